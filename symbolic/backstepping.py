@@ -1,0 +1,128 @@
+"""Adaptive RBFNN backstepping law (eq. 9-22) and its Lyapunov function (eq. 25).
+
+Naming follows the paper: ``z1 = e1 - e1d`` and ``z2 = e2 - alpha`` are the
+backstepping errors of eq. (9) (not altitudes), ``W_hat`` (l x 4) and
+``zeta_hat`` (4) the adaptive states. The reference is
+``ref = [e1d, e1d_dot, e1d_ddot]`` (12 entries).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from symbolic.kinematics import euler_rate_matrix_inv
+from symbolic.parameters import QUADROTOR, controller_layout
+from symbolic.quadrotor import rotors_from_wrench
+from symbolic.rbf import rbf, rbf_input
+from symbolic.relative import (error_rate_matrix, nominal_drift, relative_states,
+                               wrench_from_virtual)
+
+__all__ = ["CONTROLLER_OUTPUTS", "virtual_control", "control_law", "controller_function",
+           "lyapunov_function"]
+
+#: Outputs of ``control_law`` and ``controller_function``, in order.
+CONTROLLER_OUTPUTS = ("u", "wrench", "rotor", "W_hat_dot", "zeta_hat_dot", "e1", "e2",
+                      "z1", "z2", "alpha", "alpha_dot", "Psi", "Delta_hat")
+
+
+def virtual_control(e1, e1_dot, ref, k1):
+    """alpha (eq. 14) and its exact time derivative alpha_dot (eq. 18).
+
+    ``alpha = R^-1 (-k1 z1 + e1d_dot)`` depends on the relative attitude
+    through R (phi1 = phi_e and theta1 = theta_e since the vehicle neither
+    rolls nor pitches). alpha_dot is the directional derivative of alpha
+    along ``(e1_dot, e1d_dot, e1d_ddot)``, formed by symbolic
+    differentiation; ``e1_dot = R e2`` is measured, so no unknown dynamics
+    enter the law.
+
+    Returns
+    -------
+    alpha, alpha_dot : casadi.SX, (4, 1)
+    """
+    e1s, refs, k1s = ca.SX.sym("e1", 4), ca.SX.sym("ref", 12), ca.SX.sym("k1", 4)
+    e1_dots = ca.SX.sym("e1_dot", 4)
+    e1d, e1d_dot, e1d_ddot = refs[0:4], refs[4:8], refs[8:12]
+    z1 = e1s - e1d                                                   # eq. 9
+    R_inv = ca.diagcat(1, euler_rate_matrix_inv(ca.vertcat(e1s[1], e1s[2], 0)))
+    alpha = R_inv @ (-k1s * z1 + e1d_dot)                            # eq. 14
+    alpha_dot = ca.jtimes(alpha, ca.vertcat(e1s, e1d, e1d_dot),      # eq. 18
+                          ca.vertcat(e1_dots, e1d_dot, e1d_ddot))
+    fn = ca.Function("virtual_control", [e1s, e1_dots, refs, k1s], [alpha, alpha_dot])
+    return fn(e1, e1_dot, ref, k1)
+
+
+def control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl):
+    """The backstepping control and adaptive laws as expressions.
+
+    Returns a dict with ``u`` (eq. 20), ``W_hat_dot`` and ``zeta_hat_dot``
+    (eq. 22), the physical ``wrench`` and ``rotor`` forces, and the
+    intermediate signals ``e1, e2, z1, z2, alpha, alpha_dot, Psi,
+    Delta_hat``. With ``nominal_model = 1`` the quadrotor's own known drift
+    (gravity, drag, gyroscopic terms) is fed forward, so that the network
+    estimates only the remainder of ``Delta = f + d``.
+    """
+    l = W_hat.shape[0]
+    c = controller_layout(l).unpack(p_ctrl)
+    k1, k2, rho = c["k1"], c["k2"], c["rho"]
+    e1, e2 = relative_states(xq, yv)
+    R = error_rate_matrix(xq[1:4])
+    z1 = e1 - ref[0:4]                                               # eq. 9
+    alpha, alpha_dot = virtual_control(e1, R @ e2, ref, k1)
+    z2 = e2 - alpha                                                  # eq. 9
+    w_e = xq[6]                                                      # w2 = 0
+    r_e = xq[9] - yv[2]
+    Psi = rbf(rbf_input(w_e, xq[7], xq[8], r_e), c["centers"], c["widths"])   # eq. 16
+    Delta_hat = W_hat.T @ Psi                                        # eq. 16
+    squash = ca.tanh(z2 / rho)
+    u = (-k2 * z2 - R.T @ z1 - Delta_hat - squash * zeta_hat + alpha_dot   # eq. 20
+         - c["nominal_model"] * nominal_drift(xq, p_quad))
+    W_hat_dot = c["gamma1"] * (Psi @ z2.T - c["k_w"] * W_hat)               # eq. 22
+    zeta_hat_dot = c["gamma2"] * (squash * z2 - c["k_zeta"] * zeta_hat)     # eq. 22
+    wrench = wrench_from_virtual(xq, u, p_quad)
+    return dict(u=u, wrench=wrench, rotor=rotors_from_wrench(wrench, p_quad),
+                W_hat_dot=W_hat_dot, zeta_hat_dot=zeta_hat_dot, e1=e1, e2=e2, z1=z1, z2=z2,
+                alpha=alpha, alpha_dot=alpha_dot, Psi=Psi, Delta_hat=Delta_hat)
+
+
+def controller_function(l: int) -> ca.Function:
+    """The continuous-time controller as one Function.
+
+    ``controller(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl) -> (u, wrench,
+    rotor, W_hat_dot, zeta_hat_dot, e1, e2, z1, z2, alpha, alpha_dot, Psi,
+    Delta_hat)``.
+
+    Parameters
+    ----------
+    l : int
+        Number of RBF nodes.
+    """
+    xq, yv, ref = ca.SX.sym("xq", 10), ca.SX.sym("yv", 3), ca.SX.sym("ref", 12)
+    W_hat, zeta_hat = ca.SX.sym("W_hat", l, 4), ca.SX.sym("zeta_hat", 4)
+    p_quad, p_ctrl = QUADROTOR.sym(), controller_layout(l).sym()
+    out = control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)
+    names = list(CONTROLLER_OUTPUTS)
+    return ca.Function("controller", [xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl],
+                       [out[k] for k in names],
+                       ["xq", "yv", "ref", "W_hat", "zeta_hat", "p_quad", "p_ctrl"], names)
+
+
+def lyapunov_function(l: int) -> ca.Function:
+    """Lyapunov function Y = V1 + V2 of eq. (12), (17) and (25).
+
+    Needs the estimation errors ``W_tilde = W_hat - W*`` and
+    ``zeta_tilde = zeta_hat - zeta``; W* and zeta are unknown, so callers
+    pass a comparison value of their choice (zero gives the function's
+    value about the origin of the weights).
+
+    ``lyapunov(z1, z2, W_tilde, zeta_tilde, gamma1, gamma2) -> (V1, V2, Y)``.
+    """
+    z1, z2 = ca.SX.sym("z1", 4), ca.SX.sym("z2", 4)
+    W_tilde, zeta_tilde = ca.SX.sym("W_tilde", l, 4), ca.SX.sym("zeta_tilde", 4)
+    gamma1, gamma2 = ca.SX.sym("gamma1"), ca.SX.sym("gamma2")
+    V1 = 0.5 * ca.dot(z1, z1)                                                   # eq. 12
+    V2 = (0.5 * ca.dot(z2, z2) + 0.5 * ca.sum1(ca.sum2(W_tilde * W_tilde)) / gamma1
+          + 0.5 * ca.dot(zeta_tilde, zeta_tilde) / gamma2)                      # eq. 17
+    return ca.Function("lyapunov", [z1, z2, W_tilde, zeta_tilde, gamma1, gamma2],
+                       [V1, V2, V1 + V2],
+                       ["z1", "z2", "W_tilde", "zeta_tilde", "gamma1", "gamma2"],
+                       ["V1", "V2", "Y"])
