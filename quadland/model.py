@@ -1,0 +1,95 @@
+"""Numeric values of the symbolic model's vectors for a scenario."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from quadland.scenario import Scenario
+from symbolic.closed_loop import closed_loop_layout
+from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from symbolic.rbf import default_centers
+
+__all__ = ["ModelValues", "model_values", "disturbance_samples"]
+
+
+@dataclasses.dataclass(frozen=True)
+class ModelValues:
+    """Parameter and initial-state vectors of one scenario.
+
+    Attributes
+    ----------
+    l : int
+        RBF node count.
+    p_quad, p_veh, p_ctrl, ref : ndarray
+        The parameter groups of ``symbolic.parameters`` and the reference
+        ``[e1d, e1d_dot, e1d_ddot]``.
+    p : ndarray
+        Their concatenation, the closed loop's parameter vector.
+    x0 : ndarray
+        Initial closed-loop state (adaptive states start at zero).
+    rotor_limits : tuple of float
+        (min, max) rotor force, N.
+    """
+
+    l: int
+    p_quad: np.ndarray
+    p_veh: np.ndarray
+    p_ctrl: np.ndarray
+    ref: np.ndarray
+    p: np.ndarray
+    x0: np.ndarray
+    rotor_limits: tuple[float, float]
+
+
+def model_values(scenario: Scenario) -> ModelValues:
+    """Translate a validated scenario into the symbolic model's vectors."""
+    q, v, c, r = (scenario.data[k] for k in ("quadrotor", "vehicle", "controller", "rbf"))
+    l = r["nodes"]
+    p_quad = QUADROTOR.pack(dict(
+        m1=q["mass"], I=q["inertia"], Kt=q["drag_translational"], Kr=q["drag_rotational"],
+        g=q["gravity"], arm=q["arm_length"], c=q["rotor_drag_factor"]))
+    p_veh = VEHICLE.pack(dict(
+        m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"], d22=v["d22"], d33=v["d33"],
+        tau=v["tau"], z2=v["deck_altitude"]))
+    p_ctrl = controller_layout(l).pack(dict(
+        k1=c["k1"], k2=c["k2"], gamma1=c["gamma1"], gamma2=c["gamma2"], k_w=c["k_w"],
+        k_zeta=c["k_zeta"], rho=c["rho"], nominal_model=float(c["nominal_model"]),
+        centers=default_centers(l, r["center_min"], r["center_max"]),
+        widths=np.full(l, r["width"])))
+    ref = np.concatenate([scenario.data["reference"]["e1d"], np.zeros(8)])
+    init = scenario.data["initial"]
+    deg = np.pi / 180
+    x0 = np.zeros(closed_loop_layout(l).nx)
+    x0[0:10] = [init["z1"], *np.multiply(init["eta1_deg"], deg), *init["velocity1"],
+                *np.multiply(init["omega1_deg_s"], deg)]
+    x0[10:16] = [*init["position2"], init["psi2_deg"] * deg, *init["velocity2"],
+                 init["r2_deg_s"] * deg]
+    x0[-2:] = init["position2"]   # the quadrotor starts above the vehicle
+    return ModelValues(l, p_quad, p_veh, p_ctrl, ref,
+                       np.concatenate([p_quad, p_veh, p_ctrl, ref]), x0,
+                       (q["rotor_force_min"], q["rotor_force_max"]))
+
+
+def disturbance_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
+    """Disturbance ``[d_F, d_M]`` held from each of ``times`` to the next.
+
+    ``bias + amplitude sin(frequency t) + noise_std n`` per axis, where ``n``
+    is standard normal, drawn from a generator seeded with
+    ``simulation.seed`` (Section 4 of the paper). The draws do not depend on
+    ``disturbance.noise``, which only zeroes them.
+
+    Returns
+    -------
+    ndarray, shape (6, len(times))
+    """
+    d = scenario.data["disturbance"]
+    rng = np.random.default_rng(scenario.data["simulation"]["seed"])
+    noise = rng.standard_normal((6, len(times))) * float(d["noise"])
+    t = np.asarray(times)[None, :]
+    d_F = (np.asarray(d["force_bias"])[:, None] + d["force_amplitude"]
+           * np.sin(d["force_frequency"] * t) + d["force_noise_std"] * noise[0:3])
+    d_M = (np.asarray(d["moment_bias"])[:, None] + d["moment_amplitude"]
+           * np.sin(d["moment_frequency"] * t) + d["moment_noise_std"] * noise[3:6])
+    return np.vstack([d_F, d_M])

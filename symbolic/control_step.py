@@ -1,0 +1,63 @@
+"""Discrete-time control step for flight hardware (eq. 20, 22 sampled).
+
+At a sample the law of eq. (20) is evaluated from the measurements, the
+rotor forces are clipped to their limits, and the adaptive laws of eq. (22)
+are integrated exactly over ``dt`` with the measurements held (zero-order
+hold). With Psi and z2 held, ``W_hat_dot = gamma1 (Psi z2^T - k_w W_hat)``
+is linear with constant forcing, so
+
+    W_next = a W_hat + (1 - a) / k_w Psi z2^T,   a = exp(-gamma1 k_w dt),
+
+and likewise for zeta_hat. This is stable for every ``dt > 0``, unlike a
+forward-Euler update.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from symbolic.backstepping import control_law
+from symbolic.parameters import QUADROTOR, controller_layout
+from symbolic.quadrotor import wrench_from_rotors
+
+__all__ = ["STEP_INPUTS", "STEP_OUTPUTS", "control_step_function"]
+
+STEP_INPUTS = ("xq", "yv", "ref", "W_hat", "zeta_hat", "p_quad", "p_ctrl", "rotor_limits", "dt")
+STEP_OUTPUTS = ("u", "wrench", "rotor", "W_next", "zeta_next", "n_clipped", "tilt")
+
+
+def control_step_function(l: int) -> ca.Function:
+    """The sampled control step for ``l`` RBF nodes.
+
+    ``control_step(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl,
+    rotor_limits, dt) -> (u, wrench, rotor, W_next, zeta_next, n_clipped,
+    tilt)``
+
+    ``u`` is the commanded virtual input (eq. 20); ``rotor`` the rotor
+    forces clipped to ``rotor_limits = [F_min, F_max]`` (N) and ``wrench``
+    the wrench they produce; ``n_clipped`` counts the clipped rotors;
+    ``tilt = cos(theta1) cos(phi1)``, which the caller must keep away from
+    zero (the thrust map divides by it).
+    """
+    xq, yv, ref = ca.SX.sym("xq", 10), ca.SX.sym("yv", 3), ca.SX.sym("ref", 12)
+    W_hat, zeta_hat = ca.SX.sym("W_hat", l, 4), ca.SX.sym("zeta_hat", 4)
+    p_quad, p_ctrl = QUADROTOR.sym(), controller_layout(l).sym()
+    limits, dt = ca.SX.sym("rotor_limits", 2), ca.SX.sym("dt")
+    c = controller_layout(l).unpack(p_ctrl)
+    law = control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)
+    rotor = ca.fmin(ca.fmax(law["rotor"], limits[0]), limits[1])
+    n_clipped = ca.sum1(law["rotor"] < limits[0]) + ca.sum1(law["rotor"] > limits[1])
+    z2, Psi = law["z2"], law["Psi"]
+    a_w = ca.exp(-c["gamma1"] * c["k_w"] * dt)
+    b_w = -ca.expm1(-c["gamma1"] * c["k_w"] * dt) / c["k_w"]             # (1 - a_w) / k_w
+    a_z = ca.exp(-c["gamma2"] * c["k_zeta"] * dt)
+    b_z = -ca.expm1(-c["gamma2"] * c["k_zeta"] * dt) / c["k_zeta"]
+    W_next = a_w * W_hat + b_w * (Psi @ z2.T)                             # eq. 22, exact ZOH
+    zeta_next = a_z * zeta_hat + b_z * (ca.tanh(z2 / c["rho"]) * z2)      # eq. 22, exact ZOH
+    tilt = ca.cos(xq[1]) * ca.cos(xq[2])
+    return ca.Function(
+        "control_step",
+        [xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl, limits, dt],
+        [law["u"], wrench_from_rotors(rotor, p_quad), rotor, W_next, zeta_next, n_clipped, tilt],
+        list(STEP_INPUTS), list(STEP_OUTPUTS),
+    )
