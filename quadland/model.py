@@ -86,7 +86,8 @@ def disturbance_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
     """
     d = scenario.data["disturbance"]
     rng = np.random.default_rng(scenario.data["simulation"]["seed"])
-    noise = rng.standard_normal((6, len(times))) * float(d["noise"])
+    # one row of six draws per sample: sample k gets the same draws whatever the duration
+    noise = rng.standard_normal((len(times), 6)).T * float(d["noise"])
     t = np.asarray(times)[None, :]
     d_F = (np.asarray(d["force_bias"])[:, None] + d["force_amplitude"]
            * np.sin(d["force_frequency"] * t) + d["force_noise_std"] * noise[0:3])

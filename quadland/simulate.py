@@ -100,16 +100,16 @@ class SimulationResult(Mapping):
 
 
 def time_grid(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Output times, disturbance switch times and their merged grid.
+    """Output times, disturbance sample times and their merged grid.
 
     Returns ``(t_out, t_dist, t_all)``; every interval of ``t_all`` has a
-    constant disturbance.
+    constant disturbance. ``t_dist`` ends with the final time, whose sample
+    is only reported, never integrated.
     """
     sim, dist = scenario.data["simulation"], scenario.data["disturbance"]
     T = sim["duration"]
     t_out = _arange(T, 1.0 / sim["output_rate_hz"])
-    t_dist = _arange(T, 1.0 / dist["sample_rate_hz"])[:-1] if T > 0 else np.zeros(1)
-    t_dist = t_dist if t_dist.size else np.zeros(1)
+    t_dist = _arange(T, 1.0 / dist["sample_rate_hz"])
     t_all = np.unique(np.round(np.concatenate([t_out, t_dist]), 12))
     return t_out, t_dist, t_all
 

@@ -1,0 +1,91 @@
+"""Backstepping law (eq. 9-22) checked along simulated trajectories."""
+
+import numpy as np
+import pytest
+
+from quadland.model import model_values
+from quadland.scenario import load_scenario
+from quadland.simulate import simulate
+from symbolic.backstepping import controller_function, lyapunov_function
+from symbolic.closed_loop import closed_loop_layout
+
+
+@pytest.fixture(scope="module")
+def fine_run():
+    """1 kHz samples of the first 0.6 s (the fast transient), noise off."""
+    sc = load_scenario("paper", ["simulation.duration=0.6", "simulation.output_rate_hz=1000",
+                                 "disturbance.noise=false", "simulation.integrator=\"cvodes\"",
+                                 "simulation.reltol=1e-12", "simulation.abstol=1e-12"])
+    return sc, simulate(sc)
+
+
+def _controller_signals(sc, res):
+    mv = model_values(sc)
+    ctrl = controller_function(mv.l).map(len(res["t"]))
+    lay = closed_loop_layout(mv.l)
+    X = res.states.T
+    W = X[16:16 + 4 * mv.l]
+    yv = np.vstack([np.full(X.shape[1], mv.p_veh[-1]), X[12], X[15]])
+    # the mapped function takes W_hat as l x 4 blocks side by side
+    W_blocks = np.hstack([W[:, k].reshape(mv.l, 4, order="F") for k in range(X.shape[1])])
+    out = ctrl(X[0:10], yv, mv.ref, W_blocks, X[16 + 4 * mv.l:20 + 4 * mv.l], mv.p_quad, mv.p_ctrl)
+    names = controller_function(mv.l).name_out()
+    assert lay.nx == X.shape[0]
+    return {n: np.array(v) for n, v in zip(names, out)}
+
+
+def test_alpha_dot_matches_finite_difference(fine_run):
+    """alpha_dot of eq. (18), formed symbolically, against a central difference of alpha."""
+    sc, res = fine_run
+    sig = _controller_signals(sc, res)
+    t, alpha, alpha_dot = res["t"], sig["alpha"], sig["alpha_dot"]
+    h = t[1] - t[0]
+    fd = (alpha[:, 2:] - alpha[:, :-2]) / (2 * h)
+    scale = np.abs(alpha_dot[:, 1:-1]).max(axis=1, keepdims=True)
+    err = np.abs(fd - alpha_dot[:, 1:-1]) / scale
+    assert err.max() < 2e-4        # O(h^2) with h = 1 ms against alpha_ddot ~ 1e2 scale
+
+
+def test_error_definitions(fine_run):
+    """z1 = e1 - e1d and z2 = e2 - alpha (eq. 9); alpha = R^-1(-k1 z1) with e1d = 0."""
+    sc, res = fine_run
+    sig = _controller_signals(sc, res)
+    e1 = np.vstack([res[n] for n in ("z_e", "phi_e", "theta_e", "psi_e")])
+    e2 = np.vstack([res[n] for n in ("dz_e", "p_e", "q_e", "r_e")])
+    np.testing.assert_allclose(sig["z1"], e1, atol=1e-14)
+    np.testing.assert_allclose(sig["z2"], e2 - sig["alpha"], atol=1e-12)
+    k1 = np.array(sc["controller.k1"])
+    k = 200
+    phi, th = e1[1, k], e1[2, k]
+    Rr = np.array([[1, np.tan(th) * np.sin(phi), np.tan(th) * np.cos(phi)],
+                   [0, np.cos(phi), -np.sin(phi)],
+                   [0, np.sin(phi) / np.cos(th), np.cos(phi) / np.cos(th)]])
+    R = np.block([[np.eye(1), np.zeros((1, 3))], [np.zeros((3, 1)), Rr]])
+    np.testing.assert_allclose(sig["alpha"][:, k], np.linalg.solve(R, -k1 * e1[:, k]), rtol=1e-12)
+
+
+def test_lyapunov_v1_decreases_while_far(fine_run):
+    """V1 = z1'z1/2 (eq. 12) falls over the transient, as eq. (15) predicts when z2 is small
+    relative to k1 z1; checked as an overall drop rather than monotonicity."""
+    sc, res = fine_run
+    lyap = lyapunov_function(model_values(sc).l)
+    sig = _controller_signals(sc, res)
+    V1_start = float(lyap(sig["z1"][:, 0], sig["z2"][:, 0], 0, 0, 1, 1)[0])
+    np.testing.assert_allclose(V1_start, 0.5 * np.sum(sig["z1"][:, 0] ** 2))
+    assert res["V1"][-1] < 0.5 * res["V1"][0]
+
+
+def test_adaptive_law_by_hand(values, rng):
+    """W_hat_dot = gamma1 (Psi z2' - k_w W_hat), zeta_hat_dot = gamma2 (tanh(z2/rho) z2 - k_zeta zeta_hat)."""
+    l = values.l
+    ctrl = controller_function(l)
+    xq = np.concatenate([[1.0], rng.uniform(-0.5, 0.5, 3), rng.normal(size=6)])
+    W, zeta = rng.normal(size=(l, 4)) * 0.1, rng.normal(size=4)
+    out = dict(zip(ctrl.name_out(), ctrl(xq, [0, 0.3, 0.05], values.ref, W, zeta,
+                                          values.p_quad, values.p_ctrl)))
+    Psi, z2 = np.array(out["Psi"]).ravel(), np.array(out["z2"]).ravel()
+    g1, g2, kw, kz, rho = 0.05, 0.1, 5.0, 0.1, 0.1
+    np.testing.assert_allclose(np.array(out["W_hat_dot"]), g1 * (np.outer(Psi, z2) - kw * W), atol=1e-14)
+    np.testing.assert_allclose(np.array(out["zeta_hat_dot"]).ravel(),
+                               g2 * (np.tanh(z2 / rho) * z2 - kz * zeta), atol=1e-14)
+    np.testing.assert_allclose(np.array(out["Delta_hat"]).ravel(), W.T @ Psi, atol=1e-14)
