@@ -195,11 +195,12 @@ def simulate(scenario: Scenario) -> SimulationResult:
         X, held = _simulate_sampled(scenario, mv, t_out, t_dist, w_dist)
     else:
         X, held = _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist), None
-    if not np.all(np.isfinite(X)):
-        bad = int(np.argmax(~np.all(np.isfinite(X), axis=0)))
+    X_np = X.full() if isinstance(X, ca.DM) else X
+    if not np.all(np.isfinite(X_np)):
+        bad = int(np.argmax(~np.all(np.isfinite(X_np), axis=0)))
         raise SimulationError(f"state became non-finite at t = {t_out[bad]:.4g} s "
                               "(check gains and the initial attitude)")
-    return _result(scenario, mv, t_out, t_dist, w_dist, X, held)
+    return _result(scenario, mv, t_out, t_dist, w_dist, X, X_np, held)
 
 
 def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
@@ -210,9 +211,9 @@ def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
         out = integ(x0=mv.x0, u=w, p=mv.p)
     except RuntimeError as exc:
         raise SimulationError(f"integrator {plugin} failed: {str(exc).splitlines()[-1]}") from None
-    X = np.column_stack([mv.x0, np.asarray(out["xf"])])
-    keep = np.isin(np.round(t_all, 12), np.round(t_out, 12))
-    return X[:, keep]
+    X = ca.horzcat(ca.DM(mv.x0), out["xf"])           # stays a DM: no NumPy round trip
+    keep = np.flatnonzero(np.isin(np.round(t_all, 12), np.round(t_out, 12)))
+    return X if len(keep) == X.shape[1] else X[:, keep.tolist()]
 
 
 def _control_step(scenario, l):
@@ -268,11 +269,17 @@ def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
     return X, held
 
 
-def _result(scenario, mv, t_out, t_dist, w_dist, X, held):
+@functools.lru_cache(maxsize=8)
+def _mapped_outputs(l: int, n: int) -> ca.Function:
+    return closed_loop_outputs(l).map(n)
+
+
+def _result(scenario, mv, t_out, t_dist, w_dist, X, X_np, held):
     lay = closed_loop_layout(mv.l)
     w_out = _held(t_dist, w_dist, t_out)
     n = len(t_out)
-    outs = closed_loop_outputs(mv.l).map(n)(X, w_out, mv.p)
+    outs = _mapped_outputs(mv.l, n)(X, w_out, mv.p)
+    X = X_np
     sig = {name: np.asarray(v) for (name, _), v in zip(OUTPUTS, outs)}
     tilt = np.cos(X[1]) * np.cos(X[2])
     if np.any(np.abs(tilt) < TILT_MIN):
@@ -301,4 +308,4 @@ def _result(scenario, mv, t_out, t_dist, w_dist, X, held):
     for i, nm in enumerate(("d_Fx", "d_Fy", "d_Fz", "d_Mx", "d_My", "d_Mz")):
         cols[nm] = w_out[i]
     return SimulationResult(scenario, {k: np.asarray(v, dtype=float).ravel()
-                                       for k, v in cols.items()}, X.T.copy())
+                                       for k, v in cols.items()}, X.T)
