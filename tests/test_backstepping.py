@@ -89,3 +89,41 @@ def test_adaptive_law_by_hand(values, rng):
     np.testing.assert_allclose(np.array(out["zeta_hat_dot"]).ravel(),
                                g2 * (np.tanh(z2 / rho) * z2 - kz * zeta), atol=1e-14)
     np.testing.assert_allclose(np.array(out["Delta_hat"]).ravel(), W.T @ Psi, atol=1e-14)
+
+
+@pytest.mark.parametrize("nominal", [0.0, 1.0])
+def test_control_law_by_hand(values, rng, nominal):
+    """u of eq. (20), assembled here from its printed terms (plus -f_nominal when enabled)."""
+    from symbolic.parameters import QUADROTOR, controller_layout
+
+    l = values.l
+    ctrl = controller_function(l)
+    p_ctrl = values.p_ctrl.copy()
+    lay = controller_layout(l)
+    a, _ = lay.offsets()["nominal_model"]
+    p_ctrl[a] = nominal
+    xq = np.concatenate([[0.8], rng.uniform(-0.5, 0.5, 3), rng.normal(size=6)])
+    yv = np.array([0.1, 0.2, 0.07])
+    W, zeta = rng.normal(size=(l, 4)) * 0.1, rng.normal(size=4)
+    out = {k: np.array(v) for k, v in zip(ctrl.name_out(), ctrl(xq, yv, values.ref, W, zeta,
+                                                                 values.p_quad, p_ctrl))}
+    z1, z2, Psi = out["z1"].ravel(), out["z2"].ravel(), out["Psi"].ravel()
+    k2, rho = np.array([2.0, 4, 10, 10]), 0.1
+    phi, th = xq[1], xq[2]
+    Rr = np.array([[1, np.tan(th) * np.sin(phi), np.tan(th) * np.cos(phi)],
+                   [0, np.cos(phi), -np.sin(phi)],
+                   [0, np.sin(phi) / np.cos(th), np.cos(phi) / np.cos(th)]])
+    R = np.block([[np.eye(1), np.zeros((1, 3))], [np.zeros((3, 1)), Rr]])
+    q = QUADROTOR.unpack(values.p_quad)
+    I, m1, g = q["I"], q["m1"][0], q["g"][0]
+    V, Om = xq[4:7], xq[7:10]
+    J = np.array([-np.sin(th), np.cos(th) * np.sin(phi), np.cos(th) * np.cos(phi)])
+    f_nom = np.concatenate([[-(J @ (q["Kt"] * V)) / m1 - g],
+                            -q["Kr"] * Om / I - np.cross(Om, I * Om) / I])
+    u = (-k2 * z2 - R.T @ z1 - W.T @ Psi - np.tanh(z2 / rho) * zeta
+         + out["alpha_dot"].ravel() - nominal * f_nom)
+    np.testing.assert_allclose(out["u"].ravel(), u, rtol=1e-12, atol=1e-12)
+    # the wrench realises u (eq. 6)
+    wrench = out["wrench"].ravel()
+    np.testing.assert_allclose(np.cos(th) * np.cos(phi) * wrench[0] / m1, u[0], rtol=1e-12)
+    np.testing.assert_allclose(wrench[1:] / I, u[1:], rtol=1e-12)
