@@ -1,6 +1,7 @@
 """Exceptions raised by quadland."""
 
-__all__ = ["QuadlandError", "ScenarioError", "SingularAttitudeError", "CompilerNotFoundError"]
+__all__ = ["QuadlandError", "ScenarioError", "SingularAttitudeError", "CompilerNotFoundError",
+           "OperatingPointError", "MarginsError"]
 
 
 class QuadlandError(Exception):
@@ -17,3 +18,11 @@ class SingularAttitudeError(QuadlandError, ArithmeticError):
 
 class CompilerNotFoundError(QuadlandError, RuntimeError):
     """No C compiler was found to build the generated code."""
+
+
+class OperatingPointError(QuadlandError, ArithmeticError):
+    """No operating point could be found or used for a linearization."""
+
+
+class MarginsError(QuadlandError, ValueError):
+    """A margins request is malformed (time, requirement or output folder)."""
