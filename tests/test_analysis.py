@@ -1,0 +1,207 @@
+"""Margins of textbook loops against closed-form values."""
+
+import math
+
+import control
+import numpy as np
+import pytest
+import scipy.optimize
+
+from quadland.analysis import (allmargin, closed_loop_poles, disk_gain_margin,
+                               disk_phase_margin, diskmargin, freqresp)
+
+
+def _third_order():
+    """L = 1/(s(s+1)(s+2)): |L(j sqrt2)| = 1/6, gain crossover w^6 + 5 w^4 + 4 w^2 = 1."""
+    wc = math.sqrt(max(r.real for r in np.roots([1, 5, 4, -1]) if abs(r.imag) < 1e-12))
+    pm = 90 - math.degrees(math.atan(wc) + math.atan(wc / 2))
+    return control.tf([1], [1, 3, 2, 0]), dict(gm=[6.0], wg=[math.sqrt(2)], pm=[pm], wc=[wc])
+
+
+def _cubic_lag():
+    """L = 2/(s+1)^3: phase -180 at w = tan(60 deg), |L| = 2/8; |L| = 1 at (1+w^2) = 2^(2/3)."""
+    wc = math.sqrt(2 ** (2 / 3) - 1)
+    return (control.tf([2], [1, 3, 3, 1]),
+            dict(gm=[4.0], wg=[math.sqrt(3)], pm=[180 - 3 * math.degrees(math.atan(wc))],
+                 wc=[wc]))
+
+
+def _conditionally_stable():
+    """L = (s+1)^2/s^3: phase -180 at w = 1 with |L| = 2 (gain-reduction margin 1/2);
+    |L| = 1 where w^3 - w^2 - 1 = 0, PM = 2 atan(wc) - 90 deg."""
+    wc = max(r.real for r in np.roots([1, -1, 0, -1]) if abs(r.imag) < 1e-12)
+    return (control.tf([1, 2, 1], [1, 0, 0, 0]),
+            dict(gm=[0.5], wg=[1.0], pm=[2 * math.degrees(math.atan(wc)) - 90], wc=[wc]))
+
+
+def _integrator():
+    """L = 4/s: no phase crossing, PM = 90 deg at w = 4."""
+    return control.tf([4], [1, 0]), dict(gm=[], wg=[], pm=[90.0], wc=[4.0])
+
+
+def _discrete_integrator():
+    """L(z) = k T/(z - 1), T = 0.1, k = 1: L(-1) = -kT/2, so GM = 20 at pi/T;
+    |e^{jwT} - 1| = 2 sin(wT/2) = kT at crossover, PM = 90 - wT/2 (deg)."""
+    T, k = 0.1, 1.0
+    wc = 2 / T * math.asin(k * T / 2)
+    return (control.tf([k * T], [1, -1], T),
+            dict(gm=[2 / (k * T)], wg=[math.pi / T], pm=[90 - math.degrees(wc * T / 2)], wc=[wc]))
+
+
+CASES = [_third_order, _cubic_lag, _conditionally_stable, _integrator, _discrete_integrator]
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: c.__name__.strip("_"))
+def test_allmargin_siso_closed_form(case):
+    L, ref = case()
+    m, = allmargin(L)
+    assert m.stable
+    np.testing.assert_allclose(m.gain_margin, ref["gm"], rtol=1e-8)
+    np.testing.assert_allclose(m.gm_frequency, ref["wg"], rtol=1e-8)
+    np.testing.assert_allclose(m.phase_margin, ref["pm"], rtol=1e-8)
+    np.testing.assert_allclose(m.pm_frequency, ref["wc"], rtol=1e-8)
+    # a delay tau adds phase -w tau: the margin is PM (rad) / wc
+    np.testing.assert_allclose(m.delay_margin, np.radians(ref["pm"]) / np.array(ref["wc"]),
+                               rtol=1e-8)
+
+
+def test_allmargin_agrees_with_python_control_on_small_loops():
+    for case in (_third_order, _cubic_lag):
+        L, _ = case()
+        gm, pm, _, wg, wc, _ = control.stability_margins(L)
+        m, = allmargin(L)
+        assert m.gain_margin[0] == pytest.approx(gm, rel=1e-7)
+        assert m.phase_margin[0] == pytest.approx(pm, rel=1e-7)
+        assert m.gm_frequency[0] == pytest.approx(wg, rel=1e-7)
+        assert m.pm_frequency[0] == pytest.approx(wc, rel=1e-7)
+
+
+def _padded(L, n_extra, rng):
+    """A realization of L with n_extra more states that the output never sees.
+
+    Like the adaptive states of the flight loop: driven by the loop, many
+    of them, and absent from its transfer function.
+    """
+    s = control.ss(L)
+    n = s.nstates
+    A1 = np.diag(-rng.uniform(0.01, 50.0, n_extra))
+    X = rng.standard_normal((n_extra, n))
+    A = np.block([[s.A, np.zeros((n, n_extra))], [X, A1]])
+    B = np.vstack([s.B, rng.standard_normal((n_extra, 1))])
+    C = np.hstack([s.C, np.zeros((1, n_extra))])
+    return control.ss(A, B, C, s.D)
+
+
+def test_margins_of_a_400_state_realization(rng):
+    L, ref = _third_order()
+    big = _padded(L, 400, rng)
+    m, = allmargin(big)
+    assert m.stable
+    np.testing.assert_allclose(m.gain_margin, ref["gm"], rtol=1e-7)
+    np.testing.assert_allclose(m.phase_margin, ref["pm"], rtol=1e-7)
+    (dm,), _ = diskmargin(big)
+    (dm3,), _ = diskmargin(L)
+    assert dm.disk_margin == pytest.approx(dm3.disk_margin, rel=1e-6)
+
+
+def test_freqresp_matches_the_transfer_function():
+    L, _ = _cubic_lag()
+    w = np.logspace(-2, 2, 7)
+    s = 1j * w
+    np.testing.assert_allclose(freqresp(L, w)[:, 0, 0], 2 / (s + 1) ** 3, rtol=1e-10)
+
+
+def _siso_disk_reference(num, den):
+    """alpha = 1/max_w |S - 1/2| by brute force on the polynomials."""
+    def f(w):
+        L = np.polyval(num, 1j * w) / np.polyval(den, 1j * w)
+        return abs(1 / (1 + L) - 0.5)
+    w = np.logspace(-3, 3, 200001)
+    k = int(np.argmax(f(w)))
+    res = scipy.optimize.minimize_scalar(lambda x: -f(x), bounds=(w[k - 1], w[k + 1]),
+                                         method="bounded", options=dict(xatol=1e-12))
+    return 1 / -res.fun, res.x
+
+
+@pytest.mark.parametrize("num,den", [([1], [1, 3, 2, 0]), ([25], [1, 10, 10, 10]),
+                                     ([2], [1, 3, 3, 1])])
+def test_diskmargin_siso(num, den):
+    alpha, w = _siso_disk_reference(num, den)
+    (dm,), multi = diskmargin(control.tf(num, den))
+    assert dm.disk_margin == pytest.approx(alpha, rel=1e-7)
+    assert dm.frequency == pytest.approx(w, rel=1e-3)
+    assert multi == dm
+    lo, hi = dm.gain_margin
+    assert lo == pytest.approx((1 - alpha / 2) / (1 + alpha / 2), rel=1e-7)
+    assert hi == pytest.approx(1 / lo, rel=1e-9)
+    assert dm.phase_margin == pytest.approx(math.degrees(2 * math.atan(alpha / 2)), rel=1e-7)
+    # the disk is inside the classical margins: a gain of hi or a pure phase shift of
+    # phase_margin cannot reach -1 before the classical margins do
+    m, = allmargin(control.tf(num, den))
+    if m.gain_margin:
+        assert hi <= min(g for g in m.gain_margin if g > 1) + 1e-9
+    assert dm.phase_margin <= min(m.phase_margin) + 1e-9
+
+
+def test_disk_of_an_integrator_is_the_whole_half_plane():
+    # L = k/s: S - T = (s - k)/(s + k) is all-pass, so alpha = 2: gain (0, inf), phase 90 deg
+    (dm,), _ = diskmargin(control.tf([3], [1, 0]))
+    assert dm.disk_margin == pytest.approx(2.0, rel=1e-9)
+    assert dm.gain_margin == (0.0, math.inf)
+    assert dm.phase_margin == pytest.approx(90.0, rel=1e-7)
+
+
+def test_disk_formulas():
+    # a balanced disk of alpha = 2 (1 - g)/(1 + g) has the real-axis intercepts g and 1/g
+    for g in (0.1, 0.5, 0.9):
+        alpha = 2 * (1 - g) / (1 + g)
+        lo, hi = disk_gain_margin(alpha)
+        assert lo == pytest.approx(g) and hi == pytest.approx(1 / g)
+    assert disk_phase_margin(2.0) == pytest.approx(90.0)
+
+
+def _satellite(a=10.0):
+    """Spinning satellite (Doyle; Skogestad and Postlethwaite, Zhou, Doyle and Glover):
+    G = 1/(s^2 + a^2) [[s - a^2, a (s + 1)], [-a (s + 1), s - a^2]], K = I."""
+    return control.ss([[0, a], [-a, 0]], np.eye(2), [[1, a], [-a, 1]], np.zeros((2, 2)))
+
+
+def test_satellite_loop_at_a_time_looks_perfect():
+    # with either loop closed, the other sees 1/s: no phase crossing, PM 90 deg at 1 rad/s
+    L = _satellite()
+    margins = allmargin(L)
+    assert len(margins) == 2
+    for m in margins:
+        assert m.stable
+        assert m.gain_margin == ()
+        np.testing.assert_allclose(m.phase_margin, [90.0], rtol=1e-8)
+        np.testing.assert_allclose(m.pm_frequency, [1.0], rtol=1e-8)
+        np.testing.assert_allclose(m.delay_margin, [math.pi / 2], rtol=1e-8)
+    per_loop, _ = diskmargin(L)
+    for dm in per_loop:  # S_i = s/(s+1): |S_i - 1/2| = 1/2 at every frequency
+        assert dm.disk_margin == pytest.approx(2.0, rel=1e-6)
+
+
+def test_satellite_multiloop_disk_margin_is_poor():
+    # T = 1/(s+1) [[1, a], [-a, 1]]; S - I/2 = 1/(s+1) ((s-1)/2 I + a J) with J skew, a
+    # normal matrix, so mu = its spectral radius: max over w of
+    # sqrt((1/4 + (w/2 + a)^2) / (1 + w^2)), reached at w = sqrt(a^2 + 1) - a.
+    a = 10.0
+    w = math.sqrt(a * a + 1) - a
+    alpha = 1 / math.sqrt((0.25 + (w / 2 + a) ** 2) / (1 + w * w))
+    _, multi = diskmargin(_satellite(a))
+    assert multi.disk_margin == pytest.approx(alpha, rel=1e-6)
+    assert multi.frequency == pytest.approx(w, rel=1e-2)
+    assert multi.gain_margin[1] < 1.11 and multi.phase_margin < 6.0
+
+
+def test_unstable_loop_has_no_margin():
+    L = control.tf([1], [1, -1])           # closed loop s = 0: not stable
+    m, = allmargin(L)
+    assert not m.stable
+    (dm,), multi = diskmargin(control.tf([0.5], [1, -1]))
+    assert dm.disk_margin == 0.0 and multi.disk_margin == 0.0
+
+
+def test_closed_loop_poles():
+    np.testing.assert_allclose(sorted(closed_loop_poles(control.tf([2], [1, 1])).real), [-3.0])
