@@ -1,0 +1,288 @@
+"""The generated C, compiled on demand and called from Python.
+
+The sources of ``generated/`` (or, for another node count ``l``, sources
+generated for it) are compiled with the system's C compiler into a shared
+library, cached under ``$XDG_CACHE_HOME/quadland`` (``~/.cache/quadland``)
+by a hash of the sources, compiler and flags, and loaded with ``ctypes``.
+
+:func:`load_control_step` returns a callable with the calling convention and
+outputs of ``symbolic.control_step.control_step_function`` (NumPy arrays of
+the same shapes), used by the sampled-data simulation with
+``controller.backend = "c"``; :func:`load_api` gives the readable ``ql_``
+API with ``ctypes`` mirrors of its structs.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import functools
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from quadland.exceptions import CompilerNotFoundError, QuadlandError
+from symbolic.control_step import STEP_INPUTS, STEP_OUTPUTS
+from symbolic.parameters import QUADROTOR, VEHICLE, ParamLayout, controller_layout
+
+__all__ = ["CompileError", "find_compiler", "cache_dir", "sources", "build_library",
+           "CControlStep", "load_control_step", "CApi", "load_api"]
+
+#: Flags of every build; the generated files compile alone with them.
+CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-fPIC")
+
+_STEP_SOURCES = ("control_step.c", "quadland.c")
+_ALL_SOURCES = _STEP_SOURCES + ("closed_loop.c", "plant.c", "quadland_model.c",
+                                "closed_loop_jacobian.c", "quadland_jacobian.c")
+
+
+class CompileError(QuadlandError, RuntimeError):
+    """The C compiler failed on the generated sources."""
+
+
+def find_compiler() -> str:
+    """Path of the C compiler: ``$CC``, else ``cc``, ``gcc`` or ``clang``.
+
+    Raises
+    ------
+    CompilerNotFoundError
+        When none is found.
+    """
+    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
+        path = shutil.which(name) if name else None
+        if path:
+            return path
+    raise CompilerNotFoundError(
+        "no C compiler found (set CC or install cc, gcc or clang); "
+        "controller.backend = \"c\" compiles the generated code on demand")
+
+
+def cache_dir() -> Path:
+    """Folder of the compiled libraries."""
+    root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(root) / "quadland"
+
+
+@functools.lru_cache(maxsize=8)
+def _generated_sources(l: int, precision: str) -> tuple[tuple[str, str], ...]:
+    from quadland.codegen import GENERATED_DIR, default_values
+    from symbolic.codegen import CodegenConfig, generate
+
+    folder = GENERATED_DIR if precision == "double" else GENERATED_DIR / "float"
+    header = folder / "quadland.h"
+    if header.exists() and f"#define QL_RBF_NODES {l} " in header.read_text():
+        files = {p.name: p.read_text() for p in folder.iterdir() if p.suffix in (".c", ".h")}
+    else:
+        files = generate(_defaults_for(l, default_values()), CodegenConfig(precision))
+    return tuple(sorted(files.items()))
+
+
+def _defaults_for(l, defaults):
+    if l == defaults.l:
+        return defaults
+    from quadland.model import model_values
+    from quadland.scenario import load_scenario
+
+    mv = model_values(load_scenario("paper", [f"rbf.nodes={l}"]))
+    return dataclasses.replace(defaults, l=l, p_ctrl=mv.p_ctrl, x0=mv.x0)
+
+
+def sources(l: int, precision: str = "double") -> dict[str, str]:
+    """The C files for ``l`` nodes: ``generated/`` when it matches, else fresh ones."""
+    if precision not in ("double", "float"):
+        raise ValueError(f"precision must be 'double' or 'float', got {precision!r}")
+    return dict(_generated_sources(l, precision))
+
+
+def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "-O2") -> Path:
+    """Compile ``compile_`` (names in ``files``) into a cached shared library.
+
+    Parameters
+    ----------
+    files : dict of str to str
+        Every source and header by file name.
+    compile_ : tuple of str
+        The ``.c`` files to compile and link.
+    opt : str
+        Optimization flag.
+
+    Returns
+    -------
+    Path
+        The library; rebuilt only when sources, compiler or flags change.
+    """
+    cc = find_compiler()
+    flags = (*CFLAGS, opt, "-shared")
+    digest = hashlib.sha256()
+    for part in (cc, *flags, *compile_):
+        digest.update(part.encode() + b"\0")
+    for name, text in sorted(files.items()):
+        digest.update(name.encode() + b"\0" + text.encode() + b"\0")
+    target = cache_dir() / digest.hexdigest()[:20] / "libquadland.so"
+    if target.exists():
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        for name, text in files.items():
+            Path(tmp, name).write_text(text)
+        out = Path(tmp, "libquadland.so")
+        cmd = [cc, *flags, "-o", str(out), *compile_, "-lm"]
+        proc = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise CompileError(f"{' '.join(cmd)} failed:\n{proc.stderr.strip()}")
+        os.replace(out, target)
+    return target
+
+
+def _pointer_array(arrays, ctype):
+    return (ctypes.POINTER(ctype) * len(arrays))(
+        *[a.ctypes.data_as(ctypes.POINTER(ctype)) for a in arrays])
+
+
+class CControlStep:
+    """The compiled ``control_step``, called like the CasADi function.
+
+    ``step(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl, rotor_limits, dt)
+    -> (u, wrench, rotor, W_next, zeta_next, n_clipped, tilt)``, each a
+    float64 array shaped as the CasADi function's output (``(4, 1)``,
+    ``(l, 4)``, ``(1, 1)``, ...). With ``precision = "float"`` the inputs
+    are rounded to float32 and the single-precision build runs.
+    """
+
+    def __init__(self, l: int, precision: str = "double", opt: str = "-O2"):
+        self.l, self.precision = l, precision
+        files = sources(l, precision)
+        self.library = build_library(files, _STEP_SOURCES, opt)
+        self._lib = ctypes.CDLL(str(self.library))
+        self._real = ctypes.c_double if precision == "double" else ctypes.c_float
+        self._dtype = np.float64 if precision == "double" else np.float32
+        fn = self._lib.control_step
+        ptr = ctypes.POINTER(self._real)
+        fn.argtypes = [ctypes.POINTER(ptr), ctypes.POINTER(ptr), ctypes.POINTER(ctypes.c_int),
+                       ptr, ctypes.c_int]
+        fn.restype = ctypes.c_int
+        self._fn = fn
+        self._in_sizes = (10, 3, 12, 4 * l, 4, QUADROTOR.size, controller_layout(l).size, 2, 1)
+        self._out_shapes = ((4, 1), (4, 1), (4, 1), (l, 4), (4, 1), (1, 1), (1, 1))
+        self._iw = (ctypes.c_int * 1)()
+        self._w = (self._real * 1)()
+
+    def __call__(self, *args):
+        if len(args) != len(STEP_INPUTS):
+            raise TypeError(f"control_step takes {len(STEP_INPUTS)} inputs {STEP_INPUTS}")
+        ins = []
+        for name, a, n in zip(STEP_INPUTS, args, self._in_sizes):
+            v = np.asarray(a, dtype=float)
+            v = (v.reshape(-1, order="F") if v.ndim > 1 else np.atleast_1d(v))
+            if v.size != n:
+                raise ValueError(f"control_step: {name} has {v.size} values, expected {n}")
+            ins.append(np.ascontiguousarray(v, dtype=self._dtype))
+        outs = [np.zeros(int(np.prod(s)), dtype=self._dtype) for s in self._out_shapes]
+        self._fn(_pointer_array(ins, self._real), _pointer_array(outs, self._real),
+                 self._iw, self._w, 0)
+        return tuple(o.astype(np.float64).reshape(s, order="F")
+                     for o, s in zip(outs, self._out_shapes))
+
+    def __repr__(self) -> str:
+        return (f"CControlStep(l={self.l}, precision={self.precision!r}): "
+                f"{', '.join(STEP_INPUTS)} -> {', '.join(STEP_OUTPUTS)}")
+
+
+@functools.lru_cache(maxsize=8)
+def load_control_step(l: int, precision: str = "double") -> CControlStep:
+    """The compiled control step for ``l`` RBF nodes (built on first use).
+
+    Raises
+    ------
+    CompilerNotFoundError
+        When no C compiler is found.
+    CompileError
+        When the compiler rejects the sources.
+    """
+    return CControlStep(l, precision)
+
+
+def _struct(name: str, fields, real):
+    return type(name, (ctypes.Structure,), {"_fields_": list(fields)})
+
+
+def _layout_struct(name: str, layout: ParamLayout, real):
+    fields = []
+    for f in layout.fields:
+        if f.shape is not None:
+            fields.append((f.name, (real * f.shape[0]) * f.shape[1]))
+        else:
+            fields.append((f.name, real if f.size == 1 else real * f.size))
+    return _struct(name, fields, real)
+
+
+@dataclasses.dataclass(frozen=True)
+class CApi:
+    """The readable C API (``quadland.h``) loaded with ``ctypes``.
+
+    Attributes
+    ----------
+    lib : ctypes.CDLL
+        With ``ql_params_init``, ``ql_control_step``, ``ql_closed_loop``, ...
+    QuadrotorState, VehicleState, Reference, AdaptiveState, Params, Output,
+    VehicleParams : type
+        ``ctypes.Structure`` mirrors of the header's structs.
+    real : type
+        ``ctypes.c_double`` or ``ctypes.c_float``.
+    """
+
+    lib: ctypes.CDLL
+    QuadrotorState: type
+    VehicleState: type
+    Reference: type
+    AdaptiveState: type
+    Params: type
+    Output: type
+    VehicleParams: type
+    real: type
+
+
+@functools.lru_cache(maxsize=4)
+def load_api(l: int, precision: str = "double", opt: str = "-O2") -> CApi:
+    """The whole generated library (step, closed loop, Jacobian, plant)."""
+    files = sources(l, precision)
+    lib = ctypes.CDLL(str(build_library(files, _ALL_SOURCES, opt)))
+    real = ctypes.c_double if precision == "double" else ctypes.c_float
+    S = _struct
+    api = CApi(
+        lib=lib,
+        QuadrotorState=S("QuadrotorState", [("z1", real), ("eta1", real * 3), ("V1", real * 3),
+                                            ("Omega1", real * 3)], real),
+        VehicleState=S("VehicleState", [("z2", real), ("psi2", real), ("r2", real)], real),
+        Reference=S("Reference", [("e1d", real * 4), ("e1d_dot", real * 4),
+                                  ("e1d_ddot", real * 4)], real),
+        AdaptiveState=S("AdaptiveState", [("W_hat", (real * l) * 4), ("zeta_hat", real * 4)],
+                        real),
+        Params=S("Params", [("quad", _layout_struct("QuadrotorParams", QUADROTOR, real)),
+                            ("ctrl", _layout_struct("ControllerParams", controller_layout(l),
+                                                    real)),
+                            ("rotor_force_min", real), ("rotor_force_max", real),
+                            ("tilt_min", real)], real),
+        Output=S("Output", [("u", real * 4), ("wrench", real * 4), ("rotor", real * 4),
+                            ("n_clipped", ctypes.c_int), ("tilt", real)], real),
+        VehicleParams=_layout_struct("VehicleParams", VEHICLE, real),
+        real=real)
+    P = ctypes.POINTER
+    lib.ql_control_step.argtypes = [P(api.QuadrotorState), P(api.VehicleState),
+                                    P(api.Reference), P(api.Params), real,
+                                    P(api.AdaptiveState), P(api.Output)]
+    lib.ql_control_step.restype = ctypes.c_int
+    lib.ql_status_string.argtypes = [ctypes.c_int]
+    lib.ql_status_string.restype = ctypes.c_char_p
+    for name in ("ql_closed_loop", "ql_closed_loop_jacobian"):
+        getattr(lib, name).argtypes = [P(real)] * 4
+    lib.ql_plant.argtypes = [P(real)] * 6
+    lib.ql_closed_loop_jacobian_sparsity.restype = P(ctypes.c_int)
+    lib.ql_pack_closed_loop_params.argtypes = [P(api.Params), P(api.VehicleParams),
+                                               P(api.Reference), P(real)]
+    return api
