@@ -31,26 +31,26 @@ def _grid(title, rows=4):
     return fig, axes
 
 
-def _fig2(r):
-    fig, ax = _grid(FIGURES["fig2_relative_altitude_attitude.png"])
+def _four_panel(r, fig_name, first, first_unit, rest, rest_unit):
+    """One linear signal and three angular ones (shown in degrees)."""
+    fig, ax = _grid(FIGURES[fig_name])
     t = r["t"]
-    ax[0].plot(t, r["z_e"])
-    ax[0].set_ylabel("z_e [m]")
-    for a, name in zip(ax[1:], ("phi_e", "theta_e", "psi_e")):
+    ax[0].plot(t, r[first])
+    ax[0].set_ylabel(f"{first} [{first_unit}]")
+    for a, name in zip(ax[1:], rest):
         a.plot(t, np.rad2deg(r[name]))
-        a.set_ylabel(f"{name} [deg]")
+        a.set_ylabel(f"{name} [{rest_unit}]")
     return fig, ax
+
+
+def _fig2(r):
+    return _four_panel(r, "fig2_relative_altitude_attitude.png", "z_e", "m",
+                       ("phi_e", "theta_e", "psi_e"), "deg")
 
 
 def _fig3(r):
-    fig, ax = _grid(FIGURES["fig3_velocity_errors.png"])
-    t = r["t"]
-    ax[0].plot(t, r["dz_e"])
-    ax[0].set_ylabel("dz_e [m/s]")
-    for a, name in zip(ax[1:], ("p_e", "q_e", "r_e")):
-        a.plot(t, np.rad2deg(r[name]))
-        a.set_ylabel(f"{name} [deg/s]")
-    return fig, ax
+    return _four_panel(r, "fig3_velocity_errors.png", "dz_e", "m/s", ("p_e", "q_e", "r_e"),
+                       "deg/s")
 
 
 def _fig4(r):

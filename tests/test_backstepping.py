@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 
+from reference import error_rate_matrix
+
 from quadland.model import model_values
 from quadland.scenario import load_scenario
 from quadland.simulate import simulate
@@ -56,11 +58,7 @@ def test_error_definitions(fine_run):
     np.testing.assert_allclose(sig["z2"], e2 - sig["alpha"], atol=1e-12)
     k1 = np.array(sc["controller.k1"])
     k = 200
-    phi, th = e1[1, k], e1[2, k]
-    Rr = np.array([[1, np.tan(th) * np.sin(phi), np.tan(th) * np.cos(phi)],
-                   [0, np.cos(phi), -np.sin(phi)],
-                   [0, np.sin(phi) / np.cos(th), np.cos(phi) / np.cos(th)]])
-    R = np.block([[np.eye(1), np.zeros((1, 3))], [np.zeros((3, 1)), Rr]])
+    R = error_rate_matrix(e1[1, k], e1[2, k])
     np.testing.assert_allclose(sig["alpha"][:, k], np.linalg.solve(R, -k1 * e1[:, k]), rtol=1e-12)
 
 
@@ -110,10 +108,7 @@ def test_control_law_by_hand(values, rng, nominal):
     z1, z2, Psi = out["z1"].ravel(), out["z2"].ravel(), out["Psi"].ravel()
     k2, rho = np.array([2.0, 4, 10, 10]), 0.1
     phi, th = xq[1], xq[2]
-    Rr = np.array([[1, np.tan(th) * np.sin(phi), np.tan(th) * np.cos(phi)],
-                   [0, np.cos(phi), -np.sin(phi)],
-                   [0, np.sin(phi) / np.cos(th), np.cos(phi) / np.cos(th)]])
-    R = np.block([[np.eye(1), np.zeros((1, 3))], [np.zeros((3, 1)), Rr]])
+    R = error_rate_matrix(phi, th)
     q = QUADROTOR.unpack(values.p_quad)
     I, m1, g = q["I"], q["m1"][0], q["g"][0]
     V, Om = xq[4:7], xq[7:10]

@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 
+from reference import euler_rate_matrix
+
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.relative import relative_function
 
@@ -22,10 +24,7 @@ def _newton_euler(xq, xv, wrench, d_F, d_M, pq, pv):
     m, I, Kt, Kr, g = pq["m1"][0], pq["I"], pq["Kt"], pq["Kr"], pq["g"][0]
     eta, V, Om = xq[1:4], xq[4:7], xq[7:10]
     R = _rot(eta)
-    phi, th = eta[0], eta[1]
-    W = np.array([[1, np.tan(th) * np.sin(phi), np.tan(th) * np.cos(phi)],
-                  [0, np.cos(phi), -np.sin(phi)],
-                  [0, np.sin(phi) / np.cos(th), np.cos(phi) / np.cos(th)]])
+    W = euler_rate_matrix(eta[0], eta[1])
     F = np.array([0, 0, wrench[0]])
     V_dot = (F - Kt * V - m * R.T @ np.array([0, 0, g]) + d_F) / m - np.cross(Om, V)
     Om_dot = (wrench[1:] - Kr * Om + d_M - np.cross(Om, I * Om)) / I
