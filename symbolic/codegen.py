@@ -43,9 +43,9 @@ STATUS_CODES = (
     ("QL_OK", 0, "success; outputs and adaptive state updated"),
     ("QL_ERR_NULL", 1, "a NULL pointer argument"),
     ("QL_ERR_INVALID", 2, "dt <= 0 or rotor_force_min > rotor_force_max"),
-    ("QL_ERR_NONFINITE_INPUT", 3, "an input or parameter is NaN or infinite"),
+    ("QL_ERR_NONFINITE_INPUT", 3, "an input, parameter or the adaptive state is NaN or infinite"),
     ("QL_ERR_TILT", 4, "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible"),
-    ("QL_ERR_NONFINITE_OUTPUT", 5, "the law produced a NaN or infinite value"),
+    ("QL_ERR_NONFINITE_OUTPUT", 5, "the law overflowed: a NaN or infinite value from finite inputs"),
 )
 
 #: The CasADi functions written as C, in file order.
@@ -410,6 +410,8 @@ def _source(config: CodegenConfig, d: Defaults) -> str:
                    f"[sizeof({sname}) == {size} * sizeof(ql_real) ? 1 : -1];\n")
     out.append("typedef char ql_params_is_packed"
                "[sizeof(ql_params) == QL_PARAMS_SIZE * sizeof(ql_real) ? 1 : -1];\n")
+    out.append("typedef char ql_adaptive_state_is_packed"
+               "[sizeof(ql_adaptive_state) == (4 * QL_RBF_NODES + 4) * sizeof(ql_real) ? 1 : -1];\n")
     out.append("\n/* Defaults: quadland/scenarios/paper.toml. */\n")
     out.append(_array(config, "ql_default_p_quad", d.p_quad))
     out.append(_array(config, "ql_default_p_ctrl", d.p_ctrl))
@@ -556,7 +558,8 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
     }}
     if (!ql_all_finite(res_v, 16 + 4 * QL_RBF_NODES)) {{
         ql_output_zero(out, tilt);
-        return QL_ERR_NONFINITE_OUTPUT;
+        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + 4)
+            ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
     }}
     memcpy(out->u, res_v, 4 * sizeof(ql_real));
     memcpy(out->wrench, res_v + 4, 4 * sizeof(ql_real));

@@ -17,6 +17,7 @@ typedef char ql_quadrotor_params_is_packed[sizeof(ql_quadrotor_params) == QL_P_Q
 typedef char ql_controller_params_is_packed[sizeof(ql_controller_params) == QL_P_CTRL_SIZE * sizeof(ql_real) ? 1 : -1];
 typedef char ql_vehicle_params_is_packed[sizeof(ql_vehicle_params) == QL_P_VEH_SIZE * sizeof(ql_real) ? 1 : -1];
 typedef char ql_params_is_packed[sizeof(ql_params) == QL_PARAMS_SIZE * sizeof(ql_real) ? 1 : -1];
+typedef char ql_adaptive_state_is_packed[sizeof(ql_adaptive_state) == (4 * QL_RBF_NODES + 4) * sizeof(ql_real) ? 1 : -1];
 
 /* Defaults: quadland/scenarios/paper.toml. */
 static const ql_real ql_default_p_quad[13] = {
@@ -336,9 +337,9 @@ const char *ql_status_string(ql_status status)
     case QL_OK: return "success; outputs and adaptive state updated";
     case QL_ERR_NULL: return "a NULL pointer argument";
     case QL_ERR_INVALID: return "dt <= 0 or rotor_force_min > rotor_force_max";
-    case QL_ERR_NONFINITE_INPUT: return "an input or parameter is NaN or infinite";
+    case QL_ERR_NONFINITE_INPUT: return "an input, parameter or the adaptive state is NaN or infinite";
     case QL_ERR_TILT: return "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible";
-    case QL_ERR_NONFINITE_OUTPUT: return "the law produced a NaN or infinite value";
+    case QL_ERR_NONFINITE_OUTPUT: return "the law overflowed: a NaN or infinite value from finite inputs";
     }
     return "unknown status";
 }
@@ -437,7 +438,8 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
     }
     if (!ql_all_finite(res_v, 16 + 4 * QL_RBF_NODES)) {
         ql_output_zero(out, tilt);
-        return QL_ERR_NONFINITE_OUTPUT;
+        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + 4)
+            ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
     }
     memcpy(out->u, res_v, 4 * sizeof(ql_real));
     memcpy(out->wrench, res_v + 4, 4 * sizeof(ql_real));

@@ -31,9 +31,9 @@ typedef enum {
     QL_OK = 0,                     /* success; outputs and adaptive state updated */
     QL_ERR_NULL = 1,               /* a NULL pointer argument */
     QL_ERR_INVALID = 2,            /* dt <= 0 or rotor_force_min > rotor_force_max */
-    QL_ERR_NONFINITE_INPUT = 3,    /* an input or parameter is NaN or infinite */
+    QL_ERR_NONFINITE_INPUT = 3,    /* an input, parameter or the adaptive state is NaN or infinite */
     QL_ERR_TILT = 4,               /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
-    QL_ERR_NONFINITE_OUTPUT = 5,   /* the law produced a NaN or infinite value */
+    QL_ERR_NONFINITE_OUTPUT = 5,   /* the law overflowed: a NaN or infinite value from finite inputs */
 } ql_status;
 
 /* Measured quadrotor state (eq. 1-2): Earth frame z up, ZYX Euler angles. */

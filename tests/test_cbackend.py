@@ -1,0 +1,392 @@
+"""The compiled generated C against the CasADi functions it came from."""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import shutil
+import subprocess
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import quadland
+from quadland import cbackend
+from quadland.codegen import GENERATED_DIR
+from quadland.exceptions import CompilerNotFoundError
+from quadland.model import disturbance_samples, model_values
+from symbolic.closed_loop import closed_loop_function, closed_loop_layout, plant_function
+from symbolic.codegen import STATUS_CODES, closed_loop_jacobian_function
+from symbolic.control_step import control_step_function
+
+try:
+    cbackend.find_compiler()
+    HAVE_CC = True
+except CompilerNotFoundError:
+    HAVE_CC = False
+
+pytestmark = pytest.mark.skipif(not HAVE_CC, reason="no C compiler")
+
+L = 100
+STATUS = {name: value for name, value, _ in STATUS_CODES}
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return model_values(quadland.load_scenario("paper"))
+
+
+@pytest.fixture(scope="module")
+def api():
+    # -O0: the Jacobian's 0.8 MB of straight-line code compiles in seconds.
+    return cbackend.load_api(L, "double", "-O0")
+
+
+def _inputs(rng, mv, l, scale=1.0):
+    """Random inputs of the control step around the paper's operating range."""
+    xq = rng.normal(size=10) * 0.4 * scale
+    xq[0] = 1.0 + rng.normal()
+    return [xq, np.array([0.1, rng.normal(), rng.normal() * 0.2]), rng.normal(size=12) * 0.1,
+            rng.normal(size=(l, 4)), rng.normal(size=4), mv.p_quad, mv.p_ctrl,
+            np.array([-50.0, 80.0]), 0.002]
+
+
+def _boundary_inputs(mv, l):
+    """Clipping at both limits, near-singular tilt, tiny and huge dt, zero state."""
+    base = [np.zeros(10), np.zeros(3), np.zeros(12), np.zeros((l, 4)), np.zeros(4),
+            mv.p_quad, mv.p_ctrl, np.array([-500.0, 500.0]), 0.002]
+    cases = [base]
+    tilt = [*base]
+    tilt[0] = np.array([1.0, 0.3, math.pi / 2 - 2e-3, 0.1, 0, 0, 0, 0, 0, 0])
+    cases.append(tilt)
+    clip = [*base]
+    clip[0] = np.array([5.0, 0.5, -0.4, 1.0, 2, -1, 3, 4, -5, 6])
+    clip[7] = np.array([0.0, 1.0])
+    cases.append(clip)
+    for dt in (1e-9, 10.0):
+        c = [*base]
+        c[0] = np.array([1.0, 0.1, 0.2, 0.3, 0.5, 0.5, 0.1, 0.1, 0.1, 0.1])
+        c[8] = dt
+        cases.append(c)
+    return cases
+
+
+def _assert_rel(actual, expected, rtol=1e-12):
+    actual, expected = np.ravel(np.asarray(actual, float)), np.ravel(np.asarray(expected, float))
+    scale = np.maximum(np.abs(expected), np.max(np.abs(expected), initial=0.0) * 1e-12)
+    scale = np.where(scale == 0, 1.0, scale)
+    assert np.all(np.abs(actual - expected) <= rtol * scale), \
+        np.max(np.abs(actual - expected) / scale)
+
+
+@pytest.mark.parametrize("l", [L, 7])
+def test_control_step_matches_casadi(paper, l):
+    mv = paper if l == L else model_values(quadland.load_scenario("paper", [f"rbf.nodes={l}"]))
+    step, ref = cbackend.load_control_step(l), control_step_function(l)
+    rng = np.random.default_rng(l)
+    cases = [_inputs(rng, mv, l, s) for s in (0.1, 1.0, 3.0)] + _boundary_inputs(mv, l)
+    clipped = 0
+    for args in cases:
+        got, want = step(*args), ref(*args)
+        for g, w in zip(got, want):
+            assert g.shape == np.asarray(w).shape
+            _assert_rel(g, w)
+        clipped += int(got[5].item())
+    assert clipped > 0   # the boundary cases reach the limits
+
+
+def test_float_build_tracks_double(paper):
+    rng = np.random.default_rng(1)
+    args = _inputs(rng, paper, L, 0.5)
+    d = cbackend.load_control_step(L)(*args)
+    f = cbackend.load_control_step(L, "float")(*args)
+    for a, b in zip(d, f):
+        assert np.allclose(a, b, rtol=1e-4, atol=1e-4 * np.max(np.abs(a), initial=1.0))
+
+
+def _api_objects(api, mv, x):
+    xq = api.QuadrotorState(x[0], (api.real * 3)(*x[1:4]), (api.real * 3)(*x[4:7]),
+                            (api.real * 3)(*x[7:10]))
+    yv = api.VehicleState(mv.p_veh[-1], x[12], x[15])
+    ref = api.Reference()
+    params = api.Params()
+    state = api.AdaptiveState()
+    api.lib.ql_params_init(ctypes.byref(params))
+    api.lib.ql_reference_init(ctypes.byref(ref))
+    api.lib.ql_adaptive_state_init(ctypes.byref(state))
+    return xq, yv, ref, params, state, api.Output()
+
+
+def _step(api, xq, yv, ref, params, dt, state, out):
+    return api.lib.ql_control_step(ctypes.byref(xq), ctypes.byref(yv), ctypes.byref(ref),
+                                   ctypes.byref(params), dt, ctypes.byref(state),
+                                   ctypes.byref(out))
+
+
+def _flat(struct):
+    return np.frombuffer(bytes(struct), dtype=np.float64).copy()
+
+
+def test_api_defaults_are_the_paper_scenario(api, paper):
+    xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
+    flat = _flat(params)
+    nq = paper.p_quad.size
+    np.testing.assert_array_equal(flat[:nq], paper.p_quad)
+    np.testing.assert_array_equal(flat[nq:nq + paper.p_ctrl.size], paper.p_ctrl)
+    assert (params.rotor_force_min, params.rotor_force_max) == paper.rotor_limits
+    assert not _flat(state).any() and not _flat(ref).any()
+    vp = api.VehicleParams()
+    api.lib.ql_vehicle_params_init(ctypes.byref(vp))
+    p = np.zeros(closed_loop_layout(L).np)
+    api.lib.ql_pack_closed_loop_params(ctypes.byref(params), ctypes.byref(vp),
+                                       ctypes.byref(ref), p.ctypes.data_as(
+                                           ctypes.POINTER(ctypes.c_double)))
+    np.testing.assert_array_equal(p, paper.p)
+
+
+def test_api_step_matches_casadi(api, paper):
+    xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
+    f = control_step_function(L)
+    W, zeta = np.zeros((L, 4)), np.zeros(4)
+    x = paper.x0
+    for _ in range(3):   # the adaptive state is carried across steps
+        assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
+        want = f(x[0:10], [paper.p_veh[-1], x[12], x[15]], paper.ref, W, zeta, paper.p_quad,
+                 paper.p_ctrl, list(paper.rotor_limits), 0.002)
+        W, zeta = np.asarray(want[3]), np.asarray(want[4]).ravel()
+        _assert_rel(list(out.u), want[0])
+        _assert_rel(list(out.wrench), want[1])
+        _assert_rel(list(out.rotor), want[2])
+        _assert_rel(_flat(state)[:4 * L], W.ravel(order="F"))
+        _assert_rel(_flat(state)[4 * L:], zeta)
+        assert out.n_clipped == 0 and out.tilt == pytest.approx(float(want[6]), rel=1e-15)
+
+
+def test_api_clipping_is_reported(api, paper):
+    xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
+    params.rotor_force_min, params.rotor_force_max = -2.0, 3.0
+    assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
+    assert out.n_clipped > 0
+    assert all(-2.0 <= f <= 3.0 for f in out.rotor)
+
+
+@pytest.mark.parametrize("case, status", [
+    ("nan_measurement", "QL_ERR_NONFINITE_INPUT"),
+    ("inf_vehicle", "QL_ERR_NONFINITE_INPUT"),
+    ("inf_center", "QL_ERR_NONFINITE_INPUT"),
+    ("nan_gain", "QL_ERR_NONFINITE_INPUT"),
+    ("inf_dt", "QL_ERR_NONFINITE_INPUT"),
+    ("nan_W_hat", "QL_ERR_NONFINITE_INPUT"),
+    ("inf_zeta_hat", "QL_ERR_NONFINITE_INPUT"),
+    ("zero_dt", "QL_ERR_INVALID"),
+    ("swapped_limits", "QL_ERR_INVALID"),
+    ("vertical_pitch", "QL_ERR_TILT"),
+    ("rolled_over", "QL_ERR_TILT"),
+    ("overflow", "QL_ERR_NONFINITE_OUTPUT"),
+])
+def test_api_errors_leave_the_state_untouched(api, paper, case, status):
+    xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
+    dt = 0.002
+    assert _step(api, xq, yv, ref, params, dt, state, out) == STATUS["QL_OK"]
+    if case == "nan_measurement":
+        xq.Omega1[1] = math.nan
+    elif case == "inf_vehicle":
+        yv.r2 = math.inf
+    elif case == "inf_center":
+        params.ctrl.centers[37][4] = -math.inf
+    elif case == "nan_gain":
+        params.ctrl.k2[3] = math.nan
+    elif case == "inf_dt":
+        dt = math.inf
+    elif case == "nan_W_hat":
+        state.W_hat[2][99] = math.nan
+    elif case == "inf_zeta_hat":
+        state.zeta_hat[0] = math.inf
+    elif case == "zero_dt":
+        dt = 0.0
+    elif case == "swapped_limits":
+        params.rotor_force_min, params.rotor_force_max = 10.0, -10.0
+    elif case == "vertical_pitch":
+        xq.eta1[1] = math.pi / 2
+    elif case == "rolled_over":
+        xq.eta1[0] = math.pi / 2 + 1e-4
+    elif case == "overflow":
+        xq.V1[2] = 100.0
+        params.ctrl.k2[0] = 1e308     # finite gain, overflowing product
+    before = bytes(state)
+    assert _step(api, xq, yv, ref, params, dt, state, out) == STATUS[status]
+    assert bytes(state) == before
+    assert not any(list(out.u) + list(out.wrench) + list(out.rotor))
+    assert api.lib.ql_status_string(STATUS[status])
+
+
+def test_api_null_pointer(api):
+    out = api.Output()
+    assert api.lib.ql_control_step(None, None, None, None, 0.002, None,
+                                   ctypes.byref(out)) == STATUS["QL_ERR_NULL"]
+
+
+def test_closed_loop_and_jacobian_match_casadi(api, paper):
+    rng = np.random.default_rng(3)
+    lay = closed_loop_layout(L)
+    x = paper.x0 + 0.1 * rng.normal(size=lay.nx)
+    w = rng.normal(size=6)
+    ptr = ctypes.POINTER(ctypes.c_double)
+
+    def c(a):
+        return np.ascontiguousarray(a, dtype=float).ctypes.data_as(ptr)
+
+    xd = np.zeros(lay.nx)
+    api.lib.ql_closed_loop(c(x), c(w), c(paper.p), xd.ctypes.data_as(ptr))
+    _assert_rel(xd, closed_loop_function(L)(x, w, paper.p))
+    J = closed_loop_jacobian_function(L)(x, w, paper.p)
+    nz = np.zeros(J.nnz())
+    api.lib.ql_closed_loop_jacobian(c(x), c(w), c(paper.p), nz.ctypes.data_as(ptr))
+    _assert_rel(nz, np.asarray(J.nonzeros()))
+    sp = api.lib.ql_closed_loop_jacobian_sparsity()
+    nrow, ncol = sp[0], sp[1]
+    colind = [sp[2 + k] for k in range(ncol + 1)]
+    assert (nrow, ncol) == (lay.nx, lay.nx) and colind == list(J.sparsity().colind())
+    xp = np.concatenate([x[0:16], x[-2:]])
+    xpd = np.zeros(18)
+    wrench = rng.normal(size=4)
+    api.lib.ql_plant(c(xp), c(wrench), c(w), c(paper.p_quad), c(paper.p_veh),
+                     xpd.ctypes.data_as(ptr))
+    _assert_rel(xpd, plant_function()(xp, wrench, w, paper.p_quad, paper.p_veh))
+
+
+def test_jacobian_is_the_derivative(paper):
+    """The generated Jacobian against central differences of the right-hand side."""
+    rng = np.random.default_rng(4)
+    f, J = closed_loop_function(L), closed_loop_jacobian_function(L)
+    x, w = paper.x0 + 0.05 * rng.normal(size=paper.x0.size), rng.normal(size=6)
+    v = rng.normal(size=x.size)
+    h = 1e-6
+    fd = (np.asarray(f(x + h * v, w, paper.p)) - np.asarray(f(x - h * v, w, paper.p))) / (2 * h)
+    jv = np.asarray(ca.mtimes(J(x, w, paper.p), ca.DM(v)))
+    np.testing.assert_allclose(jv, fd, rtol=1e-6, atol=1e-6 * np.max(np.abs(fd)))
+
+
+def _sim(overrides):
+    return quadland.simulate(quadland.load_scenario("paper", overrides))
+
+
+def test_backends_fly_the_same_trajectory():
+    common = ["controller.rate_hz=500.0", "simulation.duration=1.0"]
+    a = _sim(common + ['controller.backend="casadi"'])
+    b = _sim(common + ['controller.backend="c"'])
+    assert np.max(np.abs(a.states - b.states)) <= 1e-9
+    for name in ("F_total", "M_x", "F_1", "u_2"):
+        assert np.max(np.abs(a[name] - b[name])) <= 1e-9 * max(1.0, np.max(np.abs(a[name])))
+
+
+@pytest.mark.slow
+def test_500_hz_stays_near_the_continuous_loop():
+    """1 cm in altitude over the whole flight; 1 mrad in attitude after the transient.
+
+    The attitude exceeds 1 mrad only in the first 0.4 s, where the printed
+    law commands rotor forces of -96..206 N: see docs/codegen.md.
+    """
+    cont = _sim([])
+    samp = _sim(["controller.rate_hz=500.0"])
+    assert np.max(np.abs(samp["z_e"] - cont["z_e"])) <= 0.01
+    late = cont["t"] >= 0.4
+    for k in ("phi_e", "theta_e", "psi_e"):
+        assert np.max(np.abs(samp[k] - cont[k])[late]) <= 1e-3
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the initial transient deviates by ~2 mrad in pitch at "
+                                       "500 Hz (docs/codegen.md); kept to record the gap")
+def test_500_hz_attitude_within_1_mrad_over_the_whole_flight():
+    cont = _sim([])
+    samp = _sim(["controller.rate_hz=500.0"])
+    for k in ("phi_e", "theta_e", "psi_e"):
+        assert np.max(np.abs(samp[k] - cont[k])) <= 1e-3
+
+
+@pytest.fixture(scope="module")
+def example(tmp_path_factory):
+    """The example built from a copy of generated/ (nothing is written in the tree)."""
+    if shutil.which("make") is None:
+        pytest.skip("no make")
+    root = tmp_path_factory.mktemp("generated")
+    shutil.copytree(GENERATED_DIR, root, dirs_exist_ok=True,
+                    ignore=shutil.ignore_patterns("build", "closed_loop_jacobian.c"))
+    cc = cbackend.find_compiler()
+    subprocess.run(["make", "-s", "-j2", f"CC={cc}", "build/fly"], cwd=root / "example",
+                   check=True, capture_output=True)
+    return root / "example" / "build" / "fly"
+
+
+def _fly(fly, rate, duration):
+    out = subprocess.run([str(fly), str(rate), str(duration)], check=True, capture_output=True,
+                         text=True).stdout
+    lines = out.splitlines()
+    header = lines[0].split(",")
+    data = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    return {h: data[:, i] for i, h in enumerate(header)}
+
+
+def _rk4_closed_loop(scenario, h, n):
+    """Classical RK4 of the CasADi closed loop: an independent reference."""
+    mv = model_values(scenario)
+    f = closed_loop_function(mv.l)
+    w_all = disturbance_samples(scenario, h * np.arange(n + 1))
+    x, xs = mv.x0.copy(), [mv.x0.copy()]
+    for k in range(n):
+        def rhs(y):
+            return np.asarray(f(y, w_all[:, k], mv.p)).ravel()
+        k1 = rhs(x)
+        k2 = rhs(x + h / 2 * k1)
+        k3 = rhs(x + h / 2 * k2)
+        k4 = rhs(x + h * k3)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        xs.append(x.copy())
+    return np.array(xs)
+
+
+def test_pure_c_continuous_flight_matches_rk4(example):
+    """``fly 0``: the generated closed loop under classical RK4, 10 ms steps.
+
+    quadland.simulate's continuous loop uses CasADi's "rk" integrator, which
+    differs from classical RK4 on the same grid by up to ~3e-6 here; the C is
+    therefore checked at 1e-9 against RK4 of the CasADi function, and
+    against quadland.simulate at that integrator difference.
+    """
+    c = _fly(example, 0.0, 1.0)
+    sc = quadland.load_scenario("paper", ["simulation.duration=1.0", "disturbance.noise=false"])
+    X = _rk4_closed_loop(sc, 0.01, 100)
+    names = ("z1", "phi1", "theta1", "psi1", "u1", "v1", "w1", "p1", "q1", "r1",
+             "x2", "y2", "psi2", "u2", "v2", "r2")
+    for i, name in enumerate(names):
+        assert np.max(np.abs(c[name] - X[:, i])) <= 1e-9, name
+    py = quadland.simulate(sc)
+    for name in ("z_e", "phi_e", "theta_e", "psi_e"):
+        assert np.max(np.abs(c[name] - py[name])) <= 1e-5, name
+
+
+@pytest.mark.parametrize("rate", [500.0])
+def test_pure_c_flight_matches_python(example, rate):
+    c = _fly(example, rate, 1.0)
+    py = _sim([f"controller.rate_hz={rate}", "simulation.duration=1.0",
+               "disturbance.noise=false"])
+    np.testing.assert_allclose(c["t"], py["t"], atol=1e-12)
+    names = ("z1", "phi1", "theta1", "psi1", "u1", "v1", "w1", "p1", "q1", "r1",
+             "x2", "y2", "psi2", "u2", "v2", "r2")
+    for i, name in enumerate(names):
+        assert np.max(np.abs(c[name] - py.states[:, i])) <= 1e-9, name
+    for name in ("z_e", "phi_e", "theta_e", "psi_e", "x1", "y1", "norm_W_hat", "zeta_hat_1"):
+        assert np.max(np.abs(c[name] - py[name])) <= 1e-9, name
+    for name in ("F_total", "M_x", "M_y", "M_z", "F_1", "F_4", "u_1"):
+        assert np.max(np.abs(c[name] - py[name])) <= 1e-9 * max(1.0, np.max(np.abs(py[name]))), \
+            name
+    assert not c["status"].any()
+
+
+def test_no_compiler_is_one_clear_error(monkeypatch):
+    monkeypatch.setenv("CC", "")
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    with pytest.raises(CompilerNotFoundError, match="no C compiler found"):
+        cbackend.find_compiler()
