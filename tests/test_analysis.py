@@ -205,3 +205,41 @@ def test_unstable_loop_has_no_margin():
 
 def test_closed_loop_poles():
     np.testing.assert_allclose(sorted(closed_loop_poles(control.tf([2], [1, 1])).real), [-3.0])
+
+
+def _max_real_pole(L, gains):
+    """Largest real part of the poles of the loop closed through diag(gains)."""
+    A, B, C = (np.asarray(m) for m in (L.A, L.B, L.C))
+    return np.linalg.eigvals(A - B @ np.diag(gains) @ C).real.max()
+
+
+def test_flight_loop_margins_are_where_its_poles_cross():
+    """Independent check on the 4 x 4, 40-state flight loop (l = 5): scale one loop's
+    gain across each reported gain margin and watch the closed-loop eigenvalues; any
+    diagonal gain inside the multiloop disk interval keeps the loop stable."""
+    from quadland.linearize import equilibrium, linear_models
+    from quadland.scenario import load_scenario
+
+    sc = load_scenario("paper", ["rbf.nodes=5"])
+    L = linear_models(sc, equilibrium(sc)).loop_input
+    assert np.allclose(L.D, 0)
+    assert _max_real_pole(L, np.ones(4)) < 0
+    margins = allmargin(L)
+    assert sum(len(m.gain_margin) for m in margins) >= 2
+    for i, m in enumerate(margins):
+        for gm in m.gain_margin:
+            g = np.ones(4)
+            g[i] = gm
+            # the closed loop has a pole on the imaginary axis at the crossing frequency
+            p = np.linalg.eigvals(np.asarray(L.A) - np.asarray(L.B) @ np.diag(g)
+                                  @ np.asarray(L.C))
+            assert np.min(np.abs(p.real)) < 1e-6 * max(1.0, gm ** -1)
+            w = m.gm_frequency[m.gain_margin.index(gm)]
+            k = np.argmin(np.abs(p.real))
+            assert abs(abs(p[k].imag) - w) < 1e-5 * max(w, 1e-3)
+    _, multi = diskmargin(L)
+    lo, hi = multi.gain_margin
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        g = np.exp(rng.uniform(np.log(lo) + 1e-3, np.log(hi) - 1e-3, 4))
+        assert _max_real_pole(L, g) < 0
