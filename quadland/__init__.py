@@ -16,4 +16,19 @@ except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
 __all__ = ["__version__", "QuadlandError", "ScenarioError", "Scenario", "load_scenario",
-           "SimulationResult", "simulate"]
+           "SimulationResult", "simulate", "allmargin", "diskmargin", "equilibrium",
+           "frozen_point", "linear_models"]
+
+# The analysis API imports python-control; load it on first use so that
+# `import quadland` stays light for simulation.
+_LAZY = {"allmargin": "quadland.analysis", "diskmargin": "quadland.analysis",
+         "equilibrium": "quadland.linearize", "frozen_point": "quadland.linearize",
+         "linear_models": "quadland.linearize"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'quadland' has no attribute {name!r}")
