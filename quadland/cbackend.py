@@ -151,7 +151,8 @@ class CControlStep:
     -> (u, wrench, rotor, W_next, zeta_next, n_clipped, tilt)``, each a
     float64 array shaped as the CasADi function's output (``(4, 1)``,
     ``(l, 4)``, ``(1, 1)``, ...). With ``precision = "float"`` the inputs
-    are rounded to float32 and the single-precision build runs.
+    are rounded to float32 and the single-precision build runs. The object
+    reuses its buffers between calls: use one per thread.
     """
 
     def __init__(self, l: int, precision: str = "double", opt: str = "-O2"):
@@ -167,26 +168,30 @@ class CControlStep:
                        ptr, ctypes.c_int]
         fn.restype = ctypes.c_int
         self._fn = fn
-        self._in_sizes = (10, 3, 12, 4 * l, 4, QUADROTOR.size, controller_layout(l).size, 2, 1)
+        in_sizes = (10, 3, 12, 4 * l, 4, QUADROTOR.size, controller_layout(l).size, 2, 1)
         self._out_shapes = ((4, 1), (4, 1), (4, 1), (l, 4), (4, 1), (1, 1), (1, 1))
+        # Buffers and pointer arrays live as long as the object: a call only copies.
+        self._ins = [np.zeros(n, dtype=self._dtype) for n in in_sizes]
+        self._outs = [np.zeros(int(np.prod(s)), dtype=self._dtype) for s in self._out_shapes]
+        self._arg = _pointer_array(self._ins, self._real)
+        self._res = _pointer_array(self._outs, self._real)
         self._iw = (ctypes.c_int * 1)()
         self._w = (self._real * 1)()
 
     def __call__(self, *args):
         if len(args) != len(STEP_INPUTS):
             raise TypeError(f"control_step takes {len(STEP_INPUTS)} inputs {STEP_INPUTS}")
-        ins = []
-        for name, a, n in zip(STEP_INPUTS, args, self._in_sizes):
+        for name, a, buf in zip(STEP_INPUTS, args, self._ins):
             v = np.asarray(a, dtype=float)
-            v = (v.reshape(-1, order="F") if v.ndim > 1 else np.atleast_1d(v))
-            if v.size != n:
-                raise ValueError(f"control_step: {name} has {v.size} values, expected {n}")
-            ins.append(np.ascontiguousarray(v, dtype=self._dtype))
-        outs = [np.zeros(int(np.prod(s)), dtype=self._dtype) for s in self._out_shapes]
-        self._fn(_pointer_array(ins, self._real), _pointer_array(outs, self._real),
-                 self._iw, self._w, 0)
+            if v.ndim > 1:
+                v = v.reshape(-1, order="F")
+            if v.size != buf.size:
+                raise ValueError(f"control_step: {name} has {v.size} values, "
+                                 f"expected {buf.size}")
+            buf[:] = v.ravel()
+        self._fn(self._arg, self._res, self._iw, self._w, 0)
         return tuple(o.astype(np.float64).reshape(s, order="F")
-                     for o, s in zip(outs, self._out_shapes))
+                     for o, s in zip(self._outs, self._out_shapes))
 
     def __repr__(self) -> str:
         return (f"CControlStep(l={self.l}, precision={self.precision!r}): "

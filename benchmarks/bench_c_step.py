@@ -1,0 +1,127 @@
+"""Cost and accuracy of the generated C control step (docs/performance.md).
+
+Run with ``python benchmarks/bench_c_step.py [--steps N]``. Builds the
+pure-C example from a copy of ``generated/`` with the system's ``cc`` at
+-O2 and reports:
+
+* time per control step (l = 100) of ``bench``, double and float, the
+  best of several runs;
+* instructions per step from valgrind's callgrind (the difference of two
+  run lengths, so start-up cost cancels), when valgrind is installed;
+* the cost of one call from Python: the compiled step through ctypes and
+  the CasADi function;
+* the float build's deviation from the double one over the paper's
+  closed loop at 500 Hz, the two backends' difference, and the 500 Hz
+  loop's deviation from the continuous-time one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shutil
+import subprocess
+import tempfile
+import timeit
+from pathlib import Path
+
+import numpy as np
+
+import quadland
+from quadland import cbackend
+from quadland.codegen import GENERATED_DIR
+from quadland.model import model_values
+from symbolic.control_step import control_step_function
+
+ANGLES = ("phi_e", "theta_e", "psi_e")
+
+
+def _build(root: Path) -> Path:
+    shutil.copytree(GENERATED_DIR, root, dirs_exist_ok=True,
+                    ignore=shutil.ignore_patterns("build"))
+    subprocess.run(["make", "-s", "-j2", "build/bench", "build/bench_float"],
+                   cwd=root / "example", check=True)
+    return root / "example" / "build"
+
+
+def _time_per_step(exe: Path, n: int, repeats: int) -> float:
+    best = np.inf
+    for _ in range(repeats):
+        out = subprocess.run([str(exe), str(n)], capture_output=True, text=True,
+                             check=True).stdout
+        best = min(best, float(re.search(r"([\d.]+) ns/step", out).group(1)))
+    return best
+
+
+def _instructions(exe: Path, n: int) -> float | None:
+    if shutil.which("valgrind") is None:
+        return None
+    counts = []
+    for steps in (n, 2 * n):
+        with tempfile.NamedTemporaryFile() as f:
+            res = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={f.name}",
+                                  str(exe), str(steps)], capture_output=True, text=True, check=True)
+        counts.append(int(re.search(r"Collected : (\d+)", res.stderr).group(1)))
+    return (counts[1] - counts[0]) / n
+
+
+def _python_call_cost(l: int) -> tuple[float, float]:
+    mv = model_values(quadland.load_scenario("paper"))
+    args = (mv.x0[0:10], np.array([0.0, mv.x0[12], mv.x0[15]]), mv.ref, np.zeros((l, 4)),
+            np.zeros(4), mv.p_quad, mv.p_ctrl, np.array(mv.rotor_limits), 0.002)
+    out = []
+    for fn in (cbackend.load_control_step(l), control_step_function(l)):
+        n = 2000
+        out.append(min(timeit.repeat(lambda: fn(*args), number=n, repeat=5)) / n)
+    return out[0], out[1]
+
+
+def _simulate(overrides, precision=None):
+    sc = quadland.load_scenario("paper", overrides)
+    if precision is None:
+        return quadland.simulate(sc)
+    original = cbackend.load_control_step
+    cbackend.load_control_step = lambda l: cbackend.CControlStep(l, precision)
+    try:
+        return quadland.simulate(sc)
+    finally:
+        cbackend.load_control_step = original
+
+
+def _max_dev(a, b, names):
+    return max(float(np.max(np.abs(a[k] - b[k]))) for k in names)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=200000, help="steps per timing run")
+    parser.add_argument("--repeats", type=int, default=7, help="timing runs (best is kept)")
+    args = parser.parse_args()
+    l = model_values(quadland.load_scenario("paper")).l
+    with tempfile.TemporaryDirectory() as tmp:
+        build = _build(Path(tmp))
+        for name in ("bench", "bench_float"):
+            ns = _time_per_step(build / name, args.steps, args.repeats)
+            ir = _instructions(build / name, 1000)
+            ir_text = f"{ir:,.0f} instructions" if ir is not None else "valgrind not found"
+            print(f"{name}: {ns / 1000:.3f} us/step, {ir_text} per step (l = {l}, -O2)")
+    c_call, casadi_call = _python_call_cost(l)
+    print(f"python call: compiled C via ctypes {c_call * 1e6:.1f} us, "
+          f"CasADi Function {casadi_call * 1e6:.1f} us")
+    sampled = ["controller.rate_hz=500.0"]
+    ref = _simulate(sampled + ['controller.backend="c"'], "double")
+    flt = _simulate(sampled + ['controller.backend="c"'], "float")
+    cas = _simulate(sampled)
+    cont = _simulate([])
+    print(f"float vs double control step, 500 Hz, 10 s: z_e {_max_dev(flt, ref, ['z_e']):.2e} m, "
+          f"attitude {_max_dev(flt, ref, ANGLES):.2e} rad, "
+          f"rotor forces {_max_dev(flt, ref, ['F_1', 'F_2', 'F_3', 'F_4']):.2e} N")
+    print(f"backend c vs casadi, 500 Hz, 10 s: states {np.max(np.abs(ref.states - cas.states)):.2e}")
+    late = cont["t"] >= 0.4
+    print(f"500 Hz vs continuous: z_e {_max_dev(cas, cont, ['z_e']):.2e} m, "
+          f"attitude {_max_dev(cas, cont, ANGLES):.2e} rad "
+          f"(t >= 0.4 s: {max(np.max(np.abs(cas[k] - cont[k])[late]) for k in ANGLES):.2e} rad)")
+
+
+if __name__ == "__main__":
+    main()
