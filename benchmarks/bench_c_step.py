@@ -116,7 +116,8 @@ def main() -> None:
     print(f"float vs double control step, 500 Hz, 10 s: z_e {_max_dev(flt, ref, ['z_e']):.2e} m, "
           f"attitude {_max_dev(flt, ref, ANGLES):.2e} rad, "
           f"rotor forces {_max_dev(flt, ref, ['F_1', 'F_2', 'F_3', 'F_4']):.2e} N")
-    print(f"backend c vs casadi, 500 Hz, 10 s: states {np.max(np.abs(ref.states - cas.states)):.2e}")
+    diff = np.max(np.abs(ref.states - cas.states))
+    print(f"backend c vs casadi, 500 Hz, 10 s: states {diff:.2e}")
     late = cont["t"] >= 0.4
     print(f"500 Hz vs continuous: z_e {_max_dev(cas, cont, ['z_e']):.2e} m, "
           f"attitude {_max_dev(cas, cont, ANGLES):.2e} rad "

@@ -25,15 +25,16 @@ byte reproducible.
 from __future__ import annotations
 
 import dataclasses
+import os
 import re
+import tempfile
 
 import casadi as ca
 import numpy as np
 
 from symbolic.closed_loop import closed_loop_function, closed_loop_layout, plant_function
 from symbolic.control_step import control_step_function
-from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, ParamLayout, \
-    controller_layout
+from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
 
 __all__ = ["CodegenConfig", "Defaults", "STATUS_CODES", "CASADI_FUNCTIONS", "generate_example",
            "closed_loop_jacobian_function", "generate"]
@@ -45,7 +46,8 @@ STATUS_CODES = (
     ("QL_ERR_INVALID", 2, "dt <= 0 or rotor_force_min > rotor_force_max"),
     ("QL_ERR_NONFINITE_INPUT", 3, "an input, parameter or the adaptive state is NaN or infinite"),
     ("QL_ERR_TILT", 4, "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible"),
-    ("QL_ERR_NONFINITE_OUTPUT", 5, "the law overflowed: a NaN or infinite value from finite inputs"),
+    ("QL_ERR_NONFINITE_OUTPUT", 5,
+     "the law overflowed: a NaN or infinite value from finite inputs"),
 )
 
 #: The CasADi functions written as C, in file order.
@@ -182,9 +184,6 @@ def _banner(config: CodegenConfig, what: str, source: str) -> str:
 
 def _emit_casadi(name: str, l: int, config: CodegenConfig) -> dict[str, str]:
     """CasADi's C for one function, post-processed; ``{file name: text}``."""
-    import os
-    import tempfile
-
     fn = _casadi_function(name, l)
     opts = {"with_header": True, "casadi_real": config.precision, "casadi_int": config.casadi_int,
             "prefix": f"{name}_", "verbose": False, "with_export": False}
@@ -238,8 +237,8 @@ def _c_field(f, config) -> str:
     return f"    {decl:<32} /* {f.unit}: {f.doc} */"
 
 
-#: (struct name, layout, comment) of the parameter structs.
 def _param_structs(l: int):
+    """(struct name, layout, comment) of the parameter structs."""
     return (("ql_quadrotor_params", QUADROTOR,
              "Physical constants of the quadrotor (Table 1, eq. 2): layout p_quad."),
             ("ql_controller_params", controller_layout(l),
@@ -261,7 +260,8 @@ def _header(config: CodegenConfig, d: Defaults) -> str:
     lay = closed_loop_layout(l)
     jac = closed_loop_jacobian_function(l).sparsity_out(0)
     out = [_banner(config, "quadland.h: readable C API of the adaptive backstepping control step.",
-                   "the layouts of symbolic.parameters"), "#ifndef QUADLAND_H\n#define QUADLAND_H\n"]
+                   "the layouts of symbolic.parameters"),
+           "#ifndef QUADLAND_H\n#define QUADLAND_H\n"]
     out.append(f"""
 #ifdef __cplusplus
 extern "C" {{
@@ -410,8 +410,8 @@ def _source(config: CodegenConfig, d: Defaults) -> str:
                    f"[sizeof({sname}) == {size} * sizeof(ql_real) ? 1 : -1];\n")
     out.append("typedef char ql_params_is_packed"
                "[sizeof(ql_params) == QL_PARAMS_SIZE * sizeof(ql_real) ? 1 : -1];\n")
-    out.append("typedef char ql_adaptive_state_is_packed"
-               "[sizeof(ql_adaptive_state) == (4 * QL_RBF_NODES + 4) * sizeof(ql_real) ? 1 : -1];\n")
+    out.append("typedef char ql_adaptive_state_is_packed[sizeof(ql_adaptive_state)"
+               " == (4 * QL_RBF_NODES + 4) * sizeof(ql_real) ? 1 : -1];\n")
     out.append("\n/* Defaults: quadland/scenarios/paper.toml. */\n")
     out.append(_array(config, "ql_default_p_quad", d.p_quad))
     out.append(_array(config, "ql_default_p_ctrl", d.p_ctrl))
@@ -645,7 +645,8 @@ def _example_scenario(d: Defaults) -> str:
     return (banner + "#ifndef QL_PAPER_SCENARIO_H\n#define QL_PAPER_SCENARIO_H\n\n"
             f"#define QL_EXAMPLE_DURATION {d.duration!r}              /* s */\n"
             f"#define QL_EXAMPLE_OUTPUT_RATE_HZ {d.output_rate_hz!r}      /* Hz, CSV rows */\n"
-            f"#define QL_EXAMPLE_CONTROL_RATE_HZ {d.control_rate_hz!r}     /* Hz, 0 = continuous */\n"
+            f"#define QL_EXAMPLE_CONTROL_RATE_HZ {d.control_rate_hz!r}"
+            "     /* Hz, 0 = continuous */\n"
             f"#define QL_EXAMPLE_DISTURBANCE_RATE_HZ {d.disturbance_rate_hz!r} /* Hz, hold */\n"
             f"#define QL_EXAMPLE_FORCE_AMPLITUDE {d.force_amplitude!r}     /* N */\n"
             f"#define QL_EXAMPLE_FORCE_FREQUENCY {d.force_frequency!r}     /* rad/s */\n"
