@@ -196,8 +196,8 @@ def _emit_casadi(name: str, l: int, config: CodegenConfig) -> dict[str, str]:
               "closed_loop": "symbolic.closed_loop.closed_loop_function",
               "closed_loop_jacobian": "symbolic.codegen.closed_loop_jacobian_function",
               "plant": "symbolic.closed_loop.plant_function"}[name]
-    signature = re.sub(r"\s+", " ", str(fn))
-    banner = _banner(config, f"{name}: {signature}", f"{source}(l={l})"
+    signature = re.sub(r"\s+", " ", str(fn)).removesuffix(" SXFunction")
+    banner = _banner(config, signature, f"{source}(l={l})"
                      if name != "plant" else f"{source}()")
     c = texts["c"]
     # Arguments CasADi's SX code leaves unused (-Wunused-parameter).
