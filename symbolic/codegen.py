@@ -473,18 +473,21 @@ const char *ql_status_string(ql_status status)
 }}
 
 /* 1 when all n values are finite: x * 0 is zero for a finite x and NaN
- * for an infinity or a NaN. Eight independent sums keep the loop
+ * for an infinity or a NaN. Sixteen independent sums keep the loop
  * branch-free and let the compiler pair them in vector instructions. */
 static int ql_all_finite(const ql_real *v, int n)
 {{
-    ql_real acc[8] = {{0, 0, 0, 0, 0, 0, 0, 0}};
+    ql_real acc[16] = {{0}};
     int i = 0;
-    for (; i + 8 <= n; i += 8) {{
-""" + "".join(f"        acc[{k}] += v[i + {k}] * 0;\n" for k in range(8)) + f"""    }}
+    for (; i + 16 <= n; i += 16) {{
+""" + "".join(f"        acc[{k}] += v[i + {k}] * 0;\n" for k in range(16)) + f"""    }}
     for (; i < n; ++i) {{
         acc[0] += v[i] * 0;
     }}
-    return (acc[0] + acc[1] + acc[2] + acc[3] + acc[4] + acc[5] + acc[6] + acc[7]) == 0;
+    for (i = 1; i < 16; ++i) {{
+        acc[0] += acc[i];
+    }}
+    return acc[0] == 0;
 }}
 
 static void ql_output_zero(ql_output *out, ql_real tilt)

@@ -345,13 +345,13 @@ const char *ql_status_string(ql_status status)
 }
 
 /* 1 when all n values are finite: x * 0 is zero for a finite x and NaN
- * for an infinity or a NaN. Eight independent sums keep the loop
+ * for an infinity or a NaN. Sixteen independent sums keep the loop
  * branch-free and let the compiler pair them in vector instructions. */
 static int ql_all_finite(const ql_real *v, int n)
 {
-    ql_real acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    ql_real acc[16] = {0};
     int i = 0;
-    for (; i + 8 <= n; i += 8) {
+    for (; i + 16 <= n; i += 16) {
         acc[0] += v[i + 0] * 0;
         acc[1] += v[i + 1] * 0;
         acc[2] += v[i + 2] * 0;
@@ -360,11 +360,22 @@ static int ql_all_finite(const ql_real *v, int n)
         acc[5] += v[i + 5] * 0;
         acc[6] += v[i + 6] * 0;
         acc[7] += v[i + 7] * 0;
+        acc[8] += v[i + 8] * 0;
+        acc[9] += v[i + 9] * 0;
+        acc[10] += v[i + 10] * 0;
+        acc[11] += v[i + 11] * 0;
+        acc[12] += v[i + 12] * 0;
+        acc[13] += v[i + 13] * 0;
+        acc[14] += v[i + 14] * 0;
+        acc[15] += v[i + 15] * 0;
     }
     for (; i < n; ++i) {
         acc[0] += v[i] * 0;
     }
-    return (acc[0] + acc[1] + acc[2] + acc[3] + acc[4] + acc[5] + acc[6] + acc[7]) == 0;
+    for (i = 1; i < 16; ++i) {
+        acc[0] += acc[i];
+    }
+    return acc[0] == 0;
 }
 
 static void ql_output_zero(ql_output *out, ql_real tilt)
