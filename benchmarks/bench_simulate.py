@@ -474,6 +474,16 @@ def write_section(text, path=DOC):
     path.write_text("".join(lines[:start]) + text + ("\n" + tail if tail else ""))
 
 
+def loosest_matching(run, label, sweep, sc, mv, E_ref, tol):
+    """The loosest rtol of ``sweep`` (atol = rtol / 10) whose error is within ``tol``."""
+    for rtol in sweep:
+        err = max_error(attitude_errors(run(sc, rtol, rtol / 10), mv), E_ref)
+        print(f"{label} rtol {rtol:.0e}: max error {max(err.values()):.2e}")
+        if max(err.values()) <= tol:
+            return rtol, err
+    raise SystemExit(f"no {label} tolerance in the sweep matches simulate's accuracy")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--no-write", action="store_true", help="do not update docs/performance.md")
@@ -503,29 +513,12 @@ def main(argv=None):
     err_q = max_error(np.vstack([res[n] for n in ERROR_SIGNALS]), E_ref)
     tol_q = max(err_q.values())
     print("quadland error:", err_q)
-    chosen = None
-    for rtol in RTOL_SWEEP:
-        err_b = max_error(attitude_errors(baseline(sc, rtol, rtol / 10), mv), E_ref)
-        print(f"baseline rtol {rtol:.0e}: max error {max(err_b.values()):.2e}")
-        if max(err_b.values()) <= tol_q:
-            chosen = (rtol, err_b)
-            break
-    if chosen is None:
-        raise SystemExit("no baseline tolerance in the sweep matches simulate's accuracy")
-    rtol, err_b = chosen
+    rtol, err_b = loosest_matching(baseline, "baseline", RTOL_SWEEP, sc, mv, E_ref, tol_q)
     t_base = time_call(lambda: baseline(sc, rtol, rtol / 10), args.baseline_runs)
     print(f"baseline: {t_base:.3f} s")
 
-    single = None
-    for rtol1 in SINGLE_RTOL_SWEEP:
-        err_1 = max_error(attitude_errors(baseline_single_call(sc, rtol1, rtol1 / 10), mv), E_ref)
-        print(f"single-call baseline rtol {rtol1:.0e}: max error {max(err_1.values()):.2e}")
-        if max(err_1.values()) <= tol_q:
-            single = (rtol1, err_1)
-            break
-    if single is None:
-        raise SystemExit("no single-call tolerance in the sweep matches simulate's accuracy")
-    rtol1, err_1 = single
+    rtol1, err_1 = loosest_matching(baseline_single_call, "single-call baseline",
+                                    SINGLE_RTOL_SWEEP, sc, mv, E_ref, tol_q)
     t_single = time_call(lambda: baseline_single_call(sc, rtol1, rtol1 / 10), 1)
     print(f"single-call baseline: {t_single:.3f} s")
 
