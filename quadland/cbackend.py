@@ -147,8 +147,9 @@ def _pointer_array(arrays, ctype):
 class CControlStep:
     """The compiled ``control_step``, called like the CasADi function.
 
-    ``step(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl, rotor_limits, dt)
-    -> (u, wrench, rotor, W_next, zeta_next, n_clipped, tilt)``, each a
+    ``step(xq, yv, ref, W_hat, zeta_hat, u_prev, p_quad, p_ctrl,
+    rotor_limits, hold, dt) -> (u, wrench, rotor, W_next, zeta_next, u_law,
+    n_clipped, tilt)``, each a
     float64 array shaped as the CasADi function's output (``(4, 1)``,
     ``(l, 4)``, ``(1, 1)``, ...). With ``precision = "float"`` the inputs
     are rounded to float32 and the single-precision build runs. The object
@@ -168,8 +169,8 @@ class CControlStep:
                        ptr, ctypes.c_int]
         fn.restype = ctypes.c_int
         self._fn = fn
-        in_sizes = (10, 3, 12, 4 * l, 4, QUADROTOR.size, controller_layout(l).size, 2, 1)
-        self._out_shapes = ((4, 1), (4, 1), (4, 1), (l, 4), (4, 1), (1, 1), (1, 1))
+        in_sizes = (10, 3, 12, 4 * l, 4, 4, QUADROTOR.size, controller_layout(l).size, 2, 1, 1)
+        self._out_shapes = ((4, 1), (4, 1), (4, 1), (l, 4), (4, 1), (4, 1), (1, 1), (1, 1))
         # Buffers and pointer arrays live as long as the object: a call only copies.
         self._ins = [np.zeros(n, dtype=self._dtype) for n in in_sizes]
         self._outs = [np.zeros(int(np.prod(s)), dtype=self._dtype) for s in self._out_shapes]
@@ -266,15 +267,17 @@ def load_api(l: int, precision: str = "double", opt: str = "-O2") -> CApi:
         VehicleState=S("VehicleState", [("z2", real), ("psi2", real), ("r2", real)], real),
         Reference=S("Reference", [("e1d", real * 4), ("e1d_dot", real * 4),
                                   ("e1d_ddot", real * 4)], real),
-        AdaptiveState=S("AdaptiveState", [("W_hat", (real * l) * 4), ("zeta_hat", real * 4)],
+        AdaptiveState=S("AdaptiveState", [("W_hat", (real * l) * 4), ("zeta_hat", real * 4),
+                                          ("u_prev", real * 4), ("has_prev", ctypes.c_int)],
                         real),
         Params=S("Params", [("quad", _layout_struct("QuadrotorParams", QUADROTOR, real)),
                             ("ctrl", _layout_struct("ControllerParams", controller_layout(l),
                                                     real)),
                             ("rotor_force_min", real), ("rotor_force_max", real),
-                            ("tilt_min", real)], real),
-        Output=S("Output", [("u", real * 4), ("wrench", real * 4), ("rotor", real * 4),
-                            ("n_clipped", ctypes.c_int), ("tilt", real)], real),
+                            ("tilt_min", real), ("hold_compensation", real)], real),
+        Output=S("Output", [("u", real * 4), ("u_law", real * 4), ("wrench", real * 4),
+                            ("rotor", real * 4), ("n_clipped", ctypes.c_int), ("tilt", real)],
+                 real),
         VehicleParams=_layout_struct("VehicleParams", VEHICLE, real),
         real=real)
     P = ctypes.POINTER

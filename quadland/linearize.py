@@ -228,10 +228,13 @@ def _jacobians(scenario: Scenario, point: OperatingPoint):
     return tuple(np.asarray(v, dtype=float) for v in out[3:9])
 
 
-def _assemble(point, Ap, Bp, Ac, Bc, Cc, Dc, dt) -> LinearModels:
+def _assemble(point, Ap, Bp, Ac, Bc, Cc, Dc, dt, n_hold=0) -> LinearModels:
     n, nc = Ap.shape[0], Ac.shape[0]
     m = Bp.shape[1]
-    xc_names = [f"W_hat[{k}]" for k in range(nc - 4)] + [f"zeta_hat[{k}]" for k in range(4)]
+    n_adapt = nc - n_hold
+    xc_names = ([f"W_hat[{k}]" for k in range(n_adapt - 4)]
+                + [f"zeta_hat[{k}]" for k in range(4)]
+                + [f"u_prev[{k}]" for k in range(n_hold)])
     kw = dict(dt=dt) if dt else {}
     y_names = list(PLANT_STATES)
     plant = control.ss(Ap, Bp, np.eye(n), np.zeros((n, m)), inputs=list(INPUT_NAMES),
@@ -289,7 +292,10 @@ def sampled_models(scenario: Scenario, point: OperatingPoint, rate_hz: float) ->
     sampled simulator, linearized); the controller's adaptive states with
     the measurement held over the period, which is exactly how
     ``symbolic.control_step`` integrates eq. (22). u is applied at the
-    sample it is computed, with no computation delay.
+    sample it is computed, with no computation delay. With
+    ``controller.hold_compensation = kappa > 0`` the controller also holds
+    the law's previous output ``u_prev`` (four more states) and commands
+    ``(1 + kappa) u_law - kappa u_prev``, as the control step does.
     """
     if not rate_hz > 0:
         raise ValueError(f"sampled_models: rate_hz must be > 0, got {rate_hz}")
@@ -297,4 +303,11 @@ def sampled_models(scenario: Scenario, point: OperatingPoint, rate_hz: float) ->
     dt = 1.0 / rate_hz
     Phi_p, Gam_p = _zoh(Ap, Bp, dt)
     Phi_c, Gam_c = _zoh(Ac, Bc, dt)
-    return _assemble(point, Phi_p, Gam_p, Phi_c, Gam_c, Cc, Dc, dt)
+    kappa = float(scenario.data["controller"]["hold_compensation"])
+    if kappa == 0:
+        return _assemble(point, Phi_p, Gam_p, Phi_c, Gam_c, Cc, Dc, dt)
+    m, nc = Cc.shape
+    Phi_k = np.block([[Phi_c, np.zeros((nc, m))], [Cc, np.zeros((m, m))]])
+    Gam_k = np.vstack([Gam_c, Dc])
+    C_k = np.hstack([(1 + kappa) * Cc, -kappa * np.eye(m)])
+    return _assemble(point, Phi_p, Gam_p, Phi_k, Gam_k, C_k, (1 + kappa) * Dc, dt, n_hold=m)

@@ -31,6 +31,8 @@ class ModelValues:
         Initial closed-loop state (adaptive states start at zero).
     rotor_limits : tuple of float
         (min, max) rotor force, N.
+    hold : float
+        Hold compensation of the sampled control step, periods.
     """
 
     l: int
@@ -41,6 +43,7 @@ class ModelValues:
     p: np.ndarray
     x0: np.ndarray
     rotor_limits: tuple[float, float]
+    hold: float
 
 
 def model_values(scenario: Scenario) -> ModelValues:
@@ -69,7 +72,7 @@ def model_values(scenario: Scenario) -> ModelValues:
     x0[-2:] = init["position2"]   # the quadrotor starts above the vehicle
     return ModelValues(l, p_quad, p_veh, p_ctrl, ref,
                        np.concatenate([p_quad, p_veh, p_ctrl, ref]), x0,
-                       (q["rotor_force_min"], q["rotor_force_max"]))
+                       (q["rotor_force_min"], q["rotor_force_max"]), c["hold_compensation"])
 
 
 def disturbance_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:

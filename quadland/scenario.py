@@ -45,6 +45,10 @@ def _nonnegative(v):
     return None if np.all(np.asarray(v) >= 0) else "must be >= 0"
 
 
+def _unit_interval(v):
+    return None if 0 <= v <= 1 else "must be in [0, 1]"
+
+
 def _at_least_one(v):
     return None if v >= 1 else "must be >= 1"
 
@@ -116,6 +120,8 @@ SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "nominal_model": Field(B, "-", "feed forward the quadrotor's known dynamics"),
         "rate_hz": Field(F, "Hz", "control rate, 0 = continuous", check=_nonnegative),
         "backend": Field(S, "-", "control step implementation", choices=("casadi", "c")),
+        "hold_compensation": Field(F, "periods", "extrapolation of the held command",
+                                   check=_unit_interval),
     },
     "rbf": {
         "nodes": Field(I, "-", "l, the number of nodes", check=_at_least_one),

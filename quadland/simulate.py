@@ -225,7 +225,12 @@ def _control_step(scenario, l):
 
 
 def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
-    """Control step at ``rate_hz`` with zero-order hold on the plant."""
+    """Control step at ``rate_hz`` with zero-order hold on the plant.
+
+    The step's hold compensation (``controller.hold_compensation``) is off
+    on the first sample, which has no previous command, and on from the
+    second.
+    """
     rate = scenario.data["controller"]["rate_hz"]
     T = scenario.data["simulation"]["duration"]
     t_ctrl = _arange(T, 1.0 / rate)[:-1] if T > 0 else np.zeros(1)
@@ -237,6 +242,8 @@ def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
     xp = mv.x0[xq_idx].copy()
     W = np.zeros((mv.l, 4))
     zeta = np.zeros(4)
+    u_law = np.zeros(4)
+    hold = 0.0                     # no previous command on the first step
     yv_z2 = mv.p_veh[-1]
     limits = np.asarray(mv.rotor_limits, dtype=float)
     ctrl_set = set(np.round(t_ctrl, 12))
@@ -249,12 +256,14 @@ def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
     for i, t in enumerate(grid):
         if t in ctrl_set:
             yv = np.array([yv_z2, xp[12], xp[15]])
-            r = step(xp[0:10], yv, mv.ref, W, zeta, mv.p_quad, mv.p_ctrl, limits, dt)
-            u, wrench, rotor, W, zeta, _, tilt = (np.asarray(v, dtype=float) for v in r)
+            r = step(xp[0:10], yv, mv.ref, W, zeta, u_law, mv.p_quad, mv.p_ctrl, limits, hold,
+                     dt)
+            u, wrench, rotor, W, zeta, u_law, _, tilt = (np.asarray(v, dtype=float) for v in r)
             if abs(tilt.item()) < TILT_MIN:
                 raise SimulationError(f"singular attitude at t = {t:.4g} s: "
                                       f"cos(theta) cos(phi) = {tilt.item():.2e}")
-            u, wrench, rotor, zeta = u.ravel(), wrench.ravel(), rotor.ravel(), zeta.ravel()
+            u, wrench, rotor = u.ravel(), wrench.ravel(), rotor.ravel()
+            zeta, u_law, hold = zeta.ravel(), u_law.ravel(), mv.hold
         if t in out_set:
             k = out_set[t]
             X[:, k] = np.concatenate([xp[0:16], W.ravel(order="F"), zeta, xp[16:18]])

@@ -43,7 +43,8 @@ __all__ = ["CodegenConfig", "Defaults", "STATUS_CODES", "CASADI_FUNCTIONS", "gen
 STATUS_CODES = (
     ("QL_OK", 0, "success; outputs and adaptive state updated"),
     ("QL_ERR_NULL", 1, "a NULL pointer argument"),
-    ("QL_ERR_INVALID", 2, "dt <= 0 or rotor_force_min > rotor_force_max"),
+    ("QL_ERR_INVALID", 2,
+     "dt <= 0, rotor_force_min > rotor_force_max or hold_compensation outside [0, 1]"),
     ("QL_ERR_NONFINITE_INPUT", 3, "an input, parameter or the adaptive state is NaN or infinite"),
     ("QL_ERR_TILT", 4, "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible"),
     ("QL_ERR_NONFINITE_OUTPUT", 5,
@@ -123,6 +124,8 @@ class Defaults:
         ``(F_min, F_max)``, N.
     tilt_min : float
         Smallest accepted ``|cos(theta1) cos(phi1)|``.
+    hold : float
+        Hold compensation of the control step, periods.
     x0 : ndarray
         Initial closed-loop state.
     duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
@@ -140,6 +143,7 @@ class Defaults:
     ref: np.ndarray
     rotor_limits: tuple[float, float]
     tilt_min: float
+    hold: float
     x0: np.ndarray
     duration: float
     output_rate_hz: float
@@ -275,7 +279,7 @@ typedef {config.precision} ql_real;
 #define QL_P_QUAD_SIZE {QUADROTOR.size}
 #define QL_P_VEH_SIZE {VEHICLE.size}
 #define QL_P_CTRL_SIZE {controller_layout(l).size}
-#define QL_PARAMS_SIZE (QL_P_QUAD_SIZE + QL_P_CTRL_SIZE + 3)   /* ql_params, scalars */
+#define QL_PARAMS_SIZE (QL_P_QUAD_SIZE + QL_P_CTRL_SIZE + 4)   /* ql_params, scalars */
 #define QL_CLOSED_LOOP_NX {lay.nx}   /* [xq (10), xv (6), vec(W_hat) (4 l), zeta_hat (4), x1, y1] */
 #define QL_CLOSED_LOOP_NW {lay.nw}     /* [d_F (3), d_M (3)] */
 #define QL_CLOSED_LOOP_NP {lay.np}  /* [p_quad, p_veh, p_ctrl, ref (12)] */
@@ -311,10 +315,13 @@ typedef struct {
     ql_real e1d_ddot[4];             /* second time derivative */
 } ql_reference;
 
-/* Adaptive state (eq. 22): start at zero (ql_adaptive_state_init). */
+/* The step's memory: the adaptive state (eq. 22) and the law's previous
+ * output for the hold compensation. Start with ql_adaptive_state_init. */
 typedef struct {
     ql_real W_hat[4][QL_RBF_NODES];  /* W_hat (l x 4) column-major: W_hat[j][i] = W(i, j) */
     ql_real zeta_hat[4];             /* zeta_hat */
+    ql_real u_prev[4];               /* u_law of the last successful step */
+    int has_prev;                    /* 0 until a step succeeds: no extrapolation */
 } ql_adaptive_state;
 """)
     for sname, layout, doc in _param_structs(l):
@@ -329,11 +336,13 @@ typedef struct {
     ql_real rotor_force_min;         /* N: lower rotor force limit (clipping) */
     ql_real rotor_force_max;         /* N: upper rotor force limit (clipping) */
     ql_real tilt_min;                /* -: smallest accepted |cos(theta1) cos(phi1)| */
+    ql_real hold_compensation;       /* periods, 0..1: extrapolation of the held command */
 } ql_params;
 
 /* Outputs of one control step. */
 typedef struct {
-    ql_real u[4];                    /* virtual inputs (eq. 20), before clipping */
+    ql_real u[4];                    /* commanded virtual inputs, before clipping */
+    ql_real u_law[4];                /* the law of eq. (20) at the measurements */
     ql_real wrench[4];               /* N, N m: F_total, M_x, M_y, M_z of the clipped rotors */
     ql_real rotor[4];                /* N: rotor forces F1..F4, clipped to the limits */
     int n_clipped;                   /* number of rotors clipped this step (0..4) */
@@ -343,20 +352,22 @@ typedef struct {
 /* Fill the defaults (the paper scenario, quadland/scenarios/paper.toml). */
 void ql_params_init(ql_params *params);
 void ql_vehicle_params_init(ql_vehicle_params *params);
-/* Zero the adaptive state, W_hat(0) = 0 and zeta_hat(0) = 0 (Section 4). */
+/* W_hat(0) = 0 and zeta_hat(0) = 0 (Section 4), no previous command. */
 void ql_adaptive_state_init(ql_adaptive_state *state);
 /* The paper's reference e1d = 0. */
 void ql_reference_init(ql_reference *ref);
 
 /* One control step of period dt (s).
  *
- * Evaluates the law of eq. (20) at the measurements, clips the rotor forces
- * to [rotor_force_min, rotor_force_max] and integrates the adaptive laws of
- * eq. (22) exactly over dt with the measurements held. On QL_OK the outputs
- * are written and the adaptive state advanced; on any error the adaptive
- * state is left untouched and u, wrench and rotor are set to zero (never
- * NaN): the caller applies its failsafe. No heap, no global state:
- * reentrant. */
+ * Evaluates the law of eq. (20) at the measurements (u_law), extrapolates
+ * it against the hold's delay, u = u_law + hold_compensation (u_law -
+ * u_prev) (from the second step on), clips the rotor forces of u to
+ * [rotor_force_min, rotor_force_max] and integrates the adaptive laws of
+ * eq. (22) exactly over dt with the measurements held. The rotor forces
+ * are meant to be held until the next step. On QL_OK the outputs are
+ * written and the state advanced; on any error the state is left
+ * untouched and the outputs are set to zero (never NaN): the caller
+ * applies its failsafe. No heap, no global state: reentrant. */
 ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *yv,
                           const ql_reference *ref, const ql_params *params, ql_real dt,
                           ql_adaptive_state *state, ql_output *out);
@@ -399,7 +410,7 @@ def _source(config: CodegenConfig, d: Defaults) -> str:
     m = config.math
     out = [_banner(config, "quadland.c: readable C API of the adaptive backstepping control step.",
                    "the layouts of symbolic.parameters"),
-           '#include "quadland.h"\n\n#include <math.h>\n#include <string.h>\n\n'
+           '#include "quadland.h"\n\n#include <math.h>\n#include <stddef.h>\n#include <string.h>\n\n'
            '#include "control_step.h"\n\n']
     out.append("/* The parameter structs hold ql_real fields only and no padding, so that\n"
                " * they are the vectors of symbolic.parameters that CasADi reads. */\n")
@@ -410,8 +421,8 @@ def _source(config: CodegenConfig, d: Defaults) -> str:
                    f"[sizeof({sname}) == {size} * sizeof(ql_real) ? 1 : -1];\n")
     out.append("typedef char ql_params_is_packed"
                "[sizeof(ql_params) == QL_PARAMS_SIZE * sizeof(ql_real) ? 1 : -1];\n")
-    out.append("typedef char ql_adaptive_state_is_packed[sizeof(ql_adaptive_state)"
-               " == (4 * QL_RBF_NODES + 4) * sizeof(ql_real) ? 1 : -1];\n")
+    out.append("typedef char ql_adaptive_state_is_packed[offsetof(ql_adaptive_state, has_prev)"
+               " == (4 * QL_RBF_NODES + 8) * sizeof(ql_real) ? 1 : -1];\n")
     out.append("\n/* Defaults: quadland/scenarios/paper.toml. */\n")
     out.append(_array(config, "ql_default_p_quad", d.p_quad))
     out.append(_array(config, "ql_default_p_ctrl", d.p_ctrl))
@@ -434,6 +445,7 @@ void ql_params_init(ql_params *params)
     params->rotor_force_min = {config.literal(lo)};
     params->rotor_force_max = {config.literal(hi)};
     params->tilt_min = {config.literal(d.tilt_min)};
+    params->hold_compensation = {config.literal(d.hold)};
 }}
 
 void ql_vehicle_params_init(ql_vehicle_params *params)
@@ -472,22 +484,33 @@ const char *ql_status_string(ql_status status)
     return "unknown status";
 }}
 
-/* 1 when all n values are finite: x * 0 is zero for a finite x and NaN
- * for an infinity or a NaN. Sixteen independent sums keep the loop
- * branch-free and let the compiler pair them in vector instructions. */
+/* 1 when all n values are finite. A sum of values is finite when all of
+ * them are (a NaN or an infinity survives every addition, inf - inf is
+ * NaN), so one addition per value decides the common case; only a sum that
+ * overflowed from finite values needs the value-by-value test. Sixteen
+ * independent sums keep the loop branch-free and let the compiler pair
+ * them in vector instructions. */
 static int ql_all_finite(const ql_real *v, int n)
 {{
     ql_real acc[16] = {{0}};
     int i = 0;
     for (; i + 16 <= n; i += 16) {{
-""" + "".join(f"        acc[{k}] += v[i + {k}] * 0;\n" for k in range(16)) + f"""    }}
+""" + "".join(f"        acc[{k}] += v[i + {k}];\n" for k in range(16)) + f"""    }}
     for (; i < n; ++i) {{
-        acc[0] += v[i] * 0;
+        acc[0] += v[i];
     }}
     for (i = 1; i < 16; ++i) {{
         acc[0] += acc[i];
     }}
-    return acc[0] == 0;
+    if (isfinite(acc[0])) {{
+        return 1;
+    }}
+    for (i = 0; i < n; ++i) {{
+        if (!isfinite(v[i])) {{
+            return 0;
+        }}
+    }}
+    return 1;
 }}
 
 static void ql_output_zero(ql_output *out, ql_real tilt)
@@ -501,8 +524,8 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
                           ql_adaptive_state *state, ql_output *out)
 {{
     /* in = [xq (10), yv (3), ref (12), dt]; res_v = [u, wrench, rotor,
-     * zeta_next, W_next (4 l)], so that each is checked in one pass. */
-    ql_real in[26], res_v[16 + 4 * QL_RBF_NODES], limits[2], n_clipped, tilt;
+     * zeta_next, u_law, W_next (4 l)], so that each is checked in one pass. */
+    ql_real in[26], res_v[20 + 4 * QL_RBF_NODES], limits[2], hold, n_clipped, tilt;
     const ql_real *arg[control_step_SZ_ARG];
     ql_real *res[control_step_SZ_RES];
     casadi_int work_int[control_step_SZ_IW + 1];
@@ -530,47 +553,55 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
         ql_output_zero(out, 0);
         return QL_ERR_NONFINITE_INPUT;
     }}
-    if (!(dt > 0) || !(params->rotor_force_min <= params->rotor_force_max)) {{
+    if (!(dt > 0) || !(params->rotor_force_min <= params->rotor_force_max)
+        || !(params->hold_compensation >= 0 && params->hold_compensation <= 1)) {{
         ql_output_zero(out, 0);
         return QL_ERR_INVALID;
     }}
     limits[0] = params->rotor_force_min;
     limits[1] = params->rotor_force_max;
+    hold = state->has_prev ? params->hold_compensation : 0;
 
     arg[0] = in;
     arg[1] = in + 10;
     arg[2] = in + 13;
     arg[3] = &state->W_hat[0][0];
     arg[4] = state->zeta_hat;
-    arg[5] = (const ql_real *)&params->quad;
-    arg[6] = (const ql_real *)&params->ctrl;
-    arg[7] = limits;
-    arg[8] = in + 25;
+    arg[5] = state->u_prev;
+    arg[6] = (const ql_real *)&params->quad;
+    arg[7] = (const ql_real *)&params->ctrl;
+    arg[8] = limits;
+    arg[9] = &hold;
+    arg[10] = in + 25;
     res[0] = res_v;
     res[1] = res_v + 4;
     res[2] = res_v + 8;
-    res[3] = res_v + 16;
+    res[3] = res_v + 20;
     res[4] = res_v + 12;
-    res[5] = &n_clipped;
-    res[6] = &tilt;
+    res[5] = res_v + 16;
+    res[6] = &n_clipped;
+    res[7] = &tilt;
     control_step(arg, res, work_int, work_real, 0);
 
     if (!({m("fabs")}(tilt) >= params->tilt_min)) {{
         ql_output_zero(out, tilt);
         return QL_ERR_TILT;
     }}
-    if (!ql_all_finite(res_v, 16 + 4 * QL_RBF_NODES)) {{
+    if (!ql_all_finite(res_v, 20 + 4 * QL_RBF_NODES)) {{
         ql_output_zero(out, tilt);
-        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + 4)
+        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + 8)
             ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
     }}
     memcpy(out->u, res_v, 4 * sizeof(ql_real));
     memcpy(out->wrench, res_v + 4, 4 * sizeof(ql_real));
     memcpy(out->rotor, res_v + 8, 4 * sizeof(ql_real));
+    memcpy(out->u_law, res_v + 16, 4 * sizeof(ql_real));
     out->n_clipped = (int)n_clipped;
     out->tilt = tilt;
     memcpy(state->zeta_hat, res_v + 12, 4 * sizeof(ql_real));
-    memcpy(&state->W_hat[0][0], res_v + 16, 4 * QL_RBF_NODES * sizeof(ql_real));
+    memcpy(state->u_prev, res_v + 16, 4 * sizeof(ql_real));
+    memcpy(&state->W_hat[0][0], res_v + 20, 4 * QL_RBF_NODES * sizeof(ql_real));
+    state->has_prev = 1;
     return QL_OK;
 }}
 """)
@@ -835,6 +866,7 @@ int main(int argc, char **argv)
             /* The law's outputs at this state, for the CSV only. */
             memcpy(&probe.W_hat[0][0], x + 16, NL * sizeof(ql_real));
             memcpy(probe.zeta_hat, x + 16 + NL, 4 * sizeof(ql_real));
+            probe.has_prev = 0;
             measure(x, &xq, &yv);
             status = ql_control_step(&xq, &yv, &ref, &params, h, &probe, &out);
         }

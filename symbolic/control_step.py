@@ -10,6 +10,18 @@ is linear with constant forcing, so
 
 and likewise for zeta_hat. This is stable for every ``dt > 0``, unlike a
 forward-Euler update.
+
+Hold compensation. A command held over ``[t_k, t_k + dt)`` acts on average
+half a period late, which is the dominant error of the sampled loop against
+the continuous one. The step extrapolates the law's output by ``hold``
+periods along its last difference,
+
+    u_cmd = u_k + hold (u_k - u_prev),
+
+so that ``hold = 1/2`` cancels the half-period delay to first order in
+``dt`` and the remaining error is second order; ``hold = 0`` is the plain
+zero-order-hold emulation of eq. (20). ``u_prev`` is the law's output
+``u_law`` of the previous step (on the first step, pass ``hold = 0``).
 """
 
 from __future__ import annotations
@@ -18,35 +30,43 @@ import casadi as ca
 
 from symbolic.backstepping import control_law
 from symbolic.parameters import QUADROTOR, controller_layout
-from symbolic.quadrotor import wrench_from_rotors
+from symbolic.quadrotor import rotors_from_wrench, wrench_from_rotors
+from symbolic.relative import wrench_from_virtual
 
 __all__ = ["STEP_INPUTS", "STEP_OUTPUTS", "control_step_function"]
 
-STEP_INPUTS = ("xq", "yv", "ref", "W_hat", "zeta_hat", "p_quad", "p_ctrl", "rotor_limits", "dt")
-STEP_OUTPUTS = ("u", "wrench", "rotor", "W_next", "zeta_next", "n_clipped", "tilt")
+STEP_INPUTS = ("xq", "yv", "ref", "W_hat", "zeta_hat", "u_prev", "p_quad", "p_ctrl",
+               "rotor_limits", "hold", "dt")
+STEP_OUTPUTS = ("u", "wrench", "rotor", "W_next", "zeta_next", "u_law", "n_clipped", "tilt")
 
 
 def control_step_function(l: int) -> ca.Function:
     """The sampled control step for ``l`` RBF nodes.
 
-    ``control_step(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl,
-    rotor_limits, dt) -> (u, wrench, rotor, W_next, zeta_next, n_clipped,
-    tilt)``
+    ``control_step(xq, yv, ref, W_hat, zeta_hat, u_prev, p_quad, p_ctrl,
+    rotor_limits, hold, dt) -> (u, wrench, rotor, W_next, zeta_next, u_law,
+    n_clipped, tilt)``
 
-    ``u`` is the commanded virtual input (eq. 20); ``rotor`` the rotor
-    forces clipped to ``rotor_limits = [F_min, F_max]`` (N) and ``wrench``
-    the wrench they produce; ``n_clipped`` counts the clipped rotors;
+    ``u_law`` is the law of eq. (20) at the measurements and ``u`` the
+    commanded virtual input, ``u_law`` extrapolated by ``hold`` periods
+    from ``u_prev`` (see the module's docstring); ``rotor`` the rotor
+    forces of ``u`` clipped to ``rotor_limits = [F_min, F_max]`` (N) and
+    ``wrench`` the wrench they produce; ``n_clipped`` counts the clipped
+    rotors;
     ``tilt = cos(theta1) cos(phi1)``, which the caller must keep away from
     zero (the thrust map divides by it).
     """
     xq, yv, ref = ca.SX.sym("xq", 10), ca.SX.sym("yv", 3), ca.SX.sym("ref", 12)
     W_hat, zeta_hat = ca.SX.sym("W_hat", l, 4), ca.SX.sym("zeta_hat", 4)
+    u_prev = ca.SX.sym("u_prev", 4)
     p_quad, p_ctrl = QUADROTOR.sym(), controller_layout(l).sym()
-    limits, dt = ca.SX.sym("rotor_limits", 2), ca.SX.sym("dt")
+    limits, hold, dt = ca.SX.sym("rotor_limits", 2), ca.SX.sym("hold"), ca.SX.sym("dt")
     c = controller_layout(l).unpack(p_ctrl)
     law = control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)
-    rotor = ca.fmin(ca.fmax(law["rotor"], limits[0]), limits[1])
-    n_clipped = ca.sum1(law["rotor"] < limits[0]) + ca.sum1(law["rotor"] > limits[1])
+    u = law["u"] + hold * (law["u"] - u_prev)                              # hold compensation
+    unclipped = rotors_from_wrench(wrench_from_virtual(xq, u, p_quad), p_quad)
+    rotor = ca.fmin(ca.fmax(unclipped, limits[0]), limits[1])
+    n_clipped = ca.sum1(unclipped < limits[0]) + ca.sum1(unclipped > limits[1])
     z2, Psi = law["z2"], law["Psi"]
     a_w = ca.exp(-c["gamma1"] * c["k_w"] * dt)
     b_w = -ca.expm1(-c["gamma1"] * c["k_w"] * dt) / c["k_w"]             # (1 - a_w) / k_w
@@ -57,7 +77,8 @@ def control_step_function(l: int) -> ca.Function:
     tilt = ca.cos(xq[1]) * ca.cos(xq[2])
     return ca.Function(
         "control_step",
-        [xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl, limits, dt],
-        [law["u"], wrench_from_rotors(rotor, p_quad), rotor, W_next, zeta_next, n_clipped, tilt],
+        [xq, yv, ref, W_hat, zeta_hat, u_prev, p_quad, p_ctrl, limits, hold, dt],
+        [u, wrench_from_rotors(rotor, p_quad), rotor, W_next, zeta_next, law["u"], n_clipped,
+         tilt],
         list(STEP_INPUTS), list(STEP_OUTPUTS),
     )

@@ -106,6 +106,6 @@ def test_no_heap_and_no_casadi_runtime():
         text = src.read_text()
         assert not re.search(r"\b(malloc|calloc|realloc|free)\s*\(", text), src
         includes = set(re.findall(r"#include [<\"]([^>\"]+)[>\"]", text))
-        assert includes <= {"math.h", "string.h", "stdio.h", "stdlib.h", "time.h",
+        assert includes <= {"math.h", "stddef.h", "string.h", "stdio.h", "stdlib.h", "time.h",
                             "quadland.h", "control_step.h", "closed_loop.h", "plant.h",
                             "closed_loop_jacobian.h", "paper_scenario.h"}, (src, includes)

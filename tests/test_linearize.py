@@ -131,8 +131,9 @@ def test_broken_loops_are_minus_KP_and_minus_PK(small, eq_point):
 
 
 def test_sampled_models_are_zero_order_holds(small, eq_point):
-    models = linear_models(small, eq_point)
-    sampled = sampled_models(small, eq_point, 50.0)
+    plain = small.replace(**{"controller.hold_compensation": 0.0})
+    models = linear_models(plain, eq_point)
+    sampled = sampled_models(plain, eq_point, 50.0)
     ref = control.sample_system(models.plant, 0.02, method="zoh")
     np.testing.assert_allclose(sampled.plant.A, ref.A, atol=1e-12)
     np.testing.assert_allclose(sampled.plant.B, ref.B, atol=1e-12)
@@ -145,3 +146,16 @@ def test_sampled_models_are_zero_order_holds(small, eq_point):
 def test_newton_failure_is_reported(small):
     with pytest.raises(OperatingPointError, match="did not converge"):
         equilibrium(small, max_iter=1, tol=1e-300)
+
+
+def test_sampled_controller_extrapolates_by_the_hold_compensation(small, eq_point):
+    """K_comp(z) = (1 + kappa - kappa / z) K_zoh(z): the step's u = u_law + kappa (u_law - u_prev)."""
+    kappa = 0.5
+    plain = sampled_models(small.replace(**{"controller.hold_compensation": 0.0}), eq_point, 50.0)
+    comp = sampled_models(small.replace(**{"controller.hold_compensation": kappa}), eq_point, 50.0)
+    assert comp.controller.nstates == plain.controller.nstates + 4
+    w = np.array([0.1, 3.0, 40.0, 150.0])
+    z = np.exp(1j * w * 0.02)
+    want = (1 + kappa - kappa / z)[:, None, None] * freqresp(plain.controller, w)
+    got = freqresp(comp.controller, w)
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())

@@ -55,7 +55,8 @@ def test_requirement_decides_the_verdict(tmp_path, capsys):
 
 
 def test_sampled_loop_and_figures(tmp_path):
-    status, out = _run(tmp_path, "--set", "controller.rate_hz=50", "--at", "0.1")
+    status, out = _run(tmp_path, "--set", "controller.rate_hz=50", "--at", "0.1",
+                       "--set", "controller.hold_compensation=0.0")
     assert status == 0
     assert {p.name for p in out.iterdir()} == {"margins.json", *FIGURES}
     for fig in FIGURES:
@@ -82,3 +83,27 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, messag
     assert err.startswith("quadland: error:") and message in err
     assert len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_hold_compensation_trades_nyquist_gain_for_phase(tmp_path):
+    """At z = -1 the extrapolation 1 + k - k/z is exactly 1 + 2k and real: with
+    k = 1/2 the gain margin at the Nyquist frequency shrinks by 20 log10(2) dB,
+    while the phase lost to the hold is recovered near crossover."""
+    runs = {}
+    for hold in (0.0, 0.5):
+        status, out = _run(tmp_path, "--no-plots", "--set", "controller.rate_hz=50",
+                           "--set", f"controller.hold_compensation={hold}", name=f"h{hold}")
+        assert status == 0
+        runs[hold] = json.loads((out / "margins.json").read_text())
+    nyquist = math.pi * 50
+    for name, cont in runs[0.0]["continuous"]["loops"].items():
+        at_nyquist = []
+        for hold in (0.0, 0.5):
+            crossings = runs[hold]["sampled"]["loops"][name]["all_crossings"]
+            k = [i for i, w in enumerate(crossings["gm_frequency"])
+                 if w == pytest.approx(nyquist, rel=1e-9)]
+            assert len(k) == 1
+            at_nyquist.append(crossings["gain_margin"][k[0]])
+        assert at_nyquist[0] / at_nyquist[1] == pytest.approx(2.0, rel=1e-9)
+        pm = {h: runs[h]["sampled"]["loops"][name]["phase_margin_deg"] for h in (0.0, 0.5)}
+        assert abs(pm[0.5] - cont["phase_margin_deg"]) < 0.1 * abs(pm[0.0] - cont["phase_margin_deg"])

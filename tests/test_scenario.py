@@ -73,6 +73,8 @@ BAD_OVERRIDES = [
     (["controller.nominal_model=1"], r"controller\.nominal_model: expected true or false"),
     (["disturbance.noise=yes"], r"disturbance\.noise: expected true or false"),
     (["simulation.integrator=euler"], r"simulation\.integrator: must be one of"),
+    (["controller.hold_compensation=-0.5"], r"controller\.hold_compensation: must be in \[0, 1\]"),
+    (["controller.hold_compensation=2"], r"controller\.hold_compensation: must be in \[0, 1\]"),
     (["quadrotor.masss=2"], r"unknown key 'quadrotor\.masss' \(did you mean 'quadrotor\.mass'\?\)"),
     (["quadrotr.mass=2"], r"unknown section 'quadrotr' \(did you mean 'quadrotor'\?\)"),
     (["mass=2"], r"expected section\.key=value"),

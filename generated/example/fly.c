@@ -176,6 +176,7 @@ int main(int argc, char **argv)
             /* The law's outputs at this state, for the CSV only. */
             memcpy(&probe.W_hat[0][0], x + 16, NL * sizeof(ql_real));
             memcpy(probe.zeta_hat, x + 16 + NL, 4 * sizeof(ql_real));
+            probe.has_prev = 0;
             measure(x, &xq, &yv);
             status = ql_control_step(&xq, &yv, &ref, &params, h, &probe, &out);
         }

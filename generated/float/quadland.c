@@ -7,6 +7,7 @@
 #include "quadland.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "control_step.h"
@@ -17,7 +18,7 @@ typedef char ql_quadrotor_params_is_packed[sizeof(ql_quadrotor_params) == QL_P_Q
 typedef char ql_controller_params_is_packed[sizeof(ql_controller_params) == QL_P_CTRL_SIZE * sizeof(ql_real) ? 1 : -1];
 typedef char ql_vehicle_params_is_packed[sizeof(ql_vehicle_params) == QL_P_VEH_SIZE * sizeof(ql_real) ? 1 : -1];
 typedef char ql_params_is_packed[sizeof(ql_params) == QL_PARAMS_SIZE * sizeof(ql_real) ? 1 : -1];
-typedef char ql_adaptive_state_is_packed[sizeof(ql_adaptive_state) == (4 * QL_RBF_NODES + 4) * sizeof(ql_real) ? 1 : -1];
+typedef char ql_adaptive_state_is_packed[offsetof(ql_adaptive_state, has_prev) == (4 * QL_RBF_NODES + 8) * sizeof(ql_real) ? 1 : -1];
 
 /* Defaults: quadland/scenarios/paper.toml. */
 static const ql_real ql_default_p_quad[13] = {
@@ -303,6 +304,7 @@ void ql_params_init(ql_params *params)
     params->rotor_force_min = -500.0f;
     params->rotor_force_max = 500.0f;
     params->tilt_min = 0.001f;
+    params->hold_compensation = 0.5f;
 }
 
 void ql_vehicle_params_init(ql_vehicle_params *params)
@@ -336,7 +338,7 @@ const char *ql_status_string(ql_status status)
     switch (status) {
     case QL_OK: return "success; outputs and adaptive state updated";
     case QL_ERR_NULL: return "a NULL pointer argument";
-    case QL_ERR_INVALID: return "dt <= 0 or rotor_force_min > rotor_force_max";
+    case QL_ERR_INVALID: return "dt <= 0, rotor_force_min > rotor_force_max or hold_compensation outside [0, 1]";
     case QL_ERR_NONFINITE_INPUT: return "an input, parameter or the adaptive state is NaN or infinite";
     case QL_ERR_TILT: return "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible";
     case QL_ERR_NONFINITE_OUTPUT: return "the law overflowed: a NaN or infinite value from finite inputs";
@@ -344,38 +346,49 @@ const char *ql_status_string(ql_status status)
     return "unknown status";
 }
 
-/* 1 when all n values are finite: x * 0 is zero for a finite x and NaN
- * for an infinity or a NaN. Sixteen independent sums keep the loop
- * branch-free and let the compiler pair them in vector instructions. */
+/* 1 when all n values are finite. A sum of values is finite when all of
+ * them are (a NaN or an infinity survives every addition, inf - inf is
+ * NaN), so one addition per value decides the common case; only a sum that
+ * overflowed from finite values needs the value-by-value test. Sixteen
+ * independent sums keep the loop branch-free and let the compiler pair
+ * them in vector instructions. */
 static int ql_all_finite(const ql_real *v, int n)
 {
     ql_real acc[16] = {0};
     int i = 0;
     for (; i + 16 <= n; i += 16) {
-        acc[0] += v[i + 0] * 0;
-        acc[1] += v[i + 1] * 0;
-        acc[2] += v[i + 2] * 0;
-        acc[3] += v[i + 3] * 0;
-        acc[4] += v[i + 4] * 0;
-        acc[5] += v[i + 5] * 0;
-        acc[6] += v[i + 6] * 0;
-        acc[7] += v[i + 7] * 0;
-        acc[8] += v[i + 8] * 0;
-        acc[9] += v[i + 9] * 0;
-        acc[10] += v[i + 10] * 0;
-        acc[11] += v[i + 11] * 0;
-        acc[12] += v[i + 12] * 0;
-        acc[13] += v[i + 13] * 0;
-        acc[14] += v[i + 14] * 0;
-        acc[15] += v[i + 15] * 0;
+        acc[0] += v[i + 0];
+        acc[1] += v[i + 1];
+        acc[2] += v[i + 2];
+        acc[3] += v[i + 3];
+        acc[4] += v[i + 4];
+        acc[5] += v[i + 5];
+        acc[6] += v[i + 6];
+        acc[7] += v[i + 7];
+        acc[8] += v[i + 8];
+        acc[9] += v[i + 9];
+        acc[10] += v[i + 10];
+        acc[11] += v[i + 11];
+        acc[12] += v[i + 12];
+        acc[13] += v[i + 13];
+        acc[14] += v[i + 14];
+        acc[15] += v[i + 15];
     }
     for (; i < n; ++i) {
-        acc[0] += v[i] * 0;
+        acc[0] += v[i];
     }
     for (i = 1; i < 16; ++i) {
         acc[0] += acc[i];
     }
-    return acc[0] == 0;
+    if (isfinite(acc[0])) {
+        return 1;
+    }
+    for (i = 0; i < n; ++i) {
+        if (!isfinite(v[i])) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 static void ql_output_zero(ql_output *out, ql_real tilt)
@@ -389,8 +402,8 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
                           ql_adaptive_state *state, ql_output *out)
 {
     /* in = [xq (10), yv (3), ref (12), dt]; res_v = [u, wrench, rotor,
-     * zeta_next, W_next (4 l)], so that each is checked in one pass. */
-    ql_real in[26], res_v[16 + 4 * QL_RBF_NODES], limits[2], n_clipped, tilt;
+     * zeta_next, u_law, W_next (4 l)], so that each is checked in one pass. */
+    ql_real in[26], res_v[20 + 4 * QL_RBF_NODES], limits[2], hold, n_clipped, tilt;
     const ql_real *arg[control_step_SZ_ARG];
     ql_real *res[control_step_SZ_RES];
     casadi_int work_int[control_step_SZ_IW + 1];
@@ -418,46 +431,54 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
         ql_output_zero(out, 0);
         return QL_ERR_NONFINITE_INPUT;
     }
-    if (!(dt > 0) || !(params->rotor_force_min <= params->rotor_force_max)) {
+    if (!(dt > 0) || !(params->rotor_force_min <= params->rotor_force_max)
+        || !(params->hold_compensation >= 0 && params->hold_compensation <= 1)) {
         ql_output_zero(out, 0);
         return QL_ERR_INVALID;
     }
     limits[0] = params->rotor_force_min;
     limits[1] = params->rotor_force_max;
+    hold = state->has_prev ? params->hold_compensation : 0;
 
     arg[0] = in;
     arg[1] = in + 10;
     arg[2] = in + 13;
     arg[3] = &state->W_hat[0][0];
     arg[4] = state->zeta_hat;
-    arg[5] = (const ql_real *)&params->quad;
-    arg[6] = (const ql_real *)&params->ctrl;
-    arg[7] = limits;
-    arg[8] = in + 25;
+    arg[5] = state->u_prev;
+    arg[6] = (const ql_real *)&params->quad;
+    arg[7] = (const ql_real *)&params->ctrl;
+    arg[8] = limits;
+    arg[9] = &hold;
+    arg[10] = in + 25;
     res[0] = res_v;
     res[1] = res_v + 4;
     res[2] = res_v + 8;
-    res[3] = res_v + 16;
+    res[3] = res_v + 20;
     res[4] = res_v + 12;
-    res[5] = &n_clipped;
-    res[6] = &tilt;
+    res[5] = res_v + 16;
+    res[6] = &n_clipped;
+    res[7] = &tilt;
     control_step(arg, res, work_int, work_real, 0);
 
     if (!(fabsf(tilt) >= params->tilt_min)) {
         ql_output_zero(out, tilt);
         return QL_ERR_TILT;
     }
-    if (!ql_all_finite(res_v, 16 + 4 * QL_RBF_NODES)) {
+    if (!ql_all_finite(res_v, 20 + 4 * QL_RBF_NODES)) {
         ql_output_zero(out, tilt);
-        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + 4)
+        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + 8)
             ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
     }
     memcpy(out->u, res_v, 4 * sizeof(ql_real));
     memcpy(out->wrench, res_v + 4, 4 * sizeof(ql_real));
     memcpy(out->rotor, res_v + 8, 4 * sizeof(ql_real));
+    memcpy(out->u_law, res_v + 16, 4 * sizeof(ql_real));
     out->n_clipped = (int)n_clipped;
     out->tilt = tilt;
     memcpy(state->zeta_hat, res_v + 12, 4 * sizeof(ql_real));
-    memcpy(&state->W_hat[0][0], res_v + 16, 4 * QL_RBF_NODES * sizeof(ql_real));
+    memcpy(state->u_prev, res_v + 16, 4 * sizeof(ql_real));
+    memcpy(&state->W_hat[0][0], res_v + 20, 4 * QL_RBF_NODES * sizeof(ql_real));
+    state->has_prev = 1;
     return QL_OK;
 }

@@ -19,7 +19,7 @@ typedef float ql_real;
 #define QL_P_QUAD_SIZE 13
 #define QL_P_VEH_SIZE 10
 #define QL_P_CTRL_SIZE 1114
-#define QL_PARAMS_SIZE (QL_P_QUAD_SIZE + QL_P_CTRL_SIZE + 3)   /* ql_params, scalars */
+#define QL_PARAMS_SIZE (QL_P_QUAD_SIZE + QL_P_CTRL_SIZE + 4)   /* ql_params, scalars */
 #define QL_CLOSED_LOOP_NX 422   /* [xq (10), xv (6), vec(W_hat) (4 l), zeta_hat (4), x1, y1] */
 #define QL_CLOSED_LOOP_NW 6     /* [d_F (3), d_M (3)] */
 #define QL_CLOSED_LOOP_NP 1149  /* [p_quad, p_veh, p_ctrl, ref (12)] */
@@ -30,7 +30,7 @@ typedef float ql_real;
 typedef enum {
     QL_OK = 0,                     /* success; outputs and adaptive state updated */
     QL_ERR_NULL = 1,               /* a NULL pointer argument */
-    QL_ERR_INVALID = 2,            /* dt <= 0 or rotor_force_min > rotor_force_max */
+    QL_ERR_INVALID = 2,            /* dt <= 0, rotor_force_min > rotor_force_max or hold_compensation outside [0, 1] */
     QL_ERR_NONFINITE_INPUT = 3,    /* an input, parameter or the adaptive state is NaN or infinite */
     QL_ERR_TILT = 4,               /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
     QL_ERR_NONFINITE_OUTPUT = 5,   /* the law overflowed: a NaN or infinite value from finite inputs */
@@ -58,10 +58,13 @@ typedef struct {
     ql_real e1d_ddot[4];             /* second time derivative */
 } ql_reference;
 
-/* Adaptive state (eq. 22): start at zero (ql_adaptive_state_init). */
+/* The step's memory: the adaptive state (eq. 22) and the law's previous
+ * output for the hold compensation. Start with ql_adaptive_state_init. */
 typedef struct {
     ql_real W_hat[4][QL_RBF_NODES];  /* W_hat (l x 4) column-major: W_hat[j][i] = W(i, j) */
     ql_real zeta_hat[4];             /* zeta_hat */
+    ql_real u_prev[4];               /* u_law of the last successful step */
+    int has_prev;                    /* 0 until a step succeeds: no extrapolation */
 } ql_adaptive_state;
 
 /* Physical constants of the quadrotor (Table 1, eq. 2): layout p_quad. */
@@ -108,11 +111,13 @@ typedef struct {
     ql_real rotor_force_min;         /* N: lower rotor force limit (clipping) */
     ql_real rotor_force_max;         /* N: upper rotor force limit (clipping) */
     ql_real tilt_min;                /* -: smallest accepted |cos(theta1) cos(phi1)| */
+    ql_real hold_compensation;       /* periods, 0..1: extrapolation of the held command */
 } ql_params;
 
 /* Outputs of one control step. */
 typedef struct {
-    ql_real u[4];                    /* virtual inputs (eq. 20), before clipping */
+    ql_real u[4];                    /* commanded virtual inputs, before clipping */
+    ql_real u_law[4];                /* the law of eq. (20) at the measurements */
     ql_real wrench[4];               /* N, N m: F_total, M_x, M_y, M_z of the clipped rotors */
     ql_real rotor[4];                /* N: rotor forces F1..F4, clipped to the limits */
     int n_clipped;                   /* number of rotors clipped this step (0..4) */
@@ -122,20 +127,22 @@ typedef struct {
 /* Fill the defaults (the paper scenario, quadland/scenarios/paper.toml). */
 void ql_params_init(ql_params *params);
 void ql_vehicle_params_init(ql_vehicle_params *params);
-/* Zero the adaptive state, W_hat(0) = 0 and zeta_hat(0) = 0 (Section 4). */
+/* W_hat(0) = 0 and zeta_hat(0) = 0 (Section 4), no previous command. */
 void ql_adaptive_state_init(ql_adaptive_state *state);
 /* The paper's reference e1d = 0. */
 void ql_reference_init(ql_reference *ref);
 
 /* One control step of period dt (s).
  *
- * Evaluates the law of eq. (20) at the measurements, clips the rotor forces
- * to [rotor_force_min, rotor_force_max] and integrates the adaptive laws of
- * eq. (22) exactly over dt with the measurements held. On QL_OK the outputs
- * are written and the adaptive state advanced; on any error the adaptive
- * state is left untouched and u, wrench and rotor are set to zero (never
- * NaN): the caller applies its failsafe. No heap, no global state:
- * reentrant. */
+ * Evaluates the law of eq. (20) at the measurements (u_law), extrapolates
+ * it against the hold's delay, u = u_law + hold_compensation (u_law -
+ * u_prev) (from the second step on), clips the rotor forces of u to
+ * [rotor_force_min, rotor_force_max] and integrates the adaptive laws of
+ * eq. (22) exactly over dt with the measurements held. The rotor forces
+ * are meant to be held until the next step. On QL_OK the outputs are
+ * written and the state advanced; on any error the state is left
+ * untouched and the outputs are set to zero (never NaN): the caller
+ * applies its failsafe. No heap, no global state: reentrant. */
 ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *yv,
                           const ql_reference *ref, const ql_params *params, ql_real dt,
                           ql_adaptive_state *state, ql_output *out);
