@@ -64,7 +64,7 @@ typedef struct {
     ql_real W_hat[4][QL_RBF_NODES];  /* W_hat (l x 4) column-major: W_hat[j][i] = W(i, j) */
     ql_real zeta_hat[4];             /* zeta_hat */
     ql_real u_prev[4];               /* u_law of the last successful step */
-    int has_prev;                    /* 0 until a step succeeds: no extrapolation */
+    int has_prev;                    /* 0: do not extrapolate (initially, after a gap) */
 } ql_adaptive_state;
 
 /* Physical constants of the quadrotor (Table 1, eq. 2): layout p_quad. */
@@ -142,7 +142,9 @@ void ql_reference_init(ql_reference *ref);
  * are meant to be held until the next step. On QL_OK the outputs are
  * written and the state advanced; on any error the state is left
  * untouched and the outputs are set to zero (never NaN): the caller
- * applies its failsafe. No heap, no global state: reentrant. */
+ * applies its failsafe, and clears state->has_prev before the next call
+ * (as after any period whose output was not applied). No heap, no global
+ * state: reentrant. */
 ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *yv,
                           const ql_reference *ref, const ql_params *params, ql_real dt,
                           ql_adaptive_state *state, ql_output *out);
