@@ -253,11 +253,12 @@ class CApi:
     real: type
 
 
-@functools.lru_cache(maxsize=4)
-def load_api(l: int, precision: str = "double", opt: str = "-O2") -> CApi:
-    """The whole generated library (step, closed loop, Jacobian, plant)."""
+@functools.lru_cache(maxsize=8)
+def load_api(l: int, precision: str = "double", opt: str = "-O2", model: bool = True) -> CApi:
+    """The generated library: the step's API and, with ``model``, the closed
+    loop, its Jacobian and the plant (whose compilation takes most of the time)."""
     files = sources(l, precision)
-    lib = ctypes.CDLL(str(build_library(files, _ALL_SOURCES, opt)))
+    lib = ctypes.CDLL(str(build_library(files, _ALL_SOURCES if model else _STEP_SOURCES, opt)))
     real = ctypes.c_double if precision == "double" else ctypes.c_float
     S = _struct
     api = CApi(
@@ -287,10 +288,12 @@ def load_api(l: int, precision: str = "double", opt: str = "-O2") -> CApi:
     lib.ql_control_step.restype = ctypes.c_int
     lib.ql_status_string.argtypes = [ctypes.c_int]
     lib.ql_status_string.restype = ctypes.c_char_p
+    lib.ql_pack_closed_loop_params.argtypes = [P(api.Params), P(api.VehicleParams),
+                                               P(api.Reference), P(real)]
+    if not model:
+        return api
     for name in ("ql_closed_loop", "ql_closed_loop_jacobian"):
         getattr(lib, name).argtypes = [P(real)] * 4
     lib.ql_plant.argtypes = [P(real)] * 6
     lib.ql_closed_loop_jacobian_sparsity.restype = P(ctypes.c_int)
-    lib.ql_pack_closed_loop_params.argtypes = [P(api.Params), P(api.VehicleParams),
-                                               P(api.Reference), P(real)]
     return api

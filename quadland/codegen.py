@@ -42,7 +42,8 @@ def default_values(scenario_name: str = "paper") -> Defaults:
     d, sim = sc.data["disturbance"], sc.data["simulation"]
     return Defaults(
         l=mv.l, p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
-        rotor_limits=tuple(float(v) for v in mv.rotor_limits), tilt_min=TILT_MIN, hold=mv.hold, x0=mv.x0,
+        rotor_limits=tuple(float(v) for v in mv.rotor_limits), tilt_min=TILT_MIN,
+        hold=mv.hold, x0=mv.x0,
         duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
         control_rate_hz=EXAMPLE_CONTROL_RATE_HZ,
         disturbance_rate_hz=float(d["sample_rate_hz"]),

@@ -100,7 +100,8 @@ class LinearModels:
     plant : control.StateSpace
         P: u (4) -> y (10), states xr.
     controller : control.StateSpace
-        K: y (10) -> u (4), states xc (the adaptive states).
+        K: y (10) -> u (4), states xc (the adaptive states; sampled with hold
+        compensation, also the law's previous output ``u_prev``).
     loop_input : control.StateSpace
         ``L_i = -K P`` (4 x 4), the loop broken at the plant input.
     loop_output : control.StateSpace

@@ -43,6 +43,16 @@ def api():
     return cbackend.load_api(L, "double", "-O0")
 
 
+@pytest.fixture(scope="module", params=["double", "float"])
+def step_api(request):
+    """The step's API alone, as flight code builds it (-O2), in both precisions."""
+    return cbackend.load_api(L, request.param, "-O2", model=False)
+
+
+def _finfo(api):
+    return np.finfo(np.float64 if api.real is ctypes.c_double else np.float32)
+
+
 def _inputs(rng, mv, l, scale=1.0):
     """Random inputs of the control step around the paper's operating range."""
     xq = rng.normal(size=10) * 0.4 * scale
@@ -177,21 +187,31 @@ def test_api_step_matches_casadi(api, paper):
         hold = paper.hold
 
 
-def test_api_hold_compensation_extrapolates_the_law(api, paper):
+def test_api_hold_compensation_extrapolates_the_law(step_api, paper):
     """u = u_law + kappa (u_law - u_law of the step before), from the second step on."""
+    api = step_api
     xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
     params.hold_compensation = 0.75
+    state.u_prev[1] = math.nan          # not read while has_prev = 0
     assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
     first = np.array(list(out.u_law))
     np.testing.assert_array_equal(list(out.u), first)      # nothing to extrapolate from
+    np.testing.assert_array_equal(list(state.u_prev), first)
+    assert state.has_prev == 1
     xq.eta1[1] += 0.01
     assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
     second = np.array(list(out.u_law))
     assert np.max(np.abs(second - first)) > 0.1
-    _assert_rel(list(out.u), second + 0.75 * (second - first))
+    want = second + 0.75 * (second - first)
+    tol = 1e-12 if api.real is ctypes.c_double else 1e-6
+    np.testing.assert_allclose(list(out.u), want, rtol=tol, atol=tol * np.max(np.abs(want)))
+    state.has_prev = 0                  # a gap: the next command is not extrapolated
+    assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
+    np.testing.assert_array_equal(list(out.u), list(out.u_law))
 
 
-def test_api_clipping_is_reported(api, paper):
+def test_api_clipping_is_reported(step_api, paper):
+    api = step_api
     xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
     params.rotor_force_min, params.rotor_force_max = -2.0, 3.0
     assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
@@ -217,7 +237,8 @@ def test_api_clipping_is_reported(api, paper):
     ("rolled_over", "QL_ERR_TILT"),
     ("overflow", "QL_ERR_NONFINITE_OUTPUT"),
 ])
-def test_api_errors_leave_the_state_untouched(api, paper, case, status):
+def test_api_errors_leave_the_state_untouched(step_api, paper, case, status):
+    api = step_api
     xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
     dt = 0.002
     assert _step(api, xq, yv, ref, params, dt, state, out) == STATUS["QL_OK"]
@@ -253,7 +274,7 @@ def test_api_errors_leave_the_state_untouched(api, paper, case, status):
         xq.eta1[0] = math.pi / 2 + 1e-4
     elif case == "overflow":
         xq.V1[2] = 100.0
-        params.ctrl.k2[0] = 1e308     # finite gain, overflowing product
+        params.ctrl.k2[0] = _finfo(api).max / 2    # finite gain, overflowing product
     before = bytes(state)
     assert _step(api, xq, yv, ref, params, dt, state, out) == STATUS[status]
     assert bytes(state) == before
@@ -261,20 +282,18 @@ def test_api_errors_leave_the_state_untouched(api, paper, case, status):
     assert api.lib.ql_status_string(STATUS[status])
 
 
-def test_api_accepts_huge_finite_parameters(api, paper):
+def test_api_accepts_huge_finite_parameters(step_api, paper):
     """Finite values whose sum overflows are not taken for infinities."""
+    api = step_api
     xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
-    params.rotor_force_max = 1.7e308
-    params.ctrl.centers[5][0] = 1.7e308      # a node so far away that Psi_5 = 0
     assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
-    p_ctrl = np.ctypeslib.as_array(ctypes.cast(ctypes.byref(params.ctrl),
-                                               ctypes.POINTER(ctypes.c_double)),
-                                   (paper.p_ctrl.size,)).copy()
-    want = control_step_function(L)(paper.x0[0:10], [paper.p_veh[-1], paper.x0[12],
-                                                     paper.x0[15]], paper.ref, np.zeros((L, 4)),
-                                    np.zeros(4), np.zeros(4), paper.p_quad, p_ctrl,
-                                    [paper.rotor_limits[0], 1.7e308], 0.0, 0.002)
-    _assert_rel(list(out.rotor), want[2])
+    want = list(out.u) + list(out.rotor)
+    xq, yv, ref, params, state, out = _api_objects(api, paper, paper.x0)
+    huge = 0.9 * float(_finfo(api).max)
+    params.rotor_force_max = huge           # never reached
+    params.ctrl.centers[5][0] = huge        # a node so far away that Psi_5 = 0; W_hat = 0
+    assert _step(api, xq, yv, ref, params, 0.002, state, out) == STATUS["QL_OK"]
+    assert list(out.u) + list(out.rotor) == want
 
 
 def test_api_null_pointer(api):

@@ -149,7 +149,10 @@ def test_newton_failure_is_reported(small):
 
 
 def test_sampled_controller_extrapolates_by_the_hold_compensation(small, eq_point):
-    """K_comp(z) = (1 + kappa - kappa / z) K_zoh(z): the step's u = u_law + kappa (u_law - u_prev)."""
+    """K_comp(z) = (1 + kappa - kappa / z) K_zoh(z).
+
+    The step commands u = u_law + kappa (u_law - u_prev).
+    """
     kappa = 0.5
     plain = sampled_models(small.replace(**{"controller.hold_compensation": 0.0}), eq_point, 50.0)
     comp = sampled_models(small.replace(**{"controller.hold_compensation": kappa}), eq_point, 50.0)

@@ -404,6 +404,7 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
     /* in = [xq (10), yv (3), ref (12), dt]; res_v = [u, wrench, rotor,
      * zeta_next, u_law, W_next (4 l)], so that each is checked in one pass. */
     ql_real in[26], res_v[20 + 4 * QL_RBF_NODES], limits[2], hold, n_clipped, tilt;
+    ql_real no_prev[4] = {0, 0, 0, 0};
     const ql_real *arg[control_step_SZ_ARG];
     ql_real *res[control_step_SZ_RES];
     casadi_int work_int[control_step_SZ_IW + 1];
@@ -424,9 +425,11 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
     memcpy(in + 17, ref->e1d_dot, 4 * sizeof(ql_real));
     memcpy(in + 21, ref->e1d_ddot, 4 * sizeof(ql_real));
     in[25] = dt;
-    /* The parameters, limits and tilt_min in one pass over ql_params. W_hat
-     * and zeta_hat are checked through u, W_next and zeta_next: any NaN or
-     * infinity in them reaches u through W_hat^T Psi (0 * inf is NaN). */
+    /* The parameters, limits and tilt_min in one pass over ql_params. The
+     * state is checked through the outputs: a NaN or an infinity in W_hat or
+     * zeta_hat reaches u through W_hat^T Psi (0 * inf is NaN) and W_next,
+     * zeta_next; one in u_prev reaches u when has_prev is set (u_prev is not
+     * read otherwise). */
     if (!(ql_all_finite(in, 26) & ql_all_finite((const ql_real *)params, QL_PARAMS_SIZE))) {
         ql_output_zero(out, 0);
         return QL_ERR_NONFINITE_INPUT;
@@ -445,7 +448,7 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
     arg[2] = in + 13;
     arg[3] = &state->W_hat[0][0];
     arg[4] = state->zeta_hat;
-    arg[5] = state->u_prev;
+    arg[5] = state->has_prev ? state->u_prev : no_prev;
     arg[6] = (const ql_real *)&params->quad;
     arg[7] = (const ql_real *)&params->ctrl;
     arg[8] = limits;
@@ -467,7 +470,7 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
     }
     if (!ql_all_finite(res_v, 20 + 4 * QL_RBF_NODES)) {
         ql_output_zero(out, tilt);
-        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + 8)
+        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + (state->has_prev ? 8 : 4))
             ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
     }
     memcpy(out->u, res_v, 4 * sizeof(ql_real));
