@@ -19,7 +19,7 @@ periods along its last difference,
     u_cmd = u_k + hold (u_k - u_prev),
 
 so that ``hold = 1/2`` cancels the half-period delay to first order in
-``dt`` and the remaining error is second order; ``hold = 0`` is the plain
+``dt`` and the hold's error becomes second order; ``hold = 0`` is the plain
 zero-order-hold emulation of eq. (20). ``u_prev`` is the law's output
 ``u_law`` of the previous step (on the first step, pass ``hold = 0``).
 """
