@@ -65,6 +65,104 @@ def test_allmargin_siso_closed_form(case):
                                rtol=1e-8)
 
 
+def _double_integrator_lead():
+    """L = K (T s + 1)/s^2, K = 2, T = 1: the phase -180 + atan(wT) never reaches -180
+    again; |L| = 1 where w^4 = K^2 (1 + w^2 T^2), PM = atan(wc T)."""
+    K, T = 2.0, 1.0
+    x = max(r.real for r in np.roots([1, -K * K * T * T, -K * K]) if abs(r.imag) < 1e-12)
+    wc = math.sqrt(x)
+    return (control.tf([K * T, K], [1, 0, 0]),
+            dict(gm=[], wg=[], pm=[math.degrees(math.atan(wc * T))], wc=[wc]))
+
+
+def _quadruple_integrator():
+    """L = 2 (s+1)^3/s^4: phase -360 + 3 atan(w) is -180 at w = sqrt 3 with |L| = 16/9
+    (gain-reduction margin 9/16); |L| = 1 where 4 (1 + x)^3 = x^4, x = w^2; the closed
+    loop s^4 + 2 (s+1)^3 is stable (Routh: k = 2 > 9/8)."""
+    x = max(r.real for r in np.roots([1, -4, -12, -12, -4]) if abs(r.imag) < 1e-12)
+    wc = math.sqrt(x)
+    return (control.tf([2, 6, 6, 2], [1, 0, 0, 0, 0]),
+            dict(gm=[9 / 16], wg=[math.sqrt(3)], pm=[3 * math.degrees(math.atan(wc)) - 180],
+                 wc=[wc]))
+
+
+def _slow_cubic_lag():
+    """L = 2 a^3/(s + a)^3, a = 1e-4: the cubic lag 1e4 times slower, a genuine slow
+    triple pole that must not be mistaken for roundoff."""
+    a = 1e-4
+    wc = a * math.sqrt(2 ** (2 / 3) - 1)
+    return (control.tf([2 * a ** 3], [1, 3 * a, 3 * a * a, a ** 3]),
+            dict(gm=[4.0], wg=[a * math.sqrt(3)], pm=[180 - 3 * math.degrees(math.atan(wc / a))],
+                 wc=[wc]))
+
+
+INTEGRATOR_CASES = [_conditionally_stable, _double_integrator_lead, _quadruple_integrator,
+                    _integrator]
+
+
+def _companion(L):
+    """An exact controllable-canonical realization (integer entries, exact zeros)."""
+    import scipy.signal
+
+    num, den = (np.asarray(v, dtype=float).ravel() for v in control.tfdata(L)[:2])
+    A, B, C, D = scipy.signal.tf2ss(num, den)
+    return control.ss(A, B, C, D)
+
+
+def _assert_margins(m, ref):
+    assert m.stable
+    np.testing.assert_allclose(m.gain_margin, ref["gm"], rtol=1e-7)
+    np.testing.assert_allclose(m.gm_frequency, ref["wg"], rtol=1e-7)
+    np.testing.assert_allclose(m.phase_margin, ref["pm"], rtol=1e-7)
+    np.testing.assert_allclose(m.pm_frequency, ref["wc"], rtol=1e-7)
+
+
+@pytest.mark.parametrize("realize", [control.ss, _companion], ids=["control.ss", "companion"])
+@pytest.mark.parametrize("case", INTEGRATOR_CASES, ids=lambda c: c.__name__.strip("_"))
+def test_allmargin_repeated_integrators_both_realizations(case, realize):
+    """control.ss goes through slycot when it is installed and leaves ~1e-16 in the
+    entries of A, which splits a k-fold integrator into k poles of ~eps^(1/k); the
+    companion form keeps them exactly at zero. Both must give the closed form."""
+    L, ref = case()
+    m, = allmargin(realize(L))
+    _assert_margins(m, ref)
+
+
+def _perturbed(base, rng):
+    """Random similarity transforms (condition number up to ~1e2) and entry noise of
+    1e-14 ||A||."""
+    A, B, C, D = (np.asarray(v, dtype=float) for v in (base.A, base.B, base.C, base.D))
+    n = A.shape[0]
+    for _ in range(10):
+        T = np.eye(n) + 0.5 * rng.standard_normal((n, n))
+        Ti = np.linalg.inv(T)
+        noise = 1e-14 * np.linalg.norm(A, 2) * rng.standard_normal((n, n))
+        yield control.ss(Ti @ A @ T + noise, Ti @ B, C @ T, D)
+
+
+@pytest.mark.parametrize("case", INTEGRATOR_CASES, ids=lambda c: c.__name__.strip("_"))
+def test_allmargin_perturbed_realizations(case):
+    """Perturbations scatter repeated integrators further; the margins must not move."""
+    L, ref = case()
+    for sys in _perturbed(_companion(L), np.random.default_rng(7)):
+        m, = allmargin(sys)
+        _assert_margins(m, ref)
+
+
+def test_allmargin_keeps_a_genuine_slow_triple_pole():
+    """A well-scaled realization of a triple pole at -1e-4 (control.ss balances it), and
+    perturbations of it: its crossings near 1e-4 rad/s are the loop's own. (The
+    companion form of the same loop puts a^3 = 1e-12 beside unit entries; roundoff of
+    1e-14 there moves the gain margin by 1e-3, and allmargin's error bound says so.)"""
+    L, ref = _slow_cubic_lag()
+    base = control.ss(L)
+    m, = allmargin(base)
+    _assert_margins(m, ref)
+    for sys in _perturbed(base, np.random.default_rng(8)):
+        m, = allmargin(sys)
+        _assert_margins(m, ref)
+
+
 def test_allmargin_agrees_with_python_control_on_small_loops():
     for case in (_third_order, _cubic_lag):
         L, _ = case()
