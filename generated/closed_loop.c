@@ -4946,8 +4946,8 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a025=(a017*a025);
   a012=(a012+a025);
   a012=(a004*a012);
-  a025=cos(a000);
-  a013=cos(a002);
+  a025=cos(a002);
+  a013=cos(a000);
   a025=(a025*a013);
   a012=(a012/a025);
   a008=(a008*a006);

@@ -6031,8 +6031,8 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a220=(a232+a220);
   res[0][3]=a220;
   a020=(a020*a005);
-  a005=cos(a002);
-  a009=cos(a004);
+  a005=cos(a004);
+  a009=cos(a002);
   a005=(a005*a009);
   a020=(a020/a005);
   a005=4.;

@@ -24,7 +24,7 @@ typedef double ql_real;
 #define QL_CLOSED_LOOP_NW 6     /* [d_F (3), d_M (3)] */
 #define QL_CLOSED_LOOP_NP 1149  /* [p_quad, p_veh, p_ctrl, ref (12)] */
 #define QL_CLOSED_LOOP_JACOBIAN_NNZ 4627
-#define QL_PLANT_NX 18          /* [xq (10), xv (6), x1, y1] */
+#define QL_PLANT_NX 18         /* [xq (10), xv (6), x1, y1] */
 
 /* Status of ql_control_step. */
 typedef enum {

@@ -26,9 +26,10 @@ from pathlib import Path
 
 import numpy as np
 
-from quadland.exceptions import CompilerNotFoundError, QuadlandError
-from symbolic.control_step import STEP_INPUTS, STEP_OUTPUTS
-from symbolic.parameters import QUADROTOR, VEHICLE, ParamLayout, controller_layout
+from quadland.exceptions import CompileError, CompilerNotFoundError
+from symbolic.control_step import step_inputs, step_outputs
+from symbolic.layout import Layout
+from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 
 __all__ = ["CompileError", "find_compiler", "cache_dir", "sources", "build_library",
            "CControlStep", "load_control_step", "CApi", "load_api"]
@@ -39,10 +40,6 @@ CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-fPIC")
 _STEP_SOURCES = ("control_step.c", "quadland.c")
 _ALL_SOURCES = _STEP_SOURCES + ("closed_loop.c", "plant.c", "quadland_model.c",
                                 "closed_loop_jacobian.c", "quadland_jacobian.c")
-
-
-class CompileError(QuadlandError, RuntimeError):
-    """The C compiler failed on the generated sources."""
 
 
 def find_compiler() -> str:
@@ -169,8 +166,10 @@ class CControlStep:
                        ptr, ctypes.c_int]
         fn.restype = ctypes.c_int
         self._fn = fn
-        in_sizes = (10, 3, 12, 4 * l, 4, 4, QUADROTOR.size, controller_layout(l).size, 2, 1, 1)
-        self._out_shapes = ((4, 1), (4, 1), (4, 1), (l, 4), (4, 1), (4, 1), (1, 1), (1, 1))
+        self._in_names = step_inputs(l).names()
+        in_sizes = tuple(f.size for f in step_inputs(l).fields)
+        self._out_names = step_outputs(l).names()
+        self._out_shapes = tuple(f.shape or (f.size, 1) for f in step_outputs(l).fields)
         # Buffers and pointer arrays live as long as the object: a call only copies.
         self._ins = [np.zeros(n, dtype=self._dtype) for n in in_sizes]
         self._outs = [np.zeros(int(np.prod(s)), dtype=self._dtype) for s in self._out_shapes]
@@ -180,9 +179,9 @@ class CControlStep:
         self._w = (self._real * 1)()
 
     def __call__(self, *args):
-        if len(args) != len(STEP_INPUTS):
-            raise TypeError(f"control_step takes {len(STEP_INPUTS)} inputs {STEP_INPUTS}")
-        for name, a, buf in zip(STEP_INPUTS, args, self._ins):
+        if len(args) != len(self._in_names):
+            raise TypeError(f"control_step takes {len(self._in_names)} inputs {self._in_names}")
+        for name, a, buf in zip(self._in_names, args, self._ins):
             v = np.asarray(a, dtype=float)
             if v.ndim > 1:
                 v = v.reshape(-1, order="F")
@@ -196,7 +195,7 @@ class CControlStep:
 
     def __repr__(self) -> str:
         return (f"CControlStep(l={self.l}, precision={self.precision!r}): "
-                f"{', '.join(STEP_INPUTS)} -> {', '.join(STEP_OUTPUTS)}")
+                f"{', '.join(self._in_names)} -> {', '.join(self._out_names)}")
 
 
 @functools.lru_cache(maxsize=8)
@@ -217,7 +216,7 @@ def _struct(name: str, fields, real):
     return type(name, (ctypes.Structure,), {"_fields_": list(fields)})
 
 
-def _layout_struct(name: str, layout: ParamLayout, real):
+def _layout_struct(name: str, layout: Layout, real):
     fields = []
     for f in layout.fields:
         if f.shape is not None:

@@ -1,7 +1,7 @@
 """Exceptions raised by quadland."""
 
-__all__ = ["QuadlandError", "ScenarioError", "SingularAttitudeError", "CompilerNotFoundError",
-           "OperatingPointError", "MarginsError"]
+__all__ = ["QuadlandError", "ScenarioError", "SimulationError", "SingularAttitudeError",
+           "CompilerNotFoundError", "CompileError", "OperatingPointError", "MarginsError"]
 
 
 class QuadlandError(Exception):
@@ -12,12 +12,20 @@ class ScenarioError(QuadlandError, ValueError):
     """A scenario file or override is malformed or non-physical."""
 
 
+class SimulationError(QuadlandError, RuntimeError):
+    """The simulated loop left the model's domain (singular attitude, NaN)."""
+
+
 class SingularAttitudeError(QuadlandError, ArithmeticError):
     """cos(theta) cos(phi) is too small to invert the thrust map."""
 
 
 class CompilerNotFoundError(QuadlandError, RuntimeError):
     """No C compiler was found to build the generated code."""
+
+
+class CompileError(QuadlandError, RuntimeError):
+    """The C compiler failed on generated sources."""
 
 
 class OperatingPointError(QuadlandError, ArithmeticError):

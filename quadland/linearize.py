@@ -21,11 +21,17 @@ import control
 import numpy as np
 import scipy.linalg
 
+from quadland.constants import TILT_MIN
 from quadland.exceptions import OperatingPointError, SingularAttitudeError
 from quadland.model import model_values
 from quadland.scenario import Scenario
-from symbolic.linearization import (PLANT_STATES, equilibrium_residual_function,
-                                    linearization_function)
+from symbolic.closed_loop import closed_loop_state
+from symbolic.linearization import (RELATIVE_PLANT, VEHICLE_SPEEDS, controller_states,
+                                    equilibrium_residual_function, linearization_function)
+from symbolic.parameters import VEHICLE
+from symbolic.quadrotor import DISTURBANCE
+from symbolic.relative import VIRTUAL_INPUT
+from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["LOOP_NAMES", "INPUT_NAMES", "OperatingPoint", "LinearModels", "equilibrium",
            "frozen_point", "linear_models", "sampled_models"]
@@ -33,9 +39,7 @@ __all__ = ["LOOP_NAMES", "INPUT_NAMES", "OperatingPoint", "LinearModels", "equil
 #: The four loops, one per virtual input.
 LOOP_NAMES = ("altitude", "roll", "pitch", "yaw")
 #: Names of the virtual inputs u (eq. 6).
-INPUT_NAMES = ("u_z", "u_phi", "u_theta", "u_psi")
-
-_TILT_MIN = 1e-3
+INPUT_NAMES = VIRTUAL_INPUT.element_names()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,7 +53,7 @@ class OperatingPoint:
     time : float or None
         s, the simulated time of a frozen point.
     xr : ndarray, shape (10,)
-        Relative plant state (``PLANT_STATES``), SI units and rad.
+        Relative plant state (``symbolic.linearization.RELATIVE_PLANT``).
     xc : ndarray, shape (4 l + 4,)
         Adaptive states ``[vec(W_hat), zeta_hat]``.
     vehicle : ndarray, shape (3,)
@@ -81,7 +85,8 @@ class OperatingPoint:
     def to_dict(self) -> dict:
         """JSON-ready summary."""
         return dict(kind=self.kind, time_s=self.time,
-                    state={n: float(v) for n, v in zip(PLANT_STATES, self.xr)},
+                    state={n: float(v) for n, v in
+                           zip(RELATIVE_PLANT.element_names(), self.xr)},
                     zeta_hat=self.xc[-4:].tolist(),
                     norm_W_hat=float(np.linalg.norm(self.xc[:-4])),
                     vehicle=dict(u2=float(self.vehicle[0]), v2=float(self.vehicle[1]),
@@ -123,7 +128,7 @@ class LinearModels:
 
 def _constant_disturbance(scenario: Scenario) -> np.ndarray:
     d = scenario.data["disturbance"]
-    return np.concatenate([d["force_bias"], d["moment_bias"]]).astype(float)
+    return DISTURBANCE.pack(dict(d_F=d["force_bias"], d_M=d["moment_bias"]))
 
 
 def equilibrium(scenario: Scenario, *, tol: float = 1e-9, max_iter: int = 50) -> OperatingPoint:
@@ -149,8 +154,11 @@ def equilibrium(scenario: Scenario, *, tol: float = 1e-9, max_iter: int = 50) ->
     l = mv.l
     F = equilibrium_residual_function(l)
     w = _constant_disturbance(scenario)
-    xi = np.zeros(10 + 4 * l + 4 + 3)
-    xi[0:4] = mv.ref[0:4] + np.array([mv.p_veh[-1], 0, 0, 0])
+    xr0 = RELATIVE_PLANT.zeros()
+    xr0[0:4] = mv.ref[0:4]                                   # hover at the reference e1d
+    xr0[RELATIVE_PLANT.index("z1")] += VEHICLE.unpack(mv.p_veh)["z2"][0]
+    nr, nc = RELATIVE_PLANT.size, controller_states(l).size
+    xi = np.concatenate([xr0, np.zeros(nc), VEHICLE_SPEEDS.zeros()])
 
     def residual(x):
         r, J = F(x, w, mv.p_quad, mv.p_veh, mv.p_ctrl, mv.ref)
@@ -180,7 +188,7 @@ def equilibrium(scenario: Scenario, *, tol: float = 1e-9, max_iter: int = 50) ->
     else:
         raise OperatingPointError(f"no equilibrium: Newton's method did not converge in "
                                   f"{max_iter} iterations (residual {norm:.3g})")
-    return _point(scenario, "equilibrium", None, xi[0:10], xi[10:14 + 4 * l], xi[-3:], w, it)
+    return _point(scenario, "equilibrium", None, xi[:nr], xi[nr:nr + nc], xi[nr + nc:], w, it)
 
 
 def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
@@ -196,24 +204,26 @@ def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
     if t > 0:
         res = simulate(scenario.replace(**{"simulation.duration": float(t)}))
         x = res.states[-1]
-        w = np.array([res[k][-1] for k in ("d_Fx", "d_Fy", "d_Fz", "d_Mx", "d_My", "d_Mz")])
+        w = np.array([res[k][-1] for k in DISTURBANCE.element_names()])
     else:
         from quadland.model import disturbance_samples
         x, w = mv.x0, disturbance_samples(scenario, np.zeros(1))[:, 0]
-    l = mv.l
-    xq, xv = x[0:10], x[10:16]
-    xr = xq.copy()
-    xr[3] = xq[3] - xv[2]
-    return _point(scenario, "frozen", float(t), xr, x[16:20 + 4 * l], xv[3:6], w, 0)
+    xs = closed_loop_state(mv.l).unpack(x)
+    xv = VEHICLE_STATE.unpack(xs["xv"])
+    xr = xs["xq"].copy()
+    xr[RELATIVE_PLANT.index("psi_e")] -= xv["psi2"][0]
+    xc = np.concatenate([xs["W_hat"].ravel(order="F"), xs["zeta_hat"]])
+    speeds = np.concatenate([xv[n] for n in VEHICLE_SPEEDS.names()])
+    return _point(scenario, "frozen", float(t), xr, xc, speeds, w, 0)
 
 
 def _point(scenario, kind, t, xr, xc, vehicle, w, iterations) -> OperatingPoint:
     mv = model_values(scenario)
     tilt = np.cos(xr[1]) * np.cos(xr[2])
-    if abs(tilt) < _TILT_MIN:
+    if abs(tilt) < TILT_MIN:
         raise SingularAttitudeError(f"operating point at cos(theta) cos(phi) = {tilt:.2e}: "
                                     "the thrust map is singular there")
-    z2 = float(mv.p_veh[-1])
+    z2 = float(VEHICLE.unpack(mv.p_veh)["z2"][0])
     out = linearization_function(mv.l)(xr, xc, [z2, vehicle[2]], w, mv.p_quad, mv.p_ctrl,
                                        mv.ref)
     u, xr_dot, xc_dot = (np.asarray(v, dtype=float).ravel() for v in out[0:3])
@@ -237,7 +247,7 @@ def _assemble(point, Ap, Bp, Ac, Bc, Cc, Dc, dt, n_hold=0) -> LinearModels:
                 + [f"zeta_hat[{k}]" for k in range(4)]
                 + [f"u_prev[{k}]" for k in range(n_hold)])
     kw = dict(dt=dt) if dt else {}
-    y_names = list(PLANT_STATES)
+    y_names = list(RELATIVE_PLANT.element_names())
     plant = control.ss(Ap, Bp, np.eye(n), np.zeros((n, m)), inputs=list(INPUT_NAMES),
                        outputs=y_names, states=y_names, name="plant", **kw)
     controller = control.ss(Ac, Bc, Cc, Dc, inputs=y_names, outputs=list(INPUT_NAMES),

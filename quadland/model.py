@@ -7,9 +7,12 @@ import dataclasses
 import numpy as np
 
 from quadland.scenario import Scenario
-from symbolic.closed_loop import closed_loop_layout
+from symbolic.backstepping import REFERENCE
+from symbolic.closed_loop import POSITION1, closed_loop_params, closed_loop_state
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.rbf import default_centers
+from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["ModelValues", "model_values", "disturbance_samples"]
 
@@ -61,17 +64,20 @@ def model_values(scenario: Scenario) -> ModelValues:
         k_zeta=c["k_zeta"], rho=c["rho"], nominal_model=float(c["nominal_model"]),
         centers=default_centers(l, r["center_min"], r["center_max"]),
         widths=np.full(l, r["width"])))
-    ref = np.concatenate([scenario.data["reference"]["e1d"], np.zeros(8)])
+    ref = REFERENCE.pack(dict(e1d=scenario.data["reference"]["e1d"], e1d_dot=np.zeros(4),
+                              e1d_ddot=np.zeros(4)))
     init = scenario.data["initial"]
     deg = np.pi / 180
-    x0 = np.zeros(closed_loop_layout(l).nx)
-    x0[0:10] = [init["z1"], *np.multiply(init["eta1_deg"], deg), *init["velocity1"],
-                *np.multiply(init["omega1_deg_s"], deg)]
-    x0[10:16] = [*init["position2"], init["psi2_deg"] * deg, *init["velocity2"],
-                 init["r2_deg_s"] * deg]
-    x0[-2:] = init["position2"]   # the quadrotor starts above the vehicle
-    return ModelValues(l, p_quad, p_veh, p_ctrl, ref,
-                       np.concatenate([p_quad, p_veh, p_ctrl, ref]), x0,
+    xq = QUAD_STATE.pack(dict(z1=init["z1"], eta1=np.multiply(init["eta1_deg"], deg),
+                              V1=init["velocity1"], Omega1=np.multiply(init["omega1_deg_s"], deg)))
+    (x2, y2), (u2, v2) = init["position2"], init["velocity2"]
+    xv = VEHICLE_STATE.pack(dict(x2=x2, y2=y2, psi2=init["psi2_deg"] * deg, u2=u2, v2=v2,
+                                 r2=init["r2_deg_s"] * deg))
+    x0 = closed_loop_state(l).pack(dict(
+        xq=xq, xv=xv, W_hat=np.zeros((l, 4)), zeta_hat=np.zeros(4),
+        pos1=POSITION1.pack(dict(x1=x2, y1=y2))))   # the quadrotor starts above the vehicle
+    p = closed_loop_params(l).pack(dict(p_quad=p_quad, p_veh=p_veh, p_ctrl=p_ctrl, ref=ref))
+    return ModelValues(l, p_quad, p_veh, p_ctrl, ref, p, x0,
                        (q["rotor_force_min"], q["rotor_force_max"]), c["hold_compensation"])
 
 

@@ -22,53 +22,48 @@ from collections.abc import Mapping
 import casadi as ca
 import numpy as np
 
-from quadland.exceptions import QuadlandError
+from quadland.constants import TILT_MIN
+from quadland.exceptions import SimulationError
 from quadland.model import ModelValues, disturbance_samples, model_values
 from quadland.scenario import Scenario
-from symbolic.closed_loop import (OUTPUTS, closed_loop_function, closed_loop_layout,
-                                  closed_loop_outputs, plant_function)
-from symbolic.control_step import control_step_function
+from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, POSITION1, closed_loop_function,
+                                  closed_loop_outputs, closed_loop_state, plant_function,
+                                  vehicle_measurement)
+from symbolic.control_step import control_step_function, step_outputs
+from symbolic.layout import Field, Layout
+from symbolic.parameters import VEHICLE
+from symbolic.quadrotor import DISTURBANCE
+from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.vehicle import STATE as VEHICLE_STATE
 
-__all__ = ["SimulationError", "SimulationResult", "simulate", "COLUMNS", "time_grid"]
+__all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
+           "time_grid"]
 
-#: Minimum |cos(theta) cos(phi)| the simulator accepts before it stops.
-TILT_MIN = 1e-3
-
-
-class SimulationError(QuadlandError, RuntimeError):
-    """The simulated loop left the model's domain (singular attitude, NaN)."""
-
-
-def _columns():
-    cols = [("t", "s")]
-    cols += [(n, u) for n, u in zip(("z_e", "phi_e", "theta_e", "psi_e"),
-                                    ("m", "rad", "rad", "rad"))]
-    cols += [(n, u) for n, u in zip(("dz_e", "p_e", "q_e", "r_e"),
-                                    ("m/s", "rad/s", "rad/s", "rad/s"))]
-    cols += [(f"u_{i}", "m/s^2" if i == 1 else "rad/s^2") for i in range(1, 5)]
-    cols += [("F_total", "N"), ("M_x", "N m"), ("M_y", "N m"), ("M_z", "N m")]
-    cols += [(f"F_{i}", "N") for i in range(1, 5)]
-    for name in ("Delta", "Delta_hat", "Delta_target"):
-        cols += [(f"{name}_{i}", "m/s^2" if i == 1 else "rad/s^2") for i in range(1, 5)]
-    cols += [("zeta_hat_1", "-"), ("zeta_hat_2", "-"), ("zeta_hat_3", "-"), ("zeta_hat_4", "-")]
-    cols += [("norm_W_hat", "-"), ("V1", "-")]
-    cols += [("z1", "m"), ("phi1", "rad"), ("theta1", "rad"), ("psi1", "rad"),
-             ("x1", "m"), ("y1", "m"), ("x2", "m"), ("y2", "m"), ("psi2", "rad"),
-             ("u2", "m/s"), ("v2", "m/s"), ("r2", "rad/s")]
-    cols += [(f"d_F{a}", "N") for a in "xyz"] + [(f"d_M{a}", "N m") for a in "xyz"]
-    return tuple(cols)
-
+#: The columns of trajectory.csv, composed from the model's layouts.
+TRAJECTORY = Layout("trajectory", (
+    Field("t", 1, "s", "time"),
+    *(OUTPUTS[n] for n in ("e1", "e2", "u", "wrench", "rotor", "Delta", "Delta_hat",
+                           "Delta_target")),
+    dataclasses.replace(closed_loop_state(1)["zeta_hat"], doc="robust term estimate zeta_hat"),
+    Field("norm_W_hat", 1, "-", "Frobenius norm of the network weights W_hat"),
+    OUTPUTS["lyapunov_V1"],
+    QUAD_STATE["z1"],
+    QUAD_STATE["eta1"],
+    *POSITION1.fields,
+    *VEHICLE_STATE.fields,
+    *DISTURBANCE.fields,
+), "one row per output time of a simulation")
 
 #: Columns of trajectory.csv: (name, unit).
-COLUMNS = _columns()
+COLUMNS = tuple(zip(TRAJECTORY.element_names(), TRAJECTORY.element_units()))
 
 
 @dataclasses.dataclass(frozen=True)
 class SimulationResult(Mapping):
     """The outputs of one simulation, each a NumPy array by name.
 
-    ``result["t"]``, ``result["z_e"]``, ... (see ``COLUMNS``); ``states``
-    is the closed-loop state at each row, ``(len(t), nx)``.
+    ``result["t"]``, ``result["z_e"]``, ... (the entries of ``TRAJECTORY``);
+    ``states`` is the closed-loop state at each row, ``(len(t), nx)``.
     """
 
     scenario: Scenario
@@ -85,10 +80,13 @@ class SimulationResult(Mapping):
         return len(self.columns)
 
     def to_csv(self, path=None) -> str:
-        """The trajectory as CSV text (header ``name [unit]``); written to ``path`` if given."""
+        """The trajectory as CSV text with a header of plain names; written to ``path`` if given.
+
+        Units are in :func:`columns_sidecar` (``columns.json``) and ``docs/simulation.md``.
+        """
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
-        writer.writerow([f"{n} [{u}]" for n, u in COLUMNS])
+        writer.writerow([n for n, _ in COLUMNS])
         data = np.column_stack([self.columns[n] for n, _ in COLUMNS])
         for row in data:
             writer.writerow([f"{v:.12g}" for v in row])
@@ -97,6 +95,13 @@ class SimulationResult(Mapping):
             from quadland.output import write_text_atomic
             write_text_atomic(path, text)
         return text
+
+
+def columns_sidecar() -> dict:
+    """``columns.json``: each CSV column's unit and meaning, in column order."""
+    return {"columns": [dict(name=n, unit=u, doc=d) for n, u, d in
+                        zip(TRAJECTORY.element_names(), TRAJECTORY.element_units(),
+                            TRAJECTORY.element_docs())]}
 
 
 def time_grid(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -129,7 +134,7 @@ def _held(t_switch, values, times):
 @functools.lru_cache(maxsize=8)
 def _continuous_integrator(l: int, plugin: str, opts: tuple, grid: tuple):
     f = closed_loop_function(l)
-    x, w, p = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("w", 6), ca.SX.sym("p", f.size1_in(2))
+    x, w, p = (ca.SX.sym(f.name_in(i), f.size1_in(i)) for i in range(3))
     dae = {"x": x, "u": w, "p": p, "ode": f(x, w, p)}
     return ca.integrator("closed_loop_sim", plugin, dae, grid[0], list(grid[1:]), dict(opts))
 
@@ -137,9 +142,10 @@ def _continuous_integrator(l: int, plugin: str, opts: tuple, grid: tuple):
 @functools.lru_cache(maxsize=16)
 def _plant_integrator(plugin: str, opts: tuple, h: float):
     f = plant_function()
-    xp, u = ca.SX.sym("xp", 18), ca.SX.sym("u", 10)
+    xp, u = PLANT_STATE.sym(), ca.SX.sym("u", f.size1_in(1) + f.size1_in(2))
     pq, pv = ca.SX.sym("pq", f.size1_in(3)), ca.SX.sym("pv", f.size1_in(4))
-    dae = {"x": xp, "u": u, "p": ca.vertcat(pq, pv), "ode": f(xp, u[0:4], u[4:10], pq, pv)}
+    nwr = f.size1_in(1)
+    dae = {"x": xp, "u": u, "p": ca.vertcat(pq, pv), "ode": f(xp, u[:nwr], u[nwr:], pq, pv)}
     return ca.integrator("plant_sim", plugin, dae, 0.0, h, dict(opts))
 
 
@@ -237,26 +243,25 @@ def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
     grid = np.unique(np.round(np.concatenate([t_out, t_dist, t_ctrl]), 12))
     step = _control_step(scenario, mv.l)
     plugin, opts = _integrator_options(scenario, 1)
-    lay = closed_loop_layout(mv.l)
-    xq_idx = np.r_[0:16, lay.nx - 2:lay.nx]
-    xp = mv.x0[xq_idx].copy()
-    W = np.zeros((mv.l, 4))
-    zeta = np.zeros(4)
+    lay = closed_loop_state(mv.l)
+    x0 = lay.unpack(mv.x0)
+    xp = PLANT_STATE.pack({n: x0[n] for n in PLANT_STATE.names()})
+    xq_of, xv_of = PLANT_STATE.slice("xq"), PLANT_STATE.slice("xv")
+    W, zeta = x0["W_hat"], x0["zeta_hat"]
     u_law = np.zeros(4)
     hold = 0.0                     # no previous command on the first step
-    yv_z2 = mv.p_veh[-1]
     limits = np.asarray(mv.rotor_limits, dtype=float)
     ctrl_set = set(np.round(t_ctrl, 12))
     out_set = {t: k for k, t in enumerate(np.round(t_out, 12))}
-    X = np.zeros((lay.nx, len(t_out)))
+    X = np.zeros((lay.size, len(t_out)))
     held = np.zeros((12, len(t_out)))
     wrench = u = rotor = np.zeros(4)
     pv = np.concatenate([mv.p_quad, mv.p_veh])
     dt = 1.0 / rate
     for i, t in enumerate(grid):
         if t in ctrl_set:
-            yv = np.array([yv_z2, xp[12], xp[15]])
-            r = step(xp[0:10], yv, mv.ref, W, zeta, u_law, mv.p_quad, mv.p_ctrl, limits, hold,
+            yv = np.asarray(vehicle_measurement(xp[xv_of], mv.p_veh), dtype=float).ravel()
+            r = step(xp[xq_of], yv, mv.ref, W, zeta, u_law, mv.p_quad, mv.p_ctrl, limits, hold,
                      dt)
             u, wrench, rotor, W, zeta, u_law, _, tilt = (np.asarray(v, dtype=float) for v in r)
             if abs(tilt.item()) < TILT_MIN:
@@ -266,7 +271,9 @@ def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
             zeta, u_law, hold = zeta.ravel(), u_law.ravel(), mv.hold
         if t in out_set:
             k = out_set[t]
-            X[:, k] = np.concatenate([xp[0:16], W.ravel(order="F"), zeta, xp[16:18]])
+            ps = PLANT_STATE.unpack(xp)
+            X[:, k] = lay.pack(dict(xq=ps["xq"], xv=ps["xv"], W_hat=W, zeta_hat=zeta,
+                                    pos1=ps["pos1"]))
             held[:, k] = np.concatenate([u, wrench, rotor])
         if i + 1 < len(grid):
             h = round(grid[i + 1] - t, 12)
@@ -284,37 +291,29 @@ def _mapped_outputs(l: int, n: int) -> ca.Function:
 
 
 def _result(scenario, mv, t_out, t_dist, w_dist, X, X_np, held):
-    lay = closed_loop_layout(mv.l)
+    lay = closed_loop_state(mv.l)
     w_out = _held(t_dist, w_dist, t_out)
     n = len(t_out)
     outs = _mapped_outputs(mv.l, n)(X, w_out, mv.p)
     X = X_np
-    sig = {name: np.asarray(v) for (name, _), v in zip(OUTPUTS, outs)}
-    tilt = np.cos(X[1]) * np.cos(X[2])
+    sig = {name: np.asarray(v) for name, v in zip(OUTPUTS.names(), outs)}
+    xs = lay.unpack(X)
+    tilt = np.cos(X[lay.index("phi1")]) * np.cos(X[lay.index("theta1")])
     if np.any(np.abs(tilt) < TILT_MIN):
         k = int(np.argmax(np.abs(tilt) < TILT_MIN))
         raise SimulationError(f"singular attitude at t = {t_out[k]:.4g} s: "
                               f"cos(theta) cos(phi) = {tilt[k]:.2e}")
     if held is not None:
-        sig["u"], sig["wrench"], sig["rotor"] = held[0:4], held[4:8], held[8:12]
-    cols = {"t": t_out}
-    names4 = {"e1": ("z_e", "phi_e", "theta_e", "psi_e"), "e2": ("dz_e", "p_e", "q_e", "r_e"),
-              "wrench": ("F_total", "M_x", "M_y", "M_z")}
-    for key, names in names4.items():
-        cols.update({nm: sig[key][i] for i, nm in enumerate(names)})
-    for key, stem in (("u", "u"), ("rotor", "F"), ("Delta", "Delta"),
-                      ("Delta_hat", "Delta_hat"), ("Delta_target", "Delta_target")):
-        cols.update({f"{stem}_{i + 1}": sig[key][i] for i in range(4)})
-    zeta = X[16 + 4 * mv.l:20 + 4 * mv.l]
-    cols.update({f"zeta_hat_{i + 1}": zeta[i] for i in range(4)})
-    cols["norm_W_hat"] = np.linalg.norm(X[16:16 + 4 * mv.l], axis=0)
-    cols["V1"] = sig["V1"][0]
-    for i, nm in enumerate(("z1", "phi1", "theta1", "psi1")):
-        cols[nm] = X[i]
-    cols["x1"], cols["y1"] = X[lay.nx - 2], X[lay.nx - 1]
-    for i, nm in enumerate(("x2", "y2", "psi2", "u2", "v2", "r2")):
-        cols[nm] = X[10 + i]
-    for i, nm in enumerate(("d_Fx", "d_Fy", "d_Fz", "d_Mx", "d_My", "d_Mz")):
-        cols[nm] = w_out[i]
+        so = step_outputs(mv.l)
+        for name in ("u", "wrench", "rotor"):
+            sig[name] = held[so.slice(name)]
+    data = dict(sig, t=t_out[None, :], zeta_hat=xs["zeta_hat"],
+                norm_W_hat=np.linalg.norm(xs["W_hat"], axis=(0, 1))[None, :],
+                **QUAD_STATE.unpack(xs["xq"]), **POSITION1.unpack(xs["pos1"]),
+                **VEHICLE_STATE.unpack(xs["xv"]), **DISTURBANCE.unpack(w_out))
+    cols = {}
+    for f in TRAJECTORY.fields:
+        rows = np.asarray(data[f.name], dtype=float).reshape(f.size, -1)
+        cols.update(zip(f.element_names(), rows))
     return SimulationResult(scenario, {k: np.asarray(v, dtype=float).ravel()
                                        for k, v in cols.items()}, X.T)

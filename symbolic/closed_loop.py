@@ -1,89 +1,115 @@
 """Closed loop: quadrotor + vehicle + controller + adaptive states as one ODE.
 
-State ``x = [xq (10), xv (6), vec(W_hat) (4 l, column-major), zeta_hat (4),
-x1, y1]``; the last two are the quadrotor's planar position in E, integrated
-from ``R(eta1) V1`` for the ground track only (the 4-DOF model ignores it);
-input ``w = [d_F (3), d_M (3)]``, the disturbance, held piecewise constant by
-the simulator; parameter ``p = [p_quad, p_veh, p_ctrl, ref (12)]``.
-The controller and the plant share one set of physical parameters.
+State ``x`` (:func:`closed_loop_state`): the quadrotor ``xq``, the vehicle
+``xv``, ``vec(W_hat)`` (column-major), ``zeta_hat`` and the quadrotor's
+planar position ``pos1 = [x1, y1]``, integrated from ``R(eta1) V1`` for the
+ground track only (the 4-DOF model ignores it). Input ``w``
+(``symbolic.quadrotor.DISTURBANCE``), the disturbance, held piecewise
+constant by the simulator. Parameter ``p`` (:func:`closed_loop_params`):
+``[p_quad, p_veh, p_ctrl, ref]``. The controller and the plant share one set
+of physical parameters. :func:`closed_loop_outputs` gives the signals of
+:data:`OUTPUTS`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 
 import casadi as ca
 
-from symbolic.backstepping import control_law
+from symbolic.backstepping import ADAPTIVE_UNITS, REFERENCE, control_law
 from symbolic.kinematics import rotation
+from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import quadrotor_rhs
-from symbolic.relative import disturbance_input, nominal_drift, relative_drift
-from symbolic.vehicle import vehicle_rhs
+from symbolic.quadrotor import DISTURBANCE, ROTORS, WRENCH, quadrotor_rhs
+from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.relative import (E1, E2, VIRTUAL_INPUT, disturbance_input, nominal_drift,
+                               relative_drift)
+from symbolic.vehicle import MEASUREMENT, vehicle_rhs
+from symbolic.vehicle import STATE as VEHICLE_STATE
 
-__all__ = ["ClosedLoopLayout", "closed_loop_layout", "closed_loop_rhs", "closed_loop_function",
-           "plant_function",
-           "closed_loop_outputs", "OUTPUTS"]
+__all__ = ["POSITION1", "PLANT_STATE", "OUTPUTS", "closed_loop_state", "closed_loop_params",
+           "closed_loop_rhs", "closed_loop_function", "plant_function", "closed_loop_outputs",
+           "vehicle_measurement"]
 
-#: Outputs of ``closed_loop_outputs`` (name, size).
-OUTPUTS = (("e1", 4), ("e2", 4), ("u", 4), ("wrench", 4), ("rotor", 4), ("Delta", 4),
-           ("Delta_target", 4), ("Delta_hat", 4), ("z1", 4), ("z2", 4), ("V1", 1))
+#: The quadrotor's planar position in E, integrated for the ground track.
+POSITION1 = Layout("pos1", (Field("x1", 1, "m", "quadrotor x in E"),
+                            Field("y1", 1, "m", "quadrotor y in E")))
 
+#: State of the plant alone (sampled-data loops): the closed loop without the
+#: adaptive states.
+PLANT_STATE = Layout("xp", (
+    Field.nested("xq", QUAD_STATE, "quadrotor"),
+    Field.nested("xv", VEHICLE_STATE, "vehicle"),
+    Field.nested("pos1", POSITION1, "quadrotor planar position"),
+), "plant state: quadrotor, vehicle, planar position")
 
-@dataclasses.dataclass(frozen=True)
-class ClosedLoopLayout:
-    """Sizes and offsets of the closed-loop state and parameter vectors."""
-
-    l: int
-
-    @property
-    def nx(self) -> int:
-        return 10 + 6 + 4 * self.l + 4 + 2
-
-    @property
-    def nw(self) -> int:
-        return 6
-
-    @property
-    def np(self) -> int:
-        return QUADROTOR.size + VEHICLE.size + controller_layout(self.l).size + 12
-
-    def split_state(self, x):
-        """``(xq, xv, W_hat (l x 4), zeta_hat, pos1)`` from a state vector."""
-        l = self.l
-        W = x[16:16 + 4 * l]
-        W = ca.reshape(W, l, 4) if isinstance(x, ca.SX | ca.MX | ca.DM) else W.reshape(
-            (l, 4), order="F")
-        return x[0:10], x[10:16], W, x[16 + 4 * l:20 + 4 * l], x[20 + 4 * l:22 + 4 * l]
-
-    def split_params(self, p):
-        """``(p_quad, p_veh, p_ctrl, ref)`` from a parameter vector."""
-        a = QUADROTOR.size
-        b = a + VEHICLE.size
-        c = b + controller_layout(self.l).size
-        return p[0:a], p[a:b], p[b:c], p[c:c + 12]
+#: Signals of :func:`closed_loop_outputs`, in order.
+OUTPUTS = Layout("y", (
+    Field.nested("e1", E1, "relative position (eq. 7)"),
+    Field.nested("e2", E2, "relative rates (eq. 7)"),
+    Field.nested("u", VIRTUAL_INPUT, "virtual input (eq. 20)"),
+    Field.nested("wrench", WRENCH, "thrust and moments"),
+    Field.nested("rotor", ROTORS, "rotor forces"),
+    Field("Delta", 4, ADAPTIVE_UNITS, "true uncertainty f + d (eq. 16)",
+          elements=tuple(f"Delta_{i}" for i in range(1, 5))),
+    Field("Delta_target", 4, ADAPTIVE_UNITS, "what the network is asked to learn",
+          elements=tuple(f"Delta_target_{i}" for i in range(1, 5))),
+    Field("Delta_hat", 4, ADAPTIVE_UNITS, "network estimate W_hat^T Psi (eq. 16)",
+          elements=tuple(f"Delta_hat_{i}" for i in range(1, 5))),
+    Field("bs_z1", 4, E1["e1"].unit, "backstepping error z1 = e1 - e1d (eq. 9)"),
+    Field("bs_z2", 4, E2["e2"].unit, "backstepping error z2 = e2 - alpha (eq. 9)"),
+    Field("lyapunov_V1", 1, "-", "Lyapunov function V1 = z1^T z1 / 2 (eq. 12)"),
+), "closed-loop output signals")
 
 
 @functools.cache
-def closed_loop_layout(l: int) -> ClosedLoopLayout:
-    """Layout of the closed-loop vectors for ``l`` RBF nodes."""
-    return ClosedLoopLayout(l)
+def closed_loop_state(l: int) -> Layout:
+    """Layout of the closed-loop state for ``l`` RBF nodes."""
+    return Layout("x", (
+        Field.nested("xq", QUAD_STATE, "quadrotor"),
+        Field.nested("xv", VEHICLE_STATE, "vehicle"),
+        Field("W_hat", 4 * l, tuple(u for u in ADAPTIVE_UNITS for _ in range(l)),
+              "network weights (eq. 22), column-major", shape=(l, 4)),
+        Field("zeta_hat", 4, ADAPTIVE_UNITS, "robust term estimate (eq. 22)"),
+        Field.nested("pos1", POSITION1, "quadrotor planar position"),
+    ), "closed-loop state")
+
+
+@functools.cache
+def closed_loop_params(l: int) -> Layout:
+    """Layout of the closed loop's parameter vector for ``l`` RBF nodes."""
+    return Layout("p", (
+        Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
+        Field.nested("p_veh", VEHICLE, "vehicle constants and inputs"),
+        Field.nested("p_ctrl", controller_layout(l), "controller"),
+        Field.nested("ref", REFERENCE, "reference"),
+    ), "closed-loop parameters")
+
+
+def vehicle_measurement(xv, p_veh):
+    """What the controller measures of the vehicle, ``yv = [z2, psi2, r2]``."""
+    v = VEHICLE_STATE.unpack(xv)
+    return ca.vertcat(VEHICLE.unpack(p_veh)["z2"], v["psi2"], v["r2"])
+
+
+def _planar_velocity(xq):
+    q = QUAD_STATE.unpack(xq)
+    return (rotation(q["eta1"]) @ q["V1"])[0:2]
 
 
 def _symbols(l: int):
-    lay = closed_loop_layout(l)
-    return ca.SX.sym("x", lay.nx), ca.SX.sym("w", lay.nw), ca.SX.sym("p", lay.np)
+    return (closed_loop_state(l).sym(), DISTURBANCE.sym(), closed_loop_params(l).sym())
 
 
 def _signals(x, w, p, l):
-    lay = closed_loop_layout(l)
-    xq, xv, W_hat, zeta_hat, _ = lay.split_state(x)
-    p_quad, p_veh, p_ctrl, ref = lay.split_params(p)
-    d_F, d_M = w[0:3], w[3:6]
-    yv = ca.vertcat(VEHICLE.unpack(p_veh)["z2"], xv[2], xv[5])
-    law = control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)
-    return xq, xv, p_quad, p_veh, p_ctrl, d_F, d_M, law
+    xs, ps, ws = closed_loop_state(l).unpack(x), closed_loop_params(l).unpack(p), \
+        DISTURBANCE.unpack(w)
+    xq, xv = xs["xq"], xs["xv"]
+    p_quad, p_veh, p_ctrl = ps["p_quad"], ps["p_veh"], ps["p_ctrl"]
+    yv = vehicle_measurement(xv, p_veh)
+    law = control_law(xq, yv, ps["ref"], xs["W_hat"], xs["zeta_hat"], p_quad, p_ctrl)
+    return xq, xv, p_quad, p_veh, p_ctrl, ws["d_F"], ws["d_M"], law
 
 
 def closed_loop_rhs(x, w, p, l: int):
@@ -94,7 +120,7 @@ def closed_loop_rhs(x, w, p, l: int):
         vehicle_rhs(xv, p_veh),
         ca.vec(law["W_hat_dot"]),
         law["zeta_hat_dot"],
-        (rotation(xq[1:4]) @ xq[4:7])[0:2],
+        _planar_velocity(xq),
     )
 
 
@@ -108,7 +134,7 @@ def closed_loop_function(l: int) -> ca.Function:
 
 @functools.cache
 def closed_loop_outputs(l: int) -> ca.Function:
-    """``closed_loop_outputs(x, w, p) -> (e1, e2, u, ...)``: the signals of ``OUTPUTS``.
+    """``closed_loop_outputs(x, w, p) -> (e1, e2, u, ...)``: the fields of :data:`OUTPUTS`.
 
     ``Delta = f + d`` is the true uncertainty of eq. (16); ``Delta_target``
     is what the network is asked to learn: Delta itself for the printed law,
@@ -121,8 +147,8 @@ def closed_loop_outputs(l: int) -> ca.Function:
     signals = dict(law)
     signals["Delta"] = Delta
     signals["Delta_target"] = Delta - nominal * nominal_drift(xq, p_quad)
-    signals["V1"] = 0.5 * ca.dot(law["z1"], law["z1"])                          # eq. 12
-    names = [n for n, _ in OUTPUTS]
+    signals["lyapunov_V1"] = 0.5 * ca.dot(law["bs_z1"], law["bs_z1"])            # eq. 12
+    names = list(OUTPUTS.names())
     return ca.Function("closed_loop_outputs", [x, w, p], [signals[n] for n in names],
                        ["x", "w", "p"], names)
 
@@ -131,13 +157,14 @@ def closed_loop_outputs(l: int) -> ca.Function:
 def plant_function() -> ca.Function:
     """``plant(xp, wrench, w, p_quad, p_veh) -> xp_dot`` for sampled-data loops.
 
-    ``xp = [xq (10), xv (6), x1, y1]``: the closed-loop state without the
-    adaptive states, driven by a held wrench and disturbance ``w``.
+    ``xp`` (:data:`PLANT_STATE`): the closed-loop state without the adaptive
+    states, driven by a held wrench and disturbance ``w``.
     """
-    xp, wrench, w = ca.SX.sym("xp", 18), ca.SX.sym("wrench", 4), ca.SX.sym("w", 6)
+    xp, wrench, w = PLANT_STATE.sym(), WRENCH.sym(), DISTURBANCE.sym()
     p_quad, p_veh = QUADROTOR.sym(), VEHICLE.sym()
-    xq, xv = xp[0:10], xp[10:16]
-    rhs = ca.vertcat(quadrotor_rhs(xq, wrench, w[0:3], w[3:6], p_quad), vehicle_rhs(xv, p_veh),
-                     (rotation(xq[1:4]) @ xq[4:7])[0:2])
+    xs, ws = PLANT_STATE.unpack(xp), DISTURBANCE.unpack(w)
+    xq, xv = xs["xq"], xs["xv"]
+    rhs = ca.vertcat(quadrotor_rhs(xq, wrench, ws["d_F"], ws["d_M"], p_quad),
+                     vehicle_rhs(xv, p_veh), _planar_velocity(xq))
     return ca.Function("plant", [xp, wrench, w, p_quad, p_veh], [rhs],
                        ["xp", "wrench", "w", "p_quad", "p_veh"], ["xp_dot"])

@@ -32,7 +32,9 @@ import tempfile
 import casadi as ca
 import numpy as np
 
-from symbolic.closed_loop import closed_loop_function, closed_loop_layout, plant_function
+from symbolic.closed_loop import (PLANT_STATE, closed_loop_function, closed_loop_params,
+                                  closed_loop_state, plant_function)
+from symbolic.quadrotor import DISTURBANCE
 from symbolic.control_step import control_step_function
 from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
 
@@ -261,7 +263,6 @@ def _array(config, name, values) -> str:
 
 def _header(config: CodegenConfig, d: Defaults) -> str:
     l = d.l
-    lay = closed_loop_layout(l)
     jac = closed_loop_jacobian_function(l).sparsity_out(0)
     out = [_banner(config, "quadland.h: readable C API of the adaptive backstepping control step.",
                    "the layouts of symbolic.parameters"),
@@ -280,11 +281,11 @@ typedef {config.precision} ql_real;
 #define QL_P_VEH_SIZE {VEHICLE.size}
 #define QL_P_CTRL_SIZE {controller_layout(l).size}
 #define QL_PARAMS_SIZE (QL_P_QUAD_SIZE + QL_P_CTRL_SIZE + 4)   /* ql_params, scalars */
-#define QL_CLOSED_LOOP_NX {lay.nx}   /* [xq (10), xv (6), vec(W_hat) (4 l), zeta_hat (4), x1, y1] */
-#define QL_CLOSED_LOOP_NW {lay.nw}     /* [d_F (3), d_M (3)] */
-#define QL_CLOSED_LOOP_NP {lay.np}  /* [p_quad, p_veh, p_ctrl, ref (12)] */
+#define QL_CLOSED_LOOP_NX {closed_loop_state(l).size}   /* [xq (10), xv (6), vec(W_hat) (4 l), zeta_hat (4), x1, y1] */
+#define QL_CLOSED_LOOP_NW {DISTURBANCE.size}     /* [d_F (3), d_M (3)] */
+#define QL_CLOSED_LOOP_NP {closed_loop_params(l).size}  /* [p_quad, p_veh, p_ctrl, ref (12)] */
 #define QL_CLOSED_LOOP_JACOBIAN_NNZ {jac.nnz()}
-#define QL_PLANT_NX 18          /* [xq (10), xv (6), x1, y1] */
+#define QL_PLANT_NX {PLANT_STATE.size}         /* [xq (10), xv (6), x1, y1] */
 
 /* Status of ql_control_step. */
 typedef enum {{

@@ -26,18 +26,53 @@ zero-order-hold emulation of eq. (20). ``u_prev`` is the law's output
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 
-from symbolic.backstepping import control_law
+from symbolic.backstepping import ADAPTIVE_UNITS, REFERENCE, control_law
+from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, controller_layout
-from symbolic.quadrotor import rotors_from_wrench, wrench_from_rotors
-from symbolic.relative import wrench_from_virtual
+from symbolic.quadrotor import ROTORS, WRENCH, rotors_from_wrench, wrench_from_rotors
+from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.relative import VIRTUAL_INPUT, tilt, wrench_from_virtual
+from symbolic.vehicle import MEASUREMENT
 
-__all__ = ["STEP_INPUTS", "STEP_OUTPUTS", "control_step_function"]
+__all__ = ["step_inputs", "step_outputs", "control_step_function"]
 
-STEP_INPUTS = ("xq", "yv", "ref", "W_hat", "zeta_hat", "u_prev", "p_quad", "p_ctrl",
-               "rotor_limits", "hold", "dt")
-STEP_OUTPUTS = ("u", "wrench", "rotor", "W_next", "zeta_next", "u_law", "n_clipped", "tilt")
+
+@functools.cache
+def step_inputs(l: int) -> Layout:
+    """The control step's arguments, in order (one field per argument)."""
+    return Layout("control_step_in", (
+        Field.nested("xq", QUAD_STATE, "measured quadrotor state"),
+        Field.nested("yv", MEASUREMENT, "measured vehicle state"),
+        Field.nested("ref", REFERENCE, "reference"),
+        Field("W_hat", 4 * l, "-", "network weights (eq. 22)", shape=(l, 4)),
+        Field("zeta_hat", 4, ADAPTIVE_UNITS, "robust term estimate (eq. 22)"),
+        Field("u_prev", 4, ADAPTIVE_UNITS, "the law's output of the previous step"),
+        Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
+        Field.nested("p_ctrl", controller_layout(l), "controller parameters"),
+        Field("rotor_limits", 2, "N", "rotor force limits F_min, F_max",
+              elements=("F_min", "F_max")),
+        Field("hold", 1, "periods", "hold compensation"),
+        Field("dt", 1, "s", "control period"),
+    ), "arguments of control_step")
+
+
+@functools.cache
+def step_outputs(l: int) -> Layout:
+    """The control step's results, in order (one field per result)."""
+    return Layout("control_step_out", (
+        Field.nested("u", VIRTUAL_INPUT, "commanded virtual input"),
+        Field.nested("wrench", WRENCH, "wrench of the clipped rotors"),
+        Field.nested("rotor", ROTORS, "rotor forces, clipped"),
+        Field("W_next", 4 * l, "-", "network weights after dt", shape=(l, 4)),
+        Field("zeta_next", 4, ADAPTIVE_UNITS, "robust term estimate after dt"),
+        Field("u_law", 4, ADAPTIVE_UNITS, "the law of eq. (20) at the measurements"),
+        Field("n_clipped", 1, "-", "number of clipped rotors"),
+        Field("tilt", 1, "-", "cos(theta1) cos(phi1)"),
+    ), "results of control_step")
 
 
 def control_step_function(l: int) -> ca.Function:
@@ -56,29 +91,25 @@ def control_step_function(l: int) -> ca.Function:
     ``tilt = cos(theta1) cos(phi1)``, which the caller must keep away from
     zero (the thrust map divides by it).
     """
-    xq, yv, ref = ca.SX.sym("xq", 10), ca.SX.sym("yv", 3), ca.SX.sym("ref", 12)
-    W_hat, zeta_hat = ca.SX.sym("W_hat", l, 4), ca.SX.sym("zeta_hat", 4)
-    u_prev = ca.SX.sym("u_prev", 4)
-    p_quad, p_ctrl = QUADROTOR.sym(), controller_layout(l).sym()
-    limits, hold, dt = ca.SX.sym("rotor_limits", 2), ca.SX.sym("hold"), ca.SX.sym("dt")
+    ins = step_inputs(l)
+    xq, yv, ref, W_hat, zeta_hat, u_prev, p_quad, p_ctrl, limits, hold, dt = ins.syms()
     c = controller_layout(l).unpack(p_ctrl)
     law = control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)
     u = law["u"] + hold * (law["u"] - u_prev)                              # hold compensation
     unclipped = rotors_from_wrench(wrench_from_virtual(xq, u, p_quad), p_quad)
     rotor = ca.fmin(ca.fmax(unclipped, limits[0]), limits[1])
     n_clipped = ca.sum1(unclipped < limits[0]) + ca.sum1(unclipped > limits[1])
-    z2, Psi = law["z2"], law["Psi"]
+    z2, Psi = law["bs_z2"], law["Psi"]
     a_w = ca.exp(-c["gamma1"] * c["k_w"] * dt)
     b_w = -ca.expm1(-c["gamma1"] * c["k_w"] * dt) / c["k_w"]             # (1 - a_w) / k_w
     a_z = ca.exp(-c["gamma2"] * c["k_zeta"] * dt)
     b_z = -ca.expm1(-c["gamma2"] * c["k_zeta"] * dt) / c["k_zeta"]
     W_next = a_w * W_hat + b_w * (Psi @ z2.T)                             # eq. 22, exact ZOH
     zeta_next = a_z * zeta_hat + b_z * (ca.tanh(z2 / c["rho"]) * z2)      # eq. 22, exact ZOH
-    tilt = ca.cos(xq[1]) * ca.cos(xq[2])
     return ca.Function(
         "control_step",
         [xq, yv, ref, W_hat, zeta_hat, u_prev, p_quad, p_ctrl, limits, hold, dt],
         [u, wrench_from_rotors(rotor, p_quad), rotor, W_next, zeta_next, law["u"], n_clipped,
-         tilt],
-        list(STEP_INPUTS), list(STEP_OUTPUTS),
+         tilt(QUAD_STATE.unpack(xq)["eta1"])],
+        list(ins.names()), list(step_outputs(l).names()),
     )

@@ -20,21 +20,46 @@ The controller state is ``xc = [vec(W_hat) (4 l, column-major), zeta_hat
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import casadi as ca
 
-from symbolic.backstepping import control_law
+from symbolic.backstepping import ADAPTIVE_UNITS, REFERENCE, control_law
+from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import quadrotor_rhs
-from symbolic.relative import wrench_from_virtual
-from symbolic.vehicle import vehicle_rhs
+from symbolic.quadrotor import DISTURBANCE, quadrotor_rhs
+from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.relative import VIRTUAL_INPUT, wrench_from_virtual
+from symbolic.vehicle import MEASUREMENT, vehicle_rhs
+from symbolic.vehicle import STATE as VEHICLE_STATE
 
-__all__ = ["PLANT_STATES", "relative_plant_rhs", "loop_signals", "linearization_function",
+__all__ = ["RELATIVE_PLANT", "FROZEN_VEHICLE", "VEHICLE_SPEEDS", "controller_states",
+           "relative_plant_rhs", "loop_signals", "linearization_function",
            "equilibrium_residual_function"]
 
-#: Names of the relative plant state xr (= the measurement y).
-PLANT_STATES = ("z1", "phi1", "theta1", "psi_e", "u1", "v1", "w1", "p1", "q1", "r1")
+#: The relative plant state xr (= the measurement y): the quadrotor's state with
+#: the relative yaw psi_e = psi1 - psi2 in place of psi1.
+RELATIVE_PLANT = Layout("xr", tuple(
+    dataclasses.replace(f, elements=("phi1", "theta1", "psi_e")) if f.name == "eta1" else f
+    for f in QUAD_STATE.fields), "relative plant state")
+
+#: The vehicle as the frozen loop sees it.
+FROZEN_VEHICLE = Layout("vehicle", (Field("z2", 1, "m", "deck altitude"),
+                                    Field("r2", 1, "rad/s", "yaw rate")))
+
+#: The vehicle's speeds, unknowns of its steady motion.
+VEHICLE_SPEEDS = Layout("v2", tuple(f for f in VEHICLE_STATE.fields
+                                    if f.name in ("u2", "v2", "r2")))
+
+
+@functools.cache
+def controller_states(l: int) -> Layout:
+    """The controller's state xc: the adaptive states of eq. (22)."""
+    return Layout("xc", (
+        Field("W_hat", 4 * l, "-", "network weights, column-major", shape=(l, 4)),
+        Field("zeta_hat", 4, ADAPTIVE_UNITS, "robust term estimate"),
+    ), "controller state")
 
 
 def relative_plant_rhs(xr, u, w, r2, p_quad):
@@ -44,8 +69,11 @@ def relative_plant_rhs(xr, u, w, r2, p_quad):
     is ``psi_e_dot = psi1_dot - r2``.
     """
     wrench = wrench_from_virtual(xr, u, p_quad)
-    xq_dot = quadrotor_rhs(xr, wrench, w[0:3], w[3:6], p_quad)
-    return xq_dot - ca.vertcat(0, 0, 0, r2, ca.DM.zeros(6))
+    ws = DISTURBANCE.unpack(w)
+    xq_dot = quadrotor_rhs(xr, wrench, ws["d_F"], ws["d_M"], p_quad)
+    psi_dot = ca.DM.zeros(RELATIVE_PLANT.size)
+    psi_dot[RELATIVE_PLANT.index("psi_e")] = 1
+    return xq_dot - psi_dot * r2
 
 
 def loop_signals(xr, xc, vehicle, p_quad, p_ctrl, ref, l: int):
@@ -53,16 +81,15 @@ def loop_signals(xr, xc, vehicle, p_quad, p_ctrl, ref, l: int):
 
     ``vehicle = [z2, r2]``.
     """
-    W_hat = ca.reshape(xc[0:4 * l], l, 4)
-    zeta_hat = xc[4 * l:4 * l + 4]
-    yv = ca.vertcat(vehicle[0], 0, vehicle[1])
-    law = control_law(xr, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)
+    c, v = controller_states(l).unpack(xc), FROZEN_VEHICLE.unpack(vehicle)
+    yv = ca.vertcat(v["z2"], 0, v["r2"])                  # MEASUREMENT at psi2 = 0
+    law = control_law(xr, yv, ref, c["W_hat"], c["zeta_hat"], p_quad, p_ctrl)
     return law["u"], ca.vertcat(ca.vec(law["W_hat_dot"]), law["zeta_hat_dot"])
 
 
 def _symbols(l: int):
-    return (ca.SX.sym("xr", 10), ca.SX.sym("xc", 4 * l + 4), ca.SX.sym("vehicle", 2),
-            ca.SX.sym("w", 6), QUADROTOR.sym(), controller_layout(l).sym(), ca.SX.sym("ref", 12))
+    return (RELATIVE_PLANT.sym(), controller_states(l).sym(), FROZEN_VEHICLE.sym(),
+            DISTURBANCE.sym(), QUADROTOR.sym(), controller_layout(l).sym(), REFERENCE.sym())
 
 
 @functools.cache
@@ -84,7 +111,7 @@ def linearization_function(l: int) -> ca.Function:
         Number of RBF nodes.
     """
     xr, xc, vehicle, w, p_quad, p_ctrl, ref = _symbols(l)
-    u_in = ca.SX.sym("u", 4)
+    u_in = VIRTUAL_INPUT.sym()
     u, xc_dot = loop_signals(xr, xc, vehicle, p_quad, p_ctrl, ref, l)
     xr_dot_in = relative_plant_rhs(xr, u_in, w, vehicle[1], p_quad)
     A_p, B_p = ca.jacobian(xr_dot_in, xr), ca.jacobian(xr_dot_in, u_in)
@@ -107,13 +134,15 @@ def equilibrium_residual_function(l: int) -> ca.Function:
     vehicle in its steady motion, the loop at rest in relative coordinates.
     """
     xr, xc, _, w, p_quad, p_ctrl, ref = _symbols(l)
-    v2 = ca.SX.sym("v2", 3)
+    v2 = VEHICLE_SPEEDS.sym()
+    speeds = VEHICLE_SPEEDS.unpack(v2)
     p_veh = VEHICLE.sym()
     z2 = VEHICLE.unpack(p_veh)["z2"]
-    u, xc_dot = loop_signals(xr, xc, ca.vertcat(z2, v2[2]), p_quad, p_ctrl, ref, l)
-    xv = ca.vertcat(0, 0, 0, v2)
-    F = ca.vertcat(relative_plant_rhs(xr, u, w, v2[2], p_quad), xc_dot,
-                   vehicle_rhs(xv, p_veh)[3:6])
+    u, xc_dot = loop_signals(xr, xc, ca.vertcat(z2, speeds["r2"]), p_quad, p_ctrl, ref, l)
+    xv = ca.vertcat(*[speeds[n] if n in speeds else 0 for n in VEHICLE_STATE.names()])
+    xv_dot = VEHICLE_STATE.unpack(vehicle_rhs(xv, p_veh))
+    F = ca.vertcat(relative_plant_rhs(xr, u, w, speeds["r2"], p_quad), xc_dot,
+                   *[xv_dot[n] for n in VEHICLE_SPEEDS.names()])
     xi = ca.vertcat(xr, xc, v2)
     return ca.Function("equilibrium_residual", [xi, w, p_quad, p_veh, p_ctrl, ref],
                        [F, ca.jacobian(F, xi)],

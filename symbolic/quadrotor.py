@@ -1,8 +1,10 @@
 """Quadrotor rigid-body model (eq. 1-2) and its rotor mixer.
 
-State ``xq = [z1, phi1, theta1, psi1, u1, v1, w1, p1, q1, r1]``: altitude
-(m, E, z up), ZYX Euler angles (rad), body velocity V1 (m/s) and body rates
-Omega1 (rad/s). The wrench is ``[F_total, Mx, My, Mz]`` (N, N m).
+State ``xq`` (layout :data:`STATE`): altitude z1 (m, E, z up), ZYX Euler
+angles eta1 (rad), body velocity V1 (m/s) and body rates Omega1 (rad/s).
+The wrench is ``[F_total, M_x, M_y, M_z]`` (N, N m, layout :data:`WRENCH`),
+the rotor forces ``F_1..F_4`` (N, :data:`ROTORS`) and the disturbance
+``[d_F, d_M]`` (N, N m, :data:`DISTURBANCE`).
 """
 
 from __future__ import annotations
@@ -10,10 +12,14 @@ from __future__ import annotations
 import casadi as ca
 
 from symbolic.kinematics import euler_rate_matrix, skew, vertical_row
+from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
 
 __all__ = [
-    "STATE_NAMES",
+    "STATE",
+    "WRENCH",
+    "ROTORS",
+    "DISTURBANCE",
     "quadrotor_rhs",
     "mixer_matrix",
     "wrench_from_rotors",
@@ -22,7 +28,31 @@ __all__ = [
     "mixer_function",
 ]
 
-STATE_NAMES = ("z1", "phi1", "theta1", "psi1", "u1", "v1", "w1", "p1", "q1", "r1")
+#: The quadrotor's state xq (eq. 1-2).
+STATE = Layout("xq", (
+    Field("z1", 1, "m", "altitude in E (z up)"),
+    Field("eta1", 3, "rad", "ZYX Euler angles roll, pitch, yaw",
+          elements=("phi1", "theta1", "psi1")),
+    Field("V1", 3, "m/s", "body velocity", elements=("u1", "v1", "w1")),
+    Field("Omega1", 3, "rad/s", "body rates", elements=("p1", "q1", "r1")),
+), "measured quadrotor state: Earth frame z up, ZYX Euler angles")
+
+#: Thrust and moments in the body frame (eq. 2).
+WRENCH = Layout("wrench", (
+    Field("F_total", 1, "N", "total thrust along body z"),
+    Field("M", 3, "N m", "body moments", elements=("M_x", "M_y", "M_z")),
+), "thrust and body moments")
+
+#: The four rotor forces (under eq. 2).
+ROTORS = Layout("rotor", (
+    Field("F", 4, "N", "rotor forces", elements=("F_1", "F_2", "F_3", "F_4")),
+), "rotor forces")
+
+#: External disturbance on the quadrotor, body frame (eq. 2).
+DISTURBANCE = Layout("w", (
+    Field("d_F", 3, "N", "disturbance force", elements=("d_Fx", "d_Fy", "d_Fz")),
+    Field("d_M", 3, "N m", "disturbance moment", elements=("d_Mx", "d_My", "d_Mz")),
+), "disturbance force and moment, body frame")
 
 
 def quadrotor_rhs(xq, wrench, d_F, d_M, p_quad):
@@ -34,10 +64,12 @@ def quadrotor_rhs(xq, wrench, d_F, d_M, p_quad):
     """
     p = QUADROTOR.unpack(p_quad)
     m1, I, Kt, Kr, g_s = p["m1"], p["I"], p["Kt"], p["Kr"], p["g"]
-    eta1, V1, Omega1 = xq[1:4], xq[4:7], xq[7:10]
+    x = STATE.unpack(xq)
+    eta1, V1, Omega1 = x["eta1"], x["V1"], x["Omega1"]
     R_T_g = g_s * vertical_row(eta1).T                        # R^T [0, 0, g_s]
-    F = ca.vertcat(0, 0, wrench[0])                           # N, body z
-    T = wrench[1:4]                                           # N m
+    wr = WRENCH.unpack(wrench)
+    F = ca.vertcat(0, 0, wr["F_total"])                       # N, body z
+    T = wr["M"]                                               # N m
     z1_dot = vertical_row(eta1) @ V1                          # eq. 1
     eta1_dot = euler_rate_matrix(eta1) @ Omega1               # eq. 1
     V1_dot = -skew(Omega1) @ V1 + (F - Kt * V1 + d_F) / m1 - R_T_g              # eq. 2
@@ -75,7 +107,8 @@ def rotors_from_wrench(wrench, p_quad):
     """
     p = QUADROTOR.unpack(p_quad)
     d, c = p["arm"], p["c"]
-    T, Mx, My, Mz = wrench[0], wrench[1], wrench[2], wrench[3]
+    wr = WRENCH.unpack(wrench)
+    T, Mx, My, Mz = wr["F_total"], wr["M"][0], wr["M"][1], wr["M"][2]
     return ca.vertcat(
         T / 4 - My / (2 * d) + Mz / (4 * c),
         T / 4 + Mx / (2 * d) - Mz / (4 * c),
@@ -86,9 +119,8 @@ def rotors_from_wrench(wrench, p_quad):
 
 def quadrotor_function() -> ca.Function:
     """``quadrotor(xq, wrench, d_F, d_M, p_quad) -> xq_dot`` (eq. 1-2)."""
-    xq = ca.SX.sym("xq", 10)
-    wrench = ca.SX.sym("wrench", 4)
-    d_F, d_M = ca.SX.sym("d_F", 3), ca.SX.sym("d_M", 3)
+    xq, wrench = STATE.sym(), WRENCH.sym()
+    d_F, d_M = DISTURBANCE.syms()
     p_quad = QUADROTOR.sym()
     return ca.Function(
         "quadrotor", [xq, wrench, d_F, d_M, p_quad],
@@ -99,7 +131,7 @@ def quadrotor_function() -> ca.Function:
 
 def mixer_function() -> ca.Function:
     """``mixer(rotor, wrench, p_quad) -> (wrench_of_rotor, rotor_of_wrench)``."""
-    rotor, wrench, p_quad = ca.SX.sym("rotor", 4), ca.SX.sym("wrench", 4), QUADROTOR.sym()
+    rotor, wrench, p_quad = ROTORS.sym(), WRENCH.sym(), QUADROTOR.sym()
     return ca.Function(
         "mixer", [rotor, wrench, p_quad],
         [wrench_from_rotors(rotor, p_quad), rotors_from_wrench(wrench, p_quad)],

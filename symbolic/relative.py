@@ -12,11 +12,34 @@ from __future__ import annotations
 import casadi as ca
 
 from symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, vertical_row
+from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.vehicle import yaw_acceleration
+from symbolic.quadrotor import DISTURBANCE, WRENCH
+from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.vehicle import MEASUREMENT, yaw_acceleration
+from symbolic.vehicle import STATE as VEHICLE_STATE
+
+#: Units of the four channels: altitude, roll, pitch, yaw.
+_CHANNEL_ACCEL = ("m/s^2", "rad/s^2", "rad/s^2", "rad/s^2")
+
+#: Relative position e1 (eq. 5, 7).
+E1 = Layout("e1", (Field("e1", 4, ("m", "rad", "rad", "rad"),
+                         "relative altitude and attitude",
+                         elements=("z_e", "phi_e", "theta_e", "psi_e")),))
+#: Relative rates e2 (eq. 7).
+E2 = Layout("e2", (Field("e2", 4, ("m/s", "rad/s", "rad/s", "rad/s"),
+                         "relative vertical speed and body rates",
+                         elements=("dz_e", "p_e", "q_e", "r_e")),))
+#: Virtual input u (eq. 6).
+VIRTUAL_INPUT = Layout("u", (Field("u", 4, _CHANNEL_ACCEL, "virtual inputs (eq. 6)",
+                                   elements=("u_1", "u_2", "u_3", "u_4")),))
 
 __all__ = [
+    "E1",
+    "E2",
+    "VIRTUAL_INPUT",
     "relative_states",
+    "tilt",
     "error_rate_matrix",
     "nominal_drift",
     "relative_drift",
@@ -32,12 +55,19 @@ def relative_states(xq, yv):
 
     ``w2 = 0``: the vehicle does not heave.
     """
-    z1, eta1, V1, Omega1 = xq[0], xq[1:4], xq[4:7], xq[7:10]
-    z2, psi2, r2 = yv[0], yv[1], yv[2]
+    q, v = QUAD_STATE.unpack(xq), MEASUREMENT.unpack(yv)
+    z1, eta1, V1, Omega1 = q["z1"], q["eta1"], q["V1"], q["Omega1"]
+    z2, psi2, r2 = v["z2"], v["psi2"], v["r2"]
     e1 = ca.vertcat(z1 - z2, eta1[0], eta1[1], eta1[2] - psi2)
     Omega_e = Omega1 - euler_rate_matrix_inv(eta1) @ ca.vertcat(0, 0, r2)
     e2 = ca.vertcat(vertical_row(eta1) @ V1, Omega_e)
     return e1, e2
+
+
+def tilt(eta1):
+    """cos(theta1) cos(phi1): the thrust's share along E's z (eq. 6); the thrust map
+    divides by it."""
+    return ca.cos(eta1[0]) * ca.cos(eta1[1])
 
 
 def error_rate_matrix(eta1):
@@ -49,7 +79,8 @@ def nominal_drift(xq, p_quad):
     """The quadrotor's own part of f (eq. 6): gravity, drag, gyroscopic terms."""
     p = QUADROTOR.unpack(p_quad)
     m1, I, Kt, Kr, g_s = p["m1"], p["I"], p["Kt"], p["Kr"], p["g"]
-    eta1, V1, Omega1 = xq[1:4], xq[4:7], xq[7:10]
+    q = QUAD_STATE.unpack(xq)
+    eta1, V1, Omega1 = q["eta1"], q["V1"], q["Omega1"]
     Ix, Iy, Iz = I[0], I[1], I[2]
     p1, q1, r1 = Omega1[0], Omega1[1], Omega1[2]
     f1 = -(vertical_row(eta1) @ (Kt * V1)) / m1 - g_s
@@ -65,8 +96,9 @@ def relative_drift(xq, xv, p_quad, p_veh):
     with ``Rr12 = Rr1^-1``; ``Rr12_dot`` is differentiated symbolically
     along ``eta1_dot = Rr1 Omega1``.
     """
-    eta1, Omega1 = xq[1:4], xq[7:10]
-    u2, v2, r2 = xv[3], xv[4], xv[5]
+    q, v = QUAD_STATE.unpack(xq), VEHICLE_STATE.unpack(xv)
+    eta1, Omega1 = q["eta1"], q["Omega1"]
+    u2, v2, r2 = v["u2"], v["v2"], v["r2"]
     eta = ca.SX.sym("eta", 3)
     coupling = ca.Function("coupling", [eta], [euler_rate_matrix_inv(eta)[:, 2]])
     # d/dt (Rr12[:, 2]) r2 = (d Rr12[:, 2] / d eta1) eta1_dot r2
@@ -80,9 +112,9 @@ def relative_drift(xq, xv, p_quad, p_veh):
 def virtual_input(xq, wrench, p_quad):
     """Virtual input u of eq. (6) produced by a wrench."""
     p = QUADROTOR.unpack(p_quad)
-    phi1, theta1 = xq[1], xq[2]
-    u1 = ca.cos(theta1) * ca.cos(phi1) * wrench[0] / p["m1"]
-    return ca.vertcat(u1, wrench[1:4] / p["I"])
+    eta1, wr = QUAD_STATE.unpack(xq)["eta1"], WRENCH.unpack(wrench)
+    u1 = tilt(eta1) * wr["F_total"] / p["m1"]
+    return ca.vertcat(u1, wr["M"] / p["I"])
 
 
 def wrench_from_virtual(xq, u, p_quad):
@@ -91,28 +123,27 @@ def wrench_from_virtual(xq, u, p_quad):
     Singular where ``cos(theta1) cos(phi1) = 0``; callers guard that.
     """
     p = QUADROTOR.unpack(p_quad)
-    phi1, theta1 = xq[1], xq[2]
-    F_total = p["m1"] * u[0] / (ca.cos(theta1) * ca.cos(phi1))
+    F_total = p["m1"] * u[0] / tilt(QUAD_STATE.unpack(xq)["eta1"])
     return ca.vertcat(F_total, p["I"] * u[1:4])
 
 
 def disturbance_input(xq, d_F, d_M, p_quad):
     """d of eq. (6): ``[J d_F / m1, d_M / I]``."""
     p = QUADROTOR.unpack(p_quad)
-    eta1 = xq[1:4]
+    eta1 = QUAD_STATE.unpack(xq)["eta1"]
     return ca.vertcat(vertical_row(eta1) @ d_F / p["m1"], d_M / p["I"])
 
 
 def relative_function() -> ca.Function:
     """``relative(xq, xv, yv, wrench, d_F, d_M, p_quad, p_veh) -> (e1, e2, R, f, u, d)``."""
-    xq, xv, yv = ca.SX.sym("xq", 10), ca.SX.sym("xv", 6), ca.SX.sym("yv", 3)
-    wrench, d_F, d_M = ca.SX.sym("wrench", 4), ca.SX.sym("d_F", 3), ca.SX.sym("d_M", 3)
+    xq, xv, yv = QUAD_STATE.sym(), VEHICLE_STATE.sym(), MEASUREMENT.sym()
+    wrench, (d_F, d_M) = WRENCH.sym(), DISTURBANCE.syms()
     p_quad, p_veh = QUADROTOR.sym(), VEHICLE.sym()
     e1, e2 = relative_states(xq, yv)
     return ca.Function(
         "relative",
         [xq, xv, yv, wrench, d_F, d_M, p_quad, p_veh],
-        [e1, e2, error_rate_matrix(xq[1:4]), relative_drift(xq, xv, p_quad, p_veh),
+        [e1, e2, error_rate_matrix(QUAD_STATE.unpack(xq)["eta1"]), relative_drift(xq, xv, p_quad, p_veh),
          virtual_input(xq, wrench, p_quad), disturbance_input(xq, d_F, d_M, p_quad)],
         ["xq", "xv", "yv", "wrench", "d_F", "d_M", "p_quad", "p_veh"],
         ["e1", "e2", "R", "f", "u", "d"],

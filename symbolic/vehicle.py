@@ -1,20 +1,37 @@
 """Ground-vehicle model (eq. 3-4) with heave, roll and pitch neglected.
 
-State ``xv = [x2, y2, psi2, u2, v2, r2]``: planar position in E (m),
-heading (rad), surge and sway velocity (m/s) and yaw rate (rad/s). The
-position is not used by the controller; it is integrated for the ground
-track. The deck altitude z2 is a constant parameter (w2 = 0).
+State ``xv`` (layout :data:`STATE`): planar position in E (m), heading
+(rad), surge and sway velocity (m/s) and yaw rate (rad/s). The position is
+not used by the controller; it is integrated for the ground track. The deck
+altitude z2 is a constant parameter (w2 = 0). The controller measures
+``yv = [z2, psi2, r2]`` (:data:`MEASUREMENT`).
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
+from symbolic.layout import Field, Layout
 from symbolic.parameters import VEHICLE
 
-__all__ = ["STATE_NAMES", "vehicle_rhs", "yaw_acceleration", "vehicle_function"]
+__all__ = ["STATE", "MEASUREMENT", "vehicle_rhs", "yaw_acceleration", "vehicle_function"]
 
-STATE_NAMES = ("x2", "y2", "psi2", "u2", "v2", "r2")
+#: The vehicle's state xv (eq. 3-4, planar).
+STATE = Layout("xv", (
+    Field("x2", 1, "m", "position x in E"),
+    Field("y2", 1, "m", "position y in E"),
+    Field("psi2", 1, "rad", "heading"),
+    Field("u2", 1, "m/s", "surge velocity"),
+    Field("v2", 1, "m/s", "sway velocity"),
+    Field("r2", 1, "rad/s", "yaw rate"),
+), "ground vehicle state; heave, roll and pitch are neglected")
+
+#: What the controller measures of the vehicle.
+MEASUREMENT = Layout("yv", (
+    Field("z2", 1, "m", "deck altitude"),
+    Field("psi2", 1, "rad", "heading"),
+    Field("r2", 1, "rad/s", "yaw rate"),
+), "measured vehicle state")
 
 
 def yaw_acceleration(u2, v2, r2, p_veh):
@@ -33,7 +50,8 @@ def vehicle_rhs(xv, p_veh):
     ``phi2 = theta2 = 0`` gives ``psi2_dot = r2`` and the planar track.
     """
     p = VEHICLE.unpack(p_veh)
-    psi2, u2, v2, r2 = xv[2], xv[3], xv[4], xv[5]
+    x = STATE.unpack(xv)
+    psi2, u2, v2, r2 = x["psi2"], x["u2"], x["v2"], x["r2"]
     tau_x, tau_y = p["tau"][0], p["tau"][1]
     x2_dot = ca.cos(psi2) * u2 - ca.sin(psi2) * v2
     y2_dot = ca.sin(psi2) * u2 + ca.cos(psi2) * v2
@@ -45,6 +63,6 @@ def vehicle_rhs(xv, p_veh):
 
 def vehicle_function() -> ca.Function:
     """``vehicle(xv, p_veh) -> xv_dot`` (eq. 3-4)."""
-    xv, p_veh = ca.SX.sym("xv", 6), VEHICLE.sym()
+    xv, p_veh = STATE.sym(), VEHICLE.sym()
     return ca.Function("vehicle", [xv, p_veh], [vehicle_rhs(xv, p_veh)],
                        ["xv", "p_veh"], ["xv_dot"])

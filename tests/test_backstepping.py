@@ -9,7 +9,7 @@ from quadland.model import model_values
 from quadland.scenario import load_scenario
 from quadland.simulate import simulate
 from symbolic.backstepping import controller_function, lyapunov_function
-from symbolic.closed_loop import closed_loop_layout
+from symbolic.closed_loop import closed_loop_state, vehicle_measurement
 
 
 @pytest.fixture(scope="module")
@@ -24,15 +24,16 @@ def fine_run():
 def _controller_signals(sc, res):
     mv = model_values(sc)
     ctrl = controller_function(mv.l).map(len(res["t"]))
-    lay = closed_loop_layout(mv.l)
+    lay = closed_loop_state(mv.l)
     X = res.states.T
-    W = X[16:16 + 4 * mv.l]
-    yv = np.vstack([np.full(X.shape[1], mv.p_veh[-1]), X[12], X[15]])
+    assert lay.size == X.shape[0]
+    xs = lay.unpack(X)
+    yv = np.hstack([np.asarray(vehicle_measurement(xs["xv"][:, k], mv.p_veh))
+                    for k in range(X.shape[1])])
     # the mapped function takes W_hat as l x 4 blocks side by side
-    W_blocks = np.hstack([W[:, k].reshape(mv.l, 4, order="F") for k in range(X.shape[1])])
-    out = ctrl(X[0:10], yv, mv.ref, W_blocks, X[16 + 4 * mv.l:20 + 4 * mv.l], mv.p_quad, mv.p_ctrl)
+    W_blocks = np.hstack([xs["W_hat"][:, :, k] for k in range(X.shape[1])])
+    out = ctrl(xs["xq"], yv, mv.ref, W_blocks, xs["zeta_hat"], mv.p_quad, mv.p_ctrl)
     names = controller_function(mv.l).name_out()
-    assert lay.nx == X.shape[0]
     return {n: np.array(v) for n, v in zip(names, out)}
 
 
@@ -54,8 +55,8 @@ def test_error_definitions(fine_run):
     sig = _controller_signals(sc, res)
     e1 = np.vstack([res[n] for n in ("z_e", "phi_e", "theta_e", "psi_e")])
     e2 = np.vstack([res[n] for n in ("dz_e", "p_e", "q_e", "r_e")])
-    np.testing.assert_allclose(sig["z1"], e1, atol=1e-14)
-    np.testing.assert_allclose(sig["z2"], e2 - sig["alpha"], atol=1e-12)
+    np.testing.assert_allclose(sig["bs_z1"], e1, atol=1e-14)
+    np.testing.assert_allclose(sig["bs_z2"], e2 - sig["alpha"], atol=1e-12)
     k1 = np.array(sc["controller.k1"])
     k = 200
     R = error_rate_matrix(e1[1, k], e1[2, k])
@@ -68,9 +69,9 @@ def test_lyapunov_v1_decreases_while_far(fine_run):
     sc, res = fine_run
     lyap = lyapunov_function(model_values(sc).l)
     sig = _controller_signals(sc, res)
-    V1_start = float(lyap(sig["z1"][:, 0], sig["z2"][:, 0], 0, 0, 1, 1)[0])
-    np.testing.assert_allclose(V1_start, 0.5 * np.sum(sig["z1"][:, 0] ** 2))
-    assert res["V1"][-1] < 0.5 * res["V1"][0]
+    V1_start = float(lyap(sig["bs_z1"][:, 0], sig["bs_z2"][:, 0], 0, 0, 1, 1)[0])
+    np.testing.assert_allclose(V1_start, 0.5 * np.sum(sig["bs_z1"][:, 0] ** 2))
+    assert res["lyapunov_V1"][-1] < 0.5 * res["lyapunov_V1"][0]
 
 
 def test_adaptive_law_by_hand(values, rng):
@@ -81,7 +82,7 @@ def test_adaptive_law_by_hand(values, rng):
     W, zeta = rng.normal(size=(l, 4)) * 0.1, rng.normal(size=4)
     out = dict(zip(ctrl.name_out(), ctrl(xq, [0, 0.3, 0.05], values.ref, W, zeta,
                                           values.p_quad, values.p_ctrl)))
-    Psi, z2 = np.array(out["Psi"]).ravel(), np.array(out["z2"]).ravel()
+    Psi, z2 = np.array(out["Psi"]).ravel(), np.array(out["bs_z2"]).ravel()
     g1, g2, kw, kz, rho = 0.05, 0.1, 5.0, 0.1, 0.1
     np.testing.assert_allclose(np.array(out["W_hat_dot"]), g1 * (np.outer(Psi, z2) - kw * W), atol=1e-14)
     np.testing.assert_allclose(np.array(out["zeta_hat_dot"]).ravel(),
@@ -105,7 +106,7 @@ def test_control_law_by_hand(values, rng, nominal):
     W, zeta = rng.normal(size=(l, 4)) * 0.1, rng.normal(size=4)
     out = {k: np.array(v) for k, v in zip(ctrl.name_out(), ctrl(xq, yv, values.ref, W, zeta,
                                                                  values.p_quad, p_ctrl))}
-    z1, z2, Psi = out["z1"].ravel(), out["z2"].ravel(), out["Psi"].ravel()
+    z1, z2, Psi = out["bs_z1"].ravel(), out["bs_z2"].ravel(), out["Psi"].ravel()
     k2, rho = np.array([2.0, 4, 10, 10]), 0.1
     phi, th = xq[1], xq[2]
     R = error_rate_matrix(phi, th)

@@ -16,7 +16,8 @@ from quadland import cbackend
 from quadland.codegen import GENERATED_DIR
 from quadland.exceptions import CompilerNotFoundError
 from quadland.model import disturbance_samples, model_values
-from symbolic.closed_loop import closed_loop_function, closed_loop_layout, plant_function
+from symbolic.closed_loop import (closed_loop_function, closed_loop_params, closed_loop_state,
+                                  plant_function)
 from symbolic.codegen import STATUS_CODES, closed_loop_jacobian_function
 from symbolic.control_step import control_step_function
 
@@ -158,7 +159,7 @@ def test_api_defaults_are_the_paper_scenario(api, paper):
     assert not _state_reals(state).any() and state.has_prev == 0 and not _flat(ref).any()
     vp = api.VehicleParams()
     api.lib.ql_vehicle_params_init(ctypes.byref(vp))
-    p = np.zeros(closed_loop_layout(L).np)
+    p = np.zeros(closed_loop_params(L).size)
     api.lib.ql_pack_closed_loop_params(ctypes.byref(params), ctypes.byref(vp),
                                        ctypes.byref(ref), p.ctypes.data_as(
                                            ctypes.POINTER(ctypes.c_double)))
@@ -304,15 +305,15 @@ def test_api_null_pointer(api):
 
 def test_closed_loop_and_jacobian_match_casadi(api, paper):
     rng = np.random.default_rng(3)
-    lay = closed_loop_layout(L)
-    x = paper.x0 + 0.1 * rng.normal(size=lay.nx)
+    nx = closed_loop_state(L).size
+    x = paper.x0 + 0.1 * rng.normal(size=nx)
     w = rng.normal(size=6)
     ptr = ctypes.POINTER(ctypes.c_double)
 
     def c(a):
         return np.ascontiguousarray(a, dtype=float).ctypes.data_as(ptr)
 
-    xd = np.zeros(lay.nx)
+    xd = np.zeros(nx)
     api.lib.ql_closed_loop(c(x), c(w), c(paper.p), xd.ctypes.data_as(ptr))
     _assert_rel(xd, closed_loop_function(L)(x, w, paper.p))
     J = closed_loop_jacobian_function(L)(x, w, paper.p)
@@ -322,7 +323,7 @@ def test_closed_loop_and_jacobian_match_casadi(api, paper):
     sp = api.lib.ql_closed_loop_jacobian_sparsity()
     nrow, ncol = sp[0], sp[1]
     colind = [sp[2 + k] for k in range(ncol + 1)]
-    assert (nrow, ncol) == (lay.nx, lay.nx) and colind == list(J.sparsity().colind())
+    assert (nrow, ncol) == (nx, nx) and colind == list(J.sparsity().colind())
     xp = np.concatenate([x[0:16], x[-2:]])
     xpd = np.zeros(18)
     wrench = rng.normal(size=4)

@@ -10,7 +10,7 @@ from quadland.linearize import equilibrium, frozen_point, linear_models, sampled
 from quadland.model import model_values
 from quadland.scenario import load_scenario
 from symbolic.backstepping import controller_function
-from symbolic.closed_loop import closed_loop_function, closed_loop_layout
+from symbolic.closed_loop import closed_loop_function, closed_loop_state
 from symbolic.quadrotor import quadrotor_function
 
 L_NODES = 4
@@ -28,13 +28,12 @@ def eq_point(small):
 
 def _full_state(small, point, psi2=0.0):
     """Closed-loop state of symbolic.closed_loop at a point (psi1 = psi_e + psi2)."""
-    lay = closed_loop_layout(L_NODES)
-    x = np.zeros(lay.nx)
-    x[0:10] = point.xr
-    x[3] = point.xr[3] + psi2
-    x[10:16] = [0.0, 0.0, psi2, *point.vehicle]
-    x[16:20 + 4 * L_NODES] = point.xc
-    return x
+    lay = closed_loop_state(L_NODES)
+    xq = point.xr.copy()
+    xq[3] += psi2                                   # psi1 = psi_e + psi2
+    return lay.pack(dict(xq=xq, xv=[0.0, 0.0, psi2, *point.vehicle],
+                         W_hat=point.xc[:4 * L_NODES], zeta_hat=point.xc[4 * L_NODES:],
+                         pos1=[0.0, 0.0]))
 
 
 def _fd_jacobian(f, x, idx_in, h=1e-6):
@@ -47,7 +46,8 @@ def _fd_jacobian(f, x, idx_in, h=1e-6):
 
 
 def _loop_indices():
-    return np.r_[0:10, 16:20 + 4 * L_NODES]
+    lay = closed_loop_state(L_NODES)
+    return np.r_[lay.slice("xq"), lay.slice("W_hat").start:lay.slice("zeta_hat").stop]
 
 
 def test_equilibrium_is_a_steady_motion_of_the_nonlinear_loop(small, eq_point):
@@ -56,9 +56,11 @@ def test_equilibrium_is_a_steady_motion_of_the_nonlinear_loop(small, eq_point):
     xdot = np.asarray(closed_loop_function(L_NODES)(x, eq_point.w, mv.p)).ravel()
     r2 = eq_point.vehicle[2]
     # the quadrotor yaws with the vehicle; everything else of the loop is at rest
-    np.testing.assert_allclose(xdot[0:10], [0, 0, 0, r2, 0, 0, 0, 0, 0, 0], atol=1e-9)
-    np.testing.assert_allclose(xdot[16:20 + 4 * L_NODES], 0, atol=1e-9)
-    np.testing.assert_allclose(xdot[12:16], [r2, 0, 0, 0], atol=1e-9)
+    d = closed_loop_state(L_NODES).unpack(xdot)
+    np.testing.assert_allclose(d["xq"], [0, 0, 0, r2, 0, 0, 0, 0, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(d["W_hat"], 0, atol=1e-9)
+    np.testing.assert_allclose(d["zeta_hat"], 0, atol=1e-9)
+    np.testing.assert_allclose(d["xv"][2:6], [r2, 0, 0, 0], atol=1e-9)
     # vehicle in its steady turn: r2 = tau_z / d33 when m11 = m22 (eq. 4)
     assert r2 == pytest.approx(5.0 / 80.0, rel=1e-9)
     assert eq_point.residual < 1e-8

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from quadland.scenario import load_scenario
-from quadland.simulate import COLUMNS, simulate
+from quadland.simulate import COLUMNS, columns_sidecar, simulate
 
 E1 = ("z_e", "phi_e", "theta_e", "psi_e")
 
@@ -50,10 +50,22 @@ def test_initial_relative_state(default_run):
 def test_csv_round_trip(default_run):
     text = default_run.to_csv()
     rows = list(csv.reader(io.StringIO(text)))
-    assert rows[0][:5] == ["t [s]", "z_e [m]", "phi_e [rad]", "theta_e [rad]", "psi_e [rad]"]
+    assert rows[0][:5] == ["t", "z_e", "phi_e", "theta_e", "psi_e"]
+    assert all(name.isidentifier() for name in rows[0])
     data = np.array(rows[1:], dtype=float)
     assert data.shape == (1001, len(COLUMNS))
     np.testing.assert_allclose(data[:, 1], default_run["z_e"], rtol=1e-11, atol=1e-14)
+
+
+def test_columns_sidecar_gives_every_column_a_unit():
+    side = columns_sidecar()["columns"]
+    assert [c["name"] for c in side] == [n for n, _ in COLUMNS]
+    units = {c["name"]: c["unit"] for c in side}
+    assert (units["t"], units["z_e"], units["phi_e"], units["F_1"], units["M_x"]) == \
+        ("s", "m", "rad", "N", "N m")
+    assert units["u_1"] == "m/s^2" and units["u_2"] == "rad/s^2"
+    # the Lyapunov function and the body velocity no longer share a name
+    assert "lyapunov_V1" in units and "V1" not in units
 
 
 def test_seed_fixes_the_noise():
