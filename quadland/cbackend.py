@@ -17,52 +17,20 @@ from __future__ import annotations
 import ctypes
 import dataclasses
 import functools
-import hashlib
-import os
-import shutil
-import subprocess
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from quadland.exceptions import CompileError, CompilerNotFoundError
+from quadland.build import build_library
 from symbolic.control_step import step_inputs, step_outputs
 from symbolic.layout import Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 
-__all__ = ["CompileError", "find_compiler", "cache_dir", "sources", "build_library",
-           "CControlStep", "load_control_step", "CApi", "load_api"]
-
-#: Flags of every build; the generated files compile alone with them.
-CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-fPIC")
+__all__ = ["sources", "CControlStep", "load_control_step", "CApi", "load_api"]
 
 _STEP_SOURCES = ("control_step.c", "quadland.c")
 _ALL_SOURCES = _STEP_SOURCES + ("closed_loop.c", "plant.c", "quadland_model.c",
                                 "closed_loop_jacobian.c", "quadland_jacobian.c")
-
-
-def find_compiler() -> str:
-    """Path of the C compiler: ``$CC``, else ``cc``, ``gcc`` or ``clang``.
-
-    Raises
-    ------
-    CompilerNotFoundError
-        When none is found.
-    """
-    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
-        path = shutil.which(name) if name else None
-        if path:
-            return path
-    raise CompilerNotFoundError(
-        "no C compiler found (set CC or install cc, gcc or clang); "
-        "controller.backend = \"c\" compiles the generated code on demand")
-
-
-def cache_dir() -> Path:
-    """Folder of the compiled libraries."""
-    root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(root) / "quadland"
 
 
 @functools.lru_cache(maxsize=8)
@@ -94,46 +62,6 @@ def sources(l: int, precision: str = "double") -> dict[str, str]:
     if precision not in ("double", "float"):
         raise ValueError(f"precision must be 'double' or 'float', got {precision!r}")
     return dict(_generated_sources(l, precision))
-
-
-def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "-O2") -> Path:
-    """Compile ``compile_`` (names in ``files``) into a cached shared library.
-
-    Parameters
-    ----------
-    files : dict of str to str
-        Every source and header by file name.
-    compile_ : tuple of str
-        The ``.c`` files to compile and link.
-    opt : str
-        Optimization flag.
-
-    Returns
-    -------
-    Path
-        The library; rebuilt only when sources, compiler or flags change.
-    """
-    cc = find_compiler()
-    flags = (*CFLAGS, opt, "-shared")
-    digest = hashlib.sha256()
-    for part in (cc, *flags, *compile_):
-        digest.update(part.encode() + b"\0")
-    for name, text in sorted(files.items()):
-        digest.update(name.encode() + b"\0" + text.encode() + b"\0")
-    target = cache_dir() / digest.hexdigest()[:20] / "libquadland.so"
-    if target.exists():
-        return target
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-        for name, text in files.items():
-            Path(tmp, name).write_text(text)
-        out = Path(tmp, "libquadland.so")
-        cmd = [cc, *flags, "-o", str(out), *compile_, "-lm"]
-        proc = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise CompileError(f"{' '.join(cmd)} failed:\n{proc.stderr.strip()}")
-        os.replace(out, target)
-    return target
 
 
 def _pointer_array(arrays, ctype):

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import quadland
-from quadland import cbackend
+from quadland import build, cbackend
 from quadland.codegen import GENERATED_DIR
 from quadland.exceptions import CompilerNotFoundError
 from quadland.model import disturbance_samples, model_values
@@ -22,7 +22,7 @@ from symbolic.codegen import STATUS_CODES, closed_loop_jacobian_function
 from symbolic.control_step import control_step_function
 
 try:
-    cbackend.find_compiler()
+    build.find_compiler()
     HAVE_CC = True
 except CompilerNotFoundError:
     HAVE_CC = False
@@ -394,7 +394,7 @@ def example(tmp_path_factory):
     root = tmp_path_factory.mktemp("generated")
     shutil.copytree(GENERATED_DIR, root, dirs_exist_ok=True,
                     ignore=shutil.ignore_patterns("build", "closed_loop_jacobian.c"))
-    cc = cbackend.find_compiler()
+    cc = build.find_compiler()
     subprocess.run(["make", "-s", "-j2", f"CC={cc}", "build/fly"], cwd=root / "example",
                    check=True, capture_output=True)
     return root / "example" / "build" / "fly"
@@ -469,4 +469,4 @@ def test_no_compiler_is_one_clear_error(monkeypatch):
     monkeypatch.setenv("CC", "")
     monkeypatch.setattr(shutil, "which", lambda name: None)
     with pytest.raises(CompilerNotFoundError, match="no C compiler found"):
-        cbackend.find_compiler()
+        build.find_compiler()

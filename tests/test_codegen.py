@@ -9,7 +9,7 @@ import casadi as ca
 import pytest
 
 from quadland import codegen
-from quadland.cbackend import find_compiler
+from quadland.build import find_compiler
 from quadland.cli import main as cli_main
 from quadland.exceptions import CompilerNotFoundError
 from symbolic.codegen import CodegenConfig
