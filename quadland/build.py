@@ -23,11 +23,14 @@ import casadi as ca
 
 from quadland.exceptions import CompileError, CompilerNotFoundError
 
-__all__ = ["STRICT_CFLAGS", "SHARED_CFLAGS", "find_compiler", "have_compiler", "cache_dir",
+__all__ = ["STRICT_CFLAGS", "RUNTIME_CFLAGS", "SHARED_CFLAGS", "find_compiler", "have_compiler", "cache_dir",
            "build_library"]
 
-#: Flags every generated file compiles under, alone.
+#: Flags every generated flight file compiles under, alone.
 STRICT_CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror")
+#: Flags of runtime-only code (the simulators), which need not be warning-free:
+#: CasADi's raw output leaves unused parameters.
+RUNTIME_CFLAGS = ("-std=c99", "-w")
 #: Flags of a shared library. ``-fPIC`` alone lets every call between the
 #: library's own functions go through the PLT (interposition), which costs
 #: 1.8x on the closed loop's right-hand side here; the second flag removes it.
@@ -75,8 +78,11 @@ def cache_dir() -> Path:
 
 
 def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "-O2",
-                  name: str = "libquadland") -> Path:
+                  name: str = "libquadland", strict: bool = True) -> Path:
     """Compile ``compile_`` (names in ``files``) into a cached shared library.
+
+    Each translation unit compiles in its own process, as many at a time as
+    there are cores, then they are linked.
 
     Parameters
     ----------
@@ -88,6 +94,9 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
         Optimization flag.
     name : str
         Stem of the library's file name.
+    strict : bool
+        Compile with :data:`STRICT_CFLAGS` (flight code) rather than
+        :data:`RUNTIME_CFLAGS`.
 
     Returns
     -------
@@ -102,9 +111,9 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
         When the compiler rejects the sources.
     """
     cc = find_compiler()
-    flags = (*STRICT_CFLAGS, opt, *SHARED_CFLAGS)
+    cflags = (*(STRICT_CFLAGS if strict else RUNTIME_CFLAGS), opt, *SHARED_CFLAGS[:-1])
     digest = hashlib.sha256()
-    for part in (_compiler_identity(cc), ca.__version__, *flags, *compile_):
+    for part in (_compiler_identity(cc), ca.__version__, *cflags, *compile_):
         digest.update(part.encode() + b"\0")
     for fname, text in sorted(files.items()):
         digest.update(fname.encode() + b"\0" + text.encode() + b"\0")
@@ -119,12 +128,32 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
         for fname, text in files.items():
             Path(tmp, fname).write_text(text)
+        objects = [str(Path(c).with_suffix(".o")) for c in compile_]
+        _run_parallel([[cc, *cflags, "-c", c, "-o", o] for c, o in zip(compile_, objects)],
+                      tmp, cc)
         out = Path(tmp, f"{name}.so")
-        cmd = [cc, *flags, "-o", str(out), *compile_, "-lm"]
-        proc = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True)
-        if proc.returncode != 0:
-            first = next((ln for ln in proc.stderr.splitlines() if "error" in ln),
-                         proc.stderr.strip().splitlines()[0] if proc.stderr.strip() else "")
-            raise CompileError(f"{Path(cc).name} failed on the generated C: {first}")
+        _run_parallel([[cc, SHARED_CFLAGS[-1], "-o", str(out), *objects, "-lm"]], tmp, cc)
         os.replace(out, target)
     return target
+
+
+def _run_parallel(commands: list[list[str]], cwd: str, cc: str) -> None:
+    """Run compiler commands, at most one per core at a time; raise on the first failure."""
+    pending, running = list(commands), []
+    jobs = max(1, os.cpu_count() or 1)
+    try:
+        while pending or running:
+            while pending and len(running) < jobs:
+                cmd = pending.pop(0)
+                running.append(subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.DEVNULL,
+                                                stderr=subprocess.PIPE, text=True))
+            proc = running.pop(0)
+            _, err = proc.communicate()
+            if proc.returncode != 0:
+                first = next((ln for ln in err.splitlines() if "error" in ln),
+                             err.strip().splitlines()[0] if err.strip() else "")
+                raise CompileError(f"{Path(cc).name} failed on the generated C: {first}")
+    finally:
+        for proc in running:
+            proc.kill()
+            proc.wait()

@@ -22,16 +22,16 @@ from collections.abc import Mapping
 import casadi as ca
 import numpy as np
 
+from quadland.compiled import SIM_GUARD, compiled_loop
 from quadland.constants import TILT_MIN
 from quadland.exceptions import SimulationError
-from quadland.model import ModelValues, disturbance_samples, model_values
+from quadland.model import disturbance_samples, model_values
 from quadland.scenario import Scenario
 from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, POSITION1, closed_loop_function,
                                   closed_loop_outputs, closed_loop_state, plant_function,
                                   vehicle_measurement)
 from symbolic.control_step import control_step_function, step_outputs
 from symbolic.layout import Field, Layout
-from symbolic.parameters import VEHICLE
 from symbolic.quadrotor import DISTURBANCE
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.vehicle import STATE as VEHICLE_STATE
@@ -197,16 +197,78 @@ def simulate(scenario: Scenario) -> SimulationResult:
     mv = model_values(scenario)
     t_out, t_dist, t_all = time_grid(scenario)
     w_dist = disturbance_samples(scenario, t_dist)
+    w_out = _held(t_dist, w_dist, t_out).T                       # (n_out, nw)
     if scenario.data["controller"]["rate_hz"] > 0:
-        X, held = _simulate_sampled(scenario, mv, t_out, t_dist, w_dist)
+        loop = compiled_loop(mv.l, "sampled")
+        if loop is not None and scenario.data["controller"]["backend"] == "casadi":
+            X, held = _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist)
+        else:
+            X, held = _simulate_sampled(scenario, mv, t_out, t_dist, w_dist)
     else:
-        X, held = _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist), None
-    X_np = X.full() if isinstance(X, ca.DM) else X
-    if not np.all(np.isfinite(X_np)):
-        bad = int(np.argmax(~np.all(np.isfinite(X_np), axis=0)))
+        loop = compiled_loop(mv.l, "continuous")
+        held = None
+        if loop is not None and scenario.data["simulation"]["integrator"] == "rk":
+            X = _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist)
+        else:
+            X = _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist)
+    if not np.all(np.isfinite(X)):
+        bad = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
         raise SimulationError(f"state became non-finite at t = {t_out[bad]:.4g} s "
                               "(check gains and the initial attitude)")
-    return _result(scenario, mv, t_out, t_dist, w_dist, X, X_np, held)
+    Y = loop.outputs(X, w_out, mv.p) if loop is not None else _vm_outputs(mv, X, w_out)
+    return _result(scenario, mv, t_out, w_out, X, Y, held)
+
+
+def _grid_index(grid, times):
+    """For each point of ``grid``, its index in the sorted ``times`` (both rounded
+    to 1e-12 s), or -1 where it is not one of them."""
+    g, t = np.round(grid, 12), np.round(times, 12)
+    k = np.clip(np.searchsorted(t, g), 0, len(t) - 1)
+    return np.where(t[k] == g, k, -1).astype(np.int_)
+
+
+def _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
+    """The continuous loop in one compiled call: one RK4 step (times
+    ``rk_steps_per_interval``) per interval of the merged grid, exactly."""
+    W = _held(t_dist, w_dist, t_all[:-1]).T
+    rec = _grid_index(t_all[1:], t_out)
+    X, _, failure = loop.integrate(mv.x0, W, np.diff(t_all), rec,
+                                   scenario.data["simulation"]["rk_steps_per_interval"], mv.p,
+                                   len(t_out))
+    if failure is not None:
+        raise SimulationError(f"state became non-finite at t = {t_all[failure.index]:.4g} s "
+                              "(check gains and the initial attitude)")
+    return X
+
+
+def _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist):
+    """The sampled-data loop in one compiled call (see ``_simulate_sampled``)."""
+    rate = scenario.data["controller"]["rate_hz"]
+    T = scenario.data["simulation"]["duration"]
+    t_ctrl = _arange(T, 1.0 / rate)[:-1] if T > 0 else np.zeros(1)
+    grid = np.unique(np.round(np.concatenate([t_out, t_dist, t_ctrl]), 12))
+    model = loop.model
+    x0 = closed_loop_state(mv.l).unpack(mv.x0)
+    xp0 = model.plant_state.pack({n: x0[n] for n in model.plant_state.names()})
+    xc0 = model.controller_state.pack(dict(W_hat=x0["W_hat"], zeta_hat=x0["zeta_hat"],
+                                           u_prev=np.zeros(4)))
+    pp = model.plant_params.pack(dict(p_quad=mv.p_quad, p_veh=mv.p_veh))
+    pc = model.controller_params.pack(dict(
+        p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
+        rotor_limits=mv.rotor_limits, hold=mv.hold, dt=1.0 / rate))
+    ctrl = _grid_index(grid[:-1], t_ctrl) >= 0
+    rec = _grid_index(grid, t_out)
+    W = _held(t_dist, w_dist, grid[:-1]).T
+    X, R, _, _, failure = loop.sampled(
+        xp0, xc0, W, np.diff(grid), ctrl, rec, scenario.data["simulation"]["rk_steps_per_interval"],
+        pp, pc, TILT_MIN, len(t_out))
+    if failure is not None:
+        t = grid[min(failure.index, len(grid) - 1)]
+        if failure.status == SIM_GUARD:
+            raise SimulationError(f"singular attitude at t = {t:.4g} s: "
+                                  f"|cos(theta) cos(phi)| < {TILT_MIN:g}")
+        raise SimulationError(f"state became non-finite at t = {t:.4g} s")
+    return X, R.T
 
 
 def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
@@ -217,9 +279,9 @@ def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
         out = integ(x0=mv.x0, u=w, p=mv.p)
     except RuntimeError as exc:
         raise SimulationError(f"integrator {plugin} failed: {str(exc).splitlines()[-1]}") from None
-    X = ca.horzcat(ca.DM(mv.x0), out["xf"])           # stays a DM: no NumPy round trip
+    X = np.hstack([mv.x0[:, None], np.asarray(out["xf"])])
     keep = np.flatnonzero(np.isin(np.round(t_all, 12), np.round(t_out, 12)))
-    return X if len(keep) == X.shape[1] else X[:, keep.tolist()]
+    return np.ascontiguousarray(X[:, keep].T)
 
 
 def _control_step(scenario, l):
@@ -282,38 +344,54 @@ def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
             xp = np.asarray(integ(x0=xp, u=np.concatenate([wrench, w]), p=pv)["xf"]).ravel()
             if not np.all(np.isfinite(xp)):
                 raise SimulationError(f"state became non-finite at t = {t:.4g} s")
-    return X, held
+    return np.ascontiguousarray(X.T), held
 
 
-@functools.lru_cache(maxsize=8)
-def _mapped_outputs(l: int, n: int) -> ca.Function:
-    return closed_loop_outputs(l).map(n)
+#: Samples per call of the mapped output function on CasADi's virtual machine.
+_VM_CHUNK = 256
 
 
-def _result(scenario, mv, t_out, t_dist, w_dist, X, X_np, held):
+@functools.lru_cache(maxsize=4)
+def _mapped_outputs(l: int) -> ca.Function:
+    # the parameter vector (input 2) is shared by every sample, not repeated
+    return closed_loop_outputs(l).map("outputs_map", "serial", _VM_CHUNK, [2], [])
+
+
+def _vm_outputs(mv, X, w_out) -> np.ndarray:
+    """Output signals on CasADi's virtual machine, in chunks, ``(n, ny)``."""
+    fn, n = _mapped_outputs(mv.l), X.shape[0]
+    Y = np.empty((n, OUTPUTS.size))
+    for a in range(0, n, _VM_CHUNK):
+        b = min(a + _VM_CHUNK, n)
+        Xc, Wc = np.zeros((_VM_CHUNK, X.shape[1])), np.zeros((_VM_CHUNK, w_out.shape[1]))
+        Xc[: b - a], Wc[: b - a] = X[a:b], w_out[a:b]
+        outs = fn(Xc.T, Wc.T, mv.p)
+        Y[a:b] = np.vstack([np.asarray(v) for v in outs]).T[: b - a]
+    return Y
+
+
+def _result(scenario, mv, t_out, w_out, X, Y, held):
+    """Columns of ``TRAJECTORY`` from states ``X`` (n, nx) and outputs ``Y`` (n, ny)."""
     lay = closed_loop_state(mv.l)
-    w_out = _held(t_dist, w_dist, t_out)
-    n = len(t_out)
-    outs = _mapped_outputs(mv.l, n)(X, w_out, mv.p)
-    X = X_np
-    sig = {name: np.asarray(v) for name, v in zip(OUTPUTS.names(), outs)}
-    xs = lay.unpack(X)
-    tilt = np.cos(X[lay.index("phi1")]) * np.cos(X[lay.index("theta1")])
+    xs = lay.unpack(X.T)
+    tilt = np.cos(X[:, lay.index("phi1")]) * np.cos(X[:, lay.index("theta1")])
     if np.any(np.abs(tilt) < TILT_MIN):
         k = int(np.argmax(np.abs(tilt) < TILT_MIN))
         raise SimulationError(f"singular attitude at t = {t_out[k]:.4g} s: "
                               f"cos(theta) cos(phi) = {tilt[k]:.2e}")
+    sig = OUTPUTS.unpack(Y.T)
     if held is not None:
         so = step_outputs(mv.l)
         for name in ("u", "wrench", "rotor"):
             sig[name] = held[so.slice(name)]
     data = dict(sig, t=t_out[None, :], zeta_hat=xs["zeta_hat"],
-                norm_W_hat=np.linalg.norm(xs["W_hat"], axis=(0, 1))[None, :],
+                norm_W_hat=np.sqrt(np.einsum("ij,ij->i", X[:, lay.slice("W_hat")],
+                                             X[:, lay.slice("W_hat")]))[None, :],
                 **QUAD_STATE.unpack(xs["xq"]), **POSITION1.unpack(xs["pos1"]),
-                **VEHICLE_STATE.unpack(xs["xv"]), **DISTURBANCE.unpack(w_out))
+                **VEHICLE_STATE.unpack(xs["xv"]), **DISTURBANCE.unpack(w_out.T))
     cols = {}
     for f in TRAJECTORY.fields:
         rows = np.asarray(data[f.name], dtype=float).reshape(f.size, -1)
         cols.update(zip(f.element_names(), rows))
-    return SimulationResult(scenario, {k: np.asarray(v, dtype=float).ravel()
-                                       for k, v in cols.items()}, X.T)
+    return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
+                                       for k, v in cols.items()}, X)

@@ -1,0 +1,221 @@
+"""The functions a compiled simulator needs, in a model-independent shape.
+
+A simulator integrates one of two kinds of loop, and knows nothing of a
+model but the sizes of these functions' flat vector arguments:
+
+* continuous: ``rhs(x, w, p) -> x_dot`` and ``outputs(x, w, p) -> y``
+  (the output signals stacked in one vector);
+* sampled-data: a plant ``plant(xp, uh, w, pp) -> xp_dot`` driven by the
+  held input ``uh``, a controller ``controller(xp, xc, pc, first) ->
+  (xc_next, uh, rec, guard)`` run at its own rate (``rec``: the signals to
+  record at the output times, ``guard``: a scalar that must stay away from
+  zero, ``first``: 1 on the first step), and ``assemble(xp, xc) -> x``, the
+  continuous loop's state, so that ``outputs`` serves both loops.
+
+:class:`LoopModel` bundles them with their layouts; :func:`paper_loop`
+builds it for the paper's 4-DOF loop. A new model supplies its own
+``LoopModel`` and goes through the same code generation, build and driver.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import os
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+import jinja2
+
+from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, closed_loop_function,
+                                  closed_loop_outputs, closed_loop_params, closed_loop_state,
+                                  plant_function, vehicle_measurement)
+from symbolic.control_step import control_step_function, step_outputs
+from symbolic.layout import Field, Layout
+from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from symbolic.quadrotor import DISTURBANCE, WRENCH
+from symbolic.backstepping import REFERENCE
+
+__all__ = ["LoopModel", "paper_loop", "controller_state", "controller_params",
+           "PLANT_PARAMS", "RECORDED", "SIMULATOR_PARTS", "simulator_sources"]
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopModel:
+    """The symbolic functions and layouts of one simulated loop.
+
+    Attributes
+    ----------
+    name : str
+        Identifier, used in generated C symbols.
+    state, disturbance, params, outputs : Layout
+        Layouts of ``x``, ``w``, ``p`` and ``y`` of the continuous loop.
+    rhs, output_fn : casadi.Function
+        ``rhs(x, w, p) -> x_dot``; ``outputs(x, w, p) -> y`` (one vector).
+    plant_state, held, controller_state, plant_params, controller_params, recorded : Layout
+        Layouts of the sampled-data loop's ``xp``, ``uh``, ``xc``, ``pp``,
+        ``pc`` and ``rec``.
+    plant, controller, assemble : casadi.Function
+        The sampled-data loop's functions (see the module docstring).
+    """
+
+    name: str
+    state: Layout
+    disturbance: Layout
+    params: Layout
+    outputs: Layout
+    rhs: ca.Function
+    output_fn: ca.Function
+    plant_state: Layout
+    held: Layout
+    controller_state: Layout
+    plant_params: Layout
+    controller_params: Layout
+    recorded: Layout
+    plant: ca.Function
+    controller: ca.Function
+    assemble: ca.Function
+
+    def functions(self) -> tuple[ca.Function, ...]:
+        """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
+        return (self.rhs, self.output_fn, self.plant, self.controller, self.assemble)
+
+
+#: What the sampled loop records of each control step: the held signals.
+RECORDED = Layout("rec", tuple(step_outputs(1)[n] for n in ("u", "wrench", "rotor")),
+                  "signals of the control step held until the next")
+
+
+@functools.cache
+def controller_state(l: int) -> Layout:
+    """The sampled controller's memory: adaptive states and the law's last output."""
+    so = step_outputs(l)
+    return Layout("xc", (
+        dataclasses.replace(so["W_next"], name="W_hat"),
+        dataclasses.replace(so["zeta_next"], name="zeta_hat"),
+        dataclasses.replace(so["u_law"], name="u_prev"),
+    ), "sampled controller state")
+
+
+#: Parameters of the plant alone.
+PLANT_PARAMS = Layout("pp", (Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
+                             Field.nested("p_veh", VEHICLE, "vehicle constants and inputs")),
+                      "plant parameters")
+
+
+@functools.cache
+def controller_params(l: int) -> Layout:
+    """Parameters of the sampled controller: the loop's, limits, hold and period."""
+    return Layout("pc", (
+        Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
+        Field.nested("p_veh", VEHICLE, "vehicle constants and inputs"),
+        Field.nested("p_ctrl", controller_layout(l), "controller"),
+        Field.nested("ref", REFERENCE, "reference"),
+        Field("rotor_limits", 2, "N", "rotor force limits", elements=("F_min", "F_max")),
+        Field("hold", 1, "periods", "hold compensation"),
+        Field("dt", 1, "s", "control period"),
+    ), "sampled controller parameters")
+
+
+def _named(name, ins, outs, in_names, out_names):
+    return ca.Function(name, ins, outs, in_names, out_names)
+
+
+@functools.cache
+def paper_loop(l: int) -> LoopModel:
+    """The paper's 4-DOF loop (``symbolic.closed_loop``) for ``l`` RBF nodes."""
+    state, params = closed_loop_state(l), closed_loop_params(l)
+    x, w, p = state.sym(), DISTURBANCE.sym(), params.sym()
+    rhs = _named("rhs", [x, w, p], [closed_loop_function(l)(x, w, p)],
+                 ["x", "w", "p"], ["x_dot"])
+    output_fn = _named("outputs", [x, w, p], [ca.vertcat(*closed_loop_outputs(l)(x, w, p))],
+                       ["x", "w", "p"], ["y"])
+
+    xc_lay, pc_lay = controller_state(l), controller_params(l)
+    xp, uh, pp = PLANT_STATE.sym(), WRENCH.sym(), PLANT_PARAMS.sym()
+    pps = PLANT_PARAMS.unpack(pp)
+    plant = _named("plant", [xp, uh, w, pp],
+                   [plant_function()(xp, uh, w, pps["p_quad"], pps["p_veh"])],
+                   ["xp", "uh", "w", "pp"], ["xp_dot"])
+
+    xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
+    xs, cs, ps = PLANT_STATE.unpack(xp), xc_lay.unpack(xc), pc_lay.unpack(pc)
+    yv = vehicle_measurement(xs["xv"], ps["p_veh"])
+    hold = (1 - first) * ps["hold"]                  # no previous command on the first step
+    res = dict(zip(step_outputs(l).names(), control_step_function(l)(
+        xs["xq"], yv, ps["ref"], cs["W_hat"], cs["zeta_hat"], cs["u_prev"], ps["p_quad"],
+        ps["p_ctrl"], ps["rotor_limits"], hold, ps["dt"])))
+    controller = _named(
+        "controller", [xp, xc, pc, first],
+        [ca.vertcat(ca.vec(res["W_next"]), res["zeta_next"], res["u_law"]), res["wrench"],
+         ca.vertcat(*(res[n] for n in RECORDED.names())), res["tilt"]],
+        ["xp", "xc", "pc", "first"], ["xc_next", "uh", "rec", "guard"])
+
+    x_of = ca.vertcat(*[xs[n] if n in xs else ca.vec(cs[n]) for n in state.names()])
+    assemble = _named("assemble", [xp, xc], [x_of], ["xp", "xc"], ["x"])
+    return LoopModel("paper", state, DISTURBANCE, params, OUTPUTS, rhs, output_fn,
+                     PLANT_STATE, WRENCH, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
+                     controller, assemble)
+
+
+_TEMPLATES = jinja2.Environment(
+    loader=jinja2.FileSystemLoader(Path(__file__).parent / "templates"),
+    undefined=jinja2.StrictUndefined, keep_trailing_newline=True, trim_blocks=True,
+    lstrip_blocks=True)
+
+
+#: The parts of a compiled simulator: the functions each loop kind calls.
+SIMULATOR_PARTS = {"continuous": ("rhs", "outputs"),
+                   "sampled": ("plant", "controller", "assemble", "outputs")}
+
+
+def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
+    """C sources of one part of a compiled simulator of ``model``, by file name.
+
+    Parameters
+    ----------
+    model : LoopModel
+    part : {"continuous", "sampled"}
+        Which loop; see :data:`SIMULATOR_PARTS`.
+
+    Returns
+    -------
+    dict of str to str
+        ``<prefix><function>.c/.h``: each function the part calls, as
+        CasADi writes it, named ``<prefix><function>`` (one translation unit
+        each, so that a build compiles them in parallel); ``<prefix><part>.c``:
+        the driver (``symbolic/templates/simulator.c.jinja``): RK4 over an
+        exact grid, one call per run, parameters passed once and shared,
+        outputs written straight into the caller's arrays. ``prefix`` is
+        ``qlsim_<model name>_``. The text depends only on the model and the
+        CasADi version.
+    """
+    if part not in SIMULATOR_PARTS:
+        raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
+    prefix = f"qlsim_{model.name}_"
+    by_name = {f.name(): f for f in model.functions()}
+    files, fns = {}, []
+    for name in SIMULATOR_PARTS[part]:
+        f = by_name[name]
+        args = f.sx_in()
+        fn = ca.Function(prefix + name, args, f.call(args), f.name_in(), f.name_out())
+        fns.append(fn)
+        cg = ca.CodeGenerator(f"{prefix}{name}.c", {
+            "with_header": True, "with_export": False, "prefix": f"{prefix}{name}_",
+            "verbose": False})
+        cg.add(fn)
+        with tempfile.TemporaryDirectory() as tmp:
+            cg.generate(tmp + os.sep)
+            for ext in ("c", "h"):
+                files[f"{prefix}{name}.{ext}"] = Path(tmp, f"{prefix}{name}.{ext}").read_text()
+    sizes = dict(NX=model.state.size, NW=model.disturbance.size, NP=model.params.size,
+                 NY=model.outputs.size, NXP=model.plant_state.size, NUH=model.held.size,
+                 NXC=model.controller_state.size, NPP=model.plant_params.size,
+                 NPC=model.controller_params.size, NREC=model.recorded.size)
+    files[f"{prefix}{part}.c"] = _TEMPLATES.get_template("simulator.c.jinja").render(
+        prefix=prefix, model=model.name, part=part, functions=SIMULATOR_PARTS[part],
+        casadi_version=ca.__version__, sizes=sizes,
+        sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
+        sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))
+    return files
