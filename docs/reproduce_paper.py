@@ -10,8 +10,8 @@ import numpy as np
 
 import quadland
 from quadland.metrics import summarize
-from quadland.output import write_bytes_atomic
-from quadland.plots import render_figures
+from quadland.output import figure_png, write_files
+from quadland.plots import simulation_figures
 
 VARIANTS = {"printed": ["controller.nominal_model=false"],
             "nominal": ["controller.nominal_model=true"]}
@@ -21,10 +21,8 @@ HERE = Path(__file__).parent
 def main():
     for variant, overrides in VARIANTS.items():
         res = quadland.simulate(quadland.load_scenario("paper", overrides))
-        folder = HERE / "figures" / variant
-        folder.mkdir(parents=True, exist_ok=True)
-        for name, data in render_figures(res).items():
-            write_bytes_atomic(folder / name, data)
+        write_files(HERE / "figures" / variant,
+                    {name: figure_png(fig) for name, fig in simulation_figures(res).items()})
         s = summarize(res)
         print(f"## {variant}")
         for name, e in s["errors"].items():

@@ -17,13 +17,17 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 
 __all__ = ["__version__", "QuadlandError", "ScenarioError", "Scenario", "load_scenario",
            "SimulationResult", "simulate", "allmargin", "diskmargin", "equilibrium",
-           "frozen_point", "linear_models"]
+           "frozen_point", "linear_models", "Requirement", "MarginReport", "margin_report",
+           "format_report", "simulation_figures", "margin_figures"]
 
-# The analysis API imports python-control; load it on first use so that
-# `import quadland` stays light for simulation.
+# The analysis API imports python-control and the figures matplotlib; load
+# them on first use so that `import quadland` stays light for simulation.
 _LAZY = {"allmargin": "quadland.analysis", "diskmargin": "quadland.analysis",
          "equilibrium": "quadland.linearize", "frozen_point": "quadland.linearize",
-         "linear_models": "quadland.linearize"}
+         "linear_models": "quadland.linearize", "Requirement": "quadland.margins",
+         "MarginReport": "quadland.margins", "margin_report": "quadland.margins",
+         "format_report": "quadland.margins", "simulation_figures": "quadland.plots",
+         "margin_figures": "quadland.plots"}
 
 
 def __getattr__(name):

@@ -545,6 +545,13 @@ def diskmargin(L, omega=None) -> tuple[list[DiskMargin], DiskMargin]:
 def sensitivity_sigma(L, omega) -> tuple[np.ndarray, np.ndarray]:
     """Singular values of ``S = (I + L)^-1`` and ``T = I - S`` at ``omega``.
 
+    Parameters
+    ----------
+    L : control.StateSpace or control.TransferFunction
+        Square loop transfer (negative feedback, ``u = -L u``).
+    omega : array_like
+        Frequencies, rad/s.
+
     Returns
     -------
     sigma_S, sigma_T : ndarray, shape (len(omega), m)

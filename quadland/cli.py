@@ -1,24 +1,35 @@
 """The ``quadland`` command line: parses arguments and calls the library.
 
-Known errors (``QuadlandError``) are reported as one line
-``quadland: error: ...`` with exit status 2 (1 for ``codegen --check``
-differences); nothing is written before the inputs are validated.
+Only this module knows flags and file names. Known errors
+(``QuadlandError``) are reported as one line ``quadland: error: ...`` with
+exit status 2; a library message that starts with one of its parameter
+names (``"at: must be ..."``) is shown with the flag that sets it
+(``"--at: must be ..."``). Exit status 1 means a check failed
+(``codegen --check`` differences, ``margins`` below the requirement), 130
+an interrupt. Nothing is written before the inputs are validated.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+import time
 from pathlib import Path
 
 from quadland.exceptions import QuadlandError
 
 __all__ = ["main", "build_parser"]
 
+#: Flag of each library parameter that a command passes on from one.
+_FLAGS = {"at": "--at", "out": "--out", "gain_margin_db": "--gain-margin-db",
+          "phase_margin_deg": "--phase-margin-deg"}
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     from quadland import __version__
+    from quadland.margins import Requirement
 
     parser = argparse.ArgumentParser(
         prog="quadland",
@@ -61,10 +72,10 @@ def build_parser() -> argparse.ArgumentParser:
     mg.add_argument("--out", type=Path, metavar="DIR",
                     help="output folder (default: a new folder named after the scenario "
                          "and the time)")
-    mg.add_argument("--gain-margin-db", type=float, default=6.0, metavar="DB",
-                    help="required gain margin (default: 6 dB)")
-    mg.add_argument("--phase-margin-deg", type=float, default=45.0, metavar="DEG",
-                    help="required phase margin (default: 45 deg)")
+    mg.add_argument("--gain-margin-db", type=float, default=Requirement.gain_margin_db,
+                    metavar="DB", help="required gain margin (default: %(default)g dB)")
+    mg.add_argument("--phase-margin-deg", type=float, default=Requirement.phase_margin_deg,
+                    metavar="DEG", help="required phase margin (default: %(default)g deg)")
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     mg.set_defaults(handler=_run_margins)
     return parser
@@ -85,9 +96,47 @@ def _run_codegen(args) -> int:
 
 
 def _run_margins(args) -> int:
-    from quadland.margins import main as margins_main
+    from threadpoolctl import threadpool_limits
 
-    return margins_main(args)
+    from quadland.margins import Requirement, format_report, margin_report
+    from quadland.output import figure_png, output_folder, write_files
+    from quadland.scenario import load_scenario
+
+    start = time.perf_counter()
+    requirement = Requirement(args.gain_margin_db, args.phase_margin_deg)
+    scenario = load_scenario(args.scenario, args.overrides)
+    folder = output_folder(args.out, scenario.name, "margins")
+    # OpenBLAS threads on matrices of a few hundred rows cost more than they
+    # bring: 3-5x slower on a busy 2-core machine.
+    with threadpool_limits(1):
+        report = margin_report(scenario, args.at, requirement)
+        figures = {}
+        if not args.no_plots:
+            from quadland.plots import margin_figures
+
+            figures = {name: figure_png(fig) for name, fig in margin_figures(report).items()}
+    data = dict(report.to_dict(), runtime_s=time.perf_counter() - start)
+    files = {"margins.json": (json.dumps(data, indent=2) + "\n").encode("utf-8"), **figures}
+    write_files(folder, files)
+    print(format_report(report), end="")
+    print(f"quadland: wrote {folder} ({time.perf_counter() - start:.1f} s)")
+    if report.passed:
+        return 0
+    failed = [f"{label}{'' if section.stable else ' (closed loop unstable)'}: "
+              f"{', '.join(section.failed)}"
+              for label, section in (("continuous", report.continuous),
+                                     ("sampled", report.sampled))
+              if section is not None and not section.passed]
+    print(f"quadland: margins below the requirement {requirement.gain_margin_db:g} dB / "
+          f"{requirement.phase_margin_deg:g} deg: {'; '.join(failed)}", file=sys.stderr)
+    return 1
+
+
+def _message(exc: QuadlandError) -> str:
+    """The error's message, naming a parameter by its flag."""
+    text = str(exc)
+    name, sep, rest = text.partition(":")
+    return f"{_FLAGS[name]}{sep}{rest}" if sep and name in _FLAGS else text
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -97,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.handler(args)
     except QuadlandError as exc:
-        print(f"quadland: error: {exc}", file=sys.stderr)
+        print(f"quadland: error: {_message(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("quadland: interrupted", file=sys.stderr)

@@ -1,38 +1,48 @@
-"""The ``quadland margins`` command: a flight-control margin review.
+"""Margin review of a scenario's closed loop, as typed results.
 
-Linearizes the closed loop at an operating point (the equilibrium, or the
-simulated state at ``--at T``), breaks it at the plant input u, and reports
-per loop (altitude, roll, pitch, yaw) the classical margins with the other
-loops closed, the loop-at-a-time and multiloop disk margins, the closed-loop
-poles, and pass or fail against a gain and phase requirement. With
-``controller.rate_hz > 0`` the sampled-data loop is reported beside the
-continuous one.
+:func:`margin_report` linearizes the closed loop at an operating point (the
+equilibrium, or the simulated state at time ``at``), breaks it at the plant
+input u, and reports per loop (altitude, roll, pitch, yaw) the classical
+margins with the other loops closed, the loop-at-a-time and multiloop disk
+margins, the closed-loop poles, and pass or fail against a
+:class:`Requirement`. With ``controller.rate_hz > 0`` the sampled-data loop
+is reported beside the continuous one. :meth:`MarginReport.to_dict` is the
+content of ``margins.json``; :func:`format_report` the table that
+``quadland margins`` prints.
+
+The text table lives here rather than in a module of its own: it reads
+nothing but these dataclasses, and they and their one text form are read
+and changed together. The figures need matplotlib and are in
+:mod:`quadland.plots.margins`.
+
+The margin mathematics (:mod:`quadland.analysis`) and the linearization
+(:mod:`quadland.linearize`) are imported when a report is built, so that
+the command line can read :class:`Requirement`'s defaults without loading
+python-control.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import io
-import json
 import math
-import time
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from quadland.analysis import (FrequencyResponse, allmargin, closed_loop_poles, diskmargin,
-                               frequency_grid, loop_at_a_time)
 from quadland.exceptions import MarginsError
-from quadland.linearize import (LOOP_NAMES, LinearModels, OperatingPoint, equilibrium,
-                                frozen_point, linear_models, sampled_models)
-from quadland.output import write_bytes_atomic, write_text_atomic
-from quadland.scenario import Scenario, load_scenario
 
-__all__ = ["Requirement", "MarginReport", "margin_report", "format_report", "render_figures",
-           "FIGURES", "main"]
+if TYPE_CHECKING:
+    import control
 
-#: Figures written by the command.
-FIGURES = ("bode.png", "nyquist.png", "sigma.png", "poles.png")
+    from quadland.analysis import DiskMargin, Margins
+    from quadland.linearize import LinearModels, OperatingPoint
+    from quadland.scenario import Scenario
+
+__all__ = ["Requirement", "LoopMargins", "MultiloopDiskMargin", "Pole", "PoleSummary",
+           "LoopReport", "MarginReport", "margin_report", "format_report"]
+
+#: Where the loop is broken, as ``margins.json`` states it.
+LOOP_BREAK = "plant input u (eq. 6), L = -K P, negative feedback"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,9 +52,14 @@ class Requirement:
     Attributes
     ----------
     gain_margin_db : float
-        dB, required gain margin in both directions.
+        dB, required gain margin in both directions (finite, >= 0).
     phase_margin_deg : float
-        deg, required phase margin.
+        deg, required phase margin, in [0, 180).
+
+    Raises
+    ------
+    MarginsError
+        A value out of range; the message starts with the field's name.
     """
 
     gain_margin_db: float = 6.0
@@ -52,37 +67,267 @@ class Requirement:
 
     def __post_init__(self):
         if not (math.isfinite(self.gain_margin_db) and self.gain_margin_db >= 0):
-            raise MarginsError(f"--gain-margin-db must be a finite number >= 0, "
+            raise MarginsError(f"gain_margin_db: must be a finite number >= 0, "
                                f"got {self.gain_margin_db}")
         if not (math.isfinite(self.phase_margin_deg) and 0 <= self.phase_margin_deg < 180):
-            raise MarginsError(f"--phase-margin-deg must lie in [0, 180), "
+            raise MarginsError(f"phase_margin_deg: must lie in [0, 180), "
                                f"got {self.phase_margin_deg}")
 
 
 @dataclasses.dataclass(frozen=True)
+class LoopMargins:
+    """Margins of one loop, broken at its input with the others closed.
+
+    Attributes
+    ----------
+    name : str
+        ``"altitude"``, ``"roll"``, ``"pitch"`` or ``"yaw"``.
+    gain_margin_up_db : float
+        dB, the smallest tolerated gain increase; ``inf`` without one.
+    gain_margin_up_frequency : float or None
+        rad/s, its phase crossover.
+    gain_margin_down_db : float
+        dB (<= 0), the largest tolerated gain reduction; ``-inf`` without one.
+    gain_margin_down_frequency : float or None
+        rad/s, its phase crossover.
+    phase_margin_deg : float
+        deg, the smallest phase margin; ``inf`` without a gain crossing.
+    crossover_frequency : float or None
+        rad/s, the gain crossover of that phase margin.
+    delay_margin_s : float
+        s, the smallest delay margin; ``inf`` without a gain crossing.
+    delay_margin_frequency : float or None
+        rad/s, its gain crossover.
+    crossings : Margins
+        Every crossing (:func:`quadland.analysis.allmargin`).
+    disk : DiskMargin
+        Loop-at-a-time disk margin (:func:`quadland.analysis.diskmargin`).
+    stable : bool
+        Whether the closed loop (all loops closed) is stable.
+    passed : bool
+        Stable, and both gain margins and the phase margin reach the
+        requirement.
+    """
+
+    name: str
+    gain_margin_up_db: float
+    gain_margin_up_frequency: float | None
+    gain_margin_down_db: float
+    gain_margin_down_frequency: float | None
+    phase_margin_deg: float
+    crossover_frequency: float | None
+    delay_margin_s: float
+    delay_margin_frequency: float | None
+    crossings: Margins
+    disk: DiskMargin
+    stable: bool
+    passed: bool
+
+    def to_dict(self) -> dict:
+        """The loop's entry of ``margins.json`` (infinities kept)."""
+        return dict(
+            gain_margin_up_db=self.gain_margin_up_db,
+            gain_margin_up_frequency=self.gain_margin_up_frequency,
+            gain_margin_down_db=self.gain_margin_down_db,
+            gain_margin_down_frequency=self.gain_margin_down_frequency,
+            phase_margin_deg=self.phase_margin_deg,
+            crossover_frequency=self.crossover_frequency,
+            delay_margin_s=self.delay_margin_s,
+            delay_margin_frequency=self.delay_margin_frequency,
+            all_crossings={k: list(v) for k, v in dataclasses.asdict(self.crossings).items()
+                           if k != "stable"},
+            disk=dataclasses.asdict(self.disk), stable=self.stable, passed=self.passed)
+
+
+@dataclasses.dataclass(frozen=True)
+class MultiloopDiskMargin:
+    """Disk margin for independent perturbations in every loop at once.
+
+    Attributes
+    ----------
+    disk : DiskMargin
+        A guaranteed lower bound (:func:`quadland.analysis.diskmargin`).
+    passed : bool
+        Its gain interval (dB, upper side) and phase reach the requirement.
+    """
+
+    disk: DiskMargin
+    passed: bool
+
+    def to_dict(self) -> dict:
+        """The ``multiloop_disk`` entry of ``margins.json`` (infinities kept)."""
+        return dict(dataclasses.asdict(self.disk), passed=self.passed)
+
+
+@dataclasses.dataclass(frozen=True)
+class Pole:
+    """One closed-loop pole in the s-plane.
+
+    Attributes
+    ----------
+    real : float
+        1/s.
+    imag : float
+        rad/s.
+    natural_frequency : float
+        rad/s, ``|s|``.
+    damping : float
+        ``-Re s / |s|`` (1 for a pole at 0).
+    time_constant : float
+        s, ``-1 / Re s``; ``inf`` for a pole on or right of the axis.
+    """
+
+    real: float
+    imag: float
+    natural_frequency: float
+    damping: float
+    time_constant: float
+
+
+@dataclasses.dataclass(frozen=True)
+class PoleSummary:
+    """The closed-loop poles a review looks at.
+
+    Attributes
+    ----------
+    count : int
+        Number of closed-loop poles (states).
+    slowest : tuple of Pole
+        Upper half plane, largest real part first.
+    least_damped : tuple of Pole
+        Complex poles (upper half plane), smallest damping first.
+    spectral_radius : float or None
+        ``max |z|`` of a sampled loop's poles; None for continuous time.
+
+    Notes
+    -----
+    Poles of a sampled loop are mapped to the s-plane by ``s = log(z) / dt``.
+    """
+
+    count: int
+    slowest: tuple[Pole, ...]
+    least_damped: tuple[Pole, ...]
+    spectral_radius: float | None = None
+
+    def to_dict(self) -> dict:
+        """The ``poles`` entry of ``margins.json`` (infinities kept)."""
+        out = dict(count=self.count, slowest=[dataclasses.asdict(p) for p in self.slowest],
+                   least_damped=[dataclasses.asdict(p) for p in self.least_damped])
+        if self.spectral_radius is not None:
+            out["spectral_radius"] = self.spectral_radius
+        return out
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopReport:
+    """Margins of the continuous-time or of the sampled-data loop.
+
+    Attributes
+    ----------
+    stable : bool
+        Whether the closed loop is stable.
+    loops : tuple of LoopMargins
+        One per loop, in the order of the virtual inputs.
+    multiloop_disk : MultiloopDiskMargin
+    poles : PoleSummary
+    passed : bool
+        Stable and every loop passed (the multiloop disk margin has its own
+        verdict and is not part of this one).
+    rate_hz : float or None
+        Hz, the controller's rate of a sampled loop; None for continuous time.
+    """
+
+    stable: bool
+    loops: tuple[LoopMargins, ...]
+    multiloop_disk: MultiloopDiskMargin
+    poles: PoleSummary
+    passed: bool
+    rate_hz: float | None = None
+
+    def loop(self, name: str) -> LoopMargins:
+        """The margins of the loop called ``name``."""
+        for m in self.loops:
+            if m.name == name:
+                return m
+        raise KeyError(name)
+
+    @property
+    def failed(self) -> tuple[str, ...]:
+        """Names of the loops that did not pass."""
+        return tuple(m.name for m in self.loops if not m.passed)
+
+    def to_dict(self) -> dict:
+        """The ``continuous`` or ``sampled`` entry of ``margins.json`` (infinities kept)."""
+        out = dict(stable=self.stable, loops={m.name: m.to_dict() for m in self.loops},
+                   multiloop_disk=self.multiloop_disk.to_dict(), passed=self.passed,
+                   poles=self.poles.to_dict())
+        if self.rate_hz is not None:
+            out["rate_hz"] = self.rate_hz
+        return out
+
+
+@dataclasses.dataclass(frozen=True)
 class MarginReport:
-    """Everything the command prints, writes and plots.
+    """The margin review of one scenario at one operating point.
 
     Attributes
     ----------
     scenario : Scenario
     point : OperatingPoint
+    requirement : Requirement
+    continuous : LoopReport
+        The continuous-time controller.
+    sampled : LoopReport or None
+        The sampled-data controller at ``controller.rate_hz``, if > 0.
     models : LinearModels
         Continuous-time models.
-    sampled : LinearModels or None
+    sampled_models : LinearModels or None
         Zero-order-hold models at ``controller.rate_hz``, if > 0.
     poles : ndarray
         Poles of the continuous closed loop, 1/s.
-    data : dict
-        The JSON-ready results (see :func:`margin_report`).
     """
 
     scenario: Scenario
     point: OperatingPoint
+    requirement: Requirement
+    continuous: LoopReport
+    sampled: LoopReport | None
     models: LinearModels
-    sampled: LinearModels | None
+    sampled_models: LinearModels | None
     poles: np.ndarray
-    data: dict
+
+    @property
+    def passed(self) -> bool:
+        """Every loop of every reported controller passed."""
+        return self.continuous.passed and (self.sampled is None or self.sampled.passed)
+
+    def to_dict(self) -> dict:
+        """The JSON-ready review, as ``margins.json`` holds it.
+
+        Returns
+        -------
+        dict
+            ``scenario``, ``overrides``, ``operating_point``,
+            ``requirement``, ``loop_break``, ``continuous`` and (for a
+            sampled controller) ``sampled``; ``quadland margins`` adds
+            ``runtime_s``.
+
+        Notes
+        -----
+        JSON has no infinity: every infinite value becomes None (``null``),
+        meaning unbounded because there is no crossing. That is an upper
+        gain margin of ``inf`` dB, a lower one of ``-inf`` dB, a phase or
+        delay margin of ``inf``, a disk's upper gain ``inf`` (``alpha >=
+        2``) and a pole's time constant ``inf``. Tuples become lists, NumPy
+        scalars Python numbers.
+        """
+        data = dict(scenario=self.scenario.name, overrides=list(self.scenario.overrides),
+                    operating_point=self.point.to_dict(),
+                    requirement=dataclasses.asdict(self.requirement),
+                    loop_break=LOOP_BREAK, continuous=self.continuous.to_dict())
+        if self.sampled is not None:
+            data["sampled"] = self.sampled.to_dict()
+        return _finite(data)
 
 
 def _db(ratio: float) -> float:
@@ -104,67 +349,62 @@ def _finite(x):
     return x
 
 
-def _pole_summary(poles: np.ndarray, dt: float, count: int = 3) -> dict:
+def _pole(p: complex) -> Pole:
+    wn = abs(p)
+    return Pole(real=float(p.real), imag=float(p.imag), natural_frequency=float(wn),
+                damping=float(-p.real / wn) if wn > 0 else 1.0,
+                time_constant=float(-1.0 / p.real) if p.real < 0 else math.inf)
+
+
+def _pole_summary(poles: np.ndarray, dt: float, count: int = 3) -> PoleSummary:
     s = np.log(poles.astype(complex)) / dt if dt else poles.astype(complex)
     upper = s[s.imag >= -1e-12]
     slow = upper[np.argsort(-upper.real)][:count]
     osc = upper[upper.imag > 1e-9]
     zeta = -osc.real / np.abs(osc)
     least = osc[np.argsort(zeta)][:count]
-
-    def row(p):
-        wn = abs(p)
-        return dict(real=float(p.real), imag=float(p.imag), natural_frequency=float(wn),
-                    damping=float(-p.real / wn) if wn > 0 else 1.0,
-                    time_constant=float(-1.0 / p.real) if p.real < 0 else math.inf)
-
-    out = dict(count=int(poles.size), slowest=[row(p) for p in slow],
-               least_damped=[row(p) for p in least])
-    if dt:
-        out["spectral_radius"] = float(np.max(np.abs(poles)))
-    return out
+    return PoleSummary(count=int(poles.size), slowest=tuple(_pole(p) for p in slow),
+                       least_damped=tuple(_pole(p) for p in least),
+                       spectral_radius=float(np.max(np.abs(poles))) if dt else None)
 
 
-def _loop_rows(L, req: Requirement) -> tuple[dict, np.ndarray]:
+def _loop_margins(name: str, cm: Margins, dm: DiskMargin, req: Requirement) -> LoopMargins:
+    gms = np.asarray(cm.gain_margin, dtype=float)
+    up, down = gms[gms >= 1.0], gms[gms < 1.0]
+    gm_up = float(up.min()) if up.size else math.inf
+    gm_down = float(down.max()) if down.size else 0.0
+    w_up = cm.gm_frequency[int(np.flatnonzero(gms == gm_up)[0])] if up.size else None
+    w_down = cm.gm_frequency[int(np.flatnonzero(gms == gm_down)[0])] if down.size else None
+    if cm.phase_margin:
+        k = int(np.argmin(cm.phase_margin))
+        pm, w_pm = cm.phase_margin[k], cm.pm_frequency[k]
+        j = int(np.argmin(cm.delay_margin))
+        dmg, w_dm = cm.delay_margin[j], cm.dm_frequency[j]
+    else:
+        pm, w_pm, dmg, w_dm = math.inf, None, math.inf, None
+    ok = (cm.stable and _db(gm_up) >= req.gain_margin_db
+          and -_db(gm_down) >= req.gain_margin_db and pm >= req.phase_margin_deg)
+    return LoopMargins(name, _db(gm_up), w_up, _db(gm_down), w_down, pm, w_pm, dmg, w_dm,
+                       crossings=cm, disk=dm, stable=cm.stable, passed=bool(ok))
+
+
+def _loop_report(L: control.StateSpace, names, req: Requirement,
+                 rate_hz: float | None = None) -> tuple[LoopReport, np.ndarray]:
+    from quadland.analysis import allmargin, closed_loop_poles, diskmargin
+
     classical = allmargin(L)
     per_loop, multi = diskmargin(L)
-    loops = {}
-    for name, cm, dm in zip(LOOP_NAMES, classical, per_loop):
-        gms = np.asarray(cm.gain_margin, dtype=float)
-        up, down = gms[gms >= 1.0], gms[gms < 1.0]
-        gm_up = float(up.min()) if up.size else math.inf
-        gm_down = float(down.max()) if down.size else 0.0
-        w_up = cm.gm_frequency[int(np.flatnonzero(gms == gm_up)[0])] if up.size else None
-        w_down = cm.gm_frequency[int(np.flatnonzero(gms == gm_down)[0])] if down.size else None
-        if cm.phase_margin:
-            k = int(np.argmin(cm.phase_margin))
-            pm, w_pm = cm.phase_margin[k], cm.pm_frequency[k]
-            j = int(np.argmin(cm.delay_margin))
-            dmg, w_dm = cm.delay_margin[j], cm.dm_frequency[j]
-        else:
-            pm, w_pm, dmg, w_dm = math.inf, None, math.inf, None
-        ok = (cm.stable and _db(gm_up) >= req.gain_margin_db
-              and -_db(gm_down) >= req.gain_margin_db and pm >= req.phase_margin_deg)
-        loops[name] = dict(
-            gain_margin_up_db=_db(gm_up), gain_margin_up_frequency=w_up,
-            gain_margin_down_db=_db(gm_down), gain_margin_down_frequency=w_down,
-            phase_margin_deg=pm, crossover_frequency=w_pm,
-            delay_margin_s=dmg, delay_margin_frequency=w_dm,
-            all_crossings=dict(gain_margin=list(cm.gain_margin),
-                               gm_frequency=list(cm.gm_frequency),
-                               phase_margin=list(cm.phase_margin),
-                               pm_frequency=list(cm.pm_frequency),
-                               delay_margin=list(cm.delay_margin),
-                               dm_frequency=list(cm.dm_frequency)),
-            disk=dataclasses.asdict(dm), stable=cm.stable, passed=bool(ok))
+    loops = tuple(_loop_margins(name, cm, dm, req)
+                  for name, cm, dm in zip(names, classical, per_loop))
     multi_ok = (_db(multi.gain_margin[1]) >= req.gain_margin_db
                 and multi.phase_margin >= req.phase_margin_deg)
     stable = bool(classical[0].stable)
     poles = closed_loop_poles(L)
-    return dict(stable=stable, loops=loops,
-                multiloop_disk=dict(dataclasses.asdict(multi), passed=bool(multi_ok)),
-                passed=bool(stable and all(v["passed"] for v in loops.values())),
-                poles=_pole_summary(poles, float(L.dt) if L.dt else 0.0)), poles
+    report = LoopReport(stable=stable, loops=loops,
+                        multiloop_disk=MultiloopDiskMargin(multi, bool(multi_ok)),
+                        poles=_pole_summary(poles, float(L.dt) if L.dt else 0.0),
+                        passed=bool(stable and all(m.passed for m in loops)), rate_hz=rate_hz)
+    return report, poles
 
 
 def margin_report(scenario: Scenario, at: float | None = None,
@@ -175,35 +415,54 @@ def margin_report(scenario: Scenario, at: float | None = None,
     ----------
     scenario : Scenario
     at : float, optional
-        s: linearize about the simulated state at this time instead of
-        the equilibrium.
-    requirement : Requirement
+        s: linearize about the simulated state at this time instead of the
+        equilibrium.
+    requirement : Requirement, optional
+        Default 6 dB and 45 deg.
 
     Returns
     -------
     MarginReport
-        ``data`` holds ``operating_point``, ``requirement``, ``continuous``
-        and (with ``controller.rate_hz > 0``) ``sampled``, each with per-loop
-        classical and disk margins, the multiloop disk margin, the
-        closed-loop poles and the verdicts.
+
+    Raises
+    ------
+    MarginsError
+        ``at`` is not a finite time >= 0 (the message starts with ``"at: "``).
+    OperatingPointError
+        No equilibrium was found, or the point is unusable.
+
+    Notes
+    -----
+    The computation is a few hundred small dense factorizations; a
+    multithreaded BLAS on a busy machine can make it several times slower.
+    The command line runs it under ``threadpoolctl.threadpool_limits(1)``;
+    do the same when calling it in a loop.
+
+    Examples
+    --------
+    >>> import quadland
+    >>> from quadland.margins import margin_report
+    >>> report = margin_report(quadland.load_scenario("paper", ["rbf.nodes=5"]))
+    >>> [m.name for m in report.continuous.loops]
+    ['altitude', 'roll', 'pitch', 'yaw']
+    >>> report.passed
+    True
     """
     if at is not None and not (math.isfinite(at) and at >= 0):
-        raise MarginsError(f"--at must be a finite time >= 0 s, got {at}")
+        raise MarginsError(f"at: must be a finite time >= 0 s, got {at}")
+    from quadland.linearize import (LOOP_NAMES, equilibrium, frozen_point, linear_models,
+                                    sampled_models)
+
     point = equilibrium(scenario) if at is None else frozen_point(scenario, at)
     models = linear_models(scenario, point)
-    cont, poles = _loop_rows(models.loop_input, requirement)
-    data = dict(scenario=scenario.name, overrides=list(scenario.overrides),
-                operating_point=point.to_dict(),
-                requirement=dataclasses.asdict(requirement),
-                loop_break="plant input u (eq. 6), L = -K P, negative feedback",
-                continuous=cont)
+    continuous, poles = _loop_report(models.loop_input, LOOP_NAMES, requirement)
     rate = float(scenario.data["controller"]["rate_hz"])
-    sampled = None
+    sampled = discrete = None
     if rate > 0:
-        sampled = sampled_models(scenario, point, rate)
-        data["sampled"], _ = _loop_rows(sampled.loop_input, requirement)
-        data["sampled"]["rate_hz"] = rate
-    return MarginReport(scenario, point, models, sampled, poles, data)
+        discrete = sampled_models(scenario, point, rate)
+        sampled, _ = _loop_report(discrete.loop_input, LOOP_NAMES, requirement, rate_hz=rate)
+    return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
+                        poles)
 
 
 def _fmt(x, spec=".3g", none="-"):
@@ -214,176 +473,76 @@ def _fmt(x, spec=".3g", none="-"):
     return format(x, spec)
 
 
-def _table(section: dict, title: str, req: dict) -> list[str]:
+def _verdict(passed: bool) -> str:
+    return "pass" if passed else "FAIL"
+
+
+def _table(section: LoopReport, title: str, req: Requirement) -> list[str]:
     lines = [title,
              f"  {'loop':<9}{'GM up':>8}{'GM down':>9}{'PM':>8}{'w_c':>9}{'DM':>9}"
              f"{'w_180':>9}{'disk a':>8}{'disk GM':>9}{'disk PM':>9}  verdict",
              f"  {'':<9}{'dB':>8}{'dB':>9}{'deg':>8}{'rad/s':>9}{'s':>9}"
              f"{'rad/s':>9}{'':>8}{'+-dB':>9}{'deg':>9}"]
-    for name, r in section["loops"].items():
-        d = r["disk"]
-        tighter_up = r["gain_margin_up_db"] <= -r["gain_margin_down_db"]
-        w180 = r["gain_margin_up_frequency" if tighter_up else "gain_margin_down_frequency"]
+    for r in section.loops:
+        d = r.disk
+        tighter_up = r.gain_margin_up_db <= -r.gain_margin_down_db
+        w180 = r.gain_margin_up_frequency if tighter_up else r.gain_margin_down_frequency
         lines.append(
-            f"  {name:<9}{_fmt(r['gain_margin_up_db'], '.1f'):>8}"
-            f"{_fmt(r['gain_margin_down_db'], '.1f'):>9}{_fmt(r['phase_margin_deg'], '.1f'):>8}"
-            f"{_fmt(r['crossover_frequency'], '.3g'):>9}{_fmt(r['delay_margin_s'], '.3g'):>9}"
-            f"{_fmt(w180, '.3g'):>9}{d['disk_margin']:>8.3f}"
-            f"{_fmt(_db(d['gain_margin'][1]), '.1f'):>9}{d['phase_margin']:>9.1f}"
-            f"  {'pass' if r['passed'] else 'FAIL'}")
-    m = section["multiloop_disk"]
-    lines.append(f"  multiloop disk margin: alpha = {m['disk_margin']:.3f}, gain "
-                 f"[{m['gain_margin'][0]:.3f}, {_fmt(m['gain_margin'][1], '.3f')}] "
-                 f"(+-{_fmt(_db(m['gain_margin'][1]), '.1f')} dB), phase +-"
-                 f"{m['phase_margin']:.1f} deg, at {m['frequency']:.3g} rad/s: "
-                 f"{'pass' if m['passed'] else 'FAIL'}")
-    p = section["poles"]
-    slow = ", ".join(f"{q['real']:.4g}{q['imag']:+.4g}j" for q in p["slowest"])
-    least = ", ".join(f"{q['real']:.4g}{q['imag']:+.4g}j (zeta {q['damping']:.3f})"
-                      for q in p["least_damped"]) or "none (all real)"
-    lines.append(f"  closed loop ({p['count']} states): "
-                 f"{'stable' if section['stable'] else 'UNSTABLE'}")
+            f"  {r.name:<9}{_fmt(r.gain_margin_up_db, '.1f'):>8}"
+            f"{_fmt(r.gain_margin_down_db, '.1f'):>9}{_fmt(r.phase_margin_deg, '.1f'):>8}"
+            f"{_fmt(r.crossover_frequency, '.3g'):>9}{_fmt(r.delay_margin_s, '.3g'):>9}"
+            f"{_fmt(w180, '.3g'):>9}{d.disk_margin:>8.3f}"
+            f"{_fmt(_db(d.gain_margin[1]), '.1f'):>9}{d.phase_margin:>9.1f}"
+            f"  {_verdict(r.passed)}")
+    m = section.multiloop_disk.disk
+    lines.append(f"  multiloop disk margin: alpha = {m.disk_margin:.3f}, gain "
+                 f"[{m.gain_margin[0]:.3f}, {_fmt(m.gain_margin[1], '.3f')}] "
+                 f"(+-{_fmt(_db(m.gain_margin[1]), '.1f')} dB), phase +-"
+                 f"{m.phase_margin:.1f} deg, at {m.frequency:.3g} rad/s: "
+                 f"{_verdict(section.multiloop_disk.passed)}")
+    p = section.poles
+    slow = ", ".join(f"{q.real:.4g}{q.imag:+.4g}j" for q in p.slowest)
+    least = ", ".join(f"{q.real:.4g}{q.imag:+.4g}j (zeta {q.damping:.3f})"
+                      for q in p.least_damped) or "none (all real)"
+    lines.append(f"  closed loop ({p.count} states): "
+                 f"{'stable' if section.stable else 'UNSTABLE'}")
     lines.append(f"  slowest poles (s-plane): {slow}")
     lines.append(f"  least damped poles:      {least}")
-    verdict = "PASS" if section["passed"] else "FAIL"
-    lines.append(f"  requirement {req['gain_margin_db']:g} dB / {req['phase_margin_deg']:g} deg "
-                 f"on every loop: {verdict}")
+    lines.append(f"  requirement {req.gain_margin_db:g} dB / {req.phase_margin_deg:g} deg "
+                 f"on every loop: {'PASS' if section.passed else 'FAIL'}")
     return lines
 
 
 def format_report(report: MarginReport) -> str:
-    """The readable table the command prints."""
-    d = report.data
-    op = d["operating_point"]
-    where = ("equilibrium (steady motion, constant disturbance)" if op["kind"] == "equilibrium"
-             else f"frozen simulated state at t = {op['time_s']:g} s")
+    """The margin review as a plain-text table.
+
+    Parameters
+    ----------
+    report : MarginReport
+
+    Returns
+    -------
+    str
+        The operating point, then per controller (continuous, sampled) one
+        row per loop (gain margins up and down, phase margin, crossover,
+        delay margin, phase crossover, loop-at-a-time disk margin, verdict),
+        the multiloop disk margin, stability, the slowest and least damped
+        poles and the verdict; ends with a newline.
+    """
+    point = report.point
+    op = point.to_dict()
+    where = ("equilibrium (steady motion, constant disturbance)" if point.kind == "equilibrium"
+             else f"frozen simulated state at t = {point.time:g} s")
     s = op["state"]
-    lines = [f"quadland margins: scenario {d['scenario']}, {where}",
+    lines = [f"quadland margins: scenario {report.scenario.name}, {where}",
              f"  z_e = {s['z1'] - op['vehicle']['z2']:.4g} m, phi = {s['phi1']:.3g} rad, "
              f"theta = {s['theta1']:.3g} rad, psi_e = {s['psi_e']:.3g} rad, "
              f"vehicle r2 = {op['vehicle']['r2']:.4g} rad/s, residual {op['residual']:.2g}",
              "  loop broken at the plant input u (eq. 6), L = -K P; each loop with the "
              "others closed", ""]
-    lines += _table(d["continuous"], "continuous-time controller", d["requirement"])
-    if "sampled" in d:
-        lines += [""] + _table(d["sampled"], f"sampled-data controller, zero-order hold at "
-                                             f"{d['sampled']['rate_hz']:g} Hz",
-                               d["requirement"])
-    return "\n".join(lines) + "\n"
-
-
-def render_figures(report: MarginReport) -> dict[str, bytes]:
-    """PNG bytes of ``FIGURES``: Bode and Nyquist per loop, sigma of S and T, pole map."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    L = report.models.loop_input
-    resp = FrequencyResponse(L)
-    omega = frequency_grid(resp, points_per_decade=30, extra_poles=report.poles)
-    G = resp(omega)
-    lc = loop_at_a_time(G)
-    ld = wd = None
+    lines += _table(report.continuous, "continuous-time controller", report.requirement)
     if report.sampled is not None:
-        rd = FrequencyResponse(report.sampled.loop_input)
-        wd = omega[omega < math.pi * report.sampled.dt ** -1]
-        ld = loop_at_a_time(rd(wd))
-    out = {}
-
-    def png(fig):
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110)
-        plt.close(fig)
-        return buf.getvalue()
-
-    fig, ax = plt.subplots(2, 4, figsize=(15, 6.5), sharex=True)
-    for i, name in enumerate(LOOP_NAMES):
-        ax[0, i].semilogx(omega, 20 * np.log10(np.abs(lc[:, i])), label="continuous")
-        ax[1, i].semilogx(omega, np.degrees(np.unwrap(np.angle(lc[:, i]))))
-        if ld is not None:
-            ax[0, i].semilogx(wd, 20 * np.log10(np.abs(ld[:, i])), "--", label="sampled")
-            ax[1, i].semilogx(wd, np.degrees(np.unwrap(np.angle(ld[:, i]))), "--")
-        ax[0, i].axhline(0, color="k", lw=0.6)
-        ax[0, i].set_title(f"{name} loop (others closed)")
-        ax[1, i].set_xlabel("frequency [rad/s]")
-        ax[0, i].grid(True, which="both", alpha=0.3)
-        ax[1, i].grid(True, which="both", alpha=0.3)
-    ax[0, 0].set_ylabel("|L| [dB]")
-    ax[1, 0].set_ylabel("arg L [deg]")
-    ax[0, 0].legend()
-    fig.tight_layout()
-    out["bode.png"] = png(fig)
-
-    fig, ax = plt.subplots(2, 2, figsize=(10, 9))
-    t = np.linspace(0, 2 * np.pi, 200)
-    for i, (name, a) in enumerate(zip(LOOP_NAMES, ax.ravel())):
-        for vals, style in ((lc[:, i], "-"), (None if ld is None else ld[:, i], "--")):
-            if vals is None:
-                continue
-            a.plot(vals.real, vals.imag, style, color="C0" if style == "-" else "C1")
-            a.plot(vals.real, -vals.imag, style, color="C0" if style == "-" else "C1", alpha=0.35)
-        a.plot(np.cos(t), np.sin(t), "k:", lw=0.6)
-        a.plot([-1], [0], "r+", ms=12)
-        a.set_xlim(-3, 2)
-        a.set_ylim(-2.5, 2.5)
-        a.set_aspect("equal")
-        a.set_title(f"{name} loop: Nyquist (zoom on -1)")
-        a.grid(True, alpha=0.3)
-    fig.tight_layout()
-    out["nyquist.png"] = png(fig)
-
-    S = np.linalg.inv(np.eye(G.shape[-1]) + G)
-    sS = np.linalg.svd(S, compute_uv=False)
-    sT = np.linalg.svd(np.eye(G.shape[-1]) - S, compute_uv=False)
-    fig, ax = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
-    for a, sv, name in ((ax[0], sS, "S = (I + L)^-1"), (ax[1], sT, "T = I - S")):
-        a.semilogx(omega, 20 * np.log10(sv))
-        a.set_title(f"singular values of {name} at the plant input")
-        a.set_xlabel("frequency [rad/s]")
-        a.grid(True, which="both", alpha=0.3)
-    ax[0].set_ylabel("sigma [dB]")
-    fig.tight_layout()
-    out["sigma.png"] = png(fig)
-
-    p = report.poles
-    fig, ax = plt.subplots(1, 2, figsize=(12, 5))
-    for a, zoom in zip(ax, (False, True)):
-        a.plot(p.real, p.imag, "x")
-        a.axvline(0, color="k", lw=0.6)
-        a.set_xlabel("Re [1/s]")
-        a.set_ylabel("Im [rad/s]")
-        a.grid(True, alpha=0.3)
-        if zoom:
-            a.set_xlim(-0.5, 0.05)
-            a.set_ylim(-0.3, 0.3)
-            a.set_title("zoom: the slow adaptive and translational poles")
-        else:
-            a.set_title(f"closed-loop poles ({p.size})")
-    fig.tight_layout()
-    out["poles.png"] = png(fig)
-    return out
-
-
-def _default_out(scenario: Scenario) -> Path:
-    return Path(f"{scenario.name}-margins-{time.strftime('%Y%m%d-%H%M%S')}")
-
-
-def main(args) -> int:
-    """Run ``quadland margins`` from parsed arguments; returns the exit status."""
-    start = time.perf_counter()
-    requirement = Requirement(args.gain_margin_db, args.phase_margin_deg)
-    scenario = load_scenario(args.scenario, args.overrides)
-    out = Path(args.out) if args.out is not None else _default_out(scenario)
-    if out.exists() and not out.is_dir():
-        raise MarginsError(f"--out {out}: exists and is not a folder")
-    report = margin_report(scenario, args.at, requirement)
-    figures = {} if args.no_plots else render_figures(report)
-    data = dict(report.data, runtime_s=time.perf_counter() - start)
-    text = json.dumps(_finite(data), indent=2) + "\n"
-    out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "margins.json", text)
-    for name, blob in figures.items():
-        write_bytes_atomic(out / name, blob)
-    print(format_report(report), end="")
-    print(f"quadland: wrote {out} ({time.perf_counter() - start:.1f} s)")
-    return 0
+        lines += [""] + _table(report.sampled, f"sampled-data controller, zero-order hold at "
+                                               f"{report.sampled.rate_hz:g} Hz",
+                               report.requirement)
+    return "\n".join(lines) + "\n"

@@ -2,12 +2,18 @@
 
 import csv
 import json
+import re
 import subprocess
 import sys
 
 import pytest
 
-from quadland.plots import FIGURES
+from quadland.cli import main
+from quadland.margins import Requirement
+from quadland.plots import MARGIN_FIGURES, SIMULATION_FIGURES
+
+FIGURES = SIMULATION_FIGURES
+PNG = b"\x89PNG\r\n\x1a\n"
 
 
 def _run(*args, cwd=None):
@@ -23,7 +29,7 @@ def test_simulate_writes_everything(tmp_path):
     names = {p.name for p in out.iterdir()}
     assert names == {"trajectory.csv", "summary.json", *FIGURES}
     for fig in FIGURES:
-        assert (out / fig).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (out / fig).read_bytes()[:8] == PNG
     with open(out / "trajectory.csv") as fh:
         rows = list(csv.reader(fh))
     header = [h.split(" [")[0] for h in rows[0]]
@@ -98,3 +104,106 @@ def test_help():
     assert "simulate" in proc.stdout
     proc = _run("simulate", "--help")
     assert "--set" in proc.stdout and "--no-plots" in proc.stdout
+
+
+def test_simulate_out_is_a_file(tmp_path):
+    out = tmp_path / "out"
+    out.write_text("keep\n")
+    proc = _run("simulate", "--set", "simulation.duration=0.1", "--out", str(out))
+    assert proc.returncode == 2
+    assert proc.stderr == f"quadland: error: --out: {out} exists and is not a folder\n"
+    assert out.read_text() == "keep\n"
+
+
+# margins, in process (its exit status is main's return value) on a small network
+
+SMALL = ["--set", "rbf.nodes=5"]
+
+
+def _margins(tmp_path, *args, name="out"):
+    out = tmp_path / name
+    return main(["margins", *SMALL, "--out", str(out), *args]), out
+
+
+def test_margins_writes_json_figures_and_table(tmp_path, capsys):
+    status, out = _margins(tmp_path, "--set", "controller.rate_hz=50")
+    assert status == 0
+    assert {p.name for p in out.iterdir()} == {"margins.json", *MARGIN_FIGURES}
+    for fig in MARGIN_FIGURES:
+        assert (out / fig).read_bytes()[:8] == PNG
+    data = json.loads((out / "margins.json").read_text())
+    assert data["continuous"]["passed"] and data["sampled"]["passed"]
+    std = capsys.readouterr()
+    assert "requirement 6 dB / 45 deg on every loop: PASS" in std.out
+    assert "zero-order hold at 50 Hz" in std.out
+    assert std.out.splitlines()[-1].startswith(f"quadland: wrote {out} (")
+    assert std.err == ""
+
+
+def test_margins_fail_exits_1_and_names_the_loops(tmp_path, capsys):
+    status, out = _margins(tmp_path, "--no-plots", "--gain-margin-db", "60")
+    assert status == 1
+    data = json.loads((out / "margins.json").read_text())
+    assert data["requirement"]["gain_margin_db"] == 60.0
+    failed = [n for n, v in data["continuous"]["loops"].items() if not v["passed"]]
+    assert failed                                  # GM down of altitude is -41 dB
+    std = capsys.readouterr()
+    assert "on every loop: FAIL" in std.out
+    assert std.err == (f"quadland: margins below the requirement 60 dB / 45 deg: "
+                       f"continuous: {', '.join(failed)}\n")
+
+
+def test_margins_unstable_loop_fails(tmp_path, capsys):
+    """The frozen state 0.1 s into the landing (30 deg tilt) of the 5-node network has
+    unstable closed-loop poles: every loop fails, the figures are still written."""
+    status, out = _margins(tmp_path, "--at", "0.1", "--set", "controller.rate_hz=50")
+    assert status == 1
+    assert {p.name for p in out.iterdir()} == {"margins.json", *MARGIN_FIGURES}
+    data = json.loads((out / "margins.json").read_text())
+    assert data["operating_point"]["kind"] == "frozen"
+    assert data["operating_point"]["time_s"] == 0.1
+    assert data["continuous"]["stable"] is False
+    loops = ", ".join(data["continuous"]["loops"])
+    assert capsys.readouterr().err == (
+        f"quadland: margins below the requirement 6 dB / 45 deg: "
+        f"continuous (closed loop unstable): {loops}; sampled (closed loop unstable): {loops}\n")
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--at", "-1"], "--at: must be a finite time >= 0 s, got -1.0"),
+    (["--at", "inf"], "--at: must be a finite time >= 0 s, got inf"),
+    (["--gain-margin-db", "-3"], "--gain-margin-db: must be a finite number >= 0, got -3.0"),
+    (["--phase-margin-deg", "200"], "--phase-margin-deg: must lie in [0, 180), got 200.0"),
+    (["--set", "rbf.nodes=0"], "rbf.nodes: must be >= 1"),
+])
+def test_margins_bad_input_names_the_flag_and_writes_nothing(tmp_path, capsys, args, message):
+    status, out = _margins(tmp_path, "--no-plots", *args)
+    assert status == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"quadland: error: {message}")
+    assert len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_margins_out_is_a_file(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.write_text("keep\n")
+    assert main(["margins", *SMALL, "--no-plots", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == f"quadland: error: --out: {out} exists and is not a folder\n"
+    assert out.read_text() == "keep\n"
+
+
+def test_margins_default_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["margins", *SMALL, "--no-plots"]) == 0
+    (folder,) = list(tmp_path.iterdir())
+    assert re.fullmatch(r"paper-margins-\d{8}-\d{6}", folder.name)
+    assert [p.name for p in folder.iterdir()] == ["margins.json"]
+
+
+def test_margins_help_shows_the_requirement_defaults(capsys):
+    with pytest.raises(SystemExit):
+        main(["margins", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"(default: {Requirement.gain_margin_db:g} dB)" in text
+    assert f"(default: {Requirement.phase_margin_deg:g} deg)" in text

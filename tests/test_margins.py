@@ -1,112 +1,186 @@
-"""The ``quadland margins`` command, end to end on a small network."""
+"""The margin review: typed report, its JSON form and its table, on a small network."""
 
+import dataclasses
 import json
 import math
 
+import numpy as np
 import pytest
+from threadpoolctl import threadpool_limits
 
+from quadland.analysis import DiskMargin, Margins
 from quadland.cli import main
-from quadland.margins import FIGURES
+from quadland.exceptions import MarginsError
+from quadland.margins import (LoopMargins, LoopReport, MarginReport, MultiloopDiskMargin,
+                              PoleSummary, Requirement, format_report, margin_report)
+from quadland.scenario import load_scenario
 
-SMALL = ["--set", "rbf.nodes=5"]
+SMALL = ["rbf.nodes=5"]
+LOOPS = ["altitude", "roll", "pitch", "yaw"]
 
 
-def _run(tmp_path, *args, name="out"):
-    out = tmp_path / name
-    return main(["margins", *SMALL, "--out", str(out), *args]), out
+def _report(*overrides, **kwargs) -> MarginReport:
+    with threadpool_limits(1):
+        return margin_report(load_scenario("paper", [*SMALL, *overrides]), **kwargs)
 
 
-def test_writes_json_and_table(tmp_path, capsys):
-    status, out = _run(tmp_path, "--no-plots")
-    assert status == 0
-    assert {p.name for p in out.iterdir()} == {"margins.json"}
-    data = json.loads((out / "margins.json").read_text())
-    cont = data["continuous"]
-    assert set(cont["loops"]) == {"altitude", "roll", "pitch", "yaw"}
-    assert cont["stable"] is True
-    assert data["operating_point"]["kind"] == "equilibrium"
-    assert data["requirement"] == {"gain_margin_db": 6.0, "phase_margin_deg": 45.0}
-    for loop in cont["loops"].values():
+@pytest.fixture(scope="module")
+def report():
+    return _report()
+
+
+@pytest.fixture(scope="module")
+def sampled():
+    """50 Hz with the plain hold, and with the shipped hold compensation."""
+    return {hold: _report("controller.rate_hz=50", f"controller.hold_compensation={hold}")
+            for hold in (0.0, 0.5)}
+
+
+def test_report_is_typed(report):
+    assert isinstance(report.requirement, Requirement)
+    assert report.requirement == Requirement(6.0, 45.0)
+    cont = report.continuous
+    assert isinstance(cont, LoopReport) and cont.rate_hz is None
+    assert report.sampled is None and report.sampled_models is None
+    assert [m.name for m in cont.loops] == LOOPS
+    for m in cont.loops:
+        assert isinstance(m, LoopMargins)
+        assert isinstance(m.crossings, Margins) and isinstance(m.disk, DiskMargin)
+        assert cont.loop(m.name) is m
+    assert isinstance(cont.multiloop_disk, MultiloopDiskMargin)
+    assert isinstance(cont.poles, PoleSummary) and cont.poles.spectral_radius is None
+    assert cont.poles.count == report.poles.size == report.models.loop_input.nstates
+    assert cont.stable and cont.passed and report.passed and cont.failed == ()
+    assert report.point.kind == "equilibrium"
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        report.continuous = None
+    with pytest.raises(KeyError):
+        cont.loop("thrust")
+
+
+def test_margins_agree_with_each_other(report):
+    cont = report.continuous
+    for m in cont.loops:
         # delay margin = phase margin (rad) / crossover frequency
-        assert loop["delay_margin_s"] == pytest.approx(
-            math.radians(loop["phase_margin_deg"]) / loop["crossover_frequency"], rel=1e-9)
-        d = loop["disk"]
-        assert d["phase_margin"] == pytest.approx(
-            math.degrees(2 * math.atan(d["disk_margin"] / 2)), rel=1e-9)
+        assert m.delay_margin_s == pytest.approx(
+            math.radians(m.phase_margin_deg) / m.crossover_frequency, rel=1e-9)
+        assert m.delay_margin_frequency == m.crossover_frequency
+        # the summary values are the extremes of every crossing
+        assert m.phase_margin_deg == min(m.crossings.phase_margin)
+        gms = np.array(m.crossings.gain_margin)
+        up, down = gms[gms >= 1], gms[gms < 1]
+        assert m.gain_margin_up_db == (20 * math.log10(up.min()) if up.size else math.inf)
+        assert m.gain_margin_down_db == (20 * math.log10(down.max()) if down.size else -math.inf)
+        assert m.disk.phase_margin == pytest.approx(
+            math.degrees(2 * math.atan(m.disk.disk_margin / 2)), rel=1e-9)
         # the disk margin never promises more than the loop-at-a-time classical phase margin
-        assert d["phase_margin"] <= loop["phase_margin_deg"] + 1e-9
+        assert m.disk.phase_margin <= m.phase_margin_deg + 1e-9
     # the multiloop disk cannot exceed any single loop's disk
-    alphas = [v["disk"]["disk_margin"] for v in cont["loops"].values()]
-    assert cont["multiloop_disk"]["disk_margin"] <= min(alphas) + 1e-9
-    assert "sampled" not in data
-    table = capsys.readouterr().out
-    for word in ("altitude", "roll", "pitch", "yaw", "multiloop disk margin",
-                 "least damped", "slowest"):
+    alphas = [m.disk.disk_margin for m in cont.loops]
+    assert cont.multiloop_disk.disk.disk_margin <= min(alphas) + 1e-9
+    # every pole of the summary is a closed-loop pole
+    for p in cont.poles.slowest + cont.poles.least_damped:
+        assert np.min(np.abs(report.poles - complex(p.real, p.imag))) < 1e-12
+        assert p.damping == pytest.approx(-p.real / abs(complex(p.real, p.imag)))
+
+
+def test_to_dict_is_the_json_of_the_command(report, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["margins", "--set", *SMALL, "--no-plots", "--out", str(out)]) == 0
+    data = json.loads((out / "margins.json").read_text())
+    assert data.pop("runtime_s") > 0
+    assert data == report.to_dict()
+    assert list(data) == ["scenario", "overrides", "operating_point", "requirement",
+                          "loop_break", "continuous"]
+    cont = data["continuous"]
+    assert list(cont) == ["stable", "loops", "multiloop_disk", "passed", "poles"]
+    assert list(cont["loops"]) == LOOPS
+    assert data["requirement"] == {"gain_margin_db": 6.0, "phase_margin_deg": 45.0}
+    assert data["overrides"] == SMALL
+    roll = report.continuous.loop("roll")
+    entry = cont["loops"]["roll"]
+    assert entry["phase_margin_deg"] == roll.phase_margin_deg
+    assert entry["crossover_frequency"] == roll.crossover_frequency
+    assert entry["all_crossings"]["pm_frequency"] == list(roll.crossings.pm_frequency)
+    assert entry["disk"]["disk_margin"] == roll.disk.disk_margin
+    assert cont["multiloop_disk"]["passed"] is report.continuous.multiloop_disk.passed
+    assert cont["poles"]["count"] == report.continuous.poles.count
+    assert capsys.readouterr().out.startswith(format_report(report))
+
+
+def test_infinities_become_null(report):
+    roll = report.continuous.loop("roll")
+    assert roll.gain_margin_up_db == math.inf and roll.gain_margin_up_frequency is None
+    entry = report.to_dict()["continuous"]["loops"]["roll"]
+    assert entry["gain_margin_up_db"] is None and entry["gain_margin_up_frequency"] is None
+    json.dumps(report.to_dict(), allow_nan=False)
+
+
+def test_requirement_decides_the_verdict():
+    strict = _report(requirement=Requirement(phase_margin_deg=89))
+    assert not strict.passed and not strict.continuous.passed
+    assert strict.continuous.failed == tuple(LOOPS)
+    assert strict.to_dict()["continuous"]["passed"] is False
+    table = format_report(strict)
+    assert "requirement 6 dB / 89 deg on every loop: FAIL" in table
+    assert table.count("  FAIL") >= len(LOOPS)
+
+
+def test_table_shows_the_report(report):
+    table = format_report(report)
+    for word in ("altitude", "roll", "pitch", "yaw", "multiloop disk margin", "least damped",
+                 "slowest", "equilibrium"):
         assert word in table
+    for m in report.continuous.loops:
+        row = next(line for line in table.splitlines() if line.startswith(f"  {m.name} "))
+        assert f"{m.phase_margin_deg:.1f}" in row and f"{m.disk.disk_margin:.3f}" in row
+        assert row.endswith("pass")
+    assert "requirement 6 dB / 45 deg on every loop: PASS" in table
+    assert table.endswith("\n") and "sampled" not in table
 
 
-def test_requirement_decides_the_verdict(tmp_path, capsys):
-    status, out = _run(tmp_path, "--no-plots", "--phase-margin-deg", "89")
-    assert status == 0
-    data = json.loads((out / "margins.json").read_text())
-    assert data["continuous"]["passed"] is False
-    assert all(not v["passed"] for v in data["continuous"]["loops"].values())
-    assert "FAIL" in capsys.readouterr().out
-
-
-def test_sampled_loop_and_figures(tmp_path):
-    status, out = _run(tmp_path, "--set", "controller.rate_hz=50", "--at", "0.1",
-                       "--set", "controller.hold_compensation=0.0")
-    assert status == 0
-    assert {p.name for p in out.iterdir()} == {"margins.json", *FIGURES}
-    for fig in FIGURES:
-        assert (out / fig).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    data = json.loads((out / "margins.json").read_text())
-    assert data["operating_point"]["kind"] == "frozen"
-    assert data["operating_point"]["time_s"] == 0.1
-    assert data["sampled"]["rate_hz"] == 50.0
-    # a zero-order hold adds phase lag: the sampled loop has less phase margin
-    for name, loop in data["sampled"]["loops"].items():
-        assert loop["phase_margin_deg"] < data["continuous"]["loops"][name]["phase_margin_deg"]
-
-
-@pytest.mark.parametrize("args,message", [
-    (["--at", "-1"], "--at"),
-    (["--gain-margin-db", "-3"], "--gain-margin-db"),
-    (["--phase-margin-deg", "200"], "--phase-margin-deg"),
-    (["--set", "rbf.nodes=0"], "nodes"),
+@pytest.mark.parametrize("call, parameter", [
+    (lambda: margin_report(load_scenario("paper", SMALL), at=-1.0), "at"),
+    (lambda: margin_report(load_scenario("paper", SMALL), at=math.nan), "at"),
+    (lambda: Requirement(gain_margin_db=-3.0), "gain_margin_db"),
+    (lambda: Requirement(gain_margin_db=math.inf), "gain_margin_db"),
+    (lambda: Requirement(phase_margin_deg=200.0), "phase_margin_deg"),
 ])
-def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, message):
-    status, out = _run(tmp_path, "--no-plots", *args)
-    assert status == 2
-    err = capsys.readouterr().err
-    assert err.startswith("quadland: error:") and message in err
-    assert len(err.strip().splitlines()) == 1
-    assert not out.exists()
+def test_errors_name_the_parameter_not_a_flag(call, parameter):
+    with pytest.raises(MarginsError) as info:
+        call()
+    assert str(info.value).startswith(f"{parameter}: ")
+    assert "--" not in str(info.value)
+    assert isinstance(info.value, ValueError)
 
 
-def test_hold_compensation_trades_nyquist_gain_for_phase(tmp_path):
+def test_sampled_loop_beside_the_continuous(sampled):
+    plain = sampled[0.0]
+    assert plain.sampled.rate_hz == 50.0 and plain.sampled_models.dt == pytest.approx(0.02)
+    assert plain.sampled.poles.spectral_radius < 1
+    data = plain.to_dict()
+    assert data["sampled"]["rate_hz"] == 50.0
+    assert data["sampled"]["poles"]["spectral_radius"] == plain.sampled.poles.spectral_radius
+    # a zero-order hold adds phase lag: the sampled loop has less phase margin
+    for m in plain.sampled.loops:
+        assert m.phase_margin_deg < plain.continuous.loop(m.name).phase_margin_deg
+    assert "zero-order hold at 50 Hz" in format_report(plain)
+
+
+def test_hold_compensation_trades_nyquist_gain_for_phase(sampled):
     """At z = -1 the extrapolation 1 + k - k/z is exactly 1 + 2k and real: with
     k = 1/2 the gain margin at the Nyquist frequency shrinks by 20 log10(2) dB,
     while the phase lost to the hold is recovered near crossover."""
-    runs = {}
-    for hold in (0.0, 0.5):
-        plots = ["--no-plots"] if hold == 0 else []          # the shipped value draws too
-        status, out = _run(tmp_path, *plots, "--set", "controller.rate_hz=50",
-                           "--set", f"controller.hold_compensation={hold}", name=f"h{hold}")
-        assert status == 0
-        runs[hold] = json.loads((out / "margins.json").read_text())
-    assert {p.name for p in out.iterdir()} == {"margins.json", *FIGURES}
     nyquist = math.pi * 50
-    for name, cont in runs[0.0]["continuous"]["loops"].items():
+    for cont in sampled[0.0].continuous.loops:
         at_nyquist = []
         for hold in (0.0, 0.5):
-            crossings = runs[hold]["sampled"]["loops"][name]["all_crossings"]
-            k = [i for i, w in enumerate(crossings["gm_frequency"])
+            crossings = sampled[hold].sampled.loop(cont.name).crossings
+            k = [i for i, w in enumerate(crossings.gm_frequency)
                  if w == pytest.approx(nyquist, rel=1e-9)]
             assert len(k) == 1
-            at_nyquist.append(crossings["gain_margin"][k[0]])
+            at_nyquist.append(crossings.gain_margin[k[0]])
         assert at_nyquist[0] / at_nyquist[1] == pytest.approx(2.0, rel=1e-9)
-        pm = {h: runs[h]["sampled"]["loops"][name]["phase_margin_deg"] for h in (0.0, 0.5)}
-        lag = {h: abs(pm[h] - cont["phase_margin_deg"]) for h in pm}
+        lag = {h: abs(sampled[h].sampled.loop(cont.name).phase_margin_deg
+                      - cont.phase_margin_deg) for h in sampled}
         assert lag[0.5] < 0.1 * lag[0.0]

@@ -1,0 +1,35 @@
+"""Figures of quadland's results, as matplotlib Figures.
+
+:mod:`quadland.plots.simulation` draws a simulation (the paper's Figures
+2-5 and the ground track), :mod:`quadland.plots.margins` a margin review
+(Bode, Nyquist, singular values, poles). Every function returns a
+:class:`matplotlib.figure.Figure` made without pyplot: nothing is shown or
+kept behind the caller's back and no backend is chosen, so a figure
+displays in a notebook as it is, and ``quadland.output.figure_png`` turns
+it into the PNG the command line writes.
+
+The margin figures import python-control; they are loaded on first use so
+that drawing a simulation does not pay for it.
+"""
+
+from quadland.plots.simulation import FIGURES as SIMULATION_FIGURES
+from quadland.plots.simulation import (control_inputs_plot, ground_track_plot,
+                                       relative_errors_plot, simulation_figures,
+                                       uncertainty_plot, velocity_errors_plot)
+
+__all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
+           "velocity_errors_plot", "control_inputs_plot", "uncertainty_plot",
+           "ground_track_plot", "MARGIN_FIGURES", "margin_figures", "bode_plot",
+           "nyquist_plot", "sigma_plot", "pole_plot"]
+
+_LAZY = {"MARGIN_FIGURES": "FIGURES", "margin_figures": "margin_figures",
+         "bode_plot": "bode_plot", "nyquist_plot": "nyquist_plot", "sigma_plot": "sigma_plot",
+         "pole_plot": "pole_plot"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        from quadland.plots import margins
+
+        return getattr(margins, _LAZY[name])
+    raise AttributeError(f"module 'quadland.plots' has no attribute {name!r}")

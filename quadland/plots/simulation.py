@@ -1,0 +1,184 @@
+"""The paper's Figures 2-5 and the ground track of a simulation."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from quadland.simulate import SimulationResult
+
+__all__ = ["FIGURES", "relative_errors_plot", "velocity_errors_plot", "control_inputs_plot",
+           "uncertainty_plot", "ground_track_plot", "simulation_figures"]
+
+#: File name and title of each figure, in the order of :func:`simulation_figures`.
+FIGURES = {
+    "fig2_relative_altitude_attitude.png": "Relative altitude and attitude (Fig. 2)",
+    "fig3_velocity_errors.png": "Velocity errors e2 (Fig. 3)",
+    "fig4_control_inputs.png": "Control inputs (Fig. 4)",
+    "fig5_uncertainty_estimation.png": "Uncertainty and its RBFNN estimate (Fig. 5)",
+    "ground_track.png": "Ground track of the quadrotor and the vehicle",
+}
+
+
+def _grid(title: str, rows: int = 4):
+    fig = Figure(figsize=(7, 1.9 * rows + 0.6))
+    axes = fig.subplots(rows, 1, sharex=True)
+    fig.suptitle(title)
+    return fig, axes
+
+
+def _finish(fig: Figure, result: SimulationResult, axes=None) -> Figure:
+    """Time-axis grid and label, the scenario's name in a corner, tight layout."""
+    if axes is not None:
+        for a in axes:
+            a.grid(True)
+        axes[-1].set_xlabel("t [s]")
+    fig.text(0.99, 0.005, f"scenario {result.scenario.name}", ha="right", va="bottom",
+             fontsize="x-small", color="0.4")
+    fig.tight_layout()
+    return fig
+
+
+def _four_panel(result, fig_name, first, first_unit, rest, rest_unit) -> Figure:
+    """One linear signal and three angular ones (shown in degrees)."""
+    fig, ax = _grid(FIGURES[fig_name])
+    t = result["t"]
+    ax[0].plot(t, result[first])
+    ax[0].set_ylabel(f"{first} [{first_unit}]")
+    for a, name in zip(ax[1:], rest):
+        a.plot(t, np.rad2deg(result[name]))
+        a.set_ylabel(f"{name} [{rest_unit}]")
+    return _finish(fig, result, ax)
+
+
+def relative_errors_plot(result: SimulationResult) -> Figure:
+    """Relative altitude and attitude errors against time (the paper's Fig. 2).
+
+    Parameters
+    ----------
+    result : SimulationResult
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Four axes: ``z_e`` (m), then ``phi_e``, ``theta_e``, ``psi_e`` (deg).
+    """
+    return _four_panel(result, "fig2_relative_altitude_attitude.png", "z_e", "m",
+                       ("phi_e", "theta_e", "psi_e"), "deg")
+
+
+def velocity_errors_plot(result: SimulationResult) -> Figure:
+    """Velocity errors e2 against time (the paper's Fig. 3).
+
+    Parameters
+    ----------
+    result : SimulationResult
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Four axes: ``dz_e`` (m/s), then ``p_e``, ``q_e``, ``r_e`` (deg/s).
+    """
+    return _four_panel(result, "fig3_velocity_errors.png", "dz_e", "m/s",
+                       ("p_e", "q_e", "r_e"), "deg/s")
+
+
+def control_inputs_plot(result: SimulationResult) -> Figure:
+    """Virtual control inputs u_1..u_4 against time (the paper's Fig. 4).
+
+    Parameters
+    ----------
+    result : SimulationResult
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Four axes, ``u_1`` (m/s^2) and ``u_2..u_4`` (rad/s^2).
+    """
+    fig, ax = _grid(FIGURES["fig4_control_inputs.png"])
+    t = result["t"]
+    units = ("m/s^2", "rad/s^2", "rad/s^2", "rad/s^2")
+    for i, a in enumerate(ax):
+        a.plot(t, result[f"u_{i + 1}"])
+        a.set_ylabel(f"u_{i + 1} [{units[i]}]")
+    return _finish(fig, result, ax)
+
+
+def uncertainty_plot(result: SimulationResult) -> Figure:
+    """Uncertainty and its RBFNN estimate against time (the paper's Fig. 5).
+
+    Parameters
+    ----------
+    result : SimulationResult
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axis per channel k: ``Delta_k`` (``f + d``), with
+        ``controller.nominal_model`` also the network's target
+        ``Delta_target_k``, and the estimate ``Delta_hat_k`` (dashed).
+    """
+    fig, ax = _grid(FIGURES["fig5_uncertainty_estimation.png"])
+    t = result["t"]
+    nominal = result.scenario.data["controller"]["nominal_model"]
+    for i, a in enumerate(ax):
+        k = i + 1
+        a.plot(t, result[f"Delta_{k}"], label="Delta = f + d")
+        if nominal:
+            a.plot(t, result[f"Delta_target_{k}"], label="Delta - fed-forward part")
+        a.plot(t, result[f"Delta_hat_{k}"], "--", label="W_hat^T Psi")
+        a.set_ylabel(f"channel {k}")
+    ax[0].legend(loc="best", fontsize="small")
+    return _finish(fig, result, ax)
+
+
+def ground_track_plot(result: SimulationResult) -> Figure:
+    """Planar tracks of the vehicle and the quadrotor.
+
+    Parameters
+    ----------
+    result : SimulationResult
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axis, equal scales: ``(x2, y2)``, ``(x1, y1)`` (dashed) and the
+        vehicle's start, m.
+    """
+    fig = Figure(figsize=(6, 6))
+    a = fig.subplots()
+    a.plot(result["x2"], result["y2"], label="vehicle")
+    a.plot(result["x1"], result["y1"], "--", label="quadrotor")
+    a.plot(result["x2"][0], result["y2"][0], "ko", label="start")
+    a.set_xlabel("x [m]")
+    a.set_ylabel("y [m]")
+    a.set_aspect("equal", adjustable="datalim")
+    a.set_title(FIGURES["ground_track.png"])
+    a.legend(loc="best")
+    a.grid(True)
+    return _finish(fig, result)
+
+
+def simulation_figures(result: SimulationResult) -> dict[str, Figure]:
+    """Every figure of a simulation, by the file name it is saved under.
+
+    Parameters
+    ----------
+    result : SimulationResult
+
+    Returns
+    -------
+    dict of str to matplotlib.figure.Figure
+        Keys are those of :data:`FIGURES`, in that order.
+
+    Examples
+    --------
+    >>> import quadland
+    >>> from quadland.plots import simulation_figures
+    >>> res = quadland.simulate(quadland.load_scenario("paper", ["simulation.duration=0.1"]))
+    >>> list(simulation_figures(res))[0]
+    'fig2_relative_altitude_attitude.png'
+    """
+    draw = (relative_errors_plot, velocity_errors_plot, control_inputs_plot, uncertainty_plot,
+            ground_track_plot)
+    return {name: plot(result) for name, plot in zip(FIGURES, draw)}
