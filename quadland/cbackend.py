@@ -1,15 +1,20 @@
 """The generated C, compiled on demand and called from Python.
 
-The sources of ``generated/`` (or, for another node count ``l``, sources
-generated for it) are compiled with the system's C compiler into a shared
+Data flows one way: the C for the requested node count ``l`` and precision
+is generated from ``symbolic`` (:func:`symbolic.codegen.generate`, with the
+paper scenario's defaults and ``rbf.nodes = l``) and compiled with the
+system's C compiler by :func:`quadland.build.build_library` into a shared
 library, cached under ``$XDG_CACHE_HOME/quadland`` (``~/.cache/quadland``)
 by a hash of the sources, compiler and flags, and loaded with ``ctypes``.
+The source tree's ``generated/`` is never read, so an installed quadland
+works the same as a checkout.
 
 :func:`load_control_step` returns a callable with the calling convention and
 outputs of ``symbolic.control_step.control_step_function`` (NumPy arrays of
 the same shapes), used by the sampled-data simulation with
-``controller.backend = "c"``; :func:`load_api` gives the readable ``ql_``
-API with ``ctypes`` mirrors of its structs.
+``controller.backend = "c"``; :func:`load_api` gives the readable API with
+``ctypes`` mirrors of its structs, derived from the same layouts as the C
+(:func:`ctypes_struct`).
 """
 
 from __future__ import annotations
@@ -17,51 +22,71 @@ from __future__ import annotations
 import ctypes
 import dataclasses
 import functools
-from pathlib import Path
 
 import numpy as np
 
 from quadland.build import build_library
+from symbolic.c_api import api_structs
+from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, generate
 from symbolic.control_step import step_inputs, step_outputs
 from symbolic.layout import Layout
-from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 
-__all__ = ["sources", "CControlStep", "load_control_step", "CApi", "load_api"]
+__all__ = ["sources", "ctypes_struct", "CControlStep", "load_control_step", "CApi", "load_api"]
 
-_STEP_SOURCES = ("control_step.c", "quadland.c")
-_ALL_SOURCES = _STEP_SOURCES + ("closed_loop.c", "plant.c", "quadland_model.c",
-                                "closed_loop_jacobian.c", "quadland_jacobian.c")
+_MODEL = tuple(f.name for f in FUNCTIONS)
 
 
 @functools.lru_cache(maxsize=8)
-def _generated_sources(l: int, precision: str) -> tuple[tuple[str, str], ...]:
-    from quadland.codegen import GENERATED_DIR, default_values
-    from symbolic.codegen import CodegenConfig, generate
+def _sources(l: int, precision: str) -> tuple[tuple[str, str], ...]:
+    from quadland.codegen import default_values
 
-    folder = GENERATED_DIR if precision == "double" else GENERATED_DIR / "float"
-    header = folder / "quadland.h"
-    if header.exists() and f"#define QL_RBF_NODES {l} " in header.read_text():
-        files = {p.name: p.read_text() for p in folder.iterdir() if p.suffix in (".c", ".h")}
-    else:
-        files = generate(_defaults_for(l, default_values()), CodegenConfig(precision))
-    return tuple(sorted(files.items()))
-
-
-def _defaults_for(l, defaults):
-    if l == defaults.l:
-        return defaults
-    from quadland.model import model_values
-    from quadland.scenario import load_scenario
-
-    mv = model_values(load_scenario("paper", [f"rbf.nodes={l}"]))
-    return dataclasses.replace(defaults, l=l, p_ctrl=mv.p_ctrl, x0=mv.x0)
+    defaults = default_values("paper")
+    if defaults.l != l:
+        defaults = default_values("paper", [f"rbf.nodes={l}"])
+    return tuple(sorted(generate(defaults, CodegenConfig(precision)).items()))
 
 
 def sources(l: int, precision: str = "double") -> dict[str, str]:
-    """The C files for ``l`` nodes: ``generated/`` when it matches, else fresh ones."""
+    """The C files of one build for ``l`` nodes, generated from ``symbolic``.
+
+    The defaults are the paper scenario's, with ``rbf.nodes = l``; for the
+    paper's own ``l`` the files equal ``generated/`` (or ``generated/float/``).
+    """
     if precision not in ("double", "float"):
         raise ValueError(f"precision must be 'double' or 'float', got {precision!r}")
-    return dict(_generated_sources(l, precision))
+    return dict(_sources(l, precision))
+
+
+def _real(precision: str):
+    return ctypes.c_double if precision == "double" else ctypes.c_float
+
+
+@functools.cache
+def ctypes_struct(layout: Layout, real) -> type:
+    """The ``ctypes.Structure`` of a layout, as ``symbolic.codegen`` declares it in C.
+
+    Real fields in order (a matrix ``shape = (rows, cols)`` as
+    ``real[cols][rows]``), nested layouts as nested structures, ``int``
+    fields as ``c_int``.
+
+    Parameters
+    ----------
+    layout : Layout
+        The struct's layout (``symbolic.c_api``).
+    real : type
+        ``ctypes.c_double`` or ``ctypes.c_float``.
+    """
+    fields = []
+    for f in layout.fields:
+        if f.ctype == "int":
+            fields.append((f.name, ctypes.c_int))
+        elif f.layout is not None:
+            fields.append((f.name, ctypes_struct(f.layout, real)))
+        elif f.shape is not None:
+            fields.append((f.name, (real * f.shape[0]) * f.shape[1]))
+        else:
+            fields.append((f.name, real if f.size == 1 else real * f.size))
+    return type(layout.name, (ctypes.Structure,), {"_fields_": fields})
 
 
 def _pointer_array(arrays, ctype):
@@ -84,11 +109,12 @@ class CControlStep:
     def __init__(self, l: int, precision: str = "double", opt: str = "-O2"):
         self.l, self.precision = l, precision
         files = sources(l, precision)
-        self.library = build_library(files, _STEP_SOURCES, opt)
+        self.library = build_library(files, c_sources(), opt)
         self._lib = ctypes.CDLL(str(self.library))
-        self._real = ctypes.c_double if precision == "double" else ctypes.c_float
+        self._real = _real(precision)
         self._dtype = np.float64 if precision == "double" else np.float32
-        fn = self._lib.control_step
+        entry = next(f for f in FUNCTIONS if f.name == "control_step")
+        fn = getattr(self._lib, entry.c_name(CodegenConfig(precision)))
         ptr = ctypes.POINTER(self._real)
         fn.argtypes = [ctypes.POINTER(ptr), ctypes.POINTER(ptr), ctypes.POINTER(ctypes.c_int),
                        ptr, ctypes.c_int]
@@ -140,18 +166,20 @@ def load_control_step(l: int, precision: str = "double") -> CControlStep:
     return CControlStep(l, precision)
 
 
-def _struct(name: str, fields, real):
-    return type(name, (ctypes.Structure,), {"_fields_": list(fields)})
+class _Library:
+    """A build's library, its API spelled ``ql_`` whatever the build's prefix.
 
+    ``lib.ql_control_step`` is ``qlf_control_step`` in the float build;
+    every other name is looked up as it is.
+    """
 
-def _layout_struct(name: str, layout: Layout, real):
-    fields = []
-    for f in layout.fields:
-        if f.shape is not None:
-            fields.append((f.name, (real * f.shape[0]) * f.shape[1]))
-        else:
-            fields.append((f.name, real if f.size == 1 else real * f.size))
-    return _struct(name, fields, real)
+    def __init__(self, cdll: ctypes.CDLL, prefix: str):
+        self._cdll, self.prefix = cdll, prefix
+
+    def __getattr__(self, name: str):
+        if name.startswith("ql_"):
+            name = self.prefix + name[3:]
+        return getattr(self._cdll, name)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -160,23 +188,28 @@ class CApi:
 
     Attributes
     ----------
-    lib : ctypes.CDLL
-        With ``ql_params_init``, ``ql_control_step``, ``ql_closed_loop``, ...
-    QuadrotorState, VehicleState, Reference, AdaptiveState, Params, Output,
-    VehicleParams : type
-        ``ctypes.Structure`` mirrors of the header's structs.
+    lib : object
+        The library, with ``ql_params_init``, ``ql_control_step``,
+        ``ql_closed_loop``, ... spelled ``ql_`` in either precision (the
+        float build's symbols are ``qlf_...``).
+    QuadrotorState, VehicleState, Reference, AdaptiveState, QuadrotorParams,
+    ControllerParams, VehicleParams, Params, Output : type
+        ``ctypes.Structure`` mirrors of the header's structs, from the same
+        layouts (:func:`ctypes_struct`).
     real : type
         ``ctypes.c_double`` or ``ctypes.c_float``.
     """
 
-    lib: ctypes.CDLL
+    lib: object
     QuadrotorState: type
     VehicleState: type
     Reference: type
     AdaptiveState: type
+    QuadrotorParams: type
+    ControllerParams: type
+    VehicleParams: type
     Params: type
     Output: type
-    VehicleParams: type
     real: type
 
 
@@ -185,29 +218,12 @@ def load_api(l: int, precision: str = "double", opt: str = "-O2", model: bool = 
     """The generated library: the step's API and, with ``model``, the closed
     loop, its Jacobian and the plant (whose compilation takes most of the time)."""
     files = sources(l, precision)
-    lib = ctypes.CDLL(str(build_library(files, _ALL_SOURCES if model else _STEP_SOURCES, opt)))
-    real = ctypes.c_double if precision == "double" else ctypes.c_float
-    S = _struct
-    api = CApi(
-        lib=lib,
-        QuadrotorState=S("QuadrotorState", [("z1", real), ("eta1", real * 3), ("V1", real * 3),
-                                            ("Omega1", real * 3)], real),
-        VehicleState=S("VehicleState", [("z2", real), ("psi2", real), ("r2", real)], real),
-        Reference=S("Reference", [("e1d", real * 4), ("e1d_dot", real * 4),
-                                  ("e1d_ddot", real * 4)], real),
-        AdaptiveState=S("AdaptiveState", [("W_hat", (real * l) * 4), ("zeta_hat", real * 4),
-                                          ("u_prev", real * 4), ("has_prev", ctypes.c_int)],
-                        real),
-        Params=S("Params", [("quad", _layout_struct("QuadrotorParams", QUADROTOR, real)),
-                            ("ctrl", _layout_struct("ControllerParams", controller_layout(l),
-                                                    real)),
-                            ("rotor_force_min", real), ("rotor_force_max", real),
-                            ("tilt_min", real), ("hold_compensation", real)], real),
-        Output=S("Output", [("u", real * 4), ("u_law", real * 4), ("wrench", real * 4),
-                            ("rotor", real * 4), ("n_clipped", ctypes.c_int), ("tilt", real)],
-                 real),
-        VehicleParams=_layout_struct("VehicleParams", VEHICLE, real),
-        real=real)
+    config = CodegenConfig(precision)
+    compiled = c_sources(_MODEL if model else ())
+    lib = _Library(ctypes.CDLL(str(build_library(files, compiled, opt))), config.prefix)
+    real = _real(precision)
+    api = CApi(lib=lib, real=real,
+               **{s.mirror: ctypes_struct(s.layout, real) for s in api_structs(l)})
     P = ctypes.POINTER
     lib.ql_control_step.argtypes = [P(api.QuadrotorState), P(api.VehicleState),
                                     P(api.Reference), P(api.Params), real,
@@ -219,8 +235,10 @@ def load_api(l: int, precision: str = "double", opt: str = "-O2", model: bool = 
                                                P(api.Reference), P(real)]
     if not model:
         return api
-    for name in ("ql_closed_loop", "ql_closed_loop_jacobian"):
-        getattr(lib, name).argtypes = [P(real)] * 4
-    lib.ql_plant.argtypes = [P(real)] * 6
+    for entry in FUNCTIONS:
+        if entry.wrapper is None:
+            continue
+        ins, outs = entry.arguments(l)
+        getattr(lib, f"ql_{entry.name}").argtypes = [P(real)] * (len(ins) + len(outs))
     lib.ql_closed_loop_jacobian_sparsity.restype = P(ctypes.c_int)
     return api

@@ -55,9 +55,12 @@ def build_parser() -> argparse.ArgumentParser:
     sim.set_defaults(handler=_run_simulate)
 
     cg = sub.add_parser("codegen", help="regenerate the C code of generated/",
-                        description="Write the generated C code, byte for byte reproducible.")
+                        description="Write the generated C code for a scenario, byte for byte "
+                                    "reproducible.")
+    scenario_args(cg)
     cg.add_argument("--out", type=Path, metavar="DIR",
-                    help="output folder (default: the project's generated/)")
+                    help="output folder (default: the source checkout's generated/, which "
+                         "holds the paper scenario only)")
     cg.add_argument("--check", action="store_true",
                     help="regenerate into a temporary folder, print a unified diff and "
                          "exit 1 where DIR differs")
@@ -92,7 +95,8 @@ def _run_simulate(args) -> int:
 def _run_codegen(args) -> int:
     from quadland.codegen import main as codegen_main
 
-    return codegen_main(out=args.out, check=args.check)
+    return codegen_main(out=args.out, check=args.check, scenario=args.scenario,
+                        overrides=args.overrides)
 
 
 def _run_margins(args) -> int:

@@ -1,9 +1,11 @@
-"""Regenerate, or check, the committed C code under ``generated/``.
+"""Regenerate, or check, the generated C code for a scenario.
 
-``generated/`` holds the double-precision build at its top, the
-single-precision build in ``float/`` and the pure-C example in
-``example/``; every file comes from :func:`symbolic.codegen.generate` with
-the paper scenario's values as defaults.
+``generated/`` in a source checkout holds the paper scenario's C: the
+double-precision build at its top, the single-precision build in
+``float/`` and the pure-C example in ``example/``; every file comes from
+:func:`symbolic.codegen.generate_tree` with the scenario's values as
+defaults. Any other scenario, or an installed (non-editable) quadland,
+writes into a folder given with ``--out``.
 """
 
 from __future__ import annotations
@@ -11,62 +13,112 @@ from __future__ import annotations
 import difflib
 import sys
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 
+from quadland.constants import TILT_MIN
+from quadland.exceptions import CodegenError
 from quadland.model import model_values
 from quadland.scenario import load_scenario
-from symbolic.codegen import CodegenConfig, Defaults, generate, generate_example
+from symbolic.codegen import Defaults, generate_tree
 
-__all__ = ["GENERATED_DIR", "EXAMPLE_CONTROL_RATE_HZ", "TILT_MIN", "default_values",
-           "generated_files", "write", "diff", "main"]
+__all__ = ["EXAMPLE_CONTROL_RATE_HZ", "checkout_root", "generated_dir", "default_values",
+           "generated_files", "stale", "write", "diff", "main"]
 
-#: The project's committed ``generated/`` folder.
-GENERATED_DIR = Path(__file__).resolve().parents[1] / "generated"
-
-#: Control rate of the pure-C example flight, Hz (a flight stack's typical rate).
+#: Control rate of the pure-C example flight for a continuous-time scenario,
+#: Hz (a flight stack's typical rate); a sampled scenario's own rate otherwise.
 EXAMPLE_CONTROL_RATE_HZ = 500.0
 
-#: Default smallest accepted |cos(theta1) cos(phi1)|, as the simulator's.
-TILT_MIN = 1e-3
 
-_GITIGNORE = ("# Build outputs of the example (quadland codegen writes this file).\n"
-              "example/build/\n*.o\n*.so\n*.csv\n")
+def _package_parent() -> Path:
+    """The folder that holds the ``quadland`` package."""
+    return Path(__file__).resolve().parents[1]
 
 
-def default_values(scenario_name: str = "paper") -> Defaults:
-    """The C defaults: the values of a shipped scenario (the paper's)."""
-    sc = load_scenario(scenario_name)
+def checkout_root() -> Path | None:
+    """The source checkout quadland runs from, or None when it is installed.
+
+    A checkout is the folder above the ``quadland`` package when it holds
+    ``pyproject.toml``, ``symbolic/`` and ``generated/`` (an installed
+    package sits in ``site-packages``, beside an installed ``symbolic``
+    but without the other two).
+    """
+    root = _package_parent()
+    if ((root / "pyproject.toml").is_file() and (root / "symbolic").is_dir()
+            and (root / "generated").is_dir()):
+        return root
+    return None
+
+
+def generated_dir() -> Path:
+    """The checkout's ``generated/``.
+
+    Raises
+    ------
+    CodegenError
+        When quadland is not run from a source checkout.
+    """
+    root = checkout_root()
+    if root is None:
+        raise CodegenError(f"quadland is installed in {_package_parent()}, not run from a "
+                           f"source checkout: there is no generated/ to write; pass --out DIR")
+    return root / "generated"
+
+
+def default_values(scenario: str | Path = "paper", overrides: Iterable[str] = ()) -> Defaults:
+    """The C defaults: a scenario's values, with overrides."""
+    sc = load_scenario(scenario, list(overrides))
     mv = model_values(sc)
     d, sim = sc.data["disturbance"], sc.data["simulation"]
+    rate = float(sc.data["controller"]["rate_hz"]) or EXAMPLE_CONTROL_RATE_HZ
+    label = sc.name + "".join(f" --set {o}" for o in sc.overrides)
     return Defaults(
-        l=mv.l, p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
+        scenario=label, l=mv.l, p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
         rotor_limits=tuple(float(v) for v in mv.rotor_limits), tilt_min=TILT_MIN,
         hold=mv.hold, x0=mv.x0,
         duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
-        control_rate_hz=EXAMPLE_CONTROL_RATE_HZ,
+        control_rate_hz=rate,
         disturbance_rate_hz=float(d["sample_rate_hz"]),
-        force_bias=tuple(np.asarray(d["force_bias"], dtype=float)),
+        force_bias=tuple(float(v) for v in np.asarray(d["force_bias"], dtype=float)),
         force_amplitude=float(d["force_amplitude"]),
         force_frequency=float(d["force_frequency"]),
-        moment_bias=tuple(np.asarray(d["moment_bias"], dtype=float)),
+        moment_bias=tuple(float(v) for v in np.asarray(d["moment_bias"], dtype=float)),
         moment_amplitude=float(d["moment_amplitude"]),
         moment_frequency=float(d["moment_frequency"]))
 
 
 def generated_files(defaults: Defaults | None = None) -> dict[str, str]:
-    """Every file of ``generated/`` by relative path (POSIX separators)."""
-    defaults = defaults or default_values()
-    files = dict(generate(defaults, CodegenConfig("double")))
-    files.update({f"float/{k}": v for k, v in generate(defaults, CodegenConfig("float")).items()})
-    files.update(generate_example(defaults))
-    files[".gitignore"] = _GITIGNORE
-    return files
+    """Every file of the generated tree by relative path (POSIX separators)."""
+    return generate_tree(defaults or default_values())
+
+
+#: Every generated file says this; a file under the target that says it but is
+#: no longer generated is stale.
+_MARK = "Do not edit: regenerate with `quadland codegen`"
+
+
+def stale(out: Path, files: dict[str, str]) -> list[str]:
+    """Files under ``out`` that a former generation wrote and this one does not."""
+    if not out.is_dir():
+        return []
+    found = []
+    for path in sorted(out.rglob("*")):
+        rel = path.relative_to(out).as_posix()
+        if not path.is_file() or rel in files or "build" in path.relative_to(out).parts:
+            continue
+        try:
+            head = path.read_text(encoding="utf-8")[:1000]
+        except (OSError, UnicodeDecodeError):
+            continue
+        if _MARK in head:
+            found.append(rel)
+    return found
 
 
 def write(out: Path, files: dict[str, str]) -> list[str]:
-    """Write ``files`` under ``out``; return the paths that changed."""
+    """Write ``files`` under ``out`` and remove stale ones; return the paths that changed."""
     changed = []
     for rel, text in sorted(files.items()):
         path = out / rel
@@ -76,11 +128,17 @@ def write(out: Path, files: dict[str, str]) -> list[str]:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
         changed.append(rel)
+    for rel in stale(out, files):
+        (out / rel).unlink()
+        changed.append(rel)
     return changed
 
 
 def diff(out: Path, files: dict[str, str]) -> str:
-    """Unified diff from the files in ``out`` to ``files`` (empty when equal)."""
+    """Unified diff from the files in ``out`` to ``files`` (empty when equal).
+
+    Stale generated files show as deletions.
+    """
     chunks = []
     for rel, text in sorted(files.items()):
         path = out / rel
@@ -89,27 +147,62 @@ def diff(out: Path, files: dict[str, str]) -> str:
             chunks.extend(difflib.unified_diff(
                 old.splitlines(keepends=True), text.splitlines(keepends=True),
                 fromfile=f"a/{rel}" if path.exists() else "/dev/null", tofile=f"b/{rel}"))
+    for rel in stale(out, files):
+        old = (out / rel).read_text(encoding="utf-8")
+        chunks.extend(difflib.unified_diff(old.splitlines(keepends=True), [],
+                                           fromfile=f"a/{rel}", tofile="/dev/null"))
     return "".join(chunks)
 
 
-def main(out: Path | None = None, check: bool = False) -> int:
+def _command(scenario, overrides, out: Path | None) -> str:
+    words = ["quadland", "codegen"]
+    if str(scenario) != "paper":
+        words += ["--scenario", str(scenario)]
+    words += [w for o in overrides for w in ("--set", o)]
+    if out is not None:
+        words += ["--out", str(out)]
+    return " ".join(words)
+
+
+def main(out: Path | None = None, check: bool = False, scenario: str | Path = "paper",
+         overrides: Iterable[str] = ()) -> int:
     """The ``quadland codegen`` command.
 
     Parameters
     ----------
     out : Path, optional
-        Target folder; the project's ``generated/`` by default.
+        Target folder; by default the checkout's ``generated/``, which holds
+        the paper scenario only.
     check : bool
         Regenerate into a temporary folder and compare instead of writing:
         print a unified diff and return 1 where ``out`` differs.
+    scenario : str or Path
+        A shipped scenario's name or a TOML file.
+    overrides : iterable of str
+        ``section.key=value`` overrides of the scenario.
 
     Returns
     -------
     int
         Exit status: 0, or 1 when ``check`` found differences.
+
+    Raises
+    ------
+    CodegenError
+        Without ``out`` outside a source checkout, or for another scenario
+        than the paper's; nothing is written then.
+    ScenarioError
+        For an unknown or invalid scenario.
     """
-    out = Path(out) if out is not None else GENERATED_DIR
-    files = generated_files()
+    overrides = list(overrides)
+    given = out
+    if out is None:
+        out = generated_dir()
+        if str(scenario) != "paper" or overrides:
+            raise CodegenError("generated/ holds the paper scenario's code; write another "
+                               "scenario's with --out DIR")
+    out = Path(out)
+    files = generated_files(default_values(scenario, overrides))
     if check:
         with tempfile.TemporaryDirectory() as tmp:
             write(Path(tmp), files)
@@ -117,11 +210,13 @@ def main(out: Path | None = None, check: bool = False) -> int:
         text = diff(out, fresh)
         if text:
             sys.stdout.write(text)
-            print(f"quadland: {out} is out of date; run `quadland codegen --out {out}`",
+            print(f"quadland: {out} is out of date; run `{_command(scenario, overrides, given)}`",
                   file=sys.stderr)
             return 1
         print(f"quadland: {out} is up to date ({len(files)} files)")
         return 0
     changed = write(out, files)
-    print(f"quadland: wrote {len(changed)} of {len(files)} files in {out}")
+    removed = sum(not (out / rel).exists() for rel in changed)
+    print(f"quadland: wrote {len(changed) - removed} of {len(files)} files in {out}"
+          + (f", removed {removed} stale" if removed else ""))
     return 0

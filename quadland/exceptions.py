@@ -1,7 +1,8 @@
 """Exceptions raised by quadland."""
 
 __all__ = ["QuadlandError", "ScenarioError", "SimulationError", "SingularAttitudeError",
-           "CompilerNotFoundError", "CompileError", "OperatingPointError", "MarginsError"]
+           "CompilerNotFoundError", "CompileError", "CodegenError", "OperatingPointError",
+           "MarginsError"]
 
 
 class QuadlandError(Exception):
@@ -26,6 +27,10 @@ class CompilerNotFoundError(QuadlandError, RuntimeError):
 
 class CompileError(QuadlandError, RuntimeError):
     """The C compiler failed on generated sources."""
+
+
+class CodegenError(QuadlandError, ValueError):
+    """Generated code cannot be written where asked (no checkout, wrong scenario)."""
 
 
 class OperatingPointError(QuadlandError, ArithmeticError):

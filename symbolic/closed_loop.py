@@ -29,8 +29,8 @@ from symbolic.vehicle import MEASUREMENT, vehicle_rhs
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["POSITION1", "PLANT_STATE", "OUTPUTS", "closed_loop_state", "closed_loop_params",
-           "closed_loop_rhs", "closed_loop_function", "plant_function", "closed_loop_outputs",
-           "vehicle_measurement"]
+           "closed_loop_rhs", "closed_loop_function", "closed_loop_jacobian_function",
+           "plant_function", "closed_loop_outputs", "vehicle_measurement"]
 
 #: The quadrotor's planar position in E, integrated for the ground track.
 POSITION1 = Layout("pos1", (Field("x1", 1, "m", "quadrotor x in E"),
@@ -130,6 +130,19 @@ def closed_loop_function(l: int) -> ca.Function:
     x, w, p = _symbols(l)
     return ca.Function("closed_loop", [x, w, p], [closed_loop_rhs(x, w, p, l)],
                        ["x", "w", "p"], ["x_dot"])
+
+
+@functools.cache
+def closed_loop_jacobian_function(l: int) -> ca.Function:
+    """``closed_loop_jacobian(x, w, p) -> jac_x``: d x_dot / d x, sparse.
+
+    The Jacobian of :func:`closed_loop_function` with respect to the state,
+    formed by CasADi's algorithmic differentiation.
+    """
+    x, w, p = _symbols(l)
+    return ca.Function("closed_loop_jacobian", [x, w, p],
+                       [ca.jacobian(closed_loop_function(l)(x, w, p), x)],
+                       ["x", "w", "p"], ["jac_x"])
 
 
 @functools.cache

@@ -1,47 +1,69 @@
 """C code of the control step and the closed loop, with a readable API.
 
-One entry point, :func:`generate`, turns the symbolic functions into the
-text of every file under ``generated/``:
+One entry point per tree, :func:`generate` (one precision) and
+:func:`generate_tree` (everything under ``generated/``), turns the symbolic
+functions into C text:
 
-* one CasADi-generated file per function (``control_step``,
-  ``closed_loop``, ``closed_loop_jacobian``, ``plant``), with its symbol
-  prefix set so that the files link together, and post-processed so that
-  each compiles alone with ``-std=c99 -pedantic -Wall -Wextra -Werror``
-  (unused arguments are voided) and, for the single-precision build, uses
-  float constants and float math;
-* ``quadland.h`` / ``quadland.c``: named structs, defaults and a checked
-  ``ql_control_step`` over CasADi's arg/res arrays, written from the
-  parameter layouts of ``symbolic.parameters`` so that they cannot drift;
-* ``example/``: a pure-C flight of the paper's scenario, a benchmark and
-  their Makefile.
+* one CasADi-generated file per function of the registry
+  :data:`FUNCTIONS`, its symbols prefixed for the build, post-processed so
+  that each compiles alone with ``-std=c99 -pedantic -Wall -Wextra
+  -Werror`` (unused arguments are voided) and, for the single-precision
+  build, uses float constants and float math;
+* ``quadland.h`` / ``quadland.c`` (named structs, defaults and a checked
+  ``ql_control_step`` over CasADi's arg/res arrays) and the named-pointer
+  wrappers of the other functions, rendered from the Jinja2 templates in
+  ``symbolic/templates/``. Python only builds the templates' context: the
+  structs come from the layouts of :mod:`symbolic.c_api`, offsets and
+  sizes from the layouts of the model, defaults as C literals;
+* ``example/``: a pure-C flight of the scenario, a benchmark and their
+  Makefile.
 
-Numeric defaults (the paper scenario) are passed in as :class:`Defaults`;
-this module imports nothing from ``quadland``. The emitter settings are the
-frozen :class:`CodegenConfig`. The output depends only on its inputs and on
-the CasADi version, never on time or paths, so regeneration is byte for
-byte reproducible.
+Every global C symbol carries the build's prefix (:attr:`CodegenConfig.prefix`:
+``ql_`` for double, ``qlf_`` for float), CasADi's functions and helpers
+included, so that both builds link into one program.
+
+Numeric defaults (a scenario's values) are passed in as :class:`Defaults`;
+this module imports nothing from ``quadland``. The output depends only on
+its inputs and on the CasADi version, never on time or paths, so
+regeneration is byte for byte reproducible.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 import re
 import tempfile
+from collections.abc import Callable
+from pathlib import Path
 
 import casadi as ca
+import jinja2
 import numpy as np
 
-from symbolic.closed_loop import (PLANT_STATE, closed_loop_function, closed_loop_params,
+from symbolic.c_api import (CStruct, adaptive_state_layout, api_structs, output_layout,
+                            params_layout)
+from symbolic.closed_loop import (PLANT_STATE, closed_loop_function,
+                                  closed_loop_jacobian_function, closed_loop_params,
                                   closed_loop_state, plant_function)
-from symbolic.quadrotor import DISTURBANCE
-from symbolic.control_step import control_step_function
+from symbolic.control_step import control_step_function, step_inputs, step_outputs
+from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
+from symbolic.quadrotor import DISTURBANCE
+from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.relative import E1
+from symbolic.vehicle import MEASUREMENT
+from symbolic.vehicle import STATE as VEHICLE_STATE
 
-__all__ = ["CodegenConfig", "Defaults", "STATUS_CODES", "CASADI_FUNCTIONS", "generate_example",
-           "closed_loop_jacobian_function", "generate"]
+__all__ = ["CodegenConfig", "Defaults", "GeneratedFunction", "FUNCTIONS", "STATUS_CODES",
+           "TEMPLATE_DIR", "c_sources", "example_columns", "generate", "generate_example",
+           "generate_tree"]
 
-#: Status codes of ``ql_control_step`` (name, value, meaning).
+#: Folder of the Jinja2 templates (installed with the package).
+TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
+
+#: Status codes of ``ql_control_step`` (name in the double build, value, meaning).
 STATUS_CODES = (
     ("QL_OK", 0, "success; outputs and adaptive state updated"),
     ("QL_ERR_NULL", 1, "a NULL pointer argument"),
@@ -52,9 +74,6 @@ STATUS_CODES = (
     ("QL_ERR_NONFINITE_OUTPUT", 5,
      "the law overflowed: a NaN or infinite value from finite inputs"),
 )
-
-#: The CasADi functions written as C, in file order.
-CASADI_FUNCTIONS = ("control_step", "closed_loop", "closed_loop_jacobian", "plant")
 
 _MATH = ("exp", "expm1", "log", "log1p", "sqrt", "cos", "sin", "tan", "acos", "asin", "atan",
          "atan2", "tanh", "sinh", "cosh", "fmin", "fmax", "fabs", "floor", "ceil", "pow", "erf")
@@ -71,6 +90,10 @@ class CodegenConfig:
     precision : {"double", "float"}
         Type of every real; ``"float"`` also writes float constants
         (``1.5f``) and calls float math (``expf``).
+    prefix : str, optional
+        Prefix of every global C name of the build (functions, types and,
+        upper-cased, macros and enumerators); ``"ql_"`` for double and
+        ``"qlf_"`` for float by default.
     casadi_int : str
         C type of CasADi's integers (sparsity patterns).
     null_checks : bool
@@ -83,6 +106,7 @@ class CodegenConfig:
     """
 
     precision: str = "double"
+    prefix: str | None = None
     casadi_int: str = "int"
     null_checks: bool = False
     builder: str = "quadland codegen (symbolic/codegen.py)"
@@ -90,11 +114,21 @@ class CodegenConfig:
     def __post_init__(self):
         if self.precision not in ("double", "float"):
             raise ValueError(f"precision must be 'double' or 'float', got {self.precision!r}")
+        if self.prefix is None:
+            object.__setattr__(self, "prefix", "ql_" if self.precision == "double" else "qlf_")
+        if not re.fullmatch(r"[a-z][a-z0-9]*_", self.prefix):
+            raise ValueError(f"prefix must be lower-case letters and digits ending in '_', "
+                             f"got {self.prefix!r}")
 
     @property
     def is_float(self) -> bool:
         """True for the single-precision build."""
         return self.precision == "float"
+
+    @property
+    def macro_prefix(self) -> str:
+        """Prefix of the build's macros and enumerators (``QL_``)."""
+        return self.prefix.upper()
 
     def literal(self, value: float) -> str:
         """A C literal of ``value`` in this precision (shortest round trip)."""
@@ -112,10 +146,13 @@ class CodegenConfig:
 
 @dataclasses.dataclass(frozen=True)
 class Defaults:
-    """Numeric defaults written into the C (the paper scenario).
+    """Numeric defaults written into the C (one scenario's values).
 
     Attributes
     ----------
+    scenario : str
+        Which scenario they are, for the comments: its name and overrides
+        (never a path, so that the output does not depend on the machine).
     l : int
         RBF node count.
     p_quad, p_veh, p_ctrl : ndarray
@@ -138,6 +175,7 @@ class Defaults:
         N, rad/s, N m, rad/s.
     """
 
+    scenario: str
     l: int
     p_quad: np.ndarray
     p_veh: np.ndarray
@@ -159,52 +197,163 @@ class Defaults:
     moment_frequency: float
 
 
-def closed_loop_jacobian_function(l: int) -> ca.Function:
-    """``closed_loop_jacobian(x, w, p) -> jac_x``: d x_dot / d x, sparse.
+@dataclasses.dataclass(frozen=True)
+class GeneratedFunction:
+    """One CasADi function written as C.
 
-    The Jacobian of ``symbolic.closed_loop.closed_loop_function`` with
-    respect to the state, formed by CasADi's algorithmic differentiation.
+    Attributes
+    ----------
+    name : str
+        The ``casadi.Function``'s name and the stem of its ``.c``/``.h``.
+    builder : callable
+        ``builder(l)`` (or ``builder()`` without ``per_node_count``)
+        returns the function.
+    per_node_count : bool
+        Whether the function depends on the RBF node count ``l``.
+    wrapper : str, optional
+        File of its named-pointer wrapper ``ql_<name>(...)``, whose
+        arguments are the function's ``name_in``/``name_out``; None when
+        ``quadland.c`` wraps it.
+    doc : str
+        Comment of the wrapper in ``quadland.h`` (``{ql}``/``{QL}`` stand for
+        the build's prefixes).
     """
-    f = closed_loop_function(l)
-    x, w, p = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("w", f.size1_in(1)), \
-        ca.SX.sym("p", f.size1_in(2))
-    return ca.Function("closed_loop_jacobian", [x, w, p], [ca.jacobian(f(x, w, p), x)],
-                       ["x", "w", "p"], ["jac_x"])
+
+    name: str
+    builder: Callable[..., ca.Function]
+    per_node_count: bool = True
+    wrapper: str | None = None
+    doc: str = ""
+
+    @property
+    def source(self) -> str:
+        """Dotted path of the builder, for the banner."""
+        return f"{self.builder.__module__}.{self.builder.__qualname__}"
+
+    def function(self, l: int) -> ca.Function:
+        """The ``casadi.Function`` for ``l`` RBF nodes."""
+        fn = self.builder(l) if self.per_node_count else self.builder()
+        if fn.name() != self.name:
+            raise ValueError(f"{self.source} builds {fn.name()!r}, registered as {self.name!r}")
+        return fn
+
+    def origin(self, l: int) -> str:
+        """The builder's call, as the banner names it."""
+        return f"{self.source}(l={l})" if self.per_node_count else f"{self.source}()"
+
+    def c_name(self, config: CodegenConfig) -> str:
+        """Its C symbol in a build: ``ql_casadi_control_step``."""
+        return f"{config.prefix}casadi_{self.name}"
+
+    def arguments(self, l: int) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """Names of its inputs and outputs: the wrapper's arguments."""
+        fn = self.function(l)
+        return tuple(fn.name_in()), tuple(fn.name_out())
 
 
-def _casadi_function(name: str, l: int) -> ca.Function:
-    return {"control_step": lambda: control_step_function(l),
-            "closed_loop": lambda: closed_loop_function(l),
-            "closed_loop_jacobian": lambda: closed_loop_jacobian_function(l),
-            "plant": plant_function}[name]()
+#: The CasADi functions written as C, in file order: the one registry.
+FUNCTIONS = (
+    GeneratedFunction("control_step", control_step_function),
+    GeneratedFunction("closed_loop", closed_loop_function, wrapper="quadland_model.c",
+                      doc="x_dot of the continuous-time closed loop (symbolic.closed_loop)."),
+    GeneratedFunction("closed_loop_jacobian", closed_loop_jacobian_function,
+                      wrapper="quadland_jacobian.c",
+                      doc="d x_dot / d x: the {QL}CLOSED_LOOP_JACOBIAN_NNZ nonzeros in "
+                          "compressed\n * column storage; {ql}closed_loop_jacobian_sparsity "
+                          "gives the pattern\n * (CasADi format: nrow, ncol, colind[ncol + 1], "
+                          "row[nnz])."),
+    GeneratedFunction("plant", plant_function, per_node_count=False, wrapper="quadland_model.c",
+                      doc="xp_dot of the plant alone (quadrotor, vehicle, planar position) "
+                          "under a\n * held wrench and disturbance w."),
+)
+
+_BY_NAME = {f.name: f for f in FUNCTIONS}
 
 
-def _banner(config: CodegenConfig, what: str, source: str) -> str:
-    return (f"/* {what}\n"
-            f" *\n"
-            f" * Generated by {config.builder} from {source}\n"
-            f" * with CasADi {ca.__version__}, precision: {config.precision}.\n"
-            f" * Do not edit: regenerate with `quadland codegen`.\n"
-            f" */\n")
+def c_sources(functions=("control_step",)) -> tuple[str, ...]:
+    """The ``.c`` files that link the API of ``functions`` (names in :data:`FUNCTIONS`).
+
+    ``quadland.c`` and the control step always; each other function with
+    its wrapper's file.
+    """
+    unknown = set(functions) - set(_BY_NAME)
+    if unknown:
+        raise ValueError(f"unknown generated functions {sorted(unknown)}")
+    chosen = [f for f in FUNCTIONS if f.name in functions or f.name == "control_step"]
+    files = [f"{f.name}.c" for f in chosen] + ["quadland.c"]
+    for f in chosen:
+        if f.wrapper and f.wrapper not in files:
+            files.append(f.wrapper)
+    return tuple(files)
 
 
-def _emit_casadi(name: str, l: int, config: CodegenConfig) -> dict[str, str]:
-    """CasADi's C for one function, post-processed; ``{file name: text}``."""
-    fn = _casadi_function(name, l)
+# --- templates -------------------------------------------------------------
+
+def _pad(text: str, width: int) -> str:
+    return text.ljust(width)
+
+
+def _signature(params, head: str, width: int = 96) -> str:
+    """``head(p1, p2, ...)`` wrapped before ``width``, continuation under the ``(``."""
+    indent = " " * (len(head) + 1)
+    lines, line = [], head + "("
+    for i, p in enumerate(params):
+        piece = p + (", " if i < len(params) - 1 else ")")
+        if len(line) + len(piece.rstrip()) > width and line.strip() != head + "(":
+            lines.append(line.rstrip())
+            line = indent
+        line += piece
+    lines.append(line)
+    return "\n".join(lines)
+
+
+@functools.cache
+def _declared(text: str, ql: str, QL: str) -> list[str]:
+    """The names a rendered header declares with the build's prefixes, sorted."""
+    return sorted(set(re.findall(rf"\b(?:{ql}|{QL})\w+", text)))
+
+
+@functools.cache
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
+                             keep_trailing_newline=True, undefined=jinja2.StrictUndefined,
+                             trim_blocks=True, lstrip_blocks=True, autoescape=False)
+    env.filters.update(pad=_pad, signature=_signature, declared=_declared,
+                       prefix=lambda text, head: head + text)
+    return env
+
+
+def _render(template: str, **context) -> str:
+    return _environment().get_template(template).render(**context)
+
+
+def _common(config: CodegenConfig | None) -> dict:
+    """Context every template shares: the banner's facts and the prefixes."""
+    ctx = dict(builder=(config or CodegenConfig()).builder, casadi_version=ca.__version__,
+               precision=config.precision if config else None)
+    if config is not None:
+        ql, QL = config.prefix, config.macro_prefix
+        ctx.update(ql=ql, QL=QL, lit=config.literal, math=config.math,
+                   api=lambda text: text.replace("{ql}", ql).replace("{QL}", QL))
+    return ctx
+
+
+# --- the CasADi files ------------------------------------------------------
+
+def _emit_casadi(entry: GeneratedFunction, l: int, config: CodegenConfig) -> dict[str, str]:
+    """CasADi's C for one function, prefixed and post-processed; ``{file name: text}``."""
+    fn = entry.function(l)
+    c_name = entry.c_name(config)
+    # The same expression graph under the build's symbol (CasADi names the C
+    # function after the Function); "prefix" names its helpers c_name__*.
+    renamed = ca.Function(c_name, fn.sx_in(), fn.call(fn.sx_in()), fn.name_in(), fn.name_out())
     opts = {"with_header": True, "casadi_real": config.precision, "casadi_int": config.casadi_int,
-            "prefix": f"{name}_", "verbose": False, "with_export": False}
-    cg = ca.CodeGenerator(f"{name}.c", opts)
-    cg.add(fn)
+            "prefix": f"{c_name}_", "verbose": False, "with_export": False}
+    cg = ca.CodeGenerator(f"{entry.name}.c", opts)
+    cg.add(renamed)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        texts = {ext: open(os.path.join(tmp, f"{name}.{ext}")).read() for ext in ("c", "h")}
-    source = {"control_step": "symbolic.control_step.control_step_function",
-              "closed_loop": "symbolic.closed_loop.closed_loop_function",
-              "closed_loop_jacobian": "symbolic.codegen.closed_loop_jacobian_function",
-              "plant": "symbolic.closed_loop.plant_function"}[name]
-    signature = re.sub(r"\s+", " ", str(fn)).removesuffix(" SXFunction")
-    banner = _banner(config, signature, f"{source}(l={l})"
-                     if name != "plant" else f"{source}()")
+        texts = {ext: Path(tmp, f"{entry.name}.{ext}").read_text() for ext in ("c", "h")}
     c = texts["c"]
     # Arguments CasADi's SX code leaves unused (-Wunused-parameter).
     c = re.sub(r"(static int \w+\(const casadi_real\*\* arg, casadi_real\*\* res, "
@@ -212,437 +361,167 @@ def _emit_casadi(name: str, l: int, config: CodegenConfig) -> dict[str, str]:
                r"\1  (void)arg; (void)res; (void)iw; (void)w; (void)mem;\n", c)
     c = re.sub(r"(void \w+_release\(int mem\) \{\n)", r"\1  (void)mem;\n", c)
     c = re.sub(r"(casadi_real \w+_default_in\(casadi_int i\) \{\n)", r"\1  (void)i;\n", c)
+    h = texts["h"]
     if not config.null_checks:
         c = re.sub(r"arg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0", r"arg[\1][\2]", c)
         c = re.sub(r"if \(res\[(\d+)\]!=0\) res\[\1\]", r"res[\1]", c)
-        c = c.replace(f"int {name}(const casadi_real** arg,",
+        c = c.replace(f"int {c_name}(const casadi_real** arg,",
                       "/* Every arg[i] and res[i] must point to valid memory: NULL is not\n"
                       " * accepted (symbolic.codegen.CodegenConfig.null_checks). */\n"
-                      f"int {name}(const casadi_real** arg,", 1)
+                      f"int {c_name}(const casadi_real** arg,", 1)
+        h = h.replace(f"int {c_name}(const casadi_real** arg,",
+                      "/* Every arg[i] and res[i] must point to valid memory. */\n"
+                      f"int {c_name}(const casadi_real** arg,", 1)
     if config.is_float:
         head, sep, body = c.partition("#include <math.h>")
         body = _MATH_RE.sub(lambda m: config.math(m.group(1)) + "(", body)
         body = _LITERAL_RE.sub(lambda m: m.group(1) + "f", body)
         c = head + sep + body
-    h = texts["h"]
-    if not config.null_checks:
-        h = h.replace(f"int {name}(const casadi_real** arg,",
-                      "/* Every arg[i] and res[i] must point to valid memory. */\n"
-                      f"int {name}(const casadi_real** arg,", 1)
-    return {f"{name}.c": banner + c, f"{name}.h": banner + h}
+    what = re.sub(r"\s+", " ", str(fn)).removesuffix(" SXFunction")
+    ctx = dict(_common(config), what=f"{c_name}: {what}", source=entry.origin(l))
+    return {f"{entry.name}.{ext}": _render("casadi.jinja", code=text, **ctx)
+            for ext, text in (("c", c), ("h", h))}
 
 
-def _c_field(f, config) -> str:
-    if f.shape is not None:
-        rows, cols = f.shape
-        decl = f"ql_real {f.name}[{cols}][{rows}];"
-    elif f.size == 1:
-        decl = f"ql_real {f.name};"
+# --- the readable API ------------------------------------------------------
+
+def _unit_text(f: Field) -> str:
+    if isinstance(f.unit, tuple):
+        return f.unit[0] if len(set(f.unit)) == 1 else ", ".join(f.unit)
+    return f.unit
+
+
+def _member(f: Field, structs: tuple[CStruct, ...], ql: str) -> dict:
+    """A struct member: C type, array dimensions and comment."""
+    if f.ctype == "int":
+        ctype, dims = "int", []
+    elif f.layout is not None:
+        owner = [s for s in structs if s.layout == f.layout]
+        if not owner:
+            raise ValueError(f"{f.name}: no C struct has layout {f.layout.name!r}")
+        ctype, dims = ql + owner[0].name, []
     else:
-        decl = f"ql_real {f.name}[{f.size}];"
-    return f"    {decl:<32} /* {f.unit}: {f.doc} */"
+        ctype = ql + "real"
+        dims = [f.shape[1], f.shape[0]] if f.shape is not None else (
+            [] if f.size == 1 else [f.size])
+    unit = _unit_text(f)
+    comment = f"{unit}: {f.doc}" if unit else f.doc
+    generic = tuple(f"{f.name}_{i + 1}" for i in range(f.size))
+    if (f.elements is not None and f.elements != generic and 1 < f.size <= 6
+            and not any(e in f.doc for e in f.elements)):
+        comment += f" ({', '.join(f.elements)})"
+    return dict(name=f.name, type=ctype, dims=dims, comment=comment)
 
 
-def _param_structs(l: int):
-    """(struct name, layout, comment) of the parameter structs."""
-    return (("ql_quadrotor_params", QUADROTOR,
-             "Physical constants of the quadrotor (Table 1, eq. 2): layout p_quad."),
-            ("ql_controller_params", controller_layout(l),
-             "Gains, adaptation constants and RBF network (eq. 14, 20, 22): layout p_ctrl."),
-            ("ql_vehicle_params", VEHICLE,
-             "Constants and inputs of the ground vehicle (Table 1, eq. 4): layout p_veh."))
+def _struct_context(s: CStruct, structs, ql: str) -> dict:
+    offsets = s.layout.offsets()
+    reals = [dict(name=f.name, offset=offsets[f.name][0]) for f in s.layout.fields
+             if f.ctype == "real"]
+    ints = [dict(name=f.name, index=i) for i, f in
+            enumerate(f for f in s.layout.fields if f.ctype == "int")]
+    return dict(name=s.name, doc=s.doc, size=s.layout.size, reals=reals, ints=ints,
+                members=[_member(f, structs, ql) for f in s.layout.fields])
 
 
-def _array(config, name, values) -> str:
-    vals = [config.literal(v) for v in np.asarray(values, dtype=float).ravel()]
-    lines = []
-    for i in range(0, len(vals), 6):
-        lines.append("    " + ", ".join(vals[i:i + 6]) + ",")
-    return f"static const ql_real {name}[{len(vals)}] = {{\n" + "\n".join(lines) + "\n};\n"
+def _sizes(l: int, jac_nnz: int) -> list[dict]:
+    """The size macros (name without prefix, value, comment), from the layouts."""
+    def fields(layout):
+        return ", ".join(f"{f.name} ({f.size})" for f in layout.fields)
+
+    return [
+        dict(name="RBF_NODES", value=l, doc="l, RBF nodes (eq. 8)"),
+        dict(name="RBF_INPUT_DIM", value=RBF_INPUT_DIM, doc="dimension of vartheta (Section 3.2)"),
+        dict(name="P_QUAD_SIZE", value=QUADROTOR.size, doc="reals in p_quad"),
+        dict(name="P_VEH_SIZE", value=VEHICLE.size, doc="reals in p_veh"),
+        dict(name="P_CTRL_SIZE", value=controller_layout(l).size, doc="reals in p_ctrl"),
+        dict(name="PARAMS_SIZE", value=params_layout(l).size, doc="reals in {ql}params"),
+        dict(name="CLOSED_LOOP_NX", value=closed_loop_state(l).size,
+             doc=f"x = [{fields(closed_loop_state(l))}]"),
+        dict(name="CLOSED_LOOP_NW", value=DISTURBANCE.size, doc=f"w = [{fields(DISTURBANCE)}]"),
+        dict(name="CLOSED_LOOP_NP", value=closed_loop_params(l).size,
+             doc=f"p = [{fields(closed_loop_params(l))}]"),
+        dict(name="CLOSED_LOOP_JACOBIAN_NNZ", value=jac_nnz, doc="nonzeros of d x_dot / d x"),
+        dict(name="PLANT_NX", value=PLANT_STATE.size, doc=f"xp = [{fields(PLANT_STATE)}]"),
+    ]
 
 
-def _header(config: CodegenConfig, d: Defaults) -> str:
+def _vector_structs(d: Defaults, config: CodegenConfig) -> list[dict]:
+    """Structs that are vectors of the model: defaults, pack and unpack."""
+    structs = {s.name: s.layout for s in api_structs(d.l)}
+    out = []
+    for name, values, public in (("quadrotor_params", d.p_quad, True),
+                                 ("controller_params", d.p_ctrl, True),
+                                 ("vehicle_params", d.p_veh, True),
+                                 ("reference", d.ref, False)):
+        layout = structs[name]
+        values = [config.literal(v) for v in np.asarray(values, dtype=float).ravel()]
+        if len(values) != layout.size:
+            raise ValueError(f"{name}: {len(values)} defaults for {layout.size} entries")
+        offsets = layout.offsets()
+        out.append(dict(name=name, vector=layout.name, public=public,
+                        rows=[values[i:i + 6] for i in range(0, len(values), 6)],
+                        size=len(values),
+                        fields=[dict(name=f.name, offset=offsets[f.name][0], size=f.size)
+                                for f in layout.fields]))
+    return out
+
+
+def _step_context(l: int, config: CodegenConfig) -> dict:
+    """Where ``ql_control_step`` puts each argument and result of CasADi's function."""
+    ins, outs = step_inputs(l), step_outputs(l)
+    # The caller's measurements and dt, staged in one buffer and checked in one pass.
+    staged_in = Layout("in", tuple(ins[n] for n in ("xq", "yv", "ref", "dt")))
+    # Every result but the two scalars read first (n_clipped, tilt), likewise.
+    staged_res = Layout("res_v", tuple(f for f in outs.fields
+                                       if f.name not in ("n_clipped", "tilt")))
+    res_offsets = staged_res.offsets()
+    return dict(
+        c_name=_BY_NAME["control_step"].c_name(config),
+        arg={n: i for i, n in enumerate(ins.names())},
+        res={n: i for i, n in enumerate(outs.names())},
+        in_size=staged_in.size, in_offset={n: a for n, (a, _) in staged_in.offsets().items()},
+        res_size=staged_res.size, res_offset={n: a for n, (a, _) in res_offsets.items()},
+        staged_res=[dict(name=n, index=outs.names().index(n), offset=a)
+                    for n, (a, _) in res_offsets.items()],
+        adaptive=adaptive_state_layout(l).offsets())
+
+
+def _wrapped(l: int, config: CodegenConfig) -> list[dict]:
+    out = []
+    for entry in FUNCTIONS:
+        if entry.wrapper is None:
+            continue
+        fn = entry.function(l)
+        ins, outs = entry.arguments(l)
+        sparse = any(not fn.sparsity_out(i).is_dense() for i in range(fn.n_out()))
+        out.append(dict(name=entry.name, c_name=entry.c_name(config), file=entry.wrapper,
+                        ins=ins, outs=outs, doc=entry.doc, sparse=sparse))
+    return out
+
+
+def _api_context(config: CodegenConfig, d: Defaults) -> dict:
     l = d.l
+    structs = api_structs(l)
     jac = closed_loop_jacobian_function(l).sparsity_out(0)
-    out = [_banner(config, "quadland.h: readable C API of the adaptive backstepping control step.",
-                   "the layouts of symbolic.parameters"),
-           "#ifndef QUADLAND_H\n#define QUADLAND_H\n"]
-    out.append(f"""
-#ifdef __cplusplus
-extern "C" {{
-#endif
-
-/* Every real is a ql_real: {config.precision} in this build. */
-typedef {config.precision} ql_real;
-
-#define QL_RBF_NODES {l}          /* l, RBF nodes (eq. 8) */
-#define QL_RBF_INPUT_DIM {RBF_INPUT_DIM}       /* dimension of vartheta (Section 3.2) */
-#define QL_P_QUAD_SIZE {QUADROTOR.size}
-#define QL_P_VEH_SIZE {VEHICLE.size}
-#define QL_P_CTRL_SIZE {controller_layout(l).size}
-#define QL_PARAMS_SIZE (QL_P_QUAD_SIZE + QL_P_CTRL_SIZE + 4)   /* ql_params, scalars */
-#define QL_CLOSED_LOOP_NX {closed_loop_state(l).size}   /* [xq (10), xv (6), vec(W_hat) (4 l), zeta_hat (4), x1, y1] */
-#define QL_CLOSED_LOOP_NW {DISTURBANCE.size}     /* [d_F (3), d_M (3)] */
-#define QL_CLOSED_LOOP_NP {closed_loop_params(l).size}  /* [p_quad, p_veh, p_ctrl, ref (12)] */
-#define QL_CLOSED_LOOP_JACOBIAN_NNZ {jac.nnz()}
-#define QL_PLANT_NX {PLANT_STATE.size}         /* [xq (10), xv (6), x1, y1] */
-
-/* Status of ql_control_step. */
-typedef enum {{
-""")
-    for name, value, doc in STATUS_CODES:
-        out.append(f"    {name + ' = ' + str(value) + ',':<30} /* {doc} */\n")
-    out.append("} ql_status;\n")
-    out.append("""
-/* Measured quadrotor state (eq. 1-2): Earth frame z up, ZYX Euler angles. */
-typedef struct {
-    ql_real z1;                      /* m: altitude */
-    ql_real eta1[3];                 /* rad: roll phi1, pitch theta1, yaw psi1 */
-    ql_real V1[3];                   /* m/s: body velocity u1, v1, w1 */
-    ql_real Omega1[3];               /* rad/s: body rates p1, q1, r1 */
-} ql_quadrotor_state;
-
-/* Measured vehicle state (eq. 4); heave, roll and pitch are neglected. */
-typedef struct {
-    ql_real z2;                      /* m: deck altitude */
-    ql_real psi2;                    /* rad: heading */
-    ql_real r2;                      /* rad/s: yaw rate */
-} ql_vehicle_state;
-
-/* Reference of the relative states e1 = [z_e, phi_e, theta_e, psi_e]. */
-typedef struct {
-    ql_real e1d[4];                  /* m, rad, rad, rad */
-    ql_real e1d_dot[4];              /* first time derivative */
-    ql_real e1d_ddot[4];             /* second time derivative */
-} ql_reference;
-
-/* The step's memory: the adaptive state (eq. 22) and the law's previous
- * output for the hold compensation. Start with ql_adaptive_state_init. */
-typedef struct {
-    ql_real W_hat[4][QL_RBF_NODES];  /* W_hat (l x 4) column-major: W_hat[j][i] = W(i, j) */
-    ql_real zeta_hat[4];             /* zeta_hat */
-    ql_real u_prev[4];               /* u_law of the last successful step */
-    int has_prev;                    /* 0: do not extrapolate (initially, after a gap) */
-} ql_adaptive_state;
-""")
-    for sname, layout, doc in _param_structs(l):
-        out.append(f"\n/* {doc} */\ntypedef struct {{\n")
-        out.extend(_c_field(f, config) + "\n" for f in layout.fields)
-        out.append(f"}} {sname};\n")
-    out.append("""
-/* Everything ql_control_step is tuned with; ql_params_init fills the defaults. */
-typedef struct {
-    ql_quadrotor_params quad;        /* physical constants */
-    ql_controller_params ctrl;       /* gains, adaptation, RBF network */
-    ql_real rotor_force_min;         /* N: lower rotor force limit (clipping) */
-    ql_real rotor_force_max;         /* N: upper rotor force limit (clipping) */
-    ql_real tilt_min;                /* -: smallest accepted |cos(theta1) cos(phi1)| */
-    ql_real hold_compensation;       /* periods, 0..1: extrapolation of the held command */
-} ql_params;
-
-/* Outputs of one control step. */
-typedef struct {
-    ql_real u[4];                    /* commanded virtual inputs, before clipping */
-    ql_real u_law[4];                /* the law of eq. (20) at the measurements */
-    ql_real wrench[4];               /* N, N m: F_total, M_x, M_y, M_z of the clipped rotors */
-    ql_real rotor[4];                /* N: rotor forces F1..F4, clipped to the limits */
-    int n_clipped;                   /* number of rotors clipped this step (0..4) */
-    ql_real tilt;                    /* cos(theta1) cos(phi1) */
-} ql_output;
-
-/* Fill the defaults (the paper scenario, quadland/scenarios/paper.toml). */
-void ql_params_init(ql_params *params);
-void ql_vehicle_params_init(ql_vehicle_params *params);
-/* W_hat(0) = 0 and zeta_hat(0) = 0 (Section 4), no previous command. */
-void ql_adaptive_state_init(ql_adaptive_state *state);
-/* The paper's reference e1d = 0. */
-void ql_reference_init(ql_reference *ref);
-
-/* One control step of period dt (s).
- *
- * Evaluates the law of eq. (20) at the measurements (u_law), extrapolates
- * it against the hold's delay, u = u_law + hold_compensation (u_law -
- * u_prev) (from the second step on), clips the rotor forces of u to
- * [rotor_force_min, rotor_force_max] and integrates the adaptive laws of
- * eq. (22) exactly over dt with the measurements held. The rotor forces
- * are meant to be held until the next step. On QL_OK the outputs are
- * written and the state advanced; on any error the state is left
- * untouched and the outputs are set to zero (never NaN): the caller
- * applies its failsafe, and clears state->has_prev before the next call
- * (as after any period whose output was not applied). No heap, no global
- * state: reentrant. */
-ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *yv,
-                          const ql_reference *ref, const ql_params *params, ql_real dt,
-                          ql_adaptive_state *state, ql_output *out);
-
-/* A short English description of a status code. */
-const char *ql_status_string(ql_status status);
-
-/* Pack the named parameters into the layouts of symbolic.parameters. */
-void ql_pack_quadrotor_params(const ql_quadrotor_params *s, ql_real *p_quad);
-void ql_pack_controller_params(const ql_controller_params *s, ql_real *p_ctrl);
-void ql_pack_vehicle_params(const ql_vehicle_params *s, ql_real *p_veh);
-/* The closed loop's parameter vector p = [p_quad, p_veh, p_ctrl, ref]. */
-void ql_pack_closed_loop_params(const ql_params *params, const ql_vehicle_params *vehicle,
-                                const ql_reference *ref, ql_real *p);
-
-/* x_dot of the continuous-time closed loop (symbolic.closed_loop). */
-void ql_closed_loop(const ql_real *x, const ql_real *w, const ql_real *p, ql_real *x_dot);
-/* d x_dot / d x: the QL_CLOSED_LOOP_JACOBIAN_NNZ nonzeros in compressed
- * column storage; ql_closed_loop_jacobian_sparsity gives the pattern
- * (CasADi format: nrow, ncol, colind[ncol + 1], row[nnz]). */
-void ql_closed_loop_jacobian(const ql_real *x, const ql_real *w, const ql_real *p,
-                             ql_real *jac_nz);
-const int *ql_closed_loop_jacobian_sparsity(void);
-/* xp_dot of the plant alone (quadrotor, vehicle, planar position) under a
- * held wrench and disturbance w. */
-void ql_plant(const ql_real *xp, const ql_real *wrench, const ql_real *w,
-              const ql_real *p_quad, const ql_real *p_veh, ql_real *xp_dot);
-
-#ifdef __cplusplus
-} /* extern "C" */
-#endif
-
-#endif /* QUADLAND_H */
-""")
-    return "".join(out)
-
-
-def _source(config: CodegenConfig, d: Defaults) -> str:
-    l = d.l
-    m = config.math
-    out = [_banner(config, "quadland.c: readable C API of the adaptive backstepping control step.",
-                   "the layouts of symbolic.parameters"),
-           '#include "quadland.h"\n\n'
-           '#include <math.h>\n#include <stddef.h>\n#include <string.h>\n\n'
-           '#include "control_step.h"\n\n']
-    out.append("/* The parameter structs hold ql_real fields only and no padding, so that\n"
-               " * they are the vectors of symbolic.parameters that CasADi reads. */\n")
-    for sname, size in (("ql_quadrotor_params", "QL_P_QUAD_SIZE"),
-                        ("ql_controller_params", "QL_P_CTRL_SIZE"),
-                        ("ql_vehicle_params", "QL_P_VEH_SIZE")):
-        out.append(f"typedef char {sname}_is_packed"
-                   f"[sizeof({sname}) == {size} * sizeof(ql_real) ? 1 : -1];\n")
-    out.append("typedef char ql_params_is_packed"
-               "[sizeof(ql_params) == QL_PARAMS_SIZE * sizeof(ql_real) ? 1 : -1];\n")
-    out.append("typedef char ql_adaptive_state_is_packed[offsetof(ql_adaptive_state, has_prev)"
-               " == (4 * QL_RBF_NODES + 8) * sizeof(ql_real) ? 1 : -1];\n")
-    out.append("\n/* Defaults: quadland/scenarios/paper.toml. */\n")
-    out.append(_array(config, "ql_default_p_quad", d.p_quad))
-    out.append(_array(config, "ql_default_p_ctrl", d.p_ctrl))
-    out.append(_array(config, "ql_default_p_veh", d.p_veh))
-    out.append(_array(config, "ql_default_ref", d.ref))
-    for (sname, layout, _), short in zip(_param_structs(l), ("quadrotor", "controller", "vehicle")):
-        pack = [f"\nvoid ql_pack_{short}_params(const {sname} *s, ql_real *p)\n{{\n"]
-        unpack = [f"\nstatic void ql_unpack_{short}_params(const ql_real *p, {sname} *s)\n{{\n"]
-        for f in layout.fields:
-            a, _ = layout.offsets()[f.name]
-            pack.append(f"    memcpy(p + {a}, &s->{f.name}, {f.size} * sizeof(ql_real));\n")
-            unpack.append(f"    memcpy(&s->{f.name}, p + {a}, {f.size} * sizeof(ql_real));\n")
-        out.extend(pack + ["}\n"] + unpack + ["}\n"])
     lo, hi = d.rotor_limits
-    out.append(f"""
-void ql_params_init(ql_params *params)
-{{
-    ql_unpack_quadrotor_params(ql_default_p_quad, &params->quad);
-    ql_unpack_controller_params(ql_default_p_ctrl, &params->ctrl);
-    params->rotor_force_min = {config.literal(lo)};
-    params->rotor_force_max = {config.literal(hi)};
-    params->tilt_min = {config.literal(d.tilt_min)};
-    params->hold_compensation = {config.literal(d.hold)};
-}}
-
-void ql_vehicle_params_init(ql_vehicle_params *params)
-{{
-    ql_unpack_vehicle_params(ql_default_p_veh, params);
-}}
-
-void ql_adaptive_state_init(ql_adaptive_state *state)
-{{
-    memset(state, 0, sizeof *state);
-}}
-
-void ql_reference_init(ql_reference *ref)
-{{
-    memcpy(ref->e1d, ql_default_ref, 4 * sizeof(ql_real));
-    memcpy(ref->e1d_dot, ql_default_ref + 4, 4 * sizeof(ql_real));
-    memcpy(ref->e1d_ddot, ql_default_ref + 8, 4 * sizeof(ql_real));
-}}
-
-void ql_pack_closed_loop_params(const ql_params *params, const ql_vehicle_params *vehicle,
-                                const ql_reference *ref, ql_real *p)
-{{
-    ql_pack_quadrotor_params(&params->quad, p);
-    ql_pack_vehicle_params(vehicle, p + QL_P_QUAD_SIZE);
-    ql_pack_controller_params(&params->ctrl, p + QL_P_QUAD_SIZE + QL_P_VEH_SIZE);
-    memcpy(p + QL_P_QUAD_SIZE + QL_P_VEH_SIZE + QL_P_CTRL_SIZE, ref, 12 * sizeof(ql_real));
-}}
-
-const char *ql_status_string(ql_status status)
-{{
-    switch (status) {{
-""")
-    for name, _, doc in STATUS_CODES:
-        out.append(f'    case {name}: return "{doc}";\n')
-    out.append(f"""    }}
-    return "unknown status";
-}}
-
-/* 1 when all n values are finite. A sum of values is finite when all of
- * them are (a NaN or an infinity survives every addition, inf - inf is
- * NaN), so one addition per value decides the common case; only a sum that
- * overflowed from finite values needs the value-by-value test. Sixteen
- * independent sums keep the loop branch-free and let the compiler pair
- * them in vector instructions. */
-static int ql_all_finite(const ql_real *v, int n)
-{{
-    ql_real acc[16] = {{0}};
-    int i = 0;
-    for (; i + 16 <= n; i += 16) {{
-""" + "".join(f"        acc[{k}] += v[i + {k}];\n" for k in range(16)) + f"""    }}
-    for (; i < n; ++i) {{
-        acc[0] += v[i];
-    }}
-    for (i = 1; i < 16; ++i) {{
-        acc[0] += acc[i];
-    }}
-    if (isfinite(acc[0])) {{
-        return 1;
-    }}
-    for (i = 0; i < n; ++i) {{
-        if (!isfinite(v[i])) {{
-            return 0;
-        }}
-    }}
-    return 1;
-}}
-
-static void ql_output_zero(ql_output *out, ql_real tilt)
-{{
-    memset(out, 0, sizeof *out);
-    out->tilt = isfinite(tilt) ? tilt : 0;
-}}
-
-ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *yv,
-                          const ql_reference *ref, const ql_params *params, ql_real dt,
-                          ql_adaptive_state *state, ql_output *out)
-{{
-    /* in = [xq (10), yv (3), ref (12), dt]; res_v = [u, wrench, rotor,
-     * zeta_next, u_law, W_next (4 l)], so that each is checked in one pass. */
-    ql_real in[26], res_v[20 + 4 * QL_RBF_NODES], limits[2], hold, n_clipped, tilt;
-    ql_real no_prev[4] = {{0, 0, 0, 0}};
-    const ql_real *arg[control_step_SZ_ARG];
-    ql_real *res[control_step_SZ_RES];
-    casadi_int work_int[control_step_SZ_IW + 1];
-    ql_real work_real[control_step_SZ_W + 1];
-
-    if (!xq || !yv || !ref || !params || !state || !out) {{
-        if (out) ql_output_zero(out, 0);
-        return QL_ERR_NULL;
-    }}
-    in[0] = xq->z1;
-    memcpy(in + 1, xq->eta1, 3 * sizeof(ql_real));
-    memcpy(in + 4, xq->V1, 3 * sizeof(ql_real));
-    memcpy(in + 7, xq->Omega1, 3 * sizeof(ql_real));
-    in[10] = yv->z2;
-    in[11] = yv->psi2;
-    in[12] = yv->r2;
-    memcpy(in + 13, ref->e1d, 4 * sizeof(ql_real));
-    memcpy(in + 17, ref->e1d_dot, 4 * sizeof(ql_real));
-    memcpy(in + 21, ref->e1d_ddot, 4 * sizeof(ql_real));
-    in[25] = dt;
-    /* The parameters, limits and tilt_min in one pass over ql_params. The
-     * state is checked through the outputs: a NaN or an infinity in W_hat or
-     * zeta_hat reaches u through W_hat^T Psi (0 * inf is NaN) and W_next,
-     * zeta_next; one in u_prev reaches u when has_prev is set (u_prev is not
-     * read otherwise). */
-    if (!(ql_all_finite(in, 26) & ql_all_finite((const ql_real *)params, QL_PARAMS_SIZE))) {{
-        ql_output_zero(out, 0);
-        return QL_ERR_NONFINITE_INPUT;
-    }}
-    if (!(dt > 0) || !(params->rotor_force_min <= params->rotor_force_max)
-        || !(params->hold_compensation >= 0 && params->hold_compensation <= 1)) {{
-        ql_output_zero(out, 0);
-        return QL_ERR_INVALID;
-    }}
-    limits[0] = params->rotor_force_min;
-    limits[1] = params->rotor_force_max;
-    hold = state->has_prev ? params->hold_compensation : 0;
-
-    arg[0] = in;
-    arg[1] = in + 10;
-    arg[2] = in + 13;
-    arg[3] = &state->W_hat[0][0];
-    arg[4] = state->zeta_hat;
-    arg[5] = state->has_prev ? state->u_prev : no_prev;
-    arg[6] = (const ql_real *)&params->quad;
-    arg[7] = (const ql_real *)&params->ctrl;
-    arg[8] = limits;
-    arg[9] = &hold;
-    arg[10] = in + 25;
-    res[0] = res_v;
-    res[1] = res_v + 4;
-    res[2] = res_v + 8;
-    res[3] = res_v + 20;
-    res[4] = res_v + 12;
-    res[5] = res_v + 16;
-    res[6] = &n_clipped;
-    res[7] = &tilt;
-    control_step(arg, res, work_int, work_real, 0);
-
-    if (!({m("fabs")}(tilt) >= params->tilt_min)) {{
-        ql_output_zero(out, tilt);
-        return QL_ERR_TILT;
-    }}
-    if (!ql_all_finite(res_v, 20 + 4 * QL_RBF_NODES)) {{
-        ql_output_zero(out, tilt);
-        return ql_all_finite(&state->W_hat[0][0], 4 * QL_RBF_NODES + (state->has_prev ? 8 : 4))
-            ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
-    }}
-    memcpy(out->u, res_v, 4 * sizeof(ql_real));
-    memcpy(out->wrench, res_v + 4, 4 * sizeof(ql_real));
-    memcpy(out->rotor, res_v + 8, 4 * sizeof(ql_real));
-    memcpy(out->u_law, res_v + 16, 4 * sizeof(ql_real));
-    out->n_clipped = (int)n_clipped;
-    out->tilt = tilt;
-    memcpy(state->zeta_hat, res_v + 12, 4 * sizeof(ql_real));
-    memcpy(state->u_prev, res_v + 16, 4 * sizeof(ql_real));
-    memcpy(&state->W_hat[0][0], res_v + 20, 4 * QL_RBF_NODES * sizeof(ql_real));
-    state->has_prev = 1;
-    return QL_OK;
-}}
-""")
-    return "".join(out)
-
-
-_WRAPPED = {
-    "closed_loop": (("x", "w", "p"), ("x_dot",)),
-    "closed_loop_jacobian": (("x", "w", "p"), ("jac_nz",)),
-    "plant": (("xp", "wrench", "w", "p_quad", "p_veh"), ("xp_dot",)),
-}
-
-
-def _wrapper_source(config: CodegenConfig, file: str, names: tuple[str, ...]) -> str:
-    """Named-pointer wrappers of CasADi functions, one file per link unit."""
-    out = [_banner(config, f"{file}: C API of {', '.join(names)}.", "symbolic.codegen"),
-           '#include "quadland.h"\n\n']
-    out.extend(f'#include "{name}.h"\n' for name in names)
-    for name in names:
-        ins, outs = _WRAPPED[name]
-        params = (",\n" + " " * (len(name) + 9)).join(
-            [f"const ql_real *{a}" for a in ins] + [f"ql_real *{r}" for r in outs])
-        out.append(f"\nvoid ql_{name}({params})\n{{\n"
-                   f"    const ql_real *arg[{name}_SZ_ARG];\n"
-                   f"    ql_real *res[{name}_SZ_RES];\n"
-                   f"    casadi_int work_int[{name}_SZ_IW + 1];\n"
-                   f"    ql_real work_real[{name}_SZ_W + 1];\n")
-        out.extend(f"    arg[{i}] = {a};\n" for i, a in enumerate(ins))
-        out.extend(f"    res[{i}] = {r};\n" for i, r in enumerate(outs))
-        out.append(f"    {name}(arg, res, work_int, work_real, 0);\n}}\n")
-        if name == "closed_loop_jacobian":
-            out.append("\nconst int *ql_closed_loop_jacobian_sparsity(void)\n{\n"
-                       "    return closed_loop_jacobian_sparsity_out(0);\n}\n")
-    return "".join(out)
+    scalars = {"rotor_force_min": lo, "rotor_force_max": hi, "tilt_min": d.tilt_min,
+               "hold_compensation": d.hold}
+    params = params_layout(l)
+    return dict(
+        _common(config),
+        scenario=d.scenario,
+        aliases=config.prefix != "ql_",
+        sizes=_sizes(l, jac.nnz()),
+        status_codes=[dict(name=n.removeprefix("QL_"), value=v, doc=doc)
+                      for n, v, doc in STATUS_CODES],
+        structs=[_struct_context(s, structs, config.prefix) for s in structs],
+        vectors=_vector_structs(d, config),
+        params_scalars=[dict(name=f.name, value=config.literal(scalars[f.name]))
+                        for f in params.fields if f.layout is None],
+        p_offset={n: a for n, (a, _) in closed_loop_params(l).offsets().items()},
+        step=_step_context(l, config),
+        wrapped=_wrapped(l, config),
+    )
 
 
 def generate(defaults: Defaults, config: CodegenConfig = CodegenConfig()) -> dict[str, str]:
@@ -651,7 +530,7 @@ def generate(defaults: Defaults, config: CodegenConfig = CodegenConfig()) -> dic
     Parameters
     ----------
     defaults : Defaults
-        Numeric defaults of the parameter structs and of the example.
+        Numeric defaults of the parameter structs.
     config : CodegenConfig
         Emitter settings.
 
@@ -661,348 +540,111 @@ def generate(defaults: Defaults, config: CodegenConfig = CodegenConfig()) -> dic
         File name (relative to the build's folder) to its text.
     """
     if config.casadi_int != "int":
-        raise ValueError("the readable API exposes sparsity patterns as int: keep casadi_int = int")
+        raise ValueError("the readable API exposes sparsity patterns as int: "
+                         "keep casadi_int = int")
     files = {}
-    for name in CASADI_FUNCTIONS:
-        files.update(_emit_casadi(name, defaults.l, config))
-    files["quadland.h"] = _header(config, defaults)
-    files["quadland.c"] = _source(config, defaults)
-    files["quadland_model.c"] = _wrapper_source(config, "quadland_model.c",
-                                                ("closed_loop", "plant"))
-    files["quadland_jacobian.c"] = _wrapper_source(config, "quadland_jacobian.c",
-                                                   ("closed_loop_jacobian",))
+    for entry in FUNCTIONS:
+        files.update(_emit_casadi(entry, defaults.l, config))
+    ctx = _api_context(config, defaults)
+    files["quadland.h"] = _render("quadland.h.jinja", **ctx)
+    files["quadland.c"] = _render("quadland.c.jinja", **ctx)
+    for file in dict.fromkeys(w["file"] for w in ctx["wrapped"]):
+        files[file] = _render("wrappers.c.jinja", file=file,
+                              functions=[w for w in ctx["wrapped"] if w["file"] == file], **ctx)
     return files
 
 
-def _double_array(name: str, values) -> str:
-    vals = [repr(float(v)) for v in np.asarray(values, dtype=float).ravel()]
-    lines = ["    " + ", ".join(vals[i:i + 6]) + "," for i in range(0, len(vals), 6)]
-    return f"static const double {name}[{len(vals)}] = {{\n" + "\n".join(lines) + "\n};\n"
+# --- the pure-C example ----------------------------------------------------
+
+def example_columns(l: int) -> list[tuple[str, str]]:
+    """Columns of the example's CSV: ``(name, C expression)``, names from the layouts.
+
+    The names are the layouts' element names, the same as
+    ``quadland.simulate.TRAJECTORY``'s for the same signals; ``n_clipped``
+    and ``status`` are the example's own (ints, last). The expressions read
+    the closed-loop state ``x``, the step's output ``out`` and the vehicle's
+    parameters ``vehicle``.
+    """
+    x = closed_loop_state(l)
+    names = x.element_names()
+
+    def at(name):
+        return f"(double)x[{names.index(name)}]"
+
+    xq, xv, pos1, zeta = (x.slice(n) for n in ("xq", "xv", "pos1", "zeta_hat"))
+    # e1 = [z1 - z2, phi1 - phi2, theta1 - theta2, psi1 - psi2] with phi2 = theta2 = 0 (eq. 5, 7)
+    e1 = {"z_e": f"{at('z1')} - (double)vehicle->z2", "phi_e": at("phi1"), "theta_e": at("theta1"),
+          "psi_e": f"{at('psi1')} - {at('psi2')}"}
+    cols = [("t", "t")]
+    cols += [(n, e1[n]) for n in E1.element_names()]
+    cols += [(names[i], at(names[i])) for s in (xq, xv, pos1) for i in range(s.start, s.stop)]
+    for fname in ("u", "wrench", "rotor"):
+        f = output_layout(l)[fname]
+        cols += [(n, f"(double)out->{fname}[{i}]") for i, n in enumerate(f.element_names())]
+    cols += [(names[i], at(names[i])) for i in range(zeta.start, zeta.stop)]
+    cols += [("norm_W_hat", "sqrt(norm_W_hat)"), ("n_clipped", "out->n_clipped"),
+             ("status", "status")]
+    return cols
 
 
-def _example_scenario(d: Defaults) -> str:
-    banner = _banner(CodegenConfig(), "paper_scenario.h: the paper's scenario for the examples.",
-                     "quadland/scenarios/paper.toml")
-    return (banner + "#ifndef QL_PAPER_SCENARIO_H\n#define QL_PAPER_SCENARIO_H\n\n"
-            f"#define QL_EXAMPLE_DURATION {d.duration!r}              /* s */\n"
-            f"#define QL_EXAMPLE_OUTPUT_RATE_HZ {d.output_rate_hz!r}      /* Hz, CSV rows */\n"
-            f"#define QL_EXAMPLE_CONTROL_RATE_HZ {d.control_rate_hz!r}"
-            "     /* Hz, 0 = continuous */\n"
-            f"#define QL_EXAMPLE_DISTURBANCE_RATE_HZ {d.disturbance_rate_hz!r} /* Hz, hold */\n"
-            f"#define QL_EXAMPLE_FORCE_AMPLITUDE {d.force_amplitude!r}     /* N */\n"
-            f"#define QL_EXAMPLE_FORCE_FREQUENCY {d.force_frequency!r}     /* rad/s */\n"
-            f"#define QL_EXAMPLE_MOMENT_AMPLITUDE {d.moment_amplitude!r}   /* N m */\n"
-            f"#define QL_EXAMPLE_MOMENT_FREQUENCY {d.moment_frequency!r}   /* rad/s */\n\n"
-            "/* Disturbance bias [d_F (N), d_M (N m)]; the random part is left out. */\n"
-            + _double_array("ql_example_bias", [*d.force_bias, *d.moment_bias])
-            + "\n/* Initial closed-loop state (layout of QL_CLOSED_LOOP_NX). */\n"
-            + _double_array("ql_example_x0", d.x0)
-            + "\n/* Vehicle deck altitude z2 (m). */\n"
-            f"#define QL_EXAMPLE_Z2 {float(d.p_veh[-1])!r}\n\n#endif /* QL_PAPER_SCENARIO_H */\n")
-
-
-_FLY_C = r"""#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "paper_scenario.h"
-#include "quadland.h"
-
-/* Usage: fly [RATE_HZ [DURATION_S]] > trajectory.csv
- *
- * RATE_HZ > 0: sampled data. ql_control_step runs every 1/RATE_HZ s and its
- * wrench is held on the plant (ql_plant), integrated by one classical RK4
- * step per control period. RATE_HZ = 0: the continuous-time closed loop
- * (ql_closed_loop), one RK4 step per output interval. The disturbance is
- * bias + amplitude sin(frequency t), held over each disturbance sample;
- * the paper's random part is left out so that runs are reproducible
- * everywhere. The rates must divide each other (see paper_scenario.h). */
-
-#define NX QL_CLOSED_LOOP_NX
-#define NL (4 * QL_RBF_NODES)
-
-static void disturbance(double t, ql_real *w)
-{
-    int i;
-    for (i = 0; i < 3; ++i) {
-        w[i] = (ql_real)(ql_example_bias[i]
-                         + QL_EXAMPLE_FORCE_AMPLITUDE * sin(QL_EXAMPLE_FORCE_FREQUENCY * t));
-        w[3 + i] = (ql_real)(ql_example_bias[3 + i]
-                             + QL_EXAMPLE_MOMENT_AMPLITUDE * sin(QL_EXAMPLE_MOMENT_FREQUENCY * t));
-    }
-}
-
-/* Plant state xp = [xq (10), xv (6), x1, y1] from the closed-loop state. */
-static void plant_from_closed_loop(const ql_real *x, ql_real *xp)
-{
-    memcpy(xp, x, 16 * sizeof(ql_real));
-    xp[16] = x[NX - 2];
-    xp[17] = x[NX - 1];
-}
-
-static void measure(const ql_real *x, ql_quadrotor_state *xq, ql_vehicle_state *yv)
-{
-    xq->z1 = x[0];
-    memcpy(xq->eta1, x + 1, 3 * sizeof(ql_real));
-    memcpy(xq->V1, x + 4, 3 * sizeof(ql_real));
-    memcpy(xq->Omega1, x + 7, 3 * sizeof(ql_real));
-    yv->z2 = (ql_real)QL_EXAMPLE_Z2;
-    yv->psi2 = x[12];
-    yv->r2 = x[15];
-}
-
-static void rk4_plant(ql_real *xp, const ql_real *wrench, const ql_real *w, const ql_real *pq,
-                      const ql_real *pv, ql_real h)
-{
-    ql_real k1[QL_PLANT_NX], k2[QL_PLANT_NX], k3[QL_PLANT_NX], k4[QL_PLANT_NX], y[QL_PLANT_NX];
-    int i;
-    ql_plant(xp, wrench, w, pq, pv, k1);
-    for (i = 0; i < QL_PLANT_NX; ++i) y[i] = xp[i] + h / 2 * k1[i];
-    ql_plant(y, wrench, w, pq, pv, k2);
-    for (i = 0; i < QL_PLANT_NX; ++i) y[i] = xp[i] + h / 2 * k2[i];
-    ql_plant(y, wrench, w, pq, pv, k3);
-    for (i = 0; i < QL_PLANT_NX; ++i) y[i] = xp[i] + h * k3[i];
-    ql_plant(y, wrench, w, pq, pv, k4);
-    for (i = 0; i < QL_PLANT_NX; ++i) xp[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-}
-
-static void rk4_closed_loop(ql_real *x, const ql_real *w, const ql_real *p, ql_real h)
-{
-    static ql_real k1[NX], k2[NX], k3[NX], k4[NX], y[NX];
-    int i;
-    ql_closed_loop(x, w, p, k1);
-    for (i = 0; i < NX; ++i) y[i] = x[i] + h / 2 * k1[i];
-    ql_closed_loop(y, w, p, k2);
-    for (i = 0; i < NX; ++i) y[i] = x[i] + h / 2 * k2[i];
-    ql_closed_loop(y, w, p, k3);
-    for (i = 0; i < NX; ++i) y[i] = x[i] + h * k3[i];
-    ql_closed_loop(y, w, p, k4);
-    for (i = 0; i < NX; ++i) x[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-}
-
-static void write_header(void)
-{
-    int i;
-    printf("t,z_e,phi_e,theta_e,psi_e,z1,phi1,theta1,psi1,u1,v1,w1,p1,q1,r1,"
-           "x2,y2,psi2,u2,v2,r2,x1,y1");
-    for (i = 1; i <= 4; ++i) printf(",u_%d", i);
-    printf(",F_total,M_x,M_y,M_z");
-    for (i = 1; i <= 4; ++i) printf(",F_%d", i);
-    for (i = 1; i <= 4; ++i) printf(",zeta_hat_%d", i);
-    printf(",norm_W_hat,n_clipped,status\n");
-}
-
-static void write_row(double t, const ql_real *x, const ql_output *out, int status)
-{
-    double norm = 0;
-    int i;
-    for (i = 16; i < 16 + NL; ++i) norm += (double)x[i] * (double)x[i];
-    printf("%.17g,%.17g,%.17g,%.17g,%.17g", t, (double)x[0] - QL_EXAMPLE_Z2, (double)x[1],
-           (double)x[2], (double)x[3] - (double)x[12]);
-    for (i = 0; i < 16; ++i) printf(",%.17g", (double)x[i]);
-    printf(",%.17g,%.17g", (double)x[NX - 2], (double)x[NX - 1]);
-    for (i = 0; i < 4; ++i) printf(",%.17g", (double)out->u[i]);
-    for (i = 0; i < 4; ++i) printf(",%.17g", (double)out->wrench[i]);
-    for (i = 0; i < 4; ++i) printf(",%.17g", (double)out->rotor[i]);
-    for (i = 0; i < 4; ++i) printf(",%.17g", (double)x[16 + NL + i]);
-    printf(",%.17g,%d,%d\n", sqrt(norm), out->n_clipped, status);
-}
-
-/* Steps of the grid per period of a rate; 0 when it does not divide. */
-static long steps_per(double grid_hz, double rate_hz)
-{
-    long n = lround(grid_hz / rate_hz);
-    return (n > 0 && fabs((double)n * rate_hz - grid_hz) < 1e-9 * grid_hz) ? n : 0;
-}
-
-int main(int argc, char **argv)
-{
-    static ql_real x[NX], p[QL_CLOSED_LOOP_NP];
-    ql_real xp[QL_PLANT_NX], pq[QL_P_QUAD_SIZE], pv[QL_P_VEH_SIZE], w[6];
-    ql_real wrench[4] = {0, 0, 0, 0};
-    static ql_params params;
-    static ql_adaptive_state state, probe;
-    ql_vehicle_params vehicle;
-    ql_reference ref;
-    ql_quadrotor_state xq;
-    ql_vehicle_state yv;
-    ql_output out;
-    double rate = argc > 1 ? atof(argv[1]) : QL_EXAMPLE_CONTROL_RATE_HZ;
-    double duration = argc > 2 ? atof(argv[2]) : QL_EXAMPLE_DURATION;
-    double grid_hz = rate > 0 ? rate : fmax(QL_EXAMPLE_OUTPUT_RATE_HZ,
-                                            QL_EXAMPLE_DISTURBANCE_RATE_HZ);
-    long n_out = steps_per(grid_hz, QL_EXAMPLE_OUTPUT_RATE_HZ);
-    long n_dist = steps_per(grid_hz, QL_EXAMPLE_DISTURBANCE_RATE_HZ);
-    long k, n_steps = lround(duration * grid_hz);
-    ql_real h = (ql_real)(1.0 / grid_hz);
-    int i, status = QL_OK;
-
-    if (rate < 0 || duration < 0 || n_out == 0 || n_dist == 0) {
-        fprintf(stderr, "fly: RATE_HZ must be 0 or a multiple of %g Hz and %g Hz\n",
-                QL_EXAMPLE_OUTPUT_RATE_HZ, QL_EXAMPLE_DISTURBANCE_RATE_HZ);
-        return 2;
-    }
-    ql_params_init(&params);
-    ql_vehicle_params_init(&vehicle);
-    ql_reference_init(&ref);
-    ql_adaptive_state_init(&state);
-    ql_pack_quadrotor_params(&params.quad, pq);
-    ql_pack_vehicle_params(&vehicle, pv);
-    ql_pack_closed_loop_params(&params, &vehicle, &ref, p);
-    for (i = 0; i < NX; ++i) x[i] = (ql_real)ql_example_x0[i];
-    plant_from_closed_loop(x, xp);
-    memset(&out, 0, sizeof out);
-    write_header();
-    for (k = 0; k <= n_steps; ++k) {
-        double t = (double)k / grid_hz;
-        if (k % n_dist == 0) disturbance((double)(k / n_dist) / QL_EXAMPLE_DISTURBANCE_RATE_HZ, w);
-        if (rate > 0) {
-            if (k < n_steps) {
-                measure(x, &xq, &yv);
-                status = ql_control_step(&xq, &yv, &ref, &params, h, &state, &out);
-                if (status != QL_OK) {
-                    fprintf(stderr, "fly: t = %g s: %s\n", t, ql_status_string(status));
-                    return 1;
-                }
-                memcpy(wrench, out.wrench, sizeof wrench);
-            }
-            memcpy(x + 16, &state.W_hat[0][0], NL * sizeof(ql_real));
-            memcpy(x + 16 + NL, state.zeta_hat, 4 * sizeof(ql_real));
-        } else {
-            /* The law's outputs at this state, for the CSV only. */
-            memcpy(&probe.W_hat[0][0], x + 16, NL * sizeof(ql_real));
-            memcpy(probe.zeta_hat, x + 16 + NL, 4 * sizeof(ql_real));
-            probe.has_prev = 0;
-            measure(x, &xq, &yv);
-            status = ql_control_step(&xq, &yv, &ref, &params, h, &probe, &out);
-        }
-        if (k % n_out == 0) write_row(t, x, &out, status);
-        if (k == n_steps) break;
-        if (rate > 0) {
-            rk4_plant(xp, wrench, w, pq, pv, h);
-            memcpy(x, xp, 16 * sizeof(ql_real));
-            x[NX - 2] = xp[16];
-            x[NX - 1] = xp[17];
-        } else {
-            rk4_closed_loop(x, w, p, h);
-        }
-    }
-    return 0;
-}
-"""
-
-_BENCH_C = r"""#define _POSIX_C_SOURCE 199309L
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <time.h>
-
-#include "paper_scenario.h"
-#include "quadland.h"
-
-/* Usage: bench N
- *
- * Runs N control steps (l = QL_RBF_NODES) from the paper's initial state,
- * each on slightly different measurements, and prints the time per step. */
-
-int main(int argc, char **argv)
-{
-    static ql_params params;
-    static ql_adaptive_state state;
-    ql_reference ref;
-    ql_quadrotor_state xq;
-    ql_vehicle_state yv;
-    ql_output out;
-    struct timespec t0, t1;
-    long i, n = argc > 1 ? strtol(argv[1], NULL, 10) : 100000;
-    double seconds, check = 0;
-    int bad = 0;
-
-    if (n < 0) {
-        fprintf(stderr, "usage: bench N\n");
-        return 2;
-    }
-    ql_params_init(&params);
-    ql_reference_init(&ref);
-    ql_adaptive_state_init(&state);
-    xq.z1 = (ql_real)ql_example_x0[0];
-    for (i = 0; i < 3; ++i) {
-        xq.eta1[i] = (ql_real)ql_example_x0[1 + i];
-        xq.V1[i] = (ql_real)ql_example_x0[4 + i];
-        xq.Omega1[i] = (ql_real)ql_example_x0[7 + i];
-    }
-    yv.z2 = (ql_real)QL_EXAMPLE_Z2;
-    yv.psi2 = (ql_real)ql_example_x0[12];
-    yv.r2 = (ql_real)ql_example_x0[15];
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    for (i = 0; i < n; ++i) {
-        xq.z1 = (ql_real)(ql_example_x0[0] + 1e-6 * (double)(i & 1023));
-        bad += ql_control_step(&xq, &yv, &ref, &params, (ql_real)0.002, &state, &out) != QL_OK;
-        check += (double)out.wrench[0];
-    }
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-    printf("control_step (%s, l = %d): %ld steps, %.1f ns/step (checksum %.6g, %d errors)\n",
-           sizeof(ql_real) == sizeof(double) ? "double" : "float", QL_RBF_NODES, n,
-           n > 0 ? 1e9 * seconds / (double)n : 0.0, check, bad);
-    return bad != 0;
-}
-"""
-
-_MAKEFILE = """\
-CC ?= cc
-CFLAGS ?= -std=c99 -pedantic -Wall -Wextra -Werror -O2
-LDLIBS = -lm
-BUILD = build
-STEP = control_step.c quadland.c
-MODEL = closed_loop.c plant.c quadland_model.c
-
-.PHONY: all clean run
-all: $(BUILD)/fly $(BUILD)/bench $(BUILD)/fly_float $(BUILD)/bench_float
-
-$(BUILD):
-\tmkdir -p $(BUILD)
-
-# Double precision: sources in ../, single precision: ../float/.
-$(BUILD)/fly: fly.c paper_scenario.h $(addprefix ../,$(STEP) $(MODEL)) | $(BUILD)
-\t$(CC) $(CFLAGS) -I.. -o $@ fly.c $(addprefix ../,$(STEP) $(MODEL)) $(LDLIBS)
-
-$(BUILD)/bench: bench.c paper_scenario.h $(addprefix ../,$(STEP)) | $(BUILD)
-\t$(CC) $(CFLAGS) -I.. -o $@ bench.c $(addprefix ../,$(STEP)) $(LDLIBS)
-
-$(BUILD)/fly_float: fly.c paper_scenario.h $(addprefix ../float/,$(STEP) $(MODEL)) | $(BUILD)
-\t$(CC) $(CFLAGS) -I../float -o $@ fly.c $(addprefix ../float/,$(STEP) $(MODEL)) $(LDLIBS)
-
-$(BUILD)/bench_float: bench.c paper_scenario.h $(addprefix ../float/,$(STEP)) | $(BUILD)
-\t$(CC) $(CFLAGS) -I../float -o $@ bench.c $(addprefix ../float/,$(STEP)) $(LDLIBS)
-
-run: $(BUILD)/fly $(BUILD)/bench
-\t$(BUILD)/fly > $(BUILD)/trajectory.csv
-\t$(BUILD)/bench 100000
-
-clean:
-\trm -rf $(BUILD)
-"""
+def _example_context(d: Defaults) -> dict:
+    l = d.l
+    x = closed_loop_state(l)
+    cols = example_columns(l)
+    n_real = len(cols) - 2
+    xq0 = x.slice("xq").start
+    xv_names = VEHICLE_STATE.element_names()
+    vehicle = []
+    for f in MEASUREMENT.fields:
+        if f.name in xv_names:
+            i = x.slice("xv").start + xv_names.index(f.name)
+            vehicle.append(dict(name=f.name, expr=f"x[{i}]"))
+        else:
+            vehicle.append(dict(name=f.name, expr=f"vehicle->{f.name}"))
+    offsets = QUAD_STATE.offsets()
+    return dict(
+        _common(None),
+        scenario=d.scenario,
+        columns=[n for n, _ in cols],
+        real_columns=[dict(name=n, expr=e) for n, e in cols[:n_real]],
+        int_columns=[dict(name=n, expr=e) for n, e in cols[n_real:]],
+        quad=[dict(name=f.name, offset=xq0 + offsets[f.name][0], size=f.size)
+              for f in QUAD_STATE.fields],
+        z1=xq0 + offsets["z1"][0],
+        vehicle=vehicle,
+        plant=[dict(name=f.name, xp=PLANT_STATE.slice(f.name).start, x=x.slice(f.name).start,
+                    size=f.size) for f in PLANT_STATE.fields],
+        W_hat=x.slice("W_hat").start, zeta_hat=x.slice("zeta_hat").start,
+        d=d,
+        bias=[repr(float(v)) for v in (*d.force_bias, *d.moment_bias)],
+        x0_rows=[[repr(float(v)) for v in d.x0[i:i + 6]] for i in range(0, len(d.x0), 6)],
+        x0_size=len(d.x0),
+        step_sources=c_sources(),
+        model_sources=c_sources(("closed_loop", "plant")),
+    )
 
 
 def generate_example(defaults: Defaults) -> dict[str, str]:
-    """Text of the pure-C example: flight, benchmark and Makefile.
+    """Text of the pure-C example: flight, benchmark, scenario header and Makefile.
 
-    The sources are precision-independent (``ql_real``); the Makefile builds
-    them against both the double (``../``) and the float (``../float/``)
-    files.
+    The sources are precision-independent (``ql_real``; the float header
+    spells its names ``ql_`` too when it is the only build included); the
+    Makefile builds them against both the double (``../``) and the float
+    (``../float/``) files.
     """
-    config = CodegenConfig()
-    mk_banner = "".join("# " + line.lstrip(" /*").rstrip() + "\n"
-                        for line in _banner(config, "Makefile of the pure-C example.",
-                                            "symbolic.codegen").splitlines()
-                        if line.strip(" /*"))
-    return {
-        "example/paper_scenario.h": _example_scenario(defaults),
-        "example/fly.c": _banner(config, "fly.c: the paper's scenario flown in pure C.",
-                                 "symbolic.codegen") + _FLY_C,
-        "example/bench.c": _banner(config, "bench.c: time per control step.",
-                                   "symbolic.codegen") + _BENCH_C,
-        "example/Makefile": mk_banner + _MAKEFILE,
-    }
+    ctx = _example_context(defaults)
+    return {f"example/{name}": _render(f"example/{name}.jinja", **ctx)
+            for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}
+
+
+def generate_tree(defaults: Defaults) -> dict[str, str]:
+    """Every file of ``generated/`` by relative path (POSIX separators).
+
+    The double build at the top, the float build in ``float/``, the example
+    in ``example/`` and a ``.gitignore`` of the example's build outputs.
+    """
+    files = dict(generate(defaults, CodegenConfig("double")))
+    files.update({f"float/{k}": v for k, v in generate(defaults, CodegenConfig("float")).items()})
+    files.update(generate_example(defaults))
+    files[".gitignore"] = _render("gitignore.jinja", **_common(None))
+    return files

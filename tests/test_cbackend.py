@@ -12,13 +12,14 @@ import numpy as np
 import pytest
 
 import quadland
-from quadland import build, cbackend
-from quadland.codegen import GENERATED_DIR
+from quadland import build, cbackend, codegen
 from quadland.exceptions import CompilerNotFoundError
 from quadland.model import disturbance_samples, model_values
-from symbolic.closed_loop import (closed_loop_function, closed_loop_params, closed_loop_state,
-                                  plant_function)
-from symbolic.codegen import STATUS_CODES, closed_loop_jacobian_function
+from quadland.simulate import TRAJECTORY
+from symbolic.closed_loop import (PLANT_STATE, closed_loop_function,
+                                  closed_loop_jacobian_function, closed_loop_params,
+                                  closed_loop_state, plant_function)
+from symbolic.codegen import STATUS_CODES
 from symbolic.control_step import control_step_function
 
 try:
@@ -392,7 +393,7 @@ def example(tmp_path_factory):
     if shutil.which("make") is None:
         pytest.skip("no make")
     root = tmp_path_factory.mktemp("generated")
-    shutil.copytree(GENERATED_DIR, root, dirs_exist_ok=True,
+    shutil.copytree(codegen.generated_dir(), root, dirs_exist_ok=True,
                     ignore=shutil.ignore_patterns("build", "closed_loop_jacobian.c"))
     cc = build.find_compiler()
     subprocess.run(["make", "-s", "-j2", f"CC={cc}", "build/fly"], cwd=root / "example",
@@ -407,6 +408,10 @@ def _fly(fly, rate, duration):
     header = lines[0].split(",")
     data = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
     return {h: data[:, i] for i, h in enumerate(header)}
+
+
+#: The plant's states by name, as both CSVs name them (the layouts' element names).
+PLANT_NAMES = PLANT_STATE["xq"].element_names() + PLANT_STATE["xv"].element_names()
 
 
 def _rk4_closed_loop(scenario, h, n):
@@ -438,10 +443,9 @@ def test_pure_c_continuous_flight_matches_rk4(example):
     c = _fly(example, 0.0, 1.0)
     sc = quadland.load_scenario("paper", ["simulation.duration=1.0", "disturbance.noise=false"])
     X = _rk4_closed_loop(sc, 0.01, 100)
-    names = ("z1", "phi1", "theta1", "psi1", "u1", "v1", "w1", "p1", "q1", "r1",
-             "x2", "y2", "psi2", "u2", "v2", "r2")
-    for i, name in enumerate(names):
-        assert np.max(np.abs(c[name] - X[:, i])) <= 1e-9, name
+    x_names = closed_loop_state(L).element_names()
+    for name in PLANT_NAMES:
+        assert np.max(np.abs(c[name] - X[:, x_names.index(name)])) <= 1e-9, name
     py = quadland.simulate(sc)
     for name in ("z_e", "phi_e", "theta_e", "psi_e"):
         assert np.max(np.abs(c[name] - py[name])) <= 1e-5, name
@@ -453,16 +457,32 @@ def test_pure_c_flight_matches_python(example, rate):
     py = _sim([f"controller.rate_hz={rate}", "simulation.duration=1.0",
                "disturbance.noise=false"])
     np.testing.assert_allclose(c["t"], py["t"], atol=1e-12)
-    names = ("z1", "phi1", "theta1", "psi1", "u1", "v1", "w1", "p1", "q1", "r1",
-             "x2", "y2", "psi2", "u2", "v2", "r2")
-    for i, name in enumerate(names):
-        assert np.max(np.abs(c[name] - py.states[:, i])) <= 1e-9, name
-    for name in ("z_e", "phi_e", "theta_e", "psi_e", "x1", "y1", "norm_W_hat", "zeta_hat_1"):
-        assert np.max(np.abs(c[name] - py[name])) <= 1e-9, name
-    for name in ("F_total", "M_x", "M_y", "M_z", "F_1", "F_4", "u_1"):
-        assert np.max(np.abs(c[name] - py[name])) <= 1e-9 * max(1.0, np.max(np.abs(py[name]))), \
-            name
+    x_names = closed_loop_state(L).element_names()
+    for name in PLANT_NAMES:
+        assert np.max(np.abs(c[name] - py.states[:, x_names.index(name)])) <= 1e-9, name
+    shared = [n for n in c if n in TRAJECTORY.element_names() and n != "t"]
+    assert len(shared) == len(c) - len(("t", "u1", "v1", "w1", "p1", "q1", "r1", "n_clipped",
+                                        "status"))
+    for name in shared:
+        scale = max(1.0, np.max(np.abs(py[name])))
+        assert np.max(np.abs(c[name] - py[name])) <= 1e-9 * scale, name
     assert not c["status"].any()
+
+
+def test_sources_are_generated_not_read(tmp_path, monkeypatch):
+    """One-way flow: the runtime's C comes from symbolic/, equal to generated/ for the paper."""
+    monkeypatch.setattr(codegen, "_package_parent", lambda: tmp_path)   # no checkout
+    cbackend._sources.cache_clear()
+    try:
+        committed = codegen.generated_files()
+        assert cbackend.sources(L) == {k: v for k, v in committed.items()
+                                       if "/" not in k and k != ".gitignore"}
+        assert cbackend.sources(L, "float") == {k.removeprefix("float/"): v
+                                                for k, v in committed.items()
+                                                if k.startswith("float/")}
+        assert "#define QL_RBF_NODES 7 " in cbackend.sources(7)["quadland.h"]
+    finally:
+        cbackend._sources.cache_clear()
 
 
 def test_no_compiler_is_one_clear_error(monkeypatch):

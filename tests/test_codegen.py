@@ -1,18 +1,25 @@
-"""generated/ is up to date, reproducible and compiles alone under strict flags."""
+"""generated/ is up to date, reproducible and compiles alone under strict flags;
+the registry, the struct layouts, the prefixes and the scenario switch."""
 
 from __future__ import annotations
 
+import ctypes
 import re
 import subprocess
 
 import casadi as ca
 import pytest
 
-from quadland import codegen
+from quadland import cbackend, codegen
 from quadland.build import find_compiler
 from quadland.cli import main as cli_main
 from quadland.exceptions import CompilerNotFoundError
-from symbolic.codegen import CodegenConfig
+from quadland.simulate import TRAJECTORY
+from symbolic.c_api import api_structs
+from symbolic.closed_loop import closed_loop_state
+from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, example_columns, generate
+
+GENERATED_DIR = codegen.generated_dir()
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +28,7 @@ def files():
 
 
 def test_generated_is_up_to_date(files):
-    text = codegen.diff(codegen.GENERATED_DIR, files)
+    text = codegen.diff(GENERATED_DIR, files)
     assert not text, ("generated/ is out of date with symbolic/: run `quadland codegen`\n"
                       + text[:4000])
 
@@ -70,7 +77,7 @@ def test_float_build_has_no_double_constants_or_math(files):
             assert not call.findall(body), name
             bad = [m for m in literal.findall(body) if not m.endswith("f")]
             assert not bad, (name, bad[:5])
-    assert "typedef float ql_real;" in files["float/quadland.h"]
+    assert "typedef float qlf_real;" in files["float/quadland.h"]
     assert "typedef double ql_real;" in files["quadland.h"]
 
 
@@ -92,7 +99,7 @@ def _compiler():
 @pytest.mark.parametrize("folder", ["", "float/"])
 def test_every_file_compiles_alone(folder):
     cc = _compiler()
-    root = codegen.GENERATED_DIR / folder
+    root = GENERATED_DIR / folder
     extra = ["-Wdouble-promotion", "-Wfloat-conversion"] if folder else []
     for src in sorted(root.glob("*.c")):
         proc = subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror",
@@ -102,10 +109,262 @@ def test_every_file_compiles_alone(folder):
 
 
 def test_no_heap_and_no_casadi_runtime():
-    for src in codegen.GENERATED_DIR.rglob("*.[ch]"):
+    for src in GENERATED_DIR.rglob("*.[ch]"):
         text = src.read_text()
         assert not re.search(r"\b(malloc|calloc|realloc|free)\s*\(", text), src
         includes = set(re.findall(r"#include [<\"]([^>\"]+)[>\"]", text))
         assert includes <= {"math.h", "stddef.h", "string.h", "stdio.h", "stdlib.h", "time.h",
                             "quadland.h", "control_step.h", "closed_loop.h", "plant.h",
-                            "closed_loop_jacobian.h", "paper_scenario.h"}, (src, includes)
+                            "closed_loop_jacobian.h", "scenario.h"}, (src, includes)
+
+
+# --- the registry -----------------------------------------------------------
+
+def test_one_registry_gives_files_symbols_and_wrappers(files):
+    for entry in FUNCTIONS:
+        fn = entry.function(100)
+        assert fn.name() == entry.name
+        for folder, prefix in (("", "ql_"), ("float/", "qlf_")):
+            assert f"int {prefix}casadi_{entry.name}(" in files[f"{folder}{entry.name}.h"]
+            assert entry.origin(100) in files[f"{folder}{entry.name}.c"][:800]
+        if entry.wrapper is None:
+            continue
+        ins, outs = entry.arguments(100)
+        assert (ins, outs) == (tuple(fn.name_in()), tuple(fn.name_out()))
+        args = ", ".join([f"const ql_real \\*{a}" for a in ins]
+                         + [f"ql_real \\*{r}" for r in outs])
+        proto = re.sub(r"\s+", " ", files["quadland.h"])
+        assert re.search(rf"void ql_{entry.name}\({args}\);", proto), entry.name
+        assert f"void ql_{entry.name}(" in files[entry.wrapper]
+    assert c_sources() == ("control_step.c", "quadland.c")
+    assert c_sources(("plant",)) == ("control_step.c", "plant.c", "quadland.c",
+                                     "quadland_model.c")
+
+
+def test_example_columns_are_the_trajectory_names(files):
+    names = [n for n, _ in example_columns(100)]
+    quad = {"u1", "v1", "w1", "p1", "q1", "r1"}          # body rates: the C example only
+    assert set(names) - set(TRAJECTORY.element_names()) == quad | {"n_clipped", "status"}
+    assert names[-2:] == ["n_clipped", "status"]
+    assert len(set(names)) == len(names)
+    header = "".join(re.findall(r'printf\("([^"%\\]*)"\);', files["example/fly.c"]))
+    assert header == ",".join(names)
+
+
+# --- checkout, scenarios ---------------------------------------------------------
+
+def test_checkout_is_detected():
+    assert codegen.checkout_root() == GENERATED_DIR.parent
+
+
+def test_outside_a_checkout_codegen_needs_out(tmp_path, monkeypatch, capsys):
+    """An installed quadland: site-packages holds quadland/ and symbolic/ only."""
+    site = tmp_path / "site-packages"
+    (site / "quadland").mkdir(parents=True)
+    (site / "symbolic").mkdir()
+    monkeypatch.setattr(codegen, "_package_parent", lambda: site)
+    assert codegen.checkout_root() is None
+    for argv in (["codegen"], ["codegen", "--check"]):
+        assert cli_main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("quadland: error: ") and "--out" in err[0]
+    assert sorted(p.name for p in site.rglob("*")) == ["quadland", "symbolic"]
+    out = tmp_path / "out"
+    assert cli_main(["codegen", "--out", str(out)]) == 0
+    assert (out / "quadland.h").is_file() and (out / "example" / "fly.c").is_file()
+    (site / "pyproject.toml").write_text("")
+    (site / "generated").mkdir()
+    assert codegen.checkout_root() == site
+
+
+def test_generated_holds_the_paper_scenario_only(capsys):
+    before = {p: p.stat().st_mtime_ns for p in GENERATED_DIR.rglob("*") if p.is_file()}
+    assert cli_main(["codegen", "--set", "rbf.nodes=7"]) == 2
+    assert "--out" in capsys.readouterr().err
+    assert before == {p: p.stat().st_mtime_ns for p in GENERATED_DIR.rglob("*") if p.is_file()}
+
+
+def test_codegen_for_a_scenario_file(tmp_path, capsys):
+    paper = codegen.load_scenario("paper")
+    text = open(paper.source).read().replace('name = "paper"', 'name = "mine"')
+    text = re.sub(r"(?m)^nodes = \d+", "nodes = 7", text)
+    (tmp_path / "mine.toml").write_text(text)
+    out = tmp_path / "gen"
+    argv = ["codegen", "--scenario", str(tmp_path / "mine.toml"), "--set",
+            "simulation.duration=2.0", "--out", str(out)]
+    assert cli_main(argv) == 0
+    assert cli_main(argv + ["--check"]) == 0
+    h = (out / "quadland.h").read_text()
+    assert re.search(r"#define QL_RBF_NODES 7 ", h)
+    assert "scenario mine --set simulation.duration=2.0" in h
+    assert str(tmp_path) not in "".join(p.read_text() for p in out.rglob("*") if p.is_file())
+    assert "#define QL_EXAMPLE_DURATION 2.0 " in (out / "example" / "scenario.h").read_text()
+    assert cli_main(["codegen", "--scenario", "nope", "--out", str(out)]) == 2
+    assert "unknown scenario" in capsys.readouterr().err
+
+
+def test_stale_generated_files_are_removed(tmp_path, files):
+    codegen.write(tmp_path, files)
+    old = tmp_path / "example" / "paper_scenario.h"
+    old.write_text("/* Do not edit: regenerate with `quadland codegen`. */\n")
+    mine = tmp_path / "notes.txt"
+    mine.write_text("mine\n")
+    assert "--- a/example/paper_scenario.h" in codegen.diff(tmp_path, files)
+    assert "example/paper_scenario.h" in codegen.write(tmp_path, files)
+    assert not old.exists() and mine.exists()
+    assert codegen.diff(tmp_path, files) == ""
+
+
+# --- structs, prefixes ---------------------------------------------------------------
+
+def _run_c(tmp_path, source, includes, sources=(), name="prog"):
+    cc = _compiler()
+    (tmp_path / f"{name}.c").write_text(source)
+    exe = tmp_path / name
+    proc = subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O0",
+                           *[f"-I{i}" for i in includes], "-o", str(exe),
+                           str(tmp_path / f"{name}.c"), *map(str, sources), "-lm"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    return subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_structs_match_the_layouts_and_the_ctypes_mirrors(tmp_path, precision):
+    """sizeof and offsetof of every member, from the compiler, against the layouts."""
+    config = CodegenConfig(precision)
+    ql = config.prefix
+    lines = []
+    for s in api_structs(100):
+        lines.append(f'    printf("{s.name} . %lu\\n", (unsigned long)sizeof({ql}{s.name}));')
+        lines.extend(f'    printf("{s.name} {f.name} %lu\\n", '
+                     f'(unsigned long)offsetof({ql}{s.name}, {f.name}));'
+                     for f in s.layout.fields)
+    prog = ("#include <stddef.h>\n#include <stdio.h>\n#include \"quadland.h\"\n\n"
+            "int main(void)\n{\n" + "\n".join(lines) + "\n    return 0;\n}\n")
+    folder = GENERATED_DIR / ("float" if config.is_float else "")
+    out = _run_c(tmp_path, prog, [folder])
+    got = {(a, b): int(c) for a, b, c in (line.split() for line in out.splitlines())}
+    real = ctypes.c_double if precision == "double" else ctypes.c_float
+    size = ctypes.sizeof(real)
+    for s in api_structs(100):
+        mirror = cbackend.ctypes_struct(s.layout, real)
+        assert ctypes.sizeof(mirror) == got[s.name, "."], s.name
+        offsets, n_int = s.layout.offsets(), 0
+        for f in s.layout.fields:
+            if f.ctype == "real":
+                want = offsets[f.name][0] * size
+            else:
+                want = s.layout.size * size + n_int * ctypes.sizeof(ctypes.c_int)
+                n_int += 1
+            assert got[s.name, f.name] == want == getattr(mirror, f.name).offset, \
+                (s.name, f.name)
+        if n_int == 0:
+            assert got[s.name, "."] == s.layout.size * size, s.name
+
+
+_BOTH = r"""#include <stdio.h>
+
+#include "double/quadland.h"
+#include "float/quadland.h"
+
+int main(void)
+{
+    static ql_params p;
+    static qlf_params pf;
+    static ql_adaptive_state s;
+    static qlf_adaptive_state sf;
+    ql_quadrotor_state xq = {1.5, {0.5, 0.5, 0.5}, {1.0, 1.0, 0.1}, {0.1, 0.1, 0.1}};
+    qlf_quadrotor_state xqf = {1.5f, {0.5f, 0.5f, 0.5f}, {1.0f, 1.0f, 0.1f}, {0.1f, 0.1f, 0.1f}};
+    ql_vehicle_state yv = {0.0, 0.25, 0.0};
+    qlf_vehicle_state yvf = {0.0f, 0.25f, 0.0f};
+    ql_reference r;
+    qlf_reference rf;
+    ql_output o;
+    qlf_output of;
+    ql_status a;
+    qlf_status b;
+    ql_params_init(&p);
+    qlf_params_init(&pf);
+    ql_reference_init(&r);
+    qlf_reference_init(&rf);
+    ql_adaptive_state_init(&s);
+    qlf_adaptive_state_init(&sf);
+    a = ql_control_step(&xq, &yv, &r, &p, 0.002, &s, &o);
+    b = qlf_control_step(&xqf, &yvf, &rf, &pf, 0.002f, &sf, &of);
+    printf("%d %d %.17g %.17g %d %d\n", (int)a, (int)b, o.rotor[0], (double)of.rotor[0],
+           QL_RBF_NODES, QLF_RBF_NODES);
+    return a != QL_OK || b != QLF_OK;
+}
+"""
+
+
+def test_double_and_float_builds_link_into_one_program(tmp_path):
+    import shutil
+
+    for name, folder in (("double", GENERATED_DIR), ("float", GENERATED_DIR / "float")):
+        (tmp_path / name).mkdir()
+        for f in ("control_step.c", "control_step.h", "quadland.c", "quadland.h"):
+            shutil.copy(folder / f, tmp_path / name / f)
+    units = [tmp_path / p / f for p in ("double", "float")
+             for f in ("control_step.c", "quadland.c")]
+    a, b, rd, rf, ld, lf = _run_c(tmp_path, _BOTH, [tmp_path], units).split()
+    assert (a, b, ld, lf) == ("0", "0", "100", "100")
+    assert float(rf) == pytest.approx(float(rd), rel=1e-4)
+    if shutil.which("nm") is None:
+        return
+    cc = _compiler()
+    symbols = []
+    for unit in units:
+        obj = unit.with_suffix(".o")
+        subprocess.run([cc, "-std=c99", "-O0", "-c", str(unit), "-o", str(obj)], check=True)
+        nm = subprocess.run(["nm", "-g", "--defined-only", str(obj)], capture_output=True,
+                            text=True, check=True).stdout
+        prefix = "qlf_" if "float" in unit.parts else "ql_"
+        names = [line.split()[-1] for line in nm.splitlines() if line.strip()]
+        assert names and all(n.startswith(prefix) for n in names), (unit, names)
+        symbols += names
+    assert len(symbols) == len(set(symbols))
+
+
+def test_float_header_spells_ql_names_alone_and_refuses_a_collision(tmp_path):
+    cc = _compiler()
+
+    def syntax(text, *includes):
+        (tmp_path / "t.c").write_text(text)
+        return subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror",
+                               "-fsyntax-only", *[f"-I{i}" for i in includes],
+                               str(tmp_path / "t.c")], capture_output=True, text=True)
+
+    example = GENERATED_DIR / "example"
+    for src in ("fly.c", "bench.c"):
+        proc = syntax((example / src).read_text(), GENERATED_DIR / "float", example)
+        assert proc.returncode == 0, proc.stderr
+    header = (GENERATED_DIR / "float" / "quadland.h").read_text()
+    body = header.partition("#if !defined(QL_QUADLAND_H)")[0]
+    declared = set(re.findall(r"\b(?:qlf|QLF)_\w+", body))
+    declared -= {"QLF_QUADLAND_H", "QLF_NO_QL_NAMES"}
+    aliased = set(re.findall(r"#define (?:ql|QL)_\w+ ((?:qlf|QLF)_\w+)", header))
+    assert declared == aliased
+    g = GENERATED_DIR
+    proc = syntax(f'#include "{g}/float/quadland.h"\n#include "{g}/quadland.h"\n'
+                  "int main(void) { return 0; }\n")
+    assert proc.returncode != 0 and "include this (double) header first" in proc.stderr
+
+
+def test_any_node_count_compiles_alone(tmp_path):
+    cc = _compiler()
+    d = codegen.default_values("paper", ["rbf.nodes=3"])
+    for config in (CodegenConfig(), CodegenConfig("float")):
+        files = generate(d, config)
+        assert "#define " + config.macro_prefix + "RBF_NODES 3 " in files["quadland.h"]
+        folder = tmp_path / config.precision
+        folder.mkdir()
+        for name, text in files.items():
+            (folder / name).write_text(text)
+        for name in ("quadland.c", "control_step.c", "quadland_model.c"):
+            proc = subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror",
+                                   "-fsyntax-only", f"-I{folder}", str(folder / name)],
+                                  capture_output=True, text=True)
+            assert proc.returncode == 0, proc.stderr
+    assert closed_loop_state(3).size == 16 + 4 * 3 + 4 + 2
