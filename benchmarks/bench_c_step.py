@@ -1,8 +1,9 @@
 """Cost and accuracy of the generated C control step (docs/performance.md).
 
 Run with ``python benchmarks/bench_c_step.py [--steps N]``. Builds the
-pure-C example from a copy of ``generated/`` with the system's ``cc`` at
--O2 and reports:
+pure-C example (``example/bench.c`` against the double and the float
+build) from freshly generated sources (the paper scenario's, the same text
+as ``generated/``) with the system's ``cc`` at -O2 and reports:
 
 * time per control step (l = 100) of ``bench``, double and float, the
   best of several runs;
@@ -29,8 +30,7 @@ from pathlib import Path
 import numpy as np
 
 import quadland
-from quadland import cbackend
-from quadland.codegen import GENERATED_DIR
+from quadland import cbackend, codegen
 from quadland.model import model_values
 from symbolic.control_step import control_step_function
 
@@ -38,8 +38,7 @@ ANGLES = ("phi_e", "theta_e", "psi_e")
 
 
 def _build(root: Path) -> Path:
-    shutil.copytree(GENERATED_DIR, root, dirs_exist_ok=True,
-                    ignore=shutil.ignore_patterns("build"))
+    codegen.write(root, codegen.generated_files())
     subprocess.run(["make", "-s", "-j2", "build/bench", "build/bench_float"],
                    cwd=root / "example", check=True)
     return root / "example" / "build"
