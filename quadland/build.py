@@ -23,7 +23,8 @@ import casadi as ca
 
 from quadland.exceptions import CompileError, CompilerNotFoundError
 
-__all__ = ["STRICT_CFLAGS", "RUNTIME_CFLAGS", "SHARED_CFLAGS", "find_compiler", "have_compiler", "cache_dir",
+__all__ = ["STRICT_CFLAGS", "RUNTIME_CFLAGS", "SHARED_CFLAGS", "find_compiler", "have_compiler",
+           "compiler_version", "cache_dir",
            "build_library"]
 
 #: Flags every generated flight file compiles under, alone.
@@ -69,6 +70,15 @@ def _compiler_identity(cc: str) -> str:
     except (OSError, subprocess.SubprocessError) as exc:
         raise CompilerNotFoundError(f"{cc}: cannot run the C compiler: {exc}") from None
     return f"{cc}\n{proc.stdout}"
+
+
+def compiler_version() -> str | None:
+    """First line of the C compiler's ``--version``, or None without one."""
+    try:
+        cc = find_compiler()
+        return _compiler_identity(cc).splitlines()[1].strip() or Path(cc).name
+    except (CompilerNotFoundError, IndexError):
+        return None
 
 
 def cache_dir() -> Path:

@@ -1,23 +1,24 @@
 """The ``quadland`` command line: parses arguments and calls the library.
 
 Only this module knows flags and file names. Known errors
-(``QuadlandError``) are reported as one line ``quadland: error: ...`` with
-exit status 2; a library message that starts with one of its parameter
-names (``"at: must be ..."``) is shown with the flag that sets it
-(``"--at: must be ..."``). Exit status 1 means a check failed
-(``codegen --check`` differences, ``margins`` below the requirement), 130
-an interrupt. Nothing is written before the inputs are validated.
+(``QuadlandError``) are reported as one line ``quadland: error: ...``; a
+library message that starts with one of its parameter names (``"at: must
+be ..."``) is shown with the flag that sets it (``"--at: must be ..."``).
+
+Exit status: 0 success; 1 a check failed (``codegen --check`` differences,
+``margins`` below the requirement); 2 bad input (scenario, override, flag,
+output folder, budget), nothing written; 3 the simulated flight failed (the
+trajectory up to the failure is written, marked failed); 130 interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
-from quadland.exceptions import QuadlandError
+from quadland.exceptions import QuadlandError, SimulationError
 
 __all__ = ["main", "build_parser"]
 
@@ -103,27 +104,27 @@ def _run_margins(args) -> int:
     from threadpoolctl import threadpool_limits
 
     from quadland.margins import Requirement, format_report, margin_report
-    from quadland.output import figure_png, output_folder, write_files
+    from quadland.output import figure_png, output_folder
+    from quadland.run import strict_json
     from quadland.scenario import load_scenario
 
     start = time.perf_counter()
     requirement = Requirement(args.gain_margin_db, args.phase_margin_deg)
     scenario = load_scenario(args.scenario, args.overrides)
-    folder = output_folder(args.out, scenario.name, "margins")
     # OpenBLAS threads on matrices of a few hundred rows cost more than they
     # bring: 3-5x slower on a busy 2-core machine.
-    with threadpool_limits(1):
+    with output_folder(args.out, scenario.name, "margins") as folder, threadpool_limits(1):
         report = margin_report(scenario, args.at, requirement)
         figures = {}
         if not args.no_plots:
             from quadland.plots import margin_figures
 
             figures = {name: figure_png(fig) for name, fig in margin_figures(report).items()}
-    data = dict(report.to_dict(), runtime_s=time.perf_counter() - start)
-    files = {"margins.json": (json.dumps(data, indent=2) + "\n").encode("utf-8"), **figures}
-    write_files(folder, files)
+        data = dict(report.to_dict(), runtime_s=time.perf_counter() - start)
+        folder.write({"margins.json": strict_json(data),
+                      "scenario.toml": scenario.to_toml().encode("utf-8"), **figures})
     print(format_report(report), end="")
-    print(f"quadland: wrote {folder} ({time.perf_counter() - start:.1f} s)")
+    print(f"quadland: wrote {folder.path} ({time.perf_counter() - start:.1f} s)")
     if report.passed:
         return 0
     failed = [f"{label}{'' if section.stable else ' (closed loop unstable)'}: "
@@ -149,6 +150,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.handler(args)
+    except SimulationError as exc:
+        print(f"quadland: error: {_message(exc)}", file=sys.stderr)
+        return 3
     except QuadlandError as exc:
         print(f"quadland: error: {_message(exc)}", file=sys.stderr)
         return 2

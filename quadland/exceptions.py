@@ -14,7 +14,20 @@ class ScenarioError(QuadlandError, ValueError):
 
 
 class SimulationError(QuadlandError, RuntimeError):
-    """The simulated loop left the model's domain (singular attitude, NaN)."""
+    """The simulated flight failed: singular attitude, a non-finite state or output.
+
+    Attributes
+    ----------
+    time : float or None
+        s, when it failed.
+    partial : SimulationResult or None
+        The trajectory up to the failure, when one was recorded.
+    """
+
+    def __init__(self, message: str, time: float | None = None, partial=None):
+        super().__init__(message)
+        self.time = time
+        self.partial = partial
 
 
 class SingularAttitudeError(QuadlandError, ArithmeticError):
@@ -33,9 +46,13 @@ class CodegenError(QuadlandError, ValueError):
     """Generated code cannot be written where asked (no checkout, wrong scenario)."""
 
 
+class OutputError(QuadlandError, OSError):
+    """An output folder cannot be used (not a folder, in use, not writable)."""
+
+
 class OperatingPointError(QuadlandError, ArithmeticError):
     """No operating point could be found or used for a linearization."""
 
 
 class MarginsError(QuadlandError, ValueError):
-    """A margins request is malformed (time, requirement or output folder)."""
+    """A margins request is malformed (operating time or requirement)."""

@@ -40,6 +40,13 @@ def _peak(t, x):
 
 
 def summarize(result: SimulationResult) -> dict:
+    """Figures of merit of a run (see :func:`_summarize`); a diverged run's huge
+    values give infinities, reported as such, not as warnings."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _summarize(result)
+
+
+def _summarize(result: SimulationResult) -> dict:
     """Settling times, peak and final errors, peak inputs and estimation error.
 
     The reference is subtracted from ``e1`` before the settling band is

@@ -1,33 +1,201 @@
-"""Writing run outputs: a checked folder, whole files, deterministic PNGs.
+"""Writing run outputs: a claimed folder written whole, deterministic PNGs.
 
 Both ``quadland simulate`` and ``quadland margins`` go through the same
-three steps: :func:`output_folder` names and checks the target before any
-work, :func:`write_files` creates it and writes the whole set of files in
-one call, and :func:`figure_png` turns a figure into the bytes written.
-Handing over the set in one call leaves room to make it transactional
-(all files or none) without changing a caller.
+steps. :func:`output_folder` names the target and returns an
+:class:`OutputFolder`; claiming it (``with folder:``) checks it before any
+work: it must be a new folder, an empty one or an earlier quadland output,
+its parent must be writable, and no other run may be writing there (a lock
+beside it). :meth:`OutputFolder.write` then writes the whole set of files
+into a hidden folder beside the target and swaps it in, so that the set
+appears together or not at all and replaces any earlier set whole; a run
+interrupted at any point leaves either the old set or the new one.
+:func:`figure_png` turns a figure into the bytes written.
 """
 
 from __future__ import annotations
 
+import ctypes
 import datetime
+import errno
+import fcntl
 import io
 import os
+import shutil
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
-from quadland.exceptions import QuadlandError
+from quadland.exceptions import OutputError
 
-__all__ = ["PNG_DPI", "output_folder", "write_files", "figure_png", "write_bytes_atomic",
-           "write_text_atomic"]
+__all__ = ["PNG_DPI", "MARKER", "OutputFolder", "output_folder", "write_files", "figure_png",
+           "write_bytes_atomic", "write_text_atomic"]
 
 #: Resolution of the figures written, dots per inch.
 PNG_DPI = 110
+#: File that marks a folder as a quadland output (so that it may be replaced).
+MARKER = ".quadland-output"
 
 
-def output_folder(out: str | os.PathLike | None, name: str, kind: str = "") -> Path:
-    """The folder a run will write to, checked before any work.
+class OutputFolder:
+    """A run's output folder: claimed before any work, written whole at the end.
+
+    Use as a context manager around the run (``with folder: ...``), or call
+    :meth:`claim` and :meth:`release`. Errors are :class:`OutputError`
+    with messages starting with ``"out: "``.
+
+    Parameters
+    ----------
+    path : path-like
+        The target folder.
+    """
+
+    def __init__(self, path: str | os.PathLike):
+        self.path = Path(path).absolute()
+        self._lock_fd: int | None = None
+
+    def __repr__(self) -> str:
+        return f"OutputFolder({str(self.path)!r})"
+
+    def __fspath__(self) -> str:
+        return str(self.path)
+
+    @property
+    def _lock_path(self) -> Path:
+        return self.path.parent / f".{self.path.name}.lock"
+
+    def claim(self) -> "OutputFolder":
+        """Check the target and lock it against other runs; nothing is written yet."""
+        if self._lock_fd is not None:
+            return self
+        path = self.path
+        if path.exists() and not path.is_dir():
+            raise OutputError(f"out: {path} exists and is not a folder")
+        if path.is_dir() and not _replaceable(path):
+            raise OutputError(f"out: {path} holds files that are not a quadland output; "
+                              "choose a new or empty folder")
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self._lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise OutputError(f"out: cannot write to {path.parent}: "
+                              f"{exc.strerror or exc}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise OutputError(f"out: {path} is in use by another quadland run") from None
+        self._lock_fd = fd
+        for stale in path.parent.glob(f".{path.name}.tmp-*"):
+            shutil.rmtree(stale, ignore_errors=True)      # left by a killed run
+        return self
+
+    def release(self) -> None:
+        """Drop the lock (and its file)."""
+        if self._lock_fd is None:
+            return
+        try:
+            self._lock_path.unlink(missing_ok=True)
+        finally:
+            os.close(self._lock_fd)
+            self._lock_fd = None
+
+    def __enter__(self) -> "OutputFolder":
+        return self.claim()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def write(self, files: Mapping[str, bytes]) -> Path:
+        """Write ``files`` as the folder's whole content, replacing any earlier set.
+
+        Parameters
+        ----------
+        files : mapping of str to bytes
+            File name (no folder part) to content.
+
+        Returns
+        -------
+        Path
+            The folder.
+        """
+        for name in files:
+            if Path(name).name != name or name in ("", ".", "..", MARKER):
+                raise ValueError(f"files: {name!r} is not a plain file name")
+        claimed_here = self._lock_fd is None
+        self.claim()
+        tmp = None
+        try:
+            tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.tmp-", dir=self.path.parent))
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o777 & ~umask)
+            for name, data in {**files, MARKER: b"quadland output folder\n"}.items():
+                _write_synced(tmp / name, data, 0o666 & ~umask)
+            _fsync_dir(tmp)
+            _swap_in(tmp, self.path)
+            tmp = None
+            _fsync_dir(self.path.parent)
+        except OSError as exc:
+            raise OutputError(f"out: cannot write {self.path}: {exc.strerror or exc}") from None
+        finally:
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
+            if claimed_here:
+                self.release()
+        return self.path
+
+
+def _replaceable(path: Path) -> bool:
+    """An empty folder or an earlier quadland output."""
+    try:
+        return (path / MARKER).is_file() or not any(path.iterdir())
+    except OSError:
+        return False
+
+
+def _write_synced(path: Path, data: bytes, mode: int) -> None:
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
+    with os.fdopen(fd, "wb") as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
+def _fsync_dir(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+_RENAME_EXCHANGE = 2
+_AT_FDCWD = -100
+
+
+def _swap_in(new: Path, target: Path) -> None:
+    """Put the folder ``new`` at ``target``: one atomic rename where possible."""
+    if not target.exists():
+        os.rename(new, target)
+        return
+    renameat2 = getattr(ctypes.CDLL(None, use_errno=True), "renameat2", None)
+    if renameat2 is not None:
+        if renameat2(_AT_FDCWD, os.fsencode(new), _AT_FDCWD, os.fsencode(target),
+                     _RENAME_EXCHANGE) == 0:
+            shutil.rmtree(new, ignore_errors=True)      # now holds the old set
+            return
+        if ctypes.get_errno() not in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
+            raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+    # No atomic exchange (another OS or file system): two renames, the old set
+    # kept aside until the new one is in place.
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
+    os.rename(target, old / "set")
+    os.rename(new, target)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def output_folder(out: str | os.PathLike | None, name: str, kind: str = "") -> OutputFolder:
+    """The folder a run will write to (not claimed yet).
 
     Parameters
     ----------
@@ -42,73 +210,32 @@ def output_folder(out: str | os.PathLike | None, name: str, kind: str = "") -> P
 
     Returns
     -------
-    Path
-        The folder, not created yet (see :func:`write_files`).
+    OutputFolder
 
     Raises
     ------
-    QuadlandError
+    OutputError
         ``out`` exists and is not a folder. The message starts with
         ``"out: "``, the parameter's name.
     """
     if out is not None:
         path = Path(out)
-        _check_folder(path)
-        return path
+        if path.exists() and not path.is_dir():
+            raise OutputError(f"out: {path} exists and is not a folder")
+        return OutputFolder(path)
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     stem = "-".join(s for s in (name, kind, stamp) if s)
     path, n = Path.cwd() / stem, 1
     while path.exists():
         n += 1
         path = Path.cwd() / f"{stem}-{n}"
-    return path
+    return OutputFolder(path)
 
 
-def _check_folder(path: Path) -> None:
-    if path.exists() and not path.is_dir():
-        raise QuadlandError(f"out: {path} exists and is not a folder")
-
-
-def write_files(folder: str | os.PathLike, files: Mapping[str, bytes]) -> Path:
-    """Create ``folder`` and write every file of ``files`` into it.
-
-    Parameters
-    ----------
-    folder : path-like
-        Usually the result of :func:`output_folder`; created with its
-        parents if missing.
-    files : mapping of str to bytes
-        File name (no folder part) to content.
-
-    Returns
-    -------
-    Path
-        The folder.
-
-    Raises
-    ------
-    QuadlandError
-        The folder cannot be created (message starting with ``"out: "``).
-    ValueError
-        A name of ``files`` is not a plain file name.
-
-    Notes
-    -----
-    Each file is written whole or not at all (:func:`write_bytes_atomic`);
-    files of the folder that are not in ``files`` are left alone.
-    """
-    folder = Path(folder)
-    for name in files:
-        if Path(name).name != name or name in ("", ".", ".."):
-            raise ValueError(f"files: {name!r} is not a plain file name")
-    _check_folder(folder)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise QuadlandError(f"out: cannot create {folder}: {exc.strerror}") from None
-    for name, data in files.items():
-        write_bytes_atomic(folder / name, data)
-    return folder
+def write_files(folder: str | os.PathLike | OutputFolder, files: Mapping[str, bytes]) -> Path:
+    """Write ``files`` as the whole content of ``folder`` (see :meth:`OutputFolder.write`)."""
+    target = folder if isinstance(folder, OutputFolder) else OutputFolder(folder)
+    return target.write(files)
 
 
 def figure_png(fig) -> bytes:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import platform
 from pathlib import Path
 
@@ -10,37 +11,84 @@ import casadi as ca
 import numpy as np
 
 from quadland.metrics import summarize
-from quadland.output import figure_png, output_folder, write_files
+from quadland.exceptions import SimulationError
+from quadland.output import figure_png, output_folder
 from quadland.scenario import Scenario, load_scenario
-from quadland.simulate import SimulationResult, simulate
+from quadland.simulate import SimulationResult, columns_sidecar, simulate
+from quadland.simulate import check_plan as simulation_plan_check
 
-__all__ = ["run_simulation", "provenance"]
+__all__ = ["run_simulation", "provenance", "versions", "strict_json", "DEPENDENCIES"]
+
+
+#: Distributions whose versions shape a result, recorded in every output.
+DEPENDENCIES = ("quadland", "casadi", "numpy", "scipy", "control", "slycot", "matplotlib",
+                "Jinja2", "threadpoolctl")
+
+
+def versions() -> dict:
+    """Versions of Python, the C compiler and every distribution in :data:`DEPENDENCIES`."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {"python": platform.python_version(), "platform": platform.platform()}
+    for name in DEPENDENCIES:
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = None
+    out["casadi"] = ca.__version__
+    from quadland.build import compiler_version
+
+    out["c_compiler"] = compiler_version()
+    return out
 
 
 def provenance(scenario: Scenario) -> dict:
     """What made an output: scenario, overrides, seed and software versions."""
-    from quadland import __version__
-
     return {
         "scenario_name": scenario.name,
         "scenario_source": scenario.source,
         "overrides": list(scenario.overrides),
         "seed": scenario.data["simulation"]["seed"],
-        "versions": {"quadland": __version__, "casadi": ca.__version__,
-                     "numpy": np.__version__, "python": platform.python_version()},
+        "versions": versions(),
         "scenario": scenario.to_dict(),
     }
 
 
+def strict_json(data) -> bytes:
+    """``data`` as strict JSON (RFC 8259): every NaN or infinity becomes ``null``.
+
+    ``null`` in a summary means "undefined": a settling time never reached,
+    a ratio of zero by zero, a margin without a crossing (unbounded).
+    """
+    return (json.dumps(_finite(data), indent=2, allow_nan=False) + "\n").encode("utf-8")
+
+
+def _finite(x):
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_finite(v) for v in x]
+    if isinstance(x, float | np.floating):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
 def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
                    out: Path | None = None, plots: bool = True) -> Path:
-    """Simulate a scenario and write its outputs into a folder.
+    """Simulate a scenario and write its outputs into a folder, whole.
 
-    Writes ``trajectory.csv``, ``summary.json`` and, with ``plots``, the
-    figures of :data:`quadland.plots.SIMULATION_FIGURES`. The scenario and
-    ``out`` are checked before the simulation, and the folder is created
-    only after it has finished; each file is written through a temporary
-    file and a rename (:func:`quadland.output.write_files`).
+    Writes ``trajectory.csv``, ``columns.json`` (each column's unit),
+    ``summary.json``, ``scenario.toml`` (the resolved scenario: ``quadland
+    simulate --scenario OUT/scenario.toml`` repeats the run bit for bit)
+    and, with ``plots``, the figures of
+    :data:`quadland.plots.SIMULATION_FIGURES`. The scenario, its resource
+    plan and ``out`` are checked, and ``out`` is claimed, before the
+    simulation; the files appear together after it
+    (:class:`quadland.output.OutputFolder`).
 
     Parameters
     ----------
@@ -58,19 +106,33 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
     -------
     Path
         The output folder.
+
+    Raises
+    ------
+    SimulationError
+        The flight failed. The trajectory up to the failure is written
+        first, with ``"status": "failed"`` in ``summary.json``.
     """
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario, overrides)
-    folder = output_folder(out, sc.name)
-    result = simulate(sc)
-    return write_files(folder, _render(result, plots))
+    simulation_plan_check(sc)
+    with output_folder(out, sc.name) as folder:
+        try:
+            result = simulate(sc)
+        except SimulationError as exc:
+            if exc.partial is not None:
+                folder.write(_render(exc.partial, plots, failure=str(exc)))
+            raise
+        return folder.write(_render(result, plots))
 
 
-def _render(result: SimulationResult, plots: bool) -> dict[str, bytes]:
-    summary = {**summarize(result), **provenance(result.scenario)}
+def _render(result: SimulationResult, plots: bool, failure: str | None = None) -> dict:
+    status = {"status": "failed", "failure": failure} if failure else {"status": "ok"}
+    summary = {**status, **summarize(result), **provenance(result.scenario)}
     files = {"trajectory.csv": result.to_csv().encode("utf-8"),
-             "summary.json": (json.dumps(summary, indent=2) + "\n").encode("utf-8")}
-    if plots:
+             "columns.json": strict_json(columns_sidecar()),
+             "summary.json": strict_json(summary),
+             "scenario.toml": result.scenario.to_toml().encode("utf-8")}
+    if plots and len(result["t"]) > 1:
         from quadland.plots import simulation_figures
-
         files.update({name: figure_png(fig) for name, fig in simulation_figures(result).items()})
     return files

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import json
 import math
+import numbers
+import re
 import tomllib
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
@@ -27,30 +30,57 @@ SCENARIO_DIR = Path(__file__).parent / "scenarios"
 
 @dataclasses.dataclass(frozen=True)
 class Field:
-    """One key of a scenario section."""
+    """One key of a scenario section.
 
-    kind: type                      # float, int, bool or str
+    Attributes
+    ----------
+    kind : type
+        ``float``, ``int``, ``bool`` or ``str``.
+    unit, doc : str
+    length : int, optional
+        None for a scalar, n for a list of n values.
+    lo, hi : float, optional
+        The physical range of every value: ``lo <= v <= hi`` (``lo < v``
+        with ``lo_open``).
+    lo_open : bool
+    zero_ok : bool
+        0 is also accepted (a switch, e.g. ``controller.rate_hz = 0``:
+        continuous time).
+    check : callable, optional
+        Extra test of the whole value; returns a complaint or None.
+    choices : tuple of str, optional
+    """
+
+    kind: type
     unit: str
     doc: str
-    length: int | None = None       # None: a scalar; n: a list of n values
-    check: Callable[[Any], str | None] | None = None   # returns a complaint or None
+    length: int | None = None
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    zero_ok: bool = False
+    check: Callable[[Any], str | None] | None = None
     choices: tuple[str, ...] | None = None
 
+    def range_text(self) -> str:
+        """The accepted range, e.g. ``(0, 1e+04] kg`` (empty without one)."""
+        if self.choices:
+            return "one of " + ", ".join(self.choices)
+        if self.lo is None and self.hi is None:
+            return ""
+        left = "(" if self.lo_open else "["
+        text = f"{left}{self.lo:g}, {self.hi:g}]"
+        unit = f" {self.unit}" if self.unit not in ("-", "") else ""
+        return ("0 or " if self.zero_ok else "") + text + unit
 
-def _positive(v):
-    return None if np.all(np.asarray(v) > 0) else "must be > 0"
-
-
-def _nonnegative(v):
-    return None if np.all(np.asarray(v) >= 0) else "must be >= 0"
-
-
-def _unit_interval(v):
-    return None if 0 <= v <= 1 else "must be in [0, 1]"
-
-
-def _at_least_one(v):
-    return None if v >= 1 else "must be >= 1"
+    def complaint(self, v) -> str | None:
+        """Why the scalar ``v`` is out of range, or None."""
+        if self.zero_ok and v == 0:
+            return None
+        low_bad = self.lo is not None and (v <= self.lo if self.lo_open else v < self.lo)
+        if low_bad or (self.hi is not None and v > self.hi):
+            return f"must be in {self.range_text()}"
+        return None
 
 
 def _tilt_below_90(v):
@@ -58,88 +88,112 @@ def _tilt_below_90(v):
         "|roll| and |pitch| must be below 90 deg (the thrust map is singular there)"
 
 
+_NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+
+
+def _safe_name(v):
+    return None if _NAME_RE.fullmatch(v) else \
+        "must be 1 to 64 letters, digits, '.', '_' or '-', starting with a letter or digit " \
+        "(it names the output folder)"
+
+
+def _one_line(v):
+    return None if len(v) <= 200 and "\n" not in v and "\r" not in v else \
+        "must be one line of at most 200 characters"
+
+
+#: Largest rate, in Hz, of any clock of a run (output, control, disturbance).
+MAX_RATE_HZ = 1e5
+#: Largest duration of a run, s.
+MAX_DURATION_S = 1e5
+
 F, I, B, S = float, int, bool, str
-#: The scenario schema: section -> key -> Field.
+_POS = dict(lo=0.0, lo_open=True)
+#: The scenario schema: section -> key -> Field. Every number has a physical range.
 SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     "scenario": {
-        "name": Field(S, "-", "short name, used for the output folder"),
-        "description": Field(S, "-", "one line describing the scenario"),
+        "name": Field(S, "-", "short name, used for the output folder", check=_safe_name),
+        "description": Field(S, "-", "one line describing the scenario", check=_one_line),
     },
     "simulation": {
-        "duration": Field(F, "s", "simulated time", check=_positive),
-        "output_rate_hz": Field(F, "Hz", "rows per second of trajectory.csv", check=_positive),
+        "duration": Field(F, "s", "simulated time", lo=1e-3, hi=MAX_DURATION_S),
+        "output_rate_hz": Field(F, "Hz", "rows per second of trajectory.csv", lo=1e-3,
+                                hi=MAX_RATE_HZ),
         "integrator": Field(S, "-", "CasADi integrator plugin", choices=("cvodes", "rk")),
-        "reltol": Field(F, "-", "cvodes relative tolerance", check=_positive),
-        "abstol": Field(F, "-", "cvodes absolute tolerance", check=_positive),
-        "rk_steps_per_interval": Field(I, "-", "RK4 steps per hold interval (rk)",
-                                       check=_at_least_one),
-        "seed": Field(I, "-", "seed of every random draw", check=_nonnegative),
+        "reltol": Field(F, "-", "cvodes relative tolerance", lo=1e-14, hi=1e-2),
+        "abstol": Field(F, "-", "cvodes absolute tolerance", lo=1e-14, hi=1e-2),
+        "rk_steps_per_interval": Field(I, "-", "RK4 steps per hold interval (rk)", lo=1,
+                                       hi=1000),
+        "seed": Field(I, "-", "seed of every random draw", lo=0, hi=2 ** 63 - 1),
     },
     "quadrotor": {
-        "mass": Field(F, "kg", "m1", check=_positive),
-        "inertia": Field(F, "kg m^2", "Ix, Iy, Iz", 3, _positive),
-        "drag_translational": Field(F, "N s/m", "Kt1..Kt3", 3, _nonnegative),
-        "drag_rotational": Field(F, "N m s/rad", "Kr1..Kr3", 3, _nonnegative),
-        "gravity": Field(F, "m/s^2", "g_s", check=_positive),
-        "arm_length": Field(F, "m", "d, centre to rotor axis", check=_positive),
-        "rotor_drag_factor": Field(F, "m", "c, yaw moment per unit thrust", check=_positive),
-        "rotor_force_min": Field(F, "N", "lower rotor-force limit (C step)"),
-        "rotor_force_max": Field(F, "N", "upper rotor-force limit (C step)", check=_positive),
+        "mass": Field(F, "kg", "m1", lo=1e-3, hi=1e4),
+        "inertia": Field(F, "kg m^2", "Ix, Iy, Iz", 3, lo=1e-6, hi=1e4),
+        "drag_translational": Field(F, "N s/m", "Kt1..Kt3", 3, lo=0.0, hi=1e3),
+        "drag_rotational": Field(F, "N m s/rad", "Kr1..Kr3", 3, lo=0.0, hi=1e3),
+        "gravity": Field(F, "m/s^2", "g_s", lo=0.1, hi=100.0),
+        "arm_length": Field(F, "m", "d, centre to rotor axis", lo=1e-3, hi=10.0),
+        "rotor_drag_factor": Field(F, "m", "c, yaw moment per unit thrust", lo=1e-4, hi=10.0),
+        "rotor_force_min": Field(F, "N", "lower rotor-force limit (C step)", lo=-1e6, hi=1e6),
+        "rotor_force_max": Field(F, "N", "upper rotor-force limit (C step)", lo=1e-3, hi=1e6),
     },
     "vehicle": {
-        "m11": Field(F, "kg", "surge mass", check=_positive),
-        "m22": Field(F, "kg", "sway mass", check=_positive),
-        "m33": Field(F, "kg m^2", "yaw inertia", check=_positive),
-        "d11": Field(F, "kg/s", "surge damping", check=_nonnegative),
-        "d22": Field(F, "kg/s", "sway damping", check=_nonnegative),
-        "d33": Field(F, "kg m^2/s", "yaw damping", check=_nonnegative),
-        "tau": Field(F, "N, N, N m", "tau_x, tau_y, tau_z", 3),
-        "deck_altitude": Field(F, "m", "z2"),
+        "m11": Field(F, "kg", "surge mass", lo=1e-3, hi=1e8),
+        "m22": Field(F, "kg", "sway mass", lo=1e-3, hi=1e8),
+        "m33": Field(F, "kg m^2", "yaw inertia", lo=1e-3, hi=1e10),
+        "d11": Field(F, "kg/s", "surge damping", lo=0.0, hi=1e8),
+        "d22": Field(F, "kg/s", "sway damping", lo=0.0, hi=1e8),
+        "d33": Field(F, "kg m^2/s", "yaw damping", lo=0.0, hi=1e10),
+        "tau": Field(F, "N, N, N m", "tau_x, tau_y, tau_z", 3, lo=-1e8, hi=1e8),
+        "deck_altitude": Field(F, "m", "z2", lo=-1e4, hi=1e4),
     },
     "initial": {
-        "z1": Field(F, "m", "quadrotor altitude"),
-        "eta1_deg": Field(F, "deg", "roll, pitch, yaw", 3, _tilt_below_90),
-        "omega1_deg_s": Field(F, "deg/s", "body rates p, q, r", 3),
-        "velocity1": Field(F, "m/s", "body velocity u, v, w", 3),
-        "psi2_deg": Field(F, "deg", "vehicle heading"),
-        "r2_deg_s": Field(F, "deg/s", "vehicle yaw rate"),
-        "velocity2": Field(F, "m/s", "vehicle surge, sway", 2),
-        "position2": Field(F, "m", "vehicle x2, y2", 2),
+        "z1": Field(F, "m", "quadrotor altitude", lo=-1e4, hi=1e4),
+        "eta1_deg": Field(F, "deg", "roll, pitch, yaw", 3, lo=-3600.0, hi=3600.0,
+                          check=_tilt_below_90),
+        "omega1_deg_s": Field(F, "deg/s", "body rates p, q, r", 3, lo=-1e4, hi=1e4),
+        "velocity1": Field(F, "m/s", "body velocity u, v, w", 3, lo=-1e3, hi=1e3),
+        "psi2_deg": Field(F, "deg", "vehicle heading", lo=-3600.0, hi=3600.0),
+        "r2_deg_s": Field(F, "deg/s", "vehicle yaw rate", lo=-1e4, hi=1e4),
+        "velocity2": Field(F, "m/s", "vehicle surge, sway", 2, lo=-1e3, hi=1e3),
+        "position2": Field(F, "m", "vehicle x2, y2", 2, lo=-1e7, hi=1e7),
     },
     "reference": {
-        "e1d": Field(F, "m, rad, rad, rad", "constant desired e1", 4),
+        "e1d": Field(F, "m, rad, rad, rad", "constant desired e1", 4, lo=-1e4, hi=1e4),
     },
     "controller": {
-        "k1": Field(F, "1/s", "diagonal of k1", 4, _positive),
-        "k2": Field(F, "1/s", "diagonal of k2", 4, _positive),
-        "gamma1": Field(F, "-", "Gamma1 = gamma1 I", check=_positive),
-        "gamma2": Field(F, "-", "Gamma2 = gamma2 I", check=_positive),
-        "k_w": Field(F, "-", "W_hat leakage", check=_positive),
-        "k_zeta": Field(F, "-", "zeta_hat leakage", check=_positive),
-        "rho": Field(F, "-", "tanh width varrho", check=_positive),
+        "k1": Field(F, "1/s", "diagonal of k1", 4, hi=1e6, **_POS),
+        "k2": Field(F, "1/s", "diagonal of k2", 4, hi=1e6, **_POS),
+        "gamma1": Field(F, "-", "Gamma1 = gamma1 I", hi=1e6, **_POS),
+        "gamma2": Field(F, "-", "Gamma2 = gamma2 I", hi=1e6, **_POS),
+        "k_w": Field(F, "-", "W_hat leakage", hi=1e6, **_POS),
+        "k_zeta": Field(F, "-", "zeta_hat leakage", hi=1e6, **_POS),
+        "rho": Field(F, "-", "tanh width varrho", lo=1e-9, hi=1e6),
         "nominal_model": Field(B, "-", "feed forward the quadrotor's known dynamics"),
-        "rate_hz": Field(F, "Hz", "control rate, 0 = continuous", check=_nonnegative),
+        "rate_hz": Field(F, "Hz", "control rate, 0 = continuous", lo=1.0, hi=MAX_RATE_HZ,
+                         zero_ok=True),
         "backend": Field(S, "-", "control step implementation", choices=("casadi", "c")),
         "hold_compensation": Field(F, "periods", "extrapolation of the held command",
-                                   check=_unit_interval),
+                                   lo=0.0, hi=1.0),
     },
     "rbf": {
-        "nodes": Field(I, "-", "l, the number of nodes", check=_at_least_one),
-        "center_min": Field(F, "-", "first centre coordinate"),
-        "center_max": Field(F, "-", "last centre coordinate"),
-        "width": Field(F, "-", "common spread epsilon", check=_positive),
+        "nodes": Field(I, "-", "l, the number of nodes", lo=1, hi=1000),
+        "center_min": Field(F, "-", "first centre coordinate", lo=-1e6, hi=1e6),
+        "center_max": Field(F, "-", "last centre coordinate", lo=-1e6, hi=1e6),
+        "width": Field(F, "-", "common spread epsilon", lo=1e-6, hi=1e6),
     },
     "disturbance": {
         "noise": Field(B, "-", "include the random part"),
-        "sample_rate_hz": Field(F, "Hz", "hold interval of the disturbance", check=_positive),
-        "force_bias": Field(F, "N", "constant part of d_F", 3),
-        "force_amplitude": Field(F, "N", "sine amplitude of d_F"),
-        "force_frequency": Field(F, "rad/s", "sine frequency of d_F", check=_nonnegative),
-        "force_noise_std": Field(F, "N", "std of the noise on d_F", check=_nonnegative),
-        "moment_bias": Field(F, "N m", "constant part of d_M", 3),
-        "moment_amplitude": Field(F, "N m", "sine amplitude of d_M"),
-        "moment_frequency": Field(F, "rad/s", "sine frequency of d_M", check=_nonnegative),
-        "moment_noise_std": Field(F, "N m", "std of the noise on d_M", check=_nonnegative),
+        "sample_rate_hz": Field(F, "Hz", "hold interval of the disturbance", lo=1e-3,
+                                hi=MAX_RATE_HZ),
+        "force_bias": Field(F, "N", "constant part of d_F", 3, lo=-1e4, hi=1e4),
+        "force_amplitude": Field(F, "N", "sine amplitude of d_F", lo=-1e4, hi=1e4),
+        "force_frequency": Field(F, "rad/s", "sine frequency of d_F", lo=0.0, hi=1e5),
+        "force_noise_std": Field(F, "N", "std of the noise on d_F", lo=0.0, hi=1e4),
+        "moment_bias": Field(F, "N m", "constant part of d_M", 3, lo=-1e4, hi=1e4),
+        "moment_amplitude": Field(F, "N m", "sine amplitude of d_M", lo=-1e4, hi=1e4),
+        "moment_frequency": Field(F, "rad/s", "sine frequency of d_M", lo=0.0, hi=1e5),
+        "moment_noise_std": Field(F, "N m", "std of the noise on d_M", lo=0.0, hi=1e4),
     },
 })
 del F, I, B, S
@@ -175,13 +229,49 @@ class Scenario:
         return {s: {k: list(v) if isinstance(v, tuple) else v for k, v in kv.items()}
                 for s, kv in self.data.items()}
 
+    def to_toml(self) -> str:
+        """The resolved scenario as TOML: loading it gives the same scenario, bit for bit.
+
+        Floats are written with Python's shortest round-trip ``repr``; every
+        key is written, overrides included, so that the file alone repeats
+        the run.
+
+        Examples
+        --------
+        >>> sc = load_scenario("paper", ["simulation.duration=0.1"])
+        >>> import tomllib
+        >>> tomllib.loads(sc.to_toml())["simulation"]["duration"]
+        0.1
+        """
+        lines = [f"# Scenario {self.name}, resolved by quadland from {Path(self.source).name}"
+                 + (f" with {', '.join(self.overrides)}" if self.overrides else ""), ""]
+        lines = [" ".join(lines[0].split()), ""]
+        for section, kv in self.data.items():
+            lines.append(f"[{section}]")
+            lines.extend(f"{key} = {_toml_value(value)}" for key, value in kv.items())
+            lines.append("")
+        return "\n".join(lines)
+
     def replace(self, **changes) -> "Scenario":
         """A new validated scenario with ``{"section.key": value}`` changes."""
         raw = self.to_dict()
         for dotted, value in changes.items():
             section, key = _split_key(dotted)
             raw.setdefault(section, {})[key] = value
-        return Scenario(self.name, self.source, _validate(raw, self.source), self.overrides)
+        data = _validate(raw, self.source, self.name)
+        return Scenario(data["scenario"]["name"], self.source, data, self.overrides)
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    return "[" + ", ".join(_toml_value(v) for v in value) + "]"
 
 
 def scenario_names() -> list[str]:
@@ -218,14 +308,7 @@ def load_scenario(name_or_path: str | Path = "paper",
     2.0
     """
     path = _resolve(name_or_path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScenarioError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: malformed TOML: {exc}") from None
+    raw = _parse_toml(_read_text(path), str(path))
     pairs = _parse_overrides(overrides)
     for dotted, value in pairs:
         section, key = _split_key(dotted)
@@ -235,9 +318,77 @@ def load_scenario(name_or_path: str | Path = "paper",
         if not isinstance(raw[section], dict):
             raise ScenarioError(f"{path}: [{section}] must be a table")
         raw[section][key] = value
-    data = _validate(raw, str(path))
-    name = data["scenario"]["name"] if "name" in raw.get("scenario", {}) else path.stem
-    return Scenario(name, str(path), data, tuple(f"{k}={v}" for k, v in pairs))
+    stem = re.sub(r"[^A-Za-z0-9._-]", "-", path.stem)
+    data = _validate(raw, str(path), default_name=stem.lstrip(".-_")[:64] or "scenario")
+    return Scenario(data["scenario"]["name"], str(path), data,
+                    tuple(f"{k}={_show(v)}" for k, v in pairs))
+
+
+#: Largest scenario file read, bytes.
+MAX_FILE_BYTES = 1 << 20
+
+
+def _read_text(path: Path) -> str:
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ScenarioError(f"{path}: larger than {MAX_FILE_BYTES >> 20} MiB; not a scenario")
+    try:
+        return data.decode("utf-8-sig")             # a UTF-8 byte-order mark is accepted
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise ScenarioError(f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at line "
+                            f"{line})") from None
+
+
+_LOCATION_RE = re.compile(r"\s*\(at line (\d+), column (\d+)\)$")
+_KEY_RE = re.compile(r"""\s*([A-Za-z0-9_\-."' ]+?)\s*=""")
+
+
+def _parse_toml(text: str, source: str) -> dict:
+    """``tomllib.loads`` with every failure as one line naming the cause."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        where = _LOCATION_RE.search(msg)
+        cause = _LOCATION_RE.sub("", msg).rstrip(".")
+        if where is None:
+            raise ScenarioError(f"{source}: malformed TOML: {_show(cause, 80)}") from None
+        line_no = int(where.group(1))
+        lines = text.splitlines()
+        line = lines[line_no - 1] if 0 < line_no <= len(lines) else ""
+        if cause.startswith("Cannot overwrite a value") or cause.startswith("Cannot declare"):
+            key = _KEY_RE.match(line)
+            name = _duplicate_name(lines, line_no, key.group(1).strip() if key else line.strip())
+            raise ScenarioError(f"{source}: duplicate key {name} (line {line_no})") from None
+        raise ScenarioError(f"{source}: malformed TOML at line {line_no}, column "
+                            f"{where.group(2)}: {_show(cause, 80)}") from None
+    except RecursionError:
+        raise ScenarioError(f"{source}: malformed TOML: nested too deeply") from None
+    except ValueError as exc:                       # e.g. an integer of over 4300 digits
+        raise ScenarioError(f"{source}: malformed TOML: {_show(str(exc), 80)}") from None
+
+
+def _duplicate_name(lines: list[str], line_no: int, key: str) -> str:
+    """``section.key`` of a duplicated key, from the nearest table header above it."""
+    if key.startswith("["):
+        return key
+    for line in reversed(lines[:line_no - 1]):
+        head = line.strip()
+        if head.startswith("[") and "]" in head:
+            return f"{head[1:head.index(']')].strip()}.{key}"
+    return key
+
+
+def _show(value, limit: int = 40) -> str:
+    """A value as one short line for an error message."""
+    text = value if isinstance(value, str) else repr(value)
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _resolve(name_or_path) -> Path:
@@ -260,9 +411,9 @@ def _resolve(name_or_path) -> Path:
 
 
 def _split_key(dotted: str) -> tuple[str, str]:
-    section, dot, key = dotted.partition(".")
+    section, dot, key = str(dotted).partition(".")
     if not dot or not section or not key:
-        raise ScenarioError(f"--set {dotted}: expected section.key=value")
+        raise ScenarioError(f"--set {_show(str(dotted))}: expected section.key=value")
     return section, key
 
 
@@ -275,12 +426,14 @@ def _parse_overrides(overrides) -> list[tuple[str, Any]]:
     for item in overrides:
         dotted, eq, text = str(item).partition("=")
         if not eq or not dotted.strip():
-            raise ScenarioError(f"--set {item}: expected section.key=value")
+            raise ScenarioError(f"--set {_show(str(item))}: expected section.key=value")
         dotted, text = dotted.strip(), text.strip()
         try:
             value = tomllib.loads(f"v = {text}")["v"]
-        except tomllib.TOMLDecodeError:
+        except (tomllib.TOMLDecodeError, ValueError):
             value = text
+        except RecursionError:
+            raise ScenarioError(f"--set {dotted}: value nested too deeply") from None
         pairs.append((dotted, value))
     return pairs
 
@@ -290,18 +443,18 @@ def _unknown(what: str, name: str, known: Iterable[str]) -> str:
     return f"unknown {what} '{name}'" + (f" (did you mean '{hint[0]}'?)" if hint else "")
 
 
-def _validate(raw: Mapping, source: str) -> dict:
-    """Check every section and key of ``raw`` against SCHEMA; fill nothing."""
+def _validate(raw: Mapping, source: str, default_name: str = "scenario") -> dict:
+    """Check every section and key of ``raw`` against SCHEMA; fill nothing but the name."""
     out: dict[str, dict] = {}
     for section, table in raw.items():
         if section not in SCHEMA:
-            raise ScenarioError(f"{source}: {_unknown('section', section, SCHEMA)}")
+            raise ScenarioError(f"{source}: {_unknown('section', _show(section), SCHEMA)}")
         if not isinstance(table, Mapping):
             raise ScenarioError(f"{source}: [{section}] must be a table")
         for key in table:
             if key not in SCHEMA[section]:
-                raise ScenarioError(
-                    f"{source}: {_unknown('key', f'{section}.{key}', _dotted(section))}")
+                raise ScenarioError(f"{source}: "
+                                    f"{_unknown('key', f'{section}.{_show(key)}', _dotted(section))}")
     for section, fields in SCHEMA.items():
         table = raw.get(section, {})
         out[section] = {}
@@ -309,7 +462,7 @@ def _validate(raw: Mapping, source: str) -> dict:
             dotted = f"{section}.{key}"
             if key not in table:
                 if section == "scenario":
-                    out[section][key] = "" if key == "description" else Path(source).stem
+                    out[section][key] = "" if key == "description" else default_name
                     continue
                 raise ScenarioError(f"{source}: missing key {dotted} ({field.doc}, {field.unit})")
             out[section][key] = _check_value(dotted, table[key], field)
@@ -333,39 +486,54 @@ def _type_name(kind: type) -> str:
 def _check_scalar(dotted: str, value, field: Field):
     kind = field.kind
     if kind is bool:
-        if not isinstance(value, bool):
-            raise ScenarioError(f"{dotted}: expected true or false, got {value!r}")
-        return value
+        if not isinstance(value, bool | np.bool_):
+            raise ScenarioError(f"{dotted}: expected true or false, got {_show(value)}")
+        return bool(value)
     if kind is str:
         if not isinstance(value, str):
-            raise ScenarioError(f"{dotted}: expected a string, got {value!r}")
+            raise ScenarioError(f"{dotted}: expected a string, got {_show(value)}")
         if field.choices and value not in field.choices:
             raise ScenarioError(f"{dotted}: must be one of {', '.join(field.choices)}, "
-                                f"got '{value}'")
+                                f"got {_show(value)}")
         return value
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ScenarioError(f"{dotted}: expected {_type_name(kind)}, got {value!r}")
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise ScenarioError(f"{dotted}: expected {_type_name(kind)}, got {_show(value)}")
+    if kind is int and isinstance(value, numbers.Integral):
+        value = int(value)                          # exact, however many digits
+        complaint = field.complaint(value)
+        if complaint:
+            raise ScenarioError(f"{dotted}: {complaint}, got {_show(value)}")
+        return value
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise ScenarioError(f"{dotted}: must be finite and {field.range_text() or 'finite'}, "
+                            f"got {_show(value)}")
     if kind is int:
-        if isinstance(value, float) and not value.is_integer():
-            raise ScenarioError(f"{dotted}: expected an integer, got {value!r}")
-        return int(value)
-    if not math.isfinite(value):
-        raise ScenarioError(f"{dotted}: must be finite, got {value}")
-    return float(value)
+        if not float(number).is_integer():
+            raise ScenarioError(f"{dotted}: expected an integer, got {_show(value)}")
+        value = int(value)
+    complaint = field.complaint(value if kind is int else number)
+    if complaint:
+        raise ScenarioError(f"{dotted}: {complaint}, got {_show(value)}")
+    return value if kind is int else number
 
 
 def _check_value(dotted: str, value, field: Field):
     if field.length is None:
-        if isinstance(value, list | dict):
-            raise ScenarioError(f"{dotted}: expected {_type_name(field.kind)}, got {value!r}")
+        if isinstance(value, list | tuple | dict):
+            raise ScenarioError(f"{dotted}: expected {_type_name(field.kind)}, "
+                                f"got {_show(value)}")
         checked = _check_scalar(dotted, value, field)
     else:
-        if not isinstance(value, list) or len(value) != field.length:
+        if not isinstance(value, list | tuple) or len(value) != field.length:
             raise ScenarioError(f"{dotted}: expected a list of {field.length} numbers "
-                                f"({field.unit}), got {value!r}")
+                                f"({field.unit}), got {_show(value)}")
         checked = tuple(_check_scalar(dotted, v, field) for v in value)
     if field.check is not None:
         complaint = field.check(checked)
         if complaint:
-            raise ScenarioError(f"{dotted}: {complaint}, got {value!r}")
+            raise ScenarioError(f"{dotted}: {complaint}, got {_show(value)}")
     return checked

@@ -24,7 +24,7 @@ import numpy as np
 
 from quadland.compiled import SIM_GUARD, compiled_loop
 from quadland.constants import TILT_MIN
-from quadland.exceptions import SimulationError
+from quadland.exceptions import ScenarioError, SimulationError
 from quadland.model import disturbance_samples, model_values
 from quadland.scenario import Scenario
 from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, POSITION1, closed_loop_function,
@@ -37,7 +37,74 @@ from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
-           "time_grid"]
+           "time_grid", "SimulationPlan", "simulation_plan", "check_plan", "MEMORY_BUDGET", "MAX_RK4_STEPS"]
+
+#: Most memory a simulation may plan for its arrays, bytes.
+MEMORY_BUDGET = 2 << 30
+#: Most RK4 steps one simulation may take (about 7 min at l = 100).
+MAX_RK4_STEPS = 2e8
+#: RK4 is stable on lambda h inside about -2.785 on the real axis.
+_RK4_REAL_STABILITY = 2.785
+
+
+@dataclasses.dataclass(frozen=True)
+class SimulationPlan:
+    """What a simulation will need, estimated from its scenario before it starts.
+
+    Attributes
+    ----------
+    rows : int
+        Output rows (trajectory.csv).
+    intervals : int
+        Hold intervals of the merged time grid (at most).
+    rk4_steps : int
+        RK4 steps of the whole run.
+    memory_bytes : int
+        Memory for its arrays (states, outputs, columns, grid), bytes.
+    """
+
+    rows: int
+    intervals: int
+    rk4_steps: int
+    memory_bytes: int
+
+
+def simulation_plan(scenario: Scenario) -> SimulationPlan:
+    """Estimate a run's size from its scenario alone (no allocation).
+
+    Examples
+    --------
+    >>> import quadland
+    >>> plan = simulation_plan(quadland.load_scenario("paper"))
+    >>> plan.rows, plan.rk4_steps
+    (1001, 2002)
+    """
+    sim, ctrl, dist = (scenario.data[k] for k in ("simulation", "controller", "disturbance"))
+    T = sim["duration"]
+    rows = int(T * sim["output_rate_hz"]) + 2
+    clocks = rows + int(T * dist["sample_rate_hz"]) + 2
+    if ctrl["rate_hz"] > 0:
+        clocks += int(T * ctrl["rate_hz"]) + 2
+    l = scenario.data["rbf"]["nodes"]
+    nx, nw = closed_loop_state(l).size, DISTURBANCE.size
+    per_row = 2 * nx + OUTPUTS.size + len(COLUMNS) + nw + 12
+    return SimulationPlan(rows - 1, clocks, clocks * sim["rk_steps_per_interval"],
+                          8 * (rows * per_row + clocks * (nw + 4)))
+
+
+def check_plan(scenario: Scenario) -> None:
+    """Refuse, with one line naming the keys, a run over the memory or step budget."""
+    plan = simulation_plan(scenario)
+    if plan.memory_bytes > MEMORY_BUDGET:
+        raise ScenarioError(
+            f"simulation.duration x simulation.output_rate_hz: {plan.rows:,} output rows need "
+            f"about {plan.memory_bytes / 2**30:.1f} GiB, over the {MEMORY_BUDGET / 2**30:g} GiB "
+            "limit; lower either")
+    if plan.rk4_steps > MAX_RK4_STEPS:
+        raise ScenarioError(
+            f"simulation.duration: the run needs {plan.rk4_steps:.2g} RK4 steps (duration x "
+            f"the fastest clock x simulation.rk_steps_per_interval), over the "
+            f"{MAX_RK4_STEPS:.0e} limit; lower one of them")
 
 #: The columns of trajectory.csv, composed from the model's layouts.
 TRAJECTORY = Layout("trajectory", (
@@ -194,29 +261,79 @@ def simulate(scenario: Scenario) -> SimulationResult:
     >>> res["t"][-1]
     0.5
     """
+    check_plan(scenario)
     mv = model_values(scenario)
     t_out, t_dist, t_all = time_grid(scenario)
     w_dist = disturbance_samples(scenario, t_dist)
     w_out = _held(t_dist, w_dist, t_out).T                       # (n_out, nw)
+    failure = None
     if scenario.data["controller"]["rate_hz"] > 0:
         loop = compiled_loop(mv.l, "sampled")
         if loop is not None and scenario.data["controller"]["backend"] == "casadi":
-            X, held = _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist)
+            X, held, failure = _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist)
         else:
             X, held = _simulate_sampled(scenario, mv, t_out, t_dist, w_dist)
     else:
         loop = compiled_loop(mv.l, "continuous")
         held = None
         if loop is not None and scenario.data["simulation"]["integrator"] == "rk":
-            X = _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist)
+            X, failure = _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist)
         else:
             X = _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist)
-    if not np.all(np.isfinite(X)):
-        bad = int(np.argmax(~np.all(np.isfinite(X), axis=1)))
-        raise SimulationError(f"state became non-finite at t = {t_out[bad]:.4g} s "
-                              "(check gains and the initial attitude)")
-    Y = loop.outputs(X, w_out, mv.p) if loop is not None else _vm_outputs(mv, X, w_out)
-    return _result(scenario, mv, t_out, w_out, X, Y, held)
+    n = len(X) if failure is None else failure[0]
+    finite = np.all(np.isfinite(X[:n]), axis=1)
+    if not finite.all():
+        n = int(np.argmin(finite))
+        failure = (n, t_out[n], "the state became non-finite")
+    Y = (loop.outputs(X[:n], w_out[:n], mv.p) if loop is not None
+         else _vm_outputs(mv, X[:n], w_out[:n]))
+    finite = np.all(np.isfinite(Y), axis=1)
+    if not finite.all():
+        bad = int(np.argmin(finite))
+        name = OUTPUTS.element_names()[int(np.argmin(np.isfinite(Y[bad])))]
+        n, failure = bad, (bad, t_out[bad], f"the output {name} became non-finite")
+    result = _result(scenario, mv, t_out[:n], w_out[:n], X[:n], Y[:n],
+                     None if held is None else held[:, :n])
+    tilt = np.cos(result["phi1"]) * np.cos(result["theta1"])
+    if np.any(np.abs(tilt) < TILT_MIN):
+        k = int(np.argmax(np.abs(tilt) < TILT_MIN))
+        failure = (k, t_out[k], f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}")
+        result = _truncated(result, k)
+    if failure is not None:
+        _, t_fail, what = failure
+        raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
+                              f"{_divergence_hint(scenario)}", t_fail,
+                              result if len(result["t"]) else None)
+    return result
+
+
+def _truncated(result: SimulationResult, n: int) -> SimulationResult:
+    return SimulationResult(result.scenario, {k: v[:n] for k, v in result.columns.items()},
+                            result.states[:n])
+
+
+def _divergence_hint(scenario: Scenario) -> str:
+    """A hint where the fixed-step integrator is the likely cause, else the usual suspects.
+
+    The loop's fastest modes are set by the gains (eq. 15, 24: z1 decays at
+    k1, z2 at k2), and RK4 is stable for ``|lambda| h < 2.785``.
+    """
+    sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
+    if sim["integrator"] != "rk":
+        return " (check the gains and the initial attitude)"
+    clocks = [scenario.data["simulation"]["output_rate_hz"],
+              scenario.data["disturbance"]["sample_rate_hz"]]
+    if ctrl["rate_hz"] > 0:
+        clocks.append(ctrl["rate_hz"])
+    h = 1.0 / max(clocks) / sim["rk_steps_per_interval"]
+    fastest = max(max(ctrl["k1"]), max(ctrl["k2"]))
+    if fastest * h > _RK4_REAL_STABILITY / 2:
+        need = int(np.ceil(fastest * sim["rk_steps_per_interval"] * h
+                           / (_RK4_REAL_STABILITY / 4)))
+        return (f" (the RK4 step h = {h:.3g} s is likely too coarse for gains up to "
+                f"{fastest:g} 1/s: try simulation.rk_steps_per_interval={need} or "
+                "simulation.integrator=\"cvodes\")")
+    return " (check the gains and the initial attitude)"
 
 
 def _grid_index(grid, times):
@@ -235,10 +352,10 @@ def _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
     X, _, failure = loop.integrate(mv.x0, W, np.diff(t_all), rec,
                                    scenario.data["simulation"]["rk_steps_per_interval"], mv.p,
                                    len(t_out))
-    if failure is not None:
-        raise SimulationError(f"state became non-finite at t = {t_all[failure.index]:.4g} s "
-                              "(check gains and the initial attitude)")
-    return X
+    if failure is None:
+        return X, None
+    done = int(np.max(rec[:failure.index], initial=0)) + 1      # rows recorded before it
+    return X, (done, t_all[failure.index + 1], "the state became non-finite")
 
 
 def _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist):
@@ -262,13 +379,13 @@ def _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist):
     X, R, _, _, failure = loop.sampled(
         xp0, xc0, W, np.diff(grid), ctrl, rec, scenario.data["simulation"]["rk_steps_per_interval"],
         pp, pc, TILT_MIN, len(t_out))
-    if failure is not None:
-        t = grid[min(failure.index, len(grid) - 1)]
-        if failure.status == SIM_GUARD:
-            raise SimulationError(f"singular attitude at t = {t:.4g} s: "
-                                  f"|cos(theta) cos(phi)| < {TILT_MIN:g}")
-        raise SimulationError(f"state became non-finite at t = {t:.4g} s")
-    return X, R.T
+    if failure is None:
+        return X, R.T, None
+    t = grid[min(failure.index, len(grid) - 1)]
+    done = int(np.max(rec[:failure.index + 1], initial=-1)) + 1
+    what = (f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}"
+            if failure.status == SIM_GUARD else "the state became non-finite")
+    return X, R.T, (done, t, what)
 
 
 def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
@@ -374,11 +491,6 @@ def _result(scenario, mv, t_out, w_out, X, Y, held):
     """Columns of ``TRAJECTORY`` from states ``X`` (n, nx) and outputs ``Y`` (n, ny)."""
     lay = closed_loop_state(mv.l)
     xs = lay.unpack(X.T)
-    tilt = np.cos(X[:, lay.index("phi1")]) * np.cos(X[:, lay.index("theta1")])
-    if np.any(np.abs(tilt) < TILT_MIN):
-        k = int(np.argmax(np.abs(tilt) < TILT_MIN))
-        raise SimulationError(f"singular attitude at t = {t_out[k]:.4g} s: "
-                              f"cos(theta) cos(phi) = {tilt[k]:.2e}")
     sig = OUTPUTS.unpack(Y.T)
     if held is not None:
         so = step_outputs(mv.l)

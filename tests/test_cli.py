@@ -27,7 +27,8 @@ def test_simulate_writes_everything(tmp_path):
                 "controller.nominal_model=true", "--out", str(out))
     assert proc.returncode == 0, proc.stderr
     names = {p.name for p in out.iterdir()}
-    assert names == {"trajectory.csv", "summary.json", *FIGURES}
+    assert names == {"trajectory.csv", "columns.json", "summary.json", "scenario.toml",
+                     ".quadland-output", *FIGURES}
     for fig in FIGURES:
         assert (out / fig).read_bytes()[:8] == PNG
     with open(out / "trajectory.csv") as fh:
@@ -43,6 +44,8 @@ def test_simulate_writes_everything(tmp_path):
     assert summary["scenario"]["simulation"]["duration"] == 0.3
     assert summary["seed"] == 2019
     assert summary["versions"]["casadi"] == "3.8.2"
+    assert summary["status"] == "ok"
+    assert {"numpy", "scipy", "control", "matplotlib", "python"} <= set(summary["versions"])
     assert summary["overrides"] == ["simulation.duration=0.3", "controller.nominal_model=True"]
     assert set(summary["errors"]) >= {"z_e", "phi_e", "theta_e", "psi_e"}
 
@@ -52,17 +55,21 @@ def test_no_plots_and_default_folder(tmp_path):
     assert proc.returncode == 0, proc.stderr
     (folder,) = list(tmp_path.iterdir())
     assert folder.name.startswith("paper-")
-    assert {p.name for p in folder.iterdir()} == {"trajectory.csv", "summary.json"}
+    assert {p.name for p in folder.iterdir()} == {"trajectory.csv", "columns.json",
+                                                  "summary.json", "scenario.toml",
+                                                  ".quadland-output"}
 
 
 BAD = [
     (["--scenario", "papr"], "unknown scenario 'papr' (did you mean 'paper'?)"),
     (["--scenario", "missing.toml"], "missing.toml: scenario file not found"),
     (["--set", "quadrotor.masss=3"], "did you mean 'quadrotor.mass'?"),
-    (["--set", "quadrotor.mass=0"], "quadrotor.mass: must be > 0"),
+    (["--set", "quadrotor.mass=0"], "quadrotor.mass: must be in [0.001, 10000] kg"),
     (["--set", "simulation.duration=nan"], "simulation.duration: must be finite"),
     (["--set", "initial.eta1_deg=[0, 90, 0]"], "initial.eta1_deg"),
-    (["--set", "rbf.nodes=0"], "rbf.nodes: must be >= 1"),
+    (["--set", "rbf.nodes=0"], "rbf.nodes: must be in [1, 1000]"),
+    (["--set", "simulation.duration=90000"], "over the 2 GiB limit"),
+    (["--set", "scenario.name=\"../escape\""], "scenario.name: must be 1 to 64"),
 ]
 
 
@@ -128,7 +135,8 @@ def _margins(tmp_path, *args, name="out"):
 def test_margins_writes_json_figures_and_table(tmp_path, capsys):
     status, out = _margins(tmp_path, "--set", "controller.rate_hz=50")
     assert status == 0
-    assert {p.name for p in out.iterdir()} == {"margins.json", *MARGIN_FIGURES}
+    assert {p.name for p in out.iterdir()} == {"margins.json", "scenario.toml",
+                                               ".quadland-output", *MARGIN_FIGURES}
     for fig in MARGIN_FIGURES:
         assert (out / fig).read_bytes()[:8] == PNG
     data = json.loads((out / "margins.json").read_text())
@@ -158,7 +166,8 @@ def test_margins_unstable_loop_fails(tmp_path, capsys):
     unstable closed-loop poles: every loop fails, the figures are still written."""
     status, out = _margins(tmp_path, "--at", "0.1", "--set", "controller.rate_hz=50")
     assert status == 1
-    assert {p.name for p in out.iterdir()} == {"margins.json", *MARGIN_FIGURES}
+    assert {p.name for p in out.iterdir()} == {"margins.json", "scenario.toml",
+                                               ".quadland-output", *MARGIN_FIGURES}
     data = json.loads((out / "margins.json").read_text())
     assert data["operating_point"]["kind"] == "frozen"
     assert data["operating_point"]["time_s"] == 0.1
@@ -174,7 +183,7 @@ def test_margins_unstable_loop_fails(tmp_path, capsys):
     (["--at", "inf"], "--at: must be a finite time >= 0 s, got inf"),
     (["--gain-margin-db", "-3"], "--gain-margin-db: must be a finite number >= 0, got -3.0"),
     (["--phase-margin-deg", "200"], "--phase-margin-deg: must lie in [0, 180), got 200.0"),
-    (["--set", "rbf.nodes=0"], "rbf.nodes: must be >= 1"),
+    (["--set", "rbf.nodes=0"], "rbf.nodes: must be in [1, 1000]"),
 ])
 def test_margins_bad_input_names_the_flag_and_writes_nothing(tmp_path, capsys, args, message):
     status, out = _margins(tmp_path, "--no-plots", *args)
@@ -198,7 +207,8 @@ def test_margins_default_folder(tmp_path, monkeypatch, capsys):
     assert main(["margins", *SMALL, "--no-plots"]) == 0
     (folder,) = list(tmp_path.iterdir())
     assert re.fullmatch(r"paper-margins-\d{8}-\d{6}", folder.name)
-    assert [p.name for p in folder.iterdir()] == ["margins.json"]
+    assert sorted(p.name for p in folder.iterdir()) == [".quadland-output", "margins.json",
+                                                        "scenario.toml"]
 
 
 def test_margins_help_shows_the_requirement_defaults(capsys):
@@ -207,3 +217,79 @@ def test_margins_help_shows_the_requirement_defaults(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert f"(default: {Requirement.gain_margin_db:g} dB)" in text
     assert f"(default: {Requirement.phase_margin_deg:g} deg)" in text
+
+
+def _strict(text):
+    def refuse(token):
+        raise AssertionError(f"non-strict JSON token {token}")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_scenario_toml_repeats_the_run_bit_for_bit(tmp_path):
+    first, second = tmp_path / "a", tmp_path / "b"
+    proc = _run("simulate", "--set", "simulation.duration=0.2", "--set", "simulation.seed=7",
+                "--no-plots", "--out", str(first))
+    assert proc.returncode == 0, proc.stderr
+    proc = _run("simulate", "--scenario", str(first / "scenario.toml"), "--no-plots",
+                "--out", str(second))
+    assert proc.returncode == 0, proc.stderr
+    assert (first / "trajectory.csv").read_bytes() == (second / "trajectory.csv").read_bytes()
+    assert _strict((second / "summary.json").read_text())["seed"] == 7
+
+
+def test_failed_flight_exits_3_with_the_partial_trajectory(tmp_path):
+    out = tmp_path / "out"
+    proc = _run("simulate", "--set", "controller.k1=[1000.0, 1000.0, 1000.0, 1000.0]",
+                "--set", "controller.k2=[1000.0, 1000.0, 1000.0, 1000.0]", "--set",
+                "simulation.duration=2", "--no-plots", "--out", str(out))
+    assert proc.returncode == 3, proc.stderr
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith("quadland: error: flight failed at t = ")
+    assert "rk_steps_per_interval" in line              # the fixed step is the likely cause
+    summary = _strict((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["failure"] in line
+    with open(out / "trajectory.csv") as fh:
+        rows = list(csv.reader(fh))
+    assert 1 < len(rows) < 201
+    assert all(v not in ("nan", "inf", "-inf") for row in rows[1:] for v in row)
+
+
+def test_a_folder_in_use_is_refused(tmp_path):
+    from quadland.output import OutputFolder
+
+    out = tmp_path / "busy"
+    with OutputFolder(out):
+        proc = _run("simulate", "--set", "simulation.duration=0.1", "--no-plots",
+                    "--out", str(out))
+    assert proc.returncode == 2
+    assert "is in use by another quadland run" in proc.stderr
+    assert not out.exists()
+
+
+def test_no_plots_replaces_an_earlier_set_whole(tmp_path):
+    out = tmp_path / "out"
+    assert _run("simulate", "--set", "simulation.duration=0.1", "--out", str(out)).returncode == 0
+    assert (out / "ground_track.png").exists()
+    proc = _run("simulate", "--set", "simulation.duration=0.1", "--no-plots", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert not list(out.glob("*.png"))
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_a_folder_of_other_files_is_never_replaced(tmp_path):
+    (tmp_path / "notes.txt").write_text("mine")
+    proc = _run("simulate", "--set", "simulation.duration=0.1", "--no-plots",
+                "--out", str(tmp_path))
+    assert proc.returncode == 2
+    assert "not a quadland output" in proc.stderr
+    assert (tmp_path / "notes.txt").read_text() == "mine"
+
+
+def test_unwritable_target_is_found_before_any_work(tmp_path):
+    # a folder under a regular file cannot be made, whoever runs the test (root too)
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    proc = _run("simulate", "--set", "simulation.duration=5", "--out", str(blocker / "out"))
+    assert proc.returncode == 2
+    (line,) = proc.stderr.strip().splitlines()
+    assert "cannot write to" in line and "Traceback" not in proc.stderr

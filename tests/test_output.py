@@ -6,7 +6,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from quadland.exceptions import QuadlandError
-from quadland.output import figure_png, output_folder, write_files
+from quadland.output import MARKER, OutputFolder, figure_png, output_folder, write_files
 
 
 def _figure():
@@ -18,18 +18,18 @@ def _figure():
 def test_default_folder_is_named_and_unique(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     first = output_folder(None, "paper", "margins")
-    assert first.parent == tmp_path
-    assert re.fullmatch(r"paper-margins-\d{8}-\d{6}", first.name)
-    assert not first.exists()                      # named, not created
+    assert first.path.parent == tmp_path
+    assert re.fullmatch(r"paper-margins-\d{8}-\d{6}", first.path.name)
+    assert not first.path.exists()                 # named, not created
     write_files(first, {})
     second = output_folder(None, "paper", "margins")
-    assert second != first and not second.exists()
-    assert re.fullmatch(r"paper-margins-\d{8}-\d{6}(-2)?", second.name)
-    assert re.fullmatch(r"paper-\d{8}-\d{6}", output_folder(None, "paper").name)
+    assert second.path != first.path and not second.path.exists()
+    assert re.fullmatch(r"paper-margins-\d{8}-\d{6}(-2)?", second.path.name)
+    assert re.fullmatch(r"paper-\d{8}-\d{6}", output_folder(None, "paper").path.name)
 
 
 def test_folder_given_is_checked_before_any_work(tmp_path):
-    assert output_folder(tmp_path / "new", "paper") == tmp_path / "new"
+    assert output_folder(tmp_path / "new", "paper").path == tmp_path / "new"
     assert not (tmp_path / "new").exists()
     afile = tmp_path / "file"
     afile.write_text("keep")
@@ -40,14 +40,53 @@ def test_folder_given_is_checked_before_any_work(tmp_path):
     assert afile.read_text() == "keep"
 
 
-def test_write_files_creates_and_replaces_whole_files(tmp_path):
+def test_a_set_replaces_the_earlier_set_whole(tmp_path):
     folder = tmp_path / "a" / "b"
     assert write_files(folder, {"x.json": b"{}\n", "y.png": b"\x89PNG"}) == folder
     assert (folder / "x.json").read_bytes() == b"{}\n"
-    (folder / "other.txt").write_text("left alone")
     write_files(folder, {"x.json": b"[]\n"})
     assert (folder / "x.json").read_bytes() == b"[]\n"
-    assert sorted(p.name for p in folder.iterdir()) == ["other.txt", "x.json", "y.png"]
+    assert sorted(p.name for p in folder.iterdir()) == [MARKER, "x.json"]
+    assert sorted(p.name for p in folder.parent.iterdir()) == ["b"]   # nothing stray
+
+
+def test_a_folder_of_other_files_is_refused(tmp_path):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "thesis.tex").write_text("mine")
+    with pytest.raises(QuadlandError, match="not a quadland output"):
+        write_files(tmp_path / "out", {"x.json": b"{}"})
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["thesis.tex"]
+
+
+def test_a_claimed_folder_refuses_a_second_run(tmp_path):
+    with OutputFolder(tmp_path / "out"):
+        with pytest.raises(QuadlandError, match="in use by another quadland run"):
+            OutputFolder(tmp_path / "out").claim()
+    OutputFolder(tmp_path / "out").claim().release()       # free again
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_leftovers_of_a_killed_run_are_cleaned_and_never_results(tmp_path):
+    stale = tmp_path / ".out.tmp-abc123"
+    stale.mkdir()
+    (stale / "trajectory.csv").write_text("half")
+    write_files(tmp_path / "out", {"x.json": b"{}"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_swap_without_an_atomic_exchange(tmp_path, monkeypatch):
+    """Where renameat2 is missing the old set is kept aside until the new one is in."""
+    import quadland.output as output
+
+    class NoRenameat2:
+        def __getattr__(self, name):
+            raise AttributeError(name)
+
+    write_files(tmp_path / "out", {"old.txt": b"1"})
+    monkeypatch.setattr(output.ctypes, "CDLL", lambda *a, **k: NoRenameat2())
+    write_files(tmp_path / "out", {"new.txt": b"2"})
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [MARKER, "new.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
 @pytest.mark.parametrize("name", ["../x", "sub/x", "", ".."])

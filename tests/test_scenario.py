@@ -53,15 +53,15 @@ def _paper_text(**replace):
 
 
 BAD_OVERRIDES = [
-    (["quadrotor.mass=0"], r"quadrotor\.mass: must be > 0"),
-    (["quadrotor.mass=-2"], r"quadrotor\.mass: must be > 0"),
-    (["quadrotor.inertia=[1.0, 0.0, 1.0]"], r"quadrotor\.inertia: must be > 0"),
+    (["quadrotor.mass=0"], r"quadrotor\.mass: must be in \[0\.001, 10000\] kg, got 0"),
+    (["quadrotor.mass=-2"], r"quadrotor\.mass: must be in \[0\.001, 10000\] kg"),
+    (["quadrotor.inertia=[1.0, 0.0, 1.0]"], r"quadrotor\.inertia: must be in \[1e-06, 10000\]"),
     (["quadrotor.inertia=[1.0, 1.0]"], r"quadrotor\.inertia: expected a list of 3"),
-    (["controller.k1=[3, 5, -1, 10]"], r"controller\.k1: must be > 0"),
-    (["controller.k2=[0, 4, 10, 10]"], r"controller\.k2: must be > 0"),
-    (["controller.gamma1=0"], r"controller\.gamma1: must be > 0"),
-    (["rbf.width=0"], r"rbf\.width: must be > 0"),
-    (["rbf.nodes=0"], r"rbf\.nodes: must be >= 1"),
+    (["controller.k1=[3, 5, -1, 10]"], r"controller\.k1: must be in \(0, 1e\+06\] 1/s"),
+    (["controller.k2=[0, 4, 10, 10]"], r"controller\.k2: must be in \(0, 1e\+06\]"),
+    (["controller.gamma1=0"], r"controller\.gamma1: must be in \(0, 1e\+06\]"),
+    (["rbf.width=0"], r"rbf\.width: must be in \[1e-06, 1e\+06\]"),
+    (["rbf.nodes=0"], r"rbf\.nodes: must be in \[1, 1000\]"),
     (["rbf.nodes=2.5"], r"rbf\.nodes: expected an integer"),
     (["initial.eta1_deg=[30, 90, 0]"], r"initial\.eta1_deg: .*below 90 deg"),
     (["initial.eta1_deg=[-95, 0, 0]"], r"initial\.eta1_deg: .*below 90 deg"),
@@ -80,6 +80,25 @@ BAD_OVERRIDES = [
     (["mass=2"], r"expected section\.key=value"),
     (["quadrotor.mass"], r"expected section\.key=value"),
     (["quadrotor.rotor_force_max=-600"], r"rotor_force_max"),
+    # values that used to pass validation and then hang, exhaust memory or overflow
+    (["simulation.output_rate_hz=5e-324"], r"simulation\.output_rate_hz: must be in \[0\.001, "),
+    (["controller.rate_hz=5e-324"], r"controller\.rate_hz: must be in 0 or \[1, 100000\] Hz"),
+    (["disturbance.sample_rate_hz=5e-324"], r"disturbance\.sample_rate_hz: must be in"),
+    (["simulation.rk_steps_per_interval=1000000000"], r"rk_steps_per_interval: must be in \[1, 1000\]"),
+    (["simulation.duration=1e9"], r"simulation\.duration: must be in \[0\.001, 100000\] s"),
+    (["simulation.duration=1e-9"], r"simulation\.duration: must be in"),
+    (["controller.rate_hz=1e12"], r"controller\.rate_hz: must be in"),
+    (["rbf.nodes=1000000000000000000"], r"rbf\.nodes: must be in \[1, 1000\]"),
+    (["simulation.seed=" + "9" * 400], r"simulation\.seed: must be in \[0, 9\.22337e\+18\], got 999"),
+    (["quadrotor.mass=" + "9" * 400], r"quadrotor\.mass: must be finite"),
+    (["quadrotor.arm_length=1e-308"], r"quadrotor\.arm_length: must be in \[0\.001, 10\] m"),
+    (["quadrotor.rotor_drag_factor=1e-308"], r"rotor_drag_factor: must be in"),
+    (["disturbance.force_amplitude=1e308"], r"disturbance\.force_amplitude: must be in"),
+    (["controller.k1=" + "[" * 5000 + "]" * 5000], r"--set controller\.k1: value nested too deeply"),
+    (["scenario.name=\"../escape\""], r"scenario\.name: must be 1 to 64 letters"),
+    (["scenario.name=\"/abs/dir\""], r"scenario\.name: must be 1 to 64 letters"),
+    (["scenario.name=\"" + "a" * 300 + "\""], r"scenario\.name: must be 1 to 64"),
+    (["scenario.description=\"two\\nlines\""], r"scenario\.description: must be one line"),
 ]
 
 
@@ -144,3 +163,57 @@ def test_error_is_one_line():
     with pytest.raises(ScenarioError) as info:
         load_scenario("paper", ["quadrotor.masss=2"])
     assert "\n" not in str(info.value)
+
+
+def _shipped_paper():
+    from quadland.scenario import SCENARIO_DIR
+    return (SCENARIO_DIR / "paper.toml").read_text(encoding="utf-8")
+
+
+def test_byte_order_mark_is_accepted(tmp_path):
+    f = tmp_path / "bom.toml"
+    f.write_bytes(b"\xef\xbb\xbf" + _shipped_paper().encode("utf-8"))
+    assert load_scenario(f)["quadrotor.mass"] == 2.0
+
+
+def test_duplicate_key_is_named(tmp_path):
+    f = tmp_path / "dup.toml"
+    f.write_text(_shipped_paper().replace("seed = 2019", "seed = 2019\nduration = 3.0"))
+    with pytest.raises(ScenarioError, match=r"dup\.toml: duplicate key simulation\.duration "
+                                            r"\(line \d+\)$"):
+        load_scenario(f)
+
+
+def test_not_utf8_is_one_line(tmp_path):
+    f = tmp_path / "latin.toml"
+    f.write_bytes(_shipped_paper().replace("Section 4", "Section \xa74").encode("latin-1"))
+    with pytest.raises(ScenarioError, match=r"not UTF-8 text \(byte 0xa7 at line \d+\)"):
+        load_scenario(f)
+
+
+def test_deep_nesting_in_file(tmp_path):
+    f = tmp_path / "deep.toml"
+    f.write_text(_shipped_paper().replace("seed = 2019", "seed = " + "[" * 5000 + "]" * 5000))
+    with pytest.raises(ScenarioError, match=r"nested too deeply"):
+        load_scenario(f)
+
+
+def test_huge_file_is_refused(tmp_path):
+    f = tmp_path / "huge.toml"
+    f.write_text(_shipped_paper() + "#" * (2 << 20))
+    with pytest.raises(ScenarioError, match=r"larger than 1 MiB"):
+        load_scenario(f)
+
+
+def test_file_name_with_odd_characters_gives_a_safe_name(tmp_path):
+    f = tmp_path / "my run (2).toml"
+    f.write_text(_shipped_paper().replace('name = "paper"\n', ""))
+    assert load_scenario(f).name == "my-run--2-"
+
+
+@pytest.mark.parametrize("overrides", [o for o, _ in BAD_OVERRIDES])
+def test_every_bad_override_is_one_short_line(overrides):
+    with pytest.raises(ScenarioError) as info:
+        load_scenario("paper", overrides)
+    text = str(info.value)
+    assert "\n" not in text and len(text) < 300
