@@ -22,7 +22,8 @@ import numpy as np
 import scipy.linalg
 
 from quadland.constants import TILT_MIN
-from quadland.exceptions import OperatingPointError, SingularAttitudeError
+from quadland.exceptions import (MarginsError, OperatingPointError, ScenarioError,
+                                 SingularAttitudeError)
 from quadland.model import model_values
 from quadland.scenario import Scenario
 from symbolic.closed_loop import closed_loop_state
@@ -198,11 +199,26 @@ def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
     is generally not an equilibrium: the linear models then describe the
     loop's local, frozen-time behaviour.
     """
-    from quadland.simulate import simulate
+    from quadland.scenario import MAX_DURATION_S, SCHEMA
+    from quadland.simulate import (MAX_RK4_STEPS, MEMORY_BUDGET, check_plan, simulate,
+                                   simulation_plan)
 
+    shortest = SCHEMA["simulation"]["duration"].lo
+    if not (t == 0 or shortest <= t <= MAX_DURATION_S):
+        raise MarginsError(f"at: must be 0 or in [{shortest:g}, {MAX_DURATION_S:g}] s, got {t:g}")
     mv = model_values(scenario)
     if t > 0:
-        res = simulate(scenario.replace(**{"simulation.duration": float(t)}))
+        upto = scenario.replace(**{"simulation.duration": float(t)})
+        try:
+            check_plan(upto)
+        except ScenarioError:
+            plan = simulation_plan(upto)
+            raise MarginsError(
+                f"at: reaching {t:g} s takes {plan.rows:,} output rows "
+                f"({plan.memory_bytes / 2**30:.1f} GiB) and {plan.rk4_steps:.2g} RK4 steps, "
+                f"over the limits ({MEMORY_BUDGET / 2**30:g} GiB, {MAX_RK4_STEPS:.0e} steps)"
+            ) from None
+        res = simulate(upto)
         x = res.states[-1]
         w = np.array([res[k][-1] for k in DISTURBANCE.element_names()])
     else:

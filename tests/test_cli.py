@@ -181,6 +181,9 @@ def test_margins_unstable_loop_fails(tmp_path, capsys):
 @pytest.mark.parametrize("args, message", [
     (["--at", "-1"], "--at: must be a finite time >= 0 s, got -1.0"),
     (["--at", "inf"], "--at: must be a finite time >= 0 s, got inf"),
+    (["--at", "1e-9"], "--at: must be 0 or in [0.001, 100000] s, got 1e-09"),
+    (["--at", "1e6"], "--at: must be 0 or in [0.001, 100000] s, got 1e+06"),
+    (["--at", "90000"], "--at: reaching 90000 s takes 9,000,001 output rows"),
     (["--gain-margin-db", "-3"], "--gain-margin-db: must be a finite number >= 0, got -3.0"),
     (["--phase-margin-deg", "200"], "--phase-margin-deg: must lie in [0, 180), got 200.0"),
     (["--set", "rbf.nodes=0"], "rbf.nodes: must be in [1, 1000]"),
