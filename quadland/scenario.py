@@ -364,7 +364,9 @@ def _parse_toml(text: str, source: str) -> dict:
         if cause.startswith("Cannot overwrite a value") or cause.startswith("Cannot declare"):
             key = _KEY_RE.match(line)
             name = _duplicate_name(lines, line_no, key.group(1).strip() if key else line.strip())
-            raise ScenarioError(f"{source}: duplicate key {name} (line {line_no})") from None
+            what = "section" if name.startswith("[") else "key"
+            raise ScenarioError(f"{source}: duplicate {what} {_show(name)} (line {line_no})") \
+                from None
         raise ScenarioError(f"{source}: malformed TOML at line {line_no}, column "
                             f"{where.group(2)}: {_show(cause, 80)}") from None
     except RecursionError:

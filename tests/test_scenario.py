@@ -217,3 +217,10 @@ def test_every_bad_override_is_one_short_line(overrides):
         load_scenario("paper", overrides)
     text = str(info.value)
     assert "\n" not in text and len(text) < 300
+
+
+def test_duplicate_section_is_named(tmp_path):
+    f = tmp_path / "dup.toml"
+    f.write_text(_shipped_paper() + "\n[simulation]\nseed = 1\n")
+    with pytest.raises(ScenarioError, match=r"duplicate section \[simulation\] \(line \d+\)$"):
+        load_scenario(f)
