@@ -22,10 +22,10 @@ from quadland.build import build_library, have_compiler
 from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, simulator_sources
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "compiled_loop", "SIM_OK", "SIM_NONFINITE",
-           "SIM_GUARD"]
+           "SIM_GUARD", "SIM_CONTROLLER"]
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
-SIM_OK, SIM_NONFINITE, SIM_GUARD = 0, 1, 2
+SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER = 0, 1, 2, 3
 
 _REAL = ctypes.POINTER(ctypes.c_double)
 _LONG = ctypes.POINTER(ctypes.c_long)
@@ -62,10 +62,14 @@ class CompiledLoop:
         Optimization flag of the build.
     """
 
-    def __init__(self, model: LoopModel, part: str, opt: str = "-O2"):
+    def __init__(self, model: LoopModel, part: str, opt: str = "-O2",
+                 flight: dict[str, str] | None = None):
         self.model, self.part = model, part
         files = simulator_sources(model, part)
         sources = tuple(sorted(n for n in files if n.endswith(".c")))
+        if flight is not None:                       # the flight step's own sources
+            files = {**flight, **files}
+            sources += ("control_step.c", "quadland.c")
         self.library = build_library(files, sources, opt, f"qlsim_{model.name}_{part}",
                                      strict=False)
         lib = ctypes.CDLL(str(self.library))
@@ -166,6 +170,8 @@ class CompiledLoop:
 def compiled_loop(l: int, part: str) -> CompiledLoop | None:
     """The compiled ``part`` of the paper loop's simulator for ``l`` nodes, or None.
 
+    ``part`` is a key of ``symbolic.simulation.SIMULATOR_PARTS``.
+
     None (after one :class:`QuadlandWarning`) when no C compiler is found.
     """
     if part not in SIMULATOR_PARTS:
@@ -173,7 +179,12 @@ def compiled_loop(l: int, part: str) -> CompiledLoop | None:
     if not have_compiler():
         _warn_no_compiler()
         return None
-    return CompiledLoop(paper_loop(l), part)
+    flight = None
+    if part == "sampled_flight":
+        from quadland.cbackend import sources
+
+        flight = sources(l, "double")
+    return CompiledLoop(paper_loop(l), part, flight=flight)
 
 
 @functools.cache

@@ -22,7 +22,7 @@ from collections.abc import Mapping
 import casadi as ca
 import numpy as np
 
-from quadland.compiled import SIM_GUARD, compiled_loop
+from quadland.compiled import SIM_CONTROLLER, SIM_GUARD, compiled_loop
 from quadland.constants import TILT_MIN
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.model import disturbance_samples, model_values
@@ -32,6 +32,7 @@ from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, POSITION1, closed_loop_f
                                   vehicle_measurement)
 from symbolic.control_step import control_step_function, step_outputs
 from symbolic.layout import Field, Layout
+from symbolic.simulation import rk4_step
 from symbolic.quadrotor import DISTURBANCE
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.vehicle import STATE as VEHICLE_STATE
@@ -268,8 +269,9 @@ def simulate(scenario: Scenario) -> SimulationResult:
     w_out = _held(t_dist, w_dist, t_out).T                       # (n_out, nw)
     failure = None
     if scenario.data["controller"]["rate_hz"] > 0:
-        loop = compiled_loop(mv.l, "sampled")
-        if loop is not None and scenario.data["controller"]["backend"] == "casadi":
+        flight = scenario.data["controller"]["backend"] == "c"
+        loop = compiled_loop(mv.l, "sampled_flight" if flight else "sampled")
+        if loop is not None:
             X, held, failure = _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist)
         else:
             X, held = _simulate_sampled(scenario, mv, t_out, t_dist, w_dist)
@@ -383,12 +385,20 @@ def _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist):
         return X, R.T, None
     t = grid[min(failure.index, len(grid) - 1)]
     done = int(np.max(rec[:failure.index + 1], initial=-1)) + 1
-    what = (f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}"
-            if failure.status == SIM_GUARD else "the state became non-finite")
+    what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
+            SIM_CONTROLLER: "the flight control step (controller.backend = \"c\") returned "
+                            "an error status"}.get(failure.status, "the state became non-finite")
     return X, R.T, (done, t, what)
 
 
+@functools.lru_cache(maxsize=4)
+def _rk4_closed_loop(l: int) -> ca.Function:
+    return rk4_step(closed_loop_function(l))
+
+
 def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
+    if scenario.data["simulation"]["integrator"] == "rk":
+        return _continuous_rk4_vm(scenario, mv, t_out, t_dist, t_all, w_dist)
     plugin, opts = _integrator_options(scenario, len(t_all) - 1)
     integ = _continuous_integrator(mv.l, plugin, opts, tuple(t_all))
     w = _held(t_dist, w_dist, t_all[:-1])
@@ -399,6 +409,22 @@ def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
     X = np.hstack([mv.x0[:, None], np.asarray(out["xf"])])
     keep = np.flatnonzero(np.isin(np.round(t_all, 12), np.round(t_out, 12)))
     return np.ascontiguousarray(X[:, keep].T)
+
+
+def _continuous_rk4_vm(scenario, mv, t_out, t_dist, t_all, w_dist):
+    """The compiled driver's method on CasADi's virtual machine: one RK4 step (times
+    ``rk_steps_per_interval``) per interval of the merged grid."""
+    step, m = _rk4_closed_loop(mv.l), scenario.data["simulation"]["rk_steps_per_interval"]
+    W = _held(t_dist, w_dist, t_all[:-1])
+    rec = _grid_index(t_all[1:], t_out)
+    X = np.zeros((len(t_out), len(mv.x0)))
+    X[0] = x = mv.x0
+    for j, h in enumerate(np.diff(t_all)):
+        for _ in range(m):
+            x = step(x, W[:, j], mv.p, h / m)
+        if rec[j] >= 0:
+            X[rec[j]] = np.asarray(x).ravel()
+    return X
 
 
 def _control_step(scenario, l):

@@ -25,7 +25,7 @@ from symbolic.quadrotor import DISTURBANCE, ROTORS, WRENCH, quadrotor_rhs
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.relative import (E1, E2, VIRTUAL_INPUT, disturbance_input, nominal_drift,
                                relative_drift)
-from symbolic.vehicle import MEASUREMENT, vehicle_rhs
+from symbolic.vehicle import vehicle_rhs
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["POSITION1", "PLANT_STATE", "OUTPUTS", "closed_loop_state", "closed_loop_params",

@@ -31,7 +31,7 @@ from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from symbolic.quadrotor import DISTURBANCE, quadrotor_rhs
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.relative import VIRTUAL_INPUT, wrench_from_virtual
-from symbolic.vehicle import MEASUREMENT, vehicle_rhs
+from symbolic.vehicle import vehicle_rhs
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["RELATIVE_PLANT", "FROZEN_VEHICLE", "VEHICLE_SPEEDS", "controller_states",

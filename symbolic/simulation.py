@@ -31,14 +31,31 @@ import jinja2
 from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, closed_loop_function,
                                   closed_loop_outputs, closed_loop_params, closed_loop_state,
                                   plant_function, vehicle_measurement)
-from symbolic.control_step import control_step_function, step_outputs
+from symbolic.control_step import control_step_function, step_inputs, step_outputs
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from symbolic.quadrotor import DISTURBANCE, WRENCH
 from symbolic.backstepping import REFERENCE
 
-__all__ = ["LoopModel", "paper_loop", "controller_state", "controller_params",
+__all__ = ["rk4_step", "LoopModel", "paper_loop", "controller_state", "controller_params",
            "PLANT_PARAMS", "RECORDED", "SIMULATOR_PARTS", "simulator_sources"]
+
+
+def rk4_step(f: ca.Function) -> ca.Function:
+    """One classical RK4 step of ``x' = f(x, *u)``, the inputs after ``x`` held.
+
+    ``rk4(x, *u, h) -> x_next``: the step the compiled drivers take, for
+    CasADi's virtual machine (the fallback without a C compiler).
+    """
+    args = [ca.MX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
+    h = ca.MX.sym("h")
+    x, u = args[0], args[1:]
+    k1 = f(x, *u)
+    k2 = f(x + h / 2 * k1, *u)
+    k3 = f(x + h / 2 * k2, *u)
+    k4 = f(x + h * k3, *u)
+    return ca.Function(f"{f.name()}_rk4", [*args, h], [x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)],
+                       [*f.name_in(), "h"], [f"{f.name_out(0)}_next"])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +75,11 @@ class LoopModel:
         ``pc`` and ``rec``.
     plant, controller, assemble : casadi.Function
         The sampled-data loop's functions (see the module docstring).
+    step_args : casadi.Function
+        ``step_args(xp, xc, pc, first) -> (...)``: the control step's
+        arguments (``symbolic.control_step.step_inputs``) as the controller
+        forms them. The flight code's step behind the controller's flat
+        signature (part ``"sampled_flight"``) starts from it.
     """
 
     name: str
@@ -76,10 +98,12 @@ class LoopModel:
     plant: ca.Function
     controller: ca.Function
     assemble: ca.Function
+    step_args: ca.Function
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
-        return (self.rhs, self.output_fn, self.plant, self.controller, self.assemble)
+        return (self.rhs, self.output_fn, self.plant, self.controller, self.assemble,
+                self.step_args)
 
 
 #: What the sampled loop records of each control step: the held signals.
@@ -143,9 +167,11 @@ def paper_loop(l: int) -> LoopModel:
     xs, cs, ps = PLANT_STATE.unpack(xp), xc_lay.unpack(xc), pc_lay.unpack(pc)
     yv = vehicle_measurement(xs["xv"], ps["p_veh"])
     hold = (1 - first) * ps["hold"]                  # no previous command on the first step
-    res = dict(zip(step_outputs(l).names(), control_step_function(l)(
-        xs["xq"], yv, ps["ref"], cs["W_hat"], cs["zeta_hat"], cs["u_prev"], ps["p_quad"],
-        ps["p_ctrl"], ps["rotor_limits"], hold, ps["dt"])))
+    args = [xs["xq"], yv, ps["ref"], cs["W_hat"], cs["zeta_hat"], cs["u_prev"], ps["p_quad"],
+            ps["p_ctrl"], ps["rotor_limits"], hold, ps["dt"]]
+    step_args = _named("step_args", [xp, xc, pc, first], [ca.vec(a) for a in args],
+                       ["xp", "xc", "pc", "first"], list(step_inputs(l).names()))
+    res = dict(zip(step_outputs(l).names(), control_step_function(l)(*args)))
     controller = _named(
         "controller", [xp, xc, pc, first],
         [ca.vertcat(ca.vec(res["W_next"]), res["zeta_next"], res["u_law"]), res["wrench"],
@@ -156,7 +182,7 @@ def paper_loop(l: int) -> LoopModel:
     assemble = _named("assemble", [xp, xc], [x_of], ["xp", "xc"], ["x"])
     return LoopModel("paper", state, DISTURBANCE, params, OUTPUTS, rhs, output_fn,
                      PLANT_STATE, WRENCH, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
-                     controller, assemble)
+                     controller, assemble, step_args)
 
 
 _TEMPLATES = jinja2.Environment(
@@ -165,9 +191,14 @@ _TEMPLATES = jinja2.Environment(
     lstrip_blocks=True)
 
 
-#: The parts of a compiled simulator: the functions each loop kind calls.
-SIMULATOR_PARTS = {"continuous": ("rhs", "outputs"),
-                   "sampled": ("plant", "controller", "assemble", "outputs")}
+#: The parts of a compiled simulator: each one's driver and the functions it calls.
+#: ``"sampled_flight"`` flies the flight code's step (``quadland.h``,
+#: ``ql_control_step``) in place of the symbolic controller, through the
+#: adapter ``symbolic/templates/flight_controller.c.jinja``; its build adds
+#: the flight sources.
+SIMULATOR_PARTS = {"continuous": ("continuous", ("rhs", "outputs")),
+                   "sampled": ("sampled", ("plant", "controller", "assemble", "outputs")),
+                   "sampled_flight": ("sampled", ("plant", "step_args", "assemble", "outputs"))}
 
 
 def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
@@ -195,8 +226,9 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
     prefix = f"qlsim_{model.name}_"
     by_name = {f.name(): f for f in model.functions()}
+    driver, names = SIMULATOR_PARTS[part]
     files, fns = {}, []
-    for name in SIMULATOR_PARTS[part]:
+    for name in names:
         f = by_name[name]
         args = f.sx_in()
         fn = ca.Function(prefix + name, args, f.call(args), f.name_in(), f.name_out())
@@ -213,9 +245,26 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
                  NY=model.outputs.size, NXP=model.plant_state.size, NUH=model.held.size,
                  NXC=model.controller_state.size, NPP=model.plant_params.size,
                  NPC=model.controller_params.size, NREC=model.recorded.size)
+    headers = [n for n in names if n != "step_args"] + (
+        ["controller"] if part == "sampled_flight" else [])
     files[f"{prefix}{part}.c"] = _TEMPLATES.get_template("simulator.c.jinja").render(
-        prefix=prefix, model=model.name, part=part, functions=SIMULATOR_PARTS[part],
+        prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
         casadi_version=ca.__version__, sizes=sizes,
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))
+    if part == "sampled_flight":
+        args = by_name["step_args"]
+        offsets = {lay.name: lay.offsets() for lay in (model.controller_state, model.recorded)}
+        files[f"{prefix}controller.h"] = (
+            f"/* {prefix}controller: the flight step behind the controller's signature. */\n"
+            f"#include \"{prefix}step_args.h\"\n"
+            f"int {prefix}controller(const casadi_real** arg, casadi_real** res, "
+            "casadi_int* iw, casadi_real* w, int mem);\n")
+        files[f"{prefix}controller.c"] = _TEMPLATES.get_template(
+            "flight_controller.c.jinja").render(
+            prefix=prefix, model=model.name, casadi_version=ca.__version__,
+            args=[(n, args.nnz_out(i)) for i, n in enumerate(args.name_out())],
+            sz_iw=args.sz_iw(), sz_w=args.sz_w(),
+            xc=[(f.name, offsets["xc"][f.name][0]) for f in model.controller_state.fields],
+            rec=[(f.name, offsets["rec"][f.name][0]) for f in model.recorded.fields])
     return files
