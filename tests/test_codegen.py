@@ -14,9 +14,9 @@ from quadland import cbackend, codegen
 from quadland.build import find_compiler
 from quadland.cli import main as cli_main
 from quadland.exceptions import CompilerNotFoundError
+from quadland.scenario import load_scenario
 from quadland.simulate import TRAJECTORY
 from symbolic.c_api import api_structs
-from symbolic.closed_loop import closed_loop_state
 from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, example_columns, generate
 
 GENERATED_DIR = codegen.generated_dir()
@@ -185,7 +185,7 @@ def test_generated_holds_the_paper_scenario_only(capsys):
 
 
 def test_codegen_for_a_scenario_file(tmp_path, capsys):
-    paper = codegen.load_scenario("paper")
+    paper = load_scenario("paper")
     text = open(paper.source).read().replace('name = "paper"', 'name = "mine"')
     text = re.sub(r"(?m)^nodes = \d+", "nodes = 7", text)
     (tmp_path / "mine.toml").write_text(text)
@@ -367,4 +367,3 @@ def test_any_node_count_compiles_alone(tmp_path):
                                    "-fsyntax-only", f"-I{folder}", str(folder / name)],
                                   capture_output=True, text=True)
             assert proc.returncode == 0, proc.stderr
-    assert closed_loop_state(3).size == 16 + 4 * 3 + 4 + 2
