@@ -333,7 +333,7 @@ def _siso_margins(i, lvals, grid, resp, stable) -> Margins:
     wp = [w for w in wp if _determined(resp, i, w)]
     gm = tuple(-1.0 / l_of(w).real for w in wp)
     pm = tuple(_wrap180(math.degrees(np.angle(l_of(w))) + 180.0) for w in wc)
-    dm = tuple(math.radians(p % 360.0) / w for p, w in zip(pm, wc))
+    dm = tuple(math.radians(p % 360.0) / w for p, w in zip(pm, wc, strict=True))
     return Margins(gm, tuple(float(w) for w in wp), pm, tuple(float(w) for w in wc), dm,
                    tuple(float(w) for w in wc), stable)
 

@@ -139,8 +139,8 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
         for fname, text in files.items():
             Path(tmp, fname).write_text(text)
         objects = [str(Path(c).with_suffix(".o")) for c in compile_]
-        _run_parallel([[cc, *cflags, "-c", c, "-o", o] for c, o in zip(compile_, objects)],
-                      tmp, cc)
+        _run_parallel([[cc, *cflags, "-c", c, "-o", o]
+                       for c, o in zip(compile_, objects, strict=True)], tmp, cc)
         out = Path(tmp, f"{name}.so")
         _run_parallel([[cc, SHARED_CFLAGS[-1], "-o", str(out), *objects, "-lm"]], tmp, cc)
         os.replace(out, target)

@@ -22,13 +22,22 @@ import numpy as np
 import scipy.linalg
 
 from quadland.constants import TILT_MIN
-from quadland.exceptions import (MarginsError, OperatingPointError, ScenarioError,
-                                 SingularAttitudeError)
+from quadland.exceptions import (
+    MarginsError,
+    OperatingPointError,
+    ScenarioError,
+    SingularAttitudeError,
+)
 from quadland.model import model_values
 from quadland.scenario import Scenario
 from symbolic.closed_loop import closed_loop_state
-from symbolic.linearization import (RELATIVE_PLANT, VEHICLE_SPEEDS, controller_states,
-                                    equilibrium_residual_function, linearization_function)
+from symbolic.linearization import (
+    RELATIVE_PLANT,
+    VEHICLE_SPEEDS,
+    controller_states,
+    equilibrium_residual_function,
+    linearization_function,
+)
 from symbolic.parameters import VEHICLE
 from symbolic.quadrotor import DISTURBANCE
 from symbolic.relative import VIRTUAL_INPUT
@@ -87,7 +96,7 @@ class OperatingPoint:
         """JSON-ready summary."""
         return dict(kind=self.kind, time_s=self.time,
                     state={n: float(v) for n, v in
-                           zip(RELATIVE_PLANT.element_names(), self.xr)},
+                           zip(RELATIVE_PLANT.element_names(), self.xr, strict=True)},
                     zeta_hat=self.xc[-4:].tolist(),
                     norm_W_hat=float(np.linalg.norm(self.xc[:-4])),
                     vehicle=dict(u2=float(self.vehicle[0]), v2=float(self.vehicle[1]),
@@ -200,8 +209,13 @@ def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
     loop's local, frozen-time behaviour.
     """
     from quadland.scenario import MAX_DURATION_S, SCHEMA
-    from quadland.simulate import (MAX_RK4_STEPS, MEMORY_BUDGET, check_plan, simulate,
-                                   simulation_plan)
+    from quadland.simulate import (
+        MAX_RK4_STEPS,
+        MEMORY_BUDGET,
+        check_plan,
+        simulate,
+        simulation_plan,
+    )
 
     shortest = SCHEMA["simulation"]["duration"].lo
     if not (t == 0 or shortest <= t <= MAX_DURATION_S):

@@ -395,7 +395,7 @@ def _loop_report(L: control.StateSpace, names, req: Requirement,
     classical = allmargin(L)
     per_loop, multi = diskmargin(L)
     loops = tuple(_loop_margins(name, cm, dm, req)
-                  for name, cm, dm in zip(names, classical, per_loop))
+                  for name, cm, dm in zip(names, classical, per_loop, strict=True))
     multi_ok = (_db(multi.gain_margin[1]) >= req.gain_margin_db
                 and multi.phase_margin >= req.phase_margin_deg)
     stable = bool(classical[0].stable)
@@ -450,8 +450,13 @@ def margin_report(scenario: Scenario, at: float | None = None,
     """
     if at is not None and not (math.isfinite(at) and at >= 0):
         raise MarginsError(f"at: must be a finite time >= 0 s, got {at}")
-    from quadland.linearize import (LOOP_NAMES, equilibrium, frozen_point, linear_models,
-                                    sampled_models)
+    from quadland.linearize import (
+        LOOP_NAMES,
+        equilibrium,
+        frozen_point,
+        linear_models,
+        sampled_models,
+    )
 
     point = equilibrium(scenario) if at is None else frozen_point(scenario, at)
     models = linear_models(scenario, point)

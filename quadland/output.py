@@ -63,7 +63,7 @@ class OutputFolder:
     def _lock_path(self) -> Path:
         return self.path.parent / f".{self.path.name}.lock"
 
-    def claim(self) -> "OutputFolder":
+    def claim(self) -> OutputFolder:
         """Check the target and lock it against other runs; nothing is written yet."""
         if self._lock_fd is not None:
             return self
@@ -99,7 +99,7 @@ class OutputFolder:
             os.close(self._lock_fd)
             self._lock_fd = None
 
-    def __enter__(self) -> "OutputFolder":
+    def __enter__(self) -> OutputFolder:
         return self.claim()
 
     def __exit__(self, *exc) -> None:

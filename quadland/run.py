@@ -10,8 +10,8 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from quadland.metrics import summarize
 from quadland.exceptions import SimulationError
+from quadland.metrics import summarize
 from quadland.output import figure_png, output_folder
 from quadland.scenario import Scenario, load_scenario
 from quadland.simulate import SimulationResult, columns_sidecar, simulate

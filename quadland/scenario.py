@@ -252,7 +252,7 @@ class Scenario:
             lines.append("")
         return "\n".join(lines)
 
-    def replace(self, **changes) -> "Scenario":
+    def replace(self, **changes) -> Scenario:
         """A new validated scenario with ``{"section.key": value}`` changes."""
         raw = self.to_dict()
         for dotted, value in changes.items():
@@ -455,8 +455,8 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario") -> dict
             raise ScenarioError(f"{source}: [{section}] must be a table")
         for key in table:
             if key not in SCHEMA[section]:
-                raise ScenarioError(f"{source}: "
-                                    f"{_unknown('key', f'{section}.{_show(key)}', _dotted(section))}")
+                dotted = f"{section}.{_show(key)}"
+                raise ScenarioError(f"{source}: {_unknown('key', dotted, _dotted(section))}")
     for section, fields in SCHEMA.items():
         table = raw.get(section, {})
         out[section] = {}

@@ -27,18 +27,26 @@ from quadland.constants import TILT_MIN
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.model import disturbance_samples, model_values
 from quadland.scenario import Scenario
-from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, POSITION1, closed_loop_function,
-                                  closed_loop_outputs, closed_loop_state, plant_function,
-                                  vehicle_measurement)
+from symbolic.closed_loop import (
+    OUTPUTS,
+    PLANT_STATE,
+    POSITION1,
+    closed_loop_function,
+    closed_loop_outputs,
+    closed_loop_state,
+    plant_function,
+    vehicle_measurement,
+)
 from symbolic.control_step import control_step_function, step_outputs
 from symbolic.layout import Field, Layout
-from symbolic.simulation import rk4_step
 from symbolic.quadrotor import DISTURBANCE
 from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.simulation import rk4_step
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
-           "time_grid", "SimulationPlan", "simulation_plan", "check_plan", "MEMORY_BUDGET", "MAX_RK4_STEPS"]
+           "time_grid", "SimulationPlan", "simulation_plan", "check_plan", "MEMORY_BUDGET",
+           "MAX_RK4_STEPS"]
 
 #: Most memory a simulation may plan for its arrays, bytes.
 MEMORY_BUDGET = 2 << 30
@@ -57,9 +65,9 @@ class SimulationPlan:
     rows : int
         Output rows (trajectory.csv).
     intervals : int
-        Hold intervals of the merged time grid (at most).
+        Hold intervals of the merged time grid (an upper bound).
     rk4_steps : int
-        RK4 steps of the whole run.
+        RK4 steps of the whole run (an upper bound).
     memory_bytes : int
         Memory for its arrays (states, outputs, columns, grid), bytes.
     """
@@ -77,8 +85,8 @@ def simulation_plan(scenario: Scenario) -> SimulationPlan:
     --------
     >>> import quadland
     >>> plan = simulation_plan(quadland.load_scenario("paper"))
-    >>> plan.rows, plan.rk4_steps
-    (1001, 2002)
+    >>> plan.rows, plan.rk4_steps <= 2004, plan.memory_bytes < 2**23
+    (1001, True, True)
     """
     sim, ctrl, dist = (scenario.data[k] for k in ("simulation", "controller", "disturbance"))
     T = sim["duration"]
@@ -123,7 +131,7 @@ TRAJECTORY = Layout("trajectory", (
 ), "one row per output time of a simulation")
 
 #: Columns of trajectory.csv: (name, unit).
-COLUMNS = tuple(zip(TRAJECTORY.element_names(), TRAJECTORY.element_units()))
+COLUMNS = tuple(zip(TRAJECTORY.element_names(), TRAJECTORY.element_units(), strict=True))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -169,7 +177,7 @@ def columns_sidecar() -> dict:
     """``columns.json``: each CSV column's unit and meaning, in column order."""
     return {"columns": [dict(name=n, unit=u, doc=d) for n, u, d in
                         zip(TRAJECTORY.element_names(), TRAJECTORY.element_units(),
-                            TRAJECTORY.element_docs())]}
+                            TRAJECTORY.element_docs(), strict=True)]}
 
 
 def time_grid(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -259,8 +267,8 @@ def simulate(scenario: Scenario) -> SimulationResult:
     >>> import quadland
     >>> sc = quadland.load_scenario("paper", ["simulation.duration=0.5"])
     >>> res = quadland.simulate(sc)
-    >>> res["t"][-1]
-    0.5
+    >>> float(res["t"][-1]), len(res["t"])
+    (0.5, 51)
     """
     check_plan(scenario)
     mv = model_values(scenario)
@@ -530,6 +538,6 @@ def _result(scenario, mv, t_out, w_out, X, Y, held):
     cols = {}
     for f in TRAJECTORY.fields:
         rows = np.asarray(data[f.name], dtype=float).reshape(f.size, -1)
-        cols.update(zip(f.element_names(), rows))
+        cols.update(zip(f.element_names(), rows, strict=True))
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
                                        for k, v in cols.items()}, X)

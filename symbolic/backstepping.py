@@ -18,12 +18,18 @@ import casadi as ca
 from symbolic.kinematics import euler_rate_matrix_inv
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, controller_layout
-from symbolic.quadrotor import ROTORS, WRENCH
+from symbolic.quadrotor import ROTORS, WRENCH, rotors_from_wrench
 from symbolic.quadrotor import STATE as QUAD_STATE
-from symbolic.quadrotor import rotors_from_wrench
 from symbolic.rbf import rbf, rbf_input
-from symbolic.relative import (E1, E2, VIRTUAL_INPUT, error_rate_matrix, nominal_drift,
-                               relative_states, wrench_from_virtual)
+from symbolic.relative import (
+    E1,
+    E2,
+    VIRTUAL_INPUT,
+    error_rate_matrix,
+    nominal_drift,
+    relative_states,
+    wrench_from_virtual,
+)
 from symbolic.vehicle import MEASUREMENT
 
 __all__ = ["REFERENCE", "ADAPTIVE_UNITS", "controller_outputs", "virtual_control",
@@ -94,8 +100,9 @@ def control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl):
     Returns a dict with ``u`` (eq. 20), ``W_hat_dot`` and ``zeta_hat_dot``
     (eq. 22), the physical ``wrench`` and ``rotor`` forces, and the
     intermediate signals ``e1, e2, bs_z1, bs_z2, alpha, alpha_dot, Psi,
-    Delta_hat`` (the fields of :func:`controller_outputs`). With ``nominal_model = 1`` the quadrotor's own known drift
-    (gravity, drag, gyroscopic terms) is fed forward, so that the network
+    Delta_hat`` (the fields of :func:`controller_outputs`). With
+    ``nominal_model = 1`` the quadrotor's own known drift (gravity, drag,
+    gyroscopic terms) is fed forward, so that the network
     estimates only the remainder of ``Delta = f + d``.
     """
     l = W_hat.shape[0]

@@ -23,10 +23,16 @@ from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from symbolic.quadrotor import DISTURBANCE, ROTORS, WRENCH, quadrotor_rhs
 from symbolic.quadrotor import STATE as QUAD_STATE
-from symbolic.relative import (E1, E2, VIRTUAL_INPUT, disturbance_input, nominal_drift,
-                               relative_drift)
-from symbolic.vehicle import vehicle_rhs
+from symbolic.relative import (
+    E1,
+    E2,
+    VIRTUAL_INPUT,
+    disturbance_input,
+    nominal_drift,
+    relative_drift,
+)
 from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import vehicle_rhs
 
 __all__ = ["POSITION1", "PLANT_STATE", "OUTPUTS", "closed_loop_state", "closed_loop_params",
            "closed_loop_rhs", "closed_loop_function", "closed_loop_jacobian_function",

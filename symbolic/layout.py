@@ -60,7 +60,7 @@ class Field:
     doc: str
     shape: tuple[int, int] | None = None
     elements: tuple[str, ...] | None = None
-    layout: "Layout | None" = None
+    layout: Layout | None = None
     ctype: str = "real"
 
     def __post_init__(self):
@@ -80,7 +80,7 @@ class Field:
             raise ValueError(f"{self.name}: ctype must be 'real' or 'int'")
 
     @classmethod
-    def nested(cls, name: str, layout: "Layout", doc: str) -> "Field":
+    def nested(cls, name: str, layout: Layout, doc: str) -> Field:
         """A field that holds a whole other layout."""
         return cls(name, layout.size, "", doc, layout=layout)
 

@@ -31,8 +31,8 @@ from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from symbolic.quadrotor import DISTURBANCE, quadrotor_rhs
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.relative import VIRTUAL_INPUT, wrench_from_virtual
-from symbolic.vehicle import vehicle_rhs
 from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import vehicle_rhs
 
 __all__ = ["RELATIVE_PLANT", "FROZEN_VEHICLE", "VEHICLE_SPEEDS", "controller_states",
            "relative_plant_rhs", "loop_signals", "linearization_function",

@@ -143,7 +143,8 @@ def relative_function() -> ca.Function:
     return ca.Function(
         "relative",
         [xq, xv, yv, wrench, d_F, d_M, p_quad, p_veh],
-        [e1, e2, error_rate_matrix(QUAD_STATE.unpack(xq)["eta1"]), relative_drift(xq, xv, p_quad, p_veh),
+        [e1, e2, error_rate_matrix(QUAD_STATE.unpack(xq)["eta1"]),
+         relative_drift(xq, xv, p_quad, p_veh),
          virtual_input(xq, wrench, p_quad), disturbance_input(xq, d_F, d_M, p_quad)],
         ["xq", "xv", "yv", "wrench", "d_F", "d_M", "p_quad", "p_veh"],
         ["e1", "e2", "R", "f", "u", "d"],

@@ -28,14 +28,21 @@ from pathlib import Path
 import casadi as ca
 import jinja2
 
-from symbolic.closed_loop import (OUTPUTS, PLANT_STATE, closed_loop_function,
-                                  closed_loop_outputs, closed_loop_params, closed_loop_state,
-                                  plant_function, vehicle_measurement)
+from symbolic.backstepping import REFERENCE
+from symbolic.closed_loop import (
+    OUTPUTS,
+    PLANT_STATE,
+    closed_loop_function,
+    closed_loop_outputs,
+    closed_loop_params,
+    closed_loop_state,
+    plant_function,
+    vehicle_measurement,
+)
 from symbolic.control_step import control_step_function, step_inputs, step_outputs
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from symbolic.quadrotor import DISTURBANCE, WRENCH
-from symbolic.backstepping import REFERENCE
 
 __all__ = ["rk4_step", "LoopModel", "paper_loop", "controller_state", "controller_params",
            "PLANT_PARAMS", "RECORDED", "SIMULATOR_PARTS", "simulator_sources"]
@@ -171,7 +178,7 @@ def paper_loop(l: int) -> LoopModel:
             ps["p_ctrl"], ps["rotor_limits"], hold, ps["dt"]]
     step_args = _named("step_args", [xp, xc, pc, first], [ca.vec(a) for a in args],
                        ["xp", "xc", "pc", "first"], list(step_inputs(l).names()))
-    res = dict(zip(step_outputs(l).names(), control_step_function(l)(*args)))
+    res = dict(zip(step_outputs(l).names(), control_step_function(l)(*args), strict=True))
     controller = _named(
         "controller", [xp, xc, pc, first],
         [ca.vertcat(ca.vec(res["W_next"]), res["zeta_next"], res["u_law"]), res["wrench"],

@@ -7,8 +7,14 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from quadland.analysis import (allmargin, closed_loop_poles, disk_gain_margin,
-                               disk_phase_margin, diskmargin, freqresp)
+from quadland.analysis import (
+    allmargin,
+    closed_loop_poles,
+    disk_gain_margin,
+    disk_phase_margin,
+    diskmargin,
+    freqresp,
+)
 
 
 def _third_order():

@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 from reference import error_rate_matrix
 
 from quadland.model import model_values
@@ -34,7 +33,7 @@ def _controller_signals(sc, res):
     W_blocks = np.hstack([xs["W_hat"][:, :, k] for k in range(X.shape[1])])
     out = ctrl(xs["xq"], yv, mv.ref, W_blocks, xs["zeta_hat"], mv.p_quad, mv.p_ctrl)
     names = controller_function(mv.l).name_out()
-    return {n: np.array(v) for n, v in zip(names, out)}
+    return {n: np.array(v) for n, v in zip(names, out, strict=True)}
 
 
 def test_alpha_dot_matches_finite_difference(fine_run):
@@ -75,16 +74,18 @@ def test_lyapunov_v1_decreases_while_far(fine_run):
 
 
 def test_adaptive_law_by_hand(values, rng):
-    """W_hat_dot = gamma1 (Psi z2' - k_w W_hat), zeta_hat_dot = gamma2 (tanh(z2/rho) z2 - k_zeta zeta_hat)."""
+    """W_hat_dot = gamma1 (Psi z2' - k_w W_hat) and
+    zeta_hat_dot = gamma2 (tanh(z2/rho) z2 - k_zeta zeta_hat) (eq. 22)."""
     l = values.l
     ctrl = controller_function(l)
     xq = np.concatenate([[1.0], rng.uniform(-0.5, 0.5, 3), rng.normal(size=6)])
     W, zeta = rng.normal(size=(l, 4)) * 0.1, rng.normal(size=4)
     out = dict(zip(ctrl.name_out(), ctrl(xq, [0, 0.3, 0.05], values.ref, W, zeta,
-                                          values.p_quad, values.p_ctrl)))
+                                          values.p_quad, values.p_ctrl), strict=True))
     Psi, z2 = np.array(out["Psi"]).ravel(), np.array(out["bs_z2"]).ravel()
     g1, g2, kw, kz, rho = 0.05, 0.1, 5.0, 0.1, 0.1
-    np.testing.assert_allclose(np.array(out["W_hat_dot"]), g1 * (np.outer(Psi, z2) - kw * W), atol=1e-14)
+    np.testing.assert_allclose(np.array(out["W_hat_dot"]), g1 * (np.outer(Psi, z2) - kw * W),
+                               atol=1e-14)
     np.testing.assert_allclose(np.array(out["zeta_hat_dot"]).ravel(),
                                g2 * (np.tanh(z2 / rho) * z2 - kz * zeta), atol=1e-14)
     np.testing.assert_allclose(np.array(out["Delta_hat"]).ravel(), W.T @ Psi, atol=1e-14)
@@ -104,8 +105,8 @@ def test_control_law_by_hand(values, rng, nominal):
     xq = np.concatenate([[0.8], rng.uniform(-0.5, 0.5, 3), rng.normal(size=6)])
     yv = np.array([0.1, 0.2, 0.07])
     W, zeta = rng.normal(size=(l, 4)) * 0.1, rng.normal(size=4)
-    out = {k: np.array(v) for k, v in zip(ctrl.name_out(), ctrl(xq, yv, values.ref, W, zeta,
-                                                                 values.p_quad, p_ctrl))}
+    values_out = ctrl(xq, yv, values.ref, W, zeta, values.p_quad, p_ctrl)
+    out = {k: np.array(v) for k, v in zip(ctrl.name_out(), values_out, strict=True)}
     z1, z2, Psi = out["bs_z1"].ravel(), out["bs_z2"].ravel(), out["Psi"].ravel()
     k2, rho = np.array([2.0, 4, 10, 10]), 0.1
     phi, th = xq[1], xq[2]

@@ -11,8 +11,16 @@ from threadpoolctl import threadpool_limits
 from quadland.analysis import DiskMargin, Margins
 from quadland.cli import main
 from quadland.exceptions import MarginsError
-from quadland.margins import (LoopMargins, LoopReport, MarginReport, MultiloopDiskMargin,
-                              PoleSummary, Requirement, format_report, margin_report)
+from quadland.margins import (
+    LoopMargins,
+    LoopReport,
+    MarginReport,
+    MultiloopDiskMargin,
+    PoleSummary,
+    Requirement,
+    format_report,
+    margin_report,
+)
 from quadland.scenario import load_scenario
 
 SMALL = ["rbf.nodes=5"]

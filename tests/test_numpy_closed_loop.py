@@ -8,7 +8,6 @@ states checks both derivations against each other. The SciPy baseline of
 
 import numpy as np
 import pytest
-
 from numpy_closed_loop import numpy_rhs, random_states
 
 import quadland

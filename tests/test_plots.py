@@ -12,10 +12,21 @@ from threadpoolctl import threadpool_limits
 
 import quadland
 from quadland.margins import margin_report
-from quadland.plots import (MARGIN_FIGURES, SIMULATION_FIGURES, bode_plot, control_inputs_plot,
-                            ground_track_plot, margin_figures, nyquist_plot, pole_plot,
-                            relative_errors_plot, sigma_plot, simulation_figures,
-                            uncertainty_plot, velocity_errors_plot)
+from quadland.plots import (
+    MARGIN_FIGURES,
+    SIMULATION_FIGURES,
+    bode_plot,
+    control_inputs_plot,
+    ground_track_plot,
+    margin_figures,
+    nyquist_plot,
+    pole_plot,
+    relative_errors_plot,
+    sigma_plot,
+    simulation_figures,
+    uncertainty_plot,
+    velocity_errors_plot,
+)
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +91,7 @@ def test_error_figures_plot_the_columns(result, plot, first, rest):
     fig = plot(result)
     assert isinstance(fig, Figure) and len(fig.axes) == 4
     expected = [result[first]] + [np.rad2deg(result[n]) for n in rest]
-    for a, name, y in zip(fig.axes, (first, *rest), expected):
+    for a, name, y in zip(fig.axes, (first, *rest), expected, strict=True):
         (line,) = a.lines
         x, yy = _data(line)
         np.testing.assert_array_equal(x, result["t"])
@@ -108,7 +119,7 @@ def test_uncertainty_plot(result, nominal):
     for k, a in enumerate(fig.axes, start=1):
         names = [f"Delta_{k}"] + ([f"Delta_target_{k}"] if nominal else []) + [f"Delta_hat_{k}"]
         assert len(a.lines) == len(names)
-        for line, name in zip(a.lines, names):
+        for line, name in zip(a.lines, names, strict=True):
             np.testing.assert_array_equal(_data(line)[1], res[name])
         assert a.lines[-1].get_linestyle() == "--"
     assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-1] == "W_hat^T Psi"
@@ -138,7 +149,7 @@ def test_bode_is_the_loop_with_the_others_closed(report, figures):
     fig = figures["bode.png"]
     top, bottom = fig.axes[:4], fig.axes[4:]
     names = [m.name for m in report.continuous.loops]
-    for i, (mag, phase, name) in enumerate(zip(top, bottom, names)):
+    for i, (mag, phase, name) in enumerate(zip(top, bottom, names, strict=True)):
         assert mag.get_title() == f"{name} loop (others closed)"
         w, db = _data(mag.lines[0])
         w2, deg = _data(phase.lines[0])
@@ -201,9 +212,9 @@ def test_single_plots_equal_the_set(report, figures):
                        (sigma_plot, "sigma.png"), (pole_plot, "poles.png")):
         fig = plot(report)
         assert isinstance(fig, Figure)
-        for a, b in zip(fig.axes, figures[name].axes):
+        for a, b in zip(fig.axes, figures[name].axes, strict=True):
             assert len(a.lines) == len(b.lines)
-            for la, lb in zip(a.lines, b.lines):
+            for la, lb in zip(a.lines, b.lines, strict=True):
                 np.testing.assert_array_equal(la.get_xydata(), lb.get_xydata())
 
 

@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 from reference import euler_rate_matrix
 
 from symbolic.parameters import QUADROTOR, VEHICLE
@@ -13,7 +12,8 @@ REL = relative_function()
 
 def _rot(eta):
     phi, th, psi = eta
-    cf, sf, ct, st, cp, sp = np.cos(phi), np.sin(phi), np.cos(th), np.sin(th), np.cos(psi), np.sin(psi)
+    cf, sf, ct, st = np.cos(phi), np.sin(phi), np.cos(th), np.sin(th)
+    cp, sp = np.cos(psi), np.sin(psi)
     return np.array([[cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
                      [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],
                      [-st, ct * sf, ct * cf]])
@@ -36,7 +36,8 @@ def _newton_euler(xq, xv, wrench, d_F, d_M, pq, pv):
         np.cos(psi2) * u2 - np.sin(psi2) * v2, np.sin(psi2) * u2 + np.cos(psi2) * v2, r2,
         (tx + m22 * v2 * r2 - pv["d11"][0] * u2) / m11,
         (ty - m11 * u2 * r2 - pv["d22"][0] * v2) / m22,
-        (tz - m22 * v2 * u2 + m11 * u2 * v2 - pv["d33"][0] * r2) / m33])   # C2 V2 = (m22 v2 u2 - m11 u2 v2)
+        # C2 V2 = (m22 v2 u2 - m11 u2 v2)
+        (tz - m22 * v2 * u2 + m11 * u2 * v2 - pv["d33"][0] * r2) / m33])
     return xq_dot, xv_dot
 
 
@@ -60,7 +61,8 @@ def test_relative_dynamics_against_newton_euler(values, seed):
     pq, pv = QUADROTOR.unpack(values.p_quad), VEHICLE.unpack(pv_vec)
     xq = np.concatenate([[rng.normal()], rng.uniform(-1.0, 1.0, 3), rng.normal(size=6)])
     xv = np.concatenate([rng.normal(size=2), rng.uniform(-3, 3, 1), rng.normal(size=3)])
-    wrench, d_F, d_M = rng.normal(size=4) * [20, 1, 1, 1], rng.normal(size=3), rng.normal(size=3) * 0.1
+    wrench = rng.normal(size=4) * [20, 1, 1, 1]
+    d_F, d_M = rng.normal(size=3), rng.normal(size=3) * 0.1
     xq_dot, xv_dot = _newton_euler(xq, xv, wrench, d_F, d_M, pq, pv)
     h = 1e-5
     z2 = pv["z2"][0]
@@ -69,7 +71,8 @@ def test_relative_dynamics_against_newton_euler(values, seed):
     e2_dot_fd = (e2p - e2m) / (2 * h)
     e1_dot_fd = (e1p - e1m) / (2 * h)
     yv = [z2, xv[2], xv[5]]
-    e1, e2, R, f, u, d = (np.array(v) for v in REL(xq, xv, yv, wrench, d_F, d_M, values.p_quad, pv_vec))
+    e1, e2, R, f, u, d = (np.array(v)
+                          for v in REL(xq, xv, yv, wrench, d_F, d_M, values.p_quad, pv_vec))
     np.testing.assert_allclose((f + u + d).ravel(), e2_dot_fd, rtol=1e-6, atol=1e-7)
     # d/dt e1 = R e2 (eq. 10)
     np.testing.assert_allclose((R @ e2).ravel(), e1_dot_fd, rtol=1e-6, atol=1e-7)

@@ -84,17 +84,20 @@ BAD_OVERRIDES = [
     (["simulation.output_rate_hz=5e-324"], r"simulation\.output_rate_hz: must be in \[0\.001, "),
     (["controller.rate_hz=5e-324"], r"controller\.rate_hz: must be in 0 or \[1, 100000\] Hz"),
     (["disturbance.sample_rate_hz=5e-324"], r"disturbance\.sample_rate_hz: must be in"),
-    (["simulation.rk_steps_per_interval=1000000000"], r"rk_steps_per_interval: must be in \[1, 1000\]"),
+    (["simulation.rk_steps_per_interval=1000000000"],
+     r"rk_steps_per_interval: must be in \[1, 1000\]"),
     (["simulation.duration=1e9"], r"simulation\.duration: must be in \[0\.001, 100000\] s"),
     (["simulation.duration=1e-9"], r"simulation\.duration: must be in"),
     (["controller.rate_hz=1e12"], r"controller\.rate_hz: must be in"),
     (["rbf.nodes=1000000000000000000"], r"rbf\.nodes: must be in \[1, 1000\]"),
-    (["simulation.seed=" + "9" * 400], r"simulation\.seed: must be in \[0, 9\.22337e\+18\], got 999"),
+    (["simulation.seed=" + "9" * 400],
+     r"simulation\.seed: must be in \[0, 9\.22337e\+18\], got 999"),
     (["quadrotor.mass=" + "9" * 400], r"quadrotor\.mass: must be finite"),
     (["quadrotor.arm_length=1e-308"], r"quadrotor\.arm_length: must be in \[0\.001, 10\] m"),
     (["quadrotor.rotor_drag_factor=1e-308"], r"rotor_drag_factor: must be in"),
     (["disturbance.force_amplitude=1e308"], r"disturbance\.force_amplitude: must be in"),
-    (["controller.k1=" + "[" * 5000 + "]" * 5000], r"--set controller\.k1: value nested too deeply"),
+    (["controller.k1=" + "[" * 5000 + "]" * 5000],
+     r"--set controller\.k1: value nested too deeply"),
     (["scenario.name=\"../escape\""], r"scenario\.name: must be 1 to 64 letters"),
     (["scenario.name=\"/abs/dir\""], r"scenario\.name: must be 1 to 64 letters"),
     (["scenario.name=\"" + "a" * 300 + "\""], r"scenario\.name: must be 1 to 64"),
@@ -125,7 +128,8 @@ def test_malformed_toml(tmp_path):
 
 def test_unknown_section_in_file(tmp_path):
     text = _paper_text() + "\n[vehicel]\nm11 = 1.0\n"
-    with pytest.raises(ScenarioError, match=r"unknown section 'vehicel' \(did you mean 'vehicle'\?\)"):
+    with pytest.raises(ScenarioError,
+                       match=r"unknown section 'vehicel' \(did you mean 'vehicle'\?\)"):
         load_scenario(_write(tmp_path, text))
 
 

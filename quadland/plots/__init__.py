@@ -13,9 +13,14 @@ that drawing a simulation does not pay for it.
 """
 
 from quadland.plots.simulation import FIGURES as SIMULATION_FIGURES
-from quadland.plots.simulation import (control_inputs_plot, ground_track_plot,
-                                       relative_errors_plot, simulation_figures,
-                                       uncertainty_plot, velocity_errors_plot)
+from quadland.plots.simulation import (
+    control_inputs_plot,
+    ground_track_plot,
+    relative_errors_plot,
+    simulation_figures,
+    uncertainty_plot,
+    velocity_errors_plot,
+)
 
 __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "velocity_errors_plot", "control_inputs_plot", "uncertainty_plot",

@@ -14,8 +14,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
-from quadland.analysis import (FrequencyResponse, frequency_grid, loop_at_a_time,
-                               sensitivity_sigma)
+from quadland.analysis import FrequencyResponse, frequency_grid, loop_at_a_time, sensitivity_sigma
 from quadland.margins import MarginReport
 
 __all__ = ["FIGURES", "bode_plot", "nyquist_plot", "sigma_plot", "pole_plot",
@@ -84,7 +83,7 @@ def _nyquist(report: MarginReport, r: _LoopResponse) -> Figure:
     fig = Figure(figsize=(10, 9))
     ax = fig.subplots(2, 2)
     t = np.linspace(0, 2 * np.pi, 200)
-    for i, (name, a) in enumerate(zip(names, ax.ravel())):
+    for i, (name, a) in enumerate(zip(names, ax.ravel(), strict=True)):
         curves = [(r.loops[:, i], "-", "C0")]
         if r.sampled_loops is not None:
             curves.append((r.sampled_loops[:, i], "--", "C1"))
@@ -183,7 +182,7 @@ def pole_plot(report: MarginReport) -> Figure:
     p = report.poles
     fig = Figure(figsize=(12, 5))
     ax = fig.subplots(1, 2)
-    for a, zoom in zip(ax, (False, True)):
+    for a, zoom in zip(ax, (False, True), strict=True):
         a.plot(p.real, p.imag, "x")
         a.axvline(0, color="k", lw=0.6)
         a.set_xlabel("Re [1/s]")
@@ -214,4 +213,4 @@ def margin_figures(report: MarginReport) -> dict[str, Figure]:
     """
     r = _loop_response(report)
     return dict(zip(FIGURES, (_bode(report, r), _nyquist(report, r), _sigma(report, r.omega),
-                              pole_plot(report))))
+                              pole_plot(report)), strict=True))

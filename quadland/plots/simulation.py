@@ -45,7 +45,7 @@ def _four_panel(result, fig_name, first, first_unit, rest, rest_unit) -> Figure:
     t = result["t"]
     ax[0].plot(t, result[first])
     ax[0].set_ylabel(f"{first} [{first_unit}]")
-    for a, name in zip(ax[1:], rest):
+    for a, name in zip(ax[1:], rest, strict=True):
         a.plot(t, np.rad2deg(result[name]))
         a.set_ylabel(f"{name} [{rest_unit}]")
     return _finish(fig, result, ax)
@@ -181,4 +181,4 @@ def simulation_figures(result: SimulationResult) -> dict[str, Figure]:
     """
     draw = (relative_errors_plot, velocity_errors_plot, control_inputs_plot, uncertainty_plot,
             ground_track_plot)
-    return {name: plot(result) for name, plot in zip(FIGURES, draw)}
+    return {name: plot(result) for name, plot in zip(FIGURES, draw, strict=True)}
