@@ -10,7 +10,7 @@ import numpy as np
 
 import quadland
 from quadland.metrics import summarize
-from quadland.output import figure_png, write_files
+from quadland.output import figure_png, write_bytes_atomic
 from quadland.plots import simulation_figures
 
 VARIANTS = {"printed": ["controller.nominal_model=false"],
@@ -21,8 +21,12 @@ HERE = Path(__file__).parent
 def main():
     for variant, overrides in VARIANTS.items():
         res = quadland.simulate(quadland.load_scenario("paper", overrides))
-        write_files(HERE / "figures" / variant,
-                    {name: figure_png(fig) for name, fig in simulation_figures(res).items()})
+        # docs/figures/<variant> is part of the source tree, not a quadland output folder
+        # (write_files would refuse it, and mark it): each PNG is replaced on its own.
+        folder = HERE / "figures" / variant
+        folder.mkdir(parents=True, exist_ok=True)
+        for name, fig in simulation_figures(res).items():
+            write_bytes_atomic(folder / name, figure_png(fig))
         s = summarize(res)
         print(f"## {variant}")
         for name, e in s["errors"].items():
@@ -35,6 +39,9 @@ def main():
         print("  peak u:", {k: round(inp[k]["value"], 3) for k in ("u_1", "u_2", "u_3", "u_4")})
         print(f"  peak F_total {inp['F_total']['value']:.1f} N, rotors"
               f" {inp['rotor_min']:.1f} .. {inp['rotor_max']:.1f} N")
+        thrust = res["F_total"]
+        print(f"  F_total {thrust.min():.2f} .. {thrust.max():.2f} N, positive from"
+              f" {res['t'][np.argmax(thrust > 0)]:.2f} s")
         late = res["t"] >= 1.0
         rotors = np.vstack([res[f"F_{i}"][late] for i in range(1, 5)])
         print(f"  rotors after 1 s: {rotors.min():.2f} .. {rotors.max():.2f} N")
