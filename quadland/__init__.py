@@ -6,7 +6,7 @@ this package loads scenarios, simulates, analyses and plots.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from quadland.exceptions import QuadlandError, ScenarioError
+from quadland.exceptions import QuadlandError, ScenarioError, SimulationError
 from quadland.scenario import Scenario, load_scenario
 from quadland.simulate import SimulationResult, simulate
 
@@ -15,7 +15,8 @@ try:
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
-__all__ = ["__version__", "QuadlandError", "ScenarioError", "Scenario", "load_scenario",
+__all__ = ["__version__", "QuadlandError", "ScenarioError", "SimulationError", "Scenario",
+           "load_scenario",
            "SimulationResult", "simulate", "allmargin", "diskmargin", "equilibrium",
            "frozen_point", "linear_models", "Requirement", "MarginReport", "margin_report",
            "format_report", "simulation_figures", "margin_figures"]

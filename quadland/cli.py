@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from quadland.exceptions import QuadlandError, SimulationError
@@ -148,6 +149,16 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``quadland`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warning
+        return _dispatch(args)
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"quadland: warning: {message}", file=sys.stderr if file is None else file)
+
+
+def _dispatch(args) -> int:
     try:
         return args.handler(args)
     except SimulationError as exc:

@@ -1,12 +1,13 @@
-"""Compiled simulators: the loops of ``symbolic.simulation`` as native code.
+"""Simulators of the loops of ``symbolic.simulation``: compiled, or on CasADi's VM.
 
 :func:`compiled_loop` generates the C of one part of a simulator
 (``symbolic.simulation.simulator_sources``), builds it once into the disk
-cache (:mod:`quadland.build`) and loads it with ``ctypes``. A call runs a
-whole simulation in C: RK4 over the exact time grid, the parameters passed
-once, states and outputs written straight into NumPy arrays. Where no C
-compiler is found, :func:`compiled_loop` returns None after one warning, and
-the simulator falls back to CasADi's virtual machine.
+cache (:mod:`quadland.build`) and loads it with ``ctypes``
+(:class:`CompiledLoop`). A call runs a whole simulation in C: RK4 over the
+exact time grid, the parameters passed once, states and outputs written
+straight into NumPy arrays. Where no C compiler is found it returns, after
+one warning, a :class:`VMLoop`: the same drivers, step for step, on CasADi's
+virtual machine, several times slower.
 """
 
 from __future__ import annotations
@@ -19,9 +20,10 @@ import warnings
 import numpy as np
 
 from quadland.build import build_library, have_compiler
-from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, simulator_sources
+from quadland.exceptions import CompilerNotFoundError
+from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, rk4_step, simulator_sources
 
-__all__ = ["QuadlandWarning", "CompiledLoop", "compiled_loop", "SIM_OK", "SIM_NONFINITE",
+__all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK", "SIM_NONFINITE",
            "SIM_GUARD", "SIM_CONTROLLER"]
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
@@ -166,19 +168,102 @@ class CompiledLoop:
         return Y
 
 
+class VMLoop:
+    """The drivers of :class:`CompiledLoop` on CasADi's virtual machine.
+
+    The same algorithm, step for step (``symbolic/templates/simulator.c.jinja``):
+    used where no C compiler is found.
+    """
+
+    #: Samples per call of the mapped output function.
+    CHUNK = 256
+
+    def __init__(self, model: LoopModel, part: str):
+        self.model, self.part = model, part
+        self._rhs = rk4_step(model.rhs)
+        self._plant = rk4_step(model.plant)
+        self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [2], [])
+
+    def integrate(self, x0, W, H, rec, substeps: int, p, n_rows: int):
+        """As :meth:`CompiledLoop.integrate`."""
+        X = np.zeros((n_rows, self.model.state.size))
+        X[0] = x = np.asarray(x0, dtype=float)
+        for j, h in enumerate(H):
+            for _ in range(int(substeps)):
+                x = self._rhs(x, W[j], p, h / substeps)
+            x = np.asarray(x, dtype=float).ravel()
+            if not np.all(np.isfinite(x)):
+                return X, x, Failure(SIM_NONFINITE, j)
+            if rec[j] >= 0:
+                X[rec[j]] = x
+        return X, x, None
+
+    def sampled(self, xp0, xc0, W, H, ctrl, rec, substeps: int, pp, pc, guard_min: float,
+                n_rows: int):
+        """As :meth:`CompiledLoop.sampled`."""
+        m = self.model
+        X = np.zeros((n_rows, m.state.size))
+        R = np.zeros((n_rows, m.recorded.size))
+        xp, xc = np.asarray(xp0, dtype=float), np.asarray(xc0, dtype=float)
+        uh, rv, first = np.zeros(m.held.size), np.zeros(m.recorded.size), 1.0
+        n = len(H)
+        for j in range(n + 1):
+            if j < n and ctrl[j]:
+                xc_n, uh_n, rv_n, guard = (np.asarray(v, dtype=float).ravel() for v in
+                                           m.controller(xp, xc, pc, first))
+                if not abs(guard[0]) >= guard_min:
+                    return X, R, xp, xc, Failure(SIM_GUARD, j)
+                if not (np.all(np.isfinite(xc_n)) and np.all(np.isfinite(uh_n))
+                        and np.all(np.isfinite(rv_n))):
+                    return X, R, xp, xc, Failure(SIM_NONFINITE, j)
+                xc, uh, rv, first = xc_n, uh_n, rv_n, 0.0
+            if rec[j] >= 0:
+                X[rec[j]] = np.asarray(m.assemble(xp, xc), dtype=float).ravel()
+                R[rec[j]] = rv
+            if j == n:
+                break
+            for _ in range(int(substeps)):
+                xp = self._plant(xp, uh, W[j], pp, H[j] / substeps)
+            xp = np.asarray(xp, dtype=float).ravel()
+            if not np.all(np.isfinite(xp)):
+                return X, R, xp, xc, Failure(SIM_NONFINITE, j)
+        return X, R, xp, xc, None
+
+    def outputs(self, X, W, p) -> np.ndarray:
+        """As :meth:`CompiledLoop.outputs`, in chunks with ``p`` shared, not repeated."""
+        n, k = X.shape[0], self.CHUNK
+        Y = np.empty((n, self.model.outputs.size))
+        for a in range(0, n, k):
+            b = min(a + k, n)
+            Xc = np.zeros((k, X.shape[1]))
+            Wc = np.zeros((k, W.shape[1]))
+            Xc[: b - a], Wc[: b - a] = X[a:b], W[a:b]
+            Y[a:b] = np.asarray(self._outputs(Xc.T, Wc.T, p), dtype=float).T[: b - a]
+        return Y
+
+
 @functools.lru_cache(maxsize=16)
-def compiled_loop(l: int, part: str) -> CompiledLoop | None:
-    """The compiled ``part`` of the paper loop's simulator for ``l`` nodes, or None.
+def compiled_loop(l: int, part: str) -> CompiledLoop | VMLoop:
+    """The ``part`` of the paper loop's simulator for ``l`` nodes: compiled, or on the VM.
 
-    ``part`` is a key of ``symbolic.simulation.SIMULATOR_PARTS``.
+    ``part`` is a key of ``symbolic.simulation.SIMULATOR_PARTS``. Without a C
+    compiler: a :class:`VMLoop` after one :class:`QuadlandWarning`; the flight
+    code (part ``"sampled_flight"``) exists only compiled.
 
-    None (after one :class:`QuadlandWarning`) when no C compiler is found.
+    Raises
+    ------
+    CompilerNotFoundError
+        For ``"sampled_flight"`` without a C compiler.
     """
     if part not in SIMULATOR_PARTS:
         raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
     if not have_compiler():
+        if part == "sampled_flight":
+            raise CompilerNotFoundError(
+                "controller.backend = \"c\" flies the compiled flight code, and no C compiler "
+                "was found (set CC or install gcc; or use controller.backend = \"casadi\")")
         _warn_no_compiler()
-        return None
+        return VMLoop(paper_loop(l), part)
     flight = None
     if part == "sampled_flight":
         from quadland.cbackend import sources
@@ -189,5 +274,5 @@ def compiled_loop(l: int, part: str) -> CompiledLoop | None:
 
 @functools.cache
 def _warn_no_compiler() -> None:
-    warnings.warn("no C compiler found (set CC or install gcc): simulating in CasADi's "
-                  "virtual machine, several times slower", QuadlandWarning, stacklevel=3)
+    warnings.warn("no C compiler found (set CC or install gcc): simulating on CasADi's "
+                  "virtual machine, several times slower", QuadlandWarning, stacklevel=4)

@@ -119,7 +119,8 @@ SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "duration": Field(F, "s", "simulated time", lo=1e-3, hi=MAX_DURATION_S),
         "output_rate_hz": Field(F, "Hz", "rows per second of trajectory.csv", lo=1e-3,
                                 hi=MAX_RATE_HZ),
-        "integrator": Field(S, "-", "CasADi integrator plugin", choices=("cvodes", "rk")),
+        "integrator": Field(S, "-", "rk: compiled RK4 on the exact grid; cvodes: CasADi's "
+                            "variable-step reference (continuous loop)", choices=("cvodes", "rk")),
         "reltol": Field(F, "-", "cvodes relative tolerance", lo=1e-14, hi=1e-2),
         "abstol": Field(F, "-", "cvodes absolute tolerance", lo=1e-14, hi=1e-2),
         "rk_steps_per_interval": Field(I, "-", "RK4 steps per hold interval (rk)", lo=1,
@@ -134,8 +135,10 @@ SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "gravity": Field(F, "m/s^2", "g_s", lo=0.1, hi=100.0),
         "arm_length": Field(F, "m", "d, centre to rotor axis", lo=1e-3, hi=10.0),
         "rotor_drag_factor": Field(F, "m", "c, yaw moment per unit thrust", lo=1e-4, hi=10.0),
-        "rotor_force_min": Field(F, "N", "lower rotor-force limit (C step)", lo=-1e6, hi=1e6),
-        "rotor_force_max": Field(F, "N", "upper rotor-force limit (C step)", lo=1e-3, hi=1e6),
+        "rotor_force_min": Field(F, "N", "lower rotor-force limit (the sampled step clips)",
+                                 lo=-1e6, hi=1e6),
+        "rotor_force_max": Field(F, "N", "upper rotor-force limit (the sampled step clips)",
+                                 lo=1e-3, hi=1e6),
     },
     "vehicle": {
         "m11": Field(F, "kg", "surge mass", lo=1e-3, hi=1e8),

@@ -1,14 +1,19 @@
-"""Closed-loop simulation on CasADi's integrators.
+"""Closed-loop simulation, compiled (or on CasADi's virtual machine without a compiler).
 
-Two loops share one symbolic model:
+Two loops share one symbolic model (``symbolic.simulation``), and both run
+in one call of a simulator (:func:`quadland.compiled.compiled_loop`): RK4,
+one step (times ``simulation.rk_steps_per_interval``) per interval of the
+exact grid on which the disturbance, the outputs and the control are held:
 
 * continuous (``controller.rate_hz = 0``, the paper's): the whole closed
-  loop of ``symbolic.closed_loop`` is one ODE, integrated in a single call
-  of a CasADi integrator over a time grid on which the disturbance is
-  piecewise constant;
-* sampled-data (``rate_hz > 0``): the control step of
-  ``symbolic.control_step`` (CasADi or compiled C) runs at that rate and
-  its wrench is held on the plant between samples.
+  loop of ``symbolic.closed_loop`` is one ODE; ``simulation.integrator =
+  "cvodes"`` integrates it with CasADi's cvodes instead (the reference);
+* sampled-data (``rate_hz > 0``): the control step (``controller.backend``:
+  the CasADi function or the flight code's ``ql_control_step``) runs at that
+  rate and its wrench is held on the plant.
+
+A run's size is checked first (:func:`check_plan`); a flight that fails
+raises :class:`SimulationError` carrying the trajectory up to the failure.
 """
 
 from __future__ import annotations
@@ -29,19 +34,14 @@ from quadland.model import disturbance_samples, model_values
 from quadland.scenario import Scenario
 from symbolic.closed_loop import (
     OUTPUTS,
-    PLANT_STATE,
     POSITION1,
     closed_loop_function,
-    closed_loop_outputs,
     closed_loop_state,
-    plant_function,
-    vehicle_measurement,
 )
-from symbolic.control_step import control_step_function, step_outputs
+from symbolic.control_step import step_outputs
 from symbolic.layout import Field, Layout
 from symbolic.quadrotor import DISTURBANCE
 from symbolic.quadrotor import STATE as QUAD_STATE
-from symbolic.simulation import rk4_step
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
@@ -215,32 +215,14 @@ def _continuous_integrator(l: int, plugin: str, opts: tuple, grid: tuple):
     return ca.integrator("closed_loop_sim", plugin, dae, grid[0], list(grid[1:]), dict(opts))
 
 
-@functools.lru_cache(maxsize=16)
-def _plant_integrator(plugin: str, opts: tuple, h: float):
-    f = plant_function()
-    xp, u = PLANT_STATE.sym(), ca.SX.sym("u", f.size1_in(1) + f.size1_in(2))
-    pq, pv = ca.SX.sym("pq", f.size1_in(3)), ca.SX.sym("pv", f.size1_in(4))
-    nwr = f.size1_in(1)
-    dae = {"x": xp, "u": u, "p": ca.vertcat(pq, pv), "ode": f(xp, u[:nwr], u[nwr:], pq, pv)}
-    return ca.integrator("plant_sim", plugin, dae, 0.0, h, dict(opts))
-
-
-def _integrator_options(scenario: Scenario, n_intervals: int) -> tuple[str, tuple]:
-    """Plugin and options for a grid of ``n_intervals`` hold intervals.
-
-    cvodes runs Adams with functional iteration: the loop is not stiff, and
-    the disturbance restarts the solver every hold interval, which makes a
-    BDF method's Jacobian factorizations the dominant cost. CasADi's "rk"
-    spreads ``number_of_finite_elements`` over the whole horizon, so it is
-    scaled by the number of intervals.
-    """
+def _cvodes_options(scenario: Scenario) -> tuple:
+    """cvodes runs Adams with functional iteration: the loop is not stiff, and the
+    disturbance restarts the solver every hold interval, which makes a BDF
+    method's Jacobian factorizations the dominant cost."""
     sim = scenario.data["simulation"]
-    if sim["integrator"] == "cvodes":
-        opts = {"abstol": sim["abstol"], "reltol": sim["reltol"], "max_num_steps": 100000,
-                "linear_multistep_method": "adams", "nonlinear_solver_iteration": "functional"}
-    else:
-        opts = {"number_of_finite_elements": sim["rk_steps_per_interval"] * n_intervals}
-    return sim["integrator"], tuple(sorted(opts.items()))
+    opts = {"abstol": sim["abstol"], "reltol": sim["reltol"], "max_num_steps": 100000,
+            "linear_multistep_method": "adams", "nonlinear_solver_iteration": "functional"}
+    return tuple(sorted(opts.items()))
 
 
 def simulate(scenario: Scenario) -> SimulationResult:
@@ -279,24 +261,20 @@ def simulate(scenario: Scenario) -> SimulationResult:
     if scenario.data["controller"]["rate_hz"] > 0:
         flight = scenario.data["controller"]["backend"] == "c"
         loop = compiled_loop(mv.l, "sampled_flight" if flight else "sampled")
-        if loop is not None:
-            X, held, failure = _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist)
-        else:
-            X, held = _simulate_sampled(scenario, mv, t_out, t_dist, w_dist)
+        X, held, failure = _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist)
     else:
         loop = compiled_loop(mv.l, "continuous")
         held = None
-        if loop is not None and scenario.data["simulation"]["integrator"] == "rk":
-            X, failure = _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist)
+        if scenario.data["simulation"]["integrator"] == "rk":
+            X, failure = _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist)
         else:
-            X = _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist)
+            X = _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist)
     n = len(X) if failure is None else failure[0]
     finite = np.all(np.isfinite(X[:n]), axis=1)
     if not finite.all():
         n = int(np.argmin(finite))
         failure = (n, t_out[n], "the state became non-finite")
-    Y = (loop.outputs(X[:n], w_out[:n], mv.p) if loop is not None
-         else _vm_outputs(mv, X[:n], w_out[:n]))
+    Y = loop.outputs(X[:n], w_out[:n], mv.p)
     finite = np.all(np.isfinite(Y), axis=1)
     if not finite.all():
         bad = int(np.argmin(finite))
@@ -354,9 +332,9 @@ def _grid_index(grid, times):
     return np.where(t[k] == g, k, -1).astype(np.int_)
 
 
-def _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
-    """The continuous loop in one compiled call: one RK4 step (times
-    ``rk_steps_per_interval``) per interval of the merged grid, exactly."""
+def _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
+    """The continuous loop in one call of ``loop`` (compiled or on the VM): one RK4
+    step (times ``rk_steps_per_interval``) per interval of the merged grid, exactly."""
     W = _held(t_dist, w_dist, t_all[:-1]).T
     rec = _grid_index(t_all[1:], t_out)
     X, _, failure = loop.integrate(mv.x0, W, np.diff(t_all), rec,
@@ -368,8 +346,13 @@ def _continuous_compiled(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
     return X, (done, t_all[failure.index + 1], "the state became non-finite")
 
 
-def _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist):
-    """The sampled-data loop in one compiled call (see ``_simulate_sampled``)."""
+def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist):
+    """The sampled-data loop in one call of ``loop`` (compiled or on the VM).
+
+    The control step runs at ``rate_hz`` and its wrench is held on the plant
+    until the next; the step's hold compensation is off on the first sample,
+    which has no previous command, and on from the second.
+    """
     rate = scenario.data["controller"]["rate_hz"]
     T = scenario.data["simulation"]["duration"]
     t_ctrl = _arange(T, 1.0 / rate)[:-1] if T > 0 else np.zeros(1)
@@ -399,16 +382,10 @@ def _sampled_compiled(loop, scenario, mv, t_out, t_dist, w_dist):
     return X, R.T, (done, t, what)
 
 
-@functools.lru_cache(maxsize=4)
-def _rk4_closed_loop(l: int) -> ca.Function:
-    return rk4_step(closed_loop_function(l))
-
-
-def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
-    if scenario.data["simulation"]["integrator"] == "rk":
-        return _continuous_rk4_vm(scenario, mv, t_out, t_dist, t_all, w_dist)
-    plugin, opts = _integrator_options(scenario, len(t_all) - 1)
-    integ = _continuous_integrator(mv.l, plugin, opts, tuple(t_all))
+def _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist):
+    """The continuous loop on CasADi's cvodes (the variable-step reference)."""
+    plugin = "cvodes"
+    integ = _continuous_integrator(mv.l, plugin, _cvodes_options(scenario), tuple(t_all))
     w = _held(t_dist, w_dist, t_all[:-1])
     try:
         out = integ(x0=mv.x0, u=w, p=mv.p)
@@ -417,108 +394,6 @@ def _simulate_continuous(scenario, mv, t_out, t_dist, t_all, w_dist):
     X = np.hstack([mv.x0[:, None], np.asarray(out["xf"])])
     keep = np.flatnonzero(np.isin(np.round(t_all, 12), np.round(t_out, 12)))
     return np.ascontiguousarray(X[:, keep].T)
-
-
-def _continuous_rk4_vm(scenario, mv, t_out, t_dist, t_all, w_dist):
-    """The compiled driver's method on CasADi's virtual machine: one RK4 step (times
-    ``rk_steps_per_interval``) per interval of the merged grid."""
-    step, m = _rk4_closed_loop(mv.l), scenario.data["simulation"]["rk_steps_per_interval"]
-    W = _held(t_dist, w_dist, t_all[:-1])
-    rec = _grid_index(t_all[1:], t_out)
-    X = np.zeros((len(t_out), len(mv.x0)))
-    X[0] = x = mv.x0
-    for j, h in enumerate(np.diff(t_all)):
-        for _ in range(m):
-            x = step(x, W[:, j], mv.p, h / m)
-        if rec[j] >= 0:
-            X[rec[j]] = np.asarray(x).ravel()
-    return X
-
-
-def _control_step(scenario, l):
-    backend = scenario.data["controller"]["backend"]
-    if backend == "c":
-        from quadland.cbackend import load_control_step
-        return load_control_step(l)
-    return control_step_function(l)
-
-
-def _simulate_sampled(scenario, mv, t_out, t_dist, w_dist):
-    """Control step at ``rate_hz`` with zero-order hold on the plant.
-
-    The step's hold compensation (``controller.hold_compensation``) is off
-    on the first sample, which has no previous command, and on from the
-    second.
-    """
-    rate = scenario.data["controller"]["rate_hz"]
-    T = scenario.data["simulation"]["duration"]
-    t_ctrl = _arange(T, 1.0 / rate)[:-1] if T > 0 else np.zeros(1)
-    grid = np.unique(np.round(np.concatenate([t_out, t_dist, t_ctrl]), 12))
-    step = _control_step(scenario, mv.l)
-    plugin, opts = _integrator_options(scenario, 1)
-    lay = closed_loop_state(mv.l)
-    x0 = lay.unpack(mv.x0)
-    xp = PLANT_STATE.pack({n: x0[n] for n in PLANT_STATE.names()})
-    xq_of, xv_of = PLANT_STATE.slice("xq"), PLANT_STATE.slice("xv")
-    W, zeta = x0["W_hat"], x0["zeta_hat"]
-    u_law = np.zeros(4)
-    hold = 0.0                     # no previous command on the first step
-    limits = np.asarray(mv.rotor_limits, dtype=float)
-    ctrl_set = set(np.round(t_ctrl, 12))
-    out_set = {t: k for k, t in enumerate(np.round(t_out, 12))}
-    X = np.zeros((lay.size, len(t_out)))
-    held = np.zeros((12, len(t_out)))
-    wrench = u = rotor = np.zeros(4)
-    pv = np.concatenate([mv.p_quad, mv.p_veh])
-    dt = 1.0 / rate
-    for i, t in enumerate(grid):
-        if t in ctrl_set:
-            yv = np.asarray(vehicle_measurement(xp[xv_of], mv.p_veh), dtype=float).ravel()
-            r = step(xp[xq_of], yv, mv.ref, W, zeta, u_law, mv.p_quad, mv.p_ctrl, limits, hold,
-                     dt)
-            u, wrench, rotor, W, zeta, u_law, _, tilt = (np.asarray(v, dtype=float) for v in r)
-            if abs(tilt.item()) < TILT_MIN:
-                raise SimulationError(f"singular attitude at t = {t:.4g} s: "
-                                      f"cos(theta) cos(phi) = {tilt.item():.2e}")
-            u, wrench, rotor = u.ravel(), wrench.ravel(), rotor.ravel()
-            zeta, u_law, hold = zeta.ravel(), u_law.ravel(), mv.hold
-        if t in out_set:
-            k = out_set[t]
-            ps = PLANT_STATE.unpack(xp)
-            X[:, k] = lay.pack(dict(xq=ps["xq"], xv=ps["xv"], W_hat=W, zeta_hat=zeta,
-                                    pos1=ps["pos1"]))
-            held[:, k] = np.concatenate([u, wrench, rotor])
-        if i + 1 < len(grid):
-            h = round(grid[i + 1] - t, 12)
-            w = _held(t_dist, w_dist, [t])[:, 0]
-            integ = _plant_integrator(plugin, opts, h)
-            xp = np.asarray(integ(x0=xp, u=np.concatenate([wrench, w]), p=pv)["xf"]).ravel()
-            if not np.all(np.isfinite(xp)):
-                raise SimulationError(f"state became non-finite at t = {t:.4g} s")
-    return np.ascontiguousarray(X.T), held
-
-
-#: Samples per call of the mapped output function on CasADi's virtual machine.
-_VM_CHUNK = 256
-
-
-@functools.lru_cache(maxsize=4)
-def _mapped_outputs(l: int) -> ca.Function:
-    # the parameter vector (input 2) is shared by every sample, not repeated
-    return closed_loop_outputs(l).map("outputs_map", "serial", _VM_CHUNK, [2], [])
-
-
-def _vm_outputs(mv, X, w_out) -> np.ndarray:
-    """Output signals on CasADi's virtual machine, in chunks, ``(n, ny)``."""
-    fn, n = _mapped_outputs(mv.l), X.shape[0]
-    Y = np.empty((n, OUTPUTS.size))
-    for a in range(0, n, _VM_CHUNK):
-        b = min(a + _VM_CHUNK, n)
-        Xc, Wc = np.zeros((_VM_CHUNK, X.shape[1])), np.zeros((_VM_CHUNK, w_out.shape[1]))
-        Xc[: b - a], Wc[: b - a] = X[a:b], w_out[a:b]
-        outs = fn(Xc.T, Wc.T, mv.p)
-        Y[a:b] = np.vstack([np.asarray(v) for v in outs]).T[: b - a]
-    return Y
 
 
 def _result(scenario, mv, t_out, w_out, X, Y, held):

@@ -12,6 +12,9 @@ from quadland.compiled import QuadlandWarning
 SHORT = ["simulation.duration=1.5", "disturbance.noise=false", "rbf.nodes=7"]
 
 
+_warnings = []
+
+
 def _vm(monkeypatch, scenario):
     """The same scenario on CasADi's virtual machine (as without a compiler)."""
     monkeypatch.setattr(compiled, "have_compiler", lambda: False)
@@ -20,6 +23,7 @@ def _vm(monkeypatch, scenario):
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
+            _warnings.append(caught)
             res = quadland.simulate(scenario)
     finally:
         monkeypatch.undo()
@@ -28,12 +32,20 @@ def _vm(monkeypatch, scenario):
 
 
 @pytest.mark.parametrize("extra", [[], ["controller.rate_hz=200"],
-                                   ["controller.rate_hz=200", "controller.backend=c"]],
-                         ids=["continuous", "sampled", "sampled-flight-code"])
+                                   ["controller.rate_hz=5", "simulation.duration=10"]],
+                         ids=["continuous", "sampled", "sampled-until-it-fails"])
 def test_compiled_equals_the_virtual_machine(monkeypatch, extra):
     sc = quadland.load_scenario("paper", SHORT + extra)
-    fast = quadland.simulate(sc)
-    slow, caught = _vm(monkeypatch, sc)
+    try:
+        fast = quadland.simulate(sc)
+    except quadland.SimulationError as exc:       # a 5 Hz loop fails: it must fail alike
+        fast = exc.partial
+        with pytest.raises(quadland.SimulationError) as info:
+            _vm(monkeypatch, sc)
+        assert str(info.value) == str(exc)
+        slow, caught = info.value.partial, _warnings[-1]
+    else:
+        slow, caught = _vm(monkeypatch, sc)
     for name in ("z_e", "phi_e", "psi_e", "F_1", "Delta_hat_1", "norm_W_hat", "lyapunov_V1"):
         scale = max(1.0, np.abs(slow[name]).max())
         np.testing.assert_allclose(fast[name], slow[name], rtol=0, atol=1e-9 * scale,
@@ -59,3 +71,16 @@ def test_the_flight_code_flies_the_same_trajectory():
     b = quadland.simulate(quadland.load_scenario("paper", base + ["controller.backend=c"]))
     for name in ("z_e", "theta_e", "F_1", "M_z", "zeta_hat_2"):
         np.testing.assert_allclose(b[name], a[name], rtol=0, atol=1e-9, err_msg=name)
+
+
+def test_the_flight_code_needs_a_compiler(monkeypatch):
+    monkeypatch.setattr(compiled, "have_compiler", lambda: False)
+    compiled.compiled_loop.cache_clear()
+    try:
+        sc = quadland.load_scenario("paper", SHORT + ["controller.rate_hz=200",
+                                                      "controller.backend=c"])
+        with pytest.raises(quadland.QuadlandError, match="no C compiler was found"):
+            quadland.simulate(sc)
+    finally:
+        monkeypatch.undo()
+        compiled.compiled_loop.cache_clear()
