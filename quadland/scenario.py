@@ -477,6 +477,10 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario") -> dict
     q = out["quadrotor"]
     if q["rotor_force_max"] <= q["rotor_force_min"]:
         raise ScenarioError("quadrotor.rotor_force_max: must be > quadrotor.rotor_force_min")
+    if out["simulation"]["integrator"] == "cvodes" and out["controller"]["rate_hz"] > 0:
+        raise ScenarioError("simulation.integrator: cvodes integrates the continuous loop only "
+                            "(controller.rate_hz = 0); the sampled-data loop takes RK4 steps "
+                            "(raise simulation.rk_steps_per_interval for accuracy)")
     return out
 
 

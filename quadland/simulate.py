@@ -318,9 +318,9 @@ def _divergence_hint(scenario: Scenario) -> str:
     if fastest * h > _RK4_REAL_STABILITY / 2:
         need = int(np.ceil(fastest * sim["rk_steps_per_interval"] * h
                            / (_RK4_REAL_STABILITY / 4)))
+        cvodes = "" if ctrl["rate_hz"] > 0 else " or simulation.integrator=\"cvodes\""
         return (f" (the RK4 step h = {h:.3g} s is likely too coarse for gains up to "
-                f"{fastest:g} 1/s: try simulation.rk_steps_per_interval={need} or "
-                "simulation.integrator=\"cvodes\")")
+                f"{fastest:g} 1/s: try simulation.rk_steps_per_interval={need}{cvodes})")
     return " (check the gains and the initial attitude)"
 
 

@@ -80,6 +80,8 @@ BAD_OVERRIDES = [
     (["mass=2"], r"expected section\.key=value"),
     (["quadrotor.mass"], r"expected section\.key=value"),
     (["quadrotor.rotor_force_max=-600"], r"rotor_force_max"),
+    (["simulation.integrator=\"cvodes\"", "controller.rate_hz=500"],
+     r"simulation\.integrator: cvodes integrates the continuous loop only"),
     # values that used to pass validation and then hang, exhaust memory or overflow
     (["simulation.output_rate_hz=5e-324"], r"simulation\.output_rate_hz: must be in \[0\.001, "),
     (["controller.rate_hz=5e-324"], r"controller\.rate_hz: must be in 0 or \[1, 100000\] Hz"),
