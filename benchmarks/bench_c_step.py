@@ -8,7 +8,8 @@ as ``generated/``) with the system's ``cc`` at -O2 and reports:
 * time per control step (l = 100) of ``bench``, double and float, the
   best of several runs;
 * instructions per step from valgrind's callgrind (the difference of two
-  run lengths, so start-up cost cancels), when valgrind is installed;
+  run lengths, so start-up cost cancels), when valgrind is installed,
+  against the double build's budget of 20,000;
 * the cost of one call from Python: the compiled step through ctypes and
   the CasADi function;
 * the float build's deviation from the double one over the paper's
@@ -35,6 +36,8 @@ from quadland.model import model_values
 from symbolic.control_step import control_step_function
 
 ANGLES = ("phi_e", "theta_e", "psi_e")
+#: Instructions one double control step (l = 100) may cost at -O2 (docs/codegen.md).
+BUDGET = 20_000
 
 
 def _build(root: Path) -> Path:
@@ -105,6 +108,8 @@ def main() -> None:
             ns = _time_per_step(build / name, args.steps, args.repeats)
             ir = _instructions(build / name, 1000)
             ir_text = f"{ir:,.0f} instructions" if ir is not None else "valgrind not found"
+            if name == "bench" and ir is not None:
+                ir_text += f" (budget {BUDGET:,}: {'met' if ir <= BUDGET else 'EXCEEDED'})"
             print(f"{name}: {ns / 1000:.3f} us/step, {ir_text} per step (l = {l}, -O2)")
     c_call, casadi_call = _python_call_cost(l)
     print(f"python call: compiled C via ctypes {c_call * 1e6:.1f} us, "

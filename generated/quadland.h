@@ -34,14 +34,15 @@ typedef double ql_real;
 #define QL_CLOSED_LOOP_JACOBIAN_NNZ 4627     /* nonzeros of d x_dot / d x */
 #define QL_PLANT_NX 18                       /* xp = [xq (10), xv (6), pos1 (2)] */
 
-/* Status of ql_control_step. */
+/* Status of ql_control_step and ql_check_params. */
 typedef enum {
     QL_OK = 0,                     /* success; outputs and adaptive state updated */
     QL_ERR_NULL = 1,               /* a NULL pointer argument */
-    QL_ERR_INVALID = 2,            /* dt <= 0, rotor_force_min > rotor_force_max or hold_compensation outside [0, 1] */
+    QL_ERR_INVALID = 2,            /* dt <= 0 */
     QL_ERR_NONFINITE_INPUT = 3,    /* an input, parameter or the adaptive state is NaN or infinite */
     QL_ERR_TILT = 4,               /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
     QL_ERR_NONFINITE_OUTPUT = 5,   /* the law overflowed: a NaN or infinite value from finite inputs */
+    QL_ERR_PARAM = 6,              /* a parameter outside its range (ql_check_params names it) */
 } ql_status;
 
 /* Measured quadrotor state (eq. 1-2): Earth frame z up, ZYX Euler angles. */
@@ -140,6 +141,14 @@ void ql_adaptive_state_init(ql_adaptive_state *state);
 /* The scenario's reference e1d, e1d_dot, e1d_ddot. */
 void ql_reference_init(ql_reference *ref);
 
+/* Check every parameter against its range, once at start-up and after
+ * retuning: QL_OK, or QL_ERR_PARAM with *bad_field set to the member path of
+ * the first invalid one ("quad.m1", "ctrl.widths", "rotor_force_max", ...;
+ * a static string), or QL_ERR_NULL when params is NULL. NaN and
+ * infinities are invalid everywhere. bad_field may be NULL; on success
+ * *bad_field is set to NULL. */
+ql_status ql_check_params(const ql_params *params, const char **bad_field);
+
 /* One control step of period dt (s).
  *
  * Evaluates the law of eq. (20) at the measurements (u_law), extrapolates
@@ -148,11 +157,12 @@ void ql_reference_init(ql_reference *ref);
  * [rotor_force_min, rotor_force_max] and integrates the adaptive laws of
  * eq. (22) exactly over dt with the measurements held. The rotor forces
  * are meant to be held until the next step. On QL_OK the outputs are
- * written and the state advanced; on any error the state is left
- * untouched and the outputs are set to zero (never NaN): the caller
+ * written, all finite, and the state advanced; on any error the state is
+ * left untouched and the outputs are set to zero (never NaN): the caller
  * applies its failsafe, and clears state->has_prev before the next call
- * (as after any period whose output was not applied). No heap, no global
- * state: reentrant. */
+ * (as after any period whose output was not applied). Parameters outside
+ * their ranges give QL_ERR_PARAM (ql_check_params names the member). No
+ * heap, no global state: reentrant. */
 ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *yv,
                           const ql_reference *ref, const ql_params *params, ql_real dt,
                           ql_adaptive_state *state, ql_output *out);

@@ -189,9 +189,9 @@ class CApi:
     Attributes
     ----------
     lib : object
-        The library, with ``ql_params_init``, ``ql_control_step``,
-        ``ql_closed_loop``, ... spelled ``ql_`` in either precision (the
-        float build's symbols are ``qlf_...``).
+        The library, with ``ql_params_init``, ``ql_check_params``,
+        ``ql_control_step``, ``ql_closed_loop``, ... spelled ``ql_`` in
+        either precision (the float build's symbols are ``qlf_...``).
     QuadrotorState, VehicleState, Reference, AdaptiveState, QuadrotorParams,
     ControllerParams, VehicleParams, Params, Output : type
         ``ctypes.Structure`` mirrors of the header's structs, from the same
@@ -229,6 +229,8 @@ def load_api(l: int, precision: str = "double", opt: str = "-O2", model: bool = 
                                     P(api.Reference), P(api.Params), real,
                                     P(api.AdaptiveState), P(api.Output)]
     lib.ql_control_step.restype = ctypes.c_int
+    lib.ql_check_params.argtypes = [P(api.Params), P(ctypes.c_char_p)]
+    lib.ql_check_params.restype = ctypes.c_int
     lib.ql_status_string.argtypes = [ctypes.c_int]
     lib.ql_status_string.restype = ctypes.c_char_p
     lib.ql_pack_closed_loop_params.argtypes = [P(api.Params), P(api.VehicleParams),

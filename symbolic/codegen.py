@@ -43,7 +43,7 @@ import jinja2
 import numpy as np
 
 from symbolic.c_api import (CStruct, adaptive_state_layout, api_structs, output_layout,
-                            params_layout)
+                            param_ranges, params_layout)
 from symbolic.closed_loop import (PLANT_STATE, closed_loop_function,
                                   closed_loop_jacobian_function, closed_loop_params,
                                   closed_loop_state, plant_function)
@@ -63,16 +63,17 @@ __all__ = ["CodegenConfig", "Defaults", "GeneratedFunction", "FUNCTIONS", "STATU
 #: Folder of the Jinja2 templates (installed with the package).
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 
-#: Status codes of ``ql_control_step`` (name in the double build, value, meaning).
+#: Status codes of ``ql_control_step`` and ``ql_check_params`` (name in the
+#: double build, value, meaning).
 STATUS_CODES = (
     ("QL_OK", 0, "success; outputs and adaptive state updated"),
     ("QL_ERR_NULL", 1, "a NULL pointer argument"),
-    ("QL_ERR_INVALID", 2,
-     "dt <= 0, rotor_force_min > rotor_force_max or hold_compensation outside [0, 1]"),
+    ("QL_ERR_INVALID", 2, "dt <= 0"),
     ("QL_ERR_NONFINITE_INPUT", 3, "an input, parameter or the adaptive state is NaN or infinite"),
     ("QL_ERR_TILT", 4, "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible"),
     ("QL_ERR_NONFINITE_OUTPUT", 5,
      "the law overflowed: a NaN or infinite value from finite inputs"),
+    ("QL_ERR_PARAM", 6, "a parameter outside its range (ql_check_params names it)"),
 )
 
 _MATH = ("exp", "expm1", "log", "log1p", "sqrt", "cos", "sin", "tan", "acos", "asin", "atan",
@@ -499,6 +500,29 @@ def _wrapped(l: int, config: CodegenConfig) -> list[dict]:
     return out
 
 
+def _param_ranges(l: int, config: CodegenConfig) -> list[dict]:
+    """The range of each member of ``ql_params`` (``symbolic.c_api.param_ranges``),
+    bounds as C literals.
+
+    ``bounded`` is False where only finiteness is asked; ``in_step`` marks
+    the bounded members whose size does not grow with ``l``: the control
+    step tests those on every call (a few dozen comparisons), the per-node
+    arrays only ``ql_check_params``.
+    """
+    out = []
+    for r, other in zip(param_ranges(l), param_ranges(l + 1), strict=True):
+        g = r.range
+        bounded = (g.lo is not None or g.hi is not None or g.choices is not None
+                   or r.at_least is not None)
+        out.append(dict(
+            name=r.name, offset=r.offset, size=r.size, text=g.text(),
+            lo=None if g.lo is None else config.literal(g.lo), lo_open=g.lo_open,
+            hi=None if g.hi is None else config.literal(g.hi), hi_open=g.hi_open,
+            choices=None if g.choices is None else [config.literal(v) for v in g.choices],
+            at_least=r.at_least, bounded=bounded, in_step=bounded and other.size == r.size))
+    return out
+
+
 def _api_context(config: CodegenConfig, d: Defaults) -> dict:
     l = d.l
     structs = api_structs(l)
@@ -520,6 +544,7 @@ def _api_context(config: CodegenConfig, d: Defaults) -> dict:
                         for f in params.fields if f.layout is None],
         p_offset={n: a for n, (a, _) in closed_loop_params(l).offsets().items()},
         step=_step_context(l, config),
+        param_ranges=_param_ranges(l, config),
         wrapped=_wrapped(l, config),
     )
 

@@ -86,8 +86,9 @@ def control_step_function(l: int) -> ca.Function:
     commanded virtual input, ``u_law`` extrapolated by ``hold`` periods
     from ``u_prev`` (see the module's docstring); ``rotor`` the rotor
     forces of ``u`` clipped to ``rotor_limits = [F_min, F_max]`` (N) and
-    ``wrench`` the wrench they produce; ``n_clipped`` counts the clipped
-    rotors;
+    ``wrench`` the wrench they produce; a NaN or infinite force (an
+    overflow) is passed through unclipped, never replaced by a limit;
+    ``n_clipped`` counts the clipped rotors;
     ``tilt = cos(theta1) cos(phi1)``, which the caller must keep away from
     zero (the thrust map divides by it).
     """
@@ -97,8 +98,13 @@ def control_step_function(l: int) -> ca.Function:
     law = control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)
     u = law["u"] + hold * (law["u"] - u_prev)                              # hold compensation
     unclipped = rotors_from_wrench(wrench_from_virtual(xq, u, p_quad), p_quad)
-    rotor = ca.fmin(ca.fmax(unclipped, limits[0]), limits[1])
-    n_clipped = ca.sum1(unclipped < limits[0]) + ca.sum1(unclipped > limits[1])
+    # Clip finite forces only: fmax(NaN, F_min) would be F_min, hiding an
+    # overflow; a NaN or an infinity fails both tests and passes through.
+    F_min, F_max = limits[0], limits[1]
+    rotor = ca.if_else(ca.logic_and(unclipped < F_min, unclipped > -ca.inf), F_min,
+                       ca.if_else(ca.logic_and(unclipped > F_max, unclipped < ca.inf), F_max,
+                                  unclipped))
+    n_clipped = ca.sum1(unclipped < F_min) + ca.sum1(unclipped > F_max)
     z2, Psi = law["bs_z2"], law["Psi"]
     a_w = ca.exp(-c["gamma1"] * c["k_w"] * dt)
     b_w = -ca.expm1(-c["gamma1"] * c["k_w"] * dt) / c["k_w"]             # (1 - a_w) / k_w

@@ -231,13 +231,22 @@ def test_api_clipping_is_reported(step_api, paper):
     ("inf_zeta_hat", "QL_ERR_NONFINITE_INPUT"),
     ("nan_u_prev", "QL_ERR_NONFINITE_INPUT"),
     ("nan_hold", "QL_ERR_NONFINITE_INPUT"),
-    ("negative_hold", "QL_ERR_INVALID"),
-    ("hold_above_one", "QL_ERR_INVALID"),
+    ("negative_hold", "QL_ERR_PARAM"),
+    ("hold_above_one", "QL_ERR_PARAM"),
     ("zero_dt", "QL_ERR_INVALID"),
-    ("swapped_limits", "QL_ERR_INVALID"),
+    ("swapped_limits", "QL_ERR_PARAM"),
+    ("negative_mass", "QL_ERR_PARAM"),
+    ("zero_arm", "QL_ERR_PARAM"),
+    ("zero_c", "QL_ERR_PARAM"),
+    ("zero_rho", "QL_ERR_PARAM"),
+    ("negative_gamma1", "QL_ERR_PARAM"),
+    ("negative_k1", "QL_ERR_PARAM"),
+    ("half_nominal_model", "QL_ERR_PARAM"),
+    ("tilt_min_one", "QL_ERR_PARAM"),
     ("vertical_pitch", "QL_ERR_TILT"),
     ("rolled_over", "QL_ERR_TILT"),
     ("overflow", "QL_ERR_NONFINITE_OUTPUT"),
+    ("overflowed_rotor_force", "QL_ERR_NONFINITE_OUTPUT"),
 ])
 def test_api_errors_leave_the_state_untouched(step_api, paper, case, status):
     api = step_api
@@ -270,6 +279,22 @@ def test_api_errors_leave_the_state_untouched(step_api, paper, case, status):
         dt = 0.0
     elif case == "swapped_limits":
         params.rotor_force_min, params.rotor_force_max = 10.0, -10.0
+    elif case == "negative_mass":
+        params.quad.m1 = -2.0
+    elif case == "zero_arm":
+        params.quad.arm = 0.0
+    elif case == "zero_c":
+        params.quad.c = -0.0
+    elif case == "zero_rho":
+        params.ctrl.rho = 0.0
+    elif case == "negative_gamma1":
+        params.ctrl.gamma1 = -0.05
+    elif case == "negative_k1":
+        params.ctrl.k1[2] = -1.0
+    elif case == "half_nominal_model":
+        params.ctrl.nominal_model = 0.5
+    elif case == "tilt_min_one":
+        params.tilt_min = 1.0
     elif case == "vertical_pitch":
         xq.eta1[1] = math.pi / 2
     elif case == "rolled_over":
@@ -277,11 +302,88 @@ def test_api_errors_leave_the_state_untouched(step_api, paper, case, status):
     elif case == "overflow":
         xq.V1[2] = 100.0
         params.ctrl.k2[0] = _finfo(api).max / 2    # finite gain, overflowing product
+    elif case == "overflowed_rotor_force":
+        # u is finite, the moments I u overflow and the mixer makes NaN of them:
+        # fmax(NaN, F_min) would have clipped it to F_min with QL_OK.
+        xq.Omega1[0] = 1e307 if api.real is ctypes.c_double else 1e37
     before = bytes(state)
     assert _step(api, xq, yv, ref, params, dt, state, out) == STATUS[status]
     assert bytes(state) == before
     assert not any(list(out.u) + list(out.u_law) + list(out.wrench) + list(out.rotor))
     assert api.lib.ql_status_string(STATUS[status])
+
+
+def _check_params(api, params):
+    bad = ctypes.c_char_p()
+    status = api.lib.ql_check_params(ctypes.byref(params), ctypes.byref(bad))
+    return status, None if bad.value is None else bad.value.decode()
+
+
+@pytest.mark.parametrize("member, value, name", [
+    ("quad.m1", -2.0, "quad.m1"),
+    ("quad.m1", math.nan, "quad.m1"),
+    ("quad.I", 0.0, "quad.I"),
+    ("quad.Kt", -1e-30, "quad.Kt"),
+    ("quad.g", -9.8, "quad.g"),
+    ("quad.arm", 0.0, "quad.arm"),
+    ("quad.c", -0.0, "quad.c"),
+    ("ctrl.k1", -3.0, "ctrl.k1"),
+    ("ctrl.k2", math.inf, "ctrl.k2"),
+    ("ctrl.gamma1", -0.05, "ctrl.gamma1"),
+    ("ctrl.gamma2", 0.0, "ctrl.gamma2"),
+    ("ctrl.k_w", 0.0, "ctrl.k_w"),
+    ("ctrl.k_zeta", -0.1, "ctrl.k_zeta"),
+    ("ctrl.rho", 0.0, "ctrl.rho"),
+    ("ctrl.nominal_model", 2.0, "ctrl.nominal_model"),
+    ("ctrl.centers", -math.inf, "ctrl.centers"),
+    ("ctrl.widths", 0.0, "ctrl.widths"),
+    ("rotor_force_min", math.nan, "rotor_force_min"),
+    ("rotor_force_max", -600.0, "rotor_force_max"),
+    ("tilt_min", -1e-3, "tilt_min"),
+    ("tilt_min", 1.0, "tilt_min"),
+    ("hold_compensation", 1.5, "hold_compensation"),
+])
+def test_check_params_names_the_bad_member(step_api, paper, member, value, name):
+    api = step_api
+    params = api.Params()
+    api.lib.ql_params_init(ctypes.byref(params))
+    assert _check_params(api, params) == (STATUS["QL_OK"], None)
+    owner, _, field = member.rpartition(".")
+    target = getattr(params, owner) if owner else params
+    if isinstance(getattr(target, field), (int, float)):
+        setattr(target, field, value)
+    else:   # an array member: its last entry
+        flat = getattr(target, field)
+        while not isinstance(flat[len(flat) - 1], (int, float)):
+            flat = flat[len(flat) - 1]
+        flat[len(flat) - 1] = value
+    assert _check_params(api, params) == (STATUS["QL_ERR_PARAM"], name)
+    # The step refuses it too, but for the per-node widths (check_params only).
+    xq, yv, ref, _, state, out = _api_objects(api, paper, paper.x0)
+    status = _step(api, xq, yv, ref, params, 0.002, state, out)
+    if name == "ctrl.widths":
+        assert status == STATUS["QL_OK"]
+    else:
+        assert status in (STATUS["QL_ERR_PARAM"], STATUS["QL_ERR_NONFINITE_INPUT"])
+
+
+def test_check_params_edges(step_api):
+    """Boundaries that are valid, a NULL bad_field, a NULL params."""
+    api = step_api
+    params = api.Params()
+    api.lib.ql_params_init(ctypes.byref(params))
+    params.quad.Kt[0] = -0.0               # >= 0 holds for -0
+    params.tilt_min = 0.0
+    params.hold_compensation = 1.0
+    params.ctrl.nominal_model = 1.0
+    params.rotor_force_min = params.rotor_force_max = 7.0
+    params.quad.m1 = float(_finfo(api).smallest_subnormal)
+    assert _check_params(api, params) == (STATUS["QL_OK"], None)
+    params.quad.m1 = 0.0
+    assert api.lib.ql_check_params(ctypes.byref(params), None) == STATUS["QL_ERR_PARAM"]
+    bad = ctypes.c_char_p(b"stale")
+    assert api.lib.ql_check_params(None, ctypes.byref(bad)) == STATUS["QL_ERR_NULL"]
+    assert bad.value is None
 
 
 def test_api_accepts_huge_finite_parameters(step_api, paper):

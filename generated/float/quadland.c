@@ -419,12 +419,171 @@ const char *qlf_status_string(qlf_status status)
     switch (status) {
     case QLF_OK: return "success; outputs and adaptive state updated";
     case QLF_ERR_NULL: return "a NULL pointer argument";
-    case QLF_ERR_INVALID: return "dt <= 0, rotor_force_min > rotor_force_max or hold_compensation outside [0, 1]";
+    case QLF_ERR_INVALID: return "dt <= 0";
     case QLF_ERR_NONFINITE_INPUT: return "an input, parameter or the adaptive state is NaN or infinite";
     case QLF_ERR_TILT: return "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible";
     case QLF_ERR_NONFINITE_OUTPUT: return "the law overflowed: a NaN or infinite value from finite inputs";
+    case QLF_ERR_PARAM: return "a parameter outside its range (ql_check_params names it)";
     }
     return "unknown status";
+}
+
+/* The range of each member of qlf_params, in layout order (symbolic.c_api.PARAM_RANGES):
+ *   quad.m1              > 0
+ *   quad.I               > 0
+ *   quad.Kt              >= 0
+ *   quad.Kr              >= 0
+ *   quad.g               > 0
+ *   quad.arm             > 0
+ *   quad.c               > 0
+ *   ctrl.k1              > 0
+ *   ctrl.k2              > 0
+ *   ctrl.gamma1          > 0
+ *   ctrl.gamma2          > 0
+ *   ctrl.k_w             > 0
+ *   ctrl.k_zeta          > 0
+ *   ctrl.rho             > 0
+ *   ctrl.nominal_model   0 or 1
+ *   ctrl.centers         finite
+ *   ctrl.widths          > 0
+ *   rotor_force_min      finite
+ *   rotor_force_max      >= rotor_force_min
+ *   tilt_min             in [0, 1)
+ *   hold_compensation    in [0, 1]
+ * NaN and infinities are outside every range. */
+qlf_status qlf_check_params(const qlf_params *params, const char **bad_field)
+{
+    const qlf_real *p = (const qlf_real *)params;
+    const char *bad = NULL;
+    int i;
+
+    if (bad_field) {
+        *bad_field = NULL;
+    }
+    if (!params) {
+        return QLF_ERR_NULL;
+    }
+    if (!bad && !(isfinite(p[0]) && (p[0] > 0.0f))) {
+        bad = "quad.m1";
+    }
+    for (i = 1; !bad && i < 4; ++i) {
+        if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
+            bad = "quad.I";
+        }
+    }
+    for (i = 4; !bad && i < 7; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
+            bad = "quad.Kt";
+        }
+    }
+    for (i = 7; !bad && i < 10; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
+            bad = "quad.Kr";
+        }
+    }
+    if (!bad && !(isfinite(p[10]) && (p[10] > 0.0f))) {
+        bad = "quad.g";
+    }
+    if (!bad && !(isfinite(p[11]) && (p[11] > 0.0f))) {
+        bad = "quad.arm";
+    }
+    if (!bad && !(isfinite(p[12]) && (p[12] > 0.0f))) {
+        bad = "quad.c";
+    }
+    for (i = 13; !bad && i < 17; ++i) {
+        if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
+            bad = "ctrl.k1";
+        }
+    }
+    for (i = 17; !bad && i < 21; ++i) {
+        if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
+            bad = "ctrl.k2";
+        }
+    }
+    if (!bad && !(isfinite(p[21]) && (p[21] > 0.0f))) {
+        bad = "ctrl.gamma1";
+    }
+    if (!bad && !(isfinite(p[22]) && (p[22] > 0.0f))) {
+        bad = "ctrl.gamma2";
+    }
+    if (!bad && !(isfinite(p[23]) && (p[23] > 0.0f))) {
+        bad = "ctrl.k_w";
+    }
+    if (!bad && !(isfinite(p[24]) && (p[24] > 0.0f))) {
+        bad = "ctrl.k_zeta";
+    }
+    if (!bad && !(isfinite(p[25]) && (p[25] > 0.0f))) {
+        bad = "ctrl.rho";
+    }
+    if (!bad && !(isfinite(p[26]) && ((p[26] == 0.0f) || (p[26] == 1.0f)))) {
+        bad = "ctrl.nominal_model";
+    }
+    for (i = 27; !bad && i < 1027; ++i) {
+        if (!(isfinite(p[i]))) {
+            bad = "ctrl.centers";
+        }
+    }
+    for (i = 1027; !bad && i < 1127; ++i) {
+        if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
+            bad = "ctrl.widths";
+        }
+    }
+    if (!bad && !(isfinite(p[1127]))) {
+        bad = "rotor_force_min";
+    }
+    if (!bad && !(isfinite(p[1128]) && (p[1128] >= p[1127]))) {
+        bad = "rotor_force_max";
+    }
+    if (!bad && !(isfinite(p[1129]) && ((p[1129] >= 0.0f) && (p[1129] < 1.0f)))) {
+        bad = "tilt_min";
+    }
+    if (!bad && !(isfinite(p[1130]) && ((p[1130] >= 0.0f) && (p[1130] <= 1.0f)))) {
+        bad = "hold_compensation";
+    }
+    if (bad_field) {
+        *bad_field = bad;
+    }
+    return bad ? QLF_ERR_PARAM : QLF_OK;
+}
+
+/* 1 when every parameter lies in its range, the per-node arrays aside
+ * (ctrl.widths: qlf_check_params only): the step's invariant,
+ * 30 comparisons. The values are known to be finite; no names and no
+ * branches: qlf_check_params finds the culprit. */
+static int params_in_range(const qlf_real *p)
+{
+    int ok = 1;
+    ok &= (p[0] > 0.0f);
+    ok &= (p[1] > 0.0f);
+    ok &= (p[2] > 0.0f);
+    ok &= (p[3] > 0.0f);
+    ok &= (p[4] >= 0.0f);
+    ok &= (p[5] >= 0.0f);
+    ok &= (p[6] >= 0.0f);
+    ok &= (p[7] >= 0.0f);
+    ok &= (p[8] >= 0.0f);
+    ok &= (p[9] >= 0.0f);
+    ok &= (p[10] > 0.0f);
+    ok &= (p[11] > 0.0f);
+    ok &= (p[12] > 0.0f);
+    ok &= (p[13] > 0.0f);
+    ok &= (p[14] > 0.0f);
+    ok &= (p[15] > 0.0f);
+    ok &= (p[16] > 0.0f);
+    ok &= (p[17] > 0.0f);
+    ok &= (p[18] > 0.0f);
+    ok &= (p[19] > 0.0f);
+    ok &= (p[20] > 0.0f);
+    ok &= (p[21] > 0.0f);
+    ok &= (p[22] > 0.0f);
+    ok &= (p[23] > 0.0f);
+    ok &= (p[24] > 0.0f);
+    ok &= (p[25] > 0.0f);
+    ok &= ((p[26] == 0.0f) | (p[26] == 1.0f));
+    ok &= (p[1128] >= p[1127]);
+    ok &= ((p[1129] >= 0.0f) & (p[1129] < 1.0f));
+    ok &= ((p[1130] >= 0.0f) & (p[1130] <= 1.0f));
+    return ok;
 }
 
 /* 1 when all n values are finite. A sum of values is finite when all of
@@ -508,10 +667,13 @@ qlf_status qlf_control_step(const qlf_quadrotor_state *xq, const qlf_vehicle_sta
         output_zero(out, 0);
         return QLF_ERR_NONFINITE_INPUT;
     }
-    if (!(dt > 0) || !(params->rotor_force_min <= params->rotor_force_max)
-        || !(params->hold_compensation >= 0 && params->hold_compensation <= 1)) {
+    if (!(dt > 0)) {
         output_zero(out, 0);
         return QLF_ERR_INVALID;
+    }
+    if (!params_in_range((const qlf_real *)params)) {
+        output_zero(out, 0);
+        return QLF_ERR_PARAM;
     }
     limits[0] = params->rotor_force_min;
     limits[1] = params->rotor_force_max;

@@ -31,14 +31,15 @@ typedef float qlf_real;
 #define QLF_CLOSED_LOOP_JACOBIAN_NNZ 4627    /* nonzeros of d x_dot / d x */
 #define QLF_PLANT_NX 18                      /* xp = [xq (10), xv (6), pos1 (2)] */
 
-/* Status of qlf_control_step. */
+/* Status of qlf_control_step and qlf_check_params. */
 typedef enum {
     QLF_OK = 0,                    /* success; outputs and adaptive state updated */
     QLF_ERR_NULL = 1,              /* a NULL pointer argument */
-    QLF_ERR_INVALID = 2,           /* dt <= 0, rotor_force_min > rotor_force_max or hold_compensation outside [0, 1] */
+    QLF_ERR_INVALID = 2,           /* dt <= 0 */
     QLF_ERR_NONFINITE_INPUT = 3,   /* an input, parameter or the adaptive state is NaN or infinite */
     QLF_ERR_TILT = 4,              /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
     QLF_ERR_NONFINITE_OUTPUT = 5,  /* the law overflowed: a NaN or infinite value from finite inputs */
+    QLF_ERR_PARAM = 6,             /* a parameter outside its range (ql_check_params names it) */
 } qlf_status;
 
 /* Measured quadrotor state (eq. 1-2): Earth frame z up, ZYX Euler angles. */
@@ -137,6 +138,14 @@ void qlf_adaptive_state_init(qlf_adaptive_state *state);
 /* The scenario's reference e1d, e1d_dot, e1d_ddot. */
 void qlf_reference_init(qlf_reference *ref);
 
+/* Check every parameter against its range, once at start-up and after
+ * retuning: QLF_OK, or QLF_ERR_PARAM with *bad_field set to the member path of
+ * the first invalid one ("quad.m1", "ctrl.widths", "rotor_force_max", ...;
+ * a static string), or QLF_ERR_NULL when params is NULL. NaN and
+ * infinities are invalid everywhere. bad_field may be NULL; on success
+ * *bad_field is set to NULL. */
+qlf_status qlf_check_params(const qlf_params *params, const char **bad_field);
+
 /* One control step of period dt (s).
  *
  * Evaluates the law of eq. (20) at the measurements (u_law), extrapolates
@@ -145,11 +154,12 @@ void qlf_reference_init(qlf_reference *ref);
  * [rotor_force_min, rotor_force_max] and integrates the adaptive laws of
  * eq. (22) exactly over dt with the measurements held. The rotor forces
  * are meant to be held until the next step. On QLF_OK the outputs are
- * written and the state advanced; on any error the state is left
- * untouched and the outputs are set to zero (never NaN): the caller
+ * written, all finite, and the state advanced; on any error the state is
+ * left untouched and the outputs are set to zero (never NaN): the caller
  * applies its failsafe, and clears state->has_prev before the next call
- * (as after any period whose output was not applied). No heap, no global
- * state: reentrant. */
+ * (as after any period whose output was not applied). Parameters outside
+ * their ranges give QLF_ERR_PARAM (qlf_check_params names the member). No
+ * heap, no global state: reentrant. */
 qlf_status qlf_control_step(const qlf_quadrotor_state *xq, const qlf_vehicle_state *yv,
                             const qlf_reference *ref, const qlf_params *params, qlf_real dt,
                             qlf_adaptive_state *state, qlf_output *out);
@@ -201,6 +211,7 @@ void qlf_plant(const qlf_real *xp, const qlf_real *wrench, const qlf_real *w,
 #define QL_ERR_NONFINITE_INPUT QLF_ERR_NONFINITE_INPUT
 #define QL_ERR_NONFINITE_OUTPUT QLF_ERR_NONFINITE_OUTPUT
 #define QL_ERR_NULL QLF_ERR_NULL
+#define QL_ERR_PARAM QLF_ERR_PARAM
 #define QL_ERR_TILT QLF_ERR_TILT
 #define QL_OK QLF_OK
 #define QL_PARAMS_SIZE QLF_PARAMS_SIZE
@@ -212,6 +223,7 @@ void qlf_plant(const qlf_real *xp, const qlf_real *wrench, const qlf_real *w,
 #define QL_RBF_NODES QLF_RBF_NODES
 #define ql_adaptive_state qlf_adaptive_state
 #define ql_adaptive_state_init qlf_adaptive_state_init
+#define ql_check_params qlf_check_params
 #define ql_closed_loop qlf_closed_loop
 #define ql_closed_loop_jacobian qlf_closed_loop_jacobian
 #define ql_closed_loop_jacobian_sparsity qlf_closed_loop_jacobian_sparsity
