@@ -32,8 +32,11 @@ import numpy as np
 
 import quadland
 from quadland import cbackend, codegen
-from quadland.model import model_values
-from symbolic.control_step import control_step_function
+from quadland.model import disturbance_samples, model_values
+from symbolic.closed_loop import closed_loop_state
+from symbolic.control_step import control_step_function, step_outputs
+from symbolic.parameters import VEHICLE
+from symbolic.simulation import paper_loop, rk4_step
 
 ANGLES = ("phi_e", "theta_e", "psi_e")
 #: Instructions one double control step (l = 100) may cost at -O2 (docs/codegen.md).
@@ -76,20 +79,56 @@ def _python_call_cost(l: int) -> tuple[float, float]:
     out = []
     for fn in (cbackend.load_control_step(l), control_step_function(l)):
         n = 2000
-        out.append(min(timeit.repeat(lambda: fn(*args), number=n, repeat=5)) / n)
+        out.append(min(timeit.repeat(lambda fn=fn: fn(*args), number=n, repeat=5)) / n)
     return out[0], out[1]
 
 
-def _simulate(overrides, precision=None):
-    sc = quadland.load_scenario("paper", overrides)
-    if precision is None:
-        return quadland.simulate(sc)
-    original = cbackend.load_control_step
-    cbackend.load_control_step = lambda l: cbackend.CControlStep(l, precision)
-    try:
-        return quadland.simulate(sc)
-    finally:
-        cbackend.load_control_step = original
+def _simulate(overrides):
+    return quadland.simulate(quadland.load_scenario("paper", overrides))
+
+
+def _fly(precision: str, rate: float = 500.0, duration: float = 10.0) -> dict:
+    """The paper's sampled loop flown with one build of the step, in Python.
+
+    ``quadland.simulate`` runs its loop in C with the double step; to fly the
+    float build, this loop calls it through ctypes (``CControlStep``) and
+    steps the plant with the same RK4 (``symbolic.simulation.rk4_step``),
+    one step per control period, the disturbance (bias and sine) held at its
+    sample rate. Returns ``z_e``, the attitude and the rotor forces per step.
+    """
+    sc = quadland.load_scenario("paper", ["disturbance.noise=false", f"controller.rate_hz={rate}",
+                                          f"simulation.duration={duration}"])
+    mv = model_values(sc)
+    m = paper_loop(mv.l)
+    step, plant = cbackend.CControlStep(mv.l, precision), rk4_step(m.plant)
+    x0 = closed_loop_state(mv.l).unpack(mv.x0)
+    xp = m.plant_state.pack({n: x0[n] for n in m.plant_state.names()})
+    xc = m.controller_state.zeros()
+    pp = m.plant_params.pack(dict(p_quad=mv.p_quad, p_veh=mv.p_veh))
+    pc = m.controller_params.pack(dict(p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl,
+                                       ref=mv.ref, rotor_limits=mv.rotor_limits, hold=mv.hold,
+                                       dt=1.0 / rate))
+    n = int(round(duration * rate))
+    t = np.arange(n) / rate
+    w_rate = sc["disturbance.sample_rate_hz"]
+    w = disturbance_samples(sc, np.floor(t * w_rate + 1e-9) / w_rate)
+    z2 = float(VEHICLE.unpack(mv.p_veh)["z2"][0])
+    rows = {k: np.empty(n) for k in ("z_e", *ANGLES, "F_1", "F_2", "F_3", "F_4")}
+    for k in range(n):
+        args = m.step_args(xp, xc, pc, 1.0 if k == 0 else 0.0)
+        out = dict(zip(step_outputs(mv.l).names(), step(*(np.asarray(a) for a in args)),
+                       strict=True))
+        xc = np.concatenate([out["W_next"].ravel(order="F"), out["zeta_next"].ravel(),
+                             out["u_law"].ravel()])
+        xp = np.asarray(plant(xp, out["wrench"], w[:, k], pp, 1.0 / rate)).ravel()
+        q = m.plant_state.unpack(xp)
+        rows["z_e"][k] = q["xq"][0] - z2
+        eta, psi2 = q["xq"][1:4], m.plant_state.unpack(xp)["xv"][2]
+        for name, v in zip(ANGLES, (eta[0], eta[1], eta[2] - psi2), strict=True):
+            rows[name][k] = v
+        for i in range(4):
+            rows[f"F_{i + 1}"][k] = out["rotor"][i, 0]
+    return rows
 
 
 def _max_dev(a, b, names):
@@ -115,13 +154,19 @@ def main() -> None:
     print(f"python call: compiled C via ctypes {c_call * 1e6:.1f} us, "
           f"CasADi Function {casadi_call * 1e6:.1f} us")
     sampled = ["controller.rate_hz=500.0"]
-    ref = _simulate(sampled + ['controller.backend="c"'], "double")
-    flt = _simulate(sampled + ['controller.backend="c"'], "float")
+    ref = _simulate(sampled + ['controller.backend="c"'])
     cas = _simulate(sampled)
+    dbl, flt = _fly("double"), _fly("float")
     cont = _simulate([])
-    print(f"float vs double control step, 500 Hz, 10 s: z_e {_max_dev(flt, ref, ['z_e']):.2e} m, "
-          f"attitude {_max_dev(flt, ref, ANGLES):.2e} rad, "
-          f"rotor forces {_max_dev(flt, ref, ['F_1', 'F_2', 'F_3', 'F_4']):.2e} N")
+    print(f"float vs double control step, 500 Hz, 10 s: z_e {_max_dev(flt, dbl, ['z_e']):.2e} m, "
+          f"attitude {_max_dev(flt, dbl, ANGLES):.2e} rad, "
+          f"rotor forces {_max_dev(flt, dbl, ['F_1', 'F_2', 'F_3', 'F_4']):.2e} N")
+    # row k of the Python loop is the state after step k, at (k + 1) / 500 s; simulate's
+    # rows are at j / 100 s
+    quiet = _simulate(sampled + ['controller.backend="c"', "disturbance.noise=false"])
+    check = np.max(np.abs(dbl["z_e"][4::5] - quiet["z_e"][1:]))
+    print(f"the Python loop with the double step vs simulate: z_e {check:.2e} m "
+          "(checks the loop that flies the float build)")
     diff = np.max(np.abs(ref.states - cas.states))
     print(f"backend c vs casadi, 500 Hz, 10 s: states {diff:.2e}")
     plain = _simulate(sampled + ["controller.hold_compensation=0.0"])

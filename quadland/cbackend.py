@@ -135,7 +135,7 @@ class CControlStep:
     def __call__(self, *args):
         if len(args) != len(self._in_names):
             raise TypeError(f"control_step takes {len(self._in_names)} inputs {self._in_names}")
-        for name, a, buf in zip(self._in_names, args, self._ins):
+        for name, a, buf in zip(self._in_names, args, self._ins, strict=True):
             v = np.asarray(a, dtype=float)
             if v.ndim > 1:
                 v = v.reshape(-1, order="F")
@@ -145,7 +145,7 @@ class CControlStep:
             buf[:] = v.ravel()
         self._fn(self._arg, self._res, self._iw, self._w, 0)
         return tuple(o.astype(np.float64).reshape(s, order="F")
-                     for o, s in zip(self._outs, self._out_shapes))
+                     for o, s in zip(self._outs, self._out_shapes, strict=True))
 
     def __repr__(self) -> str:
         return (f"CControlStep(l={self.l}, precision={self.precision!r}): "

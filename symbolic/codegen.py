@@ -42,11 +42,22 @@ import casadi as ca
 import jinja2
 import numpy as np
 
-from symbolic.c_api import (CStruct, adaptive_state_layout, api_structs, output_layout,
-                            param_ranges, params_layout)
-from symbolic.closed_loop import (PLANT_STATE, closed_loop_function,
-                                  closed_loop_jacobian_function, closed_loop_params,
-                                  closed_loop_state, plant_function)
+from symbolic.c_api import (
+    CStruct,
+    adaptive_state_layout,
+    api_structs,
+    output_layout,
+    param_ranges,
+    params_layout,
+)
+from symbolic.closed_loop import (
+    PLANT_STATE,
+    closed_loop_function,
+    closed_loop_jacobian_function,
+    closed_loop_params,
+    closed_loop_state,
+    plant_function,
+)
 from symbolic.control_step import control_step_function, step_inputs, step_outputs
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout

@@ -16,9 +16,14 @@ from quadland import build, cbackend, codegen
 from quadland.exceptions import CompilerNotFoundError
 from quadland.model import disturbance_samples, model_values
 from quadland.simulate import TRAJECTORY
-from symbolic.closed_loop import (PLANT_STATE, closed_loop_function,
-                                  closed_loop_jacobian_function, closed_loop_params,
-                                  closed_loop_state, plant_function)
+from symbolic.closed_loop import (
+    PLANT_STATE,
+    closed_loop_function,
+    closed_loop_jacobian_function,
+    closed_loop_params,
+    closed_loop_state,
+    plant_function,
+)
 from symbolic.codegen import STATUS_CODES
 from symbolic.control_step import control_step_function
 
@@ -105,7 +110,7 @@ def test_control_step_matches_casadi(paper, l):
     clipped = 0
     for args in cases:
         got, want = step(*args), ref(*args)
-        for g, w in zip(got, want):
+        for g, w in zip(got, want, strict=True):
             assert g.shape == np.asarray(w).shape
             _assert_rel(g, w)
         clipped += int(got[6].item())
@@ -117,7 +122,7 @@ def test_float_build_tracks_double(paper):
     args = _inputs(rng, paper, L, 0.5)
     d = cbackend.load_control_step(L)(*args)
     f = cbackend.load_control_step(L, "float")(*args)
-    for a, b in zip(d, f):
+    for a, b in zip(d, f, strict=True):
         assert np.allclose(a, b, rtol=1e-4, atol=1e-4 * np.max(np.abs(a), initial=1.0))
 
 
@@ -523,7 +528,7 @@ def _rk4_closed_loop(scenario, h, n):
     w_all = disturbance_samples(scenario, h * np.arange(n + 1))
     x, xs = mv.x0.copy(), [mv.x0.copy()]
     for k in range(n):
-        def rhs(y):
+        def rhs(y, k=k):
             return np.asarray(f(y, w_all[:, k], mv.p)).ravel()
         k1 = rhs(x)
         k2 = rhs(x + h / 2 * k1)
