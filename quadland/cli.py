@@ -105,8 +105,7 @@ def _run_margins(args) -> int:
     from threadpoolctl import threadpool_limits
 
     from quadland.margins import Requirement, format_report, margin_report
-    from quadland.output import figure_png, output_folder
-    from quadland.run import strict_json
+    from quadland.output import figure_png, output_folder, strict_json
     from quadland.scenario import load_scenario
 
     start = time.perf_counter()

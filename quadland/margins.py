@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from quadland.exceptions import MarginsError
+from quadland.output import json_ready
 
 if TYPE_CHECKING:
     import control
@@ -327,26 +328,11 @@ class MarginReport:
                     loop_break=LOOP_BREAK, continuous=self.continuous.to_dict())
         if self.sampled is not None:
             data["sampled"] = self.sampled.to_dict()
-        return _finite(data)
+        return json_ready(data)
 
 
 def _db(ratio: float) -> float:
     return 20.0 * math.log10(ratio) if ratio > 0 else -math.inf
-
-
-def _finite(x):
-    """JSON value: infinities become None (no crossing, margin unbounded)."""
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_finite(v) for v in x]
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 def _pole(p: complex) -> Pole:

@@ -19,16 +19,20 @@ import datetime
 import errno
 import fcntl
 import io
+import json
+import math
 import os
 import shutil
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
+import numpy as np
+
 from quadland.exceptions import OutputError
 
 __all__ = ["PNG_DPI", "MARKER", "OutputFolder", "output_folder", "write_files", "figure_png",
-           "write_bytes_atomic", "write_text_atomic"]
+           "json_ready", "strict_json", "write_bytes_atomic", "write_text_atomic"]
 
 #: Resolution of the figures written, dots per inch.
 PNG_DPI = 110
@@ -236,6 +240,30 @@ def write_files(folder: str | os.PathLike | OutputFolder, files: Mapping[str, by
     """Write ``files`` as the whole content of ``folder`` (see :meth:`OutputFolder.write`)."""
     target = folder if isinstance(folder, OutputFolder) else OutputFolder(folder)
     return target.write(files)
+
+
+def json_ready(x):
+    """``x`` with NumPy scalars as Python ones and every NaN or infinity as None.
+
+    ``None`` (``null``) stands for an undefined or unbounded value: a
+    settling time never reached, a margin without a crossing.
+    """
+    if isinstance(x, dict):
+        return {k: json_ready(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [json_ready(v) for v in x]
+    if isinstance(x, float | np.floating):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def strict_json(data) -> bytes:
+    """``data`` as strict JSON (RFC 8259): no NaN or Infinity tokens (see :func:`json_ready`)."""
+    return (json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n").encode("utf-8")
 
 
 def figure_png(fig) -> bytes:

@@ -2,22 +2,19 @@
 
 from __future__ import annotations
 
-import json
-import math
 import platform
 from pathlib import Path
 
 import casadi as ca
-import numpy as np
 
 from quadland.exceptions import SimulationError
 from quadland.metrics import summarize
-from quadland.output import figure_png, output_folder
+from quadland.output import figure_png, output_folder, strict_json
 from quadland.scenario import Scenario, load_scenario
 from quadland.simulate import SimulationResult, columns_sidecar, simulate
 from quadland.simulate import check_plan as simulation_plan_check
 
-__all__ = ["run_simulation", "provenance", "versions", "strict_json", "DEPENDENCIES"]
+__all__ = ["run_simulation", "provenance", "versions", "DEPENDENCIES"]
 
 
 #: Distributions whose versions shape a result, recorded in every output.
@@ -52,29 +49,6 @@ def provenance(scenario: Scenario) -> dict:
         "versions": versions(),
         "scenario": scenario.to_dict(),
     }
-
-
-def strict_json(data) -> bytes:
-    """``data`` as strict JSON (RFC 8259): every NaN or infinity becomes ``null``.
-
-    ``null`` in a summary means "undefined": a settling time never reached,
-    a ratio of zero by zero, a margin without a crossing (unbounded).
-    """
-    return (json.dumps(_finite(data), indent=2, allow_nan=False) + "\n").encode("utf-8")
-
-
-def _finite(x):
-    if isinstance(x, dict):
-        return {k: _finite(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_finite(v) for v in x]
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
 
 
 def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
