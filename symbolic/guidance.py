@@ -1,0 +1,152 @@
+"""Landing guidance: phases, the descent profile and abort, as one sampled step.
+
+The guidance runs at the control rate on the relative state in the deck
+frame (position ``p_e``, velocity ``v_e``; z up, the pad's centre at the
+origin) and produces the reference the position loop tracks. Its state is
+:data:`STATE`: the phase, a dwell timer, the descent reference height and
+the abort count. Phases (:data:`PHASES`):
+
+0. **approach**: the reference is the hover point ``[0, 0, hover_height]``;
+   it leaves when the quadrotor is within ``align_radius`` of it;
+1. **align**: hold the hover point until the horizontal offset is within
+   half of ``max_offset`` and the horizontal relative speed within half of
+   ``max_relative_speed`` for ``dwell_time`` without a break;
+2. **descend**: the reference height falls at ``clamp(h / descent_time,
+   touchdown_speed, descent_speed)`` with ``h`` its height above touchdown
+   (the gear on the deck), a rate that is large high up and the crawl
+   ``touchdown_speed`` for the last part, which goes on below the touchdown
+   height until contact (PX4 lands at 0.7 m/s and crawls at 0.3 m/s for the
+   last metre); the horizontal reference stays at the pad;
+3. **touchdown**: set by the simulator when the landing gear meets the deck
+   (``symbolic.landing``'s gear gap crosses zero); the guidance holds it;
+4. **landed**: likewise, ``settle_time`` after touchdown.
+
+**Abort.** During the descent, when the horizontal offset exceeds
+``max_offset`` or the horizontal relative speed ``max_relative_speed``
+(the criteria of a good touchdown could no longer be met), or when the deck
+rises faster than ``max_deck_rise`` (a heaving ship deck), the phase goes
+back to align, the reference climbs back to the hover height, and the abort
+count grows by one.
+
+All logic is branch-free (``if_else``), so that the step is one CasADi
+Function, generated into C like the controller.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from symbolic.layout import Field, Layout
+
+__all__ = ["PHASES", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED", "STATE",
+           "PARAMS", "REFERENCE", "guidance_step", "guidance_function"]
+
+#: Phase numbers, as written to trajectory.csv's ``phase`` column.
+PHASES = ("approach", "align", "descend", "touchdown", "landed")
+APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED = range(len(PHASES))
+
+#: The guidance's memory.
+STATE = Layout("xg", (
+    Field("phase", 1, "-", "phase number (PHASES)"),
+    Field("timer", 1, "s", "time the align criteria have held without a break"),
+    Field("z_ref", 1, "m", "descent reference height of the centre above the pad"),
+    Field("aborts", 1, "-", "number of aborted descents"),
+), "landing guidance state")
+
+#: The guidance's parameters (the [landing] keys of a landing scenario).
+PARAMS = Layout("p_guid", (
+    Field("hover_height", 1, "m", "height of the hover point above the pad (centre)"),
+    Field("align_radius", 1, "m", "distance to the hover point that ends the approach"),
+    Field("dwell_time", 1, "s", "time the align criteria must hold"),
+    Field("descent_speed", 1, "m/s", "largest descent rate"),
+    Field("descent_time", 1, "s", "height over rate: the descent rate is h / descent_time"),
+    Field("touchdown_speed", 1, "m/s", "descent rate at touchdown (the crawl)"),
+    Field("touchdown_height", 1, "m", "the centre's height above the pad at contact"),
+    Field("max_offset", 1, "m", "largest horizontal offset at touchdown"),
+    Field("max_relative_speed", 1, "m/s", "largest horizontal relative speed at touchdown"),
+    Field("max_deck_rise", 1, "m/s", "largest deck rise rate at which a descent goes on"),
+), "landing guidance parameters")
+
+#: What the position loop tracks: the reference and its first two derivatives
+#: in the deck frame.
+REFERENCE = Layout("r_pos", (
+    Field("p_ref", 3, "m", "reference position", elements=("x_ref", "y_ref", "z_ref")),
+    Field("v_ref", 3, "m/s", "its rate", elements=("vx_ref", "vy_ref", "vz_ref")),
+    Field("a_ref", 3, "m/s^2", "its acceleration", elements=("ax_ref", "ay_ref", "az_ref")),
+), "position reference in the deck frame")
+
+
+def _descent_rate(h, p):
+    """clamp(h / descent_time, touchdown_speed, descent_speed), m/s (down)."""
+    return ca.fmin(ca.fmax(h / p["descent_time"], p["touchdown_speed"]), p["descent_speed"])
+
+
+def guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid):
+    """One guidance step of length ``dt`` (s).
+
+    Parameters
+    ----------
+    xg : casadi.SX, (4,)
+        :data:`STATE` at the start of the step.
+    p_e, v_e : casadi.SX, (3,)
+        Relative position and velocity in the deck frame, m, m/s.
+    deck_rise : casadi.SX
+        The deck's vertical velocity at the pad, m/s (up).
+    dt : casadi.SX
+        Step length, s.
+    p_guid : casadi.SX
+        :data:`PARAMS`.
+
+    Returns
+    -------
+    xg_next : casadi.SX, (4,)
+    reference : casadi.SX, (9,)
+        :data:`REFERENCE` for the step.
+    """
+    g, p = STATE.unpack(xg), PARAMS.unpack(p_guid)
+    phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
+    hover = p["hover_height"]
+    offset = ca.norm_2(p_e[0:2])
+    speed = ca.norm_2(v_e[0:2])
+    to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, hover))
+
+    in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
+    aligned = ca.logic_and(offset <= p["max_offset"] / 2, speed <= p["max_relative_speed"] / 2)
+    timer_next = ca.if_else(ca.logic_and(in_align, aligned), timer + dt, 0)
+    abort = ca.logic_and(in_descend, ca.logic_or(
+        ca.logic_or(offset > p["max_offset"], speed > p["max_relative_speed"]),
+        deck_rise > p["max_deck_rise"]))
+    phase_next = ca.if_else(
+        ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
+        ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
+                   ca.if_else(abort, ALIGN, phase)))
+
+    # the descent reference: it falls only while descending, and is reset to the
+    # hover height by an abort or before the descent starts
+    h = z_ref - p["touchdown_height"]
+    rate = _descent_rate(h, p)
+    # below the touchdown height the reference goes on at the crawl until contact:
+    # a heaving deck may have moved away, and the quadrotor must meet it
+    descending = ca.logic_and(in_descend, ca.logic_not(abort))
+    z_fall = z_ref - rate * dt
+    z_next = ca.if_else(descending, z_fall,
+                        ca.if_else(phase >= TOUCHDOWN, z_ref, hover))
+
+    vz = ca.if_else(descending, -rate, 0)
+    # d/dt of -rate: the rate is h / descent_time where it is not clamped
+    unclamped = ca.logic_and(h / p["descent_time"] > p["touchdown_speed"],
+                             h / p["descent_time"] < p["descent_speed"])
+    az = ca.if_else(ca.logic_and(descending, unclamped), rate / p["descent_time"], 0)
+    reference = ca.vertcat(0, 0, z_ref, 0, 0, vz, 0, 0, az)
+    return ca.vertcat(phase_next, timer_next, z_next, aborts + abort), reference
+
+
+def guidance_function() -> ca.Function:
+    """``guidance(xg, p_e, v_e, deck_rise, dt, p_guid) -> (xg_next, reference)``."""
+    xg, p_e, v_e = STATE.sym(), ca.SX.sym("p_e", 3), ca.SX.sym("v_e", 3)
+    deck_rise, dt, p_guid = ca.SX.sym("deck_rise"), ca.SX.sym("dt"), PARAMS.sym()
+    xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid)
+    return ca.Function("guidance", [xg, p_e, v_e, deck_rise, dt, p_guid],
+                       [xg_next, reference],
+                       ["xg", "p_e", "v_e", "deck_rise", "dt", "p_guid"],
+                       ["xg_next", "reference"])

@@ -1,0 +1,108 @@
+"""Landing guidance on scripted relative trajectories, against hand-worked timings."""
+
+import math
+
+import numpy as np
+import pytest
+
+from symbolic.guidance import ALIGN, APPROACH, DESCEND, PARAMS, STATE, TOUCHDOWN, guidance_function
+
+P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
+         descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2, max_offset=0.2,
+         max_relative_speed=0.5, max_deck_rise=0.8)
+DT = 0.002
+GUIDANCE = guidance_function()
+
+
+def _run(script, n, xg=None, p=P):
+    """Step the guidance n times; script(k, z_ref) -> (p_e, v_e, deck_rise)."""
+    xg = STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=p["hover_height"], aborts=0)) \
+        if xg is None else xg
+    pg = PARAMS.pack(p)
+    rows = []
+    for k in range(n):
+        z_ref = STATE.unpack(xg)["z_ref"][0]
+        p_e, v_e, rise = script(k, z_ref)
+        xg_next, ref = (np.asarray(v, dtype=float).ravel()
+                        for v in GUIDANCE(xg, p_e, v_e, rise, DT, pg))
+        rows.append((xg, ref))
+        xg = xg_next
+    return rows, xg
+
+
+def _on_track(k, z_ref):
+    """A quadrotor that tracks the reference exactly, over the pad."""
+    return [0.0, 0.0, z_ref], [0.0, 0.0, 0.0], 0.0
+
+
+def test_approach_ends_within_the_align_radius():
+    def script(k, z_ref):              # flies in along x at 1 m/s from 5 m out
+        return [-5.0 + k * DT, 0.0, 3.0], [1.0, 0.0, 0.0], 0.0
+    rows, _ = _run(script, 3000)
+    phases = [STATE.unpack(xg)["phase"][0] for xg, _ in rows]
+    k = phases.index(ALIGN)
+    # within 0.5 m of the hover point: -5 + k dt >= -0.5 at the step before
+    assert math.isclose((k - 1) * DT, 4.5, abs_tol=DT)
+    ref = rows[0][1]
+    np.testing.assert_allclose(ref[0:3], [0, 0, 3.0])   # the hover point
+    np.testing.assert_allclose(ref[3:9], 0)
+
+
+def test_align_dwells_then_descends_and_a_break_restarts_the_dwell():
+    xg = STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0))
+
+    def script(k, z_ref):              # drifts out of the half-limit band for 10 steps
+        off = 0.15 if 200 <= k < 210 else 0.05
+        return [off, 0.0, 3.0], [0.0, 0.0, 0.0], 0.0
+    rows, _ = _run(script, 1000, xg)
+    phases = [STATE.unpack(x)["phase"][0] for x, _ in rows]
+    k = phases.index(DESCEND)
+    # the timer restarts after the break (step 209) and needs 1 s = 500 steps
+    assert k == 210 + 500
+
+
+def test_descent_profile_against_its_closed_form():
+    """Rate min(max(h / T, v_td), v_max): linear at 0.7 m/s down to h = 0.7 m, then
+    exponential h = 0.7 exp(-(t - t1) / T) down to h = 0.3 m, then the 0.3 m/s crawl."""
+    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=3.0, aborts=0))
+    rows, _ = _run(_on_track, 3000, xg)
+    t = DT * np.arange(len(rows))
+    z = np.array([STATE.unpack(x)["z_ref"][0] for x, _ in rows])
+    h0, T, vmax, vtd = 3.0 - 0.2, 1.0, 0.7, 0.3
+    t1 = (h0 - vmax * T) / vmax                     # linear part ends at h = v_max T
+    t2 = t1 + T * math.log(vmax / vtd)              # exponential part ends at h = v_td T
+    h = np.where(t <= t1, h0 - vmax * t,
+                 np.where(t <= t2, vmax * T * np.exp(-(t - t1) / T),
+                          vtd * T - vtd * (t - t2)))
+    np.testing.assert_allclose(z - 0.2, h, atol=3 * DT)    # Euler of the rate: O(dt)
+    # the reference's rate and acceleration are the profile's
+    vz = np.array([ref[5] for _, ref in rows])
+    az = np.array([ref[8] for _, ref in rows])
+    mid = (t > t1 + 0.05) & (t < t2 - 0.05)
+    np.testing.assert_allclose(vz[mid], -(z[mid] - 0.2) / T, rtol=1e-12)
+    np.testing.assert_allclose(az[mid], (z[mid] - 0.2) / T ** 2, rtol=1e-12)
+    assert np.all(az[t < t1 - 0.05] == 0) and np.all(az[t > t2 + 0.05] == 0)
+    assert z[-1] < 0.2 - 0.3                             # crawls on below contact height
+
+
+@pytest.mark.parametrize("cause", ["offset", "speed", "deck"])
+def test_abort_climbs_back_to_hover_and_counts(cause):
+    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
+
+    def script(k, z_ref):
+        bad = k == 100
+        p_e = [0.25 if bad and cause == "offset" else 0.0, 0.0, z_ref]
+        v_e = [0.6 if bad and cause == "speed" else 0.0, 0.0, 0.0]
+        return p_e, v_e, 1.0 if bad and cause == "deck" else 0.0
+    rows, _ = _run(script, 102, xg)
+    after = STATE.unpack(rows[101][0])
+    assert after["phase"][0] == ALIGN and after["aborts"][0] == 1
+    assert after["z_ref"][0] == 3.0                       # back to the hover height
+    before = STATE.unpack(rows[100][0])
+    assert before["phase"][0] == DESCEND and before["z_ref"][0] < 2.0
+
+
+def test_touchdown_is_held():
+    xg = STATE.pack(dict(phase=TOUCHDOWN, timer=0.0, z_ref=0.1, aborts=2))
+    rows, last = _run(lambda k, z: ([1.0, 1.0, 5.0], [3.0, 0, 0], 2.0), 10, xg)
+    np.testing.assert_array_equal(last, xg)
