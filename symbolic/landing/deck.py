@@ -1,0 +1,162 @@
+"""The vehicle and its deck: eq. (4) plus prescribed heave, roll and pitch.
+
+The vehicle's planar motion is the model of eq. (4) (:mod:`symbolic.vehicle`,
+state ``xv``, driven by ``p_veh``'s ``tau``). Its deck moves in heave, roll
+and pitch as prescribed sums of :data:`N_DECK` sinusoids
+``s(t) = sum_i a_i sin(omega_i t + phase_i)`` (parameters :data:`DECK_PARAMS`);
+a car has zero amplitudes. The deck's yaw is the vehicle's heading psi2.
+
+Frames: E has z up. The deck frame's origin is the vehicle's reference point
+``O2 = [x2, y2, deck_height + heave(t)]`` (the centre of roll and pitch) and
+its attitude ``eta2 = [phi2(t), theta2(t), psi2]`` (ZYX),
+``R_deck = Rz(psi2) Ry(theta2) Rx(phi2)`` maps deck vectors to E. The pad
+centre is ``p2 = O2 + R_deck pad_offset``. All time derivatives are taken
+symbolically along ``xv_dot = vehicle_rhs(xv)`` plus the explicit time terms.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import NamedTuple
+
+import casadi as ca
+
+from symbolic.kinematics import rotation
+from symbolic.layout import Field, Layout
+from symbolic.parameters import VEHICLE
+from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import vehicle_rhs
+
+__all__ = [
+    "N_DECK",
+    "DECK_PARAMS",
+    "DECK_POSE",
+    "DeckPose",
+    "deck_motion",
+    "time_derivative",
+    "vee",
+    "deck_pose",
+    "deck_function",
+]
+
+#: Sinusoids per prescribed deck motion (heave, roll, pitch).
+N_DECK = 3
+
+
+def _sines(name: str, unit: str, what: str) -> tuple[Field, ...]:
+    idx = range(1, N_DECK + 1)
+    return (
+        Field(f"{name}_amp", N_DECK, unit, f"{what} amplitudes",
+              elements=tuple(f"{name}_amp_{i}" for i in idx)),
+        Field(f"{name}_freq", N_DECK, "rad/s", f"{what} frequencies",
+              elements=tuple(f"{name}_freq_{i}" for i in idx)),
+        Field(f"{name}_phase", N_DECK, "rad", f"{what} phases",
+              elements=tuple(f"{name}_phase_{i}" for i in idx)),
+    )
+
+
+#: The deck's prescribed motion and the pad's place on it.
+DECK_PARAMS = Layout("p_deck", (
+    *_sines("heave", "m", "heave (along E's z)"),
+    *_sines("roll", "rad", "deck roll phi2"),
+    *_sines("pitch", "rad", "deck pitch theta2"),
+    Field("pad_offset", 3, "m", "pad centre in the deck frame (z up) from the vehicle's "
+          "reference point", elements=("pad_x", "pad_y", "pad_z")),
+    Field("deck_height", 1, "m", "altitude of the vehicle's reference point at zero heave"),
+), "prescribed deck motion: sums of sinusoids; zero amplitudes for a car")
+
+#: Outputs of :func:`deck_function`, in order.
+DECK_POSE = Layout("deck", (
+    Field("p2", 3, "m", "pad centre in E", elements=("x2", "y2", "z2")),
+    Field("eta2", 3, "rad", "deck attitude, ZYX", elements=("phi2", "theta2", "psi2")),
+    Field("R_deck", 9, "-", "deck-to-E rotation Rz(psi2) Ry(theta2) Rx(phi2)", shape=(3, 3)),
+    Field("v2E", 3, "m/s", "pad centre velocity in E", elements=("vx2", "vy2", "vz2")),
+    Field("a2E", 3, "m/s^2", "pad centre acceleration in E", elements=("ax2", "ay2", "az2")),
+    Field("w2E", 3, "rad/s", "deck angular velocity in E", elements=("wx2", "wy2", "wz2")),
+    Field("w2E_dot", 3, "rad/s^2", "deck angular acceleration in E",
+          elements=("wx2_dot", "wy2_dot", "wz2_dot")),
+), "pad and deck pose in E with first and second time derivatives")
+
+
+class DeckPose(NamedTuple):
+    """The fields of :data:`DECK_POSE` as expressions or numbers."""
+
+    p2: ca.SX
+    eta2: ca.SX
+    R_deck: ca.SX
+    v2E: ca.SX
+    a2E: ca.SX
+    w2E: ca.SX
+    w2E_dot: ca.SX
+
+
+def _sum_of_sines(amp, freq, phase, t):
+    return ca.sum1(amp * ca.sin(freq * t + phase))
+
+
+def deck_motion(t, p_deck):
+    """Prescribed heave (m), roll phi2 and pitch theta2 (rad) at time t."""
+    p = DECK_PARAMS.unpack(p_deck)
+    return tuple(_sum_of_sines(p[f"{n}_amp"], p[f"{n}_freq"], p[f"{n}_phase"], t)
+                 for n in ("heave", "roll", "pitch"))
+
+
+def time_derivative(expr, x, x_dot, t):
+    """d/dt of ``expr(x, t)`` along ``x_dot``: ``d expr/dx x_dot + d expr/dt``.
+
+    ``x`` and ``t`` must be symbols; ``expr`` may be a matrix.
+    """
+    rows, cols = expr.shape
+    flat = ca.reshape(expr, rows * cols, 1)
+    d = ca.jtimes(flat, ca.vertcat(x, t), ca.vertcat(x_dot, 1))
+    return ca.reshape(d, rows, cols)
+
+
+def vee(S):
+    """w from the skew-symmetric part of S (the inverse of ``skew``)."""
+    A = (S - S.T) / 2
+    return ca.vertcat(A[2, 1], A[0, 2], A[1, 0])
+
+
+def _pose(xv, t, p_deck):
+    """Pad centre p2, attitude eta2 and R_deck in E, without derivatives."""
+    v, p = VEHICLE_STATE.unpack(xv), DECK_PARAMS.unpack(p_deck)
+    heave, phi2, theta2 = deck_motion(t, p_deck)
+    eta2 = ca.vertcat(phi2, theta2, v["psi2"])
+    R_deck = rotation(eta2)
+    origin = ca.vertcat(v["x2"], v["y2"], p["deck_height"] + heave)
+    return origin + R_deck @ p["pad_offset"], eta2, R_deck
+
+
+@functools.cache
+def deck_function() -> ca.Function:
+    """``deck(xv, t, p_veh, p_deck) -> (p2, eta2, R_deck, v2E, a2E, w2E, w2E_dot)``.
+
+    Eq. (3)-(4) for the vehicle's planar motion and heading, with heave, roll
+    and pitch prescribed. The derivatives are symbolic, along
+    ``xv_dot = vehicle_rhs(xv, p_veh)`` and the explicit time terms;
+    ``S(w2E) = R_deck_dot R_deck^T``. Outputs: :data:`DECK_POSE`.
+    """
+    xv, t = VEHICLE_STATE.sym(), ca.SX.sym("t")
+    p_veh, p_deck = VEHICLE.sym(), DECK_PARAMS.sym()
+    xv_dot = vehicle_rhs(xv, p_veh)
+
+    def d_dt(e):
+        return time_derivative(e, xv, xv_dot, t)
+
+    p2, eta2, R_deck = _pose(xv, t, p_deck)
+    v2E = d_dt(p2)
+    a2E = d_dt(v2E)
+    w2E = vee(d_dt(R_deck) @ R_deck.T)
+    w2E_dot = d_dt(w2E)
+    return ca.Function("deck", [xv, t, p_veh, p_deck],
+                       [p2, eta2, R_deck, v2E, a2E, w2E, w2E_dot],
+                       ["xv", "t", "p_veh", "p_deck"], list(DECK_POSE.names()))
+
+
+def deck_pose(xv, t, p_veh, p_deck) -> DeckPose:
+    """The deck's pose and its time derivatives (:func:`deck_function`).
+
+    Symbolic arguments give expressions, numeric ones ``casadi.DM``.
+    """
+    return DeckPose(*deck_function()(xv, t, p_veh, p_deck))
