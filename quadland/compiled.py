@@ -24,10 +24,10 @@ from quadland.exceptions import CompilerNotFoundError
 from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, rk4_step, simulator_sources
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK", "SIM_NONFINITE",
-           "SIM_GUARD", "SIM_CONTROLLER"]
+           "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "Failure"]
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
-SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER = 0, 1, 2, 3
+SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT = 0, 1, 2, 3, 4
 
 _REAL = ctypes.POINTER(ctypes.c_double)
 _LONG = ctypes.POINTER(ctypes.c_long)
@@ -47,10 +47,11 @@ def _f64(a) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class Failure:
-    """Where a compiled run stopped: its status and grid index."""
+    """Where a run stopped early: its status, grid index and, for an event, the time."""
 
     status: int
     index: int
+    time: float = float("nan")
 
 
 class CompiledLoop:
@@ -77,7 +78,7 @@ class CompiledLoop:
         lib = ctypes.CDLL(str(self.library))
         prefix = f"qlsim_{model.name}_"
         self._outputs = getattr(lib, f"{prefix}{part}_outputs")
-        self._outputs.argtypes = [_REAL, _REAL, ctypes.c_long, _REAL, _REAL]
+        self._outputs.argtypes = [_REAL, _REAL, _REAL, ctypes.c_long, _REAL, _REAL]
         if part == "continuous":
             self._integrate = getattr(lib, f"{prefix}integrate")
             self._integrate.argtypes = [_REAL, _REAL, _REAL, _LONG, ctypes.c_long,
@@ -86,18 +87,19 @@ class CompiledLoop:
             self._sampled = getattr(lib, f"{prefix}sampled")
             self._sampled.argtypes = [_REAL, _REAL, _REAL, _REAL, ctypes.c_char_p, _LONG,
                                       ctypes.c_long, ctypes.c_long, _REAL, _REAL,
-                                      ctypes.c_double, _REAL, _REAL, _REAL, _REAL, _LONG]
+                                      ctypes.c_double, _REAL, _REAL, _REAL, _REAL, _LONG,
+                                      _REAL]
 
-    def integrate(self, x0, W, H, rec, substeps: int, p, n_rows: int):
-        """The continuous loop over ``len(H)`` intervals (see the driver's docs).
+    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int):
+        """The continuous loop over the ``len(G) - 1`` intervals of the grid ``G``.
 
         Parameters
         ----------
         x0 : array_like, (nx,)
         W : array_like, (n, nw)
             Disturbance held over each interval.
-        H : array_like, (n,)
-            Interval lengths, s.
+        G : array_like, (n + 1,)
+            Grid times, s.
         rec : array_like of int, (n,)
             Row of the returned states for the state at each interval's end, or -1.
         substeps : int
@@ -113,24 +115,26 @@ class CompiledLoop:
         failure : Failure or None
         """
         m = self.model
-        x0, W, H, p = _f64(x0), _f64(W), _f64(H), _f64(p)
+        x0, W, G, p = _f64(x0), _f64(W), _f64(G), _f64(p)
         rec = np.ascontiguousarray(rec, dtype=np.int_)
-        n = len(H)
+        n = len(G) - 1
         assert W.shape == (n, m.disturbance.size) and rec.shape == (n,)
         X = np.zeros((n_rows, m.state.size))
         X[0] = x0
         x_end = np.empty(m.state.size)
         fail = ctypes.c_long(-1)
-        status = self._integrate(_ptr(x0), _ptr(W), _ptr(H), _ptr(rec, _LONG), n, int(substeps),
+        status = self._integrate(_ptr(x0), _ptr(W), _ptr(G), _ptr(rec, _LONG), n, int(substeps),
                                  _ptr(p), _ptr(X), _ptr(x_end), ctypes.byref(fail))
         return X, x_end, (Failure(status, fail.value) if status else None)
 
-    def sampled(self, xp0, xc0, W, H, ctrl, rec, substeps: int, pp, pc, guard_min: float,
+    def sampled(self, xp0, xc0, W, G, ctrl, rec, substeps: int, pp, pc, guard_min: float,
                 n_rows: int):
-        """The sampled-data loop over ``len(H)`` intervals (see the driver's docs).
+        """The sampled-data loop over the ``len(G) - 1`` intervals of the grid ``G``.
 
         ``ctrl`` (n,) and ``rec`` (n + 1,) flag, per grid point, a control
-        step and the row it is recorded to (or -1).
+        step and the row it is recorded to (or -1). A model with an event
+        stops where it happens: the failure then has status
+        :data:`SIM_EVENT`, its ``time`` and, in ``xp_end``, the state then.
 
         Returns
         -------
@@ -142,29 +146,32 @@ class CompiledLoop:
         failure : Failure or None
         """
         m = self.model
-        xp0, xc0, W, H, pp, pc = (_f64(a) for a in (xp0, xc0, W, H, pp, pc))
+        xp0, xc0, W, G, pp, pc = (_f64(a) for a in (xp0, xc0, W, G, pp, pc))
         ctrl = np.ascontiguousarray(ctrl, dtype=np.uint8)
         rec = np.ascontiguousarray(rec, dtype=np.int_)
-        n = len(H)
+        n = len(G) - 1
         assert W.shape == (n, m.disturbance.size) and ctrl.shape == (n,)
         assert rec.shape == (n + 1,)
         X = np.zeros((n_rows, m.state.size))
         R = np.zeros((n_rows, m.recorded.size))
         xp_end, xc_end = np.empty(m.plant_state.size), np.empty(m.controller_state.size)
-        fail = ctypes.c_long(-1)
-        status = self._sampled(_ptr(xp0), _ptr(xc0), _ptr(W), _ptr(H), ctrl.ctypes.data_as(
+        fail, t_event = ctypes.c_long(-1), ctypes.c_double(np.nan)
+        status = self._sampled(_ptr(xp0), _ptr(xc0), _ptr(W), _ptr(G), ctrl.ctypes.data_as(
             ctypes.c_char_p), _ptr(rec, _LONG), n, int(substeps), _ptr(pp), _ptr(pc),
-            float(guard_min), _ptr(X), _ptr(R), _ptr(xp_end), _ptr(xc_end), ctypes.byref(fail))
-        return X, R, xp_end, xc_end, (Failure(status, fail.value) if status else None)
+            float(guard_min), _ptr(X), _ptr(R), _ptr(xp_end), _ptr(xc_end), ctypes.byref(fail),
+            ctypes.byref(t_event))
+        return X, R, xp_end, xc_end, (Failure(status, fail.value, t_event.value) if status
+                                      else None)
 
-    def outputs(self, X, W, p) -> np.ndarray:
-        """Output signals at each row of ``X`` (with ``W``'s rows), ``(n, ny)``."""
+    def outputs(self, X, W, T, p) -> np.ndarray:
+        """Output signals at each row of ``X`` (with ``W``'s rows, at times ``T``), ``(n, ny)``."""
         m = self.model
-        X, W, p = _f64(X), _f64(W), _f64(p)
+        X, W, T, p = _f64(X), _f64(W), _f64(T), _f64(p)
         n = X.shape[0]
         assert X.shape == (n, m.state.size) and W.shape == (n, m.disturbance.size)
+        assert T.shape == (n,)
         Y = np.empty((n, m.outputs.size))
-        self._outputs(_ptr(X), _ptr(W), n, _ptr(p), _ptr(Y))
+        self._outputs(_ptr(X), _ptr(W), _ptr(T), n, _ptr(p), _ptr(Y))
         return Y
 
 
@@ -182,15 +189,16 @@ class VMLoop:
         self.model, self.part = model, part
         self._rhs = rk4_step(model.rhs)
         self._plant = rk4_step(model.plant)
-        self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [2], [])
+        self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [3], [])
 
-    def integrate(self, x0, W, H, rec, substeps: int, p, n_rows: int):
+    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int):
         """As :meth:`CompiledLoop.integrate`."""
         X = np.zeros((n_rows, self.model.state.size))
         X[0] = x = np.asarray(x0, dtype=float)
-        for j, h in enumerate(H):
-            for _ in range(int(substeps)):
-                x = self._rhs(x, W[j], p, h / substeps)
+        for j in range(len(G) - 1):
+            h = (G[j + 1] - G[j]) / substeps
+            for s in range(int(substeps)):
+                x = self._rhs(x, W[j], G[j] + s * h, p, h)
             x = np.asarray(x, dtype=float).ravel()
             if not np.all(np.isfinite(x)):
                 return X, x, Failure(SIM_NONFINITE, j)
@@ -198,7 +206,16 @@ class VMLoop:
                 X[rec[j]] = x
         return X, x, None
 
-    def sampled(self, xp0, xc0, W, H, ctrl, rec, substeps: int, pp, pc, guard_min: float,
+    def _span(self, xp, uh, w, pp, t_start, span, substeps):
+        h = span / substeps
+        for s in range(int(substeps)):
+            xp = self._plant(xp, uh, w, t_start + s * h, pp, h)
+        return np.asarray(xp, dtype=float).ravel()
+
+    def _event(self, xp, t, pp) -> float:
+        return float(self.model.event(xp, t, pp))
+
+    def sampled(self, xp0, xc0, W, G, ctrl, rec, substeps: int, pp, pc, guard_min: float,
                 n_rows: int):
         """As :meth:`CompiledLoop.sampled`."""
         m = self.model
@@ -206,11 +223,12 @@ class VMLoop:
         R = np.zeros((n_rows, m.recorded.size))
         xp, xc = np.asarray(xp0, dtype=float), np.asarray(xc0, dtype=float)
         uh, rv, first = np.zeros(m.held.size), np.zeros(m.recorded.size), 1.0
-        n = len(H)
+        n = len(G) - 1
+        g_start = self._event(xp, G[0], pp) if m.event is not None else None
         for j in range(n + 1):
             if j < n and ctrl[j]:
                 xc_n, uh_n, rv_n, guard = (np.asarray(v, dtype=float).ravel() for v in
-                                           m.controller(xp, xc, pc, first))
+                                           m.controller(xp, xc, pc, first, G[j]))
                 if not abs(guard[0]) >= guard_min:
                     return X, R, xp, xc, Failure(SIM_GUARD, j)
                 if not (np.all(np.isfinite(xc_n)) and np.all(np.isfinite(uh_n))
@@ -222,14 +240,26 @@ class VMLoop:
                 R[rec[j]] = rv
             if j == n:
                 break
-            for _ in range(int(substeps)):
-                xp = self._plant(xp, uh, W[j], pp, H[j] / substeps)
-            xp = np.asarray(xp, dtype=float).ravel()
+            start, span = xp, G[j + 1] - G[j]
+            xp = self._span(start, uh, W[j], pp, G[j], span, substeps)
             if not np.all(np.isfinite(xp)):
                 return X, R, xp, xc, Failure(SIM_NONFINITE, j)
+            if g_start is not None:
+                g_end = self._event(xp, G[j + 1], pp)
+                if g_start > 0 and not g_end > 0:
+                    lo, hi = 0.0, span
+                    while hi - lo > 1e-12 * span:
+                        mid = (lo + hi) / 2
+                        trial = self._span(start, uh, W[j], pp, G[j], mid, substeps)
+                        if self._event(trial, G[j] + mid, pp) > 0:
+                            lo = mid
+                        else:
+                            hi, xp = mid, trial
+                    return X, R, xp, xc, Failure(SIM_EVENT, j, G[j] + hi)
+                g_start = g_end
         return X, R, xp, xc, None
 
-    def outputs(self, X, W, p) -> np.ndarray:
+    def outputs(self, X, W, T, p) -> np.ndarray:
         """As :meth:`CompiledLoop.outputs`, in chunks with ``p`` shared, not repeated."""
         n, k = X.shape[0], self.CHUNK
         Y = np.empty((n, self.model.outputs.size))
@@ -237,8 +267,9 @@ class VMLoop:
             b = min(a + k, n)
             Xc = np.zeros((k, X.shape[1]))
             Wc = np.zeros((k, W.shape[1]))
-            Xc[: b - a], Wc[: b - a] = X[a:b], W[a:b]
-            Y[a:b] = np.asarray(self._outputs(Xc.T, Wc.T, p), dtype=float).T[: b - a]
+            Tc = np.zeros((1, k))
+            Xc[: b - a], Wc[: b - a], Tc[0, : b - a] = X[a:b], W[a:b], T[a:b]
+            Y[a:b] = np.asarray(self._outputs(Xc.T, Wc.T, Tc, p), dtype=float).T[: b - a]
         return Y
 
 

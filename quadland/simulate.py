@@ -274,7 +274,7 @@ def simulate(scenario: Scenario) -> SimulationResult:
     if not finite.all():
         n = int(np.argmin(finite))
         failure = (n, t_out[n], "the state became non-finite")
-    Y = loop.outputs(X[:n], w_out[:n], mv.p)
+    Y = loop.outputs(X[:n], w_out[:n], t_out[:n], mv.p)
     finite = np.all(np.isfinite(Y), axis=1)
     if not finite.all():
         bad = int(np.argmin(finite))
@@ -337,7 +337,7 @@ def _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
     step (times ``rk_steps_per_interval``) per interval of the merged grid, exactly."""
     W = _held(t_dist, w_dist, t_all[:-1]).T
     rec = _grid_index(t_all[1:], t_out)
-    X, _, failure = loop.integrate(mv.x0, W, np.diff(t_all), rec,
+    X, _, failure = loop.integrate(mv.x0, W, t_all, rec,
                                    scenario.data["simulation"]["rk_steps_per_interval"], mv.p,
                                    len(t_out))
     if failure is None:
@@ -370,7 +370,7 @@ def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist):
     rec = _grid_index(grid, t_out)
     W = _held(t_dist, w_dist, grid[:-1]).T
     X, R, _, _, failure = loop.sampled(
-        xp0, xc0, W, np.diff(grid), ctrl, rec, scenario.data["simulation"]["rk_steps_per_interval"],
+        xp0, xc0, W, grid, ctrl, rec, scenario.data["simulation"]["rk_steps_per_interval"],
         pp, pc, TILT_MIN, len(t_out))
     if failure is None:
         return X, R.T, None

@@ -3,14 +3,19 @@
 A simulator integrates one of two kinds of loop, and knows nothing of a
 model but the sizes of these functions' flat vector arguments:
 
-* continuous: ``rhs(x, w, p) -> x_dot`` and ``outputs(x, w, p) -> y``
+* continuous: ``rhs(x, w, t, p) -> x_dot`` and ``outputs(x, w, t, p) -> y``
   (the output signals stacked in one vector);
-* sampled-data: a plant ``plant(xp, uh, w, pp) -> xp_dot`` driven by the
-  held input ``uh``, a controller ``controller(xp, xc, pc, first) ->
+* sampled-data: a plant ``plant(xp, uh, w, t, pp) -> xp_dot`` driven by the
+  held input ``uh``, a controller ``controller(xp, xc, pc, first, t) ->
   (xc_next, uh, rec, guard)`` run at its own rate (``rec``: the signals to
   record at the output times, ``guard``: a scalar that must stay away from
   zero, ``first``: 1 on the first step), and ``assemble(xp, xc) -> x``, the
-  continuous loop's state, so that ``outputs`` serves both loops.
+  continuous loop's state, so that ``outputs`` serves both loops; and,
+  optionally, an event ``event(xp, t, pp) -> g`` whose crossing from
+  positive to zero or below ends the run at the instant it happens (a
+  touchdown), located within the step.
+
+``t`` is the time, s: models that do not depend on it ignore it.
 
 :class:`LoopModel` bundles them with their layouts; :func:`paper_loop`
 builds it for the paper's 4-DOF loop. A new model supplies its own
@@ -52,15 +57,22 @@ def rk4_step(f: ca.Function) -> ca.Function:
     """One classical RK4 step of ``x' = f(x, *u)``, the inputs after ``x`` held.
 
     ``rk4(x, *u, h) -> x_next``: the step the compiled drivers take, for
-    CasADi's virtual machine (the fallback without a C compiler).
+    CasADi's virtual machine (the fallback without a C compiler). An input
+    named ``t`` is the time: it advances through the stages (``t``,
+    ``t + h/2``, ``t + h``) instead of being held.
     """
     args = [ca.MX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
     h = ca.MX.sym("h")
     x, u = args[0], args[1:]
-    k1 = f(x, *u)
-    k2 = f(x + h / 2 * k1, *u)
-    k3 = f(x + h / 2 * k2, *u)
-    k4 = f(x + h * k3, *u)
+    names = f.name_in()[1:]
+
+    def at(c):
+        return [ui + c * h if name == "t" else ui for name, ui in zip(names, u, strict=True)]
+
+    k1 = f(x, *at(0))
+    k2 = f(x + h / 2 * k1, *at(0.5))
+    k3 = f(x + h / 2 * k2, *at(0.5))
+    k4 = f(x + h * k3, *at(1))
     return ca.Function(f"{f.name()}_rk4", [*args, h], [x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)],
                        [*f.name_in(), "h"], [f"{f.name_out(0)}_next"])
 
@@ -82,11 +94,14 @@ class LoopModel:
         ``pc`` and ``rec``.
     plant, controller, assemble : casadi.Function
         The sampled-data loop's functions (see the module docstring).
-    step_args : casadi.Function
-        ``step_args(xp, xc, pc, first) -> (...)``: the control step's
+    step_args : casadi.Function or None
+        ``step_args(xp, xc, pc, first, t) -> (...)``: the control step's
         arguments (``symbolic.control_step.step_inputs``) as the controller
         forms them. The flight code's step behind the controller's flat
         signature (part ``"sampled_flight"``) starts from it.
+    event : casadi.Function or None
+        ``event(xp, t, pp) -> g``: the run ends where ``g`` falls from
+        positive to zero or below (see the module docstring).
     """
 
     name: str
@@ -105,12 +120,13 @@ class LoopModel:
     plant: ca.Function
     controller: ca.Function
     assemble: ca.Function
-    step_args: ca.Function
+    step_args: ca.Function | None = None
+    event: ca.Function | None = None
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
-        return (self.rhs, self.output_fn, self.plant, self.controller, self.assemble,
-                self.step_args)
+        return tuple(f for f in (self.rhs, self.output_fn, self.plant, self.controller,
+                                 self.assemble, self.step_args, self.event) if f is not None)
 
 
 #: What the sampled loop records of each control step: the held signals.
@@ -157,18 +173,19 @@ def _named(name, ins, outs, in_names, out_names):
 def paper_loop(l: int) -> LoopModel:
     """The paper's 4-DOF loop (``symbolic.closed_loop``) for ``l`` RBF nodes."""
     state, params = closed_loop_state(l), closed_loop_params(l)
-    x, w, p = state.sym(), DISTURBANCE.sym(), params.sym()
-    rhs = _named("rhs", [x, w, p], [closed_loop_function(l)(x, w, p)],
-                 ["x", "w", "p"], ["x_dot"])
-    output_fn = _named("outputs", [x, w, p], [ca.vertcat(*closed_loop_outputs(l)(x, w, p))],
-                       ["x", "w", "p"], ["y"])
+    x, w, p, t = state.sym(), DISTURBANCE.sym(), params.sym(), ca.SX.sym("t")
+    rhs = _named("rhs", [x, w, t, p], [closed_loop_function(l)(x, w, p)],
+                 ["x", "w", "t", "p"], ["x_dot"])
+    output_fn = _named("outputs", [x, w, t, p],
+                       [ca.vertcat(*closed_loop_outputs(l)(x, w, p))],
+                       ["x", "w", "t", "p"], ["y"])
 
     xc_lay, pc_lay = controller_state(l), controller_params(l)
     xp, uh, pp = PLANT_STATE.sym(), WRENCH.sym(), PLANT_PARAMS.sym()
     pps = PLANT_PARAMS.unpack(pp)
-    plant = _named("plant", [xp, uh, w, pp],
+    plant = _named("plant", [xp, uh, w, t, pp],
                    [plant_function()(xp, uh, w, pps["p_quad"], pps["p_veh"])],
-                   ["xp", "uh", "w", "pp"], ["xp_dot"])
+                   ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
 
     xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
     xs, cs, ps = PLANT_STATE.unpack(xp), xc_lay.unpack(xc), pc_lay.unpack(pc)
@@ -176,20 +193,20 @@ def paper_loop(l: int) -> LoopModel:
     hold = (1 - first) * ps["hold"]                  # no previous command on the first step
     args = [xs["xq"], yv, ps["ref"], cs["W_hat"], cs["zeta_hat"], cs["u_prev"], ps["p_quad"],
             ps["p_ctrl"], ps["rotor_limits"], hold, ps["dt"]]
-    step_args = _named("step_args", [xp, xc, pc, first], [ca.vec(a) for a in args],
-                       ["xp", "xc", "pc", "first"], list(step_inputs(l).names()))
+    step_args = _named("step_args", [xp, xc, pc, first, t], [ca.vec(a) for a in args],
+                       ["xp", "xc", "pc", "first", "t"], list(step_inputs(l).names()))
     res = dict(zip(step_outputs(l).names(), control_step_function(l)(*args), strict=True))
     controller = _named(
-        "controller", [xp, xc, pc, first],
+        "controller", [xp, xc, pc, first, t],
         [ca.vertcat(ca.vec(res["W_next"]), res["zeta_next"], res["u_law"]), res["wrench"],
          ca.vertcat(*(res[n] for n in RECORDED.names())), res["tilt"]],
-        ["xp", "xc", "pc", "first"], ["xc_next", "uh", "rec", "guard"])
+        ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
 
     x_of = ca.vertcat(*[xs[n] if n in xs else ca.vec(cs[n]) for n in state.names()])
     assemble = _named("assemble", [xp, xc], [x_of], ["xp", "xc"], ["x"])
     return LoopModel("paper", state, DISTURBANCE, params, OUTPUTS, rhs, output_fn,
                      PLANT_STATE, WRENCH, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
-                     controller, assemble, step_args)
+                     controller, assemble, step_args=step_args)
 
 
 _TEMPLATES = jinja2.Environment(
@@ -234,6 +251,8 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     prefix = f"qlsim_{model.name}_"
     by_name = {f.name(): f for f in model.functions()}
     driver, names = SIMULATOR_PARTS[part]
+    if driver == "sampled" and model.event is not None:
+        names = (*names, "event")
     files, fns = {}, []
     for name in names:
         f = by_name[name]
@@ -256,6 +275,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         ["controller"] if part == "sampled_flight" else [])
     files[f"{prefix}{part}.c"] = _TEMPLATES.get_template("simulator.c.jinja").render(
         prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
+        has_event=driver == "sampled" and model.event is not None,
         casadi_version=ca.__version__, sizes=sizes,
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))
