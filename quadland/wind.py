@@ -1,0 +1,149 @@
+"""Wind for landing scenarios: Dryden turbulence and discrete 1-cosine gusts.
+
+The wind is a velocity in the Earth frame E, sampled on the disturbance's
+hold grid; the landing plant turns it into a force through the rotor drag.
+Two parts add up:
+
+* **Dryden turbulence** (MIL-F-8785C, low altitude). Each axis is a
+  first-order Gauss-Markov (Ornstein-Uhlenbeck) process with the Dryden
+  longitudinal spectrum ``Phi(w) = sigma^2 (2 L / (pi V)) / (1 + (L w /
+  V)^2)``, discretized exactly on the sample grid:
+  ``u_{k+1} = a u_k + sigma sqrt(1 - a^2) n_k`` with ``a = exp(-V dt / L)``
+  and ``n_k`` standard normal, started in its stationary distribution. The
+  standard gives the lateral and vertical axes a second-order spectrum; the
+  first-order one is kept for all three (the same variance and scale, a
+  slower roll-off above ``V / L``), which is what a quadrotor near hover,
+  with a bandwidth well below ``V / L``, sees alike.
+* **1-cosine gusts** (MIL-F-8785C's discrete gust):
+  ``v(t) = v_m / 2 (1 - cos(pi (t - t0) / d))`` for ``t0 <= t <= t0 + 2 d``,
+  zero outside, along a given direction.
+
+The draws come from the caller's seeded generator, so a run is repeated by
+its seed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import scipy.signal
+
+__all__ = ["FT", "DrydenTurbulence", "OneCosineGust", "dryden_low_altitude",
+           "turbulence_samples", "gust_samples"]
+
+#: One foot, m: MIL-F-8785C states its low-altitude scales in feet.
+FT = 0.3048
+
+
+@dataclasses.dataclass(frozen=True)
+class DrydenTurbulence:
+    """Intensities and scale lengths of the three axes (E: x, y horizontal, z up).
+
+    Attributes
+    ----------
+    sigma : tuple of float
+        Standard deviations, m/s.
+    scale : tuple of float
+        Scale lengths L, m.
+    airspeed : float
+        V, m/s: how fast the frozen turbulence field is crossed.
+    """
+
+    sigma: tuple[float, float, float]
+    scale: tuple[float, float, float]
+    airspeed: float
+
+
+def dryden_low_altitude(w20: float, height: float, airspeed: float) -> DrydenTurbulence:
+    """MIL-F-8785C's low-altitude intensities and scales (below 1000 ft).
+
+    ``sigma_w = 0.1 W20``, ``sigma_u / sigma_w = 1 / (0.177 + 0.000823 h)^0.4``,
+    ``L_w = h``, ``L_u = L_v = h / (0.177 + 0.000823 h)^1.2`` with ``h`` in
+    feet (the standard's own units; converted here).
+
+    Parameters
+    ----------
+    w20 : float
+        Wind speed at 20 ft, m/s (light turbulence: 7.7 m/s = 15 kt).
+    height : float
+        Altitude above ground, m (at least 10 ft is used).
+    airspeed : float
+        m/s, at least 0.1.
+
+    Examples
+    --------
+    >>> d = dryden_low_altitude(7.7, 10.0, 14.0)
+    >>> round(d.sigma[2], 3), round(d.scale[2], 2)
+    (0.77, 10.0)
+    """
+    h_ft = max(height / FT, 10.0)
+    ratio = 1.0 / (0.177 + 0.000823 * h_ft) ** 0.4
+    sigma_w = 0.1 * w20
+    L_uv = h_ft / (0.177 + 0.000823 * h_ft) ** 1.2 * FT
+    return DrydenTurbulence((sigma_w * ratio, sigma_w * ratio, sigma_w),
+                            (L_uv, L_uv, h_ft * FT), max(airspeed, 0.1))
+
+
+def turbulence_samples(turbulence: DrydenTurbulence, times: np.ndarray,
+                       rng: np.random.Generator) -> np.ndarray:
+    """Turbulence velocity at ``times`` (evenly spaced), shape ``(3, len(times))``, m/s."""
+    times = np.asarray(times, dtype=float)
+    n = len(times)
+    out = np.zeros((3, n))
+    draws = rng.standard_normal((n, 3)).T
+    if n == 0:
+        return out
+    dt = times[1] - times[0] if n > 1 else 0.0
+    for axis in range(3):
+        sigma, L = turbulence.sigma[axis], turbulence.scale[axis]
+        if sigma == 0:
+            continue
+        a = math.exp(-turbulence.airspeed * dt / L)
+        b = sigma * math.sqrt(1.0 - a * a)
+        out[axis, 0] = sigma * draws[axis, 0]            # the stationary distribution
+        if n > 1:                                        # u_k = a u_(k-1) + b n_k
+            out[axis, 1:] = scipy.signal.lfilter([b], [1.0, -a], draws[axis, 1:],
+                                                 zi=[a * out[axis, 0]])[0]
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class OneCosineGust:
+    """A discrete 1-cosine gust.
+
+    Attributes
+    ----------
+    start : float
+        t0, s.
+    half_length : float
+        d, s: the gust builds up over ``d`` and dies down over the next ``d``.
+    amplitude : float
+        v_m, m/s, reached at ``t0 + d``.
+    direction : tuple of float
+        Unit vector in E (normalized here).
+    """
+
+    start: float
+    half_length: float
+    amplitude: float
+    direction: tuple[float, float, float]
+
+
+def gust_samples(gust: OneCosineGust, times: np.ndarray) -> np.ndarray:
+    """The gust's velocity at ``times``, shape ``(3, len(times))``, m/s.
+
+    Examples
+    --------
+    >>> g = OneCosineGust(1.0, 0.5, 4.0, (1.0, 0.0, 0.0))
+    >>> gust_samples(g, np.array([0.0, 1.25, 1.5, 2.0]))[0].round(6).tolist()
+    [0.0, 2.0, 4.0, 0.0]
+    """
+    times = np.asarray(times, dtype=float)
+    e = np.asarray(gust.direction, dtype=float)
+    e = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else e
+    s = (times - gust.start) / gust.half_length
+    inside = (s >= 0) & (s <= 2)
+    v = np.where(inside, gust.amplitude / 2 * (1 - np.cos(np.pi * np.clip(s, 0, 2))), 0.0)
+    return e[:, None] * v[None, :]
