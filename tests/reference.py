@@ -15,3 +15,20 @@ def error_rate_matrix(phi, theta):
     R = np.eye(4)
     R[1:, 1:] = euler_rate_matrix(phi, theta)
     return R
+
+
+def rotation(eta):
+    """Rz(psi) Ry(theta) Rx(phi) (body to E), multiplied out by hand."""
+    phi, th, psi = eta
+    cf, sf, ct, st = np.cos(phi), np.sin(phi), np.cos(th), np.sin(th)
+    cp, sp = np.cos(psi), np.sin(psi)
+    return np.array([[cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
+                     [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],
+                     [-st, ct * sf, ct * cf]])
+
+
+def have_compiler() -> bool:
+    """Whether quadland finds a C compiler (tests of generated C skip without one)."""
+    from quadland.build import have_compiler as found
+
+    return found()

@@ -10,6 +10,7 @@ import subprocess
 import casadi as ca
 import numpy as np
 import pytest
+from reference import have_compiler
 
 import quadland
 from quadland import build, cbackend, codegen
@@ -27,13 +28,7 @@ from symbolic.closed_loop import (
 from symbolic.codegen import STATUS_CODES
 from symbolic.control_step import control_step_function
 
-try:
-    build.find_compiler()
-    HAVE_CC = True
-except CompilerNotFoundError:
-    HAVE_CC = False
-
-pytestmark = pytest.mark.skipif(not HAVE_CC, reason="no C compiler")
+pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
 L = 100
 STATUS = {name: value for name, value, _ in STATUS_CODES}

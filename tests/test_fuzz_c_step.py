@@ -31,21 +31,15 @@ from fractions import Fraction as Q
 
 import numpy as np
 import pytest
+from reference import have_compiler
 
 import quadland
 from quadland import build, cbackend
-from quadland.exceptions import CompilerNotFoundError
 from quadland.model import model_values
 from symbolic.c_api import adaptive_state_layout, output_layout, param_ranges
 from symbolic.codegen import STATUS_CODES, c_sources
 
-try:
-    build.find_compiler()
-    HAVE_CC = True
-except CompilerNotFoundError:
-    HAVE_CC = False
-
-pytestmark = pytest.mark.skipif(not HAVE_CC, reason="no C compiler")
+pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
 L = 100
 SEED = 173

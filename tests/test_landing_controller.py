@@ -9,7 +9,7 @@ centripetal and Euler terms, and ODE solutions from ``solve_ivp``.
 
 import numpy as np
 import pytest
-from reference import euler_rate_matrix
+from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
@@ -65,24 +65,16 @@ def _call(step, *args):
 
 # ---------------------------------------------------------------- references (NumPy)
 
-def _rot(eta):
-    """Rz(psi) Ry(theta) Rx(phi), multiplied out."""
-    phi, th, psi = eta
-    cf, sf, ct, st = np.cos(phi), np.sin(phi), np.cos(th), np.sin(th)
-    cp, sp = np.cos(psi), np.sin(psi)
-    return np.array([[cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
-                     [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],
-                     [-st, ct * sf, ct * cf]])
 
 
 def _deck_euler_rates(eta2, w2E):
     """eta2_dot = Rr(eta2) R_deck^T w2E (eq. 3)."""
-    return euler_rate_matrix(eta2[0], eta2[1]) @ _rot(eta2).T @ w2E
+    return euler_rate_matrix(eta2[0], eta2[1]) @ rotation(eta2).T @ w2E
 
 
 def _known_acceleration(m, pq):
     """f_p in the deck frame: R^T (g + drag - a2) - 2 w x v_e - w' x p_e - w x (w x p_e)."""
-    R, R1 = _rot(m["eta2"]), _rot(m["eta1"])
+    R, R1 = rotation(m["eta2"]), rotation(m["eta1"])
     w, w_dot = R.T @ m["w2E"], R.T @ m["w2E_dot"]
     p_e, v_e = m["p_e"], m["v_e"]
     V1 = R1.T @ (m["v2E"] + R @ (v_e + np.cross(w, p_e)))
@@ -123,7 +115,7 @@ def test_body_z_to_attitude(rng):
         b = np.array([np.sin(tilt) * np.cos(az), np.sin(tilt) * np.sin(az), np.cos(tilt)])
         T, b3, phi, theta, tilt_lim, thrust_lim = (np.array(v).ravel()
                                                    for v in f(7.0 * b, psi, 1.45, 100.0))
-        R = _rot([phi[0], theta[0], psi])
+        R = rotation([phi[0], theta[0], psi])
         np.testing.assert_allclose(R[:, 2], b, atol=1e-12)
         np.testing.assert_allclose(b3, b, atol=1e-12)
         np.testing.assert_allclose(np.arctan2(R[1, 0], R[0, 0]), np.angle(np.exp(1j * psi)),
@@ -143,7 +135,7 @@ def test_tilt_and_thrust_limits(rng):
                                                    for v in f(t_E, 0.3, tilt_max, T_max))
         angle = np.arccos(np.clip(b3[2], -1, 1))
         assert angle <= tilt_max + 1e-12
-        np.testing.assert_allclose(_rot([phi[0], theta[0], 0.3])[:, 2], b3, atol=1e-12)
+        np.testing.assert_allclose(rotation([phi[0], theta[0], 0.3])[:, 2], b3, atol=1e-12)
         inside = t_E[2] > np.cos(tilt_max) * np.linalg.norm(t_E)
         assert tilt_lim == (not inside)
         if inside:
@@ -275,12 +267,12 @@ def test_outer_law_by_hand(step, rng, nominal):
         np.testing.assert_allclose(out["bs_z2"].ravel()[:3], z2, atol=1e-14)
         np.testing.assert_allclose(out["Delta_hat"].ravel(), Delta, atol=1e-14)
         np.testing.assert_allclose(out["a_des"].ravel(), a_des, atol=1e-12)
-        t_E = M1 * _rot(m["eta2"]) @ a_des
+        t_E = M1 * rotation(m["eta2"]) @ a_des
         assert out["limits"].ravel()[:2].tolist() == [0, 0]
         np.testing.assert_allclose(out["wrench"].ravel()[0], np.linalg.norm(t_E), rtol=1e-12)
         eta_c = out["eta_c"].ravel()
         np.testing.assert_allclose(eta_c[2], m["eta2"][2])
-        np.testing.assert_allclose(_rot(eta_c)[:, 2], t_E / np.linalg.norm(t_E), atol=1e-12)
+        np.testing.assert_allclose(rotation(eta_c)[:, 2], t_E / np.linalg.norm(t_E), atol=1e-12)
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -374,8 +366,8 @@ def test_memory_update_is_the_exact_solution(step, seed):
     np.testing.assert_allclose(nxt["zeta_hat"], sol[6 * L_NODES:], atol=1e-13)
 
     # compensator: delta = R_deck^T (T b3 - t_E) / m1, b3 = R(eta_c) e_z
-    R = _rot(m["eta2"])
-    T, b3 = out["wrench"].ravel()[0], _rot(out["eta_c"].ravel())[:, 2]
+    R = rotation(m["eta2"])
+    T, b3 = out["wrench"].ravel()[0], rotation(out["eta_c"].ravel())[:, 2]
     delta = R.T @ (T * b3 - M1 * R @ out["a_des"].ravel()) / M1
     assert np.linalg.norm(delta) > 0.1
     k1p, k2p = np.array(GAINS["k1p"]), np.array(GAINS["k2p"])

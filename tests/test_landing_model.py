@@ -8,7 +8,7 @@ finite differences, never taken from the code under test.
 
 import numpy as np
 import pytest
-from reference import euler_rate_matrix
+from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 
 from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_function
@@ -38,14 +38,6 @@ P_ACT = ACTUATOR.pack(dict(motor_time_constant=TAU_M, F_max=F_MAX, gear_height=G
 
 # ---------------------------------------------------------------- references (NumPy)
 
-def _rot(eta):
-    """Rz(psi) Ry(theta) Rx(phi), multiplied out."""
-    phi, th, psi = eta
-    cf, sf, ct, st = np.cos(phi), np.sin(phi), np.cos(th), np.sin(th)
-    cp, sp = np.cos(psi), np.sin(psi)
-    return np.array([[cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
-                     [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],
-                     [-st, ct * sf, ct * cf]])
 
 
 def _quad6(x, F_cmd, d_F, d_M, pq):
@@ -53,7 +45,7 @@ def _quad6(x, F_cmd, d_F, d_M, pq):
     m, I, Kt, Kr, g = pq["m1"][0], pq["I"], pq["Kt"], pq["Kr"], pq["g"][0]
     d, c = pq["arm"][0], pq["c"][0]
     eta, V, Om, F = x[3:6], x[6:9], x[9:12], x[12:16]
-    R = _rot(eta)
+    R = rotation(eta)
     thrust = np.array([0.0, 0.0, F.sum()])
     M = np.array([d * (F[1] - F[3]), d * (F[2] - F[0]), c * (F[0] - F[1] + F[2] - F[3])])
     V_dot = (thrust - Kt * V - m * R.T @ [0, 0, g] + d_F) / m - np.cross(Om, V)
@@ -84,7 +76,7 @@ def _sines(d, name, t, order=0):
 def _deck(xv, t, d):
     """Pad centre p2, eta2 and R_deck in closed form."""
     eta2 = np.array([_sines(d, "roll", t), _sines(d, "pitch", t), xv[2]])
-    R = _rot(eta2)
+    R = rotation(eta2)
     origin = np.array([xv[0], xv[1], d["deck_height"][0] + _sines(d, "heave", t)])
     return origin + R @ d["pad_offset"], eta2, R
 
@@ -95,7 +87,7 @@ def _relative(x, xv, t, d):
     eta1 = x[3:6]
     eta2_dot = np.array([_sines(d, "roll", t, 1), _sines(d, "pitch", t, 1), xv[5]])
     Omega_e = x[9:12] - np.linalg.solve(euler_rate_matrix(eta1[0], eta1[1]), eta2_dot)
-    gear = x[0:3] - GEAR * _rot(eta1)[:, 2]
+    gear = x[0:3] - GEAR * rotation(eta1)[:, 2]
     return R2.T @ (x[0:3] - p2), eta1 - eta2, Omega_e, R2[:, 2] @ (gear - p2)
 
 
@@ -206,7 +198,7 @@ def test_relative_acceleration_is_the_rotating_frame_formula(values, rng, kind):
         t = rng.uniform(0, 30)
         F_cmd, w = rng.uniform(0, F_MAX, 4), rng.normal(size=6)
         x_dot = _quad6(x1q, F_cmd, w[:3], w[3:], pq)
-        R1, V1, Om1 = _rot(x1q[3:6]), x1q[6:9], x1q[9:12]
+        R1, V1, Om1 = rotation(x1q[3:6]), x1q[6:9], x1q[9:12]
         p1_ddot = R1 @ (x_dot[6:9] + np.cross(Om1, V1))
         _, _, R, _, a2E, w2E, w2E_dot = (np.array(v) for v in DECK(xv, t, p_veh, p_deck))
         wd, wd_dot = R.T @ w2E.ravel(), R.T @ w2E_dot.ravel()
@@ -266,7 +258,7 @@ def test_newtons_law_in_E(values, seed):
     F = x1q[12:16]                                          # logged rotor forces (states)
     d_F, d_M = rng.normal(size=3) * 2, rng.normal(size=3) * 0.1
     x_dot = _col(QUAD6(x1q, rng.uniform(0, F_MAX, 4), d_F, d_M, values.p_quad, P_ACT))
-    R, V, Om = _rot(x1q[3:6]), x1q[6:9], x1q[9:12]
+    R, V, Om = rotation(x1q[3:6]), x1q[6:9], x1q[9:12]
     a_E = R @ (x_dot[6:9] + np.cross(Om, V))
     np.testing.assert_allclose(m * a_E, R @ (np.array([0, 0, F.sum()]) - Kt * V + d_F)
                                - [0, 0, m * g], rtol=1e-12, atol=1e-12)
@@ -374,7 +366,7 @@ def test_a_car_gives_the_papers_relative_altitude_and_rates(values, rng):
     x1q, xv = _random_states(rng)
     p_e, v_e, eta_e, Omega_e, _ = (_col(v) for v in
                                    REL6(x1q, xv, 2.0, p_quad, p_act, p_veh, p_deck))
-    R1 = _rot(x1q[3:6])
+    R1 = rotation(x1q[3:6])
     assert p_e[2] == pytest.approx(x1q[2] - 0.7, abs=1e-13)
     assert v_e[2] == pytest.approx(R1[2] @ x1q[6:9], abs=1e-13)
     np.testing.assert_allclose(eta_e, x1q[3:6] - [0, 0, xv[2]], atol=1e-15)

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from reference import euler_rate_matrix
+from reference import euler_rate_matrix, rotation
 
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.relative import relative_function
@@ -10,20 +10,13 @@ from symbolic.relative import relative_function
 REL = relative_function()
 
 
-def _rot(eta):
-    phi, th, psi = eta
-    cf, sf, ct, st = np.cos(phi), np.sin(phi), np.cos(th), np.sin(th)
-    cp, sp = np.cos(psi), np.sin(psi)
-    return np.array([[cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
-                     [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],
-                     [-st, ct * sf, ct * cf]])
 
 
 def _newton_euler(xq, xv, wrench, d_F, d_M, pq, pv):
     """State derivative of quadrotor and vehicle, written from eq. (1)-(4) with numpy."""
     m, I, Kt, Kr, g = pq["m1"][0], pq["I"], pq["Kt"], pq["Kr"], pq["g"][0]
     eta, V, Om = xq[1:4], xq[4:7], xq[7:10]
-    R = _rot(eta)
+    R = rotation(eta)
     W = euler_rate_matrix(eta[0], eta[1])
     F = np.array([0, 0, wrench[0]])
     V_dot = (F - Kt * V - m * R.T @ np.array([0, 0, g]) + d_F) / m - np.cross(Om, V)
@@ -48,7 +41,7 @@ def _relative_states(xq, xv, z2):
                      [0, np.cos(phi), np.sin(phi) * np.cos(th)],
                      [0, -np.sin(phi), np.cos(phi) * np.cos(th)]])
     e1 = np.array([xq[0] - z2, xq[1], xq[2], xq[3] - xv[2]])
-    e2 = np.concatenate([[_rot(xq[1:4])[2] @ xq[4:7]], xq[7:10] - Winv @ [0, 0, xv[5]]])
+    e2 = np.concatenate([[rotation(xq[1:4])[2] @ xq[4:7]], xq[7:10] - Winv @ [0, 0, xv[5]]])
     return e1, e2
 
 
