@@ -12,6 +12,16 @@ The margin figures import python-control; they are loaded on first use so
 that drawing a simulation does not pay for it.
 """
 
+from quadland.plots.landing import (
+    LANDING_FIGURES,
+    landing_animation,
+    landing_figures,
+    landing_limits,
+    relative_position_plot,
+    rotor_forces_plot,
+    trajectory_3d_plot,
+)
+from quadland.plots.landing import ground_track_plot as landing_ground_track_plot
 from quadland.plots.simulation import FIGURES as SIMULATION_FIGURES
 from quadland.plots.simulation import (
     control_inputs_plot,
@@ -25,7 +35,10 @@ from quadland.plots.simulation import (
 __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "velocity_errors_plot", "control_inputs_plot", "uncertainty_plot",
            "ground_track_plot", "MARGIN_FIGURES", "margin_figures", "bode_plot",
-           "nyquist_plot", "sigma_plot", "pole_plot"]
+           "nyquist_plot", "sigma_plot", "pole_plot",
+           "LANDING_FIGURES", "landing_figures", "landing_limits", "trajectory_3d_plot",
+           "relative_position_plot", "landing_ground_track_plot", "rotor_forces_plot",
+           "landing_animation"]
 
 _LAZY = {"MARGIN_FIGURES": "FIGURES", "margin_figures": "margin_figures",
          "bode_plot": "bode_plot", "nyquist_plot": "nyquist_plot", "sigma_plot": "sigma_plot",

@@ -1,0 +1,319 @@
+"""Landing figures and animation: each draws the result's own data, limits and phases.
+
+The landing is made by hand here (a descent onto a pad that drives a curve,
+heaves, rolls and pitches), so these tests need no simulator.
+"""
+
+import sys
+
+import numpy as np
+import pytest
+from matplotlib import animation
+from matplotlib.figure import Figure
+from PIL import Image
+from scipy.spatial.transform import Rotation
+
+from quadland.exceptions import QuadlandError
+from quadland.plots import (
+    LANDING_FIGURES,
+    landing_animation,
+    landing_figures,
+    landing_ground_track_plot,
+    landing_limits,
+    relative_position_plot,
+    rotor_forces_plot,
+    trajectory_3d_plot,
+)
+from quadland.plots.landing import DEFAULT_LIMITS, PAD_SIZE, _frame_rows
+from quadland.scenario import Scenario
+from symbolic.guidance import PHASES
+
+RATE = 50.0        # rows per second
+TOUCHDOWN = 3.0    # s
+MASS, GRAVITY, THRUST_TO_WEIGHT = 1.5, 9.81, 2.0
+F_MAX = THRUST_TO_WEIGHT * MASS * GRAVITY / 4
+#: (phase, start, end) of the hand-made landing, s
+RUNS = [(0, 0.0, 1.0), (1, 1.0, 1.5), (2, 1.5, 3.0), (3, 3.0, 3.5), (4, 3.5, 4.0)]
+
+
+class _Landing(dict):
+    """Columns by name and a scenario: all the figures read."""
+
+    def __init__(self, columns, scenario):
+        super().__init__(columns)
+        self.scenario = scenario
+
+
+def _deck_rotation(psi, theta, phi):
+    """Rz(psi) Ry(theta) Rx(phi): scipy's intrinsic ZYX."""
+    return Rotation.from_euler("ZYX", np.column_stack([psi, theta, phi])).as_matrix()
+
+
+def _landing(duration=4.0, landing=None, quadrotor=True, touchdown=TOUCHDOWN):
+    t = np.arange(round(duration * RATE) + 1) / RATE
+    psi2 = 0.3 + 0.05 * t                                 # a turn at 3 m/s
+    x2, y2 = 60 * (np.sin(psi2) - np.sin(0.3)), -60 * (np.cos(psi2) - np.cos(0.3))
+    z2 = 1.0 + 0.3 * np.sin(1.1 * t)                      # heave
+    phi2, theta2 = 0.05 * np.sin(0.7 * t), 0.04 * np.sin(0.9 * t + 0.4)
+    shape = (1 - np.clip(t / touchdown, 0, 1)) ** 2       # 1 at the start, 0 from touchdown
+    p_e = np.column_stack([-3 * shape, shape, 0.15 + 2.85 * shape])
+    p1 = (np.column_stack([x2, y2, z2])
+          + np.einsum("nij,nj->ni", _deck_rotation(psi2, theta2, phi2), p_e))
+    phase = np.select([t < 1, t < 1.5, t < touchdown, t < touchdown + 0.5], [0, 1, 2, 3], 4)
+    F = np.column_stack([MASS * GRAVITY / 4 * (1 + 0.1 * np.sin(2 * t + k)) for k in range(4)])
+    columns = dict(
+        t=t, phase=phase, x1=p1[:, 0], y1=p1[:, 1], z1=p1[:, 2],
+        phi1=phi2 + 0.1 * shape * np.sin(3 * t), theta1=theta2 - 0.08 * shape,
+        psi1=psi2 + 0.2 * shape, x2=x2, y2=y2, z2=z2, phi2=phi2, theta2=theta2, psi2=psi2,
+        x_e=p_e[:, 0], y_e=p_e[:, 1], z_e=p_e[:, 2], F_total=F.sum(axis=1),
+        M_x=0.2 * (F[:, 1] - F[:, 3]), M_y=0.2 * (F[:, 2] - F[:, 0]),
+        M_z=0.01 * (F[:, 0] - F[:, 1] + F[:, 2] - F[:, 3]),
+        F_1=F[:, 0], F_2=F[:, 1], F_3=F[:, 2], F_4=F[:, 3],
+        d_Fx=0 * t, d_Fy=0 * t, d_Fz=0 * t)
+    data = {}
+    if quadrotor:
+        data["quadrotor"] = {"mass": MASS, "gravity": GRAVITY,
+                             "thrust_to_weight": THRUST_TO_WEIGHT, "arm_length": 0.2}
+    if landing is not None:
+        data["landing"] = landing
+    return _Landing(columns, Scenario(name="synthetic", source="<test>", data=data))
+
+
+@pytest.fixture(scope="module")
+def result():
+    return _landing()
+
+
+@pytest.fixture(autouse=True)
+def _no_pyplot_figure():
+    yield
+    if "matplotlib.pyplot" in sys.modules:
+        assert sys.modules["matplotlib.pyplot"].get_fignums() == []
+
+
+def _data(line):
+    return np.asarray(line.get_xdata(), dtype=float), np.asarray(line.get_ydata(), dtype=float)
+
+
+def _by_label(ax, label):
+    (line,) = [ln for ln in ax.lines if ln.get_label() == label]
+    return line
+
+
+def _limit_values(ax):
+    """y of every dotted or dashed horizontal line (axhline) of an axis."""
+    return sorted(float(ln.get_ydata()[0]) for ln in ax.lines
+                  if ln.get_linestyle() in (":", "--") and ln.get_xdata()[0] == 0
+                  and ln.get_xdata()[1] == 1)
+
+
+def test_landing_figures(result):
+    figs = landing_figures(result)
+    assert list(figs) == list(LANDING_FIGURES) == [
+        "landing_3d.png", "relative_position.png", "ground_tracks.png", "rotor_forces.png"]
+    for name, fig in figs.items():
+        assert isinstance(fig, Figure)
+        assert (fig.get_suptitle() or fig.axes[0].get_title()) == LANDING_FIGURES[name]
+        assert any(t.get_text() == "scenario synthetic" for t in fig.texts)
+
+
+def test_trajectory_3d_draws_both_paths_and_starts(result):
+    (a,) = trajectory_3d_plot(result).axes
+    for label, body in (("quadrotor", "1"), ("pad centre", "2")):
+        xyz = _by_label(a, label).get_data_3d()
+        for got, name in zip(xyz, "xyz", strict=True):
+            np.testing.assert_array_equal(got, result[f"{name}{body}"])
+        start = np.ravel(_by_label(a, f"{label.split()[0]} start").get_data_3d())
+        np.testing.assert_array_equal(start, [result[f"{n}{body}"][0] for n in "xyz"])
+
+
+@pytest.mark.parametrize("landing, pad_size, side", [
+    (None, None, PAD_SIZE),
+    ({"pad_size": 2.5}, None, 2.5),
+    ({"pad_size": 2.5}, 0.8, 0.8),
+])
+def test_pad_square_lies_at_touchdown_in_the_deck_plane(landing, pad_size, side):
+    res = _landing(landing=landing)
+    (a,) = trajectory_3d_plot(res, pad_size=pad_size).axes
+    square = np.column_stack(_by_label(a, "pad at touchdown").get_data_3d())
+    row = round(TOUCHDOWN * RATE)                 # the first row with phase 3
+    assert res["phase"][row] == 3 and res["phase"][row - 1] == 2
+    # by hand: p2 + R_deck [+-s/2, +-s/2, 0]
+    R = _deck_rotation([res["psi2"][row]], [res["theta2"][row]], [res["phi2"][row]])[0]
+    p2 = np.array([res[n][row] for n in ("x2", "y2", "z2")])
+    h = side / 2
+    expected = [p2 + R @ np.array([sx * h, sy * h, 0.0]) for sx in (1, -1) for sy in (1, -1)]
+    assert square.shape == (5, 3)
+    np.testing.assert_array_equal(square[0], square[-1])          # closed
+    for corner in expected:
+        assert np.min(np.linalg.norm(square[:4] - corner, axis=1)) < 1e-12
+    # the corners are in the deck plane and the sides are a square's
+    np.testing.assert_allclose((square[:4] - p2) @ R[:, 2], 0, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(np.diff(square, axis=0), axis=1), side,
+                               rtol=1e-12)
+
+
+def test_pad_square_without_touchdown_is_at_the_end():
+    res = _landing(duration=2.0, touchdown=10.0)
+    assert res["phase"].max() < 3
+    (a,) = trajectory_3d_plot(res).axes
+    square = np.column_stack(_by_label(a, "pad at the end (no touchdown)").get_data_3d())
+    np.testing.assert_allclose(square[:4].mean(axis=0),
+                               [res[n][-1] for n in ("x2", "y2", "z2")], atol=1e-12)
+
+
+def test_relative_position_plots_the_columns_and_rates(result):
+    fig = relative_position_plot(result)
+    assert len(fig.axes) == 4
+    t = result["t"]
+    pos, height, speed, tilt = fig.axes
+    for label, y in (("x_e", result["x_e"]), ("y_e", result["y_e"]),
+                     ("offset", np.hypot(result["x_e"], result["y_e"]))):
+        x, yy = _data(_by_label(pos, label))
+        np.testing.assert_array_equal(x, t)
+        np.testing.assert_array_equal(yy, y)
+    np.testing.assert_array_equal(_data(_by_label(height, "z_e"))[1], result["z_e"])
+    # rates against the hand-made landing's closed form: p_e = c (1 - t/T)^2 + const
+    dshape = np.where(t < TOUCHDOWN, -2 * (1 - t / TOUCHDOWN) / TOUCHDOWN, 0.0)
+    np.testing.assert_allclose(_data(_by_label(speed, "horizontal speed"))[1],
+                               np.hypot(3, 1) * np.abs(dshape), atol=0.02)
+    np.testing.assert_allclose(_data(_by_label(speed, "sink rate"))[1], -2.85 * dshape,
+                               atol=0.02)
+    # tilt: angle between the body and deck z axes
+    n1 = _deck_rotation(result["psi1"], result["theta1"], result["phi1"])[:, :, 2]
+    n2 = _deck_rotation(result["psi2"], result["theta2"], result["phi2"])[:, :, 2]
+    np.testing.assert_allclose(_data(_by_label(tilt, "tilt from deck normal"))[1],
+                               np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=1), -1, 1))),
+                               atol=1e-5)
+    assert fig.axes[-1].get_xlabel() == "t [s]"
+
+
+@pytest.mark.parametrize("landing, limits, expected", [
+    (None, None, dict(DEFAULT_LIMITS)),
+    ({"max_offset": 0.3, "max_sink_rate": 0.7, "max_tilt_deg": 8.0,
+      "max_relative_speed": 0.4, "hover_height": 2.0},
+     None, {"max_offset": 0.3, "max_sink_rate": 0.7, "max_tilt_deg": 8.0,
+            "max_relative_speed": 0.4}),
+    ({"max_offset": 0.3}, {"max_offset": 0.25, "max_tilt_deg": 12.0},
+     {**DEFAULT_LIMITS, "max_offset": 0.25, "max_tilt_deg": 12.0}),
+])
+def test_relative_position_limit_lines(landing, limits, expected):
+    assert dict(DEFAULT_LIMITS) == {"max_sink_rate": 0.5, "max_offset": 0.2,
+                                    "max_tilt_deg": 10.0, "max_relative_speed": 0.5}
+    pos, height, speed, tilt = relative_position_plot(_landing(landing=landing), limits).axes
+    off = expected["max_offset"]
+    assert _limit_values(pos) == [-off, off]
+    assert _limit_values(height) == []
+    assert _by_label(speed, "max_relative_speed").get_ydata()[0] == \
+        expected["max_relative_speed"]
+    assert _by_label(speed, "max_sink_rate").get_ydata()[0] == expected["max_sink_rate"]
+    assert _limit_values(tilt) == [expected["max_tilt_deg"]]
+
+
+@pytest.mark.parametrize("plot", [relative_position_plot, rotor_forces_plot])
+def test_phases_are_shaded_where_they_are(result, plot):
+    fig = plot(result)
+    for a in fig.axes:
+        spans = [(p.get_x(), p.get_x() + p.get_width()) for p in a.patches]
+        assert spans == [(t0, t1) for _, t0, t1 in RUNS]
+        colours = [p.get_facecolor() for p in a.patches]
+        assert len(set(colours)) == len(RUNS)
+    (legend,) = fig.legends
+    assert [t.get_text() for t in legend.get_texts()] == list(PHASES)
+
+
+def test_phase_runs_repeat_after_an_abort():
+    res = _landing()
+    res["phase"] = np.where((res["t"] >= 2.0) & (res["t"] < 2.5), 1, res["phase"])  # abort
+    a = relative_position_plot(res).axes[0]
+    spans = [(p.get_x(), p.get_x() + p.get_width()) for p in a.patches]
+    assert spans == [(0.0, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 2.5), (2.5, 3.0), (3.0, 3.5),
+                     (3.5, 4.0)]
+
+
+def test_ground_track_plot(result):
+    (a,) = landing_ground_track_plot(result).axes
+    for label, body in (("pad centre", "2"), ("quadrotor", "1")):
+        x, y = _data(_by_label(a, label))
+        np.testing.assert_array_equal(x, result[f"x{body}"])
+        np.testing.assert_array_equal(y, result[f"y{body}"])
+        start = _data(_by_label(a, f"{label.split()[0]} start"))
+        assert (start[0][0], start[1][0]) == (result[f"x{body}"][0], result[f"y{body}"][0])
+        row = round(TOUCHDOWN * RATE)
+        end = _data(_by_label(a, f"{label.split()[0]} at touchdown"))
+        assert (end[0][0], end[1][0]) == (result[f"x{body}"][row], result[f"y{body}"][row])
+    assert a.get_aspect() == 1.0
+
+
+def test_ground_track_without_touchdown_has_no_touchdown_mark():
+    (a,) = landing_ground_track_plot(_landing(duration=2.0, touchdown=10.0)).axes
+    assert not [ln for ln in a.lines if "touchdown" in ln.get_label()]
+
+
+@pytest.mark.parametrize("quadrotor, limits, F_max", [
+    (True, None, F_MAX),
+    (True, {"F_max": 6.0}, 6.0),
+    (False, None, None),
+])
+def test_rotor_forces_plot(quadrotor, limits, F_max):
+    res = _landing(quadrotor=quadrotor)
+    rotors, total = rotor_forces_plot(res, limits).axes
+    for k in range(1, 5):
+        x, y = _data(_by_label(rotors, f"F_{k}"))
+        np.testing.assert_array_equal(x, res["t"])
+        np.testing.assert_array_equal(y, res[f"F_{k}"])
+    np.testing.assert_array_equal(_data(_by_label(total, "F_total"))[1], res["F_total"])
+    if F_max is None:
+        assert _limit_values(rotors) == _limit_values(total) == [0.0]
+    else:
+        assert _limit_values(rotors) == pytest.approx([0.0, F_max], rel=1e-15)
+        assert _limit_values(total) == pytest.approx([0.0, 4 * F_max], rel=1e-15)
+
+
+def test_landing_limits_rejects_unknown_keys(result):
+    with pytest.raises(ValueError, match="max_ofset"):
+        landing_limits(result, {"max_ofset": 0.3})
+    assert landing_limits(result)["F_max"] == pytest.approx(F_MAX)
+
+
+# animation
+
+
+def test_frames_of_a_long_landing():
+    t = np.arange(3001) / 100.0                   # 30 s at 100 Hz
+    rows = _frame_rows(t, 20)
+    assert len(rows) == 12 * 20 + 1               # played in 12 s
+    assert rows[0] == 0 and rows[-1] == 3000
+    assert set(np.diff(rows)) <= {12, 13}         # evenly spaced: 3000 / 240 = 12.5
+    short = np.arange(21) / 10.0                  # 2 s at 10 Hz, at 20 fps: every row
+    np.testing.assert_array_equal(_frame_rows(short, 20), np.arange(21))
+
+
+def test_animation_writes_a_gif(tmp_path):
+    res = _landing(duration=2.0, touchdown=1.6)
+    fps = 10
+    path = landing_animation(res, tmp_path / "landing.gif", fps=fps)
+    assert path == tmp_path / "landing.gif"
+    assert path.read_bytes()[:6] == b"GIF89a"
+    with Image.open(path) as im:
+        assert im.format == "GIF"
+        assert im.n_frames == round(2.0 * fps) + 1
+        assert im.info["duration"] == 1000 // fps
+        assert im.size == (512, 416)
+    again = landing_animation(res, tmp_path / "again.gif", fps=fps)
+    assert again.read_bytes() == path.read_bytes()
+
+
+def test_animation_mp4_needs_ffmpeg(tmp_path, monkeypatch):
+    monkeypatch.setattr(animation.writers, "is_available", lambda name: False)
+    with pytest.raises(QuadlandError, match="ffmpeg"):
+        landing_animation(_landing(duration=0.2), tmp_path / "landing.mp4")
+    with pytest.raises(QuadlandError, match=r"\.gif or an \.mp4"):
+        landing_animation(_landing(duration=0.2), tmp_path / "landing.avi")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not animation.writers.is_available("ffmpeg"), reason="no ffmpeg")
+def test_animation_writes_an_mp4(tmp_path):
+    path = landing_animation(_landing(duration=1.0), tmp_path / "landing.mp4", fps=10)
+    assert path.read_bytes()[4:8] == b"ftyp"
