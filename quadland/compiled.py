@@ -21,10 +21,14 @@ import numpy as np
 
 from quadland.build import build_library, have_compiler
 from quadland.exceptions import CompilerNotFoundError
+from symbolic.landing.loop import landing_loop
 from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, rk4_step, simulator_sources
 
-__all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK", "SIM_NONFINITE",
-           "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "Failure"]
+__all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "LOOPS", "SIM_OK",
+           "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "Failure"]
+
+#: The loops a scenario's ``scenario.model`` names: builders ``l -> LoopModel``.
+LOOPS = {"paper": paper_loop, "landing": landing_loop}
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
 SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT = 0, 1, 2, 3, 4
@@ -187,7 +191,7 @@ class VMLoop:
 
     def __init__(self, model: LoopModel, part: str):
         self.model, self.part = model, part
-        self._rhs = rk4_step(model.rhs)
+        self._rhs = rk4_step(model.rhs) if model.rhs is not None else None
         self._plant = rk4_step(model.plant)
         self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [3], [])
 
@@ -274,12 +278,14 @@ class VMLoop:
 
 
 @functools.lru_cache(maxsize=16)
-def compiled_loop(l: int, part: str) -> CompiledLoop | VMLoop:
-    """The ``part`` of the paper loop's simulator for ``l`` nodes: compiled, or on the VM.
+def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VMLoop:
+    """The ``part`` of a loop's simulator for ``l`` nodes: compiled, or on the VM.
 
-    ``part`` is a key of ``symbolic.simulation.SIMULATOR_PARTS``. Without a C
-    compiler: a :class:`VMLoop` after one :class:`QuadlandWarning`; the flight
-    code (part ``"sampled_flight"``) exists only compiled.
+    ``part`` is a key of ``symbolic.simulation.SIMULATOR_PARTS``; ``model`` a
+    key of :data:`LOOPS` (the paper's loop, the landing loop). One simulator
+    is kept per model, ``l`` and part. Without a C compiler: a
+    :class:`VMLoop` after one :class:`QuadlandWarning`; the flight code
+    (part ``"sampled_flight"``, the paper's loop only) exists only compiled.
 
     Raises
     ------
@@ -288,19 +294,22 @@ def compiled_loop(l: int, part: str) -> CompiledLoop | VMLoop:
     """
     if part not in SIMULATOR_PARTS:
         raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
+    if model not in LOOPS:
+        raise ValueError(f"model must be one of {', '.join(LOOPS)}, got {model!r}")
+    loop = LOOPS[model](l)
     if not have_compiler():
         if part == "sampled_flight":
             raise CompilerNotFoundError(
                 "controller.backend = \"c\" flies the compiled flight code, and no C compiler "
                 "was found (set CC or install gcc; or use controller.backend = \"casadi\")")
         _warn_no_compiler()
-        return VMLoop(paper_loop(l), part)
+        return VMLoop(loop, part)
     flight = None
     if part == "sampled_flight":
         from quadland.cbackend import sources
 
         flight = sources(l, "double")
-    return CompiledLoop(paper_loop(l), part, flight=flight)
+    return CompiledLoop(loop, part, flight=flight)
 
 
 @functools.cache

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from quadland.simulate import SimulationResult
 
-__all__ = ["settling_time", "summarize", "SETTLING_FRACTION", "SETTLING_FLOOR"]
+__all__ = ["settling_time", "summarize", "SETTLING_FRACTION", "SETTLING_FLOOR",
+           "TouchdownReport", "touchdown_report", "landing_summary"]
 
 #: Settling band as a fraction of the initial error (the 2 % criterion).
 SETTLING_FRACTION = 0.02
@@ -86,3 +89,104 @@ def _summarize(result: SimulationResult) -> dict:
     return {"errors": errors, "inputs": inputs,
             "estimation_second_half": estimation,
             "landed_below_deck": bool(np.any(result["z_e"] < 0))}
+
+
+@dataclasses.dataclass(frozen=True)
+class TouchdownReport:
+    """How a landing ended: the contact's figures against the scenario's limits.
+
+    Attributes
+    ----------
+    touchdown : bool
+        The landing gear met the deck.
+    time : float or None
+        When, s.
+    sink_rate : float or None
+        Relative vertical speed at contact, m/s, positive down: ``-dz_e``,
+        the quadrotor centre's velocity relative to the deck point under
+        it, along the deck normal.
+    offset : float or None
+        Horizontal distance of the centre from the pad centre in the deck
+        frame, ``hypot(x_e, y_e)``, m.
+    relative_speed : float or None
+        Horizontal relative speed in the deck frame, ``hypot(dx_e, dy_e)``, m/s.
+    tilt_deg : float or None
+        Angle between the body z axis and the deck normal, deg.
+    aborts : int
+        Descents aborted before the touchdown (or the end).
+    success : bool
+        A touchdown with every figure within its limit.
+    limits : dict
+        ``max_sink_rate``, ``max_offset``, ``max_tilt_deg``,
+        ``max_relative_speed``: the scenario's ``[landing]`` limits.
+    """
+
+    touchdown: bool
+    time: float | None
+    sink_rate: float | None
+    offset: float | None
+    relative_speed: float | None
+    tilt_deg: float | None
+    aborts: int
+    success: bool
+    limits: dict
+
+    def to_dict(self) -> dict:
+        """The report as plain JSON data."""
+        return dataclasses.asdict(self)
+
+
+def _body_z(phi, theta, psi):
+    """Third column of Rz(psi) Ry(theta) Rx(phi): the body z axis in E."""
+    return np.array([np.cos(psi) * np.sin(theta) * np.cos(phi) + np.sin(psi) * np.sin(phi),
+                     np.sin(psi) * np.sin(theta) * np.cos(phi) - np.cos(psi) * np.sin(phi),
+                     np.cos(theta) * np.cos(phi)])
+
+
+def touchdown_report(result: SimulationResult) -> TouchdownReport:
+    """The touchdown's figures, read at the touchdown row of a landing's result.
+
+    The touchdown row is the first of phase 3 (``symbolic.guidance.TOUCHDOWN``),
+    at the instant the gear met the deck.
+    """
+    from symbolic.guidance import TOUCHDOWN
+
+    g = result.scenario.data["landing"]
+    limits = {k: g[k] for k in ("max_sink_rate", "max_offset", "max_tilt_deg",
+                                "max_relative_speed")}
+    rows = np.flatnonzero(result["phase"] == TOUCHDOWN)
+    if rows.size == 0:
+        aborts = int(result["aborts"][-1]) if len(result["t"]) else 0
+        return TouchdownReport(False, None, None, None, None, None, aborts, False, limits)
+    k = int(rows[0])
+    c = {name: float(result[name][k]) for name in result}
+    n1 = _body_z(c["phi1"], c["theta1"], c["psi1"])
+    n2 = _body_z(c["phi2"], c["theta2"], c["psi2"])
+    tilt = float(np.degrees(np.arccos(np.clip(n1 @ n2, -1.0, 1.0))))
+    sink, offset = -c["dz_e"], float(np.hypot(c["x_e"], c["y_e"]))
+    speed = float(np.hypot(c["dx_e"], c["dy_e"]))
+    success = (sink <= limits["max_sink_rate"] and offset <= limits["max_offset"]
+               and tilt <= limits["max_tilt_deg"] and speed <= limits["max_relative_speed"])
+    return TouchdownReport(True, c["t"], sink, offset, speed, tilt, int(c["aborts"]),
+                           bool(success), limits)
+
+
+def landing_summary(result: SimulationResult) -> dict:
+    """summary.json's figures of a landing: the ``landing`` object, phases and rotors.
+
+    ``phases``: the time each phase was first entered (s), by name;
+    ``rotors``: the extreme rotor forces and the limit ``F_max`` (N).
+    """
+    from symbolic.guidance import PHASES
+
+    t = result["t"]
+    phases = {}
+    for number, name in enumerate(PHASES):
+        rows = np.flatnonzero(result["phase"] == number)
+        phases[name] = float(t[rows[0]]) if rows.size else None
+    q = result.scenario.data["quadrotor"]
+    rotors = np.vstack([result[f"F_{i}"] for i in range(1, 5)])
+    return {"landing": touchdown_report(result).to_dict(), "phases": phases,
+            "rotors": {"min": float(rotors.min()) if rotors.size else None,
+                       "max": float(rotors.max()) if rotors.size else None,
+                       "F_max": q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4}}

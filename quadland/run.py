@@ -8,7 +8,7 @@ from pathlib import Path
 import casadi as ca
 
 from quadland.exceptions import SimulationError
-from quadland.metrics import summarize
+from quadland.metrics import landing_summary, summarize
 from quadland.output import figure_png, output_folder, strict_json
 from quadland.scenario import Scenario, load_scenario
 from quadland.simulate import SimulationResult, columns_sidecar, simulate
@@ -101,12 +101,28 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
 
 def _render(result: SimulationResult, plots: bool, failure: str | None = None) -> dict:
     status = {"status": "failed", "failure": failure} if failure else {"status": "ok"}
-    summary = {**status, **summarize(result), **provenance(result.scenario)}
+    landing = result.scenario.model == "landing"
+    figures = landing_summary(result) if landing else summarize(result)
+    summary = {**status, **figures, **provenance(result.scenario)}
     files = {"trajectory.csv": result.to_csv().encode("utf-8"),
-             "columns.json": strict_json(columns_sidecar()),
+             "columns.json": strict_json(columns_sidecar(result.layout)),
              "summary.json": strict_json(summary),
              "scenario.toml": result.scenario.to_toml().encode("utf-8")}
     if plots and len(result["t"]) > 1:
-        from quadland.plots import simulation_figures
-        files.update({name: figure_png(fig) for name, fig in simulation_figures(result).items()})
+        draw = _landing_figures() if landing else None
+        if not landing:
+            from quadland.plots import simulation_figures as draw
+        if draw is not None:
+            files.update({name: figure_png(fig) for name, fig in draw(result).items()})
     return files
+
+
+def _landing_figures():
+    """``quadland.plots.landing.landing_figures`` where that module exists, else None."""
+    from importlib.util import find_spec
+
+    if find_spec("quadland.plots.landing") is None:
+        return None
+    from quadland.plots.landing import landing_figures
+
+    return landing_figures

@@ -22,7 +22,8 @@ import numpy as np
 
 from quadland.exceptions import ScenarioError
 
-__all__ = ["Field", "SCHEMA", "Scenario", "load_scenario", "scenario_names", "SCENARIO_DIR"]
+__all__ = ["Field", "SCHEMA", "LANDING_SCHEMA", "SCHEMAS", "MODELS", "Scenario", "load_scenario",
+           "scenario_names", "require_model", "SCENARIO_DIR"]
 
 #: Folder of the scenarios shipped with quadland.
 SCENARIO_DIR = Path(__file__).parent / "scenarios"
@@ -38,7 +39,10 @@ class Field:
         ``float``, ``int``, ``bool`` or ``str``.
     unit, doc : str
     length : int, optional
-        None for a scalar, n for a list of n values.
+        None for a scalar, n for a list of n values (of ``min_length`` to n
+        values when ``min_length`` is given).
+    min_length : int, optional
+        Shortest list accepted; None: exactly ``length``.
     lo, hi : float, optional
         The physical range of every value: ``lo <= v <= hi`` (``lo < v``
         with ``lo_open``).
@@ -55,6 +59,7 @@ class Field:
     unit: str
     doc: str
     length: int | None = None
+    min_length: int | None = None
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
@@ -202,6 +207,139 @@ SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
 del F, I, B, S
 
 
+#: The loops a scenario may select with ``scenario.model`` ("paper" when absent).
+MODELS = ("paper", "landing")
+
+
+def _tilt_within(limit_deg):
+    def check(v):
+        return None if abs(v[0]) < limit_deg and abs(v[1]) < limit_deg else \
+            f"|roll| and |pitch| must be below {limit_deg:g} deg"
+    return check
+
+
+def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
+    """The three keys of one prescribed deck motion: up to three sinusoids."""
+    amp = f"{name}_amplitude" + ("_deg" if unit == "deg" else "")
+    return {
+        amp: Field(float, unit, f"{what} amplitudes a_i of sum a_i sin(w_i t + phase_i)", 3,
+                   min_length=1, lo=0.0, hi=amp_hi),
+        f"{name}_frequency": Field(float, "rad/s", f"{what} frequencies w_i", 3, min_length=1,
+                                   lo=0.0, hi=100.0),
+        f"{name}_phase_deg": Field(float, "deg", f"{what} phases", 3, min_length=1, lo=-3600.0,
+                                   hi=3600.0),
+    }
+
+
+F, I, B, S = float, int, bool, str
+#: The landing scenario schema (``scenario.model = "landing"``): the 6-DOF
+#: loop of ``symbolic.landing`` with guidance, motor lag, rotor limits, the
+#: sampled step, a moving deck and wind (docs/landing.md).
+LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
+    "scenario": {
+        **SCHEMA["scenario"],
+        "model": Field(S, "-", "the loop simulated", choices=("landing",)),
+    },
+    "simulation": {
+        "duration": SCHEMA["simulation"]["duration"],
+        "output_rate_hz": SCHEMA["simulation"]["output_rate_hz"],
+        "rk_steps_per_interval": Field(I, "-", "RK4 steps per hold interval", lo=1, hi=1000),
+        "seed": SCHEMA["simulation"]["seed"],
+    },
+    "quadrotor": {
+        **{k: SCHEMA["quadrotor"][k] for k in ("mass", "inertia", "drag_translational",
+                                               "drag_rotational", "gravity", "arm_length",
+                                               "rotor_drag_factor")},
+        "thrust_to_weight": Field(F, "-", "4 F_max / (m1 g): sets the rotor limit F_max",
+                                  lo=1.0, hi=20.0, lo_open=True),
+        "motor_time_constant": Field(F, "s", "first-order lag of each rotor force", lo=1e-3,
+                                     hi=1.0),
+        "gear_height": Field(F, "m", "landing gear's lowest point below the centre", lo=0.0,
+                             hi=10.0),
+    },
+    "vehicle": {k: SCHEMA["vehicle"][k] for k in ("m11", "m22", "m33", "d11", "d22", "d33",
+                                                  "tau")},
+    "deck": {
+        "height": Field(F, "m", "altitude of the vehicle's reference point (the centre of roll "
+                        "and pitch) at zero heave", lo=-1e4, hi=1e4),
+        "pad_offset": Field(F, "m", "pad centre from the reference point, deck frame (x "
+                            "forward, z up)", 3, lo=-1e3, hi=1e3),
+        **_sines("heave", "m", "heave", 100.0),
+        **_sines("roll", "deg", "roll", 45.0),
+        **_sines("pitch", "deg", "pitch", 45.0),
+    },
+    "initial": {
+        "position1": Field(F, "m", "quadrotor x1, y1 in E", 2, lo=-1e7, hi=1e7),
+        "z1": Field(F, "m", "quadrotor altitude in E", lo=-1e4, hi=1e4),
+        "eta1_deg": Field(F, "deg", "roll, pitch, yaw", 3, lo=-3600.0, hi=3600.0,
+                          check=_tilt_within(60.0)),
+        "omega1_deg_s": SCHEMA["initial"]["omega1_deg_s"],
+        "relative_velocity": Field(F, "m/s", "quadrotor velocity in E minus the pad's "
+                                   "(0: moving with the pad)", 3, lo=-1e3, hi=1e3),
+        "position2": SCHEMA["initial"]["position2"],
+        "psi2_deg": SCHEMA["initial"]["psi2_deg"],
+        "r2_deg_s": SCHEMA["initial"]["r2_deg_s"],
+        "velocity2": SCHEMA["initial"]["velocity2"],
+    },
+    "controller": {
+        "k1p": Field(F, "1/s", "outer k1: deck-frame x, y, z", 3, hi=1e3, **_POS),
+        "k2p": Field(F, "1/s", "outer k2: deck-frame x, y, z", 3, hi=1e3, **_POS),
+        "k1": Field(F, "1/s", "inner k1: roll, pitch, yaw", 3, hi=1e3, **_POS),
+        "k2": Field(F, "1/s", "inner k2: roll, pitch, yaw", 3, hi=1e3, **_POS),
+        **{k: SCHEMA["controller"][k] for k in ("gamma1", "gamma2", "k_w", "k_zeta", "rho",
+                                                "nominal_model")},
+        "filter_frequency": Field(F, "rad/s", "command filter w_f", hi=1e4, **_POS),
+        "filter_damping": Field(F, "-", "command filter zeta_f", hi=10.0, **_POS),
+        "tilt_max_deg": Field(F, "deg", "largest tilt the outer loop commands", lo=1.0,
+                              hi=80.0),
+        "rate_hz": Field(F, "Hz", "control rate of the sampled step", lo=1.0,
+                         hi=MAX_RATE_HZ),
+    },
+    "rbf": SCHEMA["rbf"],
+    "landing": {
+        "hover_height": Field(F, "m", "hover point: the centre's height above the pad",
+                              hi=1e3, **_POS),
+        "align_radius": Field(F, "m", "distance to the hover point that ends the approach",
+                              hi=1e3, **_POS),
+        "dwell_time": Field(F, "s", "time the align criteria must hold", lo=0.0, hi=1e3),
+        "descent_speed": Field(F, "m/s", "largest descent rate", hi=100.0, **_POS),
+        "descent_time": Field(F, "s", "descent rate = height above touchdown / descent_time",
+                              hi=1e3, **_POS),
+        "touchdown_speed": Field(F, "m/s", "descent rate of the final crawl", hi=100.0,
+                                 **_POS),
+        "max_deck_rise": Field(F, "m/s", "a faster rising deck aborts the descent", hi=100.0,
+                               **_POS),
+        "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
+                               **_POS),
+        "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
+                            hi=100.0, **_POS),
+        "max_tilt_deg": Field(F, "deg", "limit: body z axis from the deck normal", hi=90.0,
+                              **_POS),
+        "max_relative_speed": Field(F, "m/s", "limit: horizontal relative speed at contact",
+                                    hi=100.0, **_POS),
+        "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0,
+                             hi=1e3),
+    },
+    "disturbance": SCHEMA["disturbance"],
+    "wind": {
+        "mean": Field(F, "m/s", "steady wind in E", 3, lo=-100.0, hi=100.0),
+        "turbulence_w20": Field(F, "m/s", "Dryden turbulence: wind speed at 20 ft (0: none)",
+                                lo=0.0, hi=50.0),
+        "gust_amplitude": Field(F, "m/s", "1-cosine gust peak v_m (0: none)", lo=0.0,
+                                hi=100.0),
+        "gust_start": Field(F, "s", "gust start t0", lo=0.0, hi=MAX_DURATION_S),
+        "gust_half_length": Field(F, "s", "gust build-up time d", hi=1e3, **_POS),
+        "gust_direction": Field(F, "-", "gust direction in E (normalized)", 3, lo=-1.0,
+                                hi=1.0),
+    },
+})
+del F, I, B, S
+
+#: The schema of each model.
+SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
+    {"paper": SCHEMA, "landing": LANDING_SCHEMA})
+
+
 @dataclasses.dataclass(frozen=True)
 class Scenario:
     """A validated scenario.
@@ -226,6 +364,11 @@ class Scenario:
     def __getitem__(self, dotted: str):
         section, key = dotted.split(".", 1)
         return self.data[section][key]
+
+    @property
+    def model(self) -> str:
+        """The loop it selects: ``"paper"`` (the 4-DOF loop) or ``"landing"`` (6-DOF)."""
+        return self.data["scenario"].get("model", "paper")
 
     def to_dict(self) -> dict:
         """Plain nested dict (lists, not tuples) for JSON output."""
@@ -315,8 +458,8 @@ def load_scenario(name_or_path: str | Path = "paper",
     pairs = _parse_overrides(overrides)
     for dotted, value in pairs:
         section, key = _split_key(dotted)
-        if section not in SCHEMA:
-            raise ScenarioError(f"--set {dotted}: {_unknown('section', section, SCHEMA)}")
+        if not any(section in schema for schema in SCHEMAS.values()):
+            raise ScenarioError(f"--set {dotted}: {_unknown('section', section, _SECTIONS)}")
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise ScenarioError(f"{path}: [{section}] must be a table")
@@ -448,19 +591,36 @@ def _unknown(what: str, name: str, known: Iterable[str]) -> str:
     return f"unknown {what} '{name}'" + (f" (did you mean '{hint[0]}'?)" if hint else "")
 
 
+def _model(raw: Mapping) -> str:
+    """``scenario.model`` of a raw scenario, checked; "paper" when absent."""
+    table = raw.get("scenario", {})
+    model = table.get("model", "paper") if isinstance(table, Mapping) else "paper"
+    if model not in MODELS:
+        raise ScenarioError(f"scenario.model: must be one of {', '.join(MODELS)}, "
+                            f"got {_show(model)}")
+    return model
+
+
 def _validate(raw: Mapping, source: str, default_name: str = "scenario") -> dict:
-    """Check every section and key of ``raw`` against SCHEMA; fill nothing but the name."""
+    """Check every section and key of ``raw`` against its model's schema; fill nothing but
+    the name (and, for the paper's, leave ``scenario.model`` out: it is the default)."""
+    model = _model(raw)
+    schema = SCHEMAS[model]
+    if model == "paper" and isinstance(raw.get("scenario"), Mapping):
+        raw = {**raw, "scenario": {k: v for k, v in raw["scenario"].items() if k != "model"}}
     out: dict[str, dict] = {}
     for section, table in raw.items():
-        if section not in SCHEMA:
-            raise ScenarioError(f"{source}: {_unknown('section', _show(section), SCHEMA)}")
+        if section not in schema:
+            raise ScenarioError(f"{source}: {_unknown('section', _show(section), schema)}"
+                                + _other_model(section, model))
         if not isinstance(table, Mapping):
             raise ScenarioError(f"{source}: [{section}] must be a table")
         for key in table:
-            if key not in SCHEMA[section]:
+            if key not in schema[section]:
                 dotted = f"{section}.{_show(key)}"
-                raise ScenarioError(f"{source}: {_unknown('key', dotted, _dotted(section))}")
-    for section, fields in SCHEMA.items():
+                raise ScenarioError(f"{source}: {_unknown('key', dotted, _dotted(section, model))}"
+                                    + _other_model(section, model, key))
+    for section, fields in schema.items():
         table = raw.get(section, {})
         out[section] = {}
         for key, field in fields.items():
@@ -474,6 +634,9 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario") -> dict
     nodes = out["rbf"]
     if nodes["center_max"] < nodes["center_min"]:
         raise ScenarioError("rbf.center_max: must be >= rbf.center_min")
+    if model == "landing":
+        _check_landing(out)
+        return out
     q = out["quadrotor"]
     if q["rotor_force_max"] <= q["rotor_force_min"]:
         raise ScenarioError("quadrotor.rotor_force_max: must be > quadrotor.rotor_force_min")
@@ -484,8 +647,46 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario") -> dict
     return out
 
 
-def _dotted(section: str) -> list[str]:
-    return [f"{section}.{k}" for k in SCHEMA[section]]
+def _check_landing(data: dict) -> None:
+    """The landing schema's cross-key rules."""
+    deck = data["deck"]
+    for name in ("heave", "roll", "pitch"):
+        keys = [k for k in deck if k.startswith(f"{name}_")]
+        if len({len(deck[k]) for k in keys}) != 1:
+            raise ScenarioError(f"deck.{keys[1]}: must have as many values as deck.{keys[0]}")
+    wind = data["wind"]
+    if wind["gust_amplitude"] > 0 and not any(wind["gust_direction"]):
+        raise ScenarioError("wind.gust_direction: must not be all zero when "
+                            "wind.gust_amplitude > 0")
+    guidance = data["landing"]
+    if guidance["touchdown_speed"] > guidance["descent_speed"]:
+        raise ScenarioError("landing.touchdown_speed: must be <= landing.descent_speed")
+    if guidance["hover_height"] <= data["quadrotor"]["gear_height"]:
+        raise ScenarioError("landing.hover_height: must be above quadrotor.gear_height")
+
+
+#: Every section of every schema.
+_SECTIONS = tuple(dict.fromkeys(s for schema in SCHEMAS.values() for s in schema))
+
+
+def _other_model(section: str, model: str, key: str | None = None) -> str:
+    """A hint when the section or key belongs to another model's schema."""
+    for other, schema in SCHEMAS.items():
+        if other != model and section in schema and (key is None or key in schema[section]):
+            return f" (a key of scenario.model = \"{other}\")" if key else \
+                f" (a section of scenario.model = \"{other}\")"
+    return ""
+
+
+def _dotted(section: str, model: str = "paper") -> list[str]:
+    return [f"{section}.{k}" for k in SCHEMAS[model][section]]
+
+
+def require_model(scenario: Scenario, model: str, what: str) -> None:
+    """Refuse, in one line, a scenario of another model than ``what`` handles."""
+    if scenario.model != model:
+        raise ScenarioError(f"scenario.model: {what} handles scenario.model = \"{model}\" "
+                            f"only, got \"{scenario.model}\"")
 
 
 def _type_name(kind: type) -> str:
@@ -537,8 +738,11 @@ def _check_value(dotted: str, value, field: Field):
                                 f"got {_show(value)}")
         checked = _check_scalar(dotted, value, field)
     else:
-        if not isinstance(value, list | tuple) or len(value) != field.length:
-            raise ScenarioError(f"{dotted}: expected a list of {field.length} numbers "
+        shortest = field.length if field.min_length is None else field.min_length
+        if not isinstance(value, list | tuple) or not shortest <= len(value) <= field.length:
+            count = field.length if shortest == field.length else \
+                f"{shortest} to {field.length}"
+            raise ScenarioError(f"{dotted}: expected a list of {count} numbers "
                                 f"({field.unit}), got {_show(value)}")
         checked = tuple(_check_scalar(dotted, v, field) for v in value)
     if field.check is not None:

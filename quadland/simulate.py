@@ -95,8 +95,17 @@ def simulation_plan(scenario: Scenario) -> SimulationPlan:
     if ctrl["rate_hz"] > 0:
         clocks += int(T * ctrl["rate_hz"]) + 2
     l = scenario.data["rbf"]["nodes"]
-    nx, nw = closed_loop_state(l).size, DISTURBANCE.size
-    per_row = 2 * nx + OUTPUTS.size + len(COLUMNS) + nw + 12
+    if scenario.model == "landing":
+        from symbolic.landing.loop import DISTURBANCE as W_LAND
+        from symbolic.landing.loop import OUTPUTS as Y_LAND
+        from symbolic.landing.loop import RECORDED as REC_LAND
+        from symbolic.landing.loop import loop_state
+
+        nx, nw = loop_state(l).size, W_LAND.size
+        per_row = 2 * nx + 2 * (Y_LAND.size + REC_LAND.size) + nw + 12
+    else:
+        nx, nw = closed_loop_state(l).size, DISTURBANCE.size
+        per_row = 2 * nx + OUTPUTS.size + len(COLUMNS) + nw + 12
     return SimulationPlan(rows - 1, clocks, clocks * sim["rk_steps_per_interval"],
                           8 * (rows * per_row + clocks * (nw + 4)))
 
@@ -140,11 +149,15 @@ class SimulationResult(Mapping):
 
     ``result["t"]``, ``result["z_e"]``, ... (the entries of ``TRAJECTORY``);
     ``states`` is the closed-loop state at each row, ``(len(t), nx)``.
+    ``layout`` names the columns of ``trajectory.csv``: ``TRAJECTORY`` for
+    the paper's loop, ``quadland.landing.LANDING_TRAJECTORY`` for the
+    landing loop, whose result holds more signals than its CSV.
     """
 
     scenario: Scenario
     columns: Mapping[str, np.ndarray]
     states: np.ndarray
+    layout: Layout = TRAJECTORY
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
@@ -162,8 +175,9 @@ class SimulationResult(Mapping):
         """
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
-        writer.writerow([n for n, _ in COLUMNS])
-        data = np.column_stack([self.columns[n] for n, _ in COLUMNS])
+        names = self.layout.element_names()
+        writer.writerow(names)
+        data = np.column_stack([self.columns[n] for n in names])
         for row in data:
             writer.writerow([f"{v:.12g}" for v in row])
         text = buf.getvalue()
@@ -173,11 +187,14 @@ class SimulationResult(Mapping):
         return text
 
 
-def columns_sidecar() -> dict:
-    """``columns.json``: each CSV column's unit and meaning, in column order."""
+def columns_sidecar(layout: Layout = TRAJECTORY) -> dict:
+    """``columns.json``: each CSV column's unit and meaning, in column order.
+
+    ``layout`` is the result's (``SimulationResult.layout``).
+    """
     return {"columns": [dict(name=n, unit=u, doc=d) for n, u, d in
-                        zip(TRAJECTORY.element_names(), TRAJECTORY.element_units(),
-                            TRAJECTORY.element_docs(), strict=True)]}
+                        zip(layout.element_names(), layout.element_units(),
+                            layout.element_docs(), strict=True)]}
 
 
 def time_grid(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -244,6 +261,11 @@ def simulate(scenario: Scenario) -> SimulationResult:
         When the attitude reaches the thrust map's singularity or the state
         stops being finite.
 
+    Notes
+    -----
+    A landing scenario (``scenario.model = "landing"``) runs the landing
+    loop instead: :func:`quadland.landing.simulate_landing`.
+
     Examples
     --------
     >>> import quadland
@@ -252,6 +274,10 @@ def simulate(scenario: Scenario) -> SimulationResult:
     >>> float(res["t"][-1]), len(res["t"])
     (0.5, 51)
     """
+    if scenario.model == "landing":
+        from quadland.landing import simulate_landing
+
+        return simulate_landing(scenario)
     check_plan(scenario)
     mv = model_values(scenario)
     t_out, t_dist, t_all = time_grid(scenario)
@@ -307,7 +333,7 @@ def _divergence_hint(scenario: Scenario) -> str:
     k1, z2 at k2), and RK4 is stable for ``|lambda| h < 2.785``.
     """
     sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
-    if sim["integrator"] != "rk":
+    if sim.get("integrator", "rk") != "rk":
         return " (check the gains and the initial attitude)"
     clocks = [scenario.data["simulation"]["output_rate_hz"],
               scenario.data["disturbance"]["sample_rate_hz"]]

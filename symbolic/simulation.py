@@ -88,7 +88,8 @@ class LoopModel:
     state, disturbance, params, outputs : Layout
         Layouts of ``x``, ``w``, ``p`` and ``y`` of the continuous loop.
     rhs, output_fn : casadi.Function
-        ``rhs(x, w, p) -> x_dot``; ``outputs(x, w, p) -> y`` (one vector).
+        ``rhs(x, w, t, p) -> x_dot`` (None for a loop that is sampled-data
+        only); ``outputs(x, w, t, p) -> y`` (one vector).
     plant_state, held, controller_state, plant_params, controller_params, recorded : Layout
         Layouts of the sampled-data loop's ``xp``, ``uh``, ``xc``, ``pp``,
         ``pc`` and ``rec``.
@@ -109,7 +110,7 @@ class LoopModel:
     disturbance: Layout
     params: Layout
     outputs: Layout
-    rhs: ca.Function
+    rhs: ca.Function | None
     output_fn: ca.Function
     plant_state: Layout
     held: Layout

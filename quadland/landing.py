@@ -1,0 +1,333 @@
+"""Landing scenarios: their vectors, wind, the simulation and the ride on the deck.
+
+A landing scenario (``scenario.model = "landing"``, schema
+``quadland.scenario.LANDING_SCHEMA``) flies the landing loop of
+``symbolic.landing.loop`` in one call of its compiled simulator (on CasADi's
+virtual machine without a C compiler): the guidance and the landing step at
+``controller.rate_hz``, their rotor commands held on the 6-DOF plant, RK4 on
+the exact grid of the output, disturbance and control times, and the
+touchdown (the gear gap's zero crossing) located within its step, where the
+integration ends. From then on the quadrotor rides on the deck, pinned at its
+touchdown pose with its rotors idle: the rows up to ``landing.settle_time``
+after touchdown (or the duration) are computed from the vehicle's motion and
+the deck's, phase 3 (touchdown), then 4 (landed) at the end of the settling.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from quadland.compiled import SIM_EVENT, SIM_GUARD, compiled_loop
+from quadland.constants import TILT_MIN
+from quadland.exceptions import SimulationError
+from quadland.model import disturbance_samples
+from quadland.scenario import Scenario, require_model
+from quadland.simulate import (
+    SimulationResult,
+    _arange,
+    _divergence_hint,
+    _grid_index,
+    _held,
+    check_plan,
+    time_grid,
+)
+from quadland.wind import OneCosineGust, dryden_low_altitude, gust_samples, turbulence_samples
+from symbolic.guidance import APPROACH, LANDED, TOUCHDOWN
+from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
+from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.kinematics import rotation
+from symbolic.landing.controller import landing_controller_params, landing_memory
+from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
+from symbolic.landing.loop import (
+    ANCHOR,
+    OUTPUTS,
+    RECORDED,
+    controller_params,
+    controller_state,
+    landed_outputs_function,
+    loop_state,
+)
+from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
+from symbolic.landing.quadrotor import ACTUATOR
+from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.layout import Field, Layout
+from symbolic.parameters import QUADROTOR, VEHICLE
+from symbolic.simulation import rk4_step
+from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import vehicle_function
+
+__all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "wind_samples",
+           "landing_disturbance", "simulate_landing"]
+
+#: The columns of a landing run's trajectory.csv (docs/landing.md), from the loop's layouts.
+LANDING_TRAJECTORY = Layout("landing_trajectory", (
+    Field("t", 1, "s", "time"),
+    *(OUTPUTS[n] for n in ("phase", "p1", "eta1", "p2", "eta2", "p_e", "F_total", "M", "F",
+                           "d_F")),
+), "one row per output time of a landing, and one at touchdown")
+
+
+@dataclasses.dataclass(frozen=True)
+class LandingValues:
+    """A landing scenario as the landing loop's vectors.
+
+    Attributes
+    ----------
+    l : int
+        RBF node count.
+    pp : ndarray
+        Plant parameters (``symbolic.landing.plant.PLANT_PARAMS``).
+    pc : ndarray
+        Controller parameters (``symbolic.landing.loop.controller_params(l)``).
+    xp0, xc0 : ndarray
+        Initial plant state and controller memory.
+    F_max : float
+        Largest rotor force, N.
+    """
+
+    l: int
+    pp: np.ndarray
+    pc: np.ndarray
+    xp0: np.ndarray
+    xc0: np.ndarray
+    F_max: float
+
+
+def _padded(values, scale: float = 1.0) -> np.ndarray:
+    out = np.zeros(N_DECK)
+    out[:len(values)] = np.multiply(values, scale)
+    return out
+
+
+def landing_values(scenario: Scenario) -> LandingValues:
+    """Translate a validated landing scenario into the landing loop's vectors.
+
+    The quadrotor starts with its rotors at hover thrust, ``m1 g / 4`` each,
+    and its velocity ``initial.relative_velocity`` plus the pad's; the
+    command filter starts at its initial roll and pitch, the guidance in the
+    approach with the reference at the hover point.
+    """
+    require_model(scenario, "landing", "the landing loop")
+    d = scenario.data
+    q, v, dk, c, r, g = (d[k] for k in ("quadrotor", "vehicle", "deck", "controller", "rbf",
+                                        "landing"))
+    l, deg = r["nodes"], np.pi / 180
+    p_quad = QUADROTOR.pack(dict(
+        m1=q["mass"], I=q["inertia"], Kt=q["drag_translational"], Kr=q["drag_rotational"],
+        g=q["gravity"], arm=q["arm_length"], c=q["rotor_drag_factor"]))
+    F_max = q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
+    p_act = ACTUATOR.pack(dict(motor_time_constant=q["motor_time_constant"], F_max=F_max,
+                               gear_height=q["gear_height"]))
+    p_veh = VEHICLE.pack(dict(m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"],
+                              d22=v["d22"], d33=v["d33"], tau=v["tau"], z2=0.0))
+    deck = {}
+    for name, scale in (("heave", 1.0), ("roll", deg), ("pitch", deg)):
+        amp = dk[f"{name}_amplitude" + ("_deg" if name != "heave" else "")]
+        deck[f"{name}_amp"] = _padded(amp, scale)
+        deck[f"{name}_freq"] = _padded(dk[f"{name}_frequency"])
+        deck[f"{name}_phase"] = _padded(dk[f"{name}_phase_deg"], deg)
+    p_deck = DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
+    pp = PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
+
+    centers = np.linspace(r["center_min"], r["center_max"], l) if l > 1 else \
+        np.array([(r["center_min"] + r["center_max"]) / 2])
+    lay = landing_controller_params(l)
+    p_ctrl = lay.pack(dict(
+        k1p=c["k1p"], k2p=c["k2p"], k1=c["k1"], k2=c["k2"], gamma1=c["gamma1"],
+        gamma2=c["gamma2"], k_w=c["k_w"], k_zeta=c["k_zeta"], rho=c["rho"],
+        nominal_model=float(c["nominal_model"]), w_f=c["filter_frequency"],
+        zeta_f=c["filter_damping"], tilt_max=c["tilt_max_deg"] * deg,
+        centers=np.tile(centers, (lay["centers"].shape[0], 1)), widths=np.full(l, r["width"])))
+    p_guid = GUIDANCE_PARAMS.pack(dict(
+        hover_height=g["hover_height"], align_radius=g["align_radius"],
+        dwell_time=g["dwell_time"], descent_speed=g["descent_speed"],
+        descent_time=g["descent_time"], touchdown_speed=g["touchdown_speed"],
+        touchdown_height=q["gear_height"], max_offset=g["max_offset"],
+        max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"]))
+    rate = c["rate_hz"]
+    pc = controller_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
+
+    init = d["initial"]
+    (x2, y2), (u2, v2) = init["position2"], init["velocity2"]
+    xv = VEHICLE_STATE.pack(dict(x2=x2, y2=y2, psi2=init["psi2_deg"] * deg, u2=u2, v2=v2,
+                                 r2=init["r2_deg_s"] * deg))
+    v_pad = np.asarray(deck_pose(xv, 0.0, p_veh, p_deck).v2E, dtype=float).ravel()
+    eta1 = np.multiply(init["eta1_deg"], deg)
+    V1 = np.asarray(rotation(eta1), dtype=float).T @ (v_pad + np.asarray(
+        init["relative_velocity"]))
+    x1q = QUAD6_STATE.pack(dict(
+        p1=[*init["position1"], init["z1"]], eta1=eta1, V1=V1,
+        Omega1=np.multiply(init["omega1_deg_s"], deg),
+        F=np.full(4, q["mass"] * q["gravity"] / 4)))
+    xp0 = PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
+    mem = landing_memory(l).zeros()
+    mem[landing_memory(l).slice("eta_f")] = eta1[:2]
+    xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
+                                  aborts=0.0))
+    xc0 = controller_state(l).pack(dict(xg=xg, mem=mem))
+    return LandingValues(l, pp, pc, xp0, xc0, F_max)
+
+
+def wind_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
+    """Wind velocity in E at ``times`` (the disturbance's sample times), ``(3, n)``, m/s.
+
+    ``wind.mean`` plus Dryden turbulence (MIL-F-8785C low altitude, its
+    intensity from ``wind.turbulence_w20``, at the hover point's altitude
+    ``deck.height + landing.hover_height``, crossed at the vehicle's initial
+    speed through the mean wind) plus a 1-cosine gust. The turbulence's
+    draws come from their own generator seeded with ``(simulation.seed, 1)``,
+    independent of the disturbance's.
+    """
+    w, d = scenario.data["wind"], scenario.data
+    times = np.asarray(times, dtype=float)
+    psi2 = d["initial"]["psi2_deg"] * np.pi / 180
+    u2, v2 = d["initial"]["velocity2"]
+    ground = np.array([np.cos(psi2) * u2 - np.sin(psi2) * v2,
+                       np.sin(psi2) * u2 + np.cos(psi2) * v2, 0.0])
+    airspeed = float(np.linalg.norm(ground - np.asarray(w["mean"])))
+    height = d["deck"]["height"] + d["landing"]["hover_height"]
+    turbulence = dryden_low_altitude(w["turbulence_w20"], height, airspeed)
+    rng = np.random.default_rng((d["simulation"]["seed"], 1))
+    out = np.asarray(w["mean"], dtype=float)[:, None] + turbulence_samples(turbulence, times, rng)
+    if w["gust_amplitude"] > 0:
+        gust = OneCosineGust(w["gust_start"], w["gust_half_length"], w["gust_amplitude"],
+                             tuple(w["gust_direction"]))
+        out = out + gust_samples(gust, times)
+    return out
+
+
+def landing_disturbance(scenario: Scenario, times: np.ndarray) -> np.ndarray:
+    """The landing loop's held disturbance at ``times``, ``(9, n)``: wind (E), d_F, d_M (body).
+
+    ``d_F``, ``d_M`` are ``[disturbance]``'s, drawn as for the paper's loop
+    (:func:`quadland.model.disturbance_samples`).
+    """
+    return np.vstack([wind_samples(scenario, times), disturbance_samples(scenario, times)])
+
+
+def simulate_landing(scenario: Scenario) -> SimulationResult:
+    """Fly a landing scenario: approach, align, descend, touchdown, ride on the deck.
+
+    Returns
+    -------
+    SimulationResult
+        Every signal of ``symbolic.landing.loop.OUTPUTS`` and ``RECORDED``
+        by name, at the output times up to touchdown, one row at the
+        touchdown instant, then the ride on the deck; its ``layout`` is
+        :data:`LANDING_TRAJECTORY` (the CSV's columns) and ``states`` the
+        loop's state ``[xp, xc]`` per row.
+
+    Raises
+    ------
+    SimulationError
+        When the attitude reaches the singular tilt or the state stops
+        being finite, with the trajectory up to then.
+    """
+    check_plan(scenario)
+    lv = landing_values(scenario)
+    sim, rate = scenario.data["simulation"], scenario.data["controller"]["rate_hz"]
+    T = sim["duration"]
+    t_out, t_dist, _ = time_grid(scenario)
+    w_dist = landing_disturbance(scenario, t_dist)
+    t_ctrl = _arange(T, 1.0 / rate)[:-1]
+    grid = np.unique(np.round(np.concatenate([t_out, t_dist, t_ctrl]), 12))
+    ctrl = _grid_index(grid[:-1], t_ctrl) >= 0
+    rec = _grid_index(grid, t_out)
+    loop = compiled_loop(lv.l, "sampled", "landing")
+    X, R, xp_end, xc_end, failure = loop.sampled(
+        lv.xp0, lv.xc0, _held(t_dist, w_dist, grid[:-1]).T, grid, ctrl, rec,
+        sim["rk_steps_per_interval"], lv.pp, lv.pc, TILT_MIN, len(t_out))
+    done = len(t_out) if failure is None else \
+        int(np.max(rec[:failure.index + 1], initial=-1)) + 1
+    times, X, R = t_out[:done], X[:done], R[:done]
+    Y = loop.outputs(X, _held(t_dist, w_dist, times).T, times, lv.pp)
+    what = None
+    if failure is not None and failure.status == SIM_EVENT:
+        t_td = failure.time
+        x_td = np.concatenate([xp_end, xc_end])
+        y_td = loop.outputs(x_td[None, :], _held(t_dist, w_dist, [t_td]).T, np.array([t_td]),
+                            lv.pp)
+        R_td = R[-1] if len(R) else np.zeros(RECORDED.size)
+        ride = _ride(scenario, lv, t_out, t_td, x_td, y_td[0], R_td)
+        times = np.concatenate([times, [t_td], ride[0]])
+        X = np.vstack([X, x_td, ride[1]])
+        R = np.vstack([R, R_td, ride[2]])
+        Y = np.vstack([Y, y_td, ride[3]])
+        Y[done, OUTPUTS.index("phase")] = TOUCHDOWN
+    elif failure is not None:
+        what = (f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}"
+                if failure.status == SIM_GUARD else "the state became non-finite")
+        t_fail = grid[min(failure.index, len(grid) - 1)]
+    bad = ~np.all(np.isfinite(Y), axis=1)
+    if bad.any():
+        k = int(np.argmax(bad))
+        name = OUTPUTS.element_names()[int(np.argmin(np.isfinite(Y[k])))]
+        what, t_fail = f"the output {name} became non-finite", times[k]
+        times, X, R, Y = times[:k], X[:k], R[:k], Y[:k]
+    result = _result(scenario, times, X, R, Y)
+    if what is not None:
+        raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
+                              f"{_divergence_hint(scenario)}", t_fail,
+                              result if len(times) else None)
+    return result
+
+
+def _ride(scenario, lv, t_out, t_td, x_td, y_td, R_td):
+    """Rows after touchdown: the quadrotor pinned to the deck, its rotors winding down.
+
+    The vehicle goes on by eq. (4), integrated by RK4 in steps of at most
+    one control period; the quadrotor keeps its touchdown pose in the deck
+    frame and its rotor forces decay as ``F_td exp(-(t - t_td) / tau_m)``
+    (commands zero, the motors' lag). Returns times, states, recorded
+    signals and outputs.
+    """
+    settle = scenario.data["landing"]["settle_time"]
+    T = scenario.data["simulation"]["duration"]
+    t_end = min(t_td + settle, T)
+    later = t_out[(t_out > t_td + 1e-12) & (t_out < t_end - 1e-12)]
+    times = np.append(later, t_end) if t_end > t_td + 1e-12 else later
+    n = len(times)
+    lay, ys = loop_state(lv.l), OUTPUTS.unpack(y_td)
+    xp_td = lay.unpack(x_td)["xp"]
+    s = PLANT_STATE.unpack(xp_td)
+    R_rel = (np.asarray(rotation(ys["eta2"]), dtype=float).T
+             @ np.asarray(rotation(ys["eta1"]), dtype=float))
+    anchor = ANCHOR.pack(dict(p_e=ys["p_e"], R_rel=R_rel))
+    F_td = QUAD6_STATE.unpack(s["x1q"])["F"]
+    p = PLANT_PARAMS.unpack(lv.pp)
+    tau_m = ACTUATOR.unpack(p["p_act"])["motor_time_constant"][0]
+    aborts = ys["aborts"][0]
+    step = rk4_step(vehicle_function())
+    h_max = float(controller_params(lv.l).unpack(lv.pc)["dt"][0])
+    landed = landed_outputs_function()
+    X, Y = np.zeros((n, lay.size)), np.zeros((n, OUTPUTS.size))
+    xv, t = s["xv"].copy(), t_td
+    for k, t_k in enumerate(times):
+        m = max(1, int(np.ceil((t_k - t) / h_max - 1e-9)))
+        for _ in range(m):
+            xv = np.asarray(step(xv, p["p_veh"], (t_k - t) / m), dtype=float).ravel()
+        t = t_k
+        F = F_td * np.exp(-(t_k - t_td) / tau_m)
+        phase = LANDED if t_k >= t_td + settle - 1e-12 else TOUCHDOWN
+        y, x1q = (np.asarray(v, dtype=float).ravel()
+                  for v in landed(xv, t_k, lv.pp, anchor, F, phase, aborts))
+        Y[k] = y
+        X[k] = np.concatenate([PLANT_STATE.pack(dict(x1q=x1q, xv=xv)), lay.unpack(x_td)["xc"]])
+    if n:                                          # yaw continuous with the touchdown's
+        psi = np.unwrap(np.concatenate([[ys["eta1"][2]], Y[:, OUTPUTS.index("psi1")]]))[1:]
+        Y[:, OUTPUTS.index("psi1")] = psi
+        X[:, lay.slice("xp")][:, PLANT_STATE.index("psi1")] = psi
+    held = np.tile(R_td, (n, 1))                   # the last commands, rotors idle
+    held[:, RECORDED.slice("F_cmd")] = 0.0
+    return times, X, held, Y
+
+
+def _result(scenario, times, X, R, Y) -> SimulationResult:
+    """The result's columns: ``t``, every output and every recorded signal by name."""
+    cols = {"t": times}
+    cols.update(zip(OUTPUTS.element_names(), Y.T, strict=True))
+    cols.update(zip(RECORDED.element_names(), R.T, strict=True))
+    return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
+                                       for k, v in cols.items()}, X, LANDING_TRAJECTORY)

@@ -1,0 +1,254 @@
+"""The landing loop as the simulator sees it: plant with wind, sensors, guidance, landing step.
+
+:func:`landing_loop` bundles, in the shape of :class:`symbolic.simulation.LoopModel`:
+
+* **plant** ``plant(xp, F_cmd, w, t, pp)``: the landing plant
+  (:mod:`symbolic.landing.plant`) under the held disturbance ``w``
+  (:data:`DISTURBANCE`): the wind velocity in E and the body-frame
+  ``[d_F, d_M]``. The rotor drag of eq. (2) acts on the velocity relative to
+  the air, ``-Kt (V1 - R(eta1)^T v_wind)``, so the wind adds the body force
+  ``Kt R(eta1)^T v_wind`` (:func:`wind_force`) to ``d_F``;
+* **controller** ``controller(xp, xc, pc, first, t)``: perfect sensors
+  (:func:`~symbolic.landing.controller.measurement_function`), then one
+  guidance step (:func:`symbolic.guidance.guidance_step`) whose reference
+  feeds one landing step (:func:`~symbolic.landing.controller.landing_law`),
+  both at the control rate; the memory ``xc`` (:func:`controller_state`) is
+  the guidance's state (the phase among it) and the step's; the held input
+  is the rotor commands, the guard the measured tilt;
+* **event** ``event(xp, t, pp)``: the gear gap; touchdown ends the
+  integration at the instant it happens;
+* **assemble** ``x = [xp, xc]`` and **outputs** ``y`` (:func:`loop_outputs`):
+  the signals of the landing trajectory.
+
+After touchdown the quadrotor rides on the deck, pinned at its touchdown
+pose with its rotors idle; :func:`landed_outputs_function` gives the same
+signals from the vehicle's state, the deck's motion and that pose.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import casadi as ca
+
+from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
+from symbolic.guidance import REFERENCE, guidance_step
+from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.kinematics import rotation
+from symbolic.landing.controller import (
+    MEASUREMENT,
+    landing_controller_params,
+    landing_law,
+    landing_memory,
+    landing_step_outputs,
+    measurement_function,
+)
+from symbolic.landing.deck import DECK_POSE, deck_pose, time_derivative, vee
+from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE, landing_plant_rhs
+from symbolic.landing.quadrotor import COMMAND
+from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.relative import RELATIVE6, gear_gap, relative6
+from symbolic.layout import Field, Layout
+from symbolic.parameters import QUADROTOR
+from symbolic.quadrotor import DISTURBANCE as BODY_DISTURBANCE
+from symbolic.quadrotor import WRENCH, wrench_from_rotors
+from symbolic.simulation import LoopModel
+from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import vehicle_rhs
+
+__all__ = ["DISTURBANCE", "RECORDED", "OUTPUTS", "ANCHOR", "wind_force", "controller_state",
+           "controller_params", "loop_state", "loop_outputs", "landed_outputs_function",
+           "landing_loop"]
+
+#: The held disturbance of the landing loop: wind in E, then eq. (2)'s d_F, d_M.
+DISTURBANCE = Layout("w_land", (
+    Field("v_wind", 3, "m/s", "wind velocity in E", elements=("vx_wind", "vy_wind", "vz_wind")),
+    *BODY_DISTURBANCE.fields,
+), "wind velocity (E) and the disturbance force and moment (body)")
+
+#: What the loop records of each control step (held until the next).
+RECORDED = Layout("rec_land", (
+    COMMAND["F_cmd"],
+    landing_step_outputs(1)["eta_d"],
+    REFERENCE["p_ref"],
+    landing_step_outputs(1)["limits"],
+), "the landing step's commands, attitude reference, position reference and limit flags")
+
+#: The landing trajectory's signals (one vector, the simulator's ``y``).
+OUTPUTS = Layout("y_land", (
+    Field("phase", 1, "-", "guidance phase (symbolic.guidance.PHASES)"),
+    QUAD6_STATE["p1"],
+    QUAD6_STATE["eta1"],
+    DECK_POSE["p2"],
+    DECK_POSE["eta2"],
+    *RELATIVE6.fields,
+    Field("F_total", 1, "N", "thrust acting (the rotor states, after motor lag and limits)"),
+    Field("M", 3, "N m", "body moments of the rotor states", elements=("M_x", "M_y", "M_z")),
+    QUAD6_STATE["F"],
+    Field("d_F", 3, "N", "every external force but thrust, gravity and eq. 2's drag "
+          "(wind, disturbance, contact), body frame", elements=("d_Fx", "d_Fy", "d_Fz")),
+    Field("d_M", 3, "N m", "every external moment but the rotors' and eq. 2's drag, body "
+          "frame", elements=("d_Mx", "d_My", "d_Mz")),
+    Field("aborts", 1, "-", "aborted descents so far"),
+), "landing signals: both bodies in E, the relative state, rotors, external forces")
+
+#: The pose at which the quadrotor is pinned to the deck after touchdown.
+ANCHOR = Layout("anchor", (
+    Field("p_e", 3, "m", "the quadrotor's centre in the deck frame at touchdown"),
+    Field("R_rel", 9, "-", "R_deck^T R(eta1) at touchdown", shape=(3, 3)),
+), "the quadrotor's pose on the deck")
+
+
+def wind_force(eta1, v_wind, p_quad):
+    """Body force of the wind through eq. (2)'s drag: ``Kt R(eta1)^T v_wind``, N."""
+    return QUADROTOR.unpack(p_quad)["Kt"] * (rotation(eta1).T @ v_wind)
+
+
+def _body_disturbance(xp, w, pp):
+    """``[d_F + wind_force, d_M]``: the landing plant's disturbance input."""
+    ws = DISTURBANCE.unpack(w)
+    eta1 = QUAD6_STATE.unpack(PLANT_STATE.unpack(xp)["x1q"])["eta1"]
+    d_F = ws["d_F"] + wind_force(eta1, ws["v_wind"], PLANT_PARAMS.unpack(pp)["p_quad"])
+    return ca.vertcat(d_F, ws["d_M"])
+
+
+@functools.cache
+def controller_state(l: int) -> Layout:
+    """The landing loop's memory: the guidance's state and the landing step's."""
+    return Layout("xc_land", (
+        Field.nested("xg", GUIDANCE_STATE, "guidance: phase, dwell timer, z_ref, aborts"),
+        Field.nested("mem", landing_memory(l), "landing step: network, filter, compensator"),
+    ), "landing loop memory")
+
+
+@functools.cache
+def controller_params(l: int) -> Layout:
+    """The landing loop's controller parameters: sensors' model, law, guidance, period."""
+    return Layout("pc_land", (
+        Field.nested("pp", PLANT_PARAMS, "plant model of the (perfect) sensors and of the law"),
+        Field.nested("p_ctrl", landing_controller_params(l), "landing step"),
+        Field.nested("p_guid", GUIDANCE_PARAMS, "guidance"),
+        Field("dt", 1, "s", "control period"),
+    ), "landing loop controller parameters")
+
+
+@functools.cache
+def loop_state(l: int) -> Layout:
+    """The landing loop's whole state ``x = [xp, xc]``."""
+    return Layout("x_land", (
+        Field.nested("xp", PLANT_STATE, "plant"),
+        Field.nested("xc", controller_state(l), "controller memory"),
+    ), "landing loop state")
+
+
+def _signals(x1q, xv, t, pp, d_F, d_M, phase, aborts):
+    """The :data:`OUTPUTS` vector of a quadrotor state with its external forces."""
+    p = PLANT_PARAMS.unpack(pp)
+    q = QUAD6_STATE.unpack(x1q)
+    deck = deck_pose(xv, t, p["p_veh"], p["p_deck"])
+    rel = relative6(x1q, xv, t, p["p_quad"], p["p_act"], p["p_veh"], p["p_deck"])
+    return ca.vertcat(phase, q["p1"], q["eta1"], deck.p2, deck.eta2, *rel,
+                      wrench_from_rotors(q["F"], p["p_quad"]), q["F"], d_F, d_M, aborts)
+
+
+def loop_outputs(l: int, x, w, t, pp):
+    """The :data:`OUTPUTS` of the loop state ``x`` (:func:`loop_state`) under ``w``."""
+    xs = loop_state(l).unpack(x)
+    xp, xg = xs["xp"], GUIDANCE_STATE.unpack(controller_state(l).unpack(xs["xc"])["xg"])
+    ps = PLANT_STATE.unpack(xp)
+    d = BODY_DISTURBANCE.unpack(_body_disturbance(xp, w, pp))
+    return _signals(ps["x1q"], ps["xv"], t, pp, d["d_F"], d["d_M"], xg["phase"], xg["aborts"])
+
+
+@functools.cache
+def landed_outputs_function() -> ca.Function:
+    """``landed_outputs(xv, t, pp, anchor, F, phase, aborts) -> (y, x1q)``: the quadrotor on
+    the deck.
+
+    The quadrotor is pinned at the pose ``anchor`` (:data:`ANCHOR`):
+    ``p1 = p2 + R_deck p_e``, ``R(eta1) = R_deck R_rel``, and its rotor
+    forces are ``F`` (idle, winding down). Its velocity, rates and
+    accelerations are symbolic time derivatives along the vehicle's motion
+    (eq. 4) and the deck's prescribed motion. ``d_F`` and ``d_M`` are then
+    what eq. (2) needs to hold: the deck's contact, wind and disturbance
+    together, ``d_F = R^T m (p1'' + g e_z) - F_total e_z + Kt V1`` and
+    ``d_M = I Omega' + Omega x I Omega - M + Kr Omega``. The ZYX yaw is
+    ``atan2``'s, in ``(-pi, pi]``: the caller unwraps it. ``x1q`` is the
+    quadrotor's state so pinned.
+    """
+    xv, t, pp = VEHICLE_STATE.sym(), ca.SX.sym("t"), PLANT_PARAMS.sym()
+    anchor, F = ANCHOR.sym(), ca.SX.sym("F", 4)
+    phase, aborts = ca.SX.sym("phase"), ca.SX.sym("aborts")
+    p, a = PLANT_PARAMS.unpack(pp), ANCHOR.unpack(anchor)
+    q = QUADROTOR.unpack(p["p_quad"])
+    xv_dot = vehicle_rhs(xv, p["p_veh"])
+
+    def d_dt(e):
+        return time_derivative(e, xv, xv_dot, t)
+
+    deck = deck_pose(xv, t, p["p_veh"], p["p_deck"])
+    p1 = deck.p2 + deck.R_deck @ a["p_e"]
+    R1 = deck.R_deck @ a["R_rel"]
+    eta1 = ca.vertcat(ca.atan2(R1[2, 1], R1[2, 2]),
+                      ca.atan2(-R1[2, 0], ca.sqrt(R1[2, 1] ** 2 + R1[2, 2] ** 2)),
+                      ca.atan2(R1[1, 0], R1[0, 0]))
+    p1_dot = d_dt(p1)
+    V1 = R1.T @ p1_dot                                                 # eq. 1
+    Omega1 = vee(R1.T @ d_dt(R1))
+    wrench = WRENCH.unpack(wrench_from_rotors(F, p["p_quad"]))
+    m1, I, g = q["m1"], q["I"], q["g"]
+    d_F = (R1.T @ (m1 * (d_dt(p1_dot) + ca.vertcat(0, 0, g)))
+           - ca.vertcat(0, 0, wrench["F_total"]) + q["Kt"] * V1)           # eq. 2, solved
+    d_M = (I * d_dt(Omega1) + ca.cross(Omega1, I * Omega1) - wrench["M"]
+           + q["Kr"] * Omega1)                                             # eq. 2, solved
+    x1q = ca.vertcat(p1, eta1, V1, Omega1, F)
+    y = _signals(x1q, xv, t, pp, d_F, d_M, phase, aborts)
+    return ca.Function("landed_outputs", [xv, t, pp, anchor, F, phase, aborts], [y, x1q],
+                       ["xv", "t", "pp", "anchor", "F", "phase", "aborts"], ["y", "x1q"])
+
+
+def _named(name, ins, outs, in_names, out_names):
+    return ca.Function(name, ins, outs, in_names, out_names)
+
+
+@functools.cache
+def landing_loop(l: int) -> LoopModel:
+    """The landing loop for ``l`` RBF nodes (see the module docstring).
+
+    Sampled-data only: the landing step runs at the control rate (``pc``'s
+    ``dt``) and its rotor commands are held; there is no continuous loop
+    (``rhs`` is None). ``p`` of ``outputs`` is the plant's ``pp``.
+    """
+    xc_lay, pc_lay, x_lay = controller_state(l), controller_params(l), loop_state(l)
+    xp, uh, w, t, pp = PLANT_STATE.sym(), COMMAND.sym(), DISTURBANCE.sym(), ca.SX.sym("t"), \
+        PLANT_PARAMS.sym()
+    plant = _named("plant", [xp, uh, w, t, pp],
+                   [landing_plant_rhs(xp, uh, _body_disturbance(xp, w, pp), t, pp)],
+                   ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
+
+    xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
+    cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
+    plant_p = PLANT_PARAMS.unpack(ps["pp"])
+    y = measurement_function()(xp, t, ps["pp"])
+    ms = MEASUREMENT.unpack(y)
+    xg_next, ref = guidance_step(cs["xg"], ms["p_e"], ms["v_e"], ms["v2E"][2], ps["dt"],
+                                 ps["p_guid"])
+    res = landing_law(l, y, ref, cs["mem"], ps["p_ctrl"], plant_p["p_quad"], plant_p["p_act"],
+                      ps["dt"])
+    rec = ca.vertcat(res["F_cmd"], res["eta_d"], REFERENCE.unpack(ref)["p_ref"], res["limits"])
+    controller = _named("controller", [xp, xc, pc, first, t],
+                        [ca.vertcat(xg_next, res["mem_next"]), res["F_cmd"], rec, res["tilt"]],
+                        ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
+
+    assemble = _named("assemble", [xp, xc], [ca.vertcat(xp, xc)], ["xp", "xc"], ["x"])
+    x = x_lay.sym()
+    output_fn = _named("outputs", [x, w, t, pp], [loop_outputs(l, x, w, t, pp)],
+                       ["x", "w", "t", "p"], ["y"])
+    s, pps = PLANT_STATE.unpack(xp), PLANT_PARAMS.unpack(pp)
+    event = _named("event", [xp, t, pp],
+                   [gear_gap(s["x1q"], s["xv"], t, pps["p_act"], pps["p_veh"], pps["p_deck"])],
+                   ["xp", "t", "pp"], ["g"])
+    return LoopModel("landing", x_lay, DISTURBANCE, PLANT_PARAMS, OUTPUTS, None, output_fn,
+                     PLANT_STATE, COMMAND, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
+                     controller, assemble, event=event)
+
