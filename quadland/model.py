@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from quadland.scenario import Scenario
+from quadland.scenario import Scenario, require_model
 from symbolic.backstepping import REFERENCE
 from symbolic.closed_loop import POSITION1, closed_loop_params, closed_loop_state
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
@@ -50,7 +50,12 @@ class ModelValues:
 
 
 def model_values(scenario: Scenario) -> ModelValues:
-    """Translate a validated scenario into the symbolic model's vectors."""
+    """Translate a validated scenario into the symbolic model's vectors.
+
+    The paper's 4-DOF loop only: a landing scenario is refused in one line
+    (its vectors are ``quadland.landing.landing_values``).
+    """
+    require_model(scenario, "paper", "the 4-DOF loop (simulation, codegen, margins)")
     q, v, c, r = (scenario.data[k] for k in ("quadrotor", "vehicle", "controller", "rbf"))
     l = r["nodes"]
     p_quad = QUADROTOR.pack(dict(

@@ -113,6 +113,8 @@ def simulation_plan(scenario: Scenario) -> SimulationPlan:
 def check_plan(scenario: Scenario) -> None:
     """Refuse, with one line naming the keys, a run over the memory or step budget."""
     plan = simulation_plan(scenario)
+    if scenario.model == "landing":
+        _check_motor_step(scenario)
     if plan.memory_bytes > MEMORY_BUDGET:
         raise ScenarioError(
             f"simulation.duration x simulation.output_rate_hz: {plan.rows:,} output rows need "
@@ -123,6 +125,27 @@ def check_plan(scenario: Scenario) -> None:
             f"simulation.duration: the run needs {plan.rk4_steps:.2g} RK4 steps (duration x "
             f"the fastest clock x simulation.rk_steps_per_interval), over the "
             f"{MAX_RK4_STEPS:.0e} limit; lower one of them")
+
+def _check_motor_step(scenario: Scenario) -> None:
+    """Refuse a landing whose fixed RK4 step cannot follow the motors' lag.
+
+    The motors are ``F' = (F_cmd - F) / tau_m``: RK4 is stable for
+    ``h / tau_m < 2.785``; half of that is required, with ``h`` the longest
+    step of the merged grid (at most the shortest clock period over
+    ``rk_steps_per_interval``).
+    """
+    sim, q = scenario.data["simulation"], scenario.data["quadrotor"]
+    rates = (sim["output_rate_hz"], scenario.data["disturbance"]["sample_rate_hz"],
+             scenario.data["controller"]["rate_hz"])
+    h = 1.0 / max(rates) / sim["rk_steps_per_interval"]
+    tau = q["motor_time_constant"]
+    if h / tau > _RK4_REAL_STABILITY / 2:
+        need = int(np.ceil(sim["rk_steps_per_interval"] * h / tau / (_RK4_REAL_STABILITY / 2)))
+        raise ScenarioError(
+            f"quadrotor.motor_time_constant: {tau:g} s is too fast for the RK4 step h = "
+            f"{h:.3g} s (h / tau_m must stay below {_RK4_REAL_STABILITY / 2:.3g}); raise "
+            f"simulation.rk_steps_per_interval to {need}")
+
 
 #: The columns of trajectory.csv, composed from the model's layouts.
 TRAJECTORY = Layout("trajectory", (

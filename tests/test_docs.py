@@ -1,8 +1,10 @@
 """The user documentation against the code: scenario keys, links, the README example.
 
 ``python tests/test_docs.py`` prints the key tables of ``docs/scenario.md`` as
-:func:`schema_rows` renders them from ``quadland.scenario.SCHEMA`` (with each
-key's ``doc`` as a placeholder meaning), for pasting after a schema change.
+:func:`schema_rows` renders them from ``quadland.scenario.SCHEMAS`` (with each
+key's ``doc`` as a placeholder meaning), for pasting after a schema change:
+the paper's schema first, then, under the page's ``# Landing scenarios``
+heading, the landing schema.
 """
 
 import importlib
@@ -11,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from quadland.scenario import SCHEMA, Field
+from quadland.scenario import SCHEMAS, Field
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -19,6 +21,9 @@ PAGES = (*sorted(DOCS.glob("*.md")), ROOT / "README.md")
 
 _KIND = {float: "number", int: "integer", bool: "boolean", str: "string"}
 _LINK_RE = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
+#: The heading of docs/scenario.md above which the paper's schema is
+#: documented, and below which the landing schema.
+LANDING_HEADING = "# Landing scenarios"
 #: Pages linked before they are written (by another change): a missing one is
 #: reported as an expected failure, not hidden; drop it here once it exists.
 PENDING: set = set()
@@ -26,9 +31,11 @@ _FENCE_RE = re.compile(r"^(```|~~~)")
 
 
 def type_text(field: Field) -> str:
-    """The table's "type" cell: ``number``, ``3 numbers``, ``integer``, ..."""
+    """The table's "type" cell: ``number``, ``3 numbers``, ``1 to 3 numbers``, ``integer``, ..."""
     if field.length is None:
         return _KIND[field.kind]
+    if field.min_length is not None and field.min_length != field.length:
+        return f"{field.min_length} to {field.length} {_KIND[field.kind]}s"
     return f"{field.length} {_KIND[field.kind]}s"
 
 
@@ -37,22 +44,22 @@ def range_cell(field: Field) -> str:
     return field.range_text() or "-"
 
 
-def schema_rows(section: str) -> dict[str, str]:
+def schema_rows(section: str, model: str = "paper") -> dict[str, str]:
     """Expected start of each key's row in docs/scenario.md: key, type, unit, range.
 
     The rest of the row (the meaning) is written by hand.
     """
     return {key: f"| `{key}` | {type_text(f)} | {f.unit} | {range_cell(f)} |"
-            for key, f in SCHEMA[section].items()}
+            for key, f in SCHEMAS[model][section].items()}
 
 
-def schema_tables() -> str:
-    """Every section's table, with each key's ``doc`` as its meaning."""
+def schema_tables(model: str = "paper") -> str:
+    """Every section's table of a model's schema, with each key's ``doc`` as its meaning."""
     out = []
-    for section, fields in SCHEMA.items():
+    for section, fields in SCHEMAS[model].items():
         out += [f"## [{section}]", "| key | type | unit | range | meaning |",
                 "| --- | --- | --- | --- | --- |"]
-        out += [f"{row} {fields[key].doc} |" for key, row in schema_rows(section).items()]
+        out += [f"{row} {fields[key].doc} |" for key, row in schema_rows(section, model).items()]
         out.append("")
     return "\n".join(out)
 
@@ -85,19 +92,31 @@ def _anchors(page: Path) -> set[str]:
             if line.startswith("#")}
 
 
-def test_scenario_md_lists_every_key_with_its_unit_and_range():
-    sections = _sections((DOCS / "scenario.md").read_text())
-    assert set(sections) == set(SCHEMA), "docs/scenario.md: one '## [section]' per section"
-    for section in SCHEMA:
+def _model_parts() -> dict[str, str]:
+    """docs/scenario.md's text about each model's schema."""
+    text = (DOCS / "scenario.md").read_text()
+    head, sep, tail = text.partition(f"\n{LANDING_HEADING}")
+    assert sep, f"docs/scenario.md: no '{LANDING_HEADING}' heading"
+    return {"paper": head, "landing": tail}
+
+
+@pytest.mark.parametrize("model", sorted(SCHEMAS))
+def test_scenario_md_lists_every_key_with_its_unit_and_range(model):
+    schema = SCHEMAS[model]
+    sections = _sections(_model_parts()[model])
+    assert set(sections) == set(schema), (
+        f"docs/scenario.md ({model}): one '## [section]' per section")
+    for section in schema:
         rows = [ln.strip() for ln in sections[section].splitlines() if ln.startswith("| `")]
-        for expected in schema_rows(section).values():
+        for expected in schema_rows(section, model).values():
             assert any(r.startswith(expected) for r in rows), (
-                f"docs/scenario.md [{section}]: no row starting {expected!r} "
+                f"docs/scenario.md ({model}) [{section}]: no row starting {expected!r} "
                 "(python tests/test_docs.py prints the tables)")
         documented = {r.split("`")[1] for r in rows}
-        assert documented <= set(SCHEMA[section]), (
-            f"docs/scenario.md [{section}]: {sorted(documented - set(SCHEMA[section]))} "
-            "are not keys of quadland.scenario.SCHEMA")
+        assert documented <= set(schema[section]), (
+            f"docs/scenario.md ({model}) [{section}]: "
+            f"{sorted(documented - set(schema[section]))} are not keys of "
+            f"quadland.scenario.SCHEMAS[{model!r}]")
 
 
 def trajectory_rows() -> list[str]:
@@ -192,3 +211,5 @@ def test_model_md_cites_functions_that_exist():
 
 if __name__ == "__main__":
     print(schema_tables())
+    print(LANDING_HEADING, "\n")
+    print(schema_tables("landing"))

@@ -1,0 +1,322 @@
+"""Landing scenarios flown end to end, against checks independent of the loop's code.
+
+The shipped scenarios must land within their limits at their default seed,
+at every seed 0-19 and, for ``highway``, at 80 km/h. The trajectory is
+checked from its CSV columns alone: Newton's law by finite differences of
+the logged positions (the thrust, attitude and external force as logged, a
+rotation multiplied out by hand); the touchdown figures by hand at the
+touchdown row; the ride on the deck as a rigid pose in the deck frame with
+the rotors winding down by the motor lag; the wind as the drag of the air
+velocity. The compiled simulator and CasADi's virtual machine fly the same
+landing. Each landing takes about 0.1 s compiled.
+"""
+
+import csv
+import io
+import json
+import warnings
+
+import numpy as np
+import pytest
+from reference import rotation
+
+import quadland
+from quadland import compiled
+from quadland.cli import main
+from quadland.exceptions import ScenarioError
+from quadland.metrics import touchdown_report
+from quadland.scenario import LANDING_SCHEMA, load_scenario
+from symbolic.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
+
+SCENARIOS = ("highway", "turning", "ship")
+#: trajectory.csv's columns, as the issue names them.
+COLUMNS = ["t", "phase", "x1", "y1", "z1", "phi1", "theta1", "psi1",
+           "x2", "y2", "z2", "phi2", "theta2", "psi2", "x_e", "y_e", "z_e",
+           "F_total", "M_x", "M_y", "M_z", "F_1", "F_2", "F_3", "F_4", "d_Fx", "d_Fy", "d_Fz"]
+E_Z = np.array([0.0, 0.0, 1.0])
+
+
+def _fly(name, *overrides):
+    return quadland.simulate(load_scenario(name, list(overrides)))
+
+
+def _csv(result) -> dict:
+    """The trajectory as trajectory.csv holds it: each column by name, from its text."""
+    rows = list(csv.reader(io.StringIO(result.to_csv())))
+    data = np.array(rows[1:], dtype=float)
+    return {name: data[:, i] for i, name in enumerate(rows[0])}
+
+
+def _speed(kmh):
+    u2 = kmh / 3.6
+    return [f"initial.velocity2=[{u2!r}, 0.0]", f"vehicle.tau=[{150.0 * u2!r}, 0.0, 0.0]"]
+
+
+def _first_rows(phase):
+    """Each phase's number in the order the phases are first entered."""
+    _, first = np.unique(phase, return_index=True)
+    return [int(phase[k]) for k in sorted(first)]
+
+
+# ---------------------------------------------------------------- the scenarios land
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_lands_within_the_limits_at_the_default_seed(name):
+    res = _fly(name)
+    rep = touchdown_report(res)
+    assert rep.touchdown and rep.success, rep
+    assert rep.aborts == 0
+    assert _first_rows(res["phase"]) == [APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED]
+    assert np.all(np.diff(res["phase"]) >= 0)
+    # the run ends settle_time after touchdown, the last row landed, the ride in between
+    settle = res.scenario["landing.settle_time"]
+    assert res["t"][-1] == pytest.approx(rep.time + settle, abs=1e-12)
+    riding = (res["t"] >= rep.time) & (res["t"] < rep.time + settle - 1e-9)
+    assert np.all(res["phase"][riding] == TOUCHDOWN) and res["phase"][-1] == LANDED
+    q = res.scenario.data["quadrotor"]
+    F_max = q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
+    rotors = np.vstack([res[f"F_{i}"] for i in range(1, 5)])
+    assert rotors.min() >= 0 and rotors.max() <= F_max * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("name,seed", [(n, s) for n in SCENARIOS for s in range(20)])
+def test_lands_within_the_limits_at_every_seed(name, seed):
+    rep = touchdown_report(_fly(name, f"simulation.seed={seed}"))
+    assert rep.touchdown and rep.success, rep
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_highway_lands_at_80_kmh(seed):
+    rep = touchdown_report(_fly("highway", f"simulation.seed={seed}", *_speed(80)))
+    assert rep.touchdown and rep.success, rep
+
+
+@pytest.mark.parametrize("kmh", [30, 60, 70])
+def test_highway_lands_at_other_speeds(kmh):
+    rep = touchdown_report(_fly("highway", *_speed(kmh)))
+    assert rep.touchdown and rep.success, rep
+
+
+# ---------------------------------------------------------------- physics from the log
+
+@pytest.fixture(scope="module")
+def fine():
+    """highway logged at 1 kHz, its CSV columns and the scenario."""
+    res = _fly("highway", "simulation.output_rate_hz=1000")
+    return _csv(res), res.scenario
+
+
+def _newton_residual(c, sc, k):
+    """m a - (R (F_total e_z + d_F) - m g e_z - R Kt (R^T v)) at rows k, N, by central
+    differences of the logged positions."""
+    q = sc.data["quadrotor"]
+    m, g, Kt = q["mass"], q["gravity"], np.asarray(q["drag_translational"])
+    t = c["t"]
+    p = np.column_stack([c["x1"], c["y1"], c["z1"]])
+    h = (t[k + 1] - t[k])[:, None]
+    a = (p[k + 1] - 2 * p[k] + p[k - 1]) / h**2
+    v = (p[k + 1] - p[k - 1]) / (2 * h)
+    out = []
+    for j, kk in enumerate(k):
+        R = rotation((c["phi1"][kk], c["theta1"][kk], c["psi1"][kk]))
+        d_F = np.array([c["d_Fx"][kk], c["d_Fy"][kk], c["d_Fz"][kk]])
+        force = (R @ (c["F_total"][kk] * E_Z + d_F) - m * g * E_Z
+                 - R @ (Kt * (R.T @ v[j])))
+        out.append(m * a[j] - force)
+    return np.array(out)
+
+
+def _smooth_rows(c, t_td, rate_hz):
+    """Rows whose neighbours are 1 ms away on either side, away from the touchdown's
+    impact, and with no switch at the row: of the held disturbance (every 10 ms; the
+    acceleration jumps) or of the held rotor commands (at the control rate; the
+    motors' lag makes the thrust's rate jump there, which a central second
+    difference across it turns into an error of about m h |jump| / 4)."""
+    t = c["t"]
+    k = np.arange(1, len(t) - 1)
+    even = np.isclose(t[k + 1] - t[k], 1e-3) & np.isclose(t[k] - t[k - 1], 1e-3)
+    switch = np.zeros(len(k), bool)
+    for period in (0.01, 1.0 / rate_hz):
+        switch |= np.isclose(np.round(t[k] / period) * period, t[k], atol=1e-9)
+    away = (t[k + 1] < t_td - 1e-9) | (t[k - 1] > t_td + 1e-9)
+    return k[even & ~switch & away]
+
+
+def test_plant_obeys_newton_from_the_logged_thrust_attitude_and_forces(fine):
+    c, sc = fine
+    t_td = c["t"][np.argmax(c["phase"] == TOUCHDOWN)]
+    k = _smooth_rows(c, t_td, sc["controller.rate_hz"])
+    before, after = k[c["t"][k] < t_td], k[c["t"][k] > t_td]
+    assert len(before) > 5000 and len(after) > 1000
+    r = _newton_residual(c, sc, before)
+    assert np.max(np.abs(r)) < 5e-3                       # N, of forces up to 20 N
+    # on the deck, d_F holds the contact force too: Newton's law still holds
+    assert np.max(np.abs(_newton_residual(c, sc, after))) < 5e-3
+
+
+def test_touchdown_figures_by_hand_at_the_touchdown_row(fine):
+    c, sc = fine
+    k = int(np.argmax(c["phase"] == TOUCHDOWN))
+    rep = touchdown_report(quadland.simulate(sc))
+    assert rep.time == pytest.approx(c["t"][k], abs=1e-9)
+    assert c["t"][k] - c["t"][k - 1] <= 1e-3 + 1e-12     # the touchdown row is its own
+    p_e = np.array([c["x_e"], c["y_e"], c["z_e"]])
+    v_e = (p_e[:, k] - p_e[:, k - 1]) / (c["t"][k] - c["t"][k - 1])
+    assert rep.offset == pytest.approx(np.hypot(*p_e[:2, k]), abs=1e-9)
+    assert rep.sink_rate == pytest.approx(-v_e[2], abs=5e-3)
+    assert rep.relative_speed == pytest.approx(np.hypot(*v_e[:2]), abs=5e-3)
+    R1 = rotation((c["phi1"][k], c["theta1"][k], c["psi1"][k]))
+    R2 = rotation((c["phi2"][k], c["theta2"][k], c["psi2"][k]))
+    tilt = np.degrees(np.arccos(R1[:, 2] @ R2[:, 2]))
+    assert rep.tilt_deg == pytest.approx(tilt, abs=1e-6)
+    limits = sc.data["landing"]
+    assert rep.success == (rep.sink_rate <= limits["max_sink_rate"]
+                           and rep.offset <= limits["max_offset"]
+                           and rep.tilt_deg <= limits["max_tilt_deg"]
+                           and rep.relative_speed <= limits["max_relative_speed"])
+    # the touchdown is located within the step: the gear is on the deck plane
+    p1 = np.array([c["x1"][k], c["y1"][k], c["z1"][k]])
+    p2 = np.array([c["x2"][k], c["y2"][k], c["z2"][k]])
+    gear = p1 - sc["quadrotor.gear_height"] * R1[:, 2]
+    assert R2[:, 2] @ (gear - p2) == pytest.approx(0, abs=1e-9)
+
+
+def test_on_the_deck_the_pose_is_rigid_and_the_rotors_wind_down(fine):
+    c, sc = fine
+    k = int(np.argmax(c["phase"] == TOUCHDOWN))
+    t = c["t"]
+    p_e = np.array([c["x_e"], c["y_e"], c["z_e"]])
+    np.testing.assert_allclose(p_e[:, k:], np.broadcast_to(p_e[:, [k]], p_e[:, k:].shape),
+                               atol=1e-9)
+    R_rel = [rotation((c["phi2"][j], c["theta2"][j], c["psi2"][j])).T
+             @ rotation((c["phi1"][j], c["theta1"][j], c["psi1"][j])) for j in range(k, len(t))]
+    np.testing.assert_allclose(R_rel, np.broadcast_to(R_rel[0], np.shape(R_rel)), atol=1e-9)
+    tau = sc["quadrotor.motor_time_constant"]
+    for i in range(1, 5):
+        F = c[f"F_{i}"]
+        np.testing.assert_allclose(F[k:], F[k] * np.exp(-(t[k:] - t[k]) / tau),
+                                   rtol=1e-9, atol=1e-300)
+
+
+def test_wind_acts_as_the_drag_of_the_air_velocity():
+    """With a steady wind alone, the logged external force is ``Kt R^T v_wind``."""
+    wind = np.array([3.0, -4.0, 1.0])
+    res = _fly("highway", "wind.turbulence_w20=0.0", "wind.gust_amplitude=0.0",
+               f"wind.mean={wind.tolist()}", "disturbance.force_bias=[0.0, 0.0, 0.0]",
+               "disturbance.force_amplitude=0.0", "disturbance.noise=false")
+    c, Kt = _csv(res), np.asarray(res.scenario["quadrotor.drag_translational"])
+    k = np.flatnonzero(c["phase"] < TOUCHDOWN)
+    for j in k[::50]:
+        R = rotation((c["phi1"][j], c["theta1"][j], c["psi1"][j]))
+        d_F = [c["d_Fx"][j], c["d_Fy"][j], c["d_Fz"][j]]
+        np.testing.assert_allclose(d_F, Kt * (R.T @ wind), atol=1e-9)
+
+
+def test_compiled_and_virtual_machine_fly_the_same_landing(monkeypatch):
+    ref = _fly("highway")
+    monkeypatch.setattr(compiled, "have_compiler", lambda: False)
+    compiled.compiled_loop.cache_clear()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", compiled.QuadlandWarning)
+            vm = _fly("highway")
+    finally:
+        monkeypatch.undo()
+        compiled.compiled_loop.cache_clear()
+    assert len(vm["t"]) == len(ref["t"])
+    for name in COLUMNS:
+        np.testing.assert_allclose(vm[name], ref[name], rtol=1e-9, atol=1e-9, err_msg=name)
+
+
+# ---------------------------------------------------------------- outputs and failures
+
+def test_simulate_writes_the_landing_columns_and_summary(tmp_path):
+    out = tmp_path / "run"
+    assert main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out)]) == 0
+    with open(out / "trajectory.csv") as fh:
+        header = next(csv.reader(fh))
+    assert header == COLUMNS
+    side = json.loads((out / "columns.json").read_text())["columns"]
+    assert [c["name"] for c in side] == COLUMNS and all(c["unit"] for c in side)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "ok"
+    assert set(summary["landing"]) == {"touchdown", "time", "sink_rate", "offset",
+                                       "relative_speed", "tilt_deg", "aborts", "success",
+                                       "limits"}
+    assert summary["landing"]["limits"] == {"max_sink_rate": 0.5, "max_offset": 0.2,
+                                            "max_tilt_deg": 10.0, "max_relative_speed": 0.5}
+    assert summary["landing"]["success"] is True
+    again = load_scenario(out / "scenario.toml")
+    assert again.model == "landing" and again.data == load_scenario("highway").data
+
+
+def test_failed_landing_exits_3_with_the_partial_trajectory(tmp_path, capsys):
+    out = tmp_path / "run"
+    status = main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out),
+                   "--set", "initial.omega1_deg_s=[0.0, 3000.0, 0.0]"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 3 and len(err) == 1 and "singular attitude" in err[0]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["landing"]["touchdown"] is False
+    with open(out / "trajectory.csv") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == COLUMNS and len(rows) > 1
+
+
+def test_a_motor_lag_too_fast_for_the_step_is_refused_before_any_work(tmp_path):
+    with pytest.raises(ScenarioError, match="rk_steps_per_interval to 3"):
+        _fly("highway", "quadrotor.motor_time_constant=0.001")
+    out = tmp_path / "run"
+    assert main(["simulate", "--scenario", "highway", "--out", str(out), "--set",
+                 "quadrotor.motor_time_constant=0.001"]) == 2
+    assert not out.exists()
+
+
+# ---------------------------------------------------------------- the landing schema
+
+def test_the_landing_schema_has_the_keys_the_issue_names():
+    for dotted in ("vehicle.tau", "initial.position1", "initial.z1", "initial.velocity2",
+                   "deck.heave_amplitude", "deck.heave_frequency", "deck.roll_amplitude_deg",
+                   "deck.roll_frequency", "deck.pitch_amplitude_deg", "deck.pitch_frequency",
+                   "landing.max_sink_rate", "landing.max_offset", "landing.max_tilt_deg",
+                   "landing.max_relative_speed", "landing.hover_height", "landing.dwell_time",
+                   "landing.touchdown_speed", "landing.settle_time", "simulation.seed",
+                   "disturbance.noise", "quadrotor.thrust_to_weight",
+                   "quadrotor.motor_time_constant", "quadrotor.gear_height",
+                   "controller.rate_hz"):
+        section, key = dotted.split(".")
+        assert key in LANDING_SCHEMA[section], dotted
+    defaults = {"max_sink_rate": 0.5, "max_offset": 0.2, "max_tilt_deg": 10.0,
+                "max_relative_speed": 0.5}
+    for name in SCENARIOS:
+        sc = load_scenario(name)
+        assert sc.model == "landing"
+        assert {k: sc.data["landing"][k] for k in defaults} == defaults
+
+
+def test_ship_deck_is_sea_state_4():
+    d = load_scenario("ship").data["deck"]
+    assert (d["heave_amplitude"], d["heave_frequency"]) == ((0.68,), (0.349,))
+    assert (d["roll_amplitude_deg"], d["roll_frequency"]) == ((0.62,), (0.286,))
+    assert (d["pitch_amplitude_deg"], d["pitch_frequency"]) == ((0.52,), (0.524,))
+
+
+def test_the_paper_scenario_keeps_its_schema():
+    sc = load_scenario("paper")
+    assert sc.model == "paper" and "model" not in sc.data["scenario"]
+    assert load_scenario("paper", ['scenario.model="paper"']).data == sc.data
+    with pytest.raises(ScenarioError, match=r"controller.k1p.*scenario.model = \"landing\""):
+        load_scenario("paper", ["controller.k1p=[1.0, 1.0, 1.0]"])
+    with pytest.raises(ScenarioError, match="scenario.model: must be one of paper, landing"):
+        load_scenario("paper", ["scenario.model=plane"])
+
+
+def test_deck_motions_take_one_to_three_sinusoids_of_matching_lengths():
+    sc = load_scenario("ship", ["deck.heave_amplitude=[0.5, 0.2, 0.1]",
+                                "deck.heave_frequency=[0.3, 0.6, 0.9]",
+                                "deck.heave_phase_deg=[0.0, 10.0, 20.0]"])
+    assert sc["deck.heave_amplitude"] == (0.5, 0.2, 0.1)
+    with pytest.raises(ScenarioError, match="deck.heave_frequency: must have as many"):
+        load_scenario("ship", ["deck.heave_amplitude=[0.5, 0.2]"])
+    with pytest.raises(ScenarioError, match="expected a list of 1 to 3 numbers"):
+        load_scenario("ship", ["deck.roll_frequency=[0.1, 0.2, 0.3, 0.4]"])
