@@ -25,7 +25,7 @@ __all__ = ["main", "build_parser"]
 
 #: Flag of each library parameter that a command passes on from one.
 _FLAGS = {"at": "--at", "out": "--out", "gain_margin_db": "--gain-margin-db",
-          "phase_margin_deg": "--phase-margin-deg"}
+          "phase_margin_deg": "--phase-margin-deg", "animate": "--animate"}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -54,6 +54,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="output folder (default: a new folder named after the scenario "
                           "and the time)")
     sim.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    sim.add_argument("--animate", action="store_true",
+                     help="also write landing.gif, an animation of the landing (landing "
+                          "scenarios)")
     sim.set_defaults(handler=_run_simulate)
 
     cg = sub.add_parser("codegen", help="regenerate the C code of generated/",
@@ -89,7 +92,8 @@ def build_parser() -> argparse.ArgumentParser:
 def _run_simulate(args) -> int:
     from quadland.run import run_simulation
 
-    out = run_simulation(args.scenario, args.overrides, args.out, plots=not args.no_plots)
+    out = run_simulation(args.scenario, args.overrides, args.out, plots=not args.no_plots,
+                         animate=args.animate)
     print(f"quadland: wrote {out}")
     return 0
 

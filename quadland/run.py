@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import platform
+import tempfile
 from pathlib import Path
 
 import casadi as ca
 
-from quadland.exceptions import SimulationError
+from quadland.exceptions import ScenarioError, SimulationError
 from quadland.metrics import landing_summary, summarize
 from quadland.output import figure_png, output_folder, strict_json
 from quadland.scenario import Scenario, load_scenario
@@ -52,7 +53,7 @@ def provenance(scenario: Scenario) -> dict:
 
 
 def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
-                   out: Path | None = None, plots: bool = True) -> Path:
+                   out: Path | None = None, plots: bool = True, animate: bool = False) -> Path:
     """Simulate a scenario and write its outputs into a folder, whole.
 
     Writes ``trajectory.csv``, ``columns.json`` (each column's unit),
@@ -75,6 +76,9 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
         (:func:`quadland.output.output_folder`).
     plots : bool
         Also write the figures.
+    animate : bool
+        Also write ``landing.gif``, an animation of the landing
+        (``quadland.plots.landing.landing_animation``); landing scenarios only.
 
     Returns
     -------
@@ -86,20 +90,28 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
     SimulationError
         The flight failed. The trajectory up to the failure is written
         first, with ``"status": "failed"`` in ``summary.json``.
+    ScenarioError
+        ``animate`` for a scenario that is not a landing's, or without
+        ``quadland.plots.landing``; before any work.
     """
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario, overrides)
     simulation_plan_check(sc)
+    if animate and (sc.model != "landing" or _landing_plots() is None):
+        raise ScenarioError("animate: draws a landing (scenario.model = \"landing\") with "
+                            "quadland.plots.landing; this scenario's model is "
+                            f"\"{sc.model}\"")
     with output_folder(out, sc.name) as folder:
         try:
             result = simulate(sc)
         except SimulationError as exc:
             if exc.partial is not None:
-                folder.write(_render(exc.partial, plots, failure=str(exc)))
+                folder.write(_render(exc.partial, plots, animate, failure=str(exc)))
             raise
-        return folder.write(_render(result, plots))
+        return folder.write(_render(result, plots, animate))
 
 
-def _render(result: SimulationResult, plots: bool, failure: str | None = None) -> dict:
+def _render(result: SimulationResult, plots: bool, animate: bool = False,
+            failure: str | None = None) -> dict:
     status = {"status": "failed", "failure": failure} if failure else {"status": "ok"}
     landing = result.scenario.model == "landing"
     figures = landing_summary(result) if landing else summarize(result)
@@ -108,21 +120,27 @@ def _render(result: SimulationResult, plots: bool, failure: str | None = None) -
              "columns.json": strict_json(columns_sidecar(result.layout)),
              "summary.json": strict_json(summary),
              "scenario.toml": result.scenario.to_toml().encode("utf-8")}
+    drawing = _landing_plots() if landing else None
     if plots and len(result["t"]) > 1:
-        draw = _landing_figures() if landing else None
-        if not landing:
+        if landing:
+            draw = None if drawing is None else drawing.landing_figures
+        else:
             from quadland.plots import simulation_figures as draw
         if draw is not None:
             files.update({name: figure_png(fig) for name, fig in draw(result).items()})
+    if animate and drawing is not None and len(result["t"]) > 1:
+        with tempfile.TemporaryDirectory() as tmp:
+            files["landing.gif"] = drawing.landing_animation(
+                result, Path(tmp) / "landing.gif").read_bytes()
     return files
 
 
-def _landing_figures():
-    """``quadland.plots.landing.landing_figures`` where that module exists, else None."""
+def _landing_plots():
+    """The module ``quadland.plots.landing`` where it exists, else None."""
     from importlib.util import find_spec
 
     if find_spec("quadland.plots.landing") is None:
         return None
-    from quadland.plots.landing import landing_figures
+    import quadland.plots.landing
 
-    return landing_figures
+    return quadland.plots.landing

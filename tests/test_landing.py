@@ -250,6 +250,19 @@ def test_simulate_writes_the_landing_columns_and_summary(tmp_path):
     assert again.model == "landing" and again.data == load_scenario("highway").data
 
 
+def test_animate_writes_the_landing_as_a_gif_and_refuses_the_paper_loop(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["simulate", "--scenario", "highway", "--no-plots", "--animate", "--out",
+                 str(out), "--set", "simulation.duration=1.0"]) == 0
+    assert (out / "landing.gif").read_bytes()[:4] == b"GIF8"
+    assert not list(out.glob("*.png"))
+    capsys.readouterr()
+    assert main(["simulate", "--animate", "--out", str(tmp_path / "paper")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("quadland: error: --animate:")
+    assert not (tmp_path / "paper").exists()
+
+
 def test_failed_landing_exits_3_with_the_partial_trajectory(tmp_path, capsys):
     out = tmp_path / "run"
     status = main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out),
