@@ -97,6 +97,21 @@ def test_highway_lands_at_other_speeds(kmh):
     assert rep.touchdown and rep.success, rep
 
 
+def test_a_rising_deck_aborts_the_descent_and_a_later_try_lands():
+    """The ship's deck rises through the first descent (heave phase 180 deg): faster than
+    max_deck_rise, the descent is aborted back to the hover height, then tried again."""
+    res = _fly("ship", "deck.heave_phase_deg=[180.0]", "landing.max_deck_rise=0.1",
+               "simulation.duration=60.0")
+    rep = touchdown_report(res)
+    assert rep.success and rep.aborts >= 1
+    phase = res["phase"]
+    first_descent = int(np.argmax(phase == DESCEND))
+    back = first_descent + int(np.argmax(phase[first_descent:] == ALIGN))
+    assert back > first_descent and phase[back - 1] == DESCEND
+    assert res["z_ref"][back + 1] == pytest.approx(res.scenario["landing.hover_height"])
+    assert np.all(np.diff(res["aborts"]) >= 0) and res["aborts"][back] >= 1
+
+
 # ---------------------------------------------------------------- physics from the log
 
 @pytest.fixture(scope="module")
