@@ -18,6 +18,7 @@ import ctypes
 import datetime
 import errno
 import fcntl
+import glob
 import io
 import json
 import math
@@ -54,7 +55,7 @@ class OutputFolder:
     """
 
     def __init__(self, path: str | os.PathLike):
-        self.path = Path(path).absolute()
+        self.path = Path(os.path.normpath(Path(path).absolute()))
         self._lock_fd: int | None = None
 
     def __repr__(self) -> str:
@@ -67,30 +68,53 @@ class OutputFolder:
     def _lock_path(self) -> Path:
         return self.path.parent / f".{self.path.name}.lock"
 
+    def _check(self) -> None:
+        path = self.path
+        if path.is_symlink():
+            raise OutputError(f"out: {path} is a symbolic link; give the folder itself")
+        if path.exists() and not path.is_dir():
+            raise OutputError(f"out: {path} exists and is not a folder")
+        cwd = Path.cwd().resolve()
+        if path.exists() and (cwd == path.resolve() or path.resolve() in cwd.parents):
+            raise OutputError(f"out: {path} is the current folder or holds it; choose "
+                              "another (a set replaces its folder whole)")
+        if len(os.fsencode(path.name)) > _NAME_MAX - _TEMP_SUFFIX:
+            raise OutputError(f"out: the folder name {path.name[:40]}... is too long")
+        if path.is_dir() and not _replaceable(path):
+            raise OutputError(f"out: {path} holds files that are not a quadland output; "
+                              "choose a new or empty folder")
+
     def claim(self) -> OutputFolder:
         """Check the target and lock it against other runs; nothing is written yet."""
         if self._lock_fd is not None:
             return self
+        self._check()
         path = self.path
-        if path.exists() and not path.is_dir():
-            raise OutputError(f"out: {path} exists and is not a folder")
-        if path.is_dir() and not _replaceable(path):
-            raise OutputError(f"out: {path} holds files that are not a quadland output; "
-                              "choose a new or empty folder")
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd = os.open(self._lock_path, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as exc:
-            raise OutputError(f"out: cannot write to {path.parent}: "
-                              f"{exc.strerror or exc}") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
+        for _ in range(8):
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                fd = os.open(self._lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError as exc:
+                raise OutputError(f"out: cannot write to {path.parent}: "
+                                  f"{exc.strerror or exc}") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                os.close(fd)
+                raise OutputError(f"out: {path} is in use by another quadland run") from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self._lock_path).st_ino
+            except OSError:
+                same = False
+            if same:                 # not a lock file that its holder unlinked meanwhile
+                break
             os.close(fd)
-            raise OutputError(f"out: {path} is in use by another quadland run") from None
+        else:
+            raise OutputError(f"out: {path} is in use by another quadland run")
         self._lock_fd = fd
-        for stale in path.parent.glob(f".{path.name}.tmp-*"):
-            shutil.rmtree(stale, ignore_errors=True)      # left by a killed run
+        stem = glob.escape(f".{path.name}")
+        for stale in (*path.parent.glob(f"{stem}.tmp-*"), *path.parent.glob(f"{stem}.old-*")):
+            _remove(stale)                                   # left by a killed run
         return self
 
     def release(self) -> None:
@@ -111,6 +135,10 @@ class OutputFolder:
 
     def write(self, files: Mapping[str, bytes]) -> Path:
         """Write ``files`` as the folder's whole content, replacing any earlier set.
+
+        An earlier set is replaced only if the folder still holds nothing but
+        the files its manifest (:data:`MARKER`) names: files that appeared in
+        it meanwhile make the write fail, and they stay.
 
         Parameters
         ----------
@@ -133,28 +161,54 @@ class OutputFolder:
             umask = os.umask(0)
             os.umask(umask)
             os.chmod(tmp, 0o777 & ~umask)
-            for name, data in {**files, MARKER: b"quadland output folder\n"}.items():
+            manifest = json.dumps({"quadland_output": sorted(files)}, indent=1) + "\n"
+            for name, data in {**files, MARKER: manifest.encode("utf-8")}.items():
                 _write_synced(tmp / name, data, 0o666 & ~umask)
             _fsync_dir(tmp)
+            if self.path.exists() and not _replaceable(self.path):
+                raise OutputError(f"out: {self.path} gained files that are not a quadland "
+                                  "output during the run; nothing was replaced")
             _swap_in(tmp, self.path)
             tmp = None
             _fsync_dir(self.path.parent)
         except OSError as exc:
+            if isinstance(exc, OutputError):
+                raise
             raise OutputError(f"out: cannot write {self.path}: {exc.strerror or exc}") from None
         finally:
             if tmp is not None:
-                shutil.rmtree(tmp, ignore_errors=True)
+                _remove(tmp)
             if claimed_here:
                 self.release()
         return self.path
 
 
-def _replaceable(path: Path) -> bool:
-    """An empty folder or an earlier quadland output."""
+#: Longest file name most file systems take, and what the temporary names add.
+_NAME_MAX, _TEMP_SUFFIX = 255, 24
+
+
+def _remove(path: Path) -> None:
+    """Remove a file, a symbolic link or a folder, quietly."""
     try:
-        return (path / MARKER).is_file() or not any(path.iterdir())
+        if path.is_symlink() or not path.is_dir():
+            path.unlink(missing_ok=True)
+        else:
+            shutil.rmtree(path, ignore_errors=True)
     except OSError:
+        pass
+
+
+def _replaceable(path: Path) -> bool:
+    """An empty folder, or one that holds exactly the files its manifest names."""
+    try:
+        entries = list(path.iterdir())
+        if not entries:
+            return True
+        listed = set(json.loads((path / MARKER).read_text())["quadland_output"])
+    except (OSError, ValueError, KeyError, TypeError):
         return False
+    return all((e.name == MARKER or e.name in listed) and e.is_file() and not e.is_symlink()
+               for e in entries)
 
 
 def _write_synced(path: Path, data: bytes, mode: int) -> None:
@@ -186,7 +240,7 @@ def _swap_in(new: Path, target: Path) -> None:
     if renameat2 is not None:
         if renameat2(_AT_FDCWD, os.fsencode(new), _AT_FDCWD, os.fsencode(target),
                      _RENAME_EXCHANGE) == 0:
-            shutil.rmtree(new, ignore_errors=True)      # now holds the old set
+            _remove(new)                                 # now holds the old set
             return
         if ctypes.get_errno() not in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
             raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
@@ -195,7 +249,7 @@ def _swap_in(new: Path, target: Path) -> None:
     old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
     os.rename(target, old / "set")
     os.rename(new, target)
-    shutil.rmtree(old, ignore_errors=True)
+    _remove(old)
 
 
 def output_folder(out: str | os.PathLike | None, name: str, kind: str = "") -> OutputFolder:
@@ -215,6 +269,8 @@ def output_folder(out: str | os.PathLike | None, name: str, kind: str = "") -> O
     Returns
     -------
     OutputFolder
+        Claimed already when the name is the default one (so that two runs
+        started in the same second take different names).
 
     Raises
     ------
@@ -229,11 +285,16 @@ def output_folder(out: str | os.PathLike | None, name: str, kind: str = "") -> O
         return OutputFolder(path)
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     stem = "-".join(s for s in (name, kind, stamp) if s)
-    path, n = Path.cwd() / stem, 1
-    while path.exists():
-        n += 1
-        path = Path.cwd() / f"{stem}-{n}"
-    return OutputFolder(path)
+    for n in range(1, 1000):
+        path = Path.cwd() / (stem if n == 1 else f"{stem}-{n}")
+        if path.exists():
+            continue
+        folder = OutputFolder(path)
+        try:
+            return folder.claim()              # claimed now: a run started in the same
+        except OutputError:                    # second takes the next name
+            continue
+    raise OutputError(f"out: no free folder name {stem}-N in {Path.cwd()}")
 
 
 def write_files(folder: str | os.PathLike | OutputFolder, files: Mapping[str, bytes]) -> Path:

@@ -111,3 +111,58 @@ def test_figure_png_closes_a_pyplot_figure():
     ax.plot([0, 1])
     figure_png(fig)
     assert fig.number not in plt.get_fignums()
+
+
+def test_user_files_beside_an_earlier_set_are_never_deleted(tmp_path):
+    folder = tmp_path / "r2"
+    write_files(folder, {"x.json": b"{}"})
+    (folder / "notes.txt").write_text("mine")
+    (folder / "analysis").mkdir()
+    with pytest.raises(QuadlandError, match="not a quadland output"):
+        write_files(folder, {"x.json": b"[]"})
+    assert (folder / "notes.txt").read_text() == "mine" and (folder / "analysis").is_dir()
+
+
+def test_a_nested_output_is_not_replaced_by_its_parent(tmp_path):
+    write_files(tmp_path / "r2" / "inner", {"a.txt": b"1"})
+    with pytest.raises(QuadlandError, match="not a quadland output"):
+        write_files(tmp_path / "r2", {"b.txt": b"2"})
+    assert (tmp_path / "r2" / "inner" / "a.txt").read_bytes() == b"1"
+
+
+def test_files_that_appear_during_the_run_stay(tmp_path):
+    folder = OutputFolder(tmp_path / "e2")
+    with folder:
+        (tmp_path / "e2").mkdir()
+        (tmp_path / "e2" / "thesis.tex").write_text("written meanwhile")
+        with pytest.raises(QuadlandError, match="gained files .* nothing was replaced"):
+            folder.write({"x.json": b"{}"})
+    assert (tmp_path / "e2" / "thesis.tex").read_text() == "written meanwhile"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["e2"]
+
+
+def test_symlinks_and_the_current_folder_are_refused(tmp_path, monkeypatch):
+    write_files(tmp_path / "real", {"x.json": b"{}"})
+    (tmp_path / "lnk").symlink_to(tmp_path / "real")
+    with pytest.raises(QuadlandError, match="symbolic link"):
+        write_files(tmp_path / "lnk", {"x.json": b"[]"})
+    monkeypatch.chdir(tmp_path / "real")
+    for target in (".", str(tmp_path / "real"), str(tmp_path)):
+        with pytest.raises(QuadlandError, match="current folder or holds it"):
+            OutputFolder(target).claim()
+
+
+def test_two_default_names_in_one_second_differ(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    first = output_folder(None, "paper")          # claimed: a second run takes another name
+    second = output_folder(None, "paper")
+    assert first.path != second.path
+    first.release()
+    second.release()
+
+
+def test_glob_characters_in_a_name_touch_no_other_run(tmp_path):
+    other = tmp_path / ".run1.tmp-abc"
+    other.mkdir()
+    write_files(tmp_path / "run[1]", {"x.json": b"{}"})
+    assert other.is_dir()                         # '[1]' is not a pattern
