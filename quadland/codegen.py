@@ -11,6 +11,7 @@ writes into a folder given with ``--out``.
 from __future__ import annotations
 
 import difflib
+import re
 import sys
 import tempfile
 from collections.abc import Iterable
@@ -73,7 +74,8 @@ def default_values(scenario: str | Path = "paper", overrides: Iterable[str] = ()
     mv = model_values(sc)
     d, sim = sc.data["disturbance"], sc.data["simulation"]
     rate = float(sc.data["controller"]["rate_hz"]) or EXAMPLE_CONTROL_RATE_HZ
-    label = sc.name + "".join(f" --set {o}" for o in sc.overrides)
+    # the label goes into C comments and a string literal: only safe characters
+    label = _C_UNSAFE.sub("?", sc.name + "".join(f" --set {o}" for o in sc.overrides))
     return Defaults(
         scenario=label, l=mv.l, p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
         rotor_limits=tuple(float(v) for v in mv.rotor_limits), tilt_min=TILT_MIN,
@@ -89,9 +91,22 @@ def default_values(scenario: str | Path = "paper", overrides: Iterable[str] = ()
         moment_frequency=float(d["moment_frequency"]))
 
 
+#: Characters the scenario label keeps in generated C (comments, a string literal).
+_C_UNSAFE = re.compile(r"[^A-Za-z0-9_.,:=+\-\[\] ]")
+
+#: The generated tree's own list of its files: a later generation removes only
+#: files named there, never anything else under the target.
+MANIFEST = ".quadland-generated"
+
+
 def generated_files(defaults: Defaults | None = None) -> dict[str, str]:
-    """Every file of the generated tree by relative path (POSIX separators)."""
-    return generate_tree(defaults or default_values())
+    """Every file of the generated tree by relative path (POSIX separators).
+
+    The tree includes :data:`MANIFEST`, the list of its other files.
+    """
+    files = generate_tree(defaults or default_values())
+    files[MANIFEST] = "".join(f"{rel}\n" for rel in sorted(files))
+    return files
 
 
 #: Every generated file says this; a file under the target that says it but is
@@ -100,13 +115,26 @@ _MARK = "Do not edit: regenerate with `quadland codegen`"
 
 
 def stale(out: Path, files: dict[str, str]) -> list[str]:
-    """Files under ``out`` that a former generation wrote and this one does not."""
-    if not out.is_dir():
+    """Files a former generation wrote under ``out`` and this one does not.
+
+    Only files that the former generation's :data:`MANIFEST` lists, that are
+    regular files inside ``out`` and that still carry the generated marker:
+    nothing else under ``out`` is ever touched.
+    """
+    manifest = out / MANIFEST
+    if not manifest.is_file() or manifest.is_symlink():
+        return []
+    try:
+        listed = manifest.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
         return []
     found = []
-    for path in sorted(out.rglob("*")):
-        rel = path.relative_to(out).as_posix()
-        if not path.is_file() or rel in files or "build" in path.relative_to(out).parts:
+    for rel in listed:
+        parts = Path(rel).parts
+        if not rel or rel in files or Path(rel).is_absolute() or ".." in parts:
+            continue
+        path = out / rel
+        if not path.is_file() or path.is_symlink():
             continue
         try:
             head = path.read_text(encoding="utf-8")[:1000]
@@ -202,6 +230,8 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
             raise CodegenError("generated/ holds the paper scenario's code; write another "
                                "scenario's with --out DIR")
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise CodegenError(f"out: {out} exists and is not a folder")
     files = generated_files(default_values(scenario, overrides))
     if check:
         with tempfile.TemporaryDirectory() as tmp:
@@ -215,7 +245,10 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
             return 1
         print(f"quadland: {out} is up to date ({len(files)} files)")
         return 0
-    changed = write(out, files)
+    try:
+        changed = write(out, files)
+    except OSError as exc:
+        raise CodegenError(f"out: cannot write {out}: {exc.strerror or exc}") from None
     removed = sum(not (out / rel).exists() for rel in changed)
     print(f"quadland: wrote {len(changed) - removed} of {len(files)} files in {out}"
           + (f", removed {removed} stale" if removed else ""))

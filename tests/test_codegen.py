@@ -205,8 +205,10 @@ def test_codegen_for_a_scenario_file(tmp_path, capsys):
 
 def test_stale_generated_files_are_removed(tmp_path, files):
     codegen.write(tmp_path, files)
-    old = tmp_path / "example" / "paper_scenario.h"
+    old = tmp_path / "example" / "paper_scenario.h"      # an earlier generation's file,
     old.write_text("/* Do not edit: regenerate with `quadland codegen`. */\n")
+    manifest = tmp_path / codegen.MANIFEST                # listed in its manifest
+    manifest.write_text(manifest.read_text() + "example/paper_scenario.h\n")
     mine = tmp_path / "notes.txt"
     mine.write_text("mine\n")
     assert "--- a/example/paper_scenario.h" in codegen.diff(tmp_path, files)
