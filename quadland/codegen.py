@@ -147,7 +147,7 @@ def stale(out: Path, files: dict[str, str]) -> list[str]:
 
 def write(out: Path, files: dict[str, str]) -> list[str]:
     """Write ``files`` under ``out`` and remove stale ones; return the paths that changed."""
-    changed = []
+    changed, old = [], stale(out, files)       # from the former manifest, before it goes
     for rel, text in sorted(files.items()):
         path = out / rel
         data = text.encode("utf-8")
@@ -156,7 +156,7 @@ def write(out: Path, files: dict[str, str]) -> list[str]:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
         changed.append(rel)
-    for rel in stale(out, files):
+    for rel in old:
         (out / rel).unlink()
         changed.append(rel)
     return changed
