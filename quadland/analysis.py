@@ -278,38 +278,64 @@ def _channel(resp: FrequencyResponse, i: int):
     return l_of
 
 
-def _determined(resp: FrequencyResponse, i: int, omega: float) -> bool:
-    """Whether the realization determines loop ``i`` at ``omega``.
+def _loop_error(resp: FrequencyResponse, i: int, omega: float) -> tuple[float, complex]:
+    """A bound on ``|dl_i|`` for the realization's uncertainty, and ``l_i``, at ``omega``.
 
     With the other loops closed, ``l_i = 1 / S_ii - 1`` and ``S = (I + L)^-1``,
-    so ``dl_i = -dS_ii / S_ii^2`` with ``dS_ii = -e_i^T S dL S e_i``. A
-    crossing where ``|dl_i| / |l_i|`` may exceed 1 is an artefact of a
-    repeated pole realized inexactly, not a property of the loop.
+    so ``dl_i = -dS_ii / S_ii^2`` with ``dS_ii = -e_i^T S dL S e_i``. Returns
+    ``(inf, nan)`` where ``l_i`` cannot be evaluated.
     """
     p = resp.point(omega)
     try:
         G = resp.at(p)
         S = np.linalg.inv(np.eye(G.shape[0]) + G)
     except (np.linalg.LinAlgError, ValueError):
-        return False
-    s_ii = abs(S[i, i])
-    l_i = abs(1.0 / S[i, i] - 1.0) if s_ii > 0 else math.inf
-    if not (np.all(np.isfinite(S)) and s_ii > 0 and math.isfinite(l_i)):
-        return False
-    bound = resp.uncertainty(p, S[i, :], S[:, i]) / (s_ii ** 2 * l_i)
-    return bool(bound <= _CROSSING_RELATIVE_ERROR)
+        return math.inf, complex(math.nan)
+    s_ii = S[i, i]
+    if not (np.all(np.isfinite(S)) and abs(s_ii) > 0):
+        return math.inf, complex(math.nan)
+    l_i = complex(1.0 / s_ii - 1.0)
+    return resp.uncertainty(p, S[i, :], S[:, i]) / abs(s_ii) ** 2, l_i
 
 
-def _roots(fun, grid, values):
-    """Refined sign changes of ``values`` (= fun(grid)) by Brent's method."""
+def _determined(resp: FrequencyResponse, i: int, omega: float) -> bool:
+    """Whether the realization determines loop ``i``'s value at ``omega``.
+
+    A crossing where ``|dl_i| / |l_i|`` may exceed 1 is an artefact of a
+    repeated pole realized inexactly, not a property of the loop.
+    """
+    err, l_i = _loop_error(resp, i, omega)
+    return bool(math.isfinite(abs(l_i)) and err <= _CROSSING_RELATIVE_ERROR * abs(l_i))
+
+
+def _sign_determined(resp: FrequencyResponse, i: int, omega: float) -> bool:
+    """Whether the sign of ``Im l_i`` at ``omega`` is fixed by the realization.
+
+    A phase crossing is a change of that sign; where the phase lies within
+    roundoff of -180 deg over a band (an integrator pair with a near-cancelled
+    lead, ``k/s^2``), the computed sign flips at random and would give
+    crossings that the loop does not have.
+    """
+    err, l_i = _loop_error(resp, i, omega)
+    return bool(math.isfinite(err) and err < abs(l_i.imag))
+
+
+def _roots(fun, grid, values, keep=None):
+    """Refined sign changes of ``values`` (= fun(grid)) by Brent's method.
+
+    ``keep(a, b)``, if given, must accept a bracketing pair of grid points.
+    """
     out = []
     for k in np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0):
+        if keep is not None and not keep(grid[k], grid[k + 1]):
+            continue
         try:
             out.append(scipy.optimize.brentq(fun, grid[k], grid[k + 1], xtol=1e-14,
                                              rtol=1e-12))
         except (ValueError, RuntimeError):
             continue
-    out += [grid[k] for k in np.flatnonzero(values == 0)]
+    out += [grid[k] for k in np.flatnonzero(values == 0)
+            if keep is None or keep(grid[k], grid[k])]
     return sorted(out)
 
 
@@ -320,7 +346,10 @@ def _siso_margins(i, lvals, grid, resp, stable) -> Margins:
     # gain crossings: log|l| = 0
     wc = _roots(lambda w: math.log(abs(l_of(w))), g, np.log(np.abs(lv)))
     # phase crossings: Im l = 0 with Re l < 0
-    wp = [w for w in _roots(lambda w: l_of(w).imag, g, lv.imag) if l_of(w).real < 0]
+    wp = [w for w in _roots(lambda w: l_of(w).imag, g, lv.imag,
+                            keep=lambda a, b: _sign_determined(resp, i, a)
+                            and _sign_determined(resp, i, b))
+          if l_of(w).real < 0]
     edges = [0.0] + ([math.pi / resp.dt] if resp.dt else [])
     for w in edges:
         try:

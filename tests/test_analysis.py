@@ -102,8 +102,21 @@ def _slow_cubic_lag():
                  wc=[wc]))
 
 
+def _near_cancelled_lead():
+    """L = 6.28 (s + 3.6) / (s^2 (s + 3.8)): the phase -180 + atan(w/3.6) - atan(w/3.8) stays
+    within 0.6 deg above -180 and never reaches it (no gain margin); |L| = 1 where
+    x^3 + 3.8^2 x^2 - 6.28^2 x - 6.28^2 3.6^2 = 0, x = w^2, PM = atan(wc/3.6) - atan(wc/3.8).
+    The closed loop s^3 + 3.8 s^2 + 6.28 s + 22.6 is stable (Routh: 3.8 * 6.28 > 22.6)."""
+    k, a, b = 6.28, 3.6, 3.8
+    x = max(r.real for r in np.roots([1, b * b, -k * k, -k * k * a * a]) if abs(r.imag) < 1e-12)
+    wc = math.sqrt(x)
+    return (control.tf([k, k * a], [1, b, 0, 0]),
+            dict(gm=[], wg=[], pm=[math.degrees(math.atan(wc / a) - math.atan(wc / b))],
+                 wc=[wc]))
+
+
 INTEGRATOR_CASES = [_conditionally_stable, _double_integrator_lead, _quadruple_integrator,
-                    _integrator]
+                    _integrator, _near_cancelled_lead]
 
 
 def _companion(L):
@@ -152,6 +165,20 @@ def test_allmargin_perturbed_realizations(case):
     L, ref = case()
     for sys in _perturbed(_companion(L), np.random.default_rng(7)):
         m, = allmargin(sys)
+        _assert_margins(m, ref)
+
+
+def test_allmargin_orthogonal_changes_of_coordinates():
+    """Random orthogonal similarity transforms (condition number 1): the phase of the
+    near-cancelled lead sits within roundoff of -180 deg near w = 0, where the sign of
+    Im L is not fixed by the data; no crossing may be reported there."""
+    L, ref = _near_cancelled_lead()
+    base = _companion(L)
+    A, B, C, D = (np.asarray(v, dtype=float) for v in (base.A, base.B, base.C, base.D))
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        Q, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+        m, = allmargin(control.ss(Q.T @ A @ Q, Q.T @ B, C @ Q, D))
         _assert_margins(m, ref)
 
 
