@@ -8,7 +8,9 @@ be ..."``) is shown with the flag that sets it (``"--at: must be ..."``).
 Exit status: 0 success; 1 a check failed (``codegen --check`` differences,
 ``margins`` below the requirement); 2 bad input (scenario, override, flag,
 output folder, budget), nothing written; 3 the simulated flight failed (the
-trajectory up to the failure is written, marked failed); 130 interrupted.
+trajectory up to the failure is written, marked failed); 4 a campaign
+stopped before its end (its finished runs are kept; run it again to
+resume); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ __all__ = ["main", "build_parser"]
 
 #: Flag of each library parameter that a command passes on from one.
 _FLAGS = {"at": "--at", "out": "--out", "gain_margin_db": "--gain-margin-db",
-          "phase_margin_deg": "--phase-margin-deg", "animate": "--animate"}
+          "phase_margin_deg": "--phase-margin-deg", "animate": "--animate", "runs": "--runs",
+          "workers": "--workers", "scheduler": "--scheduler", "scenario": "--scenario"}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -86,6 +89,25 @@ def build_parser() -> argparse.ArgumentParser:
                     metavar="DEG", help="required phase margin (default: %(default)g deg)")
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     mg.set_defaults(handler=_run_margins)
+
+    cp = sub.add_parser("campaign", help="fly a scenario's Monte Carlo campaign",
+                        description="Fly the dispersed runs of a scenario's [campaign] table "
+                                    "on every core or a Dask cluster; write runs.csv, "
+                                    "summary.json and the figures. Running again into the same "
+                                    "folder flies only the missing runs.")
+    scenario_args(cp)
+    cp.add_argument("--runs", type=int, metavar="N",
+                    help="number of runs (default: the table's campaign.runs)")
+    cp.add_argument("--out", type=Path, metavar="DIR",
+                    help="campaign folder (default: a new folder named after the scenario "
+                         "and the time)")
+    cp.add_argument("--workers", type=int, metavar="K",
+                    help="local processes (default: one per core; 1: in this process)")
+    cp.add_argument("--scheduler", metavar="ADDRESS",
+                    help="run on the dask.distributed scheduler at ADDRESS (tcp://HOST:PORT) "
+                         "instead of local processes")
+    cp.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    cp.set_defaults(handler=_run_campaign)
     return parser
 
 
@@ -110,6 +132,7 @@ def _run_margins(args) -> int:
 
     from quadland.margins import Requirement, format_report, margin_report
     from quadland.output import figure_png, output_folder, strict_json
+    from quadland.run import versions
     from quadland.scenario import load_scenario
 
     start = time.perf_counter()
@@ -124,7 +147,8 @@ def _run_margins(args) -> int:
             from quadland.plots import margin_figures
 
             figures = {name: figure_png(fig) for name, fig in margin_figures(report).items()}
-        data = dict(report.to_dict(), runtime_s=time.perf_counter() - start)
+        data = dict(report.to_dict(), runtime_s=time.perf_counter() - start,
+                    versions=versions())
         folder.write({"margins.json": strict_json(data),
                       "scenario.toml": scenario.to_toml().encode("utf-8"), **figures})
     print(format_report(report), end="")
@@ -139,6 +163,34 @@ def _run_margins(args) -> int:
     print(f"quadland: margins below the requirement {requirement.gain_margin_db:g} dB / "
           f"{requirement.phase_margin_deg:g} deg: {'; '.join(failed)}", file=sys.stderr)
     return 1
+
+
+def _run_campaign(args) -> int:
+    from quadland.campaign.execute import CampaignInterrupted, run_campaign
+    from quadland.exceptions import CampaignStopped
+
+    try:
+        result = run_campaign(args.scenario, args.overrides, args.runs, args.out, args.workers,
+                              args.scheduler, progress=sys.stderr.isatty(),
+                              plots=not args.no_plots)
+    except CampaignInterrupted as exc:
+        print(f"quadland: interrupted: {exc}", file=sys.stderr)
+        return 130
+    except CampaignStopped as exc:
+        print(f"quadland: error: {exc}", file=sys.stderr)
+        return 4
+    summary = result.summary
+    rate = ""
+    if summary is not None and summary.get("flown"):
+        lo, hi = summary["confidence"]["interval"]
+        rate = (f": {summary['successes']} of {summary['flown']} runs within limits "
+                f"({100 * summary['success_rate']:.1f} %, 95 % interval {100 * lo:.1f} to "
+                f"{100 * hi:.1f} %)")
+    speed = (f"; flew {result.flown} runs in {result.elapsed:.1f} s "
+             f"({result.flown / result.elapsed:.1f} runs/s)" if result.flown and
+             result.elapsed > 0 else "; no run left to fly")
+    print(f"quadland: wrote {result.folder}{rate}{speed}")
+    return 0
 
 
 def _message(exc: QuadlandError) -> str:
