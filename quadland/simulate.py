@@ -45,13 +45,19 @@ from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
-           "time_grid", "SimulationPlan", "simulation_plan", "check_plan", "MEMORY_BUDGET",
-           "MAX_RK4_STEPS"]
+           "time_grid", "merge_times", "SimulationPlan", "simulation_plan", "check_plan",
+           "MEMORY_BUDGET", "MAX_RK4_STEPS"]
 
 #: Most memory a simulation may plan for its arrays, bytes.
 MEMORY_BUDGET = 2 << 30
 #: Most RK4 steps one simulation may take (about 7 min at l = 100).
 MAX_RK4_STEPS = 2e8
+#: The node count MAX_RK4_STEPS is for; the limit scales with 100 / l (a step's
+#: cost grows with the node count).
+_REFERENCE_NODES = 100
+#: Gain times control period beyond which a sampled loop is likely too slow
+#: (the paper's loop needs 40 Hz for gains of 10 1/s: docs/margins.md).
+_SLOW_CONTROL = 0.25
 #: RK4 is stable on lambda h inside about -2.785 on the real axis.
 _RK4_REAL_STABILITY = 2.785
 
@@ -106,8 +112,10 @@ def simulation_plan(scenario: Scenario) -> SimulationPlan:
     else:
         nx, nw = closed_loop_state(l).size, DISTURBANCE.size
         per_row = 2 * nx + OUTPUTS.size + len(COLUMNS) + nw + 12
-    return SimulationPlan(rows - 1, clocks, clocks * sim["rk_steps_per_interval"],
-                          8 * (rows * per_row + clocks * (nw + 4)))
+    memory = 8 * (rows * per_row + clocks * (nw + 4))
+    if sim.get("integrator") == "cvodes":      # cvodes returns the state at every grid point
+        memory += 8 * 2 * clocks * nx
+    return SimulationPlan(rows - 1, clocks, clocks * sim["rk_steps_per_interval"], memory)
 
 
 def check_plan(scenario: Scenario) -> None:
@@ -120,11 +128,13 @@ def check_plan(scenario: Scenario) -> None:
             f"simulation.duration x simulation.output_rate_hz: {plan.rows:,} output rows need "
             f"about {plan.memory_bytes / 2**30:.1f} GiB, over the {MEMORY_BUDGET / 2**30:g} GiB "
             "limit; lower either")
-    if plan.rk4_steps > MAX_RK4_STEPS:
+    l = scenario.data["rbf"]["nodes"]
+    limit = MAX_RK4_STEPS * _REFERENCE_NODES / max(l, _REFERENCE_NODES // 10)
+    if plan.rk4_steps > limit:
         raise ScenarioError(
             f"simulation.duration: the run needs {plan.rk4_steps:.2g} RK4 steps (duration x "
-            f"the fastest clock x simulation.rk_steps_per_interval), over the "
-            f"{MAX_RK4_STEPS:.0e} limit; lower one of them")
+            f"the fastest clock x simulation.rk_steps_per_interval), over the limit of "
+            f"{limit:.2g} for {l} RBF nodes; lower one of them")
 
 def _check_motor_step(scenario: Scenario) -> None:
     """Refuse a landing whose fixed RK4 step cannot follow the motors' lag.
@@ -231,7 +241,7 @@ def time_grid(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     T = sim["duration"]
     t_out = _arange(T, 1.0 / sim["output_rate_hz"])
     t_dist = _arange(T, 1.0 / dist["sample_rate_hz"])
-    t_all = np.unique(np.round(np.concatenate([t_out, t_dist]), 12))
+    t_all = merge_times(t_out, t_dist)
     return t_out, t_dist, t_all
 
 
@@ -247,7 +257,7 @@ def _held(t_switch, values, times):
     return values[:, np.clip(idx, 0, values.shape[1] - 1)]
 
 
-@functools.lru_cache(maxsize=8)
+@functools.lru_cache(maxsize=1)     # keyed by the whole grid: keep only the last one
 def _continuous_integrator(l: int, plugin: str, opts: tuple, grid: tuple):
     f = closed_loop_function(l)
     x, w, p = (ca.SX.sym(f.name_in(i), f.size1_in(i)) for i in range(3))
@@ -356,6 +366,11 @@ def _divergence_hint(scenario: Scenario) -> str:
     k1, z2 at k2), and RK4 is stable for ``|lambda| h < 2.785``.
     """
     sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
+    gains = [max(ctrl[k]) for k in ("k1", "k2") if k in ctrl]
+    if gains and ctrl["rate_hz"] > 0 and max(gains) / ctrl["rate_hz"] > _SLOW_CONTROL:
+        need = int(np.ceil(max(gains) / _SLOW_CONTROL))
+        return (f" (the control period 1/{ctrl['rate_hz']:g} s is likely too long for gains "
+                f"up to {max(gains):g} 1/s: try controller.rate_hz={need} or more)")
     if sim.get("integrator", "rk") != "rk":
         return " (check the gains and the initial attitude)"
     clocks = [scenario.data["simulation"]["output_rate_hz"],
@@ -373,12 +388,36 @@ def _divergence_hint(scenario: Scenario) -> str:
     return " (check the gains and the initial attitude)"
 
 
+def merge_times(*clocks: np.ndarray) -> np.ndarray:
+    """The sorted union of clock times, points closer than :data:`_GRID_TOL` of the
+    shortest period merged into one (the earlier), so that no interval of the
+    grid is a sliver of roundoff (which would be a stray RK4 step)."""
+    t = np.sort(np.concatenate(clocks))
+    if t.size < 2:
+        return t
+    tol = _GRID_TOL * _shortest_period(clocks)
+    return t[np.concatenate([[True], np.diff(t) > tol])]
+
+
+def _shortest_period(clocks) -> float:
+    gaps = [float(np.min(np.diff(c))) for c in clocks if len(c) > 1]
+    gaps = [g for g in gaps if g > 0]
+    return min(gaps) if gaps else 1.0
+
+
+#: Grid points closer than this fraction of the shortest clock period are one point.
+_GRID_TOL = 1e-6
+
+
 def _grid_index(grid, times):
-    """For each point of ``grid``, its index in the sorted ``times`` (both rounded
-    to 1e-12 s), or -1 where it is not one of them."""
-    g, t = np.round(grid, 12), np.round(times, 12)
-    k = np.clip(np.searchsorted(t, g), 0, len(t) - 1)
-    return np.where(t[k] == g, k, -1).astype(np.int_)
+    """For each point of ``grid``, its index in the sorted ``times`` (matched within
+    :data:`_GRID_TOL` of the shortest period), or -1 where it is not one of them."""
+    grid, times = np.asarray(grid, dtype=float), np.asarray(times, dtype=float)
+    if times.size == 0:
+        return np.full(grid.shape, -1, dtype=np.int_)
+    tol = _GRID_TOL * _shortest_period([grid, times])
+    k = np.clip(np.searchsorted(times, grid - tol), 0, len(times) - 1)
+    return np.where(np.abs(times[k] - grid) <= tol, k, -1).astype(np.int_)
 
 
 def _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
@@ -405,7 +444,7 @@ def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist):
     rate = scenario.data["controller"]["rate_hz"]
     T = scenario.data["simulation"]["duration"]
     t_ctrl = _arange(T, 1.0 / rate)[:-1] if T > 0 else np.zeros(1)
-    grid = np.unique(np.round(np.concatenate([t_out, t_dist, t_ctrl]), 12))
+    grid = merge_times(t_out, t_dist, t_ctrl)
     model = loop.model
     x0 = closed_loop_state(mv.l).unpack(mv.x0)
     xp0 = model.plant_state.pack({n: x0[n] for n in model.plant_state.names()})
@@ -441,7 +480,7 @@ def _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist):
     except RuntimeError as exc:
         raise SimulationError(f"integrator {plugin} failed: {str(exc).splitlines()[-1]}") from None
     X = np.hstack([mv.x0[:, None], np.asarray(out["xf"])])
-    keep = np.flatnonzero(np.isin(np.round(t_all, 12), np.round(t_out, 12)))
+    keep = np.flatnonzero(_grid_index(t_all, t_out) >= 0)
     return np.ascontiguousarray(X[:, keep].T)
 
 
