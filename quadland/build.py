@@ -82,9 +82,31 @@ def compiler_version() -> str | None:
 
 
 def cache_dir() -> Path:
-    """Folder of the compiled libraries."""
+    """Folder of the compiled libraries.
+
+    ``$XDG_CACHE_HOME/quadland`` (``~/.cache/quadland``); where that cannot
+    be made (a read-only home, as in some CI and containers), a folder of the
+    user's own in the system's temporary folder, after one warning.
+    """
     root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(root) / "quadland"
+    preferred = Path(root) / "quadland"
+    try:
+        preferred.mkdir(parents=True, exist_ok=True)
+        if os.access(preferred, os.W_OK | os.X_OK):
+            return preferred
+    except OSError:
+        pass
+    fallback = Path(tempfile.gettempdir()) / f"quadland-cache-{os.getuid()}"
+    _warn_cache(str(preferred), str(fallback))
+    return fallback
+
+
+@functools.cache
+def _warn_cache(preferred: str, fallback: str) -> None:
+    import warnings
+
+    warnings.warn(f"cannot write the build cache {preferred}; using {fallback}",
+                  RuntimeWarning, stacklevel=4)
 
 
 def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "-O2",
@@ -162,7 +184,8 @@ def _run_parallel(commands: list[list[str]], cwd: str, cc: str) -> None:
             if proc.returncode != 0:
                 first = next((ln for ln in err.splitlines() if "error" in ln),
                              err.strip().splitlines()[0] if err.strip() else "")
-                raise CompileError(f"{Path(cc).name} failed on the generated C: {first}")
+                raise CompileError(f"{Path(cc).name} failed on the generated C: "
+                                   f"{first or f'exit status {proc.returncode}'}")
     finally:
         for proc in running:
             proc.kill()

@@ -20,7 +20,7 @@ import warnings
 import numpy as np
 
 from quadland.build import build_library, have_compiler
-from quadland.exceptions import CompilerNotFoundError
+from quadland.exceptions import CompileError, CompilerNotFoundError
 from symbolic.landing.loop import landing_loop
 from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, rk4_step, simulator_sources
 
@@ -309,7 +309,19 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
         from quadland.cbackend import sources
 
         flight = sources(l, "double")
-    return CompiledLoop(loop, part, flight=flight)
+    try:
+        return CompiledLoop(loop, part, flight=flight)
+    except CompileError as exc:
+        if part == "sampled_flight":
+            raise
+        _warn_compile_failed(str(exc))           # a broken compiler: CasADi's VM still works
+        return VMLoop(loop, part)
+
+
+@functools.cache
+def _warn_compile_failed(why: str) -> None:
+    warnings.warn(f"{why}; simulating on CasADi's virtual machine, several times slower",
+                  QuadlandWarning, stacklevel=4)
 
 
 @functools.cache
