@@ -28,7 +28,8 @@ __all__ = ["main", "build_parser"]
 #: Flag of each library parameter that a command passes on from one.
 _FLAGS = {"at": "--at", "out": "--out", "gain_margin_db": "--gain-margin-db",
           "phase_margin_deg": "--phase-margin-deg", "animate": "--animate", "runs": "--runs",
-          "workers": "--workers", "scheduler": "--scheduler", "scenario": "--scenario"}
+          "workers": "--workers", "scheduler": "--scheduler", "scenario": "--scenario",
+          "delay_periods": "--delay-periods"}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -79,7 +80,7 @@ def build_parser() -> argparse.ArgumentParser:
     scenario_args(mg)
     mg.add_argument("--at", type=float, metavar="T", default=None,
                     help="linearize about the simulated state at time T (s) instead of the "
-                         "closed loop's equilibrium")
+                         "closed loop's equilibrium (paper scenarios)")
     mg.add_argument("--out", type=Path, metavar="DIR",
                     help="output folder (default: a new folder named after the scenario "
                          "and the time)")
@@ -87,6 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
                     metavar="DB", help="required gain margin (default: %(default)g dB)")
     mg.add_argument("--phase-margin-deg", type=float, default=Requirement.phase_margin_deg,
                     metavar="DEG", help="required phase margin (default: %(default)g deg)")
+    mg.add_argument("--delay-periods", type=int, default=1, metavar="N",
+                    help="control periods from sampling to commanding in the sampled loop "
+                         "(default: %(default)d, flight code's one period)")
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     mg.set_defaults(handler=_run_margins)
 
@@ -141,7 +145,7 @@ def _run_margins(args) -> int:
     # OpenBLAS threads on matrices of a few hundred rows cost more than they
     # bring: 3-5x slower on a busy 2-core machine.
     with output_folder(args.out, scenario.name, "margins") as folder, threadpool_limits(1):
-        report = margin_report(scenario, args.at, requirement)
+        report = margin_report(scenario, args.at, requirement, args.delay_periods)
         figures = {}
         if not args.no_plots:
             from quadland.plots import margin_figures

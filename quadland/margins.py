@@ -2,11 +2,13 @@
 
 :func:`margin_report` linearizes the closed loop at an operating point (the
 equilibrium, or the simulated state at time ``at``), breaks it at the plant
-input u, and reports per loop (altitude, roll, pitch, yaw) the classical
-margins with the other loops closed, the loop-at-a-time and multiloop disk
-margins, the closed-loop poles, and pass or fail against a
-:class:`Requirement`. With ``controller.rate_hz > 0`` the sampled-data loop
-is reported beside the continuous one. :meth:`MarginReport.to_dict` is the
+input u, and reports per loop (altitude, roll, pitch, yaw; for a landing
+scenario thrust, roll, pitch, yaw at the wrench into the mixer) the
+classical margins with the other loops closed, the loop-at-a-time and
+multiloop disk margins, the closed-loop poles, and pass or fail against a
+:class:`Requirement`. With ``controller.rate_hz > 0`` (always for a landing
+scenario) the sampled-data loop, with its computation delay, is reported
+beside the continuous one. :meth:`MarginReport.to_dict` is the
 content of ``margins.json``; :func:`format_report` the table that
 ``quadland margins`` prints.
 
@@ -44,6 +46,9 @@ __all__ = ["Requirement", "LoopMargins", "MultiloopDiskMargin", "Pole", "PoleSum
 
 #: Where the loop is broken, as ``margins.json`` states it.
 LOOP_BREAK = "plant input u (eq. 6), L = -K P, negative feedback"
+#: Where the landing loop is broken.
+LANDING_LOOP_BREAK = ("plant input: the wrench [T, M_x, M_y, M_z] into the mixer, L = -K P, "
+                      "negative feedback")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -236,6 +241,9 @@ class LoopReport:
         verdict and is not part of this one).
     rate_hz : float or None
         Hz, the controller's rate of a sampled loop; None for continuous time.
+    computation_delay_periods : int or None
+        Control periods from sampling to commanding modelled in a sampled
+        loop (a ``z^-1`` on the command each); None for continuous time.
     """
 
     stable: bool
@@ -244,6 +252,14 @@ class LoopReport:
     poles: PoleSummary
     passed: bool
     rate_hz: float | None = None
+    computation_delay_periods: int | None = None
+
+    @property
+    def computation_delay_s(self) -> float | None:
+        """s, the computation delay of a sampled loop; None for continuous time."""
+        if self.rate_hz is None or self.computation_delay_periods is None:
+            return None
+        return self.computation_delay_periods / self.rate_hz
 
     def loop(self, name: str) -> LoopMargins:
         """The margins of the loop called ``name``."""
@@ -264,6 +280,9 @@ class LoopReport:
                    poles=self.poles.to_dict())
         if self.rate_hz is not None:
             out["rate_hz"] = self.rate_hz
+        if self.computation_delay_periods is not None:
+            out["computation_delay_periods"] = self.computation_delay_periods
+            out["computation_delay_s"] = self.computation_delay_s
         return out
 
 
@@ -322,10 +341,11 @@ class MarginReport:
         2``) and a pole's time constant ``inf``. Tuples become lists, NumPy
         scalars Python numbers.
         """
+        loop_break = LANDING_LOOP_BREAK if self.point.model == "landing" else LOOP_BREAK
         data = dict(scenario=self.scenario.name, overrides=list(self.scenario.overrides),
                     operating_point=self.point.to_dict(),
                     requirement=dataclasses.asdict(self.requirement),
-                    loop_break=LOOP_BREAK, continuous=self.continuous.to_dict())
+                    loop_break=loop_break, continuous=self.continuous.to_dict())
         if self.sampled is not None:
             data["sampled"] = self.sampled.to_dict()
         return json_ready(data)
@@ -374,8 +394,8 @@ def _loop_margins(name: str, cm: Margins, dm: DiskMargin, req: Requirement) -> L
                        crossings=cm, disk=dm, stable=cm.stable, passed=bool(ok))
 
 
-def _loop_report(L: control.StateSpace, names, req: Requirement,
-                 rate_hz: float | None = None) -> tuple[LoopReport, np.ndarray]:
+def _loop_report(L: control.StateSpace, names, req: Requirement, rate_hz: float | None = None,
+                 delay_periods: int | None = None) -> tuple[LoopReport, np.ndarray]:
     from quadland.analysis import allmargin, closed_loop_poles, diskmargin
 
     classical = allmargin(L)
@@ -389,22 +409,32 @@ def _loop_report(L: control.StateSpace, names, req: Requirement,
     report = LoopReport(stable=stable, loops=loops,
                         multiloop_disk=MultiloopDiskMargin(multi, bool(multi_ok)),
                         poles=_pole_summary(poles, float(L.dt) if L.dt else 0.0),
-                        passed=bool(stable and all(m.passed for m in loops)), rate_hz=rate_hz)
+                        passed=bool(stable and all(m.passed for m in loops)), rate_hz=rate_hz,
+                        computation_delay_periods=delay_periods)
     return report, poles
 
 
 def margin_report(scenario: Scenario, at: float | None = None,
-                  requirement: Requirement = Requirement()) -> MarginReport:
+                  requirement: Requirement = Requirement(),
+                  delay_periods: int = 1) -> MarginReport:
     """Linearize a scenario's loop and compute the margin review.
 
     Parameters
     ----------
     scenario : Scenario
+        A paper scenario, or a landing scenario (``scenario.model =
+        "landing"``): its loop hovering ``landing.hover_height`` above the
+        pad, broken at the wrench into the mixer
+        (:func:`quadland.linearize.equilibrium`).
     at : float, optional
         s: linearize about the simulated state at this time instead of the
-        equilibrium.
+        equilibrium (paper scenarios only).
     requirement : Requirement, optional
         Default 6 dB and 45 deg.
+    delay_periods : int, optional
+        Control periods from sampling to commanding in the sampled loop
+        (default 1: flight code sends its command one period after it
+        samples); see :func:`quadland.linearize.sampled_models`.
 
     Returns
     -------
@@ -413,7 +443,9 @@ def margin_report(scenario: Scenario, at: float | None = None,
     Raises
     ------
     MarginsError
-        ``at`` is not a finite time >= 0 (the message starts with ``"at: "``).
+        ``at`` is not a finite time >= 0, or given for a landing scenario
+        (the message starts with ``"at: "``); ``delay_periods`` is not an
+        integer >= 0.
     OperatingPointError
         No equilibrium was found, or the point is unusable.
 
@@ -436,22 +468,20 @@ def margin_report(scenario: Scenario, at: float | None = None,
     """
     if at is not None and not (math.isfinite(at) and at >= 0):
         raise MarginsError(f"at: must be a finite time >= 0 s, got {at}")
-    from quadland.linearize import (
-        LOOP_NAMES,
-        equilibrium,
-        frozen_point,
-        linear_models,
-        sampled_models,
-    )
+    if isinstance(delay_periods, bool) or not isinstance(delay_periods, int | np.integer) \
+            or delay_periods < 0:
+        raise MarginsError(f"delay_periods: must be an integer >= 0, got {delay_periods!r}")
+    from quadland.linearize import equilibrium, frozen_point, linear_models, sampled_models
 
     point = equilibrium(scenario) if at is None else frozen_point(scenario, at)
     models = linear_models(scenario, point)
-    continuous, poles = _loop_report(models.loop_input, LOOP_NAMES, requirement)
+    continuous, poles = _loop_report(models.loop_input, models.loop_names, requirement)
     rate = float(scenario.data["controller"]["rate_hz"])
     sampled = discrete = None
     if rate > 0:
-        discrete = sampled_models(scenario, point, rate)
-        sampled, _ = _loop_report(discrete.loop_input, LOOP_NAMES, requirement, rate_hz=rate)
+        discrete = sampled_models(scenario, point, rate, int(delay_periods))
+        sampled, _ = _loop_report(discrete.loop_input, discrete.loop_names, requirement,
+                                  rate_hz=rate, delay_periods=int(delay_periods))
     return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
                         poles)
 
@@ -522,18 +552,38 @@ def format_report(report: MarginReport) -> str:
     """
     point = report.point
     op = point.to_dict()
-    where = ("equilibrium (steady motion, constant disturbance)" if point.kind == "equilibrium"
-             else f"frozen simulated state at t = {point.time:g} s")
-    s = op["state"]
-    lines = [f"quadland margins: scenario {report.scenario.name}, {where}",
-             f"  z_e = {s['z1'] - op['vehicle']['z2']:.4g} m, phi = {s['phi1']:.3g} rad, "
-             f"theta = {s['theta1']:.3g} rad, psi_e = {s['psi_e']:.3g} rad, "
-             f"vehicle r2 = {op['vehicle']['r2']:.4g} rad/s, residual {op['residual']:.2g}",
-             "  loop broken at the plant input u (eq. 6), L = -K P; each loop with the "
-             "others closed", ""]
-    lines += _table(report.continuous, "continuous-time controller", report.requirement)
+    s, v = op["state"], op["vehicle"]
+    if point.model == "landing":
+        hover = report.scenario.data["landing"]["hover_height"]
+        lines = [f"quadland margins: scenario {report.scenario.name}, hover {hover:g} m above "
+                 "the pad (steady motion in the deck frame; deck still, mean wind, constant "
+                 "disturbance)",
+                 f"  x_e = {s['x_e']:.3g} m, y_e = {s['y_e']:.3g} m, z_e = {s['z_e']:.4g} m, "
+                 f"phi = {s['phi1']:.3g} rad, theta = {s['theta1']:.3g} rad, "
+                 f"psi_e = {s['psi_e']:.3g} rad, T = {point.u[0]:.4g} N",
+                 f"  vehicle u2 = {v['u2']:.4g} m/s, r2 = {v['r2']:.4g} rad/s; residual "
+                 f"{op['residual']:.2g}",
+                 "  loop broken at the wrench [T, M_x, M_y, M_z] into the mixer, L = -K P; "
+                 "each loop with the others closed", ""]
+        title = "continuous-time limit of the landing step (dt -> 0)"
+    else:
+        where = ("equilibrium (steady motion, constant disturbance)"
+                 if point.kind == "equilibrium"
+                 else f"frozen simulated state at t = {point.time:g} s")
+        lines = [f"quadland margins: scenario {report.scenario.name}, {where}",
+                 f"  z_e = {s['z1'] - v['z2']:.4g} m, phi = {s['phi1']:.3g} rad, "
+                 f"theta = {s['theta1']:.3g} rad, psi_e = {s['psi_e']:.3g} rad, "
+                 f"vehicle r2 = {v['r2']:.4g} rad/s, residual {op['residual']:.2g}",
+                 "  loop broken at the plant input u (eq. 6), L = -K P; each loop with the "
+                 "others closed", ""]
+        title = "continuous-time controller"
+    lines += _table(report.continuous, title, report.requirement)
     if report.sampled is not None:
-        lines += [""] + _table(report.sampled, f"sampled-data controller, zero-order hold at "
-                                               f"{report.sampled.rate_hz:g} Hz",
+        sd = report.sampled
+        delay = sd.computation_delay_periods
+        lines += [""] + _table(sd, f"sampled-data controller, zero-order hold at "
+                                   f"{sd.rate_hz:g} Hz, computation delay {delay} "
+                                   f"period{'' if delay == 1 else 's'} "
+                                   f"({1e3 * sd.computation_delay_s:.3g} ms)",
                                report.requirement)
     return "\n".join(lines) + "\n"

@@ -135,7 +135,7 @@ def test_broken_loops_are_minus_KP_and_minus_PK(small, eq_point):
 def test_sampled_models_are_zero_order_holds(small, eq_point):
     plain = small.replace(**{"controller.hold_compensation": 0.0})
     models = linear_models(plain, eq_point)
-    sampled = sampled_models(plain, eq_point, 50.0)
+    sampled = sampled_models(plain, eq_point, 50.0, delay_periods=0)
     ref = control.sample_system(models.plant, 0.02, method="zoh")
     np.testing.assert_allclose(sampled.plant.A, ref.A, atol=1e-12)
     np.testing.assert_allclose(sampled.plant.B, ref.B, atol=1e-12)
@@ -156,11 +156,38 @@ def test_sampled_controller_extrapolates_by_the_hold_compensation(small, eq_poin
     The step commands u = u_law + kappa (u_law - u_prev).
     """
     kappa = 0.5
-    plain = sampled_models(small.replace(**{"controller.hold_compensation": 0.0}), eq_point, 50.0)
-    comp = sampled_models(small.replace(**{"controller.hold_compensation": kappa}), eq_point, 50.0)
+    plain = sampled_models(small.replace(**{"controller.hold_compensation": 0.0}), eq_point, 50.0,
+                           delay_periods=0)
+    comp = sampled_models(small.replace(**{"controller.hold_compensation": kappa}), eq_point, 50.0,
+                          delay_periods=0)
     assert comp.controller.nstates == plain.controller.nstates + 4
     w = np.array([0.1, 3.0, 40.0, 150.0])
     z = np.exp(1j * w * 0.02)
     want = (1 + kappa - kappa / z)[:, None, None] * freqresp(plain.controller, w)
     got = freqresp(comp.controller, w)
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+
+
+@pytest.mark.parametrize("kappa", [0.0, 0.5])
+@pytest.mark.parametrize("periods", [1, 2])
+def test_computation_delay_holds_the_command(small, eq_point, kappa, periods):
+    """K_delayed(z) = z^-periods K(z): the command computed at t_k acts from t_k+periods.
+
+    Checked in the time domain: the delayed controller's impulse response is the
+    prompt one's shifted by ``periods`` samples."""
+    sc = small.replace(**{"controller.hold_compensation": kappa})
+    prompt = sampled_models(sc, eq_point, 50.0, delay_periods=0).controller
+    late = sampled_models(sc, eq_point, 50.0, delay_periods=periods)
+    assert late.delay_periods == periods
+    assert late.controller.nstates == prompt.nstates + 4 * periods
+    assert late.controller.state_labels[-4:] == [f"u_delay{periods}[{k}]" for k in range(4)]
+    n = 12
+    timepts = np.arange(n) * 0.02
+    for j in (0, 3, 7):
+        u = np.zeros((10, n))
+        u[j, 0] = 1.0
+        y0 = control.forced_response(prompt, timepts, u).outputs
+        y1 = control.forced_response(late.controller, timepts, u).outputs
+        np.testing.assert_array_equal(y1[:, :periods], 0.0)
+        np.testing.assert_allclose(y1[:, periods:], y0[:, :n - periods], rtol=1e-12,
+                                   atol=1e-12 * np.abs(y0).max())

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from quadland.analysis import DiskMargin, Margins
+from quadland.analysis import DiskMargin, Margins, freqresp
 from quadland.cli import main
 from quadland.exceptions import MarginsError
 from quadland.margins import (
@@ -39,9 +39,17 @@ def report():
 
 @pytest.fixture(scope="module")
 def sampled():
-    """50 Hz with the plain hold, and with the shipped hold compensation."""
-    return {hold: _report("controller.rate_hz=50", f"controller.hold_compensation={hold}")
+    """50 Hz with the plain hold, and with the shipped hold compensation, commanded at
+    the sample (no computation delay)."""
+    return {hold: _report("controller.rate_hz=50", f"controller.hold_compensation={hold}",
+                          delay_periods=0)
             for hold in (0.0, 0.5)}
+
+
+@pytest.fixture(scope="module")
+def delayed():
+    """50 Hz, plain hold, with the default one period of computation delay."""
+    return _report("controller.rate_hz=50", "controller.hold_compensation=0")
 
 
 def test_report_is_typed(report):
@@ -97,6 +105,7 @@ def test_to_dict_is_the_json_of_the_command(report, tmp_path, capsys):
     assert main(["margins", "--set", *SMALL, "--no-plots", "--out", str(out)]) == 0
     data = json.loads((out / "margins.json").read_text())
     assert data.pop("runtime_s") > 0
+    assert data.pop("versions")["control"]
     assert data == report.to_dict()
     assert list(data) == ["scenario", "overrides", "operating_point", "requirement",
                           "loop_break", "continuous"]
@@ -162,17 +171,45 @@ def test_errors_name_the_parameter_not_a_flag(call, parameter):
     assert isinstance(info.value, ValueError)
 
 
-def test_sampled_loop_beside_the_continuous(sampled):
-    plain = sampled[0.0]
+def test_sampled_loop_beside_the_continuous(delayed):
+    plain = delayed
     assert plain.sampled.rate_hz == 50.0 and plain.sampled_models.dt == pytest.approx(0.02)
     assert plain.sampled.poles.spectral_radius < 1
     data = plain.to_dict()
     assert data["sampled"]["rate_hz"] == 50.0
     assert data["sampled"]["poles"]["spectral_radius"] == plain.sampled.poles.spectral_radius
+    assert data["sampled"]["computation_delay_periods"] == 1
+    assert data["sampled"]["computation_delay_s"] == pytest.approx(0.02)
+    assert "computation_delay_periods" not in data["continuous"]
+    assert plain.continuous.computation_delay_s is None
     # a zero-order hold adds phase lag: the sampled loop has less phase margin
     for m in plain.sampled.loops:
         assert m.phase_margin_deg < plain.continuous.loop(m.name).phase_margin_deg
-    assert "zero-order hold at 50 Hz" in format_report(plain)
+    table = format_report(plain)
+    assert "zero-order hold at 50 Hz, computation delay 1 period (20 ms)" in table
+
+
+def test_computation_delay_is_one_period_on_the_command(sampled, delayed):
+    """Commanding one period late multiplies the loop by z^-1 = exp(-j w dt): the same
+    gain, w dt less phase; the controller carries the four held commands."""
+    prompt, late = sampled[0.0].sampled_models, delayed.sampled_models
+    assert late.delay_periods == 1 and prompt.delay_periods == 0
+    assert late.controller.nstates == prompt.controller.nstates + 4
+    assert not late.controller.D.any() and prompt.controller.D.any()
+    w = np.array([0.1, 3.0, 20.0, 150.0])
+    want = np.exp(-1j * w * 0.02)[:, None, None] * freqresp(prompt.loop_input, w)
+    np.testing.assert_allclose(freqresp(late.loop_input, w), want, rtol=1e-9,
+                               atol=1e-9 * np.abs(want).max())
+    # the delay costs phase: w_c dt at each crossover of the decoupled loops
+    for m in delayed.sampled.loops:
+        m0 = sampled[0.0].sampled.loop(m.name)
+        assert m.phase_margin_deg < m0.phase_margin_deg
+
+
+def test_delay_periods_must_be_a_count():
+    for bad in (-1, 0.5, True):
+        with pytest.raises(MarginsError, match=r"^delay_periods: must be an integer >= 0"):
+            margin_report(load_scenario("paper", SMALL), delay_periods=bad)
 
 
 def test_hold_compensation_trades_nyquist_gain_for_phase(sampled):
