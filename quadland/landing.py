@@ -145,7 +145,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         dwell_time=g["dwell_time"], descent_speed=g["descent_speed"],
         descent_time=g["descent_time"], touchdown_speed=g["touchdown_speed"],
         touchdown_height=q["gear_height"], max_offset=g["max_offset"],
-        max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"]))
+        max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"],
+        settle_time=g["settle_time"]))
     rate = c["rate_hz"]
     pc = controller_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 

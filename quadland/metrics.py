@@ -136,20 +136,17 @@ class TouchdownReport:
         return dataclasses.asdict(self)
 
 
-def _body_z(phi, theta, psi):
-    """Third column of Rz(psi) Ry(theta) Rx(phi): the body z axis in E."""
-    return np.array([np.cos(psi) * np.sin(theta) * np.cos(phi) + np.sin(psi) * np.sin(phi),
-                     np.sin(psi) * np.sin(theta) * np.cos(phi) - np.cos(psi) * np.sin(phi),
-                     np.cos(theta) * np.cos(phi)])
-
-
 def touchdown_report(result: SimulationResult) -> TouchdownReport:
     """The touchdown's figures, read at the touchdown row of a landing's result.
 
     The touchdown row is the first of phase 3 (``symbolic.guidance.TOUCHDOWN``),
-    at the instant the gear met the deck.
+    at the instant the gear met the deck; the figures are
+    ``symbolic.landing.relative.touchdown_figures`` of its relative position
+    and velocity and both attitudes (the generated C example computes them
+    with the same function).
     """
     from symbolic.guidance import TOUCHDOWN
+    from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
 
     g = result.scenario.data["landing"]
     limits = {k: g[k] for k in ("max_sink_rate", "max_offset", "max_tilt_deg",
@@ -159,15 +156,19 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
         aborts = int(result["aborts"][-1]) if len(result["t"]) else 0
         return TouchdownReport(False, None, None, None, None, None, aborts, False, limits)
     k = int(rows[0])
-    c = {name: float(result[name][k]) for name in result}
-    n1 = _body_z(c["phi1"], c["theta1"], c["psi1"])
-    n2 = _body_z(c["phi2"], c["theta2"], c["psi2"])
-    tilt = float(np.degrees(np.arccos(np.clip(n1 @ n2, -1.0, 1.0))))
-    sink, offset = -c["dz_e"], float(np.hypot(c["x_e"], c["y_e"]))
-    speed = float(np.hypot(c["dx_e"], c["dy_e"]))
-    success = (sink <= limits["max_sink_rate"] and offset <= limits["max_offset"]
-               and tilt <= limits["max_tilt_deg"] and speed <= limits["max_relative_speed"])
-    return TouchdownReport(True, c["t"], sink, offset, speed, tilt, int(c["aborts"]),
+
+    def row(*names):
+        return [float(result[n][k]) for n in names]
+
+    figures = np.asarray(touchdown_figures_function()(
+        row("x_e", "y_e", "z_e"), row("dx_e", "dy_e", "dz_e"), row("phi1", "theta1", "psi1"),
+        row("phi2", "theta2", "psi2")), dtype=float).ravel()
+    f = {name: float(v) for name, v in zip(TOUCHDOWN_FIGURES.names(), figures, strict=True)}
+    success = (f["sink_rate"] <= limits["max_sink_rate"] and f["offset"] <= limits["max_offset"]
+               and f["tilt_deg"] <= limits["max_tilt_deg"]
+               and f["relative_speed"] <= limits["max_relative_speed"])
+    return TouchdownReport(True, float(result["t"][k]), f["sink_rate"], f["offset"],
+                           f["relative_speed"], f["tilt_deg"], int(result["aborts"][k]),
                            bool(success), limits)
 
 

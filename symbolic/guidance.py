@@ -1,4 +1,4 @@
-"""Landing guidance: phases, the descent profile and abort, as one sampled step.
+"""Landing guidance: phases, descent profile, touchdown and abort in one sampled step.
 
 The guidance runs at the control rate on the relative state in the deck
 frame (position ``p_e``, velocity ``v_e``; z up, the pad's centre at the
@@ -17,9 +17,14 @@ the abort count. Phases (:data:`PHASES`):
    ``touchdown_speed`` for the last part, which goes on below the touchdown
    height until contact (PX4 lands at 0.7 m/s and crawls at 0.3 m/s for the
    last metre); the horizontal reference stays at the pad;
-3. **touchdown**: set by the simulator when the landing gear meets the deck
-   (``symbolic.landing``'s gear gap crosses zero); the guidance holds it;
-4. **landed**: likewise, ``settle_time`` after touchdown.
+3. **touchdown**: entered from the descent when the landing gear meets the
+   deck: the gear gap ``z_e - touchdown_height n2 . b3`` measured from the
+   relative position and both attitudes
+   (:func:`symbolic.landing.relative.deck_gear_gap`) is zero or below. The
+   reference holds; the flight stack idles the rotors. (The simulator
+   locates the contact within its step and ends the flight there, so its
+   guidance never sees a closed gap.)
+4. **landed**: ``settle_time`` after touchdown.
 
 **Abort.** During the descent, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
@@ -65,6 +70,7 @@ PARAMS = Layout("p_guid", (
     Field("max_offset", 1, "m", "largest horizontal offset at touchdown"),
     Field("max_relative_speed", 1, "m/s", "largest horizontal relative speed at touchdown"),
     Field("max_deck_rise", 1, "m/s", "largest deck rise rate at which a descent goes on"),
+    Field("settle_time", 1, "s", "time from touchdown to landed"),
 ), "landing guidance parameters")
 
 #: What the position loop tracks: the reference and its first two derivatives
@@ -81,7 +87,7 @@ def _descent_rate(h, p):
     return ca.fmin(ca.fmax(h / p["descent_time"], p["touchdown_speed"]), p["descent_speed"])
 
 
-def guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid):
+def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
     """One guidance step of length ``dt`` (s).
 
     Parameters
@@ -92,6 +98,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid):
         Relative position and velocity in the deck frame, m, m/s.
     deck_rise : casadi.SX
         The deck's vertical velocity at the pad, m/s (up).
+    gear_gap : casadi.SX
+        The landing gear's height above the deck plane, m: zero or below
+        during the descent is the touchdown.
     dt : casadi.SX
         Step length, s.
     p_guid : casadi.SX
@@ -111,15 +120,23 @@ def guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid):
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, hover))
 
     in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
+    in_touchdown = phase == TOUCHDOWN
     aligned = ca.logic_and(offset <= p["max_offset"] / 2, speed <= p["max_relative_speed"] / 2)
-    timer_next = ca.if_else(ca.logic_and(in_align, aligned), timer + dt, 0)
-    abort = ca.logic_and(in_descend, ca.logic_or(
+    # the timer: the align criteria's dwell, then the time since touchdown; held once landed
+    timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, aligned), in_touchdown),
+                            timer + dt, ca.if_else(phase == LANDED, timer, 0))
+    contact = ca.logic_and(in_descend, gear_gap <= 0)
+    abort = ca.logic_and(ca.logic_and(in_descend, ca.logic_not(contact)), ca.logic_or(
         ca.logic_or(offset > p["max_offset"], speed > p["max_relative_speed"]),
         deck_rise > p["max_deck_rise"]))
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
-                   ca.if_else(abort, ALIGN, phase)))
+                   ca.if_else(contact, TOUCHDOWN,
+                              ca.if_else(abort, ALIGN,
+                                         ca.if_else(ca.logic_and(
+                                             in_touchdown, timer_next >= p["settle_time"]),
+                                             LANDED, phase)))))
 
     # the descent reference: it falls only while descending, and is reset to the
     # hover height by an abort or before the descent starts
@@ -127,10 +144,10 @@ def guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid):
     rate = _descent_rate(h, p)
     # below the touchdown height the reference goes on at the crawl until contact:
     # a heaving deck may have moved away, and the quadrotor must meet it
-    descending = ca.logic_and(in_descend, ca.logic_not(abort))
+    descending = ca.logic_and(in_descend, ca.logic_not(ca.logic_or(abort, contact)))
     z_fall = z_ref - rate * dt
     z_next = ca.if_else(descending, z_fall,
-                        ca.if_else(phase >= TOUCHDOWN, z_ref, hover))
+                        ca.if_else(phase_next >= TOUCHDOWN, z_ref, hover))
 
     vz = ca.if_else(descending, -rate, 0)
     # d/dt of -rate: the rate is h / descent_time where it is not clamped
@@ -142,11 +159,12 @@ def guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid):
 
 
 def guidance_function() -> ca.Function:
-    """``guidance(xg, p_e, v_e, deck_rise, dt, p_guid) -> (xg_next, reference)``."""
+    """``guidance(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid) -> (xg_next, reference)``."""
     xg, p_e, v_e = STATE.sym(), ca.SX.sym("p_e", 3), ca.SX.sym("v_e", 3)
-    deck_rise, dt, p_guid = ca.SX.sym("deck_rise"), ca.SX.sym("dt"), PARAMS.sym()
-    xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, dt, p_guid)
-    return ca.Function("guidance", [xg, p_e, v_e, deck_rise, dt, p_guid],
+    deck_rise, gear_gap = ca.SX.sym("deck_rise"), ca.SX.sym("gear_gap")
+    dt, p_guid = ca.SX.sym("dt"), PARAMS.sym()
+    xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid)
+    return ca.Function("guidance", [xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid],
                        [xg_next, reference],
-                       ["xg", "p_e", "v_e", "deck_rise", "dt", "p_guid"],
+                       ["xg", "p_e", "v_e", "deck_rise", "gear_gap", "dt", "p_guid"],
                        ["xg_next", "reference"])

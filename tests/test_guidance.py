@@ -5,26 +5,37 @@ import math
 import numpy as np
 import pytest
 
-from symbolic.guidance import ALIGN, APPROACH, DESCEND, PARAMS, STATE, TOUCHDOWN, guidance_function
+from symbolic.guidance import (
+    ALIGN,
+    APPROACH,
+    DESCEND,
+    LANDED,
+    PARAMS,
+    STATE,
+    TOUCHDOWN,
+    guidance_function,
+)
 
 P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
          descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2, max_offset=0.2,
-         max_relative_speed=0.5, max_deck_rise=0.8)
+         max_relative_speed=0.5, max_deck_rise=0.8, settle_time=0.1)
 DT = 0.002
 GUIDANCE = guidance_function()
 
 
 def _run(script, n, xg=None, p=P):
-    """Step the guidance n times; script(k, z_ref) -> (p_e, v_e, deck_rise)."""
+    """Step the guidance n times; script(k, z_ref) -> (p_e, v_e, deck_rise[, gear_gap]).
+
+    Without a gear gap the gear is well above the deck (1 m)."""
     xg = STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=p["hover_height"], aborts=0)) \
         if xg is None else xg
     pg = PARAMS.pack(p)
     rows = []
     for k in range(n):
         z_ref = STATE.unpack(xg)["z_ref"][0]
-        p_e, v_e, rise = script(k, z_ref)
+        p_e, v_e, rise, *gap = script(k, z_ref)
         xg_next, ref = (np.asarray(v, dtype=float).ravel()
-                        for v in GUIDANCE(xg, p_e, v_e, rise, DT, pg))
+                        for v in GUIDANCE(xg, p_e, v_e, rise, gap[0] if gap else 1.0, DT, pg))
         rows.append((xg, ref))
         xg = xg_next
     return rows, xg
@@ -102,7 +113,40 @@ def test_abort_climbs_back_to_hover_and_counts(cause):
     assert before["phase"][0] == DESCEND and before["z_ref"][0] < 2.0
 
 
-def test_touchdown_is_held():
-    xg = STATE.pack(dict(phase=TOUCHDOWN, timer=0.0, z_ref=0.1, aborts=2))
-    rows, last = _run(lambda k, z: ([1.0, 1.0, 5.0], [3.0, 0, 0], 2.0), 10, xg)
+@pytest.mark.parametrize("cause", ["offset", "speed", "deck"])
+def test_contact_is_touchdown_not_abort(cause):
+    """The gear meets the deck while an abort criterion holds: the contact wins."""
+    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.1, aborts=0))
+
+    def script(k, z_ref):
+        bad = k == 3
+        p_e = [0.25 if bad and cause == "offset" else 0.0, 0.0, 0.2]
+        v_e = [0.6 if bad and cause == "speed" else 0.0, 0.0, -0.3]
+        return p_e, v_e, 1.0 if bad and cause == "deck" else 0.0, 0.0 if bad else 0.01
+    rows, _ = _run(script, 5, xg)
+    phases = [STATE.unpack(x)["phase"][0] for x, _ in rows]
+    assert phases == [DESCEND] * 4 + [TOUCHDOWN]
+    after = STATE.unpack(rows[4][0])
+    assert after["phase"][0] == TOUCHDOWN and after["aborts"][0] == 0 and after["timer"][0] == 0
+    before = STATE.unpack(rows[3][0])
+    assert after["z_ref"][0] == before["z_ref"][0]          # the reference holds
+
+
+def test_descent_touches_down_when_the_gap_closes_then_lands_after_settling():
+    """The gap closes at step 40; touchdown, then landed settle_time (50 steps) later."""
+    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0))
+    rows, last = _run(lambda k, z: ([0.0, 0.0, z], [0.0, 0.0, -0.3], 0.0,
+                                    0.3 - k * DT * 0.3 if k < 40 else -1e-9), 120, xg)
+    phases = np.array([STATE.unpack(x)["phase"][0] for x, _ in rows])
+    assert np.all(phases[:41] == DESCEND) and phases[41] == TOUCHDOWN
+    k_landed = int(np.argmax(phases == LANDED))
+    assert k_landed == 41 + 50                         # settle_time 0.1 s at 2 ms
+    np.testing.assert_array_equal(rows[k_landed][1][3:], 0)   # the reference is at rest
+    z = [STATE.unpack(x)["z_ref"][0] for x, _ in rows[41:]]
+    assert len(set(z)) == 1
+
+
+def test_landed_is_held():
+    xg = STATE.pack(dict(phase=LANDED, timer=0.3, z_ref=0.1, aborts=2))
+    rows, last = _run(lambda k, z: ([1.0, 1.0, 5.0], [3.0, 0, 0], 2.0, -1.0), 10, xg)
     np.testing.assert_array_equal(last, xg)

@@ -44,14 +44,16 @@ import functools
 import casadi as ca
 
 from symbolic.backstepping import virtual_control
-from symbolic.guidance import REFERENCE
+from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
+from symbolic.guidance import REFERENCE, guidance_step
+from symbolic.guidance import STATE as GUIDANCE_STATE
 from symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
 from symbolic.landing.attitude import thrust_attitude
 from symbolic.landing.deck import DECK_POSE, deck_pose, time_derivative
 from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
 from symbolic.landing.quadrotor import ACTUATOR, COMMAND
 from symbolic.landing.quadrotor import STATE as QUAD6_STATE
-from symbolic.landing.relative import RELATIVE6, relative6
+from symbolic.landing.relative import RELATIVE6, deck_gear_gap, relative6
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
 from symbolic.quadrotor import WRENCH, rotors_from_wrench
@@ -73,6 +75,8 @@ __all__ = [
     "known_acceleration_function",
     "landing_law",
     "landing_step_function",
+    "landing_guidance",
+    "landing_guidance_function",
     "measurement_function",
 ]
 
@@ -438,6 +442,36 @@ def landing_step_function(l: int) -> ca.Function:
     out = landing_law(l, *args)
     names_out = list(landing_step_outputs(l).names())
     return ca.Function("landing_step", args, [out[n] for n in names_out], names_in, names_out)
+
+
+def landing_guidance(xg, y, dt, p_guid):
+    """One guidance step (:func:`symbolic.guidance.guidance_step`) on the step's measurements.
+
+    The relative position and velocity are the landing sensor's, the deck's
+    rise is the pad velocity's vertical component ``v2E[2]`` and the gear
+    gap comes from ``p_e``, ``eta1`` and ``eta2``
+    (:func:`~symbolic.landing.relative.deck_gear_gap`, the gear
+    ``touchdown_height`` below the centre). Returns ``(xg_next, reference)``.
+    """
+    ms = MEASUREMENT.unpack(y)
+    h = GUIDANCE_PARAMS.unpack(p_guid)["touchdown_height"]
+    gap = deck_gear_gap(ms["p_e"], rotation(ms["eta2"]), rotation(ms["eta1"]), h)
+    return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], gap, dt, p_guid)
+
+
+@functools.cache
+def landing_guidance_function() -> ca.Function:
+    """``landing_guidance(xg, y, dt, p_guid) -> (xg_next, ref)``: :func:`landing_guidance`.
+
+    ``xg``: :data:`symbolic.guidance.STATE`; ``y``: :data:`MEASUREMENT`;
+    ``p_guid``: :data:`symbolic.guidance.PARAMS`; ``ref``:
+    :data:`symbolic.guidance.REFERENCE`, the landing step's.
+    """
+    xg, y, dt, p_guid = GUIDANCE_STATE.sym(), MEASUREMENT.sym(), ca.SX.sym("dt"), \
+        GUIDANCE_PARAMS.sym()
+    xg_next, ref = landing_guidance(xg, y, dt, p_guid)
+    return ca.Function("landing_guidance", [xg, y, dt, p_guid], [xg_next, ref],
+                       ["xg", "y", "dt", "p_guid"], ["xg_next", "ref"])
 
 
 def measurement_function() -> ca.Function:

@@ -10,11 +10,13 @@
   ``Kt R(eta1)^T v_wind`` (:func:`wind_force`) to ``d_F``;
 * **controller** ``controller(xp, xc, pc, first, t)``: perfect sensors
   (:func:`~symbolic.landing.controller.measurement_function`), then one
-  guidance step (:func:`symbolic.guidance.guidance_step`) whose reference
-  feeds one landing step (:func:`~symbolic.landing.controller.landing_law`),
-  both at the control rate; the memory ``xc`` (:func:`controller_state`) is
-  the guidance's state (the phase among it) and the step's; the held input
-  is the rotor commands, the guard the measured tilt;
+  guidance step (:func:`~symbolic.landing.controller.landing_guidance`) whose
+  reference feeds one landing step
+  (:func:`~symbolic.landing.controller.landing_law`), both at the control
+  rate; the memory ``xc`` (:func:`controller_state`) is the guidance's state
+  (the phase among it) and the step's; the held input is the rotor commands,
+  the guard the measured tilt; **step_args** gives both steps' arguments, for
+  the flight code behind the same signature (``controller.backend = "c"``);
 * **event** ``event(xp, t, pp)``: the gear gap; touchdown ends the
   integration at the instant it happens;
 * **assemble** ``x = [xp, xc]`` and **outputs** ``y`` (:func:`loop_outputs`):
@@ -32,12 +34,12 @@ import functools
 import casadi as ca
 
 from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
-from symbolic.guidance import REFERENCE, guidance_step
+from symbolic.guidance import REFERENCE
 from symbolic.guidance import STATE as GUIDANCE_STATE
 from symbolic.kinematics import rotation
 from symbolic.landing.controller import (
-    MEASUREMENT,
     landing_controller_params,
+    landing_guidance,
     landing_law,
     landing_memory,
     landing_step_outputs,
@@ -57,7 +59,8 @@ from symbolic.vehicle import STATE as VEHICLE_STATE
 from symbolic.vehicle import vehicle_rhs
 
 __all__ = ["DISTURBANCE", "RECORDED", "OUTPUTS", "ANCHOR", "wind_force", "controller_state",
-           "controller_params", "loop_state", "loop_outputs", "landed_outputs_function",
+           "controller_params", "loop_state", "loop_outputs", "loop_plant_function",
+           "landing_signals_function", "gear_gap_function", "landed_outputs_function",
            "landing_loop"]
 
 #: The held disturbance of the landing loop: wind in E, then eq. (2)'s d_F, d_M.
@@ -154,10 +157,46 @@ def _signals(x1q, xv, t, pp, d_F, d_M, phase, aborts):
 def loop_outputs(l: int, x, w, t, pp):
     """The :data:`OUTPUTS` of the loop state ``x`` (:func:`loop_state`) under ``w``."""
     xs = loop_state(l).unpack(x)
-    xp, xg = xs["xp"], GUIDANCE_STATE.unpack(controller_state(l).unpack(xs["xc"])["xg"])
-    ps = PLANT_STATE.unpack(xp)
+    xg = controller_state(l).unpack(xs["xc"])["xg"]
+    return landing_signals_function()(xs["xp"], xg, w, t, pp)
+
+
+@functools.cache
+def loop_plant_function() -> ca.Function:
+    """``landing_loop_plant(xp, F_cmd, w, t, pp) -> xp_dot``: the landing plant under
+    the loop's disturbance ``w`` (:data:`DISTURBANCE`: wind in E, body ``d_F``, ``d_M``)."""
+    xp, F_cmd, w, t, pp = PLANT_STATE.sym(), COMMAND.sym(), DISTURBANCE.sym(), \
+        ca.SX.sym("t"), PLANT_PARAMS.sym()
+    return ca.Function("landing_loop_plant", [xp, F_cmd, w, t, pp],
+                       [landing_plant_rhs(xp, F_cmd, _body_disturbance(xp, w, pp), t, pp)],
+                       ["xp", "F_cmd", "w", "t", "pp"], ["xp_dot"])
+
+
+@functools.cache
+def landing_signals_function() -> ca.Function:
+    """``landing_signals(xp, xg, w, t, pp) -> y``: :data:`OUTPUTS` in flight.
+
+    The plant's state ``xp``, the guidance's state ``xg`` (its phase and
+    abort count) and the disturbance ``w`` (:data:`DISTURBANCE`).
+    """
+    xp, xg, w, t, pp = PLANT_STATE.sym(), GUIDANCE_STATE.sym(), DISTURBANCE.sym(), \
+        ca.SX.sym("t"), PLANT_PARAMS.sym()
+    ps, gs = PLANT_STATE.unpack(xp), GUIDANCE_STATE.unpack(xg)
     d = BODY_DISTURBANCE.unpack(_body_disturbance(xp, w, pp))
-    return _signals(ps["x1q"], ps["xv"], t, pp, d["d_F"], d["d_M"], xg["phase"], xg["aborts"])
+    y = _signals(ps["x1q"], ps["xv"], t, pp, d["d_F"], d["d_M"], gs["phase"], gs["aborts"])
+    return ca.Function("landing_signals", [xp, xg, w, t, pp], [y],
+                       ["xp", "xg", "w", "t", "pp"], ["y"])
+
+
+@functools.cache
+def gear_gap_function() -> ca.Function:
+    """``landing_gear_gap(xp, t, pp) -> g``: the gear's height above the deck plane, m;
+    touchdown is its zero crossing (the simulator's event)."""
+    xp, t, pp = PLANT_STATE.sym(), ca.SX.sym("t"), PLANT_PARAMS.sym()
+    s, p = PLANT_STATE.unpack(xp), PLANT_PARAMS.unpack(pp)
+    return ca.Function("landing_gear_gap", [xp, t, pp],
+                       [gear_gap(s["x1q"], s["xv"], t, p["p_act"], p["p_veh"], p["p_deck"])],
+                       ["xp", "t", "pp"], ["g"])
 
 
 @functools.cache
@@ -222,17 +261,18 @@ def landing_loop(l: int) -> LoopModel:
     xc_lay, pc_lay, x_lay = controller_state(l), controller_params(l), loop_state(l)
     xp, uh, w, t, pp = PLANT_STATE.sym(), COMMAND.sym(), DISTURBANCE.sym(), ca.SX.sym("t"), \
         PLANT_PARAMS.sym()
-    plant = _named("plant", [xp, uh, w, t, pp],
-                   [landing_plant_rhs(xp, uh, _body_disturbance(xp, w, pp), t, pp)],
+    plant = _named("plant", [xp, uh, w, t, pp], [loop_plant_function()(xp, uh, w, t, pp)],
                    ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
 
     xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
     cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
     plant_p = PLANT_PARAMS.unpack(ps["pp"])
     y = measurement_function()(xp, t, ps["pp"])
-    ms = MEASUREMENT.unpack(y)
-    xg_next, ref = guidance_step(cs["xg"], ms["p_e"], ms["v_e"], ms["v2E"][2], ps["dt"],
-                                 ps["p_guid"])
+    args = dict(y=y, xg=cs["xg"], mem=cs["mem"], p_ctrl=ps["p_ctrl"], p_quad=plant_p["p_quad"],
+                p_act=plant_p["p_act"], p_guid=ps["p_guid"], dt=ps["dt"])
+    step_args = _named("step_args", [xp, xc, pc, first, t], list(args.values()),
+                       ["xp", "xc", "pc", "first", "t"], list(args))
+    xg_next, ref = landing_guidance(cs["xg"], y, ps["dt"], ps["p_guid"])
     res = landing_law(l, y, ref, cs["mem"], ps["p_ctrl"], plant_p["p_quad"], plant_p["p_act"],
                       ps["dt"])
     rec = ca.vertcat(res["F_cmd"], res["eta_d"], REFERENCE.unpack(ref)["p_ref"], res["limits"])
@@ -244,11 +284,8 @@ def landing_loop(l: int) -> LoopModel:
     x = x_lay.sym()
     output_fn = _named("outputs", [x, w, t, pp], [loop_outputs(l, x, w, t, pp)],
                        ["x", "w", "t", "p"], ["y"])
-    s, pps = PLANT_STATE.unpack(xp), PLANT_PARAMS.unpack(pp)
-    event = _named("event", [xp, t, pp],
-                   [gear_gap(s["x1q"], s["xv"], t, pps["p_act"], pps["p_veh"], pps["p_deck"])],
+    event = _named("event", [xp, t, pp], [gear_gap_function()(xp, t, pp)],
                    ["xp", "t", "pp"], ["g"])
     return LoopModel("landing", x_lay, DISTURBANCE, PLANT_PARAMS, OUTPUTS, None, output_fn,
                      PLANT_STATE, COMMAND, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
-                     controller, assemble, event=event)
-
+                     controller, assemble, step_args=step_args, event=event)

@@ -32,6 +32,10 @@ __all__ = [
     "relative6",
     "relative6_acceleration",
     "gear_gap",
+    "deck_gear_gap",
+    "TOUCHDOWN_FIGURES",
+    "touchdown_figures",
+    "touchdown_figures_function",
     "relative6_function",
     "relative6_acceleration_function",
 ]
@@ -57,7 +61,46 @@ RELATIVE6_ACCELERATION = Layout("acc6", (
           elements=("dp_e", "dq_e", "dr_e")),
 ), "relative accelerations")
 
+#: How a touchdown went: the figures of summary.json's ``landing`` object.
+TOUCHDOWN_FIGURES = Layout("touchdown", (
+    Field("sink_rate", 1, "m/s", "-dz_e: the centre's speed towards the deck, along its normal"),
+    Field("offset", 1, "m", "hypot(x_e, y_e): horizontal distance from the pad centre"),
+    Field("relative_speed", 1, "m/s", "hypot(dx_e, dy_e): horizontal relative speed"),
+    Field("tilt_deg", 1, "deg", "angle between the body z axis and the deck normal"),
+), "touchdown figures, deck frame")
+
 _PARAM_NAMES = ["p_quad", "p_act", "p_veh", "p_deck"]
+
+
+def deck_gear_gap(p_e, R_deck, R1, gear_height):
+    """The gear's height above the deck plane from the relative position and both attitudes.
+
+    ``n2 . (p1 - gear_height R1 e_z - p2) = z_e - gear_height n2 . (R1 e_z)``
+    with ``n2 = R_deck e_z``, since ``z_e = n2 . (p1 - p2)``: what the
+    simulator's touchdown event and the flight code's guidance both compute
+    (the latter from the landing sensor, the IMU and the deck's attitude).
+    """
+    return p_e[2] - gear_height * (R_deck[:, 2].T @ R1[:, 2])
+
+
+def touchdown_figures(p_e, v_e, eta1, eta2):
+    """:data:`TOUCHDOWN_FIGURES` of a contact: sink rate, offset, relative speed, tilt.
+
+    The tilt is ``acos(n1 . n2)`` with ``n1 = R(eta1) e_z`` and ``n2 =
+    R(eta2) e_z`` (the argument clipped to [-1, 1]), in degrees.
+    """
+    cos_tilt = rotation(eta1)[:, 2].T @ rotation(eta2)[:, 2]
+    return ca.vertcat(-v_e[2], ca.hypot(p_e[0], p_e[1]), ca.hypot(v_e[0], v_e[1]),
+                      180 / ca.pi * ca.acos(ca.fmin(ca.fmax(cos_tilt, -1), 1)))
+
+
+@functools.cache
+def touchdown_figures_function() -> ca.Function:
+    """``touchdown_figures(p_e, v_e, eta1, eta2) -> figures`` (:data:`TOUCHDOWN_FIGURES`)."""
+    p_e, v_e, eta1, eta2 = (ca.SX.sym(n, 3) for n in ("p_e", "v_e", "eta1", "eta2"))
+    return ca.Function("touchdown_figures", [p_e, v_e, eta1, eta2],
+                       [touchdown_figures(p_e, v_e, eta1, eta2)],
+                       ["p_e", "v_e", "eta1", "eta2"], ["figures"])
 
 
 def _param_syms():
@@ -70,8 +113,7 @@ def _relative_pose(x1q, xv, t, p_act, p_veh, p_deck):
     p1, eta1 = q["p1"], q["eta1"]
     R_deck = deck.R_deck
     p_e = R_deck.T @ (p1 - deck.p2)
-    gear = p1 - ACTUATOR.unpack(p_act)["gear_height"] * rotation(eta1)[:, 2]
-    gap = R_deck[:, 2].T @ (gear - deck.p2)
+    gap = deck_gear_gap(p_e, R_deck, rotation(eta1), ACTUATOR.unpack(p_act)["gear_height"])
     return p_e, eta1 - deck.eta2, gap
 
 
