@@ -374,3 +374,162 @@ def test_flight_loop_margins_are_where_its_poles_cross():
     for _ in range(20):
         g = np.exp(rng.uniform(np.log(lo) + 1e-3, np.log(hi) - 1e-3, 4))
         assert _max_real_pole(L, g) < 0
+
+
+# ---------------------------------------------------------------- python-control's disk_margins
+#
+# Both libraries bound the multiloop (balanced, skew 0) disk margin through
+# M(w) = S - I/2 = (S - T)/2 and a diagonal perturbation of independent complex
+# scalars: alpha = 1 / max_w nu(M(w)), where nu is an upper bound of mu.
+#
+# * quadland: nu_q = sigma_max(D M D^-1) at the D its minimization over log D ends
+#   at (convex, Nelder-Mead to 1e-8 in log D);
+# * python-control 0.10.2 (``control.disk_margins(L, omega, skew=0.0)``): slycot's
+#   ``ab13md`` with every block complex (itype 2). Its bound is Fan, Tits and Doyle's
+#   (1991); their G-scalings act on real blocks only, so for complex blocks it is the
+#   same D-scaled bound, to AB13MD's internal threshold TOL = 100 sqrt(eps) = 1.5e-6.
+#
+# Each is an achieved value of sigma_max(D M D^-1), so both are >= the infimum
+# nu* >= mu: per frequency nu* <= nu_q, nu_pc, hence on the same frequencies
+# alpha_pc <= alpha_q (up to quadland's own slack, ~1e-10) and alpha_q <= alpha_pc
+# (1 + TOL), quadland's alpha being the larger where ab13md stops early. Both are
+# lower bounds of the true margin 1 / max mu; where the D-scaled bound equals mu
+# (one channel; up to three complex scalar blocks, Packard and Doyle 1993; normal M,
+# with D = I) both are the true margin. python-control takes the maximum over the
+# frequencies it is given and quadland refines its peak, so on any other set of
+# frequencies python-control's alpha can only be larger (it may miss the peak).
+# python-control does not check stability: it is compared on stable loops only.
+
+#: AB13MD's convergence threshold, 100 sqrt(eps) (SLICOT AB13MD, "Set tolerances").
+_AB13MD_TOL = 100 * math.sqrt(np.finfo(float).eps)
+
+#: The runtime needs python-control >= 0.10.1; disk_margins came in 0.10.2.
+needs_disk_margins = pytest.mark.skipif(not hasattr(control, "disk_margins"),
+                                        reason="control.disk_margins needs python-control "
+                                               ">= 0.10.2")
+
+
+def _control_disk_margin(L, omega):
+    """python-control's multiloop disk margin alpha on the frequencies omega."""
+    dm, _, _ = control.disk_margins(L, np.asarray(omega, dtype=float), skew=0.0)
+    return float(dm)
+
+
+def _quadland_frequencies(L, multi):
+    """quadland's search grid and its refined peak."""
+    from quadland.analysis import FrequencyResponse, frequency_grid
+
+    grid = frequency_grid(FrequencyResponse(L), extra_poles=closed_loop_poles(L))
+    return np.unique(np.r_[grid, multi.frequency])
+
+
+def _mu_lower(M, starts=6):
+    """A lower bound of mu for independent complex scalars: max over diagonal unitary Q
+    of the spectral radius of Q M (equal to mu, Doyle 1982; any Q gives a bound)."""
+    m = M.shape[0]
+    rng = np.random.default_rng(0)
+
+    def neg_rho(theta):
+        return -np.max(np.abs(np.linalg.eigvals(np.diag(np.exp(1j * np.r_[0.0, theta])) @ M)))
+
+    best = -neg_rho(np.zeros(m - 1))
+    for _ in range(starts):
+        res = scipy.optimize.minimize(neg_rho, rng.uniform(0, 2 * np.pi, m - 1),
+                                      method="Nelder-Mead",
+                                      options=dict(xatol=1e-9, fatol=1e-13, maxiter=3000))
+        best = max(best, -res.fun)
+    return best
+
+
+def _sensitivity_at(L, w):
+    from quadland.analysis import FrequencyResponse
+
+    resp = FrequencyResponse(L)
+    G = resp.at(resp.point(w))
+    return np.linalg.inv(np.eye(G.shape[0]) + G) - 0.5 * np.eye(G.shape[0])
+
+
+def _three_channel():
+    """A stable 3 x 3 loop with non-normal coupling: L = K / (s (s + 2)) with K
+    upper triangular, so that S - I/2 is far from normal."""
+    K = np.array([[3.0, 4.0, -2.0], [0.0, 2.0, 5.0], [0.0, 0.0, 4.0]])
+    A = np.block([[np.zeros((3, 3)), np.eye(3)], [np.zeros((3, 3)), -2 * np.eye(3)]])
+    return control.ss(A, np.vstack([np.zeros((3, 3)), K]), np.hstack([np.eye(3),
+                                                                      np.zeros((3, 3))]), 0)
+
+
+@needs_disk_margins
+@pytest.mark.parametrize("case", [_third_order, _cubic_lag], ids=["third_order", "cubic_lag"])
+def test_disk_margin_matches_python_control_siso(case):
+    """One channel: mu = |S - 1/2| and both libraries are exact."""
+    L, _ = case()
+    (per,), multi = diskmargin(L)
+    assert per == multi
+    alpha_pc = _control_disk_margin(L, _quadland_frequencies(control.ss(L), multi))
+    assert multi.disk_margin == pytest.approx(alpha_pc, rel=1e-12)
+
+
+@needs_disk_margins
+def test_disk_margin_matches_python_control_satellite():
+    """Normal M (D = I is optimal): both equal the closed form of
+    test_satellite_multiloop_disk_margin_is_poor; ab13md to its TOL."""
+    a = 10.0
+    w = math.sqrt(a * a + 1) - a
+    exact = 1 / math.sqrt((0.25 + (w / 2 + a) ** 2) / (1 + w * w))
+    L = _satellite(a)
+    _, multi = diskmargin(L)
+    alpha_pc = _control_disk_margin(L, np.unique(np.r_[_quadland_frequencies(L, multi), w]))
+    assert multi.disk_margin == pytest.approx(exact, rel=1e-9)
+    assert alpha_pc == pytest.approx(exact, rel=_AB13MD_TOL)
+
+
+@needs_disk_margins
+def test_disk_margin_matches_python_control_three_channels():
+    """Three complex scalars: the D-scaled bound is mu (Packard and Doyle 1993), so at
+    the peak quadland's bound meets an independent lower bound of mu; python-control
+    agrees within ab13md's TOL, never above quadland's alpha."""
+    L = _three_channel()
+    assert np.all(closed_loop_poles(L).real < 0)
+    _, multi = diskmargin(L)
+    M = _sensitivity_at(L, multi.frequency)
+    assert np.linalg.norm(M @ M.conj().T - M.conj().T @ M) > 0.1      # far from normal
+    assert 1 / multi.disk_margin == pytest.approx(_mu_lower(M), rel=1e-8)
+    alpha_pc = _control_disk_margin(L, _quadland_frequencies(L, multi))
+    assert alpha_pc <= multi.disk_margin * (1 + 1e-9)
+    assert multi.disk_margin <= alpha_pc * (1 + _AB13MD_TOL)
+
+
+@pytest.fixture(scope="module")
+def landing_loops():
+    """The highway landing loop at hover (shipped l = 10): continuous-time limit and
+    sampled at 250 Hz with one period of computation delay."""
+    from threadpoolctl import threadpool_limits
+
+    from quadland.linearize import equilibrium, linear_models, sampled_models
+    from quadland.scenario import load_scenario
+
+    with threadpool_limits(1):
+        sc = load_scenario("highway")
+        point = equilibrium(sc)
+        return {"continuous": linear_models(sc, point).loop_input,
+                "sampled": sampled_models(sc, point, 250.0).loop_input}
+
+
+@needs_disk_margins
+@pytest.mark.parametrize("which", ["continuous", "sampled"])
+def test_disk_margin_matches_python_control_landing_loop(landing_loops, which):
+    """Four channels: the D-scaled bound may exceed mu in general. On the same
+    frequencies python-control's alpha is quadland's within ab13md's TOL, never above it;
+    on a coarse grid it can only be larger (it misses the peak). At this loop's peak the
+    bound is tight: an independent lower bound of mu meets it (observed, 1e-15)."""
+    L = landing_loops[which]
+    _, multi = diskmargin(L)
+    assert 0 < multi.disk_margin < 2
+    alpha_pc = _control_disk_margin(L, _quadland_frequencies(L, multi))
+    assert alpha_pc <= multi.disk_margin * (1 + 1e-9)
+    assert multi.disk_margin <= alpha_pc * (1 + _AB13MD_TOL)
+    coarse = np.logspace(-2, math.log10(0.99 * math.pi / L.dt) if L.dt else 3, 40)
+    assert _control_disk_margin(L, coarse) >= multi.disk_margin * (1 - 1e-9)
+    mu_low = _mu_lower(_sensitivity_at(L, multi.frequency))
+    assert multi.disk_margin <= 1 / mu_low * (1 + 1e-9)                # guaranteed
+    assert multi.disk_margin == pytest.approx(1 / mu_low, rel=1e-6)    # tight here
