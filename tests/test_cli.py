@@ -187,6 +187,8 @@ def test_margins_unstable_loop_fails(tmp_path, capsys):
     (["--gain-margin-db", "-3"], "--gain-margin-db: must be a finite number >= 0, got -3.0"),
     (["--phase-margin-deg", "200"], "--phase-margin-deg: must lie in [0, 180), got 200.0"),
     (["--set", "rbf.nodes=0"], "rbf.nodes: must be in [1, 1000]"),
+    (["--delay-periods", "-1"], "--delay-periods: must be an integer >= 0, got -1"),
+    (["--scenario", "ship", "--at", "2"], "--at: the landing loop is analysed at its hover"),
 ])
 def test_margins_bad_input_names_the_flag_and_writes_nothing(tmp_path, capsys, args, message):
     status, out = _margins(tmp_path, "--no-plots", *args)
@@ -195,6 +197,35 @@ def test_margins_bad_input_names_the_flag_and_writes_nothing(tmp_path, capsys, a
     assert err.startswith(f"quadland: error: {message}")
     assert len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_margins_of_a_landing_scenario(tmp_path, capsys):
+    """The landing loop at hover: the same files and table; the exit status follows the
+    verdict, and the failed loops are named per controller."""
+    status, out = _margins(tmp_path, "--scenario", "highway")
+    assert {p.name for p in out.iterdir()} == {"margins.json", "scenario.toml",
+                                               ".quadland-output", *MARGIN_FIGURES}
+    data = json.loads((out / "margins.json").read_text())
+    assert data["operating_point"]["model"] == "landing"
+    assert list(data["sampled"]["loops"]) == ["thrust", "roll", "pitch", "yaw"]
+    assert data["sampled"]["computation_delay_periods"] == 1
+    passed = data["continuous"]["passed"] and data["sampled"]["passed"]
+    assert status == (0 if passed else 1)
+    std = capsys.readouterr()
+    assert "hover 3 m above the pad" in std.out
+    failed = [f"{k}: {', '.join(n for n, v in data[k]['loops'].items() if not v['passed'])}"
+              for k in ("continuous", "sampled") if not data[k]["passed"]]
+    assert std.err == ("" if passed else "quadland: margins below the requirement 6 dB / "
+                                         f"45 deg: {'; '.join(failed)}\n")
+
+
+def test_margins_delay_periods(tmp_path, capsys):
+    status, out = _margins(tmp_path, "--no-plots", "--set", "controller.rate_hz=100",
+                           "--delay-periods", "2")
+    data = json.loads((out / "margins.json").read_text())
+    assert data["sampled"]["computation_delay_periods"] == 2
+    assert data["sampled"]["computation_delay_s"] == pytest.approx(0.02)
+    assert "computation delay 2 periods (20 ms)" in capsys.readouterr().out
 
 
 def test_margins_out_is_a_file(tmp_path, capsys):

@@ -229,3 +229,64 @@ def test_hold_compensation_trades_nyquist_gain_for_phase(sampled):
         lag = {h: abs(sampled[h].sampled.loop(cont.name).phase_margin_deg
                       - cont.phase_margin_deg) for h in sampled}
         assert lag[0.5] < 0.1 * lag[0.0]
+
+
+# the landing loop
+
+LANDING_LOOPS = ["thrust", "roll", "pitch", "yaw"]
+
+
+@pytest.fixture(scope="module")
+def landing():
+    """highway at hover, a small network, 250 Hz with one period of computation delay."""
+    with threadpool_limits(1):
+        return margin_report(load_scenario("highway", ["rbf.nodes=3"]))
+
+
+def test_landing_report_is_the_same_review(landing):
+    from quadland.margins import LANDING_LOOP_BREAK
+
+    assert landing.point.model == "landing" and landing.point.kind == "equilibrium"
+    for section in (landing.continuous, landing.sampled):
+        assert [m.name for m in section.loops] == LANDING_LOOPS
+        assert section.stable
+        assert isinstance(section.multiloop_disk, MultiloopDiskMargin)
+    assert landing.continuous.rate_hz is None
+    assert landing.sampled.rate_hz == 250.0
+    assert landing.sampled.computation_delay_periods == 1
+    assert landing.sampled.computation_delay_s == pytest.approx(0.004)
+    # the plant has 16 states (deck frame, motors), the controller the step's memory
+    # (6 l + 16) and, sampled, the four held commands of the delay
+    assert landing.models.plant.nstates == 16
+    assert landing.models.controller.nstates == 6 * 3 + 16
+    assert landing.sampled_models.controller.nstates == 6 * 3 + 16 + 4
+    assert landing.continuous.poles.count == 16 + 6 * 3 + 16
+    # sampling and the delay cost phase in every loop
+    for m in landing.sampled.loops:
+        assert m.phase_margin_deg < landing.continuous.loop(m.name).phase_margin_deg
+    data = landing.to_dict()
+    assert data["loop_break"] == LANDING_LOOP_BREAK
+    op = data["operating_point"]
+    assert op["model"] == "landing"
+    assert list(op["state"])[:6] == ["x_e", "y_e", "z_e", "phi1", "theta1", "psi_e"]
+    assert op["state"]["z_e"] == pytest.approx(3.0, abs=0.05)      # landing.hover_height
+    assert list(op["wrench"]) == ["F_total", "M_x", "M_y", "M_z"]
+    assert op["wrench"]["F_total"] == pytest.approx(2.0 * 9.8, rel=0.01)
+    assert list(data["sampled"]["loops"]) == LANDING_LOOPS
+    assert data["sampled"]["computation_delay_s"] == pytest.approx(0.004)
+    json.dumps(data, allow_nan=False)
+
+
+def test_landing_table(landing):
+    table = format_report(landing)
+    assert "scenario highway, hover 3 m above the pad" in table
+    assert "wrench [T, M_x, M_y, M_z] into the mixer" in table
+    assert "continuous-time limit of the landing step (dt -> 0)" in table
+    assert "zero-order hold at 250 Hz, computation delay 1 period (4 ms)" in table
+    for name in LANDING_LOOPS:
+        assert sum(line.startswith(f"  {name} ") for line in table.splitlines()) == 2
+
+
+def test_landing_refuses_a_frozen_point():
+    with pytest.raises(MarginsError, match=r"^at: the landing loop is analysed at its hover"):
+        margin_report(load_scenario("highway", ["rbf.nodes=3"]), at=1.0)
