@@ -88,7 +88,6 @@ typedef char output_is_its_layout[
     AT(ql_output, n_clipped, 17, 0) &&
     1 ? 1 : -1];
 #undef AT
-
 /* Defaults: scenario paper. */
 static const ql_real default_p_quad[13] = {
     2.0, 1.2416, 1.2416, 2.4832, 0.01, 0.01,
@@ -414,42 +413,28 @@ void ql_pack_closed_loop_params(const ql_params *params, const ql_vehicle_params
     pack_reference(ref, p + 1137);
 }
 
-const char *ql_status_string(ql_status status)
-{
-    switch (status) {
-    case QL_OK: return "success; outputs and adaptive state updated";
-    case QL_ERR_NULL: return "a NULL pointer argument";
-    case QL_ERR_INVALID: return "dt <= 0";
-    case QL_ERR_NONFINITE_INPUT: return "an input, parameter or the adaptive state is NaN or infinite";
-    case QL_ERR_TILT: return "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible";
-    case QL_ERR_NONFINITE_OUTPUT: return "the law overflowed: a NaN or infinite value from finite inputs";
-    case QL_ERR_PARAM: return "a parameter outside its range (ql_check_params names it)";
-    }
-    return "unknown status";
-}
-
 /* The range of each member of ql_params, in layout order (symbolic.c_api.PARAM_RANGES):
- *   quad.m1              > 0
- *   quad.I               > 0
- *   quad.Kt              >= 0
- *   quad.Kr              >= 0
- *   quad.g               > 0
- *   quad.arm             > 0
- *   quad.c               > 0
- *   ctrl.k1              > 0
- *   ctrl.k2              > 0
- *   ctrl.gamma1          > 0
- *   ctrl.gamma2          > 0
- *   ctrl.k_w             > 0
- *   ctrl.k_zeta          > 0
- *   ctrl.rho             > 0
- *   ctrl.nominal_model   0 or 1
- *   ctrl.centers         finite
- *   ctrl.widths          > 0
- *   rotor_force_min      finite
- *   rotor_force_max      >= rotor_force_min
- *   tilt_min             in [0, 1)
- *   hold_compensation    in [0, 1]
+ *   quad.m1                  > 0
+ *   quad.I                   > 0
+ *   quad.Kt                  >= 0
+ *   quad.Kr                  >= 0
+ *   quad.g                   > 0
+ *   quad.arm                 > 0
+ *   quad.c                   > 0
+ *   ctrl.k1                  > 0
+ *   ctrl.k2                  > 0
+ *   ctrl.gamma1              > 0
+ *   ctrl.gamma2              > 0
+ *   ctrl.k_w                 > 0
+ *   ctrl.k_zeta              > 0
+ *   ctrl.rho                 > 0
+ *   ctrl.nominal_model       0 or 1
+ *   ctrl.centers             finite
+ *   ctrl.widths              > 0
+ *   rotor_force_min          finite
+ *   rotor_force_max          >= rotor_force_min
+ *   tilt_min                 in [0, 1)
+ *   hold_compensation        in [0, 1]
  * NaN and infinities are outside every range. */
 ql_status ql_check_params(const ql_params *params, const char **bad_field)
 {

@@ -34,12 +34,13 @@ typedef double ql_real;
 #define QL_CLOSED_LOOP_JACOBIAN_NNZ 4627     /* nonzeros of d x_dot / d x */
 #define QL_PLANT_NX 18                       /* xp = [xq (10), xv (6), pos1 (2)] */
 
-/* Status of ql_control_step and ql_check_params. */
+/* Status of every step and check: ql_control_step, ql_check_params and
+ * quadland_landing.h's ql_landing_step, ql_guidance_step and their checks. */
 typedef enum {
     QL_OK = 0,                     /* success; outputs and adaptive state updated */
     QL_ERR_NULL = 1,               /* a NULL pointer argument */
-    QL_ERR_INVALID = 2,            /* dt <= 0 */
-    QL_ERR_NONFINITE_INPUT = 3,    /* an input, parameter or the adaptive state is NaN or infinite */
+    QL_ERR_INVALID = 2,            /* dt <= 0, or a guidance state out of range */
+    QL_ERR_NONFINITE_INPUT = 3,    /* an input, a parameter or the state is NaN or infinite */
     QL_ERR_TILT = 4,               /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
     QL_ERR_NONFINITE_OUTPUT = 5,   /* the law overflowed: a NaN or infinite value from finite inputs */
     QL_ERR_PARAM = 6,              /* a parameter outside its range (ql_check_params names it) */
@@ -167,7 +168,7 @@ ql_status ql_control_step(const ql_quadrotor_state *xq, const ql_vehicle_state *
                           const ql_reference *ref, const ql_params *params, ql_real dt,
                           ql_adaptive_state *state, ql_output *out);
 
-/* A short English description of a status code. */
+/* A short English description of a status code (quadland_status.c). */
 const char *ql_status_string(ql_status status);
 
 /* Pack the named parameters into the layouts of symbolic.parameters. */

@@ -26,35 +26,54 @@ import functools
 import numpy as np
 
 from quadland.build import build_library
-from symbolic.c_api import api_structs
-from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, generate
+from symbolic.c_api import api_structs, landing_api_structs
+from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, generate, generate_landing
 from symbolic.control_step import step_inputs, step_outputs
 from symbolic.layout import Layout
 
-__all__ = ["sources", "ctypes_struct", "CControlStep", "load_control_step", "CApi", "load_api"]
+__all__ = ["sources", "ctypes_struct", "CControlStep", "load_control_step", "CApi", "load_api",
+           "LandingApi", "load_landing_api"]
 
-_MODEL = tuple(f.name for f in FUNCTIONS)
+_MODEL = tuple(f.name for f in FUNCTIONS if f.part == "paper")
 
 
 @functools.lru_cache(maxsize=8)
-def _sources(l: int, precision: str) -> tuple[tuple[str, str], ...]:
-    from quadland.codegen import default_values
+def _sources(l: int, precision: str, model: str) -> tuple[tuple[str, str], ...]:
+    from quadland.codegen import (
+        LANDING_SCENARIO,
+        PAPER_SCENARIO,
+        default_values,
+        landing_default_values,
+    )
 
-    defaults = default_values("paper")
-    if defaults.l != l:
-        defaults = default_values("paper", [f"rbf.nodes={l}"])
-    return tuple(sorted(generate(defaults, CodegenConfig(precision)).items()))
+    config = CodegenConfig(precision)
+    paper = default_values(PAPER_SCENARIO)
+    if model == "paper" and paper.l != l:
+        paper = default_values(PAPER_SCENARIO, [f"rbf.nodes={l}"])
+    files = generate(paper, config)
+    if model == "landing":
+        landing = landing_default_values(LANDING_SCENARIO)
+        if landing.l != l:
+            landing = landing_default_values(LANDING_SCENARIO, [f"rbf.nodes={l}"])
+        files.update(generate_landing(landing, config))
+    return tuple(sorted(files.items()))
 
 
-def sources(l: int, precision: str = "double") -> dict[str, str]:
+def sources(l: int, precision: str = "double", model: str = "paper") -> dict[str, str]:
     """The C files of one build for ``l`` nodes, generated from ``symbolic``.
 
-    The defaults are the paper scenario's, with ``rbf.nodes = l``; for the
-    paper's own ``l`` the files equal ``generated/`` (or ``generated/float/``).
+    ``model = "paper"``: the paper's control step (``quadland.h``), with the
+    paper scenario's defaults and ``rbf.nodes = l``; ``"landing"``: also the
+    landing step and guidance (``quadland_landing.h``) with the highway
+    scenario's and ``rbf.nodes = l`` (the paper's with its own ``l``). For
+    the scenarios' own ``l`` the files equal ``generated/`` (or
+    ``generated/float/``).
     """
     if precision not in ("double", "float"):
         raise ValueError(f"precision must be 'double' or 'float', got {precision!r}")
-    return dict(_sources(l, precision))
+    if model not in ("paper", "landing"):
+        raise ValueError(f"model must be 'paper' or 'landing', got {model!r}")
+    return dict(_sources(l, precision, model))
 
 
 def _real(precision: str):
@@ -238,9 +257,67 @@ def load_api(l: int, precision: str = "double", opt: str = "-O2", model: bool = 
     if not model:
         return api
     for entry in FUNCTIONS:
-        if entry.wrapper is None:
+        if entry.wrapper is None or entry.part != "paper":
             continue
         ins, outs = entry.arguments(l)
         getattr(lib, f"ql_{entry.name}").argtypes = [P(real)] * (len(ins) + len(outs))
     lib.ql_closed_loop_jacobian_sparsity.restype = P(ctypes.c_int)
+    return api
+
+
+@dataclasses.dataclass(frozen=True)
+class LandingApi:
+    """The landing API (``quadland_landing.h``) loaded with ``ctypes``.
+
+    Attributes
+    ----------
+    lib : object
+        The library, its names spelled ``ql_`` in either precision
+        (``ql_landing_step``, ``ql_guidance_step``, ``ql_check_landing_params``,
+        ...).
+    LandingMeasurement, PositionReference, LandingState, LandingControllerParams,
+    ActuatorParams, LandingParams, LandingOutput, GuidanceState, GuidanceParams : type
+        ``ctypes.Structure`` mirrors of the header's structs (:func:`ctypes_struct`).
+    real : type
+        ``ctypes.c_double`` or ``ctypes.c_float``.
+    """
+
+    lib: object
+    LandingMeasurement: type
+    PositionReference: type
+    LandingState: type
+    LandingControllerParams: type
+    ActuatorParams: type
+    LandingParams: type
+    LandingOutput: type
+    GuidanceState: type
+    GuidanceParams: type
+    real: type
+
+
+@functools.lru_cache(maxsize=8)
+def load_landing_api(l: int, precision: str = "double", opt: str = "-O2") -> LandingApi:
+    """The landing step and guidance for ``l`` nodes, compiled (the highway scenario's
+    defaults, ``rbf.nodes = l``)."""
+    files = sources(l, precision, "landing")
+    config = CodegenConfig(precision)
+    lib = _Library(ctypes.CDLL(str(build_library(files, c_sources(("landing_step",)), opt))),
+                   config.prefix)
+    real = _real(precision)
+    api = LandingApi(lib=lib, real=real, **{s.mirror: ctypes_struct(s.layout, real)
+                                            for s in landing_api_structs(l)})
+    P = ctypes.POINTER
+    lib.ql_landing_step.argtypes = [P(api.LandingMeasurement), P(api.PositionReference),
+                                    P(api.LandingParams), real, P(api.LandingState),
+                                    P(api.LandingOutput)]
+    lib.ql_guidance_step.argtypes = [P(api.LandingMeasurement), P(api.GuidanceParams), real,
+                                     P(api.GuidanceState), P(api.PositionReference)]
+    for name, struct in (("landing", api.LandingParams), ("guidance", api.GuidanceParams)):
+        check = getattr(lib, f"ql_check_{name}_params")
+        check.argtypes = [P(struct), P(ctypes.c_char_p)]
+        check.restype = ctypes.c_int
+    lib.ql_landing_step.restype = lib.ql_guidance_step.restype = ctypes.c_int
+    lib.ql_landing_state_init.argtypes = [P(api.LandingState), P(api.LandingMeasurement)]
+    lib.ql_guidance_state_init.argtypes = [P(api.GuidanceState), P(api.GuidanceParams)]
+    lib.ql_phase_name.restype = ctypes.c_char_p
     return api

@@ -1,11 +1,16 @@
 """Regenerate, or check, the generated C code for a scenario.
 
-``generated/`` in a source checkout holds the paper scenario's C: the
-double-precision build at its top, the single-precision build in
-``float/`` and the pure-C example in ``example/``; every file comes from
-:func:`symbolic.codegen.generate_tree` with the scenario's values as
-defaults. Any other scenario, or an installed (non-editable) quadland,
-writes into a folder given with ``--out``.
+``generated/`` in a source checkout is one tree with both flight steps: the
+paper's control step with the paper scenario's values (``quadland.h``) and
+the landing step and guidance with the ``highway`` scenario's
+(``quadland_landing.h``); the double-precision build at its top, the
+single-precision build in ``float/`` and the pure-C example in
+``example/`` (``fly``: the paper's flight, ``land``: highway's landing, and
+``bench``). Every file comes from :func:`symbolic.codegen.generate_tree`. A
+landing scenario replaces the landing half's values and the paper's half
+keeps its own, any other scenario the reverse; such a tree, or one from an
+installed (non-editable) quadland, is written into a folder given with
+``--out``.
 """
 
 from __future__ import annotations
@@ -22,11 +27,16 @@ import numpy as np
 from quadland.constants import TILT_MIN
 from quadland.exceptions import CodegenError
 from quadland.model import model_values
-from quadland.scenario import load_scenario
-from symbolic.codegen import Defaults, generate_tree
+from quadland.scenario import load_scenario, require_model
+from symbolic.codegen import Defaults, LandingDefaults, generate_tree
 
-__all__ = ["EXAMPLE_CONTROL_RATE_HZ", "checkout_root", "generated_dir", "default_values",
-           "generated_files", "stale", "write", "diff", "main"]
+__all__ = ["EXAMPLE_CONTROL_RATE_HZ", "PAPER_SCENARIO", "LANDING_SCENARIO", "checkout_root",
+           "generated_dir", "default_values", "landing_default_values", "generated_files",
+           "stale", "write", "diff", "main"]
+
+#: The scenarios whose values generated/ holds: the paper's control step's and
+#: the landing step's (with the example's flights).
+PAPER_SCENARIO, LANDING_SCENARIO = "paper", "highway"
 
 #: Control rate of the pure-C example flight for a continuous-time scenario,
 #: Hz (a flight stack's typical rate); a sampled scenario's own rate otherwise.
@@ -68,16 +78,21 @@ def generated_dir() -> Path:
     return root / "generated"
 
 
-def default_values(scenario: str | Path = "paper", overrides: Iterable[str] = ()) -> Defaults:
-    """The C defaults: a scenario's values, with overrides."""
+def _label(sc) -> str:
+    """The scenario's name and overrides; it goes into C comments and a string
+    literal: only safe characters."""
+    return _C_UNSAFE.sub("?", sc.name + "".join(f" --set {o}" for o in sc.overrides))
+
+
+def default_values(scenario: str | Path = PAPER_SCENARIO,
+                   overrides: Iterable[str] = ()) -> Defaults:
+    """The C defaults of the paper's control step: a scenario's values, with overrides."""
     sc = load_scenario(scenario, list(overrides))
     mv = model_values(sc)
     d, sim = sc.data["disturbance"], sc.data["simulation"]
     rate = float(sc.data["controller"]["rate_hz"]) or EXAMPLE_CONTROL_RATE_HZ
-    # the label goes into C comments and a string literal: only safe characters
-    label = _C_UNSAFE.sub("?", sc.name + "".join(f" --set {o}" for o in sc.overrides))
     return Defaults(
-        scenario=label, l=mv.l, p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
+        scenario=_label(sc), l=mv.l, p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
         rotor_limits=tuple(float(v) for v in mv.rotor_limits), tilt_min=TILT_MIN,
         hold=mv.hold, x0=mv.x0,
         duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
@@ -91,6 +106,44 @@ def default_values(scenario: str | Path = "paper", overrides: Iterable[str] = ()
         moment_frequency=float(d["moment_frequency"]))
 
 
+def landing_default_values(scenario: str | Path = LANDING_SCENARIO,
+                           overrides: Iterable[str] = ()) -> LandingDefaults:
+    """The C defaults of the landing step, the guidance and the example ``land``: a
+    landing scenario's values (``quadland.landing.landing_values``), with overrides."""
+    from quadland.landing import landing_values
+    from quadland.metrics import TOUCHDOWN_LIMITS
+    from symbolic.landing.loop import controller_params
+    from symbolic.landing.plant import PLANT_PARAMS
+
+    sc = load_scenario(scenario, list(overrides))
+    require_model(sc, "landing", "the landing step's code generation")
+    lv = landing_values(sc)
+    pc, pp = controller_params(lv.l).unpack(lv.pc), PLANT_PARAMS.unpack(lv.pp)
+    d, sim, wind = sc.data["disturbance"], sc.data["simulation"], sc.data["wind"]
+    g = sc.data["landing"]
+    e = np.asarray(wind["gust_direction"], dtype=float)
+    e = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else e      # as quadland.wind does
+
+    def floats(v):
+        return tuple(float(x) for x in np.asarray(v, dtype=float))
+
+    return LandingDefaults(
+        scenario=_label(sc), l=lv.l, p_quad=pp["p_quad"], p_ctrl=pc["p_ctrl"], p_act=pp["p_act"],
+        p_guid=pc["p_guid"], tilt_min=TILT_MIN, pp=lv.pp, xp0=lv.xp0,
+        duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
+        control_rate_hz=float(sc.data["controller"]["rate_hz"]),
+        disturbance_rate_hz=float(d["sample_rate_hz"]),
+        rk_steps=int(sim["rk_steps_per_interval"]),
+        force_bias=floats(d["force_bias"]), force_amplitude=float(d["force_amplitude"]),
+        force_frequency=float(d["force_frequency"]), moment_bias=floats(d["moment_bias"]),
+        moment_amplitude=float(d["moment_amplitude"]),
+        moment_frequency=float(d["moment_frequency"]), wind_mean=floats(wind["mean"]),
+        gust_start=float(wind["gust_start"]), gust_half_length=float(wind["gust_half_length"]),
+        gust_amplitude=float(wind["gust_amplitude"]), gust_direction=floats(e),
+        settle_time=float(g["settle_time"]),
+        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS))
+
+
 #: Characters the scenario label keeps in generated C (comments, a string literal).
 _C_UNSAFE = re.compile(r"[^A-Za-z0-9_.,:=+\-\[\] ]")
 
@@ -99,12 +152,16 @@ _C_UNSAFE = re.compile(r"[^A-Za-z0-9_.,:=+\-\[\] ]")
 MANIFEST = ".quadland-generated"
 
 
-def generated_files(defaults: Defaults | None = None) -> dict[str, str]:
+def generated_files(defaults: Defaults | None = None,
+                    landing: LandingDefaults | None = None) -> dict[str, str]:
     """Every file of the generated tree by relative path (POSIX separators).
 
-    The tree includes :data:`MANIFEST`, the list of its other files.
+    ``defaults`` are the paper's control step's (:func:`default_values`, of
+    :data:`PAPER_SCENARIO` by default), ``landing`` the landing step's
+    (:func:`landing_default_values`, of :data:`LANDING_SCENARIO`). The tree
+    includes :data:`MANIFEST`, the list of its other files.
     """
-    files = generate_tree(defaults or default_values())
+    files = generate_tree(defaults or default_values(), landing or landing_default_values())
     files[MANIFEST] = "".join(f"{rel}\n" for rel in sorted(files))
     return files
 
@@ -184,7 +241,7 @@ def diff(out: Path, files: dict[str, str]) -> str:
 
 def _command(scenario, overrides, out: Path | None) -> str:
     words = ["quadland", "codegen"]
-    if str(scenario) != "paper":
+    if str(scenario) != PAPER_SCENARIO:
         words += ["--scenario", str(scenario)]
     words += [w for o in overrides for w in ("--set", o)]
     if out is not None:
@@ -200,12 +257,16 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
     ----------
     out : Path, optional
         Target folder; by default the checkout's ``generated/``, which holds
-        the paper scenario only.
+        the shipped scenarios' code only (:data:`PAPER_SCENARIO`,
+        :data:`LANDING_SCENARIO`).
     check : bool
         Regenerate into a temporary folder and compare instead of writing:
         print a unified diff and return 1 where ``out`` differs.
     scenario : str or Path
-        A shipped scenario's name or a TOML file.
+        A shipped scenario's name or a TOML file. A landing scenario sets the
+        landing step's defaults and the example ``land`` (the paper's step
+        keeps :data:`PAPER_SCENARIO`'s), any other the paper's step's and the
+        example ``fly`` (the landing's keeps :data:`LANDING_SCENARIO`'s).
     overrides : iterable of str
         ``section.key=value`` overrides of the scenario.
 
@@ -218,7 +279,7 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
     ------
     CodegenError
         Without ``out`` outside a source checkout, or for another scenario
-        than the paper's; nothing is written then.
+        than the shipped two or with overrides; nothing is written then.
     ScenarioError
         For an unknown or invalid scenario.
     """
@@ -226,13 +287,16 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
     given = out
     if out is None:
         out = generated_dir()
-        if str(scenario) != "paper" or overrides:
-            raise CodegenError("generated/ holds the paper scenario's code; write another "
-                               "scenario's with --out DIR")
+        if str(scenario) not in (PAPER_SCENARIO, LANDING_SCENARIO) or overrides:
+            raise CodegenError(f"generated/ holds the {PAPER_SCENARIO} and {LANDING_SCENARIO} "
+                               "scenarios' code; write another scenario's with --out DIR")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise CodegenError(f"out: {out} exists and is not a folder")
-    files = generated_files(default_values(scenario, overrides))
+    if load_scenario(scenario, overrides).model == "landing":
+        files = generated_files(landing=landing_default_values(scenario, overrides))
+    else:
+        files = generated_files(default_values(scenario, overrides))
     if check:
         with tempfile.TemporaryDirectory() as tmp:
             write(Path(tmp), files)

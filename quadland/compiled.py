@@ -70,13 +70,13 @@ class CompiledLoop:
     """
 
     def __init__(self, model: LoopModel, part: str, opt: str = "-O2",
-                 flight: dict[str, str] | None = None):
+                 flight: dict[str, str] | None = None, flight_sources: tuple[str, ...] = ()):
         self.model, self.part = model, part
         files = simulator_sources(model, part)
         sources = tuple(sorted(n for n in files if n.endswith(".c")))
-        if flight is not None:                       # the flight step's own sources
+        if flight is not None:                       # the flight code's own sources
             files = {**flight, **files}
-            sources += ("control_step.c", "quadland.c")
+            sources += flight_sources
         self.library = build_library(files, sources, opt, f"qlsim_{model.name}_{part}",
                                      strict=False)
         lib = ctypes.CDLL(str(self.library))
@@ -285,7 +285,8 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
     key of :data:`LOOPS` (the paper's loop, the landing loop). One simulator
     is kept per model, ``l`` and part. Without a C compiler: a
     :class:`VMLoop` after one :class:`QuadlandWarning`; the flight code
-    (part ``"sampled_flight"``, the paper's loop only) exists only compiled.
+    (part ``"sampled_flight"``: the paper's control step, or the landing's
+    guidance and step) exists only compiled.
 
     Raises
     ------
@@ -304,13 +305,15 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
                 "was found (set CC or install gcc; or use controller.backend = \"casadi\")")
         _warn_no_compiler()
         return VMLoop(loop, part)
-    flight = None
+    flight, flight_sources = None, ()
     if part == "sampled_flight":
         from quadland.cbackend import sources
+        from symbolic.codegen import c_sources
 
-        flight = sources(l, "double")
+        flight = sources(l, "double", model)
+        flight_sources = c_sources(({"paper": "control_step", "landing": "landing_step"}[model],))
     try:
-        return CompiledLoop(loop, part, flight=flight)
+        return CompiledLoop(loop, part, flight=flight, flight_sources=flight_sources)
     except CompileError as exc:
         if part == "sampled_flight":
             raise

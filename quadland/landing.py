@@ -4,7 +4,9 @@ A landing scenario (``scenario.model = "landing"``, schema
 ``quadland.scenario.LANDING_SCHEMA``) flies the landing loop of
 ``symbolic.landing.loop`` in one call of its compiled simulator (on CasADi's
 virtual machine without a C compiler): the guidance and the landing step at
-``controller.rate_hz``, their rotor commands held on the 6-DOF plant, RK4 on
+``controller.rate_hz`` (CasADi's functions, or with ``controller.backend =
+"c"`` the generated flight code of ``quadland_landing.h``), their rotor
+commands held on the 6-DOF plant, RK4 on
 the exact grid of the output, disturbance and control times, and the
 touchdown (the gear gap's zero crossing) located within its step, where the
 integration ends. From then on the quadrotor rides on the deck, pinned at its
@@ -19,7 +21,7 @@ import dataclasses
 
 import numpy as np
 
-from quadland.compiled import SIM_EVENT, SIM_GUARD, compiled_loop
+from quadland.compiled import SIM_CONTROLLER, SIM_EVENT, SIM_GUARD, compiled_loop
 from quadland.constants import TILT_MIN
 from quadland.exceptions import SimulationError
 from quadland.model import disturbance_samples
@@ -41,9 +43,10 @@ from symbolic.kinematics import rotation
 from symbolic.landing.controller import landing_controller_params, landing_memory
 from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
 from symbolic.landing.loop import (
-    ANCHOR,
     OUTPUTS,
     RECORDED,
+    TRAJECTORY,
+    anchor_function,
     controller_params,
     controller_state,
     landed_outputs_function,
@@ -52,7 +55,6 @@ from symbolic.landing.loop import (
 from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
 from symbolic.landing.quadrotor import ACTUATOR
 from symbolic.landing.quadrotor import STATE as QUAD6_STATE
-from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.simulation import rk4_step
 from symbolic.vehicle import STATE as VEHICLE_STATE
@@ -62,11 +64,7 @@ __all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "wind_sample
            "landing_disturbance", "simulate_landing"]
 
 #: The columns of a landing run's trajectory.csv (docs/landing.md), from the loop's layouts.
-LANDING_TRAJECTORY = Layout("landing_trajectory", (
-    Field("t", 1, "s", "time"),
-    *(OUTPUTS[n] for n in ("phase", "p1", "eta1", "p2", "eta2", "p_e", "F_total", "M", "F",
-                           "d_F")),
-), "one row per output time of a landing, and one at touchdown")
+LANDING_TRAJECTORY = TRAJECTORY
 
 
 @dataclasses.dataclass(frozen=True)
@@ -236,7 +234,8 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     grid = np.unique(np.round(np.concatenate([t_out, t_dist, t_ctrl]), 12))
     ctrl = _grid_index(grid[:-1], t_ctrl) >= 0
     rec = _grid_index(grid, t_out)
-    loop = compiled_loop(lv.l, "sampled", "landing")
+    flight = scenario.data["controller"]["backend"] == "c"
+    loop = compiled_loop(lv.l, "sampled_flight" if flight else "sampled", "landing")
     X, R, xp_end, xc_end, failure = loop.sampled(
         lv.xp0, lv.xc0, _held(t_dist, w_dist, grid[:-1]).T, grid, ctrl, rec,
         sim["rk_steps_per_interval"], lv.pp, lv.pc, TILT_MIN, len(t_out))
@@ -258,8 +257,9 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         Y = np.vstack([Y, y_td, ride[3]])
         Y[done, OUTPUTS.index("phase")] = TOUCHDOWN
     elif failure is not None:
-        what = (f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}"
-                if failure.status == SIM_GUARD else "the state became non-finite")
+        what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
+                SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
+                                "error status"}.get(failure.status, "the state became non-finite")
         t_fail = grid[min(failure.index, len(grid) - 1)]
     bad = ~np.all(np.isfinite(Y), axis=1)
     if bad.any():
@@ -293,9 +293,7 @@ def _ride(scenario, lv, t_out, t_td, x_td, y_td, R_td):
     lay, ys = loop_state(lv.l), OUTPUTS.unpack(y_td)
     xp_td = lay.unpack(x_td)["xp"]
     s = PLANT_STATE.unpack(xp_td)
-    R_rel = (np.asarray(rotation(ys["eta2"]), dtype=float).T
-             @ np.asarray(rotation(ys["eta1"]), dtype=float))
-    anchor = ANCHOR.pack(dict(p_e=ys["p_e"], R_rel=R_rel))
+    anchor = np.asarray(anchor_function()(y_td), dtype=float).ravel()
     F_td = QUAD6_STATE.unpack(s["x1q"])["F"]
     p = PLANT_PARAMS.unpack(lv.pp)
     tau_m = ACTUATOR.unpack(p["p_act"])["motor_time_constant"][0]

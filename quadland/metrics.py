@@ -9,7 +9,7 @@ import numpy as np
 from quadland.simulate import SimulationResult
 
 __all__ = ["settling_time", "summarize", "SETTLING_FRACTION", "SETTLING_FLOOR",
-           "TouchdownReport", "touchdown_report", "landing_summary"]
+           "TOUCHDOWN_LIMITS", "TouchdownReport", "touchdown_report", "landing_summary"]
 
 #: Settling band as a fraction of the initial error (the 2 % criterion).
 SETTLING_FRACTION = 0.02
@@ -17,6 +17,10 @@ SETTLING_FRACTION = 0.02
 #: noise-driven ripple does not make the criterion meaningless.
 SETTLING_FLOOR = {"z_e": 0.01, "phi_e": np.deg2rad(0.1), "theta_e": np.deg2rad(0.1),
                   "psi_e": np.deg2rad(0.1)}
+
+#: The ``[landing]`` limits a touchdown is held to, in the report's order: each
+#: is ``max_`` and the name of a ``symbolic.landing.relative.TOUCHDOWN_FIGURES``.
+TOUCHDOWN_LIMITS = ("max_sink_rate", "max_offset", "max_tilt_deg", "max_relative_speed")
 
 E1 = ("z_e", "phi_e", "theta_e", "psi_e")
 E2 = ("dz_e", "p_e", "q_e", "r_e")
@@ -149,8 +153,7 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
     from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
 
     g = result.scenario.data["landing"]
-    limits = {k: g[k] for k in ("max_sink_rate", "max_offset", "max_tilt_deg",
-                                "max_relative_speed")}
+    limits = {k: g[k] for k in TOUCHDOWN_LIMITS}
     rows = np.flatnonzero(result["phase"] == TOUCHDOWN)
     if rows.size == 0:
         aborts = int(result["aborts"][-1]) if len(result["t"]) else 0
@@ -164,9 +167,7 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
         row("x_e", "y_e", "z_e"), row("dx_e", "dy_e", "dz_e"), row("phi1", "theta1", "psi1"),
         row("phi2", "theta2", "psi2")), dtype=float).ravel()
     f = {name: float(v) for name, v in zip(TOUCHDOWN_FIGURES.names(), figures, strict=True)}
-    success = (f["sink_rate"] <= limits["max_sink_rate"] and f["offset"] <= limits["max_offset"]
-               and f["tilt_deg"] <= limits["max_tilt_deg"]
-               and f["relative_speed"] <= limits["max_relative_speed"])
+    success = all(f[k.removeprefix("max_")] <= limits[k] for k in TOUCHDOWN_LIMITS)
     return TouchdownReport(True, float(result["t"][k]), f["sink_rate"], f["offset"],
                            f["relative_speed"], f["tilt_deg"], int(result["aborts"][k]),
                            bool(success), limits)

@@ -294,6 +294,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                               hi=80.0),
         "rate_hz": Field(F, "Hz", "control rate of the sampled step", lo=1.0,
                          hi=MAX_RATE_HZ),
+        "backend": SCHEMA["controller"]["backend"],
     },
     "rbf": SCHEMA["rbf"],
     "landing": {

@@ -1,6 +1,8 @@
-"""The structs of the readable C API (``quadland.h``), as layouts.
+"""The structs of the readable C API (``quadland.h``, ``quadland_landing.h``), as layouts.
 
-Each struct of ``quadland.h`` is one :class:`CStruct`: a name and a
+Each struct of ``quadland.h`` (the paper's control step) and of
+``quadland_landing.h`` (the landing step and guidance) is one
+:class:`CStruct`: a name and a
 :class:`symbolic.layout.Layout`. The C declarations (``symbolic.codegen``)
 and the ``ctypes`` mirrors (``quadland.cbackend.ctypes_struct``) are both
 derived from these layouts, so that they cannot drift apart:
@@ -22,24 +24,43 @@ The valid values of every member of ``ql_params`` are one table,
 :data:`PARAM_RANGES`, keyed by member path; :func:`param_ranges` walks
 ``params_layout(l)`` in order and pairs each real member with its range, so
 that a new parameter without a range fails generation. ``ql_check_params``
-and the step's own range test are generated from it.
+and the step's own range test are generated from it. The landing API's
+``ql_landing_params`` and ``ql_guidance_params`` have theirs,
+:data:`LANDING_PARAM_RANGES` and :data:`GUIDANCE_PARAM_RANGES`
+(:func:`landing_param_ranges`, :func:`guidance_param_ranges`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from types import MappingProxyType
 
 from symbolic.backstepping import REFERENCE
 from symbolic.control_step import step_inputs, step_outputs
+from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
+from symbolic.guidance import REFERENCE as POSITION_REFERENCE
+from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.landing.controller import (
+    MEASUREMENT as LANDING_MEASUREMENT,
+)
+from symbolic.landing.controller import (
+    landing_controller_params,
+    landing_memory,
+    landing_step_outputs,
+)
+from symbolic.landing.quadrotor import ACTUATOR
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.vehicle import MEASUREMENT
 
 __all__ = ["CStruct", "Range", "PARAM_RANGES", "ParamRange", "params_layout", "param_ranges",
-           "adaptive_state_layout", "output_layout", "api_structs"]
+           "adaptive_state_layout", "output_layout", "api_structs", "LANDING_PARAM_RANGES",
+           "GUIDANCE_PARAM_RANGES", "MAX_ABORTS", "landing_params_layout",
+           "landing_output_layout", "guidance_state_layout", "landing_param_ranges",
+           "guidance_param_ranges", "landing_api_structs"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -204,6 +225,37 @@ class ParamRange:
     at_least: int | None = None
 
 
+def _ranges(layout: Layout, table) -> tuple[ParamRange, ...]:
+    """Every real member of ``layout`` in order, with its range in ``table``."""
+    rows, offsets = [], {}
+
+    def walk(lay: Layout, base: int, path: str):
+        for f in lay.fields:
+            if f.ctype != "real":
+                continue
+            start = base + lay.offsets()[f.name][0]
+            name = path + f.name
+            if f.layout is not None:
+                walk(f.layout, start, name + ".")
+                continue
+            if name not in table:
+                raise ValueError(f"{layout.name} member {name!r} has no range")
+            rng = table[name]
+            bound = None
+            if rng.at_least is not None:
+                if rng.at_least not in offsets:
+                    raise ValueError(f"{name}: {rng.at_least!r} is not an earlier member")
+                bound = offsets[rng.at_least]
+            offsets[name] = start
+            rows.append(ParamRange(name, start, f.size, rng, bound))
+
+    walk(layout, 0, "")
+    unused = set(table) - {r.name for r in rows}
+    if unused:
+        raise ValueError(f"the ranges of {layout.name} name no member: {sorted(unused)}")
+    return tuple(rows)
+
+
 @functools.cache
 def param_ranges(l: int) -> tuple[ParamRange, ...]:
     """Every real member of ``ql_params`` in layout order, with its range.
@@ -214,31 +266,7 @@ def param_ranges(l: int) -> tuple[ParamRange, ...]:
         When a member has no entry in :data:`PARAM_RANGES` or an entry
         names no member.
     """
-    rows, offsets = [], {}
-
-    def walk(layout: Layout, base: int, path: str):
-        for f in layout.fields:
-            start = base + layout.offsets()[f.name][0]
-            name = path + f.name
-            if f.layout is not None:
-                walk(f.layout, start, name + ".")
-                continue
-            if name not in PARAM_RANGES:
-                raise ValueError(f"params member {name!r} has no range in PARAM_RANGES")
-            rng = PARAM_RANGES[name]
-            bound = None
-            if rng.at_least is not None:
-                if rng.at_least not in offsets:
-                    raise ValueError(f"{name}: {rng.at_least!r} is not an earlier member")
-                bound = offsets[rng.at_least]
-            offsets[name] = start
-            rows.append(ParamRange(name, start, f.size, rng, bound))
-
-    walk(params_layout(l), 0, "")
-    unused = set(PARAM_RANGES) - {r.name for r in rows}
-    if unused:
-        raise ValueError(f"PARAM_RANGES names no member: {sorted(unused)}")
-    return tuple(rows)
+    return _ranges(params_layout(l), PARAM_RANGES)
 
 
 @functools.cache
@@ -291,4 +319,129 @@ def api_structs(l: int) -> tuple[CStruct, ...]:
         CStruct("params", params_layout(l),
                 "Everything {ql}control_step is tuned with; {ql}params_init fills the defaults."),
         CStruct("output", output_layout(l), "Outputs of one control step."),
+    )
+
+
+# --- the landing API (quadland_landing.h) -------------------------------------
+
+_QUAD_RANGES = {k: v for k, v in PARAM_RANGES.items() if k.startswith("quad.")}
+
+#: Valid values of every member of ``ql_landing_params`` by member path: the
+#: quadrotor's as in :data:`PARAM_RANGES`; gains, adaptation rates, leakages,
+#: the filter's frequency and damping positive (eq. 14, 20, 22 and a stable
+#: filter); the tilt limit inside (0, pi/2) (the thrust must point up); the
+#: rotor limit and the motors' lag positive; the gear not above the centre.
+LANDING_PARAM_RANGES = MappingProxyType({
+    **_QUAD_RANGES,
+    **{f"ctrl.{k}": _POSITIVE for k in ("k1p", "k2p", "k1", "k2", "gamma1", "gamma2", "k_w",
+                                        "k_zeta", "rho")},
+    "ctrl.nominal_model": Range(choices=(0.0, 1.0)),
+    "ctrl.w_f": _POSITIVE,
+    "ctrl.zeta_f": _POSITIVE,
+    "ctrl.tilt_max": Range(lo=0.0, hi=math.pi / 2, lo_open=True, hi_open=True),
+    "ctrl.centers": _FINITE,
+    "ctrl.widths": _POSITIVE,
+    "act.motor_time_constant": _POSITIVE,
+    "act.F_max": _POSITIVE,
+    "act.gear_height": _NONNEGATIVE,
+    "tilt_min": Range(lo=0.0, hi=1.0, hi_open=True),
+})
+
+#: Valid values of every member of ``ql_guidance_params``: heights, radii,
+#: speeds and times positive (a zero dwell or settling time is allowed), the
+#: gear's height not negative.
+GUIDANCE_PARAM_RANGES = MappingProxyType({
+    "hover_height": _POSITIVE,
+    "align_radius": _POSITIVE,
+    "dwell_time": _NONNEGATIVE,
+    "descent_speed": _POSITIVE,
+    "descent_time": _POSITIVE,
+    "touchdown_speed": _POSITIVE,
+    "touchdown_height": _NONNEGATIVE,
+    "max_offset": _POSITIVE,
+    "max_relative_speed": _POSITIVE,
+    "max_deck_rise": _POSITIVE,
+    "settle_time": _NONNEGATIVE,
+})
+
+#: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:
+#: exact in float, and one more still fits an int).
+MAX_ABORTS = 2 ** 24 - 1
+
+
+@functools.cache
+def landing_params_layout(l: int) -> Layout:
+    """``ql_landing_params``: everything the landing step is tuned with."""
+    return Layout("landing_params", (
+        Field.nested("quad", QUADROTOR, "physical constants"),
+        Field.nested("ctrl", landing_controller_params(l),
+                     "gains, command filter, tilt limit, RBF network"),
+        Field.nested("act", ACTUATOR, "rotor limit (and the motors' lag, the gear)"),
+        Field("tilt_min", 1, "-", "smallest accepted |cos(theta1) cos(phi1)|"),
+    ), "tuning of the landing step")
+
+
+@functools.cache
+def landing_output_layout(l: int) -> Layout:
+    """``ql_landing_output``: the landing step's results but its memory, flags as ints."""
+    outs = landing_step_outputs(l)
+    flags = outs["limits"].elements
+    docs = {"thrust_limited": "1 when the thrust was limited to [0, 4 F_max]",
+            "tilt_limited": "1 when the thrust axis was limited to tilt_max",
+            "n_clipped": "number of rotor commands clipped to [0, F_max] (0..4)"}
+    return Layout("landing_output", (
+        *(_flat(outs[n]) for n in outs.names() if n not in ("mem_next", "limits")),
+        *(Field(name, 1, "-", docs[name], ctype="int") for name in flags),
+    ), "outputs of one landing step")
+
+
+@functools.cache
+def guidance_state_layout() -> Layout:
+    """``ql_guidance_state``: the guidance's memory, phase and abort count as ints."""
+    return Layout("guidance_state", (
+        *(f for f in GUIDANCE_STATE.fields if f.name not in ("phase", "aborts")),
+        Field("phase", 1, "-", "phase: QL_PHASE_APPROACH .. QL_PHASE_LANDED", ctype="int"),
+        Field("aborts", 1, "-", "aborted descents so far", ctype="int"),
+    ), "guidance state")
+
+
+@functools.cache
+def landing_param_ranges(l: int) -> tuple[ParamRange, ...]:
+    """Every real member of ``ql_landing_params`` in order, with its range."""
+    return _ranges(landing_params_layout(l), LANDING_PARAM_RANGES)
+
+
+@functools.cache
+def guidance_param_ranges() -> tuple[ParamRange, ...]:
+    """Every member of ``ql_guidance_params`` in order, with its range."""
+    return _ranges(GUIDANCE_PARAMS, GUIDANCE_PARAM_RANGES)
+
+
+@functools.cache
+def landing_api_structs(l: int) -> tuple[CStruct, ...]:
+    """Every struct of ``quadland_landing.h`` for ``l`` RBF nodes, in declaration order.
+
+    ``ql_landing_params.quad`` is ``quadland.h``'s ``ql_quadrotor_params``.
+    """
+    return (
+        CStruct("landing_measurement", LANDING_MEASUREMENT,
+                "What the landing step and the guidance measure: the landing sensor (deck\n"
+                " * frame), the IMU and the vehicle's broadcast of its deck's motion (E)."),
+        CStruct("position_reference", POSITION_REFERENCE,
+                "The guidance's reference of the relative position, deck frame."),
+        CStruct("landing_state", landing_memory(l),
+                "The landing step's memory: network, robust terms, command filter and\n"
+                " * saturation compensator. Start with {ql}landing_state_init."),
+        CStruct("landing_controller_params", landing_controller_params(l),
+                "Gains, adaptation, command filter, tilt limit and RBF network: layout\n"
+                " * p_land."),
+        CStruct("actuator_params", ACTUATOR, "Rotors and landing gear: layout p_act."),
+        CStruct("landing_params", landing_params_layout(l),
+                "Everything {ql}landing_step is tuned with; {ql}landing_params_init fills\n"
+                " * the defaults."),
+        CStruct("landing_output", landing_output_layout(l), "Outputs of one landing step."),
+        CStruct("guidance_state", guidance_state_layout(),
+                "The guidance's memory. Start with {ql}guidance_state_init."),
+        CStruct("guidance_params", GUIDANCE_PARAMS,
+                "The guidance's parameters; {ql}guidance_params_init fills the defaults."),
     )

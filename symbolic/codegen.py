@@ -43,9 +43,16 @@ import jinja2
 import numpy as np
 
 from symbolic.c_api import (
+    MAX_ABORTS,
     CStruct,
     adaptive_state_layout,
     api_structs,
+    guidance_param_ranges,
+    guidance_state_layout,
+    landing_api_structs,
+    landing_output_layout,
+    landing_param_ranges,
+    landing_params_layout,
     output_layout,
     param_ranges,
     params_layout,
@@ -59,17 +66,44 @@ from symbolic.closed_loop import (
     plant_function,
 )
 from symbolic.control_step import control_step_function, step_inputs, step_outputs
+from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
+from symbolic.guidance import PHASE_DOCS, PHASES
+from symbolic.guidance import REFERENCE as POSITION_REFERENCE
+from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.landing.controller import MEASUREMENT as LANDING_MEASUREMENT
+from symbolic.landing.controller import (
+    N_CHANNELS,
+    NETWORK_INPUT_DIM,
+    landing_guidance_function,
+    landing_memory,
+    landing_step_function,
+    landing_step_outputs,
+    measurement_function,
+)
+from symbolic.landing.loop import (
+    ANCHOR,
+    OUTPUTS,
+    anchor_function,
+    gear_gap_function,
+    landed_outputs_function,
+    landing_signals_function,
+    loop_plant_function,
+)
+from symbolic.landing.loop import DISTURBANCE as LANDING_DISTURBANCE
+from symbolic.landing.plant import PLANT_PARAMS as LANDING_PLANT_PARAMS
+from symbolic.landing.plant import PLANT_STATE as LANDING_PLANT_STATE
+from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
 from symbolic.quadrotor import DISTURBANCE
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.relative import E1
-from symbolic.vehicle import MEASUREMENT
+from symbolic.vehicle import MEASUREMENT, vehicle_function
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
-__all__ = ["CodegenConfig", "Defaults", "GeneratedFunction", "FUNCTIONS", "STATUS_CODES",
-           "TEMPLATE_DIR", "c_sources", "example_columns", "generate", "generate_example",
-           "generate_tree"]
+__all__ = ["CodegenConfig", "Defaults", "LandingDefaults", "GeneratedFunction", "FUNCTIONS",
+           "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns",
+           "generate", "generate_landing", "generate_example", "generate_tree"]
 
 #: Folder of the Jinja2 templates (installed with the package).
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
@@ -79,8 +113,8 @@ TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 STATUS_CODES = (
     ("QL_OK", 0, "success; outputs and adaptive state updated"),
     ("QL_ERR_NULL", 1, "a NULL pointer argument"),
-    ("QL_ERR_INVALID", 2, "dt <= 0"),
-    ("QL_ERR_NONFINITE_INPUT", 3, "an input, parameter or the adaptive state is NaN or infinite"),
+    ("QL_ERR_INVALID", 2, "dt <= 0, or a guidance state out of range"),
+    ("QL_ERR_NONFINITE_INPUT", 3, "an input, a parameter or the state is NaN or infinite"),
     ("QL_ERR_TILT", 4, "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible"),
     ("QL_ERR_NONFINITE_OUTPUT", 5,
      "the law overflowed: a NaN or infinite value from finite inputs"),
@@ -88,7 +122,8 @@ STATUS_CODES = (
 )
 
 _MATH = ("exp", "expm1", "log", "log1p", "sqrt", "cos", "sin", "tan", "acos", "asin", "atan",
-         "atan2", "tanh", "sinh", "cosh", "fmin", "fmax", "fabs", "floor", "ceil", "pow", "erf")
+         "atan2", "tanh", "sinh", "cosh", "fmin", "fmax", "fabs", "floor", "ceil", "pow", "erf",
+         "hypot")
 _MATH_RE = re.compile(r"\b(" + "|".join(_MATH) + r")\(")
 _LITERAL_RE = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
 
@@ -210,6 +245,72 @@ class Defaults:
 
 
 @dataclasses.dataclass(frozen=True)
+class LandingDefaults:
+    """Numeric defaults of the landing API and its example (one landing scenario's values).
+
+    Attributes
+    ----------
+    scenario : str
+        Its name and overrides, for the comments.
+    l : int
+        RBF node count of the landing step.
+    p_quad, p_ctrl, p_act, p_guid : ndarray
+        ``symbolic.parameters.QUADROTOR``, ``landing_controller_params(l)``,
+        ``symbolic.landing.quadrotor.ACTUATOR``, ``symbolic.guidance.PARAMS``.
+    tilt_min : float
+        Smallest accepted ``|cos(theta1) cos(phi1)|``.
+    pp, xp0 : ndarray
+        The example's plant parameters (``symbolic.landing.plant.PLANT_PARAMS``)
+        and initial plant state.
+    duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
+        s, Hz, Hz, Hz.
+    rk_steps : int
+        RK4 steps per interval of the merged time grid.
+    force_bias, moment_bias : tuple of float
+    force_amplitude, force_frequency, moment_amplitude, moment_frequency : float
+        The disturbance's deterministic part: N, rad/s, N m, rad/s.
+    wind_mean : tuple of float
+        m/s, E.
+    gust_start, gust_half_length, gust_amplitude : float
+        The 1-cosine gust: s, s, m/s (0: none).
+    gust_direction : tuple of float
+        Unit vector in E.
+    settle_time : float
+        s from touchdown to the end of the run.
+    limits : tuple of (str, float)
+        The touchdown limits by name (``max_sink_rate``, ...), in report order.
+    """
+
+    scenario: str
+    l: int
+    p_quad: np.ndarray
+    p_ctrl: np.ndarray
+    p_act: np.ndarray
+    p_guid: np.ndarray
+    tilt_min: float
+    pp: np.ndarray
+    xp0: np.ndarray
+    duration: float
+    output_rate_hz: float
+    control_rate_hz: float
+    disturbance_rate_hz: float
+    rk_steps: int
+    force_bias: tuple[float, float, float]
+    force_amplitude: float
+    force_frequency: float
+    moment_bias: tuple[float, float, float]
+    moment_amplitude: float
+    moment_frequency: float
+    wind_mean: tuple[float, float, float]
+    gust_start: float
+    gust_half_length: float
+    gust_amplitude: float
+    gust_direction: tuple[float, float, float]
+    settle_time: float
+    limits: tuple[tuple[str, float], ...]
+
+
+@dataclasses.dataclass(frozen=True)
 class GeneratedFunction:
     """One CasADi function written as C.
 
@@ -227,8 +328,12 @@ class GeneratedFunction:
         arguments are the function's ``name_in``/``name_out``; None when
         ``quadland.c`` wraps it.
     doc : str
-        Comment of the wrapper in ``quadland.h`` (``{ql}``/``{QL}`` stand for
+        Comment of the wrapper in its header (``{ql}``/``{QL}`` stand for
         the build's prefixes).
+    part : {"paper", "landing"}
+        Which API it belongs to: ``quadland.h`` (the paper's control step,
+        ``l`` of the paper's scenario) or ``quadland_landing.h`` (the landing
+        step and guidance, ``l`` of the landing scenario).
     """
 
     name: str
@@ -236,6 +341,7 @@ class GeneratedFunction:
     per_node_count: bool = True
     wrapper: str | None = None
     doc: str = ""
+    part: str = "paper"
 
     @property
     def source(self) -> str:
@@ -277,26 +383,60 @@ FUNCTIONS = (
     GeneratedFunction("plant", plant_function, per_node_count=False, wrapper="quadland_model.c",
                       doc="xp_dot of the plant alone (quadrotor, vehicle, planar position) "
                           "under a\n * held wrench and disturbance w."),
+    GeneratedFunction("landing_step", landing_step_function, part="landing"),
+    GeneratedFunction("landing_guidance", landing_guidance_function, per_node_count=False,
+                      part="landing"),
+    *(GeneratedFunction(name, builder, per_node_count=False, wrapper="quadland_landing_model.c",
+                        doc=doc, part="landing") for name, builder, doc in (
+        ("landing_loop_plant", loop_plant_function,
+         "xp_dot of the landing plant (quadrotor with motor lag, vehicle; the deck's\n"
+         " * motion is prescribed) under held rotor commands and w = [v_wind (E), d_F,\n"
+         " * d_M (body)]."),
+        ("landing_sensors", measurement_function,
+         "The landing step's measurements y from the plant's state: perfect sensors."),
+        ("landing_signals", landing_signals_function,
+         "The landing trajectory's signals y ({QL}LANDING_NY): both bodies, the\n"
+         " * relative state, the rotors, the external forces, phase and aborts."),
+        ("landing_gear_gap", gear_gap_function,
+         "The landing gear's height above the deck plane, m: touchdown is its zero\n"
+         " * crossing."),
+        ("landing_anchor", anchor_function,
+         "The pose at touchdown (p_e, R_deck^T R1) from the signals y there."),
+        ("landed_outputs", landed_outputs_function,
+         "After touchdown: the signals y and the state x1q of the quadrotor pinned to\n"
+         " * the deck at anchor, its rotor forces F winding down."),
+        ("vehicle", vehicle_function, "xv_dot of the vehicle alone (eq. 3-4)."),
+        ("touchdown_figures", touchdown_figures_function,
+         "Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a\n"
+         " * contact."),
+    )),
 )
 
 _BY_NAME = {f.name: f for f in FUNCTIONS}
+
+#: The readable API's source of each part, which calls its functions without a wrapper.
+_API_FILE = {"paper": "quadland.c", "landing": "quadland_landing.c"}
 
 
 def c_sources(functions=("control_step",)) -> tuple[str, ...]:
     """The ``.c`` files that link the API of ``functions`` (names in :data:`FUNCTIONS`).
 
-    ``quadland.c`` and the control step always; each other function with
-    its wrapper's file.
+    For each part (``quadland.h``, ``quadland_landing.h``) a function belongs
+    to (the paper's without any): its API file and the functions it calls
+    (the paper's control step; the landing step and guidance); each other
+    function with its wrapper's file; ``quadland_status.c`` always.
     """
     unknown = set(functions) - set(_BY_NAME)
     if unknown:
         raise ValueError(f"unknown generated functions {sorted(unknown)}")
-    chosen = [f for f in FUNCTIONS if f.name in functions or f.name == "control_step"]
-    files = [f"{f.name}.c" for f in chosen] + ["quadland.c"]
+    parts = [p for p in _API_FILE if any(_BY_NAME[f].part == p for f in functions)] or ["paper"]
+    chosen = [f for f in FUNCTIONS
+              if f.name in functions or (f.part in parts and f.wrapper is None)]
+    files = [f"{f.name}.c" for f in chosen] + [_API_FILE[p] for p in parts]
     for f in chosen:
         if f.wrapper and f.wrapper not in files:
             files.append(f.wrapper)
-    return tuple(files)
+    return (*files, "quadland_status.c")
 
 
 # --- templates -------------------------------------------------------------
@@ -345,7 +485,7 @@ def _common(config: CodegenConfig | None) -> dict:
                precision=config.precision if config else None)
     if config is not None:
         ql, QL = config.prefix, config.macro_prefix
-        ctx.update(ql=ql, QL=QL, lit=config.literal, math=config.math,
+        ctx.update(ql=ql, QL=QL, real=ql + "real", lit=config.literal, math=config.math,
                    api=lambda text: text.replace("{ql}", ql).replace("{QL}", QL))
     return ctx
 
@@ -498,10 +638,10 @@ def _step_context(l: int, config: CodegenConfig) -> dict:
         adaptive=adaptive_state_layout(l).offsets())
 
 
-def _wrapped(l: int, config: CodegenConfig) -> list[dict]:
+def _wrapped(l: int, config: CodegenConfig, part: str = "paper") -> list[dict]:
     out = []
     for entry in FUNCTIONS:
-        if entry.wrapper is None:
+        if entry.wrapper is None or entry.part != part:
             continue
         fn = entry.function(l)
         ins, outs = entry.arguments(l)
@@ -511,9 +651,9 @@ def _wrapped(l: int, config: CodegenConfig) -> list[dict]:
     return out
 
 
-def _param_ranges(l: int, config: CodegenConfig) -> list[dict]:
-    """The range of each member of ``ql_params`` (``symbolic.c_api.param_ranges``),
-    bounds as C literals.
+def _param_ranges(l: int, config: CodegenConfig, ranges=param_ranges) -> list[dict]:
+    """The range of each member of ``ql_params`` (``symbolic.c_api.param_ranges``, or
+    another table's ``ranges(l)``), bounds as C literals.
 
     ``bounded`` is False where only finiteness is asked; ``in_step`` marks
     the bounded members whose size does not grow with ``l``: the control
@@ -521,7 +661,7 @@ def _param_ranges(l: int, config: CodegenConfig) -> list[dict]:
     arrays only ``ql_check_params``.
     """
     out = []
-    for r, other in zip(param_ranges(l), param_ranges(l + 1), strict=True):
+    for r, other in zip(ranges(l), ranges(l + 1), strict=True):
         g = r.range
         bounded = (g.lo is not None or g.hi is not None or g.choices is not None
                    or r.at_least is not None)
@@ -580,12 +720,141 @@ def generate(defaults: Defaults, config: CodegenConfig = CodegenConfig()) -> dic
                          "keep casadi_int = int")
     files = {}
     for entry in FUNCTIONS:
-        files.update(_emit_casadi(entry, defaults.l, config))
+        if entry.part == "paper":
+            files.update(_emit_casadi(entry, defaults.l, config))
     ctx = _api_context(config, defaults)
     files["quadland.h"] = _render("quadland.h.jinja", **ctx)
     files["quadland.c"] = _render("quadland.c.jinja", **ctx)
+    files["quadland_status.c"] = _render("quadland_status.c.jinja", **ctx)
     for file in dict.fromkeys(w["file"] for w in ctx["wrapped"]):
-        files[file] = _render("wrappers.c.jinja", file=file,
+        files[file] = _render("wrappers.c.jinja", file=file, header="quadland.h",
+                              functions=[w for w in ctx["wrapped"] if w["file"] == file], **ctx)
+    return files
+
+
+# --- the landing API -------------------------------------------------------
+
+def _landing_sizes(l: int) -> list[dict]:
+    """The landing API's size macros (name without prefix, value, comment)."""
+    def fields(layout):
+        return ", ".join(f"{f.name} ({f.size})" for f in layout.fields)
+
+    return [
+        dict(name="LANDING_RBF_NODES", value=l, doc="l, RBF nodes of the landing step"),
+        dict(name="LANDING_NETWORK_INPUT_DIM", value=NETWORK_INPUT_DIM,
+             doc="dimension of the network's input [v_e, Omega_e]"),
+        dict(name="LANDING_CHANNELS", value=N_CHANNELS,
+             doc="channels: deck-frame x, y, z; roll, pitch, yaw"),
+        dict(name="LANDING_PARAMS_SIZE", value=landing_params_layout(l).size,
+             doc="reals in {ql}landing_params"),
+        dict(name="LANDING_STATE_SIZE", value=landing_memory(l).size,
+             doc="reals in {ql}landing_state"),
+        dict(name="GUIDANCE_PARAMS_SIZE", value=GUIDANCE_PARAMS.size,
+             doc="reals in {ql}guidance_params"),
+        dict(name="GUIDANCE_MAX_ABORTS", value=MAX_ABORTS,
+             doc="largest abort count {ql}guidance_step accepts"),
+        dict(name="LANDING_PLANT_NX", value=LANDING_PLANT_STATE.size,
+             doc=f"xp = [{fields(LANDING_PLANT_STATE)}]"),
+        dict(name="LANDING_PLANT_NP", value=LANDING_PLANT_PARAMS.size,
+             doc=f"pp = [{fields(LANDING_PLANT_PARAMS)}]"),
+        dict(name="LANDING_NW", value=LANDING_DISTURBANCE.size,
+             doc=f"w = [{fields(LANDING_DISTURBANCE)}]"),
+        dict(name="LANDING_NY", value=OUTPUTS.size, doc="signals y of a landing"),
+        dict(name="LANDING_ANCHOR_SIZE", value=ANCHOR.size,
+             doc=f"anchor = [{fields(ANCHOR)}]"),
+        dict(name="LANDING_VEHICLE_NX", value=VEHICLE_STATE.size,
+             doc=f"xv = [{', '.join(VEHICLE_STATE.element_names())}]"),
+        dict(name="TOUCHDOWN_FIGURES", value=TOUCHDOWN_FIGURES.size,
+             doc=f"[{', '.join(TOUCHDOWN_FIGURES.names())}]"),
+    ]
+
+
+def _vector(name: str, values, config: CodegenConfig) -> dict:
+    values = [config.literal(v) for v in np.asarray(values, dtype=float).ravel()]
+    return dict(name=name, size=len(values), rows=[values[i:i + 6]
+                                                   for i in range(0, len(values), 6)])
+
+
+def _landing_step_context(l: int, config: CodegenConfig) -> dict:
+    """Where ``ql_landing_step`` and ``ql_guidance_step`` put each argument and result."""
+    step, guide = landing_step_function(l), landing_guidance_function()
+    outs = landing_step_outputs(l)
+    # every real result but tilt and the flags, staged and checked in one pass
+    staged = Layout("res_v", tuple(f for f in outs.fields if f.name not in ("tilt", "limits")))
+    offsets = {n: a for n, (a, _) in staged.offsets().items()}
+    out_lay = landing_output_layout(l)
+    copies = [dict(name=f.name, offset=offsets[f.name]) for f in out_lay.fields
+              if f.ctype == "real" and f.name in offsets]
+    # the guidance's results, staged likewise: [xg_next, ref]
+    g_offset = dict(zip(guide.name_out(), np.cumsum([0] + [guide.nnz_out(i) for i in range(
+        guide.n_out())]).tolist(), strict=False))
+    return dict(
+        c_name=_BY_NAME["landing_step"].c_name(config),
+        arg={n: i for i, n in enumerate(step.name_in())},
+        res={n: i for i, n in enumerate(step.name_out())},
+        res_size=staged.size, res_offset=offsets,
+        staged_res=[dict(name=n, index=step.name_out().index(n), offset=a)
+                    for n, a in offsets.items()],
+        copies=copies,
+        flags=[dict(name=n, index=i) for i, n in enumerate(outs["limits"].elements)],
+        y_size=LANDING_MEASUREMENT.size, ref_size=POSITION_REFERENCE.size,
+        state_size=landing_memory(l).size,
+        mem_next=offsets["mem_next"],
+        eta_f=landing_memory(l)["eta_f"].size,
+        guidance=dict(
+            c_name=_BY_NAME["landing_guidance"].c_name(config),
+            arg={n: i for i, n in enumerate(guide.name_in())},
+            res={n: i for i, n in enumerate(guide.name_out())},
+            res_size=sum(guide.nnz_out(i) for i in range(guide.n_out())), res_offset=g_offset,
+            xg=[dict(name=n, index=i, int=guidance_state_layout()[n].ctype == "int")
+                for i, n in enumerate(GUIDANCE_STATE.names())],
+            xg_size=GUIDANCE_STATE.size, params_size=GUIDANCE_PARAMS.size),
+    )
+
+
+def _landing_api_context(config: CodegenConfig, d: LandingDefaults) -> dict:
+    l = d.l
+    paper = api_structs(1)
+    structs = landing_api_structs(l)
+    lookup = (*paper, *structs)
+    return dict(
+        _common(config),
+        scenario=d.scenario,
+        aliases=config.prefix != "ql_",
+        sizes=_landing_sizes(l),
+        phases=[dict(name=n.upper(), value=i, doc=doc, text=n)
+                for i, (n, doc) in enumerate(zip(PHASES, PHASE_DOCS, strict=True))],
+        structs=[_struct_context(s, lookup, config.prefix) for s in structs],
+        defaults=dict(p_quad=_vector("p_quad", d.p_quad, config),
+                      p_land=_vector("p_land", d.p_ctrl, config),
+                      p_act=_vector("p_act", d.p_act, config),
+                      p_guid=_vector("p_guid", d.p_guid, config)),
+        tilt_min=config.literal(d.tilt_min),
+        max_aborts=MAX_ABORTS,
+        n_phases=len(PHASES),
+        landing_ranges=_param_ranges(l, config, landing_param_ranges),
+        guidance_ranges=_param_ranges(l, config, lambda _: guidance_param_ranges()),
+        step=_landing_step_context(l, config),
+        wrapped=_wrapped(l, config, "landing"),
+    )
+
+
+def generate_landing(defaults: LandingDefaults,
+                     config: CodegenConfig = CodegenConfig()) -> dict[str, str]:
+    """Text of the landing API's C files of one precision (``quadland_landing.h``, ...).
+
+    They include the same build's ``quadland.h`` (:func:`generate`) for
+    ``ql_real``, ``ql_status`` and ``ql_quadrotor_params``.
+    """
+    files = {}
+    for entry in FUNCTIONS:
+        if entry.part == "landing":
+            files.update(_emit_casadi(entry, defaults.l, config))
+    ctx = _landing_api_context(config, defaults)
+    files["quadland_landing.h"] = _render("quadland_landing.h.jinja", **ctx)
+    files["quadland_landing.c"] = _render("quadland_landing.c.jinja", **ctx)
+    for file in dict.fromkeys(w["file"] for w in ctx["wrapped"]):
+        files[file] = _render("wrappers.c.jinja", file=file, header="quadland_landing.h",
                               functions=[w for w in ctx["wrapped"] if w["file"] == file], **ctx)
     return files
 
@@ -673,14 +942,17 @@ def generate_example(defaults: Defaults) -> dict[str, str]:
             for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}
 
 
-def generate_tree(defaults: Defaults) -> dict[str, str]:
+def generate_tree(defaults: Defaults, landing: LandingDefaults) -> dict[str, str]:
     """Every file of ``generated/`` by relative path (POSIX separators).
 
-    The double build at the top, the float build in ``float/``, the example
-    in ``example/`` and a ``.gitignore`` of the example's build outputs.
+    The paper's step (``defaults``) and the landing step (``landing``), the
+    double build at the top, the float build in ``float/``, the example in
+    ``example/`` and a ``.gitignore`` of the example's build outputs.
     """
-    files = dict(generate(defaults, CodegenConfig("double")))
-    files.update({f"float/{k}": v for k, v in generate(defaults, CodegenConfig("float")).items()})
+    files = {}
+    for config, folder in ((CodegenConfig("double"), ""), (CodegenConfig("float"), "float/")):
+        built = {**generate(defaults, config), **generate_landing(landing, config)}
+        files.update({folder + k: v for k, v in built.items()})
     files.update(generate_example(defaults))
     files[".gitignore"] = _render("gitignore.jinja", **_common(None))
     return files

@@ -43,11 +43,17 @@ import casadi as ca
 
 from symbolic.layout import Field, Layout
 
-__all__ = ["PHASES", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED", "STATE",
-           "PARAMS", "REFERENCE", "guidance_step", "guidance_function"]
+__all__ = ["PHASES", "PHASE_DOCS", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED",
+           "STATE", "PARAMS", "REFERENCE", "guidance_step", "guidance_function"]
 
 #: Phase numbers, as written to trajectory.csv's ``phase`` column.
 PHASES = ("approach", "align", "descend", "touchdown", "landed")
+#: What happens in each phase (the C API's comments).
+PHASE_DOCS = ("fly to the hover point above the pad",
+              "hold the hover point until offset and speed are within half their limits",
+              "descend along the profile; abort back to align when a limit is exceeded",
+              "the gear met the deck: rotors idle, the reference holds",
+              "settle_time after touchdown")
 APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED = range(len(PHASES))
 
 #: The guidance's memory.

@@ -96,13 +96,17 @@ class LoopModel:
     plant, controller, assemble : casadi.Function
         The sampled-data loop's functions (see the module docstring).
     step_args : casadi.Function or None
-        ``step_args(xp, xc, pc, first, t) -> (...)``: the control step's
-        arguments (``symbolic.control_step.step_inputs``) as the controller
-        forms them. The flight code's step behind the controller's flat
-        signature (part ``"sampled_flight"``) starts from it.
+        ``step_args(xp, xc, pc, first, t) -> (...)``: the flight code's
+        arguments as the controller forms them (the paper's: the control
+        step's, ``symbolic.control_step.step_inputs``). The flight code behind
+        the controller's flat signature (part ``"sampled_flight"``) starts
+        from it.
     event : casadi.Function or None
         ``event(xp, t, pp) -> g``: the run ends where ``g`` falls from
         positive to zero or below (see the module docstring).
+    flight : str or None
+        The template (in ``symbolic/templates/``) of the adapter that puts
+        the flight code behind the controller's signature.
     """
 
     name: str
@@ -123,6 +127,7 @@ class LoopModel:
     assemble: ca.Function
     step_args: ca.Function | None = None
     event: ca.Function | None = None
+    flight: str | None = None
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
@@ -207,7 +212,8 @@ def paper_loop(l: int) -> LoopModel:
     assemble = _named("assemble", [xp, xc], [x_of], ["xp", "xc"], ["x"])
     return LoopModel("paper", state, DISTURBANCE, params, OUTPUTS, rhs, output_fn,
                      PLANT_STATE, WRENCH, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
-                     controller, assemble, step_args=step_args)
+                     controller, assemble, step_args=step_args,
+                     flight="flight_controller.c.jinja")
 
 
 _TEMPLATES = jinja2.Environment(
@@ -217,10 +223,11 @@ _TEMPLATES = jinja2.Environment(
 
 
 #: The parts of a compiled simulator: each one's driver and the functions it calls.
-#: ``"sampled_flight"`` flies the flight code's step (``quadland.h``,
-#: ``ql_control_step``) in place of the symbolic controller, through the
-#: adapter ``symbolic/templates/flight_controller.c.jinja``; its build adds
-#: the flight sources.
+#: ``"sampled_flight"`` flies the flight code (``quadland.h``'s
+#: ``ql_control_step``; ``quadland_landing.h``'s ``ql_guidance_step`` and
+#: ``ql_landing_step``) in place of the symbolic controller, through the
+#: model's adapter (:attr:`LoopModel.flight`); its build adds the flight
+#: sources.
 SIMULATOR_PARTS = {"continuous": ("continuous", ("rhs", "outputs")),
                    "sampled": ("sampled", ("plant", "controller", "assemble", "outputs")),
                    "sampled_flight": ("sampled", ("plant", "step_args", "assemble", "outputs"))}
@@ -281,18 +288,25 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))
     if part == "sampled_flight":
+        if model.flight is None:
+            raise ValueError(f"the loop {model.name!r} has no flight code")
         args = by_name["step_args"]
         offsets = {lay.name: lay.offsets() for lay in (model.controller_state, model.recorded)}
+        nested = {f.name: {g.name: a for g, (a, _) in zip(
+            f.layout.fields, f.layout.offsets().values(), strict=True)}
+            for f in model.controller_state.fields if f.layout is not None}
         files[f"{prefix}controller.h"] = (
             f"/* {prefix}controller: the flight step behind the controller's signature. */\n"
             f"#include \"{prefix}step_args.h\"\n"
             f"int {prefix}controller(const casadi_real** arg, casadi_real** res, "
             "casadi_int* iw, casadi_real* w, int mem);\n")
-        files[f"{prefix}controller.c"] = _TEMPLATES.get_template(
-            "flight_controller.c.jinja").render(
+        files[f"{prefix}controller.c"] = _TEMPLATES.get_template(model.flight).render(
             prefix=prefix, model=model.name, casadi_version=ca.__version__,
             args=[(n, args.nnz_out(i)) for i, n in enumerate(args.name_out())],
             sz_iw=args.sz_iw(), sz_w=args.sz_w(),
-            xc=[(f.name, offsets["xc"][f.name][0]) for f in model.controller_state.fields],
-            rec=[(f.name, offsets["rec"][f.name][0]) for f in model.recorded.fields])
+            xc=[(f.name, offsets[model.controller_state.name][f.name][0])
+                for f in model.controller_state.fields],
+            rec=[(f.name, offsets[model.recorded.name][f.name][0])
+                 for f in model.recorded.fields],
+            nested=nested)
     return files

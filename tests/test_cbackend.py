@@ -572,18 +572,24 @@ def test_pure_c_flight_matches_python(example, rate):
 
 
 def test_sources_are_generated_not_read(tmp_path, monkeypatch):
-    """One-way flow: the runtime's C comes from symbolic/, equal to generated/ for the paper."""
+    """One-way flow: the runtime's C comes from symbolic/, equal to generated/ for the
+    shipped scenarios."""
     monkeypatch.setattr(codegen, "_package_parent", lambda: tmp_path)   # no checkout
     cbackend._sources.cache_clear()
     try:
         committed = codegen.generated_files()
-        assert cbackend.sources(L) == {k: v for k, v in committed.items()
-                                       if "/" not in k and k not in (".gitignore",
-                                                                     codegen.MANIFEST)}
-        assert cbackend.sources(L, "float") == {k.removeprefix("float/"): v
-                                                for k, v in committed.items()
-                                                if k.startswith("float/")}
+        top = {k: v for k, v in committed.items()
+               if "/" not in k and k not in (".gitignore", codegen.MANIFEST)}
+        # the landing build is the whole tree (the paper's quadland.h with it), l = 10
+        assert cbackend.sources(10, model="landing") == top
+        paper = cbackend.sources(L)
+        assert paper == {k: v for k, v in top.items() if k in paper}
+        assert "quadland_landing.h" not in paper
+        assert cbackend.sources(10, "float", "landing") == {
+            k.removeprefix("float/"): v for k, v in committed.items() if k.startswith("float/")}
         assert "#define QL_RBF_NODES 7 " in cbackend.sources(7)["quadland.h"]
+        assert "#define QL_LANDING_RBF_NODES 7 " in \
+            cbackend.sources(7, model="landing")["quadland_landing.h"]
     finally:
         cbackend._sources.cache_clear()
 

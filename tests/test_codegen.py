@@ -16,8 +16,15 @@ from quadland.cli import main as cli_main
 from quadland.exceptions import CompilerNotFoundError
 from quadland.scenario import load_scenario
 from quadland.simulate import TRAJECTORY
-from symbolic.c_api import api_structs
-from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, example_columns, generate
+from symbolic.c_api import api_structs, landing_api_structs
+from symbolic.codegen import (
+    FUNCTIONS,
+    CodegenConfig,
+    c_sources,
+    example_columns,
+    generate,
+    generate_landing,
+)
 
 GENERATED_DIR = codegen.generated_dir()
 
@@ -114,31 +121,39 @@ def test_no_heap_and_no_casadi_runtime():
         assert not re.search(r"\b(malloc|calloc|realloc|free)\s*\(", text), src
         includes = set(re.findall(r"#include [<\"]([^>\"]+)[>\"]", text))
         assert includes <= {"math.h", "stddef.h", "string.h", "stdio.h", "stdlib.h", "time.h",
-                            "quadland.h", "control_step.h", "closed_loop.h", "plant.h",
-                            "closed_loop_jacobian.h", "scenario.h"}, (src, includes)
+                            "quadland.h", "quadland_landing.h", "scenario.h", "land_scenario.h",
+                            *(f"{f.name}.h" for f in FUNCTIONS)}, (src, includes)
 
 
 # --- the registry -----------------------------------------------------------
 
+#: Each part's header and the node count generated/ has for it (paper, highway).
+PARTS = {"paper": ("quadland.h", 100), "landing": ("quadland_landing.h", 10)}
+
+
 def test_one_registry_gives_files_symbols_and_wrappers(files):
     for entry in FUNCTIONS:
-        fn = entry.function(100)
+        header, l = PARTS[entry.part]
+        fn = entry.function(l)
         assert fn.name() == entry.name
         for folder, prefix in (("", "ql_"), ("float/", "qlf_")):
             assert f"int {prefix}casadi_{entry.name}(" in files[f"{folder}{entry.name}.h"]
-            assert entry.origin(100) in files[f"{folder}{entry.name}.c"][:800]
+            assert entry.origin(l) in files[f"{folder}{entry.name}.c"][:800]
         if entry.wrapper is None:
             continue
-        ins, outs = entry.arguments(100)
+        ins, outs = entry.arguments(l)
         assert (ins, outs) == (tuple(fn.name_in()), tuple(fn.name_out()))
         args = ", ".join([f"const ql_real \\*{a}" for a in ins]
                          + [f"ql_real \\*{r}" for r in outs])
-        proto = re.sub(r"\s+", " ", files["quadland.h"])
+        proto = re.sub(r"\s+", " ", files[header])
         assert re.search(rf"void ql_{entry.name}\({args}\);", proto), entry.name
         assert f"void ql_{entry.name}(" in files[entry.wrapper]
-    assert c_sources() == ("control_step.c", "quadland.c")
+    assert c_sources() == ("control_step.c", "quadland.c", "quadland_status.c")
     assert c_sources(("plant",)) == ("control_step.c", "plant.c", "quadland.c",
-                                     "quadland_model.c")
+                                     "quadland_model.c", "quadland_status.c")
+    assert c_sources(("landing_step",)) == ("landing_step.c", "landing_guidance.c",
+                                            "quadland_landing.c", "quadland_status.c")
+    assert c_sources(("vehicle",))[-2:] == ("quadland_landing_model.c", "quadland_status.c")
 
 
 def test_example_columns_are_the_trajectory_names(files):
@@ -177,10 +192,14 @@ def test_outside_a_checkout_codegen_needs_out(tmp_path, monkeypatch, capsys):
     assert codegen.checkout_root() == site
 
 
-def test_generated_holds_the_paper_scenario_only(capsys):
+def test_generated_holds_the_paper_and_highway_scenarios_only(capsys):
     before = {p: p.stat().st_mtime_ns for p in GENERATED_DIR.rglob("*") if p.is_file()}
     assert cli_main(["codegen", "--set", "rbf.nodes=7"]) == 2
     assert "--out" in capsys.readouterr().err
+    for argv in (["--scenario", "ship"], ["--scenario", "highway", "--set", "rbf.nodes=7"]):
+        assert cli_main(["codegen", *argv]) == 2
+        assert "--out" in capsys.readouterr().err
+    assert cli_main(["codegen", "--scenario", "highway", "--check"]) == 0
     assert before == {p: p.stat().st_mtime_ns for p in GENERATED_DIR.rglob("*") if p.is_file()}
 
 
@@ -237,19 +256,20 @@ def test_structs_match_the_layouts_and_the_ctypes_mirrors(tmp_path, precision):
     config = CodegenConfig(precision)
     ql = config.prefix
     lines = []
-    for s in api_structs(100):
+    structs = (*api_structs(100), *landing_api_structs(10))
+    for s in structs:
         lines.append(f'    printf("{s.name} . %lu\\n", (unsigned long)sizeof({ql}{s.name}));')
         lines.extend(f'    printf("{s.name} {f.name} %lu\\n", '
                      f'(unsigned long)offsetof({ql}{s.name}, {f.name}));'
                      for f in s.layout.fields)
-    prog = ("#include <stddef.h>\n#include <stdio.h>\n#include \"quadland.h\"\n\n"
+    prog = ("#include <stddef.h>\n#include <stdio.h>\n#include \"quadland_landing.h\"\n\n"
             "int main(void)\n{\n" + "\n".join(lines) + "\n    return 0;\n}\n")
     folder = GENERATED_DIR / ("float" if config.is_float else "")
     out = _run_c(tmp_path, prog, [folder])
     got = {(a, b): int(c) for a, b, c in (line.split() for line in out.splitlines())}
     real = ctypes.c_double if precision == "double" else ctypes.c_float
     size = ctypes.sizeof(real)
-    for s in api_structs(100):
+    for s in structs:
         mirror = cbackend.ctypes_struct(s.layout, real)
         assert ctypes.sizeof(mirror) == got[s.name, "."], s.name
         offsets, n_int = s.layout.offsets(), 0
@@ -266,9 +286,10 @@ def test_structs_match_the_layouts_and_the_ctypes_mirrors(tmp_path, precision):
 
 
 _BOTH = r"""#include <stdio.h>
+#include <string.h>
 
-#include "double/quadland.h"
-#include "float/quadland.h"
+#include "double/quadland_landing.h"
+#include "float/quadland_landing.h"
 
 int main(void)
 {
@@ -276,6 +297,8 @@ int main(void)
     static qlf_params pf;
     static ql_adaptive_state s;
     static qlf_adaptive_state sf;
+    static ql_landing_params lp;
+    static qlf_landing_params lpf;
     ql_quadrotor_state xq = {1.5, {0.5, 0.5, 0.5}, {1.0, 1.0, 0.1}, {0.1, 0.1, 0.1}};
     qlf_quadrotor_state xqf = {1.5f, {0.5f, 0.5f, 0.5f}, {1.0f, 1.0f, 0.1f}, {0.1f, 0.1f, 0.1f}};
     ql_vehicle_state yv = {0.0, 0.25, 0.0};
@@ -284,8 +307,20 @@ int main(void)
     qlf_reference rf;
     ql_output o;
     qlf_output of;
-    ql_status a;
-    qlf_status b;
+    ql_landing_measurement y;
+    qlf_landing_measurement yf;
+    ql_guidance_params gp;
+    qlf_guidance_params gpf;
+    ql_guidance_state gs;
+    qlf_guidance_state gsf;
+    ql_position_reference pr;
+    qlf_position_reference prf;
+    ql_landing_state ls;
+    qlf_landing_state lsf;
+    ql_landing_output lo;
+    qlf_landing_output lof;
+    ql_status a, c, d;
+    qlf_status b, cf, df;
     ql_params_init(&p);
     qlf_params_init(&pf);
     ql_reference_init(&r);
@@ -294,9 +329,27 @@ int main(void)
     qlf_adaptive_state_init(&sf);
     a = ql_control_step(&xq, &yv, &r, &p, 0.002, &s, &o);
     b = qlf_control_step(&xqf, &yvf, &rf, &pf, 0.002f, &sf, &of);
-    printf("%d %d %.17g %.17g %d %d\n", (int)a, (int)b, o.rotor[0], (double)of.rotor[0],
-           QL_RBF_NODES, QLF_RBF_NODES);
-    return a != QL_OK || b != QLF_OK;
+    memset(&y, 0, sizeof y);
+    memset(&yf, 0, sizeof yf);
+    y.p_e[2] = 3.0;     /* at the hover point, level */
+    yf.p_e[2] = 3.0f;
+    ql_landing_params_init(&lp);
+    qlf_landing_params_init(&lpf);
+    ql_guidance_params_init(&gp);
+    qlf_guidance_params_init(&gpf);
+    ql_guidance_state_init(&gs, &gp);
+    qlf_guidance_state_init(&gsf, &gpf);
+    ql_landing_state_init(&ls, &y);
+    qlf_landing_state_init(&lsf, &yf);
+    c = ql_guidance_step(&y, &gp, 0.004, &gs, &pr);
+    cf = qlf_guidance_step(&yf, &gpf, 0.004f, &gsf, &prf);
+    d = ql_landing_step(&y, &pr, &lp, 0.004, &ls, &lo);
+    df = qlf_landing_step(&yf, &prf, &lpf, 0.004f, &lsf, &lof);
+    printf("%d %d %d %d %d %d %.17g %.17g %.17g %.17g %d %d %d %d\n", (int)a, (int)b, (int)c,
+           (int)cf, (int)d, (int)df, o.rotor[0], (double)of.rotor[0], lo.F_cmd[0],
+           (double)lof.F_cmd[0], QL_RBF_NODES, QLF_RBF_NODES, QL_LANDING_RBF_NODES,
+           gs.phase);
+    return a != QL_OK || b != QLF_OK || c != QL_OK || cf != QLF_OK || d != QL_OK || df != QLF_OK;
 }
 """
 
@@ -304,15 +357,16 @@ int main(void)
 def test_double_and_float_builds_link_into_one_program(tmp_path):
     import shutil
 
+    sources = (*c_sources(), *c_sources(("landing_step",)))
     for name, folder in (("double", GENERATED_DIR), ("float", GENERATED_DIR / "float")):
-        (tmp_path / name).mkdir()
-        for f in ("control_step.c", "control_step.h", "quadland.c", "quadland.h"):
-            shutil.copy(folder / f, tmp_path / name / f)
-    units = [tmp_path / p / f for p in ("double", "float")
-             for f in ("control_step.c", "quadland.c")]
-    a, b, rd, rf, ld, lf = _run_c(tmp_path, _BOTH, [tmp_path], units).split()
-    assert (a, b, ld, lf) == ("0", "0", "100", "100")
-    assert float(rf) == pytest.approx(float(rd), rel=1e-4)
+        shutil.copytree(folder, tmp_path / name, ignore=shutil.ignore_patterns("example"))
+    units = [tmp_path / p / f for p in ("double", "float") for f in dict.fromkeys(sources)]
+    out = _run_c(tmp_path, _BOTH, [tmp_path], units).split()
+    assert out[:6] == ["0"] * 6
+    rd, rf, Fd, Ff = (float(v) for v in out[6:10])
+    assert out[10:] == ["100", "100", "10", "1"]        # the hover point: the approach is over
+    assert rf == pytest.approx(rd, rel=1e-4) and Ff == pytest.approx(Fd, rel=1e-4)
+    assert 0 < Fd < 9.8                                   # hover thrust within [0, F_max]
     if shutil.which("nm") is None:
         return
     cc = _compiler()
@@ -348,6 +402,11 @@ def test_float_header_spells_ql_names_alone_and_refuses_a_collision(tmp_path):
     declared -= {"QLF_QUADLAND_H", "QLF_NO_QL_NAMES"}
     aliased = set(re.findall(r"#define (?:ql|QL)_\w+ ((?:qlf|QLF)_\w+)", header))
     assert declared == aliased
+    landing = (GENERATED_DIR / "float" / "quadland_landing.h").read_text()
+    body = landing.partition("#ifdef QLF_QL_NAMES")[0].partition('#include "quadland.h"')[2]
+    declared = set(re.findall(r"\b(?:qlf|QLF)_\w+", body)) - {"QLF_QUADLAND_LANDING_H"}
+    assert declared and declared <= set(re.findall(r"#define (?:ql|QL)_\w+ ((?:qlf|QLF)_\w+)",
+                                                   landing))
     g = GENERATED_DIR
     proc = syntax(f'#include "{g}/float/quadland.h"\n#include "{g}/quadland.h"\n'
                   "int main(void) { return 0; }\n")
@@ -365,6 +424,19 @@ def test_any_node_count_compiles_alone(tmp_path):
         for name, text in files.items():
             (folder / name).write_text(text)
         for name in ("quadland.c", "control_step.c", "quadland_model.c"):
+            proc = subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror",
+                                   "-fsyntax-only", f"-I{folder}", str(folder / name)],
+                                  capture_output=True, text=True)
+            assert proc.returncode == 0, proc.stderr
+    d = codegen.landing_default_values("highway", ["rbf.nodes=3"])
+    for config in (CodegenConfig(), CodegenConfig("float")):
+        files = generate_landing(d, config)
+        assert "#define " + config.macro_prefix + "LANDING_RBF_NODES 3 " in \
+            files["quadland_landing.h"]
+        folder = tmp_path / config.precision
+        for name, text in files.items():
+            (folder / name).write_text(text)
+        for name in ("quadland_landing.c", "landing_step.c"):
             proc = subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror",
                                    "-fsyntax-only", f"-I{folder}", str(folder / name)],
                                   capture_output=True, text=True)

@@ -88,7 +88,6 @@ typedef char output_is_its_layout[
     AT(qlf_output, n_clipped, 17, 0) &&
     1 ? 1 : -1];
 #undef AT
-
 /* Defaults: scenario paper. */
 static const qlf_real default_p_quad[13] = {
     2.0f, 1.2416f, 1.2416f, 2.4832f, 0.01f, 0.01f,
@@ -414,42 +413,28 @@ void qlf_pack_closed_loop_params(const qlf_params *params, const qlf_vehicle_par
     pack_reference(ref, p + 1137);
 }
 
-const char *qlf_status_string(qlf_status status)
-{
-    switch (status) {
-    case QLF_OK: return "success; outputs and adaptive state updated";
-    case QLF_ERR_NULL: return "a NULL pointer argument";
-    case QLF_ERR_INVALID: return "dt <= 0";
-    case QLF_ERR_NONFINITE_INPUT: return "an input, parameter or the adaptive state is NaN or infinite";
-    case QLF_ERR_TILT: return "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible";
-    case QLF_ERR_NONFINITE_OUTPUT: return "the law overflowed: a NaN or infinite value from finite inputs";
-    case QLF_ERR_PARAM: return "a parameter outside its range (ql_check_params names it)";
-    }
-    return "unknown status";
-}
-
 /* The range of each member of qlf_params, in layout order (symbolic.c_api.PARAM_RANGES):
- *   quad.m1              > 0
- *   quad.I               > 0
- *   quad.Kt              >= 0
- *   quad.Kr              >= 0
- *   quad.g               > 0
- *   quad.arm             > 0
- *   quad.c               > 0
- *   ctrl.k1              > 0
- *   ctrl.k2              > 0
- *   ctrl.gamma1          > 0
- *   ctrl.gamma2          > 0
- *   ctrl.k_w             > 0
- *   ctrl.k_zeta          > 0
- *   ctrl.rho             > 0
- *   ctrl.nominal_model   0 or 1
- *   ctrl.centers         finite
- *   ctrl.widths          > 0
- *   rotor_force_min      finite
- *   rotor_force_max      >= rotor_force_min
- *   tilt_min             in [0, 1)
- *   hold_compensation    in [0, 1]
+ *   quad.m1                  > 0
+ *   quad.I                   > 0
+ *   quad.Kt                  >= 0
+ *   quad.Kr                  >= 0
+ *   quad.g                   > 0
+ *   quad.arm                 > 0
+ *   quad.c                   > 0
+ *   ctrl.k1                  > 0
+ *   ctrl.k2                  > 0
+ *   ctrl.gamma1              > 0
+ *   ctrl.gamma2              > 0
+ *   ctrl.k_w                 > 0
+ *   ctrl.k_zeta              > 0
+ *   ctrl.rho                 > 0
+ *   ctrl.nominal_model       0 or 1
+ *   ctrl.centers             finite
+ *   ctrl.widths              > 0
+ *   rotor_force_min          finite
+ *   rotor_force_max          >= rotor_force_min
+ *   tilt_min                 in [0, 1)
+ *   hold_compensation        in [0, 1]
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_params(const qlf_params *params, const char **bad_field)
 {

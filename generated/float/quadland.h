@@ -31,12 +31,13 @@ typedef float qlf_real;
 #define QLF_CLOSED_LOOP_JACOBIAN_NNZ 4627    /* nonzeros of d x_dot / d x */
 #define QLF_PLANT_NX 18                      /* xp = [xq (10), xv (6), pos1 (2)] */
 
-/* Status of qlf_control_step and qlf_check_params. */
+/* Status of every step and check: qlf_control_step, qlf_check_params and
+ * quadland_landing.h's qlf_landing_step, qlf_guidance_step and their checks. */
 typedef enum {
     QLF_OK = 0,                    /* success; outputs and adaptive state updated */
     QLF_ERR_NULL = 1,              /* a NULL pointer argument */
-    QLF_ERR_INVALID = 2,           /* dt <= 0 */
-    QLF_ERR_NONFINITE_INPUT = 3,   /* an input, parameter or the adaptive state is NaN or infinite */
+    QLF_ERR_INVALID = 2,           /* dt <= 0, or a guidance state out of range */
+    QLF_ERR_NONFINITE_INPUT = 3,   /* an input, a parameter or the state is NaN or infinite */
     QLF_ERR_TILT = 4,              /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
     QLF_ERR_NONFINITE_OUTPUT = 5,  /* the law overflowed: a NaN or infinite value from finite inputs */
     QLF_ERR_PARAM = 6,             /* a parameter outside its range (ql_check_params names it) */
@@ -164,7 +165,7 @@ qlf_status qlf_control_step(const qlf_quadrotor_state *xq, const qlf_vehicle_sta
                             const qlf_reference *ref, const qlf_params *params, qlf_real dt,
                             qlf_adaptive_state *state, qlf_output *out);
 
-/* A short English description of a status code. */
+/* A short English description of a status code (quadland_status.c). */
 const char *qlf_status_string(qlf_status status);
 
 /* Pack the named parameters into the layouts of symbolic.parameters. */
@@ -203,6 +204,7 @@ void qlf_plant(const qlf_real *xp, const qlf_real *wrench, const qlf_real *w,
 #error "two builds spell their names ql_: define QLF_NO_QL_NAMES"
 #endif
 #define QL_NAMES_ALIASED 1
+#define QLF_QL_NAMES 1   /* quadland_landing.h aliases its names too */
 #define QL_CLOSED_LOOP_JACOBIAN_NNZ QLF_CLOSED_LOOP_JACOBIAN_NNZ
 #define QL_CLOSED_LOOP_NP QLF_CLOSED_LOOP_NP
 #define QL_CLOSED_LOOP_NW QLF_CLOSED_LOOP_NW
@@ -229,6 +231,8 @@ void qlf_plant(const qlf_real *xp, const qlf_real *wrench, const qlf_real *w,
 #define ql_closed_loop_jacobian_sparsity qlf_closed_loop_jacobian_sparsity
 #define ql_control_step qlf_control_step
 #define ql_controller_params qlf_controller_params
+#define ql_guidance_step qlf_guidance_step
+#define ql_landing_step qlf_landing_step
 #define ql_output qlf_output
 #define ql_pack_closed_loop_params qlf_pack_closed_loop_params
 #define ql_pack_controller_params qlf_pack_controller_params

@@ -475,7 +475,7 @@ def landing_guidance_function() -> ca.Function:
 
 
 def measurement_function() -> ca.Function:
-    """``landing_measurement(xp, t, pp) -> y``: perfect sensors on the landing plant.
+    """``landing_sensors(xp, t, pp) -> y``: perfect sensors on the landing plant.
 
     ``y`` (:data:`MEASUREMENT`) from the plant's state
     (:data:`~symbolic.landing.plant.PLANT_STATE`) and parameters
@@ -491,4 +491,4 @@ def measurement_function() -> ca.Function:
     deck = deck_pose(x["xv"], t, p["p_veh"], p["p_deck"])
     y = ca.vertcat(p_e, v_e, q["eta1"], q["Omega1"], deck.eta2, deck.v2E, deck.a2E, deck.w2E,
                    deck.w2E_dot)
-    return ca.Function("landing_measurement", [xp, t, pp], [y], ["xp", "t", "pp"], ["y"])
+    return ca.Function("landing_sensors", [xp, t, pp], [y], ["xp", "t", "pp"], ["y"])

@@ -61,7 +61,7 @@ from symbolic.vehicle import vehicle_rhs
 __all__ = ["DISTURBANCE", "RECORDED", "OUTPUTS", "ANCHOR", "wind_force", "controller_state",
            "controller_params", "loop_state", "loop_outputs", "loop_plant_function",
            "landing_signals_function", "gear_gap_function", "landed_outputs_function",
-           "landing_loop"]
+           "anchor_function", "TRAJECTORY", "landing_loop"]
 
 #: The held disturbance of the landing loop: wind in E, then eq. (2)'s d_F, d_M.
 DISTURBANCE = Layout("w_land", (
@@ -94,6 +94,14 @@ OUTPUTS = Layout("y_land", (
           "frame", elements=("d_Mx", "d_My", "d_Mz")),
     Field("aborts", 1, "-", "aborted descents so far"),
 ), "landing signals: both bodies in E, the relative state, rotors, external forces")
+
+#: The columns of a landing's trajectory.csv (``quadland simulate`` and the
+#: generated C example ``land``): the time, then these :data:`OUTPUTS`.
+TRAJECTORY = Layout("landing_trajectory", (
+    Field("t", 1, "s", "time"),
+    *(OUTPUTS[n] for n in ("phase", "p1", "eta1", "p2", "eta2", "p_e", "F_total", "M", "F",
+                           "d_F")),
+), "one row per output time of a landing, and one at touchdown")
 
 #: The pose at which the quadrotor is pinned to the deck after touchdown.
 ANCHOR = Layout("anchor", (
@@ -246,6 +254,17 @@ def landed_outputs_function() -> ca.Function:
                        ["xv", "t", "pp", "anchor", "F", "phase", "aborts"], ["y", "x1q"])
 
 
+@functools.cache
+def anchor_function() -> ca.Function:
+    """``landing_anchor(y) -> anchor``: the touchdown pose (:data:`ANCHOR`) from the signals
+    ``y`` (:data:`OUTPUTS`) at the contact: ``p_e`` and ``R_rel = R_deck^T R(eta1)``."""
+    y = OUTPUTS.sym()
+    ys = OUTPUTS.unpack(y)
+    R_rel = rotation(ys["eta2"]).T @ rotation(ys["eta1"])
+    return ca.Function("landing_anchor", [y], [ca.vertcat(ys["p_e"], ca.vec(R_rel))], ["y"],
+                       ["anchor"])
+
+
 def _named(name, ins, outs, in_names, out_names):
     return ca.Function(name, ins, outs, in_names, out_names)
 
@@ -288,4 +307,5 @@ def landing_loop(l: int) -> LoopModel:
                    ["xp", "t", "pp"], ["g"])
     return LoopModel("landing", x_lay, DISTURBANCE, PLANT_PARAMS, OUTPUTS, None, output_fn,
                      PLANT_STATE, COMMAND, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
-                     controller, assemble, step_args=step_args, event=event)
+                     controller, assemble, step_args=step_args, event=event,
+                     flight="landing_flight_controller.c.jinja")

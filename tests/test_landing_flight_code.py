@@ -1,0 +1,284 @@
+"""The landing's generated flight code (quadland_landing.h) against the CasADi functions
+it came from, in the loop, and its contract on explicit cases."""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+import pytest
+from reference import have_compiler
+
+import quadland
+from quadland import cbackend
+from quadland.landing import landing_values
+from quadland.metrics import touchdown_report
+from symbolic.c_api import landing_output_layout, landing_params_layout
+from symbolic.codegen import STATUS_CODES
+from symbolic.guidance import ALIGN, DESCEND, LANDED, TOUCHDOWN
+from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
+from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.landing.controller import (
+    MEASUREMENT,
+    landing_guidance_function,
+    landing_memory,
+    landing_step_function,
+    landing_step_outputs,
+)
+from symbolic.landing.loop import controller_params
+from symbolic.landing.plant import PLANT_PARAMS
+
+pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
+
+L = 10
+STATUS = {name: value for name, value, _ in STATUS_CODES}
+
+
+def view(struct, dtype, count=None):
+    """The reals of a ctypes struct as a writable NumPy array."""
+    n = ctypes.sizeof(struct) // np.dtype(dtype).itemsize if count is None else count
+    return np.frombuffer((ctypes.c_char * ctypes.sizeof(struct)).from_buffer(struct),
+                         dtype=dtype, count=n)
+
+
+class Harness:
+    """One build's landing API with its structs, NumPy views and the highway's vectors."""
+
+    def __init__(self, precision: str):
+        self.api = api = cbackend.load_landing_api(L, precision)
+        self.dtype = np.float64 if precision == "double" else np.float32
+        self.y, self.ref = api.LandingMeasurement(), api.PositionReference()
+        self.params, self.state = api.LandingParams(), api.LandingState()
+        self.out, self.gp, self.gs = api.LandingOutput(), api.GuidanceParams(), \
+            api.GuidanceState()
+        d = self.dtype
+        self.v_y, self.v_ref = view(self.y, d), view(self.ref, d)
+        self.v_p, self.v_state = view(self.params, d), view(self.state, d)
+        self.v_out = view(self.out, d, landing_output_layout(L).size)
+        self.v_gp = view(self.gp, d)
+        api.lib.ql_landing_params_init(ctypes.byref(self.params))
+        api.lib.ql_guidance_params_init(ctypes.byref(self.gp))
+        lv = landing_values(quadland.load_scenario("highway"))
+        self.pc = controller_params(L).unpack(lv.pc)
+        self.pp = PLANT_PARAMS.unpack(lv.pp)
+
+    def step(self, dt):
+        return self.api.lib.ql_landing_step(
+            ctypes.byref(self.y), ctypes.byref(self.ref), ctypes.byref(self.params),
+            dt, ctypes.byref(self.state), ctypes.byref(self.out))
+
+    def guide(self, dt):
+        return self.api.lib.ql_guidance_step(
+            ctypes.byref(self.y), ctypes.byref(self.gp), dt, ctypes.byref(self.gs),
+            ctypes.byref(self.ref))
+
+    def check(self, name):
+        bad = ctypes.c_char_p()
+        fn = getattr(self.api.lib, f"ql_check_{name}_params")
+        status = fn(ctypes.byref(self.params if name == "landing" else self.gp),
+                    ctypes.byref(bad))
+        return status, None if bad.value is None else bad.value.decode()
+
+
+@pytest.fixture(scope="module", params=["double", "float"])
+def harness(request):
+    return Harness(request.param)
+
+
+def _measurement(rng, scale=1.0):
+    """Random measurements around the landing's operating range, a rolling deck."""
+    y = MEASUREMENT.unpack(np.zeros(MEASUREMENT.size))
+    y = {k: v.copy() for k, v in y.items()}
+    y["p_e"] = rng.normal(size=3) * [2, 2, 1] * scale + [0, 0, 2]
+    y["v_e"] = rng.normal(size=3) * 0.5 * scale
+    y["eta1"] = rng.normal(size=3) * 0.15 * scale
+    y["Omega1"] = rng.normal(size=3) * 0.3 * scale
+    y["eta2"] = rng.normal(size=3) * [0.05, 0.05, 1.0]
+    for k in ("v2E", "a2E", "w2E", "w2E_dot"):
+        y[k] = rng.normal(size=3) * (5.0 if k == "v2E" else 0.1)
+    return MEASUREMENT.pack(y)
+
+
+def test_defaults_are_the_scenarios_vectors(harness):
+    h = harness
+    want = np.concatenate([h.pp["p_quad"], h.pc["p_ctrl"], h.pp["p_act"], [1e-3]])
+    assert h.v_p.size == landing_params_layout(L).size
+    np.testing.assert_array_equal(h.v_p, want.astype(h.dtype))
+    np.testing.assert_array_equal(h.v_gp, h.pc["p_guid"].astype(h.dtype))
+    assert h.check("landing") == (STATUS["QL_OK"], None)
+    assert h.check("guidance") == (STATUS["QL_OK"], None)
+
+
+def test_steps_match_the_casadi_functions(harness, rng):
+    """Random measurements, memory and a reference: every output and the next memory."""
+    h = harness
+    step, guide = landing_step_function(L), landing_guidance_function()
+    names = landing_step_outputs(L).names()
+    mem_lay = landing_memory(L)
+    rtol = 1e-12 if h.dtype == np.float64 else 2e-3
+    for k in range(40):
+        y = _measurement(rng)
+        mem = rng.normal(size=mem_lay.size) * 0.2
+        xg = GUIDANCE_STATE.pack(dict(phase=k % 3, timer=0.3, z_ref=2.0, aborts=k % 2))
+        dt = 0.004
+        h.v_y[:] = y
+        h.v_state[:] = mem
+        h.gs.phase, h.gs.timer, h.gs.z_ref, h.gs.aborts = int(xg[0]), xg[1], xg[2], int(xg[3])
+        assert h.guide(dt) == STATUS["QL_OK"]
+        xg_next, ref = (np.asarray(v, dtype=float).ravel() for v in guide(
+            xg, h.v_y.astype(float), dt, h.pc["p_guid"]))
+        got = [h.gs.phase, h.gs.timer, h.gs.z_ref, h.gs.aborts]
+        np.testing.assert_allclose(got, xg_next, rtol=rtol, atol=1e-6)
+        np.testing.assert_allclose(h.v_ref, ref, rtol=rtol, atol=1e-6)
+        args = (h.v_y.astype(float), h.v_ref.astype(float), h.v_state.astype(float),
+                h.pc["p_ctrl"], h.pp["p_quad"], h.pp["p_act"], dt)
+        res = dict(zip(names, (np.asarray(v, dtype=float).ravel(order="F")
+                               for v in step(*args)), strict=True))
+        assert h.step(dt) == STATUS["QL_OK"]
+        out = landing_output_layout(L).unpack(h.v_out.astype(float))
+        for name, value in out.items():
+            scale = max(1.0, float(np.max(np.abs(res[name]))))
+            np.testing.assert_allclose(value, res[name], rtol=0, atol=rtol * scale * 10,
+                                       err_msg=name)
+        flags = (h.out.thrust_limited, h.out.tilt_limited, h.out.n_clipped)
+        np.testing.assert_array_equal(flags, res["limits"])
+        scale = max(1.0, float(np.max(np.abs(res["mem_next"]))))
+        np.testing.assert_allclose(h.v_state, res["mem_next"], rtol=0, atol=rtol * scale * 10)
+
+
+def _guidance_at(h, phase, gap_closed):
+    """The guidance one step from a level quadrotor over the pad at the crawl."""
+    h.v_y[:] = 0
+    y = MEASUREMENT.unpack(h.v_y)
+    y["p_e"][2] = h.pc["p_guid"][GUIDANCE_PARAMS.index("touchdown_height")] + (
+        -1e-3 if gap_closed else 1e-2)
+    y["v_e"][2] = -0.3
+    h.api.lib.ql_guidance_state_init(ctypes.byref(h.gs), ctypes.byref(h.gp))
+    h.gs.phase, h.gs.z_ref = phase, 0.1
+    return h.guide(0.004)
+
+
+def test_guidance_detects_touchdown_then_lands(harness):
+    h = harness
+    assert _guidance_at(h, DESCEND, False) == STATUS["QL_OK"] and h.gs.phase == DESCEND
+    assert _guidance_at(h, DESCEND, True) == STATUS["QL_OK"] and h.gs.phase == TOUCHDOWN
+    settle = h.pc["p_guid"][GUIDANCE_PARAMS.index("settle_time")]
+    steps = 0
+    while h.gs.phase == TOUCHDOWN and steps < 10000:
+        assert h.guide(0.004) == STATUS["QL_OK"]
+        steps += 1
+    assert h.gs.phase == LANDED and abs(steps * 0.004 - settle) <= 0.0041
+    assert h.api.lib.ql_phase_name(LANDED) == b"landed"
+    assert h.api.lib.ql_phase_name(7) == b"unknown phase"
+
+
+def _state_bytes(h):
+    return bytes(h.state), bytes(h.gs)
+
+
+@pytest.mark.parametrize("case, status", [
+    ("nan_measurement", "QL_ERR_NONFINITE_INPUT"),
+    ("inf_reference", "QL_ERR_NONFINITE_INPUT"),
+    ("nan_width", "QL_ERR_NONFINITE_INPUT"),
+    ("nan_memory", "QL_ERR_NONFINITE_INPUT"),
+    ("zero_dt", "QL_ERR_INVALID"),
+    ("negative_gain", "QL_ERR_PARAM"),
+    ("tilt_beyond_90", "QL_ERR_PARAM"),
+    ("singular_attitude", "QL_ERR_TILT"),
+    ("huge_gain", "QL_ERR_NONFINITE_OUTPUT"),
+])
+def test_landing_step_errors_leave_the_state_and_zero_the_outputs(harness, rng, case, status):
+    h = harness
+    h.api.lib.ql_landing_params_init(ctypes.byref(h.params))
+    h.v_y[:] = _measurement(rng, 0.3)
+    h.v_ref[:] = [0, 0, 2, 0, 0, -0.3, 0, 0, 0]
+    h.v_state[:] = rng.normal(size=h.v_state.size) * 0.1
+    p = landing_params_layout(L)
+    dt = 0.004
+    if case == "nan_measurement":
+        h.v_y[MEASUREMENT.index("dz_e")] = np.nan
+    elif case == "inf_reference":
+        h.ref.a_ref[2] = np.inf
+    elif case == "nan_width":
+        h.v_p[p.slice("ctrl.widths").start + 3] = np.nan
+    elif case == "nan_memory":
+        h.v_state[landing_memory(L).slice("xi2").start] = np.nan
+    elif case == "zero_dt":
+        dt = 0.0
+    elif case == "negative_gain":
+        h.params.ctrl.k2p[1] = -1.0
+    elif case == "tilt_beyond_90":
+        h.params.ctrl.tilt_max = 2.0
+    elif case == "singular_attitude":
+        h.params.tilt_min = 0.5
+        h.y.eta1[1] = 1.4
+    elif case == "huge_gain":
+        h.params.ctrl.k1[0] = h.params.ctrl.k2[0] = np.finfo(h.dtype).max / 4
+        h.y.eta1[0] = 0.5
+    before = bytes(h.state)
+    assert h.step(dt) == STATUS[status]
+    assert bytes(h.state) == before
+    out = h.v_out.astype(float)
+    assert not np.any(out[:-1]) and np.isfinite(out[-1])
+    assert (h.out.thrust_limited, h.out.tilt_limited, h.out.n_clipped) == (0, 0, 0)
+    if case == "singular_attitude":
+        assert out[-1] == pytest.approx(np.cos(1.4) * np.cos(h.y.eta1[0]), rel=1e-5)
+    if status == "QL_ERR_PARAM":
+        member = {"negative_gain": "ctrl.k2p", "tilt_beyond_90": "ctrl.tilt_max"}[case]
+        assert h.check("landing") == (STATUS["QL_ERR_PARAM"], member)
+    if case == "nan_width":
+        assert h.check("landing") == (STATUS["QL_ERR_PARAM"], "ctrl.widths")
+
+
+@pytest.mark.parametrize("case, status", [
+    ("nan_measurement", "QL_ERR_NONFINITE_INPUT"),
+    ("nan_timer", "QL_ERR_NONFINITE_INPUT"),
+    ("zero_dt", "QL_ERR_INVALID"),
+    ("unknown_phase", "QL_ERR_INVALID"),
+    ("negative_aborts", "QL_ERR_INVALID"),
+    ("negative_descent_speed", "QL_ERR_PARAM"),
+    ("timer_overflow", "QL_ERR_NONFINITE_OUTPUT"),
+])
+def test_guidance_errors_leave_the_state_and_zero_the_reference(harness, rng, case, status):
+    h = harness
+    h.api.lib.ql_guidance_params_init(ctypes.byref(h.gp))
+    h.v_y[:] = _measurement(rng, 0.3)
+    h.api.lib.ql_guidance_state_init(ctypes.byref(h.gs), ctypes.byref(h.gp))
+    h.gs.phase = ALIGN
+    dt = 0.004
+    if case == "nan_measurement":
+        h.y.v2E[2] = np.nan
+    elif case == "nan_timer":
+        h.gs.timer = np.nan
+    elif case == "zero_dt":
+        dt = -1.0
+    elif case == "unknown_phase":
+        h.gs.phase = 5
+    elif case == "negative_aborts":
+        h.gs.aborts = -1
+    elif case == "negative_descent_speed":
+        h.gp.descent_speed = -0.7
+    elif case == "timer_overflow":          # aligned: the dwell timer + dt overflows
+        h.gs.timer = dt = 0.75 * float(np.finfo(h.dtype).max)
+        h.y.p_e[0] = h.y.p_e[1] = h.y.v_e[0] = h.y.v_e[1] = 0
+    h.ref.p_ref[0] = 5.0
+    before = bytes(h.gs)
+    assert h.guide(dt) == STATUS[status]
+    assert bytes(h.gs) == before
+    assert not np.any(h.v_ref)
+    if status == "QL_ERR_PARAM":
+        assert h.check("guidance") == (STATUS["QL_ERR_PARAM"], "descent_speed")
+
+
+@pytest.mark.parametrize("name", ["highway", "ship"])
+def test_the_flight_code_flies_the_same_landing(name):
+    """controller.backend = "c" against "casadi": states to 1e-9, identical touchdown."""
+    base = quadland.load_scenario(name)
+    a = quadland.simulate(base)
+    b = quadland.simulate(quadland.load_scenario(name, ['controller.backend="c"']))
+    assert a.states.shape == b.states.shape
+    assert np.max(np.abs(a.states - b.states)) <= 1e-9
+    for column in a.columns:
+        np.testing.assert_allclose(b[column], a[column], rtol=0, atol=1e-9, err_msg=column)
+    ra, rb = touchdown_report(a), touchdown_report(b)
+    assert ra == rb and ra.success
