@@ -1,21 +1,27 @@
-"""Cost and accuracy of the generated C control step (docs/performance.md).
+"""Cost and accuracy of the generated C control steps (docs/performance.md).
 
 Run with ``python benchmarks/bench_c_step.py [--steps N]``. Builds the
 pure-C example (``example/bench.c`` against the double and the float
 build) from freshly generated sources (the paper scenario's, the same text
-as ``generated/``) with the system's ``cc`` at -O2 and reports:
+as ``generated/``; the landing's for the highway scenario with l = 100,
+``quadland codegen --scenario highway --set rbf.nodes=100``) with the
+system's ``cc`` at -O2 and reports:
 
-* time per control step (l = 100) of ``bench``, double and float, the
-  best of several runs;
+* time per step (l = 100) of ``bench N paper`` (the paper's control step)
+  and ``bench N landing`` (the landing's guidance and landing step, one
+  control period of its flight code), double and float, the best of
+  several runs;
 * instructions per step from valgrind's callgrind (the difference of two
   run lengths, so start-up cost cancels), when valgrind is installed,
-  against the double build's budget of 20,000;
+  against the double builds' budgets of 20,000 (paper) and 30,000
+  (landing);
 * the cost of one call from Python: the compiled step through ctypes and
   the CasADi function;
 * the float build's deviation from the double one over the paper's
   closed loop at 500 Hz, the two backends' difference, and the 500 Hz
   loop's deviation from the continuous-time one, with the shipped hold
-  compensation and without it.
+  compensation and without it;
+* the landing's two backends' difference over the highway landing.
 """
 
 from __future__ import annotations
@@ -39,34 +45,38 @@ from symbolic.parameters import VEHICLE
 from symbolic.simulation import paper_loop, rk4_step
 
 ANGLES = ("phi_e", "theta_e", "psi_e")
-#: Instructions one double control step (l = 100) may cost at -O2 (docs/codegen.md).
-BUDGET = 20_000
+#: Instructions one double step (l = 100) may cost at -O2, by controller (docs/codegen.md).
+BUDGET = {"paper": 20_000, "landing": 30_000}
+#: The landing's node count for the budget (the shipped highway flies l = 10).
+LANDING_L = 100
 
 
 def _build(root: Path) -> Path:
-    codegen.write(root, codegen.generated_files())
+    landing = codegen.landing_default_values("highway", [f"rbf.nodes={LANDING_L}"])
+    codegen.write(root, codegen.generated_files(landing=landing))
     subprocess.run(["make", "-s", "-j2", "build/bench", "build/bench_float"],
                    cwd=root / "example", check=True)
     return root / "example" / "build"
 
 
-def _time_per_step(exe: Path, n: int, repeats: int) -> float:
+def _time_per_step(exe: Path, n: int, repeats: int, which: str) -> float:
     best = np.inf
     for _ in range(repeats):
-        out = subprocess.run([str(exe), str(n)], capture_output=True, text=True,
+        out = subprocess.run([str(exe), str(n), which], capture_output=True, text=True,
                              check=True).stdout
         best = min(best, float(re.search(r"([\d.]+) ns/step", out).group(1)))
     return best
 
 
-def _instructions(exe: Path, n: int) -> float | None:
+def _instructions(exe: Path, n: int, which: str) -> float | None:
     if shutil.which("valgrind") is None:
         return None
     counts = []
     for steps in (n, 2 * n):
         with tempfile.NamedTemporaryFile() as f:
             res = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={f.name}",
-                                  str(exe), str(steps)], capture_output=True, text=True, check=True)
+                                  str(exe), str(steps), which], capture_output=True, text=True,
+                                 check=True)
         counts.append(int(re.search(r"Collected : (\d+)", res.stderr).group(1)))
     return (counts[1] - counts[0]) / n
 
@@ -115,12 +125,12 @@ def _fly(precision: str, rate: float = 500.0, duration: float = 10.0) -> dict:
     z2 = float(VEHICLE.unpack(mv.p_veh)["z2"][0])
     rows = {k: np.empty(n) for k in ("z_e", *ANGLES, "F_1", "F_2", "F_3", "F_4")}
     for k in range(n):
-        args = m.step_args(xp, xc, pc, 1.0 if k == 0 else 0.0)
+        args = m.step_args(xp, xc, pc, 1.0 if k == 0 else 0.0, k / rate)
         out = dict(zip(step_outputs(mv.l).names(), step(*(np.asarray(a) for a in args)),
                        strict=True))
         xc = np.concatenate([out["W_next"].ravel(order="F"), out["zeta_next"].ravel(),
                              out["u_law"].ravel()])
-        xp = np.asarray(plant(xp, out["wrench"], w[:, k], pp, 1.0 / rate)).ravel()
+        xp = np.asarray(plant(xp, out["wrench"], w[:, k], k / rate, pp, 1.0 / rate)).ravel()
         q = m.plant_state.unpack(xp)
         rows["z_e"][k] = q["xq"][0] - z2
         eta, psi2 = q["xq"][1:4], m.plant_state.unpack(xp)["xv"][2]
@@ -143,13 +153,16 @@ def main() -> None:
     l = model_values(quadland.load_scenario("paper")).l
     with tempfile.TemporaryDirectory() as tmp:
         build = _build(Path(tmp))
-        for name in ("bench", "bench_float"):
-            ns = _time_per_step(build / name, args.steps, args.repeats)
-            ir = _instructions(build / name, 1000)
-            ir_text = f"{ir:,.0f} instructions" if ir is not None else "valgrind not found"
-            if name == "bench" and ir is not None:
-                ir_text += f" (budget {BUDGET:,}: {'met' if ir <= BUDGET else 'EXCEEDED'})"
-            print(f"{name}: {ns / 1000:.3f} us/step, {ir_text} per step (l = {l}, -O2)")
+        for which, nodes in (("paper", l), ("landing", LANDING_L)):
+            for name in ("bench", "bench_float"):
+                ns = _time_per_step(build / name, args.steps, args.repeats, which)
+                ir = _instructions(build / name, 1000, which)
+                ir_text = f"{ir:,.0f} instructions" if ir is not None else "valgrind not found"
+                if name == "bench" and ir is not None:
+                    budget = BUDGET[which]
+                    ir_text += f" (budget {budget:,}: {'met' if ir <= budget else 'EXCEEDED'})"
+                print(f"{name} {which}: {ns / 1000:.3f} us/step, {ir_text} per step "
+                      f"(l = {nodes}, -O2)")
     c_call, casadi_call = _python_call_cost(l)
     print(f"python call: compiled C via ctypes {c_call * 1e6:.1f} us, "
           f"CasADi Function {casadi_call * 1e6:.1f} us")
@@ -173,6 +186,10 @@ def main() -> None:
     for name, run in (("hold compensation 1/2", cas), ("plain zero-order hold", plain)):
         print(f"500 Hz vs continuous, {name}: z_e {_max_dev(run, cont, ['z_e']):.2e} m, "
               f"attitude {_max_dev(run, cont, ANGLES):.2e} rad")
+    landings = [quadland.simulate(quadland.load_scenario("highway", [f'controller.backend="{b}"']))
+                for b in ("casadi", "c")]
+    print(f"landing backend c vs casadi, highway: states "
+          f"{np.max(np.abs(landings[0].states - landings[1].states)):.2e}")
 
 
 if __name__ == "__main__":

@@ -83,6 +83,7 @@ from symbolic.landing.controller import (
 from symbolic.landing.loop import (
     ANCHOR,
     OUTPUTS,
+    TRAJECTORY,
     anchor_function,
     gear_gap_function,
     landed_outputs_function,
@@ -92,6 +93,8 @@ from symbolic.landing.loop import (
 from symbolic.landing.loop import DISTURBANCE as LANDING_DISTURBANCE
 from symbolic.landing.plant import PLANT_PARAMS as LANDING_PLANT_PARAMS
 from symbolic.landing.plant import PLANT_STATE as LANDING_PLANT_STATE
+from symbolic.landing.quadrotor import ACTUATOR
+from symbolic.landing.quadrotor import STATE as QUAD6_STATE
 from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
@@ -102,7 +105,7 @@ from symbolic.vehicle import MEASUREMENT, vehicle_function
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["CodegenConfig", "Defaults", "LandingDefaults", "GeneratedFunction", "FUNCTIONS",
-           "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns",
+           "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns", "land_columns",
            "generate", "generate_landing", "generate_example", "generate_tree"]
 
 #: Folder of the Jinja2 templates (installed with the package).
@@ -929,17 +932,80 @@ def _example_context(d: Defaults) -> dict:
     )
 
 
-def generate_example(defaults: Defaults) -> dict[str, str]:
-    """Text of the pure-C example: flight, benchmark, scenario header and Makefile.
+def land_columns() -> list[tuple[str, str]]:
+    """Columns of the example ``land``'s CSV: ``(name, C expression)``, from the layouts.
 
-    The sources are precision-independent (``ql_real``; the float header
-    spells its names ``ql_`` too when it is the only build included); the
-    Makefile builds them against both the double (``../``) and the float
-    (``../float/``) files.
+    The names are ``symbolic.landing.loop.TRAJECTORY``'s (``quadland
+    simulate``'s trajectory.csv of a landing); the expressions read the time
+    ``t`` and the signals ``y`` (``symbolic.landing.loop.OUTPUTS``).
     """
-    ctx = _example_context(defaults)
-    return {f"example/{name}": _render(f"example/{name}.jinja", **ctx)
-            for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}
+    cols = []
+    for f in TRAJECTORY.fields:
+        if f.name == "t":
+            cols.append(("t", "t"))
+            continue
+        at = OUTPUTS.slice(f.name).start
+        cols += [(n, f"(double)y[{at + i}]") for i, n in enumerate(f.element_names())]
+    return cols
+
+
+def _land_context(d: LandingDefaults) -> dict:
+    """The example ``land``'s context: its scenario's values and the layouts' offsets."""
+    def rows(values):
+        values = [repr(float(v)) for v in np.asarray(values, dtype=float).ravel()]
+        return [values[i:i + 6] for i in range(0, len(values), 6)]
+
+    def fields(layout):
+        return ", ".join(f"{f.name} ({f.size})" for f in layout.fields)
+
+    x1q = LANDING_PLANT_STATE.slice("x1q").start
+    return dict(
+        d=d,
+        columns=[dict(name=n, expr=e) for n, e in land_columns()],
+        xg=[dict(name=n, index=i) for i, n in enumerate(GUIDANCE_STATE.names())],
+        w={n: a for n, (a, _) in LANDING_DISTURBANCE.offsets().items()},
+        y={n: OUTPUTS.slice(n).start for n in ("p_e", "v_e", "eta1", "eta2")}
+        | {"psi1": OUTPUTS.index("psi1")},
+        figures=[dict(name=n, index=i, limit="max_" + n)
+                 for i, n in enumerate(TOUCHDOWN_FIGURES.names())],
+        limits=[(name, repr(float(v))) for name, v in d.limits],
+        bias=[repr(float(v)) for v in (*d.force_bias, *d.moment_bias)],
+        wind_mean=[repr(float(v)) for v in d.wind_mean],
+        gust_direction=[repr(float(v)) for v in d.gust_direction],
+        pp_rows=rows(d.pp), pp_size=len(d.pp), pp_fields=fields(LANDING_PLANT_PARAMS),
+        xp_rows=rows(d.xp0), xp_size=len(d.xp0), xp_fields=fields(LANDING_PLANT_STATE),
+        xv=LANDING_PLANT_STATE.slice("xv").start, x1q_size=QUAD6_STATE.size,
+        rotors=x1q + QUAD6_STATE.slice("F").start,
+        p_veh=LANDING_PLANT_PARAMS.slice("p_veh").start,
+        tau_m=LANDING_PLANT_PARAMS.slice("p_act").start + ACTUATOR.index("motor_time_constant"),
+    )
+
+
+#: The landing model's functions the example ``land`` calls.
+_LAND_MODEL = tuple(f.name for f in FUNCTIONS if f.part == "landing" and f.wrapper is not None)
+
+
+def generate_example(defaults: Defaults, landing: LandingDefaults) -> dict[str, str]:
+    """Text of the pure-C example: flights, benchmark, scenario headers and Makefile.
+
+    ``fly.c`` flies the paper's scenario (``defaults``, ``scenario.h``),
+    ``land.c`` the landing scenario (``landing``, ``land_scenario.h``),
+    ``bench.c`` times either step. The sources are precision-independent
+    (``ql_real``; the float header spells its names ``ql_`` too when it is
+    the only build included); the Makefile builds them against both the
+    double (``../``) and the float (``../float/``) files.
+    """
+    status = "quadland_status.c"
+    paper = _example_context(defaults)
+    paper.update(land_scenario=landing.scenario, common_sources=[status],
+                 step_sources=[f for f in paper["step_sources"] if f != status],
+                 land_sources=[f for f in c_sources(_LAND_MODEL) if f != status])
+    land = dict(_common(None), scenario=landing.scenario, **_land_context(landing))
+    files = {f"example/{name}": _render(f"example/{name}.jinja", **paper)
+             for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}
+    files.update({f"example/{name}": _render(f"example/{name}.jinja", **land)
+                  for name in ("land_scenario.h", "land.c")})
+    return files
 
 
 def generate_tree(defaults: Defaults, landing: LandingDefaults) -> dict[str, str]:
@@ -953,6 +1019,6 @@ def generate_tree(defaults: Defaults, landing: LandingDefaults) -> dict[str, str
     for config, folder in ((CodegenConfig("double"), ""), (CodegenConfig("float"), "float/")):
         built = {**generate(defaults, config), **generate_landing(landing, config)}
         files.update({folder + k: v for k, v in built.items()})
-    files.update(generate_example(defaults))
+    files.update(generate_example(defaults, landing))
     files[".gitignore"] = _render("gitignore.jinja", **_common(None))
     return files

@@ -14,6 +14,7 @@ from quadland import cbackend, codegen
 from quadland.build import find_compiler
 from quadland.cli import main as cli_main
 from quadland.exceptions import CompilerNotFoundError
+from quadland.landing import LANDING_TRAJECTORY
 from quadland.scenario import load_scenario
 from quadland.simulate import TRAJECTORY
 from symbolic.c_api import api_structs, landing_api_structs
@@ -24,6 +25,7 @@ from symbolic.codegen import (
     example_columns,
     generate,
     generate_landing,
+    land_columns,
 )
 
 GENERATED_DIR = codegen.generated_dir()
@@ -163,6 +165,15 @@ def test_example_columns_are_the_trajectory_names(files):
     assert names[-2:] == ["n_clipped", "status"]
     assert len(set(names)) == len(names)
     header = "".join(re.findall(r'printf\("([^"%\\]*)"\);', files["example/fly.c"]))
+    assert header == ",".join(names)
+
+
+def test_land_columns_are_the_landing_trajectory_names(files):
+    names = [n for n, _ in land_columns()]
+    assert names == list(LANDING_TRAJECTORY.element_names())
+    body = files["example/land.c"].partition("static void write_header(void)")[2]
+    body = body.partition("\n}\n")[0]
+    header = "".join(re.findall(r'printf\("([^"%\\]*)"\);', body))
     assert header == ",".join(names)
 
 
@@ -393,7 +404,7 @@ def test_float_header_spells_ql_names_alone_and_refuses_a_collision(tmp_path):
                                str(tmp_path / "t.c")], capture_output=True, text=True)
 
     example = GENERATED_DIR / "example"
-    for src in ("fly.c", "bench.c"):
+    for src in ("fly.c", "bench.c", "land.c"):
         proc = syntax((example / src).read_text(), GENERATED_DIR / "float", example)
         assert proc.returncode == 0, proc.stderr
     header = (GENERATED_DIR / "float" / "quadland.h").read_text()

@@ -4,14 +4,18 @@ it came from, in the loop, and its contract on explicit cases."""
 from __future__ import annotations
 
 import ctypes
+import json
+import re
+import shutil
+import subprocess
 
 import numpy as np
 import pytest
 from reference import have_compiler
 
 import quadland
-from quadland import cbackend
-from quadland.landing import landing_values
+from quadland import build, cbackend, codegen
+from quadland.landing import LANDING_TRAJECTORY, landing_values
 from quadland.metrics import touchdown_report
 from symbolic.c_api import landing_output_layout, landing_params_layout
 from symbolic.codegen import STATUS_CODES
@@ -282,3 +286,85 @@ def test_the_flight_code_flies_the_same_landing(name):
         np.testing.assert_allclose(b[column], a[column], rtol=0, atol=1e-9, err_msg=column)
     ra, rb = touchdown_report(a), touchdown_report(b)
     assert ra == rb and ra.success
+
+
+# --- the pure-C example land -------------------------------------------------
+
+#: Deterministic parts only: the C example leaves the random ones out.
+QUIET = ["disturbance.noise=false", "wind.turbulence_w20=0.0"]
+
+
+@pytest.fixture(scope="module")
+def examples(tmp_path_factory):
+    """land, land_float and bench built from a copy of generated/ (highway), and land
+    from a tree generated for the ship (nothing is written in the tree)."""
+    if shutil.which("make") is None:
+        pytest.skip("no make")
+    cc = build.find_compiler()
+    trees = {"highway": tmp_path_factory.mktemp("generated"),
+             "ship": tmp_path_factory.mktemp("ship")}
+    shutil.copytree(codegen.generated_dir(), trees["highway"], dirs_exist_ok=True,
+                    ignore=shutil.ignore_patterns("build", "closed_loop_jacobian.c"))
+    codegen.write(trees["ship"], codegen.generated_files(
+        landing=codegen.landing_default_values("ship")))
+    procs = [subprocess.Popen(["make", "-s", f"CC={cc}", *targets], cwd=trees[name] / "example",
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+             for name, targets in (("highway", ["build/land", "build/land_float", "build/bench"]),
+                                   ("ship", ["build/land"]))]
+    for proc in procs:
+        out, _ = proc.communicate(timeout=600)
+        assert proc.returncode == 0, out.decode()
+    return {name: root / "example" / "build" for name, root in trees.items()}
+
+
+def _land(exe):
+    """The CSV's columns by name and the last line's JSON report."""
+    lines = subprocess.run([str(exe)], check=True, capture_output=True,
+                           text=True).stdout.splitlines()
+    header = lines[0].split(",")
+    data = np.array([[float(v) for v in line.split(",")] for line in lines[1:-1]])
+    return header, {h: data[:, i] for i, h in enumerate(header)}, json.loads(lines[-1])
+
+
+@pytest.mark.parametrize("name", ["highway", "ship"])
+def test_pure_c_landing_is_quadland_simulates(examples, name):
+    """The same columns and rows to 1e-9, the same touchdown report; it lands."""
+    header, c, report = _land(examples[name] / "land")
+    py = quadland.simulate(quadland.load_scenario(name, QUIET))
+    want = touchdown_report(py).to_dict()
+    assert header == list(LANDING_TRAJECTORY.element_names())
+    assert list(report) == list(want) and report["limits"] == want["limits"]
+    assert report["touchdown"] and report["success"] and want["success"]
+    for key in ("time", "sink_rate", "offset", "relative_speed", "tilt_deg"):
+        assert report[key] == pytest.approx(want[key], rel=1e-12, abs=1e-12), key
+    assert report["aborts"] == want["aborts"]
+    np.testing.assert_array_equal(c["t"], py["t"])
+    np.testing.assert_array_equal(c["phase"], py["phase"])
+    for column in header:
+        scale = max(1.0, float(np.max(np.abs(py[column]))))
+        np.testing.assert_allclose(c[column], py[column], rtol=0, atol=1e-9 * scale,
+                                   err_msg=column)
+
+
+def test_pure_c_landing_in_float_lands_alike(examples):
+    """The float build, plant included, lands within its limits near the double's figures."""
+    _, c, report = _land(examples["highway"] / "land_float")
+    _, _, double = _land(examples["highway"] / "land")
+    assert report["success"] and report["aborts"] == double["aborts"] == 0
+    assert report["time"] == pytest.approx(double["time"], abs=2e-3)
+    for key, tol in (("sink_rate", 2e-3), ("offset", 2e-3), ("relative_speed", 2e-3),
+                     ("tilt_deg", 0.05)):
+        assert report[key] == pytest.approx(double[key], abs=tol), key
+    assert c["phase"][-1] == LANDED
+
+
+def test_bench_times_either_controller(examples):
+    bench = examples["highway"] / "bench"
+    for which, what in (([], "control_step"), (["paper"], "control_step"),
+                        (["landing"], r"guidance_step \+ landing_step")):
+        out = subprocess.run([str(bench), "50", *which], check=True, capture_output=True,
+                             text=True).stdout
+        assert re.match(rf"{what} \(double, l = \d+\): 50 steps, [\d.]+ ns/step .*0 errors",
+                        out), out
+    bad = subprocess.run([str(bench), "5", "nope"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "usage: bench N [paper|landing]" in bad.stderr

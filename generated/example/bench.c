@@ -12,13 +12,17 @@
 #include <time.h>
 
 #include "quadland.h"
+#include "quadland_landing.h"
+#include "land_scenario.h"
 #include "scenario.h"
 
-/* Usage: bench N
+/* Usage: bench N [paper|landing]
  *
- * Runs N control steps (l = QL_RBF_NODES) from the scenario's initial
- * state, each on slightly different measurements, and prints the time per
- * step. */
+ * paper (the default): N control steps of the paper's scenario (l =
+ * QL_RBF_NODES) from its initial state; landing: N periods of the landing's
+ * flight code, ql_guidance_step then ql_landing_step (l =
+ * QL_LANDING_RBF_NODES), from the landing scenario's initial state. Each
+ * step sees slightly different measurements; prints the time per step. */
 
 /* The step's measurements at the closed-loop state x (symbolic.closed_loop). */
 static void measure(const ql_real *x, const ql_vehicle_params *vehicle, ql_quadrotor_state *xq,
@@ -33,7 +37,12 @@ static void measure(const ql_real *x, const ql_vehicle_params *vehicle, ql_quadr
     yv->r2 = x[15];
 }
 
-int main(int argc, char **argv)
+static double seconds_between(const struct timespec *t0, const struct timespec *t1)
+{
+    return (double)(t1->tv_sec - t0->tv_sec) + 1e-9 * (double)(t1->tv_nsec - t0->tv_nsec);
+}
+
+static int bench_paper(long n)
 {
     static ql_real x[QL_CLOSED_LOOP_NX];
     static ql_params params;
@@ -44,14 +53,10 @@ int main(int argc, char **argv)
     ql_vehicle_state yv;
     ql_output out;
     struct timespec t0, t1;
-    long i, n = argc > 1 ? strtol(argv[1], NULL, 10) : 100000;
-    double seconds, check = 0;
+    long i;
+    double check = 0;
     int bad = 0;
 
-    if (n < 0) {
-        fprintf(stderr, "usage: bench N\n");
-        return 2;
-    }
     ql_params_init(&params);
     ql_vehicle_params_init(&vehicle);
     ql_reference_init(&ref);
@@ -65,9 +70,59 @@ int main(int argc, char **argv)
         check += (double)out.wrench[0];
     }
     clock_gettime(CLOCK_MONOTONIC, &t1);
-    seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     printf("control_step (%s, l = %d): %ld steps, %.1f ns/step (checksum %.6g, %d errors)\n",
            sizeof(ql_real) == sizeof(double) ? "double" : "float", QL_RBF_NODES, n,
-           n > 0 ? 1e9 * seconds / (double)n : 0.0, check, bad);
+           n > 0 ? 1e9 * seconds_between(&t0, &t1) / (double)n : 0.0, check, bad);
     return bad != 0;
+}
+
+static int bench_landing(long n)
+{
+    static ql_landing_params params;
+    static ql_landing_state state;
+    ql_guidance_params guidance;
+    ql_guidance_state gs;
+    ql_landing_measurement y;
+    ql_position_reference ref;
+    ql_landing_output out;
+    ql_real xp[QL_LANDING_PLANT_NX], pp[QL_LANDING_PLANT_NP], t = 0, z_e;
+    ql_real dt = (ql_real)(1.0 / QL_LAND_CONTROL_RATE_HZ);
+    struct timespec t0, t1;
+    long i;
+    double check = 0;
+    int bad = 0;
+
+    for (i = 0; i < QL_LANDING_PLANT_NX; ++i) xp[i] = (ql_real)ql_land_xp0[i];
+    for (i = 0; i < QL_LANDING_PLANT_NP; ++i) pp[i] = (ql_real)ql_land_pp[i];
+    ql_landing_sensors(xp, &t, pp, (ql_real *)&y);
+    ql_landing_params_init(&params);
+    ql_guidance_params_init(&guidance);
+    ql_guidance_state_init(&gs, &guidance);
+    ql_landing_state_init(&state, &y);
+    z_e = y.p_e[2];
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (i = 0; i < n; ++i) {
+        y.p_e[2] = (ql_real)((double)z_e + 1e-6 * (double)(i & 1023));
+        bad += ql_guidance_step(&y, &guidance, dt, &gs, &ref) != QL_OK;
+        bad += ql_landing_step(&y, &ref, &params, dt, &state, &out) != QL_OK;
+        check += (double)out.F_cmd[0];
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    printf("guidance_step + landing_step (%s, l = %d): %ld steps, %.1f ns/step "
+           "(checksum %.6g, %d errors)\n",
+           sizeof(ql_real) == sizeof(double) ? "double" : "float", QL_LANDING_RBF_NODES, n,
+           n > 0 ? 1e9 * seconds_between(&t0, &t1) / (double)n : 0.0, check, bad);
+    return bad != 0;
+}
+
+int main(int argc, char **argv)
+{
+    long n = argc > 1 ? strtol(argv[1], NULL, 10) : 100000;
+    const char *which = argc > 2 ? argv[2] : "paper";
+
+    if (n < 0 || argc > 3 || (strcmp(which, "paper") != 0 && strcmp(which, "landing") != 0)) {
+        fprintf(stderr, "usage: bench N [paper|landing]\n");
+        return 2;
+    }
+    return strcmp(which, "paper") == 0 ? bench_paper(n) : bench_landing(n);
 }
