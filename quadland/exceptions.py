@@ -2,7 +2,7 @@
 
 __all__ = ["QuadlandError", "ScenarioError", "SimulationError", "SingularAttitudeError",
            "CompilerNotFoundError", "CompileError", "CodegenError", "OperatingPointError",
-           "MarginsError"]
+           "MarginsError", "CampaignError", "CampaignStopped"]
 
 
 class QuadlandError(Exception):
@@ -56,3 +56,15 @@ class OperatingPointError(QuadlandError, ArithmeticError):
 
 class MarginsError(QuadlandError, ValueError):
     """A margins request is malformed (operating time or requirement)."""
+
+
+class CampaignError(QuadlandError, ValueError):
+    """A campaign cannot start or resume where asked (folder, scheduler, changed scenario)."""
+
+
+class CampaignStopped(QuadlandError, RuntimeError):
+    """A campaign stopped before its end (a worker or the scheduler was lost).
+
+    The runs recorded so far are kept; running the same command again
+    resumes it.
+    """

@@ -23,7 +23,7 @@ import numpy as np
 from quadland.exceptions import ScenarioError
 
 __all__ = ["Field", "SCHEMA", "LANDING_SCHEMA", "SCHEMAS", "MODELS", "Scenario", "load_scenario",
-           "scenario_names", "require_model", "SCENARIO_DIR"]
+           "scenario_names", "require_model", "SCENARIO_DIR", "toml_value"]
 
 #: Folder of the scenarios shipped with quadland.
 SCENARIO_DIR = Path(__file__).parent / "scenarios"
@@ -355,12 +355,17 @@ class Scenario:
         section -> key -> value, complete and validated (lists as tuples).
     overrides : tuple of str
         The ``section.key=value`` overrides applied on top of the file.
+    campaign : CampaignSpec or None
+        The file's ``[campaign]`` table, validated
+        (:func:`quadland.campaign.spec.campaign_spec`); :func:`quadland.simulate`
+        ignores it, ``quadland campaign`` runs it.
     """
 
     name: str
     source: str
     data: Mapping[str, Mapping[str, Any]]
     overrides: tuple[str, ...] = ()
+    campaign: Any = None
 
     def __getitem__(self, dotted: str):
         section, key = dotted.split(".", 1)
@@ -395,8 +400,10 @@ class Scenario:
         lines = [" ".join(lines[0].split()), ""]
         for section, kv in self.data.items():
             lines.append(f"[{section}]")
-            lines.extend(f"{key} = {_toml_value(value)}" for key, value in kv.items())
+            lines.extend(f"{key} = {toml_value(value)}" for key, value in kv.items())
             lines.append("")
+        if self.campaign is not None:
+            lines.append(self.campaign.to_toml())
         return "\n".join(lines)
 
     def replace(self, **changes) -> Scenario:
@@ -406,10 +413,12 @@ class Scenario:
             section, key = _split_key(dotted)
             raw.setdefault(section, {})[key] = value
         data = _validate(raw, self.source, self.name)
-        return Scenario(data["scenario"]["name"], self.source, data, self.overrides)
+        return Scenario(data["scenario"]["name"], self.source, data, self.overrides,
+                        self.campaign)
 
 
-def _toml_value(value) -> str:
+def toml_value(value) -> str:
+    """A value as TOML text: floats as their shortest round trip, tables inline."""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
@@ -418,7 +427,10 @@ def _toml_value(value) -> str:
         return repr(value)
     if isinstance(value, str):
         return json.dumps(value, ensure_ascii=False)
-    return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{k if re.fullmatch(r'[A-Za-z0-9_-]+', k) else json.dumps(k)}"
+                               f" = {toml_value(v)}" for k, v in value.items()) + "}"
+    return "[" + ", ".join(toml_value(v) for v in value) + "]"
 
 
 def scenario_names() -> list[str]:
@@ -456,9 +468,15 @@ def load_scenario(name_or_path: str | Path = "paper",
     """
     path = _resolve(name_or_path)
     raw = _parse_toml(_read_text(path), str(path))
+    campaign = raw.pop("campaign", None)
     pairs = _parse_overrides(overrides)
     for dotted, value in pairs:
         section, key = _split_key(dotted)
+        if section == "campaign":                   # campaign.runs, .seed, .sampling
+            if not isinstance(campaign, dict):
+                raise ScenarioError(f"--set {dotted}: {path} has no [campaign] table")
+            campaign[key] = value
+            continue
         if not any(section in schema for schema in SCHEMAS.values()):
             raise ScenarioError(f"--set {dotted}: {_unknown('section', section, _SECTIONS)}")
         raw.setdefault(section, {})
@@ -467,8 +485,13 @@ def load_scenario(name_or_path: str | Path = "paper",
         raw[section][key] = value
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", path.stem)
     data = _validate(raw, str(path), default_name=stem.lstrip(".-_")[:64] or "scenario")
+    spec = None
+    if campaign is not None:
+        from quadland.campaign.spec import campaign_spec
+
+        spec = campaign_spec(campaign, data, _model(raw), str(path))
     return Scenario(data["scenario"]["name"], str(path), data,
-                    tuple(f"{k}={_show(v)}" for k, v in pairs))
+                    tuple(f"{k}={_show(v)}" for k, v in pairs), spec)
 
 
 #: Largest scenario file read, bytes.

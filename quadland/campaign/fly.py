@@ -1,0 +1,98 @@
+"""One run of a campaign: the dispersed scenario, flown, judged against its limits."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+from quadland.campaign.metrics import METRICS, limits_of, run_metrics, violations
+from quadland.campaign.sampling import RunDraw
+from quadland.exceptions import ScenarioError, SimulationError
+from quadland.scenario import Scenario
+
+__all__ = ["RunOutcome", "fly", "STATUSES", "warm_up"]
+
+#: A run's status: flown to the end, stopped by a numerical failure, or not
+#: flyable (a draw outside a key's range or the resource limits).
+STATUSES = ("ok", "failed", "invalid")
+
+
+@dataclasses.dataclass(frozen=True)
+class RunOutcome:
+    """What one run gave.
+
+    Attributes
+    ----------
+    index, seed : int
+    status : str
+        One of :data:`STATUSES`.
+    success : bool
+        Flown to the end with every limited metric defined and within its limit.
+    metrics : mapping of str to float or None
+        Empty unless ``status == "ok"``.
+    message : str
+        Why it failed or missed its limits ("" for a success): one line.
+    columns : mapping of str to str
+        The draw's runs.csv columns.
+    """
+
+    index: int
+    seed: int
+    status: str
+    success: bool
+    metrics: Mapping[str, float | None]
+    message: str
+    columns: Mapping[str, str]
+
+
+def fly(base: Scenario, draw: RunDraw) -> RunOutcome:
+    """Fly run ``draw.index`` of the campaign of ``base``.
+
+    Parameters
+    ----------
+    base : Scenario
+        The campaign's scenario, with its ``campaign`` table.
+    draw : RunDraw
+        The run's seed and dispersed values.
+
+    Returns
+    -------
+    RunOutcome
+        A run that leaves the model's domain is an outcome (``"failed"``),
+        as is one whose draws the scenario refuses (``"invalid"``); other
+        errors propagate.
+    """
+    from quadland.simulate import simulate
+
+    def outcome(status, success=False, metrics=None, message=""):
+        return RunOutcome(draw.index, draw.seed, status, success, metrics or {},
+                          " ".join(message.split()), draw.columns)
+
+    try:
+        scenario = base.replace(**draw.values)
+    except ScenarioError as exc:
+        return outcome("invalid", message=str(exc))
+    try:
+        result = simulate(scenario)
+    except ScenarioError as exc:
+        return outcome("invalid", message=str(exc))
+    except SimulationError as exc:
+        return outcome("failed", message=str(exc))
+    metrics = run_metrics(result)
+    extra = base.campaign.limits if base.campaign is not None else {}
+    units = {m.name: m.unit for m in METRICS[scenario.model]}
+    missed = violations(metrics, limits_of(scenario, extra), units)
+    if scenario.model == "landing" and metrics["touchdown_time"] is None:
+        missed = [f"no touchdown by t = {result['t'][-1]:.4g} s"]
+    return outcome("ok", not missed, metrics, "; ".join(missed))
+
+
+def warm_up(base: Scenario) -> None:
+    """Build (or load) the compiled simulator of ``base``'s loop in this process."""
+    from quadland.simulate import simulate
+
+    short = base.replace(**{"simulation.duration": min(base["simulation.duration"], 0.05)})
+    try:
+        simulate(short)
+    except SimulationError:
+        pass

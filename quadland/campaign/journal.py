@@ -1,0 +1,197 @@
+"""A campaign folder: claimed, identified, and written one finished run at a time.
+
+Unlike the output sets of ``quadland simulate`` (written whole at the end,
+:class:`quadland.output.OutputFolder`), a campaign's folder fills while it
+runs, so that a stop loses only the runs in flight:
+
+- ``campaign.json`` (the manifest: what must not change for the folder to be
+  resumed) and ``scenario.toml`` are written first, each atomically;
+- ``runs.csv`` is the journal: its header is written atomically with the
+  manifest, then each finished run is one line appended with a single
+  ``write`` on a file opened ``O_APPEND`` and made durable with ``fsync``
+  before the run counts as recorded (runs finishing together share one
+  ``fsync``). Lines are in the order the runs finished;
+- when every run is recorded, ``runs.csv`` is rewritten sorted by index and
+  ``summary.json`` and the figures are written, each atomically (temporary
+  file, ``fsync``, rename).
+
+A killed campaign can leave a last line cut short (power loss; a killed
+process completes its ``write``): reading the journal drops it, and the run
+is flown again. The folder is locked against a second campaign (or
+simulation) by the same lock file as ``OutputFolder`` uses.
+"""
+
+from __future__ import annotations
+
+import csv
+import fcntl
+import io
+import json
+import os
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+from quadland.exceptions import CampaignError
+from quadland.output import strict_json, write_bytes_atomic
+
+__all__ = ["CampaignFolder", "MANIFEST", "RUNS", "format_row"]
+
+#: The manifest: the campaign's identity.
+MANIFEST = "campaign.json"
+#: The journal of finished runs, then the sorted table.
+RUNS = "runs.csv"
+
+
+def format_row(values: Sequence[str]) -> bytes:
+    """One CSV line (``\\n``-terminated) of texts."""
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerow(values)
+    return buf.getvalue().encode("utf-8")
+
+
+class CampaignFolder:
+    """The folder of one campaign: a new or empty folder, or an earlier run of it.
+
+    Parameters
+    ----------
+    path : path-like
+    """
+
+    def __init__(self, path: str | os.PathLike):
+        self.path = Path(path).absolute()
+        self._lock_fd: int | None = None
+        self._runs_fd: int | None = None
+
+    def __enter__(self) -> CampaignFolder:
+        return self.claim()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    @property
+    def _lock_path(self) -> Path:
+        return self.path.parent / f".{self.path.name}.lock"
+
+    def claim(self) -> CampaignFolder:
+        """Check the folder and lock it; raise :class:`CampaignError` (``out: ...``)."""
+        path = self.path
+        if path.exists() and not path.is_dir():
+            raise CampaignError(f"out: {path} exists and is not a folder")
+        if path.is_dir() and not (path / MANIFEST).is_file() and any(path.iterdir()):
+            raise CampaignError(f"out: {path} holds files that are not a quadland campaign; "
+                                "choose a new or empty folder")
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self._lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise CampaignError(f"out: cannot write to {path.parent}: "
+                                f"{exc.strerror or exc}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise CampaignError(f"out: {path} is in use by another quadland run") from None
+        self._lock_fd = fd
+        return self
+
+    def release(self) -> None:
+        """Close the journal and drop the lock."""
+        if self._runs_fd is not None:
+            os.close(self._runs_fd)
+            self._runs_fd = None
+        if self._lock_fd is not None:
+            try:
+                self._lock_path.unlink(missing_ok=True)
+            finally:
+                os.close(self._lock_fd)
+                self._lock_fd = None
+
+    def manifest(self) -> dict | None:
+        """The manifest of an earlier run into this folder, or None."""
+        try:
+            return json.loads((self.path / MANIFEST).read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError) as exc:
+            raise CampaignError(f"out: {self.path / MANIFEST} cannot be read ({exc}); "
+                                "choose a new folder") from None
+
+    def start(self, manifest: dict, header: Sequence[str], files: dict[str, bytes]) -> None:
+        """Write the manifest and ``files`` (atomically), and the journal's header if new."""
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            write_bytes_atomic(self.path / MANIFEST, strict_json(manifest))
+            for name, data in files.items():
+                write_bytes_atomic(self.path / name, data)
+            if not (self.path / RUNS).exists():
+                write_bytes_atomic(self.path / RUNS, format_row(header))
+            _fsync_dir(self.path)
+        except OSError as exc:
+            raise CampaignError(f"out: cannot write {self.path}: {exc.strerror or exc}") \
+                from None
+
+    def read_runs(self, header: Sequence[str]) -> dict[int, list[str]]:
+        """The recorded runs by index; a last line cut short is removed from the file."""
+        path = self.path / RUNS
+        try:
+            data = path.read_bytes()
+        except FileNotFoundError:
+            return {}
+        if data and not data.endswith(b"\n"):
+            keep = data.rfind(b"\n") + 1
+            os.truncate(path, keep)
+            data = data[:keep]
+        rows = list(csv.reader(io.StringIO(data.decode("utf-8", errors="replace"))))
+        if not rows or rows[0] != list(header):
+            raise CampaignError(f"out: {path} does not have this campaign's columns; choose a "
+                                "new folder")
+        out: dict[int, list[str]] = {}
+        for n, row in enumerate(rows[1:], start=2):
+            try:
+                index = int(row[0])
+            except (ValueError, IndexError):
+                index = -1
+            if len(row) != len(header) or index < 0 or index in out:
+                raise CampaignError(f"out: {path} line {n} is damaged; choose a new folder")
+            out[index] = row
+        return out
+
+    def append(self, rows: Iterable[Sequence[str]]) -> None:
+        """Record finished runs: one write, then ``fsync``."""
+        data = b"".join(format_row(r) for r in rows)
+        if not data:
+            return
+        try:
+            if self._runs_fd is None:
+                self._runs_fd = os.open(self.path / RUNS, os.O_WRONLY | os.O_APPEND)
+            view = memoryview(data)
+            while view:
+                view = view[os.write(self._runs_fd, view):]
+            os.fsync(self._runs_fd)
+        except OSError as exc:
+            raise CampaignError(f"out: cannot write {self.path / RUNS}: "
+                                f"{exc.strerror or exc}") from None
+
+    def finish(self, header: Sequence[str], rows: Iterable[Sequence[str]],
+               files: dict[str, bytes]) -> None:
+        """Rewrite the journal sorted (``rows``, in order) and write ``files``, each atomically."""
+        if self._runs_fd is not None:
+            os.close(self._runs_fd)
+            self._runs_fd = None
+        try:
+            write_bytes_atomic(self.path / RUNS,
+                               format_row(header) + b"".join(format_row(r) for r in rows))
+            for name, data in files.items():
+                write_bytes_atomic(self.path / name, data)
+            _fsync_dir(self.path)
+        except OSError as exc:
+            raise CampaignError(f"out: cannot write {self.path}: {exc.strerror or exc}") \
+                from None
+
+
+def _fsync_dir(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)

@@ -1,0 +1,254 @@
+"""Campaigns end to end: reproducible runs, nothing lost, refusals, summary, Dask.
+
+Short paper runs (0.5 s of flight, about 2 ms each) keep the file under a minute.
+"""
+
+import csv
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from quadland.campaign.execute import campaign_header, run_campaign
+from quadland.campaign.statistics import clopper_pearson, lower_confidence_bound
+from quadland.cli import main
+from quadland.exceptions import CampaignError
+from quadland.scenario import SCENARIO_DIR, load_scenario
+
+FAST = ["simulation.duration=0.5"]
+RUNS = 24
+PAPER = (SCENARIO_DIR / "paper.toml").read_text().split("\n[campaign]")[0]
+
+
+def _rows(folder):
+    with open(folder / "runs.csv", newline="") as fh:
+        return list(csv.reader(fh))
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """An uninterrupted campaign flown in this process."""
+    out = tmp_path_factory.mktemp("ref") / "campaign"
+    result = run_campaign("paper", FAST, runs=RUNS, out=out, workers=1)
+    assert result.complete and result.flown == RUNS
+    return out
+
+
+def test_worker_count_and_order_do_not_change_a_run(reference, tmp_path):
+    out = tmp_path / "two"
+    run_campaign("paper", FAST, runs=RUNS, out=out, workers=2)
+    assert (out / "runs.csv").read_bytes() == (reference / "runs.csv").read_bytes()
+    # a campaign grown from 10 runs to 24 (the first 10 recorded before) is the same too
+    grown = tmp_path / "grown"
+    first = run_campaign("paper", FAST, runs=10, out=grown, workers=2)
+    assert first.complete and first.flown == 10
+    second = run_campaign("paper", FAST, runs=RUNS, out=grown, workers=1)
+    assert second.flown == RUNS - 10
+    assert (grown / "runs.csv").read_bytes() == (reference / "runs.csv").read_bytes()
+    again = run_campaign("paper", FAST, runs=RUNS, out=grown, workers=2)
+    assert again.flown == 0 and again.complete
+
+
+def test_files_and_summary_against_runs_csv(reference):
+    names = sorted(p.name for p in reference.iterdir())
+    assert names == ["campaign.json", "failures.png", "metrics_cdf.png", "runs.csv",
+                     "scenario.toml", "summary.json"]
+    rows = _rows(reference)
+    header, body = rows[0], rows[1:]
+    sc = load_scenario("paper", FAST)
+    assert header == campaign_header(sc.campaign, "paper")
+    assert [int(r[0]) for r in body] == list(range(RUNS))
+    summary = json.loads((reference / "summary.json").read_text())
+    col = {name: [r[k] for r in body] for k, name in enumerate(header)}
+    k = sum(s == "true" for s in col["success"])
+    assert summary["successes"] == k and summary["flown"] == RUNS
+    assert summary["confidence"]["interval"] == list(clopper_pearson(k, RUNS))
+    assert summary["confidence"]["lower_bound_one_sided"] == lower_confidence_bound(k, RUNS)
+    for name, entry in summary["metrics"].items():
+        x = np.array([float(v) for v in col[name] if v != ""])
+        if x.size == 0:
+            assert entry["p50"] is None
+            continue
+        for label, q in (("p50", 50), ("p90", 90), ("p99", 99), ("max", 100)):
+            assert entry[label] == np.percentile(x, q, method="inverted_cdf")
+    # success means every limited metric within its limit
+    for r in body:
+        ok = all(col_v != "" and float(col_v) <= 1.5 for col_v in
+                 (r[header.index(f"settling_time_{c}")] for c in ("phi_e", "theta_e", "psi_e")))
+        assert (r[header.index("success")] == "true") == ok
+    # the scenario written beside the runs repeats the campaign
+    again = load_scenario(reference / "scenario.toml")
+    assert again.data == sc.data and again.campaign.table == sc.campaign.table
+
+
+def test_a_worst_run_replays_with_its_command(reference, tmp_path, capsys):
+    summary = json.loads((reference / "summary.json").read_text())
+    worst = summary["worst_runs"][0]
+    import shlex
+
+    words = shlex.split(worst["command"])
+    assert words[:2] == ["quadland", "simulate"]
+    assert main(words[1:] + ["--out", str(tmp_path / "replay"), "--no-plots"]) == 0
+    run = json.loads((tmp_path / "replay" / "summary.json").read_text())
+    for channel in ("phi_e", "theta_e", "psi_e"):
+        assert run["errors"][channel]["settling_time"] == \
+            worst["metrics"][f"settling_time_{channel}"]
+    assert abs(run["errors"]["z_e"]["final"]) == worst["metrics"]["final_abs_z_e"]
+
+
+def _copy(reference, tmp_path):
+    out = tmp_path / "copy"
+    shutil.copytree(reference, out)
+    return out
+
+
+def test_changed_scenario_dispersions_or_version_are_refused(reference, tmp_path):
+    out = _copy(reference, tmp_path)
+    with pytest.raises(CampaignError, match="the scenario changed: quadrotor.mass: 2.0 there, "
+                                            "2.1 here"):
+        run_campaign("paper", [*FAST, "quadrotor.mass=2.1"], runs=RUNS, out=out)
+    with pytest.raises(CampaignError, match="campaign.seed: 20191121 there, 5 here"):
+        run_campaign("paper", [*FAST, "campaign.seed=5"], runs=RUNS, out=out)
+    path = tmp_path / "other.toml"
+    path.write_text(PAPER + "\n[campaign]\nruns = 24\nseed = 20191121\n[campaign.dispersions]\n"
+                    "\"quadrotor.mass\" = {distribution = \"normal\", std = 0.1}\n"
+                    "[campaign.limits]\nsettling_time_phi_e = 1.5\n"
+                    "settling_time_theta_e = 1.5\nsettling_time_psi_e = 1.5\n")
+    with pytest.raises(CampaignError, match="the dispersions changed: "
+                                            "campaign.dispersions.quadrotor.inertia"):
+        run_campaign(path, FAST, runs=RUNS, out=out)
+    with pytest.raises(CampaignError, match="--runs can only grow"):
+        run_campaign("paper", FAST, runs=RUNS - 1, out=out)
+    manifest = json.loads((out / "campaign.json").read_text())
+    (out / "campaign.json").write_text(json.dumps({**manifest, "quadland": "0.0.1"}))
+    with pytest.raises(CampaignError, match="quadland 0.0.1 made it, this is"):
+        run_campaign("paper", FAST, runs=RUNS, out=out)
+    (out / "campaign.json").write_text(json.dumps({**manifest, "code": "0" * 16}))
+    with pytest.raises(CampaignError, match="source code changed"):
+        run_campaign("paper", FAST, runs=RUNS, out=out)
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    with pytest.raises(CampaignError, match="not a quadland campaign"):
+        run_campaign("paper", FAST, runs=RUNS, out=foreign)
+    assert (foreign / "notes.txt").read_text() == "mine" and len(list(foreign.iterdir())) == 1
+
+
+def test_numerical_failures_and_invalid_draws_are_rows(tmp_path, capsys):
+    path = tmp_path / "rough.toml"
+    path.write_text(PAPER + "\n[campaign]\nruns = 16\nseed = 3\n[campaign.dispersions]\n"
+                    "\"controller.k1\" = {distribution = \"choice\", values = "
+                    "[[3.0, 5.0, 10.0, 10.0], [1000.0, 1000.0, 1000.0, 1000.0]]}\n"
+                    "\"quadrotor.mass\" = {distribution = \"normal\", std = 3.0}\n")
+    out = tmp_path / "rough"
+    assert main(["campaign", "--scenario", str(path), "--out", str(out), "--workers", "2",
+                 "--set", "simulation.duration=0.5"]) == 0
+    assert "16 runs" in capsys.readouterr().out
+    rows = _rows(out)
+    header, body = rows[0], rows[1:]
+    status = [r[header.index("status")] for r in body]
+    assert {"ok", "failed", "invalid"} <= set(status)
+    for r in body:
+        message = r[header.index("message")]
+        if r[header.index("status")] == "failed":
+            assert message.startswith("flight failed at t = ") and \
+                r[header.index("controller.k1")] == "[1000.0, 1000.0, 1000.0, 1000.0]"
+        if r[header.index("status")] == "invalid":
+            assert message.startswith("quadrotor.mass: must be in")
+            assert float(r[header.index("quadrotor.mass")]) < 1e-3
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["invalid"] == status.count("invalid")
+    assert summary["numerical_failures"] == status.count("failed")
+    assert summary["flown"] == 16 - status.count("invalid")
+    assert summary["separation"]["parameter"] == "controller.k1"
+    assert summary["worst_runs"][0]["status"] == "failed"
+
+
+def _campaign_process(out, runs, duration=5.0):
+    return subprocess.Popen(
+        [sys.executable, "-m", "quadland", "campaign", "--runs", str(runs), "--out", str(out),
+         "--workers", "2", "--no-plots", "--set", f"simulation.duration={duration}"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for_rows(out, at_least, proc, timeout=60.0):
+    path, end = out / "runs.csv", time.monotonic() + timeout
+    while time.monotonic() < end:
+        if path.exists() and path.read_bytes().count(b"\n") - 1 >= at_least:
+            return
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.005)
+    raise AssertionError("the campaign recorded too few runs in time")
+
+
+def test_interrupt_and_sigkill_lose_nothing_recorded(tmp_path):
+    import psutil
+
+    runs = 300
+    whole = tmp_path / "whole"
+    run_campaign("paper", ["simulation.duration=5.0"], runs=runs, out=whole, workers=1,
+                 plots=False)
+    out = tmp_path / "stopped"
+    # Ctrl-C: one line, status 130, the runs recorded so far kept
+    proc = _campaign_process(out, runs)
+    _wait_for_rows(out, 20, proc)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.strip().startswith("quadland: interrupted: ") and len(err.strip().splitlines()) == 1
+    assert "run the same command" in err and not (out / "summary.json").exists()
+    # SIGKILL of the campaign's process: its workers leave by themselves
+    proc = _campaign_process(out, runs)
+    recorded = len(_rows(out)) - 1
+    _wait_for_rows(out, recorded + 40, proc)
+    children = psutil.Process(proc.pid).children(recursive=True)
+    proc.kill()
+    proc.communicate()
+    gone, alive = psutil.wait_procs(children, timeout=10)
+    for p in alive:
+        p.kill()
+    assert not alive, "worker processes outlived the killed campaign"
+    rows = _rows(out)
+    assert 1 + recorded + 40 <= len(rows) < 1 + runs
+    with open(out / "runs.csv", "ab") as fh:                 # a line cut short
+        fh.write(b"299,123,ok,tr")
+    proc = _campaign_process(out, runs)
+    out_text, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert f"flew {runs - len(rows) + 1} runs" in out_text
+    assert (out / "runs.csv").read_bytes() == (whole / "runs.csv").read_bytes()
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_dask_cluster_gives_the_same_runs(reference, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None,
+                                  silence_logs=50) as cluster:
+        out = tmp_path / "dask"
+        result = run_campaign("paper", FAST, runs=RUNS, out=out,
+                              scheduler=cluster.scheduler_address)
+        assert result.complete and result.flown == RUNS
+    assert (out / "runs.csv").read_bytes() == (reference / "runs.csv").read_bytes()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["last_session"]["where"].startswith("tcp://127.0.0.1:")
+
+
+def test_command_line_errors_are_one_line(tmp_path, capsys):
+    assert main(["campaign", "--scenario", "turning", "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["quadland: error: --scenario: turning has no [campaign] table "
+                   "(docs/campaign.md shows one)"]
+    assert main(["campaign", "--runs", "0", "--out", str(tmp_path / "r")]) == 2
+    assert capsys.readouterr().err.strip() == \
+        "quadland: error: --runs: must be in [1, 1000000], got 0"
+    assert main(["campaign", "--workers", "0", "--out", str(tmp_path / "w")]) == 2
+    assert "--workers: must be in [1, 1024]" in capsys.readouterr().err
+    assert not any((tmp_path / n).exists() for n in "trw")
+    assert os.listdir(tmp_path) == []
