@@ -19,7 +19,7 @@ __all__ = ["__version__", "QuadlandError", "ScenarioError", "SimulationError", "
            "load_scenario",
            "SimulationResult", "simulate", "allmargin", "diskmargin", "equilibrium",
            "frozen_point", "linear_models", "Requirement", "MarginReport", "margin_report",
-           "format_report", "simulation_figures", "margin_figures"]
+           "format_report", "simulation_figures", "margin_figures", "run_campaign"]
 
 # The analysis API imports python-control and the figures matplotlib; load
 # them on first use so that `import quadland` stays light for simulation.
@@ -28,7 +28,7 @@ _LAZY = {"allmargin": "quadland.analysis", "diskmargin": "quadland.analysis",
          "linear_models": "quadland.linearize", "Requirement": "quadland.margins",
          "MarginReport": "quadland.margins", "margin_report": "quadland.margins",
          "format_report": "quadland.margins", "simulation_figures": "quadland.plots",
-         "margin_figures": "quadland.plots"}
+         "margin_figures": "quadland.plots", "run_campaign": "quadland.campaign.execute"}
 
 
 def __getattr__(name):

@@ -252,3 +252,14 @@ def test_command_line_errors_are_one_line(tmp_path, capsys):
     assert "--workers: must be in [1, 1024]" in capsys.readouterr().err
     assert not any((tmp_path / n).exists() for n in "trw")
     assert os.listdir(tmp_path) == []
+
+
+def test_campaign_md_lists_every_metric_and_its_unit():
+    from pathlib import Path
+
+    from quadland.campaign.metrics import METRICS
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "campaign.md").read_text()
+    for metrics in METRICS.values():
+        for m in metrics:
+            assert f"| `{m.name}` | {m.unit} |" in text, m.name

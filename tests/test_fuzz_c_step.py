@@ -31,7 +31,7 @@ from fractions import Fraction as Q
 
 import numpy as np
 import pytest
-from reference import have_compiler
+from reference import C_RANDOM, extreme, have_compiler
 
 import quadland
 from quadland import build, cbackend
@@ -152,28 +152,7 @@ class _Harness:
 
     def extreme(self, rng) -> float:
         """A value of this precision from one of the hard classes."""
-        fi, sign = self.fi, rng.choice((-1.0, 1.0))
-        kind = rng.integers(9)
-        if kind == 0:
-            return math.nan
-        if kind == 1:
-            return sign * math.inf
-        if kind == 2:
-            return sign * 0.0
-        if kind == 3:   # subnormal
-            return sign * float(fi.smallest_subnormal) * float(rng.integers(1, 2 ** 20))
-        if kind == 4:   # tiny normal
-            return sign * float(fi.tiny) * 10 ** rng.uniform(0, 5)
-        if kind == 5:   # the largest values
-            return sign * float(fi.max) * rng.uniform(0.25, 1.0)
-        if kind == 6:   # large
-            return sign * min(10 ** rng.uniform(3, math.log10(fi.max)), float(fi.max))
-        if kind == 7:   # small
-            return sign * 10 ** rng.uniform(math.log10(fi.tiny), -3)
-        bits = self.dtype(0).nbytes * 8     # raw bits: NaN payloads, any class
-        word = np.array([rng.integers(0, 2 ** bits, dtype=np.uint64)]).astype(
-            np.uint64 if bits == 64 else np.uint32)
-        return float(word.view(self.dtype)[0])
+        return extreme(rng, self.dtype)
 
     def draw(self, rng):
         """A random call: operating point, tuning and state, then a few hard values.
@@ -379,52 +358,7 @@ DRIVER = r"""
 #define N_REALS(s) ((int)(sizeof(s) / sizeof(ql_real)))
 #define N_STATE (4 * QL_RBF_NODES + 8)
 
-static unsigned long long seed;
-
-static unsigned long long next(void)
-{
-    seed ^= seed >> 12;
-    seed ^= seed << 25;
-    seed ^= seed >> 27;
-    return seed * 2685821657736338717ULL;
-}
-
-static double uniform(void)
-{
-    return (double)(next() >> 11) / 9007199254740992.0;
-}
-
-/* A ql_real with the given bits (the low ones in the float build). */
-static ql_real from_bits(unsigned long long bits)
-{
-    ql_real v;
-    if (sizeof v == 8) {
-        memcpy(&v, &bits, sizeof v);
-    } else {
-        unsigned int b = (unsigned int)bits;
-        memcpy(&v, &b, sizeof v);
-    }
-    return v;
-}
-
-/* Raw bits, signed zeros, subnormals, the extremes, NaN and infinities. */
-static ql_real extreme(void)
-{
-    int dbl = sizeof(ql_real) == 8;
-    ql_real sign = (next() & 1) ? -1 : 1;
-    switch (next() % 8) {
-    case 0: return from_bits(next());
-    case 1: return sign * 0;
-    case 2: return sign * from_bits(1 + next() % 1024);
-    case 3: return sign * from_bits(dbl ? 0x0010000000000000ULL : 0x00800000ULL);
-    case 4: return sign * from_bits(dbl ? 0x7FEFFFFFFFFFFFFFULL : 0x7F7FFFFFULL)
-                   * (ql_real)(0.25 + 0.75 * uniform());
-    case 5: return sign * (ql_real)pow(10.0, 30 * uniform());
-    case 6: return (ql_real)NAN;
-    default: return sign * (ql_real)INFINITY;
-    }
-}
-
+/* RANDOM */
 static int fail(long k, const char *what, int status)
 {
     printf("call %ld: %s (status %d)\n", k, what, status);
@@ -534,7 +468,7 @@ int main(int argc, char **argv)
     printf("\n");
     return 0;
 }
-"""
+""".replace("/* RANDOM */\n", C_RANDOM.lstrip("\n"))
 
 
 def _run(cmd, **kw):
