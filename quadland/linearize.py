@@ -421,13 +421,8 @@ def _hover_equilibrium(scenario: Scenario, tol: float, max_iter: int) -> Operati
     if abs(tilt) < TILT_MIN:
         raise SingularAttitudeError(f"operating point at cos(theta) cos(phi) = {tilt:.2e}: "
                                     "the attitude kinematics are singular there")
-    from symbolic.landing.deck import deck_pose
-    from symbolic.landing.linearization import hover_vehicle
-    from symbolic.landing.plant import PLANT_PARAMS
-
-    p = PLANT_PARAMS.unpack(hv.pp)
-    z2 = float(np.asarray(deck_pose(np.asarray(hover_vehicle(speeds), dtype=float), 0.0,
-                                    p["p_veh"], p["p_deck"]).p2)[2, 0])
+    deck = scenario.data["deck"]
+    z2 = float(deck["height"] + deck["pad_offset"][2])          # the pad, the deck still
     return OperatingPoint("equilibrium", None, z, mem, speeds, z2, hv.w, u,
                           float(np.linalg.norm(np.r_[z_dot, mem_dot])), it, model="landing")
 

@@ -120,12 +120,12 @@ def hover_measurement(z, v2, pp):
     """The step's whole measurement :data:`MEASUREMENT`: ``HOVER_OUTPUT`` and the broadcast."""
     p = PLANT_PARAMS.unpack(pp)
     xv = hover_vehicle(v2)
-    x1q = QUAD6_STATE.unpack(hover_quadrotor(z, xv, pp))
-    rel = relative6(hover_quadrotor(z, xv, pp), xv, 0, p["p_quad"], p["p_act"], p["p_veh"],
-                    p["p_deck"])
+    x1q = hover_quadrotor(z, xv, pp)
+    q = QUAD6_STATE.unpack(x1q)
+    p_e, v_e, *_ = relative6(x1q, xv, 0, p["p_quad"], p["p_act"], p["p_veh"], p["p_deck"])
     deck = deck_pose(xv, 0, p["p_veh"], p["p_deck"])
-    return ca.vertcat(rel[0], rel[1], x1q["eta1"], x1q["Omega1"], deck.eta2, deck.v2E,
-                      deck.a2E, deck.w2E, deck.w2E_dot)
+    return ca.vertcat(p_e, v_e, q["eta1"], q["Omega1"], deck.eta2, deck.v2E, deck.a2E,
+                      deck.w2E, deck.w2E_dot)
 
 
 def _symbols(l: int):
