@@ -69,7 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     scenario_args(cg)
     cg.add_argument("--out", type=Path, metavar="DIR",
                     help="output folder (default: the source checkout's generated/, which "
-                         "holds the paper scenario only)")
+                         "holds the paper and highway scenarios' code only)")
     cg.add_argument("--check", action="store_true",
                     help="regenerate into a temporary folder, print a unified diff and "
                          "exit 1 where DIR differs")
@@ -200,6 +200,8 @@ def _run_campaign(args) -> int:
 def _message(exc: QuadlandError) -> str:
     """The error's message, naming a parameter by its flag."""
     text = str(exc)
+    if text.startswith("override "):           # a scenario override is a --set here
+        return "--set " + text.removeprefix("override ")
     name, sep, rest = text.partition(":")
     return f"{_FLAGS[name]}{sep}{rest}" if sep and name in _FLAGS else text
 

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from quadland.constants import TILT_MIN
 from quadland.exceptions import ScenarioError
 
 __all__ = ["Field", "SCHEMA", "LANDING_SCHEMA", "SCHEMAS", "MODELS", "Scenario", "load_scenario",
@@ -89,8 +90,10 @@ class Field:
 
 
 def _tilt_below_90(v):
-    return None if abs(v[0]) < 90 and abs(v[1]) < 90 else \
-        "|roll| and |pitch| must be below 90 deg (the thrust map is singular there)"
+    tilt = math.cos(math.radians(v[0])) * math.cos(math.radians(v[1]))
+    return None if abs(v[0]) < 90 and abs(v[1]) < 90 and tilt >= TILT_MIN else \
+        f"|roll| and |pitch| must be below 90 deg with cos(roll) cos(pitch) >= {TILT_MIN:g} " \
+        "(the thrust map is singular there)"
 
 
 _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
@@ -103,8 +106,8 @@ def _safe_name(v):
 
 
 def _one_line(v):
-    return None if len(v) <= 200 and "\n" not in v and "\r" not in v else \
-        "must be one line of at most 200 characters"
+    return None if len(v) <= 200 and v.isprintable() else \
+        "must be one line of at most 200 printable characters"
 
 
 #: Largest rate, in Hz, of any clock of a run (output, control, disturbance).
@@ -395,9 +398,11 @@ class Scenario:
         >>> tomllib.loads(sc.to_toml())["simulation"]["duration"]
         0.1
         """
-        lines = [f"# Scenario {self.name}, resolved by quadland from {Path(self.source).name}"
-                 + (f" with {', '.join(self.overrides)}" if self.overrides else ""), ""]
-        lines = [" ".join(lines[0].split()), ""]
+        head = (f"Scenario {self.name}, resolved by quadland from {Path(self.source).name}"
+                + (f" with {', '.join(self.overrides)}" if self.overrides else ""))
+        # a comment holds printable text only (a file name may hold anything)
+        head = "".join(c if c.isprintable() else "?" for c in " ".join(head.split()))
+        lines = [f"# {head}", ""]
         for section, kv in self.data.items():
             lines.append(f"[{section}]")
             lines.extend(f"{key} = {toml_value(value)}" for key, value in kv.items())
@@ -417,6 +422,19 @@ class Scenario:
                         self.campaign)
 
 
+def _toml_string(text: str) -> str:
+    """A TOML basic string: printable characters as they are, the rest escaped."""
+    out = []
+    for c in text:
+        if c in '"\\':
+            out.append("\\" + c)
+        elif c.isprintable():
+            out.append(c)
+        else:
+            out.append(f"\\u{ord(c):04X}" if ord(c) < 0x10000 else f"\\U{ord(c):08X}")
+    return '"' + "".join(out) + '"'
+
+
 def toml_value(value) -> str:
     """A value as TOML text: floats as their shortest round trip, tables inline."""
     if isinstance(value, bool):
@@ -426,7 +444,7 @@ def toml_value(value) -> str:
     if isinstance(value, float):
         return repr(value)
     if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
+        return _toml_string(value)
     if isinstance(value, Mapping):
         return "{" + ", ".join(f"{k if re.fullmatch(r'[A-Za-z0-9_-]+', k) else json.dumps(k)}"
                                f" = {toml_value(v)}" for k, v in value.items()) + "}"
@@ -474,11 +492,17 @@ def load_scenario(name_or_path: str | Path = "paper",
         section, key = _split_key(dotted)
         if section == "campaign":                   # campaign.runs, .seed, .sampling
             if not isinstance(campaign, dict):
-                raise ScenarioError(f"--set {dotted}: {path} has no [campaign] table")
+                raise ScenarioError(f"override {_show(dotted)}: {path} has no [campaign] table")
             campaign[key] = value
             continue
         if not any(section in schema for schema in SCHEMAS.values()):
-            raise ScenarioError(f"--set {dotted}: {_unknown('section', section, _SECTIONS)}")
+            raise ScenarioError(f"override {_show(dotted)}: "
+                                f"{_unknown('section', _show(section), _SECTIONS)}")
+        known = {k for schema in SCHEMAS.values() for k in schema.get(section, {})}
+        if key not in known:
+            name = f"{section}.{_show(key)}"
+            raise ScenarioError(f"override {_show(dotted)}: "
+                                f"{_unknown('key', name, _dotted_all(section))}")
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise ScenarioError(f"{path}: [{section}] must be a table")
@@ -585,7 +609,7 @@ def _resolve(name_or_path) -> Path:
 def _split_key(dotted: str) -> tuple[str, str]:
     section, dot, key = str(dotted).partition(".")
     if not dot or not section or not key:
-        raise ScenarioError(f"--set {_show(str(dotted))}: expected section.key=value")
+        raise ScenarioError(f"override {_show(str(dotted))}: expected section.key=value")
     return section, key
 
 
@@ -598,14 +622,14 @@ def _parse_overrides(overrides) -> list[tuple[str, Any]]:
     for item in overrides:
         dotted, eq, text = str(item).partition("=")
         if not eq or not dotted.strip():
-            raise ScenarioError(f"--set {_show(str(item))}: expected section.key=value")
+            raise ScenarioError(f"override {_show(str(item))}: expected section.key=value")
         dotted, text = dotted.strip(), text.strip()
         try:
             value = tomllib.loads(f"v = {text}")["v"]
         except (tomllib.TOMLDecodeError, ValueError):
             value = text
         except RecursionError:
-            raise ScenarioError(f"--set {dotted}: value nested too deeply") from None
+            raise ScenarioError(f"override {_show(dotted)}: value nested too deeply") from None
         pairs.append((dotted, value))
     return pairs
 
@@ -700,6 +724,12 @@ def _other_model(section: str, model: str, key: str | None = None) -> str:
             return f" (a key of scenario.model = \"{other}\")" if key else \
                 f" (a section of scenario.model = \"{other}\")"
     return ""
+
+
+def _dotted_all(section: str) -> list[str]:
+    """``section.key`` of every model's schema (for did-you-mean)."""
+    return sorted({f"{section}.{k}" for schema in SCHEMAS.values()
+                   for k in schema.get(section, {})})
 
 
 def _dotted(section: str, model: str = "paper") -> list[str]:

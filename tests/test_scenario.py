@@ -99,7 +99,7 @@ BAD_OVERRIDES = [
     (["quadrotor.rotor_drag_factor=1e-308"], r"rotor_drag_factor: must be in"),
     (["disturbance.force_amplitude=1e308"], r"disturbance\.force_amplitude: must be in"),
     (["controller.k1=" + "[" * 5000 + "]" * 5000],
-     r"--set controller\.k1: value nested too deeply"),
+     r"override controller\.k1: value nested too deeply"),
     (["scenario.name=\"../escape\""], r"scenario\.name: must be 1 to 64 letters"),
     (["scenario.name=\"/abs/dir\""], r"scenario\.name: must be 1 to 64 letters"),
     (["scenario.name=\"" + "a" * 300 + "\""], r"scenario\.name: must be 1 to 64"),
@@ -230,3 +230,24 @@ def test_duplicate_section_is_named(tmp_path):
     f.write_text(_shipped_paper() + "\n[simulation]\nseed = 1\n")
     with pytest.raises(ScenarioError, match=r"duplicate section \[simulation\] \(line \d+\)$"):
         load_scenario(f)
+
+
+def test_string_keys_are_printable_and_scenario_toml_replays(tmp_path):
+    for bad in ("caf\udcff", "x\x7fy", "tab\there"):
+        with pytest.raises(ScenarioError, match="printable characters"):
+            load_scenario("paper", {"scenario.description": bad})
+    sc = load_scenario("paper", {"scenario.description": "Über «quoted» \\ \"and\" 🚁"})
+    f = tmp_path / "s.toml"
+    f.write_text(sc.to_toml(), encoding="utf-8")
+    assert load_scenario(f).data == sc.data
+
+
+def test_a_singular_initial_attitude_is_bad_input():
+    with pytest.raises(ScenarioError, match=r"initial\.eta1_deg: .*cos\(roll\) cos\(pitch\)"):
+        load_scenario("paper", ["initial.eta1_deg=[89.99, 0, 0]"])
+
+
+def test_an_unknown_override_key_is_named_as_an_override():
+    with pytest.raises(ScenarioError, match=r"^override quadrotor\.masss: unknown key "
+                                            r"'quadrotor\.masss' \(did you mean"):
+        load_scenario("paper", ["quadrotor.masss=2"])
