@@ -33,7 +33,7 @@ import numpy as np
 from quadland.campaign.fly import RunOutcome, fly, warm_up
 from quadland.campaign.journal import CampaignFolder
 from quadland.campaign.metrics import METRICS, limits_of
-from quadland.campaign.sampling import RunDraw, draws, format_value
+from quadland.campaign.sampling import RunDraw, format_value, iter_draws
 from quadland.campaign.spec import MAX_RUNS
 from quadland.campaign.statistics import (
     clopper_pearson,
@@ -284,16 +284,16 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
             folder.start(manifest, header, {"scenario.toml": base.to_toml().encode("utf-8")})
             rows = folder.read_runs(header)
             pending = [i for i in range(n_runs) if i not in rows]
-            todo = draws(base.campaign, pending, n_runs)
+            todo = iter_draws(base.campaign, pending, n_runs)
             bar = _progress_bar(progress, n_runs, len(rows))
             start, flown = time.perf_counter(), 0
             try:
                 if connection is not None:
                     batches = _dask_runs(connection, base, todo)
-                elif (workers or _cores()) == 1 or len(todo) <= 1:
+                elif (workers or _cores()) == 1 or len(pending) <= 1:
                     batches = _serial_runs(base, todo)
                 else:
-                    batches = _pool_runs(base, todo, min(workers or _cores(), len(todo)))
+                    batches = _pool_runs(base, todo, min(workers or _cores(), len(pending)))
                 for batch in batches:
                     new = [_row(o, header) for o in batch]
                     folder.append(new)
@@ -355,6 +355,20 @@ def _progress_bar(show: bool, total: int, done: int):
                 desc="campaign", smoothing=0.1)
 
 
+class _Queue:
+    """The runs still to submit: ``pop()`` the next, truthy while one is left."""
+
+    def __init__(self, todo: Iterator[RunDraw]):
+        self._todo, self._next = todo, next(todo, None)
+
+    def __bool__(self) -> bool:
+        return self._next is not None
+
+    def pop(self) -> RunDraw:
+        item, self._next = self._next, next(self._todo, None)
+        return item
+
+
 def _serial_runs(base: Scenario, todo: Iterable[RunDraw]) -> Iterator[list[RunOutcome]]:
     for draw in todo:
         yield [fly(base, draw)]
@@ -383,12 +397,12 @@ def _worker_init(lifeline) -> None:
     threading.Thread(target=watch, name="quadland-lifeline", daemon=True).start()
 
 
-def _pool_runs(base: Scenario, todo: Sequence[RunDraw], workers: int
+def _pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int
                ) -> Iterator[list[RunOutcome]]:
     """Fly ``todo`` on ``workers`` local processes; yield outcomes as they finish."""
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(["quadland.campaign.fly"])
-    queue = list(reversed(todo))
+    queue = _Queue(todo)
     ahead = 4 * workers                         # runs queued per process, for throughput
     lifeline, keep = context.Pipe(duplex=False)
     pool = cf.ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_init,
@@ -443,16 +457,17 @@ def _identity() -> str:
     return f"quadland {__version__}, code {code_fingerprint()}"
 
 
-def _dask_runs(client, base: Scenario, todo: Sequence[RunDraw]) -> Iterator[list[RunOutcome]]:
+def _dask_runs(client, base: Scenario, todo: Iterator[RunDraw]) -> Iterator[list[RunOutcome]]:
     """Fly ``todo`` on the cluster's workers; yield outcomes as they finish."""
     from distributed import as_completed
 
     client.run(warm_up, base)                   # each worker builds or loads its simulator
     threads = sum(client.nthreads().values())
     base_future = client.scatter(base, broadcast=True, hash=False)
-    queue = list(reversed(todo))
-    first = [client.submit(fly, base_future, queue.pop(), pure=False)
-             for _ in range(min(len(queue), 4 * threads))]
+    queue = _Queue(todo)
+    first = []
+    while queue and len(first) < 4 * threads:
+        first.append(client.submit(fly, base_future, queue.pop(), pure=False))
     pending = as_completed(first, with_results=True, loop=client.loop)
     try:
         for batch in pending.batches():

@@ -16,14 +16,14 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from typing import Any
 
 import numpy as np
 
 from quadland.campaign.spec import CampaignSpec, Dispersion, apply_mode
 
-__all__ = ["RunDraw", "run_seed", "unit_samples", "draws", "format_value"]
+__all__ = ["RunDraw", "run_seed", "unit_samples", "draws", "iter_draws", "format_value"]
 
 #: u is kept inside [U_EDGE, 1 - U_EDGE]: an inverse CDF is infinite at 0 and 1.
 U_EDGE = 2.0 ** -53
@@ -144,29 +144,42 @@ def format_value(value) -> str:
 def draws(spec: CampaignSpec, indices: Iterable[int], runs: int | None = None
           ) -> list[RunDraw]:
     """Each run's :class:`RunDraw`, in the order of ``indices``."""
+    return list(iter_draws(spec, indices, runs))
+
+
+def iter_draws(spec: CampaignSpec, indices: Iterable[int], runs: int | None = None,
+               chunk: int = 1024) -> Iterator[RunDraw]:
+    """:func:`draws`, computed ``chunk`` runs at a time (a campaign may have a million)."""
     idx = list(indices)
-    U = unit_samples(spec, idx, runs)
-    out = []
-    for row, i in enumerate(idx):
-        seed = run_seed(spec.seed, i)
-        values, columns, col = {}, {}, 0
-        for disp in spec.dispersions:
-            u = U[row, col:col + disp.dims]
-            col += disp.dims
-            if disp.distribution == "seed":
-                values[disp.key] = seed
-                columns[disp.key] = str(seed)
-                continue
-            if disp.distribution == "choice":
-                value = _choose(disp, float(u[0]))
-                values[disp.key] = list(value) if isinstance(value, tuple) else value
-                columns[disp.key] = format_value(value)
-                continue
-            x = _numeric(disp, u)
-            for t, target in enumerate(disp.targets):
-                per = [apply_mode(disp.mode, nom, float(x[0 if (t or len(x) == 1) else e]))
-                       for e, nom in enumerate(target.nominal)]
-                values[target.key] = per[0] if target.scalar else per
-                columns.update(zip(target.columns(), map(format_value, per), strict=True))
-        out.append(RunDraw(i, seed, values, columns))
-    return out
+    whole = None
+    if spec.sampling != "random" and idx:          # one matrix for the whole campaign
+        whole = unit_samples(spec, range(max(idx) + 1), runs)
+    for start in range(0, len(idx), chunk):
+        part = idx[start:start + chunk]
+        U = whole[part] if whole is not None else unit_samples(spec, part, runs)
+        for row, i in enumerate(part):
+            yield _draw(spec, i, U[row])
+
+
+def _draw(spec: CampaignSpec, i: int, u_row: np.ndarray) -> RunDraw:
+    seed = run_seed(spec.seed, i)
+    values, columns, col = {}, {}, 0
+    for disp in spec.dispersions:
+        u = u_row[col:col + disp.dims]
+        col += disp.dims
+        if disp.distribution == "seed":
+            values[disp.key] = seed
+            columns[disp.key] = str(seed)
+            continue
+        if disp.distribution == "choice":
+            value = _choose(disp, float(u[0]))
+            values[disp.key] = list(value) if isinstance(value, tuple) else value
+            columns[disp.key] = format_value(value)
+            continue
+        x = _numeric(disp, u)
+        for t, target in enumerate(disp.targets):
+            per = [apply_mode(disp.mode, nom, float(x[0 if (t or len(x) == 1) else e]))
+                   for e, nom in enumerate(target.nominal)]
+            values[target.key] = per[0] if target.scalar else per
+            columns.update(zip(target.columns(), map(format_value, per), strict=True))
+    return RunDraw(i, seed, values, columns)
