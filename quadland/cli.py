@@ -134,7 +134,7 @@ def _run_codegen(args) -> int:
 def _run_margins(args) -> int:
     from threadpoolctl import threadpool_limits
 
-    from quadland.margins import Requirement, format_report, margin_report
+    from quadland.margins import Requirement, check_request, format_report, margin_report
     from quadland.output import figure_png, output_folder, strict_json
     from quadland.run import versions
     from quadland.scenario import load_scenario
@@ -142,6 +142,7 @@ def _run_margins(args) -> int:
     start = time.perf_counter()
     requirement = Requirement(args.gain_margin_db, args.phase_margin_deg)
     scenario = load_scenario(args.scenario, args.overrides)
+    check_request(scenario, args.at, args.delay_periods)     # nothing claimed before this
     # OpenBLAS threads on matrices of a few hundred rows cost more than they
     # bring: 3-5x slower on a busy 2-core machine.
     with output_folder(args.out, scenario.name, "margins") as folder, threadpool_limits(1):

@@ -54,9 +54,9 @@ from symbolic.quadrotor import DISTURBANCE, WRENCH
 from symbolic.relative import VIRTUAL_INPUT
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
-__all__ = ["LOOP_NAMES", "INPUT_NAMES", "LANDING_LOOP_NAMES", "LANDING_INPUT_NAMES",
-           "OperatingPoint", "LinearModels", "equilibrium", "frozen_point", "linear_models",
-           "sampled_models"]
+__all__ = ["check_frozen_time", "LOOP_NAMES", "INPUT_NAMES", "LANDING_LOOP_NAMES",
+           "LANDING_INPUT_NAMES", "OperatingPoint", "LinearModels", "equilibrium",
+           "frozen_point", "linear_models", "sampled_models"]
 
 #: The four loops of the paper's loop, one per virtual input.
 LOOP_NAMES = ("altitude", "roll", "pitch", "yaw")
@@ -262,21 +262,17 @@ def equilibrium(scenario: Scenario, *, tol: float = 1e-9, max_iter: int = 50) ->
     return _point(scenario, "equilibrium", None, xi[:nr], xi[nr:nr + nc], xi[nr + nc:], w, it)
 
 
-def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
-    """The simulated closed-loop state at time ``t`` (s), frozen.
+def check_frozen_time(scenario: Scenario, t: float) -> None:
+    """Refuse, before any work, a time :func:`frozen_point` cannot reach.
 
-    Simulates the scenario up to ``t`` (nothing at ``t = 0``). The point
-    is generally not an equilibrium: the linear models then describe the
-    loop's local, frozen-time behaviour. The paper's loop only.
+    Raises
+    ------
+    MarginsError
+        For a landing scenario, a time out of range, or a run up to ``t``
+        over the simulator's limits; the message starts with ``"at: "``.
     """
     from quadland.scenario import MAX_DURATION_S, SCHEMA
-    from quadland.simulate import (
-        MAX_RK4_STEPS,
-        MEMORY_BUDGET,
-        check_plan,
-        simulate,
-        simulation_plan,
-    )
+    from quadland.simulate import MAX_RK4_STEPS, MEMORY_BUDGET, check_plan, simulation_plan
 
     if scenario.model == "landing":
         raise MarginsError("at: the landing loop is analysed at its hover equilibrium only; "
@@ -284,7 +280,6 @@ def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
     shortest = SCHEMA["simulation"]["duration"].lo
     if not (t == 0 or shortest <= t <= MAX_DURATION_S):
         raise MarginsError(f"at: must be 0 or in [{shortest:g}, {MAX_DURATION_S:g}] s, got {t:g}")
-    mv = model_values(scenario)
     if t > 0:
         upto = scenario.replace(**{"simulation.duration": float(t)})
         try:
@@ -296,7 +291,23 @@ def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
                 f"({plan.memory_bytes / 2**30:.1f} GiB) and {plan.rk4_steps:.2g} RK4 steps, "
                 f"over the limits ({MEMORY_BUDGET / 2**30:g} GiB, {MAX_RK4_STEPS:.0e} steps)"
             ) from None
-        res = simulate(upto)
+
+
+def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
+    """The simulated closed-loop state at time ``t`` (s), frozen.
+
+    Simulates the scenario up to ``t`` (nothing at ``t = 0``). The point
+    is generally not an equilibrium: the linear models then describe the
+    loop's local, frozen-time behaviour. The paper's loop only.
+    """
+    from quadland.simulate import (
+        simulate,
+    )
+
+    check_frozen_time(scenario, t)
+    mv = model_values(scenario)
+    if t > 0:
+        res = simulate(scenario.replace(**{"simulation.duration": float(t)}))
         x = res.states[-1]
         w = np.array([res[k][-1] for k in DISTURBANCE.element_names()])
     else:

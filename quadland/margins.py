@@ -41,8 +41,8 @@ if TYPE_CHECKING:
     from quadland.linearize import LinearModels, OperatingPoint
     from quadland.scenario import Scenario
 
-__all__ = ["Requirement", "LoopMargins", "MultiloopDiskMargin", "Pole", "PoleSummary",
-           "LoopReport", "MarginReport", "margin_report", "format_report"]
+__all__ = ["check_request", "Requirement", "LoopMargins", "MultiloopDiskMargin", "Pole",
+           "PoleSummary", "LoopReport", "MarginReport", "margin_report", "format_report"]
 
 #: Where the loop is broken, as ``margins.json`` states it.
 LOOP_BREAK = "plant input u (eq. 6), L = -K P, negative feedback"
@@ -414,6 +414,25 @@ def _loop_report(L: control.StateSpace, names, req: Requirement, rate_hz: float 
     return report, poles
 
 
+def check_request(scenario: Scenario, at: float | None = None, delay_periods: int = 1) -> None:
+    """Refuse, before any work, a request :func:`margin_report` cannot answer.
+
+    Raises
+    ------
+    MarginsError
+        Naming the parameter (``"at: ..."``, ``"delay_periods: ..."``).
+    """
+    if at is not None and not (math.isfinite(at) and at >= 0):
+        raise MarginsError(f"at: must be a finite time >= 0 s, got {at}")
+    if isinstance(delay_periods, bool) or not isinstance(delay_periods, int | np.integer) \
+            or delay_periods < 0:
+        raise MarginsError(f"delay_periods: must be an integer >= 0, got {delay_periods!r}")
+    if at is not None:
+        from quadland.linearize import check_frozen_time
+
+        check_frozen_time(scenario, at)
+
+
 def margin_report(scenario: Scenario, at: float | None = None,
                   requirement: Requirement = Requirement(),
                   delay_periods: int = 1) -> MarginReport:
@@ -466,11 +485,7 @@ def margin_report(scenario: Scenario, at: float | None = None,
     >>> report.passed
     True
     """
-    if at is not None and not (math.isfinite(at) and at >= 0):
-        raise MarginsError(f"at: must be a finite time >= 0 s, got {at}")
-    if isinstance(delay_periods, bool) or not isinstance(delay_periods, int | np.integer) \
-            or delay_periods < 0:
-        raise MarginsError(f"delay_periods: must be an integer >= 0, got {delay_periods!r}")
+    check_request(scenario, at, delay_periods)
     from quadland.linearize import equilibrium, frozen_point, linear_models, sampled_models
 
     point = equilibrium(scenario) if at is None else frozen_point(scenario, at)

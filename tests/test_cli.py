@@ -327,3 +327,10 @@ def test_unwritable_target_is_found_before_any_work(tmp_path):
     assert proc.returncode == 2
     (line,) = proc.stderr.strip().splitlines()
     assert "cannot write to" in line and "Traceback" not in proc.stderr
+
+
+def test_margins_validates_before_claiming_its_folder(tmp_path, capsys):
+    status = main(["margins", "--set", "rbf.nodes=5", "--at", "1e-9", "--out",
+                   str(tmp_path / "newp" / "sub")])
+    assert status == 2
+    assert not (tmp_path / "newp").exists()
