@@ -263,3 +263,38 @@ def test_campaign_md_lists_every_metric_and_its_unit():
     for metrics in METRICS.values():
         for m in metrics:
             assert f"| `{m.name}` | {m.unit} |" in text, m.name
+
+
+def test_progress_bar_with_eta_on_a_terminal_only(tmp_path):
+    import fcntl
+    import pty
+    import select
+    import struct
+    import termios
+
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "quadland", "campaign", "--runs", "40", "--workers", "1",
+         "--out", str(tmp_path / "tty"), "--no-plots", "--set", "simulation.duration=0.5"],
+        stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=slave)
+    os.close(slave)
+    screen = b""
+    while True:
+        ready, _, _ = select.select([master], [], [], 0.5)
+        if ready:
+            try:
+                data = os.read(master, 4096)
+            except OSError:
+                break
+            if not data:
+                break
+            screen += data
+        elif proc.poll() is not None:
+            break
+    os.close(master)
+    assert proc.wait(timeout=60) == 0
+    last = screen.replace(b"\r", b"\n").decode().split("\n")
+    bar = [line for line in last if line.startswith("campaign:")]
+    assert bar and "40/40" in bar[-1] and "<" in bar[-1] and "run/s" in bar[-1], bar
+    assert b"campaign:" not in proc.stdout.read()

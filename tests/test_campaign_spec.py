@@ -77,6 +77,8 @@ def test_set_campaign_keys():
     (GOOD + "\"quadrotor.inertia\" = {distribution = \"uniform\", low = 0.0, high = 0.1, "
      "common = true, also = [\"quadrotor.mass\"]}\n", "quadrotor.mass is dispersed twice"),
     (GOOD + "[campaign.limits]\nsettling_time = 1.0\n", "unknown metric 'settling_time'"),
+    (GOOD + "[campaign.limits]\nrotor_max = 0.0\n", "campaign.limits.rotor_max: must be > 0"),
+    (GOOD + "[campaign.limits]\nrotor_max = " + "9" * 400 + "\n", "must be finite"),
     (GOOD + "\"quadrotor.mass\" = 3\n", "duplicate key"),
 ])
 def test_mistakes_are_one_line(tmp_path, table, message):

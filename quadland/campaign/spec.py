@@ -299,6 +299,8 @@ def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
                                 + (f" (did you mean '{hint[0]}'?)" if hint else
                                    f" (metrics: {', '.join(names)})"))
         checked_limits[name] = _number(f"campaign.limits.{name}", value)
+        if not checked_limits[name] > 0:
+            raise ScenarioError(f"campaign.limits.{name}: must be > 0, got {_show(value)}")
     normalized = {"runs": runs, "seed": seed, "sampling": sampling,
                   "dispersions": {d.key: d.table for d in dispersions}}
     if checked_limits:
