@@ -302,18 +302,19 @@ def _ride(scenario, lv, t_out, t_td, x_td, y_td, R_td):
     h_max = float(controller_params(lv.l).unpack(lv.pc)["dt"][0])
     landed = landed_outputs_function()
     X, Y = np.zeros((n, lay.size)), np.zeros((n, OUTPUTS.size))
-    xv, t = s["xv"].copy(), t_td
-    for k, t_k in enumerate(times):
-        m = max(1, int(np.ceil((t_k - t) / h_max - 1e-9)))
-        for _ in range(m):
-            xv = np.asarray(step(xv, p["p_veh"], (t_k - t) / m), dtype=float).ravel()
-        t = t_k
-        F = F_td * np.exp(-(t_k - t_td) / tau_m)
-        phase = LANDED if t_k >= t_td + settle - 1e-12 else TOUCHDOWN
-        y, x1q = (np.asarray(v, dtype=float).ravel()
-                  for v in landed(xv, t_k, lv.pp, anchor, F, phase, aborts))
-        Y[k] = y
-        X[k] = np.concatenate([PLANT_STATE.pack(dict(x1q=x1q, xv=xv)), lay.unpack(x_td)["xc"]])
+    if n:                                          # every row in one call of each function
+        before = np.concatenate([[t_td], times[:-1]])
+        m = np.maximum(1, np.ceil((times - before) / h_max - 1e-9).astype(int))
+        h = np.repeat((times - before) / m, m)      # the RK4 steps, m per row
+        XV = np.asarray(step.mapaccum(len(h))(s["xv"], p["p_veh"], h[None, :]),
+                        dtype=float)[:, np.cumsum(m) - 1]
+        F = F_td[:, None] * np.exp(-(times - t_td) / tau_m)[None, :]
+        phase = np.where(times >= t_td + settle - 1e-12, LANDED, TOUCHDOWN).astype(float)
+        y, x1q = (np.asarray(v, dtype=float) for v in landed.map(n)(
+            XV, times[None, :], lv.pp, anchor, F, phase[None, :], aborts))
+        Y[:] = y.T
+        X[:, lay.slice("xp")] = np.vstack([x1q, XV]).T
+        X[:, lay.slice("xc")] = lay.unpack(x_td)["xc"]
     if n:                                          # yaw continuous with the touchdown's
         psi = np.unwrap(np.concatenate([[ys["eta1"][2]], Y[:, OUTPUTS.index("psi1")]]))[1:]
         Y[:, OUTPUTS.index("psi1")] = psi
