@@ -114,3 +114,32 @@ static ql_real extreme(void)
     }
 }
 """
+
+
+#: Flags of the address- and undefined-behaviour-sanitized builds of the fuzz tests.
+SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all",
+            "-fno-omit-frame-pointer")
+
+
+def run(cmd, **kw):
+    """A subprocess with its output captured, bounded in time."""
+    import subprocess
+
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
+
+
+def sanitizer_missing(cc: str, folder) -> str | None:
+    """Why ``cc`` cannot build and run a sanitized program here, or None if it can."""
+    from pathlib import Path
+
+    folder = Path(folder)
+    (folder / "probe.c").write_text("int main(void) { return 0; }\n")
+    res = run([cc, *SANITIZE, "probe.c", "-o", "probe"], cwd=folder)
+    if res.returncode != 0:
+        return (f"{cc} cannot build with {' '.join(SANITIZE[:2])}: "
+                f"{(res.stderr.strip().splitlines() or ['?'])[0]}")
+    res = run([str(folder / "probe")])
+    if res.returncode != 0:
+        return (f"the sanitizer runtime does not run here: "
+                f"{(res.stderr.strip().splitlines() or ['?'])[0]}")
+    return None

@@ -31,7 +31,8 @@ from fractions import Fraction as Q
 
 import numpy as np
 import pytest
-from reference import C_RANDOM, extreme, have_compiler
+from reference import C_RANDOM, SANITIZE, extreme, have_compiler, sanitizer_missing
+from reference import run as _run
 
 import quadland
 from quadland import build, cbackend
@@ -48,8 +49,6 @@ CALLS = 4000
 #: Calls of the sanitized C driver per precision.
 SANITIZED_CALLS = 20000
 STATUS = {name: value for name, value, _ in STATUS_CODES}
-SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all",
-            "-fno-omit-frame-pointer")
 
 
 def _positive(v, p):
@@ -471,24 +470,13 @@ int main(int argc, char **argv)
 """.replace("/* RANDOM */\n", C_RANDOM.lstrip("\n"))
 
 
-def _run(cmd, **kw):
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
-
-
 @pytest.fixture(scope="module")
 def sanitizer(tmp_path_factory):
     """The compiler, if it builds and runs an address- and UB-sanitized program."""
     cc = build.find_compiler()
-    tmp = tmp_path_factory.mktemp("sanitizer_probe")
-    (tmp / "probe.c").write_text("int main(void) { return 0; }\n")
-    res = _run([cc, *SANITIZE, "probe.c", "-o", "probe"], cwd=tmp)
-    if res.returncode != 0:
-        pytest.skip(f"{cc} cannot build with {' '.join(SANITIZE[:2])}: "
-                    f"{(res.stderr.strip().splitlines() or ['?'])[0]}")
-    res = _run([str(tmp / "probe")])
-    if res.returncode != 0:
-        pytest.skip(f"the sanitizer runtime does not run here: "
-                    f"{(res.stderr.strip().splitlines() or ['?'])[0]}")
+    why = sanitizer_missing(cc, tmp_path_factory.mktemp("sanitizer_probe"))
+    if why:
+        pytest.skip(why)
     return cc
 
 

@@ -33,7 +33,8 @@ from fractions import Fraction as Q
 
 import numpy as np
 import pytest
-from reference import C_RANDOM, extreme, have_compiler
+from reference import C_RANDOM, SANITIZE, extreme, have_compiler, sanitizer_missing
+from reference import run as _run
 
 from quadland import build, cbackend
 from quadland.landing import landing_values
@@ -58,8 +59,6 @@ CALLS = 3000
 #: Calls of the sanitized C driver per precision.
 SANITIZED_CALLS = 20000
 STATUS = {name: value for name, value, _ in STATUS_CODES}
-SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all",
-            "-fno-omit-frame-pointer")
 
 
 def _positive(v, p):
@@ -585,19 +584,13 @@ int main(int argc, char **argv)
 """.replace("/* RANDOM */\n", C_RANDOM.lstrip("\n"))
 
 
-def _run(cmd, **kw):
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=120, **kw)
-
-
 @pytest.fixture(scope="module")
 def sanitized_drivers(tmp_path_factory):
     """The driver with the landing's flight code, both precisions, compiled in parallel."""
     cc = build.find_compiler()
-    probe = tmp_path_factory.mktemp("sanitizer_probe")
-    (probe / "probe.c").write_text("int main(void) { return 0; }\n")
-    res = _run([cc, *SANITIZE, "probe.c", "-o", "probe"], cwd=probe)
-    if res.returncode != 0 or _run([str(probe / "probe")]).returncode != 0:
-        pytest.skip(f"{cc} cannot build and run with {' '.join(SANITIZE[:2])}")
+    why = sanitizer_missing(cc, tmp_path_factory.mktemp("sanitizer_probe"))
+    if why:
+        pytest.skip(why)
     sources = (*c_sources(("landing_step",)), "driver.c")
     procs, roots = [], {}
     for precision in ("double", "float"):
