@@ -22,6 +22,7 @@ import csv
 import dataclasses
 import functools
 import io
+import re
 from collections.abc import Mapping
 
 import casadi as ca
@@ -271,7 +272,8 @@ def _cvodes_options(scenario: Scenario) -> tuple:
     method's Jacobian factorizations the dominant cost."""
     sim = scenario.data["simulation"]
     opts = {"abstol": sim["abstol"], "reltol": sim["reltol"], "max_num_steps": 100000,
-            "linear_multistep_method": "adams", "nonlinear_solver_iteration": "functional"}
+            "linear_multistep_method": "adams", "nonlinear_solver_iteration": "functional",
+            "disable_internal_warnings": True}      # one line on failure, not a flood
     return tuple(sorted(opts.items()))
 
 
@@ -478,7 +480,10 @@ def _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist):
     try:
         out = integ(x0=mv.x0, u=w, p=mv.p)
     except RuntimeError as exc:
-        raise SimulationError(f"integrator {plugin} failed: {str(exc).splitlines()[-1]}") from None
+        code = re.search(r'returned "(\w+)"', str(exc))
+        raise SimulationError(f"integrator {plugin} failed: "
+                              f"{code.group(1) if code else str(exc).splitlines()[-1]}"
+                              f"{_divergence_hint(scenario)}") from None
     X = np.hstack([mv.x0[:, None], np.asarray(out["xf"])])
     keep = np.flatnonzero(_grid_index(t_all, t_out) >= 0)
     return np.ascontiguousarray(X[:, keep].T)

@@ -334,3 +334,13 @@ def test_margins_validates_before_claiming_its_folder(tmp_path, capsys):
                    str(tmp_path / "newp" / "sub")])
     assert status == 2
     assert not (tmp_path / "newp").exists()
+
+
+def test_a_cvodes_failure_is_one_line(tmp_path):
+    proc = _run("simulate", "--set", 'simulation.integrator="cvodes"', "--set",
+                "initial.eta1_deg=[80, 80, 0]", "--set", "controller.k1=[1e5, 1e5, 1e5, 1e5]",
+                "--set", "simulation.reltol=1e-14", "--set", "simulation.abstol=1e-14",
+                "--set", "simulation.duration=0.5", "--no-plots", "--out", str(tmp_path / "o"))
+    assert proc.returncode == 3
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith("quadland: error: integrator cvodes failed: CV_")
