@@ -64,10 +64,6 @@ class OutputFolder:
     def __fspath__(self) -> str:
         return str(self.path)
 
-    @property
-    def _lock_path(self) -> Path:
-        return self.path.parent / f".{self.path.name}.lock"
-
     def _check(self) -> None:
         path = self.path
         if path.is_symlink():
@@ -90,28 +86,7 @@ class OutputFolder:
             return self
         self._check()
         path = self.path
-        for _ in range(8):
-            try:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                fd = os.open(self._lock_path, os.O_RDWR | os.O_CREAT, 0o644)
-            except OSError as exc:
-                raise OutputError(f"out: cannot write to {path.parent}: "
-                                  f"{exc.strerror or exc}") from None
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                os.close(fd)
-                raise OutputError(f"out: {path} is in use by another quadland run") from None
-            try:
-                same = os.fstat(fd).st_ino == os.stat(self._lock_path).st_ino
-            except OSError:
-                same = False
-            if same:                 # not a lock file that its holder unlinked meanwhile
-                break
-            os.close(fd)
-        else:
-            raise OutputError(f"out: {path} is in use by another quadland run")
-        self._lock_fd = fd
+        self._lock_fd = lock_folder(path, OutputError)
         stem = glob.escape(f".{path.name}")
         for stale in (*path.parent.glob(f"{stem}.tmp-*"), *path.parent.glob(f"{stem}.old-*")):
             _remove(stale)                                   # left by a killed run
@@ -119,13 +94,9 @@ class OutputFolder:
 
     def release(self) -> None:
         """Drop the lock (and its file)."""
-        if self._lock_fd is None:
-            return
-        try:
-            self._lock_path.unlink(missing_ok=True)
-        finally:
-            os.close(self._lock_fd)
-            self._lock_fd = None
+        if self._lock_fd is not None:
+            fd, self._lock_fd = self._lock_fd, None
+            unlock_folder(self.path, fd)
 
     def __enter__(self) -> OutputFolder:
         return self.claim()
@@ -164,13 +135,13 @@ class OutputFolder:
             manifest = json.dumps({"quadland_output": sorted(files)}, indent=1) + "\n"
             for name, data in {**files, MARKER: manifest.encode("utf-8")}.items():
                 _write_synced(tmp / name, data, 0o666 & ~umask)
-            _fsync_dir(tmp)
+            fsync_dir(tmp)
             if self.path.exists() and not _replaceable(self.path):
                 raise OutputError(f"out: {self.path} gained files that are not a quadland "
                                   "output during the run; nothing was replaced")
             _swap_in(tmp, self.path)
             tmp = None
-            _fsync_dir(self.path.parent)
+            fsync_dir(self.path.parent)
         except OSError as exc:
             if isinstance(exc, OutputError):
                 raise
@@ -185,6 +156,47 @@ class OutputFolder:
 
 #: Longest file name most file systems take, and what the temporary names add.
 _NAME_MAX, _TEMP_SUFFIX = 255, 24
+
+
+def _lock_path(path: Path) -> Path:
+    return path.parent / f".{path.name}.lock"
+
+
+def lock_folder(path: Path, error: type[Exception]) -> int:
+    """Lock the folder ``path`` against other quadland runs; return the lock's descriptor.
+
+    The lock is an exclusive ``flock`` on ``.<name>.lock`` beside the folder,
+    shared by :class:`OutputFolder` and campaign folders. Raises ``error``
+    (``"out: ..."``) when the parent cannot be written or the lock is held.
+    """
+    for _ in range(8):
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(_lock_path(path), os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise error(f"out: cannot write to {path.parent}: "
+                        f"{exc.strerror or exc}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise error(f"out: {path} is in use by another quadland run") from None
+        try:
+            same = os.fstat(fd).st_ino == os.stat(_lock_path(path)).st_ino
+        except OSError:
+            same = False
+        if same:                 # not a lock file that its holder unlinked meanwhile
+            return fd
+        os.close(fd)
+    raise error(f"out: {path} is in use by another quadland run")
+
+
+def unlock_folder(path: Path, fd: int) -> None:
+    """Drop a lock taken by :func:`lock_folder` (and its file)."""
+    try:
+        _lock_path(path).unlink(missing_ok=True)
+    finally:
+        os.close(fd)
 
 
 def _remove(path: Path) -> None:
@@ -219,7 +231,8 @@ def _write_synced(path: Path, data: bytes, mode: int) -> None:
         os.fsync(fh.fileno())
 
 
-def _fsync_dir(path: Path) -> None:
+def fsync_dir(path: Path) -> None:
+    """``fsync`` a folder, so that renames and new files in it are durable."""
     fd = os.open(path, os.O_RDONLY)
     try:
         os.fsync(fd)

@@ -721,16 +721,25 @@ def generate(defaults: Defaults, config: CodegenConfig = CodegenConfig()) -> dic
     if config.casadi_int != "int":
         raise ValueError("the readable API exposes sparsity patterns as int: "
                          "keep casadi_int = int")
+    return _emit_part("paper", defaults.l, config, _api_context(config, defaults),
+                      ("quadland.h", "quadland.c", "quadland_status.c"))
+
+
+def _emit_part(part: str, l: int, config: CodegenConfig, ctx: dict,
+               sources: tuple[str, ...]) -> dict[str, str]:
+    """The files of one API: its CasADi functions, its templates, its wrappers.
+
+    ``sources`` are rendered from ``<name>.jinja``; the first is the API's
+    header, which the wrappers include.
+    """
     files = {}
     for entry in FUNCTIONS:
-        if entry.part == "paper":
-            files.update(_emit_casadi(entry, defaults.l, config))
-    ctx = _api_context(config, defaults)
-    files["quadland.h"] = _render("quadland.h.jinja", **ctx)
-    files["quadland.c"] = _render("quadland.c.jinja", **ctx)
-    files["quadland_status.c"] = _render("quadland_status.c.jinja", **ctx)
+        if entry.part == part:
+            files.update(_emit_casadi(entry, l, config))
+    for name in sources:
+        files[name] = _render(f"{name}.jinja", **ctx)
     for file in dict.fromkeys(w["file"] for w in ctx["wrapped"]):
-        files[file] = _render("wrappers.c.jinja", file=file, header="quadland.h",
+        files[file] = _render("wrappers.c.jinja", file=file, header=sources[0],
                               functions=[w for w in ctx["wrapped"] if w["file"] == file], **ctx)
     return files
 
@@ -849,17 +858,8 @@ def generate_landing(defaults: LandingDefaults,
     They include the same build's ``quadland.h`` (:func:`generate`) for
     ``ql_real``, ``ql_status`` and ``ql_quadrotor_params``.
     """
-    files = {}
-    for entry in FUNCTIONS:
-        if entry.part == "landing":
-            files.update(_emit_casadi(entry, defaults.l, config))
-    ctx = _landing_api_context(config, defaults)
-    files["quadland_landing.h"] = _render("quadland_landing.h.jinja", **ctx)
-    files["quadland_landing.c"] = _render("quadland_landing.c.jinja", **ctx)
-    for file in dict.fromkeys(w["file"] for w in ctx["wrapped"]):
-        files[file] = _render("wrappers.c.jinja", file=file, header="quadland_landing.h",
-                              functions=[w for w in ctx["wrapped"] if w["file"] == file], **ctx)
-    return files
+    return _emit_part("landing", defaults.l, config, _landing_api_context(config, defaults),
+                      ("quadland_landing.h", "quadland_landing.c"))
 
 
 # --- the pure-C example ----------------------------------------------------

@@ -24,7 +24,6 @@ simulation) by the same lock file as ``OutputFolder`` uses.
 from __future__ import annotations
 
 import csv
-import fcntl
 import io
 import json
 import os
@@ -32,7 +31,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from quadland.exceptions import CampaignError
-from quadland.output import strict_json, write_bytes_atomic
+from quadland.output import fsync_dir, lock_folder, strict_json, unlock_folder, write_bytes_atomic
 
 __all__ = ["CampaignFolder", "MANIFEST", "RUNS", "format_row"]
 
@@ -68,10 +67,6 @@ class CampaignFolder:
     def __exit__(self, *exc) -> None:
         self.release()
 
-    @property
-    def _lock_path(self) -> Path:
-        return self.path.parent / f".{self.path.name}.lock"
-
     def claim(self) -> CampaignFolder:
         """Check the folder and lock it; raise :class:`CampaignError` (``out: ...``)."""
         path = self.path
@@ -80,18 +75,7 @@ class CampaignFolder:
         if path.is_dir() and not (path / MANIFEST).is_file() and any(path.iterdir()):
             raise CampaignError(f"out: {path} holds files that are not a quadland campaign; "
                                 "choose a new or empty folder")
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd = os.open(self._lock_path, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as exc:
-            raise CampaignError(f"out: cannot write to {path.parent}: "
-                                f"{exc.strerror or exc}") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            os.close(fd)
-            raise CampaignError(f"out: {path} is in use by another quadland run") from None
-        self._lock_fd = fd
+        self._lock_fd = lock_folder(path, CampaignError)
         return self
 
     def release(self) -> None:
@@ -100,11 +84,8 @@ class CampaignFolder:
             os.close(self._runs_fd)
             self._runs_fd = None
         if self._lock_fd is not None:
-            try:
-                self._lock_path.unlink(missing_ok=True)
-            finally:
-                os.close(self._lock_fd)
-                self._lock_fd = None
+            fd, self._lock_fd = self._lock_fd, None
+            unlock_folder(self.path, fd)
 
     def manifest(self) -> dict | None:
         """The manifest of an earlier run into this folder, or None."""
@@ -125,7 +106,7 @@ class CampaignFolder:
                 write_bytes_atomic(self.path / name, data)
             if not (self.path / RUNS).exists():
                 write_bytes_atomic(self.path / RUNS, format_row(header))
-            _fsync_dir(self.path)
+            fsync_dir(self.path)
         except OSError as exc:
             raise CampaignError(f"out: cannot write {self.path}: {exc.strerror or exc}") \
                 from None
@@ -183,15 +164,8 @@ class CampaignFolder:
                                format_row(header) + b"".join(format_row(r) for r in rows))
             for name, data in files.items():
                 write_bytes_atomic(self.path / name, data)
-            _fsync_dir(self.path)
+            fsync_dir(self.path)
         except OSError as exc:
             raise CampaignError(f"out: cannot write {self.path}: {exc.strerror or exc}") \
                 from None
 
-
-def _fsync_dir(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
