@@ -25,13 +25,14 @@ from symbolic.landing.loop import landing_loop
 from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, rk4_step, simulator_sources
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "LOOPS", "SIM_OK",
-           "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "Failure"]
+           "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "SIM_ENVELOPE",
+           "Failure"]
 
 #: The loops a scenario's ``scenario.model`` names: builders ``l -> LoopModel``.
 LOOPS = {"paper": paper_loop, "landing": landing_loop}
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
-SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT = 0, 1, 2, 3, 4
+SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT, SIM_ENVELOPE = 0, 1, 2, 3, 4, 5
 
 _REAL = ctypes.POINTER(ctypes.c_double)
 _LONG = ctypes.POINTER(ctypes.c_long)
@@ -51,11 +52,24 @@ def _f64(a) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class Failure:
-    """Where a run stopped early: its status, grid index and, for an event, the time."""
+    """Where a run stopped early.
+
+    Attributes
+    ----------
+    status : int
+        One of the ``SIM_*`` codes.
+    index : int
+        The grid point (sampled loop) or interval (continuous loop).
+    time : float
+        s, for an event: when it happened.
+    envelope : ndarray or None
+        For :data:`SIM_ENVELOPE`: the envelope magnitudes that left their bounds.
+    """
 
     status: int
     index: int
     time: float = float("nan")
+    envelope: np.ndarray | None = None
 
 
 class CompiledLoop:
@@ -86,15 +100,15 @@ class CompiledLoop:
         if part == "continuous":
             self._integrate = getattr(lib, f"{prefix}integrate")
             self._integrate.argtypes = [_REAL, _REAL, _REAL, _LONG, ctypes.c_long,
-                                        ctypes.c_long, _REAL, _REAL, _REAL, _LONG]
+                                        ctypes.c_long, _REAL, _REAL, _REAL, _REAL, _LONG, _REAL]
         else:
             self._sampled = getattr(lib, f"{prefix}sampled")
             self._sampled.argtypes = [_REAL, _REAL, _REAL, _REAL, ctypes.c_char_p, _LONG,
                                       ctypes.c_long, ctypes.c_long, _REAL, _REAL,
-                                      ctypes.c_double, _REAL, _REAL, _REAL, _REAL, _LONG,
-                                      _REAL]
+                                      ctypes.c_double, _REAL, _REAL, _REAL, _REAL, _REAL, _LONG,
+                                      _REAL, _REAL]
 
-    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int):
+    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int, bound=None):
         """The continuous loop over the ``len(G) - 1`` intervals of the grid ``G``.
 
         Parameters
@@ -111,6 +125,9 @@ class CompiledLoop:
         p : array_like, (np,)
         n_rows : int
             Rows of the returned states; row 0 is ``x0``.
+        bound : array_like, (nenv,), optional
+            The envelope's bounds (:attr:`LoopModel.envelope`); none for a
+            model without an envelope.
 
         Returns
         -------
@@ -119,26 +136,30 @@ class CompiledLoop:
         failure : Failure or None
         """
         m = self.model
-        x0, W, G, p = _f64(x0), _f64(W), _f64(G), _f64(p)
+        x0, W, G, p, bound = _f64(x0), _f64(W), _f64(G), _f64(p), _bounds(m, bound)
         rec = np.ascontiguousarray(rec, dtype=np.int_)
         n = len(G) - 1
         assert W.shape == (n, m.disturbance.size) and rec.shape == (n,)
         X = np.zeros((n_rows, m.state.size))
         X[0] = x0
         x_end = np.empty(m.state.size)
+        env = np.full(max(bound.size, 1), np.nan)
         fail = ctypes.c_long(-1)
         status = self._integrate(_ptr(x0), _ptr(W), _ptr(G), _ptr(rec, _LONG), n, int(substeps),
-                                 _ptr(p), _ptr(X), _ptr(x_end), ctypes.byref(fail))
-        return X, x_end, (Failure(status, fail.value) if status else None)
+                                 _ptr(p), _ptr(bound), _ptr(X), _ptr(x_end), ctypes.byref(fail),
+                                 _ptr(env))
+        return X, x_end, (_failure(status, fail.value, np.nan, env) if status else None)
 
     def sampled(self, xp0, xc0, W, G, ctrl, rec, substeps: int, pp, pc, guard_min: float,
-                n_rows: int):
+                n_rows: int, bound=None):
         """The sampled-data loop over the ``len(G) - 1`` intervals of the grid ``G``.
 
         ``ctrl`` (n,) and ``rec`` (n + 1,) flag, per grid point, a control
         step and the row it is recorded to (or -1). A model with an event
         stops where it happens: the failure then has status
         :data:`SIM_EVENT`, its ``time`` and, in ``xp_end``, the state then.
+        ``bound`` (nenv,) are the envelope's bounds: the run stops at the
+        first grid point outside them (:data:`SIM_ENVELOPE`).
 
         Returns
         -------
@@ -151,6 +172,7 @@ class CompiledLoop:
         """
         m = self.model
         xp0, xc0, W, G, pp, pc = (_f64(a) for a in (xp0, xc0, W, G, pp, pc))
+        bound = _bounds(m, bound)
         ctrl = np.ascontiguousarray(ctrl, dtype=np.uint8)
         rec = np.ascontiguousarray(rec, dtype=np.int_)
         n = len(G) - 1
@@ -159,13 +181,14 @@ class CompiledLoop:
         X = np.zeros((n_rows, m.state.size))
         R = np.zeros((n_rows, m.recorded.size))
         xp_end, xc_end = np.empty(m.plant_state.size), np.empty(m.controller_state.size)
+        env = np.full(max(bound.size, 1), np.nan)
         fail, t_event = ctypes.c_long(-1), ctypes.c_double(np.nan)
         status = self._sampled(_ptr(xp0), _ptr(xc0), _ptr(W), _ptr(G), ctrl.ctypes.data_as(
             ctypes.c_char_p), _ptr(rec, _LONG), n, int(substeps), _ptr(pp), _ptr(pc),
-            float(guard_min), _ptr(X), _ptr(R), _ptr(xp_end), _ptr(xc_end), ctypes.byref(fail),
-            ctypes.byref(t_event))
-        return X, R, xp_end, xc_end, (Failure(status, fail.value, t_event.value) if status
-                                      else None)
+            float(guard_min), _ptr(bound), _ptr(X), _ptr(R), _ptr(xp_end), _ptr(xc_end),
+            ctypes.byref(fail), ctypes.byref(t_event), _ptr(env))
+        return X, R, xp_end, xc_end, (_failure(status, fail.value, t_event.value, env)
+                                      if status else None)
 
     def outputs(self, X, W, T, p) -> np.ndarray:
         """Output signals at each row of ``X`` (with ``W``'s rows, at times ``T``), ``(n, ny)``."""
@@ -194,11 +217,20 @@ class VMLoop:
         self._rhs = rk4_step(model.rhs) if model.rhs is not None else None
         self._plant = rk4_step(model.plant)
         self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [3], [])
+        self._no_input = np.zeros(model.held.size)
 
-    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int):
+    def _outside(self, x, uh, bound) -> np.ndarray | None:
+        """The envelope's magnitudes when one is beyond its bound (or NaN), else None."""
+        if self.model.envelope is None:
+            return None
+        s = np.asarray(self.model.envelope(x, uh), dtype=float).ravel()
+        return None if np.all(s <= bound) else s
+
+    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int, bound=None):
         """As :meth:`CompiledLoop.integrate`."""
         X = np.zeros((n_rows, self.model.state.size))
         X[0] = x = np.asarray(x0, dtype=float)
+        bound = _bounds(self.model, bound)
         for j in range(len(G) - 1):
             h = (G[j + 1] - G[j]) / substeps
             for s in range(int(substeps)):
@@ -206,6 +238,9 @@ class VMLoop:
             x = np.asarray(x, dtype=float).ravel()
             if not np.all(np.isfinite(x)):
                 return X, x, Failure(SIM_NONFINITE, j)
+            env = self._outside(x, self._no_input, bound)
+            if env is not None:
+                return X, x, Failure(SIM_ENVELOPE, j, envelope=env)
             if rec[j] >= 0:
                 X[rec[j]] = x
         return X, x, None
@@ -220,9 +255,10 @@ class VMLoop:
         return float(self.model.event(xp, t, pp))
 
     def sampled(self, xp0, xc0, W, G, ctrl, rec, substeps: int, pp, pc, guard_min: float,
-                n_rows: int):
+                n_rows: int, bound=None):
         """As :meth:`CompiledLoop.sampled`."""
         m = self.model
+        bound = _bounds(m, bound)
         X = np.zeros((n_rows, m.state.size))
         R = np.zeros((n_rows, m.recorded.size))
         xp, xc = np.asarray(xp0, dtype=float), np.asarray(xc0, dtype=float)
@@ -239,8 +275,12 @@ class VMLoop:
                         and np.all(np.isfinite(rv_n))):
                     return X, R, xp, xc, Failure(SIM_NONFINITE, j)
                 xc, uh, rv, first = xc_n, uh_n, rv_n, 0.0
+            x = np.asarray(m.assemble(xp, xc), dtype=float).ravel()
+            env = self._outside(x, uh, bound)
+            if env is not None:
+                return X, R, xp, xc, Failure(SIM_ENVELOPE, j, envelope=env)
             if rec[j] >= 0:
-                X[rec[j]] = np.asarray(m.assemble(xp, xc), dtype=float).ravel()
+                X[rec[j]] = x
                 R[rec[j]] = rv
             if j == n:
                 break
@@ -275,6 +315,21 @@ class VMLoop:
             Xc[: b - a], Wc[: b - a], Tc[0, : b - a] = X[a:b], W[a:b], T[a:b]
             Y[a:b] = np.asarray(self._outputs(Xc.T, Wc.T, Tc, p), dtype=float).T[: b - a]
         return Y
+
+
+def _bounds(model: LoopModel, bound) -> np.ndarray:
+    """The envelope's bounds as the drivers take them (none without an envelope)."""
+    if model.envelope is None:
+        return np.zeros(0)
+    bound = _f64(bound)
+    if bound.shape != (model.envelope_layout.size,):
+        raise ValueError(f"bound: expected {model.envelope_layout.size} envelope bounds, "
+                         f"got shape {bound.shape}")
+    return bound
+
+
+def _failure(status: int, index: int, time: float, env: np.ndarray) -> Failure:
+    return Failure(status, index, time, env if status == SIM_ENVELOPE else None)
 
 
 @functools.lru_cache(maxsize=16)

@@ -19,20 +19,26 @@ from __future__ import annotations
 
 import dataclasses
 
+import casadi as ca
 import numpy as np
 
-from quadland.compiled import SIM_CONTROLLER, SIM_EVENT, SIM_GUARD, compiled_loop
+from quadland.compiled import SIM_CONTROLLER, SIM_ENVELOPE, SIM_EVENT, SIM_GUARD, compiled_loop
 from quadland.constants import TILT_MIN
+from quadland.envelope import ENVELOPE_FACTOR, Envelope
 from quadland.exceptions import SimulationError
 from quadland.model import disturbance_samples
 from quadland.scenario import Scenario, require_model
 from quadland.simulate import (
+    LOOP_DIVERGED,
     SimulationResult,
     _arange,
-    _divergence_hint,
     _grid_index,
     _held,
     check_plan,
+    longest_rk4_step,
+    rk4_hint,
+    rows_recorded,
+    slow_control_hint,
     time_grid,
 )
 from quadland.wind import OneCosineGust, dryden_low_altitude, gust_samples, turbulence_samples
@@ -43,6 +49,7 @@ from symbolic.kinematics import rotation
 from symbolic.landing.controller import landing_controller_params, landing_memory
 from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
 from symbolic.landing.loop import (
+    ENVELOPE,
     OUTPUTS,
     RECORDED,
     TRAJECTORY,
@@ -50,6 +57,7 @@ from symbolic.landing.loop import (
     controller_params,
     controller_state,
     landed_outputs_function,
+    loop_plant_function,
     loop_state,
 )
 from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
@@ -60,8 +68,8 @@ from symbolic.simulation import rk4_step
 from symbolic.vehicle import STATE as VEHICLE_STATE
 from symbolic.vehicle import vehicle_function
 
-__all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "wind_samples",
-           "landing_disturbance", "simulate_landing"]
+__all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "landing_envelope",
+           "wind_samples", "landing_disturbance", "simulate_landing"]
 
 #: The columns of a landing run's trajectory.csv (docs/landing.md), from the loop's layouts.
 LANDING_TRAJECTORY = TRAJECTORY
@@ -169,6 +177,72 @@ def landing_values(scenario: Scenario) -> LandingValues:
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
 
 
+def landing_envelope(scenario: Scenario) -> Envelope:
+    """The landing's flight envelope: ``ENVELOPE_FACTOR`` times each initial scale.
+
+    Scales (each at least 1 in its unit): distance, the largest of the
+    initial distance from the pad, the hover height and the pad's offset;
+    speed, the initial speed plus the most the vehicle can gain over the run
+    (``|tau| T / m``, its drive force alone); rate, the initial body rates.
+    A rotor's force lags a command clipped to ``[0, F_max]``, so twice
+    ``F_max`` is out of reach; the network's weights follow from the leakage
+    of eq. (22) as in :func:`quadland.simulate.paper_envelope`.
+    """
+    d = scenario.data
+    q, v, dk, init, c, g = (d[k] for k in ("quadrotor", "vehicle", "deck", "initial",
+                                           "controller", "landing"))
+    T = d["simulation"]["duration"]
+    offset = float(np.linalg.norm(dk["pad_offset"]))
+    start = np.array([*init["position1"], init["z1"]]) - np.array(
+        [*init["position2"], dk["height"]])
+    L0 = max(1.0, float(np.linalg.norm(start)) + offset, g["hover_height"])
+    vehicle = float(np.hypot(*init["velocity2"])) + T * float(np.hypot(*v["tau"][:2])) / min(
+        v["m11"], v["m22"])
+    V0 = max(1.0, vehicle + float(np.linalg.norm(init["relative_velocity"])))
+    W0 = max(1.0, *np.abs(np.radians(init["omega1_deg_s"])))
+    k = ENVELOPE_FACTOR
+    distance, speed, rate = k * L0 + offset, k * V0, k * W0
+    height = abs(dk["height"]) + sum(dk["heave_amplitude"]) + k * L0
+    F_max = q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
+    z2_bound = max(speed, rate) + max(*c["k1p"], *c["k1"]) * max(distance, k * np.pi)
+    bounds = np.array([distance, height, speed, rate, 2 * F_max, z2_bound / c["k_w"],
+                       z2_bound / c["k_zeta"]])
+    basis = (f"{k:g} x the initial distance from the pad or the hover height, at least 1 m",
+             f"|deck height| + heave + {k:g} x that distance",
+             f"{k:g} x the initial speed plus what the vehicle's drive can add over the run, "
+             "at least 1 m/s",
+             f"{k:g} x the initial body rate, at least 1 rad/s",
+             "twice F_max: a rotor lags a command clipped to [0, F_max]",
+             "the leakage bound |z2| / k_w of eq. (22), |z2| <= |e2| + k1 |z1| in the envelope",
+             "the leakage bound |z2| / k_zeta of eq. (22)")
+    return Envelope(ENVELOPE, bounds, basis)
+
+
+def _landing_hint(scenario: Scenario, lv: LandingValues, xp_last) -> str:
+    """Why a landing likely diverged: the RK4 step, the control rate, or the loop itself.
+
+    The plant's eigenvalues (its Jacobian with the commands held) at the
+    initial state and at the last state recorded are checked against RK4's
+    stability region for the run's step: a body spun up to hundreds of
+    radians per second leaves it. Else the sampled controller's rate is
+    checked against its gains.
+    """
+    c, sim = scenario.data["controller"], scenario.data["simulation"]
+    f = loop_plant_function()
+    xp, uh, w, t, pp = (f.mx_in(i) for i in range(5))
+    jac = ca.Function("plant_jacobian", [xp, uh, w, t, pp], [ca.jacobian(f(xp, uh, w, t, pp), xp)])
+    lam = []
+    for x in (lv.xp0, xp_last):
+        if x is not None and np.all(np.isfinite(x)):
+            A = np.asarray(jac(x, np.zeros(f.size1_in(1)), np.zeros(f.size1_in(2)), 0.0, lv.pp))
+            if np.all(np.isfinite(A)):
+                lam.append(np.linalg.eigvals(A))
+    step = rk4_hint(np.concatenate(lam) if lam else np.zeros(0), longest_rk4_step(scenario),
+                    sim["rk_steps_per_interval"])
+    return step or slow_control_hint(scenario, [max(c[k]) for k in ("k1p", "k2p", "k1", "k2")]) \
+        or LOOP_DIVERGED
+
+
 def wind_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
     """Wind velocity in E at ``times`` (the disturbance's sample times), ``(3, n)``, m/s.
 
@@ -226,6 +300,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     """
     check_plan(scenario)
     lv = landing_values(scenario)
+    envelope = landing_envelope(scenario)
     sim, rate = scenario.data["simulation"], scenario.data["controller"]["rate_hz"]
     T = sim["duration"]
     t_out, t_dist, _ = time_grid(scenario)
@@ -238,9 +313,8 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     loop = compiled_loop(lv.l, "sampled_flight" if flight else "sampled", "landing")
     X, R, xp_end, xc_end, failure = loop.sampled(
         lv.xp0, lv.xc0, _held(t_dist, w_dist, grid[:-1]).T, grid, ctrl, rec,
-        sim["rk_steps_per_interval"], lv.pp, lv.pc, TILT_MIN, len(t_out))
-    done = len(t_out) if failure is None else \
-        int(np.max(rec[:failure.index + 1], initial=-1)) + 1
+        sim["rk_steps_per_interval"], lv.pp, lv.pc, TILT_MIN, len(t_out), envelope.bounds)
+    done = len(t_out) if failure is None else rows_recorded(rec, failure)
     times, X, R = t_out[:done], X[:done], R[:done]
     Y = loop.outputs(X, _held(t_dist, w_dist, times).T, times, lv.pp)
     what = None
@@ -260,6 +334,8 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
                 SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
                                 "error status"}.get(failure.status, "the state became non-finite")
+        if failure.status == SIM_ENVELOPE:
+            what = envelope.describe(failure.envelope)
         t_fail = grid[min(failure.index, len(grid) - 1)]
     bad = ~np.all(np.isfinite(Y), axis=1)
     if bad.any():
@@ -269,8 +345,9 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         times, X, R, Y = times[:k], X[:k], R[:k], Y[:k]
     result = _result(scenario, times, X, R, Y)
     if what is not None:
+        xp_last = X[-1, loop_state(lv.l).slice("xp")] if len(X) else None
         raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
-                              f"{_divergence_hint(scenario)}", t_fail,
+                              f"{_landing_hint(scenario, lv, xp_last)}", t_fail,
                               result if len(times) else None)
     return result
 

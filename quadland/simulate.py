@@ -28,26 +28,31 @@ from collections.abc import Mapping
 import casadi as ca
 import numpy as np
 
-from quadland.compiled import SIM_CONTROLLER, SIM_GUARD, compiled_loop
+from quadland.compiled import SIM_CONTROLLER, SIM_ENVELOPE, SIM_GUARD, compiled_loop
 from quadland.constants import TILT_MIN
+from quadland.envelope import ENVELOPE_FACTOR, Envelope, rk4_steps_needed
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.model import disturbance_samples, model_values
 from quadland.scenario import Scenario
 from symbolic.closed_loop import (
+    ENVELOPE,
     OUTPUTS,
     POSITION1,
     closed_loop_function,
+    closed_loop_jacobian_function,
     closed_loop_state,
+    envelope_function,
 )
 from symbolic.control_step import step_outputs
 from symbolic.layout import Field, Layout
-from symbolic.quadrotor import DISTURBANCE
+from symbolic.quadrotor import DISTURBANCE, WRENCH
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
            "time_grid", "merge_times", "SimulationPlan", "simulation_plan", "check_plan",
-           "MEMORY_BUDGET", "MAX_RK4_STEPS"]
+           "paper_envelope", "rows_recorded", "slow_control_hint", "longest_rk4_step",
+           "rk4_hint", "LOOP_DIVERGED", "MEMORY_BUDGET", "MAX_RK4_STEPS"]
 
 #: Most memory a simulation may plan for its arrays, bytes.
 MEMORY_BUDGET = 2 << 30
@@ -277,6 +282,59 @@ def _cvodes_options(scenario: Scenario) -> tuple:
     return tuple(sorted(opts.items()))
 
 
+def paper_envelope(scenario: Scenario, mv=None) -> Envelope:
+    """The paper loop's flight envelope: ``ENVELOPE_FACTOR`` times each initial scale.
+
+    Scales (each at least 1 in its unit): altitude, the largest of the initial
+    relative altitude and the reference; speed, the initial body velocity;
+    rate, the initial body rates and the vehicle's yaw rate (initial, or
+    ``tau_z / d33`` at its steady state). The network's weights then follow
+    from the leakage of eq. (22): ``W' = Gamma1 (Psi z2^T - k_w W)`` with
+    ``|Psi| <= 1`` keeps ``|W| <= |z2| / k_w`` (likewise ``zeta_hat`` with
+    ``k_zeta``), and ``|z2| <= |e2| + k1 |z1|`` inside the envelope. The
+    sampled step's held wrench is bounded by twice what its clipped rotors
+    produce.
+    """
+    mv = mv or model_values(scenario)
+    d = scenario.data
+    q, v, init, c = d["quadrotor"], d["vehicle"], d["initial"], d["controller"]
+    z2 = v["deck_altitude"]
+    L0 = max(1.0, abs(init["z1"] - z2), abs(d["reference"]["e1d"][0]))
+    V0 = max(1.0, *np.abs(init["velocity1"]))
+    yaw_rate = abs(init["r2_deg_s"]) * np.pi / 180
+    if v["d33"] > 0:
+        yaw_rate = max(yaw_rate, abs(v["tau"][2]) / v["d33"])
+    W0 = max(1.0, *np.abs(np.radians(init["omega1_deg_s"])), yaw_rate)
+    k = ENVELOPE_FACTOR
+    altitude, speed, rate = abs(z2) + k * L0, k * V0, k * W0
+    angle = k * max(np.pi, *np.abs(np.radians(init["eta1_deg"])))
+    z2_bound = max(speed, rate) + max(c["k1"]) * max(k * L0, angle)
+    F = max(abs(q["rotor_force_min"]), abs(q["rotor_force_max"]))
+    wrench = 2 * 4 * F * max(1.0, q["arm_length"], q["rotor_drag_factor"])
+    bounds = np.array([altitude, speed, rate, wrench, z2_bound / c["k_w"],
+                       z2_bound / c["k_zeta"]])
+    basis = (f"|deck altitude| + {k:g} x the initial relative altitude or reference, "
+             "at least 1 m",
+             f"{k:g} x the initial body speed, at least 1 m/s",
+             f"{k:g} x the initial body rate or the vehicle's yaw rate, at least 1 rad/s",
+             "twice the wrench of four rotors at their force limit",
+             "the leakage bound |z2| / k_w of eq. (22), |z2| <= |e2| + k1 |z1| in the envelope",
+             "the leakage bound |z2| / k_zeta of eq. (22)")
+    return Envelope(ENVELOPE, bounds, basis)
+
+
+def _force_bound(scenario: Scenario, initial: np.ndarray) -> float:
+    """Largest rotor force of the continuous loop's outputs, N.
+
+    The continuous law is unclipped (the rotor limits are the sampled step's):
+    ``ENVELOPE_FACTOR`` times the largest of the hover thrust, the rotor limits
+    and the rotor forces commanded at the start, ``initial``.
+    """
+    q = scenario.data["quadrotor"]
+    return ENVELOPE_FACTOR * max(q["mass"] * q["gravity"], abs(q["rotor_force_min"]),
+                                 abs(q["rotor_force_max"]), *np.abs(initial))
+
+
 def simulate(scenario: Scenario) -> SimulationResult:
     """Simulate a scenario's closed loop.
 
@@ -293,8 +351,9 @@ def simulate(scenario: Scenario) -> SimulationResult:
     Raises
     ------
     SimulationError
-        When the attitude reaches the thrust map's singularity or the state
-        stops being finite.
+        When the attitude reaches the thrust map's singularity, the flight
+        leaves its envelope (:func:`paper_envelope`) or a value stops being
+        finite; it carries the trajectory up to then.
 
     Notes
     -----
@@ -315,6 +374,7 @@ def simulate(scenario: Scenario) -> SimulationResult:
         return simulate_landing(scenario)
     check_plan(scenario)
     mv = model_values(scenario)
+    envelope = paper_envelope(scenario, mv)
     t_out, t_dist, t_all = time_grid(scenario)
     w_dist = disturbance_samples(scenario, t_dist)
     w_out = _held(t_dist, w_dist, t_out).T                       # (n_out, nw)
@@ -322,14 +382,16 @@ def simulate(scenario: Scenario) -> SimulationResult:
     if scenario.data["controller"]["rate_hz"] > 0:
         flight = scenario.data["controller"]["backend"] == "c"
         loop = compiled_loop(mv.l, "sampled_flight" if flight else "sampled")
-        X, held, failure = _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist)
+        X, held, failure = _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist, envelope)
     else:
         loop = compiled_loop(mv.l, "continuous")
         held = None
         if scenario.data["simulation"]["integrator"] == "rk":
-            X, failure = _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist)
+            X, failure = _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist,
+                                         envelope)
         else:
-            X = _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist)
+            X, failure = _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist,
+                                            envelope)
     n = len(X) if failure is None else failure[0]
     finite = np.all(np.isfinite(X[:n]), axis=1)
     if not finite.all():
@@ -341,6 +403,13 @@ def simulate(scenario: Scenario) -> SimulationResult:
         bad = int(np.argmin(finite))
         name = OUTPUTS.element_names()[int(np.argmin(np.isfinite(Y[bad])))]
         n, failure = bad, (bad, t_out[bad], f"the output {name} became non-finite")
+    rotors = np.abs(Y[:n, OUTPUTS.slice("rotor")]).max(axis=1) if n else np.zeros(0)
+    bound = _force_bound(scenario, Y[0, OUTPUTS.slice("rotor")]) if n else np.inf
+    if held is None and np.any(rotors > bound):
+        bad = int(np.argmax(rotors > bound))
+        n, failure = bad, (bad, t_out[bad], (
+            f"a rotor force reached {rotors[bad]:.3g} N, beyond its envelope of {bound:.3g} N "
+            f"({ENVELOPE_FACTOR:g} x the hover thrust, the rotor limit or the initial command)"))
     result = _result(scenario, mv, t_out[:n], w_out[:n], X[:n], Y[:n],
                      None if held is None else held[:, :n])
     tilt = np.cos(result["phi1"]) * np.cos(result["theta1"])
@@ -350,8 +419,9 @@ def simulate(scenario: Scenario) -> SimulationResult:
         result = _truncated(result, k)
     if failure is not None:
         _, t_fail, what = failure
+        last = X[len(result["t"]) - 1] if len(result["t"]) else None
         raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
-                              f"{_divergence_hint(scenario)}", t_fail,
+                              f"{_divergence_hint(scenario, mv, last)}", t_fail,
                               result if len(result["t"]) else None)
     return result
 
@@ -361,33 +431,74 @@ def _truncated(result: SimulationResult, n: int) -> SimulationResult:
                             result.states[:n])
 
 
-def _divergence_hint(scenario: Scenario) -> str:
-    """A hint where the fixed-step integrator is the likely cause, else the usual suspects.
+def slow_control_hint(scenario: Scenario, gains: list[float]) -> str | None:
+    """A hint when the control period is likely too long for the gains, else None.
 
-    The loop's fastest modes are set by the gains (eq. 15, 24: z1 decays at
-    k1, z2 at k2), and RK4 is stable for ``|lambda| h < 2.785``.
+    A sampled loop whose gain times period exceeds :data:`_SLOW_CONTROL` is
+    likely unstable for that reason (the paper's loop needs 40 Hz for gains
+    of 10 1/s: docs/margins.md).
+    """
+    rate = scenario.data["controller"]["rate_hz"]
+    if gains and rate > 0 and max(gains) / rate > _SLOW_CONTROL:
+        need = int(np.ceil(max(gains) / _SLOW_CONTROL))
+        return (f" (the control period 1/{rate:g} s is likely too long for gains up to "
+                f"{max(gains):g} 1/s: try controller.rate_hz={need} or more)")
+    return None
+
+
+def _divergence_hint(scenario: Scenario, mv=None, x_last=None) -> str:
+    """Why the paper loop likely diverged: the fixed RK4 step, the control rate, or the loop.
+
+    For the continuous loop on RK4, the closed loop's eigenvalues at the
+    initial state and at the last state recorded are checked against RK4's
+    stability region (:func:`quadland.envelope.rk4_steps_needed`): where a
+    mode lies outside it, the step is the likely cause.
     """
     sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
-    gains = [max(ctrl[k]) for k in ("k1", "k2") if k in ctrl]
-    if gains and ctrl["rate_hz"] > 0 and max(gains) / ctrl["rate_hz"] > _SLOW_CONTROL:
-        need = int(np.ceil(max(gains) / _SLOW_CONTROL))
-        return (f" (the control period 1/{ctrl['rate_hz']:g} s is likely too long for gains "
-                f"up to {max(gains):g} 1/s: try controller.rate_hz={need} or more)")
-    if sim.get("integrator", "rk") != "rk":
-        return " (check the gains and the initial attitude)"
-    clocks = [scenario.data["simulation"]["output_rate_hz"],
-              scenario.data["disturbance"]["sample_rate_hz"]]
+    slow = slow_control_hint(scenario, [max(ctrl["k1"]), max(ctrl["k2"])])
+    if slow:
+        return slow
+    if ctrl["rate_hz"] > 0 or sim["integrator"] != "rk":
+        return LOOP_DIVERGED
+    mv = mv or model_values(scenario)
+    h = longest_rk4_step(scenario)
+    jac = closed_loop_jacobian_function(mv.l)
+    lam = []
+    for x in (mv.x0, x_last):
+        if x is not None and np.all(np.isfinite(x)):
+            A = np.asarray(jac(x, np.zeros(DISTURBANCE.size), mv.p), dtype=float)
+            if np.all(np.isfinite(A)):
+                lam.append(np.linalg.eigvals(A))
+    lam = np.concatenate(lam) if lam else np.zeros(0)
+    return rk4_hint(lam, h, sim["rk_steps_per_interval"], cvodes=True) or LOOP_DIVERGED
+
+
+#: The hint where neither the step nor the control rate is the likely cause.
+LOOP_DIVERGED = (" (the loop itself left its envelope: check the gains, the disturbance, the "
+                  "vehicle's drive and the initial state)")
+
+
+def rk4_hint(eigenvalues, h: float, steps: int, cvodes: bool = False) -> str | None:
+    """A hint naming ``simulation.rk_steps_per_interval`` where a mode of ``eigenvalues`` is
+    outside RK4's stability region for the step ``h``, else None."""
+    lam = np.asarray(eigenvalues, dtype=complex)
+    need = rk4_steps_needed(lam, h, steps)
+    if need is None:
+        return None
+    fastest = lam[np.argmax(np.abs(lam))]
+    alternative = " or simulation.integrator=\"cvodes\"" if cvodes else ""
+    return (f" (the RK4 step h = {h:.3g} s is outside RK4's stability region for the loop's "
+            f"fastest mode, {fastest.real:.3g}{fastest.imag:+.3g}j 1/s: try "
+            f"simulation.rk_steps_per_interval={need}{alternative})")
+
+
+def longest_rk4_step(scenario: Scenario) -> float:
+    """The longest RK4 step of the run: the shortest clock period over the substeps."""
+    sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
+    clocks = [sim["output_rate_hz"], scenario.data["disturbance"]["sample_rate_hz"]]
     if ctrl["rate_hz"] > 0:
         clocks.append(ctrl["rate_hz"])
-    h = 1.0 / max(clocks) / sim["rk_steps_per_interval"]
-    fastest = max(max(ctrl["k1"]), max(ctrl["k2"]))
-    if fastest * h > _RK4_REAL_STABILITY / 2:
-        need = int(np.ceil(fastest * sim["rk_steps_per_interval"] * h
-                           / (_RK4_REAL_STABILITY / 4)))
-        cvodes = "" if ctrl["rate_hz"] > 0 else " or simulation.integrator=\"cvodes\""
-        return (f" (the RK4 step h = {h:.3g} s is likely too coarse for gains up to "
-                f"{fastest:g} 1/s: try simulation.rk_steps_per_interval={need}{cvodes})")
-    return " (check the gains and the initial attitude)"
+    return 1.0 / max(clocks) / sim["rk_steps_per_interval"]
 
 
 def merge_times(*clocks: np.ndarray) -> np.ndarray:
@@ -422,21 +533,23 @@ def _grid_index(grid, times):
     return np.where(np.abs(times[k] - grid) <= tol, k, -1).astype(np.int_)
 
 
-def _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist):
+def _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist, envelope):
     """The continuous loop in one call of ``loop`` (compiled or on the VM): one RK4
     step (times ``rk_steps_per_interval``) per interval of the merged grid, exactly."""
     W = _held(t_dist, w_dist, t_all[:-1]).T
     rec = _grid_index(t_all[1:], t_out)
     X, _, failure = loop.integrate(mv.x0, W, t_all, rec,
                                    scenario.data["simulation"]["rk_steps_per_interval"], mv.p,
-                                   len(t_out))
+                                   len(t_out), envelope.bounds)
     if failure is None:
         return X, None
     done = int(np.max(rec[:failure.index], initial=0)) + 1      # rows recorded before it
-    return X, (done, t_all[failure.index + 1], "the state became non-finite")
+    what = envelope.describe(failure.envelope) if failure.status == SIM_ENVELOPE else \
+        "the state became non-finite"
+    return X, (done, t_all[failure.index + 1], what)
 
 
-def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist):
+def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist, envelope):
     """The sampled-data loop in one call of ``loop`` (compiled or on the VM).
 
     The control step runs at ``rate_hz`` and its wrench is held on the plant
@@ -461,19 +574,40 @@ def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist):
     W = _held(t_dist, w_dist, grid[:-1]).T
     X, R, _, _, failure = loop.sampled(
         xp0, xc0, W, grid, ctrl, rec, scenario.data["simulation"]["rk_steps_per_interval"],
-        pp, pc, TILT_MIN, len(t_out))
+        pp, pc, TILT_MIN, len(t_out), envelope.bounds)
     if failure is None:
         return X, R.T, None
     t = grid[min(failure.index, len(grid) - 1)]
-    done = int(np.max(rec[:failure.index + 1], initial=-1)) + 1
+    done = rows_recorded(rec, failure)
     what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
             SIM_CONTROLLER: "the flight control step (controller.backend = \"c\") returned "
                             "an error status"}.get(failure.status, "the state became non-finite")
+    if failure.status == SIM_ENVELOPE:
+        what = envelope.describe(failure.envelope)
     return X, R.T, (done, t, what)
 
 
-def _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist):
-    """The continuous loop on CasADi's cvodes (the variable-step reference)."""
+def rows_recorded(rec: np.ndarray, failure) -> int:
+    """Rows a sampled run recorded before it stopped at ``failure.index``.
+
+    A grid point's row is written after its controller step and envelope
+    check; a run that stops there (a guard, a controller error, the
+    envelope) has not written it, one stopped while integrating the interval
+    that follows (a non-finite state) has.
+    """
+    stop = failure.index
+    written = stop + 1 if failure.status not in (SIM_GUARD, SIM_CONTROLLER, SIM_ENVELOPE) \
+        else stop
+    return int(np.max(rec[:written], initial=-1)) + 1
+
+
+
+def _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist, envelope):
+    """The continuous loop on CasADi's cvodes (the variable-step reference).
+
+    The envelope is checked on the rows afterwards (cvodes integrates the whole
+    grid in one call): the result ends before the first row outside it.
+    """
     plugin = "cvodes"
     integ = _continuous_integrator(mv.l, plugin, _cvodes_options(scenario), tuple(t_all))
     w = _held(t_dist, w_dist, t_all[:-1])
@@ -486,7 +620,14 @@ def _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist):
                               f"{_divergence_hint(scenario)}") from None
     X = np.hstack([mv.x0[:, None], np.asarray(out["xf"])])
     keep = np.flatnonzero(_grid_index(t_all, t_out) >= 0)
-    return np.ascontiguousarray(X[:, keep].T)
+    X = np.ascontiguousarray(X[:, keep].T)
+    env = envelope_function(mv.l).map(len(X))(X.T, np.zeros((WRENCH.size, len(X))))
+    S = np.asarray(env, dtype=float).T
+    outside = ~np.all(S <= envelope.bounds, axis=1)
+    if not outside.any():
+        return X, None
+    k = int(np.argmax(outside))
+    return X, (k, t_out[k], envelope.describe(S[k]))
 
 
 def _result(scenario, mv, t_out, w_out, X, Y, held):

@@ -34,9 +34,10 @@ from symbolic.relative import (
 from symbolic.vehicle import STATE as VEHICLE_STATE
 from symbolic.vehicle import vehicle_rhs
 
-__all__ = ["POSITION1", "PLANT_STATE", "OUTPUTS", "closed_loop_state", "closed_loop_params",
-           "closed_loop_rhs", "closed_loop_function", "closed_loop_jacobian_function",
-           "plant_function", "closed_loop_outputs", "vehicle_measurement"]
+__all__ = ["POSITION1", "PLANT_STATE", "OUTPUTS", "ENVELOPE", "closed_loop_state",
+           "closed_loop_params", "closed_loop_rhs", "closed_loop_function",
+           "closed_loop_jacobian_function", "plant_function", "closed_loop_outputs",
+           "vehicle_measurement", "envelope_function"]
 
 #: The quadrotor's planar position in E, integrated for the ground track.
 POSITION1 = Layout("pos1", (Field("x1", 1, "m", "quadrotor x in E"),
@@ -67,6 +68,22 @@ OUTPUTS = Layout("y", (
     Field("bs_z2", 4, E2["e2"].unit, "backstepping error z2 = e2 - alpha (eq. 9)"),
     Field("lyapunov_V1", 1, "-", "Lyapunov function V1 = z1^T z1 / 2 (eq. 12)"),
 ), "closed-loop output signals")
+
+
+#: The magnitudes a flight must keep within its envelope (``envelope_function``):
+#: each is compared with a bound the runtime derives from the scenario.
+ENVELOPE = Layout("env", (
+    Field("altitude", 1, "m", "|z1|, the quadrotor's altitude"),
+    Field("speed", 1, "m/s", "largest body velocity component |V1|"),
+    Field("rate", 1, "rad/s", "largest body rate |Omega1|"),
+    Field("thrust", 1, "N", "largest held thrust or moment command |wrench| (sampled loop)"),
+    Field("weight", 1, "-", "largest network weight |W_hat| (eq. 22)"),
+    Field("robust", 1, "-", "largest robust term estimate |zeta_hat| (eq. 22)"),
+), "magnitudes checked against the flight envelope")
+
+
+def _inf_norm(v):
+    return ca.mmax(ca.fabs(v))
 
 
 @functools.cache
@@ -170,6 +187,21 @@ def closed_loop_outputs(l: int) -> ca.Function:
     names = list(OUTPUTS.names())
     return ca.Function("closed_loop_outputs", [x, w, p], [signals[n] for n in names],
                        ["x", "w", "p"], names)
+
+
+@functools.cache
+def envelope_function(l: int) -> ca.Function:
+    """``envelope(x, uh) -> s``: the :data:`ENVELOPE` magnitudes of a loop state.
+
+    ``x`` is :func:`closed_loop_state`, ``uh`` the held wrench
+    (:data:`~symbolic.quadrotor.WRENCH`; zero in the continuous loop).
+    """
+    x, uh = closed_loop_state(l).sym(), WRENCH.sym()
+    xs = closed_loop_state(l).unpack(x)
+    q = QUAD_STATE.unpack(xs["xq"])
+    s = ca.vertcat(ca.fabs(q["z1"]), _inf_norm(q["V1"]), _inf_norm(q["Omega1"]),
+                   _inf_norm(uh), _inf_norm(xs["W_hat"]), _inf_norm(xs["zeta_hat"]))
+    return ca.Function("envelope", [x, uh], [s], ["x", "uh"], ["s"])
 
 
 @functools.cache

@@ -13,7 +13,12 @@ model but the sizes of these functions' flat vector arguments:
   continuous loop's state, so that ``outputs`` serves both loops; and,
   optionally, an event ``event(xp, t, pp) -> g`` whose crossing from
   positive to zero or below ends the run at the instant it happens (a
-  touchdown), located within the step.
+  touchdown), located within the step;
+
+and an envelope ``envelope(x, uh) -> s``: magnitudes (altitude, speed, rate,
+network weights, ...) that must stay at or below bounds given per run, so
+that a diverging flight stops as soon as it leaves the physical envelope
+instead of when a value overflows.
 
 ``t`` is the time, s: models that do not depend on it ignore it.
 
@@ -35,12 +40,14 @@ import jinja2
 
 from symbolic.backstepping import REFERENCE
 from symbolic.closed_loop import (
+    ENVELOPE,
     OUTPUTS,
     PLANT_STATE,
     closed_loop_function,
     closed_loop_outputs,
     closed_loop_params,
     closed_loop_state,
+    envelope_function,
     plant_function,
     vehicle_measurement,
 )
@@ -104,6 +111,13 @@ class LoopModel:
     event : casadi.Function or None
         ``event(xp, t, pp) -> g``: the run ends where ``g`` falls from
         positive to zero or below (see the module docstring).
+    envelope : casadi.Function or None
+        ``envelope(x, uh) -> s``: magnitudes of the loop state ``x`` and the
+        held input ``uh`` (zero in the continuous loop) that a flight must
+        keep below bounds given at run time: the run stops where one does
+        not (a diverging flight), see the module docstring.
+    envelope_layout : Layout or None
+        Names, units and meanings of ``s``.
     flight : str or None
         The template (in ``symbolic/templates/``) of the adapter that puts
         the flight code behind the controller's signature.
@@ -127,12 +141,15 @@ class LoopModel:
     assemble: ca.Function
     step_args: ca.Function | None = None
     event: ca.Function | None = None
+    envelope: ca.Function | None = None
+    envelope_layout: Layout | None = None
     flight: str | None = None
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
         return tuple(f for f in (self.rhs, self.output_fn, self.plant, self.controller,
-                                 self.assemble, self.step_args, self.event) if f is not None)
+                                 self.assemble, self.step_args, self.event, self.envelope)
+                     if f is not None)
 
 
 #: What the sampled loop records of each control step: the held signals.
@@ -210,10 +227,11 @@ def paper_loop(l: int) -> LoopModel:
 
     x_of = ca.vertcat(*[xs[n] if n in xs else ca.vec(cs[n]) for n in state.names()])
     assemble = _named("assemble", [xp, xc], [x_of], ["xp", "xc"], ["x"])
+    envelope = _named("envelope", [x, uh], [envelope_function(l)(x, uh)], ["x", "uh"], ["s"])
     return LoopModel("paper", state, DISTURBANCE, params, OUTPUTS, rhs, output_fn,
                      PLANT_STATE, WRENCH, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
-                     controller, assemble, step_args=step_args,
-                     flight="flight_controller.c.jinja")
+                     controller, assemble, step_args=step_args, envelope=envelope,
+                     envelope_layout=ENVELOPE, flight="flight_controller.c.jinja")
 
 
 _TEMPLATES = jinja2.Environment(
@@ -228,9 +246,11 @@ _TEMPLATES = jinja2.Environment(
 #: ``ql_landing_step``) in place of the symbolic controller, through the
 #: model's adapter (:attr:`LoopModel.flight`); its build adds the flight
 #: sources.
-SIMULATOR_PARTS = {"continuous": ("continuous", ("rhs", "outputs")),
-                   "sampled": ("sampled", ("plant", "controller", "assemble", "outputs")),
-                   "sampled_flight": ("sampled", ("plant", "step_args", "assemble", "outputs"))}
+SIMULATOR_PARTS = {"continuous": ("continuous", ("rhs", "outputs", "envelope")),
+                   "sampled": ("sampled", ("plant", "controller", "assemble", "outputs",
+                                           "envelope")),
+                   "sampled_flight": ("sampled", ("plant", "step_args", "assemble", "outputs",
+                                                  "envelope"))}
 
 
 def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
@@ -261,6 +281,8 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     driver, names = SIMULATOR_PARTS[part]
     if driver == "sampled" and model.event is not None:
         names = (*names, "event")
+    if model.envelope is None:
+        names = tuple(n for n in names if n != "envelope")
     files, fns = {}, []
     for name in names:
         f = by_name[name]
@@ -278,12 +300,14 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     sizes = dict(NX=model.state.size, NW=model.disturbance.size, NP=model.params.size,
                  NY=model.outputs.size, NXP=model.plant_state.size, NUH=model.held.size,
                  NXC=model.controller_state.size, NPP=model.plant_params.size,
-                 NPC=model.controller_params.size, NREC=model.recorded.size)
+                 NPC=model.controller_params.size, NREC=model.recorded.size,
+                 NENV=model.envelope_layout.size if model.envelope is not None else 0)
     headers = [n for n in names if n != "step_args"] + (
         ["controller"] if part == "sampled_flight" else [])
     files[f"{prefix}{part}.c"] = _TEMPLATES.get_template("simulator.c.jinja").render(
         prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
         has_event=driver == "sampled" and model.event is not None,
+        has_envelope=model.envelope is not None,
         casadi_version=ca.__version__, sizes=sizes,
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))

@@ -327,8 +327,12 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     ms, rs = MEASUREMENT.unpack(y), REFERENCE.unpack(ref)
     mm, c = landing_memory(l).unpack(mem), landing_controller_params(l).unpack(p_ctrl)
     q, act = QUADROTOR.unpack(p_quad), ACTUATOR.unpack(p_act)
-    p_e, v_e, eta1, Omega1 = ms["p_e"], ms["v_e"], ms["eta1"], ms["Omega1"]
+    p_e, v_e, Omega1 = ms["p_e"], ms["v_e"], ms["Omega1"]
     eta2 = ms["eta2"]
+    # the yaw within half a turn of the deck's heading, its reference: a yaw
+    # measured 2 pi k away is the same attitude, not k turns to unwind
+    yaw_error = ms["eta1"][2] - eta2[2]
+    eta1 = ca.vertcat(ms["eta1"][0:2], eta2[2] + ca.atan2(ca.sin(yaw_error), ca.cos(yaw_error)))
     W_hat, zeta_hat = mm["W_hat"], mm["zeta_hat"]
     m1, rho, nominal = q["m1"], c["rho"], c["nominal_model"]
     k1p, k2p = c["k1p"], c["k2p"]

@@ -61,7 +61,7 @@ from symbolic.vehicle import vehicle_rhs
 __all__ = ["DISTURBANCE", "RECORDED", "OUTPUTS", "ANCHOR", "wind_force", "controller_state",
            "controller_params", "loop_state", "loop_outputs", "loop_plant_function",
            "landing_signals_function", "gear_gap_function", "landed_outputs_function",
-           "anchor_function", "TRAJECTORY", "landing_loop"]
+           "anchor_function", "TRAJECTORY", "ENVELOPE", "envelope_function", "landing_loop"]
 
 #: The held disturbance of the landing loop: wind in E, then eq. (2)'s d_F, d_M.
 DISTURBANCE = Layout("w_land", (
@@ -108,6 +108,19 @@ ANCHOR = Layout("anchor", (
     Field("p_e", 3, "m", "the quadrotor's centre in the deck frame at touchdown"),
     Field("R_rel", 9, "-", "R_deck^T R(eta1) at touchdown", shape=(3, 3)),
 ), "the quadrotor's pose on the deck")
+
+
+#: The magnitudes a landing must keep within its envelope (:func:`envelope_function`):
+#: each is compared with a bound the runtime derives from the scenario.
+ENVELOPE = Layout("env_land", (
+    Field("distance", 1, "m", "horizontal distance from the vehicle's reference point"),
+    Field("height", 1, "m", "|z1|, the quadrotor's altitude in E"),
+    Field("speed", 1, "m/s", "largest body velocity component |V1|"),
+    Field("rate", 1, "rad/s", "largest body rate |Omega1|"),
+    Field("rotor", 1, "N", "largest rotor force |F| (the motors' states)"),
+    Field("weight", 1, "-", "largest network weight |W_hat| (eq. 22)"),
+    Field("robust", 1, "-", "largest robust term estimate |zeta_hat| (eq. 22)"),
+), "magnitudes checked against the landing's flight envelope")
 
 
 def wind_force(eta1, v_wind, p_quad):
@@ -265,6 +278,22 @@ def anchor_function() -> ca.Function:
                        ["anchor"])
 
 
+@functools.cache
+def envelope_function(l: int) -> ca.Function:
+    """``envelope(x, uh) -> s``: the :data:`ENVELOPE` magnitudes of the loop state ``x``
+    (:func:`loop_state`); ``uh``, the held rotor commands, is not needed (they are clipped)."""
+    x, uh = loop_state(l).sym(), COMMAND.sym()
+    xs = loop_state(l).unpack(x)
+    ps, cs = PLANT_STATE.unpack(xs["xp"]), controller_state(l).unpack(xs["xc"])
+    q, v = QUAD6_STATE.unpack(ps["x1q"]), VEHICLE_STATE.unpack(ps["xv"])
+    mem = landing_memory(l).unpack(cs["mem"])
+    s = ca.vertcat(ca.norm_2(q["p1"][0:2] - ca.vertcat(v["x2"], v["y2"])), ca.fabs(q["p1"][2]),
+                   ca.mmax(ca.fabs(q["V1"])), ca.mmax(ca.fabs(q["Omega1"])),
+                   ca.mmax(ca.fabs(q["F"])), ca.mmax(ca.fabs(mem["W_hat"])),
+                   ca.mmax(ca.fabs(mem["zeta_hat"])))
+    return ca.Function("envelope", [x, uh], [s], ["x", "uh"], ["s"])
+
+
 def _named(name, ins, outs, in_names, out_names):
     return ca.Function(name, ins, outs, in_names, out_names)
 
@@ -308,4 +337,6 @@ def landing_loop(l: int) -> LoopModel:
     return LoopModel("landing", x_lay, DISTURBANCE, PLANT_PARAMS, OUTPUTS, None, output_fn,
                      PLANT_STATE, COMMAND, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
                      controller, assemble, step_args=step_args, event=event,
-                     flight="landing_flight_controller.c.jinja")
+                     envelope=_named("envelope", [x, uh], [envelope_function(l)(x, uh)],
+                                     ["x", "uh"], ["s"]),
+                     envelope_layout=ENVELOPE, flight="landing_flight_controller.c.jinja")

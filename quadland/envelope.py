@@ -1,0 +1,111 @@
+"""The flight envelope: bounds a flight must stay within, and what leaving it means.
+
+A diverging flight is stopped as soon as it leaves a physical envelope, not
+when a value overflows. The loop's symbolic ``envelope(x, uh) -> s``
+(:attr:`symbolic.simulation.LoopModel.envelope`) gives magnitudes of its
+state (altitude, speeds, rates, rotor forces, network weights); the
+simulator compares them with the bounds of an :class:`Envelope`, derived from
+the scenario by each loop (docs/simulation.md, "The flight envelope"), at
+every grid point. Where a run leaves it, :func:`rk4_step_hint` tells whether
+the fixed RK4 step is the likely cause, from the loop's eigenvalues and
+RK4's stability region.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from symbolic.layout import Layout
+
+__all__ = ["ENVELOPE_FACTOR", "Envelope", "rk4_amplification", "rk4_steps_needed"]
+
+#: How far beyond its initial scale a magnitude may grow before the flight is
+#: judged diverged: a stable loop never reaches it, an unstable one within a
+#: few steps.
+ENVELOPE_FACTOR = 1e3
+
+
+@dataclasses.dataclass(frozen=True)
+class Envelope:
+    """Bounds on a loop's envelope magnitudes, each with how it was derived.
+
+    Attributes
+    ----------
+    layout : Layout
+        The magnitudes (:attr:`symbolic.simulation.LoopModel.envelope_layout`).
+    bounds : ndarray
+        One upper bound per magnitude, in its unit.
+    basis : tuple of str
+        How each bound follows from the scenario, one line each.
+    """
+
+    layout: Layout
+    bounds: np.ndarray
+    basis: tuple[str, ...]
+
+    def __post_init__(self):
+        if len(self.bounds) != self.layout.size or len(self.basis) != self.layout.size:
+            raise ValueError("one bound and one basis per envelope magnitude")
+        if not np.all(np.asarray(self.bounds) > 0):
+            raise ValueError("envelope bounds must be positive")
+
+    def as_dict(self) -> dict:
+        """``{name: {"bound", "unit", "doc", "basis"}}``, for summaries and docs."""
+        return {f.name: {"bound": float(b), "unit": f.unit, "doc": f.doc, "basis": why}
+                for f, b, why in zip(self.layout.fields, self.bounds, self.basis, strict=True)}
+
+    def describe(self, s: np.ndarray) -> str:
+        """The worst magnitude of ``s`` against its bound, as one phrase.
+
+        Examples
+        --------
+        >>> from symbolic.closed_loop import ENVELOPE
+        >>> env = Envelope(ENVELOPE, np.full(6, 10.0), ("x",) * 6)
+        >>> print(env.describe(np.array([1.0, 2e3, 0, 0, 0, 0])))
+        the speed (largest body velocity component |V1|) reached 2000 m/s, beyond its
+        envelope of 10 m/s
+        """
+        s = np.asarray(s, dtype=float)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = np.where(np.isnan(s), np.inf, s / self.bounds)
+        k = int(np.argmax(ratio))
+        f = self.layout.fields[k]
+        unit = "" if f.unit in ("-", "") else f" {f.unit}"
+        value = "a non-finite value" if not np.isfinite(s[k]) else f"{s[k]:.3g}{unit}"
+        return (f"the {f.name} ({f.doc}) reached {value}, beyond its envelope of "
+                f"{self.bounds[k]:.3g}{unit}")
+
+
+def rk4_amplification(z: np.ndarray) -> np.ndarray:
+    """``|R(z)|`` of the classical RK4 method, ``R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24``.
+
+    A mode ``lambda`` is integrated stably with step ``h`` when
+    ``|R(lambda h)| <= 1`` (Hairer and Wanner, *Solving ODEs II*, IV.2).
+
+    Examples
+    --------
+    >>> float(rk4_amplification(np.array([-2.785])))   # the real-axis limit
+    0.99...
+    """
+    z = np.asarray(z, dtype=complex)
+    return np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24)
+
+
+def rk4_steps_needed(eigenvalues: np.ndarray, h: float, steps: int) -> int | None:
+    """Steps per interval that make RK4 stable on every eigenvalue, or None if ``steps`` do.
+
+    ``h`` is the step now (the interval over ``steps``). The answer keeps
+    ``|R(lambda h')| <= 1`` for the interval's new step ``h'`` on every
+    eigenvalue, with a factor 2 of margin, so that the mode is damped, not
+    only bounded.
+    """
+    lam = np.asarray(eigenvalues, dtype=complex)
+    if lam.size == 0 or np.all(rk4_amplification(lam * h) <= 1 + 1e-12):
+        return None
+    interval = h * steps
+    n = steps
+    while np.any(rk4_amplification(lam * interval / n) > 1 + 1e-12) and n < 1 << 20:
+        n *= 2
+    return 2 * n
