@@ -86,7 +86,7 @@ def test_a_landing_spun_up_by_its_disturbance_stops_with_honest_rows():
     assert np.all(np.diff(t) > 0) and t[-1] <= info.value.time
     # every row holds a real state: no row of zeros written after the failure
     assert not np.any(np.all(partial.states == 0, axis=1))
-    assert "disturbance" in str(info.value)         # the loop's suspects, the disturbance among them
+    assert "disturbance" in str(info.value)         # named among the loop's suspects
 
 
 def test_a_vehicle_driven_away_leaves_the_distance_envelope():
