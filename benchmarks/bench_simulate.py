@@ -63,7 +63,7 @@ import quadland
 from quadland.build import find_compiler
 from quadland.compiled import compiled_loop
 from quadland.model import disturbance_samples, model_values
-from quadland.simulate import time_grid
+from quadland.simulate import run_clocks, time_grid
 from symbolic.closed_loop import closed_loop_function, closed_loop_params, closed_loop_state
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -276,19 +276,17 @@ def breakdown(sc, runs):
     """Time of the compiled integration and of the outputs alone, as ``simulate``
     calls them; and the number of right-hand side evaluations."""
     mv = model_values(sc)
-    t_out, t_dist, t_all = time_grid(sc)
-    w_dist = disturbance_samples(sc, t_dist)
-    W, W_out, H = _held(t_dist, w_dist, t_all[:-1]), _held(t_dist, w_dist, t_out), np.diff(t_all)
-    k = np.clip(np.searchsorted(np.round(t_out, 12), np.round(t_all[1:], 12)), 0, len(t_out) - 1)
-    rec = np.where(np.round(t_out[k], 12) == np.round(t_all[1:], 12), k, -1)
+    clocks = run_clocks(sc)
+    w_dist = disturbance_samples(sc, clocks[1].times())
     substeps = sc.data["simulation"]["rk_steps_per_interval"]
     loop = compiled_loop(mv.l, "continuous")
-    X, _, failure = loop.integrate(mv.x0, W, H, rec, substeps, mv.p, len(t_out))
-    assert failure is None and np.array_equal(X, quadland.simulate(sc).states)
-    return dict(integrate=time_call(lambda: loop.integrate(mv.x0, W, H, rec, substeps, mv.p,
-                                                           len(t_out)), runs),
-                outputs=time_call(lambda: loop.outputs(X, W_out, mv.p), runs),
-                evaluations=4 * substeps * len(H))
+    run = loop.integrate(mv.x0, clocks, w_dist.T, substeps, mv.p)
+    assert run.status == 0 and np.array_equal(run.X, quadland.simulate(sc).states)
+    W_out = np.ascontiguousarray(w_dist[:, run.w_index].T)
+    return dict(integrate=time_call(lambda: loop.integrate(mv.x0, clocks, w_dist.T, substeps,
+                                                           mv.p), runs),
+                outputs=time_call(lambda: loop.outputs(run.X, W_out, run.times, mv.p), runs),
+                evaluations=4 * substeps * (len(time_grid(sc)[2]) - 1))
 
 
 # --- memory (in a fresh interpreter) --------------------------------------------

@@ -20,19 +20,20 @@ import warnings
 import numpy as np
 
 from quadland.build import build_library, have_compiler
+from quadland.engine.loop import locate_event, merged_grid, rk4_span
 from quadland.exceptions import CompileError, CompilerNotFoundError
 from symbolic.landing.loop import landing_loop
 from symbolic.simulation import SIMULATOR_PARTS, LoopModel, paper_loop, rk4_step, simulator_sources
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "LOOPS", "SIM_OK",
            "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "SIM_ENVELOPE",
-           "Failure"]
+           "SIM_ROWS", "Run"]
 
 #: The loops a scenario's ``scenario.model`` names: builders ``l -> LoopModel``.
 LOOPS = {"paper": paper_loop, "landing": landing_loop}
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
-SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT, SIM_ENVELOPE = 0, 1, 2, 3, 4, 5
+SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT, SIM_ENVELOPE, SIM_ROWS = range(7)
 
 _REAL = ctypes.POINTER(ctypes.c_double)
 _LONG = ctypes.POINTER(ctypes.c_long)
@@ -51,25 +52,47 @@ def _f64(a) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
-class Failure:
-    """Where a run stopped early.
+class Run:
+    """What one call of a driver gave.
 
     Attributes
     ----------
     status : int
-        One of the ``SIM_*`` codes.
-    index : int
-        The grid point (sampled loop) or interval (continuous loop).
-    time : float
-        s, for an event: when it happened.
+        :data:`SIM_OK`, or the ``SIM_*`` code that stopped the run.
+    X : ndarray, (rows, nx)
+        The loop's state at each output row recorded.
+    R : ndarray, (rows, nrec) or None
+        The sampled loop's recorded signals at each row (None: continuous).
+    times : ndarray, (rows,)
+        Each row's time, s.
+    w_index : ndarray of int, (rows,)
+        Each row's disturbance sample (the row of ``W`` in force).
+    x_end : ndarray
+        The state where the run ended (the sampled loop's ``[xp, xc]``).
+    t_stop : float
+        s, where a run that did not reach its end stopped (an event's instant);
+        NaN otherwise.
     envelope : ndarray or None
         For :data:`SIM_ENVELOPE`: the envelope magnitudes that left their bounds.
     """
 
     status: int
-    index: int
-    time: float = float("nan")
+    X: np.ndarray
+    R: np.ndarray | None
+    times: np.ndarray
+    w_index: np.ndarray
+    x_end: np.ndarray
+    t_stop: float = float("nan")
     envelope: np.ndarray | None = None
+
+    @property
+    def rows(self) -> int:
+        """Rows recorded."""
+        return len(self.times)
+
+
+def _clock_table(clocks) -> np.ndarray:
+    return np.ascontiguousarray([c.table() for c in clocks], dtype=np.float64).ravel()
 
 
 class CompiledLoop:
@@ -78,7 +101,7 @@ class CompiledLoop:
     Parameters
     ----------
     model : LoopModel
-    part : {"continuous", "sampled"}
+    part : {"continuous", "sampled", "sampled_flight"}
     opt : str
         Optimization flag of the build.
     """
@@ -97,98 +120,88 @@ class CompiledLoop:
         prefix = f"qlsim_{model.name}_"
         self._outputs = getattr(lib, f"{prefix}{part}_outputs")
         self._outputs.argtypes = [_REAL, _REAL, _REAL, ctypes.c_long, _REAL, _REAL]
+        D, L = ctypes.c_double, ctypes.c_long
         if part == "continuous":
             self._integrate = getattr(lib, f"{prefix}integrate")
-            self._integrate.argtypes = [_REAL, _REAL, _REAL, _LONG, ctypes.c_long,
-                                        ctypes.c_long, _REAL, _REAL, _REAL, _REAL, _LONG, _REAL]
+            self._integrate.argtypes = [_REAL, _REAL, D, _REAL, L, _REAL, _REAL, _REAL, _REAL,
+                                        _LONG, L, _LONG, _REAL, ctypes.POINTER(D), _REAL]
         else:
             self._sampled = getattr(lib, f"{prefix}sampled")
-            self._sampled.argtypes = [_REAL, _REAL, _REAL, _REAL, ctypes.c_char_p, _LONG,
-                                      ctypes.c_long, ctypes.c_long, _REAL, _REAL,
-                                      ctypes.c_double, _REAL, _REAL, _REAL, _REAL, _REAL, _LONG,
-                                      _REAL, _REAL]
+            self._sampled.argtypes = [_REAL, _REAL, _REAL, D, _REAL, L, L, _REAL, _REAL, _REAL,
+                                      D, _REAL, _REAL, _REAL, _REAL, _LONG, L, _LONG, _REAL,
+                                      _REAL, ctypes.POINTER(D), _REAL]
 
-    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int, bound=None):
-        """The continuous loop over the ``len(G) - 1`` intervals of the grid ``G``.
+    def integrate(self, x0, clocks, W, substeps: int, p, bound=None) -> Run:
+        """The continuous loop over the merged grid of its output and disturbance clocks.
 
         Parameters
         ----------
         x0 : array_like, (nx,)
-        W : array_like, (n, nw)
-            Disturbance held over each interval.
-        G : array_like, (n + 1,)
-            Grid times, s.
-        rec : array_like of int, (n,)
-            Row of the returned states for the state at each interval's end, or -1.
+        clocks : sequence of quadland.engine.loop.Clock
+            The output clock, then the disturbance clock (both closing).
+        W : array_like, (samples, nw)
+            The disturbance at each tick of the disturbance clock, held until the next.
         substeps : int
-            RK4 steps per interval.
+            RK4 steps per grid interval.
         p : array_like, (np,)
-        n_rows : int
-            Rows of the returned states; row 0 is ``x0``.
         bound : array_like, (nenv,), optional
             The envelope's bounds (:attr:`LoopModel.envelope`); none for a
             model without an envelope.
 
         Returns
         -------
-        X : ndarray, (n_rows, nx)
-        x_end : ndarray, (nx,)
-        failure : Failure or None
+        Run
         """
         m = self.model
-        x0, W, G, p, bound = _f64(x0), _f64(W), _f64(G), _f64(p), _bounds(m, bound)
-        rec = np.ascontiguousarray(rec, dtype=np.int_)
-        n = len(G) - 1
-        assert W.shape == (n, m.disturbance.size) and rec.shape == (n,)
-        X = np.zeros((n_rows, m.state.size))
-        X[0] = x0
-        x_end = np.empty(m.state.size)
-        env = np.full(max(bound.size, 1), np.nan)
-        fail = ctypes.c_long(-1)
-        status = self._integrate(_ptr(x0), _ptr(W), _ptr(G), _ptr(rec, _LONG), n, int(substeps),
-                                 _ptr(p), _ptr(bound), _ptr(X), _ptr(x_end), ctypes.byref(fail),
-                                 _ptr(env))
-        return X, x_end, (_failure(status, fail.value, np.nan, env) if status else None)
+        out, dist = clocks
+        x0, W, p, bound = _f64(x0), _f64(W), _f64(p), _bounds(m, bound)
+        rows = len(out.times())
+        assert W.shape == (len(dist.times()), m.disturbance.size)
+        X = np.zeros((rows, m.state.size))
+        times, w_index = np.zeros(rows), np.zeros(rows, dtype=np.int_)
+        x_end, env = np.empty(m.state.size), np.full(max(bound.size, 1), np.nan)
+        n_rows, t_stop = ctypes.c_long(0), ctypes.c_double(np.nan)
+        status = self._integrate(
+            _ptr(x0), _ptr(_clock_table(clocks)), float(out.T), _ptr(W), int(substeps), _ptr(p),
+            _ptr(bound), _ptr(X), _ptr(times), _ptr(w_index, _LONG), rows,
+            ctypes.byref(n_rows), _ptr(x_end), ctypes.byref(t_stop), _ptr(env))
+        n = n_rows.value
+        return Run(status, X[:n], None, times[:n], w_index[:n], x_end, t_stop.value,
+                   env if status == SIM_ENVELOPE else None)
 
-    def sampled(self, xp0, xc0, W, G, ctrl, rec, substeps: int, pp, pc, guard_min: float,
-                n_rows: int, bound=None):
-        """The sampled-data loop over the ``len(G) - 1`` intervals of the grid ``G``.
+    def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
+                bound=None, delay: int = 0, uh0=None) -> Run:
+        """The sampled-data loop over the merged grid of its output, disturbance and
+        control clocks.
 
-        ``ctrl`` (n,) and ``rec`` (n + 1,) flag, per grid point, a control
-        step and the row it is recorded to (or -1). A model with an event
-        stops where it happens: the failure then has status
-        :data:`SIM_EVENT`, its ``time`` and, in ``xp_end``, the state then.
-        ``bound`` (nenv,) are the envelope's bounds: the run stops at the
-        first grid point outside them (:data:`SIM_ENVELOPE`).
-
-        Returns
-        -------
-        X : ndarray, (n_rows, nx)
-            The loop's state at the recorded points.
-        R : ndarray, (n_rows, nrec)
-            The recorded signals (held from the last control step).
-        xp_end, xc_end : ndarray
-        failure : Failure or None
+        ``delay`` control periods pass between computing a command and applying
+        it (``uh0`` is held before the first arrives; zero by default). A model
+        with an event stops where it happens: the run's status is
+        :data:`SIM_EVENT`, ``t_stop`` its instant and ``x_end`` the state then.
+        ``bound`` (nenv,) are the envelope's bounds: the run stops at the first
+        grid point outside them (:data:`SIM_ENVELOPE`).
         """
         m = self.model
-        xp0, xc0, W, G, pp, pc = (_f64(a) for a in (xp0, xc0, W, G, pp, pc))
+        out, dist, _ = clocks
+        xp0, xc0, W, pp, pc = (_f64(a) for a in (xp0, xc0, W, pp, pc))
         bound = _bounds(m, bound)
-        ctrl = np.ascontiguousarray(ctrl, dtype=np.uint8)
-        rec = np.ascontiguousarray(rec, dtype=np.int_)
-        n = len(G) - 1
-        assert W.shape == (n, m.disturbance.size) and ctrl.shape == (n,)
-        assert rec.shape == (n + 1,)
-        X = np.zeros((n_rows, m.state.size))
-        R = np.zeros((n_rows, m.recorded.size))
+        uh0 = np.zeros(m.held.size) if uh0 is None else _f64(uh0)
+        rows = len(out.times())
+        assert W.shape == (len(dist.times()), m.disturbance.size)
+        X = np.zeros((rows, m.state.size))
+        R = np.zeros((rows, m.recorded.size))
+        times, w_index = np.zeros(rows), np.zeros(rows, dtype=np.int_)
         xp_end, xc_end = np.empty(m.plant_state.size), np.empty(m.controller_state.size)
         env = np.full(max(bound.size, 1), np.nan)
-        fail, t_event = ctypes.c_long(-1), ctypes.c_double(np.nan)
-        status = self._sampled(_ptr(xp0), _ptr(xc0), _ptr(W), _ptr(G), ctrl.ctypes.data_as(
-            ctypes.c_char_p), _ptr(rec, _LONG), n, int(substeps), _ptr(pp), _ptr(pc),
-            float(guard_min), _ptr(bound), _ptr(X), _ptr(R), _ptr(xp_end), _ptr(xc_end),
-            ctypes.byref(fail), ctypes.byref(t_event), _ptr(env))
-        return X, R, xp_end, xc_end, (_failure(status, fail.value, t_event.value, env)
-                                      if status else None)
+        n_rows, t_stop = ctypes.c_long(0), ctypes.c_double(np.nan)
+        status = self._sampled(
+            _ptr(xp0), _ptr(xc0), _ptr(_clock_table(clocks)), float(out.T), _ptr(W),
+            int(substeps), int(delay), _ptr(uh0), _ptr(pp), _ptr(pc), float(guard_min),
+            _ptr(bound), _ptr(X), _ptr(R), _ptr(times), _ptr(w_index, _LONG), rows,
+            ctypes.byref(n_rows), _ptr(xp_end), _ptr(xc_end), ctypes.byref(t_stop), _ptr(env))
+        n = n_rows.value
+        return Run(status, X[:n], R[:n], times[:n], w_index[:n], np.concatenate([xp_end, xc_end]),
+                   t_stop.value, env if status == SIM_ENVELOPE else None)
 
     def outputs(self, X, W, T, p) -> np.ndarray:
         """Output signals at each row of ``X`` (with ``W``'s rows, at times ``T``), ``(n, ny)``."""
@@ -205,8 +218,8 @@ class CompiledLoop:
 class VMLoop:
     """The drivers of :class:`CompiledLoop` on CasADi's virtual machine.
 
-    The same algorithm, step for step (``symbolic/templates/simulator.c.jinja``):
-    used where no C compiler is found.
+    The same algorithm, step for step (``quadland_loop.h``, mirrored by
+    :mod:`quadland.engine.loop`): used where no C compiler is found.
     """
 
     #: Samples per call of the mapped output function.
@@ -226,82 +239,95 @@ class VMLoop:
         s = np.asarray(self.model.envelope(x, uh), dtype=float).ravel()
         return None if np.all(s <= bound) else s
 
-    def integrate(self, x0, W, G, rec, substeps: int, p, n_rows: int, bound=None):
+    def integrate(self, x0, clocks, W, substeps: int, p, bound=None) -> Run:
         """As :meth:`CompiledLoop.integrate`."""
-        X = np.zeros((n_rows, self.model.state.size))
-        X[0] = x = np.asarray(x0, dtype=float)
-        bound = _bounds(self.model, bound)
-        for j in range(len(G) - 1):
-            h = (G[j + 1] - G[j]) / substeps
-            for s in range(int(substeps)):
-                x = self._rhs(x, W[j], G[j] + s * h, p, h)
-            x = np.asarray(x, dtype=float).ravel()
-            if not np.all(np.isfinite(x)):
-                return X, x, Failure(SIM_NONFINITE, j)
+        m = self.model
+        bound = _bounds(m, bound)
+        grid, (out, dist) = merged_grid(clocks)
+        x = np.asarray(x0, dtype=float)
+        X, times, w_index = [], [], []
+        i_w, status, t_stop, env = 0, SIM_OK, np.nan, None
+        for j, t in enumerate(grid):
+            if dist[j] >= 0:
+                i_w = dist[j]
             env = self._outside(x, self._no_input, bound)
             if env is not None:
-                return X, x, Failure(SIM_ENVELOPE, j, envelope=env)
-            if rec[j] >= 0:
-                X[rec[j]] = x
-        return X, x, None
+                status, t_stop = SIM_ENVELOPE, t
+                break
+            if out[j] >= 0:
+                X.append(x)
+                times.append(clocks[0].times()[out[j]])
+                w_index.append(i_w)
+            if j + 1 == len(grid):
+                break
+            w = W[i_w]
+            x = rk4_span(lambda xx, tt, h, w=w: self._rhs(xx, w, tt, p, h), x, t,
+                         grid[j + 1] - t, substeps)
+            if not np.all(np.isfinite(x)):
+                status, t_stop = SIM_NONFINITE, grid[j + 1]
+                break
+        return _run(m, status, X, None, times, w_index, x, t_stop, env)
 
-    def _span(self, xp, uh, w, pp, t_start, span, substeps):
-        h = span / substeps
-        for s in range(int(substeps)):
-            xp = self._plant(xp, uh, w, t_start + s * h, pp, h)
-        return np.asarray(xp, dtype=float).ravel()
-
-    def _event(self, xp, t, pp) -> float:
-        return float(self.model.event(xp, t, pp))
-
-    def sampled(self, xp0, xc0, W, G, ctrl, rec, substeps: int, pp, pc, guard_min: float,
-                n_rows: int, bound=None):
+    def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
+                bound=None, delay: int = 0, uh0=None) -> Run:
         """As :meth:`CompiledLoop.sampled`."""
         m = self.model
         bound = _bounds(m, bound)
-        X = np.zeros((n_rows, m.state.size))
-        R = np.zeros((n_rows, m.recorded.size))
+        grid, (out, dist, ctrl) = merged_grid(clocks)
         xp, xc = np.asarray(xp0, dtype=float), np.asarray(xc0, dtype=float)
-        uh, rv, first = np.zeros(m.held.size), np.zeros(m.recorded.size), 1.0
-        n = len(G) - 1
-        g_start = self._event(xp, G[0], pp) if m.event is not None else None
-        for j in range(n + 1):
-            if j < n and ctrl[j]:
+        uh = np.zeros(m.held.size) if uh0 is None else np.asarray(uh0, dtype=float)
+        rv, first, queue = np.zeros(m.recorded.size), 1.0, []
+        X, R, times, w_index = [], [], [], []
+        i_w, status, t_stop, env = 0, SIM_OK, np.nan, None
+        event = None if m.event is None else (lambda x, t: float(m.event(x, t, pp)))
+        g_start = event(xp, grid[0]) if event is not None else None
+        for j, t in enumerate(grid):
+            if dist[j] >= 0:
+                i_w = dist[j]
+            if ctrl[j] >= 0:
                 xc_n, uh_n, rv_n, guard = (np.asarray(v, dtype=float).ravel() for v in
-                                           m.controller(xp, xc, pc, first, G[j]))
+                                           m.controller(xp, xc, pc, first, t))
                 if not abs(guard[0]) >= guard_min:
-                    return X, R, xp, xc, Failure(SIM_GUARD, j)
+                    status, t_stop = SIM_GUARD, t
+                    break
                 if not (np.all(np.isfinite(xc_n)) and np.all(np.isfinite(uh_n))
                         and np.all(np.isfinite(rv_n))):
-                    return X, R, xp, xc, Failure(SIM_NONFINITE, j)
-                xc, uh, rv, first = xc_n, uh_n, rv_n, 0.0
+                    status, t_stop = SIM_NONFINITE, t
+                    break
+                xc, rv, first = xc_n, rv_n, 0.0
+                queue.append(uh_n)
+                if len(queue) > delay:
+                    uh = queue.pop(0)
             x = np.asarray(m.assemble(xp, xc), dtype=float).ravel()
             env = self._outside(x, uh, bound)
             if env is not None:
-                return X, R, xp, xc, Failure(SIM_ENVELOPE, j, envelope=env)
-            if rec[j] >= 0:
-                X[rec[j]] = x
-                R[rec[j]] = rv
-            if j == n:
+                status, t_stop = SIM_ENVELOPE, t
                 break
-            start, span = xp, G[j + 1] - G[j]
-            xp = self._span(start, uh, W[j], pp, G[j], span, substeps)
+            if out[j] >= 0:
+                X.append(x)
+                R.append(rv)
+                times.append(clocks[0].times()[out[j]])
+                w_index.append(i_w)
+            if j + 1 == len(grid):
+                break
+            w, span = W[i_w], grid[j + 1] - t
+
+            def step(xx, tt, h, uh=uh, w=w):
+                return self._plant(xx, uh, w, tt, pp, h)
+
+            start = xp
+            xp = rk4_span(step, start, t, span, substeps)
             if not np.all(np.isfinite(xp)):
-                return X, R, xp, xc, Failure(SIM_NONFINITE, j)
-            if g_start is not None:
-                g_end = self._event(xp, G[j + 1], pp)
+                status, t_stop = SIM_NONFINITE, grid[j + 1]
+                break
+            if event is not None:
+                g_end = event(xp, grid[j + 1])
                 if g_start > 0 and not g_end > 0:
-                    lo, hi = 0.0, span
-                    while hi - lo > 1e-12 * span:
-                        mid = (lo + hi) / 2
-                        trial = self._span(start, uh, W[j], pp, G[j], mid, substeps)
-                        if self._event(trial, G[j] + mid, pp) > 0:
-                            lo = mid
-                        else:
-                            hi, xp = mid, trial
-                    return X, R, xp, xc, Failure(SIM_EVENT, j, G[j] + hi)
+                    offset, xp = locate_event(step, event, start, xp, t, span, substeps)
+                    status, t_stop = SIM_EVENT, t + offset
+                    break
                 g_start = g_end
-        return X, R, xp, xc, None
+        return _run(m, status, X, R, times, w_index, np.concatenate([xp, xc]), t_stop, env)
 
     def outputs(self, X, W, T, p) -> np.ndarray:
         """As :meth:`CompiledLoop.outputs`, in chunks with ``p`` shared, not repeated."""
@@ -317,6 +343,13 @@ class VMLoop:
         return Y
 
 
+def _run(m: LoopModel, status, X, R, times, w_index, x_end, t_stop, env) -> Run:
+    X = np.array(X, dtype=float).reshape(-1, m.state.size)
+    R = None if R is None else np.array(R, dtype=float).reshape(-1, m.recorded.size)
+    return Run(status, X, R, np.array(times, dtype=float), np.array(w_index, dtype=np.int_),
+               np.asarray(x_end, dtype=float), t_stop, env if status == SIM_ENVELOPE else None)
+
+
 def _bounds(model: LoopModel, bound) -> np.ndarray:
     """The envelope's bounds as the drivers take them (none without an envelope)."""
     if model.envelope is None:
@@ -326,10 +359,6 @@ def _bounds(model: LoopModel, bound) -> np.ndarray:
         raise ValueError(f"bound: expected {model.envelope_layout.size} envelope bounds, "
                          f"got shape {bound.shape}")
     return bound
-
-
-def _failure(status: int, index: int, time: float, env: np.ndarray) -> Failure:
-    return Failure(status, index, time, env if status == SIM_ENVELOPE else None)
 
 
 @functools.lru_cache(maxsize=16)

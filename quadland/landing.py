@@ -22,8 +22,16 @@ import dataclasses
 import casadi as ca
 import numpy as np
 
-from quadland.compiled import SIM_CONTROLLER, SIM_ENVELOPE, SIM_EVENT, SIM_GUARD, compiled_loop
+from quadland.compiled import (
+    SIM_CONTROLLER,
+    SIM_ENVELOPE,
+    SIM_EVENT,
+    SIM_GUARD,
+    SIM_OK,
+    compiled_loop,
+)
 from quadland.constants import TILT_MIN
+from quadland.engine.loop import Clock, grid_tolerance
 from quadland.envelope import ENVELOPE_FACTOR, Envelope
 from quadland.exceptions import SimulationError
 from quadland.model import disturbance_samples
@@ -31,15 +39,10 @@ from quadland.scenario import Scenario, require_model
 from quadland.simulate import (
     LOOP_DIVERGED,
     SimulationResult,
-    _arange,
-    _grid_index,
-    _held,
     check_plan,
     longest_rk4_step,
     rk4_hint,
-    rows_recorded,
     slow_control_hint,
-    time_grid,
 )
 from quadland.wind import OneCosineGust, dryden_low_altitude, gust_samples, turbulence_samples
 from symbolic.guidance import APPROACH, LANDED, TOUCHDOWN
@@ -69,6 +72,7 @@ from symbolic.vehicle import STATE as VEHICLE_STATE
 from symbolic.vehicle import vehicle_function
 
 __all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "landing_envelope",
+           "landing_clocks",
            "wind_samples", "landing_disturbance", "simulate_landing"]
 
 #: The columns of a landing run's trajectory.csv (docs/landing.md), from the loop's layouts.
@@ -243,6 +247,16 @@ def _landing_hint(scenario: Scenario, lv: LandingValues, xp_last) -> str:
         or LOOP_DIVERGED
 
 
+def landing_clocks(scenario: Scenario) -> tuple[Clock, Clock, Clock]:
+    """The clocks of a landing: output rows, disturbance samples (both closing at the
+    final time) and control steps."""
+    sim = scenario.data["simulation"]
+    T = sim["duration"]
+    return (Clock(sim["output_rate_hz"], 0.0, T, True),
+            Clock(scenario.data["disturbance"]["sample_rate_hz"], 0.0, T, True),
+            Clock(scenario.data["controller"]["rate_hz"], 0.0, T, False))
+
+
 def wind_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
     """Wind velocity in E at ``times`` (the disturbance's sample times), ``(3, n)``, m/s.
 
@@ -301,28 +315,22 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     check_plan(scenario)
     lv = landing_values(scenario)
     envelope = landing_envelope(scenario)
-    sim, rate = scenario.data["simulation"], scenario.data["controller"]["rate_hz"]
-    T = sim["duration"]
-    t_out, t_dist, _ = time_grid(scenario)
+    sim = scenario.data["simulation"]
+    clocks = landing_clocks(scenario)
+    t_out, t_dist = clocks[0].times(), clocks[1].times()
     w_dist = landing_disturbance(scenario, t_dist)
-    t_ctrl = _arange(T, 1.0 / rate)[:-1]
-    grid = np.unique(np.round(np.concatenate([t_out, t_dist, t_ctrl]), 12))
-    ctrl = _grid_index(grid[:-1], t_ctrl) >= 0
-    rec = _grid_index(grid, t_out)
     flight = scenario.data["controller"]["backend"] == "c"
     loop = compiled_loop(lv.l, "sampled_flight" if flight else "sampled", "landing")
-    X, R, xp_end, xc_end, failure = loop.sampled(
-        lv.xp0, lv.xc0, _held(t_dist, w_dist, grid[:-1]).T, grid, ctrl, rec,
-        sim["rk_steps_per_interval"], lv.pp, lv.pc, TILT_MIN, len(t_out), envelope.bounds)
-    done = len(t_out) if failure is None else rows_recorded(rec, failure)
-    times, X, R = t_out[:done], X[:done], R[:done]
-    Y = loop.outputs(X, _held(t_dist, w_dist, times).T, times, lv.pp)
+    run = loop.sampled(lv.xp0, lv.xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
+                       lv.pc, TILT_MIN, envelope.bounds)
+    done, times, X, R = run.rows, run.times, run.X, run.R
+    Y = loop.outputs(X, w_dist[:, run.w_index].T, times, lv.pp)
     what = None
-    if failure is not None and failure.status == SIM_EVENT:
-        t_td = failure.time
-        x_td = np.concatenate([xp_end, xc_end])
-        y_td = loop.outputs(x_td[None, :], _held(t_dist, w_dist, [t_td]).T, np.array([t_td]),
-                            lv.pp)
+    if run.status == SIM_EVENT:
+        t_td = run.t_stop
+        x_td = run.x_end
+        i_w = int(np.searchsorted(t_dist, t_td - grid_tolerance(clocks), side="right")) - 1
+        y_td = loop.outputs(x_td[None, :], w_dist[:, [i_w]].T, np.array([t_td]), lv.pp)
         R_td = R[-1] if len(R) else np.zeros(RECORDED.size)
         ride = _ride(scenario, lv, t_out, t_td, x_td, y_td[0], R_td)
         times = np.concatenate([times, [t_td], ride[0]])
@@ -330,13 +338,13 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         R = np.vstack([R, R_td, ride[2]])
         Y = np.vstack([Y, y_td, ride[3]])
         Y[done, OUTPUTS.index("phase")] = TOUCHDOWN
-    elif failure is not None:
+    elif run.status != SIM_OK:
         what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
                 SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
-                                "error status"}.get(failure.status, "the state became non-finite")
-        if failure.status == SIM_ENVELOPE:
-            what = envelope.describe(failure.envelope)
-        t_fail = grid[min(failure.index, len(grid) - 1)]
+                                "error status"}.get(run.status, "the state became non-finite")
+        if run.status == SIM_ENVELOPE:
+            what = envelope.describe(run.envelope)
+        t_fail = run.t_stop
     bad = ~np.all(np.isfinite(Y), axis=1)
     if bad.any():
         k = int(np.argmax(bad))

@@ -28,8 +28,9 @@ from collections.abc import Mapping
 import casadi as ca
 import numpy as np
 
-from quadland.compiled import SIM_CONTROLLER, SIM_ENVELOPE, SIM_GUARD, compiled_loop
+from quadland.compiled import SIM_CONTROLLER, SIM_ENVELOPE, SIM_GUARD, SIM_OK, Run, compiled_loop
 from quadland.constants import TILT_MIN
+from quadland.engine.loop import Clock, merged_grid
 from quadland.envelope import ENVELOPE_FACTOR, Envelope, rk4_steps_needed
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.model import disturbance_samples, model_values
@@ -50,8 +51,8 @@ from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
-           "time_grid", "merge_times", "SimulationPlan", "simulation_plan", "check_plan",
-           "paper_envelope", "rows_recorded", "slow_control_hint", "longest_rk4_step",
+           "time_grid", "run_clocks", "SimulationPlan", "simulation_plan", "check_plan",
+           "paper_envelope", "slow_control_hint", "longest_rk4_step",
            "rk4_hint", "LOOP_DIVERGED", "MEMORY_BUDGET", "MAX_RK4_STEPS"]
 
 #: Most memory a simulation may plan for its arrays, bytes.
@@ -236,31 +237,27 @@ def columns_sidecar(layout: Layout = TRAJECTORY) -> dict:
                             layout.element_docs(), strict=True)]}
 
 
+def run_clocks(scenario: Scenario) -> tuple[Clock, ...]:
+    """The clocks of a run: output rows and disturbance samples (both closing: they also
+    tick at the final time), then, for a sampled loop, the control steps (not closing)."""
+    sim, dist = scenario.data["simulation"], scenario.data["disturbance"]
+    T = sim["duration"]
+    clocks = [Clock(sim["output_rate_hz"], 0.0, T, True),
+              Clock(dist["sample_rate_hz"], 0.0, T, True)]
+    if scenario.data["controller"]["rate_hz"] > 0:
+        clocks.append(Clock(scenario.data["controller"]["rate_hz"], 0.0, T, False))
+    return tuple(clocks)
+
+
 def time_grid(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Output times, disturbance sample times and their merged grid.
 
-    Returns ``(t_out, t_dist, t_all)``; every interval of ``t_all`` has a
-    constant disturbance. ``t_dist`` ends with the final time, whose sample
-    is only reported, never integrated.
+    Returns ``(t_out, t_dist, t_all)``; the disturbance is held over each
+    interval of ``t_all`` (:mod:`quadland.engine.loop`'s rule). ``t_dist``
+    ends with the final time, whose sample is only reported, never integrated.
     """
-    sim, dist = scenario.data["simulation"], scenario.data["disturbance"]
-    T = sim["duration"]
-    t_out = _arange(T, 1.0 / sim["output_rate_hz"])
-    t_dist = _arange(T, 1.0 / dist["sample_rate_hz"])
-    t_all = merge_times(t_out, t_dist)
-    return t_out, t_dist, t_all
-
-
-def _arange(T, h):
-    n = int(np.floor(T / h + 1e-9))
-    t = h * np.arange(n + 1)
-    return t if np.isclose(t[-1], T) else np.append(t, T)
-
-
-def _held(t_switch, values, times):
-    """Column of ``values`` in force at each of ``times`` (zero-order hold)."""
-    idx = np.searchsorted(t_switch, np.asarray(times) + 1e-12, side="right") - 1
-    return values[:, np.clip(idx, 0, values.shape[1] - 1)]
+    out, dist = run_clocks(scenario)[:2]
+    return out.times(), dist.times(), merged_grid([out, dist])[0]
 
 
 @functools.lru_cache(maxsize=1)     # keyed by the whole grid: keep only the last one
@@ -375,50 +372,41 @@ def simulate(scenario: Scenario) -> SimulationResult:
     check_plan(scenario)
     mv = model_values(scenario)
     envelope = paper_envelope(scenario, mv)
-    t_out, t_dist, t_all = time_grid(scenario)
-    w_dist = disturbance_samples(scenario, t_dist)
-    w_out = _held(t_dist, w_dist, t_out).T                       # (n_out, nw)
-    failure = None
+    w_dist = disturbance_samples(scenario, run_clocks(scenario)[1].times())
     if scenario.data["controller"]["rate_hz"] > 0:
         flight = scenario.data["controller"]["backend"] == "c"
         loop = compiled_loop(mv.l, "sampled_flight" if flight else "sampled")
-        X, held, failure = _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist, envelope)
+        run, failure = _sampled_run(loop, scenario, mv, w_dist, envelope)
     else:
         loop = compiled_loop(mv.l, "continuous")
-        held = None
         if scenario.data["simulation"]["integrator"] == "rk":
-            X, failure = _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist,
-                                         envelope)
+            run, failure = _continuous_run(loop, scenario, mv, w_dist, envelope)
         else:
-            X, failure = _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist,
-                                            envelope)
-    n = len(X) if failure is None else failure[0]
-    finite = np.all(np.isfinite(X[:n]), axis=1)
-    if not finite.all():
-        n = int(np.argmin(finite))
-        failure = (n, t_out[n], "the state became non-finite")
-    Y = loop.outputs(X[:n], w_out[:n], t_out[:n], mv.p)
+            run, failure = _continuous_cvodes(scenario, mv, w_dist, envelope)
+    X, t_out, w_out = run.X, run.times, w_dist[:, run.w_index].T
+    n = len(X)
+    Y = loop.outputs(X, w_out, t_out, mv.p)
     finite = np.all(np.isfinite(Y), axis=1)
     if not finite.all():
         bad = int(np.argmin(finite))
         name = OUTPUTS.element_names()[int(np.argmin(np.isfinite(Y[bad])))]
-        n, failure = bad, (bad, t_out[bad], f"the output {name} became non-finite")
+        n, failure = bad, (t_out[bad], f"the output {name} became non-finite")
     rotors = np.abs(Y[:n, OUTPUTS.slice("rotor")]).max(axis=1) if n else np.zeros(0)
     bound = _force_bound(scenario, Y[0, OUTPUTS.slice("rotor")]) if n else np.inf
-    if held is None and np.any(rotors > bound):
+    if run.R is None and np.any(rotors > bound):
         bad = int(np.argmax(rotors > bound))
-        n, failure = bad, (bad, t_out[bad], (
+        n, failure = bad, (t_out[bad], (
             f"a rotor force reached {rotors[bad]:.3g} N, beyond its envelope of {bound:.3g} N "
             f"({ENVELOPE_FACTOR:g} x the hover thrust, the rotor limit or the initial command)"))
     result = _result(scenario, mv, t_out[:n], w_out[:n], X[:n], Y[:n],
-                     None if held is None else held[:, :n])
+                     None if run.R is None else run.R[:n].T)
     tilt = np.cos(result["phi1"]) * np.cos(result["theta1"])
     if np.any(np.abs(tilt) < TILT_MIN):
         k = int(np.argmax(np.abs(tilt) < TILT_MIN))
-        failure = (k, t_out[k], f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}")
+        failure = (t_out[k], f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}")
         result = _truncated(result, k)
     if failure is not None:
-        _, t_fail, what = failure
+        t_fail, what = failure
         last = X[len(result["t"]) - 1] if len(result["t"]) else None
         raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
                               f"{_divergence_hint(scenario, mv, last)}", t_fail,
@@ -501,55 +489,28 @@ def longest_rk4_step(scenario: Scenario) -> float:
     return 1.0 / max(clocks) / sim["rk_steps_per_interval"]
 
 
-def merge_times(*clocks: np.ndarray) -> np.ndarray:
-    """The sorted union of clock times, points closer than :data:`_GRID_TOL` of the
-    shortest period merged into one (the earlier), so that no interval of the
-    grid is a sliver of roundoff (which would be a stray RK4 step)."""
-    t = np.sort(np.concatenate(clocks))
-    if t.size < 2:
-        return t
-    tol = _GRID_TOL * _shortest_period(clocks)
-    return t[np.concatenate([[True], np.diff(t) > tol])]
-
-
-def _shortest_period(clocks) -> float:
-    gaps = [float(np.min(np.diff(c))) for c in clocks if len(c) > 1]
-    gaps = [g for g in gaps if g > 0]
-    return min(gaps) if gaps else 1.0
-
-
-#: Grid points closer than this fraction of the shortest clock period are one point.
-_GRID_TOL = 1e-6
-
-
-def _grid_index(grid, times):
-    """For each point of ``grid``, its index in the sorted ``times`` (matched within
-    :data:`_GRID_TOL` of the shortest period), or -1 where it is not one of them."""
-    grid, times = np.asarray(grid, dtype=float), np.asarray(times, dtype=float)
-    if times.size == 0:
-        return np.full(grid.shape, -1, dtype=np.int_)
-    tol = _GRID_TOL * _shortest_period([grid, times])
-    k = np.clip(np.searchsorted(times, grid - tol), 0, len(times) - 1)
-    return np.where(np.abs(times[k] - grid) <= tol, k, -1).astype(np.int_)
-
-
-def _continuous_run(loop, scenario, mv, t_out, t_dist, t_all, w_dist, envelope):
+def _continuous_run(loop, scenario, mv, w_dist, envelope):
     """The continuous loop in one call of ``loop`` (compiled or on the VM): one RK4
     step (times ``rk_steps_per_interval``) per interval of the merged grid, exactly."""
-    W = _held(t_dist, w_dist, t_all[:-1]).T
-    rec = _grid_index(t_all[1:], t_out)
-    X, _, failure = loop.integrate(mv.x0, W, t_all, rec,
-                                   scenario.data["simulation"]["rk_steps_per_interval"], mv.p,
-                                   len(t_out), envelope.bounds)
-    if failure is None:
-        return X, None
-    done = int(np.max(rec[:failure.index], initial=0)) + 1      # rows recorded before it
-    what = envelope.describe(failure.envelope) if failure.status == SIM_ENVELOPE else \
-        "the state became non-finite"
-    return X, (done, t_all[failure.index + 1], what)
+    run = loop.integrate(mv.x0, run_clocks(scenario), w_dist.T,
+                         scenario.data["simulation"]["rk_steps_per_interval"], mv.p,
+                         envelope.bounds)
+    return run, _failure_text(run, envelope)
 
 
-def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist, envelope):
+def _failure_text(run, envelope) -> tuple[float, str] | None:
+    """``(time, what)`` of a run that stopped early, or None."""
+    if run.status == SIM_OK:
+        return None
+    what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
+            SIM_CONTROLLER: "the flight control step (controller.backend = \"c\") returned "
+                            "an error status",
+            SIM_ENVELOPE: "" if run.envelope is None else envelope.describe(run.envelope),
+            }.get(run.status, "the state became non-finite")
+    return run.t_stop, what
+
+
+def _sampled_run(loop, scenario, mv, w_dist, envelope):
     """The sampled-data loop in one call of ``loop`` (compiled or on the VM).
 
     The control step runs at ``rate_hz`` and its wrench is held on the plant
@@ -557,9 +518,6 @@ def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist, envelope):
     which has no previous command, and on from the second.
     """
     rate = scenario.data["controller"]["rate_hz"]
-    T = scenario.data["simulation"]["duration"]
-    t_ctrl = _arange(T, 1.0 / rate)[:-1] if T > 0 else np.zeros(1)
-    grid = merge_times(t_out, t_dist, t_ctrl)
     model = loop.model
     x0 = closed_loop_state(mv.l).unpack(mv.x0)
     xp0 = model.plant_state.pack({n: x0[n] for n in model.plant_state.names()})
@@ -569,65 +527,43 @@ def _sampled_run(loop, scenario, mv, t_out, t_dist, w_dist, envelope):
     pc = model.controller_params.pack(dict(
         p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
         rotor_limits=mv.rotor_limits, hold=mv.hold, dt=1.0 / rate))
-    ctrl = _grid_index(grid[:-1], t_ctrl) >= 0
-    rec = _grid_index(grid, t_out)
-    W = _held(t_dist, w_dist, grid[:-1]).T
-    X, R, _, _, failure = loop.sampled(
-        xp0, xc0, W, grid, ctrl, rec, scenario.data["simulation"]["rk_steps_per_interval"],
-        pp, pc, TILT_MIN, len(t_out), envelope.bounds)
-    if failure is None:
-        return X, R.T, None
-    t = grid[min(failure.index, len(grid) - 1)]
-    done = rows_recorded(rec, failure)
-    what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
-            SIM_CONTROLLER: "the flight control step (controller.backend = \"c\") returned "
-                            "an error status"}.get(failure.status, "the state became non-finite")
-    if failure.status == SIM_ENVELOPE:
-        what = envelope.describe(failure.envelope)
-    return X, R.T, (done, t, what)
+    run = loop.sampled(xp0, xc0, run_clocks(scenario), w_dist.T,
+                       scenario.data["simulation"]["rk_steps_per_interval"], pp, pc, TILT_MIN,
+                       envelope.bounds)
+    return run, _failure_text(run, envelope)
 
 
-def rows_recorded(rec: np.ndarray, failure) -> int:
-    """Rows a sampled run recorded before it stopped at ``failure.index``.
-
-    A grid point's row is written after its controller step and envelope
-    check; a run that stops there (a guard, a controller error, the
-    envelope) has not written it, one stopped while integrating the interval
-    that follows (a non-finite state) has.
-    """
-    stop = failure.index
-    written = stop + 1 if failure.status not in (SIM_GUARD, SIM_CONTROLLER, SIM_ENVELOPE) \
-        else stop
-    return int(np.max(rec[:written], initial=-1)) + 1
-
-
-
-def _continuous_cvodes(scenario, mv, t_out, t_dist, t_all, w_dist, envelope):
+def _continuous_cvodes(scenario, mv, w_dist, envelope):
     """The continuous loop on CasADi's cvodes (the variable-step reference).
 
     The envelope is checked on the rows afterwards (cvodes integrates the whole
     grid in one call): the result ends before the first row outside it.
     """
     plugin = "cvodes"
+    clocks = run_clocks(scenario)
+    t_all, (out, dist) = merged_grid(clocks)
     integ = _continuous_integrator(mv.l, plugin, _cvodes_options(scenario), tuple(t_all))
-    w = _held(t_dist, w_dist, t_all[:-1])
+    w = w_dist[:, np.maximum.accumulate(np.where(dist >= 0, dist, 0))[:-1]]
     try:
-        out = integ(x0=mv.x0, u=w, p=mv.p)
+        sol = integ(x0=mv.x0, u=w, p=mv.p)
     except RuntimeError as exc:
         code = re.search(r'returned "(\w+)"', str(exc))
         raise SimulationError(f"integrator {plugin} failed: "
                               f"{code.group(1) if code else str(exc).splitlines()[-1]}"
                               f"{_divergence_hint(scenario)}") from None
-    X = np.hstack([mv.x0[:, None], np.asarray(out["xf"])])
-    keep = np.flatnonzero(_grid_index(t_all, t_out) >= 0)
+    X = np.hstack([mv.x0[:, None], np.asarray(sol["xf"])])
+    keep = np.flatnonzero(out >= 0)
     X = np.ascontiguousarray(X[:, keep].T)
+    w_index = np.maximum.accumulate(np.where(dist >= 0, dist, 0))[keep]
+    times = clocks[0].times()
     env = envelope_function(mv.l).map(len(X))(X.T, np.zeros((WRENCH.size, len(X))))
     S = np.asarray(env, dtype=float).T
     outside = ~np.all(S <= envelope.bounds, axis=1)
-    if not outside.any():
-        return X, None
-    k = int(np.argmax(outside))
-    return X, (k, t_out[k], envelope.describe(S[k]))
+    n = int(np.argmax(outside)) if outside.any() else len(X)
+    status = SIM_ENVELOPE if outside.any() else SIM_OK
+    run = Run(status, X[:n], None, times[:n], w_index[:n], X[n - 1] if n else mv.x0,
+              times[n] if outside.any() else np.nan, S[n] if outside.any() else None)
+    return run, _failure_text(run, envelope)
 
 
 def _result(scenario, mv, t_out, w_out, X, Y, held):

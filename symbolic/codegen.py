@@ -101,6 +101,7 @@ from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_la
 from symbolic.quadrotor import DISTURBANCE
 from symbolic.quadrotor import STATE as QUAD_STATE
 from symbolic.relative import E1
+from symbolic.simulation import loop_header
 from symbolic.vehicle import MEASUREMENT, vehicle_function
 from symbolic.vehicle import STATE as VEHICLE_STATE
 
@@ -1005,6 +1006,7 @@ def generate_example(defaults: Defaults, landing: LandingDefaults) -> dict[str, 
              for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}
     files.update({f"example/{name}": _render(f"example/{name}.jinja", **land)
                   for name in ("land_scenario.h", "land.c")})
+    files["example/quadland_loop.h"] = loop_header()
     return files
 
 

@@ -57,7 +57,7 @@ from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from symbolic.quadrotor import DISTURBANCE, WRENCH
 
 __all__ = ["rk4_step", "LoopModel", "paper_loop", "controller_state", "controller_params",
-           "PLANT_PARAMS", "RECORDED", "SIMULATOR_PARTS", "simulator_sources"]
+           "PLANT_PARAMS", "RECORDED", "SIMULATOR_PARTS", "simulator_sources", "loop_header"]
 
 
 def rk4_step(f: ca.Function) -> ca.Function:
@@ -253,6 +253,18 @@ SIMULATOR_PARTS = {"continuous": ("continuous", ("rhs", "outputs", "envelope")),
                                                   "envelope"))}
 
 
+def loop_header(precision: str | None = None) -> str:
+    """``quadland_loop.h``: the loop algorithm the simulators and the pure-C examples share.
+
+    Clocks and their merged grid, RK4 over a span, the event's bisection
+    (``symbolic/templates/quadland_loop.h.jinja``); ``quadland.engine.loop``
+    mirrors it in Python.
+    """
+    return _TEMPLATES.get_template("quadland_loop.h.jinja").render(
+        builder="quadland codegen (symbolic/codegen.py)", casadi_version=ca.__version__,
+        precision=precision)
+
+
 def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     """C sources of one part of a compiled simulator of ``model``, by file name.
 
@@ -304,6 +316,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
                  NENV=model.envelope_layout.size if model.envelope is not None else 0)
     headers = [n for n in names if n != "step_args"] + (
         ["controller"] if part == "sampled_flight" else [])
+    files["quadland_loop.h"] = loop_header()
     files[f"{prefix}{part}.c"] = _TEMPLATES.get_template("simulator.c.jinja").render(
         prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
         has_event=driver == "sampled" and model.event is not None,

@@ -124,6 +124,7 @@ def test_no_heap_and_no_casadi_runtime():
         includes = set(re.findall(r"#include [<\"]([^>\"]+)[>\"]", text))
         assert includes <= {"math.h", "stddef.h", "string.h", "stdio.h", "stdlib.h", "time.h",
                             "quadland.h", "quadland_landing.h", "scenario.h", "land_scenario.h",
+                            "quadland_loop.h",
                             *(f"{f.name}.h" for f in FUNCTIONS)}, (src, includes)
 
 

@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 
 import quadland
-from quadland.compiled import SIM_ENVELOPE, SIM_NONFINITE, VMLoop, compiled_loop
+from quadland.compiled import SIM_ENVELOPE, VMLoop, compiled_loop
+from quadland.engine.loop import Clock
 from quadland.envelope import Envelope, rk4_amplification, rk4_steps_needed
 from quadland.exceptions import SimulationError
 from quadland.metrics import touchdown_report
 from quadland.model import model_values
-from quadland.simulate import paper_envelope, rows_recorded
+from quadland.simulate import paper_envelope
 from symbolic.closed_loop import ENVELOPE, envelope_function
 
 STEEP = ["controller.k1=[300.0, 5.0, 10.0, 10.0]", "controller.k2=[200.0, 4.0, 10.0, 10.0]"]
@@ -105,30 +106,20 @@ def test_a_yaw_whole_turns_away_is_the_same_landing(yaw):
     assert turned.offset == pytest.approx(base.offset, abs=1e-6)
 
 
-def test_compiled_and_vm_drivers_stop_at_the_same_interval():
+def test_compiled_and_vm_drivers_stop_at_the_same_point():
     sc = quadland.load_scenario("paper", [*STEEP, "rbf.nodes=4", "simulation.duration=0.2"])
     mv = model_values(sc)
     env = paper_envelope(sc, mv)
-    G = np.arange(21) * 0.01
-    W = np.zeros((20, 6))
-    rec = np.arange(1, 21)
-    out = []
-    for loop in (compiled_loop(4, "continuous"), VMLoop(compiled_loop(4, "continuous").model,
-                                                          "continuous")):
-        X, _, failure = loop.integrate(mv.x0, W, G, rec, 1, mv.p, 21, env.bounds)
-        assert failure is not None and failure.status == SIM_ENVELOPE
-        out.append((failure.index, failure.envelope))
-    assert out[0][0] == out[1][0]
-    np.testing.assert_allclose(out[0][1], out[1][1], rtol=1e-9)
-
-
-def test_rows_recorded_counts_only_rows_written():
-    from quadland.compiled import SIM_GUARD, Failure
-
-    rec = np.array([0, -1, 1, -1, 2, 3])
-    assert rows_recorded(rec, Failure(SIM_ENVELOPE, 4)) == 2      # point 4 never written
-    assert rows_recorded(rec, Failure(SIM_GUARD, 2)) == 1
-    assert rows_recorded(rec, Failure(SIM_NONFINITE, 4)) == 3     # written, then integrated
+    clocks = (Clock(100.0, 0.0, 0.2, True), Clock(100.0, 0.0, 0.2, True))
+    W = np.zeros((21, 6))
+    runs = [loop.integrate(mv.x0, clocks, W, 1, mv.p, env.bounds) for loop in (
+        compiled_loop(4, "continuous"), VMLoop(compiled_loop(4, "continuous").model,
+                                               "continuous"))]
+    for run in runs:
+        assert run.status == SIM_ENVELOPE and run.rows >= 1
+    assert runs[0].t_stop == runs[1].t_stop and runs[0].rows == runs[1].rows
+    np.testing.assert_allclose(runs[0].envelope, runs[1].envelope, rtol=1e-9)
+    np.testing.assert_allclose(runs[0].X, runs[1].X, rtol=1e-12, atol=1e-12)
 
 
 def test_envelope_describes_its_worst_magnitude():

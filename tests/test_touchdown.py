@@ -15,6 +15,7 @@ import pytest
 import scipy.optimize
 
 from quadland.compiled import SIM_EVENT, CompiledLoop, VMLoop
+from quadland.engine.loop import Clock
 from symbolic.landing.deck import DECK_PARAMS, N_DECK
 from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE, landing_plant_function
 from symbolic.landing.quadrotor import ACTUATOR, COMMAND
@@ -87,20 +88,20 @@ def test_free_fall_meets_a_heaving_deck_at_the_closed_form_time(loop_kind):
     x1q = QUAD6_STATE.pack(dict(p1=[3.0, -2.0, Z0], eta1=np.zeros(3), V1=np.zeros(3),
                                 Omega1=np.zeros(3), F=np.zeros(4)))
     xp0 = PLANT_STATE.pack(dict(x1q=x1q, xv=VEHICLE_STATE.zeros()))
-    grid = np.arange(0, 501) * 0.01                     # 10 ms steps up to 5 s
-    n = len(grid) - 1
-    X, _, xp_end, _, failure = loop.sampled(
-        xp0, np.zeros(1), np.zeros((n, DISTURBANCE.size)), grid, np.ones(n, bool),
-        np.arange(n + 1), 1, _params(), np.zeros(1), 1e-3, n + 1)
+    clocks = (Clock(100.0, 0.0, 5.0, True), Clock(100.0, 0.0, 5.0, True),
+              Clock(100.0, 0.0, 5.0, False))                # 10 ms steps up to 5 s
+    run = loop.sampled(xp0, np.zeros(1), clocks, np.zeros((501, DISTURBANCE.size)), 1, _params(),
+                       np.zeros(1), 1e-3)
     t_meet = _meeting_time()
-    assert failure is not None and failure.status == SIM_EVENT
-    assert failure.time == pytest.approx(t_meet, abs=1e-10)
+    assert run.status == SIM_EVENT
+    assert run.t_stop == pytest.approx(t_meet, abs=1e-10)
     # the state at the event: the gear on the deck, falling at g t
-    end = PLANT_STATE.unpack(xp_end)
+    end = PLANT_STATE.unpack(run.x_end[:PLANT_STATE.size])
     z1, w1 = end["x1q"][2], end["x1q"][8]
     assert z1 - GEAR == pytest.approx(H + A * np.sin(W * t_meet + PHI), abs=1e-9)
     assert w1 == pytest.approx(-G * t_meet, rel=1e-12)
     # rows before the event are recorded; the step that holds it is not
-    assert failure.index == int(t_meet / 0.01)
-    recorded = PLANT_STATE.unpack(X[failure.index].copy())
-    assert recorded["x1q"][2] == pytest.approx(Z0 - G * grid[failure.index] ** 2 / 2, abs=1e-12)
+    last = int(t_meet / 0.01)
+    assert run.rows == last + 1 and run.times[-1] == pytest.approx(last * 0.01, abs=1e-12)
+    recorded = PLANT_STATE.unpack(run.X[last].copy())
+    assert recorded["x1q"][2] == pytest.approx(Z0 - G * (last * 0.01) ** 2 / 2, abs=1e-12)

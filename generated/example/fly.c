@@ -17,15 +17,20 @@
  *
  * RATE_HZ > 0: sampled data. ql_control_step runs every 1/RATE_HZ s and its
  * wrench is held on the plant (ql_plant), integrated by one classical RK4
- * step per control period. RATE_HZ = 0: the continuous-time closed loop
- * (ql_closed_loop), one RK4 step per output interval. The disturbance is
- * bias + amplitude sin(frequency t), held over each disturbance sample;
- * the scenario's random part is left out so that runs are reproducible
- * everywhere. The rates must divide each other (see scenario.h).
+ * step per interval of the merged grid of the output, disturbance and control
+ * clocks (quadland_loop.h, as quadland simulate's). RATE_HZ = 0: the
+ * continuous-time closed loop (ql_closed_loop), one RK4 step per interval of
+ * the output and disturbance clocks' grid. The disturbance is bias +
+ * amplitude sin(frequency t), held over each disturbance sample; the
+ * scenario's random part is left out so that runs are reproducible
+ * everywhere.
  *
  * The CSV's columns are named as quadland's trajectory.csv names the same
  * signals (the layouts' element names); n_clipped and status are the
  * example's own. */
+
+#define QLL_REAL ql_real
+#include "quadland_loop.h"
 
 #define NX QL_CLOSED_LOOP_NX
 #define NL (4 * QL_RBF_NODES)
@@ -70,33 +75,28 @@ static void measure(const ql_real *x, const ql_vehicle_params *vehicle, ql_quadr
     yv->r2 = x[15];
 }
 
-static void rk4_plant(ql_real *xp, const ql_real *wrench, const ql_real *w, const ql_real *pq,
-                      const ql_real *pv, ql_real h)
+/* The plant's context: the held wrench and disturbance, the parameters. */
+typedef struct {
+    const ql_real *wrench, *w, *pq, *pv;
+} plant_ctx;
+
+static void plant(void *vctx, const ql_real *xp, double t, ql_real *xp_dot)
 {
-    ql_real k1[QL_PLANT_NX], k2[QL_PLANT_NX], k3[QL_PLANT_NX], k4[QL_PLANT_NX], y[QL_PLANT_NX];
-    int i;
-    ql_plant(xp, wrench, w, pq, pv, k1);
-    for (i = 0; i < QL_PLANT_NX; ++i) y[i] = xp[i] + h / 2 * k1[i];
-    ql_plant(y, wrench, w, pq, pv, k2);
-    for (i = 0; i < QL_PLANT_NX; ++i) y[i] = xp[i] + h / 2 * k2[i];
-    ql_plant(y, wrench, w, pq, pv, k3);
-    for (i = 0; i < QL_PLANT_NX; ++i) y[i] = xp[i] + h * k3[i];
-    ql_plant(y, wrench, w, pq, pv, k4);
-    for (i = 0; i < QL_PLANT_NX; ++i) xp[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    const plant_ctx *c = (const plant_ctx *)vctx;
+    (void)t;
+    ql_plant(xp, c->wrench, c->w, c->pq, c->pv, xp_dot);
 }
 
-static void rk4_closed_loop(ql_real *x, const ql_real *w, const ql_real *p, ql_real h)
+/* The closed loop's context: the held disturbance and the parameters. */
+typedef struct {
+    const ql_real *w, *p;
+} loop_ctx;
+
+static void closed_loop(void *vctx, const ql_real *x, double t, ql_real *x_dot)
 {
-    static ql_real k1[NX], k2[NX], k3[NX], k4[NX], y[NX];
-    int i;
-    ql_closed_loop(x, w, p, k1);
-    for (i = 0; i < NX; ++i) y[i] = x[i] + h / 2 * k1[i];
-    ql_closed_loop(y, w, p, k2);
-    for (i = 0; i < NX; ++i) y[i] = x[i] + h / 2 * k2[i];
-    ql_closed_loop(y, w, p, k3);
-    for (i = 0; i < NX; ++i) y[i] = x[i] + h * k3[i];
-    ql_closed_loop(y, w, p, k4);
-    for (i = 0; i < NX; ++i) x[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    const loop_ctx *c = (const loop_ctx *)vctx;
+    (void)t;
+    ql_closed_loop(x, c->w, c->p, x_dot);
 }
 
 static void write_header(void)
@@ -162,16 +162,13 @@ static void write_row(double t, const ql_real *x, const ql_vehicle_params *vehic
     printf("\n");
 }
 
-/* Steps of the grid per period of a rate; 0 when it does not divide. */
-static long steps_per(double grid_hz, double rate_hz)
-{
-    long n = lround(grid_hz / rate_hz);
-    return (n > 0 && fabs((double)n * rate_hz - grid_hz) < 1e-9 * grid_hz) ? n : 0;
-}
+/* The clocks of the run: output rows and disturbance samples close at the
+ * duration, control steps (sampled data only) do not. */
+enum { CLK_OUT, CLK_DIST, CLK_CTRL, N_CLOCKS };
 
 int main(int argc, char **argv)
 {
-    static ql_real x[NX], p[QL_CLOSED_LOOP_NP];
+    static ql_real x[NX], p[QL_CLOSED_LOOP_NP], work[5 * NX];
     ql_real xp[QL_PLANT_NX], pq[QL_P_QUAD_SIZE], pv[QL_P_VEH_SIZE], w[QL_CLOSED_LOOP_NW];
     ql_real wrench[4] = {0, 0, 0, 0};
     static ql_params params;
@@ -181,19 +178,17 @@ int main(int argc, char **argv)
     ql_quadrotor_state xq;
     ql_vehicle_state yv;
     ql_output out;
+    qll_clock clocks[N_CLOCKS];
+    plant_ctx pctx;
+    loop_ctx lctx;
     double rate = argc > 1 ? atof(argv[1]) : QL_EXAMPLE_CONTROL_RATE_HZ;
     double duration = argc > 2 ? atof(argv[2]) : QL_EXAMPLE_DURATION;
-    double grid_hz = rate > 0 ? rate : fmax(QL_EXAMPLE_OUTPUT_RATE_HZ,
-                                            QL_EXAMPLE_DISTURBANCE_RATE_HZ);
-    long n_out = steps_per(grid_hz, QL_EXAMPLE_OUTPUT_RATE_HZ);
-    long n_dist = steps_per(grid_hz, QL_EXAMPLE_DISTURBANCE_RATE_HZ);
-    long k, n_steps = lround(duration * grid_hz);
-    ql_real h = (ql_real)(1.0 / grid_hz);
-    int i, status = QL_OK;
+    double t = 0, t_next, tol;
+    int i, n_clocks = rate > 0 ? N_CLOCKS : CLK_CTRL, status = QL_OK;
+    long tick;
 
-    if (rate < 0 || duration < 0 || n_out == 0 || n_dist == 0) {
-        fprintf(stderr, "fly: RATE_HZ must be 0 or a multiple of %g Hz and %g Hz\n",
-                QL_EXAMPLE_OUTPUT_RATE_HZ, QL_EXAMPLE_DISTURBANCE_RATE_HZ);
+    if (!(rate >= 0 && rate <= 1e5) || !(duration > 0 && duration <= 1e5)) {
+        fprintf(stderr, "fly: RATE_HZ must be in [0, 1e5] and DURATION_S in (0, 1e5]\n");
         return 2;
     }
     ql_params_init(&params);
@@ -206,14 +201,25 @@ int main(int argc, char **argv)
     for (i = 0; i < NX; ++i) x[i] = (ql_real)ql_example_x0[i];
     plant_from_closed_loop(x, xp);
     memset(&out, 0, sizeof out);
+    qll_clock_init(&clocks[CLK_OUT], QL_EXAMPLE_OUTPUT_RATE_HZ, 0, duration, 1);
+    qll_clock_init(&clocks[CLK_DIST], QL_EXAMPLE_DISTURBANCE_RATE_HZ, 0, duration, 1);
+    if (rate > 0) qll_clock_init(&clocks[CLK_CTRL], rate, 0, duration, 0);
+    tol = qll_grid_tolerance(clocks, n_clocks);
+    pctx.wrench = wrench;
+    pctx.w = lctx.w = w;
+    pctx.pq = pq;
+    pctx.pv = pv;
+    lctx.p = p;
     write_header();
-    for (k = 0; k <= n_steps; ++k) {
-        double t = (double)k / grid_hz;
-        if (k % n_dist == 0) disturbance((double)(k / n_dist) / QL_EXAMPLE_DISTURBANCE_RATE_HZ, w);
+    for (;;) {
+        if (qll_tick(&clocks[CLK_DIST], t, tol, &tick)) {
+            disturbance(qll_clock_time(&clocks[CLK_DIST], tick), w);
+        }
         if (rate > 0) {
-            if (k < n_steps) {
+            if (qll_tick(&clocks[CLK_CTRL], t, tol, &tick)) {
                 measure(x, &vehicle, &xq, &yv);
-                status = ql_control_step(&xq, &yv, &ref, &params, h, &state, &out);
+                status = ql_control_step(&xq, &yv, &ref, &params, (ql_real)(1.0 / rate), &state,
+                                         &out);
                 if (status != QL_OK) {
                     fprintf(stderr, "fly: t = %g s: %s\n", t, ql_status_string(status));
                     return 1;
@@ -228,16 +234,20 @@ int main(int argc, char **argv)
             memcpy(probe.zeta_hat, x + 416, sizeof probe.zeta_hat);
             probe.has_prev = 0;
             measure(x, &vehicle, &xq, &yv);
-            status = ql_control_step(&xq, &yv, &ref, &params, h, &probe, &out);
+            status = ql_control_step(&xq, &yv, &ref, &params, (ql_real)0.01, &probe, &out);
         }
-        if (k % n_out == 0) write_row(t, x, &vehicle, &out, status);
-        if (k == n_steps) break;
+        if (qll_tick(&clocks[CLK_OUT], t, tol, &tick)) {
+            write_row(qll_clock_time(&clocks[CLK_OUT], tick), x, &vehicle, &out, status);
+        }
+        t_next = qll_grid_next(clocks, n_clocks);
+        if (isinf(t_next)) break;
         if (rate > 0) {
-            rk4_plant(xp, wrench, w, pq, pv, h);
+            qll_rk4_span(plant, &pctx, xp, QL_PLANT_NX, t, t_next - t, 1, work);
             closed_loop_from_plant(xp, x);
         } else {
-            rk4_closed_loop(x, w, p, h);
+            qll_rk4_span(closed_loop, &lctx, x, NX, t, t_next - t, 1, work);
         }
+        t = t_next;
     }
     return 0;
 }

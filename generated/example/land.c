@@ -35,46 +35,17 @@
  * object with the keys of summary.json's "landing". Exit status 0 when the
  * flight ran (landed or not), 1 when the flight code returned an error. */
 
+#define QLL_REAL ql_real
+#include "quadland_loop.h"
+
 #define NXP QL_LANDING_PLANT_NX
 #define NXV QL_LANDING_VEHICLE_NX
 #define NY QL_LANDING_NY
 #define NG 4
 
-/* One clock of the time grid: h k (h = 1 / rate) for k = 0..n, and the
- * duration when it is not one of them (quadland.simulate._arange); the
- * control clock leaves the duration out. */
-typedef struct {
-    double h, T;
-    long n, count, k;
-} grid_clock;
-
-static void clock_init(grid_clock *c, double rate, double T, int drop_last)
-{
-    double last;
-    c->h = 1.0 / rate;
-    c->T = T;
-    c->n = (long)floor(T / c->h + 1e-9);
-    last = c->h * (double)c->n;
-    c->count = c->n + 1 + (fabs(last - T) <= 1e-8 + 1e-5 * fabs(T) ? 0 : 1) - drop_last;
-    c->k = 0;
-}
-
-static double clock_time(const grid_clock *c, long k)
-{
-    return k <= c->n ? c->h * (double)k : c->T;
-}
-
-/* Grid times are rounded to 1e-12 s, as numpy.round(t, 12). */
-static double rounded(double t)
-{
-    return rint(t * 1e12) / 1e12;
-}
-
-/* The next time of the clock, or infinity when it has none left. */
-static double clock_next(const grid_clock *c)
-{
-    return c->k < c->count ? rounded(clock_time(c, c->k)) : INFINITY;
-}
+/* The clocks of the run (quadland.landing.landing_clocks): output rows and
+ * disturbance samples close at the duration, control steps do not. */
+enum { CLK_OUT, CLK_DIST, CLK_CTRL, N_CLOCKS };
 
 /* The held disturbance w = [v_wind (E), d_F, d_M (body)] of the sample at t. */
 static void disturbance(double t, ql_real *w)
@@ -93,50 +64,31 @@ static void disturbance(double t, ql_real *w)
     }
 }
 
-static ql_real gap(const ql_real *xp, double t, const ql_real *pp)
+/* The plant's context: the held commands and disturbance, the parameters. */
+typedef struct {
+    const ql_real *F_cmd, *w, *pp;
+} plant_ctx;
+
+static void plant(void *vctx, const ql_real *xp, double t, ql_real *xp_dot)
 {
+    const plant_ctx *c = (const plant_ctx *)vctx;
+    ql_real tt = (ql_real)t;
+    ql_landing_loop_plant(xp, c->F_cmd, c->w, &tt, c->pp, xp_dot);
+}
+
+static ql_real gap(void *vctx, const ql_real *xp, double t)
+{
+    const plant_ctx *c = (const plant_ctx *)vctx;
     ql_real g, tt = (ql_real)t;
-    ql_landing_gear_gap(xp, &tt, pp, &g);
+    ql_landing_gear_gap(xp, &tt, c->pp, &g);
     return g;
 }
 
-/* The plant from xp over span from t0, QL_LAND_RK_STEPS classical RK4 steps,
- * the commands F_cmd and the disturbance w held. */
-static void plant_span(ql_real *xp, const ql_real *F_cmd, const ql_real *w, const ql_real *pp,
-                       double t0, double span)
+/* The vehicle alone (the ride on the deck); the context is its parameters. */
+static void vehicle(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
 {
-    ql_real k1[NXP], k2[NXP], k3[NXP], k4[NXP], y[NXP], t;
-    ql_real h = (ql_real)(span / QL_LAND_RK_STEPS);
-    int s, i;
-    for (s = 0; s < QL_LAND_RK_STEPS; ++s) {
-        ql_real ts = (ql_real)t0 + (ql_real)s * h;
-        t = ts;
-        ql_landing_loop_plant(xp, F_cmd, w, &t, pp, k1);
-        for (i = 0; i < NXP; ++i) y[i] = xp[i] + h / 2 * k1[i];
-        t = ts + h / 2;
-        ql_landing_loop_plant(y, F_cmd, w, &t, pp, k2);
-        for (i = 0; i < NXP; ++i) y[i] = xp[i] + h / 2 * k2[i];
-        ql_landing_loop_plant(y, F_cmd, w, &t, pp, k3);
-        for (i = 0; i < NXP; ++i) y[i] = xp[i] + h * k3[i];
-        t = ts + h;
-        ql_landing_loop_plant(y, F_cmd, w, &t, pp, k4);
-        for (i = 0; i < NXP; ++i) xp[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-    }
-}
-
-/* The vehicle alone over h, one classical RK4 step (the ride on the deck). */
-static void vehicle_step(ql_real *xv, const ql_real *p_veh, ql_real h)
-{
-    ql_real k1[NXV], k2[NXV], k3[NXV], k4[NXV], y[NXV];
-    int i;
-    ql_vehicle(xv, p_veh, k1);
-    for (i = 0; i < NXV; ++i) y[i] = xv[i] + h / 2 * k1[i];
-    ql_vehicle(y, p_veh, k2);
-    for (i = 0; i < NXV; ++i) y[i] = xv[i] + h / 2 * k2[i];
-    ql_vehicle(y, p_veh, k3);
-    for (i = 0; i < NXV; ++i) y[i] = xv[i] + h * k3[i];
-    ql_vehicle(y, p_veh, k4);
-    for (i = 0; i < NXV; ++i) xv[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    (void)t;
+    ql_vehicle(xv, (const ql_real *)vctx, xv_dot);
 }
 
 /* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts]. */
@@ -273,11 +225,14 @@ int main(void)
     ql_landing_measurement y;
     ql_position_reference ref;
     ql_landing_output out;
-    ql_real xp[NXP], xp_start[NXP], trial[NXP], pp[QL_LANDING_PLANT_NP], w[QL_LANDING_NW];
-    ql_real sig[NY], F_cmd[4] = {0, 0, 0, 0}, anchor[QL_LANDING_ANCHOR_SIZE];
-    ql_real figures[QL_TOUCHDOWN_FIGURES], tt;
-    grid_clock out_clock, dist_clock, ctrl_clock;
-    double t, t_next, t_td = 0, t_w_td = 0, dt = 1.0 / QL_LAND_CONTROL_RATE_HZ, g_start, g_end;
+    ql_real xp[NXP], xp_start[NXP], trial[NXP], work[5 * NXP], pp[QL_LANDING_PLANT_NP];
+    ql_real w[QL_LANDING_NW], sig[NY], F_cmd[4] = {0, 0, 0, 0};
+    ql_real anchor[QL_LANDING_ANCHOR_SIZE], figures[QL_TOUCHDOWN_FIGURES], tt;
+    qll_clock clocks[N_CLOCKS];
+    plant_ctx ctx;
+    double t = 0, t_next, t_td = 0, t_w = 0, dt = 1.0 / QL_LAND_CONTROL_RATE_HZ, tol, g_start,
+        g_end;
+    long tick;
     int i, touchdown = 0;
     ql_status status;
 
@@ -289,21 +244,23 @@ int main(void)
     tt = 0;
     ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
     ql_landing_state_init(&state, &y);       /* the command filter at the initial attitude */
-    clock_init(&out_clock, QL_LAND_OUTPUT_RATE_HZ, QL_LAND_DURATION, 0);
-    clock_init(&dist_clock, QL_LAND_DISTURBANCE_RATE_HZ, QL_LAND_DURATION, 0);
-    clock_init(&ctrl_clock, QL_LAND_CONTROL_RATE_HZ, QL_LAND_DURATION, 1);
+    qll_clock_init(&clocks[CLK_OUT], QL_LAND_OUTPUT_RATE_HZ, 0, QL_LAND_DURATION, 1);
+    qll_clock_init(&clocks[CLK_DIST], QL_LAND_DISTURBANCE_RATE_HZ, 0, QL_LAND_DURATION, 1);
+    qll_clock_init(&clocks[CLK_CTRL], QL_LAND_CONTROL_RATE_HZ, 0, QL_LAND_DURATION, 0);
+    tol = qll_grid_tolerance(clocks, N_CLOCKS);
+    ctx.F_cmd = F_cmd;
+    ctx.w = w;
+    ctx.pp = pp;
     write_header();
 
-    t = 0;
-    g_start = (double)gap(xp, t, pp);
+    g_start = (double)gap(&ctx, xp, t);
     for (;;) {
         /* this grid point's clocks: the disturbance sample, a control step, a row */
-        int is_ctrl = clock_next(&ctrl_clock) == t, is_out = clock_next(&out_clock) == t;
-        double t_w;
-        if (clock_next(&dist_clock) == t) ++dist_clock.k;
-        t_w = clock_time(&dist_clock, dist_clock.k - 1);
-        if (is_ctrl) {
-            ++ctrl_clock.k;
+        if (qll_tick(&clocks[CLK_DIST], t, tol, &tick)) {
+            t_w = qll_clock_time(&clocks[CLK_DIST], tick);
+            disturbance(t_w, w);
+        }
+        if (qll_tick(&clocks[CLK_CTRL], t, tol, &tick)) {
             tt = (ql_real)t;
             ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
             status = ql_guidance_step(&y, &guidance, (ql_real)dt, &gs, &ref);
@@ -312,35 +269,19 @@ int main(void)
             if (status != QL_OK) return failed(t, "ql_landing_step", status);
             memcpy(F_cmd, out.F_cmd, sizeof F_cmd);
         }
-        if (is_out) {
-            double t_row = clock_time(&out_clock, out_clock.k++);
+        if (qll_tick(&clocks[CLK_OUT], t, tol, &tick)) {
+            double t_row = qll_clock_time(&clocks[CLK_OUT], tick);
             signals(xp, &gs, t_row, t_w, pp, sig);
             write_row(t_row, sig);
         }
-        t_next = fmin(fmin(clock_next(&out_clock), clock_next(&dist_clock)),
-                      clock_next(&ctrl_clock));
+        t_next = qll_grid_next(clocks, N_CLOCKS);
         if (isinf(t_next)) break;
         memcpy(xp_start, xp, sizeof xp);
-        disturbance(t_w, w);
-        plant_span(xp, F_cmd, w, pp, t, t_next - t);
-        g_end = (double)gap(xp, t_next, pp);
+        qll_rk4_span(plant, &ctx, xp, NXP, t, t_next - t, QL_LAND_RK_STEPS, work);
+        g_end = (double)gap(&ctx, xp, t_next);
         if (g_start > 0 && !(g_end > 0)) {
-            /* bisection on the RK4 solution from the interval's start */
-            double lo = 0, hi = t_next - t, span = hi;
-            int it;
-            for (it = 0; it < 200 && hi - lo > 1e-12 * span; ++it) {
-                double mid = (lo + hi) / 2;
-                memcpy(trial, xp_start, sizeof trial);
-                plant_span(trial, F_cmd, w, pp, t, mid);
-                if (gap(trial, t + mid, pp) > 0) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                    memcpy(xp, trial, sizeof xp);
-                }
-            }
-            t_td = t + hi;
-            t_w_td = t_w;
+            t_td = t + qll_locate(plant, gap, &ctx, xp_start, xp, NXP, t, t_next - t,
+                                  QL_LAND_RK_STEPS, trial, work);
             touchdown = 1;
             break;
         }
@@ -361,7 +302,7 @@ int main(void)
         fprintf(stderr, "land: t = %g s: the guidance did not detect the contact (%s)\n", t_td,
                 ql_phase_name(gs.phase));
     }
-    signals(xp, &gs, t_td, t_w_td, pp, sig);
+    signals(xp, &gs, t_td, t_w, pp, sig);
     write_row(t_td, sig);
     ql_touchdown_figures(sig + 13, sig + 16, sig + 4, sig + 10,
                          figures);
@@ -377,14 +318,14 @@ int main(void)
         ql_landing_anchor(sig, anchor);
         memcpy(xv, xp + 16, sizeof xv);
         memcpy(F_td, xp + 12, sizeof F_td);
-        while (out_clock.k < out_clock.count && clock_time(&out_clock, out_clock.k) <= t_td + 1e-12) {
-            ++out_clock.k;
+        qll_clock *rows = &clocks[CLK_OUT];
+        while (rows->k < rows->count && qll_clock_time(rows, rows->k) <= t_td + 1e-12) {
+            ++rows->k;
         }
         while (!last) {
-            long m, s;
-            if (out_clock.k < out_clock.count
-                    && clock_time(&out_clock, out_clock.k) < t_end - 1e-12) {
-                tk = clock_time(&out_clock, out_clock.k++);
+            long m;
+            if (rows->k < rows->count && qll_clock_time(rows, rows->k) < t_end - 1e-12) {
+                tk = qll_clock_time(rows, rows->k++);
             } else if (t_end > t_td + 1e-12) {
                 tk = t_end;
                 last = 1;
@@ -393,9 +334,7 @@ int main(void)
             }
             m = (long)ceil((tk - t_prev) / dt - 1e-9);
             if (m < 1) m = 1;
-            for (s = 0; s < m; ++s) {
-                vehicle_step(xv, pp + 16, (ql_real)((tk - t_prev) / (double)m));
-            }
+            qll_rk4_span(vehicle, pp + 16, xv, NXV, t_prev, tk - t_prev, m, work);
             t_prev = tk;
             for (i = 0; i < 4; ++i) F[i] = (ql_real)((double)F_td[i] * exp(-(tk - t_td) / tau_m));
             phase = tk >= t_td + QL_LAND_SETTLE_TIME - 1e-12 ? QL_PHASE_LANDED : QL_PHASE_TOUCHDOWN;
