@@ -1,4 +1,4 @@
-"""The random parts of the landing's sensors: sample times, delivery, noise.
+"""The sensors' random parts: sample times, delivery, noise.
 
 The sensors' truth models are CasADi Functions
 (:mod:`symbolic.landing.sensors`, ``sense_<name>(xp, uh, w, t, pp, p_sens,
@@ -253,7 +253,9 @@ class SensorSamples:
 
 
 def validate_settings(name: str, values: Mapping | None = None) -> dict:
-    """A sensor's settings: ``values`` over :data:`SENSOR_DEFAULTS`, checked.
+    """A sensor's settings over its defaults, checked.
+
+    ``values`` (a ``[sensors.<name>]`` table) over :data:`SENSOR_DEFAULTS`.
 
     Raises
     ------
@@ -287,8 +289,11 @@ def validate_settings(name: str, values: Mapping | None = None) -> dict:
 
 
 def sensor_params(settings: Mapping[str, Mapping] | None = None) -> np.ndarray:
-    """The Functions' ``p_sens`` (:data:`SENSOR_PARAMS`) from the vision and
-    rangefinder settings (defaults for whatever is missing)."""
+    """The Functions' ``p_sens`` from the sensors' settings.
+
+    :data:`SENSOR_PARAMS` from the vision and rangefinder settings
+    (defaults for whatever is missing).
+    """
     settings = settings or {}
     v = validate_settings("vision", settings.get("vision"))
     r = validate_settings("rangefinder", settings.get("rangefinder"))
@@ -319,7 +324,7 @@ def _rng(seed, stream: int, part: int) -> np.random.Generator:
 
 
 def sample_times(rate_hz: float, duration: float, phase: float = 0.0) -> np.ndarray:
-    """``phase + k / rate_hz`` for every ``k >= 0`` within ``[0, duration]``, s.
+    """Sample times ``phase + k / rate_hz`` on ``[0, duration]``, s.
 
     Examples
     --------
@@ -333,7 +338,7 @@ def sample_times(rate_hz: float, duration: float, phase: float = 0.0) -> np.ndar
 
 
 def _decay(dt, tau):
-    """``exp(-dt / tau)`` per column: 1 for ``tau = inf``, 0 for ``tau = 0``."""
+    """``exp(-dt / tau)``: 1 for ``tau = inf``, 0 for ``tau = 0``."""
     tau = np.asarray(tau, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(tau > 0, np.asarray(dt, dtype=float) / np.where(tau > 0, tau, 1.0),
@@ -378,7 +383,9 @@ def gauss_markov(times, sigma, tau, normals) -> np.ndarray:
 
 
 def gauss_markov_fill(known_t, known_x, new_t, sigma, tau, normals) -> np.ndarray:
-    """The same Gauss-Markov process at ``new_t``, given its values at ``known_t``.
+    """A Gauss-Markov process at new times, given known values.
+
+    The same process at ``new_t``, given its values at ``known_t``.
 
     Each new value is drawn from its exact conditional distribution given
     its nearest known neighbours (the process is Markov), the new points
@@ -430,7 +437,9 @@ def gauss_markov_fill(known_t, known_x, new_t, sigma, tau, normals) -> np.ndarra
 
 
 def random_walk(times, start, density, normals) -> np.ndarray:
-    """``b_0 = start``, ``b_(k+1) = b_k + density sqrt(t_(k+1) - t_k) n_(k+1)``.
+    """A random walk at ``times`` from ``start``.
+
+    ``b_0 = start``, ``b_(k+1) = b_k + density sqrt(t_(k+1) - t_k) n_(k+1)``.
 
     ``start`` and ``density`` per column; ``normals`` shape ``(n, m)`` (the
     first row is unused).
@@ -444,7 +453,7 @@ def random_walk(times, start, density, normals) -> np.ndarray:
 
 
 def _same_times(base, t, tol=1e-9):
-    """Index into ``base`` of each ``t`` that coincides with one, else -1."""
+    """Index of each ``t`` in ``base`` where they coincide, else -1."""
     j = np.clip(np.searchsorted(base, t), 0, max(len(base) - 1, 0))
     out = np.full(len(t), -1)
     if len(base) == 0:
@@ -539,7 +548,7 @@ def _noise(name, s, times, seed, stream, attitude, random):
 
 def draw_sensors(settings: Mapping[str, Mapping] | None, duration: float, seed,
                  random: bool = True) -> dict[str, SensorSamples]:
-    """Every sensor's sample times, arrivals, deliveries and noise for a run.
+    """Every sensor's samples, arrivals, deliveries, noise for a run.
 
     Parameters
     ----------

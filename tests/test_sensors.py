@@ -1,4 +1,4 @@
-"""Sensors: truth models against hand derivations, noise against closed forms.
+"""Sensors against hand derivations, noise against closed forms.
 
 The symbolic models (symbolic.landing.sensors) are checked at chosen states
 whose readings are derived by hand (a level hover over a level pad, a
@@ -67,7 +67,7 @@ def R_zyx(eta):
 
 
 def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
-    """Plant parameters: a 2 kg quadrotor, a car, a deck with a constant roll."""
+    """Plant parameters: a 2 kg quadrotor, a car, a rolled deck."""
     zeros = np.zeros(3)
     deck = {f.name: zeros for f in DECK_PARAMS.fields if f.size == 3}
     deck.update(roll_amp=[roll, 0, 0], roll_phase=[math.pi / 2, 0, 0],
