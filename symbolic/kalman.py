@@ -34,6 +34,7 @@ __all__ = [
     "CovariancePattern",
     "nilpotent_discretization",
     "block_nis",
+    "joseph_update",
     "scalar_update",
     "select",
     "is_finite",
@@ -213,17 +214,33 @@ def block_nis(S, nu):
     return sum((yi**2 for yi in y), 0)
 
 
+def joseph_update(P, k, h, r, pattern: CovariancePattern):
+    """Joseph's ``(I - k h^T) P (I - k h^T)^T + r k k^T`` for any gain ``k`` (E9).
+
+    Expanded with ``u = P h``, ``s = h^T u + r``:
+    ``P - k u^T - u k^T + s k k^T``, on the upper triangle of ``pattern``'s
+    entries only (``O(n^2)``), mirrored. Positive semi-definite for every
+    ``k``, the optimal ``u / s`` or not.
+    """
+    u = P @ h
+    s = h.T @ u + r
+    sk = s * k
+    P_next = ca.SX(pattern.n, pattern.n)
+    for i, j in pattern.entries:
+        e = P[i, j] - k[i] * u[j] - u[i] * k[j] + sk[i] * k[j]
+        P_next[i, j] = e
+        if i != j:
+            P_next[j, i] = e
+    return P_next
+
+
 def scalar_update(x, P, h, nu, r, accept, pattern: CovariancePattern):
-    """One scalar measurement in Joseph form, on the stored entries (E9).
+    """One scalar measurement, gated, in Joseph form (E9).
 
-    ``u = P h``, ``c = h^T u``, ``s = c + r``, ``k = u / s``;
-    ``x+ = x + k nu``; ``P+ = P - k u^T - u k^T + s k k^T``, algebraically
-    Joseph's ``(I - k h^T) P (I - k h^T)^T + r k k^T``, computed on the upper
-    triangle of ``pattern`` only (``O(n^2)``) and mirrored.
-
-    Where ``accept`` is 0 the gain is exactly 0 (``1/s`` is selected away, and
-    ``nu`` and ``r`` are replaced by 0 and 1 so that a NaN measurement does
-    not leak), so ``x`` and ``P`` come back unchanged.
+    ``u = P h``, ``s = h^T u + r``, ``k = u / s``; ``x+ = x + k nu`` and
+    ``P+`` by :func:`joseph_update`. Where ``accept`` is 0 the gain is
+    exactly 0 (and ``nu``, ``r`` are replaced by 0 and 1, so that a NaN
+    measurement does not leak): ``x`` and ``P`` come back unchanged.
 
     Parameters
     ----------
@@ -245,19 +262,11 @@ def scalar_update(x, P, h, nu, r, accept, pattern: CovariancePattern):
     nu = select(accept, nu, 0)
     r = select(accept, r, 1)
     u = P @ h
-    c = h.T @ u
-    s = c + r
+    s = h.T @ u + r
     # accept * (1/s), not a selection: CasADi would carry a selection into
     # every product of k (doubling the update's cost); s >= r > 0 is finite
     k = u * (accept * (1 / s))
-    sk = s * k
-    P_next = ca.SX(pattern.n, pattern.n)
-    for i, j in pattern.entries:
-        e = P[i, j] - k[i] * u[j] - u[i] * k[j] + sk[i] * k[j]
-        P_next[i, j] = e
-        if i != j:
-            P_next[j, i] = e
-    return x + k * nu, P_next
+    return x + k * nu, joseph_update(P, k, h, r, pattern)
 
 
 # ---------------------------------------------------------------- FIFO
@@ -266,8 +275,9 @@ def fifo_push_pop(slots, count, record, push, pop_if):
     """Push ``record`` onto a FIFO, then pop its head if ``pop_if(head)``.
 
     The FIFO is the columns of ``slots`` (``rec x depth``), oldest first, of
-    which the first ``count`` are in use. A record pushed onto a full FIFO is
-    dropped. Every slot is written by selection, with no branch.
+    which the first ``count`` are in use. The pushed record may be popped at
+    once; one that finds the FIFO full after the pop is dropped. Every slot is
+    written by selection, with no branch.
 
     Parameters
     ----------
@@ -284,20 +294,20 @@ def fifo_push_pop(slots, count, record, push, pop_if):
     Returns
     -------
     dict
-        ``head`` (the head after the push), ``pop``, ``dropped`` (a push onto
-        a full FIFO), ``slots`` and ``count`` after both.
+        ``head`` (the head after the push), ``pop``, ``dropped``, and
+        ``slots`` and ``count`` after both.
     """
     depth = slots.shape[1]
-    dropped = ca.logic_and(push, count >= depth)
-    write = ca.logic_and(push, count < depth)
-    pushed = ca.horzcat(*[select(ca.logic_and(write, count == i), record, slots[:, i])
-                          for i in range(depth)])
-    count1 = count + write
-    head = pushed[:, 0]
+    # one slot more than stored: the record lands at position ``count``
+    ext = [select(ca.logic_and(push, count == i), record, slots[:, i]) for i in range(depth)]
+    ext.append(record)
+    count1 = count + push
+    head = ext[0]
     pop = pop_if(head, count1 > 0)
-    shifted = ca.horzcat(*[select(pop, pushed[:, i + 1], pushed[:, i])
-                           for i in range(depth - 1)], pushed[:, depth - 1])
-    return dict(head=head, pop=pop, dropped=dropped, slots=shifted, count=count1 - pop)
+    shifted = ca.horzcat(*[select(pop, ext[i + 1], ext[i]) for i in range(depth)])
+    dropped = ca.logic_and(ca.logic_and(push, count >= depth), ca.logic_not(pop))
+    return dict(head=head, pop=pop, dropped=dropped, slots=shifted,
+                count=count1 - pop - dropped)
 
 
 # ---------------------------------------------------------------- cost

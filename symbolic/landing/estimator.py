@@ -98,7 +98,7 @@ def _counters() -> tuple[Field, ...]:
         _counter("n_fused", _BLOCK_NAMES, "blocks fused, per block"),
         _counter("n_rejected", _BLOCK_NAMES, "blocks due but rejected by the gate, per block"),
         _counter("n_discarded", SENSORS, "packets older than the horizon by max_age, per sensor"),
-        _counter("n_dropped", SENSORS, "packets not queued: FIFO full or bad time, per sensor"),
+        _counter("n_dropped", SENSORS, "packets not queued: FIFO full, not finite, future"),
         Field("n_imu_invalid", 1, "-", "periods with a non-finite IMU sample"),
     )
 
@@ -222,7 +222,9 @@ def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
     p = estimator_params().unpack(p_est)
     pk = layout.unpack(pkt)
     t_h = state["t_h"]
-    push_ok = ca.logic_and(is_finite(pk["tau"]), pk["tau"] <= t)
+    push_ok = pk["tau"] <= t
+    for i in range(1, pkt.shape[0]):                   # tau and the values
+        push_ok = ca.logic_and(push_ok, is_finite(pkt[i]))
     fresh = pk["fresh"] > 0.5
 
     def pop_if(head, nonempty):

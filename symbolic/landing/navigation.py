@@ -324,6 +324,9 @@ def _packet(sensor: str) -> Layout:
 def _project_row(h, P, pattern: CovariancePattern, home: int):
     """Keep a row's entries in ``home``'s group; the rest's variance ``h_d^T P h_d``
     becomes measurement noise (E9a). Identity when the row lies in one group."""
+    groups = {pattern.group_of[i] for i in ca.sparsify(h).sparsity().row()}
+    if len(groups) <= 1:
+        return h, 0
     keep = [i for i in range(pattern.n) if pattern.group_of[i] == pattern.group_of[home]]
     mask = ca.DM.zeros(pattern.n)
     mask[keep] = 1
