@@ -107,7 +107,7 @@ def nilpotent_discretization(A, B, W, dt):
         for j in range(K):
             coef = dt_pow[i + j + 1] / (math.factorial(i) * math.factorial(j) * (i + j + 1))
             Q += (Ak[i] @ W @ Ak[j].T) * coef
-    return Phi, Gamma, (Q + Q.T) / 2
+    return Phi, Gamma, ca.triu(Q) + ca.triu(Q, False).T     # exactly symmetric
 
 
 # ---------------------------------------------------------------- covariance storage

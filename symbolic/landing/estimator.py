@@ -380,5 +380,5 @@ def estimator_init_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
                   deck_w2E=d["w2E"], deck_w2E_dot=d["w2E_dot"], deck_tau=t0)
     mem = ca.vertcat(*[values[f.name] if f.name in values else ca.DM.zeros(f.size)
                        for f in lay.fields])
-    return ca.Function("estimator_init", [x0, P0, deck0, t0], [mem],
+    return ca.Function("estimator_init", [x0, P0, deck0, t0], [ca.densify(mem)],
                        ["x0", "P0_diag", "deck0", "t0"], ["mem"])

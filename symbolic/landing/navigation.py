@@ -158,7 +158,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     g=9.8, q_acc=0.02, q_at=0.1, q_b=0.001, q_ab=1e-3,
     vision_sigma0=0.1, vision_k_range=0.02,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
-    range_sigma=0.1, range_min_cos=0.7,
+    range_sigma=0.05, range_min_cos=0.7,
     datalink_v_sigma=[0.1] * 3, datalink_a_sigma=[0.3] * 3,
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     **{f"max_age_{s}": 0.02 for s in SENSORS},
