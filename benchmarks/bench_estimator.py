@@ -1,4 +1,6 @@
-"""The navigation filter's cost: operations of its SX functions, instructions of its C.
+"""The navigation filter's cost: operations and instructions.
+
+The operations of its SX functions and the instructions of its C.
 
 Measured:
 
@@ -77,7 +79,7 @@ def _c_array(name: str, v) -> str:
 
 
 def _inputs(coupling: str) -> list[np.ndarray]:
-    """A running filter: a handover state and a packet of every sensor, due now."""
+    """A running filter: a handover state, every sensor due."""
     x0 = np.zeros(NAV.size)
     x0[NAV.slice("p_r")] = [0.3, -0.2, 3.0]
     mem = np.array(estimator_init_function(N_HIST, FIFO_DEPTH, coupling)(
@@ -94,7 +96,7 @@ def _inputs(coupling: str) -> list[np.ndarray]:
 
 
 def callgrind_instructions(coupling: str) -> int:
-    """Instructions of one ``estimator_step`` call, CasADi's C, gcc -O2, double."""
+    """Instructions of one ``estimator_step`` call (CasADi's C, -O2)."""
     f = estimator_step_function(N_HIST, FIFO_DEPTH, coupling)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)

@@ -49,14 +49,14 @@ def select(c, a, b):
 
 
 def is_finite(e):
-    """1 where ``e`` is neither infinite nor NaN (``|e| < inf`` is false for NaN)."""
+    """1 where ``e`` is finite (``|e| < inf`` is false for NaN)."""
     return ca.fabs(e) < ca.inf
 
 
 # ---------------------------------------------------------------- discretization
 
 def _nilpotency_index(A: np.ndarray) -> int:
-    """Smallest ``k`` with ``A^k = 0``; ``ValueError`` if ``A`` is not nilpotent."""
+    """Smallest ``k`` with ``A^k = 0`` (``ValueError`` if none)."""
     n = A.shape[0]
     M = np.eye(n)
     for k in range(1, n + 1):
@@ -67,7 +67,7 @@ def _nilpotency_index(A: np.ndarray) -> int:
 
 
 def nilpotent_discretization(A, B, W, dt):
-    """Exact discretization of ``x' = A x + B u + w`` over ``dt`` for nilpotent ``A``.
+    """Exact discretization of ``x' = A x + B u + w``, nilpotent ``A``.
 
     With ``A^K = 0`` the matrix exponential and the integrals are finite sums
     (docs/estimator.md, (E3)-(E5)):
@@ -114,11 +114,12 @@ def nilpotent_discretization(A, B, W, dt):
 
 @dataclasses.dataclass(frozen=True)
 class CovariancePattern:
-    """The stored entries of an ``n x n`` covariance: upper triangles of diagonal blocks.
+    """The stored entries of an ``n x n`` covariance.
 
-    ``groups`` partitions ``range(n)``; entries whose row and column lie in
-    different groups are structurally zero and never stored or computed. One
-    group holding everything is the full covariance.
+    The upper triangles of diagonal blocks: ``groups`` partitions
+    ``range(n)``; entries whose row and column lie in different groups are
+    structurally zero and never stored or computed. One group holding
+    everything is the full covariance.
 
     Examples
     --------
@@ -167,7 +168,10 @@ class CovariancePattern:
         return tuple(f"{prefix}_{i + 1}_{j + 1}" for i, j in self.entries)
 
     def unpack(self, v) -> ca.SX:
-        """Symmetric SX matrix from the packed vector; structural zeros elsewhere."""
+        """Symmetric SX matrix from the packed vector.
+
+        Entries outside the pattern are structural zeros.
+        """
         P = ca.SX(self.n, self.n)
         for k, (i, j) in enumerate(self.entries):
             P[i, j] = v[k]
@@ -215,12 +219,12 @@ def block_nis(S, nu):
 
 
 def joseph_update(P, k, h, r, pattern: CovariancePattern):
-    """Joseph's ``(I - k h^T) P (I - k h^T)^T + r k k^T`` for any gain ``k`` (E9).
+    """Joseph's covariance update for any gain ``k`` (E9).
 
-    Expanded with ``u = P h``, ``s = h^T u + r``:
-    ``P - k u^T - u k^T + s k k^T``, on the upper triangle of ``pattern``'s
-    entries only (``O(n^2)``), mirrored. Positive semi-definite for every
-    ``k``, the optimal ``u / s`` or not.
+    ``(I - k h^T) P (I - k h^T)^T + r k k^T``, expanded with ``u = P h``,
+    ``s = h^T u + r``: ``P - k u^T - u k^T + s k k^T``, on the upper triangle
+    of ``pattern``'s entries only (``O(n^2)``), mirrored. Positive
+    semi-definite for every ``k``, the optimal ``u / s`` or not.
     """
     u = P @ h
     s = h.T @ u + r
@@ -272,7 +276,7 @@ def scalar_update(x, P, h, nu, r, accept, pattern: CovariancePattern):
 # ---------------------------------------------------------------- FIFO
 
 def fifo_push_pop(slots, count, record, push, pop_if):
-    """Push ``record`` onto a FIFO, then pop its head if ``pop_if(head)``.
+    """Push ``record`` onto a FIFO, then pop its head if due.
 
     The FIFO is the columns of ``slots`` (``rec x depth``), oldest first, of
     which the first ``count`` are in use. The pushed record may be popped at

@@ -1,4 +1,4 @@
-"""A textbook Kalman filter in NumPy for the navigation filter's tests, and their data.
+"""A textbook Kalman filter in NumPy, and data, for the filter's tests.
 
 Written from the state equations (E2) of docs/estimator.md index by index:
 SciPy's matrix exponential for ``Phi`` and ``Gamma``, Van Loan's method for
@@ -33,10 +33,12 @@ def sl(name):
 
 
 def col(v):
+    """A flat float array."""
     return np.array(v, dtype=float).ravel()
 
 
 def params(**over):
+    """The default parameter vector with ``over`` replaced."""
     return PARAMS.pack({**ESTIMATOR_DEFAULTS, **over})
 
 
@@ -60,7 +62,7 @@ _DISCRETE = {}
 
 
 def discrete(dt, q):
-    """Phi and Gamma by the exponential of [[A, B], [0, 0]], Q by Van Loan."""
+    """Phi, Gamma by expm of [[A, B], [0, 0]]; Q by Van Loan."""
     key = (dt, q["q_acc"], q["q_at"], q["q_b"], q["q_ab"])
     if key not in _DISCRETE:
         _DISCRETE[key] = _discrete_uncached(dt, q)
@@ -78,7 +80,7 @@ def _discrete_uncached(dt, q):
 
 
 def h_rows(name, n2=None, b3=None):
-    """H of each block from (E10)-(E14), with the range's rows n2^T / (n2 . b3)."""
+    """H of each block from (E10)-(E13); the range's row n2^T / (n2 . b3)."""
     H = np.zeros((3, N))
     I3 = np.eye(3)
     if name == "vision":
@@ -98,6 +100,7 @@ def h_rows(name, n2=None, b3=None):
 
 
 def variances(name, z, q):
+    """The diagonal of R of each block (E10)-(E13)."""
     if name == "vision":
         return np.full(3, (q["vision_sigma0"] + q["vision_k_range"] * np.linalg.norm(z)) ** 2)
     if name == "range":
@@ -117,13 +120,13 @@ def joseph_reference(x, P, H, z, R):
 
 
 class ReferenceKF:
-    """A textbook KF on (E2), fusing packets at their own time, in fusion order."""
+    """A textbook KF on (E2), fusing packets at their own time."""
 
     def __init__(self, x0, P0, q):
         self.x, self.P, self.q = np.array(x0, float), np.array(P0, float), q
 
     def fuse(self, packets, n2):
-        """``packets``: sensor -> dict of values (fresh ones only). Returns NIS per block."""
+        """Fuse ``packets`` (sensor -> values); NIS per block."""
         nis = {}
         for b in BLOCKS:
             pk = packets.get(b.sensor)
@@ -136,6 +139,7 @@ class ReferenceKF:
         return nis
 
     def predict(self, a_in, dt):
+        """Predict over ``dt`` with ``a_in`` held."""
         Phi, Gamma, Q = discrete(dt, self.q)
         self.x = Phi @ self.x + Gamma @ a_in
         self.P = Phi @ self.P @ Phi.T + Q
@@ -144,23 +148,26 @@ class ReferenceKF:
 # ---------------------------------------------------------------- helpers
 
 def random_spd(rng, n, scale=1.0):
+    """A random symmetric positive definite matrix."""
     L = rng.normal(size=(n, n))
     return scale * (L @ L.T / n + 0.1 * np.eye(n))
 
 
 def random_imu(rng):
+    """A random IMU packet near hover."""
     eta = rng.normal(size=3) * [0.2, 0.2, 1.0]
     return IMU.pack(dict(eta_hat=eta, f_b=rng.normal(size=3) + [0, 0, 9.8],
                          omega=rng.normal(size=3) * 0.3))
 
 
 def acceleration(imu, g):
+    """a_in = R(eta_hat) f_b - g e_z, written here."""
     v = IMU.unpack(imu)
     return rotation(v["eta_hat"]) @ v["f_b"] - np.array([0, 0, g])
 
 
 def packet_values(rng, sensor, x, tau, eta2, n2):
-    """A packet near the measurement the state predicts (noise of order 0.3)."""
+    """A packet near what the state predicts (noise about 0.3)."""
     e = rng.normal(size=3) * 0.3
     if sensor == "vision":
         return dict(fresh=1.0, tau=tau, r_E=-x[sl("p_r")] + e)
@@ -176,26 +183,31 @@ def packet_values(rng, sensor, x, tau, eta2, n2):
 
 
 def empty(layout):
+    """A packet that is not fresh."""
     return np.zeros(layout.size)
 
 
 def init_memory(n_hist, depth, coupling, x0, P0_diag, eta2=(0, 0, 0), t0=0.0):
+    """The filter's memory at handover, the deck level unless ``eta2``."""
     deck0 = np.concatenate([eta2, np.zeros(6)])
     return col(estimator_init_function(n_hist, depth, coupling)(x0, P0_diag, deck0, t0))
 
 
 def x0_P0(rng):
+    """A random handover state and diagonal covariance."""
     x0 = rng.normal(size=N) * 0.5
     x0[sl("p_r")] += [1.0, -2.0, 4.0]
     return x0, rng.uniform(0.05, 1.0, N)
 
 
 def unpack_P(mem_layout, coupling, mem):
+    """The covariance held in a memory vector, as a matrix."""
     return covariance_pattern(coupling).unpack_numeric(mem_layout.unpack(mem)["P_h"])
 
 
 
 def block_data(rng, name):
+    """A block's packet layout, a state, a covariance, a packet and n2."""
     layout = next(p for p in PACKETS if p.name == next(b.sensor for b in BLOCKS
                                                          if b.name == name))
     x, P = rng.normal(size=N), random_spd(rng, N, 0.5)

@@ -1,4 +1,6 @@
-"""The navigation filter's flight step: a delayed fusion horizon and an output predictor.
+"""The navigation filter's flight step.
+
+A delayed fusion horizon and an output predictor.
 
 docs/estimator.md is the design; the equations (E1)-(E17) are there. The
 model (state, packets, parameters, prediction, measurement blocks) is
@@ -70,7 +72,7 @@ _HIST_UNITS = ("m/s^2",) * 3 + ("s",)
 
 
 def _depths(depth) -> tuple[int, ...]:
-    """One FIFO depth per sensor from an int or a tuple of :data:`SENSORS`' length."""
+    """One FIFO depth per sensor, from an int or a tuple of them."""
     out = (depth,) * len(SENSORS) if isinstance(depth, int) else tuple(depth)
     if len(out) != len(SENSORS) or any(not isinstance(d, int) or d < 1 for d in out):
         raise ValueError(f"depth must be a positive int or {len(SENSORS)} of them, got {depth!r}")
@@ -78,7 +80,7 @@ def _depths(depth) -> tuple[int, ...]:
 
 
 def _record_fields(layout: Layout) -> tuple[Field, ...]:
-    """A packet's fields without its ``fresh`` flag: what a FIFO slot holds."""
+    """A packet's fields but ``fresh``: what a FIFO slot holds."""
     return layout.fields[1:]
 
 
@@ -176,10 +178,10 @@ def estimator_diagnostics() -> Layout:
 # ---------------------------------------------------------------- pieces
 
 def output_predictor(x_h, hist):
-    """The state ``sum(dt_k)`` after the horizon, through buffered inputs (E17).
+    """The state carried through the buffered inputs (E17).
 
-    ``hist`` is ``4 x N``: inputs ``a_k`` (E) held over ``dt_k``, oldest
-    first. With ``T = sum dt_k``, ``S1 = sum a_k dt_k`` and
+    The state ``sum(dt_k)`` after the horizon; ``hist`` is ``4 x N``: inputs
+    ``a_k`` (E) held over ``dt_k``, oldest first. With ``T = sum dt_k``, ``S1 = sum a_k dt_k`` and
     ``S2 = sum a_k dt_k (dt_k / 2 + sum_{j>k} dt_j)``: ``v1 += S1 - T a_b``,
     ``p_r += T (v1 - v_t) + S2 - T^2 (a_b + a_t) / 2``, ``v_t += T a_t``;
     the rest is constant. The same map as (E6)'s ``Phi``, ``Gamma`` chained.
@@ -200,14 +202,20 @@ def output_predictor(x_h, hist):
 
 @functools.cache
 def output_predictor_function(n_hist: int = N_HIST) -> ca.Function:
-    """``nav_output_predictor(x_h, hist) -> x_now`` (E17), ``hist`` ``4 x n_hist``."""
+    """``nav_output_predictor(x_h, hist) -> x_now`` (E17).
+
+    ``hist`` is ``4 x n_hist``.
+    """
     x, hist = NAV.sym("x_h"), ca.SX.sym("hist", 4, n_hist)
     return ca.Function("nav_output_predictor", [x, hist], [output_predictor(x, hist)],
                        ["x_h", "hist"], ["x_now"])
 
 
 def _latest_deck(m, dl, t):
-    """The latest usable broadcast: this step's if fresh, finite, not older, not future."""
+    """The latest usable broadcast.
+
+    This step's if fresh, finite, not older and not from the future.
+    """
     values = ca.vertcat(dl["eta2"], dl["w2E"], dl["w2E_dot"], dl["tau"])
     ok = ca.logic_and(dl["fresh"] > 0.5, ca.logic_and(dl["tau"] >= m["deck_tau"], dl["tau"] <= t))
     for i in range(values.shape[0]):
@@ -218,7 +226,10 @@ def _latest_deck(m, dl, t):
 
 
 def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
-    """Queue a sensor's packet, fuse or discard its FIFO head (E16); updates ``state``."""
+    """Queue a packet; fuse or discard its FIFO's head (E16).
+
+    Updates ``state`` in place.
+    """
     p = estimator_params().unpack(p_est)
     pk = layout.unpack(pkt)
     t_h = state["t_h"]
@@ -256,7 +267,7 @@ def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
 
 
 def _output(x_now, deck, ims, t, p):
-    """The controller's :data:`MEASUREMENT` at ``t`` from the predicted state (E7), (E15)."""
+    """The controller's :data:`MEASUREMENT` at ``t`` (E7), (E15)."""
     x = NAV.unpack(x_now)
     eta2, w2E = deck_at(deck["eta2"], deck["w2E"], deck["w2E_dot"], t - deck["tau"],
                         p["deck_extrapolation_max"])
@@ -266,14 +277,20 @@ def _output(x_now, deck, ims, t, p):
 
 
 def _input(ims, x_h, p):
-    """This period's acceleration input (E2); a non-finite one is replaced by ``a_b``."""
+    """This period's acceleration input (E2).
+
+    A non-finite one is replaced by ``a_b``.
+    """
     a_in = acceleration_input(ims["eta_hat"], ims["f_b"], p["g"])
     ok = ca.logic_and(ca.logic_and(is_finite(a_in[0]), is_finite(a_in[1])), is_finite(a_in[2]))
     return select(ok, a_in, NAV.unpack(x_h)["a_b"]), ok
 
 
 def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
-    """The step's expressions: ``(mem_next, y, diag)`` (module docstring's 1-4)."""
+    """The step's expressions ``(mem_next, y, diag)``.
+
+    The module docstring's 1-4.
+    """
     lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
     m, p, ims = lay.unpack(mem), estimator_params().unpack(p_est), IMU.unpack(imu)
     deck = _latest_deck(m, DATALINK.unpack(pkts[-1]), t)
@@ -327,8 +344,8 @@ def estimator_step_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
     ``estimator_step(mem, imu, vision, gnss, range, datalink, p_est, dt, t)
     -> (mem_next, y, diag)``
 
-    Parameters (of the builder)
-    ---------------------------
+    Parameters
+    ----------
     n_hist : int
         Horizon delay in periods, ``D = n_hist dt`` (:data:`N_HIST`).
     depth : int or tuple of int
@@ -362,15 +379,15 @@ def estimator_step_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
 @functools.cache
 def estimator_init_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
                             coupling: str = "full") -> ca.Function:
-    """``estimator_init(x0, P0_diag, deck0, t0) -> mem``: the filter at handover.
+    """The filter at handover as a Function.
 
-    The horizon starts at ``t0`` with ``x0`` and a diagonal covariance; the
-    input buffer holds ``n_hist`` empty periods (``dt = 0``), so the horizon
-    stays at ``t0`` until it has filled and the output is ``x0`` propagated
-    through the periods so far. ``deck0``
-    (:data:`~symbolic.landing.navigation.DECK_INIT`) stands for a broadcast
-    at ``t0`` until one arrives; zeros mean a level deck heading along E's x,
-    not rotating. The FIFOs and counters are empty.
+    ``estimator_init(x0, P0_diag, deck0, t0) -> mem``. The horizon starts at ``t0`` with
+    ``x0`` and a diagonal covariance; the input buffer holds ``n_hist`` empty periods
+    (``dt = 0``), so the horizon stays at ``t0`` until it has filled and the output is
+    ``x0`` propagated through the periods so far. ``deck0``
+    (:data:`~symbolic.landing.navigation.DECK_INIT`) stands for a broadcast at ``t0``
+    until one arrives; zeros mean a level deck heading along E's x, not rotating. The
+    FIFOs and counters are empty.
     """
     lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
     x0, P0, deck0, t0 = NAV.sym("x0"), ca.SX.sym("P0_diag", NAV.size), DECK_INIT.sym(), \

@@ -1,4 +1,6 @@
-"""The navigation filter's model: state, packets, parameters, prediction, measurements.
+"""The navigation filter's model: prediction and measurements.
+
+State, packets, parameters, prediction, measurement blocks, outputs.
 
 docs/estimator.md gives the design and the equations (E1)-(E14) cited here.
 Frame E has z up. The filter's state :data:`NAV` is PX4's moving-target
@@ -168,7 +170,10 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
 
 @functools.cache
 def estimator_params() -> Layout:
-    """Layout of the filter's parameters (noise densities, sigmas, gates, ages)."""
+    """Layout of the filter's parameters.
+
+    Noise densities, sigmas, gates, ages; defaults :data:`ESTIMATOR_DEFAULTS`.
+    """
     return Layout("p_est", (
         Field("g", 1, "m/s^2", "gravitational acceleration"),
         Field("q_acc", 1, "m^2/s^3", "PSD of the acceleration input's white noise"),
@@ -194,7 +199,10 @@ def estimator_params() -> Layout:
 
 @functools.cache
 def covariance_pattern(coupling: str = "full") -> CovariancePattern:
-    """The stored covariance: ``full`` (171 entries) or ``axes`` (x, y, z decoupled, 63)."""
+    """The stored covariance entries of a coupling.
+
+    ``full``: 171 entries; ``axes``: x, y, z decoupled, 63 (E9a).
+    """
     if coupling == "full":
         return CovariancePattern.full(NAV.size)
     if coupling == "axes":
@@ -217,16 +225,19 @@ _B6 = np.array([[0], [1], [0], [0], [0], [0]], dtype=float)
 
 
 def acceleration_input(eta_hat, f_b, g):
-    """``a_in = R(eta_hat) f_b - g e_z`` (E2), the quadrotor's acceleration in E."""
+    """The quadrotor's acceleration in E from the IMU (E2).
+
+    ``a_in = R(eta_hat) f_b - g e_z``.
+    """
     return rotation(eta_hat) @ f_b - ca.vertcat(0, 0, g)
 
 
 def nav_transition(dt, p_est):
-    """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E3)-(E5), 18 x 18, 18 x 3, 18 x 18.
+    """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E3)-(E5).
 
-    One axis' 6 x 6 discretization (:func:`~symbolic.kalman.nilpotent_discretization`)
-    repeated on x, y and z: the state is field-major, so the 18-state
-    matrices are ``kron(M6, I3)``.
+    Sizes 18 x 18, 18 x 3, 18 x 18: one axis' 6 x 6 discretization
+    (:func:`~symbolic.kalman.nilpotent_discretization`) repeated on x, y and
+    z; the state is field-major, so the 18-state matrices are ``kron(M6, I3)``.
     """
     p = estimator_params().unpack(p_est)
     W6 = ca.diag(ca.vertcat(0, p["q_acc"], 0, p["q_at"], p["q_b"], p["q_ab"]))
@@ -244,16 +255,19 @@ def nav_transition_function() -> ca.Function:
 
 
 def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern):
-    """``x+ = Phi x + Gamma a_in``, ``P+ = Phi P Phi^T + Q`` (E6) on ``pattern``'s entries."""
+    """One prediction over ``dt`` (E6).
+
+    ``x+ = Phi x + Gamma a_in``, ``P+ = Phi P Phi^T + Q`` on ``pattern``'s entries.
+    """
     Phi, Gamma, Q = nav_transition(dt, p_est)
     return Phi @ x + Gamma @ a_in, pattern.unpack(pattern.pack(Phi @ P @ Phi.T + Q))
 
 
 @functools.cache
 def nav_predict_function(coupling: str = "full") -> ca.Function:
-    """``nav_predict(x, P, a_in, dt, p_est) -> (x_next, P_next)`` (E6).
+    """``nav_predict(x, P, a_in, dt, p_est) -> (x_next, P_next)``.
 
-    ``P`` and ``P_next`` are full symmetric 18 x 18 matrices; only the upper
+    (E6). ``P`` and ``P_next`` are full symmetric 18 x 18 matrices; only the upper
     triangle of the entries :func:`covariance_pattern` keeps is read.
     """
     pattern = covariance_pattern(coupling)
@@ -268,7 +282,7 @@ def nav_predict_function(coupling: str = "full") -> ca.Function:
 # ---------------------------------------------------------------- measurements
 
 def _model(block: Block, nav, pkt, n2, p):
-    """``(z, h, r, valid)`` of one block (E10)-(E14), from named blocks."""
+    """``(z, h, r, valid)`` of one block (E10)-(E13)."""
     z = pkt[block.field]
     ones = ca.DM.ones(3)
     if block.name == "vision":                                               # (E10)
@@ -291,7 +305,7 @@ def _model(block: Block, nav, pkt, n2, p):
 
 @functools.cache
 def measurement_model_function(name: str) -> ca.Function:
-    """``h_<name>(x, pkt, n2, p_est) -> (z, h, H, r, valid)`` of one block.
+    """``h_<name>(x, pkt, n2, p_est) -> (z, h, H, r, valid)``.
 
     ``z`` the measured values, ``h`` their prediction from the state (E10)-(E14),
     ``H = dh/dx`` by ``ca.jacobian``, ``r`` the variances (diagonal R),
@@ -322,8 +336,11 @@ def _packet(sensor: str) -> Layout:
 
 
 def _project_row(h, P, pattern: CovariancePattern, home: int):
-    """Keep a row's entries in ``home``'s group; the rest's variance ``h_d^T P h_d``
-    becomes measurement noise (E9a). Identity when the row lies in one group."""
+    """A row across groups: keep ``home``'s group, the rest as noise.
+
+    The dropped part's variance ``h_d^T P h_d`` becomes measurement noise
+    (E9a). Identity when the row lies in one group.
+    """
     groups = {pattern.group_of[i] for i in ca.sparsify(h).sparsity().row()}
     if len(groups) <= 1:
         return h, 0
@@ -335,9 +352,9 @@ def _project_row(h, P, pattern: CovariancePattern, home: int):
 
 
 def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePattern):
-    """Gate one block on its NIS, then fuse it by scalar Joseph updates (E8), (E9).
+    """Gate one block, then fuse it by scalar Joseph updates.
 
-    Returns ``(x_next, P_next, nu, nis, accept)``: the innovation ``z - h(x)``
+    (E8), (E9). Returns ``(x_next, P_next, nu, nis, accept)``: the innovation ``z - h(x)``
     and ``nu^T S^-1 nu`` with ``S = H P H^T + R`` before the update, and 1 if
     the block was fused (``due``, valid and NIS within its gate). A block not
     fused leaves ``x`` and ``P`` unchanged.
@@ -364,9 +381,10 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
 
 @functools.cache
 def nav_update_function(name: str, coupling: str = "full") -> ca.Function:
-    """``nav_update_<name>(x, P, pkt, n2, p_est, due) -> (x_next, P_next, nu, nis, fused)``.
+    """One block's gated update as a Function.
 
-    :func:`block_update` with full symmetric 18 x 18 ``P`` in and out (only
+    ``nav_update_<name>(x, P, pkt, n2, p_est, due) -> (x_next, P_next, nu, nis,
+    fused)``: :func:`block_update` with full symmetric 18 x 18 ``P`` in and out (only
     the stored upper-triangle entries of :func:`covariance_pattern` are read).
     """
     pattern = covariance_pattern(coupling)
@@ -383,7 +401,7 @@ def nav_update_function(name: str, coupling: str = "full") -> ca.Function:
 # ---------------------------------------------------------------- outputs
 
 def deck_at(eta2, w2E, w2E_dot, age, max_age):
-    """The deck's attitude and rate ``age`` seconds after a broadcast (E7).
+    """The deck's attitude and rate ``age`` after a broadcast (E7).
 
     ``eta2 + eta2_dot a + eta2_ddot a^2 / 2`` and ``w2E + w2E_dot a`` with
     ``a = age`` clipped to ``[-max_age, max_age]``; ``eta2_dot``,
@@ -395,10 +413,11 @@ def deck_at(eta2, w2E, w2E_dot, age, max_age):
 
 
 def relative_output(p_r, v_rel, eta2, w2E):
-    """``p_e = R2^T p_r``, ``v_e = R2^T v_rel - (R2^T w2E) x p_e`` (E15).
+    """The deck-frame relative position and velocity (E15).
 
-    ``v_rel = v1 - v_t``; ``R2 = R(eta2)``. The derivative of ``R2^T (p1 - p2)``
-    with ``R2' = S(w2E) R2``.
+    ``p_e = R2^T p_r``, ``v_e = R2^T v_rel - (R2^T w2E) x p_e`` with
+    ``v_rel = v1 - v_t``, ``R2 = R(eta2)``: the derivative of
+    ``R2^T (p1 - p2)`` with ``R2' = S(w2E) R2``.
     """
     R2 = rotation(eta2)
     p_e = R2.T @ p_r
