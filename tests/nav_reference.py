@@ -54,7 +54,7 @@ def model_matrices(q):
     B[sl("v1"), :] = I3
     A[sl("v_t"), sl("a_t")] = I3                    # v_t' = a_t
     for name, key in (("v1", "q_acc"), ("a_t", "q_at"), ("b", "q_b"), ("a_b", "q_ab")):
-        W[sl(name), sl(name)] = q[key] * I3
+        W[sl(name), sl(name)] = np.diag(np.broadcast_to(q[key], 3))
     return A, B, W
 
 
@@ -63,7 +63,7 @@ _DISCRETE = {}
 
 def discrete(dt, q):
     """Phi, Gamma by expm of [[A, B], [0, 0]]; Q by Van Loan."""
-    key = (dt, q["q_acc"], q["q_at"], q["q_b"], q["q_ab"])
+    key = (dt, *(tuple(np.broadcast_to(q[k], 3)) for k in ("q_acc", "q_at", "q_b", "q_ab")))
     if key not in _DISCRETE:
         _DISCRETE[key] = _discrete_uncached(dt, q)
     return _DISCRETE[key]

@@ -51,8 +51,8 @@ def _run_undelayed(rng, coupling="full", steps=30, p_fresh=0.6, n_hist=0, depth=
     reference KF on the same data; yields both after each step."""
     step = estimator_step_function(n_hist, depth, coupling)
     lay = estimator_memory(n_hist, depth, coupling)
-    q = {**ESTIMATOR_DEFAULTS, **OPEN_GATES, "q_acc": 0.3, "q_at": 0.5, "q_b": 0.01,
-         "q_ab": 0.02}
+    q = {**ESTIMATOR_DEFAULTS, **OPEN_GATES, "q_acc": [0.3, 0.2, 0.4], "q_at": [0.5] * 3,
+         "q_b": [0.01, 0.01, 0.03], "q_ab": [0.02, 0.01, 0.03]}
     p = PARAMS.pack(q)
     x0, P0 = x0_P0(rng)
     eta2 = np.array([0.05, -0.03, 0.7])
@@ -116,7 +116,7 @@ def test_delayed_fusion_is_the_undelayed_filter_shifted_by_the_horizon():
     rng = np.random.default_rng(2017)
     n_hist, depth, dt, steps = 6, 3, 0.01, 60
     step = estimator_step_function(n_hist, depth)
-    q = {**ESTIMATOR_DEFAULTS, **OPEN_GATES, "q_acc": 0.3, "q_at": 0.5}
+    q = {**ESTIMATOR_DEFAULTS, **OPEN_GATES, "q_acc": [0.3] * 3, "q_at": [0.5] * 3}
     p = PARAMS.pack(q)
     x0, P0 = x0_P0(rng)
     eta2 = np.array([0.04, -0.02, 0.3])                # one deck attitude: n2 is the same
@@ -229,8 +229,8 @@ def test_monte_carlo_nees_and_nis_lie_in_their_chi_square_bounds():
     make R or the accepted set depend on the draw, which (E8) tests apart."""
     rng = np.random.default_rng(20171)
     n_hist, depth = 4, 4
-    q = {**ESTIMATOR_DEFAULTS, **OPEN_GATES, "q_acc": 0.05, "q_at": 0.2, "q_b": 0.01,
-         "q_ab": 0.01, "vision_k_range": 0.0}
+    q = {**ESTIMATOR_DEFAULTS, **OPEN_GATES, "q_acc": [0.05] * 3, "q_at": [0.2] * 3,
+         "q_b": [0.01] * 3, "q_ab": [0.01] * 3, "vision_k_range": 0.0}
     p = PARAMS.pack(q)
     x0 = np.zeros(N)
     x0[sl("p_r")] = [0.5, -0.5, 4.0]

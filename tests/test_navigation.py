@@ -49,8 +49,9 @@ def test_prediction_equals_the_matrix_exponential_and_van_loan(rng):
     """Phi, Gamma and Q of (E3)-(E5) against expm and Van Loan's method."""
     f = nav_transition_function()
     for dt in (0.004, 0.1, 1.3):
-        q = {**ESTIMATOR_DEFAULTS, "q_acc": rng.uniform(0.01, 1), "q_at": rng.uniform(0.01, 1),
-             "q_b": rng.uniform(1e-4, 0.1), "q_ab": rng.uniform(1e-4, 0.1)}
+        q = {**ESTIMATOR_DEFAULTS, "q_acc": rng.uniform(0.01, 1, 3),
+             "q_at": rng.uniform(0.01, 1, 3), "q_b": rng.uniform(1e-4, 0.1, 3),
+             "q_ab": rng.uniform(1e-4, 0.1, 3)}
         Phi, Gamma, Q = (np.array(v) for v in f(dt, PARAMS.pack(q)))
         Phi_r, Gamma_r, Q_r = discrete(dt, q)
         scale = np.abs(Q_r).max()

@@ -157,7 +157,7 @@ BLOCKS = (
 
 #: Default parameter values; docs/estimator.md cites each one's source.
 ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
-    g=9.8, q_acc=0.02, q_at=0.1, q_b=0.001, q_ab=1e-3,
+    g=9.8, q_acc=[0.02] * 3, q_at=[0.1] * 3, q_b=[0.001] * 3, q_ab=[1e-3] * 3,
     vision_sigma0=0.1, vision_k_range=0.02,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
     range_sigma=0.05, range_min_cos=0.7,
@@ -176,10 +176,10 @@ def estimator_params() -> Layout:
     """
     return Layout("p_est", (
         Field("g", 1, "m/s^2", "gravitational acceleration"),
-        Field("q_acc", 1, "m^2/s^3", "PSD of the acceleration input's white noise"),
-        Field("q_at", 1, "m^2/s^5", "PSD of the pad acceleration's random walk"),
-        Field("q_b", 1, "m^2/s", "PSD of the relative GNSS bias' random walk"),
-        Field("q_ab", 1, "m^2/s^5", "PSD of the input bias' random walk"),
+        _vec3("q_acc", "m^2/s^3", "PSD of the acceleration input's white noise, per axis"),
+        _vec3("q_at", "m^2/s^5", "PSD of the pad acceleration's random walk, per axis"),
+        _vec3("q_b", "m^2/s", "PSD of the relative GNSS bias' random walk, per axis"),
+        _vec3("q_ab", "m^2/s^5", "PSD of the input bias' random walk, per axis"),
         Field("vision_sigma0", 1, "m", "vision noise at zero range (E10)"),
         Field("vision_k_range", 1, "-", "vision noise growth per metre of range (E10)"),
         _vec3("gnss_rel_sigma", "m", "relative GNSS position noise"),
@@ -236,14 +236,18 @@ def nav_transition(dt, p_est):
     """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E3)-(E5).
 
     Sizes 18 x 18, 18 x 3, 18 x 18: one axis' 6 x 6 discretization
-    (:func:`~symbolic.kalman.nilpotent_discretization`) repeated on x, y and
-    z; the state is field-major, so the 18-state matrices are ``kron(M6, I3)``.
+    (:func:`~symbolic.kalman.nilpotent_discretization`) on x, y and z, each
+    with its own noise densities; the state is field-major, so the 18-state
+    matrices are ``kron(M6, I3)``, and ``Q = sum_a kron(Q6_a, e_a e_a^T)``.
     """
     p = estimator_params().unpack(p_est)
-    W6 = ca.diag(ca.vertcat(0, p["q_acc"], 0, p["q_at"], p["q_b"], p["q_ab"]))
-    Phi6, Gamma6, Q6 = nilpotent_discretization(_A6, _B6, W6, dt)
     I3 = ca.DM.eye(3)
-    return ca.kron(Phi6, I3), ca.kron(Gamma6, I3), ca.kron(Q6, I3)
+    Q = ca.SX(NAV.size, NAV.size)
+    for a in range(3):
+        W6 = ca.diag(ca.vertcat(0, p["q_acc"][a], 0, p["q_at"][a], p["q_b"][a], p["q_ab"][a]))
+        Phi6, Gamma6, Q6 = nilpotent_discretization(_A6, _B6, W6, dt)
+        Q += ca.kron(Q6, I3[:, a] @ I3[a, :])
+    return ca.kron(Phi6, I3), ca.kron(Gamma6, I3), Q
 
 
 @functools.cache
