@@ -1,0 +1,401 @@
+"""The navigation filter's flight step.
+
+A delayed fusion horizon and an output predictor.
+
+docs/estimator.md is the design; the equations (E1)-(E17) are there. The
+model (state, packets, parameters, prediction, measurement blocks) is
+:mod:`symbolic.landing.navigation`. One step, at the control time ``t``:
+
+1. The deck's latest broadcast is kept (attitude and rotation, for the range
+   model and the output).
+2. The filter's state ``x_h`` and covariance ``P_h`` live at the horizon
+   ``t_h``, ``n_hist`` periods behind ``t``. Each sensor's fresh packet goes
+   into its FIFO; the FIFO's head is fused when its sample time is within half
+   a period of ``t_h`` or before it (gated per block, scalar Joseph updates),
+   or discarded when older than ``t_h - max_age``; at most one packet per
+   sensor per step (E16).
+3. The output predictor carries ``x_h`` through the ``n_hist`` buffered
+   acceleration inputs to ``t`` (state only, closed form (E17)) and forms the
+   controller's :data:`~symbolic.landing.controller.MEASUREMENT` (E7), (E15).
+4. ``x_h``, ``P_h`` are predicted over the oldest buffered input (E6); this
+   period's input joins the buffer.
+
+Everything is selected, never branched: a block that is not due, or is
+rejected, runs the same instructions with a zero gain.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import casadi as ca
+
+from symbolic.kalman import fifo_push_pop, is_finite, select
+from symbolic.kinematics import rotation
+from symbolic.landing.controller import MEASUREMENT
+from symbolic.landing.navigation import (
+    BLOCKS,
+    DATALINK,
+    DECK_INIT,
+    IMU,
+    NAV,
+    PACKETS,
+    SENSORS,
+    acceleration_input,
+    block_update,
+    covariance_pattern,
+    deck_at,
+    estimator_params,
+    nav_predict,
+    relative_output,
+)
+from symbolic.layout import Field, Layout
+
+__all__ = [
+    "N_HIST",
+    "FIFO_DEPTH",
+    "estimator_memory",
+    "estimator_diagnostics",
+    "output_predictor",
+    "output_predictor_function",
+    "estimator_step_function",
+    "estimator_init_function",
+]
+
+#: Default horizon delay in periods: D = 0.2 s at 250 Hz.
+N_HIST = 50
+#: Default FIFO depth per sensor.
+FIFO_DEPTH = 8
+
+_HIST_ROWS = ("a_in_x", "a_in_y", "a_in_z", "dt")
+_HIST_UNITS = ("m/s^2",) * 3 + ("s",)
+
+
+def _depths(depth) -> tuple[int, ...]:
+    """One FIFO depth per sensor, from an int or a tuple of them."""
+    out = (depth,) * len(SENSORS) if isinstance(depth, int) else tuple(depth)
+    if len(out) != len(SENSORS) or any(not isinstance(d, int) or d < 1 for d in out):
+        raise ValueError(f"depth must be a positive int or {len(SENSORS)} of them, got {depth!r}")
+    return out
+
+
+def _record_fields(layout: Layout) -> tuple[Field, ...]:
+    """A packet's fields but ``fresh``: what a FIFO slot holds."""
+    return layout.fields[1:]
+
+
+def _units(fields) -> tuple[str, ...]:
+    return tuple(u for f in fields for u in f.element_units())
+
+
+def _counter(name: str, names, doc: str) -> Field:
+    return Field(name, len(names), "-", doc, elements=tuple(f"{name}_{n}" for n in names))
+
+
+_BLOCK_NAMES = tuple(b.name for b in BLOCKS)
+
+
+def _counters() -> tuple[Field, ...]:
+    return (
+        _counter("n_fused", _BLOCK_NAMES, "blocks fused, per block"),
+        _counter("n_rejected", _BLOCK_NAMES, "blocks due but rejected by the gate, per block"),
+        _counter("n_discarded", SENSORS, "packets older than the horizon by max_age, per sensor"),
+        _counter("n_dropped", SENSORS, "packets not queued: FIFO full, not finite, future"),
+        Field("n_imu_invalid", 1, "-", "periods with a non-finite IMU sample"),
+    )
+
+
+@functools.cache
+def estimator_memory(n_hist: int = N_HIST, depth=FIFO_DEPTH, coupling: str = "full") -> Layout:
+    """What the filter carries from one step to the next.
+
+    Parameters
+    ----------
+    n_hist : int
+        Periods between the horizon and now (``D = n_hist dt``).
+    depth : int or tuple of int
+        FIFO depth, for every sensor or per sensor (:data:`SENSORS`' order).
+    coupling : str
+        ``full`` covariance or ``axes`` (x, y, z decoupled).
+    """
+    if n_hist < 0:
+        raise ValueError(f"n_hist must be >= 0, got {n_hist}")
+    depths, pattern = _depths(depth), covariance_pattern(coupling)
+    nav_units = NAV.element_units()
+    fifos = []
+    for layout, d in zip(PACKETS, depths, strict=True):
+        rec = _record_fields(layout)
+        size = sum(f.size for f in rec)
+        fifos += [Field(f"fifo_{layout.name}", size * d, _units(rec) * d,
+                        f"{layout.name} packets waiting for the horizon, oldest first",
+                        shape=(size, d)),
+                  Field(f"count_{layout.name}", 1, "-", f"{layout.name} packets in the FIFO")]
+    return Layout("mem_est", (
+        Field.nested("x_h", NAV, "state at the horizon t_h"),
+        Field("P_h", pattern.size, tuple(f"({nav_units[i]})({nav_units[j]})"
+                                         for i, j in pattern.entries),
+              "covariance at the horizon: stored upper-triangle entries, row by row",
+              elements=pattern.element_names()),
+        Field("t_h", 1, "s", "time of the horizon"),
+        Field("hist", 4 * n_hist, _HIST_UNITS * n_hist,
+              "acceleration inputs (E) and their periods from t_h to now, oldest first",
+              shape=(4, n_hist),
+              elements=tuple(f"{r}_{k + 1}" for k in range(n_hist) for r in _HIST_ROWS)),
+        *fifos,
+        Field("deck_eta2", 3, "rad", "deck attitude of the latest broadcast"),
+        Field("deck_w2E", 3, "rad/s", "deck angular velocity of the latest broadcast"),
+        Field("deck_w2E_dot", 3, "rad/s^2", "deck angular acceleration of the latest broadcast"),
+        Field("deck_tau", 1, "s", "sample time of the latest broadcast"),
+        *_counters(),
+    ), f"navigation filter memory (n_hist={n_hist}, depth={depths}, {coupling})")
+
+
+@functools.cache
+def estimator_diagnostics() -> Layout:
+    """What the step reports besides the controller's measurements."""
+    innov = []
+    for b in BLOCKS:
+        packet = next(p for p in PACKETS if p.name == b.sensor)
+        innov.append(Field(f"nu_{b.name}", b.dim, packet[b.field].unit,
+                           f"{b.name} innovation z - h(x) when due, else 0"))
+    nav_units = NAV.element_units()
+    return Layout("diag_est", (
+        *innov,
+        _counter("nis", _BLOCK_NAMES, "NIS when due (-1 if not finite), else 0"),
+        _counter("fused", _BLOCK_NAMES, "1 if the block was fused this step"),
+        _counter("rejected", _BLOCK_NAMES, "1 if the block was due and rejected"),
+        _counter("discarded", SENSORS, "1 if the FIFO head was too old"),
+        _counter("dropped", SENSORS, "1 if a fresh packet was not queued"),
+        Field("imu_invalid", 1, "-", "1 if the IMU sample was not finite"),
+        *_counters(),
+        Field.nested("x_h", NAV, "state at the horizon after this step's fusion"),
+        Field("P_diag", NAV.size, tuple(f"({u})^2" for u in nav_units),
+              "its variances", elements=tuple(f"var_{n}" for n in NAV.element_names())),
+        Field("t_h", 1, "s", "time of the horizon"),
+    ), "navigation filter diagnostics")
+
+
+# ---------------------------------------------------------------- pieces
+
+def output_predictor(x_h, hist):
+    """The state carried through the buffered inputs (E17).
+
+    The state ``sum(dt_k)`` after the horizon; ``hist`` is ``4 x N``: inputs
+    ``a_k`` (E) held over ``dt_k``, oldest first. With ``T = sum dt_k``, ``S1 = sum a_k dt_k`` and
+    ``S2 = sum a_k dt_k (dt_k / 2 + sum_{j>k} dt_j)``: ``v1 += S1 - T a_b``,
+    ``p_r += T (v1 - v_t) + S2 - T^2 (a_b + a_t) / 2``, ``v_t += T a_t``;
+    the rest is constant. The same map as (E6)'s ``Phi``, ``Gamma`` chained.
+    """
+    x = NAV.unpack(x_h)
+    n = hist.shape[1]
+    T, S1, S2, after = 0, ca.DM.zeros(3), ca.DM.zeros(3), 0
+    for k in reversed(range(n)):
+        a_k, dt_k = hist[0:3, k], hist[3, k]
+        S1 = S1 + a_k * dt_k
+        S2 = S2 + a_k * (dt_k * (dt_k / 2 + after))
+        after = after + dt_k
+    T = after
+    v1 = x["v1"] + S1 - T * x["a_b"]
+    p_r = x["p_r"] + T * (x["v1"] - x["v_t"]) + S2 - (T**2 / 2) * (x["a_b"] + x["a_t"])
+    return ca.vertcat(p_r, v1, x["v_t"] + T * x["a_t"], x["a_t"], x["b"], x["a_b"])
+
+
+@functools.cache
+def output_predictor_function(n_hist: int = N_HIST) -> ca.Function:
+    """``nav_output_predictor(x_h, hist) -> x_now`` (E17).
+
+    ``hist`` is ``4 x n_hist``.
+    """
+    x, hist = NAV.sym("x_h"), ca.SX.sym("hist", 4, n_hist)
+    return ca.Function("nav_output_predictor", [x, hist], [output_predictor(x, hist)],
+                       ["x_h", "hist"], ["x_now"])
+
+
+def _latest_deck(m, dl, t):
+    """The latest usable broadcast.
+
+    This step's if fresh, finite, not older and not from the future.
+    """
+    values = ca.vertcat(dl["eta2"], dl["w2E"], dl["w2E_dot"], dl["tau"])
+    ok = ca.logic_and(dl["fresh"] > 0.5, ca.logic_and(dl["tau"] >= m["deck_tau"], dl["tau"] <= t))
+    for i in range(values.shape[0]):
+        ok = ca.logic_and(ok, is_finite(values[i]))
+    old = ca.vertcat(m["deck_eta2"], m["deck_w2E"], m["deck_w2E_dot"], m["deck_tau"])
+    new = select(ok, values, old)
+    return dict(eta2=new[0:3], w2E=new[3:6], w2E_dot=new[6:9], tau=new[9])
+
+
+def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
+    """Queue a packet; fuse or discard its FIFO's head (E16).
+
+    Updates ``state`` in place.
+    """
+    p = estimator_params().unpack(p_est)
+    pk = layout.unpack(pkt)
+    t_h = state["t_h"]
+    push_ok = pk["tau"] <= t
+    for i in range(1, pkt.shape[0]):                   # tau and the values
+        push_ok = ca.logic_and(push_ok, is_finite(pkt[i]))
+    fresh = pk["fresh"] > 0.5
+
+    def pop_if(head, nonempty):
+        return ca.logic_and(nonempty, head[0] <= t_h + dt / 2)
+
+    name = layout.name
+    f = fifo_push_pop(m[f"fifo_{name}"], m[f"count_{name}"], pkt[1:],
+                      ca.logic_and(fresh, push_ok), pop_if)
+    head_tau = f["head"][0]
+    stale = ca.logic_and(f["pop"], head_tau < t_h - p[f"max_age_{name}"])
+    due = ca.logic_and(f["pop"], ca.logic_not(stale))
+    eta2_r, _ = deck_at(deck["eta2"], deck["w2E"], deck["w2E_dot"], head_tau - deck["tau"],
+                        p["deck_extrapolation_max"])
+    n2 = rotation(eta2_r)[:, 2]
+    head_pkt = ca.vertcat(1, f["head"])
+    x, P = state["x"], state["P"]
+    for b in (b for b in BLOCKS if b.sensor == name):
+        x, P, nu, nis, fused = block_update(b.name, x, P, head_pkt, n2, p_est, due,
+                                            state["pattern"])
+        nis_ok = is_finite(nis)
+        state["blocks"][b.name] = dict(
+            nu=select(ca.logic_and(due, nis_ok), nu, 0),
+            nis=select(due, select(nis_ok, nis, -1), 0),
+            fused=fused, rejected=ca.logic_and(due, ca.logic_not(fused)))
+    state.update(x=x, P=P)
+    state["sensors"][name] = dict(
+        fifo=ca.vec(f["slots"]), count=f["count"], discarded=stale,
+        dropped=ca.logic_or(f["dropped"], ca.logic_and(fresh, ca.logic_not(push_ok))))
+
+
+def _output(x_now, deck, ims, t, p):
+    """The controller's :data:`MEASUREMENT` at ``t`` (E7), (E15)."""
+    x = NAV.unpack(x_now)
+    eta2, w2E = deck_at(deck["eta2"], deck["w2E"], deck["w2E_dot"], t - deck["tau"],
+                        p["deck_extrapolation_max"])
+    p_e, v_e = relative_output(x["p_r"], x["v1"] - x["v_t"], eta2, w2E)
+    return ca.vertcat(p_e, v_e, ims["eta_hat"], ims["omega"], eta2, x["v_t"], x["a_t"], w2E,
+                      deck["w2E_dot"])
+
+
+def _input(ims, x_h, p):
+    """This period's acceleration input (E2).
+
+    A non-finite one is replaced by ``a_b``.
+    """
+    a_in = acceleration_input(ims["eta_hat"], ims["f_b"], p["g"])
+    ok = ca.logic_and(ca.logic_and(is_finite(a_in[0]), is_finite(a_in[1])), is_finite(a_in[2]))
+    return select(ok, a_in, NAV.unpack(x_h)["a_b"]), ok
+
+
+def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
+    """The step's expressions ``(mem_next, y, diag)``.
+
+    The module docstring's 1-4.
+    """
+    lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
+    m, p, ims = lay.unpack(mem), estimator_params().unpack(p_est), IMU.unpack(imu)
+    deck = _latest_deck(m, DATALINK.unpack(pkts[-1]), t)
+    state = dict(x=m["x_h"], P=pattern.unpack(m["P_h"]), t_h=m["t_h"], pattern=pattern,
+                 blocks={}, sensors={})
+    for layout, pkt in zip(PACKETS, pkts, strict=True):
+        _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t)
+    x, P = state["x"], state["P"]
+    y = _output(output_predictor(x, m["hist"]), deck, ims, t, p)
+
+    a_in, imu_ok = _input(ims, x, p)
+    hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt))                # oldest first
+    x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern)
+
+    blk, sen = state["blocks"], state["sensors"]
+    flags = dict(
+        fused=ca.vertcat(*[blk[b]["fused"] for b in _BLOCK_NAMES]),
+        rejected=ca.vertcat(*[blk[b]["rejected"] for b in _BLOCK_NAMES]),
+        discarded=ca.vertcat(*[sen[s]["discarded"] for s in SENSORS]),
+        dropped=ca.vertcat(*[sen[s]["dropped"] for s in SENSORS]),
+        imu_invalid=ca.logic_not(imu_ok))
+    counters = dict(n_fused=m["n_fused"] + flags["fused"],
+                    n_rejected=m["n_rejected"] + flags["rejected"],
+                    n_discarded=m["n_discarded"] + flags["discarded"],
+                    n_dropped=m["n_dropped"] + flags["dropped"],
+                    n_imu_invalid=m["n_imu_invalid"] + flags["imu_invalid"])
+    fifos = []
+    for s in SENSORS:
+        fifos += [sen[s]["fifo"], sen[s]["count"]]
+    mem_next = ca.vertcat(
+        x_next, pattern.pack(P_next), state["t_h"] + hist[3, 0], ca.vec(hist[:, 1:]), *fifos,
+        deck["eta2"], deck["w2E"], deck["w2E_dot"], deck["tau"],
+        *[counters[f.name] for f in _counters()])
+    diag = ca.vertcat(
+        *[blk[b]["nu"] for b in _BLOCK_NAMES],
+        ca.vertcat(*[blk[b]["nis"] for b in _BLOCK_NAMES]),
+        *[flags[k] for k in ("fused", "rejected", "discarded", "dropped", "imu_invalid")],
+        *[counters[f.name] for f in _counters()],
+        x, ca.diag(P), state["t_h"])
+    return mem_next, y, diag
+
+
+_STEP_INPUTS = ["mem", "imu", *SENSORS, "p_est", "dt", "t"]
+
+
+@functools.cache
+def estimator_step_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
+                            coupling: str = "full") -> ca.Function:
+    """The navigation filter's step.
+
+    ``estimator_step(mem, imu, vision, gnss, range, datalink, p_est, dt, t)
+    -> (mem_next, y, diag)``
+
+    Parameters
+    ----------
+    n_hist : int
+        Horizon delay in periods, ``D = n_hist dt`` (:data:`N_HIST`).
+    depth : int or tuple of int
+        FIFO depth, every sensor or each (:data:`FIFO_DEPTH`).
+    coupling : str
+        ``full`` covariance or ``axes``: x, y, z decoupled, the range fused on
+        z with its x, y part as noise (E9a).
+
+    Notes
+    -----
+    Inputs: ``mem`` (:func:`estimator_memory`), ``imu``
+    (:data:`~symbolic.landing.navigation.IMU`), one packet per sensor
+    (:data:`~symbolic.landing.navigation.PACKETS`), ``p_est``
+    (:func:`~symbolic.landing.navigation.estimator_params`), the period
+    ``dt`` and the time ``t`` of this step (s). Outputs: ``mem_next``,
+    ``y`` (:data:`~symbolic.landing.controller.MEASUREMENT`, at ``t``) and
+    ``diag`` (:func:`estimator_diagnostics`). Equations (E1)-(E17) of
+    docs/estimator.md.
+    """
+    lay = estimator_memory(n_hist, depth, coupling)
+    mem, imu, p_est = lay.sym("mem"), IMU.sym("imu"), estimator_params().sym("p_est")
+    pkts = [layout.sym(layout.name) for layout in PACKETS]
+    dt, t = ca.SX.sym("dt"), ca.SX.sym("t")
+    mem_next, y, diag = _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t)
+    assert y.shape[0] == MEASUREMENT.size and diag.shape[0] == estimator_diagnostics().size
+    return ca.Function("estimator_step", [mem, imu, *pkts, p_est, dt, t],
+                       [mem_next, y, diag], _STEP_INPUTS, ["mem_next", "y", "diag"],
+                       {"cse": True})
+
+
+@functools.cache
+def estimator_init_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
+                            coupling: str = "full") -> ca.Function:
+    """The filter at handover as a Function.
+
+    ``estimator_init(x0, P0_diag, deck0, t0) -> mem``. The horizon starts at ``t0`` with
+    ``x0`` and a diagonal covariance; the input buffer holds ``n_hist`` empty periods
+    (``dt = 0``), so the horizon stays at ``t0`` until it has filled and the output is
+    ``x0`` propagated through the periods so far. ``deck0``
+    (:data:`~symbolic.landing.navigation.DECK_INIT`) stands for a broadcast at ``t0``
+    until one arrives; zeros mean a level deck heading along E's x, not rotating. The
+    FIFOs and counters are empty.
+    """
+    lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
+    x0, P0, deck0, t0 = NAV.sym("x0"), ca.SX.sym("P0_diag", NAV.size), DECK_INIT.sym(), \
+        ca.SX.sym("t0")
+    d = DECK_INIT.unpack(deck0)
+    values = dict(x_h=x0, P_h=pattern.pack(ca.diag(P0)), t_h=t0, deck_eta2=d["eta2"],
+                  deck_w2E=d["w2E"], deck_w2E_dot=d["w2E_dot"], deck_tau=t0)
+    mem = ca.vertcat(*[values[f.name] if f.name in values else ca.DM.zeros(f.size)
+                       for f in lay.fields])
+    return ca.Function("estimator_init", [x0, P0, deck0, t0], [ca.densify(mem)],
+                       ["x0", "P0_diag", "deck0", "t0"], ["mem"])
