@@ -180,8 +180,9 @@ def oscillator(v0, K, C, g_eff):
         return K * d(t) + C * d_dot(t)
 
     grid = np.linspace(1e-9, 2 * np.pi / w, 4001)
-    i = int(np.argmax(force(grid) < 0))
-    return d, d_dot, brentq(force, grid[i - 1], grid[i], xtol=1e-15)
+    below = np.flatnonzero(force(grid) < 0)
+    assert below.size, "no separation: gravity keeps the feet on the deck"
+    return d, d_dot, brentq(force, grid[below[0] - 1], grid[below[0]], xtol=1e-15)
 
 
 def peak_force(v0, K, C):

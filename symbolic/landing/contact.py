@@ -383,7 +383,8 @@ def stiffest_rate(p_quad, p_gear):
     rate ``N b_slip (1/m1 + h_cg^2 / I)`` (``I`` the smaller of ``Ix``,
     ``Iy``; the exact rate of a rank-one damper on ``diag(m1, I)``) and the
     yaw at ``b_slip sum(x_i^2 + y_i^2) / Iz``; the normal springs oscillate
-    at ``sqrt(N k / m1)`` and rock at ``sqrt(k sum x_i^2 / Iy)``. Classical
+    at ``sqrt(N k / m1)`` and rock at most at ``sqrt(k sum x_i^2 / Iy)`` (about
+    the centre, feet sliding freely; slower about pinned feet). Classical
     RK4 is stable for a step below ``RK4_REAL_STABILITY / stiffest_rate``;
     accuracy of the bounce asks ``h sqrt(N k / m1)`` of about 0.1
     (docs/contact.md).
