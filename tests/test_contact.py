@@ -573,6 +573,12 @@ def test_jacobian_matches_central_differences_where_the_model_is_smooth():
     foot0 = FOOT.unpack(np.array(f(x0[:16], x0[16:22], 0.0, -0.3, pv, pd, pg, pl)[2]).ravel())
     assert foot0["in_contact"].min() == 1.0 and foot0["slip"].min() > 0.01
     J = np.array(fn(x0)[1])
+    # At rest on a still deck (zero slip, exactly) the wrench's Jacobian is finite too.
+    still = params()
+    wrench = ca.vertcat(*f(x1q, xvs, t, np.inf, *(part(still, n) for n in
+                                                 ("p_veh", "p_deck", "p_gear", "p_lock")))[:2])
+    rest = state_on_deck(np.zeros(3), 2e-3)
+    assert np.isfinite(np.array(ca.Function("rest", [x], [ca.jacobian(wrench, x)])(rest))).all()
     step = 1e-6
     J_fd = np.column_stack([(np.array(fn(x0 + step * e)[0]) - np.array(fn(x0 - step * e)[0]))
                             .ravel() / (2 * step) for e in np.eye(x0.size)])

@@ -1,4 +1,4 @@
-"""The landing gear on the deck: feet, friction and a lock-down device.
+"""Landing gear on the deck: feet, friction, a lock-down device.
 
 Each of the :data:`N_FEET` feet (four feet, or two skids by their end
 points) is a point ``r_i`` fixed in the body frame. Against the deck plane
@@ -143,7 +143,7 @@ def smooth_penetration(delta, delta_eps):
 
 
 def _feet_kinematics(x1q, deck, r_feet):
-    """Per foot (columns): arm ``R1 r_i``, penetration, relative velocity; and R1."""
+    """R1, n2; per foot (columns) penetration and relative velocity."""
     q = QUAD6_STATE.unpack(x1q)
     R1 = rotation(q["eta1"])
     v1E, w1E = R1 @ q["V1"], R1 @ q["Omega1"]
@@ -195,9 +195,10 @@ def contact_wrench(x1q, xv, t, p_veh, p_deck, p_gear):
     push = k * delta_plus + c * sigma * delta_dot                       # N, Kelvin-Voigt
     F_n = ca.fmax(push, 0)                                              # never pulls
     v_t = v_rel - n2 @ (n2.T @ v_rel)                                   # slip, deck plane
-    slip = ca.sqrt(ca.sum1(v_t ** 2))                                   # m/s
+    slip2 = ca.sum1(v_t ** 2)                                           # (m/s)^2
     v_s2 = g["v_eps"] ** 2 + (mu * F_n / g["b_slip"]) ** 2             # (m/s)^2
-    scale = mu * F_n / ca.sqrt(slip ** 2 + v_s2)                        # N s/m
+    scale = mu * F_n / ca.sqrt(slip2 + v_s2)                            # N s/m, smooth at 0
+    slip = ca.sqrt(slip2)                                               # m/s, signal only
     F_E = n2 @ F_n - v_t * (ca.DM.ones(3, 1) @ scale)                   # N per foot, E
     F_B = R1.T @ F_E
     d_F = ca.sum2(F_B)
@@ -253,11 +254,13 @@ def lock_wrench(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock):
 
 @functools.cache
 def contact_function() -> ca.Function:
-    """``contact(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock) -> (d_F, d_M, foot, hold)``.
+    """The named Function ``contact``: the feet and the lock-down.
 
-    The feet (:func:`contact_wrench`) and the lock-down (:func:`lock_wrench`)
-    together: ``d_F``, ``d_M`` are their sum, body frame, to add to the
-    plant's disturbance; ``foot`` is :data:`FOOT`, ``hold`` :data:`HOLD`.
+    ``contact(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock) ->
+    (d_F, d_M, foot, hold)``: the feet (:func:`contact_wrench`) and the
+    lock-down (:func:`lock_wrench`) together: ``d_F``, ``d_M`` are their
+    sum, body frame, to add to the plant's disturbance; ``foot`` is
+    :data:`FOOT`, ``hold`` :data:`HOLD`.
     """
     x1q, xv, t, t_signal = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), ca.SX.sym("t"), \
         ca.SX.sym("t_signal")
@@ -273,7 +276,7 @@ def contact_function() -> ca.Function:
 
 
 def friction_margin(x1q, xv, t, F_other, p_quad, p_veh, p_deck, p_gear):
-    """Friction the feet need to hold a resting body, over what they can give.
+    """Friction a resting body needs over what its feet can give.
 
     The body is taken at rest on the deck at its pose in ``x1q`` (moving
     with the deck's material point under its centre): its centre
@@ -312,7 +315,10 @@ def friction_margin(x1q, xv, t, F_other, p_quad, p_veh, p_deck, p_gear):
 
 @functools.cache
 def friction_margin_function() -> ca.Function:
-    """``friction_margin(x1q, xv, t, F_other, p_quad, p_veh, p_deck, p_gear) -> margin``."""
+    """The named Function of :func:`friction_margin`.
+
+    ``friction_margin(x1q, xv, t, F_other, p_quad, p_veh, p_deck, p_gear) -> margin``.
+    """
     x1q, xv, t, F_other = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), ca.SX.sym("t"), \
         ca.SX.sym("F_other", 3)
     p_quad, p_veh, p_deck, p_gear = QUADROTOR.sym(), VEHICLE.sym(), DECK_PARAMS.sym(), \
@@ -330,7 +336,7 @@ def _casadi(v):
 
 
 def tip_over_angles(p_gear):
-    """Static tip-over angles of the gear about the body's x and y axes, rad.
+    """Static tip-over angles about the body's x and y axes, rad.
 
     ``atan(half_track / h_cg)``: ``h_cg`` is the centre's height above the
     feet's plane (the mean of ``-z_i``; the feet are taken coplanar and
@@ -351,7 +357,7 @@ def tip_over_angles(p_gear):
 
 @functools.cache
 def tip_over_function() -> ca.Function:
-    """``tip_over(p_gear) -> (roll, pitch)``: :func:`tip_over_angles`, rad."""
+    """``tip_over(p_gear) -> (roll, pitch)``: tip-over angles, rad."""
     p_gear = GEAR.sym()
     a = tip_over_angles(p_gear)
     return ca.Function("tip_over", [p_gear], [a[0], a[1]], ["p_gear"], ["roll", "pitch"])
@@ -376,7 +382,7 @@ RK4_REAL_STABILITY = 2.785293563405282
 
 
 def stiffest_rate(p_quad, p_gear):
-    """Largest eigenvalue magnitude the gear adds to a resting body, 1/s.
+    """Largest eigenvalue the gear adds to a resting body, 1/s.
 
     The friction's slope is at most ``b_slip`` per foot. Through the feet,
     ``h_cg`` below the centre, it damps the slide-and-rock motion at the
@@ -404,7 +410,7 @@ def stiffest_rate(p_quad, p_gear):
 
 
 def gear_defaults(surface: str = "ship_deck") -> dict:
-    """Default :data:`GEAR` values of a 2 kg quadrotor's gear on a surface.
+    """Default :data:`GEAR` values: a 2 kg quadrotor on a surface.
 
     Parameters
     ----------
