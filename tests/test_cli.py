@@ -344,3 +344,38 @@ def test_a_cvodes_failure_is_one_line(tmp_path):
     assert proc.returncode == 3
     (line,) = proc.stderr.strip().splitlines()
     assert line.startswith("quadland: error: integrator cvodes failed: CV_")
+
+
+# A command line that does not parse: one line naming the flag, exit 2 (argparse alone
+# prints its usage and a second line).
+
+@pytest.mark.parametrize("args, line", [
+    (["campaign", "--runs", "abc"], "--runs: must be an integer, got 'abc'"),
+    (["campaign", "--workers", "-"], "--workers: must be an integer, got '-'"),
+    (["margins", "--delay-periods", "1.5"], "--delay-periods: must be an integer, got '1.5'"),
+    (["margins", "--at", "x"], "--at: must be a number, got 'x'"),
+    (["margins", "--gain-margin-db", "six"], "--gain-margin-db: must be a number, got 'six'"),
+    (["simulate", "--out"], "--out: expected one argument"),
+    (["simulate", "--bogus"], "unrecognized arguments: --bogus (see quadland simulate --help)"),
+    (["codegen", "stray"], "unrecognized arguments: stray (see quadland codegen --help)"),
+    ([], "a command is required: simulate, codegen, margins or campaign"),
+    (["fly"], "unknown command 'fly': the commands are simulate, codegen, margins or campaign"),
+])
+def test_a_bad_command_line_is_one_line(tmp_path, capsys, monkeypatch, args, line):
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    std = capsys.readouterr()
+    assert std.out == ""
+    assert std.err.startswith(f"quadland: error: {line}")
+    assert len(std.err.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_bad_flag_type_through_the_console():
+    proc = _run("campaign", "--runs", "abc")
+    assert proc.returncode == 2
+    assert proc.stderr == "quadland: error: --runs: must be an integer, got 'abc'\n"
+    assert proc.stdout == ""
+    proc = _run("margins", "--help")                    # help is unchanged
+    assert proc.returncode == 0 and proc.stdout.startswith("usage: quadland margins")
+    assert proc.stderr == ""
