@@ -16,6 +16,8 @@ resume); 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import logging
+import os
 import sys
 import time
 import warnings
@@ -279,9 +281,50 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"quadland: error: {exc}", file=sys.stderr)
         return 2
+    _quiet_matplotlib()
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning
         return _dispatch(args)
+
+
+def _quiet_matplotlib() -> None:
+    """Keep matplotlib from adding lines to quadland's one.
+
+    Where its configuration and cache folder cannot be written (a read-only
+    home), matplotlib makes a temporary one and says so in two lines, even
+    when only imported (python-control imports it); here ``MPLCONFIGDIR``
+    names a private temporary folder first, removed at exit (and inherited by
+    a campaign's workers). Its log is limited to errors: a font cache it
+    cannot save (a full disk) is no concern of a run's.
+    """
+    logging.getLogger("matplotlib").setLevel(logging.ERROR)
+    if os.environ.get("MPLCONFIGDIR"):
+        return
+    home = Path.home()
+    if sys.platform.startswith(("linux", "freebsd")):
+        config = Path(os.environ.get("XDG_CONFIG_HOME") or home / ".config") / "matplotlib"
+        cache = Path(os.environ.get("XDG_CACHE_HOME") or home / ".cache") / "matplotlib"
+    else:
+        config = cache = home / ".matplotlib"
+    if all(_could_write(folder) for folder in (config, cache)):
+        return
+    import atexit
+    import shutil
+    import tempfile
+
+    folder = tempfile.mkdtemp(prefix="quadland-matplotlib-")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    os.environ["MPLCONFIGDIR"] = folder
+
+
+def _could_write(folder: Path) -> bool:
+    """Whether ``folder`` is, or could be made as, a writable folder (nothing is made)."""
+    path = folder
+    while not path.exists():
+        if path.parent == path:
+            return False
+        path = path.parent
+    return path.is_dir() and os.access(path, os.W_OK | os.X_OK)
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):

@@ -120,7 +120,7 @@ def _render(result: SimulationResult, plots: bool, animate: bool = False,
              "columns.json": strict_json(columns_sidecar(result.layout)),
              "summary.json": strict_json(summary),
              "scenario.toml": result.scenario.to_toml().encode("utf-8")}
-    drawing = _landing_plots() if landing else None
+    drawing = _landing_plots() if landing and (plots or animate) else None  # matplotlib
     if plots and len(result["t"]) > 1:
         if landing:
             draw = None if drawing is None else drawing.landing_figures
