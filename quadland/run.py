@@ -7,6 +7,7 @@ import tempfile
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.metrics import landing_summary, summarize
@@ -127,9 +128,10 @@ def _render(result: SimulationResult, plots: bool, animate: bool = False,
         else:
             from quadland.plots import simulation_figures as draw
         if draw is not None:
-            files.update({name: figure_png(fig) for name, fig in draw(result).items()})
+            with np.errstate(all="ignore"):        # a failed flight's diverged rows
+                files.update({name: figure_png(fig) for name, fig in draw(result).items()})
     if animate and drawing is not None and len(result["t"]) > 1:
-        with tempfile.TemporaryDirectory() as tmp:
+        with tempfile.TemporaryDirectory() as tmp, np.errstate(all="ignore"):
             files["landing.gif"] = drawing.landing_animation(
                 result, Path(tmp) / "landing.gif").read_bytes()
     return files
