@@ -379,3 +379,58 @@ def test_a_bad_flag_type_through_the_console():
     proc = _run("margins", "--help")                    # help is unchanged
     assert proc.returncode == 0 and proc.stdout.startswith("usage: quadland margins")
     assert proc.stderr == ""
+
+
+def test_animate_a_failed_flight_exits_3_with_the_partial_data(tmp_path):
+    """The pad's position reaches 1e296 m before the state is infinite: the animation
+    stopped with ``Axis limits -inf, inf``; now every file of a failed run is written."""
+    out = tmp_path / "out"
+    proc = _run("simulate", "--scenario", "turning", "--set", "vehicle.tau=[1e8,1e8,1e8]",
+                "--animate", "--out", str(out))
+    assert proc.returncode == 3, proc.stderr
+    (line,) = proc.stderr.splitlines()
+    assert line.startswith("quadland: error: flight failed at t = ")
+    assert _strict((out / "summary.json").read_text())["status"] == "failed"
+    assert (out / "landing.gif").read_bytes()[:6] == b"GIF89a"
+    from quadland.plots import LANDING_FIGURES
+
+    for name in LANDING_FIGURES:
+        assert (out / name).read_bytes()[:8] == PNG
+
+
+def _broken_home(tmp_path):
+    """An environment whose home cannot hold matplotlib's or quadland's folders, even for
+    root: a regular file on the path."""
+    import os
+
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("XDG_CONFIG_HOME", "XDG_CACHE_HOME", "MPLCONFIGDIR")}
+    return {**env, "HOME": str(afile / "home"), "TMPDIR": str(tmp_path)}
+
+
+def test_an_unwritable_home_adds_no_line_of_matplotlib(tmp_path):
+    """matplotlib said 2 lines of its temporary folder, even with --no-plots."""
+    env = _broken_home(tmp_path)
+    for args in (["margins", *SMALL, "--no-plots"], ["margins", *SMALL],
+                 ["simulate", "--scenario", "highway", "--set", "simulation.duration=0.1",
+                  "--no-plots"]):
+        out = tmp_path / f"out{len(list(tmp_path.iterdir()))}"
+        proc = subprocess.run([sys.executable, "-m", "quadland", *args, "--out", str(out)],
+                              capture_output=True, text=True, cwd=tmp_path, env=env,
+                              timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        lines = proc.stderr.splitlines()
+        assert len(lines) <= 1 and all(ln.startswith("quadland: warning: cannot use the "
+                                                     "build cache") for ln in lines), lines
+    assert not list(tmp_path.glob("quadland-matplotlib-*"))       # removed at exit
+
+
+def test_a_run_without_figures_does_not_import_matplotlib(tmp_path):
+    code = ("import sys; from quadland.run import run_simulation; "
+            f"run_simulation('highway', ['simulation.duration=0.1'], {str(tmp_path / 'o')!r}, "
+            "plots=False); print('matplotlib' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.stdout == "False\n", proc.stderr
