@@ -2,11 +2,32 @@
 
 The runtime never reads the source tree's ``generated/``: it compiles the
 text that ``symbolic`` generates for it, into a per-user cache folder
-(``$XDG_CACHE_HOME/quadland`` or ``~/.cache/quadland``), under a key made
-of the sources, the CasADi version, the compiler (path and ``--version``)
-and the flags. A library is built once and reused by every later process;
-a build happens in a temporary folder beside its target and is moved into
-place whole, so concurrent processes never load a half-written library.
+(``$XDG_CACHE_HOME/quadland`` or ``~/.cache/quadland``; :func:`cache_dir`), under
+a key made of the sources, the CasADi version, the compiler (path and
+``--version``) and the flags. A library is built once and reused by every
+later process; a build happens in a temporary folder beside its target and
+is moved into place whole, so concurrent processes never load a
+half-written library.
+
+What can go wrong is bounded or caught before a library is loaded:
+
+* **Cost.** Generated C grows with the RBF network (``rbf.nodes``), and an
+  optimizing compiler's memory and time grow about as the square of a
+  function's size (CasADi writes one C function per symbolic function):
+  the landing controller at ``l = 1000`` took 12.9 GB in ``cc1`` at -O2.
+  :func:`plan_build` estimates each unit's cost (:data:`COMPILE_FIT`) and
+  compiles a unit over :data:`COMPILE_MEMORY_BUDGET` or
+  :data:`COMPILE_TIME_BUDGET` at -O0 (one warning); the compilers run
+  together only within the memory budget.
+* **Corruption.** Each library's SHA-256 is recorded beside it at its
+  build; a library whose bytes differ (truncated, empty, damaged) or that
+  does not load is rebuilt once, and a compiler that writes no output, or a
+  disk that fills, is a :class:`~quadland.exceptions.CompileError`.
+* **Other users.** Libraries are only built into and loaded from folders of
+  the user's own that others cannot write; the fallback in the system's
+  temporary folder is checked, not trusted (:func:`cache_dir`).
+* **Killed builds.** A build folder is held with ``flock`` while it is in
+  use; one left by a killed process is removed by a later build.
 """
 
 from __future__ import annotations
@@ -97,11 +118,11 @@ COMPILE_TIME_BUDGET = 120.0
 OPT_LEVELS = ("-O2", "-O0")
 #: Fit of gcc 12's peak memory (bytes) and time (s) to compile one generated
 #: translation unit of ``S`` MB of C: ``a * S**b`` per optimization level.
-#: Measured on CasADi's output for the landing controller (l = 10 to 1000) and
-#: the paper's right-hand side (l = 100 to 1000), one ``cc1`` at a time on a
-#: loaded 2-core x86-64 (docs/simulation.md, "What a build may cost"). CasADi
-#: writes a function as one C function, so the optimizer's cost grows faster
-#: than the text: at -O2 about as its square.
+#: Fitted to gcc 12 on CasADi's output for the landing controller (l = 200 to
+#: 1000) and the paper's right-hand side (l = 300 and 1000), one ``cc1`` at a
+#: time on a loaded 2-core x86-64 (the table is ``MEASURED`` in
+#: tests/test_build.py). At -O2: 0.49 MB of C 649 MiB and 26 s, 0.69 MB 1150 MiB
+#: and 51 s, 1.1 MB 3.5 GiB and 163 s; at -O0 2.1 MB 1.7 GiB and 23 s.
 COMPILE_FIT = {"-O2": ((2574 * 2**20, 2.26), (120.0, 2.36)),
                "-O0": ((518 * 2**20, 1.56), (6.5, 1.19))}
 #: Version of the cache's layout (a library and its ``.sha256``), in every key:

@@ -47,7 +47,7 @@ __all__ = ["MAX_LOOP_STATES", "loop_states", "check_request", "Requirement", "Lo
 
 #: Most states of a linearized loop the review analyses: its cost grows about as the
 #: cube of the states (poles, frequency responses, disk margins). Measured on a loaded
-#: 2-core x86-64 with one BLAS thread (docs/margins.md): the highway loop with 300
+#: 2-core x86-64 with one BLAS thread, as the command line runs: the highway loop with 300
 #: delay periods (1,292 states) 65 s and 0.4 GB, with 400 (1,692) 172 s; the paper's
 #: continuous loop at l = 350 (1,410 states) 22 s and 0.5 GB.
 MAX_LOOP_STATES = 1500
