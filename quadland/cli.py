@@ -16,6 +16,8 @@ resume); 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import logging
+import os
 import sys
 import time
 import warnings
@@ -23,7 +25,7 @@ from pathlib import Path
 
 from quadland.exceptions import QuadlandError, SimulationError
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "UsageError"]
 
 #: Flag of each library parameter that a command passes on from one.
 _FLAGS = {"at": "--at", "out": "--out", "gain_margin_db": "--gain-margin-db",
@@ -32,12 +34,76 @@ _FLAGS = {"at": "--at", "out": "--out", "gain_margin_db": "--gain-margin-db",
           "delay_periods": "--delay-periods"}
 
 
+class UsageError(QuadlandError, ValueError):
+    """A command line that does not parse: an unknown flag, a value of the wrong type."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser that reports a bad command line as :class:`UsageError`.
+
+    argparse prints its usage and a second line, then exits; quadland's
+    promise is one line ``quadland: error: ...`` naming the flag, which
+    :func:`main` prints. Every subcommand's parser is of this class too
+    (``add_subparsers`` uses the parent's class).
+    """
+
+    def error(self, message: str):
+        raise UsageError(_usage_message(message, self.prog))
+
+    def parse_args(self, args=None, namespace=None):
+        """As argparse's, with an unknown argument blamed on its subcommand's help."""
+        parsed, extra = self.parse_known_args(args, namespace)
+        if extra:
+            prog = " ".join(filter(None, (self.prog, getattr(parsed, "command", None))))
+            raise UsageError(f"unrecognized arguments: {' '.join(extra)} (see {prog} --help)")
+        return parsed
+
+
+def _usage_message(message: str, prog: str) -> str:
+    """argparse's message as quadland's one line, naming the flag first."""
+    if message.startswith("the following arguments are required: COMMAND"):
+        return f"a command is required: {_COMMANDS} (see quadland --help)"
+    if message.startswith("argument COMMAND: invalid choice: "):
+        given = message.removeprefix("argument COMMAND: invalid choice: ").split(" (")[0]
+        return f"unknown command {given}: the commands are {_COMMANDS} (see quadland --help)"
+    if message.startswith("argument "):             # "argument --runs: ..."
+        return message.removeprefix("argument ")
+    if message.startswith("unrecognized arguments: "):
+        return f"{message} (see {prog} --help)"
+    return message
+
+
+#: The subcommands, as the messages list them.
+_COMMANDS = "simulate, codegen, margins or campaign"
+
+
+def _integer(text: str) -> int:
+    """An integer flag's value (argparse shows the message after the flag)."""
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+
+
+def _number(text: str) -> float:
+    """A number flag's value."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of every subcommand."""
+    """The argument parser of every subcommand.
+
+    A command line that does not parse raises :class:`UsageError` (one
+    line naming the flag) instead of printing argparse's usage and exiting;
+    ``--help`` and ``--version`` print and exit as usual.
+    """
     from quadland import __version__
     from quadland.margins import Requirement
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="quadland",
         description="Adaptive RBFNN backstepping landing of a quadrotor on a moving vehicle.")
     parser.add_argument("--version", action="version", version=f"quadland {__version__}")
@@ -78,17 +144,17 @@ def build_parser() -> argparse.ArgumentParser:
     mg = sub.add_parser("margins", help="linearize the closed loop and report its margins",
                         description="Stability margins of the linearized closed loop.")
     scenario_args(mg)
-    mg.add_argument("--at", type=float, metavar="T", default=None,
+    mg.add_argument("--at", type=_number, metavar="T", default=None,
                     help="linearize about the simulated state at time T (s) instead of the "
                          "closed loop's equilibrium (paper scenarios)")
     mg.add_argument("--out", type=Path, metavar="DIR",
                     help="output folder (default: a new folder named after the scenario "
                          "and the time)")
-    mg.add_argument("--gain-margin-db", type=float, default=Requirement.gain_margin_db,
+    mg.add_argument("--gain-margin-db", type=_number, default=Requirement.gain_margin_db,
                     metavar="DB", help="required gain margin (default: %(default)g dB)")
-    mg.add_argument("--phase-margin-deg", type=float, default=Requirement.phase_margin_deg,
+    mg.add_argument("--phase-margin-deg", type=_number, default=Requirement.phase_margin_deg,
                     metavar="DEG", help="required phase margin (default: %(default)g deg)")
-    mg.add_argument("--delay-periods", type=int, default=1, metavar="N",
+    mg.add_argument("--delay-periods", type=_integer, default=1, metavar="N",
                     help="control periods from sampling to commanding in the sampled loop "
                          "(default: %(default)d, flight code's one period)")
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
@@ -100,12 +166,12 @@ def build_parser() -> argparse.ArgumentParser:
                                     "summary.json and the figures. Running again into the same "
                                     "folder flies only the missing runs.")
     scenario_args(cp)
-    cp.add_argument("--runs", type=int, metavar="N",
+    cp.add_argument("--runs", type=_integer, metavar="N",
                     help="number of runs (default: the table's campaign.runs)")
     cp.add_argument("--out", type=Path, metavar="DIR",
                     help="campaign folder (default: a new folder named after the scenario "
                          "and the time)")
-    cp.add_argument("--workers", type=int, metavar="K",
+    cp.add_argument("--workers", type=_integer, metavar="K",
                     help="local processes (default: one per core; 1: in this process)")
     cp.add_argument("--scheduler", metavar="ADDRESS",
                     help="run on the dask.distributed scheduler at ADDRESS (tcp://HOST:PORT) "
@@ -210,10 +276,55 @@ def _message(exc: QuadlandError) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``quadland`` console script."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as exc:
+        print(f"quadland: error: {exc}", file=sys.stderr)
+        return 2
+    _quiet_matplotlib()
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning
         return _dispatch(args)
+
+
+def _quiet_matplotlib() -> None:
+    """Keep matplotlib from adding lines to quadland's one.
+
+    Where its configuration and cache folder cannot be written (a read-only
+    home), matplotlib makes a temporary one and says so in two lines, even
+    when only imported (python-control imports it); here ``MPLCONFIGDIR``
+    names a private temporary folder first, removed at exit (and inherited by
+    a campaign's workers). Its log is limited to errors: a font cache it
+    cannot save (a full disk) is no concern of a run's.
+    """
+    logging.getLogger("matplotlib").setLevel(logging.ERROR)
+    if os.environ.get("MPLCONFIGDIR"):
+        return
+    home = Path.home()
+    if sys.platform.startswith(("linux", "freebsd")):
+        config = Path(os.environ.get("XDG_CONFIG_HOME") or home / ".config") / "matplotlib"
+        cache = Path(os.environ.get("XDG_CACHE_HOME") or home / ".cache") / "matplotlib"
+    else:
+        config = cache = home / ".matplotlib"
+    if all(_could_write(folder) for folder in (config, cache)):
+        return
+    import atexit
+    import shutil
+    import tempfile
+
+    folder = tempfile.mkdtemp(prefix="quadland-matplotlib-")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    os.environ["MPLCONFIGDIR"] = folder
+
+
+def _could_write(folder: Path) -> bool:
+    """Whether ``folder`` is, or could be made as, a writable folder (nothing is made)."""
+    path = folder
+    while not path.exists():
+        if path.parent == path:
+            return False
+        path = path.parent
+    return path.is_dir() and os.access(path, os.W_OK | os.X_OK)
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):

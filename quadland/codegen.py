@@ -16,7 +16,10 @@ installed (non-editable) quadland, is written into a folder given with
 from __future__ import annotations
 
 import difflib
+import glob
+import os
 import re
+import stat
 import sys
 import tempfile
 from collections.abc import Iterable
@@ -27,12 +30,13 @@ import numpy as np
 from quadland.constants import TILT_MIN
 from quadland.exceptions import CodegenError
 from quadland.model import model_values
+from quadland.output import WorkFolder, fsync_dir, remove_abandoned
 from quadland.scenario import load_scenario, require_model
 from symbolic.codegen import Defaults, LandingDefaults, generate_tree
 
 __all__ = ["EXAMPLE_CONTROL_RATE_HZ", "PAPER_SCENARIO", "LANDING_SCENARIO", "checkout_root",
            "generated_dir", "default_values", "landing_default_values", "generated_files",
-           "stale", "write", "diff", "main"]
+           "stale", "write", "check_target", "diff", "main"]
 
 #: The scenarios whose values generated/ holds: the paper's control step's and
 #: the landing step's (with the example's flights).
@@ -191,8 +195,9 @@ def stale(out: Path, files: dict[str, str]) -> list[str]:
         if not rel or rel in files or Path(rel).is_absolute() or ".." in parts:
             continue
         path = out / rel
-        if not path.is_file() or path.is_symlink():
-            continue
+        if not path.is_file() or any((out / Path(*parts[:k])).is_symlink()
+                                     for k in range(1, len(parts) + 1)):
+            continue                       # never through a symbolic link
         try:
             head = path.read_text(encoding="utf-8")[:1000]
         except (OSError, UnicodeDecodeError):
@@ -203,20 +208,184 @@ def stale(out: Path, files: dict[str, str]) -> list[str]:
 
 
 def write(out: Path, files: dict[str, str]) -> list[str]:
-    """Write ``files`` under ``out`` and remove stale ones; return the paths that changed."""
-    changed, old = [], stale(out, files)       # from the former manifest, before it goes
-    for rel, text in sorted(files.items()):
-        path = out / rel
-        data = text.encode("utf-8")
-        if path.exists() and path.read_bytes() == data:
-            continue
+    """Write ``files`` under ``out`` and remove stale ones; return the paths that changed.
+
+    Every path is checked before anything is written, and nothing of the
+    user's is ever replaced: a file in the way that the former generation's
+    :data:`MANIFEST` does not list (unless it already holds exactly the
+    generated text), a folder or anything else where a file goes, a file
+    where a folder goes, and a symbolic link anywhere under ``out`` on a
+    written path are refused, naming the path. The changed files are then
+    written whole into a hidden folder inside ``out`` (a new ``out``: beside
+    it) and renamed into place, the manifest last; a new ``out`` appears
+    whole or not at all.
+
+    Raises
+    ------
+    CodegenError
+        ``"out: ..."``, naming what is in the way or cannot be written;
+        nothing under ``out`` has changed then.
+    """
+    out = Path(out)
+    _check_tree(out, files)
+    old = stale(out, files)                  # from the former manifest, before it goes
+    changed = [rel for rel, text in sorted(files.items())
+               if not _holds(out / rel, text.encode("utf-8"))]
+    if not changed and not old:
+        return []
+    try:
+        if not out.exists():
+            out.parent.mkdir(parents=True, exist_ok=True)
+            remove_abandoned(out.parent, f".{glob.escape(out.name)}.codegen-*")
+            with WorkFolder(out.parent, f".{out.name}.codegen-") as work:
+                _stage(work.path, files, files)
+                os.chmod(work.path, 0o777 & ~_umask())
+                os.rename(work.path, out)
+            fsync_dir(out.parent)
+            return changed
+        remove_abandoned(out, f"{MANIFEST}.tmp-*")           # left by a killed generation
+        with WorkFolder(out, f"{MANIFEST}.tmp-") as work:
+            _stage(work.path, files, changed)
+            _check_tree(out, files)          # nothing moved in meanwhile
+            for rel in sorted(changed, key=lambda r: r == MANIFEST):     # the manifest last
+                (out / rel).parent.mkdir(parents=True, exist_ok=True)
+                os.replace(work.path / rel, out / rel)
+            for rel in old:
+                (out / rel).unlink()
+            for folder in {(out / rel).parent for rel in (*changed, *old)}:
+                fsync_dir(folder)
+    except OSError as exc:
+        raise CodegenError(f"out: cannot write {out}: {exc.strerror or exc}") from None
+    return changed + old
+
+
+def _umask() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return umask
+
+
+def _holds(path: Path, data: bytes) -> bool:
+    """Whether ``path`` is a regular file (not a link) holding exactly ``data``."""
+    try:
+        if not stat.S_ISREG(os.lstat(path).st_mode):
+            return False
+        return path.stat().st_size == len(data) and path.read_bytes() == data
+    except OSError:
+        return False
+
+
+def _stage(folder: Path, files: dict[str, str], names: Iterable[str]) -> None:
+    """Write ``names`` of ``files`` under ``folder``, each synced to disk."""
+    mode = 0o666 & ~_umask()
+    for rel in names:
+        path = folder / rel
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(data)
-        changed.append(rel)
-    for rel in old:
-        (out / rel).unlink()
-        changed.append(rel)
-    return changed
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(files[rel].encode("utf-8"))
+            fh.flush()
+            os.fsync(fh.fileno())
+    for path in sorted({(folder / rel).parent for rel in names}, key=lambda q: -len(q.parts)):
+        fsync_dir(path)
+
+
+def _listed(out: Path) -> set[str]:
+    """The files the former generation's manifest lists (none without a regular one)."""
+    manifest = out / MANIFEST
+    try:
+        if not stat.S_ISREG(os.lstat(manifest).st_mode):
+            return set()
+        return set(manifest.read_text(encoding="utf-8").splitlines())
+    except (OSError, UnicodeDecodeError):
+        return set()
+
+
+def _check_tree(out: Path, files: dict[str, str]) -> None:
+    """Refuse, naming it, anything under ``out`` that a write of ``files`` would replace
+    and that is not the former generation's own."""
+    try:
+        st = os.lstat(out)
+    except FileNotFoundError:
+        return                                     # a new folder: nothing in the way
+    except OSError as exc:
+        raise CodegenError(f"out: cannot write {out}: {exc.strerror or exc}") from None
+    if stat.S_ISLNK(st.st_mode):
+        raise CodegenError(f"out: {out} is a symbolic link; give the folder itself")
+    if not stat.S_ISDIR(st.st_mode):
+        raise CodegenError(f"out: {out} exists and is not a folder")
+    listed, seen = _listed(out), {}
+    for rel, text in sorted(files.items()):
+        parts = Path(rel).parts
+        for depth in range(1, len(parts) + 1):
+            sub = Path(*parts[:depth])
+            if sub in seen:
+                continue
+            path = out / sub
+            try:
+                mode = os.lstat(path).st_mode
+            except FileNotFoundError:
+                seen[sub] = None
+                break                              # nothing below it exists either
+            except OSError as exc:
+                raise CodegenError(f"out: cannot write {path}: {exc.strerror or exc}") from None
+            seen[sub] = mode
+            last = depth == len(parts)
+            if stat.S_ISLNK(mode):
+                raise CodegenError(f"out: {path} is a symbolic link; quadland codegen writes "
+                                   "no file through one (remove it or choose another folder)")
+            if not last and not stat.S_ISDIR(mode):
+                raise CodegenError(f"out: {path} is in the way (the generated tree needs a "
+                                   "folder there); move it or choose another folder")
+            if last and not stat.S_ISREG(mode):
+                raise CodegenError(f"out: {path} is in the way (the generated tree writes a "
+                                   "file there); move it or choose another folder")
+            if last and rel != MANIFEST and rel not in listed \
+                    and not _holds(path, text.encode("utf-8")):
+                raise CodegenError(f"out: {path} was not written by quadland codegen (the "
+                                   f"folder's {MANIFEST} does not list it); move it or "
+                                   "choose another folder")
+    for folder in [out, *(out / sub for sub, mode in seen.items()
+                          if mode is not None and stat.S_ISDIR(mode))]:
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise CodegenError(f"out: cannot write {folder}: permission denied")
+
+
+def check_target(out: Path) -> None:
+    """Refuse an ``--out`` that a generated tree must not be written into.
+
+    The current folder or one that holds it, the ``quadland`` and
+    ``symbolic`` packages (of the install and of the checkout), a folder
+    inside them or holding them, and the checkout's root are refused; the
+    checkout's ``generated/`` is allowed.
+
+    Raises
+    ------
+    CodegenError
+        ``"out: ..."``, naming the folder.
+    """
+    target = Path(os.path.abspath(out))
+    real = target.resolve()
+    cwd = Path.cwd().resolve()
+    if real == cwd or real in cwd.parents:
+        raise CodegenError(f"out: {out} is the current folder or holds it; give the generated "
+                           "tree a folder of its own (e.g. --out generated-c)")
+    import quadland
+    import symbolic
+
+    packages = {Path(quadland.__file__).resolve().parent,
+                Path(symbolic.__file__).resolve().parent,
+                _package_parent() / "quadland", _package_parent() / "symbolic"}
+    root = checkout_root()
+    if root is not None and real == root.resolve():
+        raise CodegenError(f"out: {out} is the source checkout's root; choose a folder of its "
+                           "own (the checkout's code goes to generated/)")
+    for package in sorted(packages):
+        where = ("is" if real == package else "lies in" if package in real.parents
+                 else "holds" if real in package.parents else None)
+        if where:
+            raise CodegenError(f"out: {out} {where} the package folder {package}; choose a "
+                               "folder of its own")
 
 
 def diff(out: Path, files: dict[str, str]) -> str:
@@ -291,8 +460,12 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
             raise CodegenError(f"generated/ holds the {PAPER_SCENARIO} and {LANDING_SCENARIO} "
                                "scenarios' code; write another scenario's with --out DIR")
     out = Path(out)
+    if out.is_symlink():
+        raise CodegenError(f"out: {out} is a symbolic link; give the folder itself")
     if out.exists() and not out.is_dir():
         raise CodegenError(f"out: {out} exists and is not a folder")
+    if given is not None:
+        check_target(out)
     if load_scenario(scenario, overrides).model == "landing":
         files = generated_files(landing=landing_default_values(scenario, overrides))
     else:
@@ -309,10 +482,7 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
             return 1
         print(f"quadland: {out} is up to date ({len(files)} files)")
         return 0
-    try:
-        changed = write(out, files)
-    except OSError as exc:
-        raise CodegenError(f"out: cannot write {out}: {exc.strerror or exc}") from None
+    changed = write(out, files)
     removed = sum(not (out / rel).exists() for rel in changed)
     print(f"quadland: wrote {len(changed) - removed} of {len(files)} files in {out}"
           + (f", removed {removed} stale" if removed else ""))

@@ -372,10 +372,18 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
     (part ``"sampled_flight"``: the paper's control step, or the landing's
     guidance and step) exists only compiled.
 
+    A compiler that fails, a cache that cannot be written (a full disk), a
+    library that does not load or C over the build's budgets
+    (``quadland.build.plan_build``) also give the VM after one warning; the
+    flight code has no VM fallback and raises.
+
     Raises
     ------
     CompilerNotFoundError
         For ``"sampled_flight"`` without a C compiler.
+    CompileError
+        For ``"sampled_flight"`` when its build fails (one line; a budget
+        refusal names ``rbf.nodes``).
     """
     if part not in SIMULATOR_PARTS:
         raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
@@ -398,10 +406,15 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
         flight_sources = c_sources(({"paper": "control_step", "landing": "landing_step"}[model],))
     try:
         return CompiledLoop(loop, part, flight=flight, flight_sources=flight_sources)
-    except CompileError as exc:
+    except (CompileError, OSError, AttributeError) as exc:
+        # A broken compiler or cache (the build checks the library loads; a library
+        # without the driver's symbols is the last resort): CasADi's VM still works.
+        text = (str(exc) or repr(exc)).splitlines()[0]
+        why = text if isinstance(exc, CompileError) else \
+            f"the compiled simulator does not load: {text}"
         if part == "sampled_flight":
-            raise
-        _warn_compile_failed(str(exc))           # a broken compiler: CasADi's VM still works
+            raise CompileError(why) from None
+        _warn_compile_failed(why)
         return VMLoop(loop, part)
 
 

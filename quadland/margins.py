@@ -41,8 +41,16 @@ if TYPE_CHECKING:
     from quadland.linearize import LinearModels, OperatingPoint
     from quadland.scenario import Scenario
 
-__all__ = ["check_request", "Requirement", "LoopMargins", "MultiloopDiskMargin", "Pole",
-           "PoleSummary", "LoopReport", "MarginReport", "margin_report", "format_report"]
+__all__ = ["MAX_LOOP_STATES", "loop_states", "check_request", "Requirement", "LoopMargins",
+           "MultiloopDiskMargin", "Pole", "PoleSummary", "LoopReport", "MarginReport",
+           "margin_report", "format_report"]
+
+#: Most states of a linearized loop the review analyses: its cost grows about as the
+#: cube of the states (poles, frequency responses, disk margins). Measured on a loaded
+#: 2-core x86-64 with one BLAS thread, as the command line runs: the highway loop with 300
+#: delay periods (1,292 states) 65 s and 0.4 GB, with 400 (1,692) 172 s; the paper's
+#: continuous loop at l = 350 (1,410 states) 22 s and 0.5 GB.
+MAX_LOOP_STATES = 1500
 
 #: Where the loop is broken, as ``margins.json`` states it.
 LOOP_BREAK = "plant input u (eq. 6), L = -K P, negative feedback"
@@ -427,10 +435,44 @@ def check_request(scenario: Scenario, at: float | None = None, delay_periods: in
     if isinstance(delay_periods, bool) or not isinstance(delay_periods, int | np.integer) \
             or delay_periods < 0:
         raise MarginsError(f"delay_periods: must be an integer >= 0, got {delay_periods!r}")
+    base, per_period = loop_states(scenario)
+    if base > MAX_LOOP_STATES:
+        raise MarginsError(
+            f"rbf.nodes: the loop of {scenario.data['rbf']['nodes']} nodes has {base:,} states, "
+            f"over the {MAX_LOOP_STATES:,} the margin review analyses (its cost grows as the "
+            "cube of the states); lower rbf.nodes")
+    if float(scenario.data["controller"]["rate_hz"]) > 0:
+        most = (MAX_LOOP_STATES - base) // per_period
+        if delay_periods > most:
+            raise MarginsError(
+                f"delay_periods: must be at most {most} for this loop (each period adds "
+                f"{per_period} states to its {base:,}, and the margin review analyses at most "
+                f"{MAX_LOOP_STATES:,}), got {delay_periods}")
     if at is not None:
         from quadland.linearize import check_frozen_time
 
         check_frozen_time(scenario, at)
+
+
+def loop_states(scenario: Scenario) -> tuple[int, int]:
+    """States of the scenario's loop, and how many each period of delay adds.
+
+    The loop's state in the simulators (``quadland.compiled.LOOPS``: plant
+    and controller, at least as many as the linearization keeps), plus the
+    held previous command with ``controller.hold_compensation > 0``; a
+    period of computation delay adds one held command (4 inputs).
+
+    Returns
+    -------
+    tuple of int
+        ``(states, states per delay period)``.
+    """
+    from quadland.compiled import LOOPS
+
+    loop = LOOPS[scenario.model](int(scenario.data["rbf"]["nodes"]))
+    m = loop.held.size
+    hold = float(scenario.data["controller"].get("hold_compensation", 0.0))
+    return loop.state.size + (m if hold else 0), m
 
 
 def margin_report(scenario: Scenario, at: float | None = None,

@@ -24,6 +24,7 @@ import json
 import math
 import os
 import shutil
+import stat
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -33,7 +34,8 @@ import numpy as np
 from quadland.exceptions import OutputError
 
 __all__ = ["PNG_DPI", "MARKER", "OutputFolder", "output_folder", "write_files", "figure_png",
-           "json_ready", "strict_json", "write_bytes_atomic", "write_text_atomic"]
+           "json_ready", "strict_json", "write_bytes_atomic", "write_text_atomic",
+           "lock_folder", "unlock_folder", "fsync_dir", "WorkFolder", "remove_abandoned"]
 
 #: Resolution of the figures written, dots per inch.
 PNG_DPI = 110
@@ -389,3 +391,77 @@ def write_bytes_atomic(path, data: bytes) -> None:
 def write_text_atomic(path, text: str) -> None:
     """Write UTF-8 ``text`` to ``path`` atomically (see :func:`write_bytes_atomic`)."""
     write_bytes_atomic(path, text.encode("utf-8"))
+
+
+class WorkFolder:
+    """A private temporary folder that its process holds while it lives.
+
+    ``mkdtemp`` under ``parent`` (mode 0700), with an exclusive ``flock`` on
+    the folder itself for as long as it is open: :func:`remove_abandoned`
+    removes such folders only when no live process holds them (a process
+    killed by SIGKILL drops its locks with it). Use as a context manager;
+    leaving it removes the folder.
+
+    Parameters
+    ----------
+    parent : path-like
+        Where to make it (on the file system of what it will be moved to).
+    prefix : str
+        Start of its name, e.g. ``".build-"``.
+    """
+
+    def __init__(self, parent: str | os.PathLike, prefix: str):
+        self.path = Path(tempfile.mkdtemp(prefix=prefix, dir=parent))
+        try:
+            self._fd: int | None = os.open(self.path, os.O_RDONLY | os.O_DIRECTORY)
+            fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self.close()
+            raise
+
+    def close(self) -> None:
+        """Remove the folder (whatever it still holds) and drop the lock."""
+        _remove(self.path)
+        if self._fd is not None:
+            fd, self._fd = self._fd, None
+            os.close(fd)
+
+    def __enter__(self) -> WorkFolder:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def remove_abandoned(parent: str | os.PathLike, pattern: str, min_age_s: float = 60.0) -> int:
+    """Remove the folders ``parent/pattern`` that no live process holds; return how many.
+
+    A folder is abandoned when it is older than ``min_age_s`` (by its
+    modification time: a folder just made is not locked yet) and its
+    :class:`WorkFolder` lock can be taken. Symbolic links and files that
+    match are left alone. Nothing is raised: what cannot be removed stays.
+    """
+    import time
+
+    removed, now = 0, time.time()
+    for path in Path(parent).glob(pattern):
+        try:
+            st = os.lstat(path)
+            if not stat.S_ISDIR(st.st_mode) or now - st.st_mtime < min_age_s:
+                continue
+            fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            continue                                         # held by a live process
+        try:
+            shutil.rmtree(path)
+            removed += 1
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+    return removed

@@ -7,6 +7,7 @@ import tempfile
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.metrics import landing_summary, summarize
@@ -120,16 +121,17 @@ def _render(result: SimulationResult, plots: bool, animate: bool = False,
              "columns.json": strict_json(columns_sidecar(result.layout)),
              "summary.json": strict_json(summary),
              "scenario.toml": result.scenario.to_toml().encode("utf-8")}
-    drawing = _landing_plots() if landing else None
+    drawing = _landing_plots() if landing and (plots or animate) else None  # matplotlib
     if plots and len(result["t"]) > 1:
         if landing:
             draw = None if drawing is None else drawing.landing_figures
         else:
             from quadland.plots import simulation_figures as draw
         if draw is not None:
-            files.update({name: figure_png(fig) for name, fig in draw(result).items()})
+            with np.errstate(all="ignore"):        # a failed flight's diverged rows
+                files.update({name: figure_png(fig) for name, fig in draw(result).items()})
     if animate and drawing is not None and len(result["t"]) > 1:
-        with tempfile.TemporaryDirectory() as tmp:
+        with tempfile.TemporaryDirectory() as tmp, np.errstate(all="ignore"):
             files["landing.gif"] = drawing.landing_animation(
                 result, Path(tmp) / "landing.gif").read_bytes()
     return files

@@ -344,3 +344,93 @@ def test_a_cvodes_failure_is_one_line(tmp_path):
     assert proc.returncode == 3
     (line,) = proc.stderr.strip().splitlines()
     assert line.startswith("quadland: error: integrator cvodes failed: CV_")
+
+
+# A command line that does not parse: one line naming the flag, exit 2 (argparse alone
+# prints its usage and a second line).
+
+@pytest.mark.parametrize("args, line", [
+    (["campaign", "--runs", "abc"], "--runs: must be an integer, got 'abc'"),
+    (["campaign", "--workers", "-"], "--workers: must be an integer, got '-'"),
+    (["margins", "--delay-periods", "1.5"], "--delay-periods: must be an integer, got '1.5'"),
+    (["margins", "--at", "x"], "--at: must be a number, got 'x'"),
+    (["margins", "--gain-margin-db", "six"], "--gain-margin-db: must be a number, got 'six'"),
+    (["simulate", "--out"], "--out: expected one argument"),
+    (["simulate", "--bogus"], "unrecognized arguments: --bogus (see quadland simulate --help)"),
+    (["codegen", "stray"], "unrecognized arguments: stray (see quadland codegen --help)"),
+    ([], "a command is required: simulate, codegen, margins or campaign"),
+    (["fly"], "unknown command 'fly': the commands are simulate, codegen, margins or campaign"),
+])
+def test_a_bad_command_line_is_one_line(tmp_path, capsys, monkeypatch, args, line):
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    std = capsys.readouterr()
+    assert std.out == ""
+    assert std.err.startswith(f"quadland: error: {line}")
+    assert len(std.err.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_bad_flag_type_through_the_console():
+    proc = _run("campaign", "--runs", "abc")
+    assert proc.returncode == 2
+    assert proc.stderr == "quadland: error: --runs: must be an integer, got 'abc'\n"
+    assert proc.stdout == ""
+    proc = _run("margins", "--help")                    # help is unchanged
+    assert proc.returncode == 0 and proc.stdout.startswith("usage: quadland margins")
+    assert proc.stderr == ""
+
+
+def test_animate_a_failed_flight_exits_3_with_the_partial_data(tmp_path):
+    """The pad's position reaches 1e296 m before the state is infinite: the animation
+    stopped with ``Axis limits -inf, inf``; now every file of a failed run is written."""
+    out = tmp_path / "out"
+    proc = _run("simulate", "--scenario", "turning", "--set", "vehicle.tau=[1e8,1e8,1e8]",
+                "--animate", "--out", str(out))
+    assert proc.returncode == 3, proc.stderr
+    (line,) = proc.stderr.splitlines()
+    assert line.startswith("quadland: error: flight failed at t = ")
+    assert _strict((out / "summary.json").read_text())["status"] == "failed"
+    assert (out / "landing.gif").read_bytes()[:6] == b"GIF89a"
+    from quadland.plots import LANDING_FIGURES
+
+    for name in LANDING_FIGURES:
+        assert (out / name).read_bytes()[:8] == PNG
+
+
+def _broken_home(tmp_path):
+    """An environment whose home cannot hold matplotlib's or quadland's folders, even for
+    root: a regular file on the path."""
+    import os
+
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("XDG_CONFIG_HOME", "XDG_CACHE_HOME", "MPLCONFIGDIR")}
+    return {**env, "HOME": str(afile / "home"), "TMPDIR": str(tmp_path)}
+
+
+def test_an_unwritable_home_adds_no_line_of_matplotlib(tmp_path):
+    """matplotlib said 2 lines of its temporary folder, even with --no-plots."""
+    env = _broken_home(tmp_path)
+    for args in (["margins", *SMALL, "--no-plots"], ["margins", *SMALL],
+                 ["simulate", "--scenario", "highway", "--set", "simulation.duration=0.1",
+                  "--no-plots"]):
+        out = tmp_path / f"out{len(list(tmp_path.iterdir()))}"
+        proc = subprocess.run([sys.executable, "-m", "quadland", *args, "--out", str(out)],
+                              capture_output=True, text=True, cwd=tmp_path, env=env,
+                              timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        lines = proc.stderr.splitlines()
+        assert len(lines) <= 1 and all(ln.startswith("quadland: warning: cannot use the "
+                                                     "build cache") for ln in lines), lines
+    assert not list(tmp_path.glob("quadland-matplotlib-*"))       # removed at exit
+
+
+def test_a_run_without_figures_does_not_import_matplotlib(tmp_path):
+    code = ("import sys; from quadland.run import run_simulation; "
+            f"run_simulation('highway', ['simulation.duration=0.1'], {str(tmp_path / 'o')!r}, "
+            "plots=False); print('matplotlib' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.stdout == "False\n", proc.stderr

@@ -212,6 +212,55 @@ def test_delay_periods_must_be_a_count():
             margin_report(load_scenario("paper", SMALL), delay_periods=bad)
 
 
+@pytest.mark.parametrize("name, overrides", [
+    ("paper", [*SMALL, "controller.rate_hz=50"]),
+    ("paper", [*SMALL, "controller.rate_hz=50", "controller.hold_compensation=0.5"]),
+    ("highway", []),
+])
+def test_loop_states_bound_the_linearized_loop(name, overrides):
+    """The budget's count is at least the linearized loop's states, and each period of
+    delay adds exactly what the linearization adds."""
+    from quadland.linearize import equilibrium, sampled_models
+    from quadland.margins import loop_states
+
+    sc = load_scenario(name, overrides)
+    base, per_period = loop_states(sc)
+    point, rate = equilibrium(sc), float(sc.data["controller"]["rate_hz"])
+    sizes = [sampled_models(sc, point, rate, d).loop_input.nstates for d in (0, 1, 3)]
+    assert sizes[0] <= base
+    assert sizes[1] - sizes[0] == per_period == 4 and sizes[2] - sizes[0] == 3 * per_period
+
+
+def test_delay_periods_are_bounded_by_the_loop_s_size():
+    """A delay line of a million periods ran out of memory after the folder was claimed;
+    the bound leaves the delayed loop within MAX_LOOP_STATES."""
+    from quadland.margins import MAX_LOOP_STATES, check_request, loop_states
+
+    sc = load_scenario("highway")
+    base, per_period = loop_states(sc)
+    most = (MAX_LOOP_STATES - base) // per_period
+    check_request(sc, None, most)
+    assert base + most * per_period <= MAX_LOOP_STATES < base + (most + 1) * per_period
+    for bad in (most + 1, 2_000, 1_000_000, 10**400):
+        with pytest.raises(MarginsError, match=rf"^delay_periods: must be at most {most} for "
+                                               rf"this loop .*, got {bad}$"):
+            check_request(sc, None, bad)
+    # a continuous-time loop has no delay line: the count is not used
+    check_request(load_scenario("paper", SMALL), None, 1_000_000)
+    with pytest.raises(MarginsError, match=r"^rbf\.nodes: the loop of 1000 nodes has 4,0"):
+        check_request(load_scenario("paper", ["rbf.nodes=1000"]), None, 1)
+
+
+def test_a_huge_delay_is_one_line_before_the_folder_is_claimed(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["margins", "--scenario", "highway", "--delay-periods", "1000000",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("quadland: error: --delay-periods: must be at most ")
+    assert len(err.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_hold_compensation_trades_nyquist_gain_for_phase(sampled):
     """At z = -1 the extrapolation 1 + k - k/z is exactly 1 + 2k and real: with
     k = 1/2 the gain margin at the Nyquist frequency shrinks by 20 log10(2) dB,

@@ -166,3 +166,45 @@ def test_glob_characters_in_a_name_touch_no_other_run(tmp_path):
     other.mkdir()
     write_files(tmp_path / "run[1]", {"x.json": b"{}"})
     assert other.is_dir()                         # '[1]' is not a pattern
+
+
+# --- work folders held while in use, removed once abandoned --------------------------
+
+def test_remove_abandoned_takes_only_old_unheld_folders(tmp_path):
+    import os
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    from quadland.output import WorkFolder, remove_abandoned
+
+    old = time.time() - 3600
+    abandoned, young = tmp_path / ".w-abandoned", tmp_path / ".w-young"
+    for p in (abandoned, young):
+        p.mkdir()
+        (p / "x").write_text("x")
+    link = tmp_path / ".w-link"
+    link.symlink_to(abandoned)
+    # held by another live process: its flock, not this process's
+    code = ("import sys, time; from quadland.output import WorkFolder; "
+            f"w = WorkFolder({str(tmp_path)!r}, '.w-other-'); print(w.path, flush=True); "
+            "sys.stdin.read()")
+    other = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE,
+                             stdout=subprocess.PIPE, text=True)
+    try:
+        held_elsewhere = Path(other.stdout.readline().strip())
+        with WorkFolder(tmp_path, ".w-") as held:
+            for p in (abandoned, held.path, held_elsewhere, link):
+                os.utime(p, (old, old), follow_symlinks=False)
+            assert remove_abandoned(tmp_path, ".w-*", 60) == 1
+            assert not abandoned.exists() and link.is_symlink()        # a link is left alone
+            assert held.path.exists() and held_elsewhere.exists() and young.exists()
+        assert not held.path.exists()                     # leaving removes it
+    finally:
+        other.stdin.close()
+        other.wait(timeout=60)
+    # the holder is gone (as after SIGKILL, its lock went with it)
+    os.utime(held_elsewhere, (old, old))
+    assert held_elsewhere.exists() and remove_abandoned(tmp_path, ".w-*", 60) == 1
+    assert not held_elsewhere.exists()

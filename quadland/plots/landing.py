@@ -25,6 +25,7 @@ from matplotlib.patches import Patch
 from PIL import Image
 
 from quadland.exceptions import QuadlandError
+from quadland.plots.finite import drawable
 from quadland.plots.simulation import _finish
 from quadland.scenario import Scenario
 from symbolic.guidance import PHASES, TOUCHDOWN
@@ -59,6 +60,9 @@ _PHASE_COLORS = ("#9ecae1", "#fdd0a2", "#a1d99b", "#fc9272", "#bcbddc")
 
 #: s, the longest animation: a longer landing is played faster.
 _MAX_PLAYBACK = 12.0
+#: m, farthest from E's origin the animation follows a body: a failed flight that
+#: leaves this box (or whose pose stops being finite) is animated up to the row before.
+_SCENE_EXTENT = 1e6
 
 
 class LandingResult(Protocol):
@@ -385,6 +389,7 @@ def landing_figures(result: LandingResult, limits: Mapping | None = None) -> dic
     dict of str to matplotlib.figure.Figure
         Keys are those of :data:`LANDING_FIGURES`, in that order.
     """
+    result = drawable(result)                 # a failed flight's last rows may diverge
     figs = (trajectory_3d_plot(result), relative_position_plot(result, limits),
             ground_track_plot(result), rotor_forces_plot(result, limits))
     return dict(zip(LANDING_FIGURES, figs, strict=True))
@@ -490,7 +495,8 @@ def landing_animation(result: LandingResult, path, fps: float = 20,
     Frames are rows evenly spaced in time: a landing of ``T`` seconds plays
     in ``min(T, 12)`` seconds, ``round(min(T, 12) * fps) + 1`` frames (at
     most one per row), a longer one sped up, as the text says. The same
-    result gives the same file.
+    result gives the same file. A failed flight is animated up to its last
+    row whose poses are finite and within 1e6 m of E's origin.
 
     Examples
     --------
@@ -514,16 +520,23 @@ def landing_animation(result: LandingResult, path, fps: float = 20,
         raise QuadlandError(f"landing_animation: cannot write {path.name!r}; "
                             "the animation is a .gif or an .mp4")
 
+    result = drawable(result)
     lim = landing_limits(result, limits)
     pad = _pad_size(result)
     arm = float(result.scenario.data.get("quadrotor", {}).get("arm_length", 0.25))
-    t = np.asarray(result["t"], dtype=float)
-    phase = np.asarray(result["phase"]).astype(int)
     p1 = np.column_stack([result[n] for n in ("x1", "y1", "z1")]).astype(float)
     p2 = np.column_stack([result[n] for n in ("x2", "y2", "z2")]).astype(float)
-    R1 = _rotation(result["phi1"], result["theta1"], result["psi1"])
-    offset = np.hypot(result["x_e"], result["y_e"])
-    z_ground = min(0.0, float(p1[:, 2].min()), float(p2[:, 2].min()))
+    angles = np.column_stack([result[n] for n in ("phi1", "theta1", "psi1", "phi2", "theta2",
+                                                  "psi2", "x_e", "y_e", "z_e")])
+    sane = (np.all(np.abs(p1) <= _SCENE_EXTENT, axis=1)
+            & np.all(np.abs(p2) <= _SCENE_EXTENT, axis=1) & np.all(np.isfinite(angles), axis=1))
+    n = max(1, int(np.argmin(sane)) if not sane.all() else len(sane))   # the rows drawn
+    t = np.asarray(result["t"], dtype=float)[:n]
+    phase = np.asarray(result["phase"])[:n].astype(int)
+    p1, p2 = p1[:n], p2[:n]
+    R1 = _rotation(result["phi1"][:n], result["theta1"][:n], result["psi1"][:n])
+    offset = np.hypot(result["x_e"][:n], result["y_e"][:n])
+    z_ground = min(0.0, float(np.nanmin(p1[:, 2])), float(np.nanmin(p2[:, 2])))
     rows = _frame_rows(t, fps)
     speedup = (t[-1] - t[0]) / _MAX_PLAYBACK
 

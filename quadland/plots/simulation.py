@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from quadland.plots.finite import drawable
 from quadland.simulate import SimulationResult
 
 __all__ = ["FIGURES", "relative_errors_plot", "velocity_errors_plot", "control_inputs_plot",
@@ -181,4 +182,5 @@ def simulation_figures(result: SimulationResult) -> dict[str, Figure]:
     """
     draw = (relative_errors_plot, velocity_errors_plot, control_inputs_plot, uncertainty_plot,
             ground_track_plot)
+    result = drawable(result)                 # a failed flight's last rows may diverge
     return {name: plot(result) for name, plot in zip(FIGURES, draw, strict=True)}
