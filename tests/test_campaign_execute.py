@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from quadland.campaign.execute import campaign_header, run_campaign
+from quadland.campaign.spec import campaign_spec_of
 from quadland.campaign.statistics import clopper_pearson, lower_confidence_bound
 from quadland.cli import main
 from quadland.exceptions import CampaignError
@@ -62,7 +63,7 @@ def test_files_and_summary_against_runs_csv(reference):
     rows = _rows(reference)
     header, body = rows[0], rows[1:]
     sc = load_scenario("paper", FAST)
-    assert header == campaign_header(sc.campaign, "paper")
+    assert header == campaign_header(campaign_spec_of(sc), "paper")
     assert [int(r[0]) for r in body] == list(range(RUNS))
     summary = json.loads((reference / "summary.json").read_text())
     col = {name: [r[k] for r in body] for k, name in enumerate(header)}
@@ -84,7 +85,7 @@ def test_files_and_summary_against_runs_csv(reference):
         assert (r[header.index("success")] == "true") == ok
     # the scenario written beside the runs repeats the campaign
     again = load_scenario(reference / "scenario.toml")
-    assert again.data == sc.data and again.campaign.table == sc.campaign.table
+    assert again.data == sc.data and again.campaign_table == sc.campaign_table
 
 
 def test_a_worst_run_replays_with_its_command(reference, tmp_path, capsys):
