@@ -15,6 +15,7 @@ figures are written (:func:`summarize_campaign`).
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import dataclasses
 import hashlib
 import math
@@ -326,62 +327,70 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
         _check_folder(CampaignFolder(path), manifest)
     given = [o for o in (_override_texts(overrides)) if not o.startswith("campaign.")]
     scenario_arg = _scenario_argument(base, scenario)
-    connection = _connect(scheduler) if scheduler is not None else None
-    try:
-        warm_up(base)                           # the compiled simulator, built or loaded
-        folder = CampaignFolder(path).claim() if path is not None else \
-            _new_folder(base.name)
-        with folder:
-            _check_folder(folder, manifest)     # again, now that it is ours
-            folder.start(manifest, header, {"scenario.toml": base.to_toml().encode("utf-8")})
-            rows = folder.read_runs(header)
-            pending = [i for i in range(n_runs) if i not in rows]
-            todo = iter_draws(spec, pending, n_runs)
-            bar = _progress_bar(progress, n_runs, len(rows))
-            start, flown = time.perf_counter(), 0
-            try:
-                if connection is not None:
-                    batches = _dask_runs(connection, base, todo, spec.limits)
-                elif local == 1 or len(pending) <= 1:
-                    batches = _serial_runs(base, todo, spec.limits)
-                else:
-                    batches = _pool_runs(base, todo, min(local, len(pending)), spec.limits)
-                try:
-                    for batch in batches:
-                        new = [_row(o, header) for o in batch]
-                        folder.append(new)
-                        rows.update((int(r[0]), r) for r in new)
-                        flown += len(new)
-                        if bar is not None:
-                            bar.update(len(new))
-                finally:
-                    batches.close()             # workers and tasks stopped before the folder
-            except KeyboardInterrupt:
-                raise CampaignInterrupted(folder.path, len(rows), n_runs) from None
-            finally:
-                if bar is not None:
-                    bar.close()
-            elapsed = time.perf_counter() - start
-            summary = None
-            if len(rows) == n_runs:
-                ordered = [rows[i] for i in range(n_runs)]
-                summary = summarize_campaign(base, header, ordered, scenario_arg, given)
-                summary["last_session"] = {
-                    "runs_flown": flown, "wall_s": elapsed,
-                    "runs_per_s": flown / elapsed if flown and elapsed > 0 else None,
-                    "where": scheduler or f"{max(local, 1)} local process(es)"}
-                from quadland.output import strict_json
-                from quadland.run import provenance
+    with contextlib.ExitStack() as stack:
+        if scheduler is not None:
+            stack.enter_context(_quiet_cluster_logs())
+            connection = _connect(scheduler)
+            stack.callback(_disconnect, connection)
+        else:
+            connection = None
+        return _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
+                             scheduler, scenario_arg, given, progress, plots)
 
-                summary["provenance"] = provenance(base)
-                files = {"summary.json": strict_json(summary)}
-                if plots:
-                    files.update(_figures(base, header, ordered, summary))
-                folder.finish(header, ordered, files)
-            return CampaignResult(folder.path, n_runs, len(rows), flown, elapsed, summary)
-    finally:
-        if connection is not None:
-            _disconnect(connection)
+
+def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local, scheduler,
+                  scenario_arg, given, progress, plots) -> CampaignResult:
+    """:func:`run_campaign` once every check has passed: build, claim, fly, summarize."""
+    warm_up(base)                               # the compiled simulator, built or loaded
+    folder = CampaignFolder(path).claim() if path is not None else _new_folder(base.name)
+    with folder:
+        _check_folder(folder, manifest)         # again, now that it is ours
+        folder.start(manifest, header, {"scenario.toml": base.to_toml().encode("utf-8")})
+        rows = folder.read_runs(header)
+        pending = [i for i in range(n_runs) if i not in rows]
+        todo = iter_draws(spec, pending, n_runs)
+        bar = _progress_bar(progress, n_runs, len(rows))
+        start, flown = time.perf_counter(), 0
+        try:
+            if connection is not None:
+                batches = _dask_runs(connection, base, todo, spec.limits)
+            elif local == 1 or len(pending) <= 1:
+                batches = _serial_runs(base, todo, spec.limits)
+            else:
+                batches = _pool_runs(base, todo, min(local, len(pending)), spec.limits)
+            try:
+                for batch in batches:
+                    new = [_row(o, header) for o in batch]
+                    folder.append(new)
+                    rows.update((int(r[0]), r) for r in new)
+                    flown += len(new)
+                    if bar is not None:
+                        bar.update(len(new))
+            finally:
+                batches.close()                 # workers and tasks stopped before the folder
+        except KeyboardInterrupt:
+            raise CampaignInterrupted(folder.path, len(rows), n_runs) from None
+        finally:
+            if bar is not None:
+                bar.close()
+        elapsed = time.perf_counter() - start
+        summary = None
+        if len(rows) == n_runs:
+            ordered = [rows[i] for i in range(n_runs)]
+            summary = summarize_campaign(base, header, ordered, scenario_arg, given)
+            summary["last_session"] = {
+                "runs_flown": flown, "wall_s": elapsed,
+                "runs_per_s": flown / elapsed if flown and elapsed > 0 else None,
+                "where": scheduler or f"{max(local, 1)} local process(es)"}
+            from quadland.output import strict_json
+            from quadland.run import provenance
+
+            summary["provenance"] = provenance(base)
+            files = {"summary.json": strict_json(summary)}
+            if plots:
+                files.update(_figures(base, header, ordered, summary))
+            folder.finish(header, ordered, files)
+        return CampaignResult(folder.path, n_runs, len(rows), flown, elapsed, summary)
 
 
 def _check_folder(folder: CampaignFolder, manifest: dict) -> None:
@@ -687,16 +696,12 @@ def check_address(address) -> None:
 
 def _connect(address: str):
     """A ``distributed.Client`` of the scheduler at ``address``, with the workers checked."""
-    import logging
-
     try:
         from distributed import Client
     except ImportError:
         raise CampaignError("scheduler: needs the dask.distributed package "
                             "(pip install 'dask[distributed]')") from None
     _reachable(address)
-    # the campaign reports the cluster's failures itself, in one line
-    logging.getLogger("distributed").setLevel(logging.CRITICAL)
     try:
         client = Client(address, timeout="15s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -716,6 +721,27 @@ def _connect(address: str):
         _disconnect(client)
         raise
     return client
+
+
+@contextlib.contextmanager
+def _quiet_cluster_logs():
+    """Silence dask.distributed's log lines meanwhile: the campaign reports in one line."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401  (its import sets its loggers' levels)
+    except ImportError:
+        pass
+    names = ["distributed"] + [n for n in logging.root.manager.loggerDict
+                               if n.startswith("distributed.")]
+    saved = {n: logging.getLogger(n).level for n in names}
+    for name in names:
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for name, level in saved.items():
+            logging.getLogger(name).setLevel(level)
 
 
 def _reachable(address: str) -> None:
@@ -779,8 +805,9 @@ def _dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[
         except Exception as exc:
             if not _cluster_error(exc):
                 raise
-            raise _stopped(f"the cluster failed before the first run ({type(exc).__name__}: "
-                           f"{' '.join(str(exc).split())[:160]})") from None
+            raise _stopped(f"the cluster failed while preparing its workers "
+                           f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]})") \
+                from None
         queue = _Queue(todo)
         pending = as_completed(loop=client.loop)
 
@@ -799,16 +826,15 @@ def _dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[
             done = pending.next_batch(block=False)
             outcomes, why = [], None
             for future in done:
-                error = None
-                if future.status == "finished":
-                    try:
-                        outcomes.append(future.result(timeout=30))
-                        continue
-                    except Exception as exc:    # lost between its end and its result
-                        error = exc
-                elif future.status == "error":
-                    error = future.exception()
-                if error is not None and not _cluster_error(error):
+                if future.status in ("lost", "pending"):
+                    pending.add(future)         # its worker died with its result: flown again
+                    continue
+                try:
+                    outcomes.append(future.result(timeout=30))
+                    continue
+                except Exception as exc:        # failed, cancelled, or lost meanwhile
+                    error = exc
+                if not _cluster_error(error):
                     raise error
                 why = why or _loss(client, error)
             if outcomes:
@@ -846,19 +872,17 @@ def _dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[
                     pass
 
 
-def _loss(client, error) -> str:
+def _loss(client, error: BaseException) -> str:
     """Why a run was lost on the cluster, in words."""
-    if client.status != "running" or "connection" in str(error).lower():
+    text = " ".join(str(error).split())
+    if client.status != "running" or "connection" in text.lower():
         return "the cluster's scheduler was lost"
-    if error is None:
-        return "the cluster cancelled a run"
     name = type(error).__name__
-    text = " ".join(str(error).split())[:160]
     if name == "KilledWorker":
-        return f"the cluster lost a run with its worker ({name}: {text})"
-    return f"the cluster lost a run ({name}: {text})"
-
-
+        return f"the cluster lost a run with its worker ({name}: {text[:160]})"
+    if "Cancelled" in name:
+        return f"the cluster cancelled a run: a worker was lost ({name}: {text[:120]})"
+    return f"the cluster lost a run ({name}: {text[:160]})"
 def _parse(rows: Sequence[Sequence[str]], header: Sequence[str]) -> dict[str, list[str]]:
     return {name: [r[k] for r in rows] for k, name in enumerate(header)}
 
