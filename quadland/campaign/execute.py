@@ -64,9 +64,10 @@ CAMPAIGN_FIGURES = ("metrics_cdf.png", "failures.png")
 #: Most local worker processes one campaign may ask for.
 MAX_WORKERS = 1024
 #: Memory of one local worker process with its simulator loaded, before the
-#: arrays of its run, bytes: the largest unique set size (USS) measured on a
-#: landing campaign is about 110 MiB (docs/campaign.md).
-WORKER_MEMORY = 160 * 2**20
+#: arrays of its run, bytes. Measured on the shipped landing campaigns: 70 MiB
+#: of its own (USS), 120 MiB resident (RSS, with the pages it shares with the
+#: forkserver); the paper's, 20 and 55 MiB (docs/campaign.md).
+WORKER_MEMORY = 128 * 2**20
 #: How long a Dask cluster may be left without a worker before the campaign stops, s.
 NO_WORKER_GRACE_S = 20.0
 #: Runs queued ahead on each local worker process or Dask thread.
@@ -198,7 +199,15 @@ def _differences(old: Mapping, new: Mapping, prefix: str = "") -> list[str]:
 
 
 def _short(value) -> str:
-    text = format_value(value) if not isinstance(value, Mapping) else str(dict(value))
+    """A value of campaign.json, shortened for a message."""
+    if isinstance(value, Mapping):
+        text = str(dict(value))
+    else:
+        try:
+            text = format_value(value)
+        except (TypeError, ValueError):         # a null in a damaged campaign.json
+            text = json_kind(value) if value is None else repr(value)
+    text = " ".join(text.split())
     return text if len(text) <= 40 else text[:37] + "..."
 
 
