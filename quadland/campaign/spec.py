@@ -346,7 +346,7 @@ def _dispersion(key: str, entry, data, schema) -> Dispersion:
     if not isinstance(entry, Mapping):
         raise ScenarioError(f"{_where(key)}: must be a table {{distribution = ...}}")
     dist = entry.get("distribution")
-    if dist not in DISTRIBUTIONS:
+    if not isinstance(dist, str) or dist not in DISTRIBUTIONS:
         raise ScenarioError(f"{_where(key, 'distribution')}: must be one of "
                             f"{', '.join(DISTRIBUTIONS)}, got {_show(dist)}")
     required, optional = DISTRIBUTIONS[dist]
