@@ -325,6 +325,23 @@ def test_workers_stay_silent_without_a_compiler(tmp_path):
                                         "several times slower"]
 
 
+def _has_forkserver(pid: int) -> bool:
+    """The process ``pid`` has started the forkserver of its workers."""
+    import psutil
+
+    try:
+        children = psutil.Process(pid).children()
+    except psutil.Error:
+        return False
+    for child in children:
+        try:
+            if "forkserver" in " ".join(child.cmdline()):
+                return True
+        except psutil.Error:                    # a compiler run that just ended
+            pass
+    return False
+
+
 @pytest.mark.slow
 def test_ctrl_c_at_any_moment_of_start_up_is_one_line(tmp_path):
     # V12: Ctrl-C (SIGINT to the whole process group, as a terminal sends it) while the
@@ -333,8 +350,6 @@ def test_ctrl_c_at_any_moment_of_start_up_is_one_line(tmp_path):
     # (once the quadland package is imported: Python's own start and that import are
     # before any of quadland's code can run) through the workers' start to the first runs.
     import random
-
-    import psutil
 
     rng = random.Random(20261123)
     code = ("import sys\nfrom quadland.cli import main\nprint('ready', flush=True)\n"
@@ -349,9 +364,7 @@ def test_ctrl_c_at_any_moment_of_start_up_is_one_line(tmp_path):
         if trial % 2:                           # from the parser's imports to the first runs
             time.sleep(rng.uniform(0.0, 2.0))
         else:                                   # while the forkserver and its workers start
-            while proc.poll() is None and not any(
-                    "forkserver" in " ".join(c.cmdline())
-                    for c in psutil.Process(proc.pid).children()):
+            while proc.poll() is None and not _has_forkserver(proc.pid):
                 time.sleep(0.002)
             time.sleep(rng.uniform(0.0, 0.4))
         os.killpg(proc.pid, signal.SIGINT)
