@@ -890,7 +890,7 @@ def _loss(client, error: BaseException) -> str:
     if name == "KilledWorker":
         return f"the cluster lost a run with its worker ({name}: {text[:160]})"
     if "Cancelled" in name:
-        return f"the cluster cancelled a run: a worker was lost ({name}: {text[:120]})"
+        return "the cluster cancelled a run: a worker was lost"
     return f"the cluster lost a run ({name}: {text[:160]})"
 def _parse(rows: Sequence[Sequence[str]], header: Sequence[str]) -> dict[str, list[str]]:
     return {name: [r[k] for r in rows] for k, name in enumerate(header)}
