@@ -1,7 +1,10 @@
 """Scenario files: schema, loading, overrides and validation.
 
 A scenario is a TOML file whose sections and keys are fixed by ``SCHEMA``.
-It is validated once, here; everything downstream trusts it.
+It is validated once, here; everything downstream trusts it. Its
+``[campaign]`` table is kept as written (``Scenario.campaign_table``): only a
+campaign validates it (``quadland.campaign``), the commands that ignore it
+never refuse a scenario for its sake.
 """
 
 from __future__ import annotations

@@ -43,7 +43,7 @@ SAMPLINGS = ("random", "sobol", "lhs")
 MAX_RUNS = 1_000_000
 #: A point of the unit cube is kept within [U_EDGE, 1 - U_EDGE]: an inverse
 #: CDF is infinite at 0 and 1. A normal draw reaches at most
-#: ``ndtri(1 - U_EDGE) = 8.13`` standard deviations from its mean.
+#: ``-ndtri(U_EDGE) = 8.21`` standard deviations from its mean.
 U_EDGE = 2.0 ** -53
 _SEED_MAX = 2 ** 63 - 1
 _TOP = {"runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
