@@ -100,7 +100,10 @@ def test_scenario_mutants_load_or_give_one_line(tmp_path):
     for k, data in enumerate(_mutants(600)):
         path = tmp_path / f"m{k}.toml"
         path.write_bytes(data)
-        loaded += _load_or_refuse(path) is not None
+        sc = _load_or_refuse(path)
+        loaded += sc is not None
+        if sc is not None and sc.campaign_table is not None:
+            _check_campaign(sc)                # what a campaign of it would check and draw
     assert 0 < loaded < 600                    # both outcomes occur
 
 
