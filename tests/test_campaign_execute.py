@@ -495,5 +495,6 @@ def test_workers_are_bounded_by_memory(tmp_path, monkeypatch, capsys):
                  str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("quadland: error: --workers: 300 local "
-                                               "processes need about"), err
+                                               "processes (of the 1000 asked: one per run) "
+                                               "need about"), err
     assert os.listdir(tmp_path) == []                          # V16: nothing created

@@ -497,7 +497,9 @@ def local_workers(base: Scenario, workers: int | None, runs: int) -> int:
         return wanted
     if workers is None:
         return fit
-    raise CampaignError(f"workers: {wanted} local processes need about "
+    what = f"{wanted} local processes" + ("" if wanted == workers else
+                                          f" (of the {workers} asked: one per run)")
+    raise CampaignError(f"workers: {what} need about "
                         f"{wanted * each / 2**30:.1f} GiB (about {each / 2**20:.0f} MiB each), "
                         f"over the {available / 2**30:.1f} GiB of memory available; use "
                         f"--workers {fit} or fewer")
