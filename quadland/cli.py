@@ -257,6 +257,9 @@ def _run_campaign(args) -> int:
         rate = (f": {summary['successes']} of {summary['flown']} runs within limits "
                 f"({100 * summary['success_rate']:.1f} %, 95 % interval {100 * lo:.1f} to "
                 f"{100 * hi:.1f} %)")
+    elif summary is not None:
+        rate = (f": no run flown, the draws of all {summary['runs']} were invalid (runs.csv "
+                "says why)")
     speed = (f"; flew {result.flown} runs in {result.elapsed:.1f} s "
              f"({result.flown / result.elapsed:.1f} runs/s)" if result.flown and
              result.elapsed > 0 else "; no run left to fly")
@@ -275,16 +278,20 @@ def _message(exc: QuadlandError) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``quadland`` console script."""
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)
-    except UsageError as exc:
-        print(f"quadland: error: {exc}", file=sys.stderr)
-        return 2
-    _quiet_matplotlib()
-    with warnings.catch_warnings():
-        warnings.showwarning = _one_line_warning
-        return _dispatch(args)
+    try:                                        # Ctrl-C while the parser imports its modules
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except UsageError as exc:
+            print(f"quadland: error: {exc}", file=sys.stderr)
+            return 2
+        _quiet_matplotlib()
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
+            return _dispatch(args)
+    except KeyboardInterrupt:
+        print("quadland: interrupted", file=sys.stderr)
+        return 130
 
 
 def _quiet_matplotlib() -> None:

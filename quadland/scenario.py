@@ -1,14 +1,17 @@
 """Scenario files: schema, loading, overrides and validation.
 
 A scenario is a TOML file whose sections and keys are fixed by ``SCHEMA``.
-It is validated once, here; everything downstream trusts it.
+It is validated once, here; everything downstream trusts it. Its
+``[campaign]`` table is kept as written (``Scenario.campaign_table``): only a
+campaign validates it (``quadland.campaign``), the commands that ignore it
+never refuse a scenario for its sake.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import difflib
-import json
 import math
 import numbers
 import re
@@ -358,17 +361,18 @@ class Scenario:
         section -> key -> value, complete and validated (lists as tuples).
     overrides : tuple of str
         The ``section.key=value`` overrides applied on top of the file.
-    campaign : CampaignSpec or None
-        The file's ``[campaign]`` table, validated
-        (:func:`quadland.campaign.spec.campaign_spec`); :func:`quadland.simulate`
-        ignores it, ``quadland campaign`` runs it.
+    campaign_table : dict or None
+        The file's ``[campaign]`` table as written (``--set campaign.KEY``
+        applied), not validated here: :func:`quadland.simulate`, margins and
+        codegen ignore it, and ``quadland campaign`` validates it against
+        the scenario (:func:`quadland.campaign.campaign_spec_of`).
     """
 
     name: str
     source: str
     data: Mapping[str, Mapping[str, Any]]
     overrides: tuple[str, ...] = ()
-    campaign: Any = None
+    campaign_table: dict | None = None
 
     def __getitem__(self, dotted: str):
         section, key = dotted.split(".", 1)
@@ -407,8 +411,8 @@ class Scenario:
             lines.append(f"[{section}]")
             lines.extend(f"{key} = {toml_value(value)}" for key, value in kv.items())
             lines.append("")
-        if self.campaign is not None:
-            lines.append(self.campaign.to_toml())
+        if self.campaign_table is not None:
+            lines.append(_campaign_toml(self.campaign_table))
         return "\n".join(lines)
 
     def replace(self, **changes) -> Scenario:
@@ -419,7 +423,25 @@ class Scenario:
             raw.setdefault(section, {})[key] = value
         data = _validate(raw, self.source, self.name)
         return Scenario(data["scenario"]["name"], self.source, data, self.overrides,
-                        self.campaign)
+                        self.campaign_table)
+
+
+def _campaign_toml(table: Mapping[str, Any]) -> str:
+    """A ``[campaign]`` table as TOML: its values, then each sub-table as a section."""
+    lines = ["[campaign]"]
+    lines += [f"{_toml_key(k)} = {toml_value(v)}" for k, v in table.items()
+              if not isinstance(v, Mapping)]
+    for name, sub in table.items():
+        if isinstance(sub, Mapping):
+            lines += ["", f"[campaign.{_toml_key(name)}]"]
+            lines += [f"{_toml_key(k)} = {toml_value(v)}" for k, v in sub.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _toml_key(key) -> str:
+    """A TOML key: bare when it can be, else a quoted string."""
+    key = str(key)
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else _toml_string(key)
 
 
 def _toml_string(text: str) -> str:
@@ -446,8 +468,10 @@ def toml_value(value) -> str:
     if isinstance(value, str):
         return _toml_string(value)
     if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{k if re.fullmatch(r'[A-Za-z0-9_-]+', k) else json.dumps(k)}"
-                               f" = {toml_value(v)}" for k, v in value.items()) + "}"
+        return "{" + ", ".join(f"{_toml_key(k)} = {toml_value(v)}"
+                               for k, v in value.items()) + "}"
+    if isinstance(value, datetime.date | datetime.time):   # TOML's dates and times
+        return value.isoformat()
     return "[" + ", ".join(toml_value(v) for v in value) + "]"
 
 
@@ -487,11 +511,14 @@ def load_scenario(name_or_path: str | Path = "paper",
     path = _resolve(name_or_path)
     raw = _parse_toml(_read_text(path), str(path))
     campaign = raw.pop("campaign", None)
+    if campaign is not None and not isinstance(campaign, dict):
+        raise ScenarioError(f"{path}: [campaign] must be a table")
     pairs = _parse_overrides(overrides)
+    overridden = {}
     for dotted, value in pairs:
         section, key = _split_key(dotted)
         if section == "campaign":                   # campaign.runs, .seed, .sampling
-            if not isinstance(campaign, dict):
+            if campaign is None:
                 raise ScenarioError(f"override {_show(dotted)}: {path} has no [campaign] table")
             campaign[key] = value
             continue
@@ -507,15 +534,21 @@ def load_scenario(name_or_path: str | Path = "paper",
         if not isinstance(raw[section], dict):
             raise ScenarioError(f"{path}: [{section}] must be a table")
         raw[section][key] = value
+        overridden[(section, key)] = dotted
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", path.stem)
-    data = _validate(raw, str(path), default_name=stem.lstrip(".-_")[:64] or "scenario")
-    spec = None
-    if campaign is not None:
-        from quadland.campaign.spec import campaign_spec
-
-        spec = campaign_spec(campaign, data, _model(raw), str(path))
+    data = _validate(raw, str(path), default_name=stem.lstrip(".-_")[:64] or "scenario",
+                     overridden=overridden)
     return Scenario(data["scenario"]["name"], str(path), data,
-                    tuple(f"{k}={_show(v)}" for k, v in pairs), spec)
+                    tuple(f"{k}={_show(v)}" for k, v in pairs), _plain_copy(campaign))
+
+
+def _plain_copy(value):
+    """A deep copy of parsed TOML (dicts and lists), for a table kept as written."""
+    if isinstance(value, Mapping):
+        return {k: _plain_copy(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain_copy(v) for v in value]
+    return value
 
 
 #: Largest scenario file read, bytes.
@@ -649,24 +682,34 @@ def _model(raw: Mapping) -> str:
     return model
 
 
-def _validate(raw: Mapping, source: str, default_name: str = "scenario") -> dict:
+def _validate(raw: Mapping, source: str, default_name: str = "scenario",
+              overridden: Mapping[tuple[str, str], str] | None = None) -> dict:
     """Check every section and key of ``raw`` against its model's schema; fill nothing but
-    the name (and, for the paper's, leave ``scenario.model`` out: it is the default)."""
+    the name (and, for the paper's, leave ``scenario.model`` out: it is the default).
+
+    ``overridden`` maps ``(section, key)`` to the ``--set`` text that put it
+    there: a key of another model's schema is blamed on that override, not
+    on the file."""
     model = _model(raw)
     schema = SCHEMAS[model]
+    overridden = overridden or {}
     if model == "paper" and isinstance(raw.get("scenario"), Mapping):
         raw = {**raw, "scenario": {k: v for k, v in raw["scenario"].items() if k != "model"}}
     out: dict[str, dict] = {}
     for section, table in raw.items():
         if section not in schema:
-            raise ScenarioError(f"{source}: {_unknown('section', _show(section), schema)}"
+            given = [d for (s, _), d in overridden.items() if s == section]
+            where = f"override {_show(given[0])}" if given else source
+            raise ScenarioError(f"{where}: {_unknown('section', _show(section), schema)}"
                                 + _other_model(section, model))
         if not isinstance(table, Mapping):
             raise ScenarioError(f"{source}: [{section}] must be a table")
         for key in table:
             if key not in schema[section]:
                 dotted = f"{section}.{_show(key)}"
-                raise ScenarioError(f"{source}: {_unknown('key', dotted, _dotted(section, model))}"
+                where = f"override {_show(overridden[section, key])}" \
+                    if (section, key) in overridden else source
+                raise ScenarioError(f"{where}: {_unknown('key', dotted, _dotted(section, model))}"
                                     + _other_model(section, model, key))
     for section, fields in schema.items():
         table = raw.get(section, {})

@@ -4,12 +4,13 @@ import numpy as np
 import pytest
 
 from quadland.campaign.sampling import draws, run_seed, unit_samples
+from quadland.campaign.spec import campaign_spec_of
 from quadland.scenario import load_scenario
 
 
 def _spec(sampling="random", runs=64):
     sc = load_scenario("highway", [f"campaign.sampling=\"{sampling}\"", f"campaign.runs={runs}"])
-    return sc, sc.campaign
+    return sc, campaign_spec_of(sc)
 
 
 def test_run_seed_is_the_spawned_child():
@@ -81,7 +82,7 @@ def test_choice_and_weights(tmp_path):
             "\n")
     path = tmp_path / "c.toml"
     path.write_text(text)
-    spec = load_scenario(path).campaign
+    spec = campaign_spec_of(load_scenario(path))
     ds = draws(spec, range(4000))
     share = np.mean([d.values["controller.nominal_model"] for d in ds])
     assert share == pytest.approx(0.75, abs=0.03)
@@ -96,3 +97,61 @@ def test_overrides_replay_the_values_exactly():
     replayed = load_scenario("highway", d.overrides())
     direct = sc.replace(**d.values)
     assert replayed.data == direct.data
+
+
+def _spec_of(table: str, model: str = "paper"):
+    """The validated campaign of the shipped scenario ``model`` with ``table`` as its table."""
+    import tomllib
+
+    from quadland.campaign.spec import campaign_spec
+
+    sc = load_scenario(model)
+    return sc, campaign_spec(tomllib.loads(table)["campaign"], sc.data, sc.model)
+
+
+@pytest.mark.parametrize("std", [1e-300, 1e-30, 1e-8, 1.0, 1e8, 1e300])
+@pytest.mark.parametrize("mean", [-1e6, -0.2, 0.75, 0.9, 3.0, 1e300])
+def test_truncnorm_draws_stay_within_their_bounds(std, mean):
+    # V7: std = 1e-300 with the mean outside [low, high] drew inf. Whatever the spread,
+    # every draw lies in [low, high]; where the spread vanishes against the distance to
+    # the interval, all the mass is at the nearest bound (the limit std -> 0).
+    low, high = 0.5, 1.0
+    sc, spec = _spec_of(f"[campaign]\nruns = 256\nseed = 5\n[campaign.dispersions]\n"
+                        f"\"quadrotor.mass\" = {{distribution = \"truncnorm\", mode = \"absolute\""
+                        f", mean = {mean!r}, std = {std!r}, low = {low}, high = {high}}}\n")
+    x = np.array([d.values["quadrotor.mass"] for d in draws(spec, range(256))])
+    assert np.all(np.isfinite(x)) and x.min() >= low and x.max() <= high
+    from scipy.special import ndtr
+
+    a, b = (low - mean) / std, (high - mean) / std
+    if std <= 1e-8 and not a <= 0 <= b:
+        # near a bound at distance d the law is exponential of scale std^2 / d (in X);
+        # u >= 2^-53 keeps every draw within 37 such scales (-log(2^-53))
+        bound = low if mean < low else high
+        d = abs(bound - mean)
+        assert np.all(np.abs(x - bound) <= 37 * std * (std / d) + 2 * np.spacing(bound))
+    elif std == 1.0 and a <= 0 <= b:
+        # the truncated law's CDF, from the normal CDF, gives back each run's u
+        u = np.array([np.random.default_rng(d.seed).random(1)[0] for d in draws(spec, range(256))])
+        cdf = (ndtr((x - mean) / std) - ndtr(a)) / (ndtr(b) - ndtr(a))
+        assert np.allclose(cdf, u, atol=1e-9)
+
+
+@pytest.mark.parametrize("weights, expected", [
+    ([1e308, 1e308], [0.5, 0.5]),          # V20: the sum overflowed; the last value every time
+    ([1.7e308, 0.0, 1.7e308], [0.5, 0.0, 0.5]),
+    ([5e-324, 5e-324], [0.5, 0.5]),         # the smallest subnormal weights
+    ([1e308, 1e307], [10 / 11, 1 / 11]),
+])
+def test_choice_weights_of_any_size_pick_in_proportion(weights, expected):
+    n = 4000
+    sc, spec = _spec_of(f"[campaign]\nruns = {n}\nseed = 9\n[campaign.dispersions]\n"
+                        f"\"rbf.nodes\" = {{distribution = \"choice\", values = "
+                        f"{list(range(5, 5 + len(weights)))}, weights = {weights!r}}}\n")
+    picks = np.array([d.values["rbf.nodes"] - 5 for d in draws(spec, range(n))])
+    for k, p in enumerate(expected):
+        share = np.mean(picks == k)
+        if p == 0.0:
+            assert share == 0.0
+        else:                                # within 5 binomial standard deviations
+            assert abs(share - p) < 5 * np.sqrt(p * (1 - p) / n), (k, share, p)

@@ -1,6 +1,7 @@
 """Monte Carlo campaigns: dispersed runs of a scenario, on every core or a Dask cluster.
 
-A scenario's ``[campaign]`` table (:mod:`quadland.campaign.spec`) names the
+A scenario's ``[campaign]`` table (:mod:`quadland.campaign.spec`, validated by
+:func:`campaign_spec_of` when a campaign runs) names the
 dispersed keys; :mod:`~quadland.campaign.sampling` gives run ``i`` its seed
 and values from the campaign seed and ``i`` alone; :mod:`~quadland.campaign.fly`
 flies one run; :mod:`~quadland.campaign.journal` records each finished run
@@ -10,13 +11,14 @@ Clopper-Pearson interval, the order statistics and the separation of failures;
 See docs/campaign.md.
 """
 
-__all__ = ["CampaignSpec", "Dispersion", "campaign_spec", "RunDraw", "draws", "run_seed",
-           "RunOutcome", "fly", "clopper_pearson", "order_statistic", "separation",
+__all__ = ["CampaignSpec", "Dispersion", "campaign_spec", "campaign_spec_of", "RunDraw",
+           "draws", "run_seed", "RunOutcome", "fly", "clopper_pearson", "order_statistic",
+           "separation",
            "CampaignResult", "run_campaign", "summarize_campaign"]
 
-# The submodules import NumPy, SciPy and the simulator: load them on first use,
-# so that loading a scenario (which validates its [campaign] table) stays light.
+# The submodules import NumPy, SciPy and the simulator: load them on first use.
 _LAZY = {"CampaignSpec": "spec", "Dispersion": "spec", "campaign_spec": "spec",
+         "campaign_spec_of": "spec",
          "RunDraw": "sampling", "draws": "sampling", "run_seed": "sampling",
          "RunOutcome": "fly", "fly": "fly",
          "clopper_pearson": "statistics", "order_statistic": "statistics",

@@ -15,26 +15,29 @@ figures are written (:func:`summarize_campaign`).
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import dataclasses
 import hashlib
 import math
 import multiprocessing
+import multiprocessing.connection
 import os
 import shlex
 import signal
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from quadland.campaign.fly import RunOutcome, fly, warm_up
-from quadland.campaign.journal import CampaignFolder
+from quadland.campaign.journal import MANIFEST, CampaignFolder, damaged_manifest, json_kind
 from quadland.campaign.metrics import METRICS, limits_of
 from quadland.campaign.sampling import RunDraw, format_value, iter_draws
-from quadland.campaign.spec import MAX_RUNS
+from quadland.campaign.spec import MAX_RUNS, CampaignSpec, campaign_spec_of
 from quadland.campaign.statistics import (
     clopper_pearson,
     lower_confidence_bound,
@@ -45,8 +48,10 @@ from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.scenario import SCENARIO_DIR, Scenario, load_scenario
 
 __all__ = ["CampaignResult", "CampaignInterrupted", "run_campaign", "summarize_campaign",
-           "campaign_header", "code_fingerprint", "replay_command", "CAMPAIGN_FIGURES",
-           "CONFIDENCE", "QUANTILES", "WORST_RUNS"]
+           "campaign_header", "code_fingerprint", "replay_command", "check_address",
+           "local_workers", "worker_memory", "available_memory", "CAMPAIGN_FIGURES",
+           "CONFIDENCE", "QUANTILES", "WORST_RUNS", "MAX_WORKERS", "WORKER_MEMORY",
+           "NO_WORKER_GRACE_S"]
 
 #: Confidence level of the success rate's interval and bound.
 CONFIDENCE = 0.95
@@ -56,6 +61,17 @@ QUANTILES = {"p50": 0.5, "p90": 0.9, "p99": 0.99, "max": 1.0}
 WORST_RUNS = 5
 #: The figures of a finished campaign.
 CAMPAIGN_FIGURES = ("metrics_cdf.png", "failures.png")
+#: Most local worker processes one campaign may ask for.
+MAX_WORKERS = 1024
+#: Memory of one local worker process with its simulator loaded, before the
+#: arrays of its run, bytes. Measured on the shipped landing campaigns: 70 MiB
+#: of its own (USS), 120 MiB resident (RSS, with the pages it shares with the
+#: forkserver); the paper's, 20 and 55 MiB (docs/campaign.md).
+WORKER_MEMORY = 128 * 2**20
+#: How long a Dask cluster may be left without a worker before the campaign stops, s.
+NO_WORKER_GRACE_S = 20.0
+#: Runs queued ahead on each local worker process or Dask thread.
+_AHEAD = 4
 #: Format of campaign.json.
 _FORMAT = 1
 
@@ -136,7 +152,7 @@ def code_fingerprint() -> str:
     return digest.hexdigest()[:16]
 
 
-def _manifest(scenario: Scenario, runs: int) -> dict:
+def _manifest(scenario: Scenario, spec: CampaignSpec, runs: int) -> dict:
     from importlib.metadata import version
 
     from quadland import __version__
@@ -145,7 +161,30 @@ def _manifest(scenario: Scenario, runs: int) -> dict:
     return {"format": _FORMAT, "quadland": __version__, "code": code_fingerprint(),
             "libraries": {name: version(name) for name in ("casadi", "numpy", "scipy")},
             "c_compiler": compiler_version(), "runs": runs,
-            "campaign": scenario.campaign.identity(), "scenario": scenario.to_dict()}
+            "campaign": spec.identity(), "scenario": scenario.to_dict()}
+
+
+#: The type each entry of campaign.json must have (format 1).
+_MANIFEST_TYPES = {"quadland": (str,), "code": (str,), "libraries": (dict,),
+                   "c_compiler": (str, type(None)), "runs": (int,), "campaign": (dict,),
+                   "scenario": (dict,)}
+
+
+def _check_manifest(old: dict, path: Path) -> None:
+    """Refuse a manifest of this format whose entries are not what quadland writes."""
+    for key, kinds in _MANIFEST_TYPES.items():
+        if key not in old:
+            raise damaged_manifest(path, f"no \"{key}\"")
+        value = old[key]
+        if isinstance(value, bool) or not isinstance(value, kinds):
+            raise damaged_manifest(path, f"\"{key}\" is {json_kind(value)}")
+    if old["runs"] < 1:
+        raise damaged_manifest(path, f"\"runs\" is {old['runs']}")
+    if not all(isinstance(v, str) for v in old["libraries"].values()):
+        raise damaged_manifest(path, "\"libraries\" holds something else than versions")
+    for section, table in old["scenario"].items():
+        if not isinstance(table, dict):
+            raise damaged_manifest(path, f"\"scenario.{section}\" is {json_kind(table)}")
 
 
 def _differences(old: Mapping, new: Mapping, prefix: str = "") -> list[str]:
@@ -160,35 +199,50 @@ def _differences(old: Mapping, new: Mapping, prefix: str = "") -> list[str]:
 
 
 def _short(value) -> str:
-    text = format_value(value) if not isinstance(value, Mapping) else str(dict(value))
+    """A value of campaign.json, shortened for a message."""
+    if isinstance(value, Mapping):
+        text = str(dict(value))
+    else:
+        try:
+            text = format_value(value)
+        except (TypeError, ValueError):         # a null in a damaged campaign.json
+            text = json_kind(value) if value is None else repr(value)
+    text = " ".join(text.split())
     return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _check_resumable(old: dict, new: dict, path: Path) -> None:
-    """Refuse, naming the first difference, a folder of another campaign."""
+    """Refuse, naming the first difference, a folder of another campaign or a damaged one."""
+    manifest = path / MANIFEST
+    if "format" not in old:
+        raise damaged_manifest(manifest, "no \"format\"")
+    if old["format"] != _FORMAT:
+        raise CampaignError(f"out: {path} holds another campaign (it was written by another "
+                            f"quadland: campaign format {_short(old['format'])}); choose a new "
+                            "folder or run the campaign it holds")
+    _check_manifest(old, manifest)
     why = None
-    if old.get("format") != _FORMAT:
-        why = f"it was written by another quadland (campaign format {old.get('format')})"
-    elif old.get("quadland") != new["quadland"]:
-        why = f"quadland {old.get('quadland')} made it, this is {new['quadland']}"
-    elif old.get("code") != new["code"]:
+    if old["quadland"] != new["quadland"]:
+        why = f"quadland {' '.join(old['quadland'].split())[:40]} made it, this is " \
+            f"{new['quadland']}"
+    elif old["code"] != new["code"]:
         why = "quadland's source code changed since (its runs would not be comparable)"
-    elif old.get("libraries") != new["libraries"] or old.get("c_compiler") != new["c_compiler"]:
-        diff = _differences({**old.get("libraries", {}), "c_compiler": old.get("c_compiler")},
+    elif old["libraries"] != new["libraries"] or old["c_compiler"] != new["c_compiler"]:
+        diff = _differences({**old["libraries"], "c_compiler": old["c_compiler"]},
                             {**new["libraries"], "c_compiler": new["c_compiler"]})
         why = f"a library changed: {diff[0]}"
-    elif old.get("scenario") != new["scenario"]:
-        diff = _differences(old.get("scenario", {}), new["scenario"])
+    elif old["scenario"] != new["scenario"]:
+        diff = _differences(old["scenario"], new["scenario"])
         why = f"the scenario changed: {diff[0]}" + \
             (f" (and {len(diff) - 1} more)" if len(diff) > 1 else "")
-    elif old.get("campaign") != new["campaign"]:
-        diff = _differences(old.get("campaign", {}), new["campaign"], "campaign.")
+    elif old["campaign"] != new["campaign"]:
+        diff = _differences(old["campaign"], new["campaign"], "campaign.")
         what = "the dispersions" if diff[0].startswith("campaign.dispersions") else \
             "the campaign"
         why = f"{what} changed: {diff[0]}"
-    elif new["runs"] < old.get("runs", 0):
+    elif new["runs"] < old["runs"]:
         why = f"it holds a campaign of {old['runs']} runs; --runs can only grow"
-    elif new["runs"] != old.get("runs") and new["campaign"].get("sampling") == "lhs":
+    elif new["runs"] != old["runs"] and new["campaign"].get("sampling") == "lhs":
         why = (f"it holds a Latin hypercube of {old['runs']} runs, whose points depend on "
                "the number of runs")
     if why:
@@ -232,8 +286,8 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
         The campaign folder (default a new ``<scenario>-campaign-<stamp>``).
         Running again into it flies only the missing runs.
     workers : int, optional
-        Local processes (default: every core; 1 flies in this process).
-        Ignored with ``scheduler``.
+        Local processes (default: every core, as many as the available
+        memory holds; 1 flies in this process). Ignored with ``scheduler``.
     scheduler : str, optional
         Address of a ``dask.distributed`` scheduler (``tcp://HOST:PORT``).
     progress : bool
@@ -248,52 +302,72 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
     Raises
     ------
     ScenarioError, CampaignError
-        Before any run: a bad scenario or campaign table, a folder that
-        holds something else or another campaign (the message says what
-        changed), a scheduler that cannot be reached.
+        Before anything is written or created: a bad scenario or campaign
+        table, more workers than the memory holds, a folder that holds
+        something else or another campaign (the message says what changed)
+        or a damaged one, a scheduler that cannot be reached.
     CampaignStopped
         A worker died or the scheduler was lost; the recorded runs stay.
     KeyboardInterrupt
         The recorded runs stay; running again resumes.
     """
-    base = scenario if isinstance(scenario, Scenario) else load_scenario(scenario, overrides)
-    if base.campaign is None:
-        raise CampaignError(f"scenario: {base.name} has no [campaign] table "
-                            "(docs/campaign.md shows one)")
-    n_runs = base.campaign.runs if runs is None else runs
-    if not isinstance(n_runs, int) or not 1 <= n_runs <= MAX_RUNS:
-        raise CampaignError(f"runs: must be in [1, {MAX_RUNS}], got {n_runs}")
-    if workers is not None and not 1 <= workers <= 1024:
-        raise CampaignError(f"workers: must be in [1, 1024], got {workers}")
-    from quadland.output import output_folder
     from quadland.simulate import check_plan
 
+    base = scenario if isinstance(scenario, Scenario) else load_scenario(scenario, overrides)
+    spec = campaign_spec_of(base)
+    n_runs = spec.runs if runs is None else runs
+    if isinstance(n_runs, bool) or not isinstance(n_runs, int) or not 1 <= n_runs <= MAX_RUNS:
+        raise CampaignError(f"runs: must be in [1, {MAX_RUNS}], got {n_runs}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or not 1 <= workers <= MAX_WORKERS):
+        raise CampaignError(f"workers: must be in [1, {MAX_WORKERS}], got {workers}")
     check_plan(base)
-    path = output_folder(out, base.name, "campaign").path
+    if scheduler is not None:
+        check_address(scheduler)
+        local = 0
+    else:
+        local = local_workers(base, workers, n_runs)
+    # scenario.toml of the folder holds the table as validated (defaults filled in)
+    base = dataclasses.replace(base, campaign_table=spec.table)
+    header = campaign_header(spec, base.model)
+    manifest = _manifest(base, spec, n_runs)
+    path = None if out is None else Path(out).absolute()
+    if path is not None:                        # refused now, before the cluster and the build
+        _check_folder(CampaignFolder(path), manifest)
     given = [o for o in (_override_texts(overrides)) if not o.startswith("campaign.")]
     scenario_arg = _scenario_argument(base, scenario)
-    with CampaignFolder(path) as folder:
-        manifest = _manifest(base, n_runs)
-        old = folder.manifest()
-        if old is not None:
-            _check_resumable(old, manifest, folder.path)
-        header = campaign_header(base.campaign, base.model)
-        connection = _connect(scheduler) if scheduler else None
+    with contextlib.ExitStack() as stack:
+        if scheduler is not None:
+            stack.enter_context(_quiet_cluster_logs())
+            connection = _connect(scheduler)
+            stack.callback(_disconnect, connection)
+        else:
+            connection = None
+        return _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
+                             scheduler, scenario_arg, given, progress, plots)
+
+
+def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local, scheduler,
+                  scenario_arg, given, progress, plots) -> CampaignResult:
+    """:func:`run_campaign` once every check has passed: build, claim, fly, summarize."""
+    warm_up(base)                               # the compiled simulator, built or loaded
+    folder = CampaignFolder(path).claim() if path is not None else _new_folder(base.name)
+    with folder:
+        _check_folder(folder, manifest)         # again, now that it is ours
+        folder.start(manifest, header, {"scenario.toml": base.to_toml().encode("utf-8")})
+        rows = folder.read_runs(header)
+        pending = [i for i in range(n_runs) if i not in rows]
+        todo = iter_draws(spec, pending, n_runs)
+        bar = _progress_bar(progress, n_runs, len(rows))
+        start, flown = time.perf_counter(), 0
         try:
-            warm_up(base)
-            folder.start(manifest, header, {"scenario.toml": base.to_toml().encode("utf-8")})
-            rows = folder.read_runs(header)
-            pending = [i for i in range(n_runs) if i not in rows]
-            todo = iter_draws(base.campaign, pending, n_runs)
-            bar = _progress_bar(progress, n_runs, len(rows))
-            start, flown = time.perf_counter(), 0
+            if connection is not None:
+                batches = _dask_runs(connection, base, todo, spec.limits)
+            elif local == 1 or len(pending) <= 1:
+                batches = _serial_runs(base, todo, spec.limits)
+            else:
+                batches = _pool_runs(base, todo, min(local, len(pending)), spec.limits)
             try:
-                if connection is not None:
-                    batches = _dask_runs(connection, base, todo)
-                elif (workers or _cores()) == 1 or len(pending) <= 1:
-                    batches = _serial_runs(base, todo)
-                else:
-                    batches = _pool_runs(base, todo, min(workers or _cores(), len(pending)))
                 for batch in batches:
                     new = [_row(o, header) for o in batch]
                     folder.append(new)
@@ -301,15 +375,14 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
                     flown += len(new)
                     if bar is not None:
                         bar.update(len(new))
-            except KeyboardInterrupt:
-                raise CampaignInterrupted(folder.path, len(rows), n_runs) from None
             finally:
-                if bar is not None:
-                    bar.close()
-            elapsed = time.perf_counter() - start
+                batches.close()                 # workers and tasks stopped before the folder
+        except KeyboardInterrupt:
+            raise CampaignInterrupted(folder.path, len(rows), n_runs) from None
         finally:
-            if connection is not None:
-                connection.close()
+            if bar is not None:
+                bar.close()
+        elapsed = time.perf_counter() - start
         summary = None
         if len(rows) == n_runs:
             ordered = [rows[i] for i in range(n_runs)]
@@ -317,7 +390,7 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
             summary["last_session"] = {
                 "runs_flown": flown, "wall_s": elapsed,
                 "runs_per_s": flown / elapsed if flown and elapsed > 0 else None,
-                "where": scheduler or f"{workers or _cores()} local process(es)"}
+                "where": scheduler or f"{max(local, 1)} local process(es)"}
             from quadland.output import strict_json
             from quadland.run import provenance
 
@@ -327,6 +400,31 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
                 files.update(_figures(base, header, ordered, summary))
             folder.finish(header, ordered, files)
         return CampaignResult(folder.path, n_runs, len(rows), flown, elapsed, summary)
+
+
+def _check_folder(folder: CampaignFolder, manifest: dict) -> None:
+    """Refuse a folder that is not this campaign's (read only: nothing is created)."""
+    folder.check()
+    old = folder.manifest()
+    if old is not None:
+        _check_resumable(old, manifest, folder.path)
+
+
+def _new_folder(name: str) -> CampaignFolder:
+    """A new folder ``<name>-campaign-<YYYYmmdd-HHMMSS>[-N]`` here, claimed."""
+    import datetime
+
+    stem = f"{name}-campaign-{datetime.datetime.now().strftime('%Y%m%d-%H%M%S')}"
+    for n in range(1, 1000):
+        path = Path.cwd() / (stem if n == 1 else f"{stem}-{n}")
+        if path.exists():
+            continue
+        try:
+            return CampaignFolder(path).claim()
+        except CampaignError:               # taken meanwhile by a campaign started with it
+            if not path.parent.is_dir() or not os.access(path.parent, os.W_OK):
+                raise
+    raise CampaignError(f"out: no free folder name {stem}-N in {Path.cwd()}")
 
 
 def _override_texts(overrides) -> list[str]:
@@ -344,6 +442,67 @@ def _cores() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:
         return max(1, os.cpu_count() or 1)
+
+
+def available_memory() -> int | None:
+    """Memory the system can give new processes without swapping, bytes (None: unknown).
+
+    Linux's ``MemAvailable`` (``/proc/meminfo``), else the free pages.
+    """
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def worker_memory(base: Scenario) -> int:
+    """Memory one local worker process of a campaign of ``base`` takes, bytes (estimate).
+
+    :data:`WORKER_MEMORY` (a process with the simulator loaded) plus the
+    arrays of one run (``quadland.simulate.simulation_plan``).
+    """
+    from quadland.simulate import simulation_plan
+
+    return WORKER_MEMORY + simulation_plan(base).memory_bytes
+
+
+def local_workers(base: Scenario, workers: int | None, runs: int) -> int:
+    """How many local processes fly a campaign of ``runs`` runs of ``base``.
+
+    ``workers`` (default: one per core), no more than the runs, and no more
+    than the available memory holds (:func:`worker_memory` each): asked for
+    explicitly, too many is refused; by default, fewer are started.
+
+    Raises
+    ------
+    CampaignError
+        ``workers: ...``: more than the memory holds, with what they would take.
+    """
+    wanted = min(workers or _cores(), runs)
+    if wanted == 1:
+        return 1                                # flies in this process
+    each = worker_memory(base)
+    available = available_memory()
+    if available is None:
+        return wanted
+    fit = max(1, available // each)
+    if wanted <= fit:
+        return wanted
+    if workers is None:
+        return fit
+    what = f"{wanted} local processes" + ("" if wanted == workers else
+                                          f" (of the {workers} asked: one per run)")
+    raise CampaignError(f"workers: {what} need about "
+                        f"{wanted * each / 2**30:.1f} GiB (about {each / 2**20:.0f} MiB each), "
+                        f"over the {available / 2**30:.1f} GiB of memory available; use "
+                        f"--workers {fit} or fewer")
 
 
 def _progress_bar(show: bool, total: int, done: int):
@@ -369,20 +528,32 @@ class _Queue:
         return item
 
 
-def _serial_runs(base: Scenario, todo: Iterable[RunDraw]) -> Iterator[list[RunOutcome]]:
+def _serial_runs(base: Scenario, todo: Iterable[RunDraw], limits: Mapping[str, float]
+                 ) -> Iterator[list[RunOutcome]]:
     for draw in todo:
-        yield [fly(base, draw)]
+        yield [fly(base, draw, limits)]
 
 
-def _worker_init(lifeline) -> None:
-    """A pool process: Ctrl-C is the parent's to handle; exit when the parent is gone.
+@dataclasses.dataclass(frozen=True)
+class _Raised:
+    """An exception a worker's run raised (not a run's outcome), sent to the campaign."""
 
-    ``lifeline`` is the read end of a pipe whose only write end the campaign's
-    process holds: it reads end of file when that process ends, however it
-    ends (a SIGKILL included), and the worker exits instead of waiting for
-    work forever.
+    error: BaseException
+
+
+def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) -> None:
+    """A local worker process: fly the draws ``conn`` brings, send back each outcome.
+
+    Ctrl-C is the campaign's to handle (the forkserver, and so every worker,
+    starts with SIGINT ignored; set again here for a forkserver started by
+    another caller). Warnings stay silent: the campaign's process has given
+    each once, building the same simulator. ``lifeline`` is the read end of a
+    pipe whose only write end the campaign's process holds: it reads end of
+    file when that process ends, however it ends (a SIGKILL included), and
+    the worker exits at once, even in the middle of a run.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    warnings.simplefilter("ignore")
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)                        # one BLAS thread per process
@@ -395,34 +566,143 @@ def _worker_init(lifeline) -> None:
         os._exit(1)
 
     threading.Thread(target=watch, name="quadland-lifeline", daemon=True).start()
+    while True:
+        try:
+            draw = conn.recv()
+        except (EOFError, OSError):
+            return
+        if draw is None:
+            return
+        try:
+            result = fly(base, draw, limits)
+        except Exception as exc:                # a bug, or out of memory: the campaign's
+            result = _Raised(exc)               # process raises it
+        try:
+            conn.send(result)
+        except (OSError, ValueError):
+            return
+        except Exception as exc:                # an exception that does not pickle
+            conn.send(_Raised(RuntimeError(f"{type(exc).__name__}: {exc}")))
 
 
-def _pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int
-               ) -> Iterator[list[RunOutcome]]:
-    """Fly ``todo`` on ``workers`` local processes; yield outcomes as they finish."""
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(["quadland.campaign.fly"])
-    queue = _Queue(todo)
-    ahead = 4 * workers                         # runs queued per process, for throughput
-    lifeline, keep = context.Pipe(duplex=False)
-    pool = cf.ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_init,
-                                  initargs=(lifeline,))
-    running: set[cf.Future] = set()
+def _start_forkserver() -> None:
+    """Start the forkserver with SIGINT ignored, so that it and every worker ignore Ctrl-C.
+
+    A Ctrl-C meant for the campaign reaches its whole process group: a
+    forkserver still importing its preloaded modules, or a worker not yet
+    running its first line, would print a traceback. A process started with
+    SIGINT ignored keeps it ignored (Python installs its handler only over
+    the default). SIGINT is blocked meanwhile in this process, so that a
+    Ctrl-C in that moment is delivered here afterwards, not lost.
+    """
+    from multiprocessing import forkserver, resource_tracker
+
+    resource_tracker.ensure_running()           # it unblocks SIGINT itself when it starts
+    if threading.current_thread() is not threading.main_thread():
+        forkserver.ensure_running()
+        return
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
-        while queue or running:
-            while queue and len(running) < ahead:
-                running.add(pool.submit(fly, base, queue.pop()))
-            done, running = cf.wait(running, return_when=cf.FIRST_COMPLETED)
-            try:
-                yield [f.result() for f in done]
-            except cf.process.BrokenProcessPool:
-                raise CampaignStopped("a worker process died (killed, or out of memory); "
-                                      "the finished runs are recorded: run the same "
-                                      "command to resume") from None
+        if signal.SIGINT in signal.sigpending():
+            return                              # raised as KeyboardInterrupt when unblocked
+        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            forkserver.ensure_running()
+        finally:
+            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
     finally:
-        pool.shutdown(wait=False, cancel_futures=True)
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+
+class _Worker:
+    """A local worker process, its end of the pipe and the runs sent to it."""
+
+    def __init__(self, context, lifeline, base: Scenario, limits: Mapping[str, float]):
+        self.conn, theirs = context.Pipe()
+        self.process = context.Process(target=_worker_main, name="quadland-campaign-worker",
+                                       args=(theirs, lifeline, base, limits), daemon=True)
+        self.process.start()
+        theirs.close()
+        self.busy = 0
+
+    def send(self, draw: RunDraw) -> None:
+        self.conn.send(draw)
+        self.busy += 1
+
+
+def _pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
+               limits: Mapping[str, float]) -> Iterator[list[RunOutcome]]:
+    """Fly ``todo`` on ``workers`` local processes; yield outcomes as they finish.
+
+    Each worker is a process of the ``forkserver`` (no fork of a process
+    that holds threads) fed through its own pipe, at most :data:`_AHEAD`
+    runs ahead. Only pipes connect them: no semaphore that a SIGKILLed
+    campaign would leave to the resource tracker.
+    """
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["quadland.campaign.execute"])
+    _start_forkserver()
+    queue = _Queue(todo)
+    lifeline, keep = context.Pipe(duplex=False)
+    pool: list[_Worker] = []
+    try:
+        for _ in range(workers):
+            pool.append(_Worker(context, lifeline, base, limits))
         lifeline.close()
-        keep.close()
+        for worker in pool:
+            while queue and worker.busy < _AHEAD:
+                worker.send(queue.pop())
+        while any(w.busy for w in pool):
+            ready = multiprocessing.connection.wait([w.conn for w in pool if w.busy])
+            outcomes, lost = [], None
+            for worker in pool:
+                if worker.conn not in ready:
+                    continue
+                try:
+                    result = worker.conn.recv()
+                except (EOFError, OSError):
+                    lost = worker
+                    continue
+                worker.busy -= 1
+                if isinstance(result, _Raised):
+                    raise result.error
+                outcomes.append(result)
+                try:
+                    while queue and worker.busy < _AHEAD:
+                        worker.send(queue.pop())
+                except OSError:
+                    lost = worker
+            if outcomes:
+                yield outcomes
+            if lost is not None:
+                lost.process.join(1.0)
+                code = lost.process.exitcode
+                how = f"killed by signal {-code}" if code is not None and code < 0 else \
+                    "killed, or out of memory"
+                raise CampaignStopped(f"a worker process died ({how}); the finished runs are "
+                                      "recorded: run the same command to resume")
+    finally:
+        keep.close()                            # every worker exits, even mid-run
+        for worker in pool:
+            worker.conn.close()
+        for worker in pool:
+            worker.process.join(5.0)
+            if worker.process.exitcode is None:
+                worker.process.kill()
+                worker.process.join()
+
+
+def check_address(address) -> None:
+    """Refuse, in one line, a scheduler address that is not ``[PROTOCOL://]HOST:PORT``."""
+    import re
+
+    match = re.fullmatch(r"(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+)"
+                         r":([0-9]{1,5})", str(address))
+    if match is None or not 1 <= int(match.group(3)) <= 65535:
+        from quadland.scenario import toml_value
+
+        raise CampaignError(f"scheduler: expected tcp://HOST:PORT (or HOST:PORT; also tls, "
+                            f"ws, wss, ucx), got {toml_value(str(address))[:80]}")
 
 
 def _connect(address: str):
@@ -432,6 +712,7 @@ def _connect(address: str):
     except ImportError:
         raise CampaignError("scheduler: needs the dask.distributed package "
                             "(pip install 'dask[distributed]')") from None
+    _reachable(address)
     try:
         client = Client(address, timeout="15s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -439,16 +720,62 @@ def _connect(address: str):
                             f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
     try:
         client.wait_for_workers(1, timeout=30)
+        mine = _identity()
+        for worker, theirs in client.run(_identity).items():
+            if theirs != mine:
+                raise CampaignError(f"scheduler: worker {worker} runs another quadland "
+                                    f"({theirs}, here {mine})")
     except (OSError, TimeoutError) as exc:
-        client.close()
+        _disconnect(client)
         raise CampaignError(f"scheduler: {address} has no worker ({exc})") from None
-    mine = _identity()
-    for worker, theirs in client.run(_identity).items():
-        if theirs != mine:
-            client.close()
-            raise CampaignError(f"scheduler: worker {worker} runs another quadland "
-                                f"({theirs}, here {mine})")
+    except BaseException:
+        _disconnect(client)
+        raise
     return client
+
+
+@contextlib.contextmanager
+def _quiet_cluster_logs():
+    """Silence dask.distributed's log lines meanwhile: the campaign reports in one line."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401  (its import sets its loggers' levels)
+    except ImportError:
+        pass
+    names = ["distributed"] + [n for n in logging.root.manager.loggerDict
+                               if n.startswith("distributed.")]
+    saved = {n: logging.getLogger(n).level for n in names}
+    for name in names:
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for name, level in saved.items():
+            logging.getLogger(name).setLevel(level)
+
+
+def _reachable(address: str) -> None:
+    """Refuse at once a TCP address where nothing listens (the client would retry 15 s)."""
+    import socket
+
+    scheme, _, location = address.rpartition("://")
+    if scheme not in ("", "tcp"):
+        return
+    host, _, port = location.rpartition(":")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=5.0).close()
+    except OSError as exc:
+        raise CampaignError(f"scheduler: cannot connect to {address}: "
+                            f"{exc.strerror or exc}") from None
+
+
+def _disconnect(client) -> None:
+    """Close a client quickly, whether or not its scheduler is still there."""
+    try:
+        client.close(timeout=2)
+    except Exception:                           # the scheduler is gone: nothing to tell it
+        pass
 
 
 def _identity() -> str:
@@ -457,39 +784,116 @@ def _identity() -> str:
     return f"quadland {__version__}, code {code_fingerprint()}"
 
 
-def _dask_runs(client, base: Scenario, todo: Iterator[RunDraw]) -> Iterator[list[RunOutcome]]:
-    """Fly ``todo`` on the cluster's workers; yield outcomes as they finish."""
+def _cluster_error(exc: BaseException) -> bool:
+    """The exception is the cluster's (a lost worker, scheduler or connection)."""
+    return type(exc).__module__.split(".")[0] in ("distributed", "tornado") or \
+        isinstance(exc, OSError | TimeoutError | cf.CancelledError)
+
+
+def _stopped(why: str) -> CampaignStopped:
+    return CampaignStopped(f"{why}; the finished runs are recorded: run the same command to "
+                           "resume")
+
+
+def _dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[str, float]
+               ) -> Iterator[list[RunOutcome]]:
+    """Fly ``todo`` on the cluster's workers; yield outcomes as they finish.
+
+    A run lost with its worker is flown again by another (Dask reschedules
+    it); the campaign stops (:class:`CampaignStopped`) when a run fails for
+    the cluster's sake (a worker killed while flying it too often), when
+    the scheduler is lost, or when no worker is left for
+    :data:`NO_WORKER_GRACE_S` seconds.
+    """
     from distributed import as_completed
 
-    client.run(warm_up, base)                   # each worker builds or loads its simulator
-    threads = sum(client.nthreads().values())
-    base_future = client.scatter(base, broadcast=True, hash=False)
-    queue = _Queue(todo)
-    first = []
-    while queue and len(first) < 4 * threads:
-        first.append(client.submit(fly, base_future, queue.pop(), pure=False))
-    pending = as_completed(first, with_results=True, loop=client.loop)
+    pending = None
     try:
-        for batch in pending.batches():
-            outcomes = [outcome for _, outcome in batch]
-            for _ in outcomes:
+        try:
+            client.run(warm_up, base)           # each worker builds or loads its simulator
+            threads = sum(client.nthreads().values())
+            base_future = client.scatter(base, broadcast=True, hash=False)
+        except Exception as exc:
+            if not _cluster_error(exc):
+                raise
+            raise _stopped(f"the cluster failed while preparing its workers "
+                           f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]})") \
+                from None
+        queue = _Queue(todo)
+        pending = as_completed(loop=client.loop)
+
+        def submit(k):
+            for _ in range(k):
                 if queue:
-                    pending.add(client.submit(fly, base_future, queue.pop(), pure=False))
-            yield outcomes
-    except Exception as exc:
-        if type(exc).__module__.split(".")[0] != "distributed" and \
-                not isinstance(exc, OSError | TimeoutError):
-            raise
-        raise CampaignStopped(f"the cluster lost a run ({type(exc).__name__}: "
-                              f"{' '.join(str(exc).split())[:200]}); the finished runs are "
-                              "recorded: run the same command to resume") from None
+                    pending.add(client.submit(fly, base_future, queue.pop(), limits,
+                                              pure=False))
+
+        submit(_AHEAD * max(threads, 1))
+        quiet_since = alone_since = time.monotonic()
+        while not pending.is_empty():
+            if not pending.has_ready():
+                with pending.thread_condition:
+                    pending.thread_condition.wait(timeout=0.25)
+            done = pending.next_batch(block=False)
+            outcomes, why = [], None
+            for future in done:
+                if future.status in ("lost", "pending"):
+                    pending.add(future)         # its worker died with its result: flown again
+                    continue
+                try:
+                    outcomes.append(future.result(timeout=30))
+                    continue
+                except Exception as exc:        # failed, cancelled, or lost meanwhile
+                    error = exc
+                if not _cluster_error(error):
+                    raise error
+                why = why or _loss(client, error)
+            if outcomes:
+                yield outcomes
+            if why is not None:
+                raise _stopped(why)
+            submit(len(done))
+            now = time.monotonic()
+            if done:
+                quiet_since = alone_since = now
+                continue
+            if now - quiet_since < 1.0:
+                continue
+            quiet_since = now                   # a second without a result: ask the cluster
+            if client.status != "running":
+                raise _stopped("the cluster's scheduler was lost")
+            try:
+                workers = len(client.nthreads())
+            except Exception as exc:
+                if not _cluster_error(exc):
+                    raise
+                raise _stopped("the cluster's scheduler was lost") from None
+            if workers:
+                alone_since = now
+            elif now - alone_since > NO_WORKER_GRACE_S:
+                raise _stopped(f"the cluster has had no worker for {NO_WORKER_GRACE_S:g} s")
     finally:
-        leftover = list(pending.futures)
-        pending.clear()
-        if leftover:
-            client.cancel(leftover, force=True)
+        if pending is not None:
+            leftover = list(pending.futures)
+            pending.clear()
+            if leftover and client.status == "running":
+                try:
+                    client.cancel(leftover, force=True)
+                except Exception:               # the scheduler is gone with its tasks
+                    pass
 
 
+def _loss(client, error: BaseException) -> str:
+    """Why a run was lost on the cluster, in words."""
+    text = " ".join(str(error).split())
+    if client.status != "running" or "connection" in text.lower():
+        return "the cluster's scheduler was lost"
+    name = type(error).__name__
+    if name == "KilledWorker":
+        return f"the cluster lost a run with its worker ({name}: {text[:160]})"
+    if "Cancelled" in name:
+        return "the cluster cancelled a run: a worker was lost"
+    return f"the cluster lost a run ({name}: {text[:160]})"
 def _parse(rows: Sequence[Sequence[str]], header: Sequence[str]) -> dict[str, list[str]]:
     return {name: [r[k] for r in rows] for k, name in enumerate(header)}
 
@@ -534,8 +938,12 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
     ``invalid`` run is counted apart); p50, p90, p99 and max (order
     statistics) of every metric; the worst runs with the command that
     replays each; the dispersed column that best separates failures.
+    Without a flown run (every draw invalid) the rate, its interval and the
+    separation are null and ``note`` says so; without a failure (or a
+    success) ``separation`` is null and ``most_correlated`` names the column
+    the severity follows most.
     """
-    spec, model = base.campaign, base.model
+    spec, model = campaign_spec_of(base), base.model
     cols = _parse(rows, header)
     n_all = len(rows)
     status = np.array(cols["status"])
@@ -546,6 +954,7 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
     summary: dict = {"scenario": base.name, "model": model, "runs": n_all, "flown": n,
                      "invalid": int((~flown).sum()), "successes": k, "failures": n - k,
                      "numerical_failures": int((status == "failed").sum())}
+    summary["success_rate"] = summary["confidence"] = None
     if n:
         lo, hi = clopper_pearson(k, n, CONFIDENCE)
         summary["success_rate"] = k / n
@@ -553,6 +962,9 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
             "level": CONFIDENCE, "method": "Clopper-Pearson (exact binomial)",
             "interval": [lo, hi],
             "lower_bound_one_sided": lower_confidence_bound(k, n, CONFIDENCE)}
+    else:
+        summary["note"] = (f"no run was flown: the draws of all {n_all} were invalid (each "
+                           "row's message says why); no success rate, no figures")
     metrics = {}
     for m in METRICS[model]:
         x = _floats(cols[m.name])
@@ -584,11 +996,11 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
     summary["worst_runs"] = worst
     numbers = _dispersed_numbers(spec, cols)
     fail = ~success[flown]
-    sep = separation({c: v[flown] for c, v in numbers.items()}, fail)
+    sep = separation({c: v[flown] for c, v in numbers.items()}, fail) if n else None
     summary["separation"] = None if sep is None else {
         "parameter": sep.parameter, "ks_statistic": sep.statistic,
         "failures": int(fail.sum()), "successes": int((~fail).sum())}
-    if sep is None and numbers:
+    if sep is None and numbers and n:
         name, rho = _most_correlated({c: v[flown] for c, v in numbers.items()},
                                      severity[flown])
         summary["most_correlated"] = {"parameter": name, "spearman_rho": rho}
@@ -615,17 +1027,20 @@ def _figures(base: Scenario, header, rows, summary) -> dict[str, bytes]:
     from quadland.output import figure_png
     from quadland.plots.campaign import failures_figure, metrics_cdf_figure
 
+    spec = campaign_spec_of(base)
     cols = _parse(rows, header)
-    limits = limits_of(base, base.campaign.limits)
+    limits = limits_of(base, spec.limits)
     success = np.array([s == "true" for s in cols["success"]])
     flown = np.array([s != "invalid" for s in cols["status"]])
+    if not flown.any():
+        return {}                               # nothing to draw: summary.json's note says so
     metric_values = {m.name: _floats(cols[m.name])[flown] for m in METRICS[base.model]
                      if m.name in limits}
     units = {m.name: m.unit for m in METRICS[base.model]}
     files = {}
     if metric_values:
         files["metrics_cdf.png"] = figure_png(metrics_cdf_figure(metric_values, limits, units))
-    numbers = {c: v[flown] for c, v in _dispersed_numbers(base.campaign, cols).items()}
+    numbers = {c: v[flown] for c, v in _dispersed_numbers(spec, cols).items()}
     severity = _severity(cols, limits, len(rows))[flown]
     if summary["separation"] is not None:
         sep = summary["separation"]

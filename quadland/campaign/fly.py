@@ -45,15 +45,19 @@ class RunOutcome:
     columns: Mapping[str, str]
 
 
-def fly(base: Scenario, draw: RunDraw) -> RunOutcome:
+def fly(base: Scenario, draw: RunDraw, limits: Mapping[str, float] | None = None
+        ) -> RunOutcome:
     """Fly run ``draw.index`` of the campaign of ``base``.
 
     Parameters
     ----------
     base : Scenario
-        The campaign's scenario, with its ``campaign`` table.
+        The campaign's scenario.
     draw : RunDraw
         The run's seed and dispersed values.
+    limits : mapping of str to float, optional
+        The campaign's ``limits`` (``CampaignSpec.limits``); default: those
+        of ``base``'s ``[campaign]`` table, validated here.
 
     Returns
     -------
@@ -79,9 +83,12 @@ def fly(base: Scenario, draw: RunDraw) -> RunOutcome:
     except SimulationError as exc:
         return outcome("failed", message=str(exc))
     metrics = run_metrics(result)
-    extra = base.campaign.limits if base.campaign is not None else {}
+    if limits is None:
+        from quadland.campaign.spec import campaign_spec_of
+
+        limits = campaign_spec_of(base).limits if base.campaign_table is not None else {}
     units = {m.name: m.unit for m in METRICS[scenario.model]}
-    missed = violations(metrics, limits_of(scenario, extra), units)
+    missed = violations(metrics, limits_of(scenario, limits), units)
     if scenario.model == "landing" and metrics["touchdown_time"] is None:
         missed = [f"no touchdown by t = {result['t'][-1]:.4g} s"]
     return outcome("ok", not missed, metrics, "; ".join(missed))

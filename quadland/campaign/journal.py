@@ -33,12 +33,30 @@ from pathlib import Path
 from quadland.exceptions import CampaignError
 from quadland.output import fsync_dir, lock_folder, strict_json, unlock_folder, write_bytes_atomic
 
-__all__ = ["CampaignFolder", "MANIFEST", "RUNS", "format_row"]
+__all__ = ["CampaignFolder", "MANIFEST", "RUNS", "format_row", "damaged_manifest",
+           "json_kind"]
 
 #: The manifest: the campaign's identity.
 MANIFEST = "campaign.json"
 #: The journal of finished runs, then the sorted table.
 RUNS = "runs.csv"
+
+
+def damaged_manifest(path: Path, why: str) -> CampaignError:
+    """The error of a manifest that is not what quadland writes."""
+    return CampaignError(f"out: {path} is damaged ({why}); it cannot be resumed: choose a new "
+                         "folder")
+
+
+def json_kind(value) -> str:
+    """What a parsed JSON value is, in JSON's words (``null``, ``an array``, ...)."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    kinds = {str: "a string", int: "a number", float: "a number", list: "an array",
+             dict: "an object"}
+    return kinds.get(type(value), type(value).__name__)
 
 
 def format_row(values: Sequence[str]) -> bytes:
@@ -62,20 +80,27 @@ class CampaignFolder:
         self._runs_fd: int | None = None
 
     def __enter__(self) -> CampaignFolder:
-        return self.claim()
+        return self if self._lock_fd is not None else self.claim()
 
     def __exit__(self, *exc) -> None:
         self.release()
 
+    def check(self) -> None:
+        """Refuse a path that is not a folder, or a folder of other files (creates nothing)."""
+        path = self.path
+        try:
+            if path.exists() and not path.is_dir():
+                raise CampaignError(f"out: {path} exists and is not a folder")
+            if path.is_dir() and not (path / MANIFEST).is_file() and any(path.iterdir()):
+                raise CampaignError(f"out: {path} holds files that are not a quadland "
+                                    "campaign; choose a new or empty folder")
+        except OSError as exc:
+            raise CampaignError(f"out: cannot read {path}: {exc.strerror or exc}") from None
+
     def claim(self) -> CampaignFolder:
         """Check the folder and lock it; raise :class:`CampaignError` (``out: ...``)."""
-        path = self.path
-        if path.exists() and not path.is_dir():
-            raise CampaignError(f"out: {path} exists and is not a folder")
-        if path.is_dir() and not (path / MANIFEST).is_file() and any(path.iterdir()):
-            raise CampaignError(f"out: {path} holds files that are not a quadland campaign; "
-                                "choose a new or empty folder")
-        self._lock_fd = lock_folder(path, CampaignError)
+        self.check()
+        self._lock_fd = lock_folder(self.path, CampaignError)
         return self
 
     def release(self) -> None:
@@ -88,14 +113,19 @@ class CampaignFolder:
             unlock_folder(self.path, fd)
 
     def manifest(self) -> dict | None:
-        """The manifest of an earlier run into this folder, or None."""
+        """The manifest of an earlier run into this folder (a JSON object), or None."""
+        path = self.path / MANIFEST
         try:
-            return json.loads((self.path / MANIFEST).read_text(encoding="utf-8"))
+            data = json.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             return None
-        except (OSError, ValueError) as exc:
-            raise CampaignError(f"out: {self.path / MANIFEST} cannot be read ({exc}); "
-                                "choose a new folder") from None
+        except (OSError, ValueError, RecursionError) as exc:
+            why = " ".join(str(exc).split())[:120] or type(exc).__name__
+            raise CampaignError(f"out: {path} cannot be read ({why}); choose a new "
+                                "folder") from None
+        if not isinstance(data, dict):
+            raise damaged_manifest(path, f"{json_kind(data)}, not a JSON object")
+        return data
 
     def start(self, manifest: dict, header: Sequence[str], files: dict[str, bytes]) -> None:
         """Write the manifest and ``files`` (atomically), and the journal's header if new."""

@@ -21,12 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from quadland.campaign.spec import CampaignSpec, Dispersion, apply_mode
+from quadland.campaign.spec import U_EDGE, CampaignSpec, Dispersion, apply_mode
 
-__all__ = ["RunDraw", "run_seed", "unit_samples", "draws", "iter_draws", "format_value"]
-
-#: u is kept inside [U_EDGE, 1 - U_EDGE]: an inverse CDF is infinite at 0 and 1.
-U_EDGE = 2.0 ** -53
+__all__ = ["RunDraw", "run_seed", "unit_samples", "draws", "iter_draws", "format_value",
+           "U_EDGE"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -109,18 +107,25 @@ def _numeric(disp: Dispersion, u: np.ndarray) -> np.ndarray:
     from scipy import stats
 
     lo, hi = np.array(disp.low), np.array(disp.high)
+    # std = 0, or a spread so small against the distance to [low, high] that
+    # all the mass sits at the nearest bound (the standardized bounds overflow)
     out = np.clip(mean, lo, hi)
     spread = std > 0
     if spread.any():
-        a = (lo[spread] - mean[spread]) / std[spread]
-        b = (hi[spread] - mean[spread]) / std[spread]
-        out[spread] = stats.truncnorm.ppf(u[spread], a, b, loc=mean[spread],
-                                          scale=std[spread])
-    return out
+        with np.errstate(all="ignore"):
+            a = (lo[spread] - mean[spread]) / std[spread]
+            b = (hi[spread] - mean[spread]) / std[spread]
+            x = mean[spread] + std[spread] * stats.truncnorm.ppf(u[spread], a, b)
+        out[spread] = np.where(np.isfinite(x), x, out[spread])
+    return np.clip(out, lo, hi)                 # never outside its bounds, even by rounding
 
 
 def _choose(disp: Dispersion, u: float):
     weights = np.ones(len(disp.values)) if disp.weights is None else np.array(disp.weights)
+    with np.errstate(over="ignore"):
+        total = weights.sum()
+    if not np.isfinite(total):                  # weights near 1e308 overflow their sum
+        weights = weights / weights.max()
     edges = np.cumsum(weights) / weights.sum()
     k = min(int(np.searchsorted(edges, u, side="right")), len(disp.values) - 1)
     while weights[k] == 0:                          # never pick a zero-weight value

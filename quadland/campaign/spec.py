@@ -1,12 +1,14 @@
 """A scenario's ``[campaign]`` table: runs, seed, sampling, dispersions, limits.
 
-The table is validated once, when the scenario is loaded
-(:func:`quadland.load_scenario` calls :func:`campaign_spec`), against the
-scenario it belongs to: every dispersion names a key of the model's schema,
-its parameters have the key's shape, and a bounded distribution cannot draw a
-value outside the key's physical range. The result is a frozen
-:class:`CampaignSpec` of :class:`Dispersion` objects; docs/campaign.md
-describes the table.
+A loaded scenario keeps the table as written (``Scenario.campaign_table``);
+only a campaign validates it (:func:`campaign_spec_of`, which
+:func:`quadland.campaign.run_campaign` calls), so that ``quadland simulate``
+and the other commands are never refused for a table they ignore. It is
+checked against the scenario it belongs to: every dispersion names a key of
+the model's schema, its parameters have the key's shape, every draw is a
+finite number, and a bounded distribution cannot draw a value outside the
+key's physical range. The result is a frozen :class:`CampaignSpec` of
+:class:`Dispersion` objects; docs/campaign.md describes the table.
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from typing import Any
 from quadland.campaign.metrics import metric_names
 from quadland.exceptions import ScenarioError
 
-__all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "apply_mode",
-           "DISTRIBUTIONS", "MODES", "SAMPLINGS", "MAX_RUNS"]
+__all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "campaign_spec_of",
+           "apply_mode", "DISTRIBUTIONS", "MODES", "SAMPLINGS", "MAX_RUNS", "U_EDGE"]
 
 #: Each distribution's required and optional parameters.
 DISTRIBUTIONS: Mapping[str, tuple[tuple[str, ...], tuple[str, ...]]] = MappingProxyType({
@@ -39,6 +41,10 @@ MODES = ("offset", "relative", "absolute")
 SAMPLINGS = ("random", "sobol", "lhs")
 #: Most runs one campaign may ask for.
 MAX_RUNS = 1_000_000
+#: A point of the unit cube is kept within [U_EDGE, 1 - U_EDGE]: an inverse
+#: CDF is infinite at 0 and 1. A normal draw reaches at most
+#: ``-ndtri(U_EDGE) = 8.21`` standard deviations from its mean.
+U_EDGE = 2.0 ** -53
 _SEED_MAX = 2 ** 63 - 1
 _TOP = {"runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
         "dispersions": "table of dispersed keys", "limits": "table of metric upper limits"}
@@ -170,34 +176,12 @@ class CampaignSpec:
         """What must not change for a campaign folder to be resumed (all but ``runs``)."""
         return {k: v for k, v in _plain(self.table).items() if k != "runs"}
 
-    def to_toml(self) -> str:
-        """The table as TOML text (``[campaign]`` and its sub-tables)."""
-        from quadland.scenario import toml_value
-
-        lines = ["[campaign]"]
-        lines += [f"{k} = {toml_value(v)}" for k, v in self.table.items()
-                  if not isinstance(v, Mapping)]
-        for name in ("dispersions", "limits"):
-            sub = self.table.get(name)
-            if sub:
-                lines += ["", f"[campaign.{name}]"]
-                lines += [f"{_toml_key(k)} = {toml_value(v)}" for k, v in sub.items()]
-        return "\n".join(lines) + "\n"
-
-
 def _plain(x):
     if isinstance(x, Mapping):
         return {k: _plain(v) for k, v in x.items()}
     if isinstance(x, list | tuple):
         return [_plain(v) for v in x]
     return x
-
-
-def _toml_key(key: str) -> str:
-    import json
-    import re
-
-    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
 
 
 def _where(key: str | None = None, param: str | None = None) -> str:
@@ -226,6 +210,33 @@ def _show(value) -> str:
     from quadland.scenario import _show as show
 
     return show(value)
+
+
+def campaign_spec_of(scenario) -> CampaignSpec:
+    """The validated ``[campaign]`` table of a loaded scenario.
+
+    Parameters
+    ----------
+    scenario : Scenario
+
+    Returns
+    -------
+    CampaignSpec
+
+    Raises
+    ------
+    CampaignError
+        The scenario has no ``[campaign]`` table.
+    ScenarioError
+        One line naming the entry at fault.
+    """
+    from quadland.exceptions import CampaignError
+
+    if scenario.campaign_table is None:
+        raise CampaignError(f"scenario: {scenario.name} has no [campaign] table "
+                            "(docs/campaign.md shows one)")
+    return campaign_spec(scenario.campaign_table, scenario.data, scenario.model,
+                         scenario.source)
 
 
 def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
@@ -308,12 +319,14 @@ def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
     return CampaignSpec(runs, seed, sampling, tuple(dispersions), checked_limits, normalized)
 
 
-def _field(key: str, schema) -> Any:
+def _field(key: str, schema, where: str | None = None) -> Any:
+    """The schema's field of ``key``; ``where`` names the entry that gave it."""
     section, dot, name = key.partition(".")
     if not dot or section not in schema or name not in schema[section] or section == "scenario":
         known = [f"{s}.{k}" for s in schema if s != "scenario" for k in schema[s]]
         hint = difflib.get_close_matches(key, known, n=1)
-        raise ScenarioError(f"{_where(key)}: not a key of this scenario's schema"
+        what = f"{_show(key)} is not" if where else "not"
+        raise ScenarioError(f"{where or _where(key)}: {what} a key of this scenario's schema"
                             + (f" (did you mean '{hint[0]}'?)" if hint else ""))
     return schema[section][name]
 
@@ -333,7 +346,7 @@ def _dispersion(key: str, entry, data, schema) -> Dispersion:
     if not isinstance(entry, Mapping):
         raise ScenarioError(f"{_where(key)}: must be a table {{distribution = ...}}")
     dist = entry.get("distribution")
-    if dist not in DISTRIBUTIONS:
+    if not isinstance(dist, str) or dist not in DISTRIBUTIONS:
         raise ScenarioError(f"{_where(key, 'distribution')}: must be one of "
                             f"{', '.join(DISTRIBUTIONS)}, got {_show(dist)}")
     required, optional = DISTRIBUTIONS[dist]
@@ -383,7 +396,7 @@ def _dispersion(key: str, entry, data, schema) -> Dispersion:
         raise ScenarioError(f"{_where(key, 'also')}: the other keys take the same offset or "
                             "factor; mode = \"absolute\" has none")
     for other in also:
-        f = _field(other, schema)
+        f = _field(other, schema, _where(key, "also"))
         if f.kind is not float:
             raise ScenarioError(f"{_where(key, 'also')}: {other} does not hold numbers")
         s, n = other.split(".", 1)
@@ -409,9 +422,57 @@ def _dispersion(key: str, entry, data, schema) -> Dispersion:
                                     f"({lo:g} >= {hi:g})")
     disp = Dispersion(key, dist, tuple(targets), mode, params["low"], params["high"],
                       params["mean"], params["std"], common=common, table=table)
+    _check_finite(disp)
     if dist in ("uniform", "truncnorm"):
         _check_reach(disp, schema)
     return disp
+
+
+def _extremes(disp: Dispersion) -> list[tuple[float, float]]:
+    """Per dimension, the smallest and largest draw ``X`` of a numeric dispersion.
+
+    A normal draw lies within ``ndtri(1 - U_EDGE)`` standard deviations of
+    its mean (:data:`U_EDGE`); a truncated one within its bounds as well.
+    """
+    reach = -_ndtri(U_EDGE)
+    out = []
+    for j in range(len(disp.low if disp.distribution == "uniform" else disp.std)):
+        if disp.distribution == "uniform":
+            out.append((disp.low[j], disp.high[j]))
+            continue
+        lo, hi = disp.mean[j] - reach * disp.std[j], disp.mean[j] + reach * disp.std[j]
+        if disp.distribution == "truncnorm":
+            lo, hi = max(lo, disp.low[j]), min(hi, disp.high[j])
+            lo, hi = min(lo, disp.high[j]), max(hi, disp.low[j])
+        out.append((lo, hi))
+    return out
+
+
+def _ndtri(u: float) -> float:
+    from scipy.special import ndtri
+
+    return float(ndtri(u))
+
+
+def _check_finite(disp: Dispersion) -> None:
+    """Refuse a dispersion some of whose draws, or the values they set, overflow."""
+    extremes = _extremes(disp)
+    for lo, hi in extremes:
+        width = hi - lo if disp.distribution == "uniform" else 0.0
+        if not (math.isfinite(lo) and math.isfinite(hi) and math.isfinite(width)):
+            param = "high" if disp.distribution == "uniform" else "std"
+            raise ScenarioError(f"{_where(disp.key, param)}: the draws overflow (they reach "
+                                f"{lo:g} to {hi:g}); use a smaller spread")
+    for target in disp.targets:
+        for e, nominal in enumerate(target.nominal):
+            lo, hi = extremes[0 if len(extremes) == 1 else e]
+            for x in (lo, hi):
+                value = apply_mode(disp.mode, nominal, x)
+                if not math.isfinite(value):
+                    where = target.key if target.scalar else f"{target.key}[{e}]"
+                    raise ScenarioError(f"{_where(disp.key)}: draws make {where} "
+                                        f"non-finite ({disp.mode} {x:g} on {nominal:g}); "
+                                        "use a smaller spread")
 
 
 def _choice(key: str, entry, field, table) -> Dispersion:
