@@ -45,7 +45,7 @@ from symbolic.landing.navigation import (
     ESTIMATOR_DEFAULTS,
     IMU,
     NAV,
-    PACKETS,
+    NAV_PACKETS,
     estimator_params,
     nav_predict_function,
     nav_update_function,
@@ -90,7 +90,7 @@ def _inputs(coupling: str) -> list[np.ndarray]:
                   v1=[0.1] * 3, vt=[0.1] * 3, s=3.0, b3_E=[0.0, 0.0, 1.0],
                   eta2=[0.01, 0.0, 0.5], v2E=[0.1] * 3, a2E=[0.0] * 3, w2E=[0.0] * 3,
                   w2E_dot=[0.0] * 3)
-    pkts = [p.pack({f.name: values[f.name] for f in p.fields}) for p in PACKETS]
+    pkts = [p.pack({f.name: values[f.name] for f in p.fields}) for p in NAV_PACKETS]
     p_est = estimator_params().pack(dict(ESTIMATOR_DEFAULTS))
     return [mem, imu, *pkts, p_est, np.array([0.004]), np.array([t])]
 

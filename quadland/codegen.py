@@ -116,13 +116,13 @@ def landing_default_values(scenario: str | Path = LANDING_SCENARIO,
     landing scenario's values (``quadland.landing.landing_values``), with overrides."""
     from quadland.landing import landing_values
     from quadland.metrics import TOUCHDOWN_LIMITS
-    from symbolic.landing.loop import controller_params
-    from symbolic.landing.plant import PLANT_PARAMS
+    from symbolic.landing.loop import landing_loop_params
+    from symbolic.landing.plant import LANDING_PLANT_PARAMS
 
     sc = load_scenario(scenario, list(overrides))
     require_model(sc, "landing", "the landing step's code generation")
     lv = landing_values(sc)
-    pc, pp = controller_params(lv.l).unpack(lv.pc), PLANT_PARAMS.unpack(lv.pp)
+    pc, pp = landing_loop_params(lv.l).unpack(lv.pc), LANDING_PLANT_PARAMS.unpack(lv.pp)
     d, sim, wind = sc.data["disturbance"], sc.data["simulation"], sc.data["wind"]
     g = sc.data["landing"]
     e = np.asarray(wind["gust_direction"], dtype=float)

@@ -61,8 +61,8 @@ class Envelope:
 
         Examples
         --------
-        >>> from symbolic.closed_loop import ENVELOPE
-        >>> env = Envelope(ENVELOPE, np.full(6, 10.0), ("x",) * 6)
+        >>> from symbolic.closed_loop import PAPER_ENVELOPE
+        >>> env = Envelope(PAPER_ENVELOPE, np.full(6, 10.0), ("x",) * 6)
         >>> print(env.describe(np.array([1.0, 500.0, 0, 0, 0, 0])))
         the speed (largest body velocity component |V1|) reached 500 m/s, beyond its
         envelope of 10 m/s

@@ -45,38 +45,34 @@ from quadland.simulate import (
     slow_control_hint,
 )
 from quadland.wind import OneCosineGust, dryden_low_altitude, gust_samples, turbulence_samples
-from symbolic.guidance import APPROACH, LANDED, TOUCHDOWN
-from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
-from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE, LANDED, TOUCHDOWN
 from symbolic.kinematics import rotation
 from symbolic.landing.controller import landing_controller_params, landing_memory
 from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
 from symbolic.landing.loop import (
-    ENVELOPE,
-    OUTPUTS,
-    RECORDED,
-    TRAJECTORY,
+    LANDING_ENVELOPE,
+    LANDING_RECORDED,
+    LANDING_SIGNALS,
+    LANDING_TRAJECTORY,
     anchor_function,
-    controller_params,
-    controller_state,
     landed_outputs_function,
+    landing_loop_memory,
+    landing_loop_params,
+    landing_loop_state,
     loop_plant_function,
-    loop_state,
 )
-from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
-from symbolic.landing.quadrotor import ACTUATOR
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.simulation import rk4_step
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_function
+from symbolic.vehicle import VEHICLE_STATE, vehicle_function
 
 __all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "landing_envelope",
            "landing_clocks",
            "wind_samples", "landing_disturbance", "simulate_landing"]
 
 #: The columns of a landing run's trajectory.csv (docs/landing.md), from the loop's layouts.
-LANDING_TRAJECTORY = TRAJECTORY
+LANDING_TRAJECTORY = LANDING_TRAJECTORY
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,9 +84,9 @@ class LandingValues:
     l : int
         RBF node count.
     pp : ndarray
-        Plant parameters (``symbolic.landing.plant.PLANT_PARAMS``).
+        Plant parameters (``symbolic.landing.plant.LANDING_PLANT_PARAMS``).
     pc : ndarray
-        Controller parameters (``symbolic.landing.loop.controller_params(l)``).
+        Controller parameters (``symbolic.landing.loop.landing_loop_params(l)``).
     xp0, xc0 : ndarray
         Initial plant state and controller memory.
     F_max : float
@@ -139,7 +135,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         deck[f"{name}_freq"] = _padded(dk[f"{name}_frequency"])
         deck[f"{name}_phase"] = _padded(dk[f"{name}_phase_deg"], deg)
     p_deck = DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
-    pp = PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
+    pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
 
     centers = np.linspace(r["center_min"], r["center_max"], l) if l > 1 else \
         np.array([(r["center_min"] + r["center_max"]) / 2])
@@ -158,7 +154,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"],
         settle_time=g["settle_time"]))
     rate = c["rate_hz"]
-    pc = controller_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
+    pc = landing_loop_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
     init = d["initial"]
     (x2, y2), (u2, v2) = init["position2"], init["velocity2"]
@@ -172,12 +168,12 @@ def landing_values(scenario: Scenario) -> LandingValues:
         p1=[*init["position1"], init["z1"]], eta1=eta1, V1=V1,
         Omega1=np.multiply(init["omega1_deg_s"], deg),
         F=np.full(4, q["mass"] * q["gravity"] / 4)))
-    xp0 = PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
+    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
     mem = landing_memory(l).zeros()
     mem[landing_memory(l).slice("eta_f")] = eta1[:2]
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
                                   aborts=0.0))
-    xc0 = controller_state(l).pack(dict(xg=xg, mem=mem))
+    xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
 
 
@@ -219,7 +215,7 @@ def landing_envelope(scenario: Scenario) -> Envelope:
              "twice F_max: a rotor lags a command clipped to [0, F_max]",
              "the leakage bound |z2| / k_w of eq. (22), |z2| <= |e2| + k1 |z1| in the envelope",
              "the leakage bound |z2| / k_zeta of eq. (22)")
-    return Envelope(ENVELOPE, bounds, basis)
+    return Envelope(LANDING_ENVELOPE, bounds, basis)
 
 
 def _landing_hint(scenario: Scenario, lv: LandingValues, xp_last) -> str:
@@ -300,7 +296,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     Returns
     -------
     SimulationResult
-        Every signal of ``symbolic.landing.loop.OUTPUTS`` and ``RECORDED``
+        Every signal of ``symbolic.landing.loop.LANDING_SIGNALS`` and ``LANDING_RECORDED``
         by name, at the output times up to touchdown, one row at the
         touchdown instant, then the ride on the deck; its ``layout`` is
         :data:`LANDING_TRAJECTORY` (the CSV's columns) and ``states`` the
@@ -331,13 +327,13 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         x_td = run.x_end
         i_w = int(np.searchsorted(t_dist, t_td - grid_tolerance(clocks), side="right")) - 1
         y_td = loop.outputs(x_td[None, :], w_dist[:, [i_w]].T, np.array([t_td]), lv.pp)
-        R_td = R[-1] if len(R) else np.zeros(RECORDED.size)
+        R_td = R[-1] if len(R) else np.zeros(LANDING_RECORDED.size)
         ride = _ride(scenario, lv, t_out, t_td, x_td, y_td[0], R_td)
         times = np.concatenate([times, [t_td], ride[0]])
         X = np.vstack([X, x_td, ride[1]])
         R = np.vstack([R, R_td, ride[2]])
         Y = np.vstack([Y, y_td, ride[3]])
-        Y[done, OUTPUTS.index("phase")] = TOUCHDOWN
+        Y[done, LANDING_SIGNALS.index("phase")] = TOUCHDOWN
     elif run.status != SIM_OK:
         what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
                 SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
@@ -348,12 +344,12 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     bad = ~np.all(np.isfinite(Y), axis=1)
     if bad.any():
         k = int(np.argmax(bad))
-        name = OUTPUTS.element_names()[int(np.argmin(np.isfinite(Y[k])))]
+        name = LANDING_SIGNALS.element_names()[int(np.argmin(np.isfinite(Y[k])))]
         what, t_fail = f"the output {name} became non-finite", times[k]
         times, X, R, Y = times[:k], X[:k], R[:k], Y[:k]
     result = _result(scenario, times, X, R, Y)
     if what is not None:
-        xp_last = X[-1, loop_state(lv.l).slice("xp")] if len(X) else None
+        xp_last = X[-1, landing_loop_state(lv.l).slice("xp")] if len(X) else None
         raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
                               f"{_landing_hint(scenario, lv, xp_last)}", t_fail,
                               result if len(times) else None)
@@ -375,18 +371,18 @@ def _ride(scenario, lv, t_out, t_td, x_td, y_td, R_td):
     later = t_out[(t_out > t_td + 1e-12) & (t_out < t_end - 1e-12)]
     times = np.append(later, t_end) if t_end > t_td + 1e-12 else later
     n = len(times)
-    lay, ys = loop_state(lv.l), OUTPUTS.unpack(y_td)
+    lay, ys = landing_loop_state(lv.l), LANDING_SIGNALS.unpack(y_td)
     xp_td = lay.unpack(x_td)["xp"]
-    s = PLANT_STATE.unpack(xp_td)
+    s = LANDING_PLANT_STATE.unpack(xp_td)
     anchor = np.asarray(anchor_function()(y_td), dtype=float).ravel()
     F_td = QUAD6_STATE.unpack(s["x1q"])["F"]
-    p = PLANT_PARAMS.unpack(lv.pp)
+    p = LANDING_PLANT_PARAMS.unpack(lv.pp)
     tau_m = ACTUATOR.unpack(p["p_act"])["motor_time_constant"][0]
     aborts = ys["aborts"][0]
     step = rk4_step(vehicle_function())
-    h_max = float(controller_params(lv.l).unpack(lv.pc)["dt"][0])
+    h_max = float(landing_loop_params(lv.l).unpack(lv.pc)["dt"][0])
     landed = landed_outputs_function()
-    X, Y = np.zeros((n, lay.size)), np.zeros((n, OUTPUTS.size))
+    X, Y = np.zeros((n, lay.size)), np.zeros((n, LANDING_SIGNALS.size))
     if n:                                          # every row in one call of each function
         before = np.concatenate([[t_td], times[:-1]])
         m = np.maximum(1, np.ceil((times - before) / h_max - 1e-9).astype(int))
@@ -401,18 +397,18 @@ def _ride(scenario, lv, t_out, t_td, x_td, y_td, R_td):
         X[:, lay.slice("xp")] = np.vstack([x1q, XV]).T
         X[:, lay.slice("xc")] = lay.unpack(x_td)["xc"]
     if n:                                          # yaw continuous with the touchdown's
-        psi = np.unwrap(np.concatenate([[ys["eta1"][2]], Y[:, OUTPUTS.index("psi1")]]))[1:]
-        Y[:, OUTPUTS.index("psi1")] = psi
-        X[:, lay.slice("xp")][:, PLANT_STATE.index("psi1")] = psi
+        psi = np.unwrap(np.concatenate([[ys["eta1"][2]], Y[:, LANDING_SIGNALS.index("psi1")]]))[1:]
+        Y[:, LANDING_SIGNALS.index("psi1")] = psi
+        X[:, lay.slice("xp")][:, LANDING_PLANT_STATE.index("psi1")] = psi
     held = np.tile(R_td, (n, 1))                   # the last commands, rotors idle
-    held[:, RECORDED.slice("F_cmd")] = 0.0
+    held[:, LANDING_RECORDED.slice("F_cmd")] = 0.0
     return times, X, held, Y
 
 
 def _result(scenario, times, X, R, Y) -> SimulationResult:
     """The result's columns: ``t``, every output and every recorded signal by name."""
     cols = {"t": times}
-    cols.update(zip(OUTPUTS.element_names(), Y.T, strict=True))
-    cols.update(zip(RECORDED.element_names(), R.T, strict=True))
+    cols.update(zip(LANDING_SIGNALS.element_names(), Y.T, strict=True))
+    cols.update(zip(LANDING_RECORDED.element_names(), R.T, strict=True))
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
                                        for k, v in cols.items()}, X, LANDING_TRAJECTORY)

@@ -50,9 +50,9 @@ from symbolic.linearization import (
     linearization_function,
 )
 from symbolic.parameters import VEHICLE
-from symbolic.quadrotor import DISTURBANCE, WRENCH
+from symbolic.quadrotor import BODY_DISTURBANCE, WRENCH
 from symbolic.relative import VIRTUAL_INPUT
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["check_frozen_time", "LOOP_NAMES", "INPUT_NAMES", "LANDING_LOOP_NAMES",
            "LANDING_INPUT_NAMES", "OperatingPoint", "LinearModels", "equilibrium",
@@ -184,7 +184,7 @@ class LinearModels:
 
 def _constant_disturbance(scenario: Scenario) -> np.ndarray:
     d = scenario.data["disturbance"]
-    return DISTURBANCE.pack(dict(d_F=d["force_bias"], d_M=d["moment_bias"]))
+    return BODY_DISTURBANCE.pack(dict(d_F=d["force_bias"], d_M=d["moment_bias"]))
 
 
 def _newton(residual, xi, tol: float, max_iter: int):
@@ -309,7 +309,7 @@ def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
     if t > 0:
         res = simulate(scenario.replace(**{"simulation.duration": float(t)}))
         x = res.states[-1]
-        w = np.array([res[k][-1] for k in DISTURBANCE.element_names()])
+        w = np.array([res[k][-1] for k in BODY_DISTURBANCE.element_names()])
     else:
         from quadland.model import disturbance_samples
         x, w = mv.x0, disturbance_samples(scenario, np.zeros(1))[:, 0]
@@ -361,30 +361,29 @@ class _HoverValues:
 
 def _hover_values(scenario: Scenario) -> _HoverValues:
     from quadland.landing import landing_values
-    from symbolic.guidance import REFERENCE
+    from symbolic.guidance import POSITION_REFERENCE
     from symbolic.kinematics import rotation
     from symbolic.landing.deck import DECK_PARAMS
-    from symbolic.landing.loop import DISTURBANCE as LANDING_DISTURBANCE
-    from symbolic.landing.loop import controller_params
-    from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
+    from symbolic.landing.loop import LANDING_DISTURBANCE, landing_loop_params
+    from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 
     lv = landing_values(scenario)
-    pc = controller_params(lv.l).unpack(lv.pc)
-    pp = PLANT_PARAMS.unpack(pc["pp"])
+    pc = landing_loop_params(lv.l).unpack(lv.pc)
+    pp = LANDING_PLANT_PARAMS.unpack(pc["pp"])
     deck = DECK_PARAMS.unpack(pp["p_deck"])
     for motion in ("heave", "roll", "pitch"):
         deck[f"{motion}_amp"] = np.zeros_like(deck[f"{motion}_amp"])
     pp["p_deck"] = DECK_PARAMS.pack(deck)
     d = scenario.data
-    xv0 = VEHICLE_STATE.unpack(PLANT_STATE.unpack(lv.xp0)["xv"])
+    xv0 = VEHICLE_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["xv"])
     heading = np.asarray(rotation([0.0, 0.0, float(xv0["psi2"][0])]), dtype=float)
     w = LANDING_DISTURBANCE.pack(dict(v_wind=heading.T @ np.asarray(d["wind"]["mean"]),
                                       d_F=d["disturbance"]["force_bias"],
                                       d_M=d["disturbance"]["moment_bias"]))
-    ref = REFERENCE.pack(dict(p_ref=[0.0, 0.0, d["landing"]["hover_height"]],
+    ref = POSITION_REFERENCE.pack(dict(p_ref=[0.0, 0.0, d["landing"]["hover_height"]],
                               v_ref=np.zeros(3), a_ref=np.zeros(3)))
     q = d["quadrotor"]
-    return _HoverValues(lv.l, PLANT_PARAMS.pack(pp), pc["p_ctrl"], ref, w,
+    return _HoverValues(lv.l, LANDING_PLANT_PARAMS.pack(pp), pc["p_ctrl"], ref, w,
                         np.concatenate([xv0[n] for n in VEHICLE_SPEEDS.names()]),
                         q["mass"] * q["gravity"])
 

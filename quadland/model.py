@@ -7,12 +7,12 @@ import dataclasses
 import numpy as np
 
 from quadland.scenario import Scenario, require_model
-from symbolic.backstepping import REFERENCE
+from symbolic.backstepping import PAPER_REFERENCE
 from symbolic.closed_loop import POSITION1, closed_loop_params, closed_loop_state
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.quadrotor import QUAD_STATE
 from symbolic.rbf import default_centers
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["ModelValues", "model_values", "disturbance_samples"]
 
@@ -69,7 +69,7 @@ def model_values(scenario: Scenario) -> ModelValues:
         k_zeta=c["k_zeta"], rho=c["rho"], nominal_model=float(c["nominal_model"]),
         centers=default_centers(l, r["center_min"], r["center_max"]),
         widths=np.full(l, r["width"])))
-    ref = REFERENCE.pack(dict(e1d=scenario.data["reference"]["e1d"], e1d_dot=np.zeros(4),
+    ref = PAPER_REFERENCE.pack(dict(e1d=scenario.data["reference"]["e1d"], e1d_dot=np.zeros(4),
                               e1d_ddot=np.zeros(4)))
     init = scenario.data["initial"]
     deg = np.pi / 180

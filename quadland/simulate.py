@@ -36,19 +36,18 @@ from quadland.exceptions import ScenarioError, SimulationError
 from quadland.model import disturbance_samples, model_values
 from quadland.scenario import Scenario
 from symbolic.closed_loop import (
-    ENVELOPE,
-    OUTPUTS,
+    PAPER_ENVELOPE,
+    PAPER_OUTPUTS,
     POSITION1,
     closed_loop_function,
     closed_loop_jacobian_function,
     closed_loop_state,
-    envelope_function,
+    paper_envelope_function,
 )
 from symbolic.control_step import step_outputs
 from symbolic.layout import Field, Layout
-from symbolic.quadrotor import DISTURBANCE, WRENCH
-from symbolic.quadrotor import STATE as QUAD_STATE
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
+from symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
            "time_grid", "run_clocks", "SimulationPlan", "simulation_plan", "check_plan",
@@ -109,16 +108,18 @@ def simulation_plan(scenario: Scenario) -> SimulationPlan:
         clocks += int(T * ctrl["rate_hz"]) + 2
     l = scenario.data["rbf"]["nodes"]
     if scenario.model == "landing":
-        from symbolic.landing.loop import DISTURBANCE as W_LAND
-        from symbolic.landing.loop import OUTPUTS as Y_LAND
-        from symbolic.landing.loop import RECORDED as REC_LAND
-        from symbolic.landing.loop import loop_state
+        from symbolic.landing.loop import (
+            LANDING_DISTURBANCE,
+            LANDING_RECORDED,
+            LANDING_SIGNALS,
+            landing_loop_state,
+        )
 
-        nx, nw = loop_state(l).size, W_LAND.size
-        per_row = 2 * nx + 2 * (Y_LAND.size + REC_LAND.size) + nw + 12
+        nx, nw = landing_loop_state(l).size, LANDING_DISTURBANCE.size
+        per_row = 2 * nx + 2 * (LANDING_SIGNALS.size + LANDING_RECORDED.size) + nw + 12
     else:
-        nx, nw = closed_loop_state(l).size, DISTURBANCE.size
-        per_row = 2 * nx + OUTPUTS.size + len(COLUMNS) + nw + 12
+        nx, nw = closed_loop_state(l).size, BODY_DISTURBANCE.size
+        per_row = 2 * nx + PAPER_OUTPUTS.size + len(COLUMNS) + nw + 12
     memory = 8 * (rows * per_row + clocks * (nw + 4))
     if sim.get("integrator") == "cvodes":      # cvodes returns the state at every grid point
         memory += 8 * 2 * clocks * nx
@@ -167,16 +168,16 @@ def _check_motor_step(scenario: Scenario) -> None:
 #: The columns of trajectory.csv, composed from the model's layouts.
 TRAJECTORY = Layout("trajectory", (
     Field("t", 1, "s", "time"),
-    *(OUTPUTS[n] for n in ("e1", "e2", "u", "wrench", "rotor", "Delta", "Delta_hat",
+    *(PAPER_OUTPUTS[n] for n in ("e1", "e2", "u", "wrench", "rotor", "Delta", "Delta_hat",
                            "Delta_target")),
     dataclasses.replace(closed_loop_state(1)["zeta_hat"], doc="robust term estimate zeta_hat"),
     Field("norm_W_hat", 1, "-", "Frobenius norm of the network weights W_hat"),
-    OUTPUTS["lyapunov_V1"],
+    PAPER_OUTPUTS["lyapunov_V1"],
     QUAD_STATE["z1"],
     QUAD_STATE["eta1"],
     *POSITION1.fields,
     *VEHICLE_STATE.fields,
-    *DISTURBANCE.fields,
+    *BODY_DISTURBANCE.fields,
 ), "one row per output time of a simulation")
 
 #: Columns of trajectory.csv: (name, unit).
@@ -317,7 +318,7 @@ def paper_envelope(scenario: Scenario, mv=None) -> Envelope:
              "twice the wrench of four rotors at their force limit",
              "the leakage bound |z2| / k_w of eq. (22), |z2| <= |e2| + k1 |z1| in the envelope",
              "the leakage bound |z2| / k_zeta of eq. (22)")
-    return Envelope(ENVELOPE, bounds, basis)
+    return Envelope(PAPER_ENVELOPE, bounds, basis)
 
 
 def _force_bound(scenario: Scenario, initial: np.ndarray) -> float:
@@ -389,10 +390,10 @@ def simulate(scenario: Scenario) -> SimulationResult:
     finite = np.all(np.isfinite(Y), axis=1)
     if not finite.all():
         bad = int(np.argmin(finite))
-        name = OUTPUTS.element_names()[int(np.argmin(np.isfinite(Y[bad])))]
+        name = PAPER_OUTPUTS.element_names()[int(np.argmin(np.isfinite(Y[bad])))]
         n, failure = bad, (t_out[bad], f"the output {name} became non-finite")
-    rotors = np.abs(Y[:n, OUTPUTS.slice("rotor")]).max(axis=1) if n else np.zeros(0)
-    bound = _force_bound(scenario, Y[0, OUTPUTS.slice("rotor")]) if n else np.inf
+    rotors = np.abs(Y[:n, PAPER_OUTPUTS.slice("rotor")]).max(axis=1) if n else np.zeros(0)
+    bound = _force_bound(scenario, Y[0, PAPER_OUTPUTS.slice("rotor")]) if n else np.inf
     if run.R is None and np.any(rotors > bound):
         bad = int(np.argmax(rotors > bound))
         n, failure = bad, (t_out[bad], (
@@ -454,7 +455,7 @@ def _divergence_hint(scenario: Scenario, mv=None, x_last=None) -> str:
     lam = []
     for x in (mv.x0, x_last):
         if x is not None and np.all(np.isfinite(x)):
-            A = np.asarray(jac(x, np.zeros(DISTURBANCE.size), mv.p), dtype=float)
+            A = np.asarray(jac(x, np.zeros(BODY_DISTURBANCE.size), mv.p), dtype=float)
             if np.all(np.isfinite(A)):
                 lam.append(np.linalg.eigvals(A))
     lam = np.concatenate(lam) if lam else np.zeros(0)
@@ -556,7 +557,7 @@ def _continuous_cvodes(scenario, mv, w_dist, envelope):
     X = np.ascontiguousarray(X[:, keep].T)
     w_index = np.maximum.accumulate(np.where(dist >= 0, dist, 0))[keep]
     times = clocks[0].times()
-    env = envelope_function(mv.l).map(len(X))(X.T, np.zeros((WRENCH.size, len(X))))
+    env = paper_envelope_function(mv.l).map(len(X))(X.T, np.zeros((WRENCH.size, len(X))))
     S = np.asarray(env, dtype=float).T
     outside = ~np.all(S <= envelope.bounds, axis=1)
     n = int(np.argmax(outside)) if outside.any() else len(X)
@@ -570,7 +571,7 @@ def _result(scenario, mv, t_out, w_out, X, Y, held):
     """Columns of ``TRAJECTORY`` from states ``X`` (n, nx) and outputs ``Y`` (n, ny)."""
     lay = closed_loop_state(mv.l)
     xs = lay.unpack(X.T)
-    sig = OUTPUTS.unpack(Y.T)
+    sig = PAPER_OUTPUTS.unpack(Y.T)
     if held is not None:
         so = step_outputs(mv.l)
         for name in ("u", "wrench", "rotor"):
@@ -579,7 +580,7 @@ def _result(scenario, mv, t_out, w_out, X, Y, held):
                 norm_W_hat=np.sqrt(np.einsum("ij,ij->i", X[:, lay.slice("W_hat")],
                                              X[:, lay.slice("W_hat")]))[None, :],
                 **QUAD_STATE.unpack(xs["xq"]), **POSITION1.unpack(xs["pos1"]),
-                **VEHICLE_STATE.unpack(xs["xv"]), **DISTURBANCE.unpack(w_out.T))
+                **VEHICLE_STATE.unpack(xs["xv"]), **BODY_DISTURBANCE.unpack(w_out.T))
     cols = {}
     for f in TRAJECTORY.fields:
         rows = np.asarray(data[f.name], dtype=float).reshape(f.size, -1)

@@ -6,7 +6,7 @@ Naming follows the paper inside the expressions: ``z1 = e1 - e1d`` and
 module (function outputs, CSV columns) the errors are named ``bs_z1`` and
 ``bs_z2`` and the Lyapunov functions ``lyapunov_V1``, ``lyapunov_V2``, so
 that they cannot be mistaken for the altitude z1 or the body velocity V1.
-The reference is ``ref = [e1d, e1d_dot, e1d_ddot]`` (:data:`REFERENCE`).
+The reference is ``ref = [e1d, e1d_dot, e1d_ddot]`` (:data:`PAPER_REFERENCE`).
 """
 
 from __future__ import annotations
@@ -18,8 +18,7 @@ import casadi as ca
 from symbolic.kinematics import euler_rate_matrix_inv
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, controller_layout
-from symbolic.quadrotor import ROTORS, WRENCH, rotors_from_wrench
-from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.quadrotor import QUAD_STATE, ROTORS, WRENCH, rotors_from_wrench
 from symbolic.rbf import rbf, rbf_input
 from symbolic.relative import (
     E1,
@@ -30,9 +29,9 @@ from symbolic.relative import (
     relative_states,
     wrench_from_virtual,
 )
-from symbolic.vehicle import MEASUREMENT
+from symbolic.vehicle import VEHICLE_MEASUREMENT
 
-__all__ = ["REFERENCE", "ADAPTIVE_UNITS", "controller_outputs", "virtual_control",
+__all__ = ["PAPER_REFERENCE", "ADAPTIVE_UNITS", "controller_outputs", "virtual_control",
            "control_law", "controller_function", "lyapunov_function"]
 
 _E1_UNITS = E1["e1"].unit
@@ -40,7 +39,7 @@ _E1_UNITS = E1["e1"].unit
 ADAPTIVE_UNITS = VIRTUAL_INPUT["u"].unit
 
 #: The reference of the relative position e1 and its derivatives (eq. 9, 14, 18).
-REFERENCE = Layout("ref", (
+PAPER_REFERENCE = Layout("ref", (
     Field("e1d", 4, _E1_UNITS, "desired e1 = [z_e, phi_e, theta_e, psi_e]"),
     Field("e1d_dot", 4, tuple(f"{u}/s" for u in _E1_UNITS), "its first time derivative"),
     Field("e1d_ddot", 4, tuple(f"{u}/s^2" for u in _E1_UNITS), "its second time derivative"),
@@ -81,9 +80,9 @@ def virtual_control(e1, e1_dot, ref, k1):
     -------
     alpha, alpha_dot : casadi.SX, (4, 1)
     """
-    e1s, refs, k1s = E1.sym(), REFERENCE.sym(), ca.SX.sym("k1", 4)
+    e1s, refs, k1s = E1.sym(), PAPER_REFERENCE.sym(), ca.SX.sym("k1", 4)
     e1_dots = ca.SX.sym("e1_dot", 4)
-    r = REFERENCE.unpack(refs)
+    r = PAPER_REFERENCE.unpack(refs)
     e1d, e1d_dot, e1d_ddot = r["e1d"], r["e1d_dot"], r["e1d_ddot"]
     z1 = e1s - e1d                                                   # eq. 9
     R_inv = ca.diagcat(1, euler_rate_matrix_inv(ca.vertcat(e1s[1], e1s[2], 0)))
@@ -108,10 +107,10 @@ def control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl):
     l = W_hat.shape[0]
     c = controller_layout(l).unpack(p_ctrl)
     k1, k2, rho = c["k1"], c["k2"], c["rho"]
-    q, v = QUAD_STATE.unpack(xq), MEASUREMENT.unpack(yv)
+    q, v = QUAD_STATE.unpack(xq), VEHICLE_MEASUREMENT.unpack(yv)
     e1, e2 = relative_states(xq, yv)
     R = error_rate_matrix(q["eta1"])
-    z1 = e1 - REFERENCE.unpack(ref)["e1d"]                           # eq. 9
+    z1 = e1 - PAPER_REFERENCE.unpack(ref)["e1d"]                           # eq. 9
     alpha, alpha_dot = virtual_control(e1, R @ e2, ref, k1)
     z2 = e2 - alpha                                                  # eq. 9
     w_e = q["V1"][2]                                                 # w2 = 0
@@ -142,7 +141,7 @@ def controller_function(l: int) -> ca.Function:
     l : int
         Number of RBF nodes.
     """
-    xq, yv, ref = QUAD_STATE.sym(), MEASUREMENT.sym(), REFERENCE.sym()
+    xq, yv, ref = QUAD_STATE.sym(), VEHICLE_MEASUREMENT.sym(), PAPER_REFERENCE.sym()
     W_hat, zeta_hat = ca.SX.sym("W_hat", l, 4), ca.SX.sym("zeta_hat", 4)
     p_quad, p_ctrl = QUADROTOR.sym(), controller_layout(l).sym()
     out = control_law(xq, yv, ref, W_hat, zeta_hat, p_quad, p_ctrl)

@@ -16,7 +16,7 @@ derived from these layouts, so that they cannot drift apart:
   it) is the C array ``name[cols][rows]``.
 
 Structs that are vectors of the model take the model's layouts directly
-(``symbolic.quadrotor.STATE``, ``symbolic.parameters.QUADROTOR``, ...);
+(``symbolic.quadrotor.QUAD_STATE``, ``symbolic.parameters.QUADROTOR``, ...);
 the three that only C has (``params``, ``adaptive_state``, ``output``)
 are defined here from the fields of the control step's signature.
 
@@ -37,15 +37,11 @@ import functools
 import math
 from types import MappingProxyType
 
-from symbolic.backstepping import REFERENCE
+from symbolic.backstepping import PAPER_REFERENCE
 from symbolic.control_step import step_inputs, step_outputs
-from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
-from symbolic.guidance import REFERENCE as POSITION_REFERENCE
-from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
 from symbolic.landing.controller import (
-    MEASUREMENT as LANDING_MEASUREMENT,
-)
-from symbolic.landing.controller import (
+    LANDING_MEASUREMENT,
     landing_controller_params,
     landing_memory,
     landing_step_outputs,
@@ -53,8 +49,8 @@ from symbolic.landing.controller import (
 from symbolic.landing.quadrotor import ACTUATOR
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import STATE as QUAD_STATE
-from symbolic.vehicle import MEASUREMENT
+from symbolic.quadrotor import QUAD_STATE
+from symbolic.vehicle import VEHICLE_MEASUREMENT
 
 __all__ = ["CStruct", "Range", "PARAM_RANGES", "ParamRange", "params_layout", "param_ranges",
            "adaptive_state_layout", "output_layout", "api_structs", "LANDING_PARAM_RANGES",
@@ -303,9 +299,9 @@ def api_structs(l: int) -> tuple[CStruct, ...]:
     return (
         CStruct("quadrotor_state", QUAD_STATE,
                 "Measured quadrotor state (eq. 1-2): Earth frame z up, ZYX Euler angles."),
-        CStruct("vehicle_state", MEASUREMENT,
+        CStruct("vehicle_state", VEHICLE_MEASUREMENT,
                 "Measured vehicle state (eq. 4); heave, roll and pitch are neglected."),
-        CStruct("reference", REFERENCE,
+        CStruct("reference", PAPER_REFERENCE,
                 "Reference of the relative states e1 = [z_e, phi_e, theta_e, psi_e]."),
         CStruct("adaptive_state", adaptive_state_layout(l),
                 "The step's memory: the adaptive state (eq. 22) and the law's previous\n"

@@ -4,11 +4,11 @@ State ``x`` (:func:`closed_loop_state`): the quadrotor ``xq``, the vehicle
 ``xv``, ``vec(W_hat)`` (column-major), ``zeta_hat`` and the quadrotor's
 planar position ``pos1 = [x1, y1]``, integrated from ``R(eta1) V1`` for the
 ground track only (the 4-DOF model ignores it). Input ``w``
-(``symbolic.quadrotor.DISTURBANCE``), the disturbance, held piecewise
+(``symbolic.quadrotor.BODY_DISTURBANCE``), the disturbance, held piecewise
 constant by the simulator. Parameter ``p`` (:func:`closed_loop_params`):
 ``[p_quad, p_veh, p_ctrl, ref]``. The controller and the plant share one set
 of physical parameters. :func:`closed_loop_outputs` gives the signals of
-:data:`OUTPUTS`.
+:data:`PAPER_OUTPUTS`.
 """
 
 from __future__ import annotations
@@ -17,12 +17,11 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import ADAPTIVE_UNITS, REFERENCE, control_law
+from symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
 from symbolic.kinematics import rotation
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import DISTURBANCE, ROTORS, WRENCH, quadrotor_rhs
-from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, ROTORS, WRENCH, quadrotor_rhs
 from symbolic.relative import (
     E1,
     E2,
@@ -31,13 +30,12 @@ from symbolic.relative import (
     nominal_drift,
     relative_drift,
 )
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_rhs
+from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
-__all__ = ["POSITION1", "PLANT_STATE", "OUTPUTS", "ENVELOPE", "closed_loop_state",
+__all__ = ["POSITION1", "PAPER_PLANT_STATE", "PAPER_OUTPUTS", "PAPER_ENVELOPE", "closed_loop_state",
            "closed_loop_params", "closed_loop_rhs", "closed_loop_function",
            "closed_loop_jacobian_function", "plant_function", "closed_loop_outputs",
-           "vehicle_measurement", "envelope_function"]
+           "vehicle_measurement", "paper_envelope_function"]
 
 #: The quadrotor's planar position in E, integrated for the ground track.
 POSITION1 = Layout("pos1", (Field("x1", 1, "m", "quadrotor x in E"),
@@ -45,14 +43,14 @@ POSITION1 = Layout("pos1", (Field("x1", 1, "m", "quadrotor x in E"),
 
 #: State of the plant alone (sampled-data loops): the closed loop without the
 #: adaptive states.
-PLANT_STATE = Layout("xp", (
+PAPER_PLANT_STATE = Layout("xp", (
     Field.nested("xq", QUAD_STATE, "quadrotor"),
     Field.nested("xv", VEHICLE_STATE, "vehicle"),
     Field.nested("pos1", POSITION1, "quadrotor planar position"),
 ), "plant state: quadrotor, vehicle, planar position")
 
 #: Signals of :func:`closed_loop_outputs`, in order.
-OUTPUTS = Layout("y", (
+PAPER_OUTPUTS = Layout("y", (
     Field.nested("e1", E1, "relative position (eq. 7)"),
     Field.nested("e2", E2, "relative rates (eq. 7)"),
     Field.nested("u", VIRTUAL_INPUT, "virtual input (eq. 20)"),
@@ -70,9 +68,9 @@ OUTPUTS = Layout("y", (
 ), "closed-loop output signals")
 
 
-#: The magnitudes a flight must keep within its envelope (``envelope_function``):
+#: The magnitudes a flight must keep within its envelope (``paper_envelope_function``):
 #: each is compared with a bound the runtime derives from the scenario.
-ENVELOPE = Layout("env", (
+PAPER_ENVELOPE = Layout("env", (
     Field("altitude", 1, "m", "|z1|, the quadrotor's altitude"),
     Field("speed", 1, "m/s", "largest body velocity component |V1|"),
     Field("rate", 1, "rad/s", "largest body rate |Omega1|"),
@@ -106,7 +104,7 @@ def closed_loop_params(l: int) -> Layout:
         Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
         Field.nested("p_veh", VEHICLE, "vehicle constants and inputs"),
         Field.nested("p_ctrl", controller_layout(l), "controller"),
-        Field.nested("ref", REFERENCE, "reference"),
+        Field.nested("ref", PAPER_REFERENCE, "reference"),
     ), "closed-loop parameters")
 
 
@@ -122,12 +120,12 @@ def _planar_velocity(xq):
 
 
 def _symbols(l: int):
-    return (closed_loop_state(l).sym(), DISTURBANCE.sym(), closed_loop_params(l).sym())
+    return (closed_loop_state(l).sym(), BODY_DISTURBANCE.sym(), closed_loop_params(l).sym())
 
 
 def _signals(x, w, p, l):
     xs, ps, ws = closed_loop_state(l).unpack(x), closed_loop_params(l).unpack(p), \
-        DISTURBANCE.unpack(w)
+        BODY_DISTURBANCE.unpack(w)
     xq, xv = xs["xq"], xs["xv"]
     p_quad, p_veh, p_ctrl = ps["p_quad"], ps["p_veh"], ps["p_ctrl"]
     yv = vehicle_measurement(xv, p_veh)
@@ -170,7 +168,7 @@ def closed_loop_jacobian_function(l: int) -> ca.Function:
 
 @functools.cache
 def closed_loop_outputs(l: int) -> ca.Function:
-    """``closed_loop_outputs(x, w, p) -> (e1, e2, u, ...)``: the fields of :data:`OUTPUTS`.
+    """``closed_loop_outputs(x, w, p) -> (e1, e2, u, ...)``: the fields of :data:`PAPER_OUTPUTS`.
 
     ``Delta = f + d`` is the true uncertainty of eq. (16); ``Delta_target``
     is what the network is asked to learn: Delta itself for the printed law,
@@ -184,14 +182,14 @@ def closed_loop_outputs(l: int) -> ca.Function:
     signals["Delta"] = Delta
     signals["Delta_target"] = Delta - nominal * nominal_drift(xq, p_quad)
     signals["lyapunov_V1"] = 0.5 * ca.dot(law["bs_z1"], law["bs_z1"])            # eq. 12
-    names = list(OUTPUTS.names())
+    names = list(PAPER_OUTPUTS.names())
     return ca.Function("closed_loop_outputs", [x, w, p], [signals[n] for n in names],
                        ["x", "w", "p"], names)
 
 
 @functools.cache
-def envelope_function(l: int) -> ca.Function:
-    """``envelope(x, uh) -> s``: the :data:`ENVELOPE` magnitudes of a loop state.
+def paper_envelope_function(l: int) -> ca.Function:
+    """``envelope(x, uh) -> s``: the :data:`PAPER_ENVELOPE` magnitudes of a loop state.
 
     ``x`` is :func:`closed_loop_state`, ``uh`` the held wrench
     (:data:`~symbolic.quadrotor.WRENCH`; zero in the continuous loop).
@@ -208,12 +206,12 @@ def envelope_function(l: int) -> ca.Function:
 def plant_function() -> ca.Function:
     """``plant(xp, wrench, w, p_quad, p_veh) -> xp_dot`` for sampled-data loops.
 
-    ``xp`` (:data:`PLANT_STATE`): the closed-loop state without the adaptive
+    ``xp`` (:data:`PAPER_PLANT_STATE`): the closed-loop state without the adaptive
     states, driven by a held wrench and disturbance ``w``.
     """
-    xp, wrench, w = PLANT_STATE.sym(), WRENCH.sym(), DISTURBANCE.sym()
+    xp, wrench, w = PAPER_PLANT_STATE.sym(), WRENCH.sym(), BODY_DISTURBANCE.sym()
     p_quad, p_veh = QUADROTOR.sym(), VEHICLE.sym()
-    xs, ws = PLANT_STATE.unpack(xp), DISTURBANCE.unpack(w)
+    xs, ws = PAPER_PLANT_STATE.unpack(xp), BODY_DISTURBANCE.unpack(w)
     xq, xv = xs["xq"], xs["xv"]
     rhs = ca.vertcat(quadrotor_rhs(xq, wrench, ws["d_F"], ws["d_M"], p_quad),
                      vehicle_rhs(xv, p_veh), _planar_velocity(xq))

@@ -58,7 +58,7 @@ from symbolic.c_api import (
     params_layout,
 )
 from symbolic.closed_loop import (
-    PLANT_STATE,
+    PAPER_PLANT_STATE,
     closed_loop_function,
     closed_loop_jacobian_function,
     closed_loop_params,
@@ -66,12 +66,15 @@ from symbolic.closed_loop import (
     plant_function,
 )
 from symbolic.control_step import control_step_function, step_inputs, step_outputs
-from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
-from symbolic.guidance import PHASE_DOCS, PHASES
-from symbolic.guidance import REFERENCE as POSITION_REFERENCE
-from symbolic.guidance import STATE as GUIDANCE_STATE
-from symbolic.landing.controller import MEASUREMENT as LANDING_MEASUREMENT
+from symbolic.guidance import (
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    PHASE_DOCS,
+    PHASES,
+    POSITION_REFERENCE,
+)
 from symbolic.landing.controller import (
+    LANDING_MEASUREMENT,
     N_CHANNELS,
     NETWORK_INPUT_DIM,
     landing_guidance_function,
@@ -82,28 +85,24 @@ from symbolic.landing.controller import (
 )
 from symbolic.landing.loop import (
     ANCHOR,
-    OUTPUTS,
-    TRAJECTORY,
+    LANDING_DISTURBANCE,
+    LANDING_SIGNALS,
+    LANDING_TRAJECTORY,
     anchor_function,
     gear_gap_function,
     landed_outputs_function,
     landing_signals_function,
     loop_plant_function,
 )
-from symbolic.landing.loop import DISTURBANCE as LANDING_DISTURBANCE
-from symbolic.landing.plant import PLANT_PARAMS as LANDING_PLANT_PARAMS
-from symbolic.landing.plant import PLANT_STATE as LANDING_PLANT_STATE
-from symbolic.landing.quadrotor import ACTUATOR
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
-from symbolic.quadrotor import DISTURBANCE
-from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE
 from symbolic.relative import E1
 from symbolic.simulation import loop_header
-from symbolic.vehicle import MEASUREMENT, vehicle_function
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE, vehicle_function
 
 __all__ = ["CodegenConfig", "Defaults", "LandingDefaults", "GeneratedFunction", "FUNCTIONS",
            "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns", "land_columns",
@@ -260,11 +259,11 @@ class LandingDefaults:
         RBF node count of the landing step.
     p_quad, p_ctrl, p_act, p_guid : ndarray
         ``symbolic.parameters.QUADROTOR``, ``landing_controller_params(l)``,
-        ``symbolic.landing.quadrotor.ACTUATOR``, ``symbolic.guidance.PARAMS``.
+        ``symbolic.landing.quadrotor.ACTUATOR``, ``symbolic.guidance.GUIDANCE_PARAMS``.
     tilt_min : float
         Smallest accepted ``|cos(theta1) cos(phi1)|``.
     pp, xp0 : ndarray
-        The example's plant parameters (``symbolic.landing.plant.PLANT_PARAMS``)
+        The example's plant parameters (``symbolic.landing.plant.LANDING_PLANT_PARAMS``)
         and initial plant state.
     duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
         s, Hz, Hz, Hz.
@@ -593,11 +592,13 @@ def _sizes(l: int, jac_nnz: int) -> list[dict]:
         dict(name="PARAMS_SIZE", value=params_layout(l).size, doc="reals in {ql}params"),
         dict(name="CLOSED_LOOP_NX", value=closed_loop_state(l).size,
              doc=f"x = [{fields(closed_loop_state(l))}]"),
-        dict(name="CLOSED_LOOP_NW", value=DISTURBANCE.size, doc=f"w = [{fields(DISTURBANCE)}]"),
+        dict(name="CLOSED_LOOP_NW", value=BODY_DISTURBANCE.size,
+             doc=f"w = [{fields(BODY_DISTURBANCE)}]"),
         dict(name="CLOSED_LOOP_NP", value=closed_loop_params(l).size,
              doc=f"p = [{fields(closed_loop_params(l))}]"),
         dict(name="CLOSED_LOOP_JACOBIAN_NNZ", value=jac_nnz, doc="nonzeros of d x_dot / d x"),
-        dict(name="PLANT_NX", value=PLANT_STATE.size, doc=f"xp = [{fields(PLANT_STATE)}]"),
+        dict(name="PLANT_NX", value=PAPER_PLANT_STATE.size,
+             doc=f"xp = [{fields(PAPER_PLANT_STATE)}]"),
     ]
 
 
@@ -772,7 +773,7 @@ def _landing_sizes(l: int) -> list[dict]:
              doc=f"pp = [{fields(LANDING_PLANT_PARAMS)}]"),
         dict(name="LANDING_NW", value=LANDING_DISTURBANCE.size,
              doc=f"w = [{fields(LANDING_DISTURBANCE)}]"),
-        dict(name="LANDING_NY", value=OUTPUTS.size, doc="signals y of a landing"),
+        dict(name="LANDING_NY", value=LANDING_SIGNALS.size, doc="signals y of a landing"),
         dict(name="LANDING_ANCHOR_SIZE", value=ANCHOR.size,
              doc=f"anchor = [{fields(ANCHOR)}]"),
         dict(name="LANDING_VEHICLE_NX", value=VEHICLE_STATE.size,
@@ -904,7 +905,7 @@ def _example_context(d: Defaults) -> dict:
     xq0 = x.slice("xq").start
     xv_names = VEHICLE_STATE.element_names()
     vehicle = []
-    for f in MEASUREMENT.fields:
+    for f in VEHICLE_MEASUREMENT.fields:
         if f.name in xv_names:
             i = x.slice("xv").start + xv_names.index(f.name)
             vehicle.append(dict(name=f.name, expr=f"x[{i}]"))
@@ -921,8 +922,8 @@ def _example_context(d: Defaults) -> dict:
               for f in QUAD_STATE.fields],
         z1=xq0 + offsets["z1"][0],
         vehicle=vehicle,
-        plant=[dict(name=f.name, xp=PLANT_STATE.slice(f.name).start, x=x.slice(f.name).start,
-                    size=f.size) for f in PLANT_STATE.fields],
+        plant=[dict(name=f.name, xp=PAPER_PLANT_STATE.slice(f.name).start, x=x.slice(f.name).start,
+                    size=f.size) for f in PAPER_PLANT_STATE.fields],
         W_hat=x.slice("W_hat").start, zeta_hat=x.slice("zeta_hat").start,
         d=d,
         bias=[repr(float(v)) for v in (*d.force_bias, *d.moment_bias)],
@@ -936,16 +937,16 @@ def _example_context(d: Defaults) -> dict:
 def land_columns() -> list[tuple[str, str]]:
     """Columns of the example ``land``'s CSV: ``(name, C expression)``, from the layouts.
 
-    The names are ``symbolic.landing.loop.TRAJECTORY``'s (``quadland
+    The names are ``symbolic.landing.loop.LANDING_TRAJECTORY``'s (``quadland
     simulate``'s trajectory.csv of a landing); the expressions read the time
-    ``t`` and the signals ``y`` (``symbolic.landing.loop.OUTPUTS``).
+    ``t`` and the signals ``y`` (``symbolic.landing.loop.LANDING_SIGNALS``).
     """
     cols = []
-    for f in TRAJECTORY.fields:
+    for f in LANDING_TRAJECTORY.fields:
         if f.name == "t":
             cols.append(("t", "t"))
             continue
-        at = OUTPUTS.slice(f.name).start
+        at = LANDING_SIGNALS.slice(f.name).start
         cols += [(n, f"(double)y[{at + i}]") for i, n in enumerate(f.element_names())]
     return cols
 
@@ -965,8 +966,8 @@ def _land_context(d: LandingDefaults) -> dict:
         columns=[dict(name=n, expr=e) for n, e in land_columns()],
         xg=[dict(name=n, index=i) for i, n in enumerate(GUIDANCE_STATE.names())],
         w={n: a for n, (a, _) in LANDING_DISTURBANCE.offsets().items()},
-        y={n: OUTPUTS.slice(n).start for n in ("p_e", "v_e", "eta1", "eta2")}
-        | {"psi1": OUTPUTS.index("psi1")},
+        y={n: LANDING_SIGNALS.slice(n).start for n in ("p_e", "v_e", "eta1", "eta2")}
+        | {"psi1": LANDING_SIGNALS.index("psi1")},
         figures=[dict(name=n, index=i, limit="max_" + n)
                  for i, n in enumerate(TOUCHDOWN_FIGURES.names())],
         limits=[(name, repr(float(v))) for name, v in d.limits],

@@ -30,13 +30,12 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import ADAPTIVE_UNITS, REFERENCE, control_law
+from symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, controller_layout
-from symbolic.quadrotor import ROTORS, WRENCH, rotors_from_wrench, wrench_from_rotors
-from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.quadrotor import QUAD_STATE, ROTORS, WRENCH, rotors_from_wrench, wrench_from_rotors
 from symbolic.relative import VIRTUAL_INPUT, tilt, wrench_from_virtual
-from symbolic.vehicle import MEASUREMENT
+from symbolic.vehicle import VEHICLE_MEASUREMENT
 
 __all__ = ["step_inputs", "step_outputs", "control_step_function"]
 
@@ -46,8 +45,8 @@ def step_inputs(l: int) -> Layout:
     """The control step's arguments, in order (one field per argument)."""
     return Layout("control_step_in", (
         Field.nested("xq", QUAD_STATE, "measured quadrotor state"),
-        Field.nested("yv", MEASUREMENT, "measured vehicle state"),
-        Field.nested("ref", REFERENCE, "reference"),
+        Field.nested("yv", VEHICLE_MEASUREMENT, "measured vehicle state"),
+        Field.nested("ref", PAPER_REFERENCE, "reference"),
         Field("W_hat", 4 * l, "-", "network weights (eq. 22)", shape=(l, 4)),
         Field("zeta_hat", 4, ADAPTIVE_UNITS, "robust term estimate (eq. 22)"),
         Field("u_prev", 4, ADAPTIVE_UNITS, "the law's output of the previous step"),

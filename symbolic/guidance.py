@@ -3,7 +3,7 @@
 The guidance runs at the control rate on the relative state in the deck
 frame (position ``p_e``, velocity ``v_e``; z up, the pad's centre at the
 origin) and produces the reference the position loop tracks. Its state is
-:data:`STATE`: the phase, a dwell timer, the descent reference height and
+:data:`GUIDANCE_STATE`: the phase, a dwell timer, the descent reference height and
 the abort count. Phases (:data:`PHASES`):
 
 0. **approach**: the reference is the hover point ``[0, 0, hover_height]``;
@@ -44,7 +44,8 @@ import casadi as ca
 from symbolic.layout import Field, Layout
 
 __all__ = ["PHASES", "PHASE_DOCS", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED",
-           "STATE", "PARAMS", "REFERENCE", "guidance_step", "guidance_function"]
+           "GUIDANCE_STATE", "GUIDANCE_PARAMS", "POSITION_REFERENCE", "guidance_step",
+           "guidance_function"]
 
 #: Phase numbers, as written to trajectory.csv's ``phase`` column.
 PHASES = ("approach", "align", "descend", "touchdown", "landed")
@@ -57,7 +58,7 @@ PHASE_DOCS = ("fly to the hover point above the pad",
 APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED = range(len(PHASES))
 
 #: The guidance's memory.
-STATE = Layout("xg", (
+GUIDANCE_STATE = Layout("xg", (
     Field("phase", 1, "-", "phase number (PHASES)"),
     Field("timer", 1, "s", "time the align criteria have held without a break"),
     Field("z_ref", 1, "m", "descent reference height of the centre above the pad"),
@@ -65,7 +66,7 @@ STATE = Layout("xg", (
 ), "landing guidance state")
 
 #: The guidance's parameters (the [landing] keys of a landing scenario).
-PARAMS = Layout("p_guid", (
+GUIDANCE_PARAMS = Layout("p_guid", (
     Field("hover_height", 1, "m", "height of the hover point above the pad (centre)"),
     Field("align_radius", 1, "m", "distance to the hover point that ends the approach"),
     Field("dwell_time", 1, "s", "time the align criteria must hold"),
@@ -81,7 +82,7 @@ PARAMS = Layout("p_guid", (
 
 #: What the position loop tracks: the reference and its first two derivatives
 #: in the deck frame.
-REFERENCE = Layout("r_pos", (
+POSITION_REFERENCE = Layout("r_pos", (
     Field("p_ref", 3, "m", "reference position", elements=("x_ref", "y_ref", "z_ref")),
     Field("v_ref", 3, "m/s", "its rate", elements=("vx_ref", "vy_ref", "vz_ref")),
     Field("a_ref", 3, "m/s^2", "its acceleration", elements=("ax_ref", "ay_ref", "az_ref")),
@@ -99,7 +100,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
     Parameters
     ----------
     xg : casadi.SX, (4,)
-        :data:`STATE` at the start of the step.
+        :data:`GUIDANCE_STATE` at the start of the step.
     p_e, v_e : casadi.SX, (3,)
         Relative position and velocity in the deck frame, m, m/s.
     deck_rise : casadi.SX
@@ -110,15 +111,15 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
     dt : casadi.SX
         Step length, s.
     p_guid : casadi.SX
-        :data:`PARAMS`.
+        :data:`GUIDANCE_PARAMS`.
 
     Returns
     -------
     xg_next : casadi.SX, (4,)
     reference : casadi.SX, (9,)
-        :data:`REFERENCE` for the step.
+        :data:`POSITION_REFERENCE` for the step.
     """
-    g, p = STATE.unpack(xg), PARAMS.unpack(p_guid)
+    g, p = GUIDANCE_STATE.unpack(xg), GUIDANCE_PARAMS.unpack(p_guid)
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
     hover = p["hover_height"]
     offset = ca.norm_2(p_e[0:2])
@@ -166,9 +167,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
 
 def guidance_function() -> ca.Function:
     """``guidance(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid) -> (xg_next, reference)``."""
-    xg, p_e, v_e = STATE.sym(), ca.SX.sym("p_e", 3), ca.SX.sym("v_e", 3)
+    xg, p_e, v_e = GUIDANCE_STATE.sym(), ca.SX.sym("p_e", 3), ca.SX.sym("v_e", 3)
     deck_rise, gear_gap = ca.SX.sym("deck_rise"), ca.SX.sym("gear_gap")
-    dt, p_guid = ca.SX.sym("dt"), PARAMS.sym()
+    dt, p_guid = ca.SX.sym("dt"), GUIDANCE_PARAMS.sym()
     xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid)
     return ca.Function("guidance", [xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid],
                        [xg_next, reference],

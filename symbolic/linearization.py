@@ -25,14 +25,12 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import ADAPTIVE_UNITS, REFERENCE, control_law
+from symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import DISTURBANCE, quadrotor_rhs
-from symbolic.quadrotor import STATE as QUAD_STATE
+from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, quadrotor_rhs
 from symbolic.relative import VIRTUAL_INPUT, wrench_from_virtual
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_rhs
+from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["RELATIVE_PLANT", "FROZEN_VEHICLE", "VEHICLE_SPEEDS", "controller_states",
            "relative_plant_rhs", "loop_signals", "linearization_function",
@@ -69,7 +67,7 @@ def relative_plant_rhs(xr, u, w, r2, p_quad):
     is ``psi_e_dot = psi1_dot - r2``.
     """
     wrench = wrench_from_virtual(xr, u, p_quad)
-    ws = DISTURBANCE.unpack(w)
+    ws = BODY_DISTURBANCE.unpack(w)
     xq_dot = quadrotor_rhs(xr, wrench, ws["d_F"], ws["d_M"], p_quad)
     psi_dot = ca.DM.zeros(RELATIVE_PLANT.size)
     psi_dot[RELATIVE_PLANT.index("psi_e")] = 1
@@ -89,7 +87,8 @@ def loop_signals(xr, xc, vehicle, p_quad, p_ctrl, ref, l: int):
 
 def _symbols(l: int):
     return (RELATIVE_PLANT.sym(), controller_states(l).sym(), FROZEN_VEHICLE.sym(),
-            DISTURBANCE.sym(), QUADROTOR.sym(), controller_layout(l).sym(), REFERENCE.sym())
+            BODY_DISTURBANCE.sym(), QUADROTOR.sym(), controller_layout(l).sym(),
+            PAPER_REFERENCE.sym())
 
 
 @functools.cache

@@ -1,10 +1,10 @@
 """Quadrotor rigid-body model (eq. 1-2) and its rotor mixer.
 
-State ``xq`` (layout :data:`STATE`): altitude z1 (m, E, z up), ZYX Euler
+State ``xq`` (layout :data:`QUAD_STATE`): altitude z1 (m, E, z up), ZYX Euler
 angles eta1 (rad), body velocity V1 (m/s) and body rates Omega1 (rad/s).
 The wrench is ``[F_total, M_x, M_y, M_z]`` (N, N m, layout :data:`WRENCH`),
 the rotor forces ``F_1..F_4`` (N, :data:`ROTORS`) and the disturbance
-``[d_F, d_M]`` (N, N m, :data:`DISTURBANCE`).
+``[d_F, d_M]`` (N, N m, :data:`BODY_DISTURBANCE`).
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
 
 __all__ = [
-    "STATE",
+    "QUAD_STATE",
     "WRENCH",
     "ROTORS",
-    "DISTURBANCE",
+    "BODY_DISTURBANCE",
     "quadrotor_rhs",
     "mixer_matrix",
     "wrench_from_rotors",
@@ -29,7 +29,7 @@ __all__ = [
 ]
 
 #: The quadrotor's state xq (eq. 1-2).
-STATE = Layout("xq", (
+QUAD_STATE = Layout("xq", (
     Field("z1", 1, "m", "altitude in E (z up)"),
     Field("eta1", 3, "rad", "ZYX Euler angles roll, pitch, yaw",
           elements=("phi1", "theta1", "psi1")),
@@ -49,7 +49,7 @@ ROTORS = Layout("rotor", (
 ), "rotor forces")
 
 #: External disturbance on the quadrotor, body frame (eq. 2).
-DISTURBANCE = Layout("w", (
+BODY_DISTURBANCE = Layout("w", (
     Field("d_F", 3, "N", "disturbance force", elements=("d_Fx", "d_Fy", "d_Fz")),
     Field("d_M", 3, "N m", "disturbance moment", elements=("d_Mx", "d_My", "d_Mz")),
 ), "disturbance force and moment, body frame")
@@ -64,7 +64,7 @@ def quadrotor_rhs(xq, wrench, d_F, d_M, p_quad):
     """
     p = QUADROTOR.unpack(p_quad)
     m1, I, Kt, Kr, g_s = p["m1"], p["I"], p["Kt"], p["Kr"], p["g"]
-    x = STATE.unpack(xq)
+    x = QUAD_STATE.unpack(xq)
     eta1, V1, Omega1 = x["eta1"], x["V1"], x["Omega1"]
     R_T_g = g_s * vertical_row(eta1).T                        # R^T [0, 0, g_s]
     wr = WRENCH.unpack(wrench)
@@ -119,8 +119,8 @@ def rotors_from_wrench(wrench, p_quad):
 
 def quadrotor_function() -> ca.Function:
     """``quadrotor(xq, wrench, d_F, d_M, p_quad) -> xq_dot`` (eq. 1-2)."""
-    xq, wrench = STATE.sym(), WRENCH.sym()
-    d_F, d_M = DISTURBANCE.syms()
+    xq, wrench = QUAD_STATE.sym(), WRENCH.sym()
+    d_F, d_M = BODY_DISTURBANCE.syms()
     p_quad = QUADROTOR.sym()
     return ca.Function(
         "quadrotor", [xq, wrench, d_F, d_M, p_quad],

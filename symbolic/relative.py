@@ -14,10 +14,8 @@ import casadi as ca
 from symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, vertical_row
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import DISTURBANCE, WRENCH
-from symbolic.quadrotor import STATE as QUAD_STATE
-from symbolic.vehicle import MEASUREMENT, yaw_acceleration
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
+from symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE, yaw_acceleration
 
 #: Units of the four channels: altitude, roll, pitch, yaw.
 _CHANNEL_ACCEL = ("m/s^2", "rad/s^2", "rad/s^2", "rad/s^2")
@@ -55,7 +53,7 @@ def relative_states(xq, yv):
 
     ``w2 = 0``: the vehicle does not heave.
     """
-    q, v = QUAD_STATE.unpack(xq), MEASUREMENT.unpack(yv)
+    q, v = QUAD_STATE.unpack(xq), VEHICLE_MEASUREMENT.unpack(yv)
     z1, eta1, V1, Omega1 = q["z1"], q["eta1"], q["V1"], q["Omega1"]
     z2, psi2, r2 = v["z2"], v["psi2"], v["r2"]
     e1 = ca.vertcat(z1 - z2, eta1[0], eta1[1], eta1[2] - psi2)
@@ -136,8 +134,8 @@ def disturbance_input(xq, d_F, d_M, p_quad):
 
 def relative_function() -> ca.Function:
     """``relative(xq, xv, yv, wrench, d_F, d_M, p_quad, p_veh) -> (e1, e2, R, f, u, d)``."""
-    xq, xv, yv = QUAD_STATE.sym(), VEHICLE_STATE.sym(), MEASUREMENT.sym()
-    wrench, (d_F, d_M) = WRENCH.sym(), DISTURBANCE.syms()
+    xq, xv, yv = QUAD_STATE.sym(), VEHICLE_STATE.sym(), VEHICLE_MEASUREMENT.sym()
+    wrench, (d_F, d_M) = WRENCH.sym(), BODY_DISTURBANCE.syms()
     p_quad, p_veh = QUADROTOR.sym(), VEHICLE.sym()
     e1, e2 = relative_states(xq, yv)
     return ca.Function(

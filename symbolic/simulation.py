@@ -38,26 +38,28 @@ from pathlib import Path
 import casadi as ca
 import jinja2
 
-from symbolic.backstepping import REFERENCE
+from symbolic.backstepping import PAPER_REFERENCE
 from symbolic.closed_loop import (
-    ENVELOPE,
-    OUTPUTS,
-    PLANT_STATE,
+    PAPER_ENVELOPE,
+    PAPER_OUTPUTS,
+    PAPER_PLANT_STATE,
     closed_loop_function,
     closed_loop_outputs,
     closed_loop_params,
     closed_loop_state,
-    envelope_function,
+    paper_envelope_function,
     plant_function,
     vehicle_measurement,
 )
 from symbolic.control_step import control_step_function, step_inputs, step_outputs
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import DISTURBANCE, WRENCH
+from symbolic.quadrotor import BODY_DISTURBANCE, WRENCH
 
-__all__ = ["rk4_step", "LoopModel", "paper_loop", "controller_state", "controller_params",
-           "PLANT_PARAMS", "RECORDED", "SIMULATOR_PARTS", "simulator_sources", "loop_header"]
+__all__ = ["rk4_step", "LoopModel", "paper_loop", "paper_controller_state",
+           "paper_controller_params",
+           "PAPER_PLANT_PARAMS", "PAPER_RECORDED", "SIMULATOR_PARTS", "simulator_sources",
+           "loop_header"]
 
 
 def rk4_step(f: ca.Function) -> ca.Function:
@@ -153,12 +155,12 @@ class LoopModel:
 
 
 #: What the sampled loop records of each control step: the held signals.
-RECORDED = Layout("rec", tuple(step_outputs(1)[n] for n in ("u", "wrench", "rotor")),
+PAPER_RECORDED = Layout("rec", tuple(step_outputs(1)[n] for n in ("u", "wrench", "rotor")),
                   "signals of the control step held until the next")
 
 
 @functools.cache
-def controller_state(l: int) -> Layout:
+def paper_controller_state(l: int) -> Layout:
     """The sampled controller's memory: adaptive states and the law's last output."""
     so = step_outputs(l)
     return Layout("xc", (
@@ -169,19 +171,19 @@ def controller_state(l: int) -> Layout:
 
 
 #: Parameters of the plant alone.
-PLANT_PARAMS = Layout("pp", (Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
+PAPER_PLANT_PARAMS = Layout("pp", (Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
                              Field.nested("p_veh", VEHICLE, "vehicle constants and inputs")),
                       "plant parameters")
 
 
 @functools.cache
-def controller_params(l: int) -> Layout:
+def paper_controller_params(l: int) -> Layout:
     """Parameters of the sampled controller: the loop's, limits, hold and period."""
     return Layout("pc", (
         Field.nested("p_quad", QUADROTOR, "quadrotor constants"),
         Field.nested("p_veh", VEHICLE, "vehicle constants and inputs"),
         Field.nested("p_ctrl", controller_layout(l), "controller"),
-        Field.nested("ref", REFERENCE, "reference"),
+        Field.nested("ref", PAPER_REFERENCE, "reference"),
         Field("rotor_limits", 2, "N", "rotor force limits", elements=("F_min", "F_max")),
         Field("hold", 1, "periods", "hold compensation"),
         Field("dt", 1, "s", "control period"),
@@ -196,22 +198,22 @@ def _named(name, ins, outs, in_names, out_names):
 def paper_loop(l: int) -> LoopModel:
     """The paper's 4-DOF loop (``symbolic.closed_loop``) for ``l`` RBF nodes."""
     state, params = closed_loop_state(l), closed_loop_params(l)
-    x, w, p, t = state.sym(), DISTURBANCE.sym(), params.sym(), ca.SX.sym("t")
+    x, w, p, t = state.sym(), BODY_DISTURBANCE.sym(), params.sym(), ca.SX.sym("t")
     rhs = _named("rhs", [x, w, t, p], [closed_loop_function(l)(x, w, p)],
                  ["x", "w", "t", "p"], ["x_dot"])
     output_fn = _named("outputs", [x, w, t, p],
                        [ca.vertcat(*closed_loop_outputs(l)(x, w, p))],
                        ["x", "w", "t", "p"], ["y"])
 
-    xc_lay, pc_lay = controller_state(l), controller_params(l)
-    xp, uh, pp = PLANT_STATE.sym(), WRENCH.sym(), PLANT_PARAMS.sym()
-    pps = PLANT_PARAMS.unpack(pp)
+    xc_lay, pc_lay = paper_controller_state(l), paper_controller_params(l)
+    xp, uh, pp = PAPER_PLANT_STATE.sym(), WRENCH.sym(), PAPER_PLANT_PARAMS.sym()
+    pps = PAPER_PLANT_PARAMS.unpack(pp)
     plant = _named("plant", [xp, uh, w, t, pp],
                    [plant_function()(xp, uh, w, pps["p_quad"], pps["p_veh"])],
                    ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
 
     xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
-    xs, cs, ps = PLANT_STATE.unpack(xp), xc_lay.unpack(xc), pc_lay.unpack(pc)
+    xs, cs, ps = PAPER_PLANT_STATE.unpack(xp), xc_lay.unpack(xc), pc_lay.unpack(pc)
     yv = vehicle_measurement(xs["xv"], ps["p_veh"])
     hold = (1 - first) * ps["hold"]                  # no previous command on the first step
     args = [xs["xq"], yv, ps["ref"], cs["W_hat"], cs["zeta_hat"], cs["u_prev"], ps["p_quad"],
@@ -222,16 +224,17 @@ def paper_loop(l: int) -> LoopModel:
     controller = _named(
         "controller", [xp, xc, pc, first, t],
         [ca.vertcat(ca.vec(res["W_next"]), res["zeta_next"], res["u_law"]), res["wrench"],
-         ca.vertcat(*(res[n] for n in RECORDED.names())), res["tilt"]],
+         ca.vertcat(*(res[n] for n in PAPER_RECORDED.names())), res["tilt"]],
         ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
 
     x_of = ca.vertcat(*[xs[n] if n in xs else ca.vec(cs[n]) for n in state.names()])
     assemble = _named("assemble", [xp, xc], [x_of], ["xp", "xc"], ["x"])
-    envelope = _named("envelope", [x, uh], [envelope_function(l)(x, uh)], ["x", "uh"], ["s"])
-    return LoopModel("paper", state, DISTURBANCE, params, OUTPUTS, rhs, output_fn,
-                     PLANT_STATE, WRENCH, xc_lay, PLANT_PARAMS, pc_lay, RECORDED, plant,
+    envelope = _named("envelope", [x, uh], [paper_envelope_function(l)(x, uh)], ["x", "uh"], ["s"])
+    return LoopModel("paper", state, BODY_DISTURBANCE, params, PAPER_OUTPUTS, rhs, output_fn,
+                     PAPER_PLANT_STATE, WRENCH, xc_lay, PAPER_PLANT_PARAMS, pc_lay,
+                     PAPER_RECORDED, plant,
                      controller, assemble, step_args=step_args, envelope=envelope,
-                     envelope_layout=ENVELOPE, flight="flight_controller.c.jinja")
+                     envelope_layout=PAPER_ENVELOPE, flight="flight_controller.c.jinja")
 
 
 _TEMPLATES = jinja2.Environment(

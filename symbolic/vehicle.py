@@ -1,10 +1,10 @@
 """Ground-vehicle model (eq. 3-4) with heave, roll and pitch neglected.
 
-State ``xv`` (layout :data:`STATE`): planar position in E (m), heading
+State ``xv`` (layout :data:`VEHICLE_STATE`): planar position in E (m), heading
 (rad), surge and sway velocity (m/s) and yaw rate (rad/s). The position is
 not used by the controller; it is integrated for the ground track. The deck
 altitude z2 is a constant parameter (w2 = 0). The controller measures
-``yv = [z2, psi2, r2]`` (:data:`MEASUREMENT`).
+``yv = [z2, psi2, r2]`` (:data:`VEHICLE_MEASUREMENT`).
 """
 
 from __future__ import annotations
@@ -14,10 +14,11 @@ import casadi as ca
 from symbolic.layout import Field, Layout
 from symbolic.parameters import VEHICLE
 
-__all__ = ["STATE", "MEASUREMENT", "vehicle_rhs", "yaw_acceleration", "vehicle_function"]
+__all__ = ["VEHICLE_STATE", "VEHICLE_MEASUREMENT", "vehicle_rhs", "yaw_acceleration",
+           "vehicle_function"]
 
 #: The vehicle's state xv (eq. 3-4, planar).
-STATE = Layout("xv", (
+VEHICLE_STATE = Layout("xv", (
     Field("x2", 1, "m", "position x in E"),
     Field("y2", 1, "m", "position y in E"),
     Field("psi2", 1, "rad", "heading"),
@@ -27,7 +28,7 @@ STATE = Layout("xv", (
 ), "ground vehicle state; heave, roll and pitch are neglected")
 
 #: What the controller measures of the vehicle.
-MEASUREMENT = Layout("yv", (
+VEHICLE_MEASUREMENT = Layout("yv", (
     Field("z2", 1, "m", "deck altitude"),
     Field("psi2", 1, "rad", "heading"),
     Field("r2", 1, "rad/s", "yaw rate"),
@@ -50,7 +51,7 @@ def vehicle_rhs(xv, p_veh):
     ``phi2 = theta2 = 0`` gives ``psi2_dot = r2`` and the planar track.
     """
     p = VEHICLE.unpack(p_veh)
-    x = STATE.unpack(xv)
+    x = VEHICLE_STATE.unpack(xv)
     psi2, u2, v2, r2 = x["psi2"], x["u2"], x["v2"], x["r2"]
     tau_x, tau_y = p["tau"][0], p["tau"][1]
     x2_dot = ca.cos(psi2) * u2 - ca.sin(psi2) * v2
@@ -63,6 +64,6 @@ def vehicle_rhs(xv, p_veh):
 
 def vehicle_function() -> ca.Function:
     """``vehicle(xv, p_veh) -> xv_dot`` (eq. 3-4)."""
-    xv, p_veh = STATE.sym(), VEHICLE.sym()
+    xv, p_veh = VEHICLE_STATE.sym(), VEHICLE.sym()
     return ca.Function("vehicle", [xv, p_veh], [vehicle_rhs(xv, p_veh)],
                        ["xv", "p_veh"], ["xv_dot"])

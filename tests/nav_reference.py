@@ -16,7 +16,7 @@ from symbolic.landing.navigation import (
     ESTIMATOR_DEFAULTS,
     IMU,
     NAV,
-    PACKETS,
+    NAV_PACKETS,
     covariance_pattern,
     estimator_params,
 )
@@ -208,7 +208,7 @@ def unpack_P(mem_layout, coupling, mem):
 
 def block_data(rng, name):
     """A block's packet layout, a state, a covariance, a packet and n2."""
-    layout = next(p for p in PACKETS if p.name == next(b.sensor for b in BLOCKS
+    layout = next(p for p in NAV_PACKETS if p.name == next(b.sensor for b in BLOCKS
                                                          if b.name == name))
     x, P = rng.normal(size=N), random_spd(rng, N, 0.5)
     eta2 = np.array([0.05, 0.02, 0.4])

@@ -4,7 +4,7 @@
 the CasADi model in ``symbolic/``: alpha_dot (eq. 18) is differentiated by
 hand instead of symbolically, and no expression of ``symbolic/`` is reused.
 Only the vectors' named layouts (``closed_loop_state``,
-``closed_loop_params``, ``DISTURBANCE``) are shared, so that both
+``closed_loop_params``, ``BODY_DISTURBANCE``) are shared, so that both
 derivations read and write the same entries.
 
 Used by ``tests/test_numpy_closed_loop.py`` (against ``closed_loop_function``)
@@ -14,7 +14,7 @@ and by ``benchmarks/bench_simulate.py`` (the SciPy baseline's right-hand side).
 import numpy as np
 
 from symbolic.closed_loop import closed_loop_params, closed_loop_state
-from symbolic.quadrotor import DISTURBANCE
+from symbolic.quadrotor import BODY_DISTURBANCE
 
 __all__ = ["numpy_rhs", "random_states"]
 
@@ -47,7 +47,7 @@ def numpy_rhs(p, l):
     -------
     callable
         ``rhs(t, x, w) -> x_dot``, ``x`` in the layout ``closed_loop_state(l)``
-        and ``w = [d_F, d_M]`` (``DISTURBANCE``).
+        and ``w = [d_F, d_M]`` (``BODY_DISTURBANCE``).
     """
     P = _leaves(closed_loop_params(l), np.asarray(p, dtype=float).ravel())
     m1, I, Kt, Kr, g = P["m1"], P["I"], P["Kt"], P["Kr"], P["g"]
@@ -66,7 +66,7 @@ def numpy_rhs(p, l):
     s_psi2, s_u2, s_v2, s_r2 = (S.slice(f"xv.{k}") for k in ("psi2", "u2", "v2", "r2"))
     s_xv, s_W, s_zeta, s_pos = (S.slice(k) for k in ("xv", "W_hat", "zeta_hat", "pos1"))
     W_shape = S["W_hat"].shape                                      # (l, 4), column-major
-    s_dF, s_dM = DISTURBANCE.slice("d_F"), DISTURBANCE.slice("d_M")
+    s_dF, s_dM = BODY_DISTURBANCE.slice("d_F"), BODY_DISTURBANCE.slice("d_M")
 
     def rhs(t, x, w):
         z1 = x[s_z1][0]
@@ -190,5 +190,5 @@ def random_states(mv, n, seed=0):
     X = mv.x0[:, None] + rng.uniform(-1, 1, (S.size, n))
     for angle in ("phi1", "theta1"):
         X[S.index(angle)] = rng.uniform(-1.0, 1.0, n)
-    W = rng.normal(0.0, 1.0, (DISTURBANCE.size, n))
+    W = rng.normal(0.0, 1.0, (BODY_DISTURBANCE.size, n))
     return X, W

@@ -18,7 +18,7 @@ from quadland.exceptions import CompilerNotFoundError
 from quadland.model import disturbance_samples, model_values
 from quadland.simulate import TRAJECTORY
 from symbolic.closed_loop import (
-    PLANT_STATE,
+    PAPER_PLANT_STATE,
     closed_loop_function,
     closed_loop_jacobian_function,
     closed_loop_params,
@@ -513,7 +513,7 @@ def _fly(fly, rate, duration):
 
 
 #: The plant's states by name, as both CSVs name them (the layouts' element names).
-PLANT_NAMES = PLANT_STATE["xq"].element_names() + PLANT_STATE["xv"].element_names()
+PLANT_NAMES = PAPER_PLANT_STATE["xq"].element_names() + PAPER_PLANT_STATE["xv"].element_names()
 
 
 def _rk4_closed_loop(scenario, h, n):

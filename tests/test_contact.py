@@ -45,16 +45,14 @@ from symbolic.landing.contact import (
     tip_over_function,
 )
 from symbolic.landing.deck import DECK_PARAMS, deck_function
-from symbolic.landing.quadrotor import ACTUATOR, quadrotor6_rhs
-from symbolic.landing.quadrotor import STATE as QUAD6
+from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_rhs
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_rhs
+from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 M, G = 2.0, 9.8                                  # kg, m/s^2
 INERTIA = np.array([0.025, 0.025, 0.045])        # kg m^2
 GEAR_HEIGHT = 0.2                                # m, the defaults' -z of the feet
-NZ = QUAD6.size + VEHICLE_STATE.size + 1         # [x1q, xv, t]
+NZ = QUAD6_STATE.size + VEHICLE_STATE.size + 1         # [x1q, xv, t]
 _PARAMS = (("F_cmd", 4), ("t_signal", 1), ("p_quad", QUADROTOR.size),
            ("p_act", ACTUATOR.size), ("p_veh", VEHICLE.size), ("p_deck", DECK_PARAMS.size),
            ("p_gear", GEAR.size), ("p_lock", LOCK.size))
@@ -68,7 +66,7 @@ def _model():
     """RK4 step, right-hand side and signals of ``z = [x1q, xv, t]``."""
     z = ca.SX.sym("z", NZ)
     P = {n: ca.SX.sym(n, s) for n, s in _PARAMS}
-    x1q, xv, t = z[:QUAD6.size], z[QUAD6.size:NZ - 1], z[NZ - 1]
+    x1q, xv, t = z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1], z[NZ - 1]
     d_F, d_M, foot, hold = contact_function()(x1q, xv, t, P["t_signal"], P["p_veh"],
                                               P["p_deck"], P["p_gear"], P["p_lock"])
     z_dot = ca.vertcat(quadrotor6_rhs(x1q, P["F_cmd"], d_F, d_M, P["p_quad"], P["p_act"]),
@@ -146,7 +144,7 @@ def state_on_deck(eta2, depth, p2=(0.0, 0.0, 0.0), psi2=0.0, xv=None):
     z[3:6] = eta2
     xv = np.zeros(VEHICLE_STATE.size) if xv is None else xv
     xv[VEHICLE_STATE.index("psi2")] = psi2
-    z[QUAD6.size:NZ - 1] = xv
+    z[QUAD6_STATE.size:NZ - 1] = xv
     return z
 
 
@@ -413,7 +411,7 @@ def test_forces_are_continuous_across_the_onset_and_the_clip():
     rng = np.random.default_rng(18)
     dz = 1e-9
     for _ in range(20):
-        z = np.zeros(QUAD6.size)
+        z = np.zeros(QUAD6_STATE.size)
         z[3:6] = rng.normal(0, 0.05, 3)
         z[6:12] = rng.normal(0, 0.5, 6)
         R1 = np.array(rotation(ca.DM(z[3:6])))
@@ -508,7 +506,7 @@ def test_lock_down_holds_the_body_on_a_deck_rolling_beyond_the_tip_over_angle(lo
     assert tilt_max > np.array(tip_over_function()(GEAR.pack(gear_defaults()))[0]).item()
     # The gear centre's motion in the deck frame, from its first place.
     R = [np.array(v) for v in deck_function().map(Z.shape[1])(
-        Z[QUAD6.size:NZ - 1], Z[NZ - 1], pv, pd)]
+        Z[QUAD6_STATE.size:NZ - 1], Z[NZ - 1], pv, pd)]
     p2, R_deck = R[0], R[2].reshape(3, 3, -1, order="F")
     centre = np.array([Z[0:3, i] + np.array(rotation(ca.DM(Z[3:6, i]))) @ [0, 0, -GEAR_HEIGHT]
                        for i in range(Z.shape[1])]).T
@@ -538,7 +536,7 @@ def test_lock_engages_after_its_delay_with_a_first_order_rise():
     lk = lock_defaults()
     p = params()
     pv, pd, pg, pl = (part(p, n) for n in ("p_veh", "p_deck", "p_gear", "p_lock"))
-    z = np.zeros(QUAD6.size)
+    z = np.zeros(QUAD6_STATE.size)
     gap = 5e-3                                                 # 50 eps: feet clear
     z[2] = GEAR_HEIGHT + gap
     for t_signal, t in ((np.inf, 5.0), (np.nan, 5.0), (1.0, 1.2), (1.0, 1.25), (1.0, 1.6)):
@@ -563,13 +561,13 @@ def test_jacobian_matches_central_differences_where_the_model_is_smooth():
     z, _, pv, pd = _on_moving_deck(p, xv, 2e-3)
     z[6:12] += [0.05, -0.04, 0.01, 0.2, -0.1, 0.3]            # slipping, rocking
     pg, pl = (part(p, n) for n in ("p_gear", "p_lock"))
-    x1q, xvs, t = QUAD6.sym(), VEHICLE_STATE.sym(), ca.SX.sym("t")
+    x1q, xvs, t = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), ca.SX.sym("t")
     keep = [i for i in range(FOOT.size) if not FOOT.element_names()[i].startswith("in_")]
     d_F, d_M, foot, hold = f(x1q, xvs, t, -0.3, pv, pd, pg, pl)
     y = ca.vertcat(d_F, d_M, foot[keep], hold)
     x = ca.vertcat(x1q, xvs, t)
     fn = ca.Function("y", [x], [y, ca.jacobian(y, x)])
-    x0 = np.concatenate([z[:QUAD6.size], z[QUAD6.size:NZ - 1], [0.0]])
+    x0 = np.concatenate([z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1], [0.0]])
     foot0 = FOOT.unpack(np.array(f(x0[:16], x0[16:22], 0.0, -0.3, pv, pd, pg, pl)[2]).ravel())
     assert foot0["in_contact"].min() == 1.0 and foot0["slip"].min() > 0.01
     J = np.array(fn(x0)[1])

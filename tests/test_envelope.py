@@ -17,7 +17,7 @@ from quadland.exceptions import SimulationError
 from quadland.metrics import touchdown_report
 from quadland.model import model_values
 from quadland.simulate import paper_envelope
-from symbolic.closed_loop import ENVELOPE, envelope_function
+from symbolic.closed_loop import PAPER_ENVELOPE, paper_envelope_function
 
 STEEP = ["controller.k1=[300.0, 5.0, 10.0, 10.0]", "controller.k2=[200.0, 4.0, 10.0, 10.0]"]
 
@@ -61,7 +61,7 @@ def test_the_physical_flight_stays_well_inside_its_envelope():
     mv = model_values(sc)
     env = paper_envelope(sc, mv)
     res = quadland.simulate(sc)
-    S = np.asarray(envelope_function(mv.l).map(len(res["t"]))(
+    S = np.asarray(paper_envelope_function(mv.l).map(len(res["t"]))(
         res.states.T, np.zeros((4, len(res["t"])))), dtype=float).T
     assert np.max(S / env.bounds) < 0.5
 
@@ -123,8 +123,8 @@ def test_compiled_and_vm_drivers_stop_at_the_same_point():
 
 
 def test_envelope_describes_its_worst_magnitude():
-    env = Envelope(ENVELOPE, np.array([10.0, 10, 10, 10, 10, 10]), ("why",) * 6)
+    env = Envelope(PAPER_ENVELOPE, np.array([10.0, 10, 10, 10, 10, 10]), ("why",) * 6)
     text = env.describe(np.array([5.0, 20.0, np.nan, 0, 0, 0]))
     assert text.startswith("the rate") and "non-finite" in text
     with pytest.raises(ValueError):
-        Envelope(ENVELOPE, np.ones(5), ("why",) * 5)
+        Envelope(PAPER_ENVELOPE, np.ones(5), ("why",) * 5)

@@ -29,20 +29,13 @@ from nav_reference import (
 from reference import rotation
 from scipy.stats import chi2
 
-from symbolic.landing.controller import MEASUREMENT
+from symbolic.landing.controller import LANDING_MEASUREMENT
 from symbolic.landing.estimator import (
     estimator_memory,
     estimator_step_function,
     output_predictor_function,
 )
-from symbolic.landing.navigation import (
-    BLOCKS,
-    ESTIMATOR_DEFAULTS,
-    GNSS,
-    IMU,
-    PACKETS,
-    VISION,
-)
+from symbolic.landing.navigation import BLOCKS, ESTIMATOR_DEFAULTS, GNSS, IMU, NAV_PACKETS, VISION
 
 # ---------------------------------------------------------------- the textbook KF
 
@@ -71,7 +64,7 @@ def _run_undelayed(rng, coupling="full", steps=30, p_fresh=0.6, n_hist=0, depth=
             eta2 = lay.unpack(mem)["deck_eta2"]
             n2 = rotation(eta2)[:, 2]
         vecs = [layout.pack(packets[layout.name]) if layout.name in packets else empty(layout)
-                for layout in PACKETS]
+                for layout in NAV_PACKETS]
         mem, y, diag = (col(v) for v in step(mem, imu, *vecs, p, dt, t))
         nis = ref.fuse(packets, n2)
         fused = dict(x=ref.x.copy(), P=ref.P.copy())
@@ -137,7 +130,7 @@ def test_delayed_fusion_is_the_undelayed_filter_shifted_by_the_horizon():
         for s, pk in packets.items():
             arrivals[(k + LATENCY[s], s)] = pk
         vecs = [layout.pack(arrivals[(k, layout.name)]) if (k, layout.name) in arrivals
-                else empty(layout) for layout in PACKETS]
+                else empty(layout) for layout in NAV_PACKETS]
         mem, y, diag = (col(v) for v in step(mem, imu, *vecs, p, dt, t))
         d = DIAG.unpack(diag)
         j = k - n_hist                                   # the horizon's sample
@@ -153,7 +146,7 @@ def test_delayed_fusion_is_the_undelayed_filter_shifted_by_the_horizon():
         for a in inputs[j:k]:
             Phi, Gamma, _ = discrete(dt, q)
             x_now = Phi @ x_now + Gamma @ a
-        ys = MEASUREMENT.unpack(y)
+        ys = LANDING_MEASUREMENT.unpack(y)
         np.testing.assert_allclose(ys["p_e"], R2.T @ x_now[sl("p_r")], rtol=1e-10, atol=1e-10)
         np.testing.assert_allclose(ys["v_e"], R2.T @ (x_now[sl("v1")] - x_now[sl("v_t")]),
                                    rtol=1e-10, atol=1e-10)
@@ -251,7 +244,7 @@ def test_monte_carlo_nees_and_nis_lie_in_their_chi_square_bounds():
                     for r in range(MC_RUNS)]
         vecs = [np.column_stack([layout.pack(v) for v in arrivals[(k, layout.name)]])
                 if (k, layout.name) in arrivals else np.zeros((layout.size, MC_RUNS))
-                for layout in PACKETS]
+                for layout in NAV_PACKETS]
         mem, _, diag = step(mem, imus[k].T, *vecs, p, MC_DT, k * MC_DT)
         mem, d = np.array(mem), DIAG.unpack(np.array(diag))
         for i, b in enumerate(BLOCKS):
@@ -287,7 +280,7 @@ def test_rejected_and_not_due_packets_leave_the_step_bit_exact(rng):
         vis = VISION.pack(dict(fresh=1.0, tau=t, r_E=[50.0, 0, 0]))
         gnss = GNSS.pack(dict(fresh=1.0, tau=t, rel=[np.nan] * 3, v1=[np.inf] * 3,
                               vt=[1e300, np.nan, 0.0]))
-        none = [empty(layout) for layout in PACKETS]
+        none = [empty(layout) for layout in NAV_PACKETS]
         mem_a = col(step(mem_a, imu, vis, gnss, *none[2:], p, 0.01, t)[0])
         mem_b = col(step(mem_b, imu, *none, p, 0.01, t)[0])
         a, b = lay.unpack(mem_a), lay.unpack(mem_b)
@@ -315,7 +308,7 @@ def _vision_run(n_hist, depth, taus_by_step, steps, **over):
         tau = taus_by_step.get(k)
         vis = (VISION.pack(dict(fresh=1.0, tau=tau, r_E=[0, 0, -3.0])) if tau is not None
                else empty(VISION))
-        mem, _, d = step(mem, imu, vis, *[empty(layout) for layout in PACKETS[1:]], p, 0.01,
+        mem, _, d = step(mem, imu, vis, *[empty(layout) for layout in NAV_PACKETS[1:]], p, 0.01,
                          k * 0.01)
         mem = col(mem)
         out.append((DIAG.unpack(col(d)), lay.unpack(mem)))
@@ -362,8 +355,8 @@ def test_init_is_the_handover_estimate():
     assert m["t_h"][0] == 3.0 and m["deck_tau"][0] == 3.0
     assert not np.any(m["hist"]) and not np.any(m["n_fused"])
     imu = IMU.pack(dict(eta_hat=[0.1, 0, 0], f_b=[0, 0, 9.8], omega=[0.1, 0.2, 0.3]))
-    y = MEASUREMENT.unpack(col(estimator_step_function(3, 4, "axes")(
-        mem, imu, *[empty(layout) for layout in PACKETS], params(), 0.004, 3.0)[1]))
+    y = LANDING_MEASUREMENT.unpack(col(estimator_step_function(3, 4, "axes")(
+        mem, imu, *[empty(layout) for layout in NAV_PACKETS], params(), 0.004, 3.0)[1]))
     R2 = rotation(eta2)
     np.testing.assert_allclose(y["p_e"], R2.T @ x0[sl("p_r")], rtol=1e-14)
     np.testing.assert_allclose(y["v_e"], R2.T @ (x0[sl("v1")] - x0[sl("v_t")]), rtol=1e-14)
@@ -389,7 +382,7 @@ def test_axes_equal_full_when_no_measurement_couples_the_axes():
         pk = {s: packet_values(rng, s, x, t, zero, up) for s in ("vision", "gnss", "range",
                                                                   "datalink")}
         pk["range"]["b3_E"] = up
-        vecs = [layout.pack(pk[layout.name]) for layout in PACKETS]
+        vecs = [layout.pack(pk[layout.name]) for layout in NAV_PACKETS]
         imu = random_imu(rng)
         mem_f = col(full(mem_f, imu, *vecs, p, 0.01, t)[0])
         mem_a = col(axes(mem_a, imu, *vecs, p, 0.01, t)[0])

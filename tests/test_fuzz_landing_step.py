@@ -47,8 +47,12 @@ from symbolic.c_api import (
 )
 from symbolic.codegen import STATUS_CODES, c_sources
 from symbolic.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
-from symbolic.landing.controller import MEASUREMENT, landing_guidance_function, landing_memory
-from symbolic.landing.loop import controller_params
+from symbolic.landing.controller import (
+    LANDING_MEASUREMENT,
+    landing_guidance_function,
+    landing_memory,
+)
+from symbolic.landing.loop import landing_loop_params
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -159,10 +163,10 @@ class _Harness:
         api.lib.ql_guidance_params_init(ctypes.byref(self.gp))
         self.p0, self.gp0 = self.v_p.copy(), self.v_gp.copy()
         lv = landing_values(load_scenario("highway"))
-        self.p_guid = controller_params(L).unpack(lv.pc)["p_guid"]
+        self.p_guid = landing_loop_params(L).unpack(lv.pc)["p_guid"]
 
     def _measurement(self, rng, scale):
-        y = MEASUREMENT.unpack(np.zeros(MEASUREMENT.size))
+        y = LANDING_MEASUREMENT.unpack(np.zeros(LANDING_MEASUREMENT.size))
         y = {k: v.copy() for k, v in y.items()}
         y["p_e"] = rng.normal(size=3) * [2, 2, 1] * scale + [0, 0, 1.5]
         y["v_e"] = rng.normal(size=3) * scale
@@ -171,7 +175,7 @@ class _Harness:
         y["Omega1"] = rng.normal(size=3) * scale
         for k in ("v2E", "a2E", "w2E", "w2E_dot"):
             y[k] = rng.normal(size=3) * (10.0 if k == "v2E" else 0.3 * scale)
-        self.v_y[:] = MEASUREMENT.pack(y)
+        self.v_y[:] = LANDING_MEASUREMENT.pack(y)
 
     def _retune(self, rng, p, p0, what):
         p[:] = p0
@@ -202,7 +206,7 @@ class _Harness:
         self._measurement(rng, scale)
         self._retune(rng, self.v_p, self.p0, "landing")
         self.v_p[_offset("landing", "tilt_min")] = rng.choice((0.0, 1e-3, rng.uniform(0, 0.9)))
-        p_e = self.v_y[MEASUREMENT.slice("p_e")]
+        p_e = self.v_y[LANDING_MEASUREMENT.slice("p_e")]
         self.v_ref[:] = np.r_[p_e, 0, 0, -rng.uniform(0, 0.7), 0, 0, rng.normal() * 0.3] + \
             scale * rng.normal(size=9)
         mem = landing_memory(L).unpack(np.zeros(landing_memory(L).size))
@@ -294,7 +298,7 @@ def _check_step(h, rng, counts):
     elif set(bad) - CHECK_PARAMS_ONLY:
         assert status == STATUS["QL_ERR_PARAM"]
     else:
-        phi, theta = (float(h.v_y[MEASUREMENT.index(n)]) for n in ("phi1", "theta1"))
+        phi, theta = (float(h.v_y[LANDING_MEASUREMENT.index(n)]) for n in ("phi1", "theta1"))
         tilt, eps = math.cos(theta) * math.cos(phi), 8 * float(h.fi.eps)
         assert out[h.o["tilt"]][0] == pytest.approx(tilt, rel=eps, abs=eps)
         if abs(out[h.o["tilt"]][0]) < p[_offset("landing", "tilt_min")]:

@@ -9,9 +9,9 @@ from symbolic.guidance import (
     ALIGN,
     APPROACH,
     DESCEND,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
     LANDED,
-    PARAMS,
-    STATE,
     TOUCHDOWN,
     guidance_function,
 )
@@ -27,12 +27,12 @@ def _run(script, n, xg=None, p=P):
     """Step the guidance n times; script(k, z_ref) -> (p_e, v_e, deck_rise[, gear_gap]).
 
     Without a gear gap the gear is well above the deck (1 m)."""
-    xg = STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=p["hover_height"], aborts=0)) \
+    xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=p["hover_height"], aborts=0)) \
         if xg is None else xg
-    pg = PARAMS.pack(p)
+    pg = GUIDANCE_PARAMS.pack(p)
     rows = []
     for k in range(n):
-        z_ref = STATE.unpack(xg)["z_ref"][0]
+        z_ref = GUIDANCE_STATE.unpack(xg)["z_ref"][0]
         p_e, v_e, rise, *gap = script(k, z_ref)
         xg_next, ref = (np.asarray(v, dtype=float).ravel()
                         for v in GUIDANCE(xg, p_e, v_e, rise, gap[0] if gap else 1.0, DT, pg))
@@ -50,7 +50,7 @@ def test_approach_ends_within_the_align_radius():
     def script(k, z_ref):              # flies in along x at 1 m/s from 5 m out
         return [-5.0 + k * DT, 0.0, 3.0], [1.0, 0.0, 0.0], 0.0
     rows, _ = _run(script, 3000)
-    phases = [STATE.unpack(xg)["phase"][0] for xg, _ in rows]
+    phases = [GUIDANCE_STATE.unpack(xg)["phase"][0] for xg, _ in rows]
     k = phases.index(ALIGN)
     # within 0.5 m of the hover point: -5 + k dt >= -0.5 at the step before
     assert math.isclose((k - 1) * DT, 4.5, abs_tol=DT)
@@ -60,13 +60,13 @@ def test_approach_ends_within_the_align_radius():
 
 
 def test_align_dwells_then_descends_and_a_break_restarts_the_dwell():
-    xg = STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0))
+    xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0))
 
     def script(k, z_ref):              # drifts out of the half-limit band for 10 steps
         off = 0.15 if 200 <= k < 210 else 0.05
         return [off, 0.0, 3.0], [0.0, 0.0, 0.0], 0.0
     rows, _ = _run(script, 1000, xg)
-    phases = [STATE.unpack(x)["phase"][0] for x, _ in rows]
+    phases = [GUIDANCE_STATE.unpack(x)["phase"][0] for x, _ in rows]
     k = phases.index(DESCEND)
     # the timer restarts after the break (step 209) and needs 1 s = 500 steps
     assert k == 210 + 500
@@ -75,10 +75,10 @@ def test_align_dwells_then_descends_and_a_break_restarts_the_dwell():
 def test_descent_profile_against_its_closed_form():
     """Rate min(max(h / T, v_td), v_max): linear at 0.7 m/s down to h = 0.7 m, then
     exponential h = 0.7 exp(-(t - t1) / T) down to h = 0.3 m, then the 0.3 m/s crawl."""
-    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=3.0, aborts=0))
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=3.0, aborts=0))
     rows, _ = _run(_on_track, 3000, xg)
     t = DT * np.arange(len(rows))
-    z = np.array([STATE.unpack(x)["z_ref"][0] for x, _ in rows])
+    z = np.array([GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows])
     h0, T, vmax, vtd = 3.0 - 0.2, 1.0, 0.7, 0.3
     t1 = (h0 - vmax * T) / vmax                     # linear part ends at h = v_max T
     t2 = t1 + T * math.log(vmax / vtd)              # exponential part ends at h = v_td T
@@ -98,7 +98,7 @@ def test_descent_profile_against_its_closed_form():
 
 @pytest.mark.parametrize("cause", ["offset", "speed", "deck"])
 def test_abort_climbs_back_to_hover_and_counts(cause):
-    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
 
     def script(k, z_ref):
         bad = k == 100
@@ -106,17 +106,17 @@ def test_abort_climbs_back_to_hover_and_counts(cause):
         v_e = [0.6 if bad and cause == "speed" else 0.0, 0.0, 0.0]
         return p_e, v_e, 1.0 if bad and cause == "deck" else 0.0
     rows, _ = _run(script, 102, xg)
-    after = STATE.unpack(rows[101][0])
+    after = GUIDANCE_STATE.unpack(rows[101][0])
     assert after["phase"][0] == ALIGN and after["aborts"][0] == 1
     assert after["z_ref"][0] == 3.0                       # back to the hover height
-    before = STATE.unpack(rows[100][0])
+    before = GUIDANCE_STATE.unpack(rows[100][0])
     assert before["phase"][0] == DESCEND and before["z_ref"][0] < 2.0
 
 
 @pytest.mark.parametrize("cause", ["offset", "speed", "deck"])
 def test_contact_is_touchdown_not_abort(cause):
     """The gear meets the deck while an abort criterion holds: the contact wins."""
-    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.1, aborts=0))
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.1, aborts=0))
 
     def script(k, z_ref):
         bad = k == 3
@@ -124,29 +124,29 @@ def test_contact_is_touchdown_not_abort(cause):
         v_e = [0.6 if bad and cause == "speed" else 0.0, 0.0, -0.3]
         return p_e, v_e, 1.0 if bad and cause == "deck" else 0.0, 0.0 if bad else 0.01
     rows, _ = _run(script, 5, xg)
-    phases = [STATE.unpack(x)["phase"][0] for x, _ in rows]
+    phases = [GUIDANCE_STATE.unpack(x)["phase"][0] for x, _ in rows]
     assert phases == [DESCEND] * 4 + [TOUCHDOWN]
-    after = STATE.unpack(rows[4][0])
+    after = GUIDANCE_STATE.unpack(rows[4][0])
     assert after["phase"][0] == TOUCHDOWN and after["aborts"][0] == 0 and after["timer"][0] == 0
-    before = STATE.unpack(rows[3][0])
+    before = GUIDANCE_STATE.unpack(rows[3][0])
     assert after["z_ref"][0] == before["z_ref"][0]          # the reference holds
 
 
 def test_descent_touches_down_when_the_gap_closes_then_lands_after_settling():
     """The gap closes at step 40; touchdown, then landed settle_time (50 steps) later."""
-    xg = STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0))
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0))
     rows, last = _run(lambda k, z: ([0.0, 0.0, z], [0.0, 0.0, -0.3], 0.0,
                                     0.3 - k * DT * 0.3 if k < 40 else -1e-9), 120, xg)
-    phases = np.array([STATE.unpack(x)["phase"][0] for x, _ in rows])
+    phases = np.array([GUIDANCE_STATE.unpack(x)["phase"][0] for x, _ in rows])
     assert np.all(phases[:41] == DESCEND) and phases[41] == TOUCHDOWN
     k_landed = int(np.argmax(phases == LANDED))
     assert k_landed == 41 + 50                         # settle_time 0.1 s at 2 ms
     np.testing.assert_array_equal(rows[k_landed][1][3:], 0)   # the reference is at rest
-    z = [STATE.unpack(x)["z_ref"][0] for x, _ in rows[41:]]
+    z = [GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows[41:]]
     assert len(set(z)) == 1
 
 
 def test_landed_is_held():
-    xg = STATE.pack(dict(phase=LANDED, timer=0.3, z_ref=0.1, aborts=2))
+    xg = GUIDANCE_STATE.pack(dict(phase=LANDED, timer=0.3, z_ref=0.1, aborts=2))
     rows, last = _run(lambda k, z: ([1.0, 1.0, 5.0], [3.0, 0, 0], 2.0, -1.0), 10, xg)
     np.testing.assert_array_equal(last, xg)

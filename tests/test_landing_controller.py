@@ -13,10 +13,10 @@ from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from symbolic.guidance import REFERENCE
+from symbolic.guidance import POSITION_REFERENCE
 from symbolic.landing.attitude import thrust_attitude_function
 from symbolic.landing.controller import (
-    MEASUREMENT,
+    LANDING_MEASUREMENT,
     NETWORK_INPUT_DIM,
     command_filter_function,
     known_acceleration,
@@ -28,13 +28,12 @@ from symbolic.landing.controller import (
     measurement_function,
 )
 from symbolic.landing.deck import DECK_PARAMS
-from symbolic.landing.plant import PLANT_STATE, landing_plant_function
-from symbolic.landing.quadrotor import ACTUATOR
-from symbolic.landing.quadrotor import STATE as QUAD6
+from symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_function
+from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.landing.relative import relative6, relative6_acceleration
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.simulation import rk4_step
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import VEHICLE_STATE
 
 L_NODES = 10
 M1, G = 2.0, 9.8
@@ -91,12 +90,12 @@ def _rbf(x):
 
 def _random_case(rng, scale=1.0):
     """Measurements over a rolling, pitching, turning deck; a reference; memory."""
-    y = MEASUREMENT.pack(dict(
+    y = LANDING_MEASUREMENT.pack(dict(
         p_e=rng.normal(0, 0.3, 3) * scale + [0, 0, 1.5], v_e=rng.normal(0, 0.3, 3) * scale,
         eta1=rng.uniform(-0.15, 0.15, 3) + [0, 0, 0.4], Omega1=rng.normal(0, 0.2, 3),
         eta2=rng.uniform(-0.1, 0.1, 3) + [0, 0, 0.4], v2E=rng.normal(0, 2, 3),
         a2E=rng.normal(0, 0.5, 3), w2E=rng.normal(0, 0.1, 3), w2E_dot=rng.normal(0, 0.1, 3)))
-    ref = REFERENCE.pack(dict(p_ref=rng.normal(0, 0.3, 3) + [0, 0, 1.5],
+    ref = POSITION_REFERENCE.pack(dict(p_ref=rng.normal(0, 0.3, 3) + [0, 0, 1.5],
                               v_ref=rng.normal(0, 0.2, 3), a_ref=rng.normal(0, 0.2, 3)))
     mem = landing_memory(L_NODES).pack(dict(
         W_hat=rng.normal(0, 0.05, (L_NODES, 6)), zeta_hat=rng.uniform(0, 0.2, 6),
@@ -220,8 +219,9 @@ def test_known_acceleration_is_the_plants_at_zero_thrust(rng):
                            tau=[150, 30, 40], z2=0))
     pq = QUADROTOR.unpack(P_QUAD)
     for _ in range(5):
-        x1q = QUAD6.pack(dict(p1=rng.normal(0, 2, 3) + [0, 0, 5], eta1=rng.uniform(-0.4, 0.4, 3),
-                              V1=rng.normal(0, 2, 3), Omega1=rng.normal(0, 0.5, 3), F=np.zeros(4)))
+        x1q = QUAD6_STATE.pack(dict(p1=rng.normal(0, 2, 3) + [0, 0, 5],
+                                    eta1=rng.uniform(-0.4, 0.4, 3), V1=rng.normal(0, 2, 3),
+                                    Omega1=rng.normal(0, 0.5, 3), F=np.zeros(4)))
         xv = VEHICLE_STATE.pack(dict(x2=1, y2=2, psi2=0.3, u2=3, v2=0.5, r2=0.2))
         t = rng.uniform(0, 10)
         args = (x1q, xv, t, P_QUAD, P_ACT, pv, pd)
@@ -230,7 +230,7 @@ def test_known_acceleration_is_the_plants_at_zero_thrust(rng):
                                         pd)
         xp = np.concatenate([x1q, xv])
         pp = np.concatenate([P_QUAD, P_ACT, pv, pd])
-        m = MEASUREMENT.unpack(np.array(measurement_function()(xp, t, pp)).ravel())
+        m = LANDING_MEASUREMENT.unpack(np.array(measurement_function()(xp, t, pp)).ravel())
         np.testing.assert_allclose(m["p_e"], np.array(p_e).ravel(), atol=1e-14)
         np.testing.assert_allclose(m["v_e"], np.array(v_e).ravel(), atol=1e-13)
         f_g, f_r = (np.array(v).ravel() for v in known_acceleration(
@@ -251,7 +251,7 @@ def test_outer_law_by_hand(step, rng, nominal):
     for _ in range(5):
         y, ref, mem = _random_case(rng)
         out = _call(step, y, ref, mem, p_ctrl, P_QUAD, P_ACT, 0.004)
-        m, r = MEASUREMENT.unpack(y), REFERENCE.unpack(ref)
+        m, r = LANDING_MEASUREMENT.unpack(y), POSITION_REFERENCE.unpack(ref)
         mm = landing_memory(L_NODES).unpack(mem)
         k1p, k2p, rho = np.array([0.8, 1.0, 1.3]), np.array([1.1, 0.9, 1.6]), GAINS["rho"]
         z1 = m["p_e"] - r["p_ref"]
@@ -288,7 +288,7 @@ def test_inner_law_by_hand(step, nominal, seed):
     I = pq["I"]
     y, ref, mem = _random_case(np.random.default_rng(seed))
     out = _call(step, y, ref, mem, p_ctrl, P_QUAD, P_ACT, 0.004)
-    m, mm = MEASUREMENT.unpack(y), landing_memory(L_NODES).unpack(mem)
+    m, mm = LANDING_MEASUREMENT.unpack(y), landing_memory(L_NODES).unpack(mem)
     eta1, Om = m["eta1"], m["Omega1"]
 
     def eta2_rates(s, m=m):
@@ -345,7 +345,7 @@ def test_memory_update_is_the_exact_solution(step, seed):
     y, ref, mem = _random_case(np.random.default_rng(seed), scale=3.0)
     out = _call(step, y, ref, mem, p_ctrl, P_QUAD, P_ACT, dt)
     assert out["limits"].ravel()[1] == 1
-    m, mm = MEASUREMENT.unpack(y), lay.unpack(mem)
+    m, mm = LANDING_MEASUREMENT.unpack(y), lay.unpack(mem)
     nxt = lay.unpack(out["mem_next"].ravel())
     eta2_dot = _deck_euler_rates(m["eta2"], m["w2E"])
     Omega_e = m["Omega1"] - np.linalg.solve(euler_rate_matrix(*m["eta1"][:2]), eta2_dot)
@@ -394,11 +394,12 @@ def test_hover_over_a_stationary_deck(step, nominal):
     pd[DECK_PARAMS.slice("deck_height")] = 1.0
     pp = np.concatenate([P_QUAD, P_ACT, pv, pd])
     psi2, hover = 0.4, np.array([0.0, 0.0, 2.0])
-    xp = PLANT_STATE.pack(dict(
-        x1q=QUAD6.pack(dict(p1=[1.5, -1.0, 1.0 + 3.0], eta1=[0, 0, psi2 + 0.05], V1=np.zeros(3),
+    xp = LANDING_PLANT_STATE.pack(dict(
+        x1q=QUAD6_STATE.pack(dict(p1=[1.5, -1.0, 1.0 + 3.0], eta1=[0, 0, psi2 + 0.05],
+                                  V1=np.zeros(3),
                             Omega1=np.zeros(3), F=[M1 * G / 4] * 4)),
         xv=VEHICLE_STATE.pack(dict(x2=0, y2=0, psi2=psi2, u2=0, v2=0, r2=0))))
-    ref = REFERENCE.pack(dict(p_ref=hover, v_ref=np.zeros(3), a_ref=np.zeros(3)))
+    ref = POSITION_REFERENCE.pack(dict(p_ref=hover, v_ref=np.zeros(3), a_ref=np.zeros(3)))
     p_ctrl, mem = _p_ctrl(nominal), landing_memory(L_NODES).zeros()
     measure, rk4 = measurement_function(), rk4_step(landing_plant_function())
     out_lay = landing_step_outputs(L_NODES)
@@ -410,7 +411,7 @@ def test_hover_over_a_stationary_deck(step, nominal):
             [np.array(v).ravel() for v in step(y, ref, mem, p_ctrl, P_QUAD, P_ACT, dt)]))
         F_log[k], mem = out["F_cmd"], out["mem_next"]
         xp = np.array(rk4(xp, out["F_cmd"], np.zeros(6), k * dt, pp, dt)).ravel()
-    m = MEASUREMENT.unpack(y)
+    m = LANDING_MEASUREMENT.unpack(y)
     assert np.all(np.isfinite(F_log)) and F_log.min() >= 0 and F_log.max() <= F_MAX
     assert np.linalg.norm(m["p_e"] - hover) < 0.03
     assert np.linalg.norm(m["v_e"]) < 0.03

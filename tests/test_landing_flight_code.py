@@ -19,18 +19,16 @@ from quadland.landing import LANDING_TRAJECTORY, landing_values
 from quadland.metrics import touchdown_report
 from symbolic.c_api import landing_output_layout, landing_params_layout
 from symbolic.codegen import STATUS_CODES
-from symbolic.guidance import ALIGN, DESCEND, LANDED, TOUCHDOWN
-from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
-from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.guidance import ALIGN, DESCEND, GUIDANCE_PARAMS, GUIDANCE_STATE, LANDED, TOUCHDOWN
 from symbolic.landing.controller import (
-    MEASUREMENT,
+    LANDING_MEASUREMENT,
     landing_guidance_function,
     landing_memory,
     landing_step_function,
     landing_step_outputs,
 )
-from symbolic.landing.loop import controller_params
-from symbolic.landing.plant import PLANT_PARAMS
+from symbolic.landing.loop import landing_loop_params
+from symbolic.landing.plant import LANDING_PLANT_PARAMS
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -63,8 +61,8 @@ class Harness:
         api.lib.ql_landing_params_init(ctypes.byref(self.params))
         api.lib.ql_guidance_params_init(ctypes.byref(self.gp))
         lv = landing_values(quadland.load_scenario("highway"))
-        self.pc = controller_params(L).unpack(lv.pc)
-        self.pp = PLANT_PARAMS.unpack(lv.pp)
+        self.pc = landing_loop_params(L).unpack(lv.pc)
+        self.pp = LANDING_PLANT_PARAMS.unpack(lv.pp)
 
     def step(self, dt):
         return self.api.lib.ql_landing_step(
@@ -91,7 +89,7 @@ def harness(request):
 
 def _measurement(rng, scale=1.0):
     """Random measurements around the landing's operating range, a rolling deck."""
-    y = MEASUREMENT.unpack(np.zeros(MEASUREMENT.size))
+    y = LANDING_MEASUREMENT.unpack(np.zeros(LANDING_MEASUREMENT.size))
     y = {k: v.copy() for k, v in y.items()}
     y["p_e"] = rng.normal(size=3) * [2, 2, 1] * scale + [0, 0, 2]
     y["v_e"] = rng.normal(size=3) * 0.5 * scale
@@ -100,7 +98,7 @@ def _measurement(rng, scale=1.0):
     y["eta2"] = rng.normal(size=3) * [0.05, 0.05, 1.0]
     for k in ("v2E", "a2E", "w2E", "w2E_dot"):
         y[k] = rng.normal(size=3) * (5.0 if k == "v2E" else 0.1)
-    return MEASUREMENT.pack(y)
+    return LANDING_MEASUREMENT.pack(y)
 
 
 def test_defaults_are_the_scenarios_vectors(harness):
@@ -153,7 +151,7 @@ def test_steps_match_the_casadi_functions(harness, rng):
 def _guidance_at(h, phase, gap_closed):
     """The guidance one step from a level quadrotor over the pad at the crawl."""
     h.v_y[:] = 0
-    y = MEASUREMENT.unpack(h.v_y)
+    y = LANDING_MEASUREMENT.unpack(h.v_y)
     y["p_e"][2] = h.pc["p_guid"][GUIDANCE_PARAMS.index("touchdown_height")] + (
         -1e-3 if gap_closed else 1e-2)
     y["v_e"][2] = -0.3
@@ -200,7 +198,7 @@ def test_landing_step_errors_leave_the_state_and_zero_the_outputs(harness, rng, 
     p = landing_params_layout(L)
     dt = 0.004
     if case == "nan_measurement":
-        h.v_y[MEASUREMENT.index("dz_e")] = np.nan
+        h.v_y[LANDING_MEASUREMENT.index("dz_e")] = np.nan
     elif case == "inf_reference":
         h.ref.a_ref[2] = np.inf
     elif case == "nan_width":

@@ -13,21 +13,20 @@ import pytest
 from quadland.landing import landing_values
 from quadland.linearize import _hover_values, equilibrium, linear_models, sampled_models
 from quadland.scenario import load_scenario
-from symbolic.guidance import ALIGN
-from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.guidance import ALIGN, GUIDANCE_STATE
 from symbolic.kinematics import rotation
 from symbolic.landing.deck import deck_pose
 from symbolic.landing.linearization import HOVER_PLANT, hover_linearization_function
 from symbolic.landing.loop import (
-    DISTURBANCE,
-    controller_params,
-    controller_state,
+    LANDING_DISTURBANCE,
     landing_loop,
+    landing_loop_memory,
+    landing_loop_params,
 )
-from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.quadrotor import QUAD6_STATE
 from symbolic.landing.relative import relative6
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import VEHICLE_STATE
 
 #: A still deck: the analysis freezes heave, roll and pitch at their mean, zero.
 STILL = [f"deck.{m}_amplitude{'_deg' if m != 'heave' else ''}=[0.0]"
@@ -59,7 +58,7 @@ def _full_state(sc, point, z, mem, psi2, t=0.0):
     """The simulator's loop state ``[xp, xc]`` for deck-frame ``z`` and memory ``mem``,
     the vehicle at (7, -4) m with heading psi2."""
     lv = landing_values(sc)
-    p = PLANT_PARAMS.unpack(lv.pp)
+    p = LANDING_PLANT_PARAMS.unpack(lv.pp)
     u2, v2, r2 = point.vehicle
     xv = VEHICLE_STATE.pack(dict(x2=7.0, y2=-4.0, psi2=psi2, u2=u2, v2=v2, r2=r2))
     deck = deck_pose(xv, t, p["p_veh"], p["p_deck"])
@@ -69,8 +68,8 @@ def _full_state(sc, point, z, mem, psi2, t=0.0):
     x1q = QUAD6_STATE.pack(dict(p1=p1, eta1=eta1, V1=zs["V1"], Omega1=zs["Omega1"], F=zs["F"]))
     xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0,
                                   z_ref=sc.data["landing"]["hover_height"], aborts=0.0))
-    xc = controller_state(lv.l).pack(dict(xg=xg, mem=mem))
-    return PLANT_STATE.pack(dict(x1q=x1q, xv=xv)), xc
+    xc = landing_loop_memory(lv.l).pack(dict(xg=xg, mem=mem))
+    return LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv)), xc
 
 
 def _wind_in_E(sc, psi2):
@@ -78,7 +77,7 @@ def _wind_in_E(sc, psi2):
     scenario's wind is fixed relative to the vehicle's initial heading."""
     d = sc.data
     turn = rotation([0.0, 0.0, psi2 - np.radians(d["initial"]["psi2_deg"])])
-    return DISTURBANCE.pack(dict(v_wind=np.asarray(turn) @ d["wind"]["mean"],
+    return LANDING_DISTURBANCE.pack(dict(v_wind=np.asarray(turn) @ d["wind"]["mean"],
                                  d_F=d["disturbance"]["force_bias"],
                                  d_M=d["disturbance"]["moment_bias"]))
 
@@ -94,18 +93,18 @@ def test_hover_is_a_steady_motion_of_the_simulated_loop(case):
     xp, xc = _full_state(sc, point, point.xr, point.xc, psi2)
     xc_next, F_cmd, _, _ = (np.asarray(v, dtype=float).ravel()
                             for v in loop.controller(xp, xc, lv.pc, 0.0, 0.0))
-    mem = controller_state(lv.l).unpack(xc_next)["mem"]
+    mem = landing_loop_memory(lv.l).unpack(xc_next)["mem"]
     np.testing.assert_allclose(mem, point.xc, atol=1e-10 * (1 + np.abs(point.xc).max()))
-    x1q = QUAD6_STATE.unpack(PLANT_STATE.unpack(xp)["x1q"])
+    x1q = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(xp)["x1q"])
     np.testing.assert_allclose(F_cmd, x1q["F"], atol=1e-9)
-    xp_dot = PLANT_STATE.unpack(np.asarray(loop.plant(xp, F_cmd, _wind_in_E(sc, psi2), 0.0,
+    xp_dot = LANDING_PLANT_STATE.unpack(np.asarray(loop.plant(xp, F_cmd, _wind_in_E(sc, psi2), 0.0,
                                                       lv.pp), dtype=float).ravel())
     d = QUAD6_STATE.unpack(xp_dot["x1q"])
     r2 = point.vehicle[2]
     np.testing.assert_allclose(d["eta1"], [0.0, 0.0, r2], atol=1e-9)
     np.testing.assert_allclose(np.r_[d["V1"], d["Omega1"], d["F"]], 0.0, atol=1e-9)
-    p = PLANT_PARAMS.unpack(lv.pp)
-    xs = PLANT_STATE.unpack(xp)
+    p = LANDING_PLANT_PARAMS.unpack(lv.pp)
+    xs = LANDING_PLANT_STATE.unpack(xp)
     p_e, v_e, *_ = relative6(xs["x1q"], xs["xv"], 0.0, p["p_quad"], p["p_act"], p["p_veh"],
                              p["p_deck"])
     np.testing.assert_allclose(np.asarray(v_e).ravel(), 0.0, atol=1e-9)
@@ -123,10 +122,10 @@ def _one_period(sc, point, psi2, dt, substeps=8):
     lv = landing_values(sc)
     loop = landing_loop(lv.l)
     w = _wind_in_E(sc, psi2)
-    p = PLANT_PARAMS.unpack(lv.pp)
+    p = LANDING_PLANT_PARAMS.unpack(lv.pp)
     nz = HOVER_PLANT.size
     pc = lv.pc.copy()
-    pc[controller_params(lv.l).slice("dt")] = dt
+    pc[landing_loop_params(lv.l).slice("dt")] = dt
 
     def f(xp):
         return np.asarray(loop.plant(xp, F_cmd, w, 0.0, lv.pp), dtype=float).ravel()
@@ -143,13 +142,13 @@ def _one_period(sc, point, psi2, dt, substeps=8):
             k3 = f(xp + h / 2 * k2)
             k4 = f(xp + h * k3)
             xp = xp + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        xs = PLANT_STATE.unpack(xp)
+        xs = LANDING_PLANT_STATE.unpack(xp)
         q = QUAD6_STATE.unpack(xs["x1q"])
         p_e = np.asarray(relative6(xs["x1q"], xs["xv"], dt, p["p_quad"], p["p_act"],
                                    p["p_veh"], p["p_deck"])[0]).ravel()
         psi_e = q["eta1"][2] - VEHICLE_STATE.unpack(xs["xv"])["psi2"][0]
         z = np.r_[p_e, q["eta1"][:2], psi_e, q["V1"], q["Omega1"], q["F"]]
-        return np.r_[z, controller_state(lv.l).unpack(xc_next)["mem"]]
+        return np.r_[z, landing_loop_memory(lv.l).unpack(xc_next)["mem"]]
 
     F_cmd = None
     return step

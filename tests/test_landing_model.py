@@ -13,13 +13,13 @@ from scipy.integrate import solve_ivp
 
 from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_function
 from symbolic.landing.plant import (
-    OUTPUTS,
-    PLANT_PARAMS,
-    PLANT_STATE,
+    LANDING_PLANT_OUTPUTS,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
     landing_outputs_function,
     landing_plant_function,
 )
-from symbolic.landing.quadrotor import ACTUATOR, STATE, quadrotor6_function
+from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_function
 from symbolic.landing.relative import (
     gear_gap,
     relative6_acceleration_function,
@@ -333,17 +333,17 @@ def test_gear_gap_level_quadrotor_over_a_tilted_deck(values):
 def test_landing_plant_and_outputs(values, rng):
     """The plant's ODE is both bodies' Newton-Euler; its outputs carry the issue's names."""
     p_quad, p_act, p_veh, p_deck = _params(values, rng, "ship")
-    pp = PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
+    pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
     x1q, xv = _random_states(rng)
-    xp = PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
+    xp = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
     F_cmd, w, t = rng.uniform(-1, F_MAX + 1, 4), rng.normal(size=6), 3.0
     xp_dot = _col(landing_plant_function()(xp, F_cmd, w, t, pp))
     pq, pv = QUADROTOR.unpack(p_quad), VEHICLE.unpack(p_veh)
     np.testing.assert_allclose(xp_dot, np.concatenate([_quad6(x1q, F_cmd, w[:3], w[3:], pq),
                                                        _vehicle(xv, pv)]), rtol=1e-12,
                                atol=1e-12)
-    y = OUTPUTS.unpack(_col(landing_outputs_function()(xp, F_cmd, w, t, pp)))
-    names = OUTPUTS.element_names()
+    y = LANDING_PLANT_OUTPUTS.unpack(_col(landing_outputs_function()(xp, F_cmd, w, t, pp)))
+    names = LANDING_PLANT_OUTPUTS.element_names()
     for required in ("x1 y1 z1 phi1 theta1 psi1 x2 y2 z2 phi2 theta2 psi2 x_e y_e z_e "
                      "F_1 F_2 F_3 F_4 d_Fx d_Fy d_Fz").split():
         assert required in names
@@ -373,4 +373,4 @@ def test_a_car_gives_the_papers_relative_altitude_and_rates(values, rng):
     Rr1 = euler_rate_matrix(*x1q[3:5])
     np.testing.assert_allclose(Omega_e, x1q[9:12] - np.linalg.solve(Rr1, [0, 0, xv[5]]),
                                atol=1e-13)
-    assert STATE.size == 16 and PLANT_STATE.size == 22
+    assert QUAD6_STATE.size == 16 and LANDING_PLANT_STATE.size == 22

@@ -38,8 +38,7 @@ from symbolic.landing.navigation import (
     nav_update_function,
     relative_output,
 )
-from symbolic.landing.quadrotor import ACTUATOR
-from symbolic.landing.quadrotor import STATE as QUAD6
+from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.landing.relative import relative6
 from symbolic.parameters import VEHICLE
 
@@ -156,7 +155,7 @@ def test_output_is_the_relative_state_of_symbolic_landing_relative(values, seed)
     p_e, v_e = (col(v) for v in relative6(x1q, xv, t, values.p_quad, p_act, p_veh,
                                            p_deck)[:2])
     deck = deck_pose(xv, t, p_veh, p_deck)
-    q = QUAD6.unpack(x1q)
+    q = QUAD6_STATE.unpack(x1q)
     v1 = rotation(q["eta1"]) @ q["V1"]
     out = relative_output(ca.DM(q["p1"] - col(deck.p2)), ca.DM(v1 - col(deck.v2E)),
                           deck.eta2, deck.w2E)

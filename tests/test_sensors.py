@@ -26,17 +26,17 @@ from quadland.sensing import (
     validate_settings,
 )
 from symbolic.landing.deck import DECK_PARAMS
-from symbolic.landing.loop import DISTURBANCE
-from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
+from symbolic.landing.loop import LANDING_DISTURBANCE
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 from symbolic.landing.quadrotor import ACTUATOR
 from symbolic.landing.sensors import (
     DATALINK_NOISE,
     GNSS_NOISE,
     IMU_NOISE,
     NOISES,
-    PACKETS,
     RANGEFINDER_NOISE,
     SENSOR_NAMES,
+    SENSOR_PACKETS,
     SENSOR_PARAMS,
     VISION_NOISE,
     sensor_function,
@@ -72,7 +72,7 @@ def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
     deck = {f.name: zeros for f in DECK_PARAMS.fields if f.size == 3}
     deck.update(roll_amp=[roll, 0, 0], roll_phase=[math.pi / 2, 0, 0],
                 pad_offset=pad_offset, deck_height=deck_height)
-    return PLANT_PARAMS.pack({
+    return LANDING_PLANT_PARAMS.pack({
         "p_quad": QUADROTOR.pack(dict(m1=M1, I=[0.025, 0.025, 0.045], Kt=KT,
                                       Kr=[0.001] * 3, g=G, arm=0.25, c=0.05)),
         "p_act": ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=20.0, gear_height=0.2)),
@@ -85,16 +85,16 @@ def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
 def state(p1=(0, 0, 5), eta1=(0, 0, 0), V1=(0, 0, 0), Omega1=(0, 0, 0), F=None,
           xv=(0, 0, 0, 0, 0, 0)):
     F = [M1 * G / 4] * 4 if F is None else F
-    return PLANT_STATE.pack({"x1q": np.concatenate([p1, eta1, V1, Omega1, F]), "xv": xv})
+    return LANDING_PLANT_STATE.pack({"x1q": np.concatenate([p1, eta1, V1, Omega1, F]), "xv": xv})
 
 
 def sense(name, xp, pp, noise=None, settings=None, uh=None, w=None, t=0.0):
     f = sensor_function(name)
     noise = np.zeros(NOISES[name].size) if noise is None else noise
     uh = np.full(4, M1 * G / 4) if uh is None else uh
-    w = np.zeros(DISTURBANCE.size) if w is None else w
+    w = np.zeros(LANDING_DISTURBANCE.size) if w is None else w
     y = np.asarray(f(xp, uh, w, t, pp, sensor_params(settings), noise)).ravel()
-    return PACKETS[name].unpack(y)
+    return SENSOR_PACKETS[name].unpack(y)
 
 
 # ---- vision ----------------------------------------------------------------------------
@@ -205,7 +205,7 @@ def test_accelerometer_reads_every_force_but_gravity_over_the_mass():
     eta1, V1, Om = np.array([0.2, -0.3, 0.8]), np.array([1.0, -0.5, 0.3]), [0.4, -0.2, 0.9]
     F = np.array([4.0, 5.5, 6.0, 3.5])
     v_wind, d_F = np.array([2.0, -1.0, 0.5]), np.array([0.3, 0.1, -0.2])
-    w = DISTURBANCE.pack({"v_wind": v_wind, "d_F": d_F, "d_M": [0.01, 0.02, 0.0]})
+    w = LANDING_DISTURBANCE.pack({"v_wind": v_wind, "d_F": d_F, "d_M": [0.01, 0.02, 0.0]})
     y = sense("imu", state(eta1=eta1, V1=V1, Omega1=Om, F=F), params(), w=w,
               uh=np.array([9.0, 0.0, 1.0, 7.0]))
     expected = (np.array([0, 0, F.sum()]) - KT * (V1 - R_zyx(eta1).T @ v_wind) + d_F) / M1
@@ -255,8 +255,8 @@ def test_datalink_broadcasts_a_cruising_car_s_motion_plus_noise():
         np.testing.assert_allclose(y[f], 0, atol=1e-12)
     n = np.arange(1, DATALINK_NOISE.size + 1) * 1e-3
     y_n = sense("datalink", state(xv=xv), pp, n)
-    np.testing.assert_allclose(PACKETS["datalink"].pack(y_n) - PACKETS["datalink"].pack(y), n,
-                               atol=1e-12)
+    packet = SENSOR_PACKETS["datalink"]
+    np.testing.assert_allclose(packet.pack(y_n) - packet.pack(y), n, atol=1e-12)
 
 
 # ---- the runtime: processes against closed forms ----------------------------------------

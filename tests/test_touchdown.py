@@ -17,22 +17,22 @@ import scipy.optimize
 from quadland.compiled import SIM_EVENT, CompiledLoop, VMLoop
 from quadland.engine.loop import Clock
 from symbolic.landing.deck import DECK_PARAMS, N_DECK
-from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE, landing_plant_function
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE, landing_plant_function
+from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from symbolic.landing.relative import gear_gap
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import DISTURBANCE
+from symbolic.quadrotor import BODY_DISTURBANCE
 from symbolic.simulation import LoopModel
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import VEHICLE_STATE
 
 G, Z0, GEAR, H, A, W, PHI = 9.81, 6.0, 0.25, 1.5, 0.68, 0.349, 0.7
 
 
 def _free_fall_model() -> LoopModel:
     """The landing plant behind a controller that keeps the rotors off."""
-    xp, w, t, pp = PLANT_STATE.sym(), DISTURBANCE.sym(), ca.SX.sym("t"), PLANT_PARAMS.sym()
+    xp, w, t = LANDING_PLANT_STATE.sym(), BODY_DISTURBANCE.sym(), ca.SX.sym("t")
+    pp = LANDING_PLANT_PARAMS.sym()
     none = Layout("none", (Field("unused", 1, "-", "no memory"),))
     xc, pc, first = none.sym(), none.sym(), ca.SX.sym("first")
     uh = COMMAND.sym()
@@ -42,19 +42,20 @@ def _free_fall_model() -> LoopModel:
                              [xc, ca.DM.zeros(4), ca.DM.zeros(1), ca.DM.ones(1)],
                              ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
     assemble = ca.Function("assemble", [xp, xc], [xp], ["xp", "xc"], ["x"])
-    x, p = PLANT_STATE.sym(), PLANT_PARAMS.sym()
-    s, ps = PLANT_STATE.unpack(x), PLANT_PARAMS.unpack(p)
+    x, p = LANDING_PLANT_STATE.sym(), LANDING_PLANT_PARAMS.sym()
+    s, ps = LANDING_PLANT_STATE.unpack(x), LANDING_PLANT_PARAMS.unpack(p)
     gap = gear_gap(s["x1q"], s["xv"], t, ps["p_act"], ps["p_veh"], ps["p_deck"])
     outputs = ca.Function("outputs", [x, w, t, p], [gap], ["x", "w", "t", "p"], ["y"])
-    rhs = ca.Function("rhs", [x, w, t, p], [ca.DM.zeros(PLANT_STATE.size)],
+    rhs = ca.Function("rhs", [x, w, t, p], [ca.DM.zeros(LANDING_PLANT_STATE.size)],
                       ["x", "w", "t", "p"], ["x_dot"])
-    sp, spp = PLANT_STATE.unpack(xp), PLANT_PARAMS.unpack(pp)
+    sp, spp = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
     event = ca.Function("event", [xp, t, pp],
                         [gear_gap(sp["x1q"], sp["xv"], t, spp["p_act"], spp["p_veh"],
                                   spp["p_deck"])], ["xp", "t", "pp"], ["g"])
     gap_layout = Layout("gap", (Field("gear_gap", 1, "m", "gear above the deck"),))
-    return LoopModel("freefall", PLANT_STATE, DISTURBANCE, PLANT_PARAMS, gap_layout, rhs,
-                     outputs, PLANT_STATE, COMMAND, none, PLANT_PARAMS, none,
+    return LoopModel("freefall", LANDING_PLANT_STATE, BODY_DISTURBANCE, LANDING_PLANT_PARAMS,
+                     gap_layout, rhs,
+                     outputs, LANDING_PLANT_STATE, COMMAND, none, LANDING_PLANT_PARAMS, none,
                      Layout("rec", (Field("r", 1, "-", "nothing"),)), plant, controller,
                      assemble, event=event)
 
@@ -70,7 +71,7 @@ def _params():
     act = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=10.0, gear_height=GEAR))
     veh = VEHICLE.pack(dict(m11=100, m22=100, m33=80, d11=100, d22=100, d33=80,
                             tau=np.zeros(3), z2=0.0))
-    return PLANT_PARAMS.pack(dict(p_quad=quad, p_act=act, p_veh=veh, p_deck=deck))
+    return LANDING_PLANT_PARAMS.pack(dict(p_quad=quad, p_act=act, p_veh=veh, p_deck=deck))
 
 
 def _meeting_time():
@@ -87,21 +88,22 @@ def test_free_fall_meets_a_heaving_deck_at_the_closed_form_time(loop_kind):
     loop = loop_kind(model, "sampled")
     x1q = QUAD6_STATE.pack(dict(p1=[3.0, -2.0, Z0], eta1=np.zeros(3), V1=np.zeros(3),
                                 Omega1=np.zeros(3), F=np.zeros(4)))
-    xp0 = PLANT_STATE.pack(dict(x1q=x1q, xv=VEHICLE_STATE.zeros()))
+    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=VEHICLE_STATE.zeros()))
     clocks = (Clock(100.0, 0.0, 5.0, True), Clock(100.0, 0.0, 5.0, True),
               Clock(100.0, 0.0, 5.0, False))                # 10 ms steps up to 5 s
-    run = loop.sampled(xp0, np.zeros(1), clocks, np.zeros((501, DISTURBANCE.size)), 1, _params(),
+    run = loop.sampled(xp0, np.zeros(1), clocks, np.zeros((501, BODY_DISTURBANCE.size)), 1,
+                       _params(),
                        np.zeros(1), 1e-3)
     t_meet = _meeting_time()
     assert run.status == SIM_EVENT
     assert run.t_stop == pytest.approx(t_meet, abs=1e-10)
     # the state at the event: the gear on the deck, falling at g t
-    end = PLANT_STATE.unpack(run.x_end[:PLANT_STATE.size])
+    end = LANDING_PLANT_STATE.unpack(run.x_end[:LANDING_PLANT_STATE.size])
     z1, w1 = end["x1q"][2], end["x1q"][8]
     assert z1 - GEAR == pytest.approx(H + A * np.sin(W * t_meet + PHI), abs=1e-9)
     assert w1 == pytest.approx(-G * t_meet, rel=1e-12)
     # rows before the event are recorded; the step that holds it is not
     last = int(t_meet / 0.01)
     assert run.rows == last + 1 and run.times[-1] == pytest.approx(last * 0.01, abs=1e-12)
-    recorded = PLANT_STATE.unpack(run.X[last].copy())
+    recorded = LANDING_PLANT_STATE.unpack(run.X[last].copy())
     assert recorded["x1q"][2] == pytest.approx(Z0 - G * (last * 0.01) ** 2 / 2, abs=1e-12)

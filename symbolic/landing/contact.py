@@ -43,10 +43,10 @@ import casadi as ca
 
 from symbolic.kinematics import rotation
 from symbolic.landing.deck import DECK_PARAMS, deck_pose
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.quadrotor import QUAD6_STATE
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.vehicle import STATE as VEHICLE_STATE
+from symbolic.vehicle import VEHICLE_STATE
 
 __all__ = [
     "N_FEET",
@@ -163,9 +163,9 @@ def contact_wrench(x1q, xv, t, p_veh, p_deck, p_gear):
     Parameters
     ----------
     x1q : casadi.SX
-        Quadrotor state (:data:`symbolic.landing.quadrotor.STATE`).
+        Quadrotor state (:data:`symbolic.landing.quadrotor.QUAD6_STATE`).
     xv : casadi.SX
-        Vehicle state (:data:`symbolic.vehicle.STATE`).
+        Vehicle state (:data:`symbolic.vehicle.VEHICLE_STATE`).
     t : casadi.SX
         Time, s (drives the deck's prescribed motion).
     p_veh, p_deck, p_gear : casadi.SX

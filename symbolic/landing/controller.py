@@ -44,15 +44,12 @@ import functools
 import casadi as ca
 
 from symbolic.backstepping import virtual_control
-from symbolic.guidance import PARAMS as GUIDANCE_PARAMS
-from symbolic.guidance import REFERENCE, guidance_step
-from symbolic.guidance import STATE as GUIDANCE_STATE
+from symbolic.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE, guidance_step
 from symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
 from symbolic.landing.attitude import thrust_attitude
 from symbolic.landing.deck import DECK_POSE, deck_pose, time_derivative
-from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from symbolic.landing.relative import RELATIVE6, deck_gear_gap, relative6
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
@@ -63,7 +60,7 @@ from symbolic.relative import nominal_drift, tilt
 __all__ = [
     "N_CHANNELS",
     "NETWORK_INPUT_DIM",
-    "MEASUREMENT",
+    "LANDING_MEASUREMENT",
     "landing_controller_params",
     "landing_memory",
     "landing_step_outputs",
@@ -91,7 +88,7 @@ _CHANNEL_RATE_UNITS = ("m/s",) * 3 + ("rad/s",) * 3
 #: What the step measures: the landing sensor (p_e, v_e, deck frame), the IMU
 #: (eta1, Omega1) and the vehicle's broadcast (deck attitude, pad motion, deck
 #: rotation in E; the fields of ``deck``'s outputs).
-MEASUREMENT = Layout("y_land", (
+LANDING_MEASUREMENT = Layout("y_land", (
     RELATIVE6["p_e"],
     RELATIVE6["v_e"],
     QUAD6_STATE["eta1"],
@@ -319,12 +316,12 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     l : int
         RBF node count.
     y, ref, mem, p_ctrl, p_quad, p_act, dt : casadi.SX
-        :data:`MEASUREMENT`, :data:`symbolic.guidance.REFERENCE`,
+        :data:`LANDING_MEASUREMENT`, :data:`symbolic.guidance.POSITION_REFERENCE`,
         :func:`landing_memory`, :func:`landing_controller_params`,
         :data:`~symbolic.parameters.QUADROTOR`,
         :data:`~symbolic.landing.quadrotor.ACTUATOR` and the period (s).
     """
-    ms, rs = MEASUREMENT.unpack(y), REFERENCE.unpack(ref)
+    ms, rs = LANDING_MEASUREMENT.unpack(y), POSITION_REFERENCE.unpack(ref)
     mm, c = landing_memory(l).unpack(mem), landing_controller_params(l).unpack(p_ctrl)
     q, act = QUADROTOR.unpack(p_quad), ACTUATOR.unpack(p_act)
     p_e, v_e, Omega1 = ms["p_e"], ms["v_e"], ms["Omega1"]
@@ -411,9 +408,9 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
 def _outer_virtual_control(p_e, v_e, ref, k1p):
     """alpha = -k1p (p_e - p_ref) + v_ref (eq. 14, R = I) and its time derivative
     (eq. 18) along ``(v_e, v_ref, a_ref)``, by symbolic differentiation."""
-    p_es, refs, k1s = ca.SX.sym("p_e", 3), REFERENCE.sym(), ca.SX.sym("k1p", 3)
+    p_es, refs, k1s = ca.SX.sym("p_e", 3), POSITION_REFERENCE.sym(), ca.SX.sym("k1p", 3)
     v_es = ca.SX.sym("v_e", 3)
-    r = REFERENCE.unpack(refs)
+    r = POSITION_REFERENCE.unpack(refs)
     alpha = -k1s * (p_es - r["p_ref"]) + r["v_ref"]
     alpha_dot = ca.jtimes(alpha, ca.vertcat(p_es, r["p_ref"], r["v_ref"]),
                           ca.vertcat(v_es, r["v_ref"], r["a_ref"]))
@@ -428,8 +425,8 @@ def landing_step_function(l: int) -> ca.Function:
     eta_c, eta_d, eta_d_dot, eta_d_ddot, mem_next, Delta_hat, a_des, bs_z1,
     bs_z2, tilt, limits)``
 
-    Inputs: the measurements ``y`` (:data:`MEASUREMENT`), the guidance's
-    reference ``ref`` (:data:`symbolic.guidance.REFERENCE`), the memory
+    Inputs: the measurements ``y`` (:data:`LANDING_MEASUREMENT`), the guidance's
+    reference ``ref`` (:data:`symbolic.guidance.POSITION_REFERENCE`), the memory
     ``mem`` (:func:`landing_memory`), the parameters ``p_ctrl``
     (:func:`landing_controller_params`), ``p_quad``
     (:data:`~symbolic.parameters.QUADROTOR`), ``p_act``
@@ -440,7 +437,7 @@ def landing_step_function(l: int) -> ca.Function:
     ``theta1 = +-pi/2``.
     """
     names_in = ["y", "ref", "mem", "p_ctrl", "p_quad", "p_act", "dt"]
-    args = [MEASUREMENT.sym(), REFERENCE.sym(), landing_memory(l).sym(),
+    args = [LANDING_MEASUREMENT.sym(), POSITION_REFERENCE.sym(), landing_memory(l).sym(),
             landing_controller_params(l).sym(), QUADROTOR.sym(), ACTUATOR.sym(),
             ca.SX.sym("dt")]
     out = landing_law(l, *args)
@@ -457,7 +454,7 @@ def landing_guidance(xg, y, dt, p_guid):
     (:func:`~symbolic.landing.relative.deck_gear_gap`, the gear
     ``touchdown_height`` below the centre). Returns ``(xg_next, reference)``.
     """
-    ms = MEASUREMENT.unpack(y)
+    ms = LANDING_MEASUREMENT.unpack(y)
     h = GUIDANCE_PARAMS.unpack(p_guid)["touchdown_height"]
     gap = deck_gear_gap(ms["p_e"], rotation(ms["eta2"]), rotation(ms["eta1"]), h)
     return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], gap, dt, p_guid)
@@ -467,11 +464,11 @@ def landing_guidance(xg, y, dt, p_guid):
 def landing_guidance_function() -> ca.Function:
     """``landing_guidance(xg, y, dt, p_guid) -> (xg_next, ref)``: :func:`landing_guidance`.
 
-    ``xg``: :data:`symbolic.guidance.STATE`; ``y``: :data:`MEASUREMENT`;
-    ``p_guid``: :data:`symbolic.guidance.PARAMS`; ``ref``:
-    :data:`symbolic.guidance.REFERENCE`, the landing step's.
+    ``xg``: :data:`symbolic.guidance.GUIDANCE_STATE`; ``y``: :data:`LANDING_MEASUREMENT`;
+    ``p_guid``: :data:`symbolic.guidance.GUIDANCE_PARAMS`; ``ref``:
+    :data:`symbolic.guidance.POSITION_REFERENCE`, the landing step's.
     """
-    xg, y, dt, p_guid = GUIDANCE_STATE.sym(), MEASUREMENT.sym(), ca.SX.sym("dt"), \
+    xg, y, dt, p_guid = GUIDANCE_STATE.sym(), LANDING_MEASUREMENT.sym(), ca.SX.sym("dt"), \
         GUIDANCE_PARAMS.sym()
     xg_next, ref = landing_guidance(xg, y, dt, p_guid)
     return ca.Function("landing_guidance", [xg, y, dt, p_guid], [xg_next, ref],
@@ -481,14 +478,14 @@ def landing_guidance_function() -> ca.Function:
 def measurement_function() -> ca.Function:
     """``landing_sensors(xp, t, pp) -> y``: perfect sensors on the landing plant.
 
-    ``y`` (:data:`MEASUREMENT`) from the plant's state
-    (:data:`~symbolic.landing.plant.PLANT_STATE`) and parameters
-    (:data:`~symbolic.landing.plant.PLANT_PARAMS`) at time ``t``: ``p_e, v_e``
+    ``y`` (:data:`LANDING_MEASUREMENT`) from the plant's state
+    (:data:`~symbolic.landing.plant.LANDING_PLANT_STATE`) and parameters
+    (:data:`~symbolic.landing.plant.LANDING_PLANT_PARAMS`) at time ``t``: ``p_e, v_e``
     from :func:`~symbolic.landing.relative.relative6`, the deck's broadcast
     from :func:`~symbolic.landing.deck.deck_pose`.
     """
-    xp, t, pp = PLANT_STATE.sym(), ca.SX.sym("t"), PLANT_PARAMS.sym()
-    x, p = PLANT_STATE.unpack(xp), PLANT_PARAMS.unpack(pp)
+    xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    x, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
     q = QUAD6_STATE.unpack(x["x1q"])
     p_e, v_e, *_ = relative6(x["x1q"], x["xv"], t, p["p_quad"], p["p_act"], p["p_veh"],
                              p["p_deck"])

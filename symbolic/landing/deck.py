@@ -24,8 +24,7 @@ import casadi as ca
 from symbolic.kinematics import rotation
 from symbolic.layout import Field, Layout
 from symbolic.parameters import VEHICLE
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_rhs
+from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = [
     "N_DECK",

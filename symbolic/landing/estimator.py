@@ -16,7 +16,7 @@ model (state, packets, parameters, prediction, measurement blocks) is
    sensor per step (E16).
 3. The output predictor carries ``x_h`` through the ``n_hist`` buffered
    acceleration inputs to ``t`` (state only, closed form (E17)) and forms the
-   controller's :data:`~symbolic.landing.controller.MEASUREMENT` (E7), (E15).
+   controller's :data:`~symbolic.landing.controller.LANDING_MEASUREMENT` (E7), (E15).
 4. ``x_h``, ``P_h`` are predicted over the oldest buffered input (E6); this
    period's input joins the buffer.
 
@@ -32,14 +32,14 @@ import casadi as ca
 
 from symbolic.kalman import fifo_push_pop, is_finite, select
 from symbolic.kinematics import rotation
-from symbolic.landing.controller import MEASUREMENT
+from symbolic.landing.controller import LANDING_MEASUREMENT
 from symbolic.landing.navigation import (
     BLOCKS,
     DATALINK,
     DECK_INIT,
     IMU,
     NAV,
-    PACKETS,
+    NAV_PACKETS,
     SENSORS,
     acceleration_input,
     block_update,
@@ -123,7 +123,7 @@ def estimator_memory(n_hist: int = N_HIST, depth=FIFO_DEPTH, coupling: str = "fu
     depths, pattern = _depths(depth), covariance_pattern(coupling)
     nav_units = NAV.element_units()
     fifos = []
-    for layout, d in zip(PACKETS, depths, strict=True):
+    for layout, d in zip(NAV_PACKETS, depths, strict=True):
         rec = _record_fields(layout)
         size = sum(f.size for f in rec)
         fifos += [Field(f"fifo_{layout.name}", size * d, _units(rec) * d,
@@ -155,7 +155,7 @@ def estimator_diagnostics() -> Layout:
     """What the step reports besides the controller's measurements."""
     innov = []
     for b in BLOCKS:
-        packet = next(p for p in PACKETS if p.name == b.sensor)
+        packet = next(p for p in NAV_PACKETS if p.name == b.sensor)
         innov.append(Field(f"nu_{b.name}", b.dim, packet[b.field].unit,
                            f"{b.name} innovation z - h(x) when due, else 0"))
     nav_units = NAV.element_units()
@@ -267,7 +267,7 @@ def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
 
 
 def _output(x_now, deck, ims, t, p):
-    """The controller's :data:`MEASUREMENT` at ``t`` (E7), (E15)."""
+    """The controller's :data:`LANDING_MEASUREMENT` at ``t`` (E7), (E15)."""
     x = NAV.unpack(x_now)
     eta2, w2E = deck_at(deck["eta2"], deck["w2E"], deck["w2E_dot"], t - deck["tau"],
                         p["deck_extrapolation_max"])
@@ -296,7 +296,7 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     deck = _latest_deck(m, DATALINK.unpack(pkts[-1]), t)
     state = dict(x=m["x_h"], P=pattern.unpack(m["P_h"]), t_h=m["t_h"], pattern=pattern,
                  blocks={}, sensors={})
-    for layout, pkt in zip(PACKETS, pkts, strict=True):
+    for layout, pkt in zip(NAV_PACKETS, pkts, strict=True):
         _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t)
     x, P = state["x"], state["P"]
     y = _output(output_predictor(x, m["hist"]), deck, ims, t, p)
@@ -358,19 +358,19 @@ def estimator_step_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
     -----
     Inputs: ``mem`` (:func:`estimator_memory`), ``imu``
     (:data:`~symbolic.landing.navigation.IMU`), one packet per sensor
-    (:data:`~symbolic.landing.navigation.PACKETS`), ``p_est``
+    (:data:`~symbolic.landing.navigation.NAV_PACKETS`), ``p_est``
     (:func:`~symbolic.landing.navigation.estimator_params`), the period
     ``dt`` and the time ``t`` of this step (s). Outputs: ``mem_next``,
-    ``y`` (:data:`~symbolic.landing.controller.MEASUREMENT`, at ``t``) and
+    ``y`` (:data:`~symbolic.landing.controller.LANDING_MEASUREMENT`, at ``t``) and
     ``diag`` (:func:`estimator_diagnostics`). Equations (E1)-(E17) of
     docs/estimator.md.
     """
     lay = estimator_memory(n_hist, depth, coupling)
     mem, imu, p_est = lay.sym("mem"), IMU.sym("imu"), estimator_params().sym("p_est")
-    pkts = [layout.sym(layout.name) for layout in PACKETS]
+    pkts = [layout.sym(layout.name) for layout in NAV_PACKETS]
     dt, t = ca.SX.sym("dt"), ca.SX.sym("t")
     mem_next, y, diag = _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t)
-    assert y.shape[0] == MEASUREMENT.size and diag.shape[0] == estimator_diagnostics().size
+    assert y.shape[0] == LANDING_MEASUREMENT.size and diag.shape[0] == estimator_diagnostics().size
     return ca.Function("estimator_step", [mem, imu, *pkts, p_est, dt, t],
                        [mem_next, y, diag], _STEP_INPUTS, ["mem_next", "y", "diag"],
                        {"cse": True})

@@ -41,24 +41,22 @@ import functools
 
 import casadi as ca
 
-from symbolic.guidance import REFERENCE
+from symbolic.guidance import POSITION_REFERENCE
 from symbolic.landing.controller import (
-    MEASUREMENT,
+    LANDING_MEASUREMENT,
     landing_controller_params,
     landing_law,
     landing_memory,
 )
 from symbolic.landing.deck import deck_pose
-from symbolic.landing.loop import DISTURBANCE, wind_force
-from symbolic.landing.plant import PLANT_PARAMS
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
-from symbolic.landing.quadrotor import quadrotor6_rhs
+from symbolic.landing.loop import LANDING_DISTURBANCE, wind_force
+from symbolic.landing.plant import LANDING_PLANT_PARAMS
+from symbolic.landing.quadrotor import QUAD6_STATE, quadrotor6_rhs
 from symbolic.landing.relative import RELATIVE6, relative6
 from symbolic.layout import Layout
 from symbolic.linearization import VEHICLE_SPEEDS
 from symbolic.quadrotor import WRENCH, rotors_from_wrench
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_rhs
+from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["HOVER_PLANT", "HOVER_OUTPUT", "hover_vehicle", "hover_quadrotor",
            "hover_plant_rhs", "hover_measurement", "hover_linearization_function",
@@ -76,7 +74,8 @@ HOVER_PLANT = Layout("z_land", (
 ), "landing plant in the deck frame")
 
 #: What the landing step measures of the quadrotor: landing sensor and IMU.
-HOVER_OUTPUT = Layout("y_quad", tuple(MEASUREMENT[n] for n in ("p_e", "v_e", "eta1", "Omega1")),
+HOVER_OUTPUT = Layout("y_quad", tuple(LANDING_MEASUREMENT[n] for n in ("p_e", "v_e", "eta1",
+                                                                       "Omega1")),
                       "the landing step's measurements of the quadrotor")
 
 
@@ -88,7 +87,7 @@ def hover_vehicle(v2):
 
 def hover_quadrotor(z, xv, pp):
     """The 6-DOF quadrotor state ``x1q`` of the deck-frame state ``z`` (``t = 0``)."""
-    zs, p = HOVER_PLANT.unpack(z), PLANT_PARAMS.unpack(pp)
+    zs, p = HOVER_PLANT.unpack(z), LANDING_PLANT_PARAMS.unpack(pp)
     deck = deck_pose(xv, 0, p["p_veh"], p["p_deck"])
     psi2 = VEHICLE_STATE.unpack(xv)["psi2"]
     eta1 = zs["eta1"] + ca.vertcat(0, 0, psi2)
@@ -99,11 +98,11 @@ def hover_plant_rhs(z, u, v2, w, pp):
     """``z_dot`` for a wrench command ``u`` (eq. 1-2 with motor lag, eq. 5 in 6-DOF).
 
     The rotors are commanded ``rotors_from_wrench(u)``; the disturbance is
-    :data:`symbolic.landing.loop.DISTURBANCE` (wind in the heading frame,
+    :data:`symbolic.landing.loop.LANDING_DISTURBANCE` (wind in the heading frame,
     ``d_F``, ``d_M``). ``p_e_dot = v_e`` (:func:`~symbolic.landing.relative.relative6`),
     ``psi_e_dot = psi1_dot - psi2_dot``; the other rows are the quadrotor's own.
     """
-    p, ws = PLANT_PARAMS.unpack(pp), DISTURBANCE.unpack(w)
+    p, ws = LANDING_PLANT_PARAMS.unpack(pp), LANDING_DISTURBANCE.unpack(w)
     xv = hover_vehicle(v2)
     x1q = hover_quadrotor(z, xv, pp)
     eta1 = QUAD6_STATE.unpack(x1q)["eta1"]
@@ -117,8 +116,9 @@ def hover_plant_rhs(z, u, v2, w, pp):
 
 
 def hover_measurement(z, v2, pp):
-    """The step's whole measurement :data:`MEASUREMENT`: ``HOVER_OUTPUT`` and the broadcast."""
-    p = PLANT_PARAMS.unpack(pp)
+    """The step's whole measurement :data:`LANDING_MEASUREMENT`: ``HOVER_OUTPUT`` and the
+    broadcast."""
+    p = LANDING_PLANT_PARAMS.unpack(pp)
     xv = hover_vehicle(v2)
     x1q = hover_quadrotor(z, xv, pp)
     q = QUAD6_STATE.unpack(x1q)
@@ -129,13 +129,15 @@ def hover_measurement(z, v2, pp):
 
 
 def _symbols(l: int):
-    return (HOVER_PLANT.sym(), landing_memory(l).sym(), VEHICLE_SPEEDS.sym(), DISTURBANCE.sym(),
-            PLANT_PARAMS.sym(), landing_controller_params(l).sym(), REFERENCE.sym())
+    return (HOVER_PLANT.sym(), landing_memory(l).sym(), VEHICLE_SPEEDS.sym(),
+            LANDING_DISTURBANCE.sym(),
+            LANDING_PLANT_PARAMS.sym(), landing_controller_params(l).sym(),
+            POSITION_REFERENCE.sym())
 
 
 def _law(l, y_quad, z, mem, v2, pp, p_ctrl, ref, dt):
     """The step's wrench and next memory with the quadrotor's measurements ``y_quad``."""
-    p = PLANT_PARAMS.unpack(pp)
+    p = LANDING_PLANT_PARAMS.unpack(pp)
     broadcast = hover_measurement(z, v2, pp)[HOVER_OUTPUT.size:]
     out = landing_law(l, ca.vertcat(y_quad, broadcast), ref, mem, p_ctrl, p["p_quad"],
                       p["p_act"], dt)
@@ -162,7 +164,7 @@ def hover_linearization_function(l: int) -> ca.Function:
         d u          = C_c d mem + D_c d y            (the wrench, eq. 20)
 
     ``v2 = [u2, v2, r2]`` are the vehicle's speeds, ``w`` the disturbance
-    (:data:`symbolic.landing.loop.DISTURBANCE`, wind in the heading frame),
+    (:data:`symbolic.landing.loop.LANDING_DISTURBANCE`, wind in the heading frame),
     ``pp`` the plant's parameters with the deck's motion the caller wants
     (frozen: zero amplitudes), ``ref`` the position reference.
 
@@ -209,7 +211,8 @@ def hover_equilibrium_residual_function(l: int) -> ca.Function:
     dt = ca.SX.sym("dt")
     y = hover_measurement(z, v2, pp)[:HOVER_OUTPUT.size]
     u, mem_next = _law(l, y, z, mem, v2, pp, p_ctrl, ref, dt)
-    xv_dot = VEHICLE_STATE.unpack(vehicle_rhs(hover_vehicle(v2), PLANT_PARAMS.unpack(pp)["p_veh"]))
+    xv_dot = VEHICLE_STATE.unpack(vehicle_rhs(hover_vehicle(v2),
+                                              LANDING_PLANT_PARAMS.unpack(pp)["p_veh"]))
     F = ca.vertcat(hover_plant_rhs(z, u, v2, w, pp), _memory_rate(mem_next, dt),
                    *[xv_dot[n] for n in VEHICLE_SPEEDS.names()])
     xi = ca.vertcat(z, mem, v2)

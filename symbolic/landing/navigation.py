@@ -35,7 +35,7 @@ from symbolic.landing.controller import deck_rates
 from symbolic.layout import Field, Layout
 
 __all__ = [
-    "NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "PACKETS",
+    "NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
     "SENSORS", "Block", "BLOCKS", "COUPLINGS", "estimator_params", "ESTIMATOR_DEFAULTS",
     "covariance_pattern", "acceleration_input", "nav_transition", "nav_transition_function",
     "nav_predict", "nav_predict_function", "measurement_model_function", "block_update",
@@ -111,8 +111,8 @@ DECK_INIT = Layout("deck0", DATALINK.fields[2:3] + DATALINK.fields[5:7],
                    "deck attitude and rotation at handover")
 
 #: Packet layouts in fusion order; the layout's name is the sensor's.
-PACKETS = (VISION, GNSS, RANGE, DATALINK)
-SENSORS = tuple(p.name for p in PACKETS)
+NAV_PACKETS = (VISION, GNSS, RANGE, DATALINK)
+SENSORS = tuple(p.name for p in NAV_PACKETS)
 
 COUPLINGS = ("full", "axes")
 
@@ -333,7 +333,7 @@ def _block(name: str) -> Block:
 
 
 def _packet(sensor: str) -> Layout:
-    for p in PACKETS:
+    for p in NAV_PACKETS:
         if p.name == sensor:
             return p
     raise KeyError(f"no sensor {sensor!r}")

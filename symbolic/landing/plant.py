@@ -1,9 +1,9 @@
 """The landing plant as one ODE: 6-DOF quadrotor and vehicle (eq. 1-4).
 
-State ``xp`` (:data:`PLANT_STATE`) = ``[x1q (16), xv (6)]``; inputs held over
+State ``xp`` (:data:`LANDING_PLANT_STATE`) = ``[x1q (16), xv (6)]``; inputs held over
 a control period: the rotor commands ``F_cmd`` (:data:`~symbolic.landing.
 quadrotor.COMMAND`) and the disturbance ``w = [d_F, d_M]``
-(:data:`symbolic.quadrotor.DISTURBANCE`, body frame); the time ``t`` drives
+(:data:`symbolic.quadrotor.BODY_DISTURBANCE`, body frame); the time ``t`` drives
 the deck. The deck's heave, roll and pitch are prescribed, not integrated.
 """
 
@@ -12,26 +12,25 @@ from __future__ import annotations
 import casadi as ca
 
 from symbolic.landing.deck import DECK_PARAMS, DECK_POSE, deck_pose
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND, quadrotor6_rhs
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
 from symbolic.landing.relative import RELATIVE6, relative6
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import DISTURBANCE
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_rhs
+from symbolic.quadrotor import BODY_DISTURBANCE
+from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
-__all__ = ["PLANT_STATE", "PLANT_PARAMS", "OUTPUTS", "landing_plant_rhs",
+__all__ = ["LANDING_PLANT_STATE", "LANDING_PLANT_PARAMS", "LANDING_PLANT_OUTPUTS",
+           "landing_plant_rhs",
            "landing_plant_function", "landing_outputs_function"]
 
 #: State of the landing plant.
-PLANT_STATE = Layout("xp", (
+LANDING_PLANT_STATE = Layout("xp", (
     Field.nested("x1q", QUAD6_STATE, "6-DOF quadrotor"),
     Field.nested("xv", VEHICLE_STATE, "vehicle (planar, eq. 4)"),
 ), "landing plant state: 6-DOF quadrotor and vehicle")
 
 #: Parameters of the landing plant.
-PLANT_PARAMS = Layout("pp", (
+LANDING_PLANT_PARAMS = Layout("pp", (
     Field.nested("p_quad", QUADROTOR, "quadrotor rigid body (Table 1)"),
     Field.nested("p_act", ACTUATOR, "motors and landing gear"),
     Field.nested("p_veh", VEHICLE, "vehicle constants and inputs (its z2 is unused)"),
@@ -39,7 +38,7 @@ PLANT_PARAMS = Layout("pp", (
 ), "landing plant parameters")
 
 #: Signals of :func:`landing_outputs_function`: the landing trajectory's columns.
-OUTPUTS = Layout("y6", (
+LANDING_PLANT_OUTPUTS = Layout("y6", (
     QUAD6_STATE["p1"],
     QUAD6_STATE["eta1"],
     DECK_POSE["p2"],
@@ -47,7 +46,7 @@ OUTPUTS = Layout("y6", (
     *RELATIVE6.fields,
     QUAD6_STATE["F"],
     COMMAND["F_cmd"],
-    *DISTURBANCE.fields,
+    *BODY_DISTURBANCE.fields,
 ), "landing signals: both bodies in E, the relative state, rotors and disturbance")
 
 
@@ -58,7 +57,8 @@ def landing_plant_rhs(xp, F_cmd, w, t, pp):
     It is an argument so that the simulator's signature does not change
     when something time-dependent does.
     """
-    x, ws, p = PLANT_STATE.unpack(xp), DISTURBANCE.unpack(w), PLANT_PARAMS.unpack(pp)
+    x, ws = LANDING_PLANT_STATE.unpack(xp), BODY_DISTURBANCE.unpack(w)
+    p = LANDING_PLANT_PARAMS.unpack(pp)
     return ca.vertcat(
         quadrotor6_rhs(x["x1q"], F_cmd, ws["d_F"], ws["d_M"], p["p_quad"], p["p_act"]),
         vehicle_rhs(x["xv"], p["p_veh"]),
@@ -67,24 +67,25 @@ def landing_plant_rhs(xp, F_cmd, w, t, pp):
 
 def landing_plant_function() -> ca.Function:
     """``landing_plant(xp, F_cmd, w, t, pp) -> xp_dot`` (eq. 1-4, motor lag)."""
-    xp, F_cmd, w = PLANT_STATE.sym(), COMMAND.sym(), DISTURBANCE.sym()
-    t, pp = ca.SX.sym("t"), PLANT_PARAMS.sym()
+    xp, F_cmd, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), BODY_DISTURBANCE.sym()
+    t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     return ca.Function("landing_plant", [xp, F_cmd, w, t, pp],
                        [landing_plant_rhs(xp, F_cmd, w, t, pp)],
                        ["xp", "F_cmd", "w", "t", "pp"], ["xp_dot"])
 
 
 def landing_outputs_function() -> ca.Function:
-    """``landing_outputs(xp, F_cmd, w, t, pp) -> y`` with ``y`` laid out as :data:`OUTPUTS`.
+    """``landing_outputs(xp, F_cmd, w, t, pp) -> y`` with ``y`` laid out as
+    :data:`LANDING_PLANT_OUTPUTS`.
 
     ``x1 y1 z1 phi1 theta1 psi1`` (quadrotor in E), ``x2 y2 z2 phi2 theta2
     psi2`` (pad centre and deck attitude in E), the relative state of
     :data:`symbolic.landing.relative.RELATIVE6` (``x_e y_e z_e`` ...), the rotor
     forces ``F_1..F_4``, their commands and the disturbance ``d_Fx ..``.
     """
-    xp, F_cmd, w = PLANT_STATE.sym(), COMMAND.sym(), DISTURBANCE.sym()
-    t, pp = ca.SX.sym("t"), PLANT_PARAMS.sym()
-    x, p = PLANT_STATE.unpack(xp), PLANT_PARAMS.unpack(pp)
+    xp, F_cmd, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), BODY_DISTURBANCE.sym()
+    t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    x, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
     q = QUAD6_STATE.unpack(x["x1q"])
     deck = deck_pose(x["xv"], t, p["p_veh"], p["p_deck"])
     rel = relative6(x["x1q"], x["xv"], t, p["p_quad"], p["p_act"], p["p_veh"], p["p_deck"])

@@ -1,6 +1,6 @@
 """The 6-DOF quadrotor in E with first-order motors (eq. 1-2).
 
-State ``x1q`` (:data:`STATE`): position p1 in E (m, z up), ZYX Euler angles
+State ``x1q`` (:data:`QUAD6_STATE`): position p1 in E (m, z up), ZYX Euler angles
 eta1 (rad), body velocity V1 (m/s), body rates Omega1 (rad/s) and the four
 rotor forces F (N), which lag their commands. Eq. (2) is the paper's, reused
 from :func:`symbolic.quadrotor.quadrotor_rhs`; eq. (1) gains the horizontal
@@ -14,10 +14,10 @@ import casadi as ca
 from symbolic.kinematics import rotation
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
-from symbolic.quadrotor import DISTURBANCE, quadrotor_rhs, wrench_from_rotors
+from symbolic.quadrotor import BODY_DISTURBANCE, quadrotor_rhs, wrench_from_rotors
 
 __all__ = [
-    "STATE",
+    "QUAD6_STATE",
     "ACTUATOR",
     "COMMAND",
     "saturate",
@@ -28,7 +28,7 @@ __all__ = [
 _ROTOR_NAMES = ("F_1", "F_2", "F_3", "F_4")
 
 #: The 6-DOF quadrotor's state x1q.
-STATE = Layout("x1q", (
+QUAD6_STATE = Layout("x1q", (
     Field("p1", 3, "m", "position in E (z up)", elements=("x1", "y1", "z1")),
     Field("eta1", 3, "rad", "ZYX Euler angles roll, pitch, yaw",
           elements=("phi1", "theta1", "psi1")),
@@ -68,7 +68,7 @@ def quadrotor6_rhs(x1q, F_cmd, d_F, d_M, p_quad, p_act):
     of the actual rotor forces through the mixer;
     ``F_dot = (sat(F_cmd) - F) / tau_m``. ``d_F``, ``d_M``: body frame.
     """
-    x = STATE.unpack(x1q)
+    x = QUAD6_STATE.unpack(x1q)
     p1, eta1, V1, Omega1, F = x["p1"], x["eta1"], x["V1"], x["Omega1"], x["F"]
     tau_m = ACTUATOR.unpack(p_act)["motor_time_constant"]                # s
     wrench = wrench_from_rotors(F, p_quad)                                # under eq. 2
@@ -80,8 +80,8 @@ def quadrotor6_rhs(x1q, F_cmd, d_F, d_M, p_quad, p_act):
 
 def quadrotor6_function() -> ca.Function:
     """``quadrotor6(x1q, F_cmd, d_F, d_M, p_quad, p_act) -> x1q_dot`` (eq. 1-2)."""
-    x1q, F_cmd = STATE.sym(), COMMAND.sym()
-    d_F, d_M = DISTURBANCE.syms()
+    x1q, F_cmd = QUAD6_STATE.sym(), COMMAND.sym()
+    d_F, d_M = BODY_DISTURBANCE.syms()
     p_quad, p_act = QUADROTOR.sym(), ACTUATOR.sym()
     return ca.Function(
         "quadrotor6", [x1q, F_cmd, d_F, d_M, p_quad, p_act],

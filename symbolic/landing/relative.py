@@ -18,13 +18,11 @@ import casadi as ca
 
 from symbolic.kinematics import euler_rate_matrix_inv, rotation
 from symbolic.landing.deck import DECK_PARAMS, deck_pose, time_derivative
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND, quadrotor6_rhs
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import DISTURBANCE
-from symbolic.vehicle import STATE as VEHICLE_STATE
-from symbolic.vehicle import vehicle_rhs
+from symbolic.quadrotor import BODY_DISTURBANCE
+from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = [
     "RELATIVE6",
@@ -120,9 +118,9 @@ def _relative_pose(x1q, xv, t, p_act, p_veh, p_deck):
 def _build():
     """Symbols and the expressions of both Functions."""
     x1q, xv, t = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), ca.SX.sym("t")
-    F_cmd, w = COMMAND.sym(), DISTURBANCE.sym()
+    F_cmd, w = COMMAND.sym(), BODY_DISTURBANCE.sym()
     p_quad, p_act, p_veh, p_deck = params = _param_syms()
-    ws = DISTURBANCE.unpack(w)
+    ws = BODY_DISTURBANCE.unpack(w)
     x = ca.vertcat(x1q, xv)
     x_dot = ca.vertcat(quadrotor6_rhs(x1q, F_cmd, ws["d_F"], ws["d_M"], p_quad, p_act),
                        vehicle_rhs(xv, p_veh))

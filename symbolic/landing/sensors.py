@@ -3,9 +3,9 @@
 Each sensor is one named CasADi Function
 ``sense_<name>(xp, uh, w, t, pp, p_sens, noise) -> y``: the packet ``y`` the
 sensor delivers, computed from the true plant state ``xp``
-(:data:`~symbolic.landing.plant.PLANT_STATE`) at its sample time ``t``, the
+(:data:`~symbolic.landing.plant.LANDING_PLANT_STATE`) at its sample time ``t``, the
 held rotor commands ``uh`` (:data:`~symbolic.landing.quadrotor.COMMAND`), the
-loop's disturbance ``w`` (:data:`~symbolic.landing.loop.DISTURBANCE`), the
+loop's disturbance ``w`` (:data:`~symbolic.landing.loop.LANDING_DISTURBANCE`), the
 plant's parameters ``pp``, the sensors' constants ``p_sens``
 (:data:`SENSOR_PARAMS`) and a noise vector drawn outside (one layout per
 sensor), so that every Function is deterministic; a zero noise vector gives
@@ -14,7 +14,7 @@ dropouts, outliers) are drawn by :mod:`quadland.sensing`; latency and
 delivery are the simulator's. docs/sensors.md gives each model, its
 equations and every default with its source.
 
-Packets (:data:`PACKETS`):
+Packets (:data:`SENSOR_PACKETS`):
 
 * **imu** (:data:`IMU_PACKET`): the attitude estimate
   ``eta_hat = eta1 + e_att``, the accelerometer's specific force
@@ -47,16 +47,15 @@ import casadi as ca
 
 from symbolic.kinematics import rotation, skew
 from symbolic.landing.deck import DECK_POSE, deck_pose
-from symbolic.landing.loop import DISTURBANCE, loop_plant_function
-from symbolic.landing.plant import PLANT_PARAMS, PLANT_STATE
-from symbolic.landing.quadrotor import COMMAND
-from symbolic.landing.quadrotor import STATE as QUAD6_STATE
+from symbolic.landing.loop import LANDING_DISTURBANCE, loop_plant_function
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
 
 __all__ = ["SENSOR_NAMES", "SENSOR_PARAMS", "IMU_PACKET", "VISION_PACKET", "GNSS_PACKET",
            "RANGEFINDER_PACKET", "DATALINK_PACKET", "IMU_NOISE", "VISION_NOISE", "GNSS_NOISE",
-           "RANGEFINDER_NOISE", "DATALINK_NOISE", "PACKETS", "NOISES", "specific_force",
+           "RANGEFINDER_NOISE", "DATALINK_NOISE", "SENSOR_PACKETS", "NOISES", "specific_force",
            "rangefinder_distance", "sense_imu_function", "sense_vision_function",
            "sense_gnss_function", "sense_rangefinder_function", "sense_datalink_function",
            "sensor_function"]
@@ -170,7 +169,7 @@ DATALINK_NOISE = Layout("n_datalink", tuple(
     for f in DATALINK_PACKET.fields), "datalink noise")
 
 #: Packet layout of each sensor.
-PACKETS = MappingProxyType({"imu": IMU_PACKET, "vision": VISION_PACKET, "gnss": GNSS_PACKET,
+SENSOR_PACKETS = MappingProxyType({"imu": IMU_PACKET, "vision": VISION_PACKET, "gnss": GNSS_PACKET,
                             "rangefinder": RANGEFINDER_PACKET,
                             "datalink": DATALINK_PACKET})
 #: Noise layout of each sensor.
@@ -180,7 +179,7 @@ NOISES = MappingProxyType({"imu": IMU_NOISE, "vision": VISION_NOISE, "gnss": GNS
 
 def _truth(xp, t, pp):
     """Quadrotor state blocks, the deck's pose, the parameters."""
-    x, p = PLANT_STATE.unpack(xp), PLANT_PARAMS.unpack(pp)
+    x, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
     q = QUAD6_STATE.unpack(x["x1q"])
     return q, deck_pose(x["xv"], t, p["p_veh"], p["p_deck"]), p
 
@@ -194,7 +193,7 @@ def specific_force(xp, uh, w, t, pp):
     hover reads ``+g`` along ``b3`` and free fall reads 0.
     """
     q, _, p = _truth(xp, t, pp)
-    xp_dot = PLANT_STATE.unpack(loop_plant_function()(xp, uh, w, t, pp))
+    xp_dot = LANDING_PLANT_STATE.unpack(loop_plant_function()(xp, uh, w, t, pp))
     V1_dot = QUAD6_STATE.unpack(xp_dot["x1q"])["V1"]
     R1 = rotation(q["eta1"])
     a1 = R1 @ (V1_dot + skew(q["Omega1"]) @ q["V1"])                   # p1'' in E
@@ -230,8 +229,8 @@ def rangefinder_distance(p1, b3, p2, R_deck, half_length, half_width):
 
 
 def _args():
-    return (PLANT_STATE.sym(), COMMAND.sym(), DISTURBANCE.sym(), ca.SX.sym("t"),
-            PLANT_PARAMS.sym(), SENSOR_PARAMS.sym())
+    return (LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym(), ca.SX.sym("t"),
+            LANDING_PLANT_PARAMS.sym(), SENSOR_PARAMS.sym())
 
 
 _IN_NAMES = ["xp", "uh", "w", "t", "pp", "p_sens", "noise"]
