@@ -32,7 +32,7 @@ extern "C" {
 #define QL_LANDING_VEHICLE_NX 6                  /* xv = [x2, y2, psi2, u2, v2, r2] */
 #define QL_TOUCHDOWN_FIGURES 4                   /* [sink_rate, offset, relative_speed, tilt_deg] */
 
-/* The guidance's phases (symbolic.guidance.PHASES): ql_guidance_state.phase. */
+/* The guidance's phases (symbolic.landing.guidance.PHASES): ql_guidance_state.phase. */
 typedef enum {
     QL_PHASE_APPROACH = 0,         /* fly to the hover point above the pad */
     QL_PHASE_ALIGN = 1,            /* hold the hover point until offset and speed are within half their limits */

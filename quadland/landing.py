@@ -45,24 +45,21 @@ from quadland.simulate import (
     slow_control_hint,
 )
 from quadland.wind import OneCosineGust, dryden_low_altitude, gust_samples, turbulence_samples
-from symbolic.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE, LANDED, TOUCHDOWN
 from symbolic.kinematics import rotation
+from symbolic.landing.contact import anchor_function, landed_outputs_function
 from symbolic.landing.controller import landing_controller_params, landing_memory
 from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
+from symbolic.landing.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE, LANDED, TOUCHDOWN
 from symbolic.landing.loop import (
     LANDING_ENVELOPE,
     LANDING_RECORDED,
-    LANDING_SIGNALS,
-    LANDING_TRAJECTORY,
-    anchor_function,
-    landed_outputs_function,
     landing_loop_memory,
     landing_loop_params,
     landing_loop_state,
-    loop_plant_function,
 )
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE, loop_plant_function
 from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.simulation import rk4_step
 from symbolic.vehicle import VEHICLE_STATE, vehicle_function

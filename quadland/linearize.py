@@ -361,11 +361,15 @@ class _HoverValues:
 
 def _hover_values(scenario: Scenario) -> _HoverValues:
     from quadland.landing import landing_values
-    from symbolic.guidance import POSITION_REFERENCE
     from symbolic.kinematics import rotation
     from symbolic.landing.deck import DECK_PARAMS
-    from symbolic.landing.loop import LANDING_DISTURBANCE, landing_loop_params
-    from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+    from symbolic.landing.guidance import POSITION_REFERENCE
+    from symbolic.landing.loop import landing_loop_params
+    from symbolic.landing.plant import (
+        LANDING_DISTURBANCE,
+        LANDING_PLANT_PARAMS,
+        LANDING_PLANT_STATE,
+    )
 
     lv = landing_values(scenario)
     pc = landing_loop_params(lv.l).unpack(lv.pc)

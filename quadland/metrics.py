@@ -143,13 +143,13 @@ class TouchdownReport:
 def touchdown_report(result: SimulationResult) -> TouchdownReport:
     """The touchdown's figures, read at the touchdown row of a landing's result.
 
-    The touchdown row is the first of phase 3 (``symbolic.guidance.TOUCHDOWN``),
+    The touchdown row is the first of phase 3 (``symbolic.landing.guidance.TOUCHDOWN``),
     at the instant the gear met the deck; the figures are
     ``symbolic.landing.relative.touchdown_figures`` of its relative position
     and velocity and both attitudes (the generated C example computes them
     with the same function).
     """
-    from symbolic.guidance import TOUCHDOWN
+    from symbolic.landing.guidance import TOUCHDOWN
     from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
 
     g = result.scenario.data["landing"]
@@ -179,7 +179,7 @@ def landing_summary(result: SimulationResult) -> dict:
     ``phases``: the time each phase was first entered (s), by name;
     ``rotors``: the extreme rotor forces and the limit ``F_max`` (N).
     """
-    from symbolic.guidance import PHASES
+    from symbolic.landing.guidance import PHASES
 
     t = result["t"]
     phases = {}

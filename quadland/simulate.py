@@ -108,12 +108,9 @@ def simulation_plan(scenario: Scenario) -> SimulationPlan:
         clocks += int(T * ctrl["rate_hz"]) + 2
     l = scenario.data["rbf"]["nodes"]
     if scenario.model == "landing":
-        from symbolic.landing.loop import (
-            LANDING_DISTURBANCE,
-            LANDING_RECORDED,
-            LANDING_SIGNALS,
-            landing_loop_state,
-        )
+        from symbolic.landing.loop import LANDING_RECORDED, landing_loop_state
+        from symbolic.landing.plant import LANDING_DISTURBANCE
+        from symbolic.landing.signals import LANDING_SIGNALS
 
         nx, nw = landing_loop_state(l).size, LANDING_DISTURBANCE.size
         per_row = 2 * nx + 2 * (LANDING_SIGNALS.size + LANDING_RECORDED.size) + nw + 12

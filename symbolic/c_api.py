@@ -39,13 +39,13 @@ from types import MappingProxyType
 
 from symbolic.backstepping import PAPER_REFERENCE
 from symbolic.control_step import step_inputs, step_outputs
-from symbolic.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
 from symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
     landing_memory,
     landing_step_outputs,
 )
+from symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
 from symbolic.landing.quadrotor import ACTUATOR
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout

@@ -66,13 +66,7 @@ from symbolic.closed_loop import (
     plant_function,
 )
 from symbolic.control_step import control_step_function, step_inputs, step_outputs
-from symbolic.guidance import (
-    GUIDANCE_PARAMS,
-    GUIDANCE_STATE,
-    PHASE_DOCS,
-    PHASES,
-    POSITION_REFERENCE,
-)
+from symbolic.landing.contact import ANCHOR, anchor_function, landed_outputs_function
 from symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     N_CHANNELS,
@@ -81,22 +75,25 @@ from symbolic.landing.controller import (
     landing_memory,
     landing_step_function,
     landing_step_outputs,
-    measurement_function,
 )
-from symbolic.landing.loop import (
-    ANCHOR,
+from symbolic.landing.guidance import (
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    PHASE_DOCS,
+    PHASES,
+    POSITION_REFERENCE,
+)
+from symbolic.landing.loop import gear_gap_function
+from symbolic.landing.plant import (
     LANDING_DISTURBANCE,
-    LANDING_SIGNALS,
-    LANDING_TRAJECTORY,
-    anchor_function,
-    gear_gap_function,
-    landed_outputs_function,
-    landing_signals_function,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
     loop_plant_function,
 )
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
+from symbolic.landing.sensors import measurement_function
+from symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY, landing_signals_function
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
 from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE
@@ -259,7 +256,7 @@ class LandingDefaults:
         RBF node count of the landing step.
     p_quad, p_ctrl, p_act, p_guid : ndarray
         ``symbolic.parameters.QUADROTOR``, ``landing_controller_params(l)``,
-        ``symbolic.landing.quadrotor.ACTUATOR``, ``symbolic.guidance.GUIDANCE_PARAMS``.
+        ``symbolic.landing.quadrotor.ACTUATOR``, ``symbolic.landing.guidance.GUIDANCE_PARAMS``.
     tilt_min : float
         Smallest accepted ``|cos(theta1) cos(phi1)|``.
     pp, xp0 : ndarray

@@ -46,12 +46,12 @@ from symbolic.c_api import (
     landing_param_ranges,
 )
 from symbolic.codegen import STATUS_CODES, c_sources
-from symbolic.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
 from symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_guidance_function,
     landing_memory,
 )
+from symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
 from symbolic.landing.loop import landing_loop_params
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from symbolic.guidance import (
+from symbolic.landing.guidance import (
     ALIGN,
     APPROACH,
     DESCEND,

@@ -13,7 +13,6 @@ from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from symbolic.guidance import POSITION_REFERENCE
 from symbolic.landing.attitude import thrust_attitude_function
 from symbolic.landing.controller import (
     LANDING_MEASUREMENT,
@@ -25,12 +24,13 @@ from symbolic.landing.controller import (
     landing_step_function,
     landing_step_outputs,
     linear2_zoh,
-    measurement_function,
 )
 from symbolic.landing.deck import DECK_PARAMS
+from symbolic.landing.guidance import POSITION_REFERENCE
 from symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_function
 from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.landing.relative import relative6, relative6_acceleration
+from symbolic.landing.sensors import measurement_function
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.simulation import rk4_step
 from symbolic.vehicle import VEHICLE_STATE

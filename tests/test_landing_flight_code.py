@@ -19,13 +19,20 @@ from quadland.landing import LANDING_TRAJECTORY, landing_values
 from quadland.metrics import touchdown_report
 from symbolic.c_api import landing_output_layout, landing_params_layout
 from symbolic.codegen import STATUS_CODES
-from symbolic.guidance import ALIGN, DESCEND, GUIDANCE_PARAMS, GUIDANCE_STATE, LANDED, TOUCHDOWN
 from symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_guidance_function,
     landing_memory,
     landing_step_function,
     landing_step_outputs,
+)
+from symbolic.landing.guidance import (
+    ALIGN,
+    DESCEND,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    LANDED,
+    TOUCHDOWN,
 )
 from symbolic.landing.loop import landing_loop_params
 from symbolic.landing.plant import LANDING_PLANT_PARAMS

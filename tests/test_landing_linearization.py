@@ -13,17 +13,12 @@ import pytest
 from quadland.landing import landing_values
 from quadland.linearize import _hover_values, equilibrium, linear_models, sampled_models
 from quadland.scenario import load_scenario
-from symbolic.guidance import ALIGN, GUIDANCE_STATE
 from symbolic.kinematics import rotation
 from symbolic.landing.deck import deck_pose
+from symbolic.landing.guidance import ALIGN, GUIDANCE_STATE
 from symbolic.landing.linearization import HOVER_PLANT, hover_linearization_function
-from symbolic.landing.loop import (
-    LANDING_DISTURBANCE,
-    landing_loop,
-    landing_loop_memory,
-    landing_loop_params,
-)
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.loop import landing_loop, landing_loop_memory, landing_loop_params
+from symbolic.landing.plant import LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 from symbolic.landing.quadrotor import QUAD6_STATE
 from symbolic.landing.relative import relative6
 from symbolic.vehicle import VEHICLE_STATE

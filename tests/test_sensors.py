@@ -26,8 +26,7 @@ from quadland.sensing import (
     validate_settings,
 )
 from symbolic.landing.deck import DECK_PARAMS
-from symbolic.landing.loop import LANDING_DISTURBANCE
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.plant import LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 from symbolic.landing.quadrotor import ACTUATOR
 from symbolic.landing.sensors import (
     DATALINK_NOISE,

@@ -32,7 +32,7 @@ extern "C" {
 #define QLF_LANDING_VEHICLE_NX 6                 /* xv = [x2, y2, psi2, u2, v2, r2] */
 #define QLF_TOUCHDOWN_FIGURES 4                  /* [sink_rate, offset, relative_speed, tilt_deg] */
 
-/* The guidance's phases (symbolic.guidance.PHASES): qlf_guidance_state.phase. */
+/* The guidance's phases (symbolic.landing.guidance.PHASES): qlf_guidance_state.phase. */
 typedef enum {
     QLF_PHASE_APPROACH = 0,        /* fly to the hover point above the pad */
     QLF_PHASE_ALIGN = 1,           /* hold the hover point until offset and speed are within half their limits */

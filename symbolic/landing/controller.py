@@ -44,13 +44,17 @@ import functools
 import casadi as ca
 
 from symbolic.backstepping import virtual_control
-from symbolic.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE, guidance_step
 from symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
 from symbolic.landing.attitude import thrust_attitude
-from symbolic.landing.deck import DECK_POSE, deck_pose, time_derivative
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.deck import DECK_POSE, time_derivative
+from symbolic.landing.guidance import (
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    POSITION_REFERENCE,
+    guidance_step,
+)
 from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
-from symbolic.landing.relative import RELATIVE6, deck_gear_gap, relative6
+from symbolic.landing.relative import RELATIVE6, deck_gear_gap
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
 from symbolic.quadrotor import WRENCH, rotors_from_wrench
@@ -74,7 +78,6 @@ __all__ = [
     "landing_step_function",
     "landing_guidance",
     "landing_guidance_function",
-    "measurement_function",
 ]
 
 #: Channels of the network: deck-frame x, y, z and body roll, pitch, yaw.
@@ -316,7 +319,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     l : int
         RBF node count.
     y, ref, mem, p_ctrl, p_quad, p_act, dt : casadi.SX
-        :data:`LANDING_MEASUREMENT`, :data:`symbolic.guidance.POSITION_REFERENCE`,
+        :data:`LANDING_MEASUREMENT`, :data:`symbolic.landing.guidance.POSITION_REFERENCE`,
         :func:`landing_memory`, :func:`landing_controller_params`,
         :data:`~symbolic.parameters.QUADROTOR`,
         :data:`~symbolic.landing.quadrotor.ACTUATOR` and the period (s).
@@ -426,7 +429,7 @@ def landing_step_function(l: int) -> ca.Function:
     bs_z2, tilt, limits)``
 
     Inputs: the measurements ``y`` (:data:`LANDING_MEASUREMENT`), the guidance's
-    reference ``ref`` (:data:`symbolic.guidance.POSITION_REFERENCE`), the memory
+    reference ``ref`` (:data:`symbolic.landing.guidance.POSITION_REFERENCE`), the memory
     ``mem`` (:func:`landing_memory`), the parameters ``p_ctrl``
     (:func:`landing_controller_params`), ``p_quad``
     (:data:`~symbolic.parameters.QUADROTOR`), ``p_act``
@@ -446,7 +449,7 @@ def landing_step_function(l: int) -> ca.Function:
 
 
 def landing_guidance(xg, y, dt, p_guid):
-    """One guidance step (:func:`symbolic.guidance.guidance_step`) on the step's measurements.
+    """One guidance step (:func:`~symbolic.landing.guidance.guidance_step`) on the measurements.
 
     The relative position and velocity are the landing sensor's, the deck's
     rise is the pad velocity's vertical component ``v2E[2]`` and the gear
@@ -464,9 +467,9 @@ def landing_guidance(xg, y, dt, p_guid):
 def landing_guidance_function() -> ca.Function:
     """``landing_guidance(xg, y, dt, p_guid) -> (xg_next, ref)``: :func:`landing_guidance`.
 
-    ``xg``: :data:`symbolic.guidance.GUIDANCE_STATE`; ``y``: :data:`LANDING_MEASUREMENT`;
-    ``p_guid``: :data:`symbolic.guidance.GUIDANCE_PARAMS`; ``ref``:
-    :data:`symbolic.guidance.POSITION_REFERENCE`, the landing step's.
+    ``xg``: :data:`symbolic.landing.guidance.GUIDANCE_STATE`; ``y``: :data:`LANDING_MEASUREMENT`;
+    ``p_guid``: :data:`symbolic.landing.guidance.GUIDANCE_PARAMS`; ``ref``:
+    :data:`symbolic.landing.guidance.POSITION_REFERENCE`, the landing step's.
     """
     xg, y, dt, p_guid = GUIDANCE_STATE.sym(), LANDING_MEASUREMENT.sym(), ca.SX.sym("dt"), \
         GUIDANCE_PARAMS.sym()
@@ -475,21 +478,3 @@ def landing_guidance_function() -> ca.Function:
                        ["xg", "y", "dt", "p_guid"], ["xg_next", "ref"])
 
 
-def measurement_function() -> ca.Function:
-    """``landing_sensors(xp, t, pp) -> y``: perfect sensors on the landing plant.
-
-    ``y`` (:data:`LANDING_MEASUREMENT`) from the plant's state
-    (:data:`~symbolic.landing.plant.LANDING_PLANT_STATE`) and parameters
-    (:data:`~symbolic.landing.plant.LANDING_PLANT_PARAMS`) at time ``t``: ``p_e, v_e``
-    from :func:`~symbolic.landing.relative.relative6`, the deck's broadcast
-    from :func:`~symbolic.landing.deck.deck_pose`.
-    """
-    xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    x, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
-    q = QUAD6_STATE.unpack(x["x1q"])
-    p_e, v_e, *_ = relative6(x["x1q"], x["xv"], t, p["p_quad"], p["p_act"], p["p_veh"],
-                             p["p_deck"])
-    deck = deck_pose(x["xv"], t, p["p_veh"], p["p_deck"])
-    y = ca.vertcat(p_e, v_e, q["eta1"], q["Omega1"], deck.eta2, deck.v2E, deck.a2E, deck.w2E,
-                   deck.w2E_dot)
-    return ca.Function("landing_sensors", [xp, t, pp], [y], ["xp", "t", "pp"], ["y"])

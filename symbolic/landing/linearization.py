@@ -41,7 +41,6 @@ import functools
 
 import casadi as ca
 
-from symbolic.guidance import POSITION_REFERENCE
 from symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
@@ -49,8 +48,8 @@ from symbolic.landing.controller import (
     landing_memory,
 )
 from symbolic.landing.deck import deck_pose
-from symbolic.landing.loop import LANDING_DISTURBANCE, wind_force
-from symbolic.landing.plant import LANDING_PLANT_PARAMS
+from symbolic.landing.guidance import POSITION_REFERENCE
+from symbolic.landing.plant import LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, wind_force
 from symbolic.landing.quadrotor import QUAD6_STATE, quadrotor6_rhs
 from symbolic.landing.relative import RELATIVE6, relative6
 from symbolic.layout import Layout

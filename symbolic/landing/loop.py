@@ -33,38 +33,31 @@ import functools
 
 import casadi as ca
 
-from symbolic.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
-from symbolic.kinematics import rotation
 from symbolic.landing.controller import (
     landing_controller_params,
     landing_guidance,
     landing_law,
     landing_memory,
     landing_step_outputs,
-    measurement_function,
 )
-from symbolic.landing.deck import DECK_POSE, deck_pose, time_derivative, vee
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE, landing_plant_rhs
+from symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
+from symbolic.landing.plant import (
+    LANDING_DISTURBANCE,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+    loop_plant_function,
+)
 from symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
-from symbolic.landing.relative import RELATIVE6, gear_gap, relative6
+from symbolic.landing.relative import gear_gap
+from symbolic.landing.sensors import measurement_function
+from symbolic.landing.signals import LANDING_SIGNALS, landing_signals_function
 from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR
-from symbolic.quadrotor import BODY_DISTURBANCE, WRENCH, wrench_from_rotors
 from symbolic.simulation import LoopModel
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["LANDING_DISTURBANCE", "LANDING_RECORDED", "LANDING_SIGNALS", "ANCHOR", "wind_force",
-           "landing_loop_memory",
-           "landing_loop_params", "landing_loop_state", "loop_outputs", "loop_plant_function",
-           "landing_signals_function", "gear_gap_function", "landed_outputs_function",
-           "anchor_function", "LANDING_TRAJECTORY", "LANDING_ENVELOPE",
+__all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
+           "landing_loop_state", "loop_outputs", "gear_gap_function",
            "landing_envelope_function", "landing_loop"]
-
-#: The held disturbance of the landing loop: wind in E, then eq. (2)'s d_F, d_M.
-LANDING_DISTURBANCE = Layout("w_land", (
-    Field("v_wind", 3, "m/s", "wind velocity in E", elements=("vx_wind", "vy_wind", "vz_wind")),
-    *BODY_DISTURBANCE.fields,
-), "wind velocity (E) and the disturbance force and moment (body)")
 
 #: What the loop records of each control step (held until the next).
 LANDING_RECORDED = Layout("rec_land", (
@@ -73,39 +66,6 @@ LANDING_RECORDED = Layout("rec_land", (
     POSITION_REFERENCE["p_ref"],
     landing_step_outputs(1)["limits"],
 ), "the landing step's commands, attitude reference, position reference and limit flags")
-
-#: The landing trajectory's signals (one vector, the simulator's ``y``).
-LANDING_SIGNALS = Layout("y_land", (
-    Field("phase", 1, "-", "guidance phase (symbolic.guidance.PHASES)"),
-    QUAD6_STATE["p1"],
-    QUAD6_STATE["eta1"],
-    DECK_POSE["p2"],
-    DECK_POSE["eta2"],
-    *RELATIVE6.fields,
-    Field("F_total", 1, "N", "thrust acting (the rotor states, after motor lag and limits)"),
-    Field("M", 3, "N m", "body moments of the rotor states", elements=("M_x", "M_y", "M_z")),
-    QUAD6_STATE["F"],
-    Field("d_F", 3, "N", "every external force but thrust, gravity and eq. 2's drag "
-          "(wind, disturbance, contact), body frame", elements=("d_Fx", "d_Fy", "d_Fz")),
-    Field("d_M", 3, "N m", "every external moment but the rotors' and eq. 2's drag, body "
-          "frame", elements=("d_Mx", "d_My", "d_Mz")),
-    Field("aborts", 1, "-", "aborted descents so far"),
-), "landing signals: both bodies in E, the relative state, rotors, external forces")
-
-#: The columns of a landing's trajectory.csv (``quadland simulate`` and the
-#: generated C example ``land``): the time, then these :data:`LANDING_SIGNALS`.
-LANDING_TRAJECTORY = Layout("landing_trajectory", (
-    Field("t", 1, "s", "time"),
-    *(LANDING_SIGNALS[n] for n in ("phase", "p1", "eta1", "p2", "eta2", "p_e", "F_total", "M", "F",
-                           "d_F")),
-), "one row per output time of a landing, and one at touchdown")
-
-#: The pose at which the quadrotor is pinned to the deck after touchdown.
-ANCHOR = Layout("anchor", (
-    Field("p_e", 3, "m", "the quadrotor's centre in the deck frame at touchdown"),
-    Field("R_rel", 9, "-", "R_deck^T R(eta1) at touchdown", shape=(3, 3)),
-), "the quadrotor's pose on the deck")
-
 
 #: The magnitudes a landing must keep within its envelope (:func:`landing_envelope_function`):
 #: each is compared with a bound the runtime derives from the scenario.
@@ -118,19 +78,6 @@ LANDING_ENVELOPE = Layout("env_land", (
     Field("weight", 1, "-", "largest network weight |W_hat| (eq. 22)"),
     Field("robust", 1, "-", "largest robust term estimate |zeta_hat| (eq. 22)"),
 ), "magnitudes checked against the landing's flight envelope")
-
-
-def wind_force(eta1, v_wind, p_quad):
-    """Body force of the wind through eq. (2)'s drag: ``Kt R(eta1)^T v_wind``, N."""
-    return QUADROTOR.unpack(p_quad)["Kt"] * (rotation(eta1).T @ v_wind)
-
-
-def _body_disturbance(xp, w, pp):
-    """``[d_F + wind_force, d_M]``: the landing plant's disturbance input."""
-    ws = LANDING_DISTURBANCE.unpack(w)
-    eta1 = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(xp)["x1q"])["eta1"]
-    d_F = ws["d_F"] + wind_force(eta1, ws["v_wind"], LANDING_PLANT_PARAMS.unpack(pp)["p_quad"])
-    return ca.vertcat(d_F, ws["d_M"])
 
 
 @functools.cache
@@ -163,49 +110,12 @@ def landing_loop_state(l: int) -> Layout:
     ), "landing loop state")
 
 
-def _signals(x1q, xv, t, pp, d_F, d_M, phase, aborts):
-    """The :data:`LANDING_SIGNALS` vector of a quadrotor state with its external forces."""
-    p = LANDING_PLANT_PARAMS.unpack(pp)
-    q = QUAD6_STATE.unpack(x1q)
-    deck = deck_pose(xv, t, p["p_veh"], p["p_deck"])
-    rel = relative6(x1q, xv, t, p["p_quad"], p["p_act"], p["p_veh"], p["p_deck"])
-    return ca.vertcat(phase, q["p1"], q["eta1"], deck.p2, deck.eta2, *rel,
-                      wrench_from_rotors(q["F"], p["p_quad"]), q["F"], d_F, d_M, aborts)
-
-
 def loop_outputs(l: int, x, w, t, pp):
     """The :data:`LANDING_SIGNALS` of the loop state ``x`` (:func:`landing_loop_state`) under
     ``w``."""
     xs = landing_loop_state(l).unpack(x)
     xg = landing_loop_memory(l).unpack(xs["xc"])["xg"]
     return landing_signals_function()(xs["xp"], xg, w, t, pp)
-
-
-@functools.cache
-def loop_plant_function() -> ca.Function:
-    """``landing_loop_plant(xp, F_cmd, w, t, pp) -> xp_dot``: the landing plant under
-    the loop's disturbance ``w`` (:data:`LANDING_DISTURBANCE`: wind in E, body ``d_F``, ``d_M``)."""
-    xp, F_cmd, w, t, pp = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym(), \
-        ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    return ca.Function("landing_loop_plant", [xp, F_cmd, w, t, pp],
-                       [landing_plant_rhs(xp, F_cmd, _body_disturbance(xp, w, pp), t, pp)],
-                       ["xp", "F_cmd", "w", "t", "pp"], ["xp_dot"])
-
-
-@functools.cache
-def landing_signals_function() -> ca.Function:
-    """``landing_signals(xp, xg, w, t, pp) -> y``: :data:`LANDING_SIGNALS` in flight.
-
-    The plant's state ``xp``, the guidance's state ``xg`` (its phase and
-    abort count) and the disturbance ``w`` (:data:`LANDING_DISTURBANCE`).
-    """
-    xp, xg, w, t, pp = LANDING_PLANT_STATE.sym(), GUIDANCE_STATE.sym(), LANDING_DISTURBANCE.sym(), \
-        ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    ps, gs = LANDING_PLANT_STATE.unpack(xp), GUIDANCE_STATE.unpack(xg)
-    d = BODY_DISTURBANCE.unpack(_body_disturbance(xp, w, pp))
-    y = _signals(ps["x1q"], ps["xv"], t, pp, d["d_F"], d["d_M"], gs["phase"], gs["aborts"])
-    return ca.Function("landing_signals", [xp, xg, w, t, pp], [y],
-                       ["xp", "xg", "w", "t", "pp"], ["y"])
 
 
 @functools.cache
@@ -217,64 +127,6 @@ def gear_gap_function() -> ca.Function:
     return ca.Function("landing_gear_gap", [xp, t, pp],
                        [gear_gap(s["x1q"], s["xv"], t, p["p_act"], p["p_veh"], p["p_deck"])],
                        ["xp", "t", "pp"], ["g"])
-
-
-@functools.cache
-def landed_outputs_function() -> ca.Function:
-    """``landed_outputs(xv, t, pp, anchor, F, phase, aborts) -> (y, x1q)``: the quadrotor on
-    the deck.
-
-    The quadrotor is pinned at the pose ``anchor`` (:data:`ANCHOR`):
-    ``p1 = p2 + R_deck p_e``, ``R(eta1) = R_deck R_rel``, and its rotor
-    forces are ``F`` (idle, winding down). Its velocity, rates and
-    accelerations are symbolic time derivatives along the vehicle's motion
-    (eq. 4) and the deck's prescribed motion. ``d_F`` and ``d_M`` are then
-    what eq. (2) needs to hold: the deck's contact, wind and disturbance
-    together, ``d_F = R^T m (p1'' + g e_z) - F_total e_z + Kt V1`` and
-    ``d_M = I Omega' + Omega x I Omega - M + Kr Omega``. The ZYX yaw is
-    ``atan2``'s, in ``(-pi, pi]``: the caller unwraps it. ``x1q`` is the
-    quadrotor's state so pinned.
-    """
-    xv, t, pp = VEHICLE_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    anchor, F = ANCHOR.sym(), ca.SX.sym("F", 4)
-    phase, aborts = ca.SX.sym("phase"), ca.SX.sym("aborts")
-    p, a = LANDING_PLANT_PARAMS.unpack(pp), ANCHOR.unpack(anchor)
-    q = QUADROTOR.unpack(p["p_quad"])
-    xv_dot = vehicle_rhs(xv, p["p_veh"])
-
-    def d_dt(e):
-        return time_derivative(e, xv, xv_dot, t)
-
-    deck = deck_pose(xv, t, p["p_veh"], p["p_deck"])
-    p1 = deck.p2 + deck.R_deck @ a["p_e"]
-    R1 = deck.R_deck @ a["R_rel"]
-    eta1 = ca.vertcat(ca.atan2(R1[2, 1], R1[2, 2]),
-                      ca.atan2(-R1[2, 0], ca.sqrt(R1[2, 1] ** 2 + R1[2, 2] ** 2)),
-                      ca.atan2(R1[1, 0], R1[0, 0]))
-    p1_dot = d_dt(p1)
-    V1 = R1.T @ p1_dot                                                 # eq. 1
-    Omega1 = vee(R1.T @ d_dt(R1))
-    wrench = WRENCH.unpack(wrench_from_rotors(F, p["p_quad"]))
-    m1, I, g = q["m1"], q["I"], q["g"]
-    d_F = (R1.T @ (m1 * (d_dt(p1_dot) + ca.vertcat(0, 0, g)))
-           - ca.vertcat(0, 0, wrench["F_total"]) + q["Kt"] * V1)           # eq. 2, solved
-    d_M = (I * d_dt(Omega1) + ca.cross(Omega1, I * Omega1) - wrench["M"]
-           + q["Kr"] * Omega1)                                             # eq. 2, solved
-    x1q = ca.vertcat(p1, eta1, V1, Omega1, F)
-    y = _signals(x1q, xv, t, pp, d_F, d_M, phase, aborts)
-    return ca.Function("landed_outputs", [xv, t, pp, anchor, F, phase, aborts], [y, x1q],
-                       ["xv", "t", "pp", "anchor", "F", "phase", "aborts"], ["y", "x1q"])
-
-
-@functools.cache
-def anchor_function() -> ca.Function:
-    """``landing_anchor(y) -> anchor``: the touchdown pose (:data:`ANCHOR`) from the signals
-    ``y`` (:data:`LANDING_SIGNALS`) at the contact: ``p_e`` and ``R_rel = R_deck^T R(eta1)``."""
-    y = LANDING_SIGNALS.sym()
-    ys = LANDING_SIGNALS.unpack(y)
-    R_rel = rotation(ys["eta2"]).T @ rotation(ys["eta1"])
-    return ca.Function("landing_anchor", [y], [ca.vertcat(ys["p_e"], ca.vec(R_rel))], ["y"],
-                       ["anchor"])
 
 
 @functools.cache

@@ -9,8 +9,11 @@ the deck. The deck's heave, roll and pitch are prescribed, not integrated.
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 
+from symbolic.kinematics import rotation
 from symbolic.landing.deck import DECK_PARAMS, DECK_POSE, deck_pose
 from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
 from symbolic.landing.relative import RELATIVE6, relative6
@@ -20,8 +23,8 @@ from symbolic.quadrotor import BODY_DISTURBANCE
 from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["LANDING_PLANT_STATE", "LANDING_PLANT_PARAMS", "LANDING_PLANT_OUTPUTS",
-           "landing_plant_rhs",
-           "landing_plant_function", "landing_outputs_function"]
+           "LANDING_DISTURBANCE", "landing_plant_rhs", "landing_plant_function",
+           "landing_outputs_function", "wind_force", "body_disturbance", "loop_plant_function"]
 
 #: State of the landing plant.
 LANDING_PLANT_STATE = Layout("xp", (
@@ -92,3 +95,34 @@ def landing_outputs_function() -> ca.Function:
     y = ca.vertcat(q["p1"], q["eta1"], deck.p2, deck.eta2, *rel, q["F"], F_cmd, w)
     return ca.Function("landing_outputs", [xp, F_cmd, w, t, pp], [y],
                        ["xp", "F_cmd", "w", "t", "pp"], ["y"])
+
+
+#: The held disturbance of the landing loop: wind in E, then eq. (2)'s d_F, d_M.
+LANDING_DISTURBANCE = Layout("w_land", (
+    Field("v_wind", 3, "m/s", "wind velocity in E", elements=("vx_wind", "vy_wind", "vz_wind")),
+    *BODY_DISTURBANCE.fields,
+), "wind velocity (E) and the disturbance force and moment (body)")
+
+
+def wind_force(eta1, v_wind, p_quad):
+    """Body force of the wind through eq. (2)'s drag: ``Kt R(eta1)^T v_wind``, N."""
+    return QUADROTOR.unpack(p_quad)["Kt"] * (rotation(eta1).T @ v_wind)
+
+
+def body_disturbance(xp, w, pp):
+    """``[d_F + wind_force, d_M]``: the landing plant's disturbance input."""
+    ws = LANDING_DISTURBANCE.unpack(w)
+    eta1 = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(xp)["x1q"])["eta1"]
+    d_F = ws["d_F"] + wind_force(eta1, ws["v_wind"], LANDING_PLANT_PARAMS.unpack(pp)["p_quad"])
+    return ca.vertcat(d_F, ws["d_M"])
+
+
+@functools.cache
+def loop_plant_function() -> ca.Function:
+    """``landing_loop_plant(xp, F_cmd, w, t, pp) -> xp_dot``: the landing plant under
+    the loop's disturbance ``w`` (:data:`LANDING_DISTURBANCE`: wind in E, body ``d_F``, ``d_M``)."""
+    xp, F_cmd, w, t, pp = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym(), \
+        ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    return ca.Function("landing_loop_plant", [xp, F_cmd, w, t, pp],
+                       [landing_plant_rhs(xp, F_cmd, body_disturbance(xp, w, pp), t, pp)],
+                       ["xp", "F_cmd", "w", "t", "pp"], ["xp_dot"])

@@ -47,18 +47,23 @@ import casadi as ca
 
 from symbolic.kinematics import rotation, skew
 from symbolic.landing.deck import DECK_POSE, deck_pose
-from symbolic.landing.loop import LANDING_DISTURBANCE, loop_plant_function
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from symbolic.landing.plant import (
+    LANDING_DISTURBANCE,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+    loop_plant_function,
+)
 from symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
+from symbolic.landing.relative import relative6
 from symbolic.layout import Field, Layout
 from symbolic.parameters import QUADROTOR
 
-__all__ = ["SENSOR_NAMES", "SENSOR_PARAMS", "IMU_PACKET", "VISION_PACKET", "GNSS_PACKET",
-           "RANGEFINDER_PACKET", "DATALINK_PACKET", "IMU_NOISE", "VISION_NOISE", "GNSS_NOISE",
-           "RANGEFINDER_NOISE", "DATALINK_NOISE", "SENSOR_PACKETS", "NOISES", "specific_force",
-           "rangefinder_distance", "sense_imu_function", "sense_vision_function",
-           "sense_gnss_function", "sense_rangefinder_function", "sense_datalink_function",
-           "sensor_function"]
+__all__ = ["measurement_function", "SENSOR_NAMES", "SENSOR_PARAMS", "IMU_PACKET",
+           "VISION_PACKET", "GNSS_PACKET", "RANGEFINDER_PACKET", "DATALINK_PACKET", "IMU_NOISE",
+           "VISION_NOISE", "GNSS_NOISE", "RANGEFINDER_NOISE", "DATALINK_NOISE", "SENSOR_PACKETS",
+           "NOISES", "specific_force", "rangefinder_distance", "sense_imu_function",
+           "sense_vision_function", "sense_gnss_function", "sense_rangefinder_function",
+           "sense_datalink_function", "sensor_function"]
 
 #: The sensors, in the order of their random streams (:mod:`quadland.sensing`).
 SENSOR_NAMES = ("imu", "vision", "gnss", "rangefinder", "datalink")
@@ -347,3 +352,23 @@ def sensor_function(name: str) -> ca.Function:
         return _BUILDERS[name]()
     except KeyError:
         raise KeyError(f"no sensor {name!r}; sensors are {', '.join(SENSOR_NAMES)}") from None
+
+
+def measurement_function() -> ca.Function:
+    """``landing_sensors(xp, t, pp) -> y``: perfect sensors on the landing plant.
+
+    ``y`` (:data:`LANDING_MEASUREMENT`) from the plant's state
+    (:data:`~symbolic.landing.plant.LANDING_PLANT_STATE`) and parameters
+    (:data:`~symbolic.landing.plant.LANDING_PLANT_PARAMS`) at time ``t``: ``p_e, v_e``
+    from :func:`~symbolic.landing.relative.relative6`, the deck's broadcast
+    from :func:`~symbolic.landing.deck.deck_pose`.
+    """
+    xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    x, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
+    q = QUAD6_STATE.unpack(x["x1q"])
+    p_e, v_e, *_ = relative6(x["x1q"], x["xv"], t, p["p_quad"], p["p_act"], p["p_veh"],
+                             p["p_deck"])
+    deck = deck_pose(x["xv"], t, p["p_veh"], p["p_deck"])
+    y = ca.vertcat(p_e, v_e, q["eta1"], q["Omega1"], deck.eta2, deck.v2E, deck.a2E, deck.w2E,
+                   deck.w2E_dot)
+    return ca.Function("landing_sensors", [xp, t, pp], [y], ["xp", "t", "pp"], ["y"])
