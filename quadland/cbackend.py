@@ -26,8 +26,8 @@ import functools
 import numpy as np
 
 from quadland.build import build_library
-from symbolic.c_api import api_structs, landing_api_structs
 from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, generate, generate_landing
+from symbolic.codegen.structs import api_structs, landing_api_structs
 from symbolic.control_step import step_inputs, step_outputs
 from symbolic.layout import Layout
 
@@ -91,7 +91,7 @@ def ctypes_struct(layout: Layout, real) -> type:
     Parameters
     ----------
     layout : Layout
-        The struct's layout (``symbolic.c_api``).
+        The struct's layout (``symbolic.codegen.structs``).
     real : type
         ``ctypes.c_double`` or ``ctypes.c_float``.
     """

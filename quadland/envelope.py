@@ -2,7 +2,7 @@
 
 A diverging flight is stopped as soon as it leaves a physical envelope, not
 when a value overflows. The loop's symbolic ``envelope(x, uh) -> s``
-(:attr:`symbolic.simulation.LoopModel.envelope`) gives magnitudes of its
+(:attr:`symbolic.loop.LoopModel.envelope`) gives magnitudes of its
 state (altitude, speeds, rates, rotor forces, network weights); the
 simulator compares them with the bounds of an :class:`Envelope`, derived from
 the scenario by each loop (docs/simulation.md, "The flight envelope"), at
@@ -34,7 +34,7 @@ class Envelope:
     Attributes
     ----------
     layout : Layout
-        The magnitudes (:attr:`symbolic.simulation.LoopModel.envelope_layout`).
+        The magnitudes (:attr:`symbolic.loop.LoopModel.envelope_layout`).
     bounds : ndarray
         One upper bound per magnitude, in its unit.
     basis : tuple of str

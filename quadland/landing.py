@@ -60,8 +60,8 @@ from symbolic.landing.loop import (
 from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE, loop_plant_function
 from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
+from symbolic.loop import rk4_step
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.simulation import rk4_step
 from symbolic.vehicle import VEHICLE_STATE, vehicle_function
 
 __all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "landing_envelope",

@@ -1,6 +1,6 @@
 """Closed-loop simulation, compiled (or on CasADi's virtual machine without a compiler).
 
-Two loops share one symbolic model (``symbolic.simulation``), and both run
+Two loops share one symbolic model (``symbolic.paper_loop``), and both run
 in one call of a simulator (:func:`quadland.compiled.compiled_loop`): RK4,
 one step (times ``simulation.rk_steps_per_interval``) per interval of the
 exact grid on which the disturbance, the outputs and the control are held:

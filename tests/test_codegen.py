@@ -17,7 +17,6 @@ from quadland.exceptions import CompilerNotFoundError
 from quadland.landing import LANDING_TRAJECTORY
 from quadland.scenario import load_scenario
 from quadland.simulate import TRAJECTORY
-from symbolic.c_api import api_structs, landing_api_structs
 from symbolic.codegen import (
     FUNCTIONS,
     CodegenConfig,
@@ -27,6 +26,7 @@ from symbolic.codegen import (
     generate_landing,
     land_columns,
 )
+from symbolic.codegen.structs import api_structs, landing_api_structs
 
 GENERATED_DIR = codegen.generated_dir()
 

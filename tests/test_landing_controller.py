@@ -31,8 +31,8 @@ from symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_function
 from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from symbolic.landing.relative import relative6, relative6_acceleration
 from symbolic.landing.sensors import measurement_function
+from symbolic.loop import rk4_step
 from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.simulation import rk4_step
 from symbolic.vehicle import VEHICLE_STATE
 
 L_NODES = 10

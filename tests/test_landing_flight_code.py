@@ -17,8 +17,8 @@ import quadland
 from quadland import build, cbackend, codegen
 from quadland.landing import LANDING_TRAJECTORY, landing_values
 from quadland.metrics import touchdown_report
-from symbolic.c_api import landing_output_layout, landing_params_layout
 from symbolic.codegen import STATUS_CODES
+from symbolic.codegen.structs import landing_output_layout, landing_params_layout
 from symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_guidance_function,

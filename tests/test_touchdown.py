@@ -21,9 +21,9 @@ from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE, la
 from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from symbolic.landing.relative import gear_gap
 from symbolic.layout import Field, Layout
+from symbolic.loop import LoopModel
 from symbolic.parameters import QUADROTOR, VEHICLE
 from symbolic.quadrotor import BODY_DISTURBANCE
-from symbolic.simulation import LoopModel
 from symbolic.vehicle import VEHICLE_STATE
 
 G, Z0, GEAR, H, A, W, PHI = 9.81, 6.0, 0.25, 1.5, 0.68, 0.349, 0.7

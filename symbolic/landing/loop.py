@@ -1,6 +1,6 @@
 """The landing loop as the simulator sees it: plant with wind, sensors, guidance, landing step.
 
-:func:`landing_loop` bundles, in the shape of :class:`symbolic.simulation.LoopModel`:
+:func:`landing_loop` bundles, in the shape of :class:`symbolic.loop.LoopModel`:
 
 * **plant** ``plant(xp, F_cmd, w, t, pp)``: the landing plant
   (:mod:`symbolic.landing.plant`) under the held disturbance ``w``
@@ -52,7 +52,7 @@ from symbolic.landing.relative import gear_gap
 from symbolic.landing.sensors import measurement_function
 from symbolic.landing.signals import LANDING_SIGNALS, landing_signals_function
 from symbolic.layout import Field, Layout
-from symbolic.simulation import LoopModel
+from symbolic.loop import LoopModel
 from symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",

@@ -1,0 +1,60 @@
+"""C code of the flight steps, the models and the simulators, with readable APIs.
+
+The package, one module per job: :mod:`~symbolic.codegen.config` (emitter
+settings and the values the C carries), :mod:`~symbolic.codegen.registry`
+(the CasADi functions written as C), :mod:`~symbolic.codegen.render` (the one
+Jinja2 environment), :mod:`~symbolic.codegen.casadi_files` (CasADi's C,
+post-processed), :mod:`~symbolic.codegen.structs` (the API's structs as
+layouts), :mod:`~symbolic.codegen.paper_api` and
+:mod:`~symbolic.codegen.landing_api` (the readable APIs),
+:mod:`~symbolic.codegen.example` (the pure-C example),
+:mod:`~symbolic.codegen.tree` (all of ``generated/``) and
+:mod:`~symbolic.codegen.simulator` (the compiled simulators' C).
+
+One entry point per tree, :func:`generate` (one precision) and
+:func:`generate_tree` (everything under ``generated/``), turns the symbolic
+functions into C text:
+
+* one CasADi-generated file per function of the registry
+  :data:`FUNCTIONS`, its symbols prefixed for the build, post-processed so
+  that each compiles alone with ``-std=c99 -pedantic -Wall -Wextra
+  -Werror`` (unused arguments are voided) and, for the single-precision
+  build, uses float constants and float math;
+* ``quadland.h`` / ``quadland.c`` (named structs, defaults and a checked
+  ``ql_control_step`` over CasADi's arg/res arrays) and the named-pointer
+  wrappers of the other functions, rendered from the Jinja2 templates in
+  ``symbolic/templates/``. Python only builds the templates' context: the
+  structs come from the layouts of :mod:`symbolic.codegen.structs`, offsets and
+  sizes from the layouts of the model, defaults as C literals;
+* ``example/``: a pure-C flight of the scenario, a benchmark and their
+  Makefile.
+
+Every global C symbol carries the build's prefix (:attr:`CodegenConfig.prefix`:
+``ql_`` for double, ``qlf_`` for float), CasADi's functions and helpers
+included, so that both builds link into one program.
+
+Numeric defaults (a scenario's values) are passed in as :class:`Defaults`;
+this package imports nothing from ``quadland``. The output depends only on
+its inputs and on the CasADi version, never on time or paths, so
+regeneration is byte for byte reproducible.
+"""
+
+from symbolic.codegen.config import (
+    DEFAULT_CONFIG,
+    STATUS_CODES,
+    TEMPLATE_DIR,
+    CodegenConfig,
+    Defaults,
+    LandingDefaults,
+)
+from symbolic.codegen.example import example_columns, generate_example, land_columns
+from symbolic.codegen.landing_api import generate_landing
+from symbolic.codegen.paper_api import generate
+from symbolic.codegen.registry import FUNCTIONS, GeneratedFunction, c_sources
+from symbolic.codegen.simulator import SIMULATOR_PARTS, loop_header, simulator_sources
+from symbolic.codegen.tree import generate_tree
+
+__all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "GeneratedFunction",
+           "FUNCTIONS", "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns",
+           "land_columns", "generate", "generate_landing", "generate_example", "generate_tree",
+           "SIMULATOR_PARTS", "loop_header", "simulator_sources"]

@@ -1,0 +1,216 @@
+"""Emitter settings and the scenario values the generated C carries."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["TEMPLATE_DIR", "STATUS_CODES", "CodegenConfig", "DEFAULT_CONFIG", "Defaults",
+           "LandingDefaults"]
+
+#: Folder of the Jinja2 templates (installed with the package).
+TEMPLATE_DIR = Path(__file__).resolve().parent.parent / "templates"
+
+
+#: Status codes of ``ql_control_step`` and ``ql_check_params`` (name in the
+#: double build, value, meaning).
+STATUS_CODES = (
+    ("QL_OK", 0, "success; outputs and adaptive state updated"),
+    ("QL_ERR_NULL", 1, "a NULL pointer argument"),
+    ("QL_ERR_INVALID", 2, "dt <= 0, or a guidance state out of range"),
+    ("QL_ERR_NONFINITE_INPUT", 3, "an input, a parameter or the state is NaN or infinite"),
+    ("QL_ERR_TILT", 4, "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible"),
+    ("QL_ERR_NONFINITE_OUTPUT", 5,
+     "the law overflowed: a NaN or infinite value from finite inputs"),
+    ("QL_ERR_PARAM", 6, "a parameter outside its range (ql_check_params names it)"),
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class CodegenConfig:
+    """Emitter settings of the generated C.
+
+    Attributes
+    ----------
+    precision : {"double", "float"}
+        Type of every real; ``"float"`` also writes float constants
+        (``1.5f``) and calls float math (``expf``).
+    prefix : str, optional
+        Prefix of every global C name of the build (functions, types and,
+        upper-cased, macros and enumerators); ``"ql_"`` for double and
+        ``"qlf_"`` for float by default.
+    casadi_int : str
+        C type of CasADi's integers (sparsity patterns).
+    null_checks : bool
+        Keep CasADi's convention that a NULL ``arg[i]`` reads as zeros and
+        a NULL ``res[i]`` is skipped. Off by default: the tests cost two
+        instructions per scalar read or written (a fifth of the control
+        step), and every caller in the generated API passes all pointers.
+    builder : str
+        Name of the command that regenerates, written into each header.
+    """
+
+    precision: str = "double"
+    prefix: str | None = None
+    casadi_int: str = "int"
+    null_checks: bool = False
+    builder: str = "quadland codegen (symbolic/codegen/)"
+
+    def __post_init__(self):
+        if self.precision not in ("double", "float"):
+            raise ValueError(f"precision must be 'double' or 'float', got {self.precision!r}")
+        if self.prefix is None:
+            object.__setattr__(self, "prefix", "ql_" if self.precision == "double" else "qlf_")
+        if not re.fullmatch(r"[a-z][a-z0-9]*_", self.prefix):
+            raise ValueError(f"prefix must be lower-case letters and digits ending in '_', "
+                             f"got {self.prefix!r}")
+
+    @property
+    def is_float(self) -> bool:
+        """True for the single-precision build."""
+        return self.precision == "float"
+
+    @property
+    def macro_prefix(self) -> str:
+        """Prefix of the build's macros and enumerators (``QL_``)."""
+        return self.prefix.upper()
+
+    def literal(self, value: float) -> str:
+        """A C literal of ``value`` in this precision (shortest round trip)."""
+        text = repr(float(value))
+        if not np.isfinite(value):
+            raise ValueError(f"non-finite default {value}")
+        if "." not in text and "e" not in text:
+            text += ".0"
+        return text + ("f" if self.is_float else "")
+
+    def math(self, name: str) -> str:
+        """Name of the C math function ``name`` in this precision."""
+        return name + ("f" if self.is_float else "")
+
+
+#: The double-precision build's settings, the default of every emitter.
+DEFAULT_CONFIG = CodegenConfig()
+
+
+@dataclasses.dataclass(frozen=True)
+class Defaults:
+    """Numeric defaults written into the C (one scenario's values).
+
+    Attributes
+    ----------
+    scenario : str
+        Which scenario they are, for the comments: its name and overrides
+        (never a path, so that the output does not depend on the machine).
+    l : int
+        RBF node count.
+    p_quad, p_veh, p_ctrl : ndarray
+        Parameter vectors in the layouts of ``symbolic.parameters``.
+    ref : ndarray, (12,)
+        ``[e1d, e1d_dot, e1d_ddot]``.
+    rotor_limits : tuple of float
+        ``(F_min, F_max)``, N.
+    tilt_min : float
+        Smallest accepted ``|cos(theta1) cos(phi1)|``.
+    hold : float
+        Hold compensation of the control step, periods.
+    x0 : ndarray
+        Initial closed-loop state.
+    duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
+        Example flight: s, Hz, Hz (0 = continuous), Hz.
+    force_bias, moment_bias : tuple of float
+        N, N m, per axis.
+    force_amplitude, force_frequency, moment_amplitude, moment_frequency : float
+        N, rad/s, N m, rad/s.
+    """
+
+    scenario: str
+    l: int
+    p_quad: np.ndarray
+    p_veh: np.ndarray
+    p_ctrl: np.ndarray
+    ref: np.ndarray
+    rotor_limits: tuple[float, float]
+    tilt_min: float
+    hold: float
+    x0: np.ndarray
+    duration: float
+    output_rate_hz: float
+    control_rate_hz: float
+    disturbance_rate_hz: float
+    force_bias: tuple[float, float, float]
+    force_amplitude: float
+    force_frequency: float
+    moment_bias: tuple[float, float, float]
+    moment_amplitude: float
+    moment_frequency: float
+
+
+@dataclasses.dataclass(frozen=True)
+class LandingDefaults:
+    """Numeric defaults of the landing API and its example (one landing scenario's values).
+
+    Attributes
+    ----------
+    scenario : str
+        Its name and overrides, for the comments.
+    l : int
+        RBF node count of the landing step.
+    p_quad, p_ctrl, p_act, p_guid : ndarray
+        ``symbolic.parameters.QUADROTOR``, ``landing_controller_params(l)``,
+        ``symbolic.landing.quadrotor.ACTUATOR``, ``symbolic.landing.guidance.GUIDANCE_PARAMS``.
+    tilt_min : float
+        Smallest accepted ``|cos(theta1) cos(phi1)|``.
+    pp, xp0 : ndarray
+        The example's plant parameters (``symbolic.landing.plant.LANDING_PLANT_PARAMS``)
+        and initial plant state.
+    duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
+        s, Hz, Hz, Hz.
+    rk_steps : int
+        RK4 steps per interval of the merged time grid.
+    force_bias, moment_bias : tuple of float
+    force_amplitude, force_frequency, moment_amplitude, moment_frequency : float
+        The disturbance's deterministic part: N, rad/s, N m, rad/s.
+    wind_mean : tuple of float
+        m/s, E.
+    gust_start, gust_half_length, gust_amplitude : float
+        The 1-cosine gust: s, s, m/s (0: none).
+    gust_direction : tuple of float
+        Unit vector in E.
+    settle_time : float
+        s from touchdown to the end of the run.
+    limits : tuple of (str, float)
+        The touchdown limits by name (``max_sink_rate``, ...), in report order.
+    """
+
+    scenario: str
+    l: int
+    p_quad: np.ndarray
+    p_ctrl: np.ndarray
+    p_act: np.ndarray
+    p_guid: np.ndarray
+    tilt_min: float
+    pp: np.ndarray
+    xp0: np.ndarray
+    duration: float
+    output_rate_hz: float
+    control_rate_hz: float
+    disturbance_rate_hz: float
+    rk_steps: int
+    force_bias: tuple[float, float, float]
+    force_amplitude: float
+    force_frequency: float
+    moment_bias: tuple[float, float, float]
+    moment_amplitude: float
+    moment_frequency: float
+    wind_mean: tuple[float, float, float]
+    gust_start: float
+    gust_half_length: float
+    gust_amplitude: float
+    gust_direction: tuple[float, float, float]
+    settle_time: float
+    limits: tuple[tuple[str, float], ...]
+

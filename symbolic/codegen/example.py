@@ -1,0 +1,180 @@
+"""The pure-C example: flights, benchmark, scenario headers and Makefile."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from symbolic.closed_loop import (
+    PAPER_PLANT_STATE,
+    closed_loop_state,
+)
+from symbolic.codegen.config import Defaults, LandingDefaults
+from symbolic.codegen.registry import FUNCTIONS, c_sources
+from symbolic.codegen.render import common_context, render
+from symbolic.codegen.simulator import loop_header
+from symbolic.codegen.structs import (
+    output_layout,
+)
+from symbolic.landing.guidance import (
+    GUIDANCE_STATE,
+)
+from symbolic.landing.plant import (
+    LANDING_DISTURBANCE,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+)
+from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from symbolic.landing.relative import TOUCHDOWN_FIGURES
+from symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
+from symbolic.quadrotor import QUAD_STATE
+from symbolic.relative import E1
+from symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE
+
+__all__ = ["example_columns", "example_context", "land_columns", "land_context", "LAND_MODEL",
+           "generate_example"]
+
+
+def example_columns(l: int) -> list[tuple[str, str]]:
+    """Columns of the example's CSV: ``(name, C expression)``, names from the layouts.
+
+    The names are the layouts' element names, the same as
+    ``quadland.simulate.TRAJECTORY``'s for the same signals; ``n_clipped``
+    and ``status`` are the example's own (ints, last). The expressions read
+    the closed-loop state ``x``, the step's output ``out`` and the vehicle's
+    parameters ``vehicle``.
+    """
+    x = closed_loop_state(l)
+    names = x.element_names()
+
+    def at(name):
+        return f"(double)x[{names.index(name)}]"
+
+    xq, xv, pos1, zeta = (x.slice(n) for n in ("xq", "xv", "pos1", "zeta_hat"))
+    # e1 = [z1 - z2, phi1 - phi2, theta1 - theta2, psi1 - psi2] with phi2 = theta2 = 0 (eq. 5, 7)
+    e1 = {"z_e": f"{at('z1')} - (double)vehicle->z2", "phi_e": at("phi1"), "theta_e": at("theta1"),
+          "psi_e": f"{at('psi1')} - {at('psi2')}"}
+    cols = [("t", "t")]
+    cols += [(n, e1[n]) for n in E1.element_names()]
+    cols += [(names[i], at(names[i])) for s in (xq, xv, pos1) for i in range(s.start, s.stop)]
+    for fname in ("u", "wrench", "rotor"):
+        f = output_layout(l)[fname]
+        cols += [(n, f"(double)out->{fname}[{i}]") for i, n in enumerate(f.element_names())]
+    cols += [(names[i], at(names[i])) for i in range(zeta.start, zeta.stop)]
+    cols += [("norm_W_hat", "sqrt(norm_W_hat)"), ("n_clipped", "out->n_clipped"),
+             ("status", "status")]
+    return cols
+
+
+def example_context(d: Defaults) -> dict:
+    l = d.l
+    x = closed_loop_state(l)
+    cols = example_columns(l)
+    n_real = len(cols) - 2
+    xq0 = x.slice("xq").start
+    xv_names = VEHICLE_STATE.element_names()
+    vehicle = []
+    for f in VEHICLE_MEASUREMENT.fields:
+        if f.name in xv_names:
+            i = x.slice("xv").start + xv_names.index(f.name)
+            vehicle.append(dict(name=f.name, expr=f"x[{i}]"))
+        else:
+            vehicle.append(dict(name=f.name, expr=f"vehicle->{f.name}"))
+    offsets = QUAD_STATE.offsets()
+    return dict(
+        common_context(None),
+        scenario=d.scenario,
+        columns=[n for n, _ in cols],
+        real_columns=[dict(name=n, expr=e) for n, e in cols[:n_real]],
+        int_columns=[dict(name=n, expr=e) for n, e in cols[n_real:]],
+        quad=[dict(name=f.name, offset=xq0 + offsets[f.name][0], size=f.size)
+              for f in QUAD_STATE.fields],
+        z1=xq0 + offsets["z1"][0],
+        vehicle=vehicle,
+        plant=[dict(name=f.name, xp=PAPER_PLANT_STATE.slice(f.name).start, x=x.slice(f.name).start,
+                    size=f.size) for f in PAPER_PLANT_STATE.fields],
+        W_hat=x.slice("W_hat").start, zeta_hat=x.slice("zeta_hat").start,
+        d=d,
+        bias=[repr(float(v)) for v in (*d.force_bias, *d.moment_bias)],
+        x0_rows=[[repr(float(v)) for v in d.x0[i:i + 6]] for i in range(0, len(d.x0), 6)],
+        x0_size=len(d.x0),
+        step_sources=c_sources(),
+        model_sources=c_sources(("closed_loop", "plant")),
+    )
+
+
+def land_columns() -> list[tuple[str, str]]:
+    """Columns of the example ``land``'s CSV: ``(name, C expression)``, from the layouts.
+
+    The names are ``symbolic.landing.loop.LANDING_TRAJECTORY``'s (``quadland
+    simulate``'s trajectory.csv of a landing); the expressions read the time
+    ``t`` and the signals ``y`` (``symbolic.landing.loop.LANDING_SIGNALS``).
+    """
+    cols = []
+    for f in LANDING_TRAJECTORY.fields:
+        if f.name == "t":
+            cols.append(("t", "t"))
+            continue
+        at = LANDING_SIGNALS.slice(f.name).start
+        cols += [(n, f"(double)y[{at + i}]") for i, n in enumerate(f.element_names())]
+    return cols
+
+
+def land_context(d: LandingDefaults) -> dict:
+    """The example ``land``'s context: its scenario's values and the layouts' offsets."""
+    def rows(values):
+        values = [repr(float(v)) for v in np.asarray(values, dtype=float).ravel()]
+        return [values[i:i + 6] for i in range(0, len(values), 6)]
+
+    def fields(layout):
+        return ", ".join(f"{f.name} ({f.size})" for f in layout.fields)
+
+    x1q = LANDING_PLANT_STATE.slice("x1q").start
+    return dict(
+        d=d,
+        columns=[dict(name=n, expr=e) for n, e in land_columns()],
+        xg=[dict(name=n, index=i) for i, n in enumerate(GUIDANCE_STATE.names())],
+        w={n: a for n, (a, _) in LANDING_DISTURBANCE.offsets().items()},
+        y={n: LANDING_SIGNALS.slice(n).start for n in ("p_e", "v_e", "eta1", "eta2")}
+        | {"psi1": LANDING_SIGNALS.index("psi1")},
+        figures=[dict(name=n, index=i, limit="max_" + n)
+                 for i, n in enumerate(TOUCHDOWN_FIGURES.names())],
+        limits=[(name, repr(float(v))) for name, v in d.limits],
+        bias=[repr(float(v)) for v in (*d.force_bias, *d.moment_bias)],
+        wind_mean=[repr(float(v)) for v in d.wind_mean],
+        gust_direction=[repr(float(v)) for v in d.gust_direction],
+        pp_rows=rows(d.pp), pp_size=len(d.pp), pp_fields=fields(LANDING_PLANT_PARAMS),
+        xp_rows=rows(d.xp0), xp_size=len(d.xp0), xp_fields=fields(LANDING_PLANT_STATE),
+        xv=LANDING_PLANT_STATE.slice("xv").start, x1q_size=QUAD6_STATE.size,
+        rotors=x1q + QUAD6_STATE.slice("F").start,
+        p_veh=LANDING_PLANT_PARAMS.slice("p_veh").start,
+        tau_m=LANDING_PLANT_PARAMS.slice("p_act").start + ACTUATOR.index("motor_time_constant"),
+    )
+
+
+#: The landing model's functions the example ``land`` calls.
+LAND_MODEL = tuple(f.name for f in FUNCTIONS if f.part == "landing" and f.wrapper is not None)
+
+
+def generate_example(defaults: Defaults, landing: LandingDefaults) -> dict[str, str]:
+    """Text of the pure-C example: flights, benchmark, scenario headers and Makefile.
+
+    ``fly.c`` flies the paper's scenario (``defaults``, ``scenario.h``),
+    ``land.c`` the landing scenario (``landing``, ``land_scenario.h``),
+    ``bench.c`` times either step. The sources are precision-independent
+    (``ql_real``; the float header spells its names ``ql_`` too when it is
+    the only build included); the Makefile builds them against both the
+    double (``../``) and the float (``../float/``) files.
+    """
+    status = "quadland_status.c"
+    paper = example_context(defaults)
+    paper.update(land_scenario=landing.scenario, common_sources=[status],
+                 step_sources=[f for f in paper["step_sources"] if f != status],
+                 land_sources=[f for f in c_sources(LAND_MODEL) if f != status])
+    land = dict(common_context(None), scenario=landing.scenario, **land_context(landing))
+    files = {f"example/{name}": render(f"example/{name}.jinja", **paper)
+             for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}
+    files.update({f"example/{name}": render(f"example/{name}.jinja", **land)
+                  for name in ("land_scenario.h", "land.c")})
+    files["example/quadland_loop.h"] = loop_header()
+    return files
+

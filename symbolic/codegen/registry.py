@@ -1,0 +1,163 @@
+"""The registry of CasADi functions written as C: one entry per function."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import casadi as ca
+
+from symbolic.closed_loop import (
+    closed_loop_function,
+    closed_loop_jacobian_function,
+    plant_function,
+)
+from symbolic.codegen.config import CodegenConfig
+from symbolic.control_step import control_step_function
+from symbolic.landing.contact import anchor_function, landed_outputs_function
+from symbolic.landing.controller import (
+    landing_guidance_function,
+    landing_step_function,
+)
+from symbolic.landing.loop import gear_gap_function
+from symbolic.landing.plant import (
+    loop_plant_function,
+)
+from symbolic.landing.relative import touchdown_figures_function
+from symbolic.landing.sensors import measurement_function
+from symbolic.landing.signals import landing_signals_function
+from symbolic.vehicle import vehicle_function
+
+__all__ = ["GeneratedFunction", "FUNCTIONS", "BY_NAME", "API_FILE", "c_sources"]
+
+
+@dataclasses.dataclass(frozen=True)
+class GeneratedFunction:
+    """One CasADi function written as C.
+
+    Attributes
+    ----------
+    name : str
+        The ``casadi.Function``'s name and the stem of its ``.c``/``.h``.
+    builder : callable
+        ``builder(l)`` (or ``builder()`` without ``per_node_count``)
+        returns the function.
+    per_node_count : bool
+        Whether the function depends on the RBF node count ``l``.
+    wrapper : str, optional
+        File of its named-pointer wrapper ``ql_<name>(...)``, whose
+        arguments are the function's ``name_in``/``name_out``; None when
+        ``quadland.c`` wraps it.
+    doc : str
+        Comment of the wrapper in its header (``{ql}``/``{QL}`` stand for
+        the build's prefixes).
+    part : {"paper", "landing"}
+        Which API it belongs to: ``quadland.h`` (the paper's control step,
+        ``l`` of the paper's scenario) or ``quadland_landing.h`` (the landing
+        step and guidance, ``l`` of the landing scenario).
+    """
+
+    name: str
+    builder: Callable[..., ca.Function]
+    per_node_count: bool = True
+    wrapper: str | None = None
+    doc: str = ""
+    part: str = "paper"
+
+    @property
+    def source(self) -> str:
+        """Dotted path of the builder, for the banner."""
+        return f"{self.builder.__module__}.{self.builder.__qualname__}"
+
+    def function(self, l: int) -> ca.Function:
+        """The ``casadi.Function`` for ``l`` RBF nodes."""
+        fn = self.builder(l) if self.per_node_count else self.builder()
+        if fn.name() != self.name:
+            raise ValueError(f"{self.source} builds {fn.name()!r}, registered as {self.name!r}")
+        return fn
+
+    def origin(self, l: int) -> str:
+        """The builder's call, as the banner names it."""
+        return f"{self.source}(l={l})" if self.per_node_count else f"{self.source}()"
+
+    def c_name(self, config: CodegenConfig) -> str:
+        """Its C symbol in a build: ``ql_casadi_control_step``."""
+        return f"{config.prefix}casadi_{self.name}"
+
+    def arguments(self, l: int) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """Names of its inputs and outputs: the wrapper's arguments."""
+        fn = self.function(l)
+        return tuple(fn.name_in()), tuple(fn.name_out())
+
+
+#: The CasADi functions written as C, in file order: the one registry.
+FUNCTIONS = (
+    GeneratedFunction("control_step", control_step_function),
+    GeneratedFunction("closed_loop", closed_loop_function, wrapper="quadland_model.c",
+                      doc="x_dot of the continuous-time closed loop (symbolic.closed_loop)."),
+    GeneratedFunction("closed_loop_jacobian", closed_loop_jacobian_function,
+                      wrapper="quadland_jacobian.c",
+                      doc="d x_dot / d x: the {QL}CLOSED_LOOP_JACOBIAN_NNZ nonzeros in "
+                          "compressed\n * column storage; {ql}closed_loop_jacobian_sparsity "
+                          "gives the pattern\n * (CasADi format: nrow, ncol, colind[ncol + 1], "
+                          "row[nnz])."),
+    GeneratedFunction("plant", plant_function, per_node_count=False, wrapper="quadland_model.c",
+                      doc="xp_dot of the plant alone (quadrotor, vehicle, planar position) "
+                          "under a\n * held wrench and disturbance w."),
+    GeneratedFunction("landing_step", landing_step_function, part="landing"),
+    GeneratedFunction("landing_guidance", landing_guidance_function, per_node_count=False,
+                      part="landing"),
+    *(GeneratedFunction(name, builder, per_node_count=False, wrapper="quadland_landing_model.c",
+                        doc=doc, part="landing") for name, builder, doc in (
+        ("landing_loop_plant", loop_plant_function,
+         "xp_dot of the landing plant (quadrotor with motor lag, vehicle; the deck's\n"
+         " * motion is prescribed) under held rotor commands and w = [v_wind (E), d_F,\n"
+         " * d_M (body)]."),
+        ("landing_sensors", measurement_function,
+         "The landing step's measurements y from the plant's state: perfect sensors."),
+        ("landing_signals", landing_signals_function,
+         "The landing trajectory's signals y ({QL}LANDING_NY): both bodies, the\n"
+         " * relative state, the rotors, the external forces, phase and aborts."),
+        ("landing_gear_gap", gear_gap_function,
+         "The landing gear's height above the deck plane, m: touchdown is its zero\n"
+         " * crossing."),
+        ("landing_anchor", anchor_function,
+         "The pose at touchdown (p_e, R_deck^T R1) from the signals y there."),
+        ("landed_outputs", landed_outputs_function,
+         "After touchdown: the signals y and the state x1q of the quadrotor pinned to\n"
+         " * the deck at anchor, its rotor forces F winding down."),
+        ("vehicle", vehicle_function, "xv_dot of the vehicle alone (eq. 3-4)."),
+        ("touchdown_figures", touchdown_figures_function,
+         "Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a\n"
+         " * contact."),
+    )),
+)
+
+
+BY_NAME = {f.name: f for f in FUNCTIONS}
+
+
+#: The readable API's source of each part, which calls its functions without a wrapper.
+API_FILE = {"paper": "quadland.c", "landing": "quadland_landing.c"}
+
+
+def c_sources(functions=("control_step",)) -> tuple[str, ...]:
+    """The ``.c`` files that link the API of ``functions`` (names in :data:`FUNCTIONS`).
+
+    For each part (``quadland.h``, ``quadland_landing.h``) a function belongs
+    to (the paper's without any): its API file and the functions it calls
+    (the paper's control step; the landing step and guidance); each other
+    function with its wrapper's file; ``quadland_status.c`` always.
+    """
+    unknown = set(functions) - set(BY_NAME)
+    if unknown:
+        raise ValueError(f"unknown generated functions {sorted(unknown)}")
+    parts = [p for p in API_FILE if any(BY_NAME[f].part == p for f in functions)] or ["paper"]
+    chosen = [f for f in FUNCTIONS
+              if f.name in functions or (f.part in parts and f.wrapper is None)]
+    files = [f"{f.name}.c" for f in chosen] + [API_FILE[p] for p in parts]
+    for f in chosen:
+        if f.wrapper and f.wrapper not in files:
+            files.append(f.wrapper)
+    return (*files, "quadland_status.c")
+

@@ -1,0 +1,129 @@
+"""The compiled simulators' C: each loop's functions and its driver.
+
+:func:`simulator_sources` writes one part of a loop's simulator (see
+:data:`SIMULATOR_PARTS`): each function of the :class:`symbolic.loop.LoopModel`
+as CasADi writes it, one translation unit each, and the driver
+(``symbolic/templates/simulator.c.jinja``), which knows nothing of the model
+but its functions' sizes; :func:`loop_header` the loop algorithm the drivers
+and the pure-C examples share (``quadland_loop.h``).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+
+from symbolic.codegen.render import common_context, render
+from symbolic.loop import LoopModel
+
+__all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
+
+#: The parts of a compiled simulator: each one's driver and the functions it calls.
+#: ``"sampled_flight"`` flies the flight code (``quadland.h``'s
+#: ``ql_control_step``; ``quadland_landing.h``'s ``ql_guidance_step`` and
+#: ``ql_landing_step``) in place of the symbolic controller, through the
+#: model's adapter (:attr:`LoopModel.flight`); its build adds the flight
+#: sources.
+SIMULATOR_PARTS = {"continuous": ("continuous", ("rhs", "outputs", "envelope")),
+                   "sampled": ("sampled", ("plant", "controller", "assemble", "outputs",
+                                           "envelope")),
+                   "sampled_flight": ("sampled", ("plant", "step_args", "assemble", "outputs",
+                                                  "envelope"))}
+
+
+def loop_header(precision: str | None = None) -> str:
+    """``quadland_loop.h``: the loop algorithm the simulators and the pure-C examples share.
+
+    Clocks and their merged grid, RK4 over a span, the event's bisection
+    (``symbolic/templates/quadland_loop.h.jinja``); ``quadland.engine.loop``
+    mirrors it in Python.
+    """
+    return render("quadland_loop.h.jinja", **dict(common_context(None), precision=precision))
+
+
+def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
+    """C sources of one part of a compiled simulator of ``model``, by file name.
+
+    Parameters
+    ----------
+    model : LoopModel
+    part : {"continuous", "sampled"}
+        Which loop; see :data:`SIMULATOR_PARTS`.
+
+    Returns
+    -------
+    dict of str to str
+        ``<prefix><function>.c/.h``: each function the part calls, as
+        CasADi writes it, named ``<prefix><function>`` (one translation unit
+        each, so that a build compiles them in parallel); ``<prefix><part>.c``:
+        the driver (``symbolic/templates/simulator.c.jinja``): RK4 over an
+        exact grid, one call per run, parameters passed once and shared,
+        outputs written straight into the caller's arrays. ``prefix`` is
+        ``qlsim_<model name>_``. The text depends only on the model and the
+        CasADi version.
+    """
+    if part not in SIMULATOR_PARTS:
+        raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
+    prefix = f"qlsim_{model.name}_"
+    by_name = {f.name(): f for f in model.functions()}
+    driver, names = SIMULATOR_PARTS[part]
+    if driver == "sampled" and model.event is not None:
+        names = (*names, "event")
+    if model.envelope is None:
+        names = tuple(n for n in names if n != "envelope")
+    files, fns = {}, []
+    for name in names:
+        f = by_name[name]
+        args = f.sx_in()
+        fn = ca.Function(prefix + name, args, f.call(args), f.name_in(), f.name_out())
+        fns.append(fn)
+        cg = ca.CodeGenerator(f"{prefix}{name}.c", {
+            "with_header": True, "with_export": False, "prefix": f"{prefix}{name}_",
+            "verbose": False})
+        cg.add(fn)
+        with tempfile.TemporaryDirectory() as tmp:
+            cg.generate(tmp + os.sep)
+            for ext in ("c", "h"):
+                files[f"{prefix}{name}.{ext}"] = Path(tmp, f"{prefix}{name}.{ext}").read_text()
+    sizes = dict(NX=model.state.size, NW=model.disturbance.size, NP=model.params.size,
+                 NY=model.outputs.size, NXP=model.plant_state.size, NUH=model.held.size,
+                 NXC=model.controller_state.size, NPP=model.plant_params.size,
+                 NPC=model.controller_params.size, NREC=model.recorded.size,
+                 NENV=model.envelope_layout.size if model.envelope is not None else 0)
+    headers = [n for n in names if n != "step_args"] + (
+        ["controller"] if part == "sampled_flight" else [])
+    files["quadland_loop.h"] = loop_header()
+    files[f"{prefix}{part}.c"] = render("simulator.c.jinja",
+        prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
+        has_event=driver == "sampled" and model.event is not None,
+        has_envelope=model.envelope is not None,
+        casadi_version=ca.__version__, sizes=sizes,
+        sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
+        sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))
+    if part == "sampled_flight":
+        if model.flight is None:
+            raise ValueError(f"the loop {model.name!r} has no flight code")
+        args = by_name["step_args"]
+        offsets = {lay.name: lay.offsets() for lay in (model.controller_state, model.recorded)}
+        nested = {f.name: {g.name: a for g, (a, _) in zip(
+            f.layout.fields, f.layout.offsets().values(), strict=True)}
+            for f in model.controller_state.fields if f.layout is not None}
+        files[f"{prefix}controller.h"] = (
+            f"/* {prefix}controller: the flight step behind the controller's signature. */\n"
+            f"#include \"{prefix}step_args.h\"\n"
+            f"int {prefix}controller(const casadi_real** arg, casadi_real** res, "
+            "casadi_int* iw, casadi_real* w, int mem);\n")
+        files[f"{prefix}controller.c"] = render(model.flight,
+            prefix=prefix, model=model.name, casadi_version=ca.__version__,
+            args=[(n, args.nnz_out(i)) for i, n in enumerate(args.name_out())],
+            sz_iw=args.sz_iw(), sz_w=args.sz_w(),
+            xc=[(f.name, offsets[model.controller_state.name][f.name][0])
+                for f in model.controller_state.fields],
+            rec=[(f.name, offsets[model.recorded.name][f.name][0])
+                 for f in model.recorded.fields],
+            nested=nested)
+    return files
+

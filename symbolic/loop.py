@@ -1,0 +1,132 @@
+"""The functions a compiled simulator needs, in a model-independent shape.
+
+A simulator integrates one of two kinds of loop, and knows nothing of a
+model but the sizes of these functions' flat vector arguments:
+
+* continuous: ``rhs(x, w, t, p) -> x_dot`` and ``outputs(x, w, t, p) -> y``
+  (the output signals stacked in one vector);
+* sampled-data: a plant ``plant(xp, uh, w, t, pp) -> xp_dot`` driven by the
+  held input ``uh``, a controller ``controller(xp, xc, pc, first, t) ->
+  (xc_next, uh, rec, guard)`` run at its own rate (``rec``: the signals to
+  record at the output times, ``guard``: a scalar that must stay away from
+  zero, ``first``: 1 on the first step), and ``assemble(xp, xc) -> x``, the
+  continuous loop's state, so that ``outputs`` serves both loops; and,
+  optionally, an event ``event(xp, t, pp) -> g`` whose crossing from
+  positive to zero or below ends the run at the instant it happens (a
+  touchdown), located within the step;
+
+and an envelope ``envelope(x, uh) -> s``: magnitudes (altitude, speed, rate,
+network weights, ...) that must stay at or below bounds given per run, so
+that a diverging flight stops as soon as it leaves the physical envelope
+instead of when a value overflows.
+
+``t`` is the time, s: models that do not depend on it ignore it.
+
+:class:`LoopModel` bundles them with their layouts; :func:`paper_loop`
+builds it for the paper's 4-DOF loop. A new model supplies its own
+``LoopModel`` and goes through the same code generation, build and driver.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import casadi as ca
+
+from symbolic.layout import Layout
+
+__all__ = ["rk4_step", "LoopModel"]
+
+
+def rk4_step(f: ca.Function) -> ca.Function:
+    """One classical RK4 step of ``x' = f(x, *u)``, the inputs after ``x`` held.
+
+    ``rk4(x, *u, h) -> x_next``: the step the compiled drivers take, for
+    CasADi's virtual machine (the fallback without a C compiler). An input
+    named ``t`` is the time: it advances through the stages (``t``,
+    ``t + h/2``, ``t + h``) instead of being held.
+    """
+    args = [ca.MX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
+    h = ca.MX.sym("h")
+    x, u = args[0], args[1:]
+    names = f.name_in()[1:]
+
+    def at(c):
+        return [ui + c * h if name == "t" else ui for name, ui in zip(names, u, strict=True)]
+
+    k1 = f(x, *at(0))
+    k2 = f(x + h / 2 * k1, *at(0.5))
+    k3 = f(x + h / 2 * k2, *at(0.5))
+    k4 = f(x + h * k3, *at(1))
+    return ca.Function(f"{f.name()}_rk4", [*args, h], [x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)],
+                       [*f.name_in(), "h"], [f"{f.name_out(0)}_next"])
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopModel:
+    """The symbolic functions and layouts of one simulated loop.
+
+    Attributes
+    ----------
+    name : str
+        Identifier, used in generated C symbols.
+    state, disturbance, params, outputs : Layout
+        Layouts of ``x``, ``w``, ``p`` and ``y`` of the continuous loop.
+    rhs, output_fn : casadi.Function
+        ``rhs(x, w, t, p) -> x_dot`` (None for a loop that is sampled-data
+        only); ``outputs(x, w, t, p) -> y`` (one vector).
+    plant_state, held, controller_state, plant_params, controller_params, recorded : Layout
+        Layouts of the sampled-data loop's ``xp``, ``uh``, ``xc``, ``pp``,
+        ``pc`` and ``rec``.
+    plant, controller, assemble : casadi.Function
+        The sampled-data loop's functions (see the module docstring).
+    step_args : casadi.Function or None
+        ``step_args(xp, xc, pc, first, t) -> (...)``: the flight code's
+        arguments as the controller forms them (the paper's: the control
+        step's, ``symbolic.control_step.step_inputs``). The flight code behind
+        the controller's flat signature (part ``"sampled_flight"``) starts
+        from it.
+    event : casadi.Function or None
+        ``event(xp, t, pp) -> g``: the run ends where ``g`` falls from
+        positive to zero or below (see the module docstring).
+    envelope : casadi.Function or None
+        ``envelope(x, uh) -> s``: magnitudes of the loop state ``x`` and the
+        held input ``uh`` (zero in the continuous loop) that a flight must
+        keep below bounds given at run time: the run stops where one does
+        not (a diverging flight), see the module docstring.
+    envelope_layout : Layout or None
+        Names, units and meanings of ``s``.
+    flight : str or None
+        The template (in ``symbolic/templates/``) of the adapter that puts
+        the flight code behind the controller's signature.
+    """
+
+    name: str
+    state: Layout
+    disturbance: Layout
+    params: Layout
+    outputs: Layout
+    rhs: ca.Function | None
+    output_fn: ca.Function
+    plant_state: Layout
+    held: Layout
+    controller_state: Layout
+    plant_params: Layout
+    controller_params: Layout
+    recorded: Layout
+    plant: ca.Function
+    controller: ca.Function
+    assemble: ca.Function
+    step_args: ca.Function | None = None
+    event: ca.Function | None = None
+    envelope: ca.Function | None = None
+    envelope_layout: Layout | None = None
+    flight: str | None = None
+
+    def functions(self) -> tuple[ca.Function, ...]:
+        """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
+        return tuple(f for f in (self.rhs, self.output_fn, self.plant, self.controller,
+                                 self.assemble, self.step_args, self.event, self.envelope)
+                     if f is not None)
+
+
