@@ -39,11 +39,11 @@ import numpy as np
 import quadland
 from quadland import cbackend, codegen
 from quadland.model import disturbance_samples, model_values
-from symbolic.closed_loop import closed_loop_state
-from symbolic.control_step import control_step_function, step_outputs
-from symbolic.loop import rk4_step
-from symbolic.paper_loop import paper_loop
-from symbolic.parameters import VEHICLE
+from quadland_symbolic.closed_loop import closed_loop_state
+from quadland_symbolic.control_step import control_step_function, step_outputs
+from quadland_symbolic.loop import rk4_step
+from quadland_symbolic.paper_loop import paper_loop
+from quadland_symbolic.parameters import VEHICLE
 
 ANGLES = ("phi_e", "theta_e", "psi_e")
 #: Instructions one double step (l = 100) may cost at -O2, by controller (docs/codegen.md).
@@ -103,7 +103,7 @@ def _fly(precision: str, rate: float = 500.0, duration: float = 10.0) -> dict:
 
     ``quadland.simulate`` runs its loop in C with the double step; to fly the
     float build, this loop calls it through ctypes (``CControlStep``) and
-    steps the plant with the same RK4 (``symbolic.loop.rk4_step``),
+    steps the plant with the same RK4 (``quadland_symbolic.loop.rk4_step``),
     one step per control period, the disturbance (bias and sine) held at its
     sample rate. Returns ``z_e``, the attitude and the rotor forces per step.
     """

@@ -4,7 +4,7 @@ The operations of its SX functions and the instructions of its C.
 
 Measured:
 
-* the operation counts (:func:`symbolic.kalman.operation_counts`) of
+* the operation counts (:func:`quadland_symbolic.kalman.operation_counts`) of
   ``estimator_step`` for both covariance couplings at the default sizes
   (``n_hist = 50``, FIFO depth 8) and of its parts (one prediction, one
   update per block, the output predictor);
@@ -32,15 +32,15 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from symbolic.kalman import operation_counts
-from symbolic.landing.estimator import (
+from quadland_symbolic.kalman import operation_counts
+from quadland_symbolic.landing.estimator import (
     FIFO_DEPTH,
     N_HIST,
     estimator_init_function,
     estimator_step_function,
     output_predictor_function,
 )
-from symbolic.landing.navigation import (
+from quadland_symbolic.landing.navigation import (
     BLOCKS,
     ESTIMATOR_DEFAULTS,
     IMU,

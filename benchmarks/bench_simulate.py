@@ -64,7 +64,11 @@ from quadland.build import find_compiler
 from quadland.compiled import compiled_loop
 from quadland.model import disturbance_samples, model_values
 from quadland.simulate import run_clocks, time_grid
-from symbolic.closed_loop import closed_loop_function, closed_loop_params, closed_loop_state
+from quadland_symbolic.closed_loop import (
+    closed_loop_function,
+    closed_loop_params,
+    closed_loop_state,
+)
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "performance.md"

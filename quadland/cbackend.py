@@ -1,7 +1,7 @@
 """The generated C, compiled on demand and called from Python.
 
 Data flows one way: the C for the requested node count ``l`` and precision
-is generated from ``symbolic`` (:func:`symbolic.codegen.generate`, with the
+is generated from ``symbolic`` (:func:`quadland_symbolic.codegen.generate`, with the
 paper scenario's defaults and ``rbf.nodes = l``) and compiled with the
 system's C compiler by :func:`quadland.build.build_library` into a shared
 library, cached under ``$XDG_CACHE_HOME/quadland`` (``~/.cache/quadland``)
@@ -10,7 +10,7 @@ The source tree's ``generated/`` is never read, so an installed quadland
 works the same as a checkout.
 
 :func:`load_control_step` returns a callable with the calling convention and
-outputs of ``symbolic.control_step.control_step_function`` (NumPy arrays of
+outputs of ``quadland_symbolic.control_step.control_step_function`` (NumPy arrays of
 the same shapes), used by the sampled-data simulation with
 ``controller.backend = "c"``; :func:`load_api` gives the readable API with
 ``ctypes`` mirrors of its structs, derived from the same layouts as the C
@@ -26,10 +26,16 @@ import functools
 import numpy as np
 
 from quadland.build import build_library
-from symbolic.codegen import FUNCTIONS, CodegenConfig, c_sources, generate, generate_landing
-from symbolic.codegen.structs import api_structs, landing_api_structs
-from symbolic.control_step import step_inputs, step_outputs
-from symbolic.layout import Layout
+from quadland_symbolic.codegen import (
+    FUNCTIONS,
+    CodegenConfig,
+    c_sources,
+    generate,
+    generate_landing,
+)
+from quadland_symbolic.codegen.structs import api_structs, landing_api_structs
+from quadland_symbolic.control_step import step_inputs, step_outputs
+from quadland_symbolic.layout import Layout
 
 __all__ = ["sources", "ctypes_struct", "CControlStep", "load_control_step", "CApi", "load_api",
            "LandingApi", "load_landing_api"]
@@ -82,7 +88,7 @@ def _real(precision: str):
 
 @functools.cache
 def ctypes_struct(layout: Layout, real) -> type:
-    """The ``ctypes.Structure`` of a layout, as ``symbolic.codegen`` declares it in C.
+    """The ``ctypes.Structure`` of a layout, as ``quadland_symbolic.codegen`` declares it in C.
 
     Real fields in order (a matrix ``shape = (rows, cols)`` as
     ``real[cols][rows]``), nested layouts as nested structures, ``int``
@@ -91,7 +97,7 @@ def ctypes_struct(layout: Layout, real) -> type:
     Parameters
     ----------
     layout : Layout
-        The struct's layout (``symbolic.codegen.structs``).
+        The struct's layout (``quadland_symbolic.codegen.structs``).
     real : type
         ``ctypes.c_double`` or ``ctypes.c_float``.
     """

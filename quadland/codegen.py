@@ -6,7 +6,7 @@ the landing step and guidance with the ``highway`` scenario's
 (``quadland_landing.h``); the double-precision build at its top, the
 single-precision build in ``float/`` and the pure-C example in
 ``example/`` (``fly``: the paper's flight, ``land``: highway's landing, and
-``bench``). Every file comes from :func:`symbolic.codegen.generate_tree`. A
+``bench``). Every file comes from :func:`quadland_symbolic.codegen.generate_tree`. A
 landing scenario replaces the landing half's values and the paper's half
 keeps its own, any other scenario the reverse; such a tree, or one from an
 installed (non-editable) quadland, is written into a folder given with
@@ -32,7 +32,7 @@ from quadland.exceptions import CodegenError
 from quadland.model import model_values
 from quadland.output import WorkFolder, fsync_dir, remove_abandoned
 from quadland.scenario import load_scenario, require_model
-from symbolic.codegen import Defaults, LandingDefaults, generate_tree
+from quadland_symbolic.codegen import Defaults, LandingDefaults, generate_tree
 
 __all__ = ["EXAMPLE_CONTROL_RATE_HZ", "PAPER_SCENARIO", "LANDING_SCENARIO", "checkout_root",
            "generated_dir", "default_values", "landing_default_values", "generated_files",
@@ -57,7 +57,7 @@ def checkout_root() -> Path | None:
 
     A checkout is the folder above the ``quadland`` package when it holds
     ``pyproject.toml``, ``symbolic/`` and ``generated/`` (an installed
-    package sits in ``site-packages``, beside an installed ``symbolic``
+    package sits in ``site-packages``, beside an installed ``quadland_symbolic``
     but without the other two).
     """
     root = _package_parent()
@@ -116,8 +116,8 @@ def landing_default_values(scenario: str | Path = LANDING_SCENARIO,
     landing scenario's values (``quadland.landing.landing_values``), with overrides."""
     from quadland.landing import landing_values
     from quadland.metrics import TOUCHDOWN_LIMITS
-    from symbolic.landing.loop import landing_loop_params
-    from symbolic.landing.plant import LANDING_PLANT_PARAMS
+    from quadland_symbolic.landing.loop import landing_loop_params
+    from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
 
     sc = load_scenario(scenario, list(overrides))
     require_model(sc, "landing", "the landing step's code generation")
@@ -371,10 +371,10 @@ def check_target(out: Path) -> None:
         raise CodegenError(f"out: {out} is the current folder or holds it; give the generated "
                            "tree a folder of its own (e.g. --out generated-c)")
     import quadland
-    import symbolic
+    import quadland_symbolic
 
     packages = {Path(quadland.__file__).resolve().parent,
-                Path(symbolic.__file__).resolve().parent,
+                Path(quadland_symbolic.__file__).resolve().parent,
                 _package_parent() / "quadland", _package_parent() / "symbolic"}
     root = checkout_root()
     if root is not None and real == root.resolve():

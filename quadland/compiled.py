@@ -1,7 +1,7 @@
-"""Simulators of the loops of ``symbolic.loop.LoopModel``: compiled, or on CasADi's VM.
+"""Simulators of the loops of ``quadland_symbolic.loop.LoopModel``: compiled, or on CasADi's VM.
 
 :func:`compiled_loop` generates the C of one part of a simulator
-(``symbolic.codegen.simulator_sources``), builds it once into the disk
+(``quadland_symbolic.codegen.simulator_sources``), builds it once into the disk
 cache (:mod:`quadland.build`) and loads it with ``ctypes``
 (:class:`CompiledLoop`). A call runs a whole simulation in C: RK4 over the
 exact time grid, the parameters passed once, states and outputs written
@@ -22,10 +22,10 @@ import numpy as np
 from quadland.build import build_library, have_compiler
 from quadland.engine.loop import locate_event, merged_grid, rk4_span
 from quadland.exceptions import CompileError, CompilerNotFoundError
-from symbolic.codegen import SIMULATOR_PARTS, simulator_sources
-from symbolic.landing.loop import landing_loop
-from symbolic.loop import LoopModel, rk4_step
-from symbolic.paper_loop import paper_loop
+from quadland_symbolic.codegen import SIMULATOR_PARTS, simulator_sources
+from quadland_symbolic.landing.loop import landing_loop
+from quadland_symbolic.loop import LoopModel, rk4_step
+from quadland_symbolic.paper_loop import paper_loop
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "LOOPS", "SIM_OK",
            "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "SIM_ENVELOPE",
@@ -367,7 +367,7 @@ def _bounds(model: LoopModel, bound) -> np.ndarray:
 def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VMLoop:
     """The ``part`` of a loop's simulator for ``l`` nodes: compiled, or on the VM.
 
-    ``part`` is a key of ``symbolic.codegen.SIMULATOR_PARTS``; ``model`` a
+    ``part`` is a key of ``quadland_symbolic.codegen.SIMULATOR_PARTS``; ``model`` a
     key of :data:`LOOPS` (the paper's loop, the landing loop). One simulator
     is kept per model, ``l`` and part. Without a C compiler: a
     :class:`VMLoop` after one :class:`QuadlandWarning`; the flight code
@@ -402,7 +402,7 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
     flight, flight_sources = None, ()
     if part == "sampled_flight":
         from quadland.cbackend import sources
-        from symbolic.codegen import c_sources
+        from quadland_symbolic.codegen import c_sources
 
         flight = sources(l, "double", model)
         flight_sources = c_sources(({"paper": "control_step", "landing": "landing_step"}[model],))

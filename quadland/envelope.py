@@ -2,7 +2,7 @@
 
 A diverging flight is stopped as soon as it leaves a physical envelope, not
 when a value overflows. The loop's symbolic ``envelope(x, uh) -> s``
-(:attr:`symbolic.loop.LoopModel.envelope`) gives magnitudes of its
+(:attr:`quadland_symbolic.loop.LoopModel.envelope`) gives magnitudes of its
 state (altitude, speeds, rates, rotor forces, network weights); the
 simulator compares them with the bounds of an :class:`Envelope`, derived from
 the scenario by each loop (docs/simulation.md, "The flight envelope"), at
@@ -17,7 +17,7 @@ import dataclasses
 
 import numpy as np
 
-from symbolic.layout import Layout
+from quadland_symbolic.layout import Layout
 
 __all__ = ["ENVELOPE_FACTOR", "Envelope", "rk4_amplification", "rk4_steps_needed"]
 
@@ -34,7 +34,7 @@ class Envelope:
     Attributes
     ----------
     layout : Layout
-        The magnitudes (:attr:`symbolic.loop.LoopModel.envelope_layout`).
+        The magnitudes (:attr:`quadland_symbolic.loop.LoopModel.envelope_layout`).
     bounds : ndarray
         One upper bound per magnitude, in its unit.
     basis : tuple of str
@@ -61,7 +61,7 @@ class Envelope:
 
         Examples
         --------
-        >>> from symbolic.closed_loop import PAPER_ENVELOPE
+        >>> from quadland_symbolic.closed_loop import PAPER_ENVELOPE
         >>> env = Envelope(PAPER_ENVELOPE, np.full(6, 10.0), ("x",) * 6)
         >>> print(env.describe(np.array([1.0, 500.0, 0, 0, 0, 0])))
         the speed (largest body velocity component |V1|) reached 500 m/s, beyond its

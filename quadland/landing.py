@@ -2,7 +2,7 @@
 
 A landing scenario (``scenario.model = "landing"``, schema
 ``quadland.scenario.LANDING_SCHEMA``) flies the landing loop of
-``symbolic.landing.loop`` in one call of its compiled simulator (on CasADi's
+``quadland_symbolic.landing.loop`` in one call of its compiled simulator (on CasADi's
 virtual machine without a C compiler): the guidance and the landing step at
 ``controller.rate_hz`` (CasADi's functions, or with ``controller.backend =
 "c"`` the generated flight code of ``quadland_landing.h``), their rotor
@@ -45,24 +45,34 @@ from quadland.simulate import (
     slow_control_hint,
 )
 from quadland.wind import OneCosineGust, dryden_low_altitude, gust_samples, turbulence_samples
-from symbolic.kinematics import rotation
-from symbolic.landing.contact import anchor_function, landed_outputs_function
-from symbolic.landing.controller import landing_controller_params, landing_memory
-from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
-from symbolic.landing.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE, LANDED, TOUCHDOWN
-from symbolic.landing.loop import (
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.contact import anchor_function, landed_outputs_function
+from quadland_symbolic.landing.controller import landing_controller_params, landing_memory
+from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
+from quadland_symbolic.landing.guidance import (
+    APPROACH,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    LANDED,
+    TOUCHDOWN,
+)
+from quadland_symbolic.landing.loop import (
     LANDING_ENVELOPE,
     LANDING_RECORDED,
     landing_loop_memory,
     landing_loop_params,
     landing_loop_state,
 )
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE, loop_plant_function
-from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
-from symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
-from symbolic.loop import rk4_step
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.vehicle import VEHICLE_STATE, vehicle_function
+from quadland_symbolic.landing.plant import (
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+    loop_plant_function,
+)
+from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
+from quadland_symbolic.loop import rk4_step
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_function
 
 __all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "landing_envelope",
            "landing_clocks",
@@ -81,9 +91,9 @@ class LandingValues:
     l : int
         RBF node count.
     pp : ndarray
-        Plant parameters (``symbolic.landing.plant.LANDING_PLANT_PARAMS``).
+        Plant parameters (``quadland_symbolic.landing.plant.LANDING_PLANT_PARAMS``).
     pc : ndarray
-        Controller parameters (``symbolic.landing.loop.landing_loop_params(l)``).
+        Controller parameters (``quadland_symbolic.landing.loop.landing_loop_params(l)``).
     xp0, xc0 : ndarray
         Initial plant state and controller memory.
     F_max : float
@@ -293,7 +303,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     Returns
     -------
     SimulationResult
-        Every signal of ``symbolic.landing.loop.LANDING_SIGNALS`` and ``LANDING_RECORDED``
+        Every signal of ``quadland_symbolic.landing.loop.LANDING_SIGNALS`` and ``LANDING_RECORDED``
         by name, at the output times up to touchdown, one row at the
         touchdown instant, then the ride on the deck; its ``layout`` is
         :data:`LANDING_TRAJECTORY` (the CSV's columns) and ``states`` the

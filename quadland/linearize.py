@@ -5,11 +5,11 @@ u to the measured relative state ``y = xr = [z1, phi1, theta1, psi_e, u1,
 v1, w1, p1, q1, r1]``; the controller maps y to u and carries the adaptive
 states ``xc = [vec(W_hat), zeta_hat]``. The coordinates and what is left
 out (planar positions, the vehicle's own dynamics) are explained in
-``symbolic.linearization`` and ``docs/margins.md``.
+``quadland_symbolic.linearization`` and ``docs/margins.md``.
 
 The landing loop (``scenario.model = "landing"``) is broken at the wrench
 ``u = [T, M_x, M_y, M_z]`` its step sends to the mixer. The plant (6-DOF
-with motor lag, in the deck frame, ``symbolic.landing.linearization``) maps
+with motor lag, in the deck frame, ``quadland_symbolic.landing.linearization``) maps
 u to the quadrotor's measurements ``y = [p_e, v_e, eta1, Omega1]``; the
 controller is the landing step, whose state is its memory. It is analysed
 hovering ``landing.hover_height`` above the pad (:func:`equilibrium`).
@@ -41,18 +41,18 @@ from quadland.exceptions import (
 )
 from quadland.model import model_values
 from quadland.scenario import Scenario
-from symbolic.closed_loop import closed_loop_state
-from symbolic.linearization import (
+from quadland_symbolic.closed_loop import closed_loop_state
+from quadland_symbolic.linearization import (
     RELATIVE_PLANT,
     VEHICLE_SPEEDS,
     controller_states,
     equilibrium_residual_function,
     linearization_function,
 )
-from symbolic.parameters import VEHICLE
-from symbolic.quadrotor import BODY_DISTURBANCE, WRENCH
-from symbolic.relative import VIRTUAL_INPUT
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.parameters import VEHICLE
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, WRENCH
+from quadland_symbolic.relative import VIRTUAL_INPUT
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["check_frozen_time", "LOOP_NAMES", "INPUT_NAMES", "LANDING_LOOP_NAMES",
            "LANDING_INPUT_NAMES", "OperatingPoint", "LinearModels", "equilibrium",
@@ -80,12 +80,12 @@ class OperatingPoint:
         s, the simulated time of a frozen point.
     xr : ndarray
         Plant state: the paper's relative state (10,
-        ``symbolic.linearization.RELATIVE_PLANT``) or the landing plant in
-        the deck frame (16, ``symbolic.landing.linearization.HOVER_PLANT``).
+        ``quadland_symbolic.linearization.RELATIVE_PLANT``) or the landing plant in
+        the deck frame (16, ``quadland_symbolic.landing.linearization.HOVER_PLANT``).
     xc : ndarray
         Controller state: the paper's adaptive states ``[vec(W_hat),
         zeta_hat]`` (4 l + 4) or the landing step's memory (6 l + 16,
-        ``symbolic.landing.controller.landing_memory``).
+        ``quadland_symbolic.landing.controller.landing_memory``).
     vehicle : ndarray, shape (3,)
         Vehicle surge, sway (m/s) and yaw rate r2 (rad/s).
     z2 : float
@@ -120,8 +120,8 @@ class OperatingPoint:
     def to_dict(self) -> dict:
         """JSON-ready summary."""
         if self.model == "landing":
-            from symbolic.landing.controller import landing_memory
-            from symbolic.landing.linearization import HOVER_PLANT
+            from quadland_symbolic.landing.controller import landing_memory
+            from quadland_symbolic.landing.linearization import HOVER_PLANT
 
             mem = landing_memory(_landing_nodes(self.xc.size)).unpack(self.xc)
             plant = HOVER_PLANT.element_names()
@@ -228,7 +228,7 @@ def equilibrium(scenario: Scenario, *, tol: float = 1e-9, max_iter: int = 50) ->
     (turbulence and gust left out, the wind turned into the vehicle's
     initial heading) and the disturbance at its constant part; the step's
     memory (network, robust terms, command filter, compensator) at rest
-    (``symbolic.landing.linearization.hover_equilibrium_residual_function``).
+    (``quadland_symbolic.landing.linearization.hover_equilibrium_residual_function``).
 
     Parameters
     ----------
@@ -361,11 +361,11 @@ class _HoverValues:
 
 def _hover_values(scenario: Scenario) -> _HoverValues:
     from quadland.landing import landing_values
-    from symbolic.kinematics import rotation
-    from symbolic.landing.deck import DECK_PARAMS
-    from symbolic.landing.guidance import POSITION_REFERENCE
-    from symbolic.landing.loop import landing_loop_params
-    from symbolic.landing.plant import (
+    from quadland_symbolic.kinematics import rotation
+    from quadland_symbolic.landing.deck import DECK_PARAMS
+    from quadland_symbolic.landing.guidance import POSITION_REFERENCE
+    from quadland_symbolic.landing.loop import landing_loop_params
+    from quadland_symbolic.landing.plant import (
         LANDING_DISTURBANCE,
         LANDING_PLANT_PARAMS,
         LANDING_PLANT_STATE,
@@ -393,8 +393,8 @@ def _hover_values(scenario: Scenario) -> _HoverValues:
 
 
 def _hover_equilibrium(scenario: Scenario, tol: float, max_iter: int) -> OperatingPoint:
-    from symbolic.landing.controller import landing_controller_params, landing_memory
-    from symbolic.landing.linearization import (
+    from quadland_symbolic.landing.controller import landing_controller_params, landing_memory
+    from quadland_symbolic.landing.linearization import (
         HOVER_PLANT,
         hover_equilibrium_residual_function,
         hover_linearization_function,
@@ -442,7 +442,7 @@ def _hover_equilibrium(scenario: Scenario, tol: float, max_iter: int) -> Operati
 
 
 def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
-    from symbolic.landing.linearization import hover_linearization_function
+    from quadland_symbolic.landing.linearization import hover_linearization_function
 
     hv = _hover_values(scenario)
     out = hover_linearization_function(hv.l)(point.xr, point.xc, point.vehicle, point.w, hv.pp,
@@ -453,14 +453,14 @@ def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
 
 def _landing_nodes(memory_size: int) -> int:
     """The node count l of a landing step's memory of ``6 l + 16`` entries."""
-    from symbolic.landing.controller import N_CHANNELS, landing_memory
+    from quadland_symbolic.landing.controller import N_CHANNELS, landing_memory
 
     return (memory_size - landing_memory(1).size) // N_CHANNELS + 1
 
 
 def _landing_names(l: int):
-    from symbolic.landing.controller import landing_memory
-    from symbolic.landing.linearization import HOVER_OUTPUT, HOVER_PLANT
+    from quadland_symbolic.landing.controller import landing_memory
+    from quadland_symbolic.landing.linearization import HOVER_OUTPUT, HOVER_PLANT
 
     return dict(x=list(HOVER_PLANT.element_names()), y=list(HOVER_OUTPUT.element_names()),
                 u=list(LANDING_INPUT_NAMES), c=list(landing_memory(l).element_names()),
@@ -521,10 +521,10 @@ def linear_models(scenario: Scenario, point: OperatingPoint) -> LinearModels:
     Returns
     -------
     LinearModels
-        From the exact symbolic Jacobians of ``symbolic.linearization``.
+        From the exact symbolic Jacobians of ``quadland_symbolic.linearization``.
         The landing loop's controller is its step's limit ``dt -> 0``:
         the memory's differential equations, which the step integrates
-        exactly over its period (``symbolic.landing.linearization``).
+        exactly over its period (``quadland_symbolic.landing.linearization``).
     """
     if point.model == "landing":
         J = _hover_jacobians(scenario, point, 0.0)
@@ -567,7 +567,7 @@ def sampled_models(scenario: Scenario, point: OperatingPoint, rate_hz: float,
     The plant is discretized with its input u held (the held wrench of the
     sampled simulator, linearized). The paper's controller has its adaptive
     states integrated with the measurement held over the period, which is
-    exactly how ``symbolic.control_step`` integrates eq. (22); with
+    exactly how ``quadland_symbolic.control_step`` integrates eq. (22); with
     ``controller.hold_compensation = kappa > 0`` it also holds the law's
     previous output ``u_prev`` (four more states) and commands ``(1 + kappa)
     u_law - kappa u_prev``, as the control step does. The landing loop's

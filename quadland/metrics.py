@@ -19,7 +19,7 @@ SETTLING_FLOOR = {"z_e": 0.01, "phi_e": np.deg2rad(0.1), "theta_e": np.deg2rad(0
                   "psi_e": np.deg2rad(0.1)}
 
 #: The ``[landing]`` limits a touchdown is held to, in the report's order: each
-#: is ``max_`` and the name of a ``symbolic.landing.relative.TOUCHDOWN_FIGURES``.
+#: is ``max_`` and the name of a ``quadland_symbolic.landing.relative.TOUCHDOWN_FIGURES``.
 TOUCHDOWN_LIMITS = ("max_sink_rate", "max_offset", "max_tilt_deg", "max_relative_speed")
 
 E1 = ("z_e", "phi_e", "theta_e", "psi_e")
@@ -143,14 +143,14 @@ class TouchdownReport:
 def touchdown_report(result: SimulationResult) -> TouchdownReport:
     """The touchdown's figures, read at the touchdown row of a landing's result.
 
-    The touchdown row is the first of phase 3 (``symbolic.landing.guidance.TOUCHDOWN``),
+    The touchdown row is the first of phase 3 (``quadland_symbolic.landing.guidance.TOUCHDOWN``),
     at the instant the gear met the deck; the figures are
-    ``symbolic.landing.relative.touchdown_figures`` of its relative position
+    ``quadland_symbolic.landing.relative.touchdown_figures`` of its relative position
     and velocity and both attitudes (the generated C example computes them
     with the same function).
     """
-    from symbolic.landing.guidance import TOUCHDOWN
-    from symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
+    from quadland_symbolic.landing.guidance import TOUCHDOWN
+    from quadland_symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
 
     g = result.scenario.data["landing"]
     limits = {k: g[k] for k in TOUCHDOWN_LIMITS}
@@ -179,7 +179,7 @@ def landing_summary(result: SimulationResult) -> dict:
     ``phases``: the time each phase was first entered (s), by name;
     ``rotors``: the extreme rotor forces and the limit ``F_max`` (N).
     """
-    from symbolic.landing.guidance import PHASES
+    from quadland_symbolic.landing.guidance import PHASES
 
     t = result["t"]
     phases = {}

@@ -7,12 +7,12 @@ import dataclasses
 import numpy as np
 
 from quadland.scenario import Scenario, require_model
-from symbolic.backstepping import PAPER_REFERENCE
-from symbolic.closed_loop import POSITION1, closed_loop_params, closed_loop_state
-from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import QUAD_STATE
-from symbolic.rbf import default_centers
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.backstepping import PAPER_REFERENCE
+from quadland_symbolic.closed_loop import POSITION1, closed_loop_params, closed_loop_state
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from quadland_symbolic.quadrotor import QUAD_STATE
+from quadland_symbolic.rbf import default_centers
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["ModelValues", "model_values", "disturbance_samples"]
 
@@ -26,7 +26,7 @@ class ModelValues:
     l : int
         RBF node count.
     p_quad, p_veh, p_ctrl, ref : ndarray
-        The parameter groups of ``symbolic.parameters`` and the reference
+        The parameter groups of ``quadland_symbolic.parameters`` and the reference
         ``[e1d, e1d_dot, e1d_ddot]``.
     p : ndarray
         Their concatenation, the closed loop's parameter vector.

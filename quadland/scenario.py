@@ -239,7 +239,7 @@ def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
 
 F, I, B, S = float, int, bool, str
 #: The landing scenario schema (``scenario.model = "landing"``): the 6-DOF
-#: loop of ``symbolic.landing`` with guidance, motor lag, rotor limits, the
+#: loop of ``quadland_symbolic.landing`` with guidance, motor lag, rotor limits, the
 #: sampled step, a moving deck and wind (docs/landing.md).
 LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     "scenario": {

@@ -1,7 +1,7 @@
 """The sensors' random parts: sample times, delivery, noise.
 
 The sensors' truth models are CasADi Functions
-(:mod:`symbolic.landing.sensors`, ``sense_<name>(xp, uh, w, t, pp, p_sens,
+(:mod:`quadland_symbolic.landing.sensors`, ``sense_<name>(xp, uh, w, t, pp, p_sens,
 noise)``) that take their noise as an input. This module draws that noise,
 seeded, for a whole run and tells when each sample is taken and when (and
 whether) it arrives:
@@ -11,7 +11,7 @@ whether) it arrives:
 * **delivered**: each sample is lost with probability ``dropout``
   (Bernoulli, independent);
 * **noise**: one row per sample, columns laid out as the sensor's noise
-  layout (:data:`symbolic.landing.sensors.NOISES`). Gauss-Markov processes
+  layout (:data:`quadland_symbolic.landing.sensors.NOISES`). Gauss-Markov processes
   are simulated exactly at the sample times,
   ``x_(k+1) = a x_k + sigma sqrt(1 - a^2) n_k`` with
   ``a = exp(-(t_(k+1) - t_k) / tau)``, started in their stationary
@@ -52,8 +52,8 @@ from typing import NamedTuple
 import numpy as np
 
 from quadland.exceptions import ScenarioError
-from symbolic.landing.sensors import NOISES, SENSOR_NAMES, SENSOR_PARAMS
-from symbolic.layout import Layout
+from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES, SENSOR_PARAMS
+from quadland_symbolic.layout import Layout
 
 __all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "SENSOR_STREAM",
            "SensorSamples", "validate_settings", "sensor_params", "sensor_seed", "sample_times",
@@ -227,7 +227,7 @@ class SensorSamples:
     Attributes
     ----------
     name : str
-        One of :data:`symbolic.landing.sensors.SENSOR_NAMES`.
+        One of :data:`quadland_symbolic.landing.sensors.SENSOR_NAMES`.
     times : numpy.ndarray
         Sample times ``t_k``, s: evaluate ``sense_<name>`` at the state then.
     arrival : numpy.ndarray

@@ -1,12 +1,12 @@
 """Closed-loop simulation, compiled (or on CasADi's virtual machine without a compiler).
 
-Two loops share one symbolic model (``symbolic.paper_loop``), and both run
+Two loops share one symbolic model (``quadland_symbolic.paper_loop``), and both run
 in one call of a simulator (:func:`quadland.compiled.compiled_loop`): RK4,
 one step (times ``simulation.rk_steps_per_interval``) per interval of the
 exact grid on which the disturbance, the outputs and the control are held:
 
 * continuous (``controller.rate_hz = 0``, the paper's): the whole closed
-  loop of ``symbolic.closed_loop`` is one ODE; ``simulation.integrator =
+  loop of ``quadland_symbolic.closed_loop`` is one ODE; ``simulation.integrator =
   "cvodes"`` integrates it with CasADi's cvodes instead (the reference);
 * sampled-data (``rate_hz > 0``): the control step (``controller.backend``:
   the CasADi function or the flight code's ``ql_control_step``) runs at that
@@ -35,7 +35,7 @@ from quadland.envelope import ENVELOPE_FACTOR, Envelope, rk4_steps_needed
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.model import disturbance_samples, model_values
 from quadland.scenario import Scenario
-from symbolic.closed_loop import (
+from quadland_symbolic.closed_loop import (
     PAPER_ENVELOPE,
     PAPER_OUTPUTS,
     POSITION1,
@@ -44,10 +44,10 @@ from symbolic.closed_loop import (
     closed_loop_state,
     paper_envelope_function,
 )
-from symbolic.control_step import step_outputs
-from symbolic.layout import Field, Layout
-from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.control_step import step_outputs
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
            "time_grid", "run_clocks", "SimulationPlan", "simulation_plan", "check_plan",
@@ -108,9 +108,9 @@ def simulation_plan(scenario: Scenario) -> SimulationPlan:
         clocks += int(T * ctrl["rate_hz"]) + 2
     l = scenario.data["rbf"]["nodes"]
     if scenario.model == "landing":
-        from symbolic.landing.loop import LANDING_RECORDED, landing_loop_state
-        from symbolic.landing.plant import LANDING_DISTURBANCE
-        from symbolic.landing.signals import LANDING_SIGNALS
+        from quadland_symbolic.landing.loop import LANDING_RECORDED, landing_loop_state
+        from quadland_symbolic.landing.plant import LANDING_DISTURBANCE
+        from quadland_symbolic.landing.signals import LANDING_SIGNALS
 
         nx, nw = landing_loop_state(l).size, LANDING_DISTURBANCE.size
         per_row = 2 * nx + 2 * (LANDING_SIGNALS.size + LANDING_RECORDED.size) + nw + 12

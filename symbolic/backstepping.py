@@ -15,12 +15,12 @@ import functools
 
 import casadi as ca
 
-from symbolic.kinematics import euler_rate_matrix_inv
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, controller_layout
-from symbolic.quadrotor import QUAD_STATE, ROTORS, WRENCH, rotors_from_wrench
-from symbolic.rbf import rbf, rbf_input
-from symbolic.relative import (
+from quadland_symbolic.kinematics import euler_rate_matrix_inv
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, controller_layout
+from quadland_symbolic.quadrotor import QUAD_STATE, ROTORS, WRENCH, rotors_from_wrench
+from quadland_symbolic.rbf import rbf, rbf_input
+from quadland_symbolic.relative import (
     E1,
     E2,
     VIRTUAL_INPUT,
@@ -29,7 +29,7 @@ from symbolic.relative import (
     relative_states,
     wrench_from_virtual,
 )
-from symbolic.vehicle import VEHICLE_MEASUREMENT
+from quadland_symbolic.vehicle import VEHICLE_MEASUREMENT
 
 __all__ = ["PAPER_REFERENCE", "ADAPTIVE_UNITS", "controller_outputs", "virtual_control",
            "control_law", "controller_function", "lyapunov_function"]

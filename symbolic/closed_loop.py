@@ -4,7 +4,7 @@ State ``x`` (:func:`closed_loop_state`): the quadrotor ``xq``, the vehicle
 ``xv``, ``vec(W_hat)`` (column-major), ``zeta_hat`` and the quadrotor's
 planar position ``pos1 = [x1, y1]``, integrated from ``R(eta1) V1`` for the
 ground track only (the 4-DOF model ignores it). Input ``w``
-(``symbolic.quadrotor.BODY_DISTURBANCE``), the disturbance, held piecewise
+(``quadland_symbolic.quadrotor.BODY_DISTURBANCE``), the disturbance, held piecewise
 constant by the simulator. Parameter ``p`` (:func:`closed_loop_params`):
 ``[p_quad, p_veh, p_ctrl, ref]``. The controller and the plant share one set
 of physical parameters. :func:`closed_loop_outputs` gives the signals of
@@ -17,12 +17,12 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
-from symbolic.kinematics import rotation
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, ROTORS, WRENCH, quadrotor_rhs
-from symbolic.relative import (
+from quadland_symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, ROTORS, WRENCH, quadrotor_rhs
+from quadland_symbolic.relative import (
     E1,
     E2,
     VIRTUAL_INPUT,
@@ -30,7 +30,7 @@ from symbolic.relative import (
     nominal_drift,
     relative_drift,
 )
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["POSITION1", "PAPER_PLANT_STATE", "PAPER_OUTPUTS", "PAPER_ENVELOPE", "closed_loop_state",
            "closed_loop_params", "closed_loop_rhs", "closed_loop_function",
@@ -192,7 +192,7 @@ def paper_envelope_function(l: int) -> ca.Function:
     """``envelope(x, uh) -> s``: the :data:`PAPER_ENVELOPE` magnitudes of a loop state.
 
     ``x`` is :func:`closed_loop_state`, ``uh`` the held wrench
-    (:data:`~symbolic.quadrotor.WRENCH`; zero in the continuous loop).
+    (:data:`~quadland_symbolic.quadrotor.WRENCH`; zero in the continuous loop).
     """
     x, uh = closed_loop_state(l).sym(), WRENCH.sym()
     xs = closed_loop_state(l).unpack(x)

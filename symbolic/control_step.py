@@ -30,12 +30,18 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, controller_layout
-from symbolic.quadrotor import QUAD_STATE, ROTORS, WRENCH, rotors_from_wrench, wrench_from_rotors
-from symbolic.relative import VIRTUAL_INPUT, tilt, wrench_from_virtual
-from symbolic.vehicle import VEHICLE_MEASUREMENT
+from quadland_symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, controller_layout
+from quadland_symbolic.quadrotor import (
+    QUAD_STATE,
+    ROTORS,
+    WRENCH,
+    rotors_from_wrench,
+    wrench_from_rotors,
+)
+from quadland_symbolic.relative import VIRTUAL_INPUT, tilt, wrench_from_virtual
+from quadland_symbolic.vehicle import VEHICLE_MEASUREMENT
 
 __all__ = ["step_inputs", "step_outputs", "control_step_function"]
 

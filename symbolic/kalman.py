@@ -1,6 +1,6 @@
 """Branch-free Kalman filter pieces on CasADi SX expressions.
 
-The navigation filter of :mod:`symbolic.landing.estimator` is assembled from
+The navigation filter of :mod:`quadland_symbolic.landing.estimator` is assembled from
 these; docs/estimator.md gives the equations, cited here as (E1)...
 
 * :func:`nilpotent_discretization`: exact ``Phi``, ``Gamma`` and discrete

@@ -9,7 +9,7 @@ Everything that needs the vector's shape is derived from that description:
   :meth:`Layout.unpack`, :meth:`Layout.pack`), symbolic or numeric;
 * the scalar entries' names and units (:meth:`Layout.element_names`,
   :meth:`Layout.element_units`): CSV columns and their sidecar;
-* C structs, their offsets and the ``ctypes`` mirrors (``symbolic.codegen``
+* C structs, their offsets and the ``ctypes`` mirrors (``quadland_symbolic.codegen``
   and ``quadland.cbackend`` read the same fields).
 
 A field may nest another layout (its size is the nested layout's), hold a

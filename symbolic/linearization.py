@@ -25,12 +25,12 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, quadrotor_rhs
-from symbolic.relative import VIRTUAL_INPUT, wrench_from_virtual
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, quadrotor_rhs
+from quadland_symbolic.relative import VIRTUAL_INPUT, wrench_from_virtual
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["RELATIVE_PLANT", "FROZEN_VEHICLE", "VEHICLE_SPEEDS", "controller_states",
            "relative_plant_rhs", "loop_signals", "linearization_function",

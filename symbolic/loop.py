@@ -33,7 +33,7 @@ import dataclasses
 
 import casadi as ca
 
-from symbolic.layout import Layout
+from quadland_symbolic.layout import Layout
 
 __all__ = ["rk4_step", "LoopModel"]
 
@@ -83,7 +83,7 @@ class LoopModel:
     step_args : casadi.Function or None
         ``step_args(xp, xc, pc, first, t) -> (...)``: the flight code's
         arguments as the controller forms them (the paper's: the control
-        step's, ``symbolic.control_step.step_inputs``). The flight code behind
+        step's, ``quadland_symbolic.control_step.step_inputs``). The flight code behind
         the controller's flat signature (part ``"sampled_flight"``) starts
         from it.
     event : casadi.Function or None

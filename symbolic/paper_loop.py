@@ -1,10 +1,10 @@
 """The paper's 4-DOF loop as the simulators see it (continuous and sampled-data).
 
-:func:`paper_loop` bundles the closed loop of :mod:`symbolic.closed_loop`
+:func:`paper_loop` bundles the closed loop of :mod:`quadland_symbolic.closed_loop`
 (the continuous loop: ``rhs`` and ``outputs``) and its sampled-data form
 (the plant under a held wrench, the control step of
-:mod:`symbolic.control_step` as the controller) in the shape of
-:class:`symbolic.loop.LoopModel`, with the layouts of the sampled loop's
+:mod:`quadland_symbolic.control_step` as the controller) in the shape of
+:class:`quadland_symbolic.loop.LoopModel`, with the layouts of the sampled loop's
 memory, parameters and recorded signals.
 """
 
@@ -15,8 +15,8 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import PAPER_REFERENCE
-from symbolic.closed_loop import (
+from quadland_symbolic.backstepping import PAPER_REFERENCE
+from quadland_symbolic.closed_loop import (
     PAPER_ENVELOPE,
     PAPER_OUTPUTS,
     PAPER_PLANT_STATE,
@@ -28,11 +28,11 @@ from symbolic.closed_loop import (
     plant_function,
     vehicle_measurement,
 )
-from symbolic.control_step import control_step_function, step_inputs, step_outputs
-from symbolic.layout import Field, Layout
-from symbolic.loop import LoopModel
-from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import BODY_DISTURBANCE, WRENCH
+from quadland_symbolic.control_step import control_step_function, step_inputs, step_outputs
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, WRENCH
 
 __all__ = ["PAPER_RECORDED", "paper_controller_state", "PAPER_PLANT_PARAMS",
            "paper_controller_params", "paper_loop"]
@@ -79,7 +79,7 @@ def _named(name, ins, outs, in_names, out_names):
 
 @functools.cache
 def paper_loop(l: int) -> LoopModel:
-    """The paper's 4-DOF loop (``symbolic.closed_loop``) for ``l`` RBF nodes."""
+    """The paper's 4-DOF loop (``quadland_symbolic.closed_loop``) for ``l`` RBF nodes."""
     state, params = closed_loop_state(l), closed_loop_params(l)
     x, w, p, t = state.sym(), BODY_DISTURBANCE.sym(), params.sym(), ca.SX.sym("t")
     rhs = _named("rhs", [x, w, t, p], [closed_loop_function(l)(x, w, p)],

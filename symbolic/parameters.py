@@ -5,7 +5,7 @@ vectors, never as Python numbers, so that the same expressions serve the
 simulator, the linearization and generated C code whose gains and physical
 constants are tuned at run time without regeneration.
 
-There are three groups, each a :class:`symbolic.layout.Layout`:
+There are three groups, each a :class:`quadland_symbolic.layout.Layout`:
 
 * ``QUADROTOR``: physical constants of the quadrotor (Table 1, eq. 2);
 * ``VEHICLE``: constants and inputs of the ground vehicle (Table 1, eq. 4);
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 
-from symbolic.layout import Field, Layout
+from quadland_symbolic.layout import Field, Layout
 
 __all__ = [
     "RBF_INPUT_DIM",

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import casadi as ca
 
-from symbolic.kinematics import euler_rate_matrix, skew, vertical_row
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR
+from quadland_symbolic.kinematics import euler_rate_matrix, skew, vertical_row
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR
 
 __all__ = [
     "QUAD_STATE",

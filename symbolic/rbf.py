@@ -10,7 +10,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from symbolic.parameters import RBF_INPUT_DIM
+from quadland_symbolic.parameters import RBF_INPUT_DIM
 
 __all__ = ["rbf_input", "rbf", "default_centers", "rbf_function"]
 

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import casadi as ca
 
-from symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, vertical_row
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
-from symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE, yaw_acceleration
+from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, vertical_row
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
+from quadland_symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE, yaw_acceleration
 
 #: Units of the four channels: altitude, roll, pitch, yaw.
 _CHANNEL_ACCEL = ("m/s^2", "rad/s^2", "rad/s^2", "rad/s^2")

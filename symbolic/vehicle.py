@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from symbolic.layout import Field, Layout
-from symbolic.parameters import VEHICLE
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import VEHICLE
 
 __all__ = ["VEHICLE_STATE", "VEHICLE_MEASUREMENT", "vehicle_rhs", "yaw_acceleration",
            "vehicle_function"]

@@ -3,15 +3,15 @@
 Written from the state equations (E2) of docs/estimator.md index by index:
 SciPy's matrix exponential for ``Phi`` and ``Gamma``, Van Loan's method for
 ``Q``, the full-matrix Joseph update with ``K = P H^T S^-1``; no code of
-``symbolic.kalman`` or ``symbolic.landing.navigation`` besides their layouts.
+``quadland_symbolic.kalman`` or ``quadland_symbolic.landing.navigation`` besides their layouts.
 """
 
 import numpy as np
 from reference import rotation
 from scipy.linalg import expm
 
-from symbolic.landing.estimator import estimator_diagnostics, estimator_init_function
-from symbolic.landing.navigation import (
+from quadland_symbolic.landing.estimator import estimator_diagnostics, estimator_init_function
+from quadland_symbolic.landing.navigation import (
     BLOCKS,
     ESTIMATOR_DEFAULTS,
     IMU,

@@ -13,8 +13,8 @@ and by ``benchmarks/bench_simulate.py`` (the SciPy baseline's right-hand side).
 
 import numpy as np
 
-from symbolic.closed_loop import closed_loop_params, closed_loop_state
-from symbolic.quadrotor import BODY_DISTURBANCE
+from quadland_symbolic.closed_loop import closed_loop_params, closed_loop_state
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE
 
 __all__ = ["numpy_rhs", "random_states"]
 

@@ -7,8 +7,8 @@ from reference import error_rate_matrix
 from quadland.model import model_values
 from quadland.scenario import load_scenario
 from quadland.simulate import simulate
-from symbolic.backstepping import controller_function, lyapunov_function
-from symbolic.closed_loop import closed_loop_state, vehicle_measurement
+from quadland_symbolic.backstepping import controller_function, lyapunov_function
+from quadland_symbolic.closed_loop import closed_loop_state, vehicle_measurement
 
 
 @pytest.fixture(scope="module")
@@ -94,7 +94,7 @@ def test_adaptive_law_by_hand(values, rng):
 @pytest.mark.parametrize("nominal", [0.0, 1.0])
 def test_control_law_by_hand(values, rng, nominal):
     """u of eq. (20), assembled here from its printed terms (plus -f_nominal when enabled)."""
-    from symbolic.parameters import QUADROTOR, controller_layout
+    from quadland_symbolic.parameters import QUADROTOR, controller_layout
 
     l = values.l
     ctrl = controller_function(l)

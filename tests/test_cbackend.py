@@ -17,7 +17,7 @@ from quadland import build, cbackend, codegen
 from quadland.exceptions import CompilerNotFoundError
 from quadland.model import disturbance_samples, model_values
 from quadland.simulate import TRAJECTORY
-from symbolic.closed_loop import (
+from quadland_symbolic.closed_loop import (
     PAPER_PLANT_STATE,
     closed_loop_function,
     closed_loop_jacobian_function,
@@ -25,8 +25,8 @@ from symbolic.closed_loop import (
     closed_loop_state,
     plant_function,
 )
-from symbolic.codegen import STATUS_CODES
-from symbolic.control_step import control_step_function
+from quadland_symbolic.codegen import STATUS_CODES
+from quadland_symbolic.control_step import control_step_function
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 

@@ -17,7 +17,7 @@ from quadland.exceptions import CompilerNotFoundError
 from quadland.landing import LANDING_TRAJECTORY
 from quadland.scenario import load_scenario
 from quadland.simulate import TRAJECTORY
-from symbolic.codegen import (
+from quadland_symbolic.codegen import (
     FUNCTIONS,
     CodegenConfig,
     c_sources,
@@ -26,7 +26,7 @@ from symbolic.codegen import (
     generate_landing,
     land_columns,
 )
-from symbolic.codegen.structs import api_structs, landing_api_structs
+from quadland_symbolic.codegen.structs import api_structs, landing_api_structs
 
 GENERATED_DIR = codegen.generated_dir()
 

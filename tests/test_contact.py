@@ -1,4 +1,4 @@
-"""The gear contact (symbolic.landing.contact) against closed forms.
+"""The gear contact (quadland_symbolic.landing.contact) against closed forms.
 
 A small harness integrates the 6-DOF quadrotor (``quadrotor6_rhs``, drag off)
 with the contact and lock-down wrench of ``contact_function`` on a deck that
@@ -27,8 +27,8 @@ import pytest
 from scipy.optimize import brentq
 from scipy.special import spence
 
-from symbolic.kinematics import rotation
-from symbolic.landing.contact import (
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.contact import (
     FOOT,
     GEAR,
     HOLD,
@@ -44,10 +44,10 @@ from symbolic.landing.contact import (
     tip_over_angles,
     tip_over_function,
 )
-from symbolic.landing.deck import DECK_PARAMS, deck_function
-from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_rhs
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.landing.deck import DECK_PARAMS, deck_function
+from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_rhs
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 M, G = 2.0, 9.8                                  # kg, m/s^2
 INERTIA = np.array([0.025, 0.025, 0.045])        # kg m^2

@@ -188,14 +188,25 @@ def _model_md_names() -> list[str]:
             continue
         module = None
         for token in re.findall(r"`([^`]+)`", row.rstrip(" |").rsplit("|", 1)[-1]):
-            if token.startswith("symbolic."):
+            if token.startswith("quadland_symbolic."):
                 parts = token.split(".")
-                module = ".".join(parts[:2])
-                if len(parts) > 2:
+                module = _module_of(parts)
+                if len(parts) > len(module.split(".")):
                     names.append(token)
             elif module and token.isidentifier():
                 names.append(f"{module}.{token}")
     return names
+
+
+def _module_of(parts: list[str]) -> str:
+    """The longest importable module path that begins ``parts``."""
+    for n in range(len(parts), 0, -1):
+        try:
+            importlib.import_module(".".join(parts[:n]))
+        except ImportError:
+            continue
+        return ".".join(parts[:n])
+    raise AssertionError(f"no module in {'.'.join(parts)}")
 
 
 def test_model_md_cites_functions_that_exist():

@@ -17,7 +17,7 @@ from quadland.exceptions import SimulationError
 from quadland.metrics import touchdown_report
 from quadland.model import model_values
 from quadland.simulate import paper_envelope
-from symbolic.closed_loop import PAPER_ENVELOPE, paper_envelope_function
+from quadland_symbolic.closed_loop import PAPER_ENVELOPE, paper_envelope_function
 
 STEEP = ["controller.k1=[300.0, 5.0, 10.0, 10.0]", "controller.k2=[200.0, 4.0, 10.0, 10.0]"]
 

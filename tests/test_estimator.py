@@ -29,13 +29,20 @@ from nav_reference import (
 from reference import rotation
 from scipy.stats import chi2
 
-from symbolic.landing.controller import LANDING_MEASUREMENT
-from symbolic.landing.estimator import (
+from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
+from quadland_symbolic.landing.estimator import (
     estimator_memory,
     estimator_step_function,
     output_predictor_function,
 )
-from symbolic.landing.navigation import BLOCKS, ESTIMATOR_DEFAULTS, GNSS, IMU, NAV_PACKETS, VISION
+from quadland_symbolic.landing.navigation import (
+    BLOCKS,
+    ESTIMATOR_DEFAULTS,
+    GNSS,
+    IMU,
+    NAV_PACKETS,
+    VISION,
+)
 
 # ---------------------------------------------------------------- the textbook KF
 

@@ -37,8 +37,8 @@ from reference import run as _run
 import quadland
 from quadland import build, cbackend
 from quadland.model import model_values
-from symbolic.codegen import STATUS_CODES, c_sources
-from symbolic.codegen.structs import adaptive_state_layout, output_layout, param_ranges
+from quadland_symbolic.codegen import STATUS_CODES, c_sources
+from quadland_symbolic.codegen.structs import adaptive_state_layout, output_layout, param_ranges
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -60,7 +60,7 @@ def _nonnegative(v, p):
 
 
 #: The documented range of every member of ql_params (docs/codegen.md),
-#: written out here, not read from symbolic.codegen.structs: a predicate of the
+#: written out here, not read from quadland_symbolic.codegen.structs: a predicate of the
 #: member's values ``v`` and the parameter vector's members ``p``. NaN
 #: and infinities are outside every range.
 DOCUMENTED = {

@@ -39,20 +39,20 @@ from reference import run as _run
 from quadland import build, cbackend
 from quadland.landing import landing_values
 from quadland.scenario import load_scenario
-from symbolic.codegen import STATUS_CODES, c_sources
-from symbolic.codegen.structs import (
+from quadland_symbolic.codegen import STATUS_CODES, c_sources
+from quadland_symbolic.codegen.structs import (
     MAX_ABORTS,
     guidance_param_ranges,
     landing_output_layout,
     landing_param_ranges,
 )
-from symbolic.landing.controller import (
+from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_guidance_function,
     landing_memory,
 )
-from symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
-from symbolic.landing.loop import landing_loop_params
+from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
+from quadland_symbolic.landing.loop import landing_loop_params
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -78,7 +78,7 @@ def _finite(v, p):
 
 
 #: The documented range of every member of ql_landing_params (docs/codegen.md),
-#: written out here, not read from symbolic.codegen.structs. NaN and infinities are
+#: written out here, not read from quadland_symbolic.codegen.structs. NaN and infinities are
 #: outside every range.
 LANDING_DOCUMENTED = {
     "quad.m1": _positive, "quad.I": _positive, "quad.Kt": _nonnegative,

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from symbolic.landing.guidance import (
+from quadland_symbolic.landing.guidance import (
     ALIGN,
     APPROACH,
     DESCEND,

@@ -52,11 +52,32 @@ def _quadland(installed, *args):
 
 def test_it_runs_the_installed_copy(installed):
     target, work, env = installed
-    proc = subprocess.run([sys.executable, "-c", "import quadland, symbolic; "
-                           "print(quadland.__file__); print(symbolic.__file__)"],
+    proc = subprocess.run([sys.executable, "-c", "import quadland, quadland_symbolic; "
+                           "print(quadland.__file__); print(quadland_symbolic.__file__)"],
                           cwd=work, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert all(line.startswith(str(target)) for line in proc.stdout.split())
+    # the symbolic layer is installed under its own name only
+    assert (target / "quadland_symbolic").is_dir() and not (target / "symbolic").exists()
+
+
+def test_pyproject_lists_every_package():
+    """setuptools ships only the packages pyproject.toml lists: every folder of Python
+    or templates under quadland/ and symbolic/ (installed as quadland_symbolic) is one."""
+    import tomllib
+
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    found = set()
+    for top, name in (("quadland", "quadland"), ("symbolic", "quadland_symbolic")):
+        for folder in [ROOT / top, *(p for p in (ROOT / top).rglob("*") if p.is_dir())]:
+            if "__pycache__" in folder.parts:
+                continue
+            if any(folder.glob("*.py")) or any(folder.glob("*.jinja")) or any(
+                    folder.glob("*.toml")):
+                rel = folder.relative_to(ROOT / top).parts
+                found.add(".".join((name, *rel)))
+    assert found == listed
 
 
 def test_commands_work_and_write_nothing_into_the_package(installed):

@@ -7,7 +7,7 @@ from nav_reference import (
     random_spd,
 )
 
-from symbolic.kalman import CovariancePattern, joseph_update, scalar_update
+from quadland_symbolic.kalman import CovariancePattern, joseph_update, scalar_update
 
 # ---------------------------------------------------------------- Joseph form
 

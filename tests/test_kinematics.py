@@ -4,7 +4,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from symbolic.kinematics import kinematics_function
+from quadland_symbolic.kinematics import kinematics_function
 
 KIN = kinematics_function()
 

@@ -26,7 +26,7 @@ from quadland.cli import main
 from quadland.exceptions import ScenarioError
 from quadland.metrics import touchdown_report
 from quadland.scenario import LANDING_SCHEMA, load_scenario
-from symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
+from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
 
 SCENARIOS = ("highway", "turning", "ship")
 #: trajectory.csv's columns, as the issue names them.

@@ -13,8 +13,8 @@ from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from symbolic.landing.attitude import thrust_attitude_function
-from symbolic.landing.controller import (
+from quadland_symbolic.landing.attitude import thrust_attitude_function
+from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     NETWORK_INPUT_DIM,
     command_filter_function,
@@ -25,15 +25,15 @@ from symbolic.landing.controller import (
     landing_step_outputs,
     linear2_zoh,
 )
-from symbolic.landing.deck import DECK_PARAMS
-from symbolic.landing.guidance import POSITION_REFERENCE
-from symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_function
-from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
-from symbolic.landing.relative import relative6, relative6_acceleration
-from symbolic.landing.sensors import measurement_function
-from symbolic.loop import rk4_step
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.landing.deck import DECK_PARAMS
+from quadland_symbolic.landing.guidance import POSITION_REFERENCE
+from quadland_symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_function
+from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from quadland_symbolic.landing.relative import relative6, relative6_acceleration
+from quadland_symbolic.landing.sensors import measurement_function
+from quadland_symbolic.loop import rk4_step
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 L_NODES = 10
 M1, G = 2.0, 9.8

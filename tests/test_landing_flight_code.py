@@ -17,16 +17,16 @@ import quadland
 from quadland import build, cbackend, codegen
 from quadland.landing import LANDING_TRAJECTORY, landing_values
 from quadland.metrics import touchdown_report
-from symbolic.codegen import STATUS_CODES
-from symbolic.codegen.structs import landing_output_layout, landing_params_layout
-from symbolic.landing.controller import (
+from quadland_symbolic.codegen import STATUS_CODES
+from quadland_symbolic.codegen.structs import landing_output_layout, landing_params_layout
+from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_guidance_function,
     landing_memory,
     landing_step_function,
     landing_step_outputs,
 )
-from symbolic.landing.guidance import (
+from quadland_symbolic.landing.guidance import (
     ALIGN,
     DESCEND,
     GUIDANCE_PARAMS,
@@ -34,8 +34,8 @@ from symbolic.landing.guidance import (
     LANDED,
     TOUCHDOWN,
 )
-from symbolic.landing.loop import landing_loop_params
-from symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.loop import landing_loop_params
+from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 

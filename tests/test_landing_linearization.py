@@ -1,10 +1,10 @@
 """The landing loop's hover point and linear models against the simulator's own loop.
 
 Every reference value comes from the functions the simulator flies
-(``symbolic.landing.loop.landing_loop``: the 6-DOF plant with motor lag in E,
+(``quadland_symbolic.landing.loop.landing_loop``: the 6-DOF plant with motor lag in E,
 perfect sensors, guidance and the landing step), evaluated with the vehicle
 placed anywhere and at any heading; nothing here reads the deck-frame
-coordinates of ``symbolic.landing.linearization``.
+coordinates of ``quadland_symbolic.landing.linearization``.
 """
 
 import numpy as np
@@ -13,15 +13,19 @@ import pytest
 from quadland.landing import landing_values
 from quadland.linearize import _hover_values, equilibrium, linear_models, sampled_models
 from quadland.scenario import load_scenario
-from symbolic.kinematics import rotation
-from symbolic.landing.deck import deck_pose
-from symbolic.landing.guidance import ALIGN, GUIDANCE_STATE
-from symbolic.landing.linearization import HOVER_PLANT, hover_linearization_function
-from symbolic.landing.loop import landing_loop, landing_loop_memory, landing_loop_params
-from symbolic.landing.plant import LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
-from symbolic.landing.quadrotor import QUAD6_STATE
-from symbolic.landing.relative import relative6
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.deck import deck_pose
+from quadland_symbolic.landing.guidance import ALIGN, GUIDANCE_STATE
+from quadland_symbolic.landing.linearization import HOVER_PLANT, hover_linearization_function
+from quadland_symbolic.landing.loop import landing_loop, landing_loop_memory, landing_loop_params
+from quadland_symbolic.landing.plant import (
+    LANDING_DISTURBANCE,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+)
+from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.relative import relative6
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 #: A still deck: the analysis freezes heave, roll and pitch at their mean, zero.
 STILL = [f"deck.{m}_amplitude{'_deg' if m != 'heave' else ''}=[0.0]"

@@ -11,21 +11,21 @@ import pytest
 from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 
-from symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_function
-from symbolic.landing.plant import (
+from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_function
+from quadland_symbolic.landing.plant import (
     LANDING_PLANT_OUTPUTS,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     landing_outputs_function,
     landing_plant_function,
 )
-from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_function
-from symbolic.landing.relative import (
+from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_function
+from quadland_symbolic.landing.relative import (
     gear_gap,
     relative6_acceleration_function,
     relative6_function,
 )
-from symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 
 DECK = deck_function()
 QUAD6 = quadrotor6_function()

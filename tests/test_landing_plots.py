@@ -26,7 +26,7 @@ from quadland.plots import (
 )
 from quadland.plots.landing import DEFAULT_LIMITS, PAD_SIZE, _frame_rows
 from quadland.scenario import Scenario
-from symbolic.landing.guidance import PHASES
+from quadland_symbolic.landing.guidance import PHASES
 
 RATE = 50.0        # rows per second
 TOUCHDOWN = 3.0    # s

@@ -9,9 +9,9 @@ from quadland.exceptions import OperatingPointError
 from quadland.linearize import equilibrium, frozen_point, linear_models, sampled_models
 from quadland.model import model_values
 from quadland.scenario import load_scenario
-from symbolic.backstepping import controller_function
-from symbolic.closed_loop import closed_loop_function, closed_loop_state
-from symbolic.quadrotor import quadrotor_function
+from quadland_symbolic.backstepping import controller_function
+from quadland_symbolic.closed_loop import closed_loop_function, closed_loop_state
+from quadland_symbolic.quadrotor import quadrotor_function
 
 L_NODES = 4
 
@@ -27,7 +27,7 @@ def eq_point(small):
 
 
 def _full_state(small, point, psi2=0.0):
-    """Closed-loop state of symbolic.closed_loop at a point (psi1 = psi_e + psi2)."""
+    """Closed-loop state of quadland_symbolic.closed_loop at a point (psi1 = psi_e + psi2)."""
     lay = closed_loop_state(L_NODES)
     xq = point.xr.copy()
     xq[3] += psi2                                   # psi1 = psi_e + psi2

@@ -2,7 +2,7 @@
 
 Against SciPy's matrix exponential and Van Loan's method, the chi-square and
 binomial quantiles, central finite differences, the textbook Joseph update
-(tests/nav_reference.py), the relative state of symbolic.landing.relative
+(tests/nav_reference.py), the relative state of quadland_symbolic.landing.relative
 (differentiated symbolically along both bodies' motion) and the exact attitude
 of a deck turning at a constant rate.
 """
@@ -25,8 +25,8 @@ from reference import rotation
 from scipy.linalg import expm
 from scipy.stats import binom, chi2
 
-from symbolic.landing.deck import DECK_PARAMS, deck_pose
-from symbolic.landing.navigation import (
+from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose
+from quadland_symbolic.landing.navigation import (
     BLOCKS,
     ESTIMATOR_DEFAULTS,
     NAV,
@@ -38,9 +38,9 @@ from symbolic.landing.navigation import (
     nav_update_function,
     relative_output,
 )
-from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
-from symbolic.landing.relative import relative6
-from symbolic.parameters import VEHICLE
+from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from quadland_symbolic.landing.relative import relative6
+from quadland_symbolic.parameters import VEHICLE
 
 # ---------------------------------------------------------------- prediction
 

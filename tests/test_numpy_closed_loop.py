@@ -12,7 +12,7 @@ from numpy_closed_loop import numpy_rhs, random_states
 
 import quadland
 from quadland.model import model_values
-from symbolic.closed_loop import closed_loop_function
+from quadland_symbolic.closed_loop import closed_loop_function
 
 
 @pytest.mark.parametrize("overrides", [

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from symbolic.parameters import QUADROTOR
-from symbolic.quadrotor import mixer_function, quadrotor_function
+from quadland_symbolic.parameters import QUADROTOR
+from quadland_symbolic.quadrotor import mixer_function, quadrotor_function
 
 QUAD = quadrotor_function()
 MIX = mixer_function()

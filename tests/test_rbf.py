@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from symbolic.rbf import default_centers, rbf_function
+from quadland_symbolic.rbf import default_centers, rbf_function
 
 
 def test_gaussian_values():

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from reference import euler_rate_matrix, rotation
 
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.relative import relative_function
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.relative import relative_function
 
 REL = relative_function()
 

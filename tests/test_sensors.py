@@ -1,6 +1,6 @@
 """Sensors against hand derivations, noise against closed forms.
 
-The symbolic models (symbolic.landing.sensors) are checked at chosen states
+The symbolic models (quadland_symbolic.landing.sensors) are checked at chosen states
 whose readings are derived by hand (a level hover over a level pad, a
 30 degree roll over a flat deck, free fall, ...); the runtime's random parts
 (quadland.sensing) against the closed-form statistics of the processes they
@@ -25,10 +25,14 @@ from quadland.sensing import (
     sensor_params,
     validate_settings,
 )
-from symbolic.landing.deck import DECK_PARAMS
-from symbolic.landing.plant import LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
-from symbolic.landing.quadrotor import ACTUATOR
-from symbolic.landing.sensors import (
+from quadland_symbolic.landing.deck import DECK_PARAMS
+from quadland_symbolic.landing.plant import (
+    LANDING_DISTURBANCE,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+)
+from quadland_symbolic.landing.quadrotor import ACTUATOR
+from quadland_symbolic.landing.sensors import (
     DATALINK_NOISE,
     GNSS_NOISE,
     IMU_NOISE,
@@ -40,7 +44,7 @@ from symbolic.landing.sensors import (
     VISION_NOISE,
     sensor_function,
 )
-from symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 
 M1, G, KT = 2.0, 9.8, np.array([0.1, 0.2, 0.3])
 DEG = math.pi / 180

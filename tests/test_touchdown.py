@@ -5,7 +5,7 @@ freely: ``z1(t) = z0 - g t^2 / 2``. The deck heaves as ``h + A sin(w t + phi)``
 and neither rolls nor pitches, so the gear meets it when
 ``z0 - g t^2 / 2 - gear_height - h - A sin(w t + phi) = 0``, solved here by
 Brent's method. The simulator's drivers (compiled and on CasADi's VM) run
-the 6-DOF plant of ``symbolic.landing`` with the gear gap as their event
+the 6-DOF plant of ``quadland_symbolic.landing`` with the gear gap as their event
 and must stop at that instant, found within a 10 ms step.
 """
 
@@ -16,15 +16,19 @@ import scipy.optimize
 
 from quadland.compiled import SIM_EVENT, CompiledLoop, VMLoop
 from quadland.engine.loop import Clock
-from symbolic.landing.deck import DECK_PARAMS, N_DECK
-from symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE, landing_plant_function
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
-from symbolic.landing.relative import gear_gap
-from symbolic.layout import Field, Layout
-from symbolic.loop import LoopModel
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import BODY_DISTURBANCE
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK
+from quadland_symbolic.landing.plant import (
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+    landing_plant_function,
+)
+from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
+from quadland_symbolic.landing.relative import gear_gap
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 G, Z0, GEAR, H, A, W, PHI = 9.81, 6.0, 0.25, 1.5, 0.68, 0.349, 0.7
 

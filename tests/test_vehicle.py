@@ -3,8 +3,8 @@
 import casadi as ca
 import numpy as np
 
-from symbolic.parameters import VEHICLE
-from symbolic.vehicle import vehicle_function
+from quadland_symbolic.parameters import VEHICLE
+from quadland_symbolic.vehicle import vehicle_function
 
 
 def test_steady_state_closed_form(values):

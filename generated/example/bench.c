@@ -24,7 +24,7 @@
  * QL_LANDING_RBF_NODES), from the landing scenario's initial state. Each
  * step sees slightly different measurements; prints the time per step. */
 
-/* The step's measurements at the closed-loop state x (symbolic.closed_loop). */
+/* The step's measurements at the closed-loop state x (quadland_symbolic.closed_loop). */
 static void measure(const ql_real *x, const ql_vehicle_params *vehicle, ql_quadrotor_state *xq,
                     ql_vehicle_state *yv)
 {

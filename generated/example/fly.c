@@ -62,7 +62,7 @@ static void closed_loop_from_plant(const ql_real *xp, ql_real *x)
     memcpy(x + 420, xp + 16, 2 * sizeof(ql_real));   /* pos1 */
 }
 
-/* The step's measurements at the closed-loop state x (symbolic.closed_loop). */
+/* The step's measurements at the closed-loop state x (quadland_symbolic.closed_loop). */
 static void measure(const ql_real *x, const ql_vehicle_params *vehicle, ql_quadrotor_state *xq,
                     ql_vehicle_state *yv)
 {

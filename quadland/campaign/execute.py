@@ -139,12 +139,12 @@ def _row(outcome: RunOutcome, header: Sequence[str]) -> list[str]:
 
 
 def code_fingerprint() -> str:
-    """A hash of the source files of ``quadland`` and ``symbolic`` (Python and templates)."""
+    """A hash of the source files of ``quadland`` and ``quadland_symbolic`` (Python, templates)."""
     import quadland
-    import symbolic
+    import quadland_symbolic
 
     digest = hashlib.sha256()
-    for package in (quadland, symbolic):
+    for package in (quadland, quadland_symbolic):
         root = Path(package.__file__).parent
         for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".jinja")):
             digest.update(str(path.relative_to(root.parent)).encode() + b"\0")

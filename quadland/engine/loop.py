@@ -123,7 +123,7 @@ def rk4_span(step, x: np.ndarray, t0: float, span: float, m: int) -> np.ndarray:
     """``x`` over ``span`` from ``t0`` in ``m`` classical RK4 steps (``qll_rk4_span``).
 
     ``step(x, t, h) -> x_next`` is one RK4 step of length ``h`` from time ``t``
-    (``symbolic.loop.rk4_step``'s function with the held inputs bound).
+    (``quadland_symbolic.loop.rk4_step``'s function with the held inputs bound).
     """
     h = span / m
     for s in range(int(m)):

@@ -6,7 +6,7 @@ column: ``t``, ``phase``, both bodies' poses ``x1 .. psi1`` and
 frame, ``F_total``, ``M_x .. M_z``, ``F_1 .. F_4``, ``d_Fx .. d_Fz``) and
 ``result.scenario`` (:class:`LandingResult`). E has z up; attitudes are ZYX
 Euler angles, ``R = Rz(psi) Ry(theta) Rx(phi)``; phases are
-:data:`symbolic.landing.guidance.PHASES`.
+:data:`quadland_symbolic.landing.guidance.PHASES`.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from quadland.exceptions import QuadlandError
 from quadland.plots.finite import drawable
 from quadland.plots.simulation import _finish
 from quadland.scenario import Scenario
-from symbolic.landing.guidance import PHASES, TOUCHDOWN
+from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
 
 __all__ = ["LANDING_FIGURES", "DEFAULT_LIMITS", "PAD_SIZE", "LandingResult", "landing_limits",
            "touchdown_row", "trajectory_3d_plot", "relative_position_plot", "ground_track_plot",

@@ -1,15 +1,15 @@
 """C code of the flight steps, the models and the simulators, with readable APIs.
 
-The package, one module per job: :mod:`~symbolic.codegen.config` (emitter
-settings and the values the C carries), :mod:`~symbolic.codegen.registry`
-(the CasADi functions written as C), :mod:`~symbolic.codegen.render` (the one
-Jinja2 environment), :mod:`~symbolic.codegen.casadi_files` (CasADi's C,
-post-processed), :mod:`~symbolic.codegen.structs` (the API's structs as
-layouts), :mod:`~symbolic.codegen.paper_api` and
-:mod:`~symbolic.codegen.landing_api` (the readable APIs),
-:mod:`~symbolic.codegen.example` (the pure-C example),
-:mod:`~symbolic.codegen.tree` (all of ``generated/``) and
-:mod:`~symbolic.codegen.simulator` (the compiled simulators' C).
+The package, one module per job: :mod:`~quadland_symbolic.codegen.config` (emitter
+settings and the values the C carries), :mod:`~quadland_symbolic.codegen.registry`
+(the CasADi functions written as C), :mod:`~quadland_symbolic.codegen.render` (the one
+Jinja2 environment), :mod:`~quadland_symbolic.codegen.casadi_files` (CasADi's C,
+post-processed), :mod:`~quadland_symbolic.codegen.structs` (the API's structs as
+layouts), :mod:`~quadland_symbolic.codegen.paper_api` and
+:mod:`~quadland_symbolic.codegen.landing_api` (the readable APIs),
+:mod:`~quadland_symbolic.codegen.example` (the pure-C example),
+:mod:`~quadland_symbolic.codegen.tree` (all of ``generated/``) and
+:mod:`~quadland_symbolic.codegen.simulator` (the compiled simulators' C).
 
 One entry point per tree, :func:`generate` (one precision) and
 :func:`generate_tree` (everything under ``generated/``), turns the symbolic
@@ -24,7 +24,7 @@ functions into C text:
   ``ql_control_step`` over CasADi's arg/res arrays) and the named-pointer
   wrappers of the other functions, rendered from the Jinja2 templates in
   ``symbolic/templates/``. Python only builds the templates' context: the
-  structs come from the layouts of :mod:`symbolic.codegen.structs`, offsets and
+  structs come from the layouts of :mod:`quadland_symbolic.codegen.structs`, offsets and
   sizes from the layouts of the model, defaults as C literals;
 * ``example/``: a pure-C flight of the scenario, a benchmark and their
   Makefile.
@@ -39,7 +39,7 @@ its inputs and on the CasADi version, never on time or paths, so
 regeneration is byte for byte reproducible.
 """
 
-from symbolic.codegen.config import (
+from quadland_symbolic.codegen.config import (
     DEFAULT_CONFIG,
     STATUS_CODES,
     TEMPLATE_DIR,
@@ -47,12 +47,12 @@ from symbolic.codegen.config import (
     Defaults,
     LandingDefaults,
 )
-from symbolic.codegen.example import example_columns, generate_example, land_columns
-from symbolic.codegen.landing_api import generate_landing
-from symbolic.codegen.paper_api import generate
-from symbolic.codegen.registry import FUNCTIONS, GeneratedFunction, c_sources
-from symbolic.codegen.simulator import SIMULATOR_PARTS, loop_header, simulator_sources
-from symbolic.codegen.tree import generate_tree
+from quadland_symbolic.codegen.example import example_columns, generate_example, land_columns
+from quadland_symbolic.codegen.landing_api import generate_landing
+from quadland_symbolic.codegen.paper_api import generate
+from quadland_symbolic.codegen.registry import FUNCTIONS, GeneratedFunction, c_sources
+from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS, loop_header, simulator_sources
+from quadland_symbolic.codegen.tree import generate_tree
 
 __all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "GeneratedFunction",
            "FUNCTIONS", "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns",

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import casadi as ca
 
-from symbolic.codegen.config import CodegenConfig
-from symbolic.codegen.registry import GeneratedFunction
-from symbolic.codegen.render import common_context, render
+from quadland_symbolic.codegen.config import CodegenConfig
+from quadland_symbolic.codegen.registry import GeneratedFunction
+from quadland_symbolic.codegen.render import common_context, render
 
 __all__ = ["emit_casadi"]
 
@@ -53,7 +53,7 @@ def emit_casadi(entry: GeneratedFunction, l: int, config: CodegenConfig) -> dict
         c = re.sub(r"if \(res\[(\d+)\]!=0\) res\[\1\]", r"res[\1]", c)
         c = c.replace(f"int {c_name}(const casadi_real** arg,",
                       "/* Every arg[i] and res[i] must point to valid memory: NULL is not\n"
-                      " * accepted (symbolic.codegen.CodegenConfig.null_checks). */\n"
+                      " * accepted (quadland_symbolic.codegen.CodegenConfig.null_checks). */\n"
                       f"int {c_name}(const casadi_real** arg,", 1)
         h = h.replace(f"int {c_name}(const casadi_real** arg,",
                       "/* Every arg[i] and res[i] must point to valid memory. */\n"

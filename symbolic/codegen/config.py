@@ -108,7 +108,7 @@ class Defaults:
     l : int
         RBF node count.
     p_quad, p_veh, p_ctrl : ndarray
-        Parameter vectors in the layouts of ``symbolic.parameters``.
+        Parameter vectors in the layouts of ``quadland_symbolic.parameters``.
     ref : ndarray, (12,)
         ``[e1d, e1d_dot, e1d_ddot]``.
     rotor_limits : tuple of float
@@ -160,12 +160,13 @@ class LandingDefaults:
     l : int
         RBF node count of the landing step.
     p_quad, p_ctrl, p_act, p_guid : ndarray
-        ``symbolic.parameters.QUADROTOR``, ``landing_controller_params(l)``,
-        ``symbolic.landing.quadrotor.ACTUATOR``, ``symbolic.landing.guidance.GUIDANCE_PARAMS``.
+        ``quadland_symbolic.parameters.QUADROTOR``, ``landing_controller_params(l)``,
+        ``quadland_symbolic.landing.quadrotor.ACTUATOR``,
+        ``quadland_symbolic.landing.guidance.GUIDANCE_PARAMS``.
     tilt_min : float
         Smallest accepted ``|cos(theta1) cos(phi1)|``.
     pp, xp0 : ndarray
-        The example's plant parameters (``symbolic.landing.plant.LANDING_PLANT_PARAMS``)
+        The example's plant parameters (``quadland_symbolic.landing.plant.LANDING_PLANT_PARAMS``)
         and initial plant state.
     duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
         s, Hz, Hz, Hz.

@@ -4,31 +4,31 @@ from __future__ import annotations
 
 import numpy as np
 
-from symbolic.closed_loop import (
+from quadland_symbolic.closed_loop import (
     PAPER_PLANT_STATE,
     closed_loop_state,
 )
-from symbolic.codegen.config import Defaults, LandingDefaults
-from symbolic.codegen.registry import FUNCTIONS, c_sources
-from symbolic.codegen.render import common_context, render
-from symbolic.codegen.simulator import loop_header
-from symbolic.codegen.structs import (
+from quadland_symbolic.codegen.config import Defaults, LandingDefaults
+from quadland_symbolic.codegen.registry import FUNCTIONS, c_sources
+from quadland_symbolic.codegen.render import common_context, render
+from quadland_symbolic.codegen.simulator import loop_header
+from quadland_symbolic.codegen.structs import (
     output_layout,
 )
-from symbolic.landing.guidance import (
+from quadland_symbolic.landing.guidance import (
     GUIDANCE_STATE,
 )
-from symbolic.landing.plant import (
+from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
 )
-from symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
-from symbolic.landing.relative import TOUCHDOWN_FIGURES
-from symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
-from symbolic.quadrotor import QUAD_STATE
-from symbolic.relative import E1
-from symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE
+from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from quadland_symbolic.landing.relative import TOUCHDOWN_FIGURES
+from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
+from quadland_symbolic.quadrotor import QUAD_STATE
+from quadland_symbolic.relative import E1
+from quadland_symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE
 
 __all__ = ["example_columns", "example_context", "land_columns", "land_context", "LAND_MODEL",
            "generate_example"]
@@ -105,9 +105,9 @@ def example_context(d: Defaults) -> dict:
 def land_columns() -> list[tuple[str, str]]:
     """Columns of the example ``land``'s CSV: ``(name, C expression)``, from the layouts.
 
-    The names are ``symbolic.landing.loop.LANDING_TRAJECTORY``'s (``quadland
+    The names are ``quadland_symbolic.landing.loop.LANDING_TRAJECTORY``'s (``quadland
     simulate``'s trajectory.csv of a landing); the expressions read the time
-    ``t`` and the signals ``y`` (``symbolic.landing.loop.LANDING_SIGNALS``).
+    ``t`` and the signals ``y`` (``quadland_symbolic.landing.loop.LANDING_SIGNALS``).
     """
     cols = []
     for f in LANDING_TRAJECTORY.fields:

@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from symbolic.codegen.config import DEFAULT_CONFIG, CodegenConfig, LandingDefaults
-from symbolic.codegen.paper_api import (
+from quadland_symbolic.codegen.config import DEFAULT_CONFIG, CodegenConfig, LandingDefaults
+from quadland_symbolic.codegen.paper_api import (
     emit_part,
     param_range_context,
     struct_context,
     wrapped_functions,
 )
-from symbolic.codegen.registry import BY_NAME
-from symbolic.codegen.render import common_context
-from symbolic.codegen.structs import (
+from quadland_symbolic.codegen.registry import BY_NAME
+from quadland_symbolic.codegen.render import common_context
+from quadland_symbolic.codegen.structs import (
     MAX_ABORTS,
     api_structs,
     guidance_param_ranges,
@@ -23,8 +23,8 @@ from symbolic.codegen.structs import (
     landing_param_ranges,
     landing_params_layout,
 )
-from symbolic.landing.contact import ANCHOR
-from symbolic.landing.controller import (
+from quadland_symbolic.landing.contact import ANCHOR
+from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     N_CHANNELS,
     NETWORK_INPUT_DIM,
@@ -33,22 +33,22 @@ from symbolic.landing.controller import (
     landing_step_function,
     landing_step_outputs,
 )
-from symbolic.landing.guidance import (
+from quadland_symbolic.landing.guidance import (
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
     PHASE_DOCS,
     PHASES,
     POSITION_REFERENCE,
 )
-from symbolic.landing.plant import (
+from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
 )
-from symbolic.landing.relative import TOUCHDOWN_FIGURES
-from symbolic.landing.signals import LANDING_SIGNALS
-from symbolic.layout import Layout
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.landing.relative import TOUCHDOWN_FIGURES
+from quadland_symbolic.landing.signals import LANDING_SIGNALS
+from quadland_symbolic.layout import Layout
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["landing_sizes", "vector_context", "landing_step_context", "landing_api_context",
            "generate_landing"]

@@ -4,27 +4,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from symbolic.closed_loop import (
+from quadland_symbolic.closed_loop import (
     PAPER_PLANT_STATE,
     closed_loop_jacobian_function,
     closed_loop_params,
     closed_loop_state,
 )
-from symbolic.codegen.casadi_files import emit_casadi
-from symbolic.codegen.config import DEFAULT_CONFIG, STATUS_CODES, CodegenConfig, Defaults
-from symbolic.codegen.registry import BY_NAME, FUNCTIONS
-from symbolic.codegen.render import common_context, render
-from symbolic.codegen.structs import (
+from quadland_symbolic.codegen.casadi_files import emit_casadi
+from quadland_symbolic.codegen.config import DEFAULT_CONFIG, STATUS_CODES, CodegenConfig, Defaults
+from quadland_symbolic.codegen.registry import BY_NAME, FUNCTIONS
+from quadland_symbolic.codegen.render import common_context, render
+from quadland_symbolic.codegen.structs import (
     CStruct,
     adaptive_state_layout,
     api_structs,
     param_ranges,
     params_layout,
 )
-from symbolic.control_step import step_inputs, step_outputs
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
-from symbolic.quadrotor import BODY_DISTURBANCE
+from quadland_symbolic.control_step import step_inputs, step_outputs
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, RBF_INPUT_DIM, VEHICLE, controller_layout
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE
 
 __all__ = ["unit_text", "member_context", "struct_context", "paper_sizes", "vector_structs",
            "step_context", "wrapped_functions", "param_range_context", "api_context", "generate",
@@ -148,8 +148,10 @@ def wrapped_functions(l: int, config: CodegenConfig, part: str = "paper") -> lis
 
 
 def param_range_context(l: int, config: CodegenConfig, ranges=param_ranges) -> list[dict]:
-    """The range of each member of ``ql_params`` (``symbolic.codegen.structs.param_ranges``, or
-    another table's ``ranges(l)``), bounds as C literals.
+    """The range of each member of ``ql_params``, bounds as C literals.
+
+    From ``quadland_symbolic.codegen.structs.param_ranges``, or another table's
+    ``ranges(l)``.
 
     ``bounded`` is False where only finiteness is asked; ``in_step`` marks
     the bounded members whose size does not grow with ``l``: the control

@@ -7,26 +7,26 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from symbolic.closed_loop import (
+from quadland_symbolic.closed_loop import (
     closed_loop_function,
     closed_loop_jacobian_function,
     plant_function,
 )
-from symbolic.codegen.config import CodegenConfig
-from symbolic.control_step import control_step_function
-from symbolic.landing.contact import anchor_function, landed_outputs_function
-from symbolic.landing.controller import (
+from quadland_symbolic.codegen.config import CodegenConfig
+from quadland_symbolic.control_step import control_step_function
+from quadland_symbolic.landing.contact import anchor_function, landed_outputs_function
+from quadland_symbolic.landing.controller import (
     landing_guidance_function,
     landing_step_function,
 )
-from symbolic.landing.loop import gear_gap_function
-from symbolic.landing.plant import (
+from quadland_symbolic.landing.loop import gear_gap_function
+from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
-from symbolic.landing.relative import touchdown_figures_function
-from symbolic.landing.sensors import measurement_function
-from symbolic.landing.signals import landing_signals_function
-from symbolic.vehicle import vehicle_function
+from quadland_symbolic.landing.relative import touchdown_figures_function
+from quadland_symbolic.landing.sensors import measurement_function
+from quadland_symbolic.landing.signals import landing_signals_function
+from quadland_symbolic.vehicle import vehicle_function
 
 __all__ = ["GeneratedFunction", "FUNCTIONS", "BY_NAME", "API_FILE", "c_sources"]
 
@@ -94,7 +94,8 @@ class GeneratedFunction:
 FUNCTIONS = (
     GeneratedFunction("control_step", control_step_function),
     GeneratedFunction("closed_loop", closed_loop_function, wrapper="quadland_model.c",
-                      doc="x_dot of the continuous-time closed loop (symbolic.closed_loop)."),
+                      doc="x_dot of the continuous-time closed loop "
+                          "(quadland_symbolic.closed_loop)."),
     GeneratedFunction("closed_loop_jacobian", closed_loop_jacobian_function,
                       wrapper="quadland_jacobian.c",
                       doc="d x_dot / d x: the {QL}CLOSED_LOOP_JACOBIAN_NNZ nonzeros in "

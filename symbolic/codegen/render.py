@@ -8,7 +8,7 @@ import re
 import casadi as ca
 import jinja2
 
-from symbolic.codegen.config import TEMPLATE_DIR, CodegenConfig
+from quadland_symbolic.codegen.config import TEMPLATE_DIR, CodegenConfig
 
 __all__ = ["pad", "signature", "declared", "environment", "render", "common_context"]
 

@@ -1,7 +1,7 @@
 """The compiled simulators' C: each loop's functions and its driver.
 
 :func:`simulator_sources` writes one part of a loop's simulator (see
-:data:`SIMULATOR_PARTS`): each function of the :class:`symbolic.loop.LoopModel`
+:data:`SIMULATOR_PARTS`): each function of the :class:`quadland_symbolic.loop.LoopModel`
 as CasADi writes it, one translation unit each, and the driver
 (``symbolic/templates/simulator.c.jinja``), which knows nothing of the model
 but its functions' sizes; :func:`loop_header` the loop algorithm the drivers
@@ -16,8 +16,8 @@ from pathlib import Path
 
 import casadi as ca
 
-from symbolic.codegen.render import common_context, render
-from symbolic.loop import LoopModel
+from quadland_symbolic.codegen.render import common_context, render
+from quadland_symbolic.loop import LoopModel
 
 __all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
 

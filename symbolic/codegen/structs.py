@@ -3,7 +3,7 @@
 Each struct of ``quadland.h`` (the paper's control step) and of
 ``quadland_landing.h`` (the landing step and guidance) is one
 :class:`CStruct`: a name and a
-:class:`symbolic.layout.Layout`. The C declarations (``symbolic.codegen``)
+:class:`quadland_symbolic.layout.Layout`. The C declarations (``quadland_symbolic.codegen``)
 and the ``ctypes`` mirrors (``quadland.cbackend.ctypes_struct``) are both
 derived from these layouts, so that they cannot drift apart:
 
@@ -16,7 +16,7 @@ derived from these layouts, so that they cannot drift apart:
   it) is the C array ``name[cols][rows]``.
 
 Structs that are vectors of the model take the model's layouts directly
-(``symbolic.quadrotor.QUAD_STATE``, ``symbolic.parameters.QUADROTOR``, ...);
+(``quadland_symbolic.quadrotor.QUAD_STATE``, ``quadland_symbolic.parameters.QUADROTOR``, ...);
 the three that only C has (``params``, ``adaptive_state``, ``output``)
 are defined here from the fields of the control step's signature.
 
@@ -37,20 +37,20 @@ import functools
 import math
 from types import MappingProxyType
 
-from symbolic.backstepping import PAPER_REFERENCE
-from symbolic.control_step import step_inputs, step_outputs
-from symbolic.landing.controller import (
+from quadland_symbolic.backstepping import PAPER_REFERENCE
+from quadland_symbolic.control_step import step_inputs, step_outputs
+from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
     landing_memory,
     landing_step_outputs,
 )
-from symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
-from symbolic.landing.quadrotor import ACTUATOR
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
-from symbolic.quadrotor import QUAD_STATE
-from symbolic.vehicle import VEHICLE_MEASUREMENT
+from quadland_symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
+from quadland_symbolic.landing.quadrotor import ACTUATOR
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
+from quadland_symbolic.quadrotor import QUAD_STATE
+from quadland_symbolic.vehicle import VEHICLE_MEASUREMENT
 
 __all__ = ["CStruct", "Range", "PARAM_RANGES", "ParamRange", "params_layout", "param_ranges",
            "adaptive_state_layout", "output_layout", "api_structs", "LANDING_PARAM_RANGES",

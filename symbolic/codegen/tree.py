@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from symbolic.codegen.config import CodegenConfig, Defaults, LandingDefaults
-from symbolic.codegen.example import generate_example
-from symbolic.codegen.landing_api import generate_landing
-from symbolic.codegen.paper_api import generate
-from symbolic.codegen.render import common_context, render
+from quadland_symbolic.codegen.config import CodegenConfig, Defaults, LandingDefaults
+from quadland_symbolic.codegen.example import generate_example
+from quadland_symbolic.codegen.landing_api import generate_landing
+from quadland_symbolic.codegen.paper_api import generate
+from quadland_symbolic.codegen.render import common_context, render
 
 __all__ = ["generate_tree"]
 

@@ -41,15 +41,15 @@ import functools
 
 import casadi as ca
 
-from symbolic.kinematics import rotation
-from symbolic.landing.deck import DECK_PARAMS, deck_pose, time_derivative, vee
-from symbolic.landing.plant import LANDING_PLANT_PARAMS
-from symbolic.landing.quadrotor import QUAD6_STATE
-from symbolic.landing.signals import LANDING_SIGNALS, landing_signals
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import WRENCH, wrench_from_rotors
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose, time_derivative, vee
+from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.signals import LANDING_SIGNALS, landing_signals
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.quadrotor import WRENCH, wrench_from_rotors
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = [
     "ANCHOR",
@@ -169,14 +169,14 @@ def contact_wrench(x1q, xv, t, p_veh, p_deck, p_gear):
     Parameters
     ----------
     x1q : casadi.SX
-        Quadrotor state (:data:`symbolic.landing.quadrotor.QUAD6_STATE`).
+        Quadrotor state (:data:`quadland_symbolic.landing.quadrotor.QUAD6_STATE`).
     xv : casadi.SX
-        Vehicle state (:data:`symbolic.vehicle.VEHICLE_STATE`).
+        Vehicle state (:data:`quadland_symbolic.vehicle.VEHICLE_STATE`).
     t : casadi.SX
         Time, s (drives the deck's prescribed motion).
     p_veh, p_deck, p_gear : casadi.SX
-        :data:`~symbolic.parameters.VEHICLE`,
-        :data:`~symbolic.landing.deck.DECK_PARAMS` and :data:`GEAR`.
+        :data:`~quadland_symbolic.parameters.VEHICLE`,
+        :data:`~quadland_symbolic.landing.deck.DECK_PARAMS` and :data:`GEAR`.
 
     Returns
     -------
@@ -190,7 +190,7 @@ def contact_wrench(x1q, xv, t, p_veh, p_deck, p_gear):
     Notes
     -----
     See the module docstring for the laws. The deck's velocity and rotation
-    come from :func:`symbolic.landing.deck.deck_pose`.
+    come from :func:`quadland_symbolic.landing.deck.deck_pose`.
     """
     g = GEAR.unpack(p_gear)
     r_feet, k, c, mu = g["r_feet"], g["k"], g["c"], g["mu"]
@@ -299,7 +299,7 @@ def friction_margin(x1q, xv, t, F_other, p_quad, p_veh, p_deck, p_gear):
         thrust ``R1 [0, 0, F_total]``, drag and wind, the lock-down's pull
         ``-F_lock n2``.
     p_quad : casadi.SX
-        :data:`~symbolic.parameters.QUADROTOR` (``m1``, ``g``).
+        :data:`~quadland_symbolic.parameters.QUADROTOR` (``m1``, ``g``).
 
     Notes
     -----
@@ -427,7 +427,7 @@ def gear_defaults(surface: str = "ship_deck") -> dict:
     Returns
     -------
     dict
-        A fresh dict for :meth:`GEAR.pack <symbolic.layout.Layout.pack>`;
+        A fresh dict for :meth:`GEAR.pack <quadland_symbolic.layout.Layout.pack>`;
         the sources are in docs/contact.md.
     """
     if surface not in SURFACES:
@@ -456,7 +456,7 @@ def lock_defaults(device: str = "magnet") -> dict:
     Returns
     -------
     dict
-        A fresh dict for :meth:`LOCK.pack <symbolic.layout.Layout.pack>`.
+        A fresh dict for :meth:`LOCK.pack <quadland_symbolic.layout.Layout.pack>`.
     """
     if device not in DEVICES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")

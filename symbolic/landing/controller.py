@@ -13,7 +13,7 @@ The design is docs/landing.md's "The controller"; its choices are in
    and the frame terms, by symbolic differentiation: :func:`known_acceleration`).
 2. **Thrust vector to attitude**: ``t_E = m1 R_deck a_des``; collective thrust
    and desired body z with thrust and tilt limits, PX4's ``bodyzToAttitude``
-   with the deck's heading (:mod:`symbolic.landing.attitude`).
+   with the deck's heading (:mod:`quadland_symbolic.landing.attitude`).
 3. **Saturation compensation** (Farrell et al. 2009): the limited thrust
    vector falls short of ``t_E`` by ``delta = R_deck^T (T b3 - t_E) / m1``;
    ``xi1' = -k1p xi1 + xi2``, ``xi2' = -k2p xi2 - xi1 + delta`` and the
@@ -24,9 +24,9 @@ The design is docs/landing.md's "The controller"; its choices are in
    and ``e1d_ddot = x''``.
 5. **Inner loop**: the paper's eq. (9)-(20) on roll, pitch and yaw with
    ``e1 = eta1``, ``e2 = Omega1``, ``e1d = [phi_d, theta_d, psi2]``
-   (:func:`symbolic.backstepping.virtual_control` for eq. 14, 18); moments
+   (:func:`quadland_symbolic.backstepping.virtual_control` for eq. 14, 18); moments
    ``M = I u``; with ``nominal_model = 1`` the drag and gyroscopic terms
-   (:func:`symbolic.relative.nominal_drift`) are fed forward.
+   (:func:`quadland_symbolic.relative.nominal_drift`) are fed forward.
 6. **Rotors**: ``[T, M]`` through the mixer's inverse, clipped to ``[0, F_max]``.
 7. **Memory** over ``dt`` with the measurements held: the adaptive laws of
    eq. (22) for all six channels, the filter and the compensator, each
@@ -43,23 +43,23 @@ import functools
 
 import casadi as ca
 
-from symbolic.backstepping import virtual_control
-from symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
-from symbolic.landing.attitude import thrust_attitude
-from symbolic.landing.deck import DECK_POSE, time_derivative
-from symbolic.landing.guidance import (
+from quadland_symbolic.backstepping import virtual_control
+from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
+from quadland_symbolic.landing.attitude import thrust_attitude
+from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
+from quadland_symbolic.landing.guidance import (
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
     POSITION_REFERENCE,
     guidance_step,
 )
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
-from symbolic.landing.relative import RELATIVE6, deck_gear_gap
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR
-from symbolic.quadrotor import WRENCH, rotors_from_wrench
-from symbolic.rbf import rbf
-from symbolic.relative import nominal_drift, tilt
+from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
+from quadland_symbolic.landing.relative import RELATIVE6, deck_gear_gap
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR
+from quadland_symbolic.quadrotor import WRENCH, rotors_from_wrench
+from quadland_symbolic.rbf import rbf
+from quadland_symbolic.relative import nominal_drift, tilt
 
 __all__ = [
     "N_CHANNELS",
@@ -270,7 +270,7 @@ def known_acceleration_function() -> ca.Function:
     is gravity; ``f_r`` drag, the pad's acceleration and the frame terms. The
     frame terms come out of differentiating ``p1 - p2 = R_deck p_e`` twice
     along the deck's rotation (``R_deck' = S(w2E) R_deck``, here through
-    ``eta2_dot``) with ``p_e'' = 0``, as :mod:`symbolic.landing.relative` does,
+    ``eta2_dot``) with ``p_e'' = 0``, as :mod:`quadland_symbolic.landing.relative` does,
     never written by hand. The quadrotor's velocity for the drag is
     ``p1' = v2E + d/dt (R_deck p_e)``.
     """
@@ -319,10 +319,10 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     l : int
         RBF node count.
     y, ref, mem, p_ctrl, p_quad, p_act, dt : casadi.SX
-        :data:`LANDING_MEASUREMENT`, :data:`symbolic.landing.guidance.POSITION_REFERENCE`,
+        :data:`LANDING_MEASUREMENT`, :data:`quadland_symbolic.landing.guidance.POSITION_REFERENCE`,
         :func:`landing_memory`, :func:`landing_controller_params`,
-        :data:`~symbolic.parameters.QUADROTOR`,
-        :data:`~symbolic.landing.quadrotor.ACTUATOR` and the period (s).
+        :data:`~quadland_symbolic.parameters.QUADROTOR`,
+        :data:`~quadland_symbolic.landing.quadrotor.ACTUATOR` and the period (s).
     """
     ms, rs = LANDING_MEASUREMENT.unpack(y), POSITION_REFERENCE.unpack(ref)
     mm, c = landing_memory(l).unpack(mem), landing_controller_params(l).unpack(p_ctrl)
@@ -429,11 +429,11 @@ def landing_step_function(l: int) -> ca.Function:
     bs_z2, tilt, limits)``
 
     Inputs: the measurements ``y`` (:data:`LANDING_MEASUREMENT`), the guidance's
-    reference ``ref`` (:data:`symbolic.landing.guidance.POSITION_REFERENCE`), the memory
+    reference ``ref`` (:data:`quadland_symbolic.landing.guidance.POSITION_REFERENCE`), the memory
     ``mem`` (:func:`landing_memory`), the parameters ``p_ctrl``
     (:func:`landing_controller_params`), ``p_quad``
-    (:data:`~symbolic.parameters.QUADROTOR`), ``p_act``
-    (:data:`~symbolic.landing.quadrotor.ACTUATOR`) and the period ``dt`` (s).
+    (:data:`~quadland_symbolic.parameters.QUADROTOR`), ``p_act``
+    (:data:`~quadland_symbolic.landing.quadrotor.ACTUATOR`) and the period ``dt`` (s).
     Outputs: :func:`landing_step_outputs`. ``F_cmd`` is clipped to
     ``[0, F_max]`` (a NaN passes through); ``tilt`` is the measured
     ``cos(theta1) cos(phi1)``: the attitude loop's ``Rr1`` is singular at
@@ -449,12 +449,14 @@ def landing_step_function(l: int) -> ca.Function:
 
 
 def landing_guidance(xg, y, dt, p_guid):
-    """One guidance step (:func:`~symbolic.landing.guidance.guidance_step`) on the measurements.
+    """One guidance step on the step's measurements.
+
+    The step is :func:`~quadland_symbolic.landing.guidance.guidance_step`.
 
     The relative position and velocity are the landing sensor's, the deck's
     rise is the pad velocity's vertical component ``v2E[2]`` and the gear
     gap comes from ``p_e``, ``eta1`` and ``eta2``
-    (:func:`~symbolic.landing.relative.deck_gear_gap`, the gear
+    (:func:`~quadland_symbolic.landing.relative.deck_gear_gap`, the gear
     ``touchdown_height`` below the centre). Returns ``(xg_next, reference)``.
     """
     ms = LANDING_MEASUREMENT.unpack(y)
@@ -467,9 +469,10 @@ def landing_guidance(xg, y, dt, p_guid):
 def landing_guidance_function() -> ca.Function:
     """``landing_guidance(xg, y, dt, p_guid) -> (xg_next, ref)``: :func:`landing_guidance`.
 
-    ``xg``: :data:`symbolic.landing.guidance.GUIDANCE_STATE`; ``y``: :data:`LANDING_MEASUREMENT`;
-    ``p_guid``: :data:`symbolic.landing.guidance.GUIDANCE_PARAMS`; ``ref``:
-    :data:`symbolic.landing.guidance.POSITION_REFERENCE`, the landing step's.
+    ``xg``: :data:`quadland_symbolic.landing.guidance.GUIDANCE_STATE`;
+    ``y``: :data:`LANDING_MEASUREMENT`;
+    ``p_guid``: :data:`quadland_symbolic.landing.guidance.GUIDANCE_PARAMS`; ``ref``:
+    :data:`quadland_symbolic.landing.guidance.POSITION_REFERENCE`, the landing step's.
     """
     xg, y, dt, p_guid = GUIDANCE_STATE.sym(), LANDING_MEASUREMENT.sym(), ca.SX.sym("dt"), \
         GUIDANCE_PARAMS.sym()

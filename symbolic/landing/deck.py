@@ -1,6 +1,6 @@
 """The vehicle and its deck: eq. (4) plus prescribed heave, roll and pitch.
 
-The vehicle's planar motion is the model of eq. (4) (:mod:`symbolic.vehicle`,
+The vehicle's planar motion is the model of eq. (4) (:mod:`quadland_symbolic.vehicle`,
 state ``xv``, driven by ``p_veh``'s ``tau``). Its deck moves in heave, roll
 and pitch as prescribed sums of :data:`N_DECK` sinusoids
 ``s(t) = sum_i a_i sin(omega_i t + phase_i)`` (parameters :data:`DECK_PARAMS`);
@@ -21,10 +21,10 @@ from typing import NamedTuple
 
 import casadi as ca
 
-from symbolic.kinematics import rotation
-from symbolic.layout import Field, Layout
-from symbolic.parameters import VEHICLE
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import VEHICLE
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = [
     "N_DECK",

@@ -4,7 +4,7 @@ A delayed fusion horizon and an output predictor.
 
 docs/estimator.md is the design; the equations (E1)-(E17) are there. The
 model (state, packets, parameters, prediction, measurement blocks) is
-:mod:`symbolic.landing.navigation`. One step, at the control time ``t``:
+:mod:`quadland_symbolic.landing.navigation`. One step, at the control time ``t``:
 
 1. The deck's latest broadcast is kept (attitude and rotation, for the range
    model and the output).
@@ -16,7 +16,7 @@ model (state, packets, parameters, prediction, measurement blocks) is
    sensor per step (E16).
 3. The output predictor carries ``x_h`` through the ``n_hist`` buffered
    acceleration inputs to ``t`` (state only, closed form (E17)) and forms the
-   controller's :data:`~symbolic.landing.controller.LANDING_MEASUREMENT` (E7), (E15).
+   controller's :data:`~quadland_symbolic.landing.controller.LANDING_MEASUREMENT` (E7), (E15).
 4. ``x_h``, ``P_h`` are predicted over the oldest buffered input (E6); this
    period's input joins the buffer.
 
@@ -30,10 +30,10 @@ import functools
 
 import casadi as ca
 
-from symbolic.kalman import fifo_push_pop, is_finite, select
-from symbolic.kinematics import rotation
-from symbolic.landing.controller import LANDING_MEASUREMENT
-from symbolic.landing.navigation import (
+from quadland_symbolic.kalman import fifo_push_pop, is_finite, select
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
+from quadland_symbolic.landing.navigation import (
     BLOCKS,
     DATALINK,
     DECK_INIT,
@@ -49,7 +49,7 @@ from symbolic.landing.navigation import (
     nav_predict,
     relative_output,
 )
-from symbolic.layout import Field, Layout
+from quadland_symbolic.layout import Field, Layout
 
 __all__ = [
     "N_HIST",
@@ -357,11 +357,11 @@ def estimator_step_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
     Notes
     -----
     Inputs: ``mem`` (:func:`estimator_memory`), ``imu``
-    (:data:`~symbolic.landing.navigation.IMU`), one packet per sensor
-    (:data:`~symbolic.landing.navigation.NAV_PACKETS`), ``p_est``
-    (:func:`~symbolic.landing.navigation.estimator_params`), the period
+    (:data:`~quadland_symbolic.landing.navigation.IMU`), one packet per sensor
+    (:data:`~quadland_symbolic.landing.navigation.NAV_PACKETS`), ``p_est``
+    (:func:`~quadland_symbolic.landing.navigation.estimator_params`), the period
     ``dt`` and the time ``t`` of this step (s). Outputs: ``mem_next``,
-    ``y`` (:data:`~symbolic.landing.controller.LANDING_MEASUREMENT`, at ``t``) and
+    ``y`` (:data:`~quadland_symbolic.landing.controller.LANDING_MEASUREMENT`, at ``t``) and
     ``diag`` (:func:`estimator_diagnostics`). Equations (E1)-(E17) of
     docs/estimator.md.
     """
@@ -385,7 +385,7 @@ def estimator_init_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
     ``x0`` and a diagonal covariance; the input buffer holds ``n_hist`` empty periods
     (``dt = 0``), so the horizon stays at ``t0`` until it has filled and the output is
     ``x0`` propagated through the periods so far. ``deck0``
-    (:data:`~symbolic.landing.navigation.DECK_INIT`) stands for a broadcast at ``t0``
+    (:data:`~quadland_symbolic.landing.navigation.DECK_INIT`) stands for a broadcast at ``t0``
     until one arrives; zeros mean a level deck heading along E's x, not rotating. The
     FIFOs and counters are empty.
     """

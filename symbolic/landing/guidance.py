@@ -20,7 +20,7 @@ the abort count. Phases (:data:`PHASES`):
 3. **touchdown**: entered from the descent when the landing gear meets the
    deck: the gear gap ``z_e - touchdown_height n2 . b3`` measured from the
    relative position and both attitudes
-   (:func:`symbolic.landing.relative.deck_gear_gap`) is zero or below. The
+   (:func:`quadland_symbolic.landing.relative.deck_gear_gap`) is zero or below. The
    reference holds; the flight stack idles the rotors. (The simulator
    locates the contact within its step and ends the flight there, so its
    guidance never sees a closed gap.)
@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from symbolic.layout import Field, Layout
+from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["PHASES", "PHASE_DOCS", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED",
            "GUIDANCE_STATE", "GUIDANCE_PARAMS", "POSITION_REFERENCE", "guidance_step",

@@ -19,13 +19,13 @@ eq. 4) and a quadrotor hovering over the pad leave an equilibrium, while
 given in the heading frame (E turned by the vehicle's heading).
 
 The plant's input is the wrench ``u = [T, M_x, M_y, M_z]`` the landing step
-sends to the mixer (:data:`symbolic.quadrotor.WRENCH`); the motors follow
+sends to the mixer (:data:`quadland_symbolic.quadrotor.WRENCH`); the motors follow
 ``rotors_from_wrench(u)`` with their lag. Its output is what the step
 measures of the quadrotor (:data:`HOVER_OUTPUT`): ``p_e, v_e`` (landing
 sensor) and ``eta1, Omega1`` (IMU). The vehicle's broadcast is frozen at its
 steady motion.
 
-The controller is the landing step (:func:`~symbolic.landing.controller.landing_law`):
+The controller is the landing step (:func:`~quadland_symbolic.landing.controller.landing_law`):
 its memory ``mem`` (network, robust terms, command filter, saturation
 compensator) is updated over ``dt`` with the measurement held, so its
 Jacobians at ``dt`` are those of a discrete-time system. Its continuous-time
@@ -41,21 +41,21 @@ import functools
 
 import casadi as ca
 
-from symbolic.landing.controller import (
+from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
     landing_law,
     landing_memory,
 )
-from symbolic.landing.deck import deck_pose
-from symbolic.landing.guidance import POSITION_REFERENCE
-from symbolic.landing.plant import LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, wind_force
-from symbolic.landing.quadrotor import QUAD6_STATE, quadrotor6_rhs
-from symbolic.landing.relative import RELATIVE6, relative6
-from symbolic.layout import Layout
-from symbolic.linearization import VEHICLE_SPEEDS
-from symbolic.quadrotor import WRENCH, rotors_from_wrench
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.landing.deck import deck_pose
+from quadland_symbolic.landing.guidance import POSITION_REFERENCE
+from quadland_symbolic.landing.plant import LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, wind_force
+from quadland_symbolic.landing.quadrotor import QUAD6_STATE, quadrotor6_rhs
+from quadland_symbolic.landing.relative import RELATIVE6, relative6
+from quadland_symbolic.layout import Layout
+from quadland_symbolic.linearization import VEHICLE_SPEEDS
+from quadland_symbolic.quadrotor import WRENCH, rotors_from_wrench
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["HOVER_PLANT", "HOVER_OUTPUT", "hover_vehicle", "hover_quadrotor",
            "hover_plant_rhs", "hover_measurement", "hover_linearization_function",
@@ -97,8 +97,8 @@ def hover_plant_rhs(z, u, v2, w, pp):
     """``z_dot`` for a wrench command ``u`` (eq. 1-2 with motor lag, eq. 5 in 6-DOF).
 
     The rotors are commanded ``rotors_from_wrench(u)``; the disturbance is
-    :data:`symbolic.landing.loop.LANDING_DISTURBANCE` (wind in the heading frame,
-    ``d_F``, ``d_M``). ``p_e_dot = v_e`` (:func:`~symbolic.landing.relative.relative6`),
+    :data:`quadland_symbolic.landing.loop.LANDING_DISTURBANCE` (wind in the heading frame,
+    ``d_F``, ``d_M``). ``p_e_dot = v_e`` (:func:`~quadland_symbolic.landing.relative.relative6`),
     ``psi_e_dot = psi1_dot - psi2_dot``; the other rows are the quadrotor's own.
     """
     p, ws = LANDING_PLANT_PARAMS.unpack(pp), LANDING_DISTURBANCE.unpack(w)
@@ -163,7 +163,7 @@ def hover_linearization_function(l: int) -> ca.Function:
         d u          = C_c d mem + D_c d y            (the wrench, eq. 20)
 
     ``v2 = [u2, v2, r2]`` are the vehicle's speeds, ``w`` the disturbance
-    (:data:`symbolic.landing.loop.LANDING_DISTURBANCE`, wind in the heading frame),
+    (:data:`quadland_symbolic.landing.loop.LANDING_DISTURBANCE`, wind in the heading frame),
     ``pp`` the plant's parameters with the deck's motion the caller wants
     (frozen: zero amplitudes), ``ref`` the position reference.
 

@@ -1,18 +1,18 @@
 """The landing loop as the simulator sees it: plant with wind, sensors, guidance, landing step.
 
-:func:`landing_loop` bundles, in the shape of :class:`symbolic.loop.LoopModel`:
+:func:`landing_loop` bundles, in the shape of :class:`quadland_symbolic.loop.LoopModel`:
 
 * **plant** ``plant(xp, F_cmd, w, t, pp)``: the landing plant
-  (:mod:`symbolic.landing.plant`) under the held disturbance ``w``
+  (:mod:`quadland_symbolic.landing.plant`) under the held disturbance ``w``
   (:data:`LANDING_DISTURBANCE`): the wind velocity in E and the body-frame
   ``[d_F, d_M]``. The rotor drag of eq. (2) acts on the velocity relative to
   the air, ``-Kt (V1 - R(eta1)^T v_wind)``, so the wind adds the body force
   ``Kt R(eta1)^T v_wind`` (:func:`wind_force`) to ``d_F``;
 * **controller** ``controller(xp, xc, pc, first, t)``: perfect sensors
-  (:func:`~symbolic.landing.controller.measurement_function`), then one
-  guidance step (:func:`~symbolic.landing.controller.landing_guidance`) whose
+  (:func:`~quadland_symbolic.landing.controller.measurement_function`), then one
+  guidance step (:func:`~quadland_symbolic.landing.controller.landing_guidance`) whose
   reference feeds one landing step
-  (:func:`~symbolic.landing.controller.landing_law`), both at the control
+  (:func:`~quadland_symbolic.landing.controller.landing_law`), both at the control
   rate; the memory ``xc`` (:func:`landing_loop_memory`) is the guidance's state
   (the phase among it) and the step's; the held input is the rotor commands,
   the guard the measured tilt; **step_args** gives both steps' arguments, for
@@ -33,27 +33,27 @@ import functools
 
 import casadi as ca
 
-from symbolic.landing.controller import (
+from quadland_symbolic.landing.controller import (
     landing_controller_params,
     landing_guidance,
     landing_law,
     landing_memory,
     landing_step_outputs,
 )
-from symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
-from symbolic.landing.plant import (
+from quadland_symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
+from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     loop_plant_function,
 )
-from symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
-from symbolic.landing.relative import gear_gap
-from symbolic.landing.sensors import measurement_function
-from symbolic.landing.signals import LANDING_SIGNALS, landing_signals_function
-from symbolic.layout import Field, Layout
-from symbolic.loop import LoopModel
-from symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
+from quadland_symbolic.landing.relative import gear_gap
+from quadland_symbolic.landing.sensors import measurement_function
+from quadland_symbolic.landing.signals import LANDING_SIGNALS, landing_signals_function
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
            "landing_loop_state", "loop_outputs", "gear_gap_function",

@@ -10,7 +10,7 @@ bias of the acceleration input, which quadland forms from the raw
 accelerometer through an attitude estimate (E1).
 
 The sequencing (delayed horizon, FIFOs, output predictor) is in
-:mod:`symbolic.landing.estimator`; this module holds what one prediction and
+:mod:`quadland_symbolic.landing.estimator`; this module holds what one prediction and
 one measurement block compute.
 """
 
@@ -23,16 +23,16 @@ import types
 import casadi as ca
 import numpy as np
 
-from symbolic.kalman import (
+from quadland_symbolic.kalman import (
     CovariancePattern,
     block_nis,
     nilpotent_discretization,
     scalar_update,
     select,
 )
-from symbolic.kinematics import rotation
-from symbolic.landing.controller import deck_rates
-from symbolic.layout import Field, Layout
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.controller import deck_rates
+from quadland_symbolic.layout import Field, Layout
 
 __all__ = [
     "NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
@@ -236,7 +236,7 @@ def nav_transition(dt, p_est):
     """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E3)-(E5).
 
     Sizes 18 x 18, 18 x 3, 18 x 18: one axis' 6 x 6 discretization
-    (:func:`~symbolic.kalman.nilpotent_discretization`) on x, y and z, each
+    (:func:`~quadland_symbolic.kalman.nilpotent_discretization`) on x, y and z, each
     with its own noise densities; the state is field-major, so the 18-state
     matrices are ``kron(M6, I3)``, and ``Q = sum_a kron(Q6_a, e_a e_a^T)``.
     """
@@ -409,7 +409,7 @@ def deck_at(eta2, w2E, w2E_dot, age, max_age):
 
     ``eta2 + eta2_dot a + eta2_ddot a^2 / 2`` and ``w2E + w2E_dot a`` with
     ``a = age`` clipped to ``[-max_age, max_age]``; ``eta2_dot``,
-    ``eta2_ddot`` from :func:`symbolic.landing.controller.deck_rates` (eq. 3).
+    ``eta2_ddot`` from :func:`quadland_symbolic.landing.controller.deck_rates` (eq. 3).
     """
     a = ca.fmin(ca.fmax(age, -max_age), max_age)
     eta2_dot, eta2_ddot = deck_rates(eta2, w2E, w2E_dot)

@@ -1,9 +1,9 @@
 """The landing plant as one ODE: 6-DOF quadrotor and vehicle (eq. 1-4).
 
 State ``xp`` (:data:`LANDING_PLANT_STATE`) = ``[x1q (16), xv (6)]``; inputs held over
-a control period: the rotor commands ``F_cmd`` (:data:`~symbolic.landing.
+a control period: the rotor commands ``F_cmd`` (:data:`~quadland_symbolic.landing.
 quadrotor.COMMAND`) and the disturbance ``w = [d_F, d_M]``
-(:data:`symbolic.quadrotor.BODY_DISTURBANCE`, body frame); the time ``t`` drives
+(:data:`quadland_symbolic.quadrotor.BODY_DISTURBANCE`, body frame); the time ``t`` drives
 the deck. The deck's heave, roll and pitch are prescribed, not integrated.
 """
 
@@ -13,14 +13,14 @@ import functools
 
 import casadi as ca
 
-from symbolic.kinematics import rotation
-from symbolic.landing.deck import DECK_PARAMS, DECK_POSE, deck_pose
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
-from symbolic.landing.relative import RELATIVE6, relative6
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import BODY_DISTURBANCE
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.deck import DECK_PARAMS, DECK_POSE, deck_pose
+from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
+from quadland_symbolic.landing.relative import RELATIVE6, relative6
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["LANDING_PLANT_STATE", "LANDING_PLANT_PARAMS", "LANDING_PLANT_OUTPUTS",
            "LANDING_DISTURBANCE", "landing_plant_rhs", "landing_plant_function",
@@ -83,7 +83,7 @@ def landing_outputs_function() -> ca.Function:
 
     ``x1 y1 z1 phi1 theta1 psi1`` (quadrotor in E), ``x2 y2 z2 phi2 theta2
     psi2`` (pad centre and deck attitude in E), the relative state of
-    :data:`symbolic.landing.relative.RELATIVE6` (``x_e y_e z_e`` ...), the rotor
+    :data:`quadland_symbolic.landing.relative.RELATIVE6` (``x_e y_e z_e`` ...), the rotor
     forces ``F_1..F_4``, their commands and the disturbance ``d_Fx ..``.
     """
     xp, F_cmd, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), BODY_DISTURBANCE.sym()

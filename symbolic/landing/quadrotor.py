@@ -3,7 +3,7 @@
 State ``x1q`` (:data:`QUAD6_STATE`): position p1 in E (m, z up), ZYX Euler angles
 eta1 (rad), body velocity V1 (m/s), body rates Omega1 (rad/s) and the four
 rotor forces F (N), which lag their commands. Eq. (2) is the paper's, reused
-from :func:`symbolic.quadrotor.quadrotor_rhs`; eq. (1) gains the horizontal
+from :func:`quadland_symbolic.quadrotor.quadrotor_rhs`; eq. (1) gains the horizontal
 rows, ``p1_dot = R(eta1) V1``.
 """
 
@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import casadi as ca
 
-from symbolic.kinematics import rotation
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR
-from symbolic.quadrotor import BODY_DISTURBANCE, quadrotor_rhs, wrench_from_rotors
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, quadrotor_rhs, wrench_from_rotors
 
 __all__ = [
     "QUAD6_STATE",

@@ -16,13 +16,13 @@ import functools
 
 import casadi as ca
 
-from symbolic.kinematics import euler_rate_matrix_inv, rotation
-from symbolic.landing.deck import DECK_PARAMS, deck_pose, time_derivative
-from symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR, VEHICLE
-from symbolic.quadrotor import BODY_DISTURBANCE
-from symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.kinematics import euler_rate_matrix_inv, rotation
+from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose, time_derivative
+from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR, VEHICLE
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = [
     "RELATIVE6",

@@ -3,9 +3,9 @@
 Each sensor is one named CasADi Function
 ``sense_<name>(xp, uh, w, t, pp, p_sens, noise) -> y``: the packet ``y`` the
 sensor delivers, computed from the true plant state ``xp``
-(:data:`~symbolic.landing.plant.LANDING_PLANT_STATE`) at its sample time ``t``, the
-held rotor commands ``uh`` (:data:`~symbolic.landing.quadrotor.COMMAND`), the
-loop's disturbance ``w`` (:data:`~symbolic.landing.loop.LANDING_DISTURBANCE`), the
+(:data:`~quadland_symbolic.landing.plant.LANDING_PLANT_STATE`) at its sample time ``t``, the
+held rotor commands ``uh`` (:data:`~quadland_symbolic.landing.quadrotor.COMMAND`), the
+loop's disturbance ``w`` (:data:`~quadland_symbolic.landing.loop.LANDING_DISTURBANCE`), the
 plant's parameters ``pp``, the sensors' constants ``p_sens``
 (:data:`SENSOR_PARAMS`) and a noise vector drawn outside (one layout per
 sensor), so that every Function is deterministic; a zero noise vector gives
@@ -45,18 +45,18 @@ from types import MappingProxyType
 
 import casadi as ca
 
-from symbolic.kinematics import rotation, skew
-from symbolic.landing.deck import DECK_POSE, deck_pose
-from symbolic.landing.plant import (
+from quadland_symbolic.kinematics import rotation, skew
+from quadland_symbolic.landing.deck import DECK_POSE, deck_pose
+from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     loop_plant_function,
 )
-from symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
-from symbolic.landing.relative import relative6
-from symbolic.layout import Field, Layout
-from symbolic.parameters import QUADROTOR
+from quadland_symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
+from quadland_symbolic.landing.relative import relative6
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.parameters import QUADROTOR
 
 __all__ = ["measurement_function", "SENSOR_NAMES", "SENSOR_PARAMS", "IMU_PACKET",
            "VISION_PACKET", "GNSS_PACKET", "RANGEFINDER_PACKET", "DATALINK_PACKET", "IMU_NOISE",
@@ -193,7 +193,7 @@ def specific_force(xp, uh, w, t, pp):
     """``R1^T (a1 - g_vec)``: an ideal accelerometer's reading, m/s^2.
 
     ``a1 = p1'' = R1 (V1' + Omega1 x V1)`` with ``V1'`` from
-    :func:`~symbolic.landing.loop.loop_plant_function` (wind, disturbance
+    :func:`~quadland_symbolic.landing.loop.loop_plant_function` (wind, disturbance
     and rotor states included); ``g_vec = [0, 0, -g]`` (E, z up), so a level
     hover reads ``+g`` along ``b3`` and free fall reads 0.
     """
@@ -329,7 +329,7 @@ def sense_rangefinder_function() -> ca.Function:
 def sense_datalink_function() -> ca.Function:
     """``sense_datalink``: the vehicle's broadcast under its noise.
 
-    The deck's ``eta2, v2E, a2E, w2E, w2E_dot`` (:func:`~symbolic.landing.
+    The deck's ``eta2, v2E, a2E, w2E, w2E_dot`` (:func:`~quadland_symbolic.landing.
     deck.deck_pose`) plus the matching white noise of :data:`DATALINK_NOISE`.
     """
     xp, uh, w, t, pp, ps = _args()
@@ -358,10 +358,10 @@ def measurement_function() -> ca.Function:
     """``landing_sensors(xp, t, pp) -> y``: perfect sensors on the landing plant.
 
     ``y`` (:data:`LANDING_MEASUREMENT`) from the plant's state
-    (:data:`~symbolic.landing.plant.LANDING_PLANT_STATE`) and parameters
-    (:data:`~symbolic.landing.plant.LANDING_PLANT_PARAMS`) at time ``t``: ``p_e, v_e``
-    from :func:`~symbolic.landing.relative.relative6`, the deck's broadcast
-    from :func:`~symbolic.landing.deck.deck_pose`.
+    (:data:`~quadland_symbolic.landing.plant.LANDING_PLANT_STATE`) and parameters
+    (:data:`~quadland_symbolic.landing.plant.LANDING_PLANT_PARAMS`) at time ``t``: ``p_e, v_e``
+    from :func:`~quadland_symbolic.landing.relative.relative6`, the deck's broadcast
+    from :func:`~quadland_symbolic.landing.deck.deck_pose`.
     """
     xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     x, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)

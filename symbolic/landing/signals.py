@@ -5,7 +5,7 @@ row of a landing (its ``y``), :data:`LANDING_TRAJECTORY` the columns of its
 ``trajectory.csv``; :func:`landing_signals` forms the vector from a
 quadrotor state, the vehicle's and the external forces (in flight, from the
 plant and its disturbance: :func:`landing_signals_function`; on the deck,
-from the contact model: :mod:`symbolic.landing.contact`).
+from the contact model: :mod:`quadland_symbolic.landing.contact`).
 """
 
 from __future__ import annotations
@@ -14,18 +14,18 @@ import functools
 
 import casadi as ca
 
-from symbolic.landing.deck import DECK_POSE, deck_pose
-from symbolic.landing.guidance import GUIDANCE_STATE
-from symbolic.landing.plant import (
+from quadland_symbolic.landing.deck import DECK_POSE, deck_pose
+from quadland_symbolic.landing.guidance import GUIDANCE_STATE
+from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     body_disturbance,
 )
-from symbolic.landing.quadrotor import QUAD6_STATE
-from symbolic.landing.relative import RELATIVE6, relative6
-from symbolic.layout import Field, Layout
-from symbolic.quadrotor import BODY_DISTURBANCE, wrench_from_rotors
+from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.relative import RELATIVE6, relative6
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.quadrotor import BODY_DISTURBANCE, wrench_from_rotors
 
 __all__ = ["LANDING_SIGNALS", "LANDING_TRAJECTORY", "landing_signals",
            "landing_signals_function"]
@@ -33,7 +33,7 @@ __all__ = ["LANDING_SIGNALS", "LANDING_TRAJECTORY", "landing_signals",
 
 #: The landing trajectory's signals (one vector, the simulator's ``y``).
 LANDING_SIGNALS = Layout("y_land", (
-    Field("phase", 1, "-", "guidance phase (symbolic.landing.guidance.PHASES)"),
+    Field("phase", 1, "-", "guidance phase (quadland_symbolic.landing.guidance.PHASES)"),
     QUAD6_STATE["p1"],
     QUAD6_STATE["eta1"],
     DECK_POSE["p2"],
