@@ -271,13 +271,13 @@ def check_frozen_time(scenario: Scenario, t: float) -> None:
         For a landing scenario, a time out of range, or a run up to ``t``
         over the simulator's limits; the message starts with ``"at: "``.
     """
-    from quadland.scenario import MAX_DURATION_S, SCHEMA
+    from quadland.schema import MAX_DURATION_S, PAPER_SCHEMA
     from quadland.simulate import MAX_RK4_STEPS, MEMORY_BUDGET, check_plan, simulation_plan
 
     if scenario.model == "landing":
         raise MarginsError("at: the landing loop is analysed at its hover equilibrium only; "
                            "a frozen state applies to the paper's loop")
-    shortest = SCHEMA["simulation"]["duration"].lo
+    shortest = PAPER_SCHEMA["simulation"]["duration"].lo
     if not (t == 0 or shortest <= t <= MAX_DURATION_S):
         raise MarginsError(f"at: must be 0 or in [{shortest:g}, {MAX_DURATION_S:g}] s, got {t:g}")
     if t > 0:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from quadland.scenario import SCHEMAS, Field
+from quadland.schema import SCHEMAS, Field
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"

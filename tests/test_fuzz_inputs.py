@@ -20,7 +20,8 @@ from quadland.campaign.sampling import draws
 from quadland.campaign.spec import DISTRIBUTIONS, MODES, campaign_spec_of
 from quadland.cli import main
 from quadland.exceptions import CampaignError, ScenarioError
-from quadland.scenario import LANDING_SCHEMA, SCENARIO_DIR, SCHEMA, load_scenario
+from quadland.scenario import SCENARIO_DIR, load_scenario
+from quadland.schema import LANDING_SCHEMA, PAPER_SCHEMA
 from quadland.simulate import check_plan
 
 SEED = 20261121
@@ -108,8 +109,8 @@ def test_scenario_mutants_load_or_give_one_line(tmp_path):
 
 
 def _random_override(rng):
-    section = rng.choice(list(SCHEMA) + ["nosuch"])
-    keys = list(SCHEMA.get(section, {"x": None})) + ["bogus"]
+    section = rng.choice(list(PAPER_SCHEMA) + ["nosuch"])
+    keys = list(PAPER_SCHEMA.get(section, {"x": None})) + ["bogus"]
     text = rng.choice(TOKENS + ["", "=", "[", '"', "1 2"])
     key = rng.choice(keys)
     return rng.choice([f"{section}.{key}={text}", f"{key}={text}", f"{section}.{key}",
@@ -287,7 +288,7 @@ def _leaves(x):
 
 
 def _random_landing_override(rng):
-    schemas = [LANDING_SCHEMA, SCHEMA]
+    schemas = [LANDING_SCHEMA, PAPER_SCHEMA]
     schema = schemas[rng.randrange(4) == 0]                  # a paper-only key at times
     section = rng.choice(list(schema) + ["campaign", "nosuch"])
     if section == "campaign":

@@ -25,7 +25,8 @@ from quadland import compiled
 from quadland.cli import main
 from quadland.exceptions import ScenarioError
 from quadland.metrics import touchdown_report
-from quadland.scenario import LANDING_SCHEMA, load_scenario
+from quadland.scenario import load_scenario
+from quadland.schema import LANDING_SCHEMA
 from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
 
 SCENARIOS = ("highway", "turning", "ship")

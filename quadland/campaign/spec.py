@@ -23,6 +23,7 @@ from typing import Any
 
 from quadland.campaign.metrics import metric_names
 from quadland.exceptions import ScenarioError
+from quadland.schema import SCHEMAS, check_value, show
 
 __all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "campaign_spec_of",
            "apply_mode", "DISTRIBUTIONS", "MODES", "SAMPLINGS", "MAX_RUNS", "U_EDGE"]
@@ -207,8 +208,6 @@ def _number(where: str, value, integer: bool = False) -> float:
 
 
 def _show(value) -> str:
-    from quadland.scenario import _show as show
-
     return show(value)
 
 
@@ -263,7 +262,6 @@ def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
     ScenarioError
         One line naming the entry at fault.
     """
-    from quadland.scenario import SCHEMAS
 
     if not isinstance(table, Mapping):
         raise ScenarioError(f"{source}: [campaign] must be a table")
@@ -476,7 +474,6 @@ def _check_finite(disp: Dispersion) -> None:
 
 
 def _choice(key: str, entry, field, table) -> Dispersion:
-    from quadland.scenario import _check_value
 
     values = entry["values"]
     if not isinstance(values, list | tuple) or not values:
@@ -484,7 +481,7 @@ def _choice(key: str, entry, field, table) -> Dispersion:
     checked = []
     for v in values:
         try:
-            checked.append(_check_value(key, v, field))
+            checked.append(check_value(key, v, field))
         except ScenarioError as exc:
             raise ScenarioError(f"{_where(key, 'values')}: {exc}") from None
     weights = entry.get("weights")

@@ -1,0 +1,36 @@
+"""The scenario schemas: every section and key of each loop kind's scenarios.
+
+Data only, at the bottom of the runtime: the loader (:mod:`quadland.scenario`)
+and the campaign table's checks read it; each loop kind
+(:mod:`quadland.kinds`) names its schema. A new kind adds its module here
+and one line to :data:`SCHEMAS` and :data:`CROSS_CHECKS`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
+
+from quadland.schema.fields import (
+    MAX_DURATION_S,
+    MAX_RATE_HZ,
+    Field,
+    check_value,
+    show,
+)
+from quadland.schema.landing import LANDING_SCHEMA, check_landing
+from quadland.schema.paper import PAPER_SCHEMA, check_paper
+
+__all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
+           "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS"]
+
+#: The schema of each model (``scenario.model``; "paper" when absent).
+SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
+    {"paper": PAPER_SCHEMA, "landing": LANDING_SCHEMA})
+
+#: Each model's rules across keys, run after every key passed its own check.
+CROSS_CHECKS: Mapping[str, Callable[[dict], None]] = MappingProxyType(
+    {"paper": check_paper, "landing": check_landing})
+
+#: The models a scenario may select with ``scenario.model``.
+MODELS = tuple(SCHEMAS)

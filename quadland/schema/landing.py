@@ -1,0 +1,152 @@
+"""The schema of the 6-DOF landing loop (``scenario.model = "landing"``)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from types import MappingProxyType
+
+from quadland.exceptions import ScenarioError
+from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
+from quadland.schema.paper import PAPER_SCHEMA, check_rbf
+
+__all__ = ["LANDING_SCHEMA", "check_landing"]
+
+_POS = dict(lo=0.0, lo_open=True)
+
+
+def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
+    """The three keys of one prescribed deck motion: up to three sinusoids."""
+    amp = f"{name}_amplitude" + ("_deg" if unit == "deg" else "")
+    return {
+        amp: Field(float, unit, f"{what} amplitudes a_i of sum a_i sin(w_i t + phase_i)", 3,
+                   min_length=1, lo=0.0, hi=amp_hi),
+        f"{name}_frequency": Field(float, "rad/s", f"{what} frequencies w_i", 3, min_length=1,
+                                   lo=0.0, hi=100.0),
+        f"{name}_phase_deg": Field(float, "deg", f"{what} phases", 3, min_length=1, lo=-3600.0,
+                                   hi=3600.0),
+    }
+
+
+F, I, B, S = float, int, bool, str
+#: The landing scenario schema (``scenario.model = "landing"``): the 6-DOF
+#: loop of ``quadland_symbolic.landing`` with guidance, motor lag, rotor limits, the
+#: sampled step, a moving deck and wind (docs/landing.md).
+LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
+    "scenario": {
+        **PAPER_SCHEMA["scenario"],
+        "model": Field(S, "-", "the loop simulated", choices=("landing",)),
+    },
+    "simulation": {
+        "duration": PAPER_SCHEMA["simulation"]["duration"],
+        "output_rate_hz": PAPER_SCHEMA["simulation"]["output_rate_hz"],
+        "rk_steps_per_interval": Field(I, "-", "RK4 steps per hold interval", lo=1, hi=1000),
+        "seed": PAPER_SCHEMA["simulation"]["seed"],
+    },
+    "quadrotor": {
+        **{k: PAPER_SCHEMA["quadrotor"][k] for k in ("mass", "inertia", "drag_translational",
+                                               "drag_rotational", "gravity", "arm_length",
+                                               "rotor_drag_factor")},
+        "thrust_to_weight": Field(F, "-", "4 F_max / (m1 g): sets the rotor limit F_max",
+                                  lo=1.0, hi=20.0, lo_open=True),
+        "motor_time_constant": Field(F, "s", "first-order lag of each rotor force", lo=1e-3,
+                                     hi=1.0),
+        "gear_height": Field(F, "m", "landing gear's lowest point below the centre", lo=0.0,
+                             hi=10.0),
+    },
+    "vehicle": {k: PAPER_SCHEMA["vehicle"][k] for k in ("m11", "m22", "m33", "d11", "d22", "d33",
+                                                  "tau")},
+    "deck": {
+        "height": Field(F, "m", "altitude of the vehicle's reference point (the centre of roll "
+                        "and pitch) at zero heave", lo=-1e4, hi=1e4),
+        "pad_offset": Field(F, "m", "pad centre from the reference point, deck frame (x "
+                            "forward, z up)", 3, lo=-1e3, hi=1e3),
+        **_sines("heave", "m", "heave", 100.0),
+        **_sines("roll", "deg", "roll", 45.0),
+        **_sines("pitch", "deg", "pitch", 45.0),
+    },
+    "initial": {
+        "position1": Field(F, "m", "quadrotor x1, y1 in E", 2, lo=-1e7, hi=1e7),
+        "z1": Field(F, "m", "quadrotor altitude in E", lo=-1e4, hi=1e4),
+        "eta1_deg": Field(F, "deg", "roll, pitch, yaw", 3, lo=-3600.0, hi=3600.0,
+                          check=tilt_within(60.0)),
+        "omega1_deg_s": PAPER_SCHEMA["initial"]["omega1_deg_s"],
+        "relative_velocity": Field(F, "m/s", "quadrotor velocity in E minus the pad's "
+                                   "(0: moving with the pad)", 3, lo=-1e3, hi=1e3),
+        "position2": PAPER_SCHEMA["initial"]["position2"],
+        "psi2_deg": PAPER_SCHEMA["initial"]["psi2_deg"],
+        "r2_deg_s": PAPER_SCHEMA["initial"]["r2_deg_s"],
+        "velocity2": PAPER_SCHEMA["initial"]["velocity2"],
+    },
+    "controller": {
+        "k1p": Field(F, "1/s", "outer k1: deck-frame x, y, z", 3, hi=1e3, **_POS),
+        "k2p": Field(F, "1/s", "outer k2: deck-frame x, y, z", 3, hi=1e3, **_POS),
+        "k1": Field(F, "1/s", "inner k1: roll, pitch, yaw", 3, hi=1e3, **_POS),
+        "k2": Field(F, "1/s", "inner k2: roll, pitch, yaw", 3, hi=1e3, **_POS),
+        **{k: PAPER_SCHEMA["controller"][k] for k in ("gamma1", "gamma2", "k_w", "k_zeta", "rho",
+                                                "nominal_model")},
+        "filter_frequency": Field(F, "rad/s", "command filter w_f", hi=1e4, **_POS),
+        "filter_damping": Field(F, "-", "command filter zeta_f", hi=10.0, **_POS),
+        "tilt_max_deg": Field(F, "deg", "largest tilt the outer loop commands", lo=1.0,
+                              hi=80.0),
+        "rate_hz": Field(F, "Hz", "control rate of the sampled step", lo=1.0,
+                         hi=MAX_RATE_HZ),
+        "backend": PAPER_SCHEMA["controller"]["backend"],
+    },
+    "rbf": PAPER_SCHEMA["rbf"],
+    "landing": {
+        "hover_height": Field(F, "m", "hover point: the centre's height above the pad",
+                              hi=1e3, **_POS),
+        "align_radius": Field(F, "m", "distance to the hover point that ends the approach",
+                              hi=1e3, **_POS),
+        "dwell_time": Field(F, "s", "time the align criteria must hold", lo=0.0, hi=1e3),
+        "descent_speed": Field(F, "m/s", "largest descent rate", hi=100.0, **_POS),
+        "descent_time": Field(F, "s", "descent rate = height above touchdown / descent_time",
+                              hi=1e3, **_POS),
+        "touchdown_speed": Field(F, "m/s", "descent rate of the final crawl", hi=100.0,
+                                 **_POS),
+        "max_deck_rise": Field(F, "m/s", "a faster rising deck aborts the descent", hi=100.0,
+                               **_POS),
+        "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
+                               **_POS),
+        "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
+                            hi=100.0, **_POS),
+        "max_tilt_deg": Field(F, "deg", "limit: body z axis from the deck normal", hi=90.0,
+                              **_POS),
+        "max_relative_speed": Field(F, "m/s", "limit: horizontal relative speed at contact",
+                                    hi=100.0, **_POS),
+        "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0,
+                             hi=1e3),
+    },
+    "disturbance": PAPER_SCHEMA["disturbance"],
+    "wind": {
+        "mean": Field(F, "m/s", "steady wind in E", 3, lo=-100.0, hi=100.0),
+        "turbulence_w20": Field(F, "m/s", "Dryden turbulence: wind speed at 20 ft (0: none)",
+                                lo=0.0, hi=50.0),
+        "gust_amplitude": Field(F, "m/s", "1-cosine gust peak v_m (0: none)", lo=0.0,
+                                hi=100.0),
+        "gust_start": Field(F, "s", "gust start t0", lo=0.0, hi=MAX_DURATION_S),
+        "gust_half_length": Field(F, "s", "gust build-up time d", hi=1e3, **_POS),
+        "gust_direction": Field(F, "-", "gust direction in E (normalized)", 3, lo=-1.0,
+                                hi=1.0),
+    },
+})
+del F, I, B, S
+
+
+def check_landing(data: dict) -> None:
+    """The landing schema's cross-key rules."""
+    check_rbf(data)
+    deck = data["deck"]
+    for name in ("heave", "roll", "pitch"):
+        keys = [k for k in deck if k.startswith(f"{name}_")]
+        if len({len(deck[k]) for k in keys}) != 1:
+            raise ScenarioError(f"deck.{keys[1]}: must have as many values as deck.{keys[0]}")
+    wind = data["wind"]
+    if wind["gust_amplitude"] > 0 and not any(wind["gust_direction"]):
+        raise ScenarioError("wind.gust_direction: must not be all zero when "
+                            "wind.gust_amplitude > 0")
+    guidance = data["landing"]
+    if guidance["touchdown_speed"] > guidance["descent_speed"]:
+        raise ScenarioError("landing.touchdown_speed: must be <= landing.descent_speed")
+    if guidance["hover_height"] <= data["quadrotor"]["gear_height"]:
+        raise ScenarioError("landing.hover_height: must be above quadrotor.gear_height")
