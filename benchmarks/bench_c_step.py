@@ -37,8 +37,10 @@ from pathlib import Path
 import numpy as np
 
 import quadland
-from quadland import cbackend, codegen
-from quadland.model import disturbance_samples, model_values
+from quadland import codegen
+from quadland.engine.disturbance import disturbance_samples
+from quadland.kinds.paper.flight import CControlStep, load_control_step
+from quadland.kinds.paper.values import model_values
 from quadland_symbolic.closed_loop import closed_loop_state
 from quadland_symbolic.control_step import control_step_function, step_outputs
 from quadland_symbolic.loop import rk4_step
@@ -53,8 +55,8 @@ LANDING_L = 100
 
 
 def _build(root: Path) -> Path:
-    landing = codegen.landing_default_values("highway", [f"rbf.nodes={LANDING_L}"])
-    codegen.write(root, codegen.generated_files(landing=landing))
+    landing = quadland.load_scenario("highway", [f"rbf.nodes={LANDING_L}"])
+    codegen.write(root, codegen.generated_files(landing))
     subprocess.run(["make", "-s", "-j2", "build/bench", "build/bench_float"],
                    cwd=root / "example", check=True)
     return root / "example" / "build"
@@ -88,7 +90,7 @@ def _python_call_cost(l: int) -> tuple[float, float]:
             np.zeros(4), np.zeros(4), mv.p_quad, mv.p_ctrl, np.array(mv.rotor_limits), mv.hold,
             0.002)
     out = []
-    for fn in (cbackend.load_control_step(l), control_step_function(l)):
+    for fn in (load_control_step(l), control_step_function(l)):
         n = 2000
         out.append(min(timeit.repeat(lambda fn=fn: fn(*args), number=n, repeat=5)) / n)
     return out[0], out[1]
@@ -111,7 +113,7 @@ def _fly(precision: str, rate: float = 500.0, duration: float = 10.0) -> dict:
                                           f"simulation.duration={duration}"])
     mv = model_values(sc)
     m = paper_loop(mv.l)
-    step, plant = cbackend.CControlStep(mv.l, precision), rk4_step(m.plant)
+    step, plant = CControlStep(mv.l, precision), rk4_step(m.plant)
     x0 = closed_loop_state(mv.l).unpack(mv.x0)
     xp = m.plant_state.pack({n: x0[n] for n in m.plant_state.names()})
     xc = m.controller_state.zeros()

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 import quadland
-from quadland.metrics import landing_summary
+from quadland.kinds.landing.report import landing_summary
 from quadland.scenario import load_scenario
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "landing.md"
@@ -89,11 +89,11 @@ def hover(duration: float, *extra) -> quadland.Scenario:
 def vm_per_second(duration: float = 5.0) -> float:
     """CPU seconds per simulated second of the landing loop on CasADi's VM.
 
-    As without a C compiler: ``quadland.compiled.have_compiler`` answers no.
+    As without a C compiler: ``quadland.engine.compiled.have_compiler`` answers no.
     """
     import warnings
 
-    from quadland import compiled
+    from quadland.engine import compiled
 
     sc, found = hover(duration), compiled.have_compiler
     compiled.have_compiler = lambda: False

@@ -60,10 +60,10 @@ import scipy
 from scipy.integrate import solve_ivp
 
 import quadland
-from quadland.build import find_compiler
-from quadland.compiled import compiled_loop
-from quadland.model import disturbance_samples, model_values
-from quadland.simulate import run_clocks, time_grid
+from quadland.engine.build import find_compiler
+from quadland.engine.disturbance import disturbance_samples
+from quadland.kinds.paper.simulate import paper_loop_part, run_clocks, time_grid
+from quadland.kinds.paper.values import model_values
 from quadland_symbolic.closed_loop import (
     closed_loop_function,
     closed_loop_params,
@@ -283,7 +283,7 @@ def breakdown(sc, runs):
     clocks = run_clocks(sc)
     w_dist = disturbance_samples(sc, clocks[1].times())
     substeps = sc.data["simulation"]["rk_steps_per_interval"]
-    loop = compiled_loop(mv.l, "continuous")
+    loop = paper_loop_part(mv.l, "continuous")
     run = loop.integrate(mv.x0, clocks, w_dist.T, substeps, mv.p)
     assert run.status == 0 and np.array_equal(run.X, quadland.simulate(sc).states)
     W_out = np.ascontiguousarray(w_dist[:, run.w_index].T)

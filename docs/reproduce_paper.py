@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 import quadland
-from quadland.metrics import summarize
+from quadland.kinds.paper.report import summarize
 from quadland.output import figure_png, write_bytes_atomic
 from quadland.plots import simulation_figures
 

@@ -27,7 +27,7 @@ extern "C" {
 #define QL_LANDING_PLANT_NX 22                   /* xp = [x1q (16), xv (6)] */
 #define QL_LANDING_PLANT_NP 57                   /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (31)] */
 #define QL_LANDING_NW 9                          /* w = [v_wind (3), d_F (3), d_M (3)] */
-#define QL_LANDING_NY 41                         /* signals y of a landing */
+#define QL_LANDING_NY 42                         /* signals y of a landing */
 #define QL_LANDING_ANCHOR_SIZE 12                /* anchor = [p_e (3), R_rel (9)] */
 #define QL_LANDING_VEHICLE_NX 6                  /* xv = [x2, y2, psi2, u2, v2, r2] */
 #define QL_TOUCHDOWN_FIGURES 4                   /* [sink_rate, offset, relative_speed, tilt_deg] */

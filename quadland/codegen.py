@@ -18,33 +18,24 @@ from __future__ import annotations
 import difflib
 import glob
 import os
-import re
 import stat
 import sys
 import tempfile
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
-import numpy as np
-
-from quadland.constants import TILT_MIN
 from quadland.exceptions import CodegenError
-from quadland.model import model_values
+from quadland.kinds import KINDS, kind_of
 from quadland.output import WorkFolder, fsync_dir, remove_abandoned
-from quadland.scenario import load_scenario, require_model
-from quadland_symbolic.codegen import Defaults, LandingDefaults, generate_tree
+from quadland.scenario import Scenario, load_scenario
+from quadland_symbolic.codegen import generate_tree
 
-__all__ = ["EXAMPLE_CONTROL_RATE_HZ", "PAPER_SCENARIO", "LANDING_SCENARIO", "checkout_root",
-           "generated_dir", "default_values", "landing_default_values", "generated_files",
-           "stale", "write", "check_target", "diff", "main"]
+__all__ = ["DEFAULT_SCENARIO", "checkout_root", "generated_dir", "tree_defaults",
+           "generated_files", "stale", "write", "check_target", "diff", "main"]
 
-#: The scenarios whose values generated/ holds: the paper's control step's and
-#: the landing step's (with the example's flights).
-PAPER_SCENARIO, LANDING_SCENARIO = "paper", "highway"
-
-#: Control rate of the pure-C example flight for a continuous-time scenario,
-#: Hz (a flight stack's typical rate); a sampled scenario's own rate otherwise.
-EXAMPLE_CONTROL_RATE_HZ = 500.0
+#: The scenario ``quadland codegen`` writes without ``--scenario``.
+DEFAULT_SCENARIO = "paper"
 
 
 def _package_parent() -> Path:
@@ -82,90 +73,35 @@ def generated_dir() -> Path:
     return root / "generated"
 
 
-def _label(sc) -> str:
-    """The scenario's name and overrides; it goes into C comments and a string
-    literal: only safe characters."""
-    return _C_UNSAFE.sub("?", sc.name + "".join(f" --set {o}" for o in sc.overrides))
-
-
-def default_values(scenario: str | Path = PAPER_SCENARIO,
-                   overrides: Iterable[str] = ()) -> Defaults:
-    """The C defaults of the paper's control step: a scenario's values, with overrides."""
-    sc = load_scenario(scenario, list(overrides))
-    mv = model_values(sc)
-    d, sim = sc.data["disturbance"], sc.data["simulation"]
-    rate = float(sc.data["controller"]["rate_hz"]) or EXAMPLE_CONTROL_RATE_HZ
-    return Defaults(
-        scenario=_label(sc), l=mv.l, p_quad=mv.p_quad, p_veh=mv.p_veh, p_ctrl=mv.p_ctrl, ref=mv.ref,
-        rotor_limits=tuple(float(v) for v in mv.rotor_limits), tilt_min=TILT_MIN,
-        hold=mv.hold, x0=mv.x0,
-        duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
-        control_rate_hz=rate,
-        disturbance_rate_hz=float(d["sample_rate_hz"]),
-        force_bias=tuple(float(v) for v in np.asarray(d["force_bias"], dtype=float)),
-        force_amplitude=float(d["force_amplitude"]),
-        force_frequency=float(d["force_frequency"]),
-        moment_bias=tuple(float(v) for v in np.asarray(d["moment_bias"], dtype=float)),
-        moment_amplitude=float(d["moment_amplitude"]),
-        moment_frequency=float(d["moment_frequency"]))
-
-
-def landing_default_values(scenario: str | Path = LANDING_SCENARIO,
-                           overrides: Iterable[str] = ()) -> LandingDefaults:
-    """The C defaults of the landing step, the guidance and the example ``land``: a
-    landing scenario's values (``quadland.landing.landing_values``), with overrides."""
-    from quadland.landing import landing_values
-    from quadland.metrics import TOUCHDOWN_LIMITS
-    from quadland_symbolic.landing.loop import landing_loop_params
-    from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
-
-    sc = load_scenario(scenario, list(overrides))
-    require_model(sc, "landing", "the landing step's code generation")
-    lv = landing_values(sc)
-    pc, pp = landing_loop_params(lv.l).unpack(lv.pc), LANDING_PLANT_PARAMS.unpack(lv.pp)
-    d, sim, wind = sc.data["disturbance"], sc.data["simulation"], sc.data["wind"]
-    g = sc.data["landing"]
-    e = np.asarray(wind["gust_direction"], dtype=float)
-    e = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else e      # as quadland.wind does
-
-    def floats(v):
-        return tuple(float(x) for x in np.asarray(v, dtype=float))
-
-    return LandingDefaults(
-        scenario=_label(sc), l=lv.l, p_quad=pp["p_quad"], p_ctrl=pc["p_ctrl"], p_act=pp["p_act"],
-        p_guid=pc["p_guid"], tilt_min=TILT_MIN, pp=lv.pp, xp0=lv.xp0,
-        duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
-        control_rate_hz=float(sc.data["controller"]["rate_hz"]),
-        disturbance_rate_hz=float(d["sample_rate_hz"]),
-        rk_steps=int(sim["rk_steps_per_interval"]),
-        force_bias=floats(d["force_bias"]), force_amplitude=float(d["force_amplitude"]),
-        force_frequency=float(d["force_frequency"]), moment_bias=floats(d["moment_bias"]),
-        moment_amplitude=float(d["moment_amplitude"]),
-        moment_frequency=float(d["moment_frequency"]), wind_mean=floats(wind["mean"]),
-        gust_start=float(wind["gust_start"]), gust_half_length=float(wind["gust_half_length"]),
-        gust_amplitude=float(wind["gust_amplitude"]), gust_direction=floats(e),
-        settle_time=float(g["settle_time"]),
-        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS))
-
-
-#: Characters the scenario label keeps in generated C (comments, a string literal).
-_C_UNSAFE = re.compile(r"[^A-Za-z0-9_.,:=+\-\[\] ]")
-
 #: The generated tree's own list of its files: a later generation removes only
 #: files named there, never anything else under the target.
 MANIFEST = ".quadland-generated"
 
 
-def generated_files(defaults: Defaults | None = None,
-                    landing: LandingDefaults | None = None) -> dict[str, str]:
+def tree_defaults(scenario: Scenario | None = None) -> dict[str, Any]:
+    """The C defaults of each part of the generated tree, by part name.
+
+    Each loop kind's part carries its default scenario's values
+    (:attr:`quadland.kinds.LoopKind.default_scenario`), the part of
+    ``scenario``'s kind that scenario's.
+    """
+    parts = {k.codegen_part: k.codegen_defaults(load_scenario(k.default_scenario))
+             for k in KINDS.values() if scenario is None or k.name != scenario.model}
+    if scenario is not None:
+        kind = kind_of(scenario)
+        parts[kind.codegen_part] = kind.codegen_defaults(scenario)
+    return parts
+
+
+def generated_files(scenario: Scenario | None = None) -> dict[str, str]:
     """Every file of the generated tree by relative path (POSIX separators).
 
-    ``defaults`` are the paper's control step's (:func:`default_values`, of
-    :data:`PAPER_SCENARIO` by default), ``landing`` the landing step's
-    (:func:`landing_default_values`, of :data:`LANDING_SCENARIO`). The tree
+    Each part carries its kind's default scenario's values, the part of
+    ``scenario``'s kind that scenario's (:func:`tree_defaults`). The tree
     includes :data:`MANIFEST`, the list of its other files.
     """
-    files = generate_tree(defaults or default_values(), landing or landing_default_values())
+    d = tree_defaults(scenario)
+    files = generate_tree(d["paper"], d["landing"])
     files[MANIFEST] = "".join(f"{rel}\n" for rel in sorted(files))
     return files
 
@@ -410,7 +346,7 @@ def diff(out: Path, files: dict[str, str]) -> str:
 
 def _command(scenario, overrides, out: Path | None) -> str:
     words = ["quadland", "codegen"]
-    if str(scenario) != PAPER_SCENARIO:
+    if str(scenario) != DEFAULT_SCENARIO:
         words += ["--scenario", str(scenario)]
     words += [w for o in overrides for w in ("--set", o)]
     if out is not None:
@@ -426,16 +362,15 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
     ----------
     out : Path, optional
         Target folder; by default the checkout's ``generated/``, which holds
-        the shipped scenarios' code only (:data:`PAPER_SCENARIO`,
-        :data:`LANDING_SCENARIO`).
+        the shipped scenarios' code only (each kind's default scenario).
     check : bool
         Regenerate into a temporary folder and compare instead of writing:
         print a unified diff and return 1 where ``out`` differs.
     scenario : str or Path
-        A shipped scenario's name or a TOML file. A landing scenario sets the
-        landing step's defaults and the example ``land`` (the paper's step
-        keeps :data:`PAPER_SCENARIO`'s), any other the paper's step's and the
-        example ``fly`` (the landing's keeps :data:`LANDING_SCENARIO`'s).
+        A shipped scenario's name or a TOML file. It sets the defaults of its
+        kind's part of the tree (a landing scenario: the landing step and the
+        example ``land``; a paper scenario: the paper's step and the example
+        ``fly``); the other part keeps its kind's default scenario's.
     overrides : iterable of str
         ``section.key=value`` overrides of the scenario.
 
@@ -456,9 +391,10 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
     given = out
     if out is None:
         out = generated_dir()
-        if str(scenario) not in (PAPER_SCENARIO, LANDING_SCENARIO) or overrides:
-            raise CodegenError(f"generated/ holds the {PAPER_SCENARIO} and {LANDING_SCENARIO} "
-                               "scenarios' code; write another scenario's with --out DIR")
+        shipped = [k.default_scenario for k in KINDS.values()]
+        if str(scenario) not in shipped or overrides:
+            raise CodegenError(f"generated/ holds the {' and '.join(shipped)} scenarios' code; "
+                               "write another scenario's with --out DIR")
     out = Path(out)
     if out.is_symlink():
         raise CodegenError(f"out: {out} is a symbolic link; give the folder itself")
@@ -466,10 +402,7 @@ def main(out: Path | None = None, check: bool = False, scenario: str | Path = "p
         raise CodegenError(f"out: {out} exists and is not a folder")
     if given is not None:
         check_target(out)
-    if load_scenario(scenario, overrides).model == "landing":
-        files = generated_files(landing=landing_default_values(scenario, overrides))
-    else:
-        files = generated_files(default_values(scenario, overrides))
+    files = generated_files(load_scenario(scenario, overrides))
     if check:
         with tempfile.TemporaryDirectory() as tmp:
             write(Path(tmp), files)

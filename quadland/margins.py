@@ -17,9 +17,9 @@ nothing but these dataclasses, and they and their one text form are read
 and changed together. The figures need matplotlib and are in
 :mod:`quadland.plots.margins`.
 
-The margin mathematics (:mod:`quadland.analysis`) and the linearization
-(:mod:`quadland.linearize`) are imported when a report is built, so that
-the command line can read :class:`Requirement`'s defaults without loading
+The margin mathematics (:mod:`quadland.analysis`) and the loop kinds'
+linearization (:mod:`quadland.kinds`) are imported when a report is built, so
+that the command line can read :class:`Requirement`'s defaults without loading
 python-control.
 """
 
@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     import control
 
     from quadland.analysis import DiskMargin, Margins
-    from quadland.linearize import LinearModels, OperatingPoint
+    from quadland.linear import LinearModels, OperatingPoint
     from quadland.scenario import Scenario
 
 __all__ = ["MAX_LOOP_STATES", "loop_states", "check_request", "Requirement", "LoopMargins",
@@ -52,11 +52,6 @@ __all__ = ["MAX_LOOP_STATES", "loop_states", "check_request", "Requirement", "Lo
 #: continuous loop at l = 350 (1,410 states) 22 s and 0.5 GB.
 MAX_LOOP_STATES = 1500
 
-#: Where the loop is broken, as ``margins.json`` states it.
-LOOP_BREAK = "plant input u (eq. 6), L = -K P, negative feedback"
-#: Where the landing loop is broken.
-LANDING_LOOP_BREAK = ("plant input: the wrench [T, M_x, M_y, M_z] into the mixer, L = -K P, "
-                      "negative feedback")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -349,7 +344,9 @@ class MarginReport:
         2``) and a pole's time constant ``inf``. Tuples become lists, NumPy
         scalars Python numbers.
         """
-        loop_break = LANDING_LOOP_BREAK if self.point.model == "landing" else LOOP_BREAK
+        from quadland.kinds import kind_of
+
+        loop_break = kind_of(self.scenario).loop_break
         data = dict(scenario=self.scenario.name, overrides=list(self.scenario.overrides),
                     operating_point=self.point.to_dict(),
                     requirement=dataclasses.asdict(self.requirement),
@@ -449,15 +446,15 @@ def check_request(scenario: Scenario, at: float | None = None, delay_periods: in
                 f"{per_period} states to its {base:,}, and the margin review analyses at most "
                 f"{MAX_LOOP_STATES:,}), got {delay_periods}")
     if at is not None:
-        from quadland.linearize import check_frozen_time
+        from quadland.kinds import kind_of
 
-        check_frozen_time(scenario, at)
+        kind_of(scenario).check_operating_time(scenario, at)
 
 
 def loop_states(scenario: Scenario) -> tuple[int, int]:
     """States of the scenario's loop, and how many each period of delay adds.
 
-    The loop's state in the simulators (``quadland.compiled.LOOPS``: plant
+    The loop's state in the simulators (its kind's ``loop_model``: plant
     and controller, at least as many as the linearization keeps), plus the
     held previous command with ``controller.hold_compensation > 0``; a
     period of computation delay adds one held command (4 inputs).
@@ -467,9 +464,9 @@ def loop_states(scenario: Scenario) -> tuple[int, int]:
     tuple of int
         ``(states, states per delay period)``.
     """
-    from quadland.compiled import LOOPS
+    from quadland.kinds import kind_of
 
-    loop = LOOPS[scenario.model](int(scenario.data["rbf"]["nodes"]))
+    loop = kind_of(scenario).loop_model(int(scenario.data["rbf"]["nodes"]))
     m = loop.held.size
     hold = float(scenario.data["controller"].get("hold_compensation", 0.0))
     return loop.state.size + (m if hold else 0), m
@@ -486,7 +483,7 @@ def margin_report(scenario: Scenario, at: float | None = None,
         A paper scenario, or a landing scenario (``scenario.model =
         "landing"``): its loop hovering ``landing.hover_height`` above the
         pad, broken at the wrench into the mixer
-        (:func:`quadland.linearize.equilibrium`).
+        (the kind's ``operating_point``).
     at : float, optional
         s: linearize about the simulated state at this time instead of the
         equilibrium (paper scenarios only).
@@ -495,7 +492,7 @@ def margin_report(scenario: Scenario, at: float | None = None,
     delay_periods : int, optional
         Control periods from sampling to commanding in the sampled loop
         (default 1: flight code sends its command one period after it
-        samples); see :func:`quadland.linearize.sampled_models`.
+        samples); see the kind's ``sampled_models``.
 
     Returns
     -------
@@ -528,15 +525,16 @@ def margin_report(scenario: Scenario, at: float | None = None,
     True
     """
     check_request(scenario, at, delay_periods)
-    from quadland.linearize import equilibrium, frozen_point, linear_models, sampled_models
+    from quadland.kinds import kind_of
 
-    point = equilibrium(scenario) if at is None else frozen_point(scenario, at)
-    models = linear_models(scenario, point)
+    kind = kind_of(scenario)
+    point = kind.operating_point(scenario, at)
+    models = kind.linear_models(scenario, point)
     continuous, poles = _loop_report(models.loop_input, models.loop_names, requirement)
     rate = float(scenario.data["controller"]["rate_hz"])
     sampled = discrete = None
     if rate > 0:
-        discrete = sampled_models(scenario, point, rate, int(delay_periods))
+        discrete = kind.sampled_models(scenario, point, rate, int(delay_periods))
         sampled, _ = _loop_report(discrete.loop_input, discrete.loop_names, requirement,
                                   rate_hz=rate, delay_periods=int(delay_periods))
     return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
@@ -607,33 +605,9 @@ def format_report(report: MarginReport) -> str:
         the multiloop disk margin, stability, the slowest and least damped
         poles and the verdict; ends with a newline.
     """
-    point = report.point
-    op = point.to_dict()
-    s, v = op["state"], op["vehicle"]
-    if point.model == "landing":
-        hover = report.scenario.data["landing"]["hover_height"]
-        lines = [f"quadland margins: scenario {report.scenario.name}, hover {hover:g} m above "
-                 "the pad (steady motion in the deck frame; deck still, mean wind, constant "
-                 "disturbance)",
-                 f"  x_e = {s['x_e']:.3g} m, y_e = {s['y_e']:.3g} m, z_e = {s['z_e']:.4g} m, "
-                 f"phi = {s['phi1']:.3g} rad, theta = {s['theta1']:.3g} rad, "
-                 f"psi_e = {s['psi_e']:.3g} rad, T = {point.u[0]:.4g} N",
-                 f"  vehicle u2 = {v['u2']:.4g} m/s, r2 = {v['r2']:.4g} rad/s; residual "
-                 f"{op['residual']:.2g}",
-                 "  loop broken at the wrench [T, M_x, M_y, M_z] into the mixer, L = -K P; "
-                 "each loop with the others closed", ""]
-        title = "continuous-time limit of the landing step (dt -> 0)"
-    else:
-        where = ("equilibrium (steady motion, constant disturbance)"
-                 if point.kind == "equilibrium"
-                 else f"frozen simulated state at t = {point.time:g} s")
-        lines = [f"quadland margins: scenario {report.scenario.name}, {where}",
-                 f"  z_e = {s['z1'] - v['z2']:.4g} m, phi = {s['phi1']:.3g} rad, "
-                 f"theta = {s['theta1']:.3g} rad, psi_e = {s['psi_e']:.3g} rad, "
-                 f"vehicle r2 = {v['r2']:.4g} rad/s, residual {op['residual']:.2g}",
-                 "  loop broken at the plant input u (eq. 6), L = -K P; each loop with the "
-                 "others closed", ""]
-        title = "continuous-time controller"
+    from quadland.kinds import kind_of
+
+    lines, title = kind_of(report.scenario).describe_point(report.scenario, report.point)
     lines += _table(report.continuous, title, report.requirement)
     if report.sampled is not None:
         sd = report.sampled

@@ -9,12 +9,11 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from quadland.engine.result import SimulationResult, columns_sidecar
 from quadland.exceptions import ScenarioError, SimulationError
-from quadland.metrics import landing_summary, summarize
+from quadland.kinds import kind_of
 from quadland.output import figure_png, output_folder, strict_json
 from quadland.scenario import Scenario, load_scenario
-from quadland.simulate import SimulationResult, columns_sidecar, simulate
-from quadland.simulate import check_plan as simulation_plan_check
 
 __all__ = ["run_simulation", "provenance", "versions", "DEPENDENCIES"]
 
@@ -35,7 +34,7 @@ def versions() -> dict:
         except PackageNotFoundError:
             out[name] = None
     out["casadi"] = ca.__version__
-    from quadland.build import compiler_version
+    from quadland.engine.build import compiler_version
 
     out["c_compiler"] = compiler_version()
     return out
@@ -96,14 +95,14 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
         ``quadland.plots.landing``; before any work.
     """
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario, overrides)
-    simulation_plan_check(sc)
-    if animate and (sc.model != "landing" or _landing_plots() is None):
-        raise ScenarioError("animate: draws a landing (scenario.model = \"landing\") with "
-                            "quadland.plots.landing; this scenario's model is "
-                            f"\"{sc.model}\"")
+    kind = kind_of(sc)
+    kind.check(sc)
+    if animate and not kind.can_animate:
+        raise ScenarioError(f"animate: scenario.model \"{sc.model}\" has no animation "
+                            "(a landing's has)")
     with output_folder(out, sc.name) as folder:
         try:
-            result = simulate(sc)
+            result = kind.simulate(sc)
         except SimulationError as exc:
             if exc.partial is not None:
                 folder.write(_render(exc.partial, plots, animate, failure=str(exc)))
@@ -113,36 +112,17 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
 
 def _render(result: SimulationResult, plots: bool, animate: bool = False,
             failure: str | None = None) -> dict:
+    kind = kind_of(result.scenario)
     status = {"status": "failed", "failure": failure} if failure else {"status": "ok"}
-    landing = result.scenario.model == "landing"
-    figures = landing_summary(result) if landing else summarize(result)
-    summary = {**status, **figures, **provenance(result.scenario)}
+    summary = {**status, **kind.summary(result), **provenance(result.scenario)}
     files = {"trajectory.csv": result.to_csv().encode("utf-8"),
              "columns.json": strict_json(columns_sidecar(result.layout)),
              "summary.json": strict_json(summary),
              "scenario.toml": result.scenario.to_toml().encode("utf-8")}
-    drawing = _landing_plots() if landing and (plots or animate) else None  # matplotlib
     if plots and len(result["t"]) > 1:
-        if landing:
-            draw = None if drawing is None else drawing.landing_figures
-        else:
-            from quadland.plots import simulation_figures as draw
-        if draw is not None:
-            with np.errstate(all="ignore"):        # a failed flight's diverged rows
-                files.update({name: figure_png(fig) for name, fig in draw(result).items()})
-    if animate and drawing is not None and len(result["t"]) > 1:
+        with np.errstate(all="ignore"):            # a failed flight's diverged rows
+            files.update({name: figure_png(fig) for name, fig in kind.figures(result).items()})
+    if animate and len(result["t"]) > 1:
         with tempfile.TemporaryDirectory() as tmp, np.errstate(all="ignore"):
-            files["landing.gif"] = drawing.landing_animation(
-                result, Path(tmp) / "landing.gif").read_bytes()
+            files["landing.gif"] = kind.animation(result, Path(tmp) / "landing.gif").read_bytes()
     return files
-
-
-def _landing_plots():
-    """The module ``quadland.plots.landing`` where it exists, else None."""
-    from importlib.util import find_spec
-
-    if find_spec("quadland.plots.landing") is None:
-        return None
-    import quadland.plots.landing
-
-    return quadland.plots.landing

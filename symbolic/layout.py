@@ -10,7 +10,7 @@ Everything that needs the vector's shape is derived from that description:
 * the scalar entries' names and units (:meth:`Layout.element_names`,
   :meth:`Layout.element_units`): CSV columns and their sidecar;
 * C structs, their offsets and the ``ctypes`` mirrors (``quadland_symbolic.codegen``
-  and ``quadland.cbackend`` read the same fields).
+  and ``quadland.engine.flightcode`` read the same fields).
 
 A field may nest another layout (its size is the nested layout's), hold a
 matrix (``shape``, column-major as CasADi stores it) or, in C structs only,

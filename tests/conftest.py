@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from quadland.model import model_values
+from quadland.kinds.paper.values import model_values
 from quadland.scenario import load_scenario
 
 

@@ -32,7 +32,7 @@ def rotation(eta):
 
 def have_compiler() -> bool:
     """Whether quadland finds a C compiler (tests of generated C skip without one)."""
-    from quadland.build import have_compiler as found
+    from quadland.engine.build import have_compiler as found
 
     return found()
 

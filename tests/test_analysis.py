@@ -348,7 +348,7 @@ def test_flight_loop_margins_are_where_its_poles_cross():
     """Independent check on the 4 x 4, 40-state flight loop (l = 5): scale one loop's
     gain across each reported gain margin and watch the closed-loop eigenvalues; any
     diagonal gain inside the multiloop disk interval keeps the loop stable."""
-    from quadland.linearize import equilibrium, linear_models
+    from quadland.linearization import equilibrium, linear_models
     from quadland.scenario import load_scenario
 
     sc = load_scenario("paper", ["rbf.nodes=5"])
@@ -505,7 +505,7 @@ def landing_loops():
     sampled at 250 Hz with one period of computation delay."""
     from threadpoolctl import threadpool_limits
 
-    from quadland.linearize import equilibrium, linear_models, sampled_models
+    from quadland.linearization import equilibrium, linear_models, sampled_models
     from quadland.scenario import load_scenario
 
     with threadpool_limits(1):

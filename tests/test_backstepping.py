@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from reference import error_rate_matrix
 
-from quadland.model import model_values
+from quadland.kinds.paper.values import model_values
 from quadland.scenario import load_scenario
-from quadland.simulate import simulate
+from quadland.simulation import simulate
 from quadland_symbolic.backstepping import controller_function, lyapunov_function
 from quadland_symbolic.closed_loop import closed_loop_state, vehicle_measurement
 

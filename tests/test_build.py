@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from quadland import build
-from quadland.build import (
+from quadland.engine import build
+from quadland.engine.build import (
     COMPILE_MEMORY_BUDGET,
     CompileBudgetError,
     build_library,
@@ -298,7 +298,7 @@ def test_a_build_killed_by_sigkill_breaks_no_later_build(tmp_path, cache):
     slow.write_text(f'#!/bin/sh\ncase "$1" in --version) exec {build.find_compiler()} '
                     f'--version;; esac\nsleep 60\nexec {build.find_compiler()} "$@"\n')
     slow.chmod(0o755)
-    code = ("from quadland.build import build_library\n"
+    code = ("from quadland.engine.build import build_library\n"
             f"build_library({{'probe.c': {PROBE!r}}}, ('probe.c',), name='libprobe', "
             "strict=False)\n")
     proc = subprocess.Popen([sys.executable, "-c", code], start_new_session=True,

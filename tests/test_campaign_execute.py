@@ -260,11 +260,11 @@ def test_command_line_errors_are_one_line(tmp_path, capsys):
 def test_campaign_md_lists_every_metric_and_its_unit():
     from pathlib import Path
 
-    from quadland.campaign.metrics import METRICS
+    from quadland.kinds import KINDS
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "campaign.md").read_text()
-    for metrics in METRICS.values():
-        for m in metrics:
+    for kind in KINDS.values():
+        for m in kind.metrics:
             assert f"| `{m.name}` | {m.unit} |" in text, m.name
 
 
@@ -473,7 +473,7 @@ def test_a_manifest_with_a_damaged_entry_is_one_line(reference, tmp_path, capsys
 def test_workers_are_bounded_by_memory(tmp_path, monkeypatch, capsys):
     # V21: --workers 1000 was accepted with no memory bound (about 120 MB each)
     from quadland.campaign import execute
-    from quadland.simulate import simulation_plan
+    from quadland.simulation import simulation_plan
 
     sc = load_scenario("highway")
     each = execute.WORKER_MEMORY + simulation_plan(sc).memory_bytes

@@ -13,10 +13,14 @@ import pytest
 from reference import have_compiler
 
 import quadland
-from quadland import build, cbackend, codegen
+from quadland import codegen
+from quadland.engine import build
+from quadland.engine.disturbance import disturbance_samples
 from quadland.exceptions import CompilerNotFoundError
-from quadland.model import disturbance_samples, model_values
-from quadland.simulate import TRAJECTORY
+from quadland.kinds.landing import flight as landing_flight
+from quadland.kinds.paper import flight as paper_flight
+from quadland.kinds.paper.simulate import TRAJECTORY
+from quadland.kinds.paper.values import model_values
 from quadland_symbolic.closed_loop import (
     PAPER_PLANT_STATE,
     closed_loop_function,
@@ -42,13 +46,13 @@ def paper():
 @pytest.fixture(scope="module")
 def api():
     # -O0: the Jacobian's 0.8 MB of straight-line code compiles in seconds.
-    return cbackend.load_api(L, "double", "-O0")
+    return paper_flight.load_api(L, "double", "-O0")
 
 
 @pytest.fixture(scope="module", params=["double", "float"])
 def step_api(request):
     """The step's API alone, as flight code builds it (-O2), in both precisions."""
-    return cbackend.load_api(L, request.param, "-O2", model=False)
+    return paper_flight.load_api(L, request.param, "-O2", model=False)
 
 
 def _finfo(api):
@@ -99,7 +103,7 @@ def _assert_rel(actual, expected, rtol=1e-12):
 @pytest.mark.parametrize("l", [L, 7])
 def test_control_step_matches_casadi(paper, l):
     mv = paper if l == L else model_values(quadland.load_scenario("paper", [f"rbf.nodes={l}"]))
-    step, ref = cbackend.load_control_step(l), control_step_function(l)
+    step, ref = paper_flight.load_control_step(l), control_step_function(l)
     rng = np.random.default_rng(l)
     cases = [_inputs(rng, mv, l, s) for s in (0.1, 1.0, 3.0)] + _boundary_inputs(mv, l)
     clipped = 0
@@ -115,8 +119,8 @@ def test_control_step_matches_casadi(paper, l):
 def test_float_build_tracks_double(paper):
     rng = np.random.default_rng(1)
     args = _inputs(rng, paper, L, 0.5)
-    d = cbackend.load_control_step(L)(*args)
-    f = cbackend.load_control_step(L, "float")(*args)
+    d = paper_flight.load_control_step(L)(*args)
+    f = paper_flight.load_control_step(L, "float")(*args)
     for a, b in zip(d, f, strict=True):
         assert np.allclose(a, b, rtol=1e-4, atol=1e-4 * np.max(np.abs(a), initial=1.0))
 
@@ -575,23 +579,25 @@ def test_sources_are_generated_not_read(tmp_path, monkeypatch):
     """One-way flow: the runtime's C comes from symbolic/, equal to generated/ for the
     shipped scenarios."""
     monkeypatch.setattr(codegen, "_package_parent", lambda: tmp_path)   # no checkout
-    cbackend._sources.cache_clear()
+    paper_flight._flight_files.cache_clear()
+    landing_flight._flight_files.cache_clear()
     try:
         committed = codegen.generated_files()
         top = {k: v for k, v in committed.items()
                if "/" not in k and k not in (".gitignore", codegen.MANIFEST)}
         # the landing build is the whole tree (the paper's quadland.h with it), l = 10
-        assert cbackend.sources(10, model="landing") == top
-        paper = cbackend.sources(L)
+        assert landing_flight.flight_files(10) == top
+        paper = paper_flight.flight_files(L)
         assert paper == {k: v for k, v in top.items() if k in paper}
         assert "quadland_landing.h" not in paper
-        assert cbackend.sources(10, "float", "landing") == {
+        assert landing_flight.flight_files(10, "float") == {
             k.removeprefix("float/"): v for k, v in committed.items() if k.startswith("float/")}
-        assert "#define QL_RBF_NODES 7 " in cbackend.sources(7)["quadland.h"]
+        assert "#define QL_RBF_NODES 7 " in paper_flight.flight_files(7)["quadland.h"]
         assert "#define QL_LANDING_RBF_NODES 7 " in \
-            cbackend.sources(7, model="landing")["quadland_landing.h"]
+            landing_flight.flight_files(7)["quadland_landing.h"]
     finally:
-        cbackend._sources.cache_clear()
+        paper_flight._flight_files.cache_clear()
+        landing_flight._flight_files.cache_clear()
 
 
 def test_no_compiler_is_one_clear_error(monkeypatch):

@@ -10,13 +10,15 @@ import subprocess
 import casadi as ca
 import pytest
 
-from quadland import cbackend, codegen
-from quadland.build import find_compiler
+from quadland import codegen
 from quadland.cli import main as cli_main
+from quadland.engine import flightcode
+from quadland.engine.build import find_compiler
 from quadland.exceptions import CompilerNotFoundError
-from quadland.landing import LANDING_TRAJECTORY
+from quadland.kinds.landing.flight import landing_defaults
+from quadland.kinds.paper.flight import paper_defaults
+from quadland.kinds.paper.simulate import TRAJECTORY
 from quadland.scenario import load_scenario
-from quadland.simulate import TRAJECTORY
 from quadland_symbolic.codegen import (
     FUNCTIONS,
     CodegenConfig,
@@ -27,6 +29,7 @@ from quadland_symbolic.codegen import (
     land_columns,
 )
 from quadland_symbolic.codegen.structs import api_structs, landing_api_structs
+from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
 
 GENERATED_DIR = codegen.generated_dir()
 
@@ -282,7 +285,7 @@ def test_structs_match_the_layouts_and_the_ctypes_mirrors(tmp_path, precision):
     real = ctypes.c_double if precision == "double" else ctypes.c_float
     size = ctypes.sizeof(real)
     for s in structs:
-        mirror = cbackend.ctypes_struct(s.layout, real)
+        mirror = flightcode.ctypes_struct(s.layout, real)
         assert ctypes.sizeof(mirror) == got[s.name, "."], s.name
         offsets, n_int = s.layout.offsets(), 0
         for f in s.layout.fields:
@@ -427,7 +430,7 @@ def test_float_header_spells_ql_names_alone_and_refuses_a_collision(tmp_path):
 
 def test_any_node_count_compiles_alone(tmp_path):
     cc = _compiler()
-    d = codegen.default_values("paper", ["rbf.nodes=3"])
+    d = paper_defaults(load_scenario("paper", ["rbf.nodes=3"]))
     for config in (CodegenConfig(), CodegenConfig("float")):
         files = generate(d, config)
         assert "#define " + config.macro_prefix + "RBF_NODES 3 " in files["quadland.h"]
@@ -440,7 +443,7 @@ def test_any_node_count_compiles_alone(tmp_path):
                                    "-fsyntax-only", f"-I{folder}", str(folder / name)],
                                   capture_output=True, text=True)
             assert proc.returncode == 0, proc.stderr
-    d = codegen.landing_default_values("highway", ["rbf.nodes=3"])
+    d = landing_defaults(load_scenario("highway", ["rbf.nodes=3"]))
     for config in (CodegenConfig(), CodegenConfig("float")):
         files = generate_landing(d, config)
         assert "#define " + config.macro_prefix + "LANDING_RBF_NODES 3 " in \

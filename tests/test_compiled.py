@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import quadland
-from quadland import compiled
-from quadland.compiled import QuadlandWarning
+from quadland.engine import compiled
+from quadland.engine.compiled import QuadlandWarning
 
 SHORT = ["simulation.duration=1.5", "disturbance.noise=false", "rbf.nodes=7"]
 

@@ -121,7 +121,7 @@ def test_scenario_md_lists_every_key_with_its_unit_and_range(model):
 
 def trajectory_rows() -> list[str]:
     """Expected start of each row of docs/simulation.md's column table: names, unit."""
-    from quadland.simulate import TRAJECTORY
+    from quadland.kinds.paper.simulate import TRAJECTORY
 
     rows = []
     for f in TRAJECTORY.fields:

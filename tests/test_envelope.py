@@ -10,14 +10,15 @@ import numpy as np
 import pytest
 
 import quadland
-from quadland.compiled import SIM_ENVELOPE, VMLoop, compiled_loop
+from quadland.engine.compiled import SIM_ENVELOPE, VMLoop
+from quadland.engine.envelope import Envelope, rk4_amplification, rk4_steps_needed
 from quadland.engine.loop import Clock
-from quadland.envelope import Envelope, rk4_amplification, rk4_steps_needed
 from quadland.exceptions import SimulationError
-from quadland.metrics import touchdown_report
-from quadland.model import model_values
-from quadland.simulate import paper_envelope
+from quadland.kinds.landing.report import touchdown_report
+from quadland.kinds.paper.simulate import paper_envelope, paper_loop_part
+from quadland.kinds.paper.values import model_values
 from quadland_symbolic.closed_loop import PAPER_ENVELOPE, paper_envelope_function
+from quadland_symbolic.paper_loop import paper_loop
 
 STEEP = ["controller.k1=[300.0, 5.0, 10.0, 10.0]", "controller.k2=[200.0, 4.0, 10.0, 10.0]"]
 
@@ -113,7 +114,7 @@ def test_compiled_and_vm_drivers_stop_at_the_same_point():
     clocks = (Clock(100.0, 0.0, 0.2, True), Clock(100.0, 0.0, 0.2, True))
     W = np.zeros((21, 6))
     runs = [loop.integrate(mv.x0, clocks, W, 1, mv.p, env.bounds) for loop in (
-        compiled_loop(4, "continuous"), VMLoop(compiled_loop(4, "continuous").model,
+        paper_loop_part(4, "continuous"), VMLoop(paper_loop(4),
                                                "continuous"))]
     for run in runs:
         assert run.status == SIM_ENVELOPE and run.rows >= 1

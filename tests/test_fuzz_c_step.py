@@ -35,8 +35,9 @@ from reference import C_RANDOM, SANITIZE, extreme, have_compiler, sanitizer_miss
 from reference import run as _run
 
 import quadland
-from quadland import build, cbackend
-from quadland.model import model_values
+from quadland.engine import build
+from quadland.kinds.paper.flight import flight_files, load_api
+from quadland.kinds.paper.values import model_values
 from quadland_symbolic.codegen import STATUS_CODES, c_sources
 from quadland_symbolic.codegen.structs import adaptive_state_layout, output_layout, param_ranges
 
@@ -122,7 +123,7 @@ class _Harness:
     """One build's API, its structs and NumPy views on them."""
 
     def __init__(self, precision: str):
-        self.api = api = cbackend.load_api(L, precision, "-O2", model=False)
+        self.api = api = load_api(L, precision, "-O2", model=False)
         self.dtype = np.float64 if precision == "double" else np.float32
         self.fi = np.finfo(self.dtype)
         self.xq, self.yv, self.ref = api.QuadrotorState(), api.VehicleState(), api.Reference()
@@ -486,7 +487,7 @@ def sanitized_drivers(sanitizer, tmp_path_factory):
     procs, exes = [], {}
     for precision in ("double", "float"):
         root = tmp_path_factory.mktemp(f"sanitized_{precision}")
-        for name, text in cbackend.sources(L, precision).items():
+        for name, text in flight_files(L, precision).items():
             (root / name).write_text(text)
         (root / "driver.c").write_text(DRIVER)
         for src in (*c_sources(), "driver.c"):

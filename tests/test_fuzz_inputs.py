@@ -22,7 +22,7 @@ from quadland.cli import main
 from quadland.exceptions import CampaignError, ScenarioError
 from quadland.scenario import SCENARIO_DIR, load_scenario
 from quadland.schema import LANDING_SCHEMA, PAPER_SCHEMA
-from quadland.simulate import check_plan
+from quadland.simulation import check_run as check_plan
 
 SEED = 20261121
 #: Value texts put in place of a key's value.

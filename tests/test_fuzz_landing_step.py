@@ -36,8 +36,9 @@ import pytest
 from reference import C_RANDOM, SANITIZE, extreme, have_compiler, sanitizer_missing
 from reference import run as _run
 
-from quadland import build, cbackend
-from quadland.landing import landing_values
+from quadland.engine import build
+from quadland.kinds.landing.flight import flight_files, load_landing_api
+from quadland.kinds.landing.values import landing_values
 from quadland.scenario import load_scenario
 from quadland_symbolic.codegen import STATUS_CODES, c_sources
 from quadland_symbolic.codegen.structs import (
@@ -146,7 +147,7 @@ class _Harness:
     """One build's landing API, its structs and NumPy views on them."""
 
     def __init__(self, precision: str):
-        self.api = api = cbackend.load_landing_api(L, precision)
+        self.api = api = load_landing_api(L, precision)
         self.dtype = d = np.float64 if precision == "double" else np.float32
         self.fi = np.finfo(d)
         self.y, self.ref = api.LandingMeasurement(), api.PositionReference()
@@ -599,7 +600,7 @@ def sanitized_drivers(tmp_path_factory):
     procs, roots = [], {}
     for precision in ("double", "float"):
         root = tmp_path_factory.mktemp(f"sanitized_landing_{precision}")
-        for name, text in cbackend.sources(L, precision, "landing").items():
+        for name, text in flight_files(L, precision).items():
             (root / name).write_text(text)
         (root / "driver.c").write_text(DRIVER)
         for src in sources:

@@ -21,10 +21,10 @@ import pytest
 from reference import rotation
 
 import quadland
-from quadland import compiled
 from quadland.cli import main
+from quadland.engine import compiled
 from quadland.exceptions import ScenarioError
-from quadland.metrics import touchdown_report
+from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
 from quadland.schema import LANDING_SCHEMA
 from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN

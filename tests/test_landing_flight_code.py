@@ -14,9 +14,11 @@ import pytest
 from reference import have_compiler
 
 import quadland
-from quadland import build, cbackend, codegen
-from quadland.landing import LANDING_TRAJECTORY, landing_values
-from quadland.metrics import touchdown_report
+from quadland import codegen
+from quadland.engine import build
+from quadland.kinds.landing.flight import load_landing_api
+from quadland.kinds.landing.report import touchdown_report
+from quadland.kinds.landing.values import landing_values
 from quadland_symbolic.codegen import STATUS_CODES
 from quadland_symbolic.codegen.structs import landing_output_layout, landing_params_layout
 from quadland_symbolic.landing.controller import (
@@ -36,6 +38,7 @@ from quadland_symbolic.landing.guidance import (
 )
 from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -54,7 +57,7 @@ class Harness:
     """One build's landing API with its structs, NumPy views and the highway's vectors."""
 
     def __init__(self, precision: str):
-        self.api = api = cbackend.load_landing_api(L, precision)
+        self.api = api = load_landing_api(L, precision)
         self.dtype = np.float64 if precision == "double" else np.float32
         self.y, self.ref = api.LandingMeasurement(), api.PositionReference()
         self.params, self.state = api.LandingParams(), api.LandingState()
@@ -311,7 +314,7 @@ def examples(tmp_path_factory):
     shutil.copytree(codegen.generated_dir(), trees["highway"], dirs_exist_ok=True,
                     ignore=shutil.ignore_patterns("build", "closed_loop_jacobian.c"))
     codegen.write(trees["ship"], codegen.generated_files(
-        landing=codegen.landing_default_values("ship")))
+        quadland.load_scenario("ship")))
     procs = [subprocess.Popen(["make", "-s", f"CC={cc}", *targets], cwd=trees[name] / "example",
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
              for name, targets in (("highway", ["build/land", "build/land_float", "build/bench"]),

@@ -10,8 +10,9 @@ coordinates of ``quadland_symbolic.landing.linearization``.
 import numpy as np
 import pytest
 
-from quadland.landing import landing_values
-from quadland.linearize import _hover_values, equilibrium, linear_models, sampled_models
+from quadland.kinds.landing.linearize import _hover_values
+from quadland.kinds.landing.values import landing_values
+from quadland.linearization import equilibrium, linear_models, sampled_models
 from quadland.scenario import load_scenario
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.deck import deck_pose

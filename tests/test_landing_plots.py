@@ -24,7 +24,7 @@ from quadland.plots import (
     rotor_forces_plot,
     trajectory_3d_plot,
 )
-from quadland.plots.landing import DEFAULT_LIMITS, PAD_SIZE, _frame_rows
+from quadland.plots.landing import LIMIT_NAMES, PAD_SIZE, _frame_rows
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.guidance import PHASES
 
@@ -56,16 +56,23 @@ def _landing(duration=4.0, landing=None, quadrotor=True, touchdown=TOUCHDOWN):
     z2 = 1.0 + 0.3 * np.sin(1.1 * t)                      # heave
     phi2, theta2 = 0.05 * np.sin(0.7 * t), 0.04 * np.sin(0.9 * t + 0.4)
     shape = (1 - np.clip(t / touchdown, 0, 1)) ** 2       # 1 at the start, 0 from touchdown
+    dshape = np.where(t < touchdown, -2 * (1 - t / touchdown) / touchdown, 0.0)
     p_e = np.column_stack([-3 * shape, shape, 0.15 + 2.85 * shape])
+    v_e = np.column_stack([-3 * dshape, dshape, 2.85 * dshape])
     p1 = (np.column_stack([x2, y2, z2])
           + np.einsum("nij,nj->ni", _deck_rotation(psi2, theta2, phi2), p_e))
     phase = np.select([t < 1, t < 1.5, t < touchdown, t < touchdown + 0.5], [0, 1, 2, 3], 4)
     F = np.column_stack([MASS * GRAVITY / 4 * (1 + 0.1 * np.sin(2 * t + k)) for k in range(4)])
+    phi1, theta1, psi1 = phi2 + 0.1 * shape * np.sin(3 * t), theta2 - 0.08 * shape, \
+        psi2 + 0.2 * shape
+    n1 = _deck_rotation(psi1, theta1, phi1)[:, :, 2]
+    n2 = _deck_rotation(psi2, theta2, phi2)[:, :, 2]
+    tilt = np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=1), -1, 1)))
     columns = dict(
         t=t, phase=phase, x1=p1[:, 0], y1=p1[:, 1], z1=p1[:, 2],
-        phi1=phi2 + 0.1 * shape * np.sin(3 * t), theta1=theta2 - 0.08 * shape,
-        psi1=psi2 + 0.2 * shape, x2=x2, y2=y2, z2=z2, phi2=phi2, theta2=theta2, psi2=psi2,
-        x_e=p_e[:, 0], y_e=p_e[:, 1], z_e=p_e[:, 2], F_total=F.sum(axis=1),
+        phi1=phi1, theta1=theta1, psi1=psi1, x2=x2, y2=y2, z2=z2, phi2=phi2,
+        theta2=theta2, psi2=psi2, x_e=p_e[:, 0], y_e=p_e[:, 1], z_e=p_e[:, 2],
+        dx_e=v_e[:, 0], dy_e=v_e[:, 1], dz_e=v_e[:, 2], tilt_deg=tilt, F_total=F.sum(axis=1),
         M_x=0.2 * (F[:, 1] - F[:, 3]), M_y=0.2 * (F[:, 2] - F[:, 0]),
         M_z=0.01 * (F[:, 0] - F[:, 1] + F[:, 2] - F[:, 3]),
         F_1=F[:, 0], F_2=F[:, 1], F_3=F[:, 2], F_4=F[:, 3],
@@ -173,41 +180,31 @@ def test_relative_position_plots_the_columns_and_rates(result):
         np.testing.assert_array_equal(x, t)
         np.testing.assert_array_equal(yy, y)
     np.testing.assert_array_equal(_data(_by_label(height, "z_e"))[1], result["z_e"])
-    # rates against the hand-made landing's closed form: p_e = c (1 - t/T)^2 + const
-    dshape = np.where(t < TOUCHDOWN, -2 * (1 - t / TOUCHDOWN) / TOUCHDOWN, 0.0)
-    np.testing.assert_allclose(_data(_by_label(speed, "horizontal speed"))[1],
-                               np.hypot(3, 1) * np.abs(dshape), atol=0.02)
-    np.testing.assert_allclose(_data(_by_label(speed, "sink rate"))[1], -2.85 * dshape,
-                               atol=0.02)
-    # tilt: angle between the body and deck z axes
-    n1 = _deck_rotation(result["psi1"], result["theta1"], result["phi1"])[:, :, 2]
-    n2 = _deck_rotation(result["psi2"], result["theta2"], result["phi2"])[:, :, 2]
-    np.testing.assert_allclose(_data(_by_label(tilt, "tilt from deck normal"))[1],
-                               np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=1), -1, 1))),
-                               atol=1e-5)
+    # the rates and the tilt are the result's own signals, not re-derived
+    np.testing.assert_array_equal(_data(_by_label(speed, "horizontal speed"))[1],
+                                  np.hypot(result["dx_e"], result["dy_e"]))
+    np.testing.assert_array_equal(_data(_by_label(speed, "sink rate"))[1], -result["dz_e"])
+    np.testing.assert_array_equal(_data(_by_label(tilt, "tilt from deck normal"))[1],
+                                  result["tilt_deg"])
     assert fig.axes[-1].get_xlabel() == "t [s]"
 
 
-@pytest.mark.parametrize("landing, limits, expected", [
-    (None, None, dict(DEFAULT_LIMITS)),
-    ({"max_offset": 0.3, "max_sink_rate": 0.7, "max_tilt_deg": 8.0,
-      "max_relative_speed": 0.4, "hover_height": 2.0},
-     None, {"max_offset": 0.3, "max_sink_rate": 0.7, "max_tilt_deg": 8.0,
-            "max_relative_speed": 0.4}),
-    ({"max_offset": 0.3}, {"max_offset": 0.25, "max_tilt_deg": 12.0},
-     {**DEFAULT_LIMITS, "max_offset": 0.25, "max_tilt_deg": 12.0}),
-])
-def test_relative_position_limit_lines(landing, limits, expected):
-    assert dict(DEFAULT_LIMITS) == {"max_sink_rate": 0.5, "max_offset": 0.2,
-                                    "max_tilt_deg": 10.0, "max_relative_speed": 0.5}
-    pos, height, speed, tilt = relative_position_plot(_landing(landing=landing), limits).axes
-    off = expected["max_offset"]
-    assert _limit_values(pos) == [-off, off]
+LIMITS = {"max_offset": 0.3, "max_sink_rate": 0.7, "max_tilt_deg": 8.0,
+          "max_relative_speed": 0.4, "F_max": 5.0}
+
+
+@pytest.mark.parametrize("limits", [LIMITS, {"max_offset": 0.25, "max_tilt_deg": 12.0}, None])
+def test_relative_position_limit_lines(limits):
+    """Each limit given is drawn where it is; one not given is not drawn."""
+    pos, height, speed, tilt = relative_position_plot(_landing(), limits).axes
+    lim = {k: (limits or {}).get(k) for k in LIMIT_NAMES}
+    off = lim["max_offset"]
+    assert _limit_values(pos) == ([] if off is None else [-off, off])
     assert _limit_values(height) == []
-    assert _by_label(speed, "max_relative_speed").get_ydata()[0] == \
-        expected["max_relative_speed"]
-    assert _by_label(speed, "max_sink_rate").get_ydata()[0] == expected["max_sink_rate"]
-    assert _limit_values(tilt) == [expected["max_tilt_deg"]]
+    for name in ("max_relative_speed", "max_sink_rate"):
+        lines = [ln for ln in speed.lines if ln.get_label() == name]
+        assert [ln.get_ydata()[0] for ln in lines] == ([] if lim[name] is None else [lim[name]])
+    assert _limit_values(tilt) == ([] if lim["max_tilt_deg"] is None else [lim["max_tilt_deg"]])
 
 
 @pytest.mark.parametrize("plot", [relative_position_plot, rotor_forces_plot])
@@ -250,13 +247,13 @@ def test_ground_track_without_touchdown_has_no_touchdown_mark():
     assert not [ln for ln in a.lines if "touchdown" in ln.get_label()]
 
 
-@pytest.mark.parametrize("quadrotor, limits, F_max", [
-    (True, None, F_MAX),
-    (True, {"F_max": 6.0}, 6.0),
-    (False, None, None),
+@pytest.mark.parametrize("limits, F_max", [
+    ({"F_max": F_MAX}, F_MAX),
+    ({"F_max": 6.0}, 6.0),
+    (None, None),
 ])
-def test_rotor_forces_plot(quadrotor, limits, F_max):
-    res = _landing(quadrotor=quadrotor)
+def test_rotor_forces_plot(limits, F_max):
+    res = _landing()
     rotors, total = rotor_forces_plot(res, limits).axes
     for k in range(1, 5):
         x, y = _data(_by_label(rotors, f"F_{k}"))
@@ -270,10 +267,11 @@ def test_rotor_forces_plot(quadrotor, limits, F_max):
         assert _limit_values(total) == pytest.approx([0.0, 4 * F_max], rel=1e-15)
 
 
-def test_landing_limits_rejects_unknown_keys(result):
+def test_landing_limits_rejects_unknown_keys():
     with pytest.raises(ValueError, match="max_ofset"):
-        landing_limits(result, {"max_ofset": 0.3})
-    assert landing_limits(result)["F_max"] == pytest.approx(F_MAX)
+        landing_limits({"max_ofset": 0.3})
+    assert landing_limits({"F_max": F_MAX})["F_max"] == pytest.approx(F_MAX)
+    assert landing_limits()["F_max"] is None
 
 
 # animation

@@ -6,8 +6,9 @@ import pytest
 
 from quadland.analysis import closed_loop_poles, freqresp
 from quadland.exceptions import OperatingPointError
-from quadland.linearize import equilibrium, frozen_point, linear_models, sampled_models
-from quadland.model import model_values
+from quadland.kinds.paper.linearize import frozen_point, paper_equilibrium
+from quadland.kinds.paper.values import model_values
+from quadland.linearization import equilibrium, linear_models, sampled_models
 from quadland.scenario import load_scenario
 from quadland_symbolic.backstepping import controller_function
 from quadland_symbolic.closed_loop import closed_loop_function, closed_loop_state
@@ -147,7 +148,7 @@ def test_sampled_models_are_zero_order_holds(small, eq_point):
 
 def test_newton_failure_is_reported(small):
     with pytest.raises(OperatingPointError, match="did not converge"):
-        equilibrium(small, max_iter=1, tol=1e-300)
+        paper_equilibrium(small, max_iter=1, tol=1e-300)
 
 
 def test_sampled_controller_extrapolates_by_the_hold_compensation(small, eq_point):

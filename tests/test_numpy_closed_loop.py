@@ -11,7 +11,7 @@ import pytest
 from numpy_closed_loop import numpy_rhs, random_states
 
 import quadland
-from quadland.model import model_values
+from quadland.kinds.paper.values import model_values
 from quadland_symbolic.closed_loop import closed_loop_function
 
 

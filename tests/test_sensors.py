@@ -3,7 +3,7 @@
 The symbolic models (quadland_symbolic.landing.sensors) are checked at chosen states
 whose readings are derived by hand (a level hover over a level pad, a
 30 degree roll over a flat deck, free fall, ...); the runtime's random parts
-(quadland.sensing) against the closed-form statistics of the processes they
+(quadland.engine.sensing) against the closed-form statistics of the processes they
 simulate, with tolerances from each estimator's own sampling distribution.
 """
 
@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from quadland.exceptions import ScenarioError
-from quadland.sensing import (
+from quadland.engine.sensing import (
     SENSOR_DEFAULTS,
     SETTINGS,
     draw_sensors,
@@ -25,6 +24,7 @@ from quadland.sensing import (
     sensor_params,
     validate_settings,
 )
+from quadland.exceptions import ScenarioError
 from quadland_symbolic.landing.deck import DECK_PARAMS
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,

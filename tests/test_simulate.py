@@ -6,8 +6,10 @@ import io
 import numpy as np
 import pytest
 
+from quadland.engine.result import columns_sidecar
+from quadland.kinds.paper.simulate import COLUMNS, TRAJECTORY
 from quadland.scenario import load_scenario
-from quadland.simulate import COLUMNS, columns_sidecar, simulate
+from quadland.simulation import simulate
 
 E1 = ("z_e", "phi_e", "theta_e", "psi_e")
 
@@ -58,7 +60,7 @@ def test_csv_round_trip(default_run):
 
 
 def test_columns_sidecar_gives_every_column_a_unit():
-    side = columns_sidecar()["columns"]
+    side = columns_sidecar(TRAJECTORY)["columns"]
     assert [c["name"] for c in side] == [n for n, _ in COLUMNS]
     units = {c["name"]: c["unit"] for c in side}
     assert (units["t"], units["z_e"], units["phi_e"], units["F_1"], units["M_x"]) == \

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from quadland.compiled import SIM_EVENT, CompiledLoop, VMLoop
+from quadland.engine.compiled import SIM_EVENT, CompiledLoop, VMLoop
 from quadland.engine.loop import Clock
 from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK
 from quadland_symbolic.landing.plant import (

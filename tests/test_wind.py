@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from quadland.wind import (
+from quadland.engine.wind import (
     FT,
     DrydenTurbulence,
     OneCosineGust,

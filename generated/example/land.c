@@ -140,17 +140,17 @@ static void write_row(double t, const ql_real *y)
     row[14] = (double)y[13];   /* x_e */
     row[15] = (double)y[14];   /* y_e */
     row[16] = (double)y[15];   /* z_e */
-    row[17] = (double)y[26];   /* F_total */
-    row[18] = (double)y[27];   /* M_x */
-    row[19] = (double)y[28];   /* M_y */
-    row[20] = (double)y[29];   /* M_z */
-    row[21] = (double)y[30];   /* F_1 */
-    row[22] = (double)y[31];   /* F_2 */
-    row[23] = (double)y[32];   /* F_3 */
-    row[24] = (double)y[33];   /* F_4 */
-    row[25] = (double)y[34];   /* d_Fx */
-    row[26] = (double)y[35];   /* d_Fy */
-    row[27] = (double)y[36];   /* d_Fz */
+    row[17] = (double)y[27];   /* F_total */
+    row[18] = (double)y[28];   /* M_x */
+    row[19] = (double)y[29];   /* M_y */
+    row[20] = (double)y[30];   /* M_z */
+    row[21] = (double)y[31];   /* F_1 */
+    row[22] = (double)y[32];   /* F_2 */
+    row[23] = (double)y[33];   /* F_3 */
+    row[24] = (double)y[34];   /* F_4 */
+    row[25] = (double)y[35];   /* d_Fx */
+    row[26] = (double)y[36];   /* d_Fy */
+    row[27] = (double)y[37];   /* d_Fz */
     for (i = 0; i < 28; ++i) printf(i ? ",%.17g" : "%.17g", row[i]);
     printf("\n");
 }

@@ -27,7 +27,7 @@ extern "C" {
 #define QLF_LANDING_PLANT_NX 22                  /* xp = [x1q (16), xv (6)] */
 #define QLF_LANDING_PLANT_NP 57                  /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (31)] */
 #define QLF_LANDING_NW 9                         /* w = [v_wind (3), d_F (3), d_M (3)] */
-#define QLF_LANDING_NY 41                        /* signals y of a landing */
+#define QLF_LANDING_NY 42                        /* signals y of a landing */
 #define QLF_LANDING_ANCHOR_SIZE 12               /* anchor = [p_e (3), R_rel (9)] */
 #define QLF_LANDING_VEHICLE_NX 6                 /* xv = [x2, y2, psi2, u2, v2, r2] */
 #define QLF_TOUCHDOWN_FIGURES 4                  /* [sink_rate, offset, relative_speed, tilt_deg] */

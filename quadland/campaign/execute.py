@@ -35,7 +35,6 @@ import numpy as np
 
 from quadland.campaign.fly import RunOutcome, fly, warm_up
 from quadland.campaign.journal import MANIFEST, CampaignFolder, damaged_manifest, json_kind
-from quadland.campaign.metrics import METRICS, limits_of
 from quadland.campaign.sampling import RunDraw, format_value, iter_draws
 from quadland.campaign.spec import MAX_RUNS, CampaignSpec, campaign_spec_of
 from quadland.campaign.statistics import (
@@ -45,6 +44,7 @@ from quadland.campaign.statistics import (
     separation,
 )
 from quadland.exceptions import CampaignError, CampaignStopped
+from quadland.kinds import kind_of
 from quadland.scenario import SCENARIO_DIR, Scenario, load_scenario
 
 __all__ = ["CampaignResult", "CampaignInterrupted", "run_campaign", "summarize_campaign",
@@ -126,7 +126,7 @@ class CampaignResult:
 def campaign_header(spec, model: str) -> list[str]:
     """The columns of runs.csv."""
     return ["index", "seed", "status", "success", *spec.columns(),
-            *(m.name for m in METRICS[model]), "message"]
+            *(m.name for m in kind_of(model).metrics), "message"]
 
 
 def _row(outcome: RunOutcome, header: Sequence[str]) -> list[str]:
@@ -156,7 +156,7 @@ def _manifest(scenario: Scenario, spec: CampaignSpec, runs: int) -> dict:
     from importlib.metadata import version
 
     from quadland import __version__
-    from quadland.build import compiler_version
+    from quadland.engine.build import compiler_version
 
     return {"format": _FORMAT, "quadland": __version__, "code": code_fingerprint(),
             "libraries": {name: version(name) for name in ("casadi", "numpy", "scipy")},
@@ -311,7 +311,6 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
     KeyboardInterrupt
         The recorded runs stay; running again resumes.
     """
-    from quadland.simulate import check_plan
 
     base = scenario if isinstance(scenario, Scenario) else load_scenario(scenario, overrides)
     spec = campaign_spec_of(base)
@@ -321,7 +320,7 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or not 1 <= workers <= MAX_WORKERS):
         raise CampaignError(f"workers: must be in [1, {MAX_WORKERS}], got {workers}")
-    check_plan(base)
+    kind_of(base).check(base)
     if scheduler is not None:
         check_address(scheduler)
         local = 0
@@ -466,11 +465,9 @@ def worker_memory(base: Scenario) -> int:
     """Memory one local worker process of a campaign of ``base`` takes, bytes (estimate).
 
     :data:`WORKER_MEMORY` (a process with the simulator loaded) plus the
-    arrays of one run (``quadland.simulate.simulation_plan``).
+    arrays of one run (its kind's ``plan``).
     """
-    from quadland.simulate import simulation_plan
-
-    return WORKER_MEMORY + simulation_plan(base).memory_bytes
+    return WORKER_MEMORY + kind_of(base).plan(base).memory_bytes
 
 
 def local_workers(base: Scenario, workers: int | None, runs: int) -> int:
@@ -950,7 +947,7 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
     success = np.array([s == "true" for s in cols["success"]])
     flown = status != "invalid"
     n, k = int(flown.sum()), int((success & flown).sum())
-    limits = limits_of(base, spec.limits)
+    limits = kind_of(base).limits(base, spec.limits)
     summary: dict = {"scenario": base.name, "model": model, "runs": n_all, "flown": n,
                      "invalid": int((~flown).sum()), "successes": k, "failures": n - k,
                      "numerical_failures": int((status == "failed").sum())}
@@ -966,7 +963,7 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
         summary["note"] = (f"no run was flown: the draws of all {n_all} were invalid (each "
                            "row's message says why); no success rate, no figures")
     metrics = {}
-    for m in METRICS[model]:
+    for m in kind_of(model).metrics:
         x = _floats(cols[m.name])
         x = x[~np.isnan(x)]
         entry = {"unit": m.unit, "doc": m.doc, "limit": limits.get(m.name), "n": int(x.size),
@@ -990,7 +987,7 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
             "success": bool(success[i]), "message": cols["message"][i],
             "severity": severity[i],
             "metrics": {m.name: (None if cols[m.name][i] == "" else float(cols[m.name][i]))
-                        for m in METRICS[model]},
+                        for m in kind_of(model).metrics},
             "dispersed": {c: cols[c][i] for c in draw_cols},
             "command": replay_command(arg, overrides, values)})
     summary["worst_runs"] = worst
@@ -1029,14 +1026,14 @@ def _figures(base: Scenario, header, rows, summary) -> dict[str, bytes]:
 
     spec = campaign_spec_of(base)
     cols = _parse(rows, header)
-    limits = limits_of(base, spec.limits)
+    limits = kind_of(base).limits(base, spec.limits)
     success = np.array([s == "true" for s in cols["success"]])
     flown = np.array([s != "invalid" for s in cols["status"]])
     if not flown.any():
         return {}                               # nothing to draw: summary.json's note says so
-    metric_values = {m.name: _floats(cols[m.name])[flown] for m in METRICS[base.model]
+    metric_values = {m.name: _floats(cols[m.name])[flown] for m in kind_of(base).metrics
                      if m.name in limits}
-    units = {m.name: m.unit for m in METRICS[base.model]}
+    units = {m.name: m.unit for m in kind_of(base).metrics}
     files = {}
     if metric_values:
         files["metrics_cdf.png"] = figure_png(metrics_cdf_figure(metric_values, limits, units))

@@ -5,9 +5,10 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 
-from quadland.campaign.metrics import METRICS, limits_of, run_metrics, violations
 from quadland.campaign.sampling import RunDraw
+from quadland.campaign.spec import campaign_spec_of
 from quadland.exceptions import ScenarioError, SimulationError
+from quadland.kinds import kind_of
 from quadland.scenario import Scenario
 
 __all__ = ["RunOutcome", "fly", "STATUSES", "warm_up"]
@@ -66,40 +67,32 @@ def fly(base: Scenario, draw: RunDraw, limits: Mapping[str, float] | None = None
         as is one whose draws the scenario refuses (``"invalid"``); other
         errors propagate.
     """
-    from quadland.simulate import simulate
-
     def outcome(status, success=False, metrics=None, message=""):
         return RunOutcome(draw.index, draw.seed, status, success, metrics or {},
                           " ".join(message.split()), draw.columns)
 
+    kind = kind_of(base)
     try:
         scenario = base.replace(**draw.values)
     except ScenarioError as exc:
         return outcome("invalid", message=str(exc))
     try:
-        result = simulate(scenario)
+        result = kind.simulate(scenario)
     except ScenarioError as exc:
         return outcome("invalid", message=str(exc))
     except SimulationError as exc:
         return outcome("failed", message=str(exc))
-    metrics = run_metrics(result)
+    metrics = kind.run_metrics(result)
     if limits is None:
-        from quadland.campaign.spec import campaign_spec_of
-
         limits = campaign_spec_of(base).limits if base.campaign_table is not None else {}
-    units = {m.name: m.unit for m in METRICS[scenario.model]}
-    missed = violations(metrics, limits_of(scenario, limits), units)
-    if scenario.model == "landing" and metrics["touchdown_time"] is None:
-        missed = [f"no touchdown by t = {result['t'][-1]:.4g} s"]
+    missed = kind.judge(result, metrics, kind.limits(scenario, limits))
     return outcome("ok", not missed, metrics, "; ".join(missed))
 
 
 def warm_up(base: Scenario) -> None:
     """Build (or load) the compiled simulator of ``base``'s loop in this process."""
-    from quadland.simulate import simulate
-
     short = base.replace(**{"simulation.duration": min(base["simulation.duration"], 0.05)})
     try:
-        simulate(short)
+        kind_of(base).simulate(short)
     except SimulationError:
         pass

@@ -21,8 +21,8 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
-from quadland.campaign.metrics import metric_names
 from quadland.exceptions import ScenarioError
+from quadland.kinds import KINDS
 from quadland.schema import SCHEMAS, check_value, show
 
 __all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "campaign_spec_of",
@@ -151,7 +151,7 @@ class CampaignSpec:
         (space-filling over all runs).
     dispersions : tuple of Dispersion
     limits : mapping of str to float
-        Upper limits on metrics (``quadland.campaign.metrics``), on top of
+        Upper limits on metrics (the loop kind's ``metrics``), on top of
         a landing's own limits.
     table : mapping
         The table as written, normalized (for ``scenario.toml``).
@@ -299,7 +299,7 @@ def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
     limits = table.get("limits", {})
     if not isinstance(limits, Mapping):
         raise ScenarioError("campaign.limits: must be a table of metric = upper limit")
-    names = metric_names(model)
+    names = [m.name for m in KINDS[model].metrics]
     checked_limits = {}
     for name, value in limits.items():
         if name not in names:

@@ -41,7 +41,7 @@ def drawable(result):
     ----------
     result : object
         ``result[name]`` gives a column, ``result.scenario`` the scenario
-        (a :class:`quadland.simulate.SimulationResult` or a landing's).
+        (a :class:`quadland.engine.result.SimulationResult`).
 
     Returns
     -------

@@ -26,11 +26,11 @@ from PIL import Image
 
 from quadland.exceptions import QuadlandError
 from quadland.plots.finite import drawable
-from quadland.plots.simulation import _finish
+from quadland.plots.style import finish
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
 
-__all__ = ["LANDING_FIGURES", "DEFAULT_LIMITS", "PAD_SIZE", "LandingResult", "landing_limits",
+__all__ = ["LANDING_FIGURES", "LIMIT_NAMES", "PAD_SIZE", "LandingResult", "landing_limits",
            "touchdown_row", "trajectory_3d_plot", "relative_position_plot", "ground_track_plot",
            "rotor_forces_plot", "landing_figures", "landing_animation"]
 
@@ -42,15 +42,11 @@ LANDING_FIGURES = types.MappingProxyType({
     "rotor_forces.png": "Rotor forces against their limits",
 })
 
-#: The touchdown limits used where neither ``limits`` nor the scenario's
-#: ``[landing]`` section gives one: sink rate (m/s), horizontal offset (m),
-#: tilt from the deck normal (deg), horizontal relative speed (m/s).
-DEFAULT_LIMITS = types.MappingProxyType({
-    "max_sink_rate": 0.5,
-    "max_offset": 0.2,
-    "max_tilt_deg": 10.0,
-    "max_relative_speed": 0.5,
-})
+#: The limits a landing's figures can draw: sink rate (m/s), horizontal offset (m),
+#: tilt from the deck normal (deg), horizontal relative speed (m/s), and the
+#: largest force of one rotor (N). The loop kind gives their values
+#: (``quadland.kinds.landing.report.touchdown_limits``).
+LIMIT_NAMES = ("max_sink_rate", "max_offset", "max_tilt_deg", "max_relative_speed", "F_max")
 
 #: m, side of the square pad drawn when the scenario gives no ``pad_size``.
 PAD_SIZE = 1.0
@@ -73,52 +69,26 @@ class LandingResult(Protocol):
     def __getitem__(self, name: str) -> np.ndarray: ...
 
 
-def landing_limits(result: LandingResult, limits: Mapping | None = None) -> dict:
-    """The touchdown limits and the rotor limit a figure draws.
+def landing_limits(limits: Mapping | None = None) -> dict:
+    """The limits a figure draws, each :data:`LIMIT_NAMES` entry or None (not drawn).
 
     Parameters
     ----------
-    result : LandingResult
     limits : mapping, optional
-        Any of ``max_sink_rate`` (m/s), ``max_offset`` (m), ``max_tilt_deg``
-        (deg), ``max_relative_speed`` (m/s), ``F_max`` (N per rotor); these
-        win over the scenario's.
-
-    Returns
-    -------
-    dict
-        Every key of :data:`DEFAULT_LIMITS` and ``F_max`` (None when unknown).
+        Any of :data:`LIMIT_NAMES`, in their units; the landing loop kind
+        passes the scenario's (``quadland.kinds.landing.report.touchdown_limits``).
 
     Raises
     ------
     ValueError
         ``limits`` has a key that is not a limit.
-
-    Notes
-    -----
-    Each limit comes from ``limits``, else from the scenario's ``[landing]``
-    section, else from :data:`DEFAULT_LIMITS`. ``F_max`` comes from
-    ``limits``, else is ``thrust_to_weight * mass * gravity / 4`` when the
-    scenario gives ``thrust_to_weight`` (in ``[quadrotor]`` or ``[landing]``),
-    else is ``[quadrotor] rotor_force_max``.
     """
-    known = (*DEFAULT_LIMITS, "F_max")
     limits = dict(limits or {})
-    unknown = sorted(set(limits) - set(known))
+    unknown = sorted(set(limits) - set(LIMIT_NAMES))
     if unknown:
         raise ValueError(f"landing_limits: unknown limit(s) {', '.join(unknown)}; "
-                         f"known: {', '.join(known)}")
-    data = result.scenario.data
-    landing, quad = data.get("landing", {}), data.get("quadrotor", {})
-    out = {k: float(limits.get(k, landing.get(k, v))) for k, v in DEFAULT_LIMITS.items()}
-    ratio = quad.get("thrust_to_weight", landing.get("thrust_to_weight"))
-    if "F_max" in limits:
-        out["F_max"] = float(limits["F_max"])
-    elif ratio is not None and "mass" in quad and "gravity" in quad:
-        out["F_max"] = ratio * quad["mass"] * quad["gravity"] / 4
-    else:
-        out["F_max"] = quad.get("rotor_force_max")
-    return out
+                         f"known: {', '.join(LIMIT_NAMES)}")
+    return {k: None if limits.get(k) is None else float(limits[k]) for k in LIMIT_NAMES}
 
 
 def touchdown_row(result: LandingResult) -> int | None:
@@ -158,23 +128,6 @@ def _deck_rectangle(result: LandingResult, row: int, length: float, width: float
     return p2 + corners @ R.T
 
 
-def _rate(x: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """dx/dt by central differences; rows at a repeated time share one value."""
-    keep = np.r_[True, np.diff(t) > 0]
-    if keep.sum() < 2:
-        return np.full(len(t), np.nan)
-    return np.interp(t, t[keep], np.gradient(x[keep], t[keep]))
-
-
-def _tilt_deg(result: LandingResult) -> np.ndarray:
-    """Angle between the quadrotor's thrust axis and the deck normal, deg."""
-    n1 = _rotation(result["phi1"], result["theta1"], result["psi1"])[..., :, 2]
-    n2 = _rotation(result["phi2"], result["theta2"], result["psi2"])[..., :, 2]
-    # atan2 keeps small angles accurate, where arccos of a dot product does not
-    return np.rad2deg(np.arctan2(np.linalg.norm(np.cross(n1, n2), axis=-1),
-                                 np.sum(n1 * n2, axis=-1)))
-
-
 def _phase_runs(result: LandingResult) -> list[tuple[int, float, float]]:
     """``(phase, t_start, t_end)`` of each run of one phase; a run ends where the next starts."""
     t, phase = np.asarray(result["t"]), np.asarray(result["phase"]).astype(int)
@@ -204,15 +157,16 @@ def _time_grid(title: str, rows: int):
     return fig, axes
 
 
-def _limit_lines(ax, values, label: str) -> None:
-    for i, v in enumerate(values):
-        ax.axhline(v, color="k", ls=":", lw=1, label=label if i == 0 else "_limit")
+def _limit_lines(ax, values, label: str, ls: str = ":") -> None:
+    """Horizontal lines at ``values`` (a None limit is not drawn)."""
+    for i, v in enumerate(x for x in values if x is not None):
+        ax.axhline(v, color="k", ls=ls, lw=1, label=label if i == 0 else "_limit")
 
 
 def _finish_time(fig: Figure, result: LandingResult, axes) -> Figure:
     for a in axes:
         a.legend(loc="upper right", fontsize="small")
-    _finish(fig, result, axes)
+    finish(fig, result, axes)
     fig.subplots_adjust(top=1 - 0.8 / fig.get_figheight())    # room for the phase legend
     return fig
 
@@ -256,7 +210,7 @@ def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None) -> 
     a.set_zlabel("z [m]")
     a.set_title(LANDING_FIGURES["landing_3d.png"])
     a.legend(loc="upper left", fontsize="small")
-    return _finish(fig, result)
+    return finish(fig, result)
 
 
 def relative_position_plot(result: LandingResult, limits: Mapping | None = None) -> Figure:
@@ -285,24 +239,24 @@ def relative_position_plot(result: LandingResult, limits: Mapping | None = None)
 
         Limit lines are dotted black, after the data lines.
     """
-    lim = landing_limits(result, limits)
+    lim = landing_limits(limits)
     t = np.asarray(result["t"])
     x_e, y_e, z_e = (np.asarray(result[n]) for n in ("x_e", "y_e", "z_e"))
     fig, ax = _time_grid(LANDING_FIGURES["relative_position.png"], 4)
     ax[0].plot(t, x_e, label="x_e")
     ax[0].plot(t, y_e, label="y_e")
     ax[0].plot(t, np.hypot(x_e, y_e), label="offset")
-    _limit_lines(ax[0], (lim["max_offset"], -lim["max_offset"]), "max_offset")
+    offset = lim["max_offset"]
+    _limit_lines(ax[0], () if offset is None else (offset, -offset), "max_offset")
     ax[0].set_ylabel("position [m]")
     ax[1].plot(t, z_e, label="z_e")
     ax[1].set_ylabel("z_e [m]")
-    ax[2].plot(t, np.hypot(_rate(x_e, t), _rate(y_e, t)), label="horizontal speed")
-    ax[2].plot(t, -_rate(z_e, t), label="sink rate")
-    ax[2].axhline(lim["max_relative_speed"], color="k", ls=":", lw=1,
-                  label="max_relative_speed")
-    ax[2].axhline(lim["max_sink_rate"], color="k", ls="--", lw=1, label="max_sink_rate")
+    ax[2].plot(t, np.hypot(result["dx_e"], result["dy_e"]), label="horizontal speed")
+    ax[2].plot(t, -np.asarray(result["dz_e"]), label="sink rate")
+    _limit_lines(ax[2], (lim["max_relative_speed"],), "max_relative_speed")
+    _limit_lines(ax[2], (lim["max_sink_rate"],), "max_sink_rate", ls="--")
     ax[2].set_ylabel("speed [m/s]")
-    ax[3].plot(t, _tilt_deg(result), label="tilt from deck normal")
+    ax[3].plot(t, result["tilt_deg"], label="tilt from deck normal")
     _limit_lines(ax[3], (lim["max_tilt_deg"],), "max_tilt_deg")
     ax[3].set_ylabel("tilt [deg]")
     _shade_phases(fig, ax, result)
@@ -341,7 +295,7 @@ def ground_track_plot(result: LandingResult) -> Figure:
     a.set_title(LANDING_FIGURES["ground_tracks.png"])
     a.legend(loc="best", fontsize="small")
     a.grid(True)
-    return _finish(fig, result)
+    return finish(fig, result)
 
 
 def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None) -> Figure:
@@ -360,7 +314,7 @@ def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None) -> F
         and ``F_total`` with ``0`` and ``4 F_max``, N (without an upper line
         when ``F_max`` is unknown).
     """
-    F_max = landing_limits(result, limits)["F_max"]
+    F_max = landing_limits(limits)["F_max"]
     t = result["t"]
     fig, ax = _time_grid(LANDING_FIGURES["rotor_forces.png"], 2)
     for k in range(1, 5):
@@ -521,7 +475,7 @@ def landing_animation(result: LandingResult, path, fps: float = 20,
                             "the animation is a .gif or an .mp4")
 
     result = drawable(result)
-    lim = landing_limits(result, limits)
+    lim = landing_limits(limits)
     pad = _pad_size(result)
     arm = float(result.scenario.data.get("quadrotor", {}).get("arm_length", 0.25))
     p1 = np.column_stack([result[n] for n in ("x1", "y1", "z1")]).astype(float)
@@ -581,9 +535,10 @@ def landing_animation(result: LandingResult, path, fps: float = 20,
         arm_front.set_data_3d(*front.T)
         arm_rest.set_data_3d(*rest.T)
         fast = f" (played x{speedup:.1f})" if speedup > 1 else ""
+        most = "" if lim["max_offset"] is None else f" (max {lim['max_offset']:g})"
         text.set_text(f"t = {t[k]:6.2f} s  {PHASES[phase[k]]}{fast}\n"
-                      f"height {result['z_e'][k]:5.2f} m, offset {offset[k]:4.2f} m "
-                      f"(max {lim['max_offset']:g}); grid {step:g} m")
+                      f"height {result['z_e'][k]:5.2f} m, offset {offset[k]:4.2f} m"
+                      f"{most}; grid {step:g} m")
 
     with writer.saving(fig, str(path), dpi=fig.dpi):
         for k in rows:

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from quadland.engine.result import SimulationResult
 from quadland.plots.finite import drawable
-from quadland.simulate import SimulationResult
+from quadland.plots.style import finish
 
 __all__ = ["FIGURES", "relative_errors_plot", "velocity_errors_plot", "control_inputs_plot",
            "uncertainty_plot", "ground_track_plot", "simulation_figures"]
@@ -28,18 +29,6 @@ def _grid(title: str, rows: int = 4):
     return fig, axes
 
 
-def _finish(fig: Figure, result: SimulationResult, axes=None) -> Figure:
-    """Time-axis grid and label, the scenario's name in a corner, tight layout."""
-    if axes is not None:
-        for a in axes:
-            a.grid(True)
-        axes[-1].set_xlabel("t [s]")
-    fig.text(0.99, 0.005, f"scenario {result.scenario.name}", ha="right", va="bottom",
-             fontsize="x-small", color="0.4")
-    fig.tight_layout()
-    return fig
-
-
 def _four_panel(result, fig_name, first, first_unit, rest, rest_unit) -> Figure:
     """One linear signal and three angular ones (shown in degrees)."""
     fig, ax = _grid(FIGURES[fig_name])
@@ -49,7 +38,7 @@ def _four_panel(result, fig_name, first, first_unit, rest, rest_unit) -> Figure:
     for a, name in zip(ax[1:], rest, strict=True):
         a.plot(t, np.rad2deg(result[name]))
         a.set_ylabel(f"{name} [{rest_unit}]")
-    return _finish(fig, result, ax)
+    return finish(fig, result, ax)
 
 
 def relative_errors_plot(result: SimulationResult) -> Figure:
@@ -102,7 +91,7 @@ def control_inputs_plot(result: SimulationResult) -> Figure:
     for i, a in enumerate(ax):
         a.plot(t, result[f"u_{i + 1}"])
         a.set_ylabel(f"u_{i + 1} [{units[i]}]")
-    return _finish(fig, result, ax)
+    return finish(fig, result, ax)
 
 
 def uncertainty_plot(result: SimulationResult) -> Figure:
@@ -130,7 +119,7 @@ def uncertainty_plot(result: SimulationResult) -> Figure:
         a.plot(t, result[f"Delta_hat_{k}"], "--", label="W_hat^T Psi")
         a.set_ylabel(f"channel {k}")
     ax[0].legend(loc="best", fontsize="small")
-    return _finish(fig, result, ax)
+    return finish(fig, result, ax)
 
 
 def ground_track_plot(result: SimulationResult) -> Figure:
@@ -157,7 +146,7 @@ def ground_track_plot(result: SimulationResult) -> Figure:
     a.set_title(FIGURES["ground_track.png"])
     a.legend(loc="best")
     a.grid(True)
-    return _finish(fig, result)
+    return finish(fig, result)
 
 
 def simulation_figures(result: SimulationResult) -> dict[str, Figure]:

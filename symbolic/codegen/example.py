@@ -38,7 +38,7 @@ def example_columns(l: int) -> list[tuple[str, str]]:
     """Columns of the example's CSV: ``(name, C expression)``, names from the layouts.
 
     The names are the layouts' element names, the same as
-    ``quadland.simulate.TRAJECTORY``'s for the same signals; ``n_clipped``
+    ``quadland.kinds.paper.simulate.TRAJECTORY``'s for the same signals; ``n_clipped``
     and ``status`` are the example's own (ints, last). The expressions read
     the closed-loop state ``x``, the step's output ``out`` and the vehicle's
     parameters ``vehicle``.

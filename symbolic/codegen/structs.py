@@ -4,7 +4,7 @@ Each struct of ``quadland.h`` (the paper's control step) and of
 ``quadland_landing.h`` (the landing step and guidance) is one
 :class:`CStruct`: a name and a
 :class:`quadland_symbolic.layout.Layout`. The C declarations (``quadland_symbolic.codegen``)
-and the ``ctypes`` mirrors (``quadland.cbackend.ctypes_struct``) are both
+and the ``ctypes`` mirrors (``quadland.engine.flightcode.ctypes_struct``) are both
 derived from these layouts, so that they cannot drift apart:
 
 * the real members are the layout's real fields, in order and without

@@ -23,7 +23,12 @@ from quadland_symbolic.landing.plant import (
     body_disturbance,
 )
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
-from quadland_symbolic.landing.relative import RELATIVE6, relative6
+from quadland_symbolic.landing.relative import (
+    RELATIVE6,
+    TOUCHDOWN_FIGURES,
+    relative6,
+    touchdown_figures,
+)
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE, wrench_from_rotors
 
@@ -39,6 +44,7 @@ LANDING_SIGNALS = Layout("y_land", (
     DECK_POSE["p2"],
     DECK_POSE["eta2"],
     *RELATIVE6.fields,
+    TOUCHDOWN_FIGURES["tilt_deg"],
     Field("F_total", 1, "N", "thrust acting (the rotor states, after motor lag and limits)"),
     Field("M", 3, "N m", "body moments of the rotor states", elements=("M_x", "M_y", "M_z")),
     QUAD6_STATE["F"],
@@ -65,7 +71,8 @@ def landing_signals(x1q, xv, t, pp, d_F, d_M, phase, aborts):
     q = QUAD6_STATE.unpack(x1q)
     deck = deck_pose(xv, t, p["p_veh"], p["p_deck"])
     rel = relative6(x1q, xv, t, p["p_quad"], p["p_act"], p["p_veh"], p["p_deck"])
-    return ca.vertcat(phase, q["p1"], q["eta1"], deck.p2, deck.eta2, *rel,
+    tilt = touchdown_figures(rel[0], rel[1], q["eta1"], deck.eta2)[3]
+    return ca.vertcat(phase, q["p1"], q["eta1"], deck.p2, deck.eta2, *rel, tilt,
                       wrench_from_rotors(q["F"], p["p_quad"]), q["F"], d_F, d_M, aborts)
 
 
@@ -76,8 +83,8 @@ def landing_signals_function() -> ca.Function:
     The plant's state ``xp``, the guidance's state ``xg`` (its phase and
     abort count) and the disturbance ``w`` (:data:`LANDING_DISTURBANCE`).
     """
-    xp, xg, w, t, pp = LANDING_PLANT_STATE.sym(), GUIDANCE_STATE.sym(), LANDING_DISTURBANCE.sym(), \
-        ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    xp, xg, w = LANDING_PLANT_STATE.sym(), GUIDANCE_STATE.sym(), LANDING_DISTURBANCE.sym()
+    t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     ps, gs = LANDING_PLANT_STATE.unpack(xp), GUIDANCE_STATE.unpack(xg)
     d = BODY_DISTURBANCE.unpack(body_disturbance(xp, w, pp))
     y = landing_signals(ps["x1q"], ps["xv"], t, pp, d["d_F"], d["d_M"], gs["phase"], gs["aborts"])

@@ -1,9 +1,9 @@
-"""Closed-loop simulation, compiled (or on CasADi's virtual machine without a compiler).
+"""The paper's 4-DOF loop flown: continuous (RK4 or cvodes) or sampled-data.
 
-Two loops share one symbolic model (``quadland_symbolic.paper_loop``), and both run
-in one call of a simulator (:func:`quadland.compiled.compiled_loop`): RK4,
-one step (times ``simulation.rk_steps_per_interval``) per interval of the
-exact grid on which the disturbance, the outputs and the control are held:
+Both loops of ``quadland_symbolic.paper_loop`` run in one call of a simulator
+(:mod:`quadland.engine.compiled`): RK4, one step (times
+``simulation.rk_steps_per_interval``) per interval of the exact grid on which
+the disturbance, the outputs and the control are held:
 
 * continuous (``controller.rate_hz = 0``, the paper's): the whole closed
   loop of ``quadland_symbolic.closed_loop`` is one ODE; ``simulation.integrator =
@@ -12,28 +12,42 @@ exact grid on which the disturbance, the outputs and the control are held:
   the CasADi function or the flight code's ``ql_control_step``) runs at that
   rate and its wrench is held on the plant.
 
-A run's size is checked first (:func:`check_plan`); a flight that fails
-raises :class:`SimulationError` carrying the trajectory up to the failure.
+A flight that fails (its envelope, :func:`paper_envelope`; the singular
+tilt; a non-finite value) raises :class:`SimulationError` carrying the
+trajectory up to the failure.
 """
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import functools
-import io
 import re
-from collections.abc import Mapping
 
 import casadi as ca
 import numpy as np
 
-from quadland.compiled import SIM_CONTROLLER, SIM_ENVELOPE, SIM_GUARD, SIM_OK, Run, compiled_loop
 from quadland.constants import TILT_MIN
+from quadland.engine.compiled import (
+    SIM_CONTROLLER,
+    SIM_ENVELOPE,
+    SIM_GUARD,
+    SIM_OK,
+    Run,
+)
+from quadland.engine.disturbance import disturbance_samples
+from quadland.engine.envelope import (
+    ENVELOPE_FACTOR,
+    LOOP_DIVERGED,
+    Envelope,
+    longest_rk4_step,
+    rk4_hint,
+    slow_control_hint,
+)
 from quadland.engine.loop import Clock, merged_grid
-from quadland.envelope import ENVELOPE_FACTOR, Envelope, rk4_steps_needed
-from quadland.exceptions import ScenarioError, SimulationError
-from quadland.model import disturbance_samples, model_values
+from quadland.engine.plan import SimulationPlan, check_plan, plan_run
+from quadland.engine.result import SimulationResult
+from quadland.exceptions import SimulationError
+from quadland.kinds.paper.values import model_values
 from quadland.scenario import Scenario
 from quadland_symbolic.closed_loop import (
     PAPER_ENVELOPE,
@@ -49,117 +63,8 @@ from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["SimulationResult", "simulate", "TRAJECTORY", "COLUMNS", "columns_sidecar",
-           "time_grid", "run_clocks", "SimulationPlan", "simulation_plan", "check_plan",
-           "paper_envelope", "slow_control_hint", "longest_rk4_step",
-           "rk4_hint", "LOOP_DIVERGED", "MEMORY_BUDGET", "MAX_RK4_STEPS"]
-
-#: Most memory a simulation may plan for its arrays, bytes.
-MEMORY_BUDGET = 2 << 30
-#: Most RK4 steps one simulation may take (about 7 min at l = 100).
-MAX_RK4_STEPS = 2e8
-#: The node count MAX_RK4_STEPS is for; the limit scales with 100 / l (a step's
-#: cost grows with the node count).
-_REFERENCE_NODES = 100
-#: Gain times control period beyond which a sampled loop is likely too slow
-#: (the paper's loop needs 40 Hz for gains of 10 1/s: docs/margins.md).
-_SLOW_CONTROL = 0.25
-#: RK4 is stable on lambda h inside about -2.785 on the real axis.
-_RK4_REAL_STABILITY = 2.785
-
-
-@dataclasses.dataclass(frozen=True)
-class SimulationPlan:
-    """What a simulation will need, estimated from its scenario before it starts.
-
-    Attributes
-    ----------
-    rows : int
-        Output rows (trajectory.csv).
-    intervals : int
-        Hold intervals of the merged time grid (an upper bound).
-    rk4_steps : int
-        RK4 steps of the whole run (an upper bound).
-    memory_bytes : int
-        Memory for its arrays (states, outputs, columns, grid), bytes.
-    """
-
-    rows: int
-    intervals: int
-    rk4_steps: int
-    memory_bytes: int
-
-
-def simulation_plan(scenario: Scenario) -> SimulationPlan:
-    """Estimate a run's size from its scenario alone (no allocation).
-
-    Examples
-    --------
-    >>> import quadland
-    >>> plan = simulation_plan(quadland.load_scenario("paper"))
-    >>> plan.rows, plan.rk4_steps <= 2004, plan.memory_bytes < 2**23
-    (1001, True, True)
-    """
-    sim, ctrl, dist = (scenario.data[k] for k in ("simulation", "controller", "disturbance"))
-    T = sim["duration"]
-    rows = int(T * sim["output_rate_hz"]) + 2
-    clocks = rows + int(T * dist["sample_rate_hz"]) + 2
-    if ctrl["rate_hz"] > 0:
-        clocks += int(T * ctrl["rate_hz"]) + 2
-    l = scenario.data["rbf"]["nodes"]
-    if scenario.model == "landing":
-        from quadland_symbolic.landing.loop import LANDING_RECORDED, landing_loop_state
-        from quadland_symbolic.landing.plant import LANDING_DISTURBANCE
-        from quadland_symbolic.landing.signals import LANDING_SIGNALS
-
-        nx, nw = landing_loop_state(l).size, LANDING_DISTURBANCE.size
-        per_row = 2 * nx + 2 * (LANDING_SIGNALS.size + LANDING_RECORDED.size) + nw + 12
-    else:
-        nx, nw = closed_loop_state(l).size, BODY_DISTURBANCE.size
-        per_row = 2 * nx + PAPER_OUTPUTS.size + len(COLUMNS) + nw + 12
-    memory = 8 * (rows * per_row + clocks * (nw + 4))
-    if sim.get("integrator") == "cvodes":      # cvodes returns the state at every grid point
-        memory += 8 * 2 * clocks * nx
-    return SimulationPlan(rows - 1, clocks, clocks * sim["rk_steps_per_interval"], memory)
-
-
-def check_plan(scenario: Scenario) -> None:
-    """Refuse, with one line naming the keys, a run over the memory or step budget."""
-    plan = simulation_plan(scenario)
-    if scenario.model == "landing":
-        _check_motor_step(scenario)
-    if plan.memory_bytes > MEMORY_BUDGET:
-        raise ScenarioError(
-            f"simulation.duration x simulation.output_rate_hz: {plan.rows:,} output rows need "
-            f"about {plan.memory_bytes / 2**30:.1f} GiB, over the {MEMORY_BUDGET / 2**30:g} GiB "
-            "limit; lower either")
-    l = scenario.data["rbf"]["nodes"]
-    limit = MAX_RK4_STEPS * _REFERENCE_NODES / max(l, _REFERENCE_NODES // 10)
-    if plan.rk4_steps > limit:
-        raise ScenarioError(
-            f"simulation.duration: the run needs {plan.rk4_steps:.2g} RK4 steps (duration x "
-            f"the fastest clock x simulation.rk_steps_per_interval), over the limit of "
-            f"{limit:.2g} for {l} RBF nodes; lower one of them")
-
-def _check_motor_step(scenario: Scenario) -> None:
-    """Refuse a landing whose fixed RK4 step cannot follow the motors' lag.
-
-    The motors are ``F' = (F_cmd - F) / tau_m``: RK4 is stable for
-    ``h / tau_m < 2.785``; half of that is required, with ``h`` the longest
-    step of the merged grid (at most the shortest clock period over
-    ``rk_steps_per_interval``).
-    """
-    sim, q = scenario.data["simulation"], scenario.data["quadrotor"]
-    rates = (sim["output_rate_hz"], scenario.data["disturbance"]["sample_rate_hz"],
-             scenario.data["controller"]["rate_hz"])
-    h = 1.0 / max(rates) / sim["rk_steps_per_interval"]
-    tau = q["motor_time_constant"]
-    if h / tau > _RK4_REAL_STABILITY / 2:
-        need = int(np.ceil(sim["rk_steps_per_interval"] * h / tau / (_RK4_REAL_STABILITY / 2)))
-        raise ScenarioError(
-            f"quadrotor.motor_time_constant: {tau:g} s is too fast for the RK4 step h = "
-            f"{h:.3g} s (h / tau_m must stay below {_RK4_REAL_STABILITY / 2:.3g}); raise "
-            f"simulation.rk_steps_per_interval to {need}")
+__all__ = ["TRAJECTORY", "COLUMNS", "run_clocks", "time_grid", "paper_envelope", "paper_plan",
+           "check_paper_plan", "simulate_paper", "paper_loop_part"]
 
 
 #: The columns of trajectory.csv, composed from the model's layouts.
@@ -179,60 +84,6 @@ TRAJECTORY = Layout("trajectory", (
 
 #: Columns of trajectory.csv: (name, unit).
 COLUMNS = tuple(zip(TRAJECTORY.element_names(), TRAJECTORY.element_units(), strict=True))
-
-
-@dataclasses.dataclass(frozen=True)
-class SimulationResult(Mapping):
-    """The outputs of one simulation, each a NumPy array by name.
-
-    ``result["t"]``, ``result["z_e"]``, ... (the entries of ``TRAJECTORY``);
-    ``states`` is the closed-loop state at each row, ``(len(t), nx)``.
-    ``layout`` names the columns of ``trajectory.csv``: ``TRAJECTORY`` for
-    the paper's loop, ``quadland.landing.LANDING_TRAJECTORY`` for the
-    landing loop, whose result holds more signals than its CSV.
-    """
-
-    scenario: Scenario
-    columns: Mapping[str, np.ndarray]
-    states: np.ndarray
-    layout: Layout = TRAJECTORY
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        return self.columns[name]
-
-    def __iter__(self):
-        return iter(self.columns)
-
-    def __len__(self) -> int:
-        return len(self.columns)
-
-    def to_csv(self, path=None) -> str:
-        """The trajectory as CSV text with a header of plain names; written to ``path`` if given.
-
-        Units are in :func:`columns_sidecar` (``columns.json``) and ``docs/simulation.md``.
-        """
-        buf = io.StringIO()
-        writer = csv.writer(buf, lineterminator="\n")
-        names = self.layout.element_names()
-        writer.writerow(names)
-        data = np.column_stack([self.columns[n] for n in names])
-        for row in data:
-            writer.writerow([f"{v:.12g}" for v in row])
-        text = buf.getvalue()
-        if path is not None:
-            from quadland.output import write_text_atomic
-            write_text_atomic(path, text)
-        return text
-
-
-def columns_sidecar(layout: Layout = TRAJECTORY) -> dict:
-    """``columns.json``: each CSV column's unit and meaning, in column order.
-
-    ``layout`` is the result's (``SimulationResult.layout``).
-    """
-    return {"columns": [dict(name=n, unit=u, doc=d) for n, u, d in
-                        zip(layout.element_names(), layout.element_units(),
-                            layout.element_docs(), strict=True)]}
 
 
 def run_clocks(scenario: Scenario) -> tuple[Clock, ...]:
@@ -330,8 +181,39 @@ def _force_bound(scenario: Scenario, initial: np.ndarray) -> float:
                                  abs(q["rotor_force_max"]), *np.abs(initial))
 
 
-def simulate(scenario: Scenario) -> SimulationResult:
-    """Simulate a scenario's closed loop.
+def paper_plan(scenario: Scenario) -> SimulationPlan:
+    """A paper run's size, estimated from its scenario alone (no allocation).
+
+    Examples
+    --------
+    >>> import quadland
+    >>> plan = paper_plan(quadland.load_scenario("paper"))
+    >>> plan.rows, plan.rk4_steps <= 2004, plan.memory_bytes < 2**23
+    (1001, True, True)
+    """
+    nx = closed_loop_state(scenario.data["rbf"]["nodes"]).size
+    cvodes = 2 * nx if scenario.data["simulation"]["integrator"] == "cvodes" else 0
+    return plan_run(scenario, nx, BODY_DISTURBANCE.size,
+                    2 * nx + PAPER_OUTPUTS.size + len(COLUMNS), cvodes)
+
+
+def check_paper_plan(scenario: Scenario) -> None:
+    """Refuse, in one line naming the keys, a paper run over the budgets."""
+    check_plan(paper_plan(scenario))
+
+
+def paper_loop_part(l: int, part: str):
+    """The compiled (or VM) ``part`` of the paper loop's simulator for ``l`` nodes."""
+    from quadland.engine.compiled import compiled_loop
+    from quadland.kinds.paper.flight import flight_code
+    from quadland_symbolic.paper_loop import paper_loop
+
+    flight = flight_code(l) if part == "sampled_flight" else None
+    return compiled_loop(paper_loop(l), part, flight)
+
+
+def simulate_paper(scenario: Scenario) -> SimulationResult:
+    """Simulate a paper scenario's closed loop.
 
     Parameters
     ----------
@@ -350,33 +232,24 @@ def simulate(scenario: Scenario) -> SimulationResult:
         leaves its envelope (:func:`paper_envelope`) or a value stops being
         finite; it carries the trajectory up to then.
 
-    Notes
-    -----
-    A landing scenario (``scenario.model = "landing"``) runs the landing
-    loop instead: :func:`quadland.landing.simulate_landing`.
-
     Examples
     --------
     >>> import quadland
     >>> sc = quadland.load_scenario("paper", ["simulation.duration=0.5"])
-    >>> res = quadland.simulate(sc)
+    >>> res = simulate_paper(sc)
     >>> float(res["t"][-1]), len(res["t"])
     (0.5, 51)
     """
-    if scenario.model == "landing":
-        from quadland.landing import simulate_landing
-
-        return simulate_landing(scenario)
-    check_plan(scenario)
+    check_paper_plan(scenario)
     mv = model_values(scenario)
     envelope = paper_envelope(scenario, mv)
     w_dist = disturbance_samples(scenario, run_clocks(scenario)[1].times())
     if scenario.data["controller"]["rate_hz"] > 0:
         flight = scenario.data["controller"]["backend"] == "c"
-        loop = compiled_loop(mv.l, "sampled_flight" if flight else "sampled")
+        loop = paper_loop_part(mv.l, "sampled_flight" if flight else "sampled")
         run, failure = _sampled_run(loop, scenario, mv, w_dist, envelope)
     else:
-        loop = compiled_loop(mv.l, "continuous")
+        loop = paper_loop_part(mv.l, "continuous")
         if scenario.data["simulation"]["integrator"] == "rk":
             run, failure = _continuous_run(loop, scenario, mv, w_dist, envelope)
         else:
@@ -402,7 +275,7 @@ def simulate(scenario: Scenario) -> SimulationResult:
     if np.any(np.abs(tilt) < TILT_MIN):
         k = int(np.argmax(np.abs(tilt) < TILT_MIN))
         failure = (t_out[k], f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}")
-        result = _truncated(result, k)
+        result = result.truncated(k)
     if failure is not None:
         t_fail, what = failure
         last = X[len(result["t"]) - 1] if len(result["t"]) else None
@@ -412,32 +285,12 @@ def simulate(scenario: Scenario) -> SimulationResult:
     return result
 
 
-def _truncated(result: SimulationResult, n: int) -> SimulationResult:
-    return SimulationResult(result.scenario, {k: v[:n] for k, v in result.columns.items()},
-                            result.states[:n])
-
-
-def slow_control_hint(scenario: Scenario, gains: list[float]) -> str | None:
-    """A hint when the control period is likely too long for the gains, else None.
-
-    A sampled loop whose gain times period exceeds :data:`_SLOW_CONTROL` is
-    likely unstable for that reason (the paper's loop needs 40 Hz for gains
-    of 10 1/s: docs/margins.md).
-    """
-    rate = scenario.data["controller"]["rate_hz"]
-    if gains and rate > 0 and max(gains) / rate > _SLOW_CONTROL:
-        need = int(np.ceil(max(gains) / _SLOW_CONTROL))
-        return (f" (the control period 1/{rate:g} s is likely too long for gains up to "
-                f"{max(gains):g} 1/s: try controller.rate_hz={need} or more)")
-    return None
-
-
 def _divergence_hint(scenario: Scenario, mv=None, x_last=None) -> str:
     """Why the paper loop likely diverged: the fixed RK4 step, the control rate, or the loop.
 
     For the continuous loop on RK4, the closed loop's eigenvalues at the
     initial state and at the last state recorded are checked against RK4's
-    stability region (:func:`quadland.envelope.rk4_steps_needed`): where a
+    stability region (:func:`quadland.engine.envelope.rk4_steps_needed`): where a
     mode lies outside it, the step is the likely cause.
     """
     sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
@@ -457,34 +310,6 @@ def _divergence_hint(scenario: Scenario, mv=None, x_last=None) -> str:
                 lam.append(np.linalg.eigvals(A))
     lam = np.concatenate(lam) if lam else np.zeros(0)
     return rk4_hint(lam, h, sim["rk_steps_per_interval"], cvodes=True) or LOOP_DIVERGED
-
-
-#: The hint where neither the step nor the control rate is the likely cause.
-LOOP_DIVERGED = (" (the loop itself left its envelope: check the gains, the disturbance, the "
-                  "vehicle's drive and the initial state)")
-
-
-def rk4_hint(eigenvalues, h: float, steps: int, cvodes: bool = False) -> str | None:
-    """A hint naming ``simulation.rk_steps_per_interval`` where a mode of ``eigenvalues`` is
-    outside RK4's stability region for the step ``h``, else None."""
-    lam = np.asarray(eigenvalues, dtype=complex)
-    need = rk4_steps_needed(lam, h, steps)
-    if need is None:
-        return None
-    fastest = lam[np.argmax(np.abs(lam))]
-    alternative = " or simulation.integrator=\"cvodes\"" if cvodes else ""
-    return (f" (the RK4 step h = {h:.3g} s is outside RK4's stability region for the loop's "
-            f"fastest mode, {fastest.real:.3g}{fastest.imag:+.3g}j 1/s: try "
-            f"simulation.rk_steps_per_interval={need}{alternative})")
-
-
-def longest_rk4_step(scenario: Scenario) -> float:
-    """The longest RK4 step of the run: the shortest clock period over the substeps."""
-    sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
-    clocks = [sim["output_rate_hz"], scenario.data["disturbance"]["sample_rate_hz"]]
-    if ctrl["rate_hz"] > 0:
-        clocks.append(ctrl["rate_hz"])
-    return 1.0 / max(clocks) / sim["rk_steps_per_interval"]
 
 
 def _continuous_run(loop, scenario, mv, w_dist, envelope):
@@ -583,4 +408,4 @@ def _result(scenario, mv, t_out, w_out, X, Y, held):
         rows = np.asarray(data[f.name], dtype=float).reshape(f.size, -1)
         cols.update(zip(f.element_names(), rows, strict=True))
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
-                                       for k, v in cols.items()}, X)
+                                       for k, v in cols.items()}, X, TRAJECTORY)

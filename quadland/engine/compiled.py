@@ -2,7 +2,7 @@
 
 :func:`compiled_loop` generates the C of one part of a simulator
 (``quadland_symbolic.codegen.simulator_sources``), builds it once into the disk
-cache (:mod:`quadland.build`) and loads it with ``ctypes``
+cache (:mod:`quadland.engine.build`) and loads it with ``ctypes``
 (:class:`CompiledLoop`). A call runs a whole simulation in C: RK4 over the
 exact time grid, the parameters passed once, states and outputs written
 straight into NumPy arrays. Where no C compiler is found it returns, after
@@ -19,20 +19,16 @@ import warnings
 
 import numpy as np
 
-from quadland.build import build_library, have_compiler
+from quadland.engine.build import build_library, have_compiler
 from quadland.engine.loop import locate_event, merged_grid, rk4_span
 from quadland.exceptions import CompileError, CompilerNotFoundError
 from quadland_symbolic.codegen import SIMULATOR_PARTS, simulator_sources
-from quadland_symbolic.landing.loop import landing_loop
 from quadland_symbolic.loop import LoopModel, rk4_step
-from quadland_symbolic.paper_loop import paper_loop
 
-__all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "LOOPS", "SIM_OK",
+__all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK",
            "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "SIM_ENVELOPE",
-           "SIM_ROWS", "Run"]
+           "SIM_ROWS", "Run", "FlightCode"]
 
-#: The loops a scenario's ``scenario.model`` names: builders ``l -> LoopModel``.
-LOOPS = {"paper": paper_loop, "landing": landing_loop}
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
 SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT, SIM_ENVELOPE, SIM_ROWS = range(7)
@@ -363,20 +359,31 @@ def _bounds(model: LoopModel, bound) -> np.ndarray:
     return bound
 
 
-@functools.lru_cache(maxsize=16)
-def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VMLoop:
-    """The ``part`` of a loop's simulator for ``l`` nodes: compiled, or on the VM.
+@dataclasses.dataclass(frozen=True)
+class FlightCode:
+    """Flight C a simulator flies in place of the symbolic controller (part
+    ``"sampled_flight"``): every file of its build by name, and the sources to compile."""
 
-    ``part`` is a key of ``quadland_symbolic.codegen.SIMULATOR_PARTS``; ``model`` a
-    key of :data:`LOOPS` (the paper's loop, the landing loop). One simulator
-    is kept per model, ``l`` and part. Without a C compiler: a
-    :class:`VMLoop` after one :class:`QuadlandWarning`; the flight code
-    (part ``"sampled_flight"``: the paper's control step, or the landing's
-    guidance and step) exists only compiled.
+    files: tuple[tuple[str, str], ...]
+    sources: tuple[str, ...]
+
+
+@functools.cache
+def compiled_loop(loop: LoopModel, part: str,
+                  flight: FlightCode | None = None) -> CompiledLoop | VMLoop:
+    """The ``part`` of a loop's simulator: compiled, or on the VM.
+
+    ``part`` is a key of ``quadland_symbolic.codegen.SIMULATOR_PARTS``;
+    ``"sampled_flight"`` needs ``flight``, the flight code behind the loop's
+    adapter (:attr:`LoopModel.flight`). Without a C compiler: a
+    :class:`VMLoop` after one :class:`QuadlandWarning`; the flight code exists
+    only compiled. One simulator is kept per loop, part and flight code (a
+    build is cached on disk, but loading it is not free);
+    ``compiled_loop.cache_clear()`` forgets them.
 
     A compiler that fails, a cache that cannot be written (a full disk), a
     library that does not load or C over the build's budgets
-    (``quadland.build.plan_build``) also give the VM after one warning; the
+    (``quadland.engine.build.plan_build``) also give the VM after one warning; the
     flight code has no VM fallback and raises.
 
     Raises
@@ -389,9 +396,8 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
     """
     if part not in SIMULATOR_PARTS:
         raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
-    if model not in LOOPS:
-        raise ValueError(f"model must be one of {', '.join(LOOPS)}, got {model!r}")
-    loop = LOOPS[model](l)
+    if (part == "sampled_flight") != (flight is not None):
+        raise ValueError("flight code goes with part 'sampled_flight', and only with it")
     if not have_compiler():
         if part == "sampled_flight":
             raise CompilerNotFoundError(
@@ -399,15 +405,9 @@ def compiled_loop(l: int, part: str, model: str = "paper") -> CompiledLoop | VML
                 "was found (set CC or install gcc; or use controller.backend = \"casadi\")")
         _warn_no_compiler()
         return VMLoop(loop, part)
-    flight, flight_sources = None, ()
-    if part == "sampled_flight":
-        from quadland.cbackend import sources
-        from quadland_symbolic.codegen import c_sources
-
-        flight = sources(l, "double", model)
-        flight_sources = c_sources(({"paper": "control_step", "landing": "landing_step"}[model],))
     try:
-        return CompiledLoop(loop, part, flight=flight, flight_sources=flight_sources)
+        return CompiledLoop(loop, part, flight=None if flight is None else dict(flight.files),
+                            flight_sources=() if flight is None else flight.sources)
     except (CompileError, OSError, AttributeError) as exc:
         # A broken compiler or cache (the build checks the library loads; a library
         # without the driver's symbols is the last resort): CasADi's VM still works.

@@ -109,7 +109,7 @@ def compiler_version() -> str | None:
 
 #: Most memory one build may take, bytes: the compiler processes running at once
 #: together, by :func:`compile_cost`'s estimate (the run's own arrays have their
-#: own 2 GiB, ``quadland.simulate.MEMORY_BUDGET``).
+#: own 2 GiB, ``quadland.engine.plan.MEMORY_BUDGET``).
 COMPILE_MEMORY_BUDGET = 2 * 2**30
 #: Longest one translation unit may take to compile, s, by the estimate.
 COMPILE_TIME_BUDGET = 120.0

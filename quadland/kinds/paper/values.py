@@ -1,4 +1,4 @@
-"""Numeric values of the symbolic model's vectors for a scenario."""
+"""A paper scenario as the symbolic model's numeric vectors."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from quadland_symbolic.quadrotor import QUAD_STATE
 from quadland_symbolic.rbf import default_centers
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["ModelValues", "model_values", "disturbance_samples"]
+__all__ = ["ModelValues", "model_values"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,7 +53,7 @@ def model_values(scenario: Scenario) -> ModelValues:
     """Translate a validated scenario into the symbolic model's vectors.
 
     The paper's 4-DOF loop only: a landing scenario is refused in one line
-    (its vectors are ``quadland.landing.landing_values``).
+    (its vectors are ``quadland.kinds.landing.values.landing_values``).
     """
     require_model(scenario, "paper", "the 4-DOF loop (simulation, codegen, margins)")
     q, v, c, r = (scenario.data[k] for k in ("quadrotor", "vehicle", "controller", "rbf"))
@@ -84,27 +84,3 @@ def model_values(scenario: Scenario) -> ModelValues:
     p = closed_loop_params(l).pack(dict(p_quad=p_quad, p_veh=p_veh, p_ctrl=p_ctrl, ref=ref))
     return ModelValues(l, p_quad, p_veh, p_ctrl, ref, p, x0,
                        (q["rotor_force_min"], q["rotor_force_max"]), c["hold_compensation"])
-
-
-def disturbance_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
-    """Disturbance ``[d_F, d_M]`` held from each of ``times`` to the next.
-
-    ``bias + amplitude sin(frequency t) + noise_std n`` per axis, where ``n``
-    is standard normal, drawn from a generator seeded with
-    ``simulation.seed`` (Section 4 of the paper). The draws do not depend on
-    ``disturbance.noise``, which only zeroes them.
-
-    Returns
-    -------
-    ndarray, shape (6, len(times))
-    """
-    d = scenario.data["disturbance"]
-    rng = np.random.default_rng(scenario.data["simulation"]["seed"])
-    # one row of six draws per sample: sample k gets the same draws whatever the duration
-    noise = rng.standard_normal((len(times), 6)).T * float(d["noise"])
-    t = np.asarray(times)[None, :]
-    d_F = (np.asarray(d["force_bias"])[:, None] + d["force_amplitude"]
-           * np.sin(d["force_frequency"] * t) + d["force_noise_std"] * noise[0:3])
-    d_M = (np.asarray(d["moment_bias"])[:, None] + d["moment_amplitude"]
-           * np.sin(d["moment_frequency"] * t) + d["moment_noise_std"] * noise[3:6])
-    return np.vstack([d_F, d_M])

@@ -1,4 +1,4 @@
-"""Landing scenarios: their vectors, wind, the simulation and the ride on the deck.
+"""A landing flown: approach, align, descend, touchdown, the ride on the deck.
 
 A landing scenario (``scenario.model = "landing"``, schema
 ``quadland.scenario.LANDING_SCHEMA``) flies the landing loop of
@@ -17,12 +17,11 @@ the deck's, phase 3 (touchdown), then 4 (landed) at the end of the settling.
 
 from __future__ import annotations
 
-import dataclasses
-
 import casadi as ca
 import numpy as np
 
-from quadland.compiled import (
+from quadland.constants import TILT_MIN
+from quadland.engine.compiled import (
     SIM_CONTROLLER,
     SIM_ENVELOPE,
     SIM_EVENT,
@@ -30,40 +29,38 @@ from quadland.compiled import (
     SIM_OK,
     compiled_loop,
 )
-from quadland.constants import TILT_MIN
-from quadland.engine.loop import Clock, grid_tolerance
-from quadland.envelope import ENVELOPE_FACTOR, Envelope
-from quadland.exceptions import SimulationError
-from quadland.model import disturbance_samples
-from quadland.scenario import Scenario, require_model
-from quadland.simulate import (
+from quadland.engine.envelope import (
+    ENVELOPE_FACTOR,
     LOOP_DIVERGED,
-    SimulationResult,
-    check_plan,
+    RK4_REAL_STABILITY,
+    Envelope,
     longest_rk4_step,
     rk4_hint,
     slow_control_hint,
 )
-from quadland.wind import OneCosineGust, dryden_low_altitude, gust_samples, turbulence_samples
-from quadland_symbolic.kinematics import rotation
-from quadland_symbolic.landing.contact import anchor_function, landed_outputs_function
-from quadland_symbolic.landing.controller import landing_controller_params, landing_memory
-from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
-from quadland_symbolic.landing.guidance import (
-    APPROACH,
-    GUIDANCE_PARAMS,
-    GUIDANCE_STATE,
-    LANDED,
-    TOUCHDOWN,
+from quadland.engine.loop import grid_tolerance
+from quadland.engine.plan import SimulationPlan, check_plan, plan_run
+from quadland.engine.result import SimulationResult
+from quadland.exceptions import ScenarioError, SimulationError
+from quadland.kinds.landing.values import (
+    LandingValues,
+    landing_clocks,
+    landing_disturbance,
+    landing_values,
+    rotor_force_max,
 )
+from quadland.scenario import Scenario
+from quadland_symbolic.landing.contact import anchor_function, landed_outputs_function
+from quadland_symbolic.landing.guidance import LANDED, TOUCHDOWN
 from quadland_symbolic.landing.loop import (
     LANDING_ENVELOPE,
     LANDING_RECORDED,
-    landing_loop_memory,
+    landing_loop,
     landing_loop_params,
     landing_loop_state,
 )
 from quadland_symbolic.landing.plant import (
+    LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     loop_plant_function,
@@ -71,117 +68,10 @@ from quadland_symbolic.landing.plant import (
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 from quadland_symbolic.loop import rk4_step
-from quadland_symbolic.parameters import QUADROTOR, VEHICLE
-from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_function
+from quadland_symbolic.vehicle import vehicle_function
 
-__all__ = ["LANDING_TRAJECTORY", "LandingValues", "landing_values", "landing_envelope",
-           "landing_clocks",
-           "wind_samples", "landing_disturbance", "simulate_landing"]
-
-#: The columns of a landing run's trajectory.csv (docs/landing.md), from the loop's layouts.
-LANDING_TRAJECTORY = LANDING_TRAJECTORY
-
-
-@dataclasses.dataclass(frozen=True)
-class LandingValues:
-    """A landing scenario as the landing loop's vectors.
-
-    Attributes
-    ----------
-    l : int
-        RBF node count.
-    pp : ndarray
-        Plant parameters (``quadland_symbolic.landing.plant.LANDING_PLANT_PARAMS``).
-    pc : ndarray
-        Controller parameters (``quadland_symbolic.landing.loop.landing_loop_params(l)``).
-    xp0, xc0 : ndarray
-        Initial plant state and controller memory.
-    F_max : float
-        Largest rotor force, N.
-    """
-
-    l: int
-    pp: np.ndarray
-    pc: np.ndarray
-    xp0: np.ndarray
-    xc0: np.ndarray
-    F_max: float
-
-
-def _padded(values, scale: float = 1.0) -> np.ndarray:
-    out = np.zeros(N_DECK)
-    out[:len(values)] = np.multiply(values, scale)
-    return out
-
-
-def landing_values(scenario: Scenario) -> LandingValues:
-    """Translate a validated landing scenario into the landing loop's vectors.
-
-    The quadrotor starts with its rotors at hover thrust, ``m1 g / 4`` each,
-    and its velocity ``initial.relative_velocity`` plus the pad's; the
-    command filter starts at its initial roll and pitch, the guidance in the
-    approach with the reference at the hover point.
-    """
-    require_model(scenario, "landing", "the landing loop")
-    d = scenario.data
-    q, v, dk, c, r, g = (d[k] for k in ("quadrotor", "vehicle", "deck", "controller", "rbf",
-                                        "landing"))
-    l, deg = r["nodes"], np.pi / 180
-    p_quad = QUADROTOR.pack(dict(
-        m1=q["mass"], I=q["inertia"], Kt=q["drag_translational"], Kr=q["drag_rotational"],
-        g=q["gravity"], arm=q["arm_length"], c=q["rotor_drag_factor"]))
-    F_max = q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
-    p_act = ACTUATOR.pack(dict(motor_time_constant=q["motor_time_constant"], F_max=F_max,
-                               gear_height=q["gear_height"]))
-    p_veh = VEHICLE.pack(dict(m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"],
-                              d22=v["d22"], d33=v["d33"], tau=v["tau"], z2=0.0))
-    deck = {}
-    for name, scale in (("heave", 1.0), ("roll", deg), ("pitch", deg)):
-        amp = dk[f"{name}_amplitude" + ("_deg" if name != "heave" else "")]
-        deck[f"{name}_amp"] = _padded(amp, scale)
-        deck[f"{name}_freq"] = _padded(dk[f"{name}_frequency"])
-        deck[f"{name}_phase"] = _padded(dk[f"{name}_phase_deg"], deg)
-    p_deck = DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
-    pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
-
-    centers = np.linspace(r["center_min"], r["center_max"], l) if l > 1 else \
-        np.array([(r["center_min"] + r["center_max"]) / 2])
-    lay = landing_controller_params(l)
-    p_ctrl = lay.pack(dict(
-        k1p=c["k1p"], k2p=c["k2p"], k1=c["k1"], k2=c["k2"], gamma1=c["gamma1"],
-        gamma2=c["gamma2"], k_w=c["k_w"], k_zeta=c["k_zeta"], rho=c["rho"],
-        nominal_model=float(c["nominal_model"]), w_f=c["filter_frequency"],
-        zeta_f=c["filter_damping"], tilt_max=c["tilt_max_deg"] * deg,
-        centers=np.tile(centers, (lay["centers"].shape[0], 1)), widths=np.full(l, r["width"])))
-    p_guid = GUIDANCE_PARAMS.pack(dict(
-        hover_height=g["hover_height"], align_radius=g["align_radius"],
-        dwell_time=g["dwell_time"], descent_speed=g["descent_speed"],
-        descent_time=g["descent_time"], touchdown_speed=g["touchdown_speed"],
-        touchdown_height=q["gear_height"], max_offset=g["max_offset"],
-        max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"],
-        settle_time=g["settle_time"]))
-    rate = c["rate_hz"]
-    pc = landing_loop_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
-
-    init = d["initial"]
-    (x2, y2), (u2, v2) = init["position2"], init["velocity2"]
-    xv = VEHICLE_STATE.pack(dict(x2=x2, y2=y2, psi2=init["psi2_deg"] * deg, u2=u2, v2=v2,
-                                 r2=init["r2_deg_s"] * deg))
-    v_pad = np.asarray(deck_pose(xv, 0.0, p_veh, p_deck).v2E, dtype=float).ravel()
-    eta1 = np.multiply(init["eta1_deg"], deg)
-    V1 = np.asarray(rotation(eta1), dtype=float).T @ (v_pad + np.asarray(
-        init["relative_velocity"]))
-    x1q = QUAD6_STATE.pack(dict(
-        p1=[*init["position1"], init["z1"]], eta1=eta1, V1=V1,
-        Omega1=np.multiply(init["omega1_deg_s"], deg),
-        F=np.full(4, q["mass"] * q["gravity"] / 4)))
-    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
-    mem = landing_memory(l).zeros()
-    mem[landing_memory(l).slice("eta_f")] = eta1[:2]
-    xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
-                                  aborts=0.0))
-    xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
-    return LandingValues(l, pp, pc, xp0, xc0, F_max)
+__all__ = ["landing_envelope", "landing_plan", "check_landing_plan", "simulate_landing",
+           "landing_loop_part"]
 
 
 def landing_envelope(scenario: Scenario) -> Envelope:
@@ -193,7 +83,7 @@ def landing_envelope(scenario: Scenario) -> Envelope:
     (``|tau| T / m``, its drive force alone); rate, the initial body rates.
     A rotor's force lags a command clipped to ``[0, F_max]``, so twice
     ``F_max`` is out of reach; the network's weights follow from the leakage
-    of eq. (22) as in :func:`quadland.simulate.paper_envelope`.
+    of eq. (22) as in :func:`quadland.kinds.paper.simulate.paper_envelope`.
     """
     d = scenario.data
     q, v, dk, init, c, g = (d[k] for k in ("quadrotor", "vehicle", "deck", "initial",
@@ -210,7 +100,7 @@ def landing_envelope(scenario: Scenario) -> Envelope:
     k = ENVELOPE_FACTOR
     distance, speed, rate = k * L0 + offset, k * V0, k * W0
     height = abs(dk["height"]) + sum(dk["heave_amplitude"]) + k * L0
-    F_max = q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
+    F_max = rotor_force_max(scenario)
     z2_bound = max(speed, rate) + max(*c["k1p"], *c["k1"]) * max(distance, k * np.pi)
     bounds = np.array([distance, height, speed, rate, 2 * F_max, z2_bound / c["k_w"],
                        z2_bound / c["k_zeta"]])
@@ -250,51 +140,47 @@ def _landing_hint(scenario: Scenario, lv: LandingValues, xp_last) -> str:
         or LOOP_DIVERGED
 
 
-def landing_clocks(scenario: Scenario) -> tuple[Clock, Clock, Clock]:
-    """The clocks of a landing: output rows, disturbance samples (both closing at the
-    final time) and control steps."""
-    sim = scenario.data["simulation"]
-    T = sim["duration"]
-    return (Clock(sim["output_rate_hz"], 0.0, T, True),
-            Clock(scenario.data["disturbance"]["sample_rate_hz"], 0.0, T, True),
-            Clock(scenario.data["controller"]["rate_hz"], 0.0, T, False))
+def landing_plan(scenario: Scenario) -> SimulationPlan:
+    """A landing's size, estimated from its scenario alone (no allocation)."""
+    nx = landing_loop_state(scenario.data["rbf"]["nodes"]).size
+    return plan_run(scenario, nx, LANDING_DISTURBANCE.size,
+                    2 * nx + 2 * (LANDING_SIGNALS.size + LANDING_RECORDED.size))
 
 
-def wind_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
-    """Wind velocity in E at ``times`` (the disturbance's sample times), ``(3, n)``, m/s.
+def check_landing_plan(scenario: Scenario) -> None:
+    """Refuse, in one line naming the keys, a landing over the budgets or whose RK4 step
+    cannot follow its motors."""
+    _check_motor_step(scenario)
+    check_plan(landing_plan(scenario))
 
-    ``wind.mean`` plus Dryden turbulence (MIL-F-8785C low altitude, its
-    intensity from ``wind.turbulence_w20``, at the hover point's altitude
-    ``deck.height + landing.hover_height``, crossed at the vehicle's initial
-    speed through the mean wind) plus a 1-cosine gust. The turbulence's
-    draws come from their own generator seeded with ``(simulation.seed, 1)``,
-    independent of the disturbance's.
+
+def _check_motor_step(scenario: Scenario) -> None:
+    """Refuse a landing whose fixed RK4 step cannot follow the motors' lag.
+
+    The motors are ``F' = (F_cmd - F) / tau_m``: RK4 is stable for
+    ``h / tau_m < 2.785``; half of that is required, with ``h`` the longest
+    step of the merged grid (at most the shortest clock period over
+    ``rk_steps_per_interval``).
     """
-    w, d = scenario.data["wind"], scenario.data
-    times = np.asarray(times, dtype=float)
-    psi2 = d["initial"]["psi2_deg"] * np.pi / 180
-    u2, v2 = d["initial"]["velocity2"]
-    ground = np.array([np.cos(psi2) * u2 - np.sin(psi2) * v2,
-                       np.sin(psi2) * u2 + np.cos(psi2) * v2, 0.0])
-    airspeed = float(np.linalg.norm(ground - np.asarray(w["mean"])))
-    height = d["deck"]["height"] + d["landing"]["hover_height"]
-    turbulence = dryden_low_altitude(w["turbulence_w20"], height, airspeed)
-    rng = np.random.default_rng((d["simulation"]["seed"], 1))
-    out = np.asarray(w["mean"], dtype=float)[:, None] + turbulence_samples(turbulence, times, rng)
-    if w["gust_amplitude"] > 0:
-        gust = OneCosineGust(w["gust_start"], w["gust_half_length"], w["gust_amplitude"],
-                             tuple(w["gust_direction"]))
-        out = out + gust_samples(gust, times)
-    return out
+    sim, q = scenario.data["simulation"], scenario.data["quadrotor"]
+    rates = (sim["output_rate_hz"], scenario.data["disturbance"]["sample_rate_hz"],
+             scenario.data["controller"]["rate_hz"])
+    h = 1.0 / max(rates) / sim["rk_steps_per_interval"]
+    tau = q["motor_time_constant"]
+    if h / tau > RK4_REAL_STABILITY / 2:
+        need = int(np.ceil(sim["rk_steps_per_interval"] * h / tau / (RK4_REAL_STABILITY / 2)))
+        raise ScenarioError(
+            f"quadrotor.motor_time_constant: {tau:g} s is too fast for the RK4 step h = "
+            f"{h:.3g} s (h / tau_m must stay below {RK4_REAL_STABILITY / 2:.3g}); raise "
+            f"simulation.rk_steps_per_interval to {need}")
 
 
-def landing_disturbance(scenario: Scenario, times: np.ndarray) -> np.ndarray:
-    """The landing loop's held disturbance at ``times``, ``(9, n)``: wind (E), d_F, d_M (body).
+def landing_loop_part(l: int, part: str):
+    """The compiled (or VM) ``part`` of the landing loop's simulator for ``l`` nodes."""
+    from quadland.kinds.landing.flight import flight_code
 
-    ``d_F``, ``d_M`` are ``[disturbance]``'s, drawn as for the paper's loop
-    (:func:`quadland.model.disturbance_samples`).
-    """
-    return np.vstack([wind_samples(scenario, times), disturbance_samples(scenario, times)])
+    flight = flight_code(l) if part == "sampled_flight" else None
+    return compiled_loop(landing_loop(l), part, flight)
 
 
 def simulate_landing(scenario: Scenario) -> SimulationResult:
@@ -315,7 +201,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         When the attitude reaches the singular tilt or the state stops
         being finite, with the trajectory up to then.
     """
-    check_plan(scenario)
+    check_landing_plan(scenario)
     lv = landing_values(scenario)
     envelope = landing_envelope(scenario)
     sim = scenario.data["simulation"]
@@ -323,7 +209,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     t_out, t_dist = clocks[0].times(), clocks[1].times()
     w_dist = landing_disturbance(scenario, t_dist)
     flight = scenario.data["controller"]["backend"] == "c"
-    loop = compiled_loop(lv.l, "sampled_flight" if flight else "sampled", "landing")
+    loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled")
     run = loop.sampled(lv.xp0, lv.xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
                        lv.pc, TILT_MIN, envelope.bounds)
     done, times, X, R = run.rows, run.times, run.X, run.R

@@ -17,14 +17,22 @@ import dataclasses
 
 import numpy as np
 
+from quadland.scenario import Scenario
 from quadland_symbolic.layout import Layout
 
-__all__ = ["ENVELOPE_FACTOR", "Envelope", "rk4_amplification", "rk4_steps_needed"]
+__all__ = ["ENVELOPE_FACTOR", "SLOW_CONTROL", "RK4_REAL_STABILITY", "LOOP_DIVERGED", "Envelope",
+           "rk4_amplification", "rk4_steps_needed", "rk4_hint", "slow_control_hint",
+           "longest_rk4_step"]
 
 #: How far beyond its initial scale a magnitude may grow before the flight is
 #: judged diverged: a stable loop never reaches it, an unstable one within a
 #: few steps.
 ENVELOPE_FACTOR = 1e3
+#: Gain times control period beyond which a sampled loop is likely too slow
+#: (the paper's loop needs 40 Hz for gains of 10 1/s: docs/margins.md).
+SLOW_CONTROL = 0.25
+#: RK4 is stable on lambda h inside about -2.785 on the real axis.
+RK4_REAL_STABILITY = 2.785
 
 
 @dataclasses.dataclass(frozen=True)
@@ -109,3 +117,46 @@ def rk4_steps_needed(eigenvalues: np.ndarray, h: float, steps: int) -> int | Non
     while np.any(rk4_amplification(lam * interval / n) > 1 + 1e-12) and n < 1 << 20:
         n *= 2
     return 2 * n
+
+
+def slow_control_hint(scenario: Scenario, gains: list[float]) -> str | None:
+    """A hint when the control period is likely too long for the gains, else None.
+
+    A sampled loop whose gain times period exceeds :data:`SLOW_CONTROL` is
+    likely unstable for that reason (the paper's loop needs 40 Hz for gains
+    of 10 1/s: docs/margins.md).
+    """
+    rate = scenario.data["controller"]["rate_hz"]
+    if gains and rate > 0 and max(gains) / rate > SLOW_CONTROL:
+        need = int(np.ceil(max(gains) / SLOW_CONTROL))
+        return (f" (the control period 1/{rate:g} s is likely too long for gains up to "
+                f"{max(gains):g} 1/s: try controller.rate_hz={need} or more)")
+    return None
+
+
+#: The hint where neither the step nor the control rate is the likely cause.
+LOOP_DIVERGED = (" (the loop itself left its envelope: check the gains, the disturbance, the "
+                  "vehicle's drive and the initial state)")
+
+
+def rk4_hint(eigenvalues, h: float, steps: int, cvodes: bool = False) -> str | None:
+    """A hint naming ``simulation.rk_steps_per_interval`` where a mode of ``eigenvalues`` is
+    outside RK4's stability region for the step ``h``, else None."""
+    lam = np.asarray(eigenvalues, dtype=complex)
+    need = rk4_steps_needed(lam, h, steps)
+    if need is None:
+        return None
+    fastest = lam[np.argmax(np.abs(lam))]
+    alternative = " or simulation.integrator=\"cvodes\"" if cvodes else ""
+    return (f" (the RK4 step h = {h:.3g} s is outside RK4's stability region for the loop's "
+            f"fastest mode, {fastest.real:.3g}{fastest.imag:+.3g}j 1/s: try "
+            f"simulation.rk_steps_per_interval={need}{alternative})")
+
+
+def longest_rk4_step(scenario: Scenario) -> float:
+    """The longest RK4 step of the run: the shortest clock period over the substeps."""
+    sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
+    clocks = [sim["output_rate_hz"], scenario.data["disturbance"]["sample_rate_hz"]]
+    if ctrl["rate_hz"] > 0:
+        clocks.append(ctrl["rate_hz"])
+    return 1.0 / max(clocks) / sim["rk_steps_per_interval"]

@@ -1,0 +1,73 @@
+"""What a simulation gives: every signal by name, the states, the CSV's layout."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from quadland.output import write_text_atomic
+from quadland_symbolic.layout import Layout
+
+__all__ = ["SimulationResult", "columns_sidecar"]
+
+
+@dataclasses.dataclass(frozen=True)
+class SimulationResult(Mapping):
+    """The outputs of one simulation, each a NumPy array by name.
+
+    ``result["t"]``, ``result["z_e"]``, ...; ``states`` is the loop's state at
+    each row, ``(len(t), nx)``. ``layout`` names the columns of
+    ``trajectory.csv`` (the loop kind's: the paper's loop writes all its
+    signals, a landing a selection of the many it records).
+    """
+
+    scenario: Any
+    columns: Mapping[str, np.ndarray]
+    states: np.ndarray
+    layout: Layout
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    def __iter__(self):
+        return iter(self.columns)
+
+    def __len__(self) -> int:
+        return len(self.columns)
+
+    def to_csv(self, path=None) -> str:
+        """The trajectory as CSV text with a header of plain names; written to ``path`` if given.
+
+        Units are in :func:`columns_sidecar` (``columns.json``) and ``docs/simulation.md``.
+        """
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        names = self.layout.element_names()
+        writer.writerow(names)
+        data = np.column_stack([self.columns[n] for n in names])
+        for row in data:
+            writer.writerow([f"{v:.12g}" for v in row])
+        text = buf.getvalue()
+        if path is not None:
+            write_text_atomic(path, text)
+        return text
+
+    def truncated(self, n: int) -> SimulationResult:
+        """The first ``n`` rows."""
+        return SimulationResult(self.scenario, {k: v[:n] for k, v in self.columns.items()},
+                                self.states[:n], self.layout)
+
+
+def columns_sidecar(layout: Layout) -> dict:
+    """``columns.json``: each CSV column's unit and meaning, in column order.
+
+    ``layout`` is the result's (``SimulationResult.layout``).
+    """
+    return {"columns": [dict(name=n, unit=u, doc=d) for n, u, d in
+                        zip(layout.element_names(), layout.element_units(),
+                            layout.element_docs(), strict=True)]}

@@ -1,0 +1,164 @@
+"""The landing's flight code: its C defaults, its build, and its API called from Python.
+
+The landing step and guidance generated as C (``quadland_landing.h``, one tree
+with the paper's step), with a landing scenario's values as its C defaults
+(:func:`landing_defaults`; ``generated/`` carries the highway scenario's),
+built on first use and loaded with ``ctypes`` (:func:`load_landing_api`).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import functools
+
+import numpy as np
+
+from quadland.constants import TILT_MIN
+from quadland.engine.build import build_library
+from quadland.engine.compiled import FlightCode
+from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
+from quadland.kinds.landing.report import TOUCHDOWN_LIMITS
+from quadland.kinds.landing.values import landing_values
+from quadland.kinds.paper.flight import PAPER_SCENARIO, default_paper
+from quadland.scenario import Scenario, load_scenario
+from quadland_symbolic.codegen import (
+    CodegenConfig,
+    LandingDefaults,
+    c_sources,
+    generate,
+    generate_landing,
+)
+from quadland_symbolic.codegen.structs import landing_api_structs
+from quadland_symbolic.landing.loop import landing_loop_params
+from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+
+__all__ = ["LANDING_SCENARIO", "landing_defaults", "default_landing", "flight_files",
+           "flight_code", "LandingApi", "load_landing_api"]
+
+#: The scenario whose values the landing's half of ``generated/`` carries.
+LANDING_SCENARIO = "highway"
+
+
+def landing_defaults(sc: Scenario) -> LandingDefaults:
+    """The C defaults of the landing step, the guidance and the example ``land``: a
+    landing scenario's values (:func:`quadland.kinds.landing.values.landing_values`)."""
+    lv = landing_values(sc)
+    pc, pp = landing_loop_params(lv.l).unpack(lv.pc), LANDING_PLANT_PARAMS.unpack(lv.pp)
+    d, sim, wind = sc.data["disturbance"], sc.data["simulation"], sc.data["wind"]
+    g = sc.data["landing"]
+    e = np.asarray(wind["gust_direction"], dtype=float)
+    e = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else e      # as quadland.engine.wind does
+
+    def floats(v):
+        return tuple(float(x) for x in np.asarray(v, dtype=float))
+
+    return LandingDefaults(
+        scenario=label(sc), l=lv.l, p_quad=pp["p_quad"], p_ctrl=pc["p_ctrl"], p_act=pp["p_act"],
+        p_guid=pc["p_guid"], tilt_min=TILT_MIN, pp=lv.pp, xp0=lv.xp0,
+        duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
+        control_rate_hz=float(sc.data["controller"]["rate_hz"]),
+        disturbance_rate_hz=float(d["sample_rate_hz"]),
+        rk_steps=int(sim["rk_steps_per_interval"]),
+        force_bias=floats(d["force_bias"]), force_amplitude=float(d["force_amplitude"]),
+        force_frequency=float(d["force_frequency"]), moment_bias=floats(d["moment_bias"]),
+        moment_amplitude=float(d["moment_amplitude"]),
+        moment_frequency=float(d["moment_frequency"]), wind_mean=floats(wind["mean"]),
+        gust_start=float(wind["gust_start"]), gust_half_length=float(wind["gust_half_length"]),
+        gust_amplitude=float(wind["gust_amplitude"]), gust_direction=floats(e),
+        settle_time=float(g["settle_time"]),
+        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS))
+
+
+
+
+@functools.cache
+def default_landing(l: int) -> LandingDefaults:
+    """:func:`landing_defaults` of :data:`LANDING_SCENARIO` with ``rbf.nodes = l``."""
+    sc = load_scenario(LANDING_SCENARIO)
+    if sc["rbf.nodes"] != l:
+        sc = load_scenario(LANDING_SCENARIO, [f"rbf.nodes={l}"])
+    return landing_defaults(sc)
+
+
+@functools.lru_cache(maxsize=8)
+def _flight_files(l: int, precision: str) -> tuple[tuple[str, str], ...]:
+    config = CodegenConfig(precision)
+    files = generate(default_paper(load_scenario(PAPER_SCENARIO)["rbf.nodes"]), config)
+    files.update(generate_landing(default_landing(l), config))
+    return tuple(sorted(files.items()))
+
+
+def flight_files(l: int, precision: str = "double") -> dict[str, str]:
+    """The C files of one build of the landing's flight code for ``l`` nodes.
+
+    The landing step and guidance with :data:`LANDING_SCENARIO`'s defaults and
+    ``rbf.nodes = l``, beside the paper's step (the tree they share); for the
+    scenarios' own ``l`` the files equal ``generated/`` (``generated/float/``).
+    """
+    if precision not in ("double", "float"):
+        raise ValueError(f"precision must be 'double' or 'float', got {precision!r}")
+    return dict(_flight_files(l, precision))
+
+
+def flight_code(l: int) -> FlightCode:
+    """The landing step and guidance the simulator flies with ``controller.backend = "c"``."""
+    return FlightCode(_flight_files(l, "double"), c_sources(("landing_step",)))
+
+
+@dataclasses.dataclass(frozen=True)
+class LandingApi:
+    """The landing API (``quadland_landing.h``) loaded with ``ctypes``.
+
+    Attributes
+    ----------
+    lib : object
+        The library, its names spelled ``ql_`` in either precision
+        (``ql_landing_step``, ``ql_guidance_step``, ``ql_check_landing_params``,
+        ...).
+    LandingMeasurement, PositionReference, LandingState, LandingControllerParams,
+    ActuatorParams, LandingParams, LandingOutput, GuidanceState, GuidanceParams : type
+        ``ctypes.Structure`` mirrors of the header's structs (:func:`ctypes_struct`).
+    real : type
+        ``ctypes.c_double`` or ``ctypes.c_float``.
+    """
+
+    lib: object
+    LandingMeasurement: type
+    PositionReference: type
+    LandingState: type
+    LandingControllerParams: type
+    ActuatorParams: type
+    LandingParams: type
+    LandingOutput: type
+    GuidanceState: type
+    GuidanceParams: type
+    real: type
+
+
+@functools.lru_cache(maxsize=8)
+def load_landing_api(l: int, precision: str = "double", opt: str = "-O2") -> LandingApi:
+    """The landing step and guidance for ``l`` nodes, compiled (the highway scenario's
+    defaults, ``rbf.nodes = l``)."""
+    files = flight_files(l, precision)
+    config = CodegenConfig(precision)
+    lib = Library(ctypes.CDLL(str(build_library(files, c_sources(("landing_step",)), opt))),
+                   config.prefix)
+    real = real_type(precision)
+    api = LandingApi(lib=lib, real=real, **{s.mirror: ctypes_struct(s.layout, real)
+                                            for s in landing_api_structs(l)})
+    P = ctypes.POINTER
+    lib.ql_landing_step.argtypes = [P(api.LandingMeasurement), P(api.PositionReference),
+                                    P(api.LandingParams), real, P(api.LandingState),
+                                    P(api.LandingOutput)]
+    lib.ql_guidance_step.argtypes = [P(api.LandingMeasurement), P(api.GuidanceParams), real,
+                                     P(api.GuidanceState), P(api.PositionReference)]
+    for name, struct in (("landing", api.LandingParams), ("guidance", api.GuidanceParams)):
+        check = getattr(lib, f"ql_check_{name}_params")
+        check.argtypes = [P(struct), P(ctypes.c_char_p)]
+        check.restype = ctypes.c_int
+    lib.ql_landing_step.restype = lib.ql_guidance_step.restype = ctypes.c_int
+    lib.ql_landing_state_init.argtypes = [P(api.LandingState), P(api.LandingMeasurement)]
+    lib.ql_guidance_state_init.argtypes = [P(api.GuidanceState), P(api.GuidanceParams)]
+    lib.ql_phase_name.restype = ctypes.c_char_p
+    return api
