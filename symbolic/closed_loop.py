@@ -18,7 +18,7 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.backstepping import ADAPTIVE_UNITS, PAPER_REFERENCE, control_law
-from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.kinematics import rotation, tilt_angle
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, ROTORS, WRENCH, quadrotor_rhs
@@ -77,6 +77,8 @@ PAPER_ENVELOPE = Layout("env", (
     Field("thrust", 1, "N", "largest held thrust or moment command |wrench| (sampled loop)"),
     Field("weight", 1, "-", "largest network weight |W_hat| (eq. 22)"),
     Field("robust", 1, "-", "largest robust term estimate |zeta_hat| (eq. 22)"),
+    Field("tilt", 1, "rad", "tilt of the thrust axis from the vertical, acos(cos phi cos theta)"),
+    Field("vehicle_speed", 1, "m/s", "largest vehicle velocity component |u2|, |v2|"),
 ), "magnitudes checked against the flight envelope")
 
 
@@ -197,9 +199,12 @@ def paper_envelope_function(l: int) -> ca.Function:
     x, uh = closed_loop_state(l).sym(), WRENCH.sym()
     xs = closed_loop_state(l).unpack(x)
     q = QUAD_STATE.unpack(xs["xq"])
+    v = VEHICLE_STATE.unpack(xs["xv"])
     s = ca.vertcat(ca.fabs(q["z1"]), _inf_norm(q["V1"]), _inf_norm(q["Omega1"]),
-                   _inf_norm(uh), _inf_norm(xs["W_hat"]), _inf_norm(xs["zeta_hat"]))
+                   _inf_norm(uh), _inf_norm(xs["W_hat"]), _inf_norm(xs["zeta_hat"]),
+                   tilt_angle(q["eta1"]), _inf_norm(ca.vertcat(v["u2"], v["v2"])))
     return ca.Function("envelope", [x, uh], [s], ["x", "uh"], ["s"])
+
 
 
 @functools.cache

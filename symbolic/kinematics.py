@@ -15,6 +15,7 @@ __all__ = [
     "vertical_row",
     "skew",
     "kinematics_function",
+    "tilt_angle",
 ]
 
 
@@ -87,3 +88,20 @@ def kinematics_function() -> ca.Function:
         ["eta", "Omega"],
         ["R", "Rr", "Rr_inv", "J", "S"],
     )
+
+
+def tilt_angle(eta):
+    """The thrust axis' angle from the vertical, ``acos(cos phi cos theta)``, in [0, pi].
+
+    Continuous in the Euler angles and blind to whole turns: a flight whose
+    thrust map's singularity ``cos phi cos theta = 0`` is crossed between two
+    checks is past ``pi / 2`` at the next one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> float(tilt_angle(ca.DM([np.pi / 3, 0, 5]))), float(tilt_angle(ca.DM([2 * np.pi, 0, 0])))
+    (1.0471975511965976, 0.0)
+    """
+    c = ca.cos(eta[0]) * ca.cos(eta[1])
+    return ca.acos(ca.fmin(1, ca.fmax(-1, c)))

@@ -343,7 +343,11 @@ def test_a_cvodes_failure_is_one_line(tmp_path):
                 "--set", "simulation.duration=0.5", "--no-plots", "--out", str(tmp_path / "o"))
     assert proc.returncode == 3
     (line,) = proc.stderr.strip().splitlines()
-    assert line.startswith("quadland: error: integrator cvodes failed: CV_")
+    assert line.startswith("quadland: error: flight failed at t = 0 s: the integrator cvodes "
+                           "failed: CV_")
+    # the rows before the failing interval are written: here the initial state alone
+    with open(tmp_path / "o" / "trajectory.csv") as f:
+        assert len(f.read().splitlines()) == 2
 
 
 # A command line that does not parse: one line naming the flag, exit 2 (argparse alone

@@ -33,6 +33,7 @@ import functools
 
 import casadi as ca
 
+from quadland_symbolic.kinematics import tilt_angle
 from quadland_symbolic.landing.controller import (
     landing_controller_params,
     landing_guidance,
@@ -77,6 +78,7 @@ LANDING_ENVELOPE = Layout("env_land", (
     Field("rotor", 1, "N", "largest rotor force |F| (the motors' states)"),
     Field("weight", 1, "-", "largest network weight |W_hat| (eq. 22)"),
     Field("robust", 1, "-", "largest robust term estimate |zeta_hat| (eq. 22)"),
+    Field("tilt", 1, "rad", "tilt of the thrust axis from the vertical, acos(cos phi cos theta)"),
 ), "magnitudes checked against the landing's flight envelope")
 
 
@@ -142,7 +144,7 @@ def landing_envelope_function(l: int) -> ca.Function:
     s = ca.vertcat(ca.norm_2(q["p1"][0:2] - ca.vertcat(v["x2"], v["y2"])), ca.fabs(q["p1"][2]),
                    ca.mmax(ca.fabs(q["V1"])), ca.mmax(ca.fabs(q["Omega1"])),
                    ca.mmax(ca.fabs(q["F"])), ca.mmax(ca.fabs(mem["W_hat"])),
-                   ca.mmax(ca.fabs(mem["zeta_hat"])))
+                   ca.mmax(ca.fabs(mem["zeta_hat"])), tilt_angle(q["eta1"]))
     return ca.Function("envelope", [x, uh], [s], ["x", "uh"], ["s"])
 
 

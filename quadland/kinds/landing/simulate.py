@@ -17,7 +17,6 @@ the deck's, phase 3 (touchdown), then 4 (landed) at the end of the settling.
 
 from __future__ import annotations
 
-import casadi as ca
 import numpy as np
 
 from quadland.constants import TILT_MIN
@@ -31,12 +30,10 @@ from quadland.engine.compiled import (
 )
 from quadland.engine.envelope import (
     ENVELOPE_FACTOR,
-    LOOP_DIVERGED,
     RK4_REAL_STABILITY,
     Envelope,
-    longest_rk4_step,
-    rk4_hint,
-    slow_control_hint,
+    likely_cause,
+    loop_modes,
 )
 from quadland.engine.loop import grid_tolerance
 from quadland.engine.plan import SimulationPlan, check_plan, plan_run
@@ -98,46 +95,41 @@ def landing_envelope(scenario: Scenario) -> Envelope:
     V0 = max(1.0, vehicle + float(np.linalg.norm(init["relative_velocity"])))
     W0 = max(1.0, *np.abs(np.radians(init["omega1_deg_s"])))
     k = ENVELOPE_FACTOR
-    distance, speed, rate = k * L0 + offset, k * V0, k * W0
+    # a vehicle that outruns the quadrotor draws away at most at its own speed
+    distance, speed, rate = k * L0 + offset + T * vehicle, k * V0, k * W0
     height = abs(dk["height"]) + sum(dk["heave_amplitude"]) + k * L0
     F_max = rotor_force_max(scenario)
     z2_bound = max(speed, rate) + max(*c["k1p"], *c["k1"]) * max(distance, k * np.pi)
     bounds = np.array([distance, height, speed, rate, 2 * F_max, z2_bound / c["k_w"],
-                       z2_bound / c["k_zeta"]])
-    basis = (f"{k:g} x the initial distance from the pad or the hover height, at least 1 m",
+                       z2_bound / c["k_zeta"], np.pi / 2])
+    basis = (f"{k:g} x the initial distance from the pad or the hover height, at least 1 m, "
+             "plus the vehicle's speed bound times the duration (a vehicle that outruns the "
+             "quadrotor)",
              f"|deck height| + heave + {k:g} x that distance",
              f"{k:g} x the initial speed plus what the vehicle's drive can add over the run, "
              "at least 1 m/s",
              f"{k:g} x the initial body rate, at least 1 rad/s",
              "twice F_max: a rotor lags a command clipped to [0, F_max]",
              "the leakage bound |z2| / k_w of eq. (22), |z2| <= |e2| + k1 |z1| in the envelope",
-             "the leakage bound |z2| / k_zeta of eq. (22)")
+             "the leakage bound |z2| / k_zeta of eq. (22)",
+             "90 degrees: the thrust points sideways at cos(phi) cos(theta) = 0")
     return Envelope(LANDING_ENVELOPE, bounds, basis)
 
 
 def _landing_hint(scenario: Scenario, lv: LandingValues, xp_last) -> str:
     """Why a landing likely diverged: the RK4 step, the control rate, or the loop itself.
 
-    The plant's eigenvalues (its Jacobian with the commands held) at the
-    initial state and at the last state recorded are checked against RK4's
-    stability region for the run's step: a body spun up to hundreds of
-    radians per second leaves it. Else the sampled controller's rate is
-    checked against its gains.
+    The plant's modes (its Jacobian with the commands held) at the initial
+    state and at the last state recorded are checked against RK4's stability
+    region for the run's step (:func:`quadland.engine.envelope.likely_cause`):
+    a body spun up to hundreds of radians per second leaves it.
     """
-    c, sim = scenario.data["controller"], scenario.data["simulation"]
+    c = scenario.data["controller"]
     f = loop_plant_function()
-    xp, uh, w, t, pp = (f.mx_in(i) for i in range(5))
-    jac = ca.Function("plant_jacobian", [xp, uh, w, t, pp], [ca.jacobian(f(xp, uh, w, t, pp), xp)])
-    lam = []
-    for x in (lv.xp0, xp_last):
-        if x is not None and np.all(np.isfinite(x)):
-            A = np.asarray(jac(x, np.zeros(f.size1_in(1)), np.zeros(f.size1_in(2)), 0.0, lv.pp))
-            if np.all(np.isfinite(A)):
-                lam.append(np.linalg.eigvals(A))
-    step = rk4_hint(np.concatenate(lam) if lam else np.zeros(0), longest_rk4_step(scenario),
-                    sim["rk_steps_per_interval"])
-    return step or slow_control_hint(scenario, [max(c[k]) for k in ("k1p", "k2p", "k1", "k2")]) \
-        or LOOP_DIVERGED
+    held = (np.zeros(f.size1_in(1)), np.zeros(f.size1_in(2)), 0.0, lv.pp)
+    initial = loop_modes(f, lv.xp0, *held)
+    last = loop_modes(f, xp_last, *held) if xp_last is not None else np.zeros(0)
+    return likely_cause(scenario, initial, last, [max(c[k]) for k in ("k1p", "k2p", "k1", "k2")])
 
 
 def landing_plan(scenario: Scenario) -> SimulationPlan:

@@ -38,10 +38,13 @@ from quadland.engine.disturbance import disturbance_samples
 from quadland.engine.envelope import (
     ENVELOPE_FACTOR,
     LOOP_DIVERGED,
+    MAX_RK_STEPS,
     Envelope,
+    fewest_stable_steps,
+    likely_cause,
     longest_rk4_step,
-    rk4_hint,
-    slow_control_hint,
+    loop_modes,
+    rk4_steps_needed,
 )
 from quadland.engine.loop import Clock, merged_grid
 from quadland.engine.plan import SimulationPlan, check_plan, plan_run
@@ -54,12 +57,12 @@ from quadland_symbolic.closed_loop import (
     PAPER_OUTPUTS,
     POSITION1,
     closed_loop_function,
-    closed_loop_jacobian_function,
     closed_loop_state,
     paper_envelope_function,
 )
 from quadland_symbolic.control_step import step_outputs
 from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.paper_loop import paper_loop
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
@@ -132,40 +135,55 @@ def paper_envelope(scenario: Scenario, mv=None) -> Envelope:
     """The paper loop's flight envelope: ``ENVELOPE_FACTOR`` times each initial scale.
 
     Scales (each at least 1 in its unit): altitude, the largest of the initial
-    relative altitude and the reference; speed, the initial body velocity;
-    rate, the initial body rates and the vehicle's yaw rate (initial, or
-    ``tau_z / d33`` at its steady state). The network's weights then follow
-    from the leakage of eq. (22): ``W' = Gamma1 (Psi z2^T - k_w W)`` with
-    ``|Psi| <= 1`` keeps ``|W| <= |z2| / k_w`` (likewise ``zeta_hat`` with
-    ``k_zeta``), and ``|z2| <= |e2| + k1 |z1|`` inside the envelope. The
-    sampled step's held wrench is bounded by twice what its clipped rotors
-    produce.
+    relative altitude and the reference; speed, the initial body velocity or
+    what the law commands for that offset, ``k1_z`` times it; rate, the
+    initial body rates, the vehicle's yaw rate (initial, or ``tau_z / d33`` at
+    its steady state) or what the law commands for the initial attitude
+    offset, ``k1`` times it. The network's weights then follow from the
+    leakage of eq. (22): ``W' = Gamma1 (Psi z2^T - k_w W)`` with ``|Psi| <= 1``
+    keeps ``|W| <= |z2| / k_w`` (likewise ``zeta_hat`` with ``k_zeta``), and
+    ``|z2| <= |e2| + k1 |z1|`` inside the envelope. The sampled step's held
+    wrench is bounded by twice what its clipped rotors produce. The tilt may
+    not pass 90 degrees, where the thrust map of eq. (6) is singular; the
+    vehicle's speed is bounded by its initial speed or its steady speed under
+    its drive, ``|tau| / d``.
     """
     mv = mv or model_values(scenario)
     d = scenario.data
     q, v, init, c = d["quadrotor"], d["vehicle"], d["initial"], d["controller"]
+    e1d = d["reference"]["e1d"]
     z2 = v["deck_altitude"]
-    L0 = max(1.0, abs(init["z1"] - z2), abs(d["reference"]["e1d"][0]))
-    V0 = max(1.0, *np.abs(init["velocity1"]))
+    L0 = max(1.0, abs(init["z1"] - z2), abs(e1d[0]))
+    V0 = max(1.0, *np.abs(init["velocity1"]), c["k1"][0] * L0)
     yaw_rate = abs(init["r2_deg_s"]) * np.pi / 180
     if v["d33"] > 0:
         yaw_rate = max(yaw_rate, abs(v["tau"][2]) / v["d33"])
-    W0 = max(1.0, *np.abs(np.radians(init["omega1_deg_s"])), yaw_rate)
+    offset = max(*np.abs(np.radians(init["eta1_deg"])), abs(np.radians(init["psi2_deg"])),
+                 *np.abs(e1d[1:]))
+    W0 = max(1.0, *np.abs(np.radians(init["omega1_deg_s"])), yaw_rate,
+             max(c["k1"][1:]) * offset)
+    steady = [abs(tau) / damping for tau, damping in ((v["tau"][0], v["d11"]),
+                                                       (v["tau"][1], v["d22"])) if damping > 0]
+    U0 = max(1.0, *np.abs(init["velocity2"]), *steady)
     k = ENVELOPE_FACTOR
     altitude, speed, rate = abs(z2) + k * L0, k * V0, k * W0
-    angle = k * max(np.pi, *np.abs(np.radians(init["eta1_deg"])))
+    angle = k * max(np.pi, offset)
     z2_bound = max(speed, rate) + max(c["k1"]) * max(k * L0, angle)
     F = max(abs(q["rotor_force_min"]), abs(q["rotor_force_max"]))
     wrench = 2 * 4 * F * max(1.0, q["arm_length"], q["rotor_drag_factor"])
     bounds = np.array([altitude, speed, rate, wrench, z2_bound / c["k_w"],
-                       z2_bound / c["k_zeta"]])
+                       z2_bound / c["k_zeta"], np.pi / 2, k * U0])
     basis = (f"|deck altitude| + {k:g} x the initial relative altitude or reference, "
              "at least 1 m",
-             f"{k:g} x the initial body speed, at least 1 m/s",
-             f"{k:g} x the initial body rate or the vehicle's yaw rate, at least 1 rad/s",
+             f"{k:g} x the initial body speed or k1_z x the altitude offset, at least 1 m/s",
+             f"{k:g} x the initial body rate, the vehicle's yaw rate or k1 x the attitude "
+             "offset, at least 1 rad/s",
              "twice the wrench of four rotors at their force limit",
              "the leakage bound |z2| / k_w of eq. (22), |z2| <= |e2| + k1 |z1| in the envelope",
-             "the leakage bound |z2| / k_zeta of eq. (22)")
+             "the leakage bound |z2| / k_zeta of eq. (22)",
+             "90 degrees: the thrust map of eq. (6) is singular at cos(phi) cos(theta) = 0",
+             f"{k:g} x the vehicle's initial speed or its steady speed |tau| / d, "
+             "at least 1 m/s")
     return Envelope(PAPER_ENVELOPE, bounds, basis)
 
 
@@ -206,7 +224,6 @@ def paper_loop_part(l: int, part: str):
     """The compiled (or VM) ``part`` of the paper loop's simulator for ``l`` nodes."""
     from quadland.engine.compiled import compiled_loop
     from quadland.kinds.paper.flight import flight_code
-    from quadland_symbolic.paper_loop import paper_loop
 
     flight = flight_code(l) if part == "sampled_flight" else None
     return compiled_loop(paper_loop(l), part, flight)
@@ -279,37 +296,59 @@ def simulate_paper(scenario: Scenario) -> SimulationResult:
     if failure is not None:
         t_fail, what = failure
         last = X[len(result["t"]) - 1] if len(result["t"]) else None
-        raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
-                              f"{_divergence_hint(scenario, mv, last)}", t_fail,
+        hint = _cvodes_hint(scenario, mv, last) if what.startswith("the integrator cvodes") \
+            else _divergence_hint(scenario, mv, last)
+        raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}{hint}", t_fail,
                               result if len(result["t"]) else None)
     return result
+
+
+def _modes(scenario: Scenario, mv, x) -> np.ndarray:
+    """Eigenvalues the RK4 step integrates at the loop state ``x``: the whole closed
+    loop's (continuous), or the plant's with its command held (sampled)."""
+    if x is None:
+        return np.zeros(0, dtype=complex)
+    loop = paper_loop(mv.l)
+    if scenario.data["controller"]["rate_hz"] == 0:
+        return loop_modes(loop.rhs, x, np.zeros(BODY_DISTURBANCE.size), 0.0, mv.p)
+    xs = closed_loop_state(mv.l).unpack(x)
+    xp = loop.plant_state.pack({n: xs[n] for n in loop.plant_state.names()})
+    pp = loop.plant_params.pack(dict(p_quad=mv.p_quad, p_veh=mv.p_veh))
+    return loop_modes(loop.plant, xp, np.zeros(loop.held.size), np.zeros(BODY_DISTURBANCE.size),
+                      0.0, pp)
 
 
 def _divergence_hint(scenario: Scenario, mv=None, x_last=None) -> str:
     """Why the paper loop likely diverged: the fixed RK4 step, the control rate, or the loop.
 
-    For the continuous loop on RK4, the closed loop's eigenvalues at the
-    initial state and at the last state recorded are checked against RK4's
-    stability region (:func:`quadland.engine.envelope.rk4_steps_needed`): where a
-    mode lies outside it, the step is the likely cause.
+    The modes RK4 integrates (the closed loop's, or in a sampled loop the
+    plant's) at the initial state and at the last state recorded are checked
+    against RK4's stability region
+    (:func:`quadland.engine.envelope.likely_cause`).
     """
-    sim, ctrl = scenario.data["simulation"], scenario.data["controller"]
-    slow = slow_control_hint(scenario, [max(ctrl["k1"]), max(ctrl["k2"])])
-    if slow:
-        return slow
-    if ctrl["rate_hz"] > 0 or sim["integrator"] != "rk":
-        return LOOP_DIVERGED
     mv = mv or model_values(scenario)
+    ctrl = scenario.data["controller"]
+    return likely_cause(scenario, _modes(scenario, mv, mv.x0), _modes(scenario, mv, x_last),
+                        [max(ctrl["k1"]), max(ctrl["k2"])])
+
+
+def _cvodes_hint(scenario: Scenario, mv, x_last) -> str:
+    """Why cvodes stopped: its Adams method, iterated without a Jacobian, needs steps
+    far below the interval on fast stable modes; a fixed RK4 step that holds them
+    is named where one exists (:func:`quadland.engine.envelope.rk4_steps_needed`)."""
+    lam = np.concatenate([_modes(scenario, mv, mv.x0), _modes(scenario, mv, x_last)])
+    stable = lam[np.isfinite(lam) & (lam.real <= 0)]
+    steps = scenario.data["simulation"]["rk_steps_per_interval"]
     h = longest_rk4_step(scenario)
-    jac = closed_loop_jacobian_function(mv.l)
-    lam = []
-    for x in (mv.x0, x_last):
-        if x is not None and np.all(np.isfinite(x)):
-            A = np.asarray(jac(x, np.zeros(BODY_DISTURBANCE.size), mv.p), dtype=float)
-            if np.all(np.isfinite(A)):
-                lam.append(np.linalg.eigvals(A))
-    lam = np.concatenate(lam) if lam else np.zeros(0)
-    return rk4_hint(lam, h, sim["rk_steps_per_interval"], cvodes=True) or LOOP_DIVERGED
+    need = rk4_steps_needed(stable, h, steps)
+    if stable.size == 0 or fewest_stable_steps(stable, h * steps) > MAX_RK_STEPS:
+        return LOOP_DIVERGED
+    need = None if need is None else min(need, MAX_RK_STEPS)
+    mode = stable[np.argmax(np.abs(stable))]
+    fix = 'simulation.integrator="rk"' + (
+        "" if need is None else f" with simulation.rk_steps_per_interval={int(need)}")
+    return (f" (cvodes' Adams method needs tiny steps on the loop's fast mode "
+            f"{mode.real:.3g}{mode.imag:+.3g}j 1/s: try {fix})")
 
 
 def _continuous_run(loop, scenario, mv, w_dist, envelope):
@@ -360,33 +399,54 @@ def _continuous_cvodes(scenario, mv, w_dist, envelope):
     """The continuous loop on CasADi's cvodes (the variable-step reference).
 
     The envelope is checked on the rows afterwards (cvodes integrates the whole
-    grid in one call): the result ends before the first row outside it.
+    grid in one call): the result ends before the first row outside it. Where
+    cvodes fails, the grid is integrated again one interval per call up to the
+    interval that fails, so that the rows before it are kept.
     """
-    plugin = "cvodes"
     clocks = run_clocks(scenario)
     t_all, (out, dist) = merged_grid(clocks)
-    integ = _continuous_integrator(mv.l, plugin, _cvodes_options(scenario), tuple(t_all))
+    opts = _cvodes_options(scenario)
     w = w_dist[:, np.maximum.accumulate(np.where(dist >= 0, dist, 0))[:-1]]
+    failed = None
     try:
-        sol = integ(x0=mv.x0, u=w, p=mv.p)
+        sol = _continuous_integrator(mv.l, "cvodes", opts, tuple(t_all))(x0=mv.x0, u=w, p=mv.p)
+        X = np.hstack([mv.x0[:, None], np.asarray(sol["xf"])])
     except RuntimeError as exc:
+        X, failed = _cvodes_by_interval(mv, opts, t_all, w)
         code = re.search(r'returned "(\w+)"', str(exc))
-        raise SimulationError(f"integrator {plugin} failed: "
-                              f"{code.group(1) if code else str(exc).splitlines()[-1]}"
-                              f"{_divergence_hint(scenario)}") from None
-    X = np.hstack([mv.x0[:, None], np.asarray(sol["xf"])])
-    keep = np.flatnonzero(out >= 0)
+        failed = (t_all[failed], "the integrator cvodes failed: "
+                  f"{code.group(1) if code else str(exc).splitlines()[-1]}")
+    keep = np.flatnonzero(out[:X.shape[1]] >= 0)
     X = np.ascontiguousarray(X[:, keep].T)
     w_index = np.maximum.accumulate(np.where(dist >= 0, dist, 0))[keep]
-    times = clocks[0].times()
+    times = clocks[0].times()[:len(keep)]
     env = paper_envelope_function(mv.l).map(len(X))(X.T, np.zeros((WRENCH.size, len(X))))
-    S = np.asarray(env, dtype=float).T
+    S = np.asarray(env, dtype=float).T.reshape(len(X), -1)
     outside = ~np.all(S <= envelope.bounds, axis=1)
     n = int(np.argmax(outside)) if outside.any() else len(X)
     status = SIM_ENVELOPE if outside.any() else SIM_OK
     run = Run(status, X[:n], None, times[:n], w_index[:n], X[n - 1] if n else mv.x0,
               times[n] if outside.any() else np.nan, S[n] if outside.any() else None)
-    return run, _failure_text(run, envelope)
+    return run, _failure_text(run, envelope) or failed
+
+
+def _cvodes_by_interval(mv, opts, t_all, w) -> tuple[np.ndarray, int]:
+    """States on ``t_all`` from cvodes restarted at every grid point (as the one call
+    restarts at each held sample), up to the first interval it fails on: ``(X, k)``
+    with ``X`` (nx, k + 1) and ``k`` that interval's index."""
+    f = closed_loop_function(mv.l)
+    x, u, p = (ca.SX.sym(f.name_in(i), f.size1_in(i)) for i in range(3))
+    dae = {"x": x, "u": u, "p": p, "ode": f(x, u, p)}
+    steps, xs = {}, [np.asarray(mv.x0, dtype=float)]
+    for k in range(len(t_all) - 1):
+        dt = float(t_all[k + 1] - t_all[k])
+        if dt not in steps:
+            steps[dt] = ca.integrator("closed_loop_step", "cvodes", dae, 0.0, dt, dict(opts))
+        try:
+            xs.append(np.asarray(steps[dt](x0=xs[-1], u=w[:, k], p=mv.p)["xf"]).ravel())
+        except RuntimeError:
+            return np.column_stack(xs), k
+    return np.column_stack(xs), len(t_all) - 1
 
 
 def _result(scenario, mv, t_out, w_out, X, Y, held):
