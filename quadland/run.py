@@ -78,7 +78,7 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
         Also write the figures.
     animate : bool
         Also write ``landing.gif``, an animation of the landing
-        (``quadland.plots.landing.landing_animation``); landing scenarios only.
+        (``quadland.plots.animation.landing_animation``); landing scenarios only.
 
     Returns
     -------

@@ -361,7 +361,8 @@ def _model(raw: Mapping) -> str:
 def _validate(raw: Mapping, source: str, default_name: str = "scenario",
               overridden: Mapping[tuple[str, str], str] | None = None) -> dict:
     """Check every section and key of ``raw`` against its model's schema; fill nothing but
-    the name (and, for the paper's, leave ``scenario.model`` out: it is the default).
+    the name (and leave ``scenario.model`` out where the schema has no such key: the
+    default model's).
 
     ``overridden`` maps ``(section, key)`` to the ``--set`` text that put it
     there: a key of another model's schema is blamed on that override, not
@@ -369,7 +370,8 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario",
     model = _model(raw)
     schema = SCHEMAS[model]
     overridden = overridden or {}
-    if model == "paper" and isinstance(raw.get("scenario"), Mapping):
+    if isinstance(raw.get("scenario"), Mapping) and "model" not in schema.get("scenario", {}):
+        # the default model's schema has no scenario.model: naming it is allowed
         raw = {**raw, "scenario": {k: v for k, v in raw["scenario"].items() if k != "model"}}
     out: dict[str, dict] = {}
     for section, table in raw.items():

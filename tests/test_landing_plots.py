@@ -24,7 +24,8 @@ from quadland.plots import (
     rotor_forces_plot,
     trajectory_3d_plot,
 )
-from quadland.plots.landing import LIMIT_NAMES, PAD_SIZE, _frame_rows
+from quadland.plots.animation import frame_rows
+from quadland.plots.landing import LIMIT_NAMES, PAD_SIZE
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.guidance import PHASES
 
@@ -279,12 +280,12 @@ def test_landing_limits_rejects_unknown_keys():
 
 def test_frames_of_a_long_landing():
     t = np.arange(3001) / 100.0                   # 30 s at 100 Hz
-    rows = _frame_rows(t, 20)
+    rows = frame_rows(t, 20)
     assert len(rows) == 12 * 20 + 1               # played in 12 s
     assert rows[0] == 0 and rows[-1] == 3000
     assert set(np.diff(rows)) <= {12, 13}         # evenly spaced: 3000 / 240 = 12.5
     short = np.arange(21) / 10.0                  # 2 s at 10 Hz, at 20 fps: every row
-    np.testing.assert_array_equal(_frame_rows(short, 20), np.arange(21))
+    np.testing.assert_array_equal(frame_rows(short, 20), np.arange(21))
 
 
 def test_animation_writes_a_gif(tmp_path):

@@ -12,9 +12,9 @@ The margin figures import python-control; they are loaded on first use so
 that drawing a simulation does not pay for it.
 """
 
+from quadland.plots.animation import landing_animation
 from quadland.plots.landing import (
     LANDING_FIGURES,
-    landing_animation,
     landing_figures,
     landing_limits,
     relative_position_plot,

@@ -11,28 +11,23 @@ Euler angles, ``R = Rz(psi) Ry(theta) Rx(phi)``; phases are
 
 from __future__ import annotations
 
-import io
-import math
 import types
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Protocol
 
 import numpy as np
-from matplotlib.animation import PillowWriter
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
-from PIL import Image
 
-from quadland.exceptions import QuadlandError
 from quadland.plots.finite import drawable
 from quadland.plots.style import finish
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
 
 __all__ = ["LANDING_FIGURES", "LIMIT_NAMES", "PAD_SIZE", "LandingResult", "landing_limits",
-           "touchdown_row", "trajectory_3d_plot", "relative_position_plot", "ground_track_plot",
-           "rotor_forces_plot", "landing_figures", "landing_animation"]
+           "pad_size_of", "body_rotation", "deck_rectangle", "touchdown_row",
+           "trajectory_3d_plot", "relative_position_plot", "ground_track_plot",
+           "rotor_forces_plot", "landing_figures"]
 
 #: File name and title of each figure, in the order of :func:`landing_figures`.
 LANDING_FIGURES = types.MappingProxyType({
@@ -53,12 +48,6 @@ PAD_SIZE = 1.0
 
 #: Shading of each phase, by number (approach, align, descend, touchdown, landed).
 _PHASE_COLORS = ("#9ecae1", "#fdd0a2", "#a1d99b", "#fc9272", "#bcbddc")
-
-#: s, the longest animation: a longer landing is played faster.
-_MAX_PLAYBACK = 12.0
-#: m, farthest from E's origin the animation follows a body: a failed flight that
-#: leaves this box (or whose pose stops being finite) is animated up to the row before.
-_SCENE_EXTENT = 1e6
 
 
 class LandingResult(Protocol):
@@ -97,7 +86,8 @@ def touchdown_row(result: LandingResult) -> int | None:
     return int(rows[0]) if rows.size else None
 
 
-def _pad_size(result: LandingResult) -> float:
+def pad_size_of(result: LandingResult) -> float:
+    """The landing pad's side, m: the scenario's ``pad_size``, else :data:`PAD_SIZE`."""
     data = result.scenario.data
     for section in ("landing", "deck"):
         if "pad_size" in data.get(section, {}):
@@ -105,7 +95,7 @@ def _pad_size(result: LandingResult) -> float:
     return PAD_SIZE
 
 
-def _rotation(phi, theta, psi) -> np.ndarray:
+def body_rotation(phi, theta, psi) -> np.ndarray:
     """``Rz(psi) Ry(theta) Rx(phi)``, (..., 3, 3), body to E."""
     cf, sf, ct, st, cp, sp = (np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta),
                               np.cos(psi), np.sin(psi))
@@ -116,12 +106,12 @@ def _rotation(phi, theta, psi) -> np.ndarray:
     ], -2)
 
 
-def _deck_rectangle(result: LandingResult, row: int, length: float, width: float) -> np.ndarray:
+def deck_rectangle(result: LandingResult, row: int, length: float, width: float) -> np.ndarray:
     """Corners (4, 3) in E of a rectangle centred on the pad in the deck plane.
 
     ``length`` is along the deck's x axis (its heading), ``width`` along y.
     """
-    R = _rotation(*(result[n][row] for n in ("phi2", "theta2", "psi2")))
+    R = body_rotation(*(result[n][row] for n in ("phi2", "theta2", "psi2")))
     p2 = np.array([result[n][row] for n in ("x2", "y2", "z2")])
     a, b = length / 2, width / 2
     corners = np.array([[a, b, 0.0], [-a, b, 0.0], [-a, -b, 0.0], [a, -b, 0.0]])
@@ -189,7 +179,7 @@ def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None) -> 
         deck plane at :func:`touchdown_row` (at the last row, labelled so,
         when there is no touchdown).
     """
-    size = _pad_size(result) if pad_size is None else float(pad_size)
+    size = pad_size_of(result) if pad_size is None else float(pad_size)
     fig = Figure(figsize=(7, 6))
     a = fig.add_subplot(projection="3d")
     a.plot(result["x1"], result["y1"], result["z1"], color="C0", label="quadrotor")
@@ -202,7 +192,7 @@ def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None) -> 
     label = "pad at touchdown"
     if row is None:
         row, label = len(result["t"]) - 1, "pad at the end (no touchdown)"
-    square = _deck_rectangle(result, row, size, size)
+    square = deck_rectangle(result, row, size, size)
     closed = np.vstack([square, square[:1]])
     a.plot(closed[:, 0], closed[:, 1], closed[:, 2], color="C3", label=label)
     a.set_xlabel("x [m]")
@@ -348,200 +338,3 @@ def landing_figures(result: LandingResult, limits: Mapping | None = None) -> dic
             ground_track_plot(result), rotor_forces_plot(result, limits))
     return dict(zip(LANDING_FIGURES, figs, strict=True))
 
-
-def _frame_rows(t: np.ndarray, fps: float) -> np.ndarray:
-    """Rows shown as frames: evenly spaced in time, at most ``_MAX_PLAYBACK * fps + 1``.
-
-    A landing of ``T`` seconds plays in ``min(T, _MAX_PLAYBACK)`` seconds:
-    ``round(min(T, _MAX_PLAYBACK) * fps) + 1`` frames (no more than the
-    rows), each the row nearest its time (the earlier on a tie), so the
-    first and the last rows are shown. A row nearest two times is shown once.
-    """
-    t = np.asarray(t, dtype=float)
-    if len(t) < 2:
-        return np.zeros(len(t), dtype=int)
-    n = min(len(t), round(min(float(t[-1] - t[0]), _MAX_PLAYBACK) * fps) + 1)
-    times = np.linspace(t[0], t[-1], max(n, 2))
-    right = np.clip(np.searchsorted(t, times), 1, len(t) - 1)
-    left = right - 1
-    return np.unique(np.where(times - t[left] <= t[right] - times, left, right))
-
-
-def _nice(x: float) -> float:
-    """The smallest of 1, 2, 5 times a power of ten that is >= x."""
-    p = 10.0 ** math.floor(math.log10(x))
-    return next(m * p for m in (1, 2, 5, 10) if m * p >= x)
-
-
-def _grid_lines(cx: float, cy: float, half: float, z: float) -> tuple[np.ndarray, float]:
-    """A horizontal grid fixed in E, over ``[c - half, c + half]``, as one NaN-separated line."""
-    step = _nice(half / 2)
-    xs = np.arange(math.ceil((cx - half) / step), math.floor((cx + half) / step) + 1) * step
-    ys = np.arange(math.ceil((cy - half) / step), math.floor((cy + half) / step) + 1) * step
-    segments = [[(x, cy - half), (x, cy + half)] for x in xs]
-    segments += [[(cx - half, y), (cx + half, y)] for y in ys]
-    pts = np.array([p for seg in segments for p in (*seg, (np.nan, np.nan))]).reshape(-1, 2)
-    return np.column_stack([pts, np.where(np.isnan(pts[:, 0]), np.nan, z)]), step
-
-
-class _GifWriter(PillowWriter):
-    """matplotlib's PillowWriter, each frame reduced to 256 colours as it comes.
-
-    Pillow's fast octree quantizer takes a seventh of the time of the median
-    cut that saving the GIF would otherwise run on every frame.
-    """
-
-    def setup(self, fig, outfile, dpi=None):
-        super().setup(fig, outfile, dpi=dpi)
-        self._paletted = []
-
-    def grab_frame(self, **savefig_kwargs):
-        buf = io.BytesIO()
-        self.fig.savefig(buf, **{**savefig_kwargs, "format": "rgba", "dpi": self.dpi})
-        im = Image.frombuffer("RGBA", self.frame_size, buf.getbuffer(), "raw", "RGBA", 0, 1)
-        self._paletted.append(im.convert("RGB").quantize(256, Image.Quantize.FASTOCTREE))
-
-    def finish(self):
-        self._paletted[0].save(self.outfile, save_all=True, append_images=self._paletted[1:],
-                               duration=int(1000 / self.fps), loop=0)
-
-
-def landing_animation(result: LandingResult, path, fps: float = 20,
-                      limits: Mapping | None = None) -> Path:
-    """Write an animation of the landing: GIF, or MP4 through ffmpeg.
-
-    Parameters
-    ----------
-    result : LandingResult
-    path : str or os.PathLike
-        Ends in ``.gif`` (matplotlib's PillowWriter) or ``.mp4`` (its
-        FFMpegWriter: needs ffmpeg on the PATH).
-    fps : float
-        Frames per second of the animation.
-    limits : mapping, optional
-        See :func:`landing_limits`; the offset limit is shown in the text.
-
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    Raises
-    ------
-    QuadlandError
-        ``path`` has another ending, or it ends in ``.mp4`` and ffmpeg is
-        not found.
-
-    Notes
-    -----
-    A 3D scene that follows the pair, equal scales on the three axes: the
-    deck (a grey rectangle three pads long and two wide, in the deck plane
-    at the pad, turned by ``psi2`` and tilted by ``phi2``, ``theta2``), the
-    pad square, the quadrotor as the cross of its arms (rotor 1's arm red)
-    turned by its attitude with a dotted line down to the pad's height,
-    both trails, a grid on the ground (fixed in E at ``z = 0``, or lower if
-    anything goes lower) that shows the deck's travel, and the time, phase,
-    height and offset. The view is centred between the two bodies and is
-    as wide as their distance needs, at least two pads each way; when it is
-    wide the cross is drawn larger than life (at least a 25th of the view)
-    so that it stays visible.
-
-    Frames are rows evenly spaced in time: a landing of ``T`` seconds plays
-    in ``min(T, 12)`` seconds, ``round(min(T, 12) * fps) + 1`` frames (at
-    most one per row), a longer one sped up, as the text says. The same
-    result gives the same file. A failed flight is animated up to its last
-    row whose poses are finite and within 1e6 m of E's origin.
-
-    Examples
-    --------
-    >>> from quadland.plots import landing_animation
-    >>> landing_animation(result, "landing.gif")  # doctest: +SKIP
-    """
-    from matplotlib import animation
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".gif":
-        writer = _GifWriter(fps=fps)
-    elif suffix == ".mp4":
-        if not animation.writers.is_available("ffmpeg"):
-            raise QuadlandError(f"landing_animation: writing {path.name} needs ffmpeg, which "
-                                "was not found on the PATH; install ffmpeg or write a .gif")
-        writer = animation.FFMpegWriter(fps=fps)
-    else:
-        raise QuadlandError(f"landing_animation: cannot write {path.name!r}; "
-                            "the animation is a .gif or an .mp4")
-
-    result = drawable(result)
-    lim = landing_limits(limits)
-    pad = _pad_size(result)
-    arm = float(result.scenario.data.get("quadrotor", {}).get("arm_length", 0.25))
-    p1 = np.column_stack([result[n] for n in ("x1", "y1", "z1")]).astype(float)
-    p2 = np.column_stack([result[n] for n in ("x2", "y2", "z2")]).astype(float)
-    angles = np.column_stack([result[n] for n in ("phi1", "theta1", "psi1", "phi2", "theta2",
-                                                  "psi2", "x_e", "y_e", "z_e")])
-    sane = (np.all(np.abs(p1) <= _SCENE_EXTENT, axis=1)
-            & np.all(np.abs(p2) <= _SCENE_EXTENT, axis=1) & np.all(np.isfinite(angles), axis=1))
-    n = max(1, int(np.argmin(sane)) if not sane.all() else len(sane))   # the rows drawn
-    t = np.asarray(result["t"], dtype=float)[:n]
-    phase = np.asarray(result["phase"])[:n].astype(int)
-    p1, p2 = p1[:n], p2[:n]
-    R1 = _rotation(result["phi1"][:n], result["theta1"][:n], result["psi1"][:n])
-    offset = np.hypot(result["x_e"][:n], result["y_e"][:n])
-    z_ground = min(0.0, float(np.nanmin(p1[:, 2])), float(np.nanmin(p2[:, 2])))
-    rows = _frame_rows(t, fps)
-    speedup = (t[-1] - t[0]) / _MAX_PLAYBACK
-
-    fig = Figure(figsize=(6.4, 5.2), dpi=80)
-    FigureCanvasAgg(fig)
-    # drawn in this order, not sorted by depth: the quadrotor is above the deck
-    a = fig.add_axes((0.0, 0.0, 1.0, 0.9), projection="3d", computed_zorder=False)
-    a.set_box_aspect((1, 1, 1), zoom=1.4)
-    a.set_axis_off()
-    ground, = a.plot([], [], [], color="0.8", lw=0.8, zorder=0)
-    trail2, = a.plot([], [], [], color="C1", lw=1, alpha=0.6, zorder=1)
-    deck = Poly3DCollection([np.zeros((4, 3))], facecolor="0.6", edgecolor="0.3", alpha=0.7,
-                            zorder=2)
-    a.add_collection3d(deck)
-    pad_line, = a.plot([], [], [], color="C1", lw=2, zorder=3)
-    trail1, = a.plot([], [], [], color="C0", lw=1, zorder=4)
-    drop, = a.plot([], [], [], color="C0", lw=0.8, ls=":", zorder=4)
-    arm_front, = a.plot([], [], [], color="C3", lw=3, zorder=5)
-    arm_rest, = a.plot([], [], [], color="k", lw=3, zorder=5)
-    text = fig.text(0.02, 0.97, "", va="top", family="monospace", fontsize="small")
-    fig.text(0.98, 0.97, f"scenario {result.scenario.name}", ha="right", va="top",
-             fontsize="x-small", color="0.4")
-
-    def draw(k: int) -> None:
-        half = max(2 * pad, 0.6 * float(np.linalg.norm(p1[k] - p2[k])) + pad)
-        c = (p1[k] + p2[k]) / 2
-        a.set_xlim(c[0] - half, c[0] + half)
-        a.set_ylim(c[1] - half, c[1] + half)
-        a.set_zlim(c[2] - half, c[2] + half)
-        grid, step = _grid_lines(c[0], c[1], half, z_ground)
-        ground.set_data_3d(*grid.T)
-        deck.set_verts([_deck_rectangle(result, k, 3 * pad, 2 * pad)])
-        sq = _deck_rectangle(result, k, pad, pad)
-        pad_line.set_data_3d(*np.vstack([sq, sq[:1]]).T)
-        trail1.set_data_3d(*p1[:k + 1].T)
-        trail2.set_data_3d(*p2[:k + 1].T)
-        drop.set_data_3d([p1[k, 0]] * 2, [p1[k, 1]] * 2, [p1[k, 2], p2[k, 2]])
-        d = max(arm, 2 * half / 25)
-        front = p1[k] + np.array([[0.0, 0, 0], [d, 0, 0]]) @ R1[k].T
-        rest = p1[k] + np.array([[0.0, 0, 0], [-d, 0, 0], [np.nan] * 3, [0, d, 0],
-                                 [0, -d, 0]]) @ R1[k].T
-        arm_front.set_data_3d(*front.T)
-        arm_rest.set_data_3d(*rest.T)
-        fast = f" (played x{speedup:.1f})" if speedup > 1 else ""
-        most = "" if lim["max_offset"] is None else f" (max {lim['max_offset']:g})"
-        text.set_text(f"t = {t[k]:6.2f} s  {PHASES[phase[k]]}{fast}\n"
-                      f"height {result['z_e'][k]:5.2f} m, offset {offset[k]:4.2f} m"
-                      f"{most}; grid {step:g} m")
-
-    with writer.saving(fig, str(path), dpi=fig.dpi):
-        for k in rows:
-            draw(int(k))
-            writer.grab_frame()
-    return path

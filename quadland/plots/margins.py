@@ -10,12 +10,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from quadland.analysis import FrequencyResponse, frequency_grid, loop_at_a_time, sensitivity_sigma
-from quadland.margins import MarginReport
+
+if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
+    from quadland.margins import MarginReport
 
 __all__ = ["FIGURES", "bode_plot", "nyquist_plot", "sigma_plot", "pole_plot",
            "margin_figures"]

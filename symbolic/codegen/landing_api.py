@@ -23,7 +23,6 @@ from quadland_symbolic.codegen.structs import (
     landing_param_ranges,
     landing_params_layout,
 )
-from quadland_symbolic.landing.contact import ANCHOR
 from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     N_CHANNELS,
@@ -46,6 +45,7 @@ from quadland_symbolic.landing.plant import (
     LANDING_PLANT_STATE,
 )
 from quadland_symbolic.landing.relative import TOUCHDOWN_FIGURES
+from quadland_symbolic.landing.ride import ANCHOR
 from quadland_symbolic.landing.signals import LANDING_SIGNALS
 from quadland_symbolic.layout import Layout
 from quadland_symbolic.vehicle import VEHICLE_STATE

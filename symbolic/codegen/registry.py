@@ -14,7 +14,6 @@ from quadland_symbolic.closed_loop import (
 )
 from quadland_symbolic.codegen.config import CodegenConfig
 from quadland_symbolic.control_step import control_step_function
-from quadland_symbolic.landing.contact import anchor_function, landed_outputs_function
 from quadland_symbolic.landing.controller import (
     landing_guidance_function,
     landing_step_function,
@@ -24,6 +23,7 @@ from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.relative import touchdown_figures_function
+from quadland_symbolic.landing.ride import anchor_function, landed_outputs_function
 from quadland_symbolic.landing.sensors import measurement_function
 from quadland_symbolic.landing.signals import landing_signals_function
 from quadland_symbolic.vehicle import vehicle_function

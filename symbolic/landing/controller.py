@@ -386,19 +386,8 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     n_clipped = ca.sum1(unclipped < 0) + ca.sum1(unclipped > act["F_max"])
 
     # memory over dt, measurements held
-    z2 = ca.vertcat(z2p_bar, z2a)
-    squash = ca.vertcat(squash_p, squash_a)
-    a_w = ca.exp(-c["gamma1"] * c["k_w"] * dt)
-    b_w = -ca.expm1(-c["gamma1"] * c["k_w"] * dt) / c["k_w"]                  # (1 - a_w) / k_w
-    a_z = ca.exp(-c["gamma2"] * c["k_zeta"] * dt)
-    b_z = -ca.expm1(-c["gamma2"] * c["k_zeta"] * dt) / c["k_zeta"]
-    W_next = a_w * W_hat + b_w * (Psi @ z2.T)                                  # eq. 22, exact ZOH
-    zeta_next = a_z * zeta_hat + b_z * (squash * z2)                           # eq. 22, exact ZOH
-    xi = [linear2_zoh(ca.vertcat(mm["xi1"][i], mm["xi2"][i]),
-                      ca.vertcat(ca.horzcat(-k1p[i], 1), ca.horzcat(-1, -k2p[i])),
-                      ca.vertcat(0, delta[i]), dt) for i in range(3)]
-    mem_next = ca.vertcat(ca.vec(W_next), zeta_next, eta_f_next, eta_f_dot_next,
-                          *[x[0] for x in xi], *[x[1] for x in xi])
+    mem_next = _memory_next(mm, c, Psi, ca.vertcat(z2p_bar, z2a), ca.vertcat(squash_p, squash_a),
+                            delta, eta_f_next, eta_f_dot_next, dt)
 
     return dict(
         F_cmd=F_cmd, wrench=wrench, eta_c=ca.vertcat(eta_c, eta2[2]),
@@ -406,6 +395,25 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
         Delta_hat=Delta_hat, a_des=a_des, bs_z1=ca.vertcat(z1p, z1a),
         bs_z2=ca.vertcat(z2p, z2a), tilt=tilt(eta1),
         limits=ca.vertcat(th["thrust_limited"], th["tilt_limited"], n_clipped))
+
+
+def _memory_next(mm, c, Psi, z2, squash, delta, eta_f_next, eta_f_dot_next, dt):
+    """The step's memory at ``t + dt``: the adaptive laws (eq. 22) integrated exactly over
+    the period with ``z2`` held (zero-order hold), the command filter's new state, and
+    the command-filter compensation ``xi`` (a linear system driven by the limits'
+    shortfall ``delta``), each axis integrated exactly too."""
+    k1p, k2p = c["k1p"], c["k2p"]
+    a_w = ca.exp(-c["gamma1"] * c["k_w"] * dt)
+    b_w = -ca.expm1(-c["gamma1"] * c["k_w"] * dt) / c["k_w"]                  # (1 - a_w) / k_w
+    a_z = ca.exp(-c["gamma2"] * c["k_zeta"] * dt)
+    b_z = -ca.expm1(-c["gamma2"] * c["k_zeta"] * dt) / c["k_zeta"]
+    W_next = a_w * mm["W_hat"] + b_w * (Psi @ z2.T)                            # eq. 22, exact ZOH
+    zeta_next = a_z * mm["zeta_hat"] + b_z * (squash * z2)                     # eq. 22, exact ZOH
+    xi = [linear2_zoh(ca.vertcat(mm["xi1"][i], mm["xi2"][i]),
+                      ca.vertcat(ca.horzcat(-k1p[i], 1), ca.horzcat(-1, -k2p[i])),
+                      ca.vertcat(0, delta[i]), dt) for i in range(3)]
+    return ca.vertcat(ca.vec(W_next), zeta_next, eta_f_next, eta_f_dot_next,
+                      *[x[0] for x in xi], *[x[1] for x in xi])
 
 
 def _outer_virtual_control(p_e, v_e, ref, k1p):

@@ -78,7 +78,7 @@ class LandingKind(LoopKind):
         return landing_figures(result, report.touchdown_limits(result.scenario))
 
     def animation(self, result: SimulationResult, path: Path) -> Path:
-        from quadland.plots.landing import landing_animation
+        from quadland.plots.animation import landing_animation
 
         return landing_animation(result, path, limits=report.touchdown_limits(result.scenario))
 

@@ -47,7 +47,6 @@ from quadland.kinds.landing.values import (
     rotor_force_max,
 )
 from quadland.scenario import Scenario
-from quadland_symbolic.landing.contact import anchor_function, landed_outputs_function
 from quadland_symbolic.landing.guidance import LANDED, TOUCHDOWN
 from quadland_symbolic.landing.loop import (
     LANDING_ENVELOPE,
@@ -63,6 +62,7 @@ from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from quadland_symbolic.landing.ride import anchor_function, landed_outputs_function
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 from quadland_symbolic.loop import rk4_step
 from quadland_symbolic.vehicle import vehicle_function

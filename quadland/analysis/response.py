@@ -1,0 +1,196 @@
+"""The frequency response of a state-space loop, its grid, poles and loop-at-a-time form.
+
+Every function works on the state space, never on polynomials (see the
+package :mod:`quadland.analysis`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import control
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+__all__ = ["FrequencyResponse", "freqresp", "frequency_grid", "closed_loop_poles",
+           "closed_loop_stable", "loop_at_a_time", "square_loop", "is_discrete",
+           "POINTS_PER_DECADE"]
+
+POINTS_PER_DECADE = 60
+#: Roundoffs of ||A|| assumed in a realization's entries (see FrequencyResponse).
+_REALIZATION_ROUNDOFFS = 1e3
+
+
+def is_discrete(sys) -> bool:
+    """Whether a python-control system is sampled (``dt`` a period, not None or True)."""
+    return bool(sys.dt) and sys.dt is not True
+
+
+class FrequencyResponse:
+    """The response ``G(s)`` of a state-space system at any frequency.
+
+    Built once from a complex Schur form of ``A``; calling it at ``omega``
+    (rad/s) evaluates ``s = j omega`` (continuous) or ``z = exp(j omega
+    dt)`` (discrete) with one triangular solve per frequency.
+
+    Parameters
+    ----------
+    sys : control.StateSpace or control.TransferFunction
+    """
+
+    def __init__(self, sys):
+        sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+        if sys.dt is True:
+            raise ValueError("freqresp: a discrete system needs a numeric sampling time")
+        self.sys = sys
+        self.dt = float(sys.dt) if is_discrete(sys) else 0.0
+        A, B, C = (np.asarray(m, dtype=float) for m in (sys.A, sys.B, sys.C))
+        self._D = np.asarray(sys.D, dtype=complex)
+        # Size of the perturbation of A that the realization itself may carry:
+        # conversions (tf -> ss through slycot, similarity transforms) leave
+        # errors of a few hundred roundoffs of ||A|| in its entries.
+        self.a_uncertainty = (_REALIZATION_ROUNDOFFS * np.finfo(float).eps
+                              * (np.linalg.norm(A, 2) if A.size else 0.0))
+        if A.shape[0]:
+            T, Z = scipy.linalg.schur(A, output="complex")
+            self._T, self._B, self._C = T, Z.conj().T @ B, C @ Z
+            self.poles = np.diag(T).copy()
+        else:
+            self._T = None
+            self.poles = np.zeros(0, dtype=complex)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(outputs, inputs)``."""
+        return self._D.shape
+
+    def at(self, point: complex) -> np.ndarray:
+        """``G`` at one point of the complex plane (s or z)."""
+        if self._T is None:
+            return self._D.copy()
+        n = self._T.shape[0]
+        X = scipy.linalg.solve_triangular(point * np.eye(n) - self._T, self._B,
+                                          check_finite=False)
+        return self._C @ X + self._D
+
+    def uncertainty(self, point: complex, left=None, right=None) -> float:
+        """Bound on ``|left^T dG right|`` at ``point`` for ``||dA|| <= a_uncertainty``.
+
+        To first order ``dG = C R dA R B`` with ``R = (point I - A)^-1``, so
+        ``|left^T dG right| <= ||left^T C R|| a_uncertainty ||R B right||``
+        (``left`` and ``right`` default to identities: a bound on ``||dG||``).
+        Near a cluster of poles that a realization leaves where an exact
+        model has a repeated pole (a multiple integrator turns into poles of
+        size ``eps^(1/k)``), the resolvent is huge and ``G`` is not
+        determined by the data.
+        """
+        if self._T is None:
+            return 0.0
+        n = self._T.shape[0]
+        B = self._B if right is None else self._B @ np.reshape(right, (-1, 1))
+        C = self._C if left is None else np.reshape(left, (1, -1)) @ self._C
+        M = point * np.eye(n) - self._T
+        RB = scipy.linalg.solve_triangular(M, B, check_finite=False)
+        CR = scipy.linalg.solve_triangular(M, C.conj().T, trans="C",
+                                           check_finite=False).conj().T
+        return float(np.linalg.norm(CR, 2) * self.a_uncertainty * np.linalg.norm(RB, 2))
+
+    def point(self, omega: float) -> complex:
+        """``j omega`` or ``exp(j omega dt)``."""
+        return np.exp(1j * omega * self.dt) if self.dt else 1j * omega
+
+    def __call__(self, omega) -> np.ndarray:
+        """Response at each of ``omega`` (rad/s), shape ``(len(omega), p, m)``."""
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        return np.stack([self.at(self.point(w)) for w in omega])
+
+
+def freqresp(sys, omega) -> np.ndarray:
+    """Frequency response from the state space, shape ``(len(omega), p, m)``.
+
+    Parameters
+    ----------
+    sys : control.StateSpace or control.TransferFunction
+    omega : array_like
+        Frequencies, rad/s.
+
+    Examples
+    --------
+    >>> import control
+    >>> G = control.tf([1], [1, 1])
+    >>> complex(freqresp(G, [1.0])[0, 0, 0])
+    (0.5-0.5j)
+    """
+    return FrequencyResponse(sys)(omega)
+
+
+def closed_loop_poles(L) -> np.ndarray:
+    """Poles of the loop closed as ``u = -L u``: eig(A - B (I + D)^-1 C)."""
+    L = L if isinstance(L, control.StateSpace) else control.ss(L)
+    A, B, C, D = (np.asarray(m, dtype=float) for m in (L.A, L.B, L.C, L.D))
+    if not A.shape[0]:
+        return np.zeros(0, dtype=complex)
+    return np.linalg.eigvals(A - B @ np.linalg.solve(np.eye(D.shape[0]) + D, C))
+
+
+def closed_loop_stable(L, p) -> bool:
+    """Whether the poles ``p`` of the loop closed around ``L`` are stable (inside the
+    unit circle if ``L`` is sampled, in the left half-plane if not)."""
+    if is_discrete(L):
+        return bool(np.all(np.abs(p) < 1.0))
+    return bool(np.all(p.real < 0.0))
+
+
+def frequency_grid(resp: FrequencyResponse, points_per_decade: int = POINTS_PER_DECADE,
+                   extra_poles=()):
+    """A log-spaced grid that spans the system's dynamics, rad/s.
+
+    From two decades below to two decades above the nonzero magnitudes
+    of the poles (and of ``extra_poles``, e.g. the closed loop's), widened
+    upward until the loop gain has rolled off below 1/2; discrete systems
+    stop at the Nyquist frequency ``pi / dt``.
+    """
+    poles = np.concatenate([resp.poles, np.asarray(extra_poles, dtype=complex)])
+    if resp.dt:
+        poles = np.log(poles[np.abs(poles) > 1e-300].astype(complex)) / resp.dt
+    mags = np.abs(poles)
+    mags = mags[mags > 1e-9]
+    lo = 1e-2 * mags.min() if mags.size else 1e-2
+    hi = 1e2 * mags.max() if mags.size else 1e2
+    lo, hi = max(lo, 1e-6), max(hi, 10 * max(lo, 1e-6))
+    if resp.dt:
+        hi = math.pi / resp.dt
+        lo = min(lo, 1e-3 * hi)
+    else:
+        while hi < 1e9 and np.max(np.abs(resp(hi))) >= 0.5:
+            hi *= 10.0
+    n = max(int(points_per_decade * math.log10(hi / lo)), 50)
+    grid = np.logspace(math.log10(lo), math.log10(hi), n)
+    if resp.dt:
+        grid[-1] = hi * (1 - 1e-9)
+    return grid
+
+
+def loop_at_a_time(G: np.ndarray) -> np.ndarray:
+    """SISO loops of each channel with all other loops closed.
+
+    ``l_i = 1 / [(I + L)^-1]_ii - 1`` at each frequency, for ``G`` of shape
+    ``(n_w, m, m)``; returns ``(n_w, m)``.
+    """
+    m = G.shape[-1]
+    if m == 1:
+        return G[:, :, 0]
+    S = np.linalg.inv(np.eye(m) + G)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
+
+
+def square_loop(sys, name):
+    """``sys`` as a StateSpace, refused unless square (one channel per loop)."""
+    sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+    if sys.ninputs != sys.noutputs:
+        raise ValueError(f"{name}: the loop must be square, got {sys.noutputs} x {sys.ninputs}")
+    return sys
+
+
