@@ -54,7 +54,7 @@ VEHICLE_SPEEDS = Layout("v2", tuple(f for f in VEHICLE_STATE.fields
 @functools.cache
 def controller_states(l: int) -> Layout:
     """The controller's state xc: the adaptive states of eq. (22)."""
-    return Layout("xc", (
+    return Layout("xc_lin", (
         Field("W_hat", 4 * l, "-", "network weights, column-major", shape=(l, 4)),
         Field("zeta_hat", 4, ADAPTIVE_UNITS, "robust term estimate"),
     ), "controller state")

@@ -196,3 +196,27 @@ def test_no_runtime_module_branches_on_the_model_name():
                                            for k in ("paper", "landing")):
                     found.append(f"{name}:{node.lineno}: {text}")
     assert found == []
+
+
+def test_module_level_layouts_have_distinct_names():
+    """Every layout a symbolic module defines at its top level names its vector
+    uniquely, so that a name read in a message, a struct or a table is one vector."""
+    import importlib
+    import pkgutil
+
+    import quadland_symbolic
+    from quadland_symbolic.layout import Layout
+
+    owners: dict[str, str] = {}
+    seen: set[int] = set()
+    for info in pkgutil.walk_packages(quadland_symbolic.__path__, "quadland_symbolic."):
+        module = importlib.import_module(info.name)
+        for attr, value in vars(module).items():
+            if not isinstance(value, Layout) or id(value) in seen:
+                continue
+            seen.add(id(value))
+            where = f"{info.name}.{attr}"
+            assert value.name not in owners, (
+                f"layout name {value.name!r} of {where} is also {owners[value.name]}")
+            owners[value.name] = where
+    assert len(owners) > 40    # the walk saw the landing's and the paper's layouts

@@ -14,16 +14,15 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from quadland_symbolic.landing.attitude import thrust_attitude_function
+from quadland_symbolic.landing.command_filter import command_filter_function, linear2_zoh
 from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     NETWORK_INPUT_DIM,
-    command_filter_function,
     known_acceleration,
     landing_controller_params,
     landing_memory,
     landing_step_function,
     landing_step_outputs,
-    linear2_zoh,
 )
 from quadland_symbolic.landing.deck import DECK_PARAMS
 from quadland_symbolic.landing.guidance import POSITION_REFERENCE

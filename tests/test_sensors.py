@@ -13,14 +13,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from quadland.engine.sensing import (
+from quadland.engine.noise import gauss_markov, gauss_markov_fill, random_walk, sample_times
+from quadland.engine.sensing import draw_sensors
+from quadland.engine.sensor_settings import (
     SENSOR_DEFAULTS,
     SETTINGS,
-    draw_sensors,
-    gauss_markov,
-    gauss_markov_fill,
-    random_walk,
-    sample_times,
     sensor_params,
     validate_settings,
 )

@@ -100,7 +100,7 @@ def landing_step_context(l: int, config: CodegenConfig) -> dict:
     step, guide = landing_step_function(l), landing_guidance_function()
     outs = landing_step_outputs(l)
     # every real result but tilt and the flags, staged and checked in one pass
-    staged = Layout("res_v", tuple(f for f in outs.fields if f.name not in ("tilt", "limits")))
+    staged = Layout("res_land", tuple(f for f in outs.fields if f.name not in ("tilt", "limits")))
     offsets = {n: a for n, (a, _) in staged.offsets().items()}
     out_lay = landing_output_layout(l)
     copies = [dict(name=f.name, offset=offsets[f.name]) for f in out_lay.fields

@@ -104,26 +104,35 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))
     if part == "sampled_flight":
-        if model.flight is None:
-            raise ValueError(f"the loop {model.name!r} has no flight code")
-        args = by_name["step_args"]
-        offsets = {lay.name: lay.offsets() for lay in (model.controller_state, model.recorded)}
-        nested = {f.name: {g.name: a for g, (a, _) in zip(
-            f.layout.fields, f.layout.offsets().values(), strict=True)}
-            for f in model.controller_state.fields if f.layout is not None}
-        files[f"{prefix}controller.h"] = (
-            f"/* {prefix}controller: the flight step behind the controller's signature. */\n"
-            f"#include \"{prefix}step_args.h\"\n"
-            f"int {prefix}controller(const casadi_real** arg, casadi_real** res, "
-            "casadi_int* iw, casadi_real* w, int mem);\n")
-        files[f"{prefix}controller.c"] = render(model.flight,
-            prefix=prefix, model=model.name, casadi_version=ca.__version__,
-            args=[(n, args.nnz_out(i)) for i, n in enumerate(args.name_out())],
-            sz_iw=args.sz_iw(), sz_w=args.sz_w(),
-            xc=[(f.name, offsets[model.controller_state.name][f.name][0])
-                for f in model.controller_state.fields],
-            rec=[(f.name, offsets[model.recorded.name][f.name][0])
-                 for f in model.recorded.fields],
-            nested=nested)
+        files.update(_flight_controller(model, prefix, by_name["step_args"]))
     return files
 
+
+def _flight_controller(model: LoopModel, prefix: str, args: ca.Function) -> dict[str, str]:
+    """``<prefix>controller.c/.h``: the model's flight step behind the controller's signature.
+
+    ``args`` is the model's ``step_args`` Function (the step's arguments
+    from the loop's state); the C is the model's ``flight`` template.
+    """
+    if model.flight is None:
+        raise ValueError(f"the loop {model.name!r} has no flight code")
+    offsets = {lay.name: lay.offsets() for lay in (model.controller_state, model.recorded)}
+    nested = {f.name: {g.name: a for g, (a, _) in zip(
+        f.layout.fields, f.layout.offsets().values(), strict=True)}
+        for f in model.controller_state.fields if f.layout is not None}
+    files = {}
+    files[f"{prefix}controller.h"] = (
+        f"/* {prefix}controller: the flight step behind the controller's signature. */\n"
+        f"#include \"{prefix}step_args.h\"\n"
+        f"int {prefix}controller(const casadi_real** arg, casadi_real** res, "
+        "casadi_int* iw, casadi_real* w, int mem);\n")
+    files[f"{prefix}controller.c"] = render(model.flight,
+        prefix=prefix, model=model.name, casadi_version=ca.__version__,
+        args=[(n, args.nnz_out(i)) for i, n in enumerate(args.name_out())],
+        sz_iw=args.sz_iw(), sz_w=args.sz_w(),
+        xc=[(f.name, offsets[model.controller_state.name][f.name][0])
+            for f in model.controller_state.fields],
+        rec=[(f.name, offsets[model.recorded.name][f.name][0])
+             for f in model.recorded.fields],
+        nested=nested)
+    return files

@@ -46,6 +46,7 @@ import casadi as ca
 from quadland_symbolic.backstepping import virtual_control
 from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
 from quadland_symbolic.landing.attitude import thrust_attitude
+from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_PARAMS,
@@ -68,9 +69,6 @@ __all__ = [
     "landing_controller_params",
     "landing_memory",
     "landing_step_outputs",
-    "linear2_zoh",
-    "command_filter",
-    "command_filter_function",
     "deck_rates",
     "known_acceleration",
     "known_acceleration_function",
@@ -91,7 +89,7 @@ _CHANNEL_RATE_UNITS = ("m/s",) * 3 + ("rad/s",) * 3
 #: What the step measures: the landing sensor (p_e, v_e, deck frame), the IMU
 #: (eta1, Omega1) and the vehicle's broadcast (deck attitude, pad motion, deck
 #: rotation in E; the fields of ``deck``'s outputs).
-LANDING_MEASUREMENT = Layout("y_land", (
+LANDING_MEASUREMENT = Layout("m_land", (
     RELATIVE6["p_e"],
     RELATIVE6["v_e"],
     QUAD6_STATE["eta1"],
@@ -184,61 +182,11 @@ def landing_step_outputs(l: int) -> Layout:
     ), "results of landing_step")
 
 
-# ---------------------------------------------------------------- linear pieces
-
-def _expm2(A, t):
-    """exp(A t) of a 2x2 matrix in closed form.
-
-    With ``s = tr(A) / 2`` and ``M = A - s I`` (traceless, so ``M^2 = q2 I``,
-    ``q2 = -det M``): ``exp(A t) = e^(s t) (C I + t S M)``, ``C = cosh(sqrt(y))``,
-    ``S = sinh(sqrt(y)) / sqrt(y)``, ``y = q2 t^2`` (cos and sin for ``y < 0``,
-    their series near 0, where the damping is critical).
-    """
-    s = (A[0, 0] + A[1, 1]) / 2
-    M = A - s * ca.SX.eye(2)
-    y = -(M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]) * t * t
-    r = ca.sqrt(ca.fabs(y))
-    r_safe = ca.fmax(r, 1e-30)
-    small = ca.fabs(y) <= 1e-3
-    C = ca.if_else(small, 1 + y / 2 + y**2 / 24 + y**3 / 720,
-                   ca.if_else(y > 0, ca.cosh(r), ca.cos(r)))
-    S = ca.if_else(small, 1 + y / 6 + y**2 / 120 + y**3 / 5040,
-                   ca.if_else(y > 0, ca.sinh(r), ca.sin(r)) / r_safe)
-    return ca.exp(s * t) * (C * ca.SX.eye(2) + t * S * M)
 
 
-def linear2_zoh(x, A, f, dt):
-    """State after ``dt`` of ``x' = A x + f`` (2x2, ``f`` held, ``A`` invertible).
-
-    ``x(dt) = x_eq + exp(A dt) (x - x_eq)`` with ``x_eq = -A^-1 f``.
-    """
-    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-    adj = ca.vertcat(ca.horzcat(A[1, 1], -A[0, 1]), ca.horzcat(-A[1, 0], A[0, 0]))
-    x_eq = -(adj @ f) / det
-    return x_eq + _expm2(A, dt) @ (x - x_eq)
 
 
-def command_filter(x, x_dot, c, w_f, zeta_f, dt):
-    """One exact step of ``x'' = w_f^2 (c - x) - 2 zeta_f w_f x'`` with ``c`` held.
 
-    Element-wise over vectors. Returns ``(x_next, x_dot_next, x_ddot)``,
-    ``x_ddot`` being the filter's acceleration at the start of the step.
-    """
-    A = ca.vertcat(ca.horzcat(0, 1), ca.horzcat(-w_f**2, -2 * zeta_f * w_f))
-    nxt = [linear2_zoh(ca.vertcat(x[i], x_dot[i]), A, ca.vertcat(0, w_f**2 * c[i]), dt)
-           for i in range(x.shape[0])]
-    x_ddot = w_f**2 * (c - x) - 2 * zeta_f * w_f * x_dot
-    return ca.vertcat(*[n[0] for n in nxt]), ca.vertcat(*[n[1] for n in nxt]), x_ddot
-
-
-def command_filter_function(n: int = 1) -> ca.Function:
-    """``command_filter(x, x_dot, c, w_f, zeta_f, dt) -> (x_next, x_dot_next, x_ddot)``."""
-    x, x_dot, c = ca.SX.sym("x", n), ca.SX.sym("x_dot", n), ca.SX.sym("c", n)
-    w_f, zeta_f, dt = ca.SX.sym("w_f"), ca.SX.sym("zeta_f"), ca.SX.sym("dt")
-    return ca.Function("command_filter", [x, x_dot, c, w_f, zeta_f, dt],
-                       list(command_filter(x, x_dot, c, w_f, zeta_f, dt)),
-                       ["x", "x_dot", "c", "w_f", "zeta_f", "dt"],
-                       ["x_next", "x_dot_next", "x_ddot"])
 
 
 # ---------------------------------------------------------------- deck kinematics
@@ -367,17 +315,8 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     e1d_dot = ca.vertcat(eta_f_dot, eta2_dot[2])
     e1d_ddot = ca.vertcat(eta_f_ddot, eta2_ddot[2])
 
-    # inner loop: the paper's attitude channels; its altitude slot stays empty
-    Rr1 = euler_rate_matrix(eta1)
-    alpha, alpha_dot = virtual_control(                                        # eq. 14, 18
-        ca.vertcat(0, eta1), ca.vertcat(0, Rr1 @ Omega1),
-        ca.vertcat(0, e1d, 0, e1d_dot, 0, e1d_ddot), ca.vertcat(0, c["k1"]))
-    z1a = eta1 - e1d                                                           # eq. 9
-    z2a = Omega1 - alpha[1:4]                                                  # eq. 9
-    squash_a = ca.tanh(z2a / rho)
-    f_a = nominal_drift(ca.vertcat(0, eta1, 0, 0, 0, Omega1), p_quad)[1:4]    # drag, gyroscopic
-    u_a = (-c["k2"] * z2a - Rr1.T @ z1a - Delta_hat[3:6] - squash_a * zeta_hat[3:6]
-           + alpha_dot[1:4] - nominal * f_a)                                   # eq. 20
+    z1a, z2a, squash_a, u_a = _inner_loop(eta1, Omega1, (e1d, e1d_dot, e1d_ddot), c,
+                                          Delta_hat[3:6], zeta_hat[3:6], p_quad)
 
     # rotors
     wrench = ca.vertcat(th["T"], q["I"] * u_a)
@@ -395,6 +334,28 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
         Delta_hat=Delta_hat, a_des=a_des, bs_z1=ca.vertcat(z1p, z1a),
         bs_z2=ca.vertcat(z2p, z2a), tilt=tilt(eta1),
         limits=ca.vertcat(th["thrust_limited"], th["tilt_limited"], n_clipped))
+
+
+def _inner_loop(eta1, Omega1, e1d_all, c, Delta_a, zeta_a, p_quad):
+    """The paper's attitude channels (its altitude slot stays empty).
+
+    ``e1d_all`` is the filtered attitude reference and its two derivatives;
+    returns ``z1a, z2a, tanh(z2a / rho)`` and the angular acceleration
+    command ``u_a`` (eq. 9, 14, 18, 20).
+    """
+    e1d, e1d_dot, e1d_ddot = e1d_all
+    rho, nominal = c["rho"], c["nominal_model"]
+    Rr1 = euler_rate_matrix(eta1)
+    alpha, alpha_dot = virtual_control(                                        # eq. 14, 18
+        ca.vertcat(0, eta1), ca.vertcat(0, Rr1 @ Omega1),
+        ca.vertcat(0, e1d, 0, e1d_dot, 0, e1d_ddot), ca.vertcat(0, c["k1"]))
+    z1a = eta1 - e1d                                                           # eq. 9
+    z2a = Omega1 - alpha[1:4]                                                  # eq. 9
+    squash_a = ca.tanh(z2a / rho)
+    f_a = nominal_drift(ca.vertcat(0, eta1, 0, 0, 0, Omega1), p_quad)[1:4]    # drag, gyroscopic
+    u_a = (-c["k2"] * z2a - Rr1.T @ z1a - Delta_a - squash_a * zeta_a
+           + alpha_dot[1:4] - nominal * f_a)                                   # eq. 20
+    return z1a, z2a, squash_a, u_a
 
 
 def _memory_next(mm, c, Psi, z2, squash, delta, eta_f_next, eta_f_dot_next, dt):

@@ -27,13 +27,13 @@ __all__ = ["LANDING_PLANT_STATE", "LANDING_PLANT_PARAMS", "LANDING_PLANT_OUTPUTS
            "landing_outputs_function", "wind_force", "body_disturbance", "loop_plant_function"]
 
 #: State of the landing plant.
-LANDING_PLANT_STATE = Layout("xp", (
+LANDING_PLANT_STATE = Layout("xp_land", (
     Field.nested("x1q", QUAD6_STATE, "6-DOF quadrotor"),
     Field.nested("xv", VEHICLE_STATE, "vehicle (planar, eq. 4)"),
 ), "landing plant state: 6-DOF quadrotor and vehicle")
 
 #: Parameters of the landing plant.
-LANDING_PLANT_PARAMS = Layout("pp", (
+LANDING_PLANT_PARAMS = Layout("pp_land", (
     Field.nested("p_quad", QUADROTOR, "quadrotor rigid body (Table 1)"),
     Field.nested("p_act", ACTUATOR, "motors and landing gear"),
     Field.nested("p_veh", VEHICLE, "vehicle constants and inputs (its z2 is unused)"),

@@ -1,0 +1,144 @@
+"""Noise processes sampled exactly at given times.
+
+Gauss-Markov (first-order, stationary start), its exact conditional fill
+between known samples, random walk, and the sample clock. The sensors
+(:mod:`quadland.engine.sensing`) draw their noise with these; each takes its
+standard normal draws as an argument, so the caller owns the random stream.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["sample_times", "gauss_markov", "gauss_markov_fill", "random_walk"]
+
+
+def sample_times(rate_hz: float, duration: float, phase: float = 0.0) -> np.ndarray:
+    """Sample times ``phase + k / rate_hz`` on ``[0, duration]``, s.
+
+    Examples
+    --------
+    >>> sample_times(4.0, 1.0).tolist()
+    [0.0, 0.25, 0.5, 0.75, 1.0]
+    """
+    if duration < phase:
+        return np.zeros(0)
+    n = int(math.floor((duration - phase) * rate_hz * (1 + 1e-12) + 1e-9)) + 1
+    return phase + np.arange(n) / rate_hz
+
+
+def _decay(dt, tau):
+    """``exp(-dt / tau)``: 1 for ``tau = inf``, 0 for ``tau = 0``."""
+    tau = np.asarray(tau, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(tau > 0, np.asarray(dt, dtype=float) / np.where(tau > 0, tau, 1.0),
+                     np.inf)
+    return np.exp(-np.where(np.asarray(dt) > 0, r, 0.0))
+
+
+def gauss_markov(times, sigma, tau, normals) -> np.ndarray:
+    """A first-order Gauss-Markov process at ``times``, exactly.
+
+    ``x_0 = sigma n_0`` (stationary), ``x_(k+1) = a_k x_k + sigma sqrt(1 -
+    a_k^2) n_(k+1)``, ``a_k = exp(-(t_(k+1) - t_k) / tau)``: the exact
+    discretization of ``dx = -x / tau dt + sigma sqrt(2 / tau) dW``.
+
+    Parameters
+    ----------
+    times : array_like, shape (n,)
+        Non-decreasing, s.
+    sigma, tau : array_like, shape (m,)
+        Stationary standard deviation and time constant of each column
+        (``tau = inf``: a random constant; ``tau = 0``: white noise).
+    normals : array_like, shape (n, m)
+        Standard normal draws.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, m)
+    """
+    normals = np.asarray(normals, dtype=float)
+    n, m = normals.shape
+    sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (m,))
+    tau = np.broadcast_to(np.asarray(tau, dtype=float), (m,))
+    x = np.empty((n, m))
+    if n == 0:
+        return x
+    a = _decay(np.diff(np.asarray(times, dtype=float))[:, None], tau[None, :])
+    b = sigma * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
+    x[0] = sigma * normals[0]
+    for k in range(n - 1):
+        x[k + 1] = a[k] * x[k] + b[k] * normals[k + 1]
+    return x
+
+
+def gauss_markov_fill(known_t, known_x, new_t, sigma, tau, normals) -> np.ndarray:
+    """A Gauss-Markov process at new times, given known values.
+
+    The same process at ``new_t``, given its values at ``known_t``.
+
+    Each new value is drawn from its exact conditional distribution given
+    its nearest known neighbours (the process is Markov), the new points
+    in time order, each joining the known ones: the result is one
+    realization of the process on the union of the times.
+
+    Parameters
+    ----------
+    known_t : array_like, shape (n,)
+        Increasing, s.
+    known_x : array_like, shape (n, m)
+    new_t : array_like, shape (p,)
+        Increasing, none equal to a ``known_t``, s.
+    sigma, tau : array_like, shape (m,)
+    normals : array_like, shape (p, m)
+        Standard normal draws.
+    """
+    known_t = np.asarray(known_t, dtype=float)
+    known_x = np.asarray(known_x, dtype=float)
+    normals = np.asarray(normals, dtype=float)
+    m = normals.shape[1]
+    sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (m,))
+    var = sigma ** 2
+    out = np.empty((len(new_t), m))
+    last_t, last_x = -np.inf, None
+    for i, t in enumerate(np.asarray(new_t, dtype=float)):
+        j = int(np.searchsorted(known_t, t))
+        if j > 0 and known_t[j - 1] > last_t:
+            ta, xa = known_t[j - 1], known_x[j - 1]
+        else:
+            ta, xa = last_t, last_x
+        has_right = j < len(known_t)
+        if xa is None:                       # nothing before: the stationary law
+            ta, xa = -np.inf, np.zeros(m)
+        a1 = _decay(t - ta, tau) if np.isfinite(ta) else np.zeros(m)
+        P = var * (1.0 - a1 * a1)            # from the left neighbour
+        mean, cvar = a1 * xa, P
+        if has_right:
+            a2 = _decay(known_t[j] - t, tau)
+            R = var * (1.0 - a2 * a2)
+            den = a2 * a2 * P + R
+            ok = den > 0
+            K = np.where(ok, P * a2 / np.where(ok, den, 1.0), 0.0)
+            mean = mean + K * (known_x[j] - a2 * mean)
+            cvar = np.where(ok, P * R / np.where(ok, den, 1.0), 0.0)
+        out[i] = mean + np.sqrt(np.clip(cvar, 0.0, None)) * normals[i]
+        last_t, last_x = t, out[i]
+    return out
+
+
+def random_walk(times, start, density, normals) -> np.ndarray:
+    """A random walk at ``times`` from ``start``.
+
+    ``b_0 = start``, ``b_(k+1) = b_k + density sqrt(t_(k+1) - t_k) n_(k+1)``.
+
+    ``start`` and ``density`` per column; ``normals`` shape ``(n, m)`` (the
+    first row is unused).
+    """
+    normals = np.asarray(normals, dtype=float)
+    steps = np.zeros_like(normals)
+    if len(normals) > 1:
+        dt = np.diff(np.asarray(times, dtype=float))[:, None]
+        steps[1:] = np.asarray(density, dtype=float) * np.sqrt(dt) * normals[1:]
+    return np.asarray(start, dtype=float) + np.cumsum(steps, axis=0)

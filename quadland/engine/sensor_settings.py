@@ -1,0 +1,233 @@
+"""The sensors' settings: every key's unit and range, the defaults, the checks.
+
+Settings are plain dicts like a scenario's ``[sensors.<name>]`` table;
+:data:`SENSOR_DEFAULTS` holds the defaults (docs/sensors.md cites each) and
+:data:`SETTINGS` every key's unit, meaning and physical range.
+:func:`validate_settings` lays a table over the defaults and checks it;
+:func:`sensor_params` forms the truth models' ``p_sens`` from the settings.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import NamedTuple
+
+import numpy as np
+
+from quadland.exceptions import ScenarioError
+from quadland_symbolic.landing.sensors import SENSOR_NAMES, SENSOR_PARAMS
+
+__all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "validate_settings",
+           "sensor_params"]
+
+_DEG = math.pi / 180.0
+_G0 = 9.80665                       # m/s^2, standard gravity: datasheets' "g"
+
+
+class Setting(NamedTuple):
+    """One key of a ``[sensors.<name>]`` table.
+
+    Attributes
+    ----------
+    unit, doc : str
+    lo, hi : float
+        Physical range of every value, ``lo <= v <= hi``.
+    length : int or None
+        None for a scalar, 3 for a list of three (x, y, z or roll, pitch, yaw).
+    """
+
+    unit: str
+    doc: str
+    lo: float
+    hi: float
+    length: int | None = None
+
+
+def _common(rate_hi: float) -> dict[str, Setting]:
+    return {
+        "rate_hz": Setting("Hz", "samples per second", 1e-3, rate_hi),
+        "latency": Setting("s", "from sample to arrival at the flight computer", 0.0, 10.0),
+        "phase": Setting("s", "time of the first sample", 0.0, 10.0),
+        "dropout": Setting("-", "probability that a sample is lost", 0.0, 1.0),
+    }
+
+
+_OUTLIERS = {
+    "outlier_rate": Setting("-", "probability that a sample is an outlier", 0.0, 1.0),
+    "outlier_sigma": Setting("m", "standard deviation of an outlier's offset per axis", 0.0,
+                             1e3),
+}
+
+
+#: Every key of every sensor's table: unit, meaning, physical range (and length).
+SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
+    "imu": MappingProxyType({
+        **_common(1e5),
+        "gyro_noise_density": Setting("rad/s/sqrt(Hz)", "gyro white-noise density", 0.0, 1.0),
+        "gyro_bias_sigma": Setting("rad/s", "std of the gyro's turn-on bias per axis", 0.0,
+                                   1.0),
+        "gyro_bias_random_walk": Setting("rad/s/sqrt(s)", "gyro bias random-walk density",
+                                         0.0, 1.0),
+        "accel_noise_density": Setting("m/s^2/sqrt(Hz)", "accelerometer white-noise density",
+                                       0.0, 10.0),
+        "accel_bias_sigma": Setting("m/s^2", "std of the accelerometer's turn-on bias per "
+                                    "axis", 0.0, 10.0),
+        "accel_bias_random_walk": Setting("m/s^2/sqrt(s)", "accelerometer bias random-walk "
+                                          "density", 0.0, 10.0),
+        "attitude_sigma": Setting("rad", "std of the attitude estimator's Gauss-Markov error "
+                                  "(roll, pitch, yaw)", 0.0, 1.0, 3),
+        "attitude_tau": Setting("s", "its time constants (roll, pitch, yaw)", 1e-3, 1e9, 3),
+        "attitude_white_sigma": Setting("rad", "std of its white part per axis", 0.0, 1.0),
+    }),
+    "vision": MappingProxyType({
+        **_common(1e3), **_OUTLIERS,
+        "sigma0": Setting("m", "noise per axis at zero range", 0.0, 100.0),
+        "sigma_per_m": Setting("m/m", "growth of the noise per metre of range", 0.0, 10.0),
+        "half_angle": Setting("rad", "half-angle of the field-of-view cone", 0.0, math.pi / 2),
+        "range_min": Setting("m", "nearest range at which the marker is detected", 0.0, 1e4),
+        "range_max": Setting("m", "farthest range at which the marker is detected", 0.0, 1e4),
+        "small_range_min": Setting("m", "nearest range of the second, smaller marker", 0.0,
+                                   1e4),
+        "small_range_max": Setting("m", "farthest range of the second marker (0: none)", 0.0,
+                                   1e4),
+    }),
+    "gnss": MappingProxyType({
+        **_common(1e3),
+        "position_sigma": Setting("m", "std of each receiver's position error (x, y, z)",
+                                  0.0, 1e3, 3),
+        "position_tau": Setting("s", "time constant of each receiver's position error", 1e-3,
+                                1e9),
+        "velocity_sigma": Setting("m/s", "std of each velocity's white noise per axis", 0.0,
+                                  100.0),
+    }),
+    "rangefinder": MappingProxyType({
+        **_common(1e5), **_OUTLIERS,
+        "sigma0": Setting("m", "noise at zero distance", 0.0, 100.0),
+        "sigma_per_m": Setting("m/m", "growth of the noise per metre", 0.0, 10.0),
+        "range_min": Setting("m", "shortest distance reported", 0.0, 1e4),
+        "range_max": Setting("m", "longest distance reported", 0.0, 1e4),
+        "deck_half_length": Setting("m", "deck extent along its x axis from the pad centre",
+                                    0.0, 1e4),
+        "deck_half_width": Setting("m", "deck extent along its y axis from the pad centre", 0.0,
+                                   1e4),
+    }),
+    "datalink": MappingProxyType({
+        **_common(1e3),
+        "eta2_sigma": Setting("rad", "std of the broadcast deck attitude (roll, pitch, yaw)",
+                              0.0, 1.0, 3),
+        "v2E_sigma": Setting("m/s", "std of the broadcast velocity per axis", 0.0, 100.0),
+        "a2E_sigma": Setting("m/s^2", "std of the broadcast acceleration per axis", 0.0, 100.0),
+        "w2E_sigma": Setting("rad/s", "std of the broadcast angular rate per axis", 0.0, 10.0),
+        "w2E_dot_sigma": Setting("rad/s^2", "std of the broadcast angular acceleration per "
+                                 "axis", 0.0, 100.0),
+    }),
+})
+
+
+#: Default settings of each sensor; docs/sensors.md gives every value's source.
+SENSOR_DEFAULTS: Mapping[str, Mapping] = MappingProxyType({
+    # TDK ICM-42688-P (DS-000347), PX4's attitude_estimator_q, VectorNav VN-100:
+    # docs/sensors.md, "IMU and attitude estimate".
+    "imu": MappingProxyType({
+        "rate_hz": 250.0, "latency": 0.0, "phase": 0.0, "dropout": 0.0,
+        "gyro_noise_density": 2.8e-3 * _DEG,              # 2.8 mdps/sqrt(Hz)
+        "gyro_bias_sigma": 0.005 * 20.0 * _DEG,           # 0.005 dps/degC over 20 degC
+        "gyro_bias_random_walk": 0.005 * 10.0 * _DEG / math.sqrt(300.0),
+        "accel_noise_density": 70e-6 * _G0,               # 70 ug/sqrt(Hz)
+        "accel_bias_sigma": 0.15e-3 * 20.0 * _G0,         # 0.15 mg/degC over 20 degC
+        "accel_bias_random_walk": 0.15e-3 * 10.0 * _G0 / math.sqrt(300.0),
+        "attitude_sigma": (0.5 * _DEG, 0.5 * _DEG, 2.0 * _DEG),
+        "attitude_tau": (5.0, 5.0, 10.0),                 # 1 / ATT_W_ACC, 1 / ATT_W_MAG
+        "attitude_white_sigma": 0.01 * _DEG,
+    }),
+    # docs/sensors.md, "Vision": issue 17's minimums, a pinhole model of a
+    # Raspberry Pi Camera Module 3 Wide and a 0.6 m marker.
+    "vision": MappingProxyType({
+        "rate_hz": 25.0, "latency": 0.06, "phase": 0.0, "dropout": 0.05,
+        "outlier_rate": 0.01, "outlier_sigma": 0.5,
+        "sigma0": 0.02, "sigma_per_m": 0.01, "half_angle": 33.5 * _DEG,
+        "range_min": 0.45, "range_max": 12.0, "small_range_min": 0.08, "small_range_max": 0.0,
+    }),
+    # u-blox NEO-M9N, Beard & McLain's GNSS error model, PX4's EKF2_GPS_DELAY:
+    # docs/sensors.md, "GNSS".
+    "gnss": MappingProxyType({
+        "rate_hz": 5.0, "latency": 0.11, "phase": 0.0, "dropout": 0.01,
+        "position_sigma": (1.5 / 1.1774, 1.5 / 1.1774, 1.9 * 1.5 / 1.1774),
+        "position_tau": 1100.0, "velocity_sigma": 0.05,
+    }),
+    # Benewake TFmini-S, PX4's EKF2_RNG_DELAY: docs/sensors.md, "Rangefinder".
+    "rangefinder": MappingProxyType({
+        "rate_hz": 125.0, "latency": 0.005, "phase": 0.0, "dropout": 0.01,
+        "outlier_rate": 0.0, "outlier_sigma": 1.0,
+        "sigma0": 0.03, "sigma_per_m": 0.005, "range_min": 0.1, "range_max": 7.0,
+        "deck_half_length": 1.0, "deck_half_width": 0.7,
+    }),
+    # A GNSS-aided MEMS INS on the vehicle and issue 17's minimums:
+    # docs/sensors.md, "Datalink".
+    "datalink": MappingProxyType({
+        "rate_hz": 10.0, "latency": 0.1, "phase": 0.0, "dropout": 0.02,
+        "eta2_sigma": (0.1 * _DEG, 0.1 * _DEG, 0.2 * _DEG),
+        "v2E_sigma": 0.05, "a2E_sigma": 0.05, "w2E_sigma": 0.002, "w2E_dot_sigma": 0.03,
+    }),
+})
+
+
+#: Overrides of ``[sensors.gnss]`` for RTK (u-blox ZED-F9P, docs/sensors.md).
+GNSS_RTK: Mapping = MappingProxyType({
+    "position_sigma": (0.01 / 1.1774, 0.01 / 1.1774, 1.9 * 0.01 / 1.1774),
+})
+
+
+def validate_settings(name: str, values: Mapping | None = None) -> dict:
+    """A sensor's settings over its defaults, checked.
+
+    ``values`` (a ``[sensors.<name>]`` table) over :data:`SENSOR_DEFAULTS`.
+
+    Raises
+    ------
+    ScenarioError
+        One line naming ``sensors.<name>.<key>``: an unknown sensor or key,
+        a value of the wrong kind or length, or out of its physical range.
+    """
+    if name not in SETTINGS:
+        raise ScenarioError(f"sensors.{name}: unknown sensor; sensors are "
+                            f"{', '.join(SENSOR_NAMES)}")
+    schema, out = SETTINGS[name], dict(SENSOR_DEFAULTS[name])
+    for key, v in (values or {}).items():
+        where = f"sensors.{name}.{key}"
+        if key not in schema:
+            raise ScenarioError(f"{where}: unknown key; keys are {', '.join(schema)}")
+        s = schema[key]
+        items = v if s.length is not None else [v]
+        if s.length is not None and (not isinstance(v, list | tuple) or len(v) != s.length):
+            raise ScenarioError(f"{where}: must be a list of {s.length} numbers ({s.unit})")
+        for x in items:
+            if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
+                raise ScenarioError(f"{where}: must be a finite number ({s.unit}), got {x!r}")
+            if not s.lo <= x <= s.hi:
+                raise ScenarioError(f"{where}: must be in [{s.lo:g}, {s.hi:g}] {s.unit}, "
+                                    f"got {x!r}")
+        out[key] = tuple(float(x) for x in v) if s.length is not None else float(v)
+    for lo, hi in (("range_min", "range_max"), ("small_range_min", "small_range_max")):
+        if lo in out and out[hi] > 0 and out[lo] > out[hi]:
+            raise ScenarioError(f"sensors.{name}.{lo}: must not exceed {hi} ({out[hi]:g} m)")
+    return out
+
+
+def sensor_params(settings: Mapping[str, Mapping] | None = None) -> np.ndarray:
+    """The Functions' ``p_sens`` from the sensors' settings.
+
+    :data:`SENSOR_PARAMS` from the vision and rangefinder settings
+    (defaults for whatever is missing).
+    """
+    settings = settings or {}
+    v = validate_settings("vision", settings.get("vision"))
+    r = validate_settings("rangefinder", settings.get("rangefinder"))
+    values = {f"vision_{k}": v[k] for k in ("sigma0", "sigma_per_m", "half_angle", "range_min",
+                                           "range_max", "small_range_min", "small_range_max")}
+    values.update({f"rangefinder_{k}": r[k] for k in ("sigma0", "sigma_per_m", "range_min",
+                                                      "range_max")})
+    values.update(deck_half_length=r["deck_half_length"], deck_half_width=r["deck_half_width"])
+    return SENSOR_PARAMS.pack(values)
