@@ -344,6 +344,7 @@ def _max_real_pole(L, gains):
     return np.linalg.eigvals(A - B @ np.diag(gains) @ C).real.max()
 
 
+@pytest.mark.slow
 def test_flight_loop_margins_are_where_its_poles_cross():
     """Independent check on the 4 x 4, 40-state flight loop (l = 5): scale one loop's
     gain across each reported gain margin and watch the closed-loop eigenvalues; any
@@ -515,6 +516,7 @@ def landing_loops():
                 "sampled": sampled_models(sc, point, 250.0).loop_input}
 
 
+@pytest.mark.slow
 @needs_disk_margins
 @pytest.mark.parametrize("which", ["continuous", "sampled"])
 def test_disk_margin_matches_python_control_landing_loop(landing_loops, which):

@@ -181,6 +181,7 @@ def _cli(tmp_path, *args, **env):
                           env={**os.environ, "XDG_CACHE_HOME": str(tmp_path / "xdg"), **env})
 
 
+@pytest.mark.slow
 def test_a_broken_compiler_is_one_warning_and_the_virtual_machine(tmp_path):
     """CC=/bin/true: the simulator on CasADi's VM after one line; the flight code has no
     fallback: one error line, exit 2."""
@@ -196,6 +197,7 @@ def test_a_broken_compiler_is_one_warning_and_the_virtual_machine(tmp_path):
     assert not (tmp_path / "c").exists()
 
 
+@pytest.mark.slow
 def test_a_corrupt_cached_simulator_is_rebuilt_through_the_cli(tmp_path):
     run = ("simulate", "--set", "rbf.nodes=3", "--set", "simulation.duration=0.05", "--no-plots")
     assert _cli(tmp_path, *run, "--out", "a").returncode == 0

@@ -152,6 +152,7 @@ def test_a_lost_worker_or_scheduler_stops_with_status_4_and_resumes(reference, t
             _kill(p)
 
 
+@pytest.mark.slow
 def test_a_bad_or_unreachable_scheduler_is_one_line_and_creates_nothing(tmp_path):
     # V13: "foo" gave the right line, then a 30 s hang and a traceback from
     # Client.__del__; V16: the refused campaign had created the parents of --out

@@ -41,6 +41,7 @@ def reference(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_worker_count_and_order_do_not_change_a_run(reference, tmp_path):
     out = tmp_path / "two"
     run_campaign("paper", FAST, runs=RUNS, out=out, workers=2)
@@ -141,6 +142,7 @@ def test_changed_scenario_dispersions_or_version_are_refused(reference, tmp_path
     assert (foreign / "notes.txt").read_text() == "mine" and len(list(foreign.iterdir())) == 1
 
 
+@pytest.mark.slow
 def test_numerical_failures_and_invalid_draws_are_rows(tmp_path, capsys):
     path = tmp_path / "rough.toml"
     path.write_text(PAPER + "\n[campaign]\nruns = 16\nseed = 3\n[campaign.dispersions]\n"
@@ -188,6 +190,7 @@ def _wait_for_rows(out, at_least, proc, timeout=60.0):
     raise AssertionError("the campaign recorded too few runs in time")
 
 
+@pytest.mark.slow
 def test_interrupt_and_sigkill_lose_nothing_recorded(tmp_path):
     import psutil
 
@@ -228,6 +231,7 @@ def test_interrupt_and_sigkill_lose_nothing_recorded(tmp_path):
     assert (out / "runs.csv").read_bytes() == (whole / "runs.csv").read_bytes()
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore")
 def test_dask_cluster_gives_the_same_runs(reference, tmp_path):
     distributed = pytest.importorskip("distributed")
@@ -268,6 +272,7 @@ def test_campaign_md_lists_every_metric_and_its_unit():
             assert f"| `{m.name}` | {m.unit} |" in text, m.name
 
 
+@pytest.mark.slow
 def test_progress_bar_with_eta_on_a_terminal_only(tmp_path):
     import fcntl
     import pty
@@ -312,6 +317,7 @@ def _env(**extra):
     return env
 
 
+@pytest.mark.slow
 def test_workers_stay_silent_without_a_compiler(tmp_path):
     # V17: each worker printed a raw two-line QuadlandWarning beside the command's own line
     proc = subprocess.run(

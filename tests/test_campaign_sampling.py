@@ -45,6 +45,7 @@ def test_sobol_prefix_and_lhs_strata():
         assert sorted(np.floor(u[:, j] * 50).astype(int)) == list(range(50))
 
 
+@pytest.mark.slow
 def test_values_follow_their_distributions():
     sc, spec = _spec("random", runs=2000)
     ds = draws(spec, range(2000))

@@ -538,6 +538,7 @@ def _rk4_closed_loop(scenario, h, n):
     return np.array(xs)
 
 
+@pytest.mark.slow
 def test_pure_c_continuous_flight_matches_rk4(example):
     """``fly 0``: the generated closed loop under classical RK4, 10 ms steps.
 
@@ -575,6 +576,7 @@ def test_pure_c_flight_matches_python(example, rate):
     assert not c["status"].any()
 
 
+@pytest.mark.slow
 def test_sources_are_generated_not_read(tmp_path, monkeypatch):
     """One-way flow: the runtime's C comes from symbolic/, equal to generated/ for the
     shipped scenarios."""

@@ -21,6 +21,7 @@ def _run(*args, cwd=None):
                           text=True, cwd=cwd, timeout=300)
 
 
+@pytest.mark.slow
 def test_simulate_writes_everything(tmp_path):
     out = tmp_path / "run"
     proc = _run("simulate", "--set", "simulation.duration=0.3", "--set",
@@ -73,6 +74,7 @@ BAD = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, message", BAD)
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, args, message):
     out = tmp_path / "out"
@@ -96,6 +98,7 @@ def test_malformed_file(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
 
 
+@pytest.mark.slow
 def test_existing_outputs_survive_bad_input(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
@@ -132,6 +135,7 @@ def _margins(tmp_path, *args, name="out"):
     return main(["margins", *SMALL, "--out", str(out), *args]), out
 
 
+@pytest.mark.slow
 def test_margins_writes_json_figures_and_table(tmp_path, capsys):
     status, out = _margins(tmp_path, "--set", "controller.rate_hz=50")
     assert status == 0
@@ -161,6 +165,7 @@ def test_margins_fail_exits_1_and_names_the_loops(tmp_path, capsys):
                        f"continuous: {', '.join(failed)}\n")
 
 
+@pytest.mark.slow
 def test_margins_unstable_loop_fails(tmp_path, capsys):
     """The frozen state 0.1 s into the landing (30 deg tilt) of the 5-node network has
     unstable closed-loop poles: every loop fails, the figures are still written."""
@@ -199,6 +204,7 @@ def test_margins_bad_input_names_the_flag_and_writes_nothing(tmp_path, capsys, a
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_margins_of_a_landing_scenario(tmp_path, capsys):
     """The landing loop at hover: the same files and table; the exit status follows the
     verdict, and the failed loops are named per controller."""
@@ -259,6 +265,7 @@ def _strict(text):
     return json.loads(text, parse_constant=refuse)
 
 
+@pytest.mark.slow
 def test_scenario_toml_repeats_the_run_bit_for_bit(tmp_path):
     first, second = tmp_path / "a", tmp_path / "b"
     proc = _run("simulate", "--set", "simulation.duration=0.2", "--set", "simulation.seed=7",
@@ -271,6 +278,7 @@ def test_scenario_toml_repeats_the_run_bit_for_bit(tmp_path):
     assert _strict((second / "summary.json").read_text())["seed"] == 7
 
 
+@pytest.mark.slow
 def test_failed_flight_exits_3_with_the_partial_trajectory(tmp_path):
     out = tmp_path / "out"
     proc = _run("simulate", "--set", "controller.k1=[1000.0, 1000.0, 1000.0, 1000.0]",
@@ -300,6 +308,7 @@ def test_a_folder_in_use_is_refused(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_no_plots_replaces_an_earlier_set_whole(tmp_path):
     out = tmp_path / "out"
     assert _run("simulate", "--set", "simulation.duration=0.1", "--out", str(out)).returncode == 0
@@ -336,6 +345,7 @@ def test_margins_validates_before_claiming_its_folder(tmp_path, capsys):
     assert not (tmp_path / "newp").exists()
 
 
+@pytest.mark.slow
 def test_a_cvodes_failure_is_one_line(tmp_path):
     proc = _run("simulate", "--set", 'simulation.integrator="cvodes"', "--set",
                 "initial.eta1_deg=[80, 80, 0]", "--set", "controller.k1=[1e5, 1e5, 1e5, 1e5]",
@@ -385,6 +395,7 @@ def test_a_bad_flag_type_through_the_console():
     assert proc.stderr == ""
 
 
+@pytest.mark.slow
 def test_animate_a_failed_flight_exits_3_with_the_partial_data(tmp_path):
     """The pad's position reaches 1e296 m before the state is infinite: the animation
     stopped with ``Axis limits -inf, inf``; now every file of a failed run is written."""
@@ -414,6 +425,7 @@ def _broken_home(tmp_path):
     return {**env, "HOME": str(afile / "home"), "TMPDIR": str(tmp_path)}
 
 
+@pytest.mark.slow
 def test_an_unwritable_home_adds_no_line_of_matplotlib(tmp_path):
     """matplotlib said 2 lines of its temporary folder, even with --no-plots."""
     env = _broken_home(tmp_path)

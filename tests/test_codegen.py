@@ -49,6 +49,7 @@ def test_regeneration_is_byte_for_byte(files):
     assert codegen.generated_files() == files
 
 
+@pytest.mark.slow
 def test_check_reports_a_unified_diff(tmp_path, capsys, files):
     codegen.write(tmp_path, files)
     assert cli_main(["codegen", "--out", str(tmp_path), "--check"]) == 0
@@ -369,6 +370,7 @@ int main(void)
 """
 
 
+@pytest.mark.slow
 def test_double_and_float_builds_link_into_one_program(tmp_path):
     import shutil
 

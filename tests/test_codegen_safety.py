@@ -18,6 +18,7 @@ def _run(*args, cwd):
                           capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow
 def test_a_generation_beside_another_leaves_it_alone(tmp_path, capsys):
     assert main(out=tmp_path / "cg" / "a") == 0
     assert main(out=tmp_path / "cg") == 0          # the parent of an earlier generation
@@ -26,6 +27,7 @@ def test_a_generation_beside_another_leaves_it_alone(tmp_path, capsys):
     assert "removed" not in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_only_files_the_manifest_lists_are_stale(tmp_path):
     files = generated_files()
     main(out=tmp_path)
@@ -45,6 +47,7 @@ def test_out_that_is_a_file_or_cannot_be_made_is_one_line(tmp_path):
     assert afile.read_text() == "keep"
 
 
+@pytest.mark.slow
 def test_overrides_cannot_inject_c(tmp_path):
     proc = _run("--set", 'scenario.description="x */ #error injected /*"', "--set",
                 'scenario.name="ok"', "--out", "gen", cwd=tmp_path)
@@ -68,6 +71,7 @@ def _one_line(proc, expected):
     assert len(proc.stderr.splitlines()) == 1 and proc.stdout == ""
 
 
+@pytest.mark.slow
 def test_a_file_where_a_folder_goes_is_refused_before_anything_is_written(tmp_path):
     """``mkdir -p out && touch out/float && quadland codegen --scenario turning --out out``
     wrote 15 entries, then failed."""
@@ -78,6 +82,7 @@ def test_a_file_where_a_folder_goes_is_refused_before_anything_is_written(tmp_pa
     assert [p.name for p in (tmp_path / "out").iterdir()] == ["float"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rel", [".gitignore", "example/Makefile", "vehicle.c"])
 def test_a_file_the_manifest_does_not_list_is_never_replaced(tmp_path, rel):
     out = tmp_path / "out"
@@ -97,6 +102,7 @@ def test_a_file_that_is_already_the_generated_text_is_taken_over(tmp_path):
     assert "quadland.h" in (tmp_path / MANIFEST).read_text().splitlines()
 
 
+@pytest.mark.slow
 def test_a_listed_file_is_replaced_and_the_user_s_files_beside_it_stay(tmp_path):
     files = generated_files()
     main(out=tmp_path)
@@ -110,6 +116,7 @@ def test_a_listed_file_is_replaced_and_the_user_s_files_beside_it_stay(tmp_path)
     assert not [p for p in tmp_path.rglob("*tmp-*")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("link", ["file", "folder", "out"])
 def test_nothing_is_written_through_a_symbolic_link(tmp_path, link):
     target = tmp_path / "target"
@@ -133,6 +140,7 @@ def test_nothing_is_written_through_a_symbolic_link(tmp_path, link):
     assert _snapshot(tmp_path) == before
 
 
+@pytest.mark.slow
 def test_a_stale_file_behind_a_symbolic_link_is_not_removed(tmp_path):
     out, elsewhere = tmp_path / "out", tmp_path / "elsewhere"
     main(out=out)
@@ -148,6 +156,7 @@ def test_a_stale_file_behind_a_symbolic_link_is_not_removed(tmp_path):
 
 @pytest.mark.parametrize("where", [".", "..", "quadland", "quadland/scenarios", "symbolic",
                                    "checkout", "above"])
+@pytest.mark.slow
 def test_out_may_not_be_the_current_folder_a_package_or_the_checkout(tmp_path, where):
     import quadland
 
@@ -174,6 +183,7 @@ def test_the_checkout_s_generated_folder_stays_allowed():
     check_target(generated_dir())                        # no error
 
 
+@pytest.mark.slow
 def test_a_failure_while_writing_changes_nothing(tmp_path, monkeypatch):
     """A disk that fills up while the files are staged: the earlier tree stays as it was,
     a new folder does not appear, and no staging folder is left."""

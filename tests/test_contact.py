@@ -297,6 +297,7 @@ def test_free_drop_bounces_to_the_height_of_the_oscillator_with_gravity(height):
 
 # --- inclined deck: friction ------------------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.parametrize("axis", [0, 1])
 def test_above_the_friction_angle_the_body_slides_at_g_sin_minus_mu_cos(axis):
     mu, theta, h = 0.3, np.radians(25.0), 5e-4
@@ -469,6 +470,7 @@ def _deck_bounds(pv, pd, xv, T, r_body):
     return max(a), max(tilt)
 
 
+@pytest.mark.slow
 def test_rolling_deck_forces_stay_finite_and_bounded_and_the_body_stays():
     h, T = 2.5e-4, 2.0
     deck, veh, xv = _rolling_deck(np.radians(8.0))
@@ -492,6 +494,7 @@ def test_rolling_deck_forces_stay_finite_and_bounded_and_the_body_stays():
     assert np.abs(diff).max() < 1e-3 * M * G
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("locked", [False, True])
 def test_lock_down_holds_the_body_on_a_deck_rolling_beyond_the_tip_over_angle(locked):
     h, T, roll = 5e-4, 2.0, np.radians(40.0)

@@ -63,6 +63,7 @@ def test_a_hint_never_names_a_value_the_key_refuses():
     assert rk4_hint(np.array([3.0, -1.0]), 0.01, 1) is None       # only a growing mode
 
 
+@pytest.mark.slow
 def test_steep_gains_fail_at_once_naming_the_rk4_step():
     sc = quadland.load_scenario("paper", STEEP)
     with pytest.raises(SimulationError) as info:
@@ -98,6 +99,7 @@ def test_the_physical_flight_stays_well_inside_its_envelope():
     assert np.max(S / env.bounds) < 0.5
 
 
+@pytest.mark.slow
 def test_a_stiff_adaptive_law_names_its_leakage_mode():
     """W' = Gamma1 (Psi z2^T - k_w W): a mode at -gamma1 k_w = -5e6 1/s, far outside RK4's
     region at h = 0.01 s; the line names the weights and that mode."""
@@ -172,6 +174,7 @@ def test_envelope_describes_its_worst_magnitude():
     ["quadrotor.drag_translational=[1e3, 1e3, 1e3]", "controller.rate_hz=100",
      "simulation.duration=1"],
 ], ids=["yaw-turns", "fast-adaptation", "sampled-drag"])
+@pytest.mark.slow
 def test_the_named_step_count_flies_the_loop(case):
     """Following the hint flies the flight, and its step count is converged: twice as many
     steps change the trajectory by less than the flight's own scale."""
@@ -225,6 +228,7 @@ def test_a_tilt_past_90_degrees_between_samples_fails_there():
     assert np.all(tilt > 0)                               # honest rows: all before it
 
 
+@pytest.mark.slow
 def test_a_vehicle_driven_without_drag_leaves_its_speed_envelope():
     sc = quadland.load_scenario("paper", [
         "vehicle.d11=0", "vehicle.d22=0", "vehicle.m11=0.001", "vehicle.m22=0.001",
@@ -234,6 +238,7 @@ def test_a_vehicle_driven_without_drag_leaves_its_speed_envelope():
     assert "the vehicle_speed" in str(info.value)
 
 
+@pytest.mark.slow
 def test_a_cvodes_failure_keeps_its_rows_and_names_rk4():
     """cvodes' Adams method gives up on a body spun at 10,000 deg/s; the rows before
     the failing interval are kept and equal a one-call cvodes run that stops there."""

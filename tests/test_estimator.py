@@ -221,6 +221,7 @@ def _mc_packet(rng, sensor, x, tau, eta2, n2, b3, q):
                 w2E=np.zeros(3), w2E_dot=np.zeros(3))
 
 
+@pytest.mark.slow
 def test_monte_carlo_nees_and_nis_lie_in_their_chi_square_bounds():
     """100 runs on truth from the process model, every sensor late by less than the
     horizon: the average NEES of the 18 states at the end and each block's average NIS

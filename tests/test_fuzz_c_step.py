@@ -332,6 +332,7 @@ def _campaign(precision, calls, seed=SEED):
     return counts
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_random_calls_keep_the_contract(precision):
     counts = _campaign(precision, CALLS)
@@ -506,6 +507,7 @@ def sanitized_drivers(sanitizer, tmp_path_factory):
     return exes
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_sanitized_random_calls(sanitized_drivers, precision):
     res = _run([str(sanitized_drivers[precision]), str(SANITIZED_CALLS), str(SEED)])

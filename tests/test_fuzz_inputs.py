@@ -251,6 +251,7 @@ def _table_mutant(rng, table):
     return table
 
 
+@pytest.mark.slow
 def test_campaign_table_mutants_are_valid_or_one_line(tmp_path):
     import dataclasses
     import math

@@ -398,6 +398,7 @@ def _campaign(precision, calls, seed=SEED):
     return steps, guides
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_random_calls_keep_the_contract(precision):
     steps, guides = _campaign(precision, CALLS)
@@ -620,6 +621,7 @@ def sanitized_drivers(tmp_path_factory):
     return exes
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_sanitized_random_calls(sanitized_drivers, precision):
     res = _run([str(sanitized_drivers[precision]), str(SANITIZED_CALLS), str(SEED)])

@@ -50,6 +50,7 @@ def _quadland(installed, *args):
                           capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_it_runs_the_installed_copy(installed):
     target, work, env = installed
     proc = subprocess.run([sys.executable, "-c", "import quadland, quadland_symbolic; "
@@ -80,6 +81,7 @@ def test_pyproject_lists_every_package():
     assert found == listed
 
 
+@pytest.mark.slow
 def test_commands_work_and_write_nothing_into_the_package(installed):
     target, work, _ = installed
     before = _tree(target)
@@ -101,6 +103,7 @@ def test_commands_work_and_write_nothing_into_the_package(installed):
     assert _tree(target) == before
 
 
+@pytest.mark.slow
 def test_codegen_without_out_outside_a_checkout_is_one_line(installed):
     target, work, _ = installed
     before = _tree(target)

@@ -83,6 +83,7 @@ def _run_clean(out, old):
     assert {p.name: p.read_bytes() for p in out.iterdir()} == old
 
 
+@pytest.mark.slow
 def test_two_runs_into_one_folder_never_mix(tmp_path):
     out = tmp_path / "out"
     a, b = _start(out, 1), _start(out, 2)

@@ -334,6 +334,7 @@ def _land(exe):
     return header, {h: data[:, i] for i, h in enumerate(header)}, json.loads(lines[-1])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["highway", "ship"])
 def test_pure_c_landing_is_quadland_simulates(examples, name):
     """The same columns and rows to 1e-9, the same touchdown report; it lands."""

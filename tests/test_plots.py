@@ -231,6 +231,7 @@ def test_sampled_loop_is_dashed_up_to_nyquist():
     assert len(nyq.axes[0].lines) == 6            # two curves and their mirrors, circle, -1
 
 
+@pytest.mark.slow
 def test_import_chooses_no_backend():
     code = ("import matplotlib; matplotlib.use('svg'); import quadland.plots.simulation, "
             "quadland.plots.margins; print(matplotlib.get_backend())")
