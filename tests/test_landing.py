@@ -116,10 +116,15 @@ def test_a_rising_deck_aborts_the_descent_and_a_later_try_lands():
 # ---------------------------------------------------------------- physics from the log
 
 @pytest.fixture(scope="module")
-def fine():
-    """highway logged at 1 kHz, its CSV columns and the scenario."""
-    res = _fly("highway", "simulation.output_rate_hz=1000")
-    return _csv(res), res.scenario
+def fine_result():
+    """highway logged at 1 kHz."""
+    return _fly("highway", "simulation.output_rate_hz=1000")
+
+
+@pytest.fixture(scope="module")
+def fine(fine_result):
+    """highway logged at 1 kHz: its CSV columns and the scenario."""
+    return _csv(fine_result), fine_result.scenario
 
 
 def _newton_residual(c, sc, k):
@@ -197,7 +202,7 @@ def test_touchdown_figures_by_hand_at_the_touchdown_row(fine):
     assert R2[:, 2] @ (gear - p2) == pytest.approx(0, abs=1e-9)
 
 
-def test_on_the_deck_the_pose_is_rigid_and_the_rotors_wind_down(fine):
+def test_on_the_deck_the_pose_is_rigid_and_the_rotors_wind_down(fine, fine_result):
     c, sc = fine
     k = int(np.argmax(c["phase"] == TOUCHDOWN))
     t = c["t"]
@@ -207,11 +212,13 @@ def test_on_the_deck_the_pose_is_rigid_and_the_rotors_wind_down(fine):
     R_rel = [rotation((c["phi2"][j], c["theta2"][j], c["psi2"][j])).T
              @ rotation((c["phi1"][j], c["theta1"][j], c["psi1"][j])) for j in range(k, len(t))]
     np.testing.assert_allclose(R_rel, np.broadcast_to(R_rel[0], np.shape(R_rel)), atol=1e-9)
-    tau = sc["quadrotor.motor_time_constant"]
+    # the decay from the result's own doubles: the CSV's 12 digits of t alone
+    # leave exp(-(t - t_k) / tau) uncertain by 2 x 5e-11 s / tau = 5e-9
+    tau, t = sc["quadrotor.motor_time_constant"], fine_result["t"]
     for i in range(1, 5):
-        F = c[f"F_{i}"]
+        F = fine_result[f"F_{i}"]
         np.testing.assert_allclose(F[k:], F[k] * np.exp(-(t[k:] - t[k]) / tau),
-                                   rtol=1e-9, atol=1e-300)
+                                   rtol=1e-12, atol=1e-300)
 
 
 def test_wind_acts_as_the_drag_of_the_air_velocity():
@@ -279,12 +286,36 @@ def test_animate_writes_the_landing_as_a_gif_and_refuses_the_paper_loop(tmp_path
     assert not (tmp_path / "paper").exists()
 
 
+@pytest.mark.parametrize("delay", [0, 1, 2])
+def test_each_command_acts_delay_periods_later(delay):
+    """The motors are a first-order lag, F' = (u - F) / tau, which RK4 steps in
+    closed form: over a control period h with u held, F_next = R F + (1 - R) u with
+    R = 1 + z + z^2/2 + z^3/6 + z^4/24, z = -h / tau. Solving for u from the logged
+    forces gives the command that acted; it is the one the step computed delay
+    periods before (hover thrust before the first)."""
+    sc = load_scenario("highway", ["simulation.output_rate_hz=250",
+                                   "disturbance.sample_rate_hz=250", "simulation.duration=2",
+                                   f"controller.delay_periods={delay}"])
+    res = quadland.simulate(sc)
+    t, tau = res["t"], sc["quadrotor.motor_time_constant"]
+    z = -np.diff(t) / tau
+    R = 1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24
+    hover = sc["quadrotor.mass"] * sc["quadrotor.gravity"] / 4
+    for i in range(1, 5):
+        F, computed = res[f"F_{i}"], res[f"F_{i}_cmd"]
+        acted = (F[1:] - R * F[:-1]) / (1 - R)
+        expected = np.r_[np.full(delay, hover), computed[:len(acted) - delay]]
+        np.testing.assert_allclose(acted, expected, rtol=0, atol=1e-12 * hover)
+
+
 def test_failed_landing_exits_3_with_the_partial_trajectory(tmp_path, capsys):
     out = tmp_path / "run"
     status = main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out),
                    "--set", "initial.omega1_deg_s=[0.0, 3000.0, 0.0]"])
     err = capsys.readouterr().err.strip().splitlines()
-    assert status == 3 and len(err) == 1 and "singular attitude" in err[0]
+    # the tumble passes 90 degrees of tilt (the envelope, checked at every grid
+    # point) before the guard's |cos(theta) cos(phi)| falls below its minimum
+    assert status == 3 and len(err) == 1 and "flight failed at t = 0.036 s: the tilt" in err[0]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and summary["landing"]["touchdown"] is False
     with open(out / "trajectory.csv") as fh:

@@ -19,7 +19,8 @@
  * and its deck) integrated by classical RK4 over the merged grid of the
  * output, disturbance and control times, as quadland simulate does; at each
  * control time the perfect sensors (ql_landing_sensors) feed ql_guidance_step
- * and ql_landing_step, whose rotor commands are held until the next. The
+ * and ql_landing_step, whose rotor commands act QL_LAND_DELAY_PERIODS control
+ * periods later (the computation delay) and are held until the next. The
  * touchdown is the zero crossing of the gear gap (ql_landing_gear_gap),
  * located within its step by bisection; there the guidance reports the
  * contact, and from then on the quadrotor rides on the deck
@@ -227,6 +228,7 @@ int main(void)
     ql_landing_output out;
     ql_real xp[NXP], xp_start[NXP], trial[NXP], work[5 * NXP], pp[QL_LANDING_PLANT_NP];
     ql_real w[QL_LANDING_NW], sig[NY], F_cmd[4] = {0, 0, 0, 0};
+    ql_real queue[4 * (QL_LAND_DELAY_PERIODS + 1)];    /* commands, newest first */
     ql_real anchor[QL_LANDING_ANCHOR_SIZE], figures[QL_TOUCHDOWN_FIGURES], tt;
     qll_clock clocks[N_CLOCKS];
     plant_ctx ctx;
@@ -244,6 +246,9 @@ int main(void)
     tt = 0;
     ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
     ql_landing_state_init(&state, &y);       /* the command filter at the initial attitude */
+    for (i = 0; i < 4 * (QL_LAND_DELAY_PERIODS + 1); ++i) {
+        queue[i] = xp[12 + i % 4];    /* the commands before the start: hover */
+    }
     qll_clock_init(&clocks[CLK_OUT], QL_LAND_OUTPUT_RATE_HZ, 0, QL_LAND_DURATION, 1);
     qll_clock_init(&clocks[CLK_DIST], QL_LAND_DISTURBANCE_RATE_HZ, 0, QL_LAND_DURATION, 1);
     qll_clock_init(&clocks[CLK_CTRL], QL_LAND_CONTROL_RATE_HZ, 0, QL_LAND_DURATION, 0);
@@ -267,7 +272,11 @@ int main(void)
             if (status != QL_OK) return failed(t, "ql_guidance_step", status);
             status = ql_landing_step(&y, &ref, &params, (ql_real)dt, &state, &out);
             if (status != QL_OK) return failed(t, "ql_landing_step", status);
-            memcpy(F_cmd, out.F_cmd, sizeof F_cmd);
+            /* the computation delay: this step's commands act QL_LAND_DELAY_PERIODS
+             * control periods later */
+            memmove(queue + 4, queue, 4 * QL_LAND_DELAY_PERIODS * sizeof *queue);
+            memcpy(queue, out.F_cmd, sizeof out.F_cmd);
+            memcpy(F_cmd, queue + 4 * QL_LAND_DELAY_PERIODS, sizeof F_cmd);
         }
         if (qll_tick(&clocks[CLK_OUT], t, tol, &tick)) {
             double t_row = qll_clock_time(&clocks[CLK_OUT], tick);

@@ -16,6 +16,7 @@
 #define QL_LAND_CONTROL_RATE_HZ 250.0          /* Hz, guidance and landing step */
 #define QL_LAND_DISTURBANCE_RATE_HZ 100.0      /* Hz, hold of the disturbance and the wind */
 #define QL_LAND_RK_STEPS 1                    /* RK4 steps per interval of the time grid */
+#define QL_LAND_DELAY_PERIODS 1               /* control periods from a step's commands to the rotors */
 #define QL_LAND_FORCE_AMPLITUDE 0.1          /* N */
 #define QL_LAND_FORCE_FREQUENCY 0.2          /* rad/s */
 #define QL_LAND_MOMENT_AMPLITUDE 0.005       /* N m */

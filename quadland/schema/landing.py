@@ -8,6 +8,7 @@ from types import MappingProxyType
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
+from quadland_symbolic.landing.loop import MAX_DELAY_PERIODS
 
 __all__ = ["LANDING_SCHEMA", "check_landing"]
 
@@ -91,6 +92,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "rate_hz": Field(F, "Hz", "control rate of the sampled step", lo=1.0,
                          hi=MAX_RATE_HZ),
         "backend": PAPER_SCHEMA["controller"]["backend"],
+        "delay_periods": Field(I, "-", "computation delay: the rotor commands computed at one "
+                               "step act from the delay_periods-th next step on",
+                               lo=0, hi=MAX_DELAY_PERIODS),
     },
     "rbf": PAPER_SCHEMA["rbf"],
     "landing": {

@@ -172,6 +172,9 @@ class LandingDefaults:
         s, Hz, Hz, Hz.
     rk_steps : int
         RK4 steps per interval of the merged time grid.
+    delay_periods : int
+        The computation delay: a step's rotor commands act this many control
+        periods later.
     force_bias, moment_bias : tuple of float
     force_amplitude, force_frequency, moment_amplitude, moment_frequency : float
         The disturbance's deterministic part: N, rad/s, N m, rad/s.
@@ -201,6 +204,7 @@ class LandingDefaults:
     control_rate_hz: float
     disturbance_rate_hz: float
     rk_steps: int
+    delay_periods: int
     force_bias: tuple[float, float, float]
     force_amplitude: float
     force_frequency: float

@@ -60,6 +60,7 @@ def landing_defaults(sc: Scenario) -> LandingDefaults:
         control_rate_hz=float(sc.data["controller"]["rate_hz"]),
         disturbance_rate_hz=float(d["sample_rate_hz"]),
         rk_steps=int(sim["rk_steps_per_interval"]),
+        delay_periods=int(sc.data["controller"]["delay_periods"]),
         force_bias=floats(d["force_bias"]), force_amplitude=float(d["force_amplitude"]),
         force_frequency=float(d["force_frequency"]), moment_bias=floats(d["moment_bias"]),
         moment_amplitude=float(d["moment_amplitude"]),
