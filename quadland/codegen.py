@@ -29,7 +29,7 @@ from quadland.exceptions import CodegenError
 from quadland.kinds import KINDS, kind_of
 from quadland.output import WorkFolder, fsync_dir, remove_abandoned
 from quadland.scenario import Scenario, load_scenario
-from quadland_symbolic.codegen import generate_tree
+from quadland_symbolic.codegen import TREE_PARTS, generate_tree
 
 __all__ = ["DEFAULT_SCENARIO", "checkout_root", "generated_dir", "tree_defaults",
            "generated_files", "stale", "write", "check_target", "diff", "main"]
@@ -85,8 +85,12 @@ def tree_defaults(scenario: Scenario | None = None) -> dict[str, Any]:
     (:attr:`quadland.kinds.LoopKind.default_scenario`), the part of
     ``scenario``'s kind that scenario's.
     """
+    if scenario is not None and kind_of(scenario).codegen_part not in TREE_PARTS:
+        raise CodegenError(f"--scenario: the loop kind {scenario.model!r} has no part in the "
+                           f"generated tree (its parts: {', '.join(TREE_PARTS)})")
     parts = {k.codegen_part: k.codegen_defaults(load_scenario(k.default_scenario))
-             for k in KINDS.values() if scenario is None or k.name != scenario.model}
+             for k in KINDS.values()
+             if k.codegen_part in TREE_PARTS and (scenario is None or k.name != scenario.model)}
     if scenario is not None:
         kind = kind_of(scenario)
         parts[kind.codegen_part] = kind.codegen_defaults(scenario)
@@ -101,7 +105,7 @@ def generated_files(scenario: Scenario | None = None) -> dict[str, str]:
     includes :data:`MANIFEST`, the list of its other files.
     """
     d = tree_defaults(scenario)
-    files = generate_tree(d["paper"], d["landing"])
+    files = generate_tree(d)
     files[MANIFEST] = "".join(f"{rel}\n" for rel in sorted(files))
     return files
 

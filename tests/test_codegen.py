@@ -458,3 +458,32 @@ def test_any_node_count_compiles_alone(tmp_path):
                                    "-fsyntax-only", f"-I{folder}", str(folder / name)],
                                   capture_output=True, text=True)
             assert proc.returncode == 0, proc.stderr
+
+
+def test_the_tree_has_exactly_its_parts():
+    """generate_tree takes one C-defaults object per part and refuses any other set,
+    so a part cannot be dropped or an extra one ignored without a word."""
+    from quadland.codegen import tree_defaults
+    from quadland_symbolic.codegen import TREE_PARTS, generate_tree
+
+    parts = tree_defaults()
+    assert set(parts) == set(TREE_PARTS)
+    with pytest.raises(ValueError, match="parts are paper, landing, got paper$"):
+        generate_tree({"paper": parts["paper"]})
+    with pytest.raises(ValueError, match="got paper, landing, glider"):
+        generate_tree({**parts, "glider": parts["paper"]})
+
+
+def test_a_kind_without_a_part_in_the_tree_is_one_line(monkeypatch):
+    """A loop kind that generates no flight code is refused by name, not ignored."""
+    import types
+
+    import quadland.codegen as qcodegen
+    from quadland.exceptions import CodegenError
+
+    glider = types.SimpleNamespace(name="glider", codegen_part=None)
+    monkeypatch.setattr(qcodegen, "kind_of", lambda scenario: glider)
+    sc = types.SimpleNamespace(model="glider")
+    with pytest.raises(CodegenError, match="^--scenario: the loop kind 'glider' has no part in "
+                                           "the generated tree"):
+        qcodegen.tree_defaults(sc)

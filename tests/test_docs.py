@@ -220,6 +220,40 @@ def test_model_md_cites_functions_that_exist():
     assert not missing, f"docs/model.md cites {missing}, which do not exist"
 
 
+#: A dotted name of the runtime or the symbolic layer, as the pages write it in code
+#: spans; ``quadland.h``/``quadland.c`` (files of the generated tree) are not names.
+_DOTTED = re.compile(r"`((?:quadland|quadland_symbolic)(?:\.[A-Za-z_][A-Za-z0-9_]*)+)")
+_FILES = re.compile(r"^quadland(?:_landing)?\.(?:h|c)$|\.jinja$")
+
+
+def _resolves(dotted: str) -> bool:
+    """Whether ``dotted`` is an importable module followed by attributes."""
+    parts = dotted.split(".")
+    for n in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:n]))
+        except ImportError:
+            continue
+        for attr in parts[n:]:
+            if not hasattr(obj, attr):
+                return False
+            obj = getattr(obj, attr)
+        return True
+    return False
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_dotted_name_in_the_pages_exists(page):
+    """Each ``quadland.x.y`` or ``quadland_symbolic.x.y`` a page names in code is a
+    module, or a module's attribute, of the installed package: a page cannot keep
+    citing a module or function that moved."""
+    missing = [f"line {n}: {m.group(1)}"
+               for n, line in enumerate(page.read_text().splitlines(), 1)
+               for m in _DOTTED.finditer(line)
+               if not _FILES.search(m.group(1)) and not _resolves(m.group(1))]
+    assert not missing, f"{page.relative_to(ROOT)} names what does not exist: {missing}"
+
+
 if __name__ == "__main__":
     print(schema_tables())
     print(LANDING_HEADING, "\n")

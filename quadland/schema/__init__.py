@@ -22,7 +22,7 @@ from quadland.schema.landing import LANDING_SCHEMA, check_landing
 from quadland.schema.paper import PAPER_SCHEMA, check_paper
 
 __all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
-           "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS"]
+           "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "SHARED_KEYS"]
 
 #: The schema of each model (``scenario.model``; "paper" when absent).
 SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
@@ -34,3 +34,18 @@ CROSS_CHECKS: Mapping[str, Callable[[dict], None]] = MappingProxyType(
 
 #: The models a scenario may select with ``scenario.model``.
 MODELS = tuple(SCHEMAS)
+
+#: The keys every kind's schema holds, with the same meaning: the engine (the
+#: resource plan, the envelope's step hints, the disturbance samples), the run's
+#: provenance and the margin review read them whatever the kind. A new kind's
+#: schema holds them too (``tests/test_architecture.py`` checks it); a kind
+#: without a network or a sampled controller says so with ``rbf.nodes`` and
+#: ``controller.rate_hz = 0`` where its schema allows.
+SHARED_KEYS = (
+    "simulation.duration", "simulation.output_rate_hz", "simulation.rk_steps_per_interval",
+    "simulation.seed", "controller.rate_hz", "rbf.nodes", "disturbance.noise",
+    "disturbance.sample_rate_hz", "disturbance.force_bias", "disturbance.force_amplitude",
+    "disturbance.force_frequency", "disturbance.force_noise_std", "disturbance.moment_bias",
+    "disturbance.moment_amplitude", "disturbance.moment_frequency",
+    "disturbance.moment_noise_std",
+)

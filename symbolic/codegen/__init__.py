@@ -52,9 +52,10 @@ from quadland_symbolic.codegen.landing_api import generate_landing
 from quadland_symbolic.codegen.paper_api import generate
 from quadland_symbolic.codegen.registry import FUNCTIONS, GeneratedFunction, c_sources
 from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS, loop_header, simulator_sources
-from quadland_symbolic.codegen.tree import generate_tree
+from quadland_symbolic.codegen.tree import TREE_PARTS, generate_tree
 
 __all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "GeneratedFunction",
            "FUNCTIONS", "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns",
            "land_columns", "generate", "generate_landing", "generate_example", "generate_tree",
+           "TREE_PARTS",
            "SIMULATOR_PARTS", "loop_header", "simulator_sources"]
