@@ -11,7 +11,7 @@ import numpy as np
 
 from quadland.engine.result import SimulationResult, columns_sidecar
 from quadland.exceptions import ScenarioError, SimulationError
-from quadland.kinds import kind_of
+from quadland.kinds import KINDS, kind_of
 from quadland.output import figure_png, output_folder, strict_json
 from quadland.scenario import Scenario, load_scenario
 
@@ -98,8 +98,9 @@ def run_simulation(scenario: str | Path | Scenario = "paper", overrides=None,
     kind = kind_of(sc)
     kind.check(sc)
     if animate and not kind.can_animate:
+        animated = ", ".join(k.name for k in KINDS.values() if k.can_animate)
         raise ScenarioError(f"animate: scenario.model \"{sc.model}\" has no animation "
-                            "(a landing's has)")
+                            f"(the loops that have one: {animated})")
     with output_folder(out, sc.name) as folder:
         try:
             result = kind.simulate(sc)

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from quadland.exceptions import ScenarioError
-from quadland.schema import CROSS_CHECKS, MODELS, SCHEMAS, check_value, show
+from quadland.schema import CROSS_CHECKS, DEFAULT_MODEL, MODELS, SCHEMAS, check_value, show
 
 __all__ = ["Scenario", "load_scenario", "scenario_names", "SCENARIO_DIR", "toml_value"]
 
@@ -64,7 +64,7 @@ class Scenario:
     @property
     def model(self) -> str:
         """The loop it selects: ``"paper"`` (the 4-DOF loop) or ``"landing"`` (6-DOF)."""
-        return self.data["scenario"].get("model", "paper")
+        return self.data["scenario"].get("model", DEFAULT_MODEL)
 
     def to_dict(self) -> dict:
         """Plain nested dict (lists, not tuples) for JSON output."""
@@ -351,7 +351,7 @@ def _unknown(what: str, name: str, known: Iterable[str]) -> str:
 def _model(raw: Mapping) -> str:
     """``scenario.model`` of a raw scenario, checked; "paper" when absent."""
     table = raw.get("scenario", {})
-    model = table.get("model", "paper") if isinstance(table, Mapping) else "paper"
+    model = table.get("model", DEFAULT_MODEL) if isinstance(table, Mapping) else DEFAULT_MODEL
     if model not in MODELS:
         raise ScenarioError(f"scenario.model: must be one of {', '.join(MODELS)}, "
                             f"got {show(model)}")
@@ -423,7 +423,7 @@ def _dotted_all(section: str) -> list[str]:
                    for k in schema.get(section, {})})
 
 
-def _dotted(section: str, model: str = "paper") -> list[str]:
+def _dotted(section: str, model: str = DEFAULT_MODEL) -> list[str]:
     return [f"{section}.{k}" for k in SCHEMAS[model][section]]
 
 

@@ -16,14 +16,14 @@ from quadland.plots.animation import landing_animation
 from quadland.plots.landing import (
     LANDING_FIGURES,
     landing_figures,
+    landing_ground_track_plot,
     landing_limits,
     relative_position_plot,
     rotor_forces_plot,
     trajectory_3d_plot,
 )
-from quadland.plots.landing import ground_track_plot as landing_ground_track_plot
-from quadland.plots.simulation import FIGURES as SIMULATION_FIGURES
 from quadland.plots.simulation import (
+    SIMULATION_FIGURES,
     control_inputs_plot,
     ground_track_plot,
     relative_errors_plot,
@@ -40,7 +40,7 @@ __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "relative_position_plot", "landing_ground_track_plot", "rotor_forces_plot",
            "landing_animation"]
 
-_LAZY = {"MARGIN_FIGURES": "FIGURES", "margin_figures": "margin_figures",
+_LAZY = {"MARGIN_FIGURES": "MARGIN_FIGURES", "margin_figures": "margin_figures",
          "bode_plot": "bode_plot", "nyquist_plot": "nyquist_plot", "sigma_plot": "sigma_plot",
          "pole_plot": "pole_plot"}
 

@@ -101,7 +101,7 @@ def failures_figure(parameter: np.ndarray, severity: np.ndarray, failed: np.ndar
     left.axhline(1.0, color="C3", ls="--", lw=1, label="limit")
     if not finite.all():
         left.axhline(top, color="0.3", ls=":", lw=1,
-                     label="no touchdown or numerical failure")
+                     label="no value (the run did not reach it, or failed numerically)")
     left.set_xlabel(name)
     left.set_ylabel("largest metric / limit")
     left.grid(alpha=0.3)

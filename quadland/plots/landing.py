@@ -23,10 +23,11 @@ from quadland.plots.finite import drawable
 from quadland.plots.style import finish
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
+from quadland_symbolic.landing.relative import TOUCHDOWN_LIMITS
 
 __all__ = ["LANDING_FIGURES", "LIMIT_NAMES", "PAD_SIZE", "LandingResult", "landing_limits",
            "pad_size_of", "body_rotation", "deck_rectangle", "touchdown_row",
-           "trajectory_3d_plot", "relative_position_plot", "ground_track_plot",
+           "trajectory_3d_plot", "relative_position_plot", "landing_ground_track_plot",
            "rotor_forces_plot", "landing_figures"]
 
 #: File name and title of each figure, in the order of :func:`landing_figures`.
@@ -41,7 +42,7 @@ LANDING_FIGURES = types.MappingProxyType({
 #: tilt from the deck normal (deg), horizontal relative speed (m/s), and the
 #: largest force of one rotor (N). The loop kind gives their values
 #: (``quadland.kinds.landing.report.touchdown_limits``).
-LIMIT_NAMES = ("max_sink_rate", "max_offset", "max_tilt_deg", "max_relative_speed", "F_max")
+LIMIT_NAMES = (*TOUCHDOWN_LIMITS, "F_max")
 
 #: m, side of the square pad drawn when the scenario gives no ``pad_size``.
 PAD_SIZE = 1.0
@@ -221,9 +222,9 @@ def relative_position_plot(result: LandingResult, limits: Mapping | None = None)
         0. ``x_e``, ``y_e`` and the offset ``hypot(x_e, y_e)``, m, with
            ``+-max_offset``;
         1. ``z_e``, m;
-        2. the horizontal relative speed ``hypot(dx_e/dt, dy_e/dt)`` with
-           ``max_relative_speed`` and the sink rate ``-dz_e/dt`` with
-           ``max_sink_rate``, m/s (central differences of the columns);
+        2. the horizontal relative speed ``hypot(dx_e, dy_e)`` with
+           ``max_relative_speed`` and the sink rate ``-dz_e`` with
+           ``max_sink_rate``, m/s (the result's own ``dx_e``, ``dy_e``, ``dz_e``);
         3. the tilt of the thrust axis from the deck normal, deg, with
            ``max_tilt_deg``.
 
@@ -253,7 +254,7 @@ def relative_position_plot(result: LandingResult, limits: Mapping | None = None)
     return _finish_time(fig, result, ax)
 
 
-def ground_track_plot(result: LandingResult) -> Figure:
+def landing_ground_track_plot(result: LandingResult) -> Figure:
     """Both tracks from above, the starts and the touchdown.
 
     Parameters
@@ -335,6 +336,6 @@ def landing_figures(result: LandingResult, limits: Mapping | None = None) -> dic
     """
     result = drawable(result)                 # a failed flight's last rows may diverge
     figs = (trajectory_3d_plot(result), relative_position_plot(result, limits),
-            ground_track_plot(result), rotor_forces_plot(result, limits))
+            landing_ground_track_plot(result), rotor_forces_plot(result, limits))
     return dict(zip(LANDING_FIGURES, figs, strict=True))
 

@@ -20,11 +20,11 @@ from quadland.analysis import FrequencyResponse, frequency_grid, loop_at_a_time,
 if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
     from quadland.margins import MarginReport
 
-__all__ = ["FIGURES", "bode_plot", "nyquist_plot", "sigma_plot", "pole_plot",
+__all__ = ["MARGIN_FIGURES", "bode_plot", "nyquist_plot", "sigma_plot", "pole_plot",
            "margin_figures"]
 
 #: File names of :func:`margin_figures`, in order.
-FIGURES = ("bode.png", "nyquist.png", "sigma.png", "poles.png")
+MARGIN_FIGURES = ("bode.png", "nyquist.png", "sigma.png", "poles.png")
 
 #: Grid density of the figures, points per decade (the margins use a finer one).
 _POINTS_PER_DECADE = 30
@@ -211,9 +211,9 @@ def margin_figures(report: MarginReport) -> dict[str, Figure]:
     Returns
     -------
     dict of str to matplotlib.figure.Figure
-        Keys are :data:`FIGURES`: Bode, Nyquist, singular values and poles.
+        Keys are :data:`MARGIN_FIGURES`: Bode, Nyquist, singular values and poles.
         The frequency responses are evaluated once for all of them.
     """
     r = _loop_response(report)
-    return dict(zip(FIGURES, (_bode(report, r), _nyquist(report, r), _sigma(report, r.omega),
+    return dict(zip(MARGIN_FIGURES, (_bode(report, r), _nyquist(report, r), _sigma(report, r.omega),
                               pole_plot(report)), strict=True))

@@ -9,11 +9,11 @@ from quadland.engine.result import SimulationResult
 from quadland.plots.finite import drawable
 from quadland.plots.style import finish
 
-__all__ = ["FIGURES", "relative_errors_plot", "velocity_errors_plot", "control_inputs_plot",
-           "uncertainty_plot", "ground_track_plot", "simulation_figures"]
+__all__ = ["SIMULATION_FIGURES", "relative_errors_plot", "velocity_errors_plot",
+           "control_inputs_plot", "uncertainty_plot", "ground_track_plot", "simulation_figures"]
 
 #: File name and title of each figure, in the order of :func:`simulation_figures`.
-FIGURES = {
+SIMULATION_FIGURES = {
     "fig2_relative_altitude_attitude.png": "Relative altitude and attitude (Fig. 2)",
     "fig3_velocity_errors.png": "Velocity errors e2 (Fig. 3)",
     "fig4_control_inputs.png": "Control inputs (Fig. 4)",
@@ -31,7 +31,7 @@ def _grid(title: str, rows: int = 4):
 
 def _four_panel(result, fig_name, first, first_unit, rest, rest_unit) -> Figure:
     """One linear signal and three angular ones (shown in degrees)."""
-    fig, ax = _grid(FIGURES[fig_name])
+    fig, ax = _grid(SIMULATION_FIGURES[fig_name])
     t = result["t"]
     ax[0].plot(t, result[first])
     ax[0].set_ylabel(f"{first} [{first_unit}]")
@@ -85,7 +85,7 @@ def control_inputs_plot(result: SimulationResult) -> Figure:
     matplotlib.figure.Figure
         Four axes, ``u_1`` (m/s^2) and ``u_2..u_4`` (rad/s^2).
     """
-    fig, ax = _grid(FIGURES["fig4_control_inputs.png"])
+    fig, ax = _grid(SIMULATION_FIGURES["fig4_control_inputs.png"])
     t = result["t"]
     units = ("m/s^2", "rad/s^2", "rad/s^2", "rad/s^2")
     for i, a in enumerate(ax):
@@ -108,7 +108,7 @@ def uncertainty_plot(result: SimulationResult) -> Figure:
         ``controller.nominal_model`` also the network's target
         ``Delta_target_k``, and the estimate ``Delta_hat_k`` (dashed).
     """
-    fig, ax = _grid(FIGURES["fig5_uncertainty_estimation.png"])
+    fig, ax = _grid(SIMULATION_FIGURES["fig5_uncertainty_estimation.png"])
     t = result["t"]
     nominal = result.scenario.data["controller"]["nominal_model"]
     for i, a in enumerate(ax):
@@ -143,7 +143,7 @@ def ground_track_plot(result: SimulationResult) -> Figure:
     a.set_xlabel("x [m]")
     a.set_ylabel("y [m]")
     a.set_aspect("equal", adjustable="datalim")
-    a.set_title(FIGURES["ground_track.png"])
+    a.set_title(SIMULATION_FIGURES["ground_track.png"])
     a.legend(loc="best")
     a.grid(True)
     return finish(fig, result)
@@ -159,7 +159,7 @@ def simulation_figures(result: SimulationResult) -> dict[str, Figure]:
     Returns
     -------
     dict of str to matplotlib.figure.Figure
-        Keys are those of :data:`FIGURES`, in that order.
+        Keys are those of :data:`SIMULATION_FIGURES`, in that order.
 
     Examples
     --------
@@ -172,4 +172,4 @@ def simulation_figures(result: SimulationResult) -> dict[str, Figure]:
     draw = (relative_errors_plot, velocity_errors_plot, control_inputs_plot, uncertainty_plot,
             ground_track_plot)
     result = drawable(result)                 # a failed flight's last rows may diverge
-    return {name: plot(result) for name, plot in zip(FIGURES, draw, strict=True)}
+    return {name: plot(result) for name, plot in zip(SIMULATION_FIGURES, draw, strict=True)}

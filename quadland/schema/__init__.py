@@ -22,7 +22,8 @@ from quadland.schema.landing import LANDING_SCHEMA, check_landing
 from quadland.schema.paper import PAPER_SCHEMA, check_paper
 
 __all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
-           "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "SHARED_KEYS"]
+           "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "DEFAULT_MODEL",
+           "SHARED_KEYS"]
 
 #: The schema of each model (``scenario.model``; "paper" when absent).
 SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
@@ -34,6 +35,9 @@ CROSS_CHECKS: Mapping[str, Callable[[dict], None]] = MappingProxyType(
 
 #: The models a scenario may select with ``scenario.model``.
 MODELS = tuple(SCHEMAS)
+
+#: The model of a scenario that names none (the paper's, as quadland began).
+DEFAULT_MODEL = "paper"
 
 #: The keys every kind's schema holds, with the same meaning: the engine (the
 #: resource plan, the envelope's step hints, the disturbance samples), the run's

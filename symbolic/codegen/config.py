@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TEMPLATE_DIR", "STATUS_CODES", "CodegenConfig", "DEFAULT_CONFIG", "Defaults",
-           "LandingDefaults"]
+__all__ = ["TEMPLATE_DIR", "STATUS_CODES", "CodegenConfig", "DEFAULT_CONFIG", "FlightDefaults",
+           "Defaults", "LandingDefaults"]
 
 #: Folder of the Jinja2 templates (installed with the package).
 TEMPLATE_DIR = Path(__file__).resolve().parent.parent / "templates"
@@ -97,8 +97,9 @@ DEFAULT_CONFIG = CodegenConfig()
 
 
 @dataclasses.dataclass(frozen=True)
-class Defaults:
-    """Numeric defaults written into the C (one scenario's values).
+class FlightDefaults:
+    """What every flight's C defaults hold: the scenario, the network, the example's clocks
+    and its deterministic disturbance.
 
     Attributes
     ----------
@@ -107,36 +108,20 @@ class Defaults:
         (never a path, so that the output does not depend on the machine).
     l : int
         RBF node count.
-    p_quad, p_veh, p_ctrl : ndarray
-        Parameter vectors in the layouts of ``quadland_symbolic.parameters``.
-    ref : ndarray, (12,)
-        ``[e1d, e1d_dot, e1d_ddot]``.
-    rotor_limits : tuple of float
-        ``(F_min, F_max)``, N.
     tilt_min : float
         Smallest accepted ``|cos(theta1) cos(phi1)|``.
-    hold : float
-        Hold compensation of the control step, periods.
-    x0 : ndarray
-        Initial closed-loop state.
     duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
-        Example flight: s, Hz, Hz (0 = continuous), Hz.
+        The example's flight: s, Hz, Hz (0 = continuous, the paper's loop
+        only), Hz.
     force_bias, moment_bias : tuple of float
         N, N m, per axis.
     force_amplitude, force_frequency, moment_amplitude, moment_frequency : float
-        N, rad/s, N m, rad/s.
+        The disturbance's sine: N, rad/s, N m, rad/s.
     """
 
     scenario: str
     l: int
-    p_quad: np.ndarray
-    p_veh: np.ndarray
-    p_ctrl: np.ndarray
-    ref: np.ndarray
-    rotor_limits: tuple[float, float]
     tilt_min: float
-    hold: float
-    x0: np.ndarray
     duration: float
     output_rate_hz: float
     control_rate_hz: float
@@ -150,34 +135,52 @@ class Defaults:
 
 
 @dataclasses.dataclass(frozen=True)
-class LandingDefaults:
+class Defaults(FlightDefaults):
+    """Numeric defaults of the paper's step and its example (one scenario's values).
+
+    Attributes
+    ----------
+    p_quad, p_veh, p_ctrl : ndarray
+        Parameter vectors in the layouts of ``quadland_symbolic.parameters``.
+    ref : ndarray, (12,)
+        ``[e1d, e1d_dot, e1d_ddot]``.
+    rotor_limits : tuple of float
+        ``(F_min, F_max)``, N.
+    hold : float
+        Hold compensation of the control step, periods.
+    x0 : ndarray
+        Initial closed-loop state.
+
+    The rest is :class:`FlightDefaults`'.
+    """
+
+    p_quad: np.ndarray
+    p_veh: np.ndarray
+    p_ctrl: np.ndarray
+    ref: np.ndarray
+    rotor_limits: tuple[float, float]
+    hold: float
+    x0: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class LandingDefaults(FlightDefaults):
     """Numeric defaults of the landing API and its example (one landing scenario's values).
 
     Attributes
     ----------
-    scenario : str
-        Its name and overrides, for the comments.
-    l : int
-        RBF node count of the landing step.
     p_quad, p_ctrl, p_act, p_guid : ndarray
         ``quadland_symbolic.parameters.QUADROTOR``, ``landing_controller_params(l)``,
         ``quadland_symbolic.landing.quadrotor.ACTUATOR``,
         ``quadland_symbolic.landing.guidance.GUIDANCE_PARAMS``.
-    tilt_min : float
-        Smallest accepted ``|cos(theta1) cos(phi1)|``.
     pp, xp0 : ndarray
         The example's plant parameters (``quadland_symbolic.landing.plant.LANDING_PLANT_PARAMS``)
         and initial plant state.
-    duration, output_rate_hz, control_rate_hz, disturbance_rate_hz : float
-        s, Hz, Hz, Hz.
     rk_steps : int
         RK4 steps per interval of the merged time grid.
     delay_periods : int
         The computation delay: a step's rotor commands act this many control
         periods later.
-    force_bias, moment_bias : tuple of float
-    force_amplitude, force_frequency, moment_amplitude, moment_frequency : float
-        The disturbance's deterministic part: N, rad/s, N m, rad/s.
     wind_mean : tuple of float
         m/s, E.
     gust_start, gust_half_length, gust_amplitude : float
@@ -188,29 +191,18 @@ class LandingDefaults:
         s from touchdown to the end of the run.
     limits : tuple of (str, float)
         The touchdown limits by name (``max_sink_rate``, ...), in report order.
+
+    The rest is :class:`FlightDefaults`'.
     """
 
-    scenario: str
-    l: int
     p_quad: np.ndarray
     p_ctrl: np.ndarray
     p_act: np.ndarray
     p_guid: np.ndarray
-    tilt_min: float
     pp: np.ndarray
     xp0: np.ndarray
-    duration: float
-    output_rate_hz: float
-    control_rate_hz: float
-    disturbance_rate_hz: float
     rk_steps: int
     delay_periods: int
-    force_bias: tuple[float, float, float]
-    force_amplitude: float
-    force_frequency: float
-    moment_bias: tuple[float, float, float]
-    moment_amplitude: float
-    moment_frequency: float
     wind_mean: tuple[float, float, float]
     gust_start: float
     gust_half_length: float

@@ -60,7 +60,7 @@ from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.quadrotor import WRENCH, rotors_from_wrench
 from quadland_symbolic.rbf import rbf
-from quadland_symbolic.relative import nominal_drift, tilt
+from quadland_symbolic.relative import E1, nominal_drift, tilt
 
 __all__ = [
     "N_CHANNELS",
@@ -84,6 +84,10 @@ N_CHANNELS = 6
 NETWORK_INPUT_DIM = 6
 
 _CHANNEL_UNITS = ("m/s^2",) * 3 + ("rad/s^2",) * 3
+#: The six channels' two groups: the outer loop's deck-frame axes, the inner loop's attitude.
+_POSITION, _ATTITUDE = slice(0, 3), slice(3, N_CHANNELS)
+#: The attitude entries of the paper's 4-vectors ``e1 = [z_e, phi_e, theta_e, psi_e]``.
+_PAPER_ATTITUDE = slice(E1.index("phi_e"), E1.index("psi_e") + 1)
 _CHANNEL_RATE_UNITS = ("m/s",) * 3 + ("rad/s",) * 3
 
 #: What the step measures: the landing sensor (p_e, v_e, deck frame), the IMU
@@ -300,7 +304,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     squash_p = ca.tanh(z2p_bar / rho)
     f_g, f_r = known_acceleration(p_e, v_e, eta1, eta2, ms["v2E"], ms["a2E"], ms["w2E"],
                                   ms["w2E_dot"], p_quad)
-    a_des = (-k2p * z2p - z1p - Delta_hat[0:3] - squash_p * zeta_hat[0:3] + alpha_p_dot
+    a_des = (-k2p * z2p - z1p - Delta_hat[_POSITION] - squash_p * zeta_hat[_POSITION] + alpha_p_dot
              - f_g - nominal * f_r)                                            # eq. 20
     t_E = m1 * R_deck @ a_des                                                  # N, in E
     th = thrust_attitude(t_E, eta2[2], c["tilt_max"], 4 * act["F_max"])
@@ -316,7 +320,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     e1d_ddot = ca.vertcat(eta_f_ddot, eta2_ddot[2])
 
     z1a, z2a, squash_a, u_a = _inner_loop(eta1, Omega1, (e1d, e1d_dot, e1d_ddot), c,
-                                          Delta_hat[3:6], zeta_hat[3:6], p_quad)
+                                          Delta_hat[_ATTITUDE], zeta_hat[_ATTITUDE], p_quad)
 
     # rotors
     wrench = ca.vertcat(th["T"], q["I"] * u_a)
@@ -350,11 +354,13 @@ def _inner_loop(eta1, Omega1, e1d_all, c, Delta_a, zeta_a, p_quad):
         ca.vertcat(0, eta1), ca.vertcat(0, Rr1 @ Omega1),
         ca.vertcat(0, e1d, 0, e1d_dot, 0, e1d_ddot), ca.vertcat(0, c["k1"]))
     z1a = eta1 - e1d                                                           # eq. 9
-    z2a = Omega1 - alpha[1:4]                                                  # eq. 9
+    z2a = Omega1 - alpha[_PAPER_ATTITUDE]                                      # eq. 9
     squash_a = ca.tanh(z2a / rho)
-    f_a = nominal_drift(ca.vertcat(0, eta1, 0, 0, 0, Omega1), p_quad)[1:4]    # drag, gyroscopic
+    # the paper's xq = [z1, eta1, V1, Omega1]: its rotational drift reads eta1 and Omega1 only
+    xq = ca.vertcat(0, eta1, ca.SX.zeros(3), Omega1)
+    f_a = nominal_drift(xq, p_quad)[_PAPER_ATTITUDE]                          # drag, gyroscopic
     u_a = (-c["k2"] * z2a - Rr1.T @ z1a - Delta_a - squash_a * zeta_a
-           + alpha_dot[1:4] - nominal * f_a)                                   # eq. 20
+           + alpha_dot[_PAPER_ATTITUDE] - nominal * f_a)                       # eq. 20
     return z1a, z2a, squash_a, u_a
 
 

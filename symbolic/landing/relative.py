@@ -24,7 +24,7 @@ from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE
 from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
-__all__ = [
+__all__ = ["TOUCHDOWN_LIMITS",
     "RELATIVE6",
     "RELATIVE6_ACCELERATION",
     "relative6",
@@ -66,6 +66,12 @@ TOUCHDOWN_FIGURES = Layout("touchdown", (
     Field("relative_speed", 1, "m/s", "hypot(dx_e, dy_e): horizontal relative speed"),
     Field("tilt_deg", 1, "deg", "angle between the body z axis and the deck normal"),
 ), "touchdown figures, deck frame")
+
+#: The limits a touchdown is held to (a landing scenario's ``[landing]`` keys), in
+#: the report's order: each is ``max_`` and the name of a :data:`TOUCHDOWN_FIGURES`.
+TOUCHDOWN_LIMITS = tuple(f"max_{n}" for n in ("sink_rate", "offset", "tilt_deg",
+                                               "relative_speed"))
+assert {n.removeprefix("max_") for n in TOUCHDOWN_LIMITS} == set(TOUCHDOWN_FIGURES.names())
 
 _PARAM_NAMES = ["p_quad", "p_act", "p_veh", "p_deck"]
 

@@ -10,14 +10,15 @@ from quadland.engine.result import SimulationResult
 from quadland.kinds.landing.values import rotor_force_max
 from quadland.metrics import Metric
 from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
-from quadland_symbolic.landing.relative import TOUCHDOWN_FIGURES, touchdown_figures_function
+from quadland_symbolic.landing.relative import (
+    TOUCHDOWN_FIGURES,
+    TOUCHDOWN_LIMITS,
+    touchdown_figures_function,
+)
 
 __all__ = ["TOUCHDOWN_LIMITS", "TouchdownReport", "touchdown_report", "landing_summary",
            "LANDING_METRICS", "landing_run_metrics", "touchdown_limits"]
 
-#: The ``[landing]`` limits a touchdown is held to, in the report's order: each
-#: is ``max_`` and the name of a ``quadland_symbolic.landing.relative.TOUCHDOWN_FIGURES``.
-TOUCHDOWN_LIMITS = ("max_sink_rate", "max_offset", "max_tilt_deg", "max_relative_speed")
 
 
 

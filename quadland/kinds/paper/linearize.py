@@ -32,8 +32,10 @@ from quadland.linear import (
 )
 from quadland.scenario import Scenario
 from quadland.schema import MAX_DURATION_S, PAPER_SCHEMA
+from quadland_symbolic.backstepping import PAPER_REFERENCE
 from quadland_symbolic.closed_loop import closed_loop_state
 from quadland_symbolic.linearization import (
+    FROZEN_VEHICLE,
     RELATIVE_PLANT,
     VEHICLE_SPEEDS,
     controller_states,
@@ -84,7 +86,9 @@ def paper_equilibrium(scenario: Scenario, *, tol: float = 1e-9,
     F = equilibrium_residual_function(l)
     w = _constant_disturbance(scenario)
     xr0 = RELATIVE_PLANT.zeros()
-    xr0[0:4] = mv.ref[0:4]                                   # hover at the reference e1d
+    e1d = PAPER_REFERENCE.unpack(mv.ref)["e1d"]              # hover at the reference e1d
+    xr0[RELATIVE_PLANT.slice("z1")] = e1d[0]                 # e1 = [z_e, phi, theta, psi_e]
+    xr0[RELATIVE_PLANT.slice("eta1")] = e1d[1:4]
     xr0[RELATIVE_PLANT.index("z1")] += VEHICLE.unpack(mv.p_veh)["z2"][0]
     nr, nc = RELATIVE_PLANT.size, controller_states(l).size
     xi = np.concatenate([xr0, np.zeros(nc), VEHICLE_SPEEDS.zeros()])
@@ -148,26 +152,30 @@ def frozen_point(scenario: Scenario, t: float) -> OperatingPoint:
 
 def _point(scenario, kind, t, xr, xc, vehicle, w, iterations) -> OperatingPoint:
     mv = model_values(scenario)
-    tilt = np.cos(xr[1]) * np.cos(xr[2])
+    phi1, theta1, _ = RELATIVE_PLANT.unpack(np.asarray(xr, float))["eta1"]
+    tilt = np.cos(phi1) * np.cos(theta1)
     if abs(tilt) < TILT_MIN:
         raise SingularAttitudeError(f"operating point at cos(theta) cos(phi) = {tilt:.2e}: "
                                     "the thrust map is singular there")
     z2 = float(VEHICLE.unpack(mv.p_veh)["z2"][0])
-    out = linearization_function(mv.l)(xr, xc, [z2, vehicle[2]], w, mv.p_quad, mv.p_ctrl,
-                                       mv.ref)
+    frozen = FROZEN_VEHICLE.pack(dict(z2=z2, r2=VEHICLE_SPEEDS.unpack(vehicle)["r2"]))
+    out = linearization_function(mv.l)(xr, xc, frozen, w, mv.p_quad, mv.p_ctrl, mv.ref)
     u, xr_dot, xc_dot = (np.asarray(v, dtype=float).ravel() for v in out[0:3])
     xc = np.asarray(xc, float)
+    adaptive = controller_states(mv.l).unpack(xc)
     return OperatingPoint(kind, t, np.asarray(xr, float), xc, np.asarray(vehicle, float), z2,
                           np.asarray(w, float), u, float(np.linalg.norm(np.r_[xr_dot, xc_dot])),
                           iterations, "paper", RELATIVE_PLANT.element_names(),
-                          dict(zeta_hat=xc[-4:].tolist(),
-                               norm_W_hat=float(np.linalg.norm(xc[:-4]))))
+                          dict(zeta_hat=adaptive["zeta_hat"].tolist(),
+                               norm_W_hat=float(np.linalg.norm(adaptive["W_hat"]))))
 
 
 def _jacobians(scenario: Scenario, point: OperatingPoint):
     mv = model_values(scenario)
-    out = linearization_function(mv.l)(point.xr, point.xc, [point.z2, point.vehicle[2]],
-                                       point.w, mv.p_quad, mv.p_ctrl, mv.ref)
+    frozen = FROZEN_VEHICLE.pack(dict(z2=point.z2,
+                                      r2=VEHICLE_SPEEDS.unpack(point.vehicle)["r2"]))
+    out = linearization_function(mv.l)(point.xr, point.xc, frozen, point.w, mv.p_quad,
+                                       mv.p_ctrl, mv.ref)
     return tuple(np.asarray(v, dtype=float) for v in out[3:9])
 
 
