@@ -3,7 +3,7 @@
 The symbolic models (quadland_symbolic.landing.sensors) are checked at chosen states
 whose readings are derived by hand (a level hover over a level pad, a
 30 degree roll over a flat deck, free fall, ...); the runtime's random parts
-(quadland.engine.sensing) against the closed-form statistics of the processes they
+(quadland.kinds.landing.sensing) against the closed-form statistics of the processes they
 simulate, with tolerances from each estimator's own sampling distribution.
 """
 
@@ -13,15 +13,16 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from quadland.engine.loop import Clock
 from quadland.engine.noise import gauss_markov, gauss_markov_fill, random_walk, sample_times
-from quadland.engine.sensing import draw_sensors
-from quadland.engine.sensor_settings import (
+from quadland.exceptions import ScenarioError
+from quadland.kinds.landing.sensing import draw_sensors
+from quadland.kinds.landing.sensor_settings import (
     SENSOR_DEFAULTS,
     SETTINGS,
     sensor_params,
     validate_settings,
 )
-from quadland.exceptions import ScenarioError
 from quadland_symbolic.landing.deck import DECK_PARAMS
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
@@ -332,7 +333,10 @@ def test_sample_times_and_arrivals():
     s = draw_sensors({"gnss": {"phase": 0.05}}, 2.0, seed=1)["gnss"]
     np.testing.assert_allclose(s.times, 0.05 + 0.2 * np.arange(10))
     np.testing.assert_allclose(s.arrival, s.times + SENSOR_DEFAULTS["gnss"]["latency"])
-    assert len(sample_times(25.0, 40.0)) == 1001
+    # the control clock's rule: ticks below the final time, none at it
+    assert len(sample_times(25.0, 40.0)) == 1000
+    np.testing.assert_array_equal(sample_times(250.0, 2.0),
+                                  Clock(250.0, 0.0, 2.0, closing=False).times())
 
 
 def test_dropout_and_outlier_rates_lie_in_their_binomial_intervals():

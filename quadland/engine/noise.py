@@ -2,31 +2,34 @@
 
 Gauss-Markov (first-order, stationary start), its exact conditional fill
 between known samples, random walk, and the sample clock. The sensors
-(:mod:`quadland.engine.sensing`) draw their noise with these; each takes its
+(:mod:`quadland.kinds.landing.sensing`) draw their noise with these; each takes its
 standard normal draws as an argument, so the caller owns the random stream.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
+
+from quadland.engine.loop import Clock
 
 __all__ = ["sample_times", "gauss_markov", "gauss_markov_fill", "random_walk"]
 
 
 def sample_times(rate_hz: float, duration: float, phase: float = 0.0) -> np.ndarray:
-    """Sample times ``phase + k / rate_hz`` on ``[0, duration]``, s.
+    """A sensor's sample times, s: the loop's clock rule (:class:`quadland.engine.loop.Clock`).
+
+    ``phase + k / rate_hz`` below ``duration``, as the control clock ticks (no
+    sample at the final time itself), so that a sensor sampled with the
+    control step reads the same instant, to the bit.
 
     Examples
     --------
     >>> sample_times(4.0, 1.0).tolist()
-    [0.0, 0.25, 0.5, 0.75, 1.0]
+    [0.0, 0.25, 0.5, 0.75]
+    >>> sample_times(4.0, 1.1, phase=0.1).tolist()
+    [0.1, 0.35, 0.6, 0.85]
     """
-    if duration < phase:
-        return np.zeros(0)
-    n = int(math.floor((duration - phase) * rate_hz * (1 + 1e-12) + 1e-9)) + 1
-    return phase + np.arange(n) / rate_hz
+    return Clock(rate_hz, phase, duration, closing=False).times()
 
 
 def _decay(dt, tau):

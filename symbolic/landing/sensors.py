@@ -10,7 +10,7 @@ plant's parameters ``pp``, the sensors' constants ``p_sens``
 (:data:`SENSOR_PARAMS`) and a noise vector drawn outside (one layout per
 sensor), so that every Function is deterministic; a zero noise vector gives
 the exact truth. The random parts (Gauss-Markov and random-walk processes,
-dropouts, outliers) are drawn by :mod:`quadland.engine.sensing`; latency and
+dropouts, outliers) are drawn by :mod:`quadland.kinds.landing.sensing`; latency and
 delivery are the simulator's. docs/sensors.md gives each model, its
 equations and every default with its source.
 
@@ -65,7 +65,7 @@ __all__ = ["measurement_function", "SENSOR_NAMES", "SENSOR_PARAMS", "IMU_PACKET"
            "sense_vision_function", "sense_gnss_function", "sense_rangefinder_function",
            "sense_datalink_function", "sensor_function"]
 
-#: The sensors, in the order of their random streams (:mod:`quadland.engine.sensing`).
+#: The sensors, in the order of their random streams (:mod:`quadland.kinds.landing.sensing`).
 SENSOR_NAMES = ("imu", "vision", "gnss", "rangefinder", "datalink")
 
 _XYZ = ("x", "y", "z")
@@ -131,7 +131,7 @@ DATALINK_PACKET = Layout("y_datalink", tuple(DECK_POSE[n] for n in (
 _E_ATT = Field("e_att", 3, "rad", "attitude estimator error (shared by imu, vision, "
                "rangefinder at equal times)", elements=_named("e_att", _ATT))
 
-#: Noise of the IMU packet (drawn by quadland.engine.sensing).
+#: Noise of the IMU packet (drawn by quadland.kinds.landing.sensing).
 IMU_NOISE = Layout("n_imu", (
     _E_ATT,
     Field("b_a", 3, "m/s^2", "accelerometer bias (turn-on + random walk)",

@@ -6,7 +6,8 @@ noise)``) that take their noise as an input. This module draws that noise,
 seeded, for a whole run and tells when each sample is taken and when (and
 whether) it arrives:
 
-* **sample times** ``t_k = phase + k / rate_hz`` on ``[0, duration]``;
+* **sample times** ``t_k = phase + k / rate_hz`` below ``duration``, the loop's clock rule
+  (:class:`quadland.engine.loop.Clock`: as the control step ticks);
 * **arrival times** ``t_k + latency``;
 * **delivered**: each sample is lost with probability ``dropout``
   (Bernoulli, independent);
@@ -37,7 +38,7 @@ times, and the rangefinder's also on the vision's, as one process must be).
 outliers): the Functions then return the exact truth, at the same times.
 
 Settings are plain dicts like a scenario's ``[sensors.<name>]`` table,
-checked over their defaults by :mod:`quadland.engine.sensor_settings`; the
+checked over their defaults by :mod:`quadland.kinds.landing.sensor_settings`; the
 processes are :mod:`quadland.engine.noise`'s.
 """
 
@@ -49,9 +50,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from quadland.engine.loop import GRID_TOL
 from quadland.engine.noise import gauss_markov, gauss_markov_fill, random_walk, sample_times
-from quadland.engine.sensor_settings import validate_settings
 from quadland.exceptions import ScenarioError
+from quadland.kinds.landing.sensor_settings import validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
 
@@ -137,15 +139,20 @@ def _rng(seed, stream: int, part: int) -> np.random.Generator:
 
 
 
-def _same_times(base, t, tol=1e-9):
-    """Index of each ``t`` in ``base`` where they coincide, else -1."""
+def _same_times(base, t):
+    """Index of each ``t`` in ``base`` where they coincide, else -1.
+
+    Coinciding is the loop's grid rule (:data:`quadland.engine.loop.GRID_TOL`
+    of ``base``'s period): the instants one grid point would merge.
+    """
+    tol = GRID_TOL * (base[1] - base[0] if len(base) > 1 else 1.0)
     j = np.clip(np.searchsorted(base, t), 0, max(len(base) - 1, 0))
     out = np.full(len(t), -1)
     if len(base) == 0:
         return out
     for shift in (0, -1):
         k = np.clip(j + shift, 0, len(base) - 1)
-        hit = np.abs(base[k] - t) <= tol * np.maximum(1.0, np.abs(t))
+        hit = np.abs(base[k] - t) <= tol
         out = np.where((out < 0) & hit, k, out)
     return out
 
