@@ -35,7 +35,12 @@ import casadi as ca
 
 from quadland_symbolic.layout import Layout
 
-__all__ = ["rk4_step", "LoopModel"]
+__all__ = ["MAX_DELAY_PERIODS", "rk4_step", "LoopModel"]
+
+#: The longest computation delay a simulator holds, in control periods: the
+#: sampled drivers keep the commands computed but not yet applied in a queue of
+#: this length (``delay`` of the compiled and the VM simulators).
+MAX_DELAY_PERIODS = 16
 
 
 def rk4_step(f: ca.Function) -> ca.Function:

@@ -18,12 +18,7 @@ from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.deck import deck_pose
 from quadland_symbolic.landing.guidance import ALIGN, GUIDANCE_STATE
 from quadland_symbolic.landing.linearization import HOVER_PLANT, hover_linearization_function
-from quadland_symbolic.landing.loop import (
-    MAX_DELAY_PERIODS,
-    landing_loop,
-    landing_loop_memory,
-    landing_loop_params,
-)
+from quadland_symbolic.landing.loop import landing_loop, landing_loop_memory, landing_loop_params
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
@@ -73,9 +68,7 @@ def _full_state(sc, point, z, mem, psi2, t=0.0):
     x1q = QUAD6_STATE.pack(dict(p1=p1, eta1=eta1, V1=zs["V1"], Omega1=zs["Omega1"], F=zs["F"]))
     xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0,
                                   z_ref=sc.data["landing"]["hover_height"], aborts=0.0))
-    # the computation delay's buffer holds the steady commands (the hover's forces)
-    u_delay = np.tile(zs["F"], MAX_DELAY_PERIODS)
-    xc = landing_loop_memory(lv.l).pack(dict(xg=xg, mem=mem, u_delay=u_delay))
+    xc = landing_loop_memory(lv.l).pack(dict(xg=xg, mem=mem))
     return LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv)), xc
 
 
@@ -133,7 +126,6 @@ def _one_period(sc, point, psi2, dt, substeps=8):
     nz = HOVER_PLANT.size
     pc = lv.pc.copy()
     pc[landing_loop_params(lv.l).slice("dt")] = dt
-    pc[landing_loop_params(lv.l).slice("delay_periods")] = 0     # commanded at the sample
 
     def f(xp):
         return np.asarray(loop.plant(xp, F_cmd, w, 0.0, lv.pp), dtype=float).ravel()

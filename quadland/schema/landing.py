@@ -8,7 +8,7 @@ from types import MappingProxyType
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
-from quadland_symbolic.landing.loop import MAX_DELAY_PERIODS
+from quadland_symbolic.loop import MAX_DELAY_PERIODS
 
 __all__ = ["LANDING_SCHEMA", "check_landing"]
 

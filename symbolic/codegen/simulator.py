@@ -17,7 +17,7 @@ from pathlib import Path
 import casadi as ca
 
 from quadland_symbolic.codegen.render import common_context, render
-from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.loop import MAX_DELAY_PERIODS, LoopModel
 
 __all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
 
@@ -99,7 +99,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     files[f"{prefix}{part}.c"] = render("simulator.c.jinja",
         prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
         has_event=driver == "sampled" and model.event is not None,
-        has_envelope=model.envelope is not None,
+        has_envelope=model.envelope is not None, max_delay=MAX_DELAY_PERIODS,
         casadi_version=ca.__version__, sizes=sizes,
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))

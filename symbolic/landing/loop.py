@@ -14,10 +14,8 @@
   reference feeds one landing step
   (:func:`~quadland_symbolic.landing.controller.landing_law`), both at the control
   rate; the memory ``xc`` (:func:`landing_loop_memory`) is the guidance's state
-  (the phase among it), the step's and the commands not yet applied; the held
-  input is the rotor commands computed ``delay_periods`` steps before
-  (:func:`delayed_command`: the flight computer's computation delay), the
-  guard the measured tilt; **step_args** gives both steps' arguments, for
+  (the phase among it) and the step's; the held input is the rotor commands,
+  the guard the measured tilt; **step_args** gives both steps' arguments, for
   the flight code behind the same signature (``controller.backend = "c"``);
 * **event** ``event(xp, t, pp)``: the gear gap; touchdown ends the
   integration at the instant it happens;
@@ -58,13 +56,9 @@ from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import LoopModel
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["MAX_DELAY_PERIODS", "delayed_command",
-           "LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
+__all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
            "landing_loop_state", "loop_outputs", "gear_gap_function",
            "landing_envelope_function", "landing_loop"]
-
-#: The longest computation delay the loop holds, in control periods.
-MAX_DELAY_PERIODS = 4
 
 #: What the loop records of each control step (held until the next).
 LANDING_RECORDED = Layout("rec_land", (
@@ -94,9 +88,6 @@ def landing_loop_memory(l: int) -> Layout:
     return Layout("xc_land", (
         Field.nested("xg", GUIDANCE_STATE, "guidance: phase, dwell timer, z_ref, aborts"),
         Field.nested("mem", landing_memory(l), "landing step: network, filter, compensator"),
-        Field("u_delay", 4 * MAX_DELAY_PERIODS, "N",
-              "rotor commands computed but not yet applied, newest first (4 per period)",
-              shape=(4, MAX_DELAY_PERIODS)),
     ), "landing loop memory")
 
 
@@ -109,8 +100,6 @@ def landing_loop_params(l: int) -> Layout:
         Field.nested("p_ctrl", landing_controller_params(l), "landing step"),
         Field.nested("p_guid", GUIDANCE_PARAMS, "guidance"),
         Field("dt", 1, "s", "control period"),
-        Field("delay_periods", 1, "-",
-              f"computation delay in control periods, 0 to {MAX_DELAY_PERIODS}"),
     ), "landing loop controller parameters")
 
 
@@ -159,28 +148,6 @@ def landing_envelope_function(l: int) -> ca.Function:
     return ca.Function("envelope", [x, uh], [s], ["x", "uh"], ["s"])
 
 
-def delayed_command(F_new, u_delay, delay_periods):
-    """The command applied now, and the buffer of those not yet applied.
-
-    ``u_delay`` holds the last :data:`MAX_DELAY_PERIODS` commands, newest
-    first, as a ``4 x MAX_DELAY_PERIODS`` matrix; the command computed
-    ``d = delay_periods`` steps ago is applied (``F_new`` itself for
-    ``d = 0``), and ``F_new`` enters the buffer. Selected, never branched:
-    every ``d`` runs the same instructions.
-
-    Returns
-    -------
-    applied : casadi.SX
-        The four rotor commands to hold over this period, N.
-    u_delay_next : casadi.SX
-        The buffer for the next step (``[F_new, u_delay[:, :-1]]``).
-    """
-    applied = F_new
-    for k in range(MAX_DELAY_PERIODS):
-        applied = ca.if_else(delay_periods == k + 1, u_delay[:, k], applied)
-    return applied, ca.horzcat(F_new, u_delay[:, :MAX_DELAY_PERIODS - 1])
-
-
 def _named(name, ins, outs, in_names, out_names):
     return ca.Function(name, ins, outs, in_names, out_names)
 
@@ -204,8 +171,7 @@ def landing_loop(l: int) -> LoopModel:
     plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
     y = measurement_function()(xp, t, ps["pp"])
     args = dict(y=y, xg=cs["xg"], mem=cs["mem"], p_ctrl=ps["p_ctrl"], p_quad=plant_p["p_quad"],
-                p_act=plant_p["p_act"], p_guid=ps["p_guid"], dt=ps["dt"],
-                u_delay=cs["u_delay"], delay_periods=ps["delay_periods"])
+                p_act=plant_p["p_act"], p_guid=ps["p_guid"], dt=ps["dt"])
     step_args = _named("step_args", [xp, xc, pc, first, t], list(args.values()),
                        ["xp", "xc", "pc", "first", "t"], list(args))
     xg_next, ref = landing_guidance(cs["xg"], y, ps["dt"], ps["p_guid"])
@@ -213,11 +179,8 @@ def landing_loop(l: int) -> LoopModel:
                       ps["dt"])
     rec = ca.vertcat(res["F_cmd"], res["eta_d"], POSITION_REFERENCE.unpack(ref)["p_ref"],
                      res["limits"])
-    u_delay = ca.reshape(cs["u_delay"], 4, MAX_DELAY_PERIODS)
-    applied, u_delay_next = delayed_command(res["F_cmd"], u_delay, ps["delay_periods"])
     controller = _named("controller", [xp, xc, pc, first, t],
-                        [ca.vertcat(xg_next, res["mem_next"], ca.vec(u_delay_next)), applied, rec,
-                         res["tilt"]],
+                        [ca.vertcat(xg_next, res["mem_next"]), res["F_cmd"], rec, res["tilt"]],
                         ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
 
     assemble = _named("assemble", [xp, xc], [ca.vertcat(xp, xc)], ["xp", "xc"], ["x"])

@@ -202,8 +202,10 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     w_dist = landing_disturbance(scenario, t_dist)
     flight = scenario.data["controller"]["backend"] == "c"
     loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled")
+    hover = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])["F"]
     run = loop.sampled(lv.xp0, lv.xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
-                       lv.pc, TILT_MIN, envelope.bounds)
+                       lv.pc, TILT_MIN, envelope.bounds,
+                       delay=scenario.data["controller"]["delay_periods"], uh0=hover)
     done, times, X, R = run.rows, run.times, run.X, run.R
     Y = loop.outputs(X, w_dist[:, run.w_index].T, times, lv.pp)
     what = None

@@ -70,8 +70,7 @@ def rotor_force_max(scenario) -> float:
 def landing_values(scenario: Scenario) -> LandingValues:
     """Translate a validated landing scenario into the landing loop's vectors.
 
-    The quadrotor starts with its rotors at hover thrust, ``m1 g / 4`` each
-    (and so do the commands of the computation delay's buffer),
+    The quadrotor starts with its rotors at hover thrust, ``m1 g / 4`` each,
     and its velocity ``initial.relative_velocity`` plus the pad's; the
     command filter starts at its initial roll and pitch, the guidance in the
     approach with the reference at the hover point.
@@ -115,8 +114,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"],
         settle_time=g["settle_time"]))
     rate = c["rate_hz"]
-    pc = landing_loop_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate,
-                                          delay_periods=float(c["delay_periods"])))
+    pc = landing_loop_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
     init = d["initial"]
     (x2, y2), (u2, v2) = init["position2"], init["velocity2"]
@@ -135,8 +133,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
     mem[landing_memory(l).slice("eta_f")] = eta1[:2]
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
                                   aborts=0.0))
-    hover = np.full(landing_loop_memory(l)["u_delay"].size, q["mass"] * q["gravity"] / 4)
-    xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem, u_delay=hover))
+    xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
 
 
