@@ -15,6 +15,13 @@ model but the sizes of these functions' flat vector arguments:
   positive to zero or below ends the run at the instant it happens (a
   touchdown), located within the step;
 
+optionally, after the event, a *ride*: a reduced state ``z`` that goes on by
+``ride_rhs(z, t, pp) -> z_dot`` (the ride's constants ``a``, formed once at
+the event, are not needed there) and gives each row by ``ride_row(z, a, t, pp)
+-> (x, y, rec)``: the loop's state, its output signals and its recorded
+signals, at the output times after the event up to its end (a landed
+quadrotor riding on the deck);
+
 and an envelope ``envelope(x, uh) -> s``: magnitudes (altitude, speed, rate,
 network weights, ...) that must stay at or below bounds given per run, so
 that a diverging flight stops as soon as it leaves the physical envelope
@@ -104,6 +111,8 @@ class LoopModel:
     flight : str or None
         The template (in ``symbolic/templates/``) of the adapter that puts
         the flight code behind the controller's signature.
+    ride_rhs, ride_row : casadi.Function or None
+        The ride after the event (see the module docstring): both or neither.
     """
 
     name: str
@@ -127,11 +136,14 @@ class LoopModel:
     envelope: ca.Function | None = None
     envelope_layout: Layout | None = None
     flight: str | None = None
+    ride_rhs: ca.Function | None = None
+    ride_row: ca.Function | None = None
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
         return tuple(f for f in (self.rhs, self.output_fn, self.plant, self.controller,
-                                 self.assemble, self.step_args, self.event, self.envelope)
+                                 self.assemble, self.step_args, self.event, self.envelope,
+                                 self.ride_rhs, self.ride_row)
                      if f is not None)
 
 

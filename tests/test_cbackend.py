@@ -116,6 +116,7 @@ def test_control_step_matches_casadi(paper, l):
     assert clipped > 0   # the boundary cases reach the limits
 
 
+@pytest.mark.slow
 def test_float_build_tracks_double(paper):
     rng = np.random.default_rng(1)
     args = _inputs(rng, paper, L, 0.5)
@@ -455,6 +456,7 @@ def _sim(overrides):
     return quadland.simulate(quadland.load_scenario("paper", overrides))
 
 
+@pytest.mark.slow
 def test_backends_fly_the_same_trajectory():
     common = ["controller.rate_hz=500.0", "simulation.duration=1.0"]
     a = _sim(common + ['controller.backend="casadi"'])
@@ -558,6 +560,7 @@ def test_pure_c_continuous_flight_matches_rk4(example):
         assert np.max(np.abs(c[name] - py[name])) <= 1e-5, name
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rate", [500.0])
 def test_pure_c_flight_matches_python(example, rate):
     c = _fly(example, rate, 1.0)

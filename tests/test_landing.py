@@ -251,6 +251,49 @@ def test_compiled_and_virtual_machine_fly_the_same_landing(monkeypatch):
         np.testing.assert_allclose(vm[name], ref[name], rtol=1e-9, atol=1e-9, err_msg=name)
 
 
+def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
+    """The ride after touchdown, run by quadland_loop.h's qll_ride in the compiled
+    simulator and by its Python mirror on the VM, from the same touchdown: the same
+    rows at the same times (ride_grid's), the same states and signals to roundoff;
+    a non-finite start stops it at once with SIM_NONFINITE and no row."""
+    from quadland.engine.compiled import SIM_NONFINITE, SIM_OK, CompiledLoop, VMLoop
+    from quadland.engine.loop import Clock, ride_grid
+    from quadland.kinds.landing.values import landing_values
+    from quadland_symbolic.landing.loop import (
+        LANDING_RECORDED,
+        landing_loop,
+        landing_ride_start,
+    )
+    from quadland_symbolic.landing.signals import LANDING_SIGNALS
+
+    sc = load_scenario("highway", ["simulation.duration=12"])
+    res, lv = quadland.simulate(sc), landing_values(sc)
+    k = int(np.argmax(res["phase"] == TOUCHDOWN))
+    x_td, t_td = res.states[k], float(res["t"][k])
+    y_td = np.array([res[n][k] for n in LANDING_SIGNALS.element_names()])
+    rec = np.array([res[n][k] for n in LANDING_RECORDED.element_names()])
+    z0, a = (np.asarray(v, dtype=float).ravel()
+             for v in landing_ride_start(lv.l)(x_td, y_td, rec, t_td, 2.0))
+    rows, model = Clock(100.0, 0.0, 12.0, True), landing_loop(lv.l)
+    runs = [loop.ride(z0, a, rows, t_td, t_td + 2.0, 0.004, lv.pp)
+            for loop in (CompiledLoop(model, "sampled"), VMLoop(model, "sampled"))]
+    times, _ = ride_grid(rows, t_td, t_td + 2.0, 0.004)
+    # touchdown at 9.2397 s: the 100 Hz ticks 9.24 .. 11.23 s, then the end itself
+    assert len(times) == 201 and times[0] == 9.24 and times[-1] == t_td + 2.0
+    for ride in runs:
+        assert ride.status == SIM_OK
+        np.testing.assert_array_equal(ride.times, times)
+    c, v = runs
+    np.testing.assert_allclose(c.X, v.X, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(c.Y, v.Y, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(c.R, v.R)
+    bad = z0.copy()
+    bad[0] = np.nan
+    for loop in (CompiledLoop(model, "sampled"), VMLoop(model, "sampled")):
+        ride = loop.ride(bad, a, rows, t_td, t_td + 2.0, 0.004, lv.pp)
+        assert ride.status == SIM_NONFINITE and len(ride.times) == 0
+
+
 # ---------------------------------------------------------------- outputs and failures
 
 def test_simulate_writes_the_landing_columns_and_summary(tmp_path):

@@ -355,6 +355,7 @@ def test_pure_c_landing_is_quadland_simulates(examples, name):
                                    err_msg=column)
 
 
+@pytest.mark.slow
 def test_pure_c_landing_in_float_lands_alike(examples):
     """The float build, plant included, lands within its limits near the double's figures."""
     _, c, report = _land(examples["highway"] / "land_float")

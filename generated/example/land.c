@@ -92,6 +92,41 @@ static void vehicle(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
     ql_vehicle(xv, (const ql_real *)vctx, xv_dot);
 }
 
+/* The ride on the deck: the vehicle's state, the pose pinned at touchdown, the
+ * rotor forces then, and the yaw's unwrapping. */
+typedef struct {
+    ql_real xv[NXV], anchor[QL_LANDING_ANCHOR_SIZE], F_td[4], aborts;
+    const ql_real *pp;
+    double t_td, psi_prev, correction;
+} ride_ctx;
+
+static void vehicle_of_ride(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
+{
+    vehicle((void *)(((const ride_ctx *)vctx)->pp + 16), xv, t, xv_dot);
+}
+
+static double unwrap_step(double psi, double psi_prev, double *correction);
+static void write_row(double t, const ql_real *y);
+
+/* One row of the ride at tk: rotors idle, winding down; the quadrotor pinned. */
+static int ride_row(void *vctx, const ql_real *xv, double tk, long row)
+{
+    ride_ctx *r = (ride_ctx *)vctx;
+    ql_real F[4], x1q[16], phase, tt = (ql_real)tk, sig[NY];
+    double psi, tau_m = ql_land_pp[13];
+    int i;
+    (void)row;
+    for (i = 0; i < 4; ++i) F[i] = (ql_real)((double)r->F_td[i] * exp(-(tk - r->t_td) / tau_m));
+    phase = tk >= r->t_td + QL_LAND_SETTLE_TIME - QLL_RIDE_TOL ? QL_PHASE_LANDED
+                                                                : QL_PHASE_TOUCHDOWN;
+    ql_landed_outputs(xv, &tt, r->pp, r->anchor, F, &phase, &r->aborts, sig, x1q);
+    psi = (double)sig[6];
+    sig[6] = (ql_real)unwrap_step(psi, r->psi_prev, &r->correction);
+    r->psi_prev = psi;
+    write_row(tk, sig);
+    return 0;
+}
+
 /* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts]. */
 static void guidance_vector(const ql_guidance_state *gs, ql_real *xg)
 {
@@ -229,7 +264,7 @@ int main(void)
     ql_real xp[NXP], xp_start[NXP], trial[NXP], work[5 * NXP], pp[QL_LANDING_PLANT_NP];
     ql_real w[QL_LANDING_NW], sig[NY], F_cmd[4] = {0, 0, 0, 0};
     ql_real queue[4 * (QL_LAND_DELAY_PERIODS + 1)];    /* commands, newest first */
-    ql_real anchor[QL_LANDING_ANCHOR_SIZE], figures[QL_TOUCHDOWN_FIGURES], tt;
+    ql_real figures[QL_TOUCHDOWN_FIGURES], tt;
     qll_clock clocks[N_CLOCKS];
     plant_ctx ctx;
     double t = 0, t_next, t_td = 0, t_w = 0, dt = 1.0 / QL_LAND_CONTROL_RATE_HZ, tol, g_start,
@@ -316,45 +351,22 @@ int main(void)
     ql_touchdown_figures(sig + 13, sig + 16, sig + 4, sig + 10,
                          figures);
 
-    /* The ride on the deck: pinned at the touchdown pose, the rotors winding
-     * down by the motors' lag, the vehicle going on. */
+    /* The ride on the deck (quadland_loop.h's qll_ride): pinned at the touchdown
+     * pose, the rotors winding down by the motors' lag, the vehicle going on. */
     {
-        ql_real xv[NXV], F_td[4], F[4], x1q[16], phase, aborts = (ql_real)gs.aborts;
-        double t_end = fmin(t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION), tk, t_prev = t_td;
-        double psi_prev = (double)sig[6], correction = 0;
-        double tau_m = ql_land_pp[13];
-        int last = 0;
-        ql_landing_anchor(sig, anchor);
-        memcpy(xv, xp + 16, sizeof xv);
-        memcpy(F_td, xp + 12, sizeof F_td);
-        qll_clock *rows = &clocks[CLK_OUT];
-        while (rows->k < rows->count && qll_clock_time(rows, rows->k) <= t_td + 1e-12) {
-            ++rows->k;
-        }
-        while (!last) {
-            long m;
-            if (rows->k < rows->count && qll_clock_time(rows, rows->k) < t_end - 1e-12) {
-                tk = qll_clock_time(rows, rows->k++);
-            } else if (t_end > t_td + 1e-12) {
-                tk = t_end;
-                last = 1;
-            } else {
-                break;
-            }
-            m = (long)ceil((tk - t_prev) / dt - 1e-9);
-            if (m < 1) m = 1;
-            qll_rk4_span(vehicle, pp + 16, xv, NXV, t_prev, tk - t_prev, m, work);
-            t_prev = tk;
-            for (i = 0; i < 4; ++i) F[i] = (ql_real)((double)F_td[i] * exp(-(tk - t_td) / tau_m));
-            phase = tk >= t_td + QL_LAND_SETTLE_TIME - 1e-12 ? QL_PHASE_LANDED : QL_PHASE_TOUCHDOWN;
-            tt = (ql_real)tk;
-            ql_landed_outputs(xv, &tt, pp, anchor, F, &phase, &aborts, sig, x1q);
-            {
-                double psi = (double)sig[6];
-                sig[6] = (ql_real)unwrap_step(psi, psi_prev, &correction);
-                psi_prev = psi;
-            }
-            write_row(tk, sig);
+        ride_ctx ride;
+        double t_end = fmin(t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION);
+        ql_landing_anchor(sig, ride.anchor);
+        memcpy(ride.xv, xp + 16, sizeof ride.xv);
+        memcpy(ride.F_td, xp + 12, sizeof ride.F_td);
+        ride.pp = pp;
+        ride.t_td = t_td;
+        ride.aborts = (ql_real)gs.aborts;
+        ride.psi_prev = (double)sig[6];
+        ride.correction = 0;
+        if (qll_ride(vehicle_of_ride, ride_row, &ride, ride.xv, NXV, &clocks[CLK_OUT], t_td,
+                     t_end, dt, work) < 0) {
+            return 1;
         }
     }
     write_report(1, t_td, figures, gs.aborts);

@@ -22,6 +22,9 @@
  *   - an event (a function of the state falling from positive to zero or
  *     below) located within its span by bisection on the RK4 solution from
  *     the span's start, to QLL_EVENT_TOL of the span.
+ *   - after an event, the ride: a reduced state carried by RK4 (steps of at
+ *     most a given length) from one output row to the next, a row at each
+ *     output tick after the event and at the ride's end.
  *
  * The including file defines QLL_REAL (the state's floating type) first,
  * else double. Times are always double. Every function is static: each
@@ -170,6 +173,49 @@ static inline double qll_locate(qll_rhs f, qll_event g, void *ctx, const qll_rea
         }
     }
     return hi;
+}
+
+/* Output ticks within this many seconds of the event, or of the ride's end, are
+ * that instant's row. */
+#define QLL_RIDE_TOL 1e-12
+
+/* One row of the ride: the reduced state z at t; nonzero stops the ride. */
+typedef int (*qll_row_fn)(void *ctx, const qll_real *z, double t, long row);
+
+/* The ride after an event at t_ev, to t_end: z (nz reals) goes on by z' = f in
+ * ceil(span / h_max) RK4 steps per span between rows; row() is called at each tick
+ * of the output clock `rows` after t_ev and before t_end (QLL_RIDE_TOL), then at
+ * t_end itself (no row when t_end is t_ev). work holds 5 nz reals. Returns the rows
+ * made, or -1 when row() stopped the ride. */
+static inline long qll_ride(qll_rhs f, qll_row_fn row, void *ctx, qll_real *z, long nz,
+                            qll_clock *rows, double t_ev, double t_end, double h_max,
+                            qll_real *work)
+{
+    double t_prev = t_ev, tk;
+    long n = 0, m;
+    int last = 0;
+    while (rows->k < rows->count && qll_clock_time(rows, rows->k) <= t_ev + QLL_RIDE_TOL) {
+        ++rows->k;
+    }
+    while (!last) {
+        if (rows->k < rows->count && qll_clock_time(rows, rows->k) < t_end - QLL_RIDE_TOL) {
+            tk = qll_clock_time(rows, rows->k++);
+        } else if (t_end > t_ev + QLL_RIDE_TOL) {
+            tk = t_end;
+            last = 1;
+        } else {
+            break;
+        }
+        m = (long)ceil((tk - t_prev) / h_max - 1e-9);
+        if (m < 1) m = 1;
+        qll_rk4_span(f, ctx, z, nz, t_prev, tk - t_prev, m, work);
+        t_prev = tk;
+        if (row(ctx, z, tk, n)) {
+            return -1;
+        }
+        ++n;
+    }
+    return n;
 }
 
 /* 1 when all n values are finite: v - v is 0 for a finite value and NaN for an

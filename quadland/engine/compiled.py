@@ -20,14 +20,14 @@ import warnings
 import numpy as np
 
 from quadland.engine.build import build_library, have_compiler
-from quadland.engine.loop import locate_event, merged_grid, rk4_span
+from quadland.engine.loop import Clock, locate_event, merged_grid, ride_grid, rk4_span
 from quadland.exceptions import CompileError, CompilerNotFoundError
 from quadland_symbolic.codegen import SIMULATOR_PARTS, simulator_sources
 from quadland_symbolic.loop import LoopModel, rk4_step
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK",
            "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "SIM_ENVELOPE",
-           "SIM_ROWS", "Run", "FlightCode"]
+           "SIM_ROWS", "Run", "Ride", "FlightCode"]
 
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
@@ -93,6 +93,22 @@ def _clock_table(clocks) -> np.ndarray:
     return np.ascontiguousarray([c.table() for c in clocks], dtype=np.float64).ravel()
 
 
+@dataclasses.dataclass(frozen=True)
+class Ride:
+    """The rows of a ride after an event (:meth:`CompiledLoop.ride`).
+
+    ``status`` is :data:`SIM_OK` or the ``SIM_*`` code that stopped it; ``times``,
+    ``X`` (the loop's state), ``Y`` (its output signals) and ``R`` (its recorded
+    signals) hold the rows before that.
+    """
+
+    status: int
+    times: np.ndarray
+    X: np.ndarray
+    Y: np.ndarray
+    R: np.ndarray
+
+
 class CompiledLoop:
     """One compiled part (``"continuous"`` or ``"sampled"``) of a loop's simulator.
 
@@ -128,6 +144,10 @@ class CompiledLoop:
             self._sampled.argtypes = [_REAL, _REAL, _REAL, D, _REAL, L, L, _REAL, _REAL, _REAL,
                                       D, _REAL, _REAL, _REAL, _REAL, _LONG, L, _LONG, _REAL,
                                       _REAL, ctypes.POINTER(D), _REAL]
+            if model.ride_rhs is not None:
+                self._ride = getattr(lib, f"{prefix}ride")
+                self._ride.argtypes = [_REAL, _REAL, _REAL, D, D, D, D, _REAL, _REAL, _REAL,
+                                       _REAL, _REAL, L, _LONG]
 
     def integrate(self, x0, clocks, W, substeps: int, p, bound=None) -> Run:
         """The continuous loop over the merged grid of its output and disturbance clocks.
@@ -201,6 +221,21 @@ class CompiledLoop:
         return Run(status, X[:n], R[:n], times[:n], w_index[:n], np.concatenate([xp_end, xc_end]),
                    t_stop.value, env if status == SIM_ENVELOPE else None)
 
+    def ride(self, z0, a, rows: Clock, t_ev: float, t_end: float, h_max: float, pp) -> Ride:
+        """The ride after the event at ``t_ev`` (a model with ``ride_rhs``, ``ride_row``):
+        ``z0`` carried to ``t_end``, a row at each tick of ``rows`` after ``t_ev`` and at
+        ``t_end`` (``quadland_loop.h``'s ``qll_ride``)."""
+        m = self.model
+        n = len(rows.times()) + 1
+        X, Y = np.zeros((n, m.state.size)), np.zeros((n, m.outputs.size))
+        R, times, n_rows = np.zeros((n, m.recorded.size)), np.zeros(n), ctypes.c_long(0)
+        status = self._ride(_ptr(_f64(z0)), _ptr(_f64(a)), _ptr(_clock_table([rows])),
+                            float(rows.T), float(t_ev), float(t_end), float(h_max),
+                            _ptr(_f64(pp)), _ptr(X), _ptr(Y), _ptr(R), _ptr(times), n,
+                            ctypes.byref(n_rows))
+        k = n_rows.value
+        return Ride(status, times[:k], X[:k], Y[:k], R[:k])
+
     def outputs(self, X, W, T, p) -> np.ndarray:
         """Output signals at each row of ``X`` (with ``W``'s rows, at times ``T``), ``(n, ny)``."""
         m = self.model
@@ -227,6 +262,7 @@ class VMLoop:
         self.model, self.part = model, part
         self._rhs = rk4_step(model.rhs) if model.rhs is not None else None
         self._plant = rk4_step(model.plant)
+        self._ride_step = rk4_step(model.ride_rhs) if model.ride_rhs is not None else None
         self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [3], [])
         self._no_input = np.zeros(model.held.size)
 
@@ -326,6 +362,27 @@ class VMLoop:
                     break
                 g_start = g_end
         return _run(m, status, X, R, times, w_index, np.concatenate([xp, xc]), t_stop, env)
+
+    def ride(self, z0, a, rows: Clock, t_ev: float, t_end: float, h_max: float, pp) -> Ride:
+        """As :meth:`CompiledLoop.ride` (:func:`quadland.engine.loop.ride_grid`)."""
+        m = self.model
+        step, z, t_prev = self._ride_step, np.asarray(z0, dtype=float), t_ev
+        out = {"X": [], "Y": [], "R": []}
+        times, steps = ride_grid(rows, t_ev, t_end, h_max)
+        status = SIM_OK
+        for t, s in zip(times, steps, strict=True):
+            z = rk4_span(lambda zz, tt, h: step(zz, tt, pp, h), z, t_prev, t - t_prev, s)
+            t_prev = t
+            x, y, r = (np.asarray(v, dtype=float).ravel() for v in m.ride_row(z, a, t, pp))
+            if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+                status = SIM_NONFINITE
+                break
+            for name, v in zip("XYR", (x, y, r), strict=True):
+                out[name].append(v)
+        k = len(out["X"])
+        sizes = {"X": m.state.size, "Y": m.outputs.size, "R": m.recorded.size}
+        X, Y, R = (np.array(out[n], dtype=float).reshape(-1, sizes[n]) for n in "XYR")
+        return Ride(status, times[:k], X, Y, R)
 
     def outputs(self, X, W, T, p) -> np.ndarray:
         """As :meth:`CompiledLoop.outputs`, in chunks with ``p`` shared, not repeated."""

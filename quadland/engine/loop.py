@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
-__all__ = ["GRID_TOL", "EVENT_TOL", "EVENT_ITERATIONS", "Clock", "grid_tolerance", "merged_grid",
-           "rk4_span", "locate_event"]
+__all__ = ["GRID_TOL", "EVENT_TOL", "EVENT_ITERATIONS", "RIDE_TOL", "Clock", "grid_tolerance",
+           "merged_grid", "rk4_span", "locate_event", "ride_grid"]
 
 #: Clock times closer than this fraction of the shortest period are one grid point.
 GRID_TOL = 1e-6
@@ -30,6 +30,9 @@ GRID_TOL = 1e-6
 EVENT_TOL = 1e-12
 #: Most bisection halvings (2^-60 of a span is below EVENT_TOL).
 EVENT_ITERATIONS = 60
+
+#: s: output ticks this close to the event, or to the ride's end, are that instant's row.
+RIDE_TOL = 1e-12
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,3 +152,26 @@ def locate_event(step, g, x_start: np.ndarray, x_end: np.ndarray, t0: float, spa
         else:
             hi, x = mid, trial
     return hi, x
+
+
+def ride_grid(rows: Clock, t_ev: float, t_end: float, h_max: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The ride's rows after an event and the RK4 steps before each (``qll_ride``).
+
+    A row at each tick of ``rows`` after ``t_ev`` and before ``t_end`` (beyond
+    :data:`RIDE_TOL`), then at ``t_end`` (none when ``t_end`` is ``t_ev``); the
+    span to each row from the last is taken in ``ceil(span / h_max)`` steps.
+
+    Examples
+    --------
+    >>> times, steps = ride_grid(Clock(10.0, 0.0, 2.0, True), 0.95, 1.25, 0.04)
+    >>> times.round(6).tolist(), steps.tolist()
+    ([1.0, 1.1, 1.2, 1.25], [2, 3, 3, 2])
+    """
+    ticks = rows.times()
+    times = ticks[(ticks > t_ev + RIDE_TOL) & (ticks < t_end - RIDE_TOL)]
+    if t_end > t_ev + RIDE_TOL:
+        times = np.append(times, t_end)
+    before = np.concatenate([[t_ev], times[:-1]])
+    steps = np.maximum(1, np.ceil((times - before) / h_max - 1e-9)).astype(np.int_)
+    return times, steps

@@ -23,8 +23,10 @@
   the signals of the landing trajectory.
 
 After touchdown the quadrotor rides on the deck, pinned at its touchdown
-pose with its rotors idle; :func:`landed_outputs_function` gives the same
-signals from the vehicle's state, the deck's motion and that pose.
+pose with its rotors idle (:mod:`quadland_symbolic.landing.ride`): the loop's
+*ride* (:func:`landing_ride_start`, and the model's ``ride_rhs``, the vehicle
+alone, and ``ride_row``, the loop's state, signals and recorded signals of a
+row, from the vehicle's state, the deck's motion and that pose).
 """
 
 from __future__ import annotations
@@ -41,23 +43,31 @@ from quadland_symbolic.landing.controller import (
     landing_memory,
     landing_step_outputs,
 )
-from quadland_symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
+from quadland_symbolic.landing.guidance import (
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    LANDED,
+    POSITION_REFERENCE,
+    TOUCHDOWN,
+)
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     loop_plant_function,
 )
-from quadland_symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
+from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from quadland_symbolic.landing.relative import gear_gap
+from quadland_symbolic.landing.ride import ANCHOR, anchor_function, landed_outputs_function
 from quadland_symbolic.landing.sensors import measurement_function
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, landing_signals_function
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import LoopModel
-from quadland_symbolic.vehicle import VEHICLE_STATE
+from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
-           "landing_loop_state", "loop_outputs", "gear_gap_function",
+           "landing_loop_state", "loop_outputs", "gear_gap_function", "landing_ride_constants",
+           "landing_ride_start",
            "landing_envelope_function", "landing_loop"]
 
 #: What the loop records of each control step (held until the next).
@@ -148,6 +158,57 @@ def landing_envelope_function(l: int) -> ca.Function:
     return ca.Function("envelope", [x, uh], [s], ["x", "uh"], ["s"])
 
 
+@functools.cache
+def landing_ride_constants(l: int) -> Layout:
+    """``a``, what the ride after touchdown holds fixed, formed at the touchdown."""
+    return Layout("ride_land", (
+        Field.nested("anchor", ANCHOR, "the pose pinned to the deck"),
+        Field("F_td", 4, "N", "rotor forces at touchdown (then winding down)"),
+        Field("t_td", 1, "s", "touchdown time"),
+        Field("settle", 1, "s", "landing.settle_time: the phase is LANDED from t_td + settle"),
+        Field("aborts", 1, "-", "the guidance's abort count"),
+        Field.nested("xc", landing_loop_memory(l), "the controller's memory, frozen"),
+        Field.nested("rec", LANDING_RECORDED, "the recorded signals, rotor commands zero"),
+    ), "constants of the ride on the deck")
+
+
+@functools.cache
+def landing_ride_start(l: int) -> ca.Function:
+    """``ride_start(x, y, rec, t, settle) -> (z, a)``: the ride's state (the vehicle's
+    ``xv``) and constants (:func:`landing_ride_constants`) from the loop's state,
+    signals and recorded signals at touchdown."""
+    x, y, rec = landing_loop_state(l).sym(), LANDING_SIGNALS.sym(), LANDING_RECORDED.sym()
+    t, settle = ca.SX.sym("t"), ca.SX.sym("settle")
+    xs = landing_loop_state(l).unpack(x)
+    ps, rs = LANDING_PLANT_STATE.unpack(xs["xp"]), LANDING_RECORDED.unpack(rec)
+    idle = ca.vertcat(ca.SX.zeros(4), *(rs[f.name] for f in LANDING_RECORDED.fields[1:]))
+    a = ca.vertcat(anchor_function()(y), QUAD6_STATE.unpack(ps["x1q"])["F"], t, settle,
+                   LANDING_SIGNALS.unpack(y)["aborts"], xs["xc"], idle)
+    return ca.Function("ride_start", [x, y, rec, t, settle], [ps["xv"], a],
+                       ["x", "y", "rec", "t", "settle"], ["z", "a"])
+
+
+def _ride_functions(l: int) -> tuple[ca.Function, ca.Function]:
+    """``ride_rhs(z, t, pp) -> z_dot``: the vehicle (eq. 4); ``ride_row(z, a, t, pp) ->
+    (x, y, rec)``: the quadrotor pinned at ``a``'s anchor, its rotor forces
+    ``F_td exp(-(t - t_td) / tau_m)`` (commands zero, the motors' lag), the phase
+    TOUCHDOWN, then LANDED from ``t_td + settle``."""
+    z, t, pp = VEHICLE_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    p = LANDING_PLANT_PARAMS.unpack(pp)
+    ride_rhs = _named("ride_rhs", [z, t, pp], [vehicle_rhs(z, p["p_veh"])],
+                      ["z", "t", "pp"], ["z_dot"])
+    a = landing_ride_constants(l).sym()
+    c = landing_ride_constants(l).unpack(a)
+    tau_m = ACTUATOR.unpack(p["p_act"])["motor_time_constant"]
+    F = c["F_td"] * ca.exp(-(t - c["t_td"]) / tau_m)
+    phase = ca.if_else(t >= c["t_td"] + c["settle"] - 1e-12, LANDED, TOUCHDOWN)
+    y, x1q = landed_outputs_function()(z, t, pp, ca.vertcat(c["anchor"]), F, phase,
+                                       c["aborts"])
+    ride_row = _named("ride_row", [z, a, t, pp], [ca.vertcat(x1q, z, c["xc"]), y, c["rec"]],
+                      ["z", "a", "t", "pp"], ["x", "y", "rec"])
+    return ride_rhs, ride_row
+
+
 def _named(name, ins, outs, in_names, out_names):
     return ca.Function(name, ins, outs, in_names, out_names)
 
@@ -184,6 +245,7 @@ def landing_loop(l: int) -> LoopModel:
                         ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
 
     assemble = _named("assemble", [xp, xc], [ca.vertcat(xp, xc)], ["xp", "xc"], ["x"])
+    ride_rhs, ride_row = _ride_functions(l)
     x = x_lay.sym()
     output_fn = _named("outputs", [x, w, t, pp], [loop_outputs(l, x, w, t, pp)],
                        ["x", "w", "t", "p"], ["y"])
@@ -196,4 +258,5 @@ def landing_loop(l: int) -> LoopModel:
                      controller, assemble, step_args=step_args, event=event,
                      envelope=_named("envelope", [x, uh], [landing_envelope_function(l)(x, uh)],
                                      ["x", "uh"], ["s"]),
-                     envelope_layout=LANDING_ENVELOPE, flight="landing_flight_controller.c.jinja")
+                     envelope_layout=LANDING_ENVELOPE, flight="landing_flight_controller.c.jinja",
+                     ride_rhs=ride_rhs, ride_row=ride_row)

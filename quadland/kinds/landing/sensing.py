@@ -263,7 +263,7 @@ def draw_sensors(settings: Mapping[str, Mapping] | None, duration: float, seed,
     --------
     >>> s = draw_sensors(None, 1.0, seed=7)
     >>> len(s["vision"].times), s["vision"].noise.shape[1]
-    (26, 9)
+    (25, 9)
     """
     settings = settings or {}
     unknown = sorted(set(settings) - set(SENSOR_NAMES))

@@ -47,25 +47,22 @@ from quadland.kinds.landing.values import (
     rotor_force_max,
 )
 from quadland.scenario import Scenario
-from quadland_symbolic.landing.guidance import LANDED, TOUCHDOWN
+from quadland_symbolic.landing.guidance import TOUCHDOWN
 from quadland_symbolic.landing.loop import (
     LANDING_ENVELOPE,
     LANDING_RECORDED,
     landing_loop,
     landing_loop_params,
     landing_loop_state,
+    landing_ride_start,
 )
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
-    LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     loop_plant_function,
 )
-from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
-from quadland_symbolic.landing.ride import anchor_function, landed_outputs_function
+from quadland_symbolic.landing.quadrotor import QUAD6_STATE
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
-from quadland_symbolic.loop import rk4_step
-from quadland_symbolic.vehicle import vehicle_function
 
 __all__ = ["landing_envelope", "landing_plan", "check_landing_plan", "simulate_landing",
            "landing_loop_part"]
@@ -198,7 +195,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     envelope = landing_envelope(scenario)
     sim = scenario.data["simulation"]
     clocks = landing_clocks(scenario)
-    t_out, t_dist = clocks[0].times(), clocks[1].times()
+    t_dist = clocks[1].times()
     w_dist = landing_disturbance(scenario, t_dist)
     flight = scenario.data["controller"]["backend"] == "c"
     loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled")
@@ -215,12 +212,15 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         i_w = int(np.searchsorted(t_dist, t_td - grid_tolerance(clocks), side="right")) - 1
         y_td = loop.outputs(x_td[None, :], w_dist[:, [i_w]].T, np.array([t_td]), lv.pp)
         R_td = R[-1] if len(R) else np.zeros(LANDING_RECORDED.size)
-        ride = _ride(scenario, lv, t_out, t_td, x_td, y_td[0], R_td)
-        times = np.concatenate([times, [t_td], ride[0]])
-        X = np.vstack([X, x_td, ride[1]])
-        R = np.vstack([R, R_td, ride[2]])
-        Y = np.vstack([Y, y_td, ride[3]])
+        ride = _ride(scenario, lv, loop, clocks[0], t_td, x_td, y_td[0], R_td)
+        times = np.concatenate([times, [t_td], ride.times])
+        X = np.vstack([X, x_td, ride.X])
+        R = np.vstack([R, R_td, ride.R])
+        Y = np.vstack([Y, y_td, ride.Y])
         Y[done, LANDING_SIGNALS.index("phase")] = TOUCHDOWN
+        if ride.status != SIM_OK:
+            what, t_fail = "the ride on the deck became non-finite", (
+                ride.times[-1] if len(ride.times) else t_td)
     elif run.status != SIM_OK:
         what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
                 SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
@@ -243,53 +243,28 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     return result
 
 
-def _ride(scenario, lv, t_out, t_td, x_td, y_td, R_td):
+def _ride(scenario, lv, loop, rows, t_td, x_td, y_td, R_td):
     """Rows after touchdown: the quadrotor pinned to the deck, its rotors winding down.
 
-    The vehicle goes on by eq. (4), integrated by RK4 in steps of at most
-    one control period; the quadrotor keeps its touchdown pose in the deck
-    frame and its rotor forces decay as ``F_td exp(-(t - t_td) / tau_m)``
-    (commands zero, the motors' lag). Returns times, states, recorded
-    signals and outputs.
+    The loop's ride (``quadland_symbolic.landing.loop``: the vehicle goes on by
+    eq. (4), RK4 in steps of at most one control period; the quadrotor keeps
+    its touchdown pose in the deck frame, its rotor forces decay as
+    ``F_td exp(-(t - t_td) / tau_m)``), run by the simulator
+    (``quadland_loop.h``'s ``qll_ride``, or its mirror on the VM); here only
+    the yaw is unwrapped, continuous with the touchdown's.
     """
     settle = scenario.data["landing"]["settle_time"]
-    T = scenario.data["simulation"]["duration"]
-    t_end = min(t_td + settle, T)
-    later = t_out[(t_out > t_td + 1e-12) & (t_out < t_end - 1e-12)]
-    times = np.append(later, t_end) if t_end > t_td + 1e-12 else later
-    n = len(times)
-    lay, ys = landing_loop_state(lv.l), LANDING_SIGNALS.unpack(y_td)
-    xp_td = lay.unpack(x_td)["xp"]
-    s = LANDING_PLANT_STATE.unpack(xp_td)
-    anchor = np.asarray(anchor_function()(y_td), dtype=float).ravel()
-    F_td = QUAD6_STATE.unpack(s["x1q"])["F"]
-    p = LANDING_PLANT_PARAMS.unpack(lv.pp)
-    tau_m = ACTUATOR.unpack(p["p_act"])["motor_time_constant"][0]
-    aborts = ys["aborts"][0]
-    step = rk4_step(vehicle_function())
+    t_end = min(t_td + settle, scenario.data["simulation"]["duration"])
+    z0, a = (np.asarray(v, dtype=float).ravel()
+             for v in landing_ride_start(lv.l)(x_td, y_td, R_td, t_td, settle))
     h_max = float(landing_loop_params(lv.l).unpack(lv.pc)["dt"][0])
-    landed = landed_outputs_function()
-    X, Y = np.zeros((n, lay.size)), np.zeros((n, LANDING_SIGNALS.size))
-    if n:                                          # every row in one call of each function
-        before = np.concatenate([[t_td], times[:-1]])
-        m = np.maximum(1, np.ceil((times - before) / h_max - 1e-9).astype(int))
-        h = np.repeat((times - before) / m, m)      # the RK4 steps, m per row
-        XV = np.asarray(step.mapaccum(len(h))(s["xv"], p["p_veh"], h[None, :]),
-                        dtype=float)[:, np.cumsum(m) - 1]
-        F = F_td[:, None] * np.exp(-(times - t_td) / tau_m)[None, :]
-        phase = np.where(times >= t_td + settle - 1e-12, LANDED, TOUCHDOWN).astype(float)
-        y, x1q = (np.asarray(v, dtype=float) for v in landed.map(n)(
-            XV, times[None, :], lv.pp, anchor, F, phase[None, :], aborts))
-        Y[:] = y.T
-        X[:, lay.slice("xp")] = np.vstack([x1q, XV]).T
-        X[:, lay.slice("xc")] = lay.unpack(x_td)["xc"]
-    if n:                                          # yaw continuous with the touchdown's
-        psi = np.unwrap(np.concatenate([[ys["eta1"][2]], Y[:, LANDING_SIGNALS.index("psi1")]]))[1:]
-        Y[:, LANDING_SIGNALS.index("psi1")] = psi
-        X[:, lay.slice("xp")][:, LANDING_PLANT_STATE.index("psi1")] = psi
-    held = np.tile(R_td, (n, 1))                   # the last commands, rotors idle
-    held[:, LANDING_RECORDED.slice("F_cmd")] = 0.0
-    return times, X, held, Y
+    ride = loop.ride(z0, a, rows, t_td, t_end, h_max, lv.pp)
+    if len(ride.times):
+        ys, k = LANDING_SIGNALS.unpack(y_td), LANDING_SIGNALS.index("psi1")
+        psi = np.unwrap(np.concatenate([[ys["eta1"][2]], ride.Y[:, k]]))[1:]
+        ride.Y[:, k] = psi
+        ride.X[:, LANDING_PLANT_STATE.index("psi1")] = psi     # xp leads the loop's state
+    return ride
 
 
 def _result(scenario, times, X, R, Y) -> SimulationResult:
