@@ -423,3 +423,66 @@ def test_deck_motions_take_one_to_three_sinusoids_of_matching_lengths():
         load_scenario("ship", ["deck.heave_amplitude=[0.5, 0.2]"])
     with pytest.raises(ScenarioError, match="expected a list of 1 to 3 numbers"):
         load_scenario("ship", ["deck.roll_frequency=[0.1, 0.2, 0.3, 0.4]"])
+
+
+# ---------------------------------------------------------------- the controller's own model
+
+def test_the_law_reads_its_own_model_and_the_plant_is_the_quadrotor():
+    """[controller_model] reaches the law (the flight step's p_quad, p_act) and nothing
+    else; [quadrotor] is the plant the simulator integrates."""
+    from quadland.kinds.landing.values import landing_values
+    from quadland_symbolic.landing.loop import landing_loop
+    from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+    from quadland_symbolic.landing.quadrotor import ACTUATOR
+    from quadland_symbolic.parameters import QUADROTOR
+
+    sc = load_scenario("highway", ["controller_model.mass=2.4",
+                                   "controller_model.motor_time_constant=0.03"])
+    lv = landing_values(sc)
+    args = dict(zip(landing_loop(lv.l).step_args.name_out(),
+                    landing_loop(lv.l).step_args(lv.xp0, lv.xc0, lv.pc, 1.0, 0.0), strict=True))
+    law_q = QUADROTOR.unpack(np.asarray(args["p_quad"], dtype=float).ravel())
+    law_a = ACTUATOR.unpack(np.asarray(args["p_act"], dtype=float).ravel())
+    assert law_q["m1"][0] == 2.4 and law_a["motor_time_constant"][0] == 0.03
+    assert law_a["F_max"][0] == 2.0 * 2.4 * 9.8 / 4            # its own thrust_to_weight
+    plant = LANDING_PLANT_PARAMS.unpack(lv.pp)
+    assert QUADROTOR.unpack(plant["p_quad"])["m1"][0] == 2.0
+    assert ACTUATOR.unpack(plant["p_act"])["motor_time_constant"][0] == 0.02
+
+
+def test_with_a_wrong_mass_the_hover_holds_the_true_weight():
+    """At the hover equilibrium on a level deck, with no wind and no disturbance, the
+    quadrotor moves with the vehicle at constant velocity: the thrust's vertical part
+    T cos(phi) cos(theta) is the plant's weight m g (drag is horizontal), whatever
+    mass the controller assumes; the altitude settles off its reference instead."""
+    from quadland.linearization import equilibrium
+
+    calm = ["wind.mean=[0.0, 0.0, 0.0]", "disturbance.force_bias=[0.0, 0.0, 0.0]",
+            "disturbance.moment_bias=[0.0, 0.0, 0.0]"]
+    sc = load_scenario("highway", calm)
+    nominal = equilibrium(sc)
+    wrong = equilibrium(load_scenario("highway", [*calm, "controller_model.mass=2.4"]))
+    for point in (nominal, wrong):
+        z = {n: point.xr[i] for i, n in enumerate(point.state_names)}
+        T = point.u[0]
+        assert T * np.cos(z["phi1"]) * np.cos(z["theta1"]) == pytest.approx(2.0 * 9.8,
+                                                                             rel=1e-9)
+    assert abs(wrong.xr[2] - nominal.xr[2]) > 1e-3      # z_e off its reference
+
+
+def test_a_campaign_disperses_the_plant_and_keeps_the_controller_s_model():
+    """A run's dispersed quadrotor.mass reaches the plant; the law keeps the nominal."""
+    from quadland.campaign.sampling import draws
+    from quadland.campaign.spec import campaign_spec_of
+    from quadland.kinds.landing.values import landing_values
+    from quadland_symbolic.landing.loop import landing_loop_params
+    from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+    from quadland_symbolic.parameters import QUADROTOR
+
+    base = load_scenario("highway")
+    draw = next(iter(draws(campaign_spec_of(base), [0])))
+    lv = landing_values(base.replace(**draw.values))
+    mass = QUADROTOR.unpack(LANDING_PLANT_PARAMS.unpack(lv.pp)["p_quad"])["m1"][0]
+    model = LANDING_PLANT_PARAMS.unpack(landing_loop_params(lv.l).unpack(lv.pc)["pp"])
+    assert mass == draw.values["quadrotor.mass"] != 2.0
+    assert QUADROTOR.unpack(model["p_quad"])["m1"][0] == 2.0

@@ -179,7 +179,7 @@ def test_continuous_limit_is_the_step_as_dt_goes_to_zero(case):
     hv = _hover_values(sc)
     f = hover_linearization_function(lv.l)
     out = {n: np.asarray(v, dtype=float) for n, v in zip(
-        f.name_out(), f(point.xr, point.xc, point.vehicle, point.w, hv.pp, hv.p_ctrl, hv.ref,
+        f.name_out(), f(point.xr, point.xc, point.vehicle, point.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref,
                         1e-6), strict=True)}
     h = 1e-6
     np.testing.assert_allclose((out["Phi_c"] - np.eye(point.xc.size)) / h, out["A_c"],

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from types import MappingProxyType
 
@@ -32,6 +33,10 @@ F, I, B, S = float, int, bool, str
 #: The landing scenario schema (``scenario.model = "landing"``): the 6-DOF
 #: loop of ``quadland_symbolic.landing`` with guidance, motor lag, rotor limits, the
 #: sampled step, a moving deck and wind (docs/landing.md).
+_THRUST_TO_WEIGHT = Field(F, "-", "4 F_max / (m1 g): sets the rotor limit F_max", lo=1.0,
+                          hi=20.0, lo_open=True)
+_MOTOR_TIME_CONSTANT = Field(F, "s", "first-order lag of each rotor force", lo=1e-3, hi=1.0)
+
 LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     "scenario": {
         **PAPER_SCHEMA["scenario"],
@@ -47,10 +52,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         **{k: PAPER_SCHEMA["quadrotor"][k] for k in ("mass", "inertia", "drag_translational",
                                                "drag_rotational", "gravity", "arm_length",
                                                "rotor_drag_factor")},
-        "thrust_to_weight": Field(F, "-", "4 F_max / (m1 g): sets the rotor limit F_max",
-                                  lo=1.0, hi=20.0, lo_open=True),
-        "motor_time_constant": Field(F, "s", "first-order lag of each rotor force", lo=1e-3,
-                                     hi=1.0),
+        "thrust_to_weight": _THRUST_TO_WEIGHT,
+        "motor_time_constant": _MOTOR_TIME_CONSTANT,
         "gear_height": Field(F, "m", "landing gear's lowest point below the centre", lo=0.0,
                              hi=10.0),
     },
@@ -96,6 +99,16 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                "step act from the delay_periods-th next step on",
                                lo=0, hi=MAX_DELAY_PERIODS),
     },
+    # The controller's own model of the quadrotor: what its law assumes (the plant is
+    # [quadrotor]). A campaign's dispersions of [quadrotor] leave it at its nominal.
+    "controller_model": {
+        k: dataclasses.replace(f, doc=f"the controller's model: {f.doc}")
+        for k, f in (("mass", PAPER_SCHEMA["quadrotor"]["mass"]),
+                     ("inertia", PAPER_SCHEMA["quadrotor"]["inertia"]),
+                     ("drag_translational", PAPER_SCHEMA["quadrotor"]["drag_translational"]),
+                     ("drag_rotational", PAPER_SCHEMA["quadrotor"]["drag_rotational"]),
+                     ("thrust_to_weight", _THRUST_TO_WEIGHT),
+                     ("motor_time_constant", _MOTOR_TIME_CONSTANT))},
     "rbf": PAPER_SCHEMA["rbf"],
     "landing": {
         "hover_height": Field(F, "m", "hover point: the centre's height above the pad",

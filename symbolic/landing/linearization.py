@@ -129,14 +129,16 @@ def hover_measurement(z, v2, pp):
 
 def _symbols(l: int):
     return (HOVER_PLANT.sym(), landing_memory(l).sym(), VEHICLE_SPEEDS.sym(),
-            LANDING_DISTURBANCE.sym(),
-            LANDING_PLANT_PARAMS.sym(), landing_controller_params(l).sym(),
+            LANDING_DISTURBANCE.sym(), LANDING_PLANT_PARAMS.sym(),
+            ca.SX.sym("pm", LANDING_PLANT_PARAMS.size), landing_controller_params(l).sym(),
             POSITION_REFERENCE.sym())
 
 
-def _law(l, y_quad, z, mem, v2, pp, p_ctrl, ref, dt):
-    """The step's wrench and next memory with the quadrotor's measurements ``y_quad``."""
-    p = LANDING_PLANT_PARAMS.unpack(pp)
+def _law(l, y_quad, z, mem, v2, pp, pm, p_ctrl, ref, dt):
+    """The step's wrench and next memory with the quadrotor's measurements ``y_quad``:
+    the law with the controller's own model ``pm``, the deck's broadcast of the plant
+    ``pp``."""
+    p = LANDING_PLANT_PARAMS.unpack(pm)
     broadcast = hover_measurement(z, v2, pp)[HOVER_OUTPUT.size:]
     out = landing_law(l, ca.vertcat(y_quad, broadcast), ref, mem, p_ctrl, p["p_quad"],
                       p["p_act"], dt)
@@ -152,7 +154,7 @@ def _memory_rate(mem_next, dt):
 def hover_linearization_function(l: int) -> ca.Function:
     """Plant and landing-step Jacobians at a hover point.
 
-    ``hover_linearization(z, mem, v2, w, pp, p_ctrl, ref, dt) -> (u, z_dot,
+    ``hover_linearization(z, mem, v2, w, pp, pm, p_ctrl, ref, dt) -> (u, z_dot,
     mem_dot, A_p, B_p, C_p, A_c, B_c, Phi_c, Gamma_c, C_c, D_c)`` with, about
     the point,
 
@@ -165,17 +167,18 @@ def hover_linearization_function(l: int) -> ca.Function:
     ``v2 = [u2, v2, r2]`` are the vehicle's speeds, ``w`` the disturbance
     (:data:`quadland_symbolic.landing.loop.LANDING_DISTURBANCE`, wind in the heading frame),
     ``pp`` the plant's parameters with the deck's motion the caller wants
-    (frozen: zero amplitudes), ``ref`` the position reference.
+    (frozen: zero amplitudes), ``pm`` the controller's own model of them (the
+    law's ``p_quad`` and ``p_act``), ``ref`` the position reference.
 
     Parameters
     ----------
     l : int
         Number of RBF nodes.
     """
-    z, mem, v2, w, pp, p_ctrl, ref = _symbols(l)
+    z, mem, v2, w, pp, pm, p_ctrl, ref = _symbols(l)
     dt, u_in, y_in = ca.SX.sym("dt"), WRENCH.sym(), HOVER_OUTPUT.sym()
     y = hover_measurement(z, v2, pp)[:HOVER_OUTPUT.size]
-    u_y, mem_next_y = _law(l, y_in, z, mem, v2, pp, p_ctrl, ref, dt)
+    u_y, mem_next_y = _law(l, y_in, z, mem, v2, pp, pm, p_ctrl, ref, dt)
     mem_dot_y = _memory_rate(mem_next_y, dt)
     z_dot_u = hover_plant_rhs(z, u_in, v2, w, pp)
     u = ca.substitute(u_y, y_in, y)
@@ -191,29 +194,30 @@ def hover_linearization_function(l: int) -> ca.Function:
             at_point(ca.jacobian(u_y, mem)), at_point(ca.jacobian(u_y, y_in))]
     names = ["u", "z_dot", "mem_dot", "A_p", "B_p", "C_p", "A_c", "B_c", "Phi_c", "Gamma_c",
              "C_c", "D_c"]
-    return ca.Function("hover_linearization", [z, mem, v2, w, pp, p_ctrl, ref, dt], outs,
-                       ["z", "mem", "v2", "w", "pp", "p_ctrl", "ref", "dt"], names)
+    return ca.Function("hover_linearization", [z, mem, v2, w, pp, pm, p_ctrl, ref, dt], outs,
+                       ["z", "mem", "v2", "w", "pp", "pm", "p_ctrl", "ref", "dt"], names)
 
 
 @functools.cache
 def hover_equilibrium_residual_function(l: int) -> ca.Function:
     """Residual and exact Jacobian of the landing loop's steady hover.
 
-    ``hover_equilibrium_residual(xi, w, pp, p_ctrl, ref) -> (F, dF)`` with
+    ``hover_equilibrium_residual(xi, w, pp, pm, p_ctrl, ref) -> (F, dF)`` with
     unknowns ``xi = [z (16), mem (6 l + 16), u2, v2, r2]`` and residual
     ``F = [z_dot, mem_dot, (u2, v2, r2)_dot]``: the vehicle in its steady
     motion (eq. 4), the quadrotor at rest in the deck frame, the memory at
     rest. The step integrates its memory exactly with the measurement held,
     so a rest point of ``mem_dot`` is a fixed point of the step at any ``dt``.
     """
-    z, mem, v2, w, pp, p_ctrl, ref = _symbols(l)
+    z, mem, v2, w, pp, pm, p_ctrl, ref = _symbols(l)
     dt = ca.SX.sym("dt")
     y = hover_measurement(z, v2, pp)[:HOVER_OUTPUT.size]
-    u, mem_next = _law(l, y, z, mem, v2, pp, p_ctrl, ref, dt)
+    u, mem_next = _law(l, y, z, mem, v2, pp, pm, p_ctrl, ref, dt)
     xv_dot = VEHICLE_STATE.unpack(vehicle_rhs(hover_vehicle(v2),
                                               LANDING_PLANT_PARAMS.unpack(pp)["p_veh"]))
     F = ca.vertcat(hover_plant_rhs(z, u, v2, w, pp), _memory_rate(mem_next, dt),
                    *[xv_dot[n] for n in VEHICLE_SPEEDS.names()])
     xi = ca.vertcat(z, mem, v2)
-    return ca.Function("hover_equilibrium_residual", [xi, w, pp, p_ctrl, ref],
-                       [F, ca.jacobian(F, xi)], ["xi", "w", "pp", "p_ctrl", "ref"], ["F", "dF"])
+    return ca.Function("hover_equilibrium_residual", [xi, w, pp, pm, p_ctrl, ref],
+                       [F, ca.jacobian(F, xi)], ["xi", "w", "pp", "pm", "p_ctrl", "ref"],
+                       ["F", "dF"])

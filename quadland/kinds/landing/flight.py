@@ -44,7 +44,8 @@ def landing_defaults(sc: Scenario) -> LandingDefaults:
     """The C defaults of the landing step, the guidance and the example ``land``: a
     landing scenario's values (:func:`quadland.kinds.landing.values.landing_values`)."""
     lv = landing_values(sc)
-    pc, pp = landing_loop_params(lv.l).unpack(lv.pc), LANDING_PLANT_PARAMS.unpack(lv.pp)
+    pc = landing_loop_params(lv.l).unpack(lv.pc)
+    model = LANDING_PLANT_PARAMS.unpack(pc["pp"])        # the controller's own model
     d, sim, wind = sc.data["disturbance"], sc.data["simulation"], sc.data["wind"]
     g = sc.data["landing"]
     e = np.asarray(wind["gust_direction"], dtype=float)
@@ -54,7 +55,8 @@ def landing_defaults(sc: Scenario) -> LandingDefaults:
         return tuple(float(x) for x in np.asarray(v, dtype=float))
 
     return LandingDefaults(
-        scenario=label(sc), l=lv.l, p_quad=pp["p_quad"], p_ctrl=pc["p_ctrl"], p_act=pp["p_act"],
+        scenario=label(sc), l=lv.l, p_quad=model["p_quad"], p_ctrl=pc["p_ctrl"],
+        p_act=model["p_act"],
         p_guid=pc["p_guid"], tilt_min=TILT_MIN, pp=lv.pp, xp0=lv.xp0,
         duration=float(sim["duration"]), output_rate_hz=float(sim["output_rate_hz"]),
         control_rate_hz=float(sc.data["controller"]["rate_hz"]),

@@ -66,6 +66,7 @@ class _HoverValues:
 
     l: int
     pp: np.ndarray          # plant parameters, the deck's heave, roll and pitch zeroed
+    pm: np.ndarray          # the controller's own model of them, likewise
     p_ctrl: np.ndarray
     ref: np.ndarray         # hover point, at rest, deck frame
     w: np.ndarray           # [v_wind (heading frame), d_F, d_M]
@@ -76,11 +77,16 @@ class _HoverValues:
 def _hover_values(scenario: Scenario) -> _HoverValues:
     lv = landing_values(scenario)
     pc = landing_loop_params(lv.l).unpack(lv.pc)
-    pp = LANDING_PLANT_PARAMS.unpack(pc["pp"])
-    deck = DECK_PARAMS.unpack(pp["p_deck"])
-    for motion in ("heave", "roll", "pitch"):
-        deck[f"{motion}_amp"] = np.zeros_like(deck[f"{motion}_amp"])
-    pp["p_deck"] = DECK_PARAMS.pack(deck)
+
+    def frozen(params):
+        """The parameters with the deck's heave, roll and pitch zeroed."""
+        p = LANDING_PLANT_PARAMS.unpack(params)
+        deck = DECK_PARAMS.unpack(p["p_deck"])
+        for motion in ("heave", "roll", "pitch"):
+            deck[f"{motion}_amp"] = np.zeros_like(deck[f"{motion}_amp"])
+        p["p_deck"] = DECK_PARAMS.pack(deck)
+        return LANDING_PLANT_PARAMS.pack(p)
+
     d = scenario.data
     xv0 = VEHICLE_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["xv"])
     heading = np.asarray(rotation([0.0, 0.0, float(xv0["psi2"][0])]), dtype=float)
@@ -90,7 +96,7 @@ def _hover_values(scenario: Scenario) -> _HoverValues:
     ref = POSITION_REFERENCE.pack(dict(p_ref=[0.0, 0.0, d["landing"]["hover_height"]],
                               v_ref=np.zeros(3), a_ref=np.zeros(3)))
     q = d["quadrotor"]
-    return _HoverValues(lv.l, LANDING_PLANT_PARAMS.pack(pp), pc["p_ctrl"], ref, w,
+    return _HoverValues(lv.l, frozen(lv.pp), frozen(pc["pp"]), pc["p_ctrl"], ref, w,
                         np.concatenate([xv0[n] for n in VEHICLE_SPEEDS.names()]),
                         q["mass"] * q["gravity"])
 
@@ -122,20 +128,20 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
     lin = hover_linearization_function(hv.l)
     ctrl = landing_controller_params(hv.l).unpack(hv.p_ctrl)
     for _ in range(3):
-        mem_dot = mem_lay.unpack(np.asarray(lin(z0, mem0, hv.speeds, hv.w, hv.pp, hv.p_ctrl,
-                                                    hv.ref, 0.0)[2], dtype=float).ravel())
+        rates = lin(z0, mem0, hv.speeds, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref, 0.0)[2]
+        mem_dot = mem_lay.unpack(np.asarray(rates, dtype=float).ravel())
         c = mem_lay.unpack(mem0)["eta_f"] + mem_dot["eta_f_dot"] / ctrl["w_f"] ** 2
         mem0[mem_lay.slice("eta_f")] = c
         z0[HOVER_PLANT.slice("eta1")][:2] = c
     xi = np.concatenate([z0, mem0, hv.speeds])
 
     def residual(x):
-        r, J = F(x, hv.w, hv.pp, hv.p_ctrl, hv.ref)
+        r, J = F(x, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref)
         return np.asarray(r, dtype=float).ravel(), np.asarray(J, dtype=float)
 
     xi, it = newton(residual, xi, tol, max_iter)
     z, mem, speeds = xi[:nz], xi[nz:nz + nm], xi[nz + nm:]
-    out = lin(z, mem, speeds, hv.w, hv.pp, hv.p_ctrl, hv.ref, 0.0)
+    out = lin(z, mem, speeds, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref, 0.0)
     u, z_dot, mem_dot = (np.asarray(v, dtype=float).ravel() for v in out[0:3])
     tilt = np.cos(z[HOVER_PLANT.index("phi1")]) * np.cos(z[HOVER_PLANT.index("theta1")])
     if abs(tilt) < TILT_MIN:
@@ -155,7 +161,7 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
 def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
     hv = _hover_values(scenario)
     out = hover_linearization_function(hv.l)(point.xr, point.xc, point.vehicle, point.w, hv.pp,
-                                             hv.p_ctrl, hv.ref, dt)
+                                             hv.pm, hv.p_ctrl, hv.ref, dt)
     return dict(zip(("A_p", "B_p", "C_p", "A_c", "B_c", "Phi_c", "Gamma_c", "C_c", "D_c"),
                     (np.asarray(v, dtype=float) for v in out[3:]), strict=True))
 

@@ -40,7 +40,8 @@ class LandingValues:
     pp : ndarray
         Plant parameters (``quadland_symbolic.landing.plant.LANDING_PLANT_PARAMS``).
     pc : ndarray
-        Controller parameters (``quadland_symbolic.landing.loop.landing_loop_params(l)``).
+        Controller parameters (``quadland_symbolic.landing.loop.landing_loop_params(l)``);
+        its ``pp`` is the controller's own model (``[controller_model]``).
     xp0, xc0 : ndarray
         Initial plant state and controller memory.
     F_max : float
@@ -96,6 +97,20 @@ def landing_values(scenario: Scenario) -> LandingValues:
         deck[f"{name}_phase"] = _padded(dk[f"{name}_phase_deg"], deg)
     p_deck = DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
     pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
+    # the controller's own model: [controller_model]'s mass, inertia, drag, motor lag and
+    # rotor limit; the geometry (gravity, arm, rotor drag factor, gear) and the
+    # vehicle's and the deck's parameters (its sensors' models) are the plant's
+    cm = d["controller_model"]
+    model = LANDING_PLANT_PARAMS.pack(dict(
+        p_quad=QUADROTOR.pack(dict(
+            m1=cm["mass"], I=cm["inertia"], Kt=cm["drag_translational"],
+            Kr=cm["drag_rotational"], g=q["gravity"], arm=q["arm_length"],
+            c=q["rotor_drag_factor"])),
+        p_act=ACTUATOR.pack(dict(
+            motor_time_constant=cm["motor_time_constant"],
+            F_max=cm["thrust_to_weight"] * cm["mass"] * q["gravity"] / 4,
+            gear_height=q["gear_height"])),
+        p_veh=p_veh, p_deck=p_deck))
 
     centers = np.linspace(r["center_min"], r["center_max"], l) if l > 1 else \
         np.array([(r["center_min"] + r["center_max"]) / 2])
@@ -114,7 +129,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"],
         settle_time=g["settle_time"]))
     rate = c["rate_hz"]
-    pc = landing_loop_params(l).pack(dict(pp=pp, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
+    pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
     init = d["initial"]
     (x2, y2), (u2, v2) = init["position2"], init["velocity2"]
