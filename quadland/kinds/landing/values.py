@@ -68,6 +68,24 @@ def rotor_force_max(scenario) -> float:
     return q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
 
 
+def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray) -> np.ndarray:
+    """The controller's own model as plant parameters: ``[controller_model]``'s mass,
+    inertia, drag, motor lag and rotor limit; the geometry (gravity, arm, rotor drag
+    factor, gear) and the vehicle's and the deck's parameters (its sensors' models)
+    are the plant's."""
+    q, cm = d["quadrotor"], d["controller_model"]
+    return LANDING_PLANT_PARAMS.pack(dict(
+        p_quad=QUADROTOR.pack(dict(
+            m1=cm["mass"], I=cm["inertia"], Kt=cm["drag_translational"],
+            Kr=cm["drag_rotational"], g=q["gravity"], arm=q["arm_length"],
+            c=q["rotor_drag_factor"])),
+        p_act=ACTUATOR.pack(dict(
+            motor_time_constant=cm["motor_time_constant"],
+            F_max=cm["thrust_to_weight"] * cm["mass"] * q["gravity"] / 4,
+            gear_height=q["gear_height"])),
+        p_veh=p_veh, p_deck=p_deck))
+
+
 def landing_values(scenario: Scenario) -> LandingValues:
     """Translate a validated landing scenario into the landing loop's vectors.
 
@@ -97,20 +115,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         deck[f"{name}_phase"] = _padded(dk[f"{name}_phase_deg"], deg)
     p_deck = DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
     pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
-    # the controller's own model: [controller_model]'s mass, inertia, drag, motor lag and
-    # rotor limit; the geometry (gravity, arm, rotor drag factor, gear) and the
-    # vehicle's and the deck's parameters (its sensors' models) are the plant's
-    cm = d["controller_model"]
-    model = LANDING_PLANT_PARAMS.pack(dict(
-        p_quad=QUADROTOR.pack(dict(
-            m1=cm["mass"], I=cm["inertia"], Kt=cm["drag_translational"],
-            Kr=cm["drag_rotational"], g=q["gravity"], arm=q["arm_length"],
-            c=q["rotor_drag_factor"])),
-        p_act=ACTUATOR.pack(dict(
-            motor_time_constant=cm["motor_time_constant"],
-            F_max=cm["thrust_to_weight"] * cm["mass"] * q["gravity"] / 4,
-            gear_height=q["gear_height"])),
-        p_veh=p_veh, p_deck=p_deck))
+    model = _controller_model(d, p_veh, p_deck)
 
     centers = np.linspace(r["center_min"], r["center_max"], l) if l > 1 else \
         np.array([(r["center_min"] + r["center_max"]) / 2])
