@@ -337,3 +337,18 @@ def test_landing_table(landing):
 def test_landing_refuses_a_frozen_point():
     with pytest.raises(MarginsError, match=r"^at: the landing loop is analysed at its hover"):
         margin_report(load_scenario("highway", ["rbf.nodes=3"]), at=1.0)
+
+
+@pytest.mark.slow
+def test_the_sampled_review_assumes_the_scenario_s_computation_delay():
+    """Without delay_periods the review takes the loop kind's computation delay: a
+    landing scenario's controller.delay_periods (the delay it flies), the paper's 1."""
+    from quadland.margins import margin_report
+
+    for delay in (0, 2):
+        sc = load_scenario("highway", [f"controller.delay_periods={delay}"])
+        report = margin_report(sc)
+        assert report.sampled.computation_delay_periods == delay
+        assert report.sampled.computation_delay_s == pytest.approx(delay / 250.0)
+    paper = load_scenario("paper", ["rbf.nodes=3", "controller.rate_hz=100"])
+    assert margin_report(paper).sampled.computation_delay_periods == 1

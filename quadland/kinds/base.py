@@ -129,6 +129,11 @@ class LoopKind(abc.ABC):
     def operating_point(self, scenario: Scenario, at: float | None = None) -> OperatingPoint:
         """Where its margin review linearizes: an equilibrium, or the simulated state at ``at``."""
 
+    def computation_delay(self, scenario: Scenario) -> int:
+        """Control periods from sampling to commanding that its flight code has (the
+        margin review's default): one, unless the scenario says otherwise."""
+        return 1
+
     def check_operating_time(self, scenario: Scenario, at: float) -> None:
         """Refuse, before any work, a time :meth:`operating_point` cannot reach."""
         raise MarginsError(f"at: the {self.name} loop is analysed at its equilibrium only")

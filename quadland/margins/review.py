@@ -96,7 +96,8 @@ def _loop_report(L: control.StateSpace, names, req: Requirement, rate_hz: float 
     return report, poles
 
 
-def check_request(scenario: Scenario, at: float | None = None, delay_periods: int = 1) -> None:
+def check_request(scenario: Scenario, at: float | None = None,
+                  delay_periods: int | None = None) -> None:
     """Refuse, before any work, a request :func:`margin_report` cannot answer.
 
     Raises
@@ -106,6 +107,10 @@ def check_request(scenario: Scenario, at: float | None = None, delay_periods: in
     """
     if at is not None and not (math.isfinite(at) and at >= 0):
         raise MarginsError(f"at: must be a finite time >= 0 s, got {at}")
+    if delay_periods is None:
+        from quadland.kinds import kind_of
+
+        delay_periods = kind_of(scenario).computation_delay(scenario)
     if isinstance(delay_periods, bool) or not isinstance(delay_periods, int | np.integer) \
             or delay_periods < 0:
         raise MarginsError(f"delay_periods: must be an integer >= 0, got {delay_periods!r}")
@@ -151,7 +156,7 @@ def loop_states(scenario: Scenario) -> tuple[int, int]:
 
 def margin_report(scenario: Scenario, at: float | None = None,
                   requirement: Requirement = Requirement(),
-                  delay_periods: int = 1) -> MarginReport:
+                  delay_periods: int | None = None) -> MarginReport:
     """Linearize a scenario's loop and compute the margin review.
 
     Parameters
@@ -167,9 +172,11 @@ def margin_report(scenario: Scenario, at: float | None = None,
     requirement : Requirement, optional
         Default 6 dB and 45 deg.
     delay_periods : int, optional
-        Control periods from sampling to commanding in the sampled loop
-        (default 1: flight code sends its command one period after it
-        samples); see the kind's ``sampled_models``.
+        Control periods from sampling to commanding in the sampled loop;
+        default: the kind's ``computation_delay`` (the landing's
+        ``controller.delay_periods``, the paper's 1: flight code sends its
+        command one period after it samples); see the kind's
+        ``sampled_models``.
 
     Returns
     -------
@@ -205,6 +212,8 @@ def margin_report(scenario: Scenario, at: float | None = None,
     from quadland.kinds import kind_of
 
     kind = kind_of(scenario)
+    if delay_periods is None:
+        delay_periods = kind.computation_delay(scenario)
     point = kind.operating_point(scenario, at)
     models = kind.linear_models(scenario, point)
     continuous, poles = _loop_report(models.loop_input, models.loop_names, requirement)

@@ -121,6 +121,9 @@ class LandingKind(LoopKind):
                  "each loop with the others closed", ""]
         return lines, "continuous-time limit of the landing step (dt -> 0)"
 
+    def computation_delay(self, scenario: Scenario) -> int:
+        return int(scenario.data["controller"]["delay_periods"])
+
     def codegen_defaults(self, scenario: Scenario) -> LandingDefaults:
         return flight.landing_defaults(scenario)
 
