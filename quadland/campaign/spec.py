@@ -23,7 +23,7 @@ from typing import Any
 
 from quadland.exceptions import ScenarioError
 from quadland.kinds import KINDS
-from quadland.schema import SCHEMAS, check_value, show
+from quadland.schema import CAMPAIGN_KEYS, SCHEMAS, check_value, show
 
 __all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "campaign_spec_of",
            "apply_mode", "DISTRIBUTIONS", "MODES", "SAMPLINGS", "MAX_RUNS", "U_EDGE"]
@@ -47,8 +47,7 @@ MAX_RUNS = 1_000_000
 #: ``-ndtri(U_EDGE) = 8.21`` standard deviations from its mean.
 U_EDGE = 2.0 ** -53
 _SEED_MAX = 2 ** 63 - 1
-_TOP = {"runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
-        "dispersions": "table of dispersed keys", "limits": "table of metric upper limits"}
+_TOP = CAMPAIGN_KEYS
 
 
 @dataclasses.dataclass(frozen=True)

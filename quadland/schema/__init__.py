@@ -22,7 +22,7 @@ from quadland.schema.landing import LANDING_SCHEMA, check_landing
 from quadland.schema.paper import PAPER_SCHEMA, check_paper
 
 __all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
-           "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS"]
+           "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "CAMPAIGN_KEYS"]
 
 #: The schema of each model (``scenario.model``; "paper" when absent).
 SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
@@ -34,3 +34,9 @@ CROSS_CHECKS: Mapping[str, Callable[[dict], None]] = MappingProxyType(
 
 #: The models a scenario may select with ``scenario.model``.
 MODELS = tuple(SCHEMAS)
+
+#: The top-level keys of a scenario's ``[campaign]`` table and what each holds:
+#: the only ``campaign.*`` keys an override (``--set``) may give.
+CAMPAIGN_KEYS: Mapping[str, str] = MappingProxyType({
+    "runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
+    "dispersions": "table of dispersed keys", "limits": "table of metric upper limits"})
