@@ -248,7 +248,7 @@ def _run_campaign(args) -> int:
         print(f"quadland: interrupted: {exc}", file=sys.stderr)
         return 130
     except CampaignStopped as exc:
-        print(f"quadland: error: {exc}", file=sys.stderr)
+        print(f"quadland: error: {_message(exc)}", file=sys.stderr)
         return 4
     summary = result.summary
     rate = ""
@@ -260,11 +260,22 @@ def _run_campaign(args) -> int:
     elif summary is not None:
         rate = (f": no run flown, the draws of all {summary['runs']} were invalid (runs.csv "
                 "says why)")
-    speed = (f"; flew {result.flown} runs in {result.elapsed:.1f} s "
-             f"({result.flown / result.elapsed:.1f} runs/s)" if result.flown and
-             result.elapsed > 0 else "; no run left to fly")
-    print(f"quadland: wrote {result.folder}{rate}{speed}")
+    print(f"quadland: wrote {result.folder}{rate}{_session(result)}")
     return 0
+
+
+def _session(result) -> str:
+    """What a campaign's command did itself, as its last line says it (as summary.json)."""
+    invalid = (f"{result.invalid} invalid draw{'s' if result.invalid != 1 else ''} "
+               "recorded") if result.invalid else ""
+    if result.flown:
+        speed = (f" ({result.flown / result.elapsed:.1f} runs/s)" if result.elapsed > 0
+                 else "")
+        return (f"; flew {result.flown} run{'s' if result.flown != 1 else ''} in "
+                f"{result.elapsed:.1f} s{speed}" + (f", {invalid}" if invalid else ""))
+    if invalid:
+        return f"; {invalid} in {result.elapsed:.1f} s"
+    return "; no run left to fly"
 
 
 def _message(exc: QuadlandError) -> str:

@@ -51,7 +51,7 @@ __all__ = ["CampaignResult", "CampaignInterrupted", "run_campaign", "summarize_c
            "campaign_header", "code_fingerprint", "replay_command", "check_address",
            "local_workers", "worker_memory", "available_memory", "CAMPAIGN_FIGURES",
            "CONFIDENCE", "QUANTILES", "WORST_RUNS", "MAX_WORKERS", "WORKER_MEMORY",
-           "NO_WORKER_GRACE_S"]
+           "NO_WORKER_GRACE_S", "SCHEDULER_TIMEOUT_S", "quiet_cluster_logs"]
 
 #: Confidence level of the success rate's interval and bound.
 CONFIDENCE = 0.95
@@ -68,6 +68,8 @@ MAX_WORKERS = 1024
 #: of its own (USS), 120 MiB resident (RSS, with the pages it shares with the
 #: forkserver); the paper's, 20 and 55 MiB (docs/campaign.md).
 WORKER_MEMORY = 128 * 2**20
+#: Longest wait for a Dask scheduler's handshake, s (its client gets twice that to connect).
+SCHEDULER_TIMEOUT_S = 5.0
 #: How long a Dask cluster may be left without a worker before the campaign stops, s.
 NO_WORKER_GRACE_S = 20.0
 #: Runs queued ahead on each local worker process or Dask thread.
@@ -108,6 +110,9 @@ class CampaignResult:
         Wall time of this call's runs, s.
     summary : dict or None
         summary.json, once every run is recorded.
+    invalid : int
+        Runs recorded by this call as ``invalid``: their draws made no valid
+        scenario, so they were not flown (not counted in ``flown``).
     """
 
     folder: Path
@@ -116,6 +121,7 @@ class CampaignResult:
     flown: int
     elapsed: float
     summary: dict | None
+    invalid: int = 0
 
     @property
     def complete(self) -> bool:
@@ -332,12 +338,12 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
     manifest = _manifest(base, spec, n_runs)
     path = None if out is None else Path(out).absolute()
     if path is not None:                        # refused now, before the cluster and the build
-        _check_folder(CampaignFolder(path), manifest)
+        _check_folder(CampaignFolder(path), manifest, header)
     given = [o for o in (_override_texts(overrides)) if not o.startswith("campaign.")]
     scenario_arg = _scenario_argument(base, scenario)
     with contextlib.ExitStack() as stack:
         if scheduler is not None:
-            stack.enter_context(_quiet_cluster_logs())
+            stack.enter_context(quiet_cluster_logs())
             connection = _connect(scheduler)
             stack.callback(_disconnect, connection)
         else:
@@ -352,13 +358,12 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
     warm_up(base)                               # the compiled simulator, built or loaded
     folder = CampaignFolder(path).claim() if path is not None else _new_folder(base.name)
     with folder:
-        _check_folder(folder, manifest)         # again, now that it is ours
+        rows = _check_folder(folder, manifest, header)  # again, now that it is ours
         folder.start(manifest, header, {"scenario.toml": base.to_toml().encode("utf-8")})
-        rows = folder.read_runs(header)
         pending = [i for i in range(n_runs) if i not in rows]
         todo = iter_draws(spec, pending, n_runs)
         bar = _progress_bar(progress, n_runs, len(rows))
-        start, flown = time.perf_counter(), 0
+        start, flown, invalid = time.perf_counter(), 0, 0
         try:
             if connection is not None:
                 batches = _dask_runs(connection, base, todo, spec.limits)
@@ -371,7 +376,8 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
                     new = [_row(o, header) for o in batch]
                     folder.append(new)
                     rows.update((int(r[0]), r) for r in new)
-                    flown += len(new)
+                    invalid += sum(o.status == "invalid" for o in batch)
+                    flown += sum(o.status != "invalid" for o in batch)
                     if bar is not None:
                         bar.update(len(new))
             finally:
@@ -387,7 +393,7 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
             ordered = [rows[i] for i in range(n_runs)]
             summary = summarize_campaign(base, header, ordered, scenario_arg, given)
             summary["last_session"] = {
-                "runs_flown": flown, "wall_s": elapsed,
+                "runs_flown": flown, "invalid_draws": invalid, "wall_s": elapsed,
                 "runs_per_s": flown / elapsed if flown and elapsed > 0 else None,
                 "where": scheduler or f"{max(local, 1)} local process(es)"}
             from quadland.output import strict_json
@@ -398,15 +404,18 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
             if plots:
                 files.update(_figures(base, header, ordered, summary))
             folder.finish(header, ordered, files)
-        return CampaignResult(folder.path, n_runs, len(rows), flown, elapsed, summary)
+        return CampaignResult(folder.path, n_runs, len(rows), flown, elapsed, summary, invalid)
 
 
-def _check_folder(folder: CampaignFolder, manifest: dict) -> None:
-    """Refuse a folder that is not this campaign's (read only: nothing is created)."""
+def _check_folder(folder: CampaignFolder, manifest: dict, header: Sequence[str]
+                  ) -> dict[int, list[str]]:
+    """The runs a folder of this campaign holds; refuse a folder that is not this
+    campaign's, or whose journal is damaged (read only: nothing is created or changed)."""
     folder.check()
     old = folder.manifest()
     if old is not None:
         _check_resumable(old, manifest, folder.path)
+    return folder.read_runs(header, manifest["runs"] if old is None else old["runs"])
 
 
 def _new_folder(name: str) -> CampaignFolder:
@@ -710,9 +719,10 @@ def _connect(address: str):
         raise CampaignError("scheduler: needs the dask.distributed package "
                             "(pip install 'dask[distributed]')") from None
     _reachable(address)
+    _handshake(address)
     try:
-        client = Client(address, timeout="15s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+        client = Client(address, timeout=f"{2 * SCHEDULER_TIMEOUT_S:g}s", set_as_default=False)
+    except Exception as exc:                    # OSError, TimeoutError, or a protocol's
         raise CampaignError(f"scheduler: cannot connect to {address}: "
                             f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
     try:
@@ -732,16 +742,23 @@ def _connect(address: str):
 
 
 @contextlib.contextmanager
-def _quiet_cluster_logs():
-    """Silence dask.distributed's log lines meanwhile: the campaign reports in one line."""
+def quiet_cluster_logs():
+    """Silence the log lines of dask.distributed, tornado and asyncio meanwhile.
+
+    A lost or failing scheduler connection makes them log (a refused
+    handshake, a closed stream, a task never awaited) beside the campaign's
+    one line. Their loggers' levels are set above CRITICAL, and set back
+    after.
+    """
     import logging
 
     try:
         import distributed  # noqa: F401  (its import sets its loggers' levels)
     except ImportError:
         pass
-    names = ["distributed"] + [n for n in logging.root.manager.loggerDict
-                               if n.startswith("distributed.")]
+    names = ["distributed", "tornado", "asyncio"] + [
+        n for n in logging.root.manager.loggerDict
+        if n.startswith(("distributed.", "tornado."))]
     saved = {n: logging.getLogger(n).level for n in names}
     for name in names:
         logging.getLogger(name).setLevel(logging.CRITICAL + 1)
@@ -750,6 +767,54 @@ def _quiet_cluster_logs():
     finally:
         for name, level in saved.items():
             logging.getLogger(name).setLevel(level)
+
+
+def _handshake(address: str) -> None:
+    """Refuse a TCP address whose listener does not answer as a Dask scheduler.
+
+    ``distributed.Client`` waits for the scheduler's handshake without a
+    bound: a server that accepts and says nothing (or an HTTP server, or
+    anything else) would hold the campaign forever. Here the handshake is
+    tried first, in a thread of its own, for :data:`SCHEDULER_TIMEOUT_S`.
+    """
+    scheme, _, _ = address.rpartition("://")
+    if scheme not in ("", "tcp"):
+        return
+    import asyncio
+
+    from distributed.comm import connect
+
+    answer: dict = {}
+
+    async def probe():
+        comm = await connect(address if scheme else f"tcp://{address}",
+                             timeout=SCHEDULER_TIMEOUT_S)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    def run():
+        try:
+            answer["info"] = asyncio.run(asyncio.wait_for(probe(), SCHEDULER_TIMEOUT_S))
+        except BaseException as exc:            # reported below, in this thread
+            answer["error"] = exc
+
+    thread = threading.Thread(target=run, name="quadland-scheduler-handshake", daemon=True)
+    thread.start()
+    thread.join(SCHEDULER_TIMEOUT_S + 1.0)
+    info = answer.get("info")
+    if isinstance(info, dict) and info.get("type") == "Scheduler":
+        return
+    error = answer.get("error")
+    if "info" in answer:
+        why = "its answer is not a scheduler's"
+    elif error is None or isinstance(error, TimeoutError):
+        why = f"no answer within {SCHEDULER_TIMEOUT_S:g} s"
+    else:
+        why = " ".join(str(error).split())[:120] or type(error).__name__
+    raise CampaignError(f"scheduler: {address} does not answer as a Dask scheduler: {why}")
 
 
 def _reachable(address: str) -> None:
