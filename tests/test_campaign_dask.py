@@ -227,7 +227,7 @@ def test_a_listener_that_is_no_scheduler_is_one_line_within_seconds(tmp_path, ki
 def test_the_cluster_s_loggers_are_silent_meanwhile_and_restored(capfd):
     import logging
 
-    from quadland.campaign.execute import quiet_cluster_logs
+    from quadland.campaign.cluster import quiet_cluster_logs
 
     names = ("distributed.client", "distributed.comm.tcp", "tornado.application",
              "tornado.general", "asyncio")

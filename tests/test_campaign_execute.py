@@ -477,24 +477,24 @@ def test_a_manifest_with_a_damaged_entry_is_one_line(reference, tmp_path, capsys
 
 def test_workers_are_bounded_by_memory(tmp_path, monkeypatch, capsys):
     # V21: --workers 1000 was accepted with no memory bound (about 120 MB each)
-    from quadland.campaign import execute
+    from quadland.campaign import local
     from quadland.simulation import simulation_plan
 
     sc = load_scenario("highway")
-    each = execute.WORKER_MEMORY + simulation_plan(sc).memory_bytes
-    assert execute.worker_memory(sc) == each
-    monkeypatch.setattr(execute, "available_memory", lambda: 10 * each + each // 2)
-    assert execute.local_workers(sc, 10, 300) == 10
-    assert execute.local_workers(sc, 3, 2) == 2               # no more than the runs
-    assert execute.local_workers(sc, None, 300) == min(10, execute._cores())
-    monkeypatch.setattr(execute, "_cores", lambda: 64)
-    assert execute.local_workers(sc, None, 300) == 10          # the default fits the memory
-    assert execute.local_workers(sc, 1, 300) == 1              # in this process: no new one
+    each = local.WORKER_MEMORY + simulation_plan(sc).memory_bytes
+    assert local.worker_memory(sc) == each
+    monkeypatch.setattr(local, "available_memory", lambda: 10 * each + each // 2)
+    assert local.local_workers(sc, 10, 300) == 10
+    assert local.local_workers(sc, 3, 2) == 2               # no more than the runs
+    assert local.local_workers(sc, None, 300) == min(10, local._cores())
+    monkeypatch.setattr(local, "_cores", lambda: 64)
+    assert local.local_workers(sc, None, 300) == 10          # the default fits the memory
+    assert local.local_workers(sc, 1, 300) == 1              # in this process: no new one
     with pytest.raises(CampaignError, match=r"workers: 11 local processes need about "
                                             r"[0-9.]+ GiB \(about [0-9]+ MiB each\), over the "
                                             r"[0-9.]+ GiB of memory available; use --workers 10 "
                                             r"or fewer"):
-        execute.local_workers(sc, 11, 300)
+        local.local_workers(sc, 11, 300)
     out = tmp_path / "a" / "w"
     assert main(["campaign", "--scenario", "highway", "--workers", "1000", "--out",
                  str(out)]) == 2
