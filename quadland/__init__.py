@@ -2,16 +2,10 @@
 
 The model and the controller live once, symbolically, in ``quadland_symbolic``;
 this package loads scenarios, simulates, analyses and plots. Every name below
-is loaded on first use, so that ``import quadland`` (and ``python -m quadland``,
-whose Ctrl-C must be one line from its first instant) stays light.
+(``__version__`` too) is loaded on first use, so that ``import quadland`` (and
+``python -m quadland``, whose Ctrl-C must be one line from its first instant)
+imports nothing.
 """
-
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("quadland")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
 
 __all__ = ["__version__", "QuadlandError", "ScenarioError", "SimulationError", "Scenario",
            "load_scenario", "SimulationResult", "simulate", "kind_of", "KINDS", "allmargin",
@@ -32,7 +26,19 @@ _LAZY = {"QuadlandError": "quadland.exceptions", "ScenarioError": "quadland.exce
          "margin_figures": "quadland.plots", "run_campaign": "quadland.campaign.execute"}
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("quadland")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        return "0+unknown"
+
+
 def __getattr__(name):
+    if name == "__version__":
+        value = globals()["__version__"] = _version()
+        return value
     if name in _LAZY:
         import importlib
 

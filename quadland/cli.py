@@ -101,38 +101,48 @@ def build_parser() -> argparse.ArgumentParser:
     ``--help`` and ``--version`` print and exit as usual.
     """
     from quadland import __version__
-    from quadland.margins import Requirement
 
     parser = _Parser(
         prog="quadland",
         description="Adaptive RBFNN backstepping landing of a quadrotor on a moving vehicle.")
     parser.add_argument("--version", action="version", version=f"quadland {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for add in (_simulate_parser, _codegen_parser, _margins_parser, _campaign_parser):
+        add(sub)
+    return parser
 
-    def scenario_args(p):
-        p.add_argument("--scenario", default="paper", metavar="NAME|PATH",
-                       help="a shipped scenario's name or a TOML file (default: paper)")
-        p.add_argument("--set", dest="overrides", action="append", default=[],
-                       metavar="SECTION.KEY=VALUE",
-                       help="override one scenario value (repeatable); the value is TOML")
 
+def _scenario_args(p) -> None:
+    p.add_argument("--scenario", default="paper", metavar="NAME|PATH",
+                   help="a shipped scenario's name or a TOML file (default: paper)")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="SECTION.KEY=VALUE",
+                   help="override one scenario value (repeatable); the value is TOML")
+
+
+def _out_arg(p, what: str = "output folder") -> None:
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help=f"{what} (default: a new folder named after the scenario and the time)")
+
+
+def _simulate_parser(sub) -> None:
     sim = sub.add_parser("simulate", help="simulate a scenario and write its outputs",
                          description="Simulate a scenario's closed loop; write trajectory.csv, "
                                      "summary.json and the figures.")
-    scenario_args(sim)
-    sim.add_argument("--out", type=Path, metavar="DIR",
-                     help="output folder (default: a new folder named after the scenario "
-                          "and the time)")
+    _scenario_args(sim)
+    _out_arg(sim)
     sim.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     sim.add_argument("--animate", action="store_true",
                      help="also write landing.gif, an animation of the landing (landing "
                           "scenarios)")
     sim.set_defaults(handler=_run_simulate)
 
+
+def _codegen_parser(sub) -> None:
     cg = sub.add_parser("codegen", help="regenerate the C code of generated/",
                         description="Write the generated C code for a scenario, byte for byte "
                                     "reproducible.")
-    scenario_args(cg)
+    _scenario_args(cg)
     cg.add_argument("--out", type=Path, metavar="DIR",
                     help="output folder (default: the source checkout's generated/, which "
                          "holds the paper and highway scenarios' code only)")
@@ -141,15 +151,17 @@ def build_parser() -> argparse.ArgumentParser:
                          "exit 1 where DIR differs")
     cg.set_defaults(handler=_run_codegen)
 
+
+def _margins_parser(sub) -> None:
+    from quadland.margins import Requirement
+
     mg = sub.add_parser("margins", help="linearize the closed loop and report its margins",
                         description="Stability margins of the linearized closed loop.")
-    scenario_args(mg)
+    _scenario_args(mg)
     mg.add_argument("--at", type=_number, metavar="T", default=None,
                     help="linearize about the simulated state at time T (s) instead of the "
                          "closed loop's equilibrium (paper scenarios)")
-    mg.add_argument("--out", type=Path, metavar="DIR",
-                    help="output folder (default: a new folder named after the scenario "
-                         "and the time)")
+    _out_arg(mg)
     mg.add_argument("--gain-margin-db", type=_number, default=Requirement.gain_margin_db,
                     metavar="DB", help="required gain margin (default: %(default)g dB)")
     mg.add_argument("--phase-margin-deg", type=_number, default=Requirement.phase_margin_deg,
@@ -160,17 +172,17 @@ def build_parser() -> argparse.ArgumentParser:
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     mg.set_defaults(handler=_run_margins)
 
+
+def _campaign_parser(sub) -> None:
     cp = sub.add_parser("campaign", help="fly a scenario's Monte Carlo campaign",
                         description="Fly the dispersed runs of a scenario's [campaign] table "
                                     "on every core or a Dask cluster; write runs.csv, "
                                     "summary.json and the figures. Running again into the same "
                                     "folder flies only the missing runs.")
-    scenario_args(cp)
+    _scenario_args(cp)
     cp.add_argument("--runs", type=_integer, metavar="N",
                     help="number of runs (default: the table's campaign.runs)")
-    cp.add_argument("--out", type=Path, metavar="DIR",
-                    help="campaign folder (default: a new folder named after the scenario "
-                         "and the time)")
+    _out_arg(cp, "campaign folder")
     cp.add_argument("--workers", type=_integer, metavar="K",
                     help="local processes (default: one per core; 1: in this process)")
     cp.add_argument("--scheduler", metavar="ADDRESS",
@@ -178,7 +190,6 @@ def build_parser() -> argparse.ArgumentParser:
                          "instead of local processes")
     cp.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     cp.set_defaults(handler=_run_campaign)
-    return parser
 
 
 def _run_simulate(args) -> int:
@@ -248,7 +259,7 @@ def _run_campaign(args) -> int:
         print(f"quadland: interrupted: {exc}", file=sys.stderr)
         return 130
     except CampaignStopped as exc:
-        print(f"quadland: error: {exc}", file=sys.stderr)
+        print(f"quadland: error: {_message(exc)}", file=sys.stderr)
         return 4
     summary = result.summary
     rate = ""
@@ -260,11 +271,22 @@ def _run_campaign(args) -> int:
     elif summary is not None:
         rate = (f": no run flown, the draws of all {summary['runs']} were invalid (runs.csv "
                 "says why)")
-    speed = (f"; flew {result.flown} runs in {result.elapsed:.1f} s "
-             f"({result.flown / result.elapsed:.1f} runs/s)" if result.flown and
-             result.elapsed > 0 else "; no run left to fly")
-    print(f"quadland: wrote {result.folder}{rate}{speed}")
+    print(f"quadland: wrote {result.folder}{rate}{_session(result)}")
     return 0
+
+
+def _session(result) -> str:
+    """What a campaign's command did itself, as its last line says it (as summary.json)."""
+    invalid = (f"{result.invalid} invalid draw{'s' if result.invalid != 1 else ''} "
+               "recorded") if result.invalid else ""
+    if result.flown:
+        speed = (f" ({result.flown / result.elapsed:.1f} runs/s)" if result.elapsed > 0
+                 else "")
+        return (f"; flew {result.flown} run{'s' if result.flown != 1 else ''} in "
+                f"{result.elapsed:.1f} s{speed}" + (f", {invalid}" if invalid else ""))
+    if invalid:
+        return f"; {invalid} in {result.elapsed:.1f} s"
+    return "; no run left to fly"
 
 
 def _message(exc: QuadlandError) -> str:

@@ -289,6 +289,39 @@ def _check_tree(out: Path, files: dict[str, str]) -> None:
                           if mode is not None and stat.S_ISDIR(mode))]:
         if not os.access(folder, os.W_OK | os.X_OK):
             raise CodegenError(f"out: cannot write {folder}: permission denied")
+    if not stat.S_ISREG(seen.get(Path(MANIFEST)) or 0):
+        _check_foreign(out, files)
+
+
+def _check_foreign(out: Path, files: dict[str, str]) -> None:
+    """Refuse a folder without a :data:`MANIFEST` that holds anything but the tree's own.
+
+    A folder no generation has written into may be empty, or hold only files
+    of the tree with the generated text already (taken over) and the tree's
+    folders; anything else there is the user's, and a generated tree is not
+    mixed into it.
+    """
+    folders = {Path(rel).parents[k] for rel in files for k in range(len(Path(rel).parts) - 1)}
+    pending = [Path()]
+    while pending:
+        sub = pending.pop()
+        try:
+            with os.scandir(out / sub) as entries:
+                names = sorted(e.name for e in entries)
+        except OSError as exc:
+            raise CodegenError(f"out: cannot read {out / sub}: {exc.strerror or exc}") from None
+        for name in names:
+            rel = sub / name
+            if sub == Path() and name.startswith(f"{MANIFEST}.tmp-"):
+                continue                           # a generation's staging folder
+            if rel in folders and (out / rel).is_dir() and not (out / rel).is_symlink():
+                pending.append(rel)
+                continue
+            if rel.as_posix() in files and _holds(out / rel, files[rel.as_posix()].encode()):
+                continue
+            raise CodegenError(f"out: {out} holds {rel.as_posix()}, which quadland codegen "
+                               f"did not write (there is no {MANIFEST}); choose a new or "
+                               "empty folder")
 
 
 def check_target(out: Path) -> None:

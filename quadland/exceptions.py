@@ -2,7 +2,7 @@
 
 __all__ = ["QuadlandError", "ScenarioError", "SimulationError", "SingularAttitudeError",
            "CompilerNotFoundError", "CompileError", "CodegenError", "OperatingPointError",
-           "MarginsError", "CampaignError", "CampaignStopped"]
+           "MarginsError", "CampaignError", "CampaignStopped", "SettingError"]
 
 
 class QuadlandError(Exception):
@@ -40,6 +40,10 @@ class CompilerNotFoundError(QuadlandError, RuntimeError):
 
 class CompileError(QuadlandError, RuntimeError):
     """The C compiler failed on generated sources."""
+
+
+class SettingError(QuadlandError, ValueError):
+    """An environment setting of quadland's (``QUADLAND_COMPILE_TIMEOUT``) is malformed."""
 
 
 class CodegenError(QuadlandError, ValueError):

@@ -20,7 +20,15 @@ from pathlib import Path
 from typing import Any
 
 from quadland.exceptions import ScenarioError
-from quadland.schema import CROSS_CHECKS, DEFAULT_MODEL, MODELS, SCHEMAS, check_value, show
+from quadland.schema import (
+    CAMPAIGN_KEYS,
+    CROSS_CHECKS,
+    DEFAULT_MODEL,
+    MODELS,
+    SCHEMAS,
+    check_value,
+    show,
+)
 
 __all__ = ["Scenario", "load_scenario", "scenario_names", "SCENARIO_DIR", "toml_value"]
 
@@ -200,9 +208,10 @@ def load_scenario(name_or_path: str | Path = "paper",
     overridden = {}
     for dotted, value in pairs:
         section, key = _split_key(dotted)
-        if section == "campaign":                   # campaign.runs, .seed, .sampling
+        if section == "campaign":                   # campaign.runs, .seed, .sampling, ...
             if campaign is None:
                 raise ScenarioError(f"override {show(dotted)}: {path} has no [campaign] table")
+            _check_campaign_key(dotted, key)
             campaign[key] = value
             continue
         if not any(section in schema for schema in SCHEMAS.values()):
@@ -322,13 +331,59 @@ def _split_key(dotted: str) -> tuple[str, str]:
     return section, key
 
 
+def _check_campaign_key(dotted: str, key: str) -> None:
+    """Refuse an override of anything but a top-level key of ``[campaign]``."""
+    keys = ", ".join(CAMPAIGN_KEYS)
+    head = key.partition(".")[0]
+    if key in CAMPAIGN_KEYS:
+        return
+    if head in CAMPAIGN_KEYS:
+        raise ScenarioError(f"override {show(dotted)}: only the [campaign] table's own keys "
+                            f"can be set ({keys}); give campaign.{head} whole "
+                            f"(campaign.{head}={{...}}) or edit the scenario file")
+    hint = difflib.get_close_matches(head, list(CAMPAIGN_KEYS), n=1)
+    raise ScenarioError(f"override {show(dotted)}: unknown key campaign.{show(key)} (the "
+                        f"[campaign] table's keys: {keys})"
+                        + (f"; did you mean 'campaign.{hint[0]}'?" if hint else ""))
+
+
+def _control(text: str) -> str | None:
+    """The first control character of ``text`` (a newline, an escape), as U+XXXX, or None."""
+    for c in text:
+        if ord(c) < 0x20 or 0x7f <= ord(c) < 0xa0:
+            return f"U+{ord(c):04X}"
+    return None
+
+
+def _printable(text: str) -> str:
+    """``text`` with its control characters escaped (``\\n``, ``\\x1b``), for a message."""
+    return "".join(c if _control(c) is None else c.encode("unicode_escape").decode("ascii")
+                   for c in text)
+
+
+def _check_printable(item) -> None:
+    """Refuse an override whose text (or key) holds a control character.
+
+    A newline or an escape would be echoed into a message or written into
+    ``scenario.toml``; the text is named with it escaped. (A string value's
+    own characters, TOML escapes included, are its key's to check.)
+    """
+    found = _control(item) if isinstance(item, str) else None
+    if found:
+        raise ScenarioError(f"override {show(_printable(item), 60)}: holds a control "
+                            f"character ({found}); an override is one line of printable text")
+
+
 def _parse_overrides(overrides) -> list[tuple[str, Any]]:
     if overrides is None:
         return []
     if isinstance(overrides, Mapping):
+        for key in overrides:
+            _check_printable(key)
         return list(overrides.items())
     pairs = []
     for item in overrides:
+        _check_printable(str(item))
         dotted, eq, text = str(item).partition("=")
         if not eq or not dotted.strip():
             raise ScenarioError(f"override {show(str(item))}: expected section.key=value")

@@ -3,6 +3,7 @@
 import ctypes
 import errno
 import os
+import re
 import signal
 import stat
 import subprocess
@@ -123,15 +124,18 @@ def test_compiles_run_within_the_memory_budget(cache, monkeypatch):
             started.append((cmd[-1], len(running)))
             Path(cwd, cmd[-1]).write_bytes(b"o")
 
-        def communicate(self):
+        def communicate(self, timeout=None):
             running.remove(self)
             return "", ""
 
-    monkeypatch.setattr(build.subprocess, "Popen", FakeProc)
-    monkeypatch.setattr(build.os, "cpu_count", lambda: 4)
+    from quadland.engine import compiler
+
+    monkeypatch.setattr(compiler.subprocess, "Popen", FakeProc)
+    monkeypatch.setattr(compiler.os, "cpu_count", lambda: 4)
     half = 0.6 * COMPILE_MEMORY_BUDGET
-    build._run_parallel([["cc", f"{n}.o"] for n in "abcd"], str(cache.parent.parent), "cc",
-                        [half, half, 1.0, 1.0], [f"{n}.o" for n in "abcd"])
+    compiler.run_compilers([["cc", f"{n}.o"] for n in "abcd"], str(cache.parent.parent), "cc",
+                           [half, half, 1.0, 1.0], [f"{n}.o" for n in "abcd"], 60.0,
+                           COMPILE_MEMORY_BUDGET)
     assert dict(started) == {"a.o": 1, "b.o": 1, "c.o": 2, "d.o": 3}
 
 
@@ -322,3 +326,73 @@ def test_a_build_killed_by_sigkill_breaks_no_later_build(tmp_path, cache):
     build._clean_cache.cache_clear()
     _probe({"probe.c": PROBE + "int more(void) { return 2; }\n"}, name="libmore")
     assert not left.exists()
+
+
+# --- a compiler that hangs, or that $CC does not name (issue 16, D12) ----------------
+
+def _fake_cc(tmp_path, hang_on_version: bool):
+    """A compiler that sleeps for a minute (in a child, as cc1 runs under gcc), on
+    ``--version`` too or only when asked to compile."""
+    cc = tmp_path / ("hangcc" if hang_on_version else "slowcc")
+    real = build.find_compiler()
+    version = "" if hang_on_version else f'case "$1" in --version) exec {real} --version;; esac\n'
+    cc.write_text(f"#!/bin/sh\n{version}sleep 60 &\nwait\n")
+    cc.chmod(0o755)
+    return cc
+
+
+def _sleepers(cc) -> list[int]:
+    import psutil
+
+    return [p.pid for p in psutil.process_iter(["cmdline"])
+            if p.info["cmdline"] and p.info["cmdline"][:2] == ["sleep", "60"]
+            and p.parent() is not None and str(cc) in " ".join(p.parent().cmdline())]
+
+
+@pytest.mark.parametrize("hang_on_version", [False, True])
+def test_a_hung_compiler_is_killed_with_its_group_and_the_vm_flies(tmp_path, cache,
+                                                                     monkeypatch,
+                                                                     hang_on_version):
+    # D12: the compile had no timeout: a compiler that hangs (or hangs on --version) held
+    # the command forever. Killed with its process group after QUADLAND_COMPILE_TIMEOUT s
+    # (here 1 s), the simulation falls back to CasADi's VM with one warning.
+    cc = _fake_cc(tmp_path, hang_on_version)
+    start = time.monotonic()
+    proc = _cli(tmp_path, "simulate", "--no-plots", "--out", str(tmp_path / "run"), "--set",
+                "simulation.duration=0.2", CC=str(cc), QUADLAND_COMPILE_TIMEOUT="1",
+                XDG_CACHE_HOME=str(cache.parent))
+    took = time.monotonic() - start
+    assert proc.returncode == 0, proc.stderr
+    if hang_on_version:
+        why = f"{cc} --version did not answer within 1 s (is it a C compiler?)"
+    else:
+        why = (r"slowcc ran over 1 s making qlsim_paper_[a-z_]+\.o and was stopped "
+               r"\(QUADLAND_COMPILE_TIMEOUT sets the limit\)")
+    assert re.fullmatch(f"quadland: warning: {why if not hang_on_version else re.escape(why)}; "
+                        "simulating on CasADi's virtual machine, several times slower\n",
+                        proc.stderr), proc.stderr
+    assert took < 30, took
+    assert (tmp_path / "run" / "trajectory.csv").is_file()
+    assert _sleepers(cc) == []                 # the compiler's children went with it
+
+
+def test_a_bad_compile_timeout_is_one_line(tmp_path, cache):
+    for text in ("abc", "-1", "0", "nan", "inf"):
+        proc = _cli(tmp_path, "simulate", "--no-plots", "--out", str(tmp_path / "run"),
+                    QUADLAND_COMPILE_TIMEOUT=text, XDG_CACHE_HOME=str(cache.parent))
+        assert proc.returncode == 2
+        assert proc.stderr == ("quadland: error: QUADLAND_COMPILE_TIMEOUT: must be a number "
+                               f"of seconds > 0, got '{text}'\n")
+        assert not (tmp_path / "run").exists()
+    assert build.COMPILE_TIMEOUT == 4 * build.COMPILE_TIME_BUDGET
+
+
+def test_a_cc_that_names_no_program_warns_and_flies_on_the_vm(tmp_path, cache):
+    # D12: CC=/nonexistent was passed over silently for cc (another compiler than asked)
+    proc = _cli(tmp_path, "simulate", "--no-plots", "--out", str(tmp_path / "run"), "--set",
+                "simulation.duration=0.2", CC="/nonexistent", XDG_CACHE_HOME=str(cache.parent))
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ("quadland: warning: CC='/nonexistent' is not a program (unset CC "
+                           "to use cc, gcc or clang): simulating on CasADi's virtual machine, "
+                           "several times slower\n")
+    assert not list(cache.glob("*/*.so"))

@@ -170,3 +170,71 @@ def test_a_bad_or_unreachable_scheduler_is_one_line_and_creates_nothing(tmp_path
         lines = err.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith(message), err
         assert text == "" and os.listdir(tmp_path) == []
+
+
+def _serve(kind: str):
+    """A TCP server on the loopback that is no Dask scheduler: silent, HTTP or an echo."""
+    import http.server
+    import socketserver
+    import threading
+
+    class Silent(socketserver.BaseRequestHandler):
+        def handle(self):
+            time.sleep(30)
+
+    class Echo(socketserver.BaseRequestHandler):
+        def handle(self):
+            while data := self.request.recv(65536):
+                self.request.sendall(data)
+
+    handler = {"silent": Silent, "echo": Echo,
+               "http": http.server.SimpleHTTPRequestHandler}[kind]
+    server = socketserver.ThreadingTCPServer(("127.0.0.1", 0), handler)
+    server.daemon_threads = True
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
+
+
+@pytest.mark.parametrize("kind, why", [
+    ("silent", "no answer within 5 s"),
+    ("http", None),
+    ("echo", "its answer is not a scheduler's"),
+])
+def test_a_listener_that_is_no_scheduler_is_one_line_within_seconds(tmp_path, kind, why):
+    # D6: something listening that is not a Dask scheduler held the campaign forever (the
+    # client waits for the handshake without a bound); an echo answered the handshake and
+    # gave an AssertionError traceback and a 30 s wait in Client.__del__ (D7: beside lines
+    # of distributed's and tornado's)
+    server = _serve(kind)
+    address = f"tcp://127.0.0.1:{server.server_address[1]}"
+    try:
+        out = tmp_path / "a" / "b"
+        start = time.monotonic()
+        proc = _campaign(out, "--scheduler", address)
+        text, err = proc.communicate(timeout=120)
+        took = time.monotonic() - start
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert proc.returncode == 2, err
+    lines = err.splitlines()
+    prefix = f"quadland: error: --scheduler: {address} does not answer as a Dask scheduler: "
+    assert len(lines) == 1 and lines[0].startswith(prefix), err
+    if why is not None:
+        assert lines[0] == prefix + why
+    assert text == "" and os.listdir(tmp_path) == [] and took < 30
+
+
+def test_the_cluster_s_loggers_are_silent_meanwhile_and_restored(capfd):
+    import logging
+
+    from quadland.campaign.cluster import quiet_cluster_logs
+
+    names = ("distributed.client", "distributed.comm.tcp", "tornado.application",
+             "tornado.general", "asyncio")
+    levels = {n: logging.getLogger(n).level for n in names}
+    with quiet_cluster_logs():
+        for name in names:
+            logging.getLogger(name).critical("lost the scheduler")
+    assert capfd.readouterr().err == ""
+    assert {n: logging.getLogger(n).level for n in names} == levels

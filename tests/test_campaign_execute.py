@@ -6,6 +6,7 @@ Short paper runs (0.5 s of flight, about 2 ms each) keep the file under a minute
 import csv
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -152,7 +153,7 @@ def test_numerical_failures_and_invalid_draws_are_rows(tmp_path, capsys):
     out = tmp_path / "rough"
     assert main(["campaign", "--scenario", str(path), "--out", str(out), "--workers", "2",
                  "--set", "simulation.duration=0.5"]) == 0
-    assert "16 runs" in capsys.readouterr().out
+    text = capsys.readouterr().out
     rows = _rows(out)
     header, body = rows[0], rows[1:]
     status = [r[header.index("status")] for r in body]
@@ -169,6 +170,10 @@ def test_numerical_failures_and_invalid_draws_are_rows(tmp_path, capsys):
     assert summary["invalid"] == status.count("invalid")
     assert summary["numerical_failures"] == status.count("failed")
     assert summary["flown"] == 16 - status.count("invalid")
+    invalid = status.count("invalid")           # the last line counts as summary.json does
+    assert f"of {16 - invalid} runs within limits" in text
+    assert f"; flew {16 - invalid} runs in " in text and \
+        text.rstrip().endswith(f", {invalid} invalid draw{'s' if invalid > 1 else ''} recorded")
     assert summary["separation"]["parameter"] == "controller.k1"
     assert summary["worst_runs"][0]["status"] == "failed"
 
@@ -323,7 +328,7 @@ def test_workers_stay_silent_without_a_compiler(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "quadland", "campaign", "--runs", "8", "--workers", "2",
          "--out", str(tmp_path / "c"), "--no-plots", "--set", "simulation.duration=0.5"],
-        env=_env(CC="/nonexistent", PATH="/nonexistent", XDG_CACHE_HOME=str(tmp_path / "x")),
+        env=_env(CC="", PATH="/nonexistent", XDG_CACHE_HOME=str(tmp_path / "x")),
         capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr.splitlines() == ["quadland: warning: no C compiler found (set CC or "
@@ -478,24 +483,24 @@ def test_a_manifest_with_a_damaged_entry_is_one_line(reference, tmp_path, capsys
 
 def test_workers_are_bounded_by_memory(tmp_path, monkeypatch, capsys):
     # V21: --workers 1000 was accepted with no memory bound (about 120 MB each)
-    from quadland.campaign import execute
+    from quadland.campaign import local
     from quadland.simulation import simulation_plan
 
     sc = load_scenario("highway")
-    each = execute.WORKER_MEMORY + simulation_plan(sc).memory_bytes
-    assert execute.worker_memory(sc) == each
-    monkeypatch.setattr(execute, "available_memory", lambda: 10 * each + each // 2)
-    assert execute.local_workers(sc, 10, 300) == 10
-    assert execute.local_workers(sc, 3, 2) == 2               # no more than the runs
-    assert execute.local_workers(sc, None, 300) == min(10, execute._cores())
-    monkeypatch.setattr(execute, "_cores", lambda: 64)
-    assert execute.local_workers(sc, None, 300) == 10          # the default fits the memory
-    assert execute.local_workers(sc, 1, 300) == 1              # in this process: no new one
+    each = local.WORKER_MEMORY + simulation_plan(sc).memory_bytes
+    assert local.worker_memory(sc) == each
+    monkeypatch.setattr(local, "available_memory", lambda: 10 * each + each // 2)
+    assert local.local_workers(sc, 10, 300) == 10
+    assert local.local_workers(sc, 3, 2) == 2               # no more than the runs
+    assert local.local_workers(sc, None, 300) == min(10, local._cores())
+    monkeypatch.setattr(local, "_cores", lambda: 64)
+    assert local.local_workers(sc, None, 300) == 10          # the default fits the memory
+    assert local.local_workers(sc, 1, 300) == 1              # in this process: no new one
     with pytest.raises(CampaignError, match=r"workers: 11 local processes need about "
                                             r"[0-9.]+ GiB \(about [0-9]+ MiB each\), over the "
                                             r"[0-9.]+ GiB of memory available; use --workers 10 "
                                             r"or fewer"):
-        execute.local_workers(sc, 11, 300)
+        local.local_workers(sc, 11, 300)
     out = tmp_path / "a" / "w"
     assert main(["campaign", "--scenario", "highway", "--workers", "1000", "--out",
                  str(out)]) == 2
@@ -504,3 +509,175 @@ def test_workers_are_bounded_by_memory(tmp_path, monkeypatch, capsys):
                                                "processes (of the 1000 asked: one per run) "
                                                "need about"), err
     assert os.listdir(tmp_path) == []                          # V16: nothing created
+
+
+# --- a second review of the commands (issue 16: D8, D9, D10, D14, D16) ----------------
+
+def _bytes(folder):
+    return {p.name: (p.is_symlink(), p.read_bytes() if p.is_file() and not p.is_symlink()
+                     else None) for p in folder.iterdir()}
+
+
+def _one_error(capsys, status, argv):
+    assert main(argv) == status
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1, captured.err
+    return err[0]
+
+
+def _argv(out, *extra, runs=RUNS):
+    return ["campaign", "--out", str(out), "--runs", str(runs), "--workers", "1",
+            "--set", "simulation.duration=0.5", *extra]
+
+
+def test_a_refused_resume_changes_no_byte_of_the_folder(reference, tmp_path, capsys):
+    # D8: a resume refused for its journal (here: --runs grown, a run recorded twice) had
+    # already rewritten campaign.json (with the new number of runs) and scenario.toml
+    out = _copy(reference, tmp_path)
+    with open(out / "runs.csv", "ab") as fh:
+        fh.write(_rows_bytes(out)[1])
+    before = _bytes(out)
+    line = _one_error(capsys, 2, _argv(out, runs=RUNS + 6))
+    assert line == (f"quadland: error: --out: {out / 'runs.csv'} line {RUNS + 2} holds run "
+                    "0 again (line 2); it cannot be resumed: choose a new folder")
+    assert _bytes(out) == before
+    assert json.loads((out / "campaign.json").read_text())["runs"] == RUNS
+    # another --set, another scenario: refused, nothing changed either
+    for extra in (["--set", "quadrotor.mass=2.1"], ["--scenario", "highway"]):
+        assert main(_argv(out, *extra)) == 2
+        assert "holds another campaign" in capsys.readouterr().err
+        assert _bytes(out) == before
+
+
+def _rows_bytes(folder):
+    return (folder / "runs.csv").read_bytes().splitlines(keepends=True)
+
+
+@pytest.mark.parametrize("index, why", [
+    (RUNS, f"line 4 holds run {RUNS}, not one of this campaign's {RUNS} (0 to {RUNS - 1})"),
+    (1000, f"line 4 holds run 1000, not one of this campaign's {RUNS} (0 to {RUNS - 1})"),
+    (-1, f"line 4 holds run -1, not one of this campaign's {RUNS} (0 to {RUNS - 1})"),
+    (5, "line 7 holds run 5 again (line 4)"),       # the rows are in the order of the runs
+])
+def test_a_journal_row_of_another_run_is_refused(reference, tmp_path, capsys, index, why):
+    # D9: a run index >= --runs, negative or repeated was accepted on resume (a campaign
+    # of 24 runs holding 25 rows, none summarized)
+    out = _copy(reference, tmp_path)
+    lines = _rows_bytes(out)
+    fields = lines[3].decode().split(",")
+    lines[3] = ",".join([str(index), *fields[1:]]).encode()
+    (out / "runs.csv").write_bytes(b"".join(lines))
+    before = _bytes(out)
+    line = _one_error(capsys, 2, _argv(out, runs=RUNS + 10))
+    assert line == (f"quadland: error: --out: {out / 'runs.csv'} {why}; it cannot be "
+                    "resumed: choose a new folder")
+    assert _bytes(out) == before
+
+
+@pytest.mark.parametrize("name", ["runs.csv", "campaign.json"])
+@pytest.mark.parametrize("kind, why", [
+    ("zero", "is a symbolic link"),
+    ("link", "is a symbolic link"),
+    ("folder", "is not a regular file (a folder)"),
+    ("fifo", "is not a regular file (a named pipe)"),
+    ("huge", None),
+])
+def test_a_journal_or_manifest_that_is_no_regular_file_is_one_line(reference, tmp_path,
+                                                                   capsys, name, kind, why):
+    # D10: a link to /dev/zero read forever (memory), a FIFO blocked, a folder gave an
+    # IsADirectoryError traceback
+    from quadland.campaign.journal import MAX_MANIFEST_BYTES, MAX_ROW_BYTES
+
+    out = _copy(reference, tmp_path)
+    path = out / name
+    if kind == "huge":
+        if name == "runs.csv":
+            path.write_bytes(path.read_bytes() + b"0," * (MAX_ROW_BYTES // 2 + 1))
+            why = "line 26 is longer than 1 MiB"
+        else:
+            path.write_bytes(b" " * (MAX_MANIFEST_BYTES + 1))
+            why = "is larger than 16 MiB, more than a campaign writes"
+    else:
+        keep = tmp_path / "kept"
+        path.rename(keep)
+        if kind == "zero":
+            path.symlink_to("/dev/zero")
+        elif kind == "link":
+            path.symlink_to(keep)
+        elif kind == "folder":
+            path.mkdir()
+        else:
+            os.mkfifo(path)
+    before = _bytes(out)
+    line = _one_error(capsys, 2, _argv(out))
+    assert line == (f"quadland: error: --out: {path} {why}; it cannot be resumed: choose a "
+                    "new folder")
+    assert _bytes(out) == before
+
+
+def test_a_full_disk_stops_with_status_4_and_the_resume_finishes(reference, tmp_path,
+                                                                   capsys, monkeypatch):
+    # D14: a full disk while runs.csv was appended to was exit 2 ("bad input"), and while
+    # the summary was written too; the runs before are kept and the same command resumes
+    import errno
+
+    from quadland.campaign import journal
+
+    out = tmp_path / "full"
+    real = journal._write_all
+    calls = []
+
+    def fill_up(fd, data):
+        calls.append(len(data))
+        if len(calls) == 5:                     # half the line written, then the disk is full
+            os.write(fd, data[:len(data) // 2])
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real(fd, data)
+
+    monkeypatch.setattr(journal, "_write_all", fill_up)
+    line = _one_error(capsys, 4, _argv(out))
+    assert line == (f"quadland: error: --out: cannot write {out / 'runs.csv'}: No space left "
+                    "on device; the runs recorded before are kept: free some space and run "
+                    "the same command to resume")
+    lines = _rows_bytes(out)                    # the header, 4 runs and the cut line
+    assert len(lines) == 6 and not lines[-1].endswith(b"\n")
+    assert not (out / "summary.json").exists()
+    monkeypatch.setattr(journal, "_write_all", real)
+    # ... and the summary cannot be written either
+    real_atomic = journal.write_bytes_atomic
+
+    def no_summary(path, data):
+        if path.name == "summary.json":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real_atomic(path, data)
+
+    monkeypatch.setattr(journal, "write_bytes_atomic", no_summary)
+    line = _one_error(capsys, 4, _argv(out))
+    assert line == (f"quadland: error: --out: cannot write {out / 'summary.json'}: No space "
+                    "left on device; every run is recorded: free some space and run the same "
+                    "command to resume")
+    assert not (out / "summary.json").exists()
+    assert (out / "runs.csv").read_bytes() == (reference / "runs.csv").read_bytes()
+    monkeypatch.setattr(journal, "write_bytes_atomic", real_atomic)
+    assert main(_argv(out)) == 0
+    assert "no run left to fly" in capsys.readouterr().out
+    assert (out / "runs.csv").read_bytes() == (reference / "runs.csv").read_bytes()
+    assert json.loads((out / "summary.json").read_text())["flown"] == RUNS
+
+
+def test_the_last_line_of_an_all_invalid_campaign_agrees_with_its_summary(tmp_path, capsys):
+    # D16: "no run flown, the draws of all 2 were invalid (runs.csv says why); flew 2 runs
+    # in 0.0 s (3355.4 runs/s)"
+    out = tmp_path / "invalid"
+    argv = ["campaign", "--scenario", "highway", "--runs", "2", "--workers", "1", "--out",
+            str(out), "--set", 'campaign.dispersions={"quadrotor.mass"={distribution="normal",'
+            'std=1e300}}']
+    assert main(argv) == 0
+    text = capsys.readouterr().out.strip()
+    assert re.fullmatch(f"quadland: wrote {re.escape(str(out))}: no run flown, the draws of "
+                        r"all 2 were invalid \(runs.csv says why\); 2 invalid draws recorded "
+                        r"in [0-9.]+ s", text), text
+    session = json.loads((out / "summary.json").read_text())["last_session"]
+    assert session["runs_flown"] == 0 and session["invalid_draws"] == 2
+    assert session["runs_per_s"] is None

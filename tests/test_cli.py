@@ -2,9 +2,11 @@
 
 import csv
 import json
+import os
 import re
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -450,3 +452,127 @@ def test_a_run_without_figures_does_not_import_matplotlib(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=300)
     assert proc.stdout == "False\n", proc.stderr
+
+
+# --- a second review of the commands (issue 16: D13, D14, D15, D17) --------------------
+
+@pytest.mark.parametrize("override, line", [
+    ("campaign.limits.x=1", "--set campaign.limits.x: only the [campaign] table's own keys "
+                            "can be set (runs, seed, sampling, dispersions, limits); give "
+                            "campaign.limits whole (campaign.limits={...}) or edit the "
+                            "scenario file"),
+    ("campaign.dispersions.quadrotor.mass=1", "--set campaign.dispersions.quadrotor.mass: "
+                                              "only the [campaign] table's own keys"),
+    ("campaign.limit=1", "--set campaign.limit: unknown key campaign.limit (the [campaign] "
+                         "table's keys: runs, seed, sampling, dispersions, limits); did you "
+                         "mean 'campaign.limits'?"),
+])
+def test_a_campaign_sub_key_set_is_blamed_on_set(tmp_path, capsys, override, line):
+    # D13: "--set campaign.limits.x=1" was "<...>/highway.toml: unknown key campaign.limits.x"
+    out = tmp_path / "c"
+    assert main(["campaign", "--scenario", "highway", "--runs", "2", "--out", str(out),
+                 "--set", override]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"quadland: error: {line}"), err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("override, shown, code", [
+    ("quadrotor.mass=1\n2", r"quadrotor.mass=1\n2", "U+000A"),
+    ("quadrotor.mass=1\x1b[31m", r"quadrotor.mass=1\x1b[31m", "U+001B"),
+    ("quadrotor.mass\x1b]0;x\x07=1", r"quadrotor.mass\x1b]0;x\x07=1", "U+001B"),
+    ("scenario.description=\"\"\"a\nb\"\"\"", r'scenario.description="""a\nb"""', "U+000A"),
+])
+def test_a_control_character_in_set_is_refused_unechoed(tmp_path, capsys, override, shown,
+                                                          code):
+    # D15: the escape sequence went out raw in the message ("got 1\x1b[31m"), and a newline
+    # could be written into scenario.toml
+    out = tmp_path / "s"
+    assert main(["simulate", "--no-plots", "--out", str(out), "--set", override]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"quadland: error: --set {shown}: holds a control character ({code}); an "
+                   "override is one line of printable text\n")
+    assert not out.exists()
+
+
+def test_a_control_character_a_toml_escape_makes_is_never_echoed(tmp_path, capsys):
+    # D15: the value's own check refuses it; the message shows it escaped
+    out = tmp_path / "s"
+    assert main(["simulate", "--no-plots", "--out", str(out), "--set",
+                 'scenario.name="a\\u001b[31mb"']) == 2
+    err = capsys.readouterr().err
+    assert "\x1b" not in err and err.count("\n") == 1
+    assert err.startswith("quadland: error: scenario.name: must be 1 to 64 letters") and \
+        err.endswith(r"got a\x1b[31mb" + "\n"), err
+    assert not out.exists()
+
+
+def test_a_full_disk_while_simulate_writes_is_one_line_and_leaves_nothing(tmp_path, capsys,
+                                                                         monkeypatch):
+    # D14: the set is written into a hidden folder and swapped in whole: a full disk
+    # leaves neither a partial set nor the hidden folder, and an earlier set stays whole
+    import errno
+
+    from quadland import output
+
+    out = tmp_path / "run"
+    argv = ["simulate", "--no-plots", "--set", "simulation.duration=0.2", "--out", str(out)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    real = output._write_synced
+
+    def full(path, data, mode):
+        if path.name == "trajectory.csv":
+            with open(path, "xb") as fh:
+                fh.write(data[:len(data) // 3])
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real(path, data, mode)
+
+    monkeypatch.setattr(output, "_write_synced", full)
+    for target in (out, tmp_path / "new"):
+        assert main([*argv[:-1], str(target)]) == 2
+        assert capsys.readouterr().err == (f"quadland: error: --out: cannot write {target}: "
+                                           "No space left on device\n")
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+
+def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
+    # D17: a SIGINT while `python -m quadland` imported its modules (before quadland's
+    # code could catch it) printed a 15 to 30 line traceback. Here it arrives exactly while
+    # quadland.cli is being found, and at seeded moments of the first half second.
+    import random
+    import signal
+
+    code = ("import os, signal, sys\nimport quadland.__main__ as m\n"
+            "class Hook:\n    def find_spec(self, name, path=None, target=None):\n"
+            "        if name == 'quadland.cli':\n"
+            "            os.kill(os.getpid(), signal.SIGINT)\n        return None\n"
+            "sys.meta_path.insert(0, Hook())\nsys.exit(m.main(sys.argv[1:]))\n")
+    proc = subprocess.run([sys.executable, "-c", code, "simulate", "--no-plots", "--out",
+                           str(tmp_path / "a")], capture_output=True, text=True, timeout=120)
+    assert (proc.returncode, proc.stderr, proc.stdout) == (130, "quadland: interrupted\n", "")
+    rng = random.Random(20261126)
+    ready = ("import sys\nimport quadland.__main__ as m\nprint('ready', flush=True)\n"
+             "sys.exit(m.main(sys.argv[1:]))\n")
+    for trial in range(6):
+        p = subprocess.Popen([sys.executable, "-c", ready, "simulate", "--no-plots", "--out",
+                              str(tmp_path / f"b{trial}")], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+        assert p.stdout.readline() == "ready\n"
+        time.sleep(rng.uniform(0.0, 0.5))
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=120)
+        # -SIGINT: CPython 3.11 ends by SIGINT after a KeyboardInterrupt some extension
+        # module's loading code saw (see tests/test_campaign_execute.py)
+        assert p.returncode in (130, -signal.SIGINT), (trial, err)
+        assert err == "quadland: interrupted\n", (trial, err)
+
+
+def test_the_console_script_is_the_early_entry_point():
+    import tomllib
+    from pathlib import Path
+
+    project = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    assert project["project"]["scripts"]["quadland"] == "quadland.__main__:main"

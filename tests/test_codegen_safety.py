@@ -20,7 +20,8 @@ def _run(*args, cwd):
 
 @pytest.mark.slow
 def test_a_generation_beside_another_leaves_it_alone(tmp_path, capsys):
-    assert main(out=tmp_path / "cg" / "a") == 0
+    assert main(out=tmp_path / "cg") == 0
+    assert main(out=tmp_path / "cg" / "a") == 0    # inside an earlier generation
     assert main(out=tmp_path / "cg") == 0          # the parent of an earlier generation
     a = tmp_path / "cg" / "a"
     assert (a / "quadland.h").exists() and (a / MANIFEST).exists()
@@ -219,3 +220,29 @@ def test_a_killed_generation_s_staging_folder_is_removed_by_the_next(tmp_path):
     (tmp_path / "quadland.h").write_text("edited\n")
     assert main(out=tmp_path) == 0
     assert not left.exists()
+
+
+@pytest.mark.parametrize("rel, named", [("notes.txt", "notes.txt"),
+                                        ("example/notes.txt", "example/notes.txt"),
+                                        ("src/main.c", "src")])    # a folder not the tree's
+def test_a_folder_of_the_user_s_without_a_manifest_is_refused(tmp_path, rel, named):
+    """D11: ``codegen --out DIR`` mixed the generated tree into a folder of other files
+    (81 files written beside ``notes.txt``)."""
+    out = tmp_path / "out"
+    (out / rel).parent.mkdir(parents=True)
+    (out / rel).write_text("the user's\n")
+    before = _snapshot(out)
+    proc = _run("--out", "out", cwd=tmp_path)
+    _one_line(proc, f"out holds {named}, which quadland codegen did not write (there is no "
+                    f"{MANIFEST}); choose a new or empty folder")
+    assert _snapshot(out) == before
+
+
+def test_an_empty_folder_or_one_with_the_manifest_is_written(tmp_path):
+    (tmp_path / "empty").mkdir()
+    assert _run("--out", "empty", cwd=tmp_path).returncode == 0
+    assert (tmp_path / "empty" / MANIFEST).is_file()
+    (tmp_path / "empty" / "notes.txt").write_text("mine\n")      # beside a generation
+    proc = _run("--out", "empty", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "empty" / "notes.txt").read_text() == "mine\n"

@@ -7,7 +7,9 @@ and values from the campaign seed and ``i`` alone; :mod:`~quadland.campaign.fly`
 flies one run; :mod:`~quadland.campaign.journal` records each finished run
 durably in the campaign folder; :mod:`~quadland.campaign.statistics` holds the
 Clopper-Pearson interval, the order statistics and the separation of failures;
-:mod:`~quadland.campaign.execute` runs a campaign (``quadland campaign``).
+:mod:`~quadland.campaign.execute` runs a campaign (``quadland campaign``), with
+:mod:`~quadland.campaign.local`, :mod:`~quadland.campaign.cluster`,
+:mod:`~quadland.campaign.resume` and :mod:`~quadland.campaign.summary`.
 See docs/campaign.md.
 """
 
@@ -24,7 +26,7 @@ _LAZY = {"CampaignSpec": "spec", "Dispersion": "spec", "campaign_spec": "spec",
          "clopper_pearson": "statistics", "order_statistic": "statistics",
          "separation": "statistics",
          "CampaignResult": "execute", "run_campaign": "execute",
-         "summarize_campaign": "execute"}
+         "summarize_campaign": "summary"}
 
 
 def __getattr__(name):

@@ -16,36 +16,115 @@ runs, so that a stop loses only the runs in flight:
   file, ``fsync``, rename).
 
 A killed campaign can leave a last line cut short (power loss; a killed
-process completes its ``write``): reading the journal drops it, and the run
-is flown again. The folder is locked against a second campaign (or
+process completes its ``write``, a full disk may not): reading the journal
+sets it aside and :meth:`CampaignFolder.start` removes it, so the run is
+flown again. The folder is locked against a second campaign (or
 simulation) by the same lock file as ``OutputFolder`` uses.
+
+Everything is read and checked before anything is written: the manifest and
+the journal must be regular files (not a link, a folder, a pipe or a
+device) of bounded size, and every recorded run must be a run of this
+campaign, recorded once. A folder refused is left byte for byte as it was.
+A disk that fills while runs are recorded or the summary written stops the
+campaign (:class:`~quadland.exceptions.CampaignStopped`): the runs recorded
+before stay, and the same command resumes once there is space.
 """
 
 from __future__ import annotations
 
 import csv
+import errno
 import io
 import json
 import os
+import stat
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
-from quadland.exceptions import CampaignError
+from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.output import fsync_dir, lock_folder, strict_json, unlock_folder, write_bytes_atomic
 
-__all__ = ["CampaignFolder", "MANIFEST", "RUNS", "format_row", "damaged_manifest",
-           "json_kind"]
+__all__ = ["CampaignFolder", "MANIFEST", "RUNS", "MAX_MANIFEST_BYTES", "MAX_ROW_BYTES",
+           "format_row", "damaged_manifest", "json_kind", "read_regular"]
 
 #: The manifest: the campaign's identity.
 MANIFEST = "campaign.json"
 #: The journal of finished runs, then the sorted table.
 RUNS = "runs.csv"
+#: Largest manifest read, bytes (one holds a scenario, itself at most 1 MiB of TOML).
+MAX_MANIFEST_BYTES = 16 * 2**20
+#: Longest line of the journal read, bytes (a run's row is a few hundred).
+MAX_ROW_BYTES = 2**20
+#: What a file that is not a regular one is, in words.
+_FILE_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe"),
+               (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"),
+               (stat.S_ISSOCK, "a socket"))
 
 
 def damaged_manifest(path: Path, why: str) -> CampaignError:
     """The error of a manifest that is not what quadland writes."""
     return CampaignError(f"out: {path} is damaged ({why}); it cannot be resumed: choose a new "
                          "folder")
+
+
+def _refused(path: Path, why: str) -> CampaignError:
+    return CampaignError(f"out: {path} {why}; it cannot be resumed: choose a new folder")
+
+
+def _open_regular(path: Path):
+    """``path`` opened for reading in binary, or None when absent.
+
+    Never through a symbolic link, and never blocking on a named pipe; a
+    path that is not a regular file is refused (:class:`CampaignError`).
+    """
+    flags = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(path, flags)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        if exc.errno == errno.ELOOP or path.is_symlink():
+            raise _refused(path, "is a symbolic link") from None
+        raise CampaignError(f"out: {path} cannot be read ({exc.strerror or exc}); choose a "
+                            "new folder") from None
+    mode = os.fstat(fd).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        what = next((name for test, name in _FILE_KINDS if test(mode)), "not a file")
+        raise _refused(path, f"is not a regular file ({what})")
+    os.set_blocking(fd, True)
+    return os.fdopen(fd, "rb")
+
+
+def read_regular(path: Path, limit: int) -> bytes | None:
+    """The bytes of the regular file ``path`` (None when absent), refused over ``limit``.
+
+    Raises
+    ------
+    CampaignError
+        ``out: ...``: a link, a folder, a pipe, a device, or a file over ``limit`` bytes.
+    """
+    fh = _open_regular(path)
+    if fh is None:
+        return None
+    try:
+        with fh:
+            data = fh.read(limit + 1)
+    except OSError as exc:
+        raise CampaignError(f"out: {path} cannot be read ({exc.strerror or exc}); choose a "
+                            "new folder") from None
+    if len(data) > limit:
+        raise _refused(path, f"is larger than {limit / 2**20:g} MiB, more than a campaign "
+                             "writes")
+    return data
+
+
+def _stopped(path: Path, exc: OSError, what: str) -> CampaignStopped:
+    """The stop of a campaign that cannot write ``path``: resumable once it can."""
+    full = exc.errno in (errno.ENOSPC, errno.EDQUOT)
+    return CampaignStopped(f"out: cannot write {path}: {exc.strerror or exc}; {what}: "
+                           + ("free some space and " if full else "")
+                           + "run the same command to resume")
 
 
 def json_kind(value) -> str:
@@ -78,6 +157,7 @@ class CampaignFolder:
         self.path = Path(path).absolute()
         self._lock_fd: int | None = None
         self._runs_fd: int | None = None
+        self._journal_end: int | None = None    # bytes of whole lines read, when cut short
 
     def __enter__(self) -> CampaignFolder:
         return self if self._lock_fd is not None else self.claim()
@@ -91,7 +171,7 @@ class CampaignFolder:
         try:
             if path.exists() and not path.is_dir():
                 raise CampaignError(f"out: {path} exists and is not a folder")
-            if path.is_dir() and not (path / MANIFEST).is_file() and any(path.iterdir()):
+            if path.is_dir() and not os.path.lexists(path / MANIFEST) and any(path.iterdir()):
                 raise CampaignError(f"out: {path} holds files that are not a quadland "
                                     "campaign; choose a new or empty folder")
         except OSError as exc:
@@ -115,11 +195,12 @@ class CampaignFolder:
     def manifest(self) -> dict | None:
         """The manifest of an earlier run into this folder (a JSON object), or None."""
         path = self.path / MANIFEST
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
+        raw = read_regular(path, MAX_MANIFEST_BYTES)
+        if raw is None:
             return None
-        except (OSError, ValueError, RecursionError) as exc:
+        try:
+            data = json.loads(raw.decode("utf-8"))
+        except (ValueError, RecursionError) as exc:
             why = " ".join(str(exc).split())[:120] or type(exc).__name__
             raise CampaignError(f"out: {path} cannot be read ({why}); choose a new "
                                 "folder") from None
@@ -128,43 +209,77 @@ class CampaignFolder:
         return data
 
     def start(self, manifest: dict, header: Sequence[str], files: dict[str, bytes]) -> None:
-        """Write the manifest and ``files`` (atomically), and the journal's header if new."""
+        """Write the manifest and ``files`` (atomically; a file that holds them already is
+        left alone), the journal's header if new, and drop a last line cut short.
+
+        Call it after :meth:`manifest` and :meth:`read_runs` have accepted the folder.
+        """
         try:
             self.path.mkdir(parents=True, exist_ok=True)
-            write_bytes_atomic(self.path / MANIFEST, strict_json(manifest))
-            for name, data in files.items():
+            for name, data in {MANIFEST: strict_json(manifest), **files}.items():
+                if _holds(self.path / name, data):
+                    continue
                 write_bytes_atomic(self.path / name, data)
-            if not (self.path / RUNS).exists():
+            if not os.path.lexists(self.path / RUNS):
                 write_bytes_atomic(self.path / RUNS, format_row(header))
+            elif self._journal_end is not None:
+                os.truncate(self.path / RUNS, self._journal_end)
+                self._journal_end = None
             fsync_dir(self.path)
         except OSError as exc:
             raise CampaignError(f"out: cannot write {self.path}: {exc.strerror or exc}") \
                 from None
 
-    def read_runs(self, header: Sequence[str]) -> dict[int, list[str]]:
-        """The recorded runs by index; a last line cut short is removed from the file."""
+    def read_runs(self, header: Sequence[str], runs: int) -> dict[int, list[str]]:
+        """The recorded runs by index, checked; nothing is written.
+
+        A last line cut short is set aside (:meth:`start` removes it). Every
+        line must hold a run of the campaign's ``runs`` (an index in
+        ``[0, runs)``), each run once, with this campaign's columns.
+
+        Raises
+        ------
+        CampaignError
+            ``out: ...``: naming the file and the line at fault.
+        """
         path = self.path / RUNS
-        try:
-            data = path.read_bytes()
-        except FileNotFoundError:
+        fh = _open_regular(path)
+        if fh is None:
             return {}
-        if data and not data.endswith(b"\n"):
-            keep = data.rfind(b"\n") + 1
-            os.truncate(path, keep)
-            data = data[:keep]
-        rows = list(csv.reader(io.StringIO(data.decode("utf-8", errors="replace"))))
-        if not rows or rows[0] != list(header):
-            raise CampaignError(f"out: {path} does not have this campaign's columns; choose a "
-                                "new folder")
         out: dict[int, list[str]] = {}
-        for n, row in enumerate(rows[1:], start=2):
-            try:
-                index = int(row[0])
-            except (ValueError, IndexError):
-                index = -1
-            if len(row) != len(header) or index < 0 or index in out:
-                raise CampaignError(f"out: {path} line {n} is damaged; choose a new folder")
-            out[index] = row
+        lines: dict[int, int] = {}
+        try:
+            with fh:
+                data = fh.readline(MAX_ROW_BYTES + 1)
+                if data.endswith(b"\n") and _parse_line(data) == list(header):
+                    end, n = len(data), 1
+                else:
+                    raise CampaignError(f"out: {path} does not have this campaign's columns; "
+                                        "choose a new folder")
+                while data := fh.readline(MAX_ROW_BYTES + 1):
+                    n += 1
+                    if not data.endswith(b"\n"):
+                        if len(data) > MAX_ROW_BYTES:
+                            raise _refused(path, f"line {n} is longer than "
+                                                 f"{MAX_ROW_BYTES / 2**20:g} MiB")
+                        self._journal_end = end       # cut short: flown again
+                        break
+                    end += len(data)
+                    row = _parse_line(data)
+                    index = _run_index(row, header)
+                    if index is None:
+                        raise CampaignError(f"out: {path} line {n} is damaged; choose a new "
+                                            "folder")
+                    if not 0 <= index < runs:
+                        raise _refused(path, f"line {n} holds run {index}, not one of this "
+                                             f"campaign's {runs} (0 to {runs - 1})")
+                    if index in out:
+                        raise _refused(path, f"line {n} holds run {index} again (line "
+                                             f"{lines[index]})")
+                    out[index], lines[index] = row, n
+        except OSError as exc:
+            raise CampaignError(f"out: {path} cannot be read ({exc.strerror or exc}); choose a "
+                                "new folder") from None
         return out
 
     def append(self, rows: Iterable[Sequence[str]]) -> None:
@@ -174,14 +289,13 @@ class CampaignFolder:
             return
         try:
             if self._runs_fd is None:
-                self._runs_fd = os.open(self.path / RUNS, os.O_WRONLY | os.O_APPEND)
-            view = memoryview(data)
-            while view:
-                view = view[os.write(self._runs_fd, view):]
+                self._runs_fd = os.open(self.path / RUNS,
+                                        os.O_WRONLY | os.O_APPEND | os.O_NOFOLLOW)
+            _write_all(self._runs_fd, data)
             os.fsync(self._runs_fd)
         except OSError as exc:
-            raise CampaignError(f"out: cannot write {self.path / RUNS}: "
-                                f"{exc.strerror or exc}") from None
+            raise _stopped(self.path / RUNS, exc, "the runs recorded before are kept") \
+                from None
 
     def finish(self, header: Sequence[str], rows: Iterable[Sequence[str]],
                files: dict[str, bytes]) -> None:
@@ -189,6 +303,7 @@ class CampaignFolder:
         if self._runs_fd is not None:
             os.close(self._runs_fd)
             self._runs_fd = None
+        name = RUNS
         try:
             write_bytes_atomic(self.path / RUNS,
                                format_row(header) + b"".join(format_row(r) for r in rows))
@@ -196,6 +311,42 @@ class CampaignFolder:
                 write_bytes_atomic(self.path / name, data)
             fsync_dir(self.path)
         except OSError as exc:
-            raise CampaignError(f"out: cannot write {self.path}: {exc.strerror or exc}") \
-                from None
+            raise _stopped(self.path / name, exc, "every run is recorded") from None
 
+
+def _write_all(fd: int, data: bytes) -> None:
+    """Write all of ``data`` to ``fd`` (``os.write`` may write part of it)."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _holds(path: Path, data: bytes) -> bool:
+    """Whether ``path`` is a regular file that holds exactly ``data``."""
+    try:
+        st = os.lstat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_size != len(data):
+            return False
+        with open(path, "rb") as fh:
+            return fh.read(len(data) + 1) == data
+    except OSError:
+        return False
+
+
+def _parse_line(data: bytes) -> list[str] | None:
+    """One CSV line's fields (None when it does not parse as one line)."""
+    try:
+        rows = list(csv.reader(io.StringIO(data.decode("utf-8", errors="replace"))))
+    except csv.Error:
+        return None
+    return rows[0] if len(rows) == 1 else None
+
+
+def _run_index(row: list[str] | None, header: Sequence[str]) -> int | None:
+    """The run index of a journal row with the header's columns, or None."""
+    if row is None or len(row) != len(header):
+        return None
+    try:
+        return int(row[0])
+    except ValueError:
+        return None

@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from quadland.campaign.spec import U_EDGE, CampaignSpec, Dispersion, apply_mode
+from quadland.campaign.draws import U_EDGE, apply_mode
+from quadland.campaign.spec import CampaignSpec, Dispersion
 
 __all__ = ["RunDraw", "run_seed", "unit_samples", "draws", "iter_draws", "format_value",
            "U_EDGE"]

@@ -21,9 +21,10 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
+from quadland.campaign.draws import U_EDGE, apply_mode, check_finite, check_reach, where
 from quadland.exceptions import ScenarioError
 from quadland.kinds import KINDS
-from quadland.schema import SCHEMAS, check_value, show
+from quadland.schema import CAMPAIGN_KEYS, SCHEMAS, check_value, show
 
 __all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "campaign_spec_of",
            "apply_mode", "DISTRIBUTIONS", "MODES", "SAMPLINGS", "MAX_RUNS", "U_EDGE"]
@@ -42,13 +43,8 @@ MODES = ("offset", "relative", "absolute")
 SAMPLINGS = ("random", "sobol", "lhs")
 #: Most runs one campaign may ask for.
 MAX_RUNS = 1_000_000
-#: A point of the unit cube is kept within [U_EDGE, 1 - U_EDGE]: an inverse
-#: CDF is infinite at 0 and 1. A normal draw reaches at most
-#: ``-ndtri(U_EDGE) = 8.21`` standard deviations from its mean.
-U_EDGE = 2.0 ** -53
 _SEED_MAX = 2 ** 63 - 1
-_TOP = {"runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
-        "dispersions": "table of dispersed keys", "limits": "table of metric upper limits"}
+_TOP = CAMPAIGN_KEYS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -185,11 +181,6 @@ def _plain(x):
     return x
 
 
-def _where(key: str | None = None, param: str | None = None) -> str:
-    text = "campaign" if key is None else f"campaign.dispersions.\"{key}\""
-    return text + (f".{param}" if param else "")
-
-
 def _number(where: str, value, integer: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ScenarioError(f"{where}: expected {'an integer' if integer else 'a number'}, "
@@ -293,7 +284,7 @@ def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
         disp = _dispersion(str(key), entry, data, schema)
         for t in disp.targets:
             if t.key in taken:
-                raise ScenarioError(f"{_where(key)}: {t.key} is dispersed twice")
+                raise ScenarioError(f"{where(key)}: {t.key} is dispersed twice")
             taken.add(t.key)
         dispersions.append(disp)
     limits = table.get("limits", {})
@@ -317,14 +308,14 @@ def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
     return CampaignSpec(runs, seed, sampling, tuple(dispersions), checked_limits, normalized)
 
 
-def _field(key: str, schema, where: str | None = None) -> Any:
-    """The schema's field of ``key``; ``where`` names the entry that gave it."""
+def _field(key: str, schema, given_by: str | None = None) -> Any:
+    """The schema's field of ``key``; ``given_by`` names the entry that gave it."""
     section, dot, name = key.partition(".")
     if not dot or section not in schema or name not in schema[section] or section == "scenario":
         known = [f"{s}.{k}" for s in schema if s != "scenario" for k in schema[s]]
         hint = difflib.get_close_matches(key, known, n=1)
-        what = f"{_show(key)} is not" if where else "not"
-        raise ScenarioError(f"{where or _where(key)}: {what} a key of this scenario's schema"
+        what = f"{_show(key)} is not" if given_by else "not"
+        raise ScenarioError(f"{given_by or where(key)}: {what} a key of this scenario's schema"
                             + (f" (did you mean '{hint[0]}'?)" if hint else ""))
     return schema[section][name]
 
@@ -342,71 +333,55 @@ def _per_dim(where: str, value, dims: int) -> tuple[float, ...]:
 def _dispersion(key: str, entry, data, schema) -> Dispersion:
     field = _field(key, schema)
     if not isinstance(entry, Mapping):
-        raise ScenarioError(f"{_where(key)}: must be a table {{distribution = ...}}")
+        raise ScenarioError(f"{where(key)}: must be a table {{distribution = ...}}")
     dist = entry.get("distribution")
     if not isinstance(dist, str) or dist not in DISTRIBUTIONS:
-        raise ScenarioError(f"{_where(key, 'distribution')}: must be one of "
+        raise ScenarioError(f"{where(key, 'distribution')}: must be one of "
                             f"{', '.join(DISTRIBUTIONS)}, got {_show(dist)}")
     required, optional = DISTRIBUTIONS[dist]
     for name in entry:
         if name != "distribution" and name not in required + optional:
             allowed = ", ".join(required + optional) or "nothing else"
-            raise ScenarioError(f"{_where(key)}: {dist} takes {allowed}; "
+            raise ScenarioError(f"{where(key)}: {dist} takes {allowed}; "
                                 f"got {_show(name)}")
     for name in required:
         if name not in entry:
-            raise ScenarioError(f"{_where(key)}: {dist} needs {name}")
+            raise ScenarioError(f"{where(key)}: {dist} needs {name}")
     section, name = key.split(".", 1)
     nominal_value = data[section][name]
     table = {k: _plain(v) for k, v in entry.items()}
     if dist == "seed":
         if (field.kind is not int or field.length is not None or field.lo is None
                 or field.lo > 0 or field.hi is None or field.hi < _SEED_MAX):
-            raise ScenarioError(f"{_where(key)}: a seed dispersion needs an integer key of "
+            raise ScenarioError(f"{where(key)}: a seed dispersion needs an integer key of "
                                 "range [0, 2^63 - 1] (simulation.seed)")
         return Dispersion(key, dist, (Target(key, (), True),), table=table)
     if dist == "choice":
         return _choice(key, entry, field, table)
     if field.kind is not float:
         kind = {int: "integers", bool: "true or false", str: "text"}[field.kind]
-        raise ScenarioError(f"{_where(key)}: {dist} draws real numbers; {key} holds {kind} "
+        raise ScenarioError(f"{where(key)}: {dist} draws real numbers; {key} holds {kind} "
                             "(use distribution = \"choice\")")
     scalar = field.length is None
     main = Target(key, (nominal_value,) if scalar else tuple(nominal_value), scalar)
     mode = entry.get("mode", "offset")
     if mode not in MODES:
-        raise ScenarioError(f"{_where(key, 'mode')}: must be one of {', '.join(MODES)}, "
+        raise ScenarioError(f"{where(key, 'mode')}: must be one of {', '.join(MODES)}, "
                             f"got {_show(mode)}")
     common = entry.get("common", False)
     if not isinstance(common, bool):
-        raise ScenarioError(f"{_where(key, 'common')}: expected true or false, "
+        raise ScenarioError(f"{where(key, 'common')}: expected true or false, "
                             f"got {_show(common)}")
     if common and scalar:
-        raise ScenarioError(f"{_where(key, 'common')}: {key} is a single number")
-    targets = [main]
-    also = entry.get("also", [])
-    if not isinstance(also, list | tuple) or not all(isinstance(a, str) for a in also):
-        raise ScenarioError(f"{_where(key, 'also')}: expected a list of \"section.key\" names")
-    if also and not (scalar or common):
-        raise ScenarioError(f"{_where(key, 'also')}: needs one draw for all: "
-                            "a single-number key or common = true")
-    if also and mode == "absolute":
-        raise ScenarioError(f"{_where(key, 'also')}: the other keys take the same offset or "
-                            "factor; mode = \"absolute\" has none")
-    for other in also:
-        f = _field(other, schema, _where(key, "also"))
-        if f.kind is not float:
-            raise ScenarioError(f"{_where(key, 'also')}: {other} does not hold numbers")
-        s, n = other.split(".", 1)
-        v = data[s][n]
-        targets.append(Target(other, (v,) if f.length is None else tuple(v), f.length is None))
+        raise ScenarioError(f"{where(key, 'common')}: {key} is a single number")
+    targets = [main, *_also(key, entry.get("also", []), scalar or common, mode, data, schema)]
     dims = 1 if (scalar or common) else len(main.nominal)
-    params = {p: _per_dim(_where(key, p), entry[p], dims) if p in entry else None
+    params = {p: _per_dim(where(key, p), entry[p], dims) if p in entry else None
               for p in ("low", "high", "mean", "std")}
     if params["std"] is not None and any(s < 0 for s in params["std"]):
-        raise ScenarioError(f"{_where(key, 'std')}: must be >= 0")
+        raise ScenarioError(f"{where(key, 'std')}: must be >= 0")
     if dist == "truncnorm" and params["low"] is None and params["high"] is None:
-        raise ScenarioError(f"{_where(key)}: truncnorm needs low, high or both (else use "
+        raise ScenarioError(f"{where(key)}: truncnorm needs low, high or both (else use "
                             "normal)")
     if dist != "uniform":
         params["mean"] = params["mean"] or (0.0,) * dims
@@ -416,107 +391,56 @@ def _dispersion(key: str, entry, data, schema) -> Dispersion:
     if params["low"] is not None:
         for lo, hi in zip(params["low"], params["high"], strict=True):
             if not lo < hi:
-                raise ScenarioError(f"{_where(key, 'low')}: must be below high "
+                raise ScenarioError(f"{where(key, 'low')}: must be below high "
                                     f"({lo:g} >= {hi:g})")
     disp = Dispersion(key, dist, tuple(targets), mode, params["low"], params["high"],
                       params["mean"], params["std"], common=common, table=table)
-    _check_finite(disp)
+    check_finite(disp)
     if dist in ("uniform", "truncnorm"):
-        _check_reach(disp, schema)
+        check_reach(disp, schema)
     return disp
 
 
-def _extremes(disp: Dispersion) -> list[tuple[float, float]]:
-    """Per dimension, the smallest and largest draw ``X`` of a numeric dispersion.
-
-    A normal draw lies within ``ndtri(1 - U_EDGE)`` standard deviations of
-    its mean (:data:`U_EDGE`); a truncated one within its bounds as well.
-    """
-    reach = -_ndtri(U_EDGE)
-    out = []
-    for j in range(len(disp.low if disp.distribution == "uniform" else disp.std)):
-        if disp.distribution == "uniform":
-            out.append((disp.low[j], disp.high[j]))
-            continue
-        lo, hi = disp.mean[j] - reach * disp.std[j], disp.mean[j] + reach * disp.std[j]
-        if disp.distribution == "truncnorm":
-            lo, hi = max(lo, disp.low[j]), min(hi, disp.high[j])
-            lo, hi = min(lo, disp.high[j]), max(hi, disp.low[j])
-        out.append((lo, hi))
-    return out
-
-
-def _ndtri(u: float) -> float:
-    from scipy.special import ndtri
-
-    return float(ndtri(u))
-
-
-def _check_finite(disp: Dispersion) -> None:
-    """Refuse a dispersion some of whose draws, or the values they set, overflow."""
-    extremes = _extremes(disp)
-    for lo, hi in extremes:
-        width = hi - lo if disp.distribution == "uniform" else 0.0
-        if not (math.isfinite(lo) and math.isfinite(hi) and math.isfinite(width)):
-            param = "high" if disp.distribution == "uniform" else "std"
-            raise ScenarioError(f"{_where(disp.key, param)}: the draws overflow (they reach "
-                                f"{lo:g} to {hi:g}); use a smaller spread")
-    for target in disp.targets:
-        for e, nominal in enumerate(target.nominal):
-            lo, hi = extremes[0 if len(extremes) == 1 else e]
-            for x in (lo, hi):
-                value = apply_mode(disp.mode, nominal, x)
-                if not math.isfinite(value):
-                    where = target.key if target.scalar else f"{target.key}[{e}]"
-                    raise ScenarioError(f"{_where(disp.key)}: draws make {where} "
-                                        f"non-finite ({disp.mode} {x:g} on {nominal:g}); "
-                                        "use a smaller spread")
+def _also(key: str, also, one_draw: bool, mode: str, data, schema) -> list[Target]:
+    """The targets of a dispersion's ``also``: keys that take the same offset or factor."""
+    if not isinstance(also, list | tuple) or not all(isinstance(a, str) for a in also):
+        raise ScenarioError(f"{where(key, 'also')}: expected a list of \"section.key\" names")
+    if also and not one_draw:
+        raise ScenarioError(f"{where(key, 'also')}: needs one draw for all: "
+                            "a single-number key or common = true")
+    if also and mode == "absolute":
+        raise ScenarioError(f"{where(key, 'also')}: the other keys take the same offset or "
+                            "factor; mode = \"absolute\" has none")
+    targets = []
+    for other in also:
+        f = _field(other, schema, where(key, "also"))
+        if f.kind is not float:
+            raise ScenarioError(f"{where(key, 'also')}: {other} does not hold numbers")
+        s, n = other.split(".", 1)
+        v = data[s][n]
+        targets.append(Target(other, (v,) if f.length is None else tuple(v), f.length is None))
+    return targets
 
 
 def _choice(key: str, entry, field, table) -> Dispersion:
 
     values = entry["values"]
     if not isinstance(values, list | tuple) or not values:
-        raise ScenarioError(f"{_where(key, 'values')}: expected a non-empty list of values")
+        raise ScenarioError(f"{where(key, 'values')}: expected a non-empty list of values")
     checked = []
     for v in values:
         try:
             checked.append(check_value(key, v, field))
         except ScenarioError as exc:
-            raise ScenarioError(f"{_where(key, 'values')}: {exc}") from None
+            raise ScenarioError(f"{where(key, 'values')}: {exc}") from None
     weights = entry.get("weights")
     if weights is not None:
-        weights = _per_dim(_where(key, "weights"), weights, len(checked)) \
+        weights = _per_dim(where(key, "weights"), weights, len(checked)) \
             if isinstance(weights, list | tuple) else None
         if weights is None or any(w < 0 for w in weights) or not sum(weights) > 0:
-            raise ScenarioError(f"{_where(key, 'weights')}: expected {len(checked)} numbers "
+            raise ScenarioError(f"{where(key, 'weights')}: expected {len(checked)} numbers "
                                 ">= 0, not all zero")
     return Dispersion(key, "choice", (Target(key, (), field.length is None),),
                       values=tuple(checked), weights=weights, table=table)
 
 
-def _check_reach(disp: Dispersion, schema) -> None:
-    """Refuse a bounded distribution whose extreme draws leave a key's physical range."""
-    for target in disp.targets:
-        field = _field(target.key, schema)
-        for e, nominal in enumerate(target.nominal):
-            j = 0 if len(disp.low) == 1 else e
-            for x in (disp.low[j], disp.high[j]):
-                if not math.isfinite(x):
-                    continue
-                value = apply_mode(disp.mode, nominal, x)
-                complaint = field.complaint(value)
-                if complaint:
-                    where = target.key if target.scalar else f"{target.key}[{e}]"
-                    raise ScenarioError(f"{_where(disp.key)}: draws reach {where} = "
-                                        f"{value:.6g}, outside its range "
-                                        f"{field.range_text()}")
-
-
-def apply_mode(mode: str, nominal: float, x: float) -> float:
-    """A key's value from its nominal and a draw ``x``, by ``mode``."""
-    if mode == "offset":
-        return nominal + x
-    if mode == "relative":
-        return nominal * (1.0 + x)
-    return x

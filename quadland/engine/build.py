@@ -28,6 +28,11 @@ What can go wrong is bounded or caught before a library is loaded:
   temporary folder is checked, not trusted (:func:`cache_dir`).
 * **Killed builds.** A build folder is held with ``flock`` while it is in
   use; one left by a killed process is removed by a later build.
+* **Hung compilers.** Each compiler process (``--version`` too) runs in a
+  process group of its own, killed whole after
+  :func:`~quadland.engine.compiler.compile_timeout` seconds: a
+  :class:`~quadland.exceptions.CompileError`, so the simulators fall back
+  to CasADi's virtual machine with one warning (:mod:`quadland.engine.compiler`).
 """
 
 from __future__ import annotations
@@ -39,19 +44,32 @@ import hashlib
 import os
 import shutil
 import stat
-import subprocess
 import tempfile
 from pathlib import Path
 
 import casadi as ca
 
-from quadland.exceptions import CompileError, CompilerNotFoundError
+from quadland.engine.compiler import (
+    COMPILE_TIMEOUT,
+    TIMEOUT_ENV,
+    VERSION_TIMEOUT,
+    compile_timeout,
+    compiler_identity,
+    compiler_problem,
+    compiler_version,
+    find_compiler,
+    have_compiler,
+    run_compilers,
+)
+from quadland.exceptions import CompileError
 from quadland.output import WorkFolder, remove_abandoned, write_text_atomic
 
 __all__ = ["STRICT_CFLAGS", "RUNTIME_CFLAGS", "SHARED_CFLAGS", "COMPILE_MEMORY_BUDGET",
            "COMPILE_TIME_BUDGET", "OPT_LEVELS", "COMPILE_FIT", "STALE_BUILD_AGE",
            "CompileBudgetError", "compile_cost", "BuildPlan", "plan_build", "find_compiler",
-           "have_compiler", "compiler_version", "cache_dir", "build_library"]
+           "have_compiler", "compiler_problem", "compiler_version", "cache_dir",
+           "build_library", "COMPILE_TIMEOUT", "VERSION_TIMEOUT", "TIMEOUT_ENV",
+           "compile_timeout"]
 
 #: Flags every generated flight file compiles under, alone.
 STRICT_CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror")
@@ -62,49 +80,6 @@ RUNTIME_CFLAGS = ("-std=c99", "-w")
 #: library's own functions go through the PLT (interposition), which costs
 #: 1.8x on the closed loop's right-hand side here; the second flag removes it.
 SHARED_CFLAGS = ("-fPIC", "-fno-semantic-interposition", "-shared")
-
-
-def find_compiler() -> str:
-    """Path of the C compiler: ``$CC``, else ``cc``, ``gcc`` or ``clang``.
-
-    Raises
-    ------
-    CompilerNotFoundError
-        When none is found.
-    """
-    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
-        path = shutil.which(name) if name else None
-        if path:
-            return path
-    raise CompilerNotFoundError(
-        "no C compiler found (set CC or install cc, gcc or clang)")
-
-
-def have_compiler() -> bool:
-    """Whether :func:`find_compiler` finds one."""
-    try:
-        find_compiler()
-    except CompilerNotFoundError:
-        return False
-    return True
-
-
-@functools.lru_cache(maxsize=4)
-def _compiler_identity(cc: str) -> str:
-    try:
-        proc = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=60)
-    except (OSError, subprocess.SubprocessError) as exc:
-        raise CompilerNotFoundError(f"{cc}: cannot run the C compiler: {exc}") from None
-    return f"{cc}\n{proc.stdout}"
-
-
-def compiler_version() -> str | None:
-    """First line of the C compiler's ``--version``, or None without one."""
-    try:
-        cc = find_compiler()
-        return _compiler_identity(cc).splitlines()[1].strip() or Path(cc).name
-    except (CompilerNotFoundError, IndexError):
-        return None
 
 
 #: Most memory one build may take, bytes: the compiler processes running at once
@@ -338,11 +313,12 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
         when the cache cannot be written (a full disk), or
         (:class:`CompileBudgetError`) when a unit is over the budgets even at -O0.
     """
+    timeout = compile_timeout()
     cc = find_compiler()
     plan = plan_build(files, compile_, opt)
     lang = STRICT_CFLAGS if strict else RUNTIME_CFLAGS
     digest = hashlib.sha256()
-    for part in (_CACHE_FORMAT, _compiler_identity(cc), ca.__version__, *lang, opt,
+    for part in (_CACHE_FORMAT, compiler_identity(cc), ca.__version__, *lang, opt,
                  *SHARED_CFLAGS[:-1], *compile_):
         digest.update(part.encode() + b"\0")
     if plan.lowered:                         # the key of a build without them is unchanged
@@ -362,7 +338,7 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
     target = cache / digest.hexdigest()[:24] / f"{name}.so"
     for attempt in range(2):
         if not _verified(target):
-            _build(cc, lang, plan, files, compile_, target, cache)
+            _build(cc, lang, plan, files, compile_, target, cache, timeout)
         try:
             ctypes.CDLL(str(target))
             return target
@@ -419,7 +395,7 @@ def _discard(target: Path) -> None:
 
 
 def _build(cc: str, lang: tuple[str, ...], plan: BuildPlan, files: dict[str, str],
-           compile_: tuple[str, ...], target: Path, cache: Path) -> None:
+           compile_: tuple[str, ...], target: Path, cache: Path, timeout: float) -> None:
     """Compile and link into ``target`` (with its checksum), through a held work folder."""
     try:
         try:
@@ -436,12 +412,13 @@ def _build(cc: str, lang: tuple[str, ...], plan: BuildPlan, files: dict[str, str
                 Path(tmp, fname).write_text(text)
             objects = [str(Path(c).with_suffix(".o")) for c in compile_]
             opts = dict(plan.opts)
-            _run_parallel([[cc, *lang, opts[c], *SHARED_CFLAGS[:-1], "-c", c, "-o", o]
+            run_compilers([[cc, *lang, opts[c], *SHARED_CFLAGS[:-1], "-c", c, "-o", o]
                            for c, o in zip(compile_, objects, strict=True)], tmp, cc,
-                          [plan.memory[c] for c in compile_], objects)
+                          [plan.memory[c] for c in compile_], objects, timeout,
+                          COMPILE_MEMORY_BUDGET)
             out = Path(tmp, target.name)
-            _run_parallel([[cc, SHARED_CFLAGS[-1], "-o", str(out), *objects, "-lm"]], tmp, cc,
-                          [0.0], [out.name])
+            run_compilers([[cc, SHARED_CFLAGS[-1], "-o", str(out), *objects, "-lm"]], tmp, cc,
+                          [0.0], [out.name], timeout, COMPILE_MEMORY_BUDGET)
             os.chmod(out, 0o755)                     # others may not write it, whatever the umask
             digest = _sha256(out)
             os.replace(out, target)
@@ -457,35 +434,3 @@ def _clean_cache(cache: Path) -> None:
     for key in cache.iterdir():
         if key.is_dir() and not key.is_symlink():
             remove_abandoned(key, ".build-*", STALE_BUILD_AGE)
-
-
-def _run_parallel(commands: list[list[str]], cwd: str, cc: str, memory: list[float],
-                  outputs: list[str]) -> None:
-    """Run compiler commands, at most one per core and :data:`COMPILE_MEMORY_BUDGET` at a
-    time; raise on the first failure, or a command that did not write its output."""
-    pending = list(zip(commands, memory, outputs, strict=True))
-    running: list[tuple[subprocess.Popen, float, str]] = []
-    jobs = max(1, os.cpu_count() or 1)
-    try:
-        while pending or running:
-            while pending and len(running) < jobs and (
-                    not running or sum(m for _, m, _ in running) + pending[0][1]
-                    <= COMPILE_MEMORY_BUDGET):
-                cmd, mem, output = pending.pop(0)
-                running.append((subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.DEVNULL,
-                                                 stderr=subprocess.PIPE, text=True,
-                                                 errors="replace"), mem, output))
-            proc, _, output = running.pop(0)
-            _, err = proc.communicate()
-            if proc.returncode != 0:
-                first = next((ln for ln in err.splitlines() if "error" in ln),
-                             err.strip().splitlines()[0] if err.strip() else "")
-                raise CompileError(f"{Path(cc).name} failed on the generated C: "
-                                   f"{first or f'exit status {proc.returncode}'}")
-            if not Path(cwd, output).is_file() or Path(cwd, output).stat().st_size == 0:
-                raise CompileError(f"{cc} wrote no {Path(output).suffix or output} file "
-                                   "(is it a C compiler?)")
-    finally:
-        for proc, _, _ in running:
-            proc.kill()
-            proc.wait()

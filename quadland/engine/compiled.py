@@ -19,7 +19,7 @@ import warnings
 
 import numpy as np
 
-from quadland.engine.build import build_library, have_compiler
+from quadland.engine.build import build_library, compiler_problem, have_compiler
 from quadland.engine.loop import Clock, locate_event, merged_grid, ride_grid, rk4_span
 from quadland.exceptions import CompileError, CompilerNotFoundError
 from quadland_symbolic.codegen import SIMULATOR_PARTS, simulator_sources
@@ -438,8 +438,9 @@ def compiled_loop(loop: LoopModel, part: str,
     build is cached on disk, but loading it is not free);
     ``compiled_loop.cache_clear()`` forgets them.
 
-    A compiler that fails, a cache that cannot be written (a full disk), a
-    library that does not load or C over the build's budgets
+    A compiler that fails or runs over its time (``--version`` too), a
+    ``$CC`` that names no program, a cache that cannot be written (a full
+    disk), a library that does not load or C over the build's budgets
     (``quadland.engine.build.plan_build``) also give the VM after one warning; the
     flight code has no VM fallback and raises.
 
@@ -456,11 +457,15 @@ def compiled_loop(loop: LoopModel, part: str,
     if (part == "sampled_flight") != (flight is not None):
         raise ValueError("flight code goes with part 'sampled_flight', and only with it")
     if not have_compiler():
+        why = compiler_problem()
+        given = why is not None and why.startswith("CC=")   # a $CC that names no program
         if part == "sampled_flight":
             raise CompilerNotFoundError(
-                "controller.backend = \"c\" flies the compiled flight code, and no C compiler "
-                "was found (set CC or install gcc; or use controller.backend = \"casadi\")")
-        _warn_no_compiler()
+                "controller.backend = \"c\" flies the compiled flight code, and "
+                + (f"{why} (or use" if given else
+                   "no C compiler was found (set CC or install gcc; or use")
+                + " controller.backend = \"casadi\")")
+        _warn_no_compiler(why if given else "no C compiler found (set CC or install gcc)")
         return VMLoop(loop, part)
     try:
         return CompiledLoop(loop, part, flight=None if flight is None else dict(flight.files),
@@ -484,6 +489,6 @@ def _warn_compile_failed(why: str) -> None:
 
 
 @functools.cache
-def _warn_no_compiler() -> None:
-    warnings.warn("no C compiler found (set CC or install gcc): simulating on CasADi's "
-                  "virtual machine, several times slower", QuadlandWarning, stacklevel=4)
+def _warn_no_compiler(why: str) -> None:
+    warnings.warn(f"{why}: simulating on CasADi's virtual machine, several times slower",
+                  QuadlandWarning, stacklevel=4)

@@ -23,7 +23,7 @@ from quadland.schema.paper import PAPER_SCHEMA, check_paper
 
 __all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
            "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "DEFAULT_MODEL",
-           "SHARED_KEYS"]
+           "SHARED_KEYS", "CAMPAIGN_KEYS"]
 
 #: The schema of each model (``scenario.model``; "paper" when absent).
 SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
@@ -53,3 +53,9 @@ SHARED_KEYS = (
     "disturbance.moment_amplitude", "disturbance.moment_frequency",
     "disturbance.moment_noise_std",
 )
+
+#: The top-level keys of a scenario's ``[campaign]`` table and what each holds:
+#: the only ``campaign.*`` keys an override (``--set``) may give.
+CAMPAIGN_KEYS: Mapping[str, str] = MappingProxyType({
+    "runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
+    "dispersions": "table of dispersed keys", "limits": "table of metric upper limits"})

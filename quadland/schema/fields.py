@@ -118,9 +118,15 @@ def tilt_within(limit_deg):
 
 
 def show(value, limit: int = 40) -> str:
-    """A value as one short line for an error message."""
+    """A value as one short line for an error message.
+
+    Whitespace runs become one space and any other control character is
+    escaped (``\\x1b``): a message never carries a terminal's escape sequence.
+    """
     text = value if isinstance(value, str) else repr(value)
-    text = " ".join(text.split())
+    text = "".join(c if not (ord(c) < 0x20 or 0x7f <= ord(c) < 0xa0)
+                   else c.encode("unicode_escape").decode("ascii")
+                   for c in " ".join(text.split()))
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
