@@ -166,9 +166,10 @@ def _margins_parser(sub) -> None:
                     metavar="DB", help="required gain margin (default: %(default)g dB)")
     mg.add_argument("--phase-margin-deg", type=_number, default=Requirement.phase_margin_deg,
                     metavar="DEG", help="required phase margin (default: %(default)g deg)")
-    mg.add_argument("--delay-periods", type=_integer, default=1, metavar="N",
+    mg.add_argument("--delay-periods", type=_integer, default=None, metavar="N",
                     help="control periods from sampling to commanding in the sampled loop "
-                         "(default: %(default)d, flight code's one period)")
+                         "(default: the scenario's: a landing's controller.delay_periods, "
+                         "the paper's 1)")
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     mg.set_defaults(handler=_run_margins)
 
