@@ -313,6 +313,7 @@ def test_satellite_loop_at_a_time_looks_perfect():
         assert dm.disk_margin == pytest.approx(2.0, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_satellite_multiloop_disk_margin_is_poor():
     # T = 1/(s+1) [[1, a], [-a, 1]]; S - I/2 = 1/(s+1) ((s-1)/2 I + a J) with J skew, a
     # normal matrix, so mu = its spectral radius: max over w of
@@ -470,6 +471,7 @@ def test_disk_margin_matches_python_control_siso(case):
     assert multi.disk_margin == pytest.approx(alpha_pc, rel=1e-12)
 
 
+@pytest.mark.slow
 @needs_disk_margins
 def test_disk_margin_matches_python_control_satellite():
     """Normal M (D = I is optimal): both equal the closed form of
@@ -484,6 +486,7 @@ def test_disk_margin_matches_python_control_satellite():
     assert alpha_pc == pytest.approx(exact, rel=_AB13MD_TOL)
 
 
+@pytest.mark.slow
 @needs_disk_margins
 def test_disk_margin_matches_python_control_three_channels():
     """Three complex scalars: the D-scaled bound is mu (Packard and Doyle 1993), so at

@@ -349,6 +349,7 @@ def _sleepers(cc) -> list[int]:
             and p.parent() is not None and str(cc) in " ".join(p.parent().cmdline())]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("hang_on_version", [False, True])
 def test_a_hung_compiler_is_killed_with_its_group_and_the_vm_flies(tmp_path, cache,
                                                                      monkeypatch,
@@ -376,6 +377,7 @@ def test_a_hung_compiler_is_killed_with_its_group_and_the_vm_flies(tmp_path, cac
     assert _sleepers(cc) == []                 # the compiler's children went with it
 
 
+@pytest.mark.slow
 def test_a_bad_compile_timeout_is_one_line(tmp_path, cache):
     for text in ("abc", "-1", "0", "nan", "inf"):
         proc = _cli(tmp_path, "simulate", "--no-plots", "--out", str(tmp_path / "run"),

@@ -200,6 +200,7 @@ def _serve(kind: str):
     ("http", None),
     ("echo", "its answer is not a scheduler's"),
 ])
+@pytest.mark.slow
 def test_a_listener_that_is_no_scheduler_is_one_line_within_seconds(tmp_path, kind, why):
     # D6: something listening that is not a Dask scheduler held the campaign forever (the
     # client waits for the handshake without a bound); an echo answered the handshake and

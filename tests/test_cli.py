@@ -538,6 +538,7 @@ def test_a_full_disk_while_simulate_writes_is_one_line_and_leaves_nothing(tmp_pa
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
 
 
+@pytest.mark.slow
 def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
     # D17: a SIGINT while `python -m quadland` imported its modules (before quadland's
     # code could catch it) printed a 15 to 30 line traceback. Here it arrives exactly while

@@ -225,6 +225,7 @@ def test_a_killed_generation_s_staging_folder_is_removed_by_the_next(tmp_path):
 @pytest.mark.parametrize("rel, named", [("notes.txt", "notes.txt"),
                                         ("example/notes.txt", "example/notes.txt"),
                                         ("src/main.c", "src")])    # a folder not the tree's
+@pytest.mark.slow
 def test_a_folder_of_the_user_s_without_a_manifest_is_refused(tmp_path, rel, named):
     """D11: ``codegen --out DIR`` mixed the generated tree into a folder of other files
     (81 files written beside ``notes.txt``)."""
@@ -238,6 +239,7 @@ def test_a_folder_of_the_user_s_without_a_manifest_is_refused(tmp_path, rel, nam
     assert _snapshot(out) == before
 
 
+@pytest.mark.slow
 def test_an_empty_folder_or_one_with_the_manifest_is_written(tmp_path):
     (tmp_path / "empty").mkdir()
     assert _run("--out", "empty", cwd=tmp_path).returncode == 0

@@ -368,6 +368,7 @@ def test_pure_c_landing_in_float_lands_alike(examples):
     assert c["phase"][-1] == LANDED
 
 
+@pytest.mark.slow
 def test_bench_times_either_controller(examples):
     bench = examples["highway"] / "bench"
     for which, what in (([], "control_step"), (["paper"], "control_step"),

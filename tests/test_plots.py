@@ -207,6 +207,7 @@ def test_poles_are_the_closed_loop_eigenvalues(report, figures):
     assert zoom.get_xlim() == (-0.5, 0.05)
 
 
+@pytest.mark.slow
 def test_single_plots_equal_the_set(report, figures):
     for plot, name in ((bode_plot, "bode.png"), (nyquist_plot, "nyquist.png"),
                        (sigma_plot, "sigma.png"), (pole_plot, "poles.png")):
@@ -218,6 +219,7 @@ def test_single_plots_equal_the_set(report, figures):
                 np.testing.assert_array_equal(la.get_xydata(), lb.get_xydata())
 
 
+@pytest.mark.slow
 def test_sampled_loop_is_dashed_up_to_nyquist():
     report = _report("controller.rate_hz=50")
     fig = bode_plot(report)
