@@ -16,6 +16,7 @@ resume); 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import errno
 import logging
 import os
 import sys
@@ -373,6 +374,14 @@ def _dispatch(args) -> int:
     except KeyboardInterrupt:
         print("quadland: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        if exc.errno not in (errno.ENAMETOOLONG, errno.ELOOP):
+            raise
+        # a path no file system holds, wherever a command first touched it
+        name = str(exc.filename)
+        shown = name if len(name) <= 80 else f"{name[:60]}... ({len(name):,} characters)"
+        print(f"quadland: error: {shown}: {exc.strerror}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -158,9 +158,17 @@ def test_a_bad_or_unreachable_scheduler_is_one_line_and_creates_nothing(tmp_path
     # Client.__del__; V16: the refused campaign had created the parents of --out
     closed = _free_port()                      # nothing listens there
     for address, message in [
-            ("foo", 'quadland: error: --scheduler: expected tcp://HOST:PORT (or HOST:PORT; '
-                    'also tls, ws, wss, ucx), got "foo"'),
+            ("foo", 'quadland: error: --scheduler: expected tcp://HOST:PORT (or HOST:PORT), '
+                    'got "foo"'),
             ("tcp://127.0.0.1:99999", "quadland: error: --scheduler: expected tcp://HOST:PORT"),
+            # a host name no DNS name can be: an empty label, a label over 63 characters
+            ("tcp://a..b:1", 'quadland: error: --scheduler: expected tcp://HOST:PORT (or '
+                             'HOST:PORT), got "tcp://a..b:1"'),
+            (f"tcp://{'a' * 300}:1", "quadland: error: --scheduler: expected tcp://HOST:PORT"),
+            # tls and ucx failed inside distributed after 20 s, with Client.__del__'s traceback
+            ("tls://127.0.0.1:8799", "quadland: error: --scheduler: only tcp:// schedulers are "
+                                     "supported (tls and ucx need security contexts"),
+            ("ucx://127.0.0.1:8799", "quadland: error: --scheduler: only tcp:// schedulers"),
             (f"tcp://127.0.0.1:{closed}", f"quadland: error: --scheduler: cannot connect to "
                                           f"tcp://127.0.0.1:{closed}: Connection refused")]:
         out = tmp_path / "a" / "b" / "c"

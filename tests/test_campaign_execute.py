@@ -531,6 +531,19 @@ def _argv(out, *extra, runs=RUNS):
             "--set", "simulation.duration=0.5", *extra]
 
 
+def test_a_summary_that_is_no_file_is_refused_before_any_run(reference, tmp_path, capsys):
+    # a summary.json that is a folder let the resume fly every remaining run, then stop
+    # with exit 4 and advice to run it again, forever
+    out = _copy(reference, tmp_path)
+    (out / "summary.json").unlink()
+    (out / "summary.json").mkdir()
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    line = _one_error(capsys, 2, _argv(out))
+    assert line == (f"quadland: error: --out: {out / 'summary.json'} is not a regular file "
+                    "(a folder); it cannot be resumed: choose a new folder")
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
 def test_a_refused_resume_changes_no_byte_of_the_folder(reference, tmp_path, capsys):
     # D8: a resume refused for its journal (here: --runs grown, a run recorded twice) had
     # already rewritten campaign.json (with the new number of runs) and scenario.toml

@@ -127,6 +127,21 @@ def test_simulate_out_is_a_file(tmp_path):
     assert out.read_text() == "keep\n"
 
 
+def test_a_name_no_file_system_holds_is_one_line(tmp_path, capsys, monkeypatch):
+    """A file name over the file system's limit (errno 36) gave a 30-line traceback from
+    every command; now one line naming the path, shortened, and nothing written."""
+    monkeypatch.chdir(tmp_path)
+    long = "x" * 5000
+    for argv in (["simulate", "--scenario", long], ["simulate", "--out", "y" * 300],
+                 ["codegen", "--out", "z" * 300],
+                 ["margins", "--out", "/".join(["w" * 200] * 30)]):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].endswith("File name too long"), err
+        assert len(err[0]) < 200 or "cannot read" in err[0]
+    assert os.listdir(tmp_path) == []
+
+
 # margins, in process (its exit status is main's return value) on a small network
 
 SMALL = ["--set", "rbf.nodes=5"]

@@ -36,16 +36,31 @@ NO_WORKER_GRACE_S = 20.0
 
 
 def check_address(address) -> None:
-    """Refuse, in one line, a scheduler address that is not ``[PROTOCOL://]HOST:PORT``."""
+    """Refuse, in one line, a scheduler address that is not ``[tcp://]HOST:PORT``.
+
+    Only plain TCP: a ``tls://`` scheduler needs a security context (certificates)
+    and ``ucx://`` a transport that quadland does not configure, so both would
+    fail inside ``distributed`` after a long wait. ``HOST`` is a bracketed IP
+    address or a DNS name of labels of 1 to 63 letters, digits or hyphens.
+    """
     import re
 
-    match = re.fullmatch(r"(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+)"
-                         r":([0-9]{1,5})", str(address))
-    if match is None or not 1 <= int(match.group(3)) <= 65535:
-        from quadland.scenario import toml_value
+    from quadland.scenario import toml_value
 
-        raise CampaignError(f"scheduler: expected tcp://HOST:PORT (or HOST:PORT; also tls, "
-                            f"ws, wss, ucx), got {toml_value(str(address))[:80]}")
+    text = str(address)
+    scheme, sep, _ = text.partition("://")
+    if sep and scheme != "tcp":
+        raise CampaignError(f"scheduler: only tcp:// schedulers are supported (tls and ucx "
+                            f"need security contexts or transports quadland does not "
+                            f"configure), got {toml_value(text)[:80]}")
+    match = re.fullmatch(r"(?:tcp://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):([0-9]{1,5})",
+                         text)
+    host = match.group(1) if match else ""
+    labels_ok = host.startswith("[") or (
+        len(host) <= 253 and all(1 <= len(label) <= 63 for label in host.split(".")))
+    if match is None or not labels_ok or not 1 <= int(match.group(2)) <= 65535:
+        raise CampaignError(f"scheduler: expected tcp://HOST:PORT (or HOST:PORT), "
+                            f"got {toml_value(text)[:80]}")
 
 
 def connect(address: str):
@@ -164,6 +179,9 @@ def _reachable(address: str) -> None:
     host, _, port = location.rpartition(":")
     try:
         socket.create_connection((host.strip("[]"), int(port)), timeout=5.0).close()
+    except UnicodeError:
+        raise CampaignError(f"scheduler: cannot connect to {address}: the host name is not "
+                            "a valid DNS name") from None
     except OSError as exc:
         raise CampaignError(f"scheduler: cannot connect to {address}: "
                             f"{exc.strerror or exc}") from None

@@ -51,6 +51,9 @@ __all__ = ["CampaignFolder", "MANIFEST", "RUNS", "MAX_MANIFEST_BYTES", "MAX_ROW_
 MANIFEST = "campaign.json"
 #: The journal of finished runs, then the sorted table.
 RUNS = "runs.csv"
+
+#: The files a campaign replaces whole (atomically) besides its journal.
+WRITTEN = ("scenario.toml", "summary.json")
 #: Largest manifest read, bytes (one holds a scenario, itself at most 1 MiB of TOML).
 MAX_MANIFEST_BYTES = 16 * 2**20
 #: Longest line of the journal read, bytes (a run's row is a few hundred).
@@ -174,6 +177,11 @@ class CampaignFolder:
             if path.is_dir() and not os.path.lexists(path / MANIFEST) and any(path.iterdir()):
                 raise CampaignError(f"out: {path} holds files that are not a quadland "
                                     "campaign; choose a new or empty folder")
+            for name in WRITTEN:                 # replaced whole later: a file, or nothing
+                mode = os.lstat(path / name).st_mode if os.path.lexists(path / name) else None
+                if mode is not None and not stat.S_ISREG(mode):
+                    what = next((n for test, n in _FILE_KINDS if test(mode)), "not a file")
+                    raise _refused(path / name, f"is not a regular file ({what})")
         except OSError as exc:
             raise CampaignError(f"out: cannot read {path}: {exc.strerror or exc}") from None
 
