@@ -199,6 +199,7 @@ def test_an_offset_the_law_commands_fast_is_flown():
         assert abs(res["z_e"][-1] - target) < 0.1
 
 
+@pytest.mark.slow
 def test_a_tilt_past_90_degrees_between_samples_fails_there():
     """A 10 Hz control of 10 1/s gains tumbles slowly; the flight fails at the first grid
     point past the thrust map's singularity, found independently from the same loop run
