@@ -220,11 +220,12 @@ void ql_landing_gear_gap(const ql_real *xp, const ql_real *t, const ql_real *pp,
 /* The pose at touchdown (p_e, R_deck^T R1) from the signals y there. */
 void ql_landing_anchor(const ql_real *y, ql_real *anchor);
 
-/* After touchdown: the signals y and the state x1q of the quadrotor pinned to
- * the deck at anchor, its rotor forces F winding down. */
-void ql_landed_outputs(const ql_real *xv, const ql_real *t, const ql_real *pp,
-                       const ql_real *anchor, const ql_real *F, const ql_real *phase,
-                       const ql_real *aborts, ql_real *y, ql_real *x1q);
+/* A row of the ride after touchdown at t_td: the signals y and the state x1q
+ * of the quadrotor pinned to the deck at anchor, its rotor forces winding
+ * down from F_td, the phase LANDED from t_td + settle. */
+void ql_landed_row(const ql_real *xv, const ql_real *t, const ql_real *pp,
+                   const ql_real *anchor, const ql_real *F_td, const ql_real *t_td,
+                   const ql_real *settle, const ql_real *aborts, ql_real *y, ql_real *x1q);
 
 /* xv_dot of the vehicle alone (eq. 3-4). */
 void ql_vehicle(const ql_real *xv, const ql_real *p_veh, ql_real *xv_dot);

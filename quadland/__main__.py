@@ -37,6 +37,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:                               # between the two
         print("quadland: interrupted", file=sys.stderr)
         return INTERRUPTED
+    except ImportError as exc:
+        # an extension module whose initialization a Ctrl-C cut short raises
+        # ImportError from the KeyboardInterrupt
+        if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+            raise
+        print("quadland: interrupted", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -169,8 +169,8 @@ def _margins_parser(sub) -> None:
                     metavar="DEG", help="required phase margin (default: %(default)g deg)")
     mg.add_argument("--delay-periods", type=_integer, default=None, metavar="N",
                     help="control periods from sampling to commanding in the sampled loop "
-                         "(default: the scenario's: a landing's controller.delay_periods, "
-                         "the paper's 1)")
+                         "(default: a landing scenario's controller.delay_periods; "
+                         "1 for the paper's loop)")
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     mg.set_defaults(handler=_run_margins)
 
@@ -314,6 +314,13 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = _one_line_warning
             return _dispatch(args)
     except KeyboardInterrupt:
+        print("quadland: interrupted", file=sys.stderr)
+        return 130
+    except ImportError as exc:
+        # a Ctrl-C that cut short an extension module's initialization (NumPy,
+        # CasADi, matplotlib load on first use) surfaces as ImportError from it
+        if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+            raise
         print("quadland: interrupted", file=sys.stderr)
         return 130
 

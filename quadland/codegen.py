@@ -85,6 +85,10 @@ def tree_defaults(scenario: Scenario | None = None) -> dict[str, Any]:
     (:attr:`quadland.kinds.LoopKind.default_scenario`), the part of
     ``scenario``'s kind that scenario's.
     """
+    parts_of = [k.codegen_part for k in KINDS.values() if k.codegen_part is not None]
+    if len(parts_of) != len(set(parts_of)):
+        raise CodegenError(f"the loop kinds share a part of the generated tree "
+                           f"({', '.join(sorted(parts_of))}): each part is one kind's")
     if scenario is not None and kind_of(scenario).codegen_part not in TREE_PARTS:
         raise CodegenError(f"--scenario: the loop kind {scenario.model!r} has no part in the "
                            f"generated tree (its parts: {', '.join(TREE_PARTS)})")

@@ -42,12 +42,16 @@ import casadi as ca
 
 from quadland_symbolic.layout import Layout
 
-__all__ = ["MAX_DELAY_PERIODS", "rk4_step", "LoopModel"]
+__all__ = ["MAX_DELAY_PERIODS", "RIDE_TOL", "rk4_step", "LoopModel"]
 
 #: The longest computation delay a simulator holds, in control periods: the
 #: sampled drivers keep the commands computed but not yet applied in a queue of
 #: this length (``delay`` of the compiled and the VM simulators).
 MAX_DELAY_PERIODS = 16
+
+#: s: an output tick this close to an event, or to the ride's end, is that
+#: instant's row; a ride's phase changes this close to its threshold.
+RIDE_TOL = 1e-12
 
 
 def rk4_step(f: ca.Function) -> ca.Function:

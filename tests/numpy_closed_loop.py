@@ -39,7 +39,7 @@ def numpy_rhs(p, l):
     ----------
     p : ndarray
         Closed-loop parameter vector, layout ``closed_loop_params(l)``
-        (``quadland.model.model_values(...).p``).
+        (``quadland.kinds.paper.values.model_values(...).p``).
     l : int
         RBF node count.
 
@@ -172,7 +172,7 @@ def random_states(mv, n, seed=0):
 
     Parameters
     ----------
-    mv : quadland.model.ModelValues
+    mv : quadland.kinds.paper.values.ModelValues
     n : int
     seed : int
 

@@ -222,7 +222,7 @@ def test_the_runtime_does_not_import_upward_into_quadland_from_symbolic():
 @pytest.mark.parametrize("folder, package", [("quadland", "quadland"),
                                              ("symbolic", "quadland_symbolic")])
 def test_no_private_name_crosses_a_module(folder, package):
-    """``from quadland.x import _y`` (or ``from .x import _y``, typing imports
+    """``from quadland.<module> import _y`` (or ``from .x import _y``, typing imports
     included) would tie a module to another's internals."""
     found = []
     for name, path in _modules(folder, package).items():

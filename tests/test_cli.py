@@ -142,6 +142,30 @@ def test_a_name_no_file_system_holds_is_one_line(tmp_path, capsys, monkeypatch):
     assert os.listdir(tmp_path) == []
 
 
+def test_a_ctrl_c_that_breaks_a_module_s_import_is_one_line(capsys, monkeypatch):
+    """A Ctrl-C during an extension module's initialization reaches the command as
+    ImportError from the KeyboardInterrupt (seen once under load): one line, 130.
+    Any other ImportError is not hidden."""
+    import quadland.cli as cli
+
+    def cut_short(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as ki:
+            raise ImportError("initialization failed") from ki
+
+    monkeypatch.setattr(cli, "_dispatch", cut_short)
+    assert main(["simulate", "--no-plots"]) == 130
+    assert capsys.readouterr().err == "quadland: interrupted\n"
+
+    def broken(args):
+        raise ImportError("no module named foo")
+
+    monkeypatch.setattr(cli, "_dispatch", broken)
+    with pytest.raises(ImportError, match="foo"):
+        main(["simulate", "--no-plots"])
+
+
 # margins, in process (its exit status is main's return value) on a small network
 
 SMALL = ["--set", "rbf.nodes=5"]

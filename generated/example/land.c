@@ -44,7 +44,7 @@
 #define NY QL_LANDING_NY
 #define NG 4
 
-/* The clocks of the run (quadland.landing.landing_clocks): output rows and
+/* The clocks of the run (quadland.kinds.landing.values.landing_clocks): output rows and
  * disturbance samples close at the duration, control steps do not. */
 enum { CLK_OUT, CLK_DIST, CLK_CTRL, N_CLOCKS };
 
@@ -95,9 +95,9 @@ static void vehicle(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
 /* The ride on the deck: the vehicle's state, the pose pinned at touchdown, the
  * rotor forces then, and the yaw's unwrapping. */
 typedef struct {
-    ql_real xv[NXV], anchor[QL_LANDING_ANCHOR_SIZE], F_td[4], aborts;
+    ql_real xv[NXV], anchor[QL_LANDING_ANCHOR_SIZE], F_td[4], t_td, settle, aborts;
     const ql_real *pp;
-    double t_td, psi_prev, correction;
+    double psi_prev, correction;
 } ride_ctx;
 
 static void vehicle_of_ride(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
@@ -108,18 +108,20 @@ static void vehicle_of_ride(void *vctx, const ql_real *xv, double t, ql_real *xv
 static double unwrap_step(double psi, double psi_prev, double *correction);
 static void write_row(double t, const ql_real *y);
 
-/* One row of the ride at tk: rotors idle, winding down; the quadrotor pinned. */
+/* One row of the ride at tk (ql_landed_row: the rotors winding down, the quadrotor
+ * pinned); nonzero, with a line on stderr, when it is not finite. */
 static int ride_row(void *vctx, const ql_real *xv, double tk, long row)
 {
     ride_ctx *r = (ride_ctx *)vctx;
-    ql_real F[4], x1q[16], phase, tt = (ql_real)tk, sig[NY];
-    double psi, tau_m = ql_land_pp[13];
-    int i;
+    ql_real x1q[16], tt = (ql_real)tk, sig[NY];
+    double psi;
     (void)row;
-    for (i = 0; i < 4; ++i) F[i] = (ql_real)((double)r->F_td[i] * exp(-(tk - r->t_td) / tau_m));
-    phase = tk >= r->t_td + QL_LAND_SETTLE_TIME - QLL_RIDE_TOL ? QL_PHASE_LANDED
-                                                                : QL_PHASE_TOUCHDOWN;
-    ql_landed_outputs(xv, &tt, r->pp, r->anchor, F, &phase, &r->aborts, sig, x1q);
+    ql_landed_row(xv, &tt, r->pp, r->anchor, r->F_td, &r->t_td, &r->settle, &r->aborts, sig,
+                  x1q);
+    if (!qll_all_finite(sig, NY)) {
+        fprintf(stderr, "land: t = %g s: the ride on the deck became non-finite\n", tk);
+        return 1;
+    }
     psi = (double)sig[6];
     sig[6] = (ql_real)unwrap_step(psi, r->psi_prev, &r->correction);
     r->psi_prev = psi;
@@ -322,6 +324,10 @@ int main(void)
         if (isinf(t_next)) break;
         memcpy(xp_start, xp, sizeof xp);
         qll_rk4_span(plant, &ctx, xp, NXP, t, t_next - t, QL_LAND_RK_STEPS, work);
+        if (!qll_all_finite(xp, NXP)) {
+            fprintf(stderr, "land: t = %g s: the state became non-finite\n", t_next);
+            return 1;
+        }
         g_end = (double)gap(&ctx, xp, t_next);
         if (g_start > 0 && !(g_end > 0)) {
             t_td = t + qll_locate(plant, gap, &ctx, xp_start, xp, NXP, t, t_next - t,
@@ -360,7 +366,8 @@ int main(void)
         memcpy(ride.xv, xp + 16, sizeof ride.xv);
         memcpy(ride.F_td, xp + 12, sizeof ride.F_td);
         ride.pp = pp;
-        ride.t_td = t_td;
+        ride.t_td = (ql_real)t_td;
+        ride.settle = (ql_real)QL_LAND_SETTLE_TIME;
         ride.aborts = (ql_real)gs.aborts;
         ride.psi_prev = (double)sig[6];
         ride.correction = 0;

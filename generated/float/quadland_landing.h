@@ -222,11 +222,12 @@ void qlf_landing_gear_gap(const qlf_real *xp, const qlf_real *t, const qlf_real 
 /* The pose at touchdown (p_e, R_deck^T R1) from the signals y there. */
 void qlf_landing_anchor(const qlf_real *y, qlf_real *anchor);
 
-/* After touchdown: the signals y and the state x1q of the quadrotor pinned to
- * the deck at anchor, its rotor forces F winding down. */
-void qlf_landed_outputs(const qlf_real *xv, const qlf_real *t, const qlf_real *pp,
-                        const qlf_real *anchor, const qlf_real *F, const qlf_real *phase,
-                        const qlf_real *aborts, qlf_real *y, qlf_real *x1q);
+/* A row of the ride after touchdown at t_td: the signals y and the state x1q
+ * of the quadrotor pinned to the deck at anchor, its rotor forces winding
+ * down from F_td, the phase LANDED from t_td + settle. */
+void qlf_landed_row(const qlf_real *xv, const qlf_real *t, const qlf_real *pp,
+                    const qlf_real *anchor, const qlf_real *F_td, const qlf_real *t_td,
+                    const qlf_real *settle, const qlf_real *aborts, qlf_real *y, qlf_real *x1q);
 
 /* xv_dot of the vehicle alone (eq. 3-4). */
 void qlf_vehicle(const qlf_real *xv, const qlf_real *p_veh, qlf_real *xv_dot);
@@ -274,7 +275,7 @@ void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_r
 #define ql_guidance_state qlf_guidance_state
 #define ql_guidance_state_init qlf_guidance_state_init
 #define ql_guidance_step qlf_guidance_step
-#define ql_landed_outputs qlf_landed_outputs
+#define ql_landed_row qlf_landed_row
 #define ql_landing_anchor qlf_landing_anchor
 #define ql_landing_controller_params qlf_landing_controller_params
 #define ql_landing_gear_gap qlf_landing_gear_gap

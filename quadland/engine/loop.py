@@ -21,6 +21,8 @@ import math
 
 import numpy as np
 
+from quadland_symbolic.loop import RIDE_TOL as SYMBOLIC_RIDE_TOL
+
 __all__ = ["GRID_TOL", "EVENT_TOL", "EVENT_ITERATIONS", "RIDE_TOL", "Clock", "grid_tolerance",
            "merged_grid", "rk4_span", "locate_event", "ride_grid"]
 
@@ -31,8 +33,9 @@ EVENT_TOL = 1e-12
 #: Most bisection halvings (2^-60 of a span is below EVENT_TOL).
 EVENT_ITERATIONS = 60
 
-#: s: output ticks this close to the event, or to the ride's end, are that instant's row.
-RIDE_TOL = 1e-12
+#: s: output ticks this close to the event, or to the ride's end, are that instant's row
+#: (:data:`quadland_symbolic.loop.RIDE_TOL`, the C's ``QLL_RIDE_TOL``).
+RIDE_TOL = SYMBOLIC_RIDE_TOL
 
 
 @dataclasses.dataclass(frozen=True)

@@ -131,7 +131,9 @@ class LoopKind(abc.ABC):
 
     def computation_delay(self, scenario: Scenario) -> int:
         """Control periods from sampling to commanding that its flight code has (the
-        margin review's default): one, unless the scenario says otherwise."""
+        margin review's default): one, unless the kind's scenarios set it (the
+        paper's simulation applies its command at the sample; its review assumes
+        the flight code's one period)."""
         return 1
 
     def check_operating_time(self, scenario: Scenario, at: float) -> None:

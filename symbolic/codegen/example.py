@@ -23,7 +23,7 @@ from quadland_symbolic.landing.plant import (
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
 )
-from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from quadland_symbolic.landing.quadrotor import QUAD6_STATE
 from quadland_symbolic.landing.relative import TOUCHDOWN_FIGURES
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 from quadland_symbolic.quadrotor import QUAD_STATE
@@ -105,7 +105,7 @@ def example_context(d: Defaults) -> dict:
 def land_columns() -> list[tuple[str, str]]:
     """Columns of the example ``land``'s CSV: ``(name, C expression)``, from the layouts.
 
-    The names are ``quadland_symbolic.landing.loop.LANDING_TRAJECTORY``'s (``quadland
+    The names are ``quadland_symbolic.landing.signals.LANDING_TRAJECTORY``'s (``quadland
     simulate``'s trajectory.csv of a landing); the expressions read the time
     ``t`` and the signals ``y`` (``quadland_symbolic.landing.loop.LANDING_SIGNALS``).
     """
@@ -147,7 +147,6 @@ def land_context(d: LandingDefaults) -> dict:
         xv=LANDING_PLANT_STATE.slice("xv").start, x1q_size=QUAD6_STATE.size,
         rotors=x1q + QUAD6_STATE.slice("F").start,
         p_veh=LANDING_PLANT_PARAMS.slice("p_veh").start,
-        tau_m=LANDING_PLANT_PARAMS.slice("p_act").start + ACTUATOR.index("motor_time_constant"),
     )
 
 

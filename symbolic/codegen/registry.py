@@ -23,7 +23,7 @@ from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.relative import touchdown_figures_function
-from quadland_symbolic.landing.ride import anchor_function, landed_outputs_function
+from quadland_symbolic.landing.ride import anchor_function, landed_row_function
 from quadland_symbolic.landing.sensors import measurement_function
 from quadland_symbolic.landing.signals import landing_signals_function
 from quadland_symbolic.vehicle import vehicle_function
@@ -124,9 +124,10 @@ FUNCTIONS = (
          " * crossing."),
         ("landing_anchor", anchor_function,
          "The pose at touchdown (p_e, R_deck^T R1) from the signals y there."),
-        ("landed_outputs", landed_outputs_function,
-         "After touchdown: the signals y and the state x1q of the quadrotor pinned to\n"
-         " * the deck at anchor, its rotor forces F winding down."),
+        ("landed_row", landed_row_function,
+         "A row of the ride after touchdown at t_td: the signals y and the state x1q\n"
+         " * of the quadrotor pinned to the deck at anchor, its rotor forces winding\n"
+         " * down from F_td, the phase LANDED from t_td + settle."),
         ("vehicle", vehicle_function, "xv_dot of the vehicle alone (eq. 3-4)."),
         ("touchdown_figures", touchdown_figures_function,
          "Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a\n"

@@ -17,7 +17,7 @@ from pathlib import Path
 import casadi as ca
 
 from quadland_symbolic.codegen.render import common_context, render
-from quadland_symbolic.loop import MAX_DELAY_PERIODS, LoopModel
+from quadland_symbolic.loop import MAX_DELAY_PERIODS, RIDE_TOL, LoopModel
 
 __all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
 
@@ -41,7 +41,8 @@ def loop_header(precision: str | None = None) -> str:
     (``symbolic/templates/quadland_loop.h.jinja``); ``quadland.engine.loop``
     mirrors it in Python.
     """
-    return render("quadland_loop.h.jinja", **dict(common_context(None), precision=precision))
+    return render("quadland_loop.h.jinja", **dict(common_context(None), precision=precision,
+                                                   ride_tol=repr(RIDE_TOL)))
 
 
 def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:

@@ -9,7 +9,7 @@
   the air, ``-Kt (V1 - R(eta1)^T v_wind)``, so the wind adds the body force
   ``Kt R(eta1)^T v_wind`` (:func:`wind_force`) to ``d_F``;
 * **controller** ``controller(xp, xc, pc, first, t)``: perfect sensors
-  (:func:`~quadland_symbolic.landing.controller.measurement_function`), then one
+  (:func:`~quadland_symbolic.landing.sensors.measurement_function`), then one
   guidance step (:func:`~quadland_symbolic.landing.controller.landing_guidance`) whose
   reference feeds one landing step
   (:func:`~quadland_symbolic.landing.controller.landing_law`), both at the control
@@ -46,9 +46,7 @@ from quadland_symbolic.landing.controller import (
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
-    LANDED,
     POSITION_REFERENCE,
-    TOUCHDOWN,
 )
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
@@ -56,9 +54,9 @@ from quadland_symbolic.landing.plant import (
     LANDING_PLANT_STATE,
     loop_plant_function,
 )
-from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
+from quadland_symbolic.landing.quadrotor import COMMAND, QUAD6_STATE
 from quadland_symbolic.landing.relative import gear_gap
-from quadland_symbolic.landing.ride import ANCHOR, anchor_function, landed_outputs_function
+from quadland_symbolic.landing.ride import ANCHOR, anchor_function, landed_row_function
 from quadland_symbolic.landing.sensors import measurement_function
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, landing_signals_function
 from quadland_symbolic.layout import Field, Layout
@@ -199,11 +197,8 @@ def _ride_functions(l: int) -> tuple[ca.Function, ca.Function]:
                       ["z", "t", "pp"], ["z_dot"])
     a = landing_ride_constants(l).sym()
     c = landing_ride_constants(l).unpack(a)
-    tau_m = ACTUATOR.unpack(p["p_act"])["motor_time_constant"]
-    F = c["F_td"] * ca.exp(-(t - c["t_td"]) / tau_m)
-    phase = ca.if_else(t >= c["t_td"] + c["settle"] - 1e-12, LANDED, TOUCHDOWN)
-    y, x1q = landed_outputs_function()(z, t, pp, ca.vertcat(c["anchor"]), F, phase,
-                                       c["aborts"])
+    y, x1q = landed_row_function()(z, t, pp, ca.vertcat(c["anchor"]), c["F_td"], c["t_td"],
+                                   c["settle"], c["aborts"])
     ride_row = _named("ride_row", [z, a, t, pp], [ca.vertcat(x1q, z, c["xc"]), y, c["rec"]],
                       ["z", "a", "t", "pp"], ["x", "y", "rec"])
     return ride_rhs, ride_row

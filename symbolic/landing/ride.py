@@ -14,14 +14,17 @@ import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.deck import deck_pose, time_derivative, vee
+from quadland_symbolic.landing.guidance import LANDED, TOUCHDOWN
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.quadrotor import ACTUATOR
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, landing_signals
 from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.loop import RIDE_TOL
 from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.quadrotor import WRENCH, wrench_from_rotors
 from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
-__all__ = ["ANCHOR", "landed_outputs_function", "anchor_function"]
+__all__ = ["ANCHOR", "landed_outputs_function", "landed_row_function", "anchor_function"]
 
 
 #: The pose at which the quadrotor is pinned to the deck after touchdown.
@@ -87,3 +90,28 @@ def anchor_function() -> ca.Function:
     R_rel = rotation(ys["eta2"]).T @ rotation(ys["eta1"])
     return ca.Function("landing_anchor", [y], [ca.vertcat(ys["p_e"], ca.vec(R_rel))], ["y"],
                        ["anchor"])
+
+
+@functools.cache
+def landed_row_function() -> ca.Function:
+    """``landed_row(xv, t, pp, anchor, F_td, t_td, settle, aborts) -> (y, x1q)``: a row of
+    the ride on the deck.
+
+    The rotor forces wind down from their touchdown values as
+    ``F_td exp(-(t - t_td) / tau_m)`` (commands zero, the motors' lag); the
+    phase is TOUCHDOWN, then LANDED from ``t_td + settle`` (within
+    :data:`~quadland_symbolic.loop.RIDE_TOL`); the signals and the pinned state
+    are :func:`landed_outputs_function`'s. The one text of a ride's row: the
+    simulators' ``ride_row`` is built on it, and the pure-C example calls its C.
+    """
+    xv, t, pp = VEHICLE_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    anchor, F_td = ANCHOR.sym(), ca.SX.sym("F_td", 4)
+    t_td, settle, aborts = ca.SX.sym("t_td"), ca.SX.sym("settle"), ca.SX.sym("aborts")
+    p_act = LANDING_PLANT_PARAMS.unpack(pp)["p_act"]
+    tau_m = ACTUATOR.unpack(p_act)["motor_time_constant"]
+    F = F_td * ca.exp(-(t - t_td) / tau_m)
+    phase = ca.if_else(t >= t_td + settle - RIDE_TOL, LANDED, TOUCHDOWN)
+    y, x1q = landed_outputs_function()(xv, t, pp, anchor, F, phase, aborts)
+    return ca.Function("landed_row", [xv, t, pp, anchor, F_td, t_td, settle, aborts], [y, x1q],
+                       ["xv", "t", "pp", "anchor", "F_td", "t_td", "settle", "aborts"],
+                       ["y", "x1q"])

@@ -60,14 +60,6 @@ from quadland_symbolic.layout import Layout
 __all__ = ["SENSOR_STREAM", "SensorSamples", "sensor_seed", "draw_sensors"]
 
 
-
-
-
-
-
-
-
-
 #: First spawn-key entry of every sensor stream: keeps the sensors' draws
 #: apart from the run's other children of the same seed.
 SENSOR_STREAM = 0x53454E53          # "SENS"
@@ -107,10 +99,6 @@ class SensorSamples:
         return self.noise[:, self.layout.slice(field)]
 
 
-
-
-
-
 def sensor_seed(seed, stream: int, part: int) -> np.random.SeedSequence:
     """The seed of one part of one sensor's draws.
 
@@ -127,16 +115,6 @@ def sensor_seed(seed, stream: int, part: int) -> np.random.SeedSequence:
 
 def _rng(seed, stream: int, part: int) -> np.random.Generator:
     return np.random.default_rng(sensor_seed(seed, stream, part))
-
-
-
-
-
-
-
-
-
-
 
 
 def _same_times(base, t):

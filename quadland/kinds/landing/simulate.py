@@ -1,7 +1,7 @@
 """A landing flown: approach, align, descend, touchdown, the ride on the deck.
 
 A landing scenario (``scenario.model = "landing"``, schema
-``quadland.scenario.LANDING_SCHEMA``) flies the landing loop of
+``quadland.schema.LANDING_SCHEMA``) flies the landing loop of
 ``quadland_symbolic.landing.loop`` in one call of its compiled simulator (on CasADi's
 virtual machine without a C compiler): the guidance and the landing step at
 ``controller.rate_hz`` (CasADi's functions, or with ``controller.backend =
@@ -25,6 +25,7 @@ from quadland.engine.compiled import (
     SIM_ENVELOPE,
     SIM_EVENT,
     SIM_GUARD,
+    SIM_NONFINITE,
     SIM_OK,
     compiled_loop,
 )
@@ -218,9 +219,13 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         R = np.vstack([R, R_td, ride.R])
         Y = np.vstack([Y, y_td, ride.Y])
         Y[done, LANDING_SIGNALS.index("phase")] = TOUCHDOWN
-        if ride.status != SIM_OK:
-            what, t_fail = "the ride on the deck became non-finite", (
-                ride.times[-1] if len(ride.times) else t_td)
+        if ride.status != SIM_OK:                    # after touchdown: no flight hint
+            raise SimulationError(
+                f"flight failed at t = {ride.times[-1] if len(ride.times) else t_td:.4g} s: "
+                f"the ride on the deck after touchdown "
+                f"{'became non-finite' if ride.status == SIM_NONFINITE else 'stopped'}",
+                float(ride.times[-1] if len(ride.times) else t_td),
+                _result(scenario, times, X, R, Y))
     elif run.status != SIM_OK:
         what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
                 SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
