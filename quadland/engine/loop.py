@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from quadland_symbolic.loop import RIDE_TOL as SYMBOLIC_RIDE_TOL
+from quadland_symbolic.loop import RIDE_TOL
 
 __all__ = ["GRID_TOL", "EVENT_TOL", "EVENT_ITERATIONS", "RIDE_TOL", "Clock", "grid_tolerance",
            "merged_grid", "rk4_span", "locate_event", "ride_grid"]
@@ -32,10 +32,6 @@ GRID_TOL = 1e-6
 EVENT_TOL = 1e-12
 #: Most bisection halvings (2^-60 of a span is below EVENT_TOL).
 EVENT_ITERATIONS = 60
-
-#: s: output ticks this close to the event, or to the ride's end, are that instant's row
-#: (:data:`quadland_symbolic.loop.RIDE_TOL`, the C's ``QLL_RIDE_TOL``).
-RIDE_TOL = SYMBOLIC_RIDE_TOL
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,8 +158,9 @@ def ride_grid(rows: Clock, t_ev: float, t_end: float, h_max: float
     """The ride's rows after an event and the RK4 steps before each (``qll_ride``).
 
     A row at each tick of ``rows`` after ``t_ev`` and before ``t_end`` (beyond
-    :data:`RIDE_TOL`), then at ``t_end`` (none when ``t_end`` is ``t_ev``); the
-    span to each row from the last is taken in ``ceil(span / h_max)`` steps.
+    :data:`quadland_symbolic.loop.RIDE_TOL`, the C's ``QLL_RIDE_TOL``), then at
+    ``t_end`` (none when ``t_end`` is ``t_ev``); the span to each row from the
+    last is taken in ``ceil(span / h_max)`` steps.
 
     Examples
     --------

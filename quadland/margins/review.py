@@ -1,6 +1,5 @@
 """Build a margin review: linearize at the operating point, break the loop, analyse it."""
 
-
 from __future__ import annotations
 
 import math
@@ -208,12 +207,12 @@ def margin_report(scenario: Scenario, at: float | None = None,
     >>> report.passed
     True
     """
-    check_request(scenario, at, delay_periods)
     from quadland.kinds import kind_of
 
     kind = kind_of(scenario)
     if delay_periods is None:
         delay_periods = kind.computation_delay(scenario)
+    check_request(scenario, at, delay_periods)
     point = kind.operating_point(scenario, at)
     models = kind.linear_models(scenario, point)
     continuous, poles = _loop_report(models.loop_input, models.loop_names, requirement)

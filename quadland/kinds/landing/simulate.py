@@ -220,12 +220,11 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         Y = np.vstack([Y, y_td, ride.Y])
         Y[done, LANDING_SIGNALS.index("phase")] = TOUCHDOWN
         if ride.status != SIM_OK:                    # after touchdown: no flight hint
-            raise SimulationError(
-                f"flight failed at t = {ride.times[-1] if len(ride.times) else t_td:.4g} s: "
-                f"the ride on the deck after touchdown "
-                f"{'became non-finite' if ride.status == SIM_NONFINITE else 'stopped'}",
-                float(ride.times[-1] if len(ride.times) else t_td),
-                _result(scenario, times, X, R, Y))
+            t_fail = float(ride.times[-1]) if len(ride.times) else t_td
+            how = "became non-finite" if ride.status == SIM_NONFINITE else "stopped"
+            raise SimulationError(f"flight failed at t = {t_fail:.4g} s: the ride on the deck "
+                                  f"after touchdown {how}", t_fail,
+                                  _result(scenario, times, X, R, Y))
     elif run.status != SIM_OK:
         what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
                 SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
