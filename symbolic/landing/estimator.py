@@ -54,6 +54,8 @@ from quadland_symbolic.layout import Field, Layout
 __all__ = [
     "N_HIST",
     "FIFO_DEPTH",
+    "FLIGHT_DEPTH",
+    "FLIGHT_COUPLING",
     "estimator_memory",
     "estimator_diagnostics",
     "output_predictor",
@@ -66,6 +68,14 @@ __all__ = [
 N_HIST = 50
 #: Default FIFO depth per sensor.
 FIFO_DEPTH = 8
+
+#: The FIFO depths flown (vision, gnss, range, datalink): each sensor's
+#: ``rate x (D - latency) + 1`` at the shipped sensors' defaults (25 Hz, 60 ms;
+#: 5 Hz, 110 ms; 125 Hz, 5 ms; 10 Hz, 100 ms) with room for dropped-then-late
+#: bursts, the range finder's 125 Hz needing 26 (docs/estimator.md, "Open questions").
+FLIGHT_DEPTH = (8, 4, 26, 4)
+#: The covariance coupling flown: x, y, z decoupled (the 30,000-instruction budget).
+FLIGHT_COUPLING = "axes"
 
 _HIST_ROWS = ("a_in_x", "a_in_y", "a_in_z", "dt")
 _HIST_UNITS = ("m/s^2",) * 3 + ("s",)
