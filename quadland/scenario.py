@@ -27,7 +27,9 @@ from quadland.schema import (
     MODELS,
     SCHEMAS,
     check_value,
+    nest_sections,
     show,
+    split_dotted,
 )
 
 __all__ = ["Scenario", "load_scenario", "scenario_names", "SCENARIO_DIR", "toml_value"]
@@ -66,7 +68,7 @@ class Scenario:
     campaign_table: dict | None = None
 
     def __getitem__(self, dotted: str):
-        section, key = dotted.split(".", 1)
+        section, key = split_dotted(dotted)
         return self.data[section][key]
 
     @property
@@ -200,7 +202,7 @@ def load_scenario(name_or_path: str | Path = "paper",
     2.0
     """
     path = _resolve(name_or_path)
-    raw = _parse_toml(_read_text(path), str(path))
+    raw = nest_sections(_parse_toml(_read_text(path), str(path)))
     campaign = raw.pop("campaign", None)
     if campaign is not None and not isinstance(campaign, dict):
         raise ScenarioError(f"{path}: [campaign] must be a table")
@@ -325,8 +327,8 @@ def _resolve(name_or_path) -> Path:
 
 
 def _split_key(dotted: str) -> tuple[str, str]:
-    section, dot, key = str(dotted).partition(".")
-    if not dot or not section or not key:
+    section, key = split_dotted(str(dotted))
+    if not section or not key:
         raise ScenarioError(f"override {show(str(dotted))}: expected section.key=value")
     return section, key
 

@@ -15,6 +15,12 @@ model but the sizes of these functions' flat vector arguments:
   positive to zero or below ends the run at the instant it happens (a
   touchdown), located within the step;
 
+optionally, the per-tick inputs ``n`` of the controller (:attr:`LoopModel.tick_inputs`:
+one row of a table per control tick, drawn before the run, such as the sensors'
+noise and sample flags): the controller is then ``controller(xp, xc, pc, first,
+t, uh, w, pp, n)``, also given the held input and disturbance in force and the
+plant's parameters (the world a sensor measures), ``n`` the row of this tick;
+
 optionally, after the event, a *ride*: a reduced state ``z`` that goes on by
 ``ride_rhs(z, t, pp) -> z_dot`` (the ride's constants ``a``, formed once at
 the event, are not needed there) and gives each row by ``ride_row(z, a, t, pp)
@@ -117,6 +123,9 @@ class LoopModel:
         the flight code behind the controller's signature.
     ride_rhs, ride_row : casadi.Function or None
         The ride after the event (see the module docstring): both or neither.
+    tick_inputs : Layout or None
+        The layout of ``n``, the controller's per-tick row (see the module
+        docstring); None: ``controller(xp, xc, pc, first, t)``.
     """
 
     name: str
@@ -142,6 +151,7 @@ class LoopModel:
     flight: str | None = None
     ride_rhs: ca.Function | None = None
     ride_row: ca.Function | None = None
+    tick_inputs: Layout | None = None
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""

@@ -66,7 +66,7 @@ def schema_tables(model: str = "paper") -> str:
 
 def _sections(text: str) -> dict[str, str]:
     """The text under each ``## [section]`` heading of docs/scenario.md."""
-    parts = re.split(r"^## \[(\w+)\].*$", text, flags=re.M)
+    parts = re.split(r"^## \[([\w.]+)\].*$", text, flags=re.M)
     return dict(zip(parts[1::2], parts[2::2], strict=True))
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 from quadland.exceptions import ScenarioError
+from quadland.schema import split_dotted
 
 __all__ = ["U_EDGE", "where", "apply_mode", "extremes", "check_finite", "check_reach"]
 
@@ -88,7 +89,7 @@ def check_finite(disp) -> None:
 def check_reach(disp, schema) -> None:
     """Refuse a bounded distribution whose extreme draws leave a key's physical range."""
     for target in disp.targets:
-        section, name = target.key.split(".", 1)
+        section, name = split_dotted(target.key)
         field = schema[section][name]
         for e, nominal in enumerate(target.nominal):
             j = 0 if len(disp.low) == 1 else e

@@ -24,7 +24,7 @@ from typing import Any
 from quadland.campaign.draws import U_EDGE, apply_mode, check_finite, check_reach, where
 from quadland.exceptions import ScenarioError
 from quadland.kinds import KINDS
-from quadland.schema import CAMPAIGN_KEYS, SCHEMAS, check_value, show
+from quadland.schema import CAMPAIGN_KEYS, SCHEMAS, check_value, show, split_dotted
 
 __all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "campaign_spec_of",
            "apply_mode", "DISTRIBUTIONS", "MODES", "SAMPLINGS", "MAX_RUNS", "U_EDGE"]
@@ -310,8 +310,8 @@ def campaign_spec(table, data: Mapping[str, Mapping[str, Any]], model: str,
 
 def _field(key: str, schema, given_by: str | None = None) -> Any:
     """The schema's field of ``key``; ``given_by`` names the entry that gave it."""
-    section, dot, name = key.partition(".")
-    if not dot or section not in schema or name not in schema[section] or section == "scenario":
+    section, name = split_dotted(key)
+    if not name or section not in schema or name not in schema[section] or section == "scenario":
         known = [f"{s}.{k}" for s in schema if s != "scenario" for k in schema[s]]
         hint = difflib.get_close_matches(key, known, n=1)
         what = f"{_show(key)} is not" if given_by else "not"
@@ -347,7 +347,7 @@ def _dispersion(key: str, entry, data, schema) -> Dispersion:
     for name in required:
         if name not in entry:
             raise ScenarioError(f"{where(key)}: {dist} needs {name}")
-    section, name = key.split(".", 1)
+    section, name = split_dotted(key)
     nominal_value = data[section][name]
     table = {k: _plain(v) for k, v in entry.items()}
     if dist == "seed":
@@ -416,7 +416,7 @@ def _also(key: str, also, one_draw: bool, mode: str, data, schema) -> list[Targe
         f = _field(other, schema, where(key, "also"))
         if f.kind is not float:
             raise ScenarioError(f"{where(key, 'also')}: {other} does not hold numbers")
-        s, n = other.split(".", 1)
+        s, n = split_dotted(other)
         v = data[s][n]
         targets.append(Target(other, (v,) if f.length is None else tuple(v), f.length is None))
     return targets

@@ -20,18 +20,31 @@ import warnings
 import numpy as np
 
 from quadland.engine.build import build_library, compiler_problem, have_compiler
-from quadland.engine.loop import Clock, locate_event, merged_grid, ride_grid, rk4_span
+from quadland.engine.loop import Clock
+from quadland.engine.runs import (
+    SIM_CONTROLLER,
+    SIM_ENVELOPE,
+    SIM_EVENT,
+    SIM_GUARD,
+    SIM_NONFINITE,
+    SIM_OK,
+    SIM_ROWS,
+    Ride,
+    Run,
+    as_f64,
+    envelope_bounds,
+    tick_rows,
+)
+from quadland.engine.vm import VMLoop
 from quadland.exceptions import CompileError, CompilerNotFoundError
 from quadland_symbolic.codegen import SIMULATOR_PARTS, simulator_sources
-from quadland_symbolic.loop import LoopModel, rk4_step
+from quadland_symbolic.loop import LoopModel
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK",
            "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "SIM_ENVELOPE",
            "SIM_ROWS", "Run", "Ride", "FlightCode"]
 
 
-#: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
-SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT, SIM_ENVELOPE, SIM_ROWS = range(7)
 
 _REAL = ctypes.POINTER(ctypes.c_double)
 _LONG = ctypes.POINTER(ctypes.c_long)
@@ -45,68 +58,14 @@ def _ptr(a: np.ndarray, kind=_REAL):
     return a.ctypes.data_as(kind)
 
 
-def _f64(a) -> np.ndarray:
-    return np.ascontiguousarray(a, dtype=np.float64)
 
 
-@dataclasses.dataclass(frozen=True)
-class Run:
-    """What one call of a driver gave.
-
-    Attributes
-    ----------
-    status : int
-        :data:`SIM_OK`, or the ``SIM_*`` code that stopped the run.
-    X : ndarray, (rows, nx)
-        The loop's state at each output row recorded.
-    R : ndarray, (rows, nrec) or None
-        The sampled loop's recorded signals at each row (None: continuous).
-    times : ndarray, (rows,)
-        Each row's time, s.
-    w_index : ndarray of int, (rows,)
-        Each row's disturbance sample (the row of ``W`` in force).
-    x_end : ndarray
-        The state where the run ended (the sampled loop's ``[xp, xc]``).
-    t_stop : float
-        s, where a run that did not reach its end stopped (an event's instant);
-        NaN otherwise.
-    envelope : ndarray or None
-        For :data:`SIM_ENVELOPE`: the envelope magnitudes that left their bounds.
-    """
-
-    status: int
-    X: np.ndarray
-    R: np.ndarray | None
-    times: np.ndarray
-    w_index: np.ndarray
-    x_end: np.ndarray
-    t_stop: float = float("nan")
-    envelope: np.ndarray | None = None
-
-    @property
-    def rows(self) -> int:
-        """Rows recorded."""
-        return len(self.times)
 
 
 def _clock_table(clocks) -> np.ndarray:
     return np.ascontiguousarray([c.table() for c in clocks], dtype=np.float64).ravel()
 
 
-@dataclasses.dataclass(frozen=True)
-class Ride:
-    """The rows of a ride after an event (:meth:`CompiledLoop.ride`).
-
-    ``status`` is :data:`SIM_OK` or the ``SIM_*`` code that stopped it; ``times``,
-    ``X`` (the loop's state), ``Y`` (its output signals) and ``R`` (its recorded
-    signals) hold the rows before that.
-    """
-
-    status: int
-    times: np.ndarray
-    X: np.ndarray
-    Y: np.ndarray
-    R: np.ndarray
 
 
 class CompiledLoop:
@@ -141,7 +100,8 @@ class CompiledLoop:
                                         _LONG, L, _LONG, _REAL, ctypes.POINTER(D), _REAL]
         else:
             self._sampled = getattr(lib, f"{prefix}sampled")
-            self._sampled.argtypes = [_REAL, _REAL, _REAL, D, _REAL, L, L, _REAL, _REAL, _REAL,
+            self._sampled.argtypes = [_REAL, _REAL, _REAL, D, _REAL, _REAL, L, L, L, _REAL,
+                                      _REAL, _REAL,
                                       D, _REAL, _REAL, _REAL, _REAL, _LONG, L, _LONG, _REAL,
                                       _REAL, ctypes.POINTER(D), _REAL]
             if model.ride_rhs is not None:
@@ -172,7 +132,7 @@ class CompiledLoop:
         """
         m = self.model
         out, dist = clocks
-        x0, W, p, bound = _f64(x0), _f64(W), _f64(p), _bounds(m, bound)
+        x0, W, p, bound = as_f64(x0), as_f64(W), as_f64(p), envelope_bounds(m, bound)
         rows = len(out.times())
         assert W.shape == (len(dist.times()), m.disturbance.size)
         X = np.zeros((rows, m.state.size))
@@ -188,9 +148,12 @@ class CompiledLoop:
                    env if status == SIM_ENVELOPE else None)
 
     def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
-                bound=None, delay: int = 0, uh0=None) -> Run:
+                bound=None, delay: int = 0, uh0=None, N=None) -> Run:
         """The sampled-data loop over the merged grid of its output, disturbance and
         control clocks.
+
+        ``N`` (one row per control tick) are the controller's per-tick inputs of a
+        model with :attr:`~quadland_symbolic.loop.LoopModel.tick_inputs`.
 
         ``delay`` control periods pass between computing a command and applying
         it (``uh0`` is held before the first arrives; zero by default). A model
@@ -201,9 +164,9 @@ class CompiledLoop:
         """
         m = self.model
         out, dist, _ = clocks
-        xp0, xc0, W, pp, pc = (_f64(a) for a in (xp0, xc0, W, pp, pc))
-        bound = _bounds(m, bound)
-        uh0 = np.zeros(m.held.size) if uh0 is None else _f64(uh0)
+        xp0, xc0, W, pp, pc = (as_f64(a) for a in (xp0, xc0, W, pp, pc))
+        bound = envelope_bounds(m, bound)
+        uh0 = np.zeros(m.held.size) if uh0 is None else as_f64(uh0)
         rows = len(out.times())
         assert W.shape == (len(dist.times()), m.disturbance.size)
         X = np.zeros((rows, m.state.size))
@@ -212,9 +175,11 @@ class CompiledLoop:
         xp_end, xc_end = np.empty(m.plant_state.size), np.empty(m.controller_state.size)
         env = np.full(max(bound.size, 1), np.nan)
         n_rows, t_stop = ctypes.c_long(0), ctypes.c_double(np.nan)
+        N = tick_rows(m, N)
         status = self._sampled(
             _ptr(xp0), _ptr(xc0), _ptr(_clock_table(clocks)), float(out.T), _ptr(W),
-            int(substeps), int(delay), _ptr(uh0), _ptr(pp), _ptr(pc), float(guard_min),
+            _ptr(N), N.shape[0], int(substeps), int(delay), _ptr(uh0), _ptr(pp), _ptr(pc),
+            float(guard_min),
             _ptr(bound), _ptr(X), _ptr(R), _ptr(times), _ptr(w_index, _LONG), rows,
             ctypes.byref(n_rows), _ptr(xp_end), _ptr(xc_end), ctypes.byref(t_stop), _ptr(env))
         n = n_rows.value
@@ -229,9 +194,9 @@ class CompiledLoop:
         n = len(rows.times()) + 1
         X, Y = np.zeros((n, m.state.size)), np.zeros((n, m.outputs.size))
         R, times, n_rows = np.zeros((n, m.recorded.size)), np.zeros(n), ctypes.c_long(0)
-        status = self._ride(_ptr(_f64(z0)), _ptr(_f64(a)), _ptr(_clock_table([rows])),
+        status = self._ride(_ptr(as_f64(z0)), _ptr(as_f64(a)), _ptr(_clock_table([rows])),
                             float(rows.T), float(t_ev), float(t_end), float(h_max),
-                            _ptr(_f64(pp)), _ptr(X), _ptr(Y), _ptr(R), _ptr(times), n,
+                            _ptr(as_f64(pp)), _ptr(X), _ptr(Y), _ptr(R), _ptr(times), n,
                             ctypes.byref(n_rows))
         k = n_rows.value
         return Ride(status, times[:k], X[:k], Y[:k], R[:k])
@@ -239,7 +204,7 @@ class CompiledLoop:
     def outputs(self, X, W, T, p) -> np.ndarray:
         """Output signals at each row of ``X`` (with ``W``'s rows, at times ``T``), ``(n, ny)``."""
         m = self.model
-        X, W, T, p = _f64(X), _f64(W), _f64(T), _f64(p)
+        X, W, T, p = as_f64(X), as_f64(W), as_f64(T), as_f64(p)
         n = X.shape[0]
         assert X.shape == (n, m.state.size) and W.shape == (n, m.disturbance.size)
         assert T.shape == (n,)
@@ -248,172 +213,12 @@ class CompiledLoop:
         return Y
 
 
-class VMLoop:
-    """The drivers of :class:`CompiledLoop` on CasADi's virtual machine.
-
-    The same algorithm, step for step (``quadland_loop.h``, mirrored by
-    :mod:`quadland.engine.loop`): used where no C compiler is found.
-    """
-
-    #: Samples per call of the mapped output function.
-    CHUNK = 256
-
-    def __init__(self, model: LoopModel, part: str):
-        self.model, self.part = model, part
-        self._rhs = rk4_step(model.rhs) if model.rhs is not None else None
-        self._plant = rk4_step(model.plant)
-        self._ride_step = rk4_step(model.ride_rhs) if model.ride_rhs is not None else None
-        self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [3], [])
-        self._no_input = np.zeros(model.held.size)
-
-    def _outside(self, x, uh, bound) -> np.ndarray | None:
-        """The envelope's magnitudes when one is beyond its bound (or NaN), else None."""
-        if self.model.envelope is None:
-            return None
-        s = np.asarray(self.model.envelope(x, uh), dtype=float).ravel()
-        return None if np.all(s <= bound) else s
-
-    def integrate(self, x0, clocks, W, substeps: int, p, bound=None) -> Run:
-        """As :meth:`CompiledLoop.integrate`."""
-        m = self.model
-        bound = _bounds(m, bound)
-        grid, (out, dist) = merged_grid(clocks)
-        x = np.asarray(x0, dtype=float)
-        X, times, w_index = [], [], []
-        i_w, status, t_stop, env = 0, SIM_OK, np.nan, None
-        for j, t in enumerate(grid):
-            if dist[j] >= 0:
-                i_w = dist[j]
-            env = self._outside(x, self._no_input, bound)
-            if env is not None:
-                status, t_stop = SIM_ENVELOPE, t
-                break
-            if out[j] >= 0:
-                X.append(x)
-                times.append(clocks[0].times()[out[j]])
-                w_index.append(i_w)
-            if j + 1 == len(grid):
-                break
-            w = W[i_w]
-            x = rk4_span(lambda xx, tt, h, w=w: self._rhs(xx, w, tt, p, h), x, t,
-                         grid[j + 1] - t, substeps)
-            if not np.all(np.isfinite(x)):
-                status, t_stop = SIM_NONFINITE, grid[j + 1]
-                break
-        return _run(m, status, X, None, times, w_index, x, t_stop, env)
-
-    def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
-                bound=None, delay: int = 0, uh0=None) -> Run:
-        """As :meth:`CompiledLoop.sampled`."""
-        m = self.model
-        bound = _bounds(m, bound)
-        grid, (out, dist, ctrl) = merged_grid(clocks)
-        xp, xc = np.asarray(xp0, dtype=float), np.asarray(xc0, dtype=float)
-        uh = np.zeros(m.held.size) if uh0 is None else np.asarray(uh0, dtype=float)
-        rv, first, queue = np.zeros(m.recorded.size), 1.0, []
-        X, R, times, w_index = [], [], [], []
-        i_w, status, t_stop, env = 0, SIM_OK, np.nan, None
-        event = None if m.event is None else (lambda x, t: float(m.event(x, t, pp)))
-        g_start = event(xp, grid[0]) if event is not None else None
-        for j, t in enumerate(grid):
-            if dist[j] >= 0:
-                i_w = dist[j]
-            if ctrl[j] >= 0:
-                xc_n, uh_n, rv_n, guard = (np.asarray(v, dtype=float).ravel() for v in
-                                           m.controller(xp, xc, pc, first, t))
-                if not abs(guard[0]) >= guard_min:
-                    status, t_stop = SIM_GUARD, t
-                    break
-                if not (np.all(np.isfinite(xc_n)) and np.all(np.isfinite(uh_n))
-                        and np.all(np.isfinite(rv_n))):
-                    status, t_stop = SIM_NONFINITE, t
-                    break
-                xc, rv, first = xc_n, rv_n, 0.0
-                queue.append(uh_n)
-                if len(queue) > delay:
-                    uh = queue.pop(0)
-            x = np.asarray(m.assemble(xp, xc), dtype=float).ravel()
-            env = self._outside(x, uh, bound)
-            if env is not None:
-                status, t_stop = SIM_ENVELOPE, t
-                break
-            if out[j] >= 0:
-                X.append(x)
-                R.append(rv)
-                times.append(clocks[0].times()[out[j]])
-                w_index.append(i_w)
-            if j + 1 == len(grid):
-                break
-            w, span = W[i_w], grid[j + 1] - t
-
-            def step(xx, tt, h, uh=uh, w=w):
-                return self._plant(xx, uh, w, tt, pp, h)
-
-            start = xp
-            xp = rk4_span(step, start, t, span, substeps)
-            if not np.all(np.isfinite(xp)):
-                status, t_stop = SIM_NONFINITE, grid[j + 1]
-                break
-            if event is not None:
-                g_end = event(xp, grid[j + 1])
-                if g_start > 0 and not g_end > 0:
-                    offset, xp = locate_event(step, event, start, xp, t, span, substeps)
-                    status, t_stop = SIM_EVENT, t + offset
-                    break
-                g_start = g_end
-        return _run(m, status, X, R, times, w_index, np.concatenate([xp, xc]), t_stop, env)
-
-    def ride(self, z0, a, rows: Clock, t_ev: float, t_end: float, h_max: float, pp) -> Ride:
-        """As :meth:`CompiledLoop.ride` (:func:`quadland.engine.loop.ride_grid`)."""
-        m = self.model
-        step, z, t_prev = self._ride_step, np.asarray(z0, dtype=float), t_ev
-        out = {"X": [], "Y": [], "R": []}
-        times, steps = ride_grid(rows, t_ev, t_end, h_max)
-        status = SIM_OK
-        for t, s in zip(times, steps, strict=True):
-            z = rk4_span(lambda zz, tt, h: step(zz, tt, pp, h), z, t_prev, t - t_prev, s)
-            t_prev = t
-            x, y, r = (np.asarray(v, dtype=float).ravel() for v in m.ride_row(z, a, t, pp))
-            if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
-                status = SIM_NONFINITE
-                break
-            for name, v in zip("XYR", (x, y, r), strict=True):
-                out[name].append(v)
-        k = len(out["X"])
-        sizes = {"X": m.state.size, "Y": m.outputs.size, "R": m.recorded.size}
-        X, Y, R = (np.array(out[n], dtype=float).reshape(-1, sizes[n]) for n in "XYR")
-        return Ride(status, times[:k], X, Y, R)
-
-    def outputs(self, X, W, T, p) -> np.ndarray:
-        """As :meth:`CompiledLoop.outputs`, in chunks with ``p`` shared, not repeated."""
-        n, k = X.shape[0], self.CHUNK
-        Y = np.empty((n, self.model.outputs.size))
-        for a in range(0, n, k):
-            b = min(a + k, n)
-            Xc = np.zeros((k, X.shape[1]))
-            Wc = np.zeros((k, W.shape[1]))
-            Tc = np.zeros((1, k))
-            Xc[: b - a], Wc[: b - a], Tc[0, : b - a] = X[a:b], W[a:b], T[a:b]
-            Y[a:b] = np.asarray(self._outputs(Xc.T, Wc.T, Tc, p), dtype=float).T[: b - a]
-        return Y
 
 
-def _run(m: LoopModel, status, X, R, times, w_index, x_end, t_stop, env) -> Run:
-    X = np.array(X, dtype=float).reshape(-1, m.state.size)
-    R = None if R is None else np.array(R, dtype=float).reshape(-1, m.recorded.size)
-    return Run(status, X, R, np.array(times, dtype=float), np.array(w_index, dtype=np.int_),
-               np.asarray(x_end, dtype=float), t_stop, env if status == SIM_ENVELOPE else None)
 
 
-def _bounds(model: LoopModel, bound) -> np.ndarray:
-    """The envelope's bounds as the drivers take them (none without an envelope)."""
-    if model.envelope is None:
-        return np.zeros(0)
-    bound = _f64(bound)
-    if bound.shape != (model.envelope_layout.size,):
-        raise ValueError(f"bound: expected {model.envelope_layout.size} envelope bounds, "
-                         f"got shape {bound.shape}")
-    return bound
+
+
 
 
 @dataclasses.dataclass(frozen=True)

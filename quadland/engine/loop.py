@@ -3,7 +3,7 @@
 The compiled simulators and the pure-C examples run the loop algorithm of
 ``symbolic/templates/quadland_loop.h.jinja``; this module is its one Python
 mirror, used by the fallback on CasADi's virtual machine
-(:class:`quadland.engine.compiled.VMLoop`) and wherever Python needs a run's grid
+(:class:`quadland.engine.vm.VMLoop`) and wherever Python needs a run's grid
 (cvodes' output times, the rows' disturbance samples). The rule, in both:
 
 * a :class:`Clock` ticks at ``phase + k / rate`` while below the duration

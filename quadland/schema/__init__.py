@@ -23,7 +23,7 @@ from quadland.schema.paper import PAPER_SCHEMA, check_paper
 
 __all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
            "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "DEFAULT_MODEL",
-           "SHARED_KEYS", "CAMPAIGN_KEYS"]
+           "SHARED_KEYS", "CAMPAIGN_KEYS", "SECTIONS", "split_dotted", "nest_sections"]
 
 #: The schema of each model (``scenario.model``; "paper" when absent).
 SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
@@ -59,3 +59,32 @@ SHARED_KEYS = (
 CAMPAIGN_KEYS: Mapping[str, str] = MappingProxyType({
     "runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
     "dispersions": "table of dispersed keys", "limits": "table of metric upper limits"})
+
+#: Every section of every schema; a section's name may hold a dot (``sensors.vision``,
+#: TOML's ``[sensors.vision]``, a table inside ``[sensors]``).
+SECTIONS = tuple(dict.fromkeys(s for schema in SCHEMAS.values() for s in schema))
+
+
+def split_dotted(dotted: str) -> tuple[str, str]:
+    """``(section, key)`` of a dotted key name: the longest known section that prefixes it
+    (``sensors.vision.latency`` is ``sensors.vision``'s ``latency``), else the part before
+    the first dot."""
+    head, dot, tail = dotted.rpartition(".")
+    if dot and head in SECTIONS and "." in head:
+        return head, tail
+    section, _, key = dotted.partition(".")
+    return section, key
+
+
+def nest_sections(raw: dict) -> dict:
+    """Parsed TOML with each dotted section's table (``raw["sensors"]["vision"]``) moved to
+    its own name (``raw["sensors.vision"]``); other entries as they are."""
+    out = dict(raw)
+    for section in SECTIONS:
+        parent, dot, child = section.rpartition(".")
+        table = out.get(parent)
+        if dot and isinstance(table, dict) and isinstance(table.get(child), dict):
+            table = dict(table)
+            out[section] = table.pop(child)
+            out[parent] = table
+    return out

@@ -9,6 +9,10 @@ from types import MappingProxyType
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
+from quadland.schema.sensors import sensor_fields
+from quadland_symbolic.landing.navigation import estimator_params
+from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
+from quadland_symbolic.landing.sensors import SENSOR_NAMES
 from quadland_symbolic.loop import MAX_DELAY_PERIODS
 
 __all__ = ["LANDING_SCHEMA", "check_landing"]
@@ -134,6 +138,28 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0,
                              hi=1e3),
     },
+    # What the aircraft can know (docs/sensors.md): false flies on the true state.
+    "sensors": {
+        "enabled": Field(B, "-", "true: the controller flies on the sensors and the navigation "
+                         "filter; false: on the true state, at once"),
+    },
+    **{f"sensors.{name}": sensor_fields(name) for name in SENSOR_NAMES},
+    # The navigation filter's own tuning (docs/estimator.md): what it assumes of the
+    # sensors. A campaign's dispersions of [sensors.*] leave it at its nominal.
+    "estimator": {
+        **{f.name: Field(F, f.unit if isinstance(f.unit, str) else f.unit[0], f.doc,
+                         f.size if f.size > 1 else None, lo=0.0, hi=1e6)
+           for f in estimator_params().fields if f.name != "g"},
+        **{f"p0_{name}": Field(F, unit, f"initial standard deviation of {what}, per axis",
+                               3, lo=0.0, hi=1e4)
+           for name, unit, what in (
+               ("position", "m", "the relative position"),
+               ("velocity", "m/s", "the quadrotor's velocity"),
+               ("target_velocity", "m/s", "the pad's velocity"),
+               ("target_acceleration", "m/s^2", "the pad's acceleration"),
+               ("bias", "m", "the relative GNSS bias"),
+               ("input_bias", "m/s^2", "the acceleration input's bias"))},
+    },
     "disturbance": PAPER_SCHEMA["disturbance"],
     "wind": {
         "mean": Field(F, "m/s", "steady wind in E", 3, lo=-100.0, hi=100.0),
@@ -162,8 +188,33 @@ def check_landing(data: dict) -> None:
     if wind["gust_amplitude"] > 0 and not any(wind["gust_direction"]):
         raise ScenarioError("wind.gust_direction: must not be all zero when "
                             "wind.gust_amplitude > 0")
+    _check_sensors(data)
     guidance = data["landing"]
     if guidance["touchdown_speed"] > guidance["descent_speed"]:
         raise ScenarioError("landing.touchdown_speed: must be <= landing.descent_speed")
     if guidance["hover_height"] <= data["quadrotor"]["gear_height"]:
         raise ScenarioError("landing.hover_height: must be above quadrotor.gear_height")
+
+
+def _check_sensors(data: dict) -> None:
+    """A sensor samples on the control clock, and its latency fits the delivery line."""
+    rate = data["controller"]["rate_hz"]
+    for name in SENSOR_NAMES:
+        s, where = data[f"sensors.{name}"], f"sensors.{name}"
+        ticks = rate / s["rate_hz"]
+        if abs(ticks - round(ticks)) > 1e-9 * ticks or round(ticks) < 1:
+            raise ScenarioError(f"{where}.rate_hz: {s['rate_hz']:g} Hz must divide "
+                                f"controller.rate_hz ({rate:g} Hz): a sensor samples on the "
+                                "control clock")
+        phase = s["phase"] * rate
+        if abs(phase - round(phase)) > 1e-6:
+            raise ScenarioError(f"{where}.phase: {s['phase']:g} s must be a whole number of "
+                                f"control periods (1/{rate:g} s)")
+        if s["latency"] * rate > DELIVERY_SLOTS - 1 + 1e-9:
+            raise ScenarioError(f"{where}.latency: {s['latency']:g} s is more than the "
+                                f"{DELIVERY_SLOTS - 1} control periods a packet can be held "
+                                f"({(DELIVERY_SLOTS - 1) / rate:g} s at {rate:g} Hz)")
+        for lo, hi in (("range_min", "range_max"), ("small_range_min", "small_range_max")):
+            if lo in s and s[hi] > 0 and s[lo] > s[hi]:
+                raise ScenarioError(f"{where}.{lo}: must not exceed {where}.{hi} "
+                                    f"({s[hi]:g} m)")

@@ -98,7 +98,8 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
                  NPC=model.controller_params.size, NREC=model.recorded.size,
                  NENV=model.envelope_layout.size if model.envelope is not None else 0,
                  NZ=model.ride_rhs.nnz_in(0) if has_ride else 0,
-                 NA=model.ride_row.nnz_in(1) if has_ride else 0)
+                 NA=model.ride_row.nnz_in(1) if has_ride else 0,
+                 NN=model.tick_inputs.size if model.tick_inputs is not None else 0)
     headers = [n for n in names if n != "step_args"] + (
         ["controller"] if part == "sampled_flight" else [])
     files["quadland_loop.h"] = loop_header()
@@ -106,7 +107,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
         has_event=driver == "sampled" and model.event is not None,
         has_envelope=model.envelope is not None, max_delay=MAX_DELAY_PERIODS,
-        has_ride=has_ride,
+        has_ride=has_ride, has_tick=driver == "sampled" and model.tick_inputs is not None,
         casadi_version=ca.__version__, sizes=sizes,
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))

@@ -65,7 +65,7 @@ from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
            "landing_loop_state", "loop_outputs", "gear_gap_function", "landing_ride_constants",
-           "landing_ride_start",
+           "landing_ride_start", "landing_ride_functions", "landing_flight_step",
            "landing_envelope_function", "landing_loop"]
 
 #: What the loop records of each control step (held until the next).
@@ -157,36 +157,38 @@ def landing_envelope_function(l: int) -> ca.Function:
 
 
 @functools.cache
-def landing_ride_constants(l: int) -> Layout:
-    """``a``, what the ride after touchdown holds fixed, formed at the touchdown."""
-    return Layout("ride_land", (
+def landing_ride_constants(l: int, recorded: Layout = LANDING_RECORDED) -> Layout:
+    """``a``, what the ride after touchdown holds fixed, formed at the touchdown (the
+    loop's ``recorded`` layout, :data:`LANDING_RECORDED` or a sensed loop's)."""
+    return Layout("ride_land" if recorded is LANDING_RECORDED else f"ride_{recorded.name}", (
         Field.nested("anchor", ANCHOR, "the pose pinned to the deck"),
         Field("F_td", 4, "N", "rotor forces at touchdown (then winding down)"),
         Field("t_td", 1, "s", "touchdown time"),
         Field("settle", 1, "s", "landing.settle_time: the phase is LANDED from t_td + settle"),
         Field("aborts", 1, "-", "the guidance's abort count"),
         Field.nested("xc", landing_loop_memory(l), "the controller's memory, frozen"),
-        Field.nested("rec", LANDING_RECORDED, "the recorded signals, rotor commands zero"),
+        Field.nested("rec", recorded, "the recorded signals, rotor commands zero"),
     ), "constants of the ride on the deck")
 
 
 @functools.cache
-def landing_ride_start(l: int) -> ca.Function:
+def landing_ride_start(l: int, recorded: Layout = LANDING_RECORDED) -> ca.Function:
     """``ride_start(x, y, rec, t, settle) -> (z, a)``: the ride's state (the vehicle's
     ``xv``) and constants (:func:`landing_ride_constants`) from the loop's state,
-    signals and recorded signals at touchdown."""
-    x, y, rec = landing_loop_state(l).sym(), LANDING_SIGNALS.sym(), LANDING_RECORDED.sym()
+    signals and recorded signals (``recorded``) at touchdown."""
+    x, y, rec = landing_loop_state(l).sym(), LANDING_SIGNALS.sym(), recorded.sym()
     t, settle = ca.SX.sym("t"), ca.SX.sym("settle")
     xs = landing_loop_state(l).unpack(x)
-    ps, rs = LANDING_PLANT_STATE.unpack(xs["xp"]), LANDING_RECORDED.unpack(rec)
-    idle = ca.vertcat(ca.SX.zeros(4), *(rs[f.name] for f in LANDING_RECORDED.fields[1:]))
+    ps, rs = LANDING_PLANT_STATE.unpack(xs["xp"]), recorded.unpack(rec)
+    idle = ca.vertcat(ca.SX.zeros(4), *(rs[f.name] for f in recorded.fields[1:]))
     a = ca.vertcat(anchor_function()(y), QUAD6_STATE.unpack(ps["x1q"])["F"], t, settle,
                    LANDING_SIGNALS.unpack(y)["aborts"], xs["xc"], idle)
     return ca.Function("ride_start", [x, y, rec, t, settle], [ps["xv"], a],
                        ["x", "y", "rec", "t", "settle"], ["z", "a"])
 
 
-def _ride_functions(l: int) -> tuple[ca.Function, ca.Function]:
+def landing_ride_functions(l: int, recorded: Layout = LANDING_RECORDED
+                           ) -> tuple[ca.Function, ca.Function]:
     """``ride_rhs(z, t, pp) -> z_dot``: the vehicle (eq. 4); ``ride_row(z, a, t, pp) ->
     (x, y, rec)``: the quadrotor pinned at ``a``'s anchor, its rotor forces
     ``F_td exp(-(t - t_td) / tau_m)`` (commands zero, the motors' lag), the phase
@@ -195,13 +197,32 @@ def _ride_functions(l: int) -> tuple[ca.Function, ca.Function]:
     p = LANDING_PLANT_PARAMS.unpack(pp)
     ride_rhs = _named("ride_rhs", [z, t, pp], [vehicle_rhs(z, p["p_veh"])],
                       ["z", "t", "pp"], ["z_dot"])
-    a = landing_ride_constants(l).sym()
-    c = landing_ride_constants(l).unpack(a)
+    a = landing_ride_constants(l, recorded).sym()
+    c = landing_ride_constants(l, recorded).unpack(a)
     y, x1q = landed_row_function()(z, t, pp, ca.vertcat(c["anchor"]), c["F_td"], c["t_td"],
                                    c["settle"], c["aborts"])
     ride_row = _named("ride_row", [z, a, t, pp], [ca.vertcat(x1q, z, c["xc"]), y, c["rec"]],
                       ["z", "a", "t", "pp"], ["x", "y", "rec"])
     return ride_rhs, ride_row
+
+
+def landing_flight_step(l: int, y, cs: dict, ps: dict):
+    """One guidance step and one landing step on the measurements ``y``.
+
+    ``cs``, ``ps``: the unpacked loop memory and controller parameters (with the
+    fields ``xg``, ``mem`` and ``pp``, ``p_ctrl``, ``p_guid``, ``dt``). Returns
+    the flight code's arguments (by name), the memory ``[xg, mem]`` after the
+    step, the :data:`LANDING_RECORDED` signals and the landing step's results.
+    """
+    plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
+    args = dict(y=y, xg=cs["xg"], mem=cs["mem"], p_ctrl=ps["p_ctrl"], p_quad=plant_p["p_quad"],
+                p_act=plant_p["p_act"], p_guid=ps["p_guid"], dt=ps["dt"])
+    xg_next, ref = landing_guidance(cs["xg"], y, ps["dt"], ps["p_guid"])
+    res = landing_law(l, y, ref, cs["mem"], ps["p_ctrl"], plant_p["p_quad"], plant_p["p_act"],
+                      ps["dt"])
+    rec = ca.vertcat(res["F_cmd"], res["eta_d"], POSITION_REFERENCE.unpack(ref)["p_ref"],
+                     res["limits"])
+    return args, ca.vertcat(xg_next, res["mem_next"]), rec, res
 
 
 def _named(name, ins, outs, in_names, out_names):
@@ -224,23 +245,16 @@ def landing_loop(l: int) -> LoopModel:
 
     xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
     cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
-    plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
     y = measurement_function()(xp, t, ps["pp"])
-    args = dict(y=y, xg=cs["xg"], mem=cs["mem"], p_ctrl=ps["p_ctrl"], p_quad=plant_p["p_quad"],
-                p_act=plant_p["p_act"], p_guid=ps["p_guid"], dt=ps["dt"])
+    args, xc_next, rec, res = landing_flight_step(l, y, cs, ps)
     step_args = _named("step_args", [xp, xc, pc, first, t], list(args.values()),
                        ["xp", "xc", "pc", "first", "t"], list(args))
-    xg_next, ref = landing_guidance(cs["xg"], y, ps["dt"], ps["p_guid"])
-    res = landing_law(l, y, ref, cs["mem"], ps["p_ctrl"], plant_p["p_quad"], plant_p["p_act"],
-                      ps["dt"])
-    rec = ca.vertcat(res["F_cmd"], res["eta_d"], POSITION_REFERENCE.unpack(ref)["p_ref"],
-                     res["limits"])
     controller = _named("controller", [xp, xc, pc, first, t],
-                        [ca.vertcat(xg_next, res["mem_next"]), res["F_cmd"], rec, res["tilt"]],
+                        [xc_next, res["F_cmd"], rec, res["tilt"]],
                         ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
 
     assemble = _named("assemble", [xp, xc], [ca.vertcat(xp, xc)], ["xp", "xc"], ["x"])
-    ride_rhs, ride_row = _ride_functions(l)
+    ride_rhs, ride_row = landing_ride_functions(l)
     x = x_lay.sym()
     output_fn = _named("outputs", [x, w, t, pp], [loop_outputs(l, x, w, t, pp)],
                        ["x", "w", "t", "p"], ["y"])

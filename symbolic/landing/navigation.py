@@ -160,7 +160,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     g=9.8, q_acc=[0.02] * 3, q_at=[0.1] * 3, q_b=[0.001] * 3, q_ab=[1e-3] * 3,
     vision_sigma0=0.1, vision_k_range=0.02,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
-    range_sigma=0.05, range_min_cos=0.7,
+    range_sigma=0.05, range_min_cos=0.7, range_deck_radius=0.5,
     datalink_v_sigma=[0.1] * 3, datalink_a_sigma=[0.3] * 3,
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     **{f"max_age_{s}": 0.02 for s in SENSORS},
@@ -187,6 +187,8 @@ def estimator_params() -> Layout:
         _vec3("gnss_vt_sigma", "m/s", "target GNSS velocity noise"),
         Field("range_sigma", 1, "m", "range finder noise"),
         Field("range_min_cos", 1, "-", "smallest n2 . b3_E of a usable range (E12)"),
+        Field("range_deck_radius", 1, "m", "largest distance from the pad centre of the "
+              "beam's predicted deck point of a usable range (E12)"),
         _vec3("datalink_v_sigma", "m/s", "broadcast pad velocity noise"),
         _vec3("datalink_a_sigma", "m/s^2", "broadcast pad acceleration noise"),
         *[Field(f"gate_{b.name}", 1, "-", f"NIS threshold of the {b.name} block (E8)")
@@ -294,9 +296,11 @@ def _model(block: Block, nav, pkt, n2, p):
         return z, -nav["p_r"], sigma**2 * ones, 1
     if block.name == "range":                                                # (E12)
         cos_b = n2.T @ pkt["b3_E"]
-        valid = cos_b >= p["range_min_cos"]
-        h = (n2.T @ nav["p_r"]) / select(valid, cos_b, 1)
-        return z, h, p["range_sigma"] ** 2, valid
+        steep = cos_b >= p["range_min_cos"]
+        h = (n2.T @ nav["p_r"]) / select(steep, cos_b, 1)
+        hit = nav["p_r"] - h * pkt["b3_E"]               # the beam's predicted deck point
+        on_deck = ca.sumsqr(hit) <= p["range_deck_radius"] ** 2
+        return z, h, p["range_sigma"] ** 2, ca.logic_and(steep, on_deck)
     h, sigma = {                                                             # (E11), (E13)
         "gnss_rel": (-nav["p_r"] + nav["b"], p["gnss_rel_sigma"]),
         "gnss_v1": (nav["v1"], p["gnss_v1_sigma"]),

@@ -12,11 +12,11 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from types import MappingProxyType
-from typing import NamedTuple
 
 import numpy as np
 
 from quadland.exceptions import ScenarioError
+from quadland.schema.sensors import SETTINGS, Setting
 from quadland_symbolic.landing.sensors import SENSOR_NAMES, SENSOR_PARAMS
 
 __all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "validate_settings",
@@ -24,106 +24,6 @@ __all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "validate_setti
 
 _DEG = math.pi / 180.0
 _G0 = 9.80665                       # m/s^2, standard gravity: datasheets' "g"
-
-
-class Setting(NamedTuple):
-    """One key of a ``[sensors.<name>]`` table.
-
-    Attributes
-    ----------
-    unit, doc : str
-    lo, hi : float
-        Physical range of every value, ``lo <= v <= hi``.
-    length : int or None
-        None for a scalar, 3 for a list of three (x, y, z or roll, pitch, yaw).
-    """
-
-    unit: str
-    doc: str
-    lo: float
-    hi: float
-    length: int | None = None
-
-
-def _common(rate_hi: float) -> dict[str, Setting]:
-    return {
-        "rate_hz": Setting("Hz", "samples per second", 1e-3, rate_hi),
-        "latency": Setting("s", "from sample to arrival at the flight computer", 0.0, 10.0),
-        "phase": Setting("s", "time of the first sample", 0.0, 10.0),
-        "dropout": Setting("-", "probability that a sample is lost", 0.0, 1.0),
-    }
-
-
-_OUTLIERS = {
-    "outlier_rate": Setting("-", "probability that a sample is an outlier", 0.0, 1.0),
-    "outlier_sigma": Setting("m", "standard deviation of an outlier's offset per axis", 0.0,
-                             1e3),
-}
-
-
-#: Every key of every sensor's table: unit, meaning, physical range (and length).
-SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
-    "imu": MappingProxyType({
-        **_common(1e5),
-        "gyro_noise_density": Setting("rad/s/sqrt(Hz)", "gyro white-noise density", 0.0, 1.0),
-        "gyro_bias_sigma": Setting("rad/s", "std of the gyro's turn-on bias per axis", 0.0,
-                                   1.0),
-        "gyro_bias_random_walk": Setting("rad/s/sqrt(s)", "gyro bias random-walk density",
-                                         0.0, 1.0),
-        "accel_noise_density": Setting("m/s^2/sqrt(Hz)", "accelerometer white-noise density",
-                                       0.0, 10.0),
-        "accel_bias_sigma": Setting("m/s^2", "std of the accelerometer's turn-on bias per "
-                                    "axis", 0.0, 10.0),
-        "accel_bias_random_walk": Setting("m/s^2/sqrt(s)", "accelerometer bias random-walk "
-                                          "density", 0.0, 10.0),
-        "attitude_sigma": Setting("rad", "std of the attitude estimator's Gauss-Markov error "
-                                  "(roll, pitch, yaw)", 0.0, 1.0, 3),
-        "attitude_tau": Setting("s", "its time constants (roll, pitch, yaw)", 1e-3, 1e9, 3),
-        "attitude_white_sigma": Setting("rad", "std of its white part per axis", 0.0, 1.0),
-    }),
-    "vision": MappingProxyType({
-        **_common(1e3), **_OUTLIERS,
-        "sigma0": Setting("m", "noise per axis at zero range", 0.0, 100.0),
-        "sigma_per_m": Setting("m/m", "growth of the noise per metre of range", 0.0, 10.0),
-        "half_angle": Setting("rad", "half-angle of the field-of-view cone", 0.0, math.pi / 2),
-        "range_min": Setting("m", "nearest range at which the marker is detected", 0.0, 1e4),
-        "range_max": Setting("m", "farthest range at which the marker is detected", 0.0, 1e4),
-        "small_range_min": Setting("m", "nearest range of the second, smaller marker", 0.0,
-                                   1e4),
-        "small_range_max": Setting("m", "farthest range of the second marker (0: none)", 0.0,
-                                   1e4),
-    }),
-    "gnss": MappingProxyType({
-        **_common(1e3),
-        "position_sigma": Setting("m", "std of each receiver's position error (x, y, z)",
-                                  0.0, 1e3, 3),
-        "position_tau": Setting("s", "time constant of each receiver's position error", 1e-3,
-                                1e9),
-        "velocity_sigma": Setting("m/s", "std of each velocity's white noise per axis", 0.0,
-                                  100.0),
-    }),
-    "rangefinder": MappingProxyType({
-        **_common(1e5), **_OUTLIERS,
-        "sigma0": Setting("m", "noise at zero distance", 0.0, 100.0),
-        "sigma_per_m": Setting("m/m", "growth of the noise per metre", 0.0, 10.0),
-        "range_min": Setting("m", "shortest distance reported", 0.0, 1e4),
-        "range_max": Setting("m", "longest distance reported", 0.0, 1e4),
-        "deck_half_length": Setting("m", "deck extent along its x axis from the pad centre",
-                                    0.0, 1e4),
-        "deck_half_width": Setting("m", "deck extent along its y axis from the pad centre", 0.0,
-                                   1e4),
-    }),
-    "datalink": MappingProxyType({
-        **_common(1e3),
-        "eta2_sigma": Setting("rad", "std of the broadcast deck attitude (roll, pitch, yaw)",
-                              0.0, 1.0, 3),
-        "v2E_sigma": Setting("m/s", "std of the broadcast velocity per axis", 0.0, 100.0),
-        "a2E_sigma": Setting("m/s^2", "std of the broadcast acceleration per axis", 0.0, 100.0),
-        "w2E_sigma": Setting("rad/s", "std of the broadcast angular rate per axis", 0.0, 10.0),
-        "w2E_dot_sigma": Setting("rad/s^2", "std of the broadcast angular acceleration per "
-                                 "axis", 0.0, 100.0),
-    }),
-})
 
 
 #: Default settings of each sensor; docs/sensors.md gives every value's source.

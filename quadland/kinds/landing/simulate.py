@@ -40,6 +40,7 @@ from quadland.engine.loop import grid_tolerance
 from quadland.engine.plan import SimulationPlan, check_plan, plan_run
 from quadland.engine.result import SimulationResult
 from quadland.exceptions import ScenarioError, SimulationError
+from quadland.kinds.landing.sensed import sensed_vectors, sensors_enabled, tick_table
 from quadland.kinds.landing.values import (
     LandingValues,
     landing_clocks,
@@ -63,6 +64,7 @@ from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY, landing_sensed_loop
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 
 __all__ = ["landing_envelope", "landing_plan", "check_landing_plan", "simulate_landing",
@@ -165,10 +167,17 @@ def _check_motor_step(scenario: Scenario) -> None:
             f"simulation.rk_steps_per_interval to {need}")
 
 
-def landing_loop_part(l: int, part: str):
-    """The compiled (or VM) ``part`` of the landing loop's simulator for ``l`` nodes."""
+def landing_loop_part(l: int, part: str, sensed: bool = False):
+    """The compiled (or VM) ``part`` of the landing loop's simulator for ``l`` nodes: the
+    loop on the true state, or (``sensed``) on the sensors and the navigation filter."""
     from quadland.kinds.landing.flight import flight_code
 
+    if sensed:
+        if part == "sampled_flight":
+            raise ScenarioError("controller.backend: \"c\" flies the landing step's C on the "
+                                "true state only for now; set sensors.enabled = false or "
+                                "controller.backend = \"casadi\"")
+        return compiled_loop(landing_sensed_loop(l), part)
     flight = flight_code(l) if part == "sampled_flight" else None
     return compiled_loop(landing_loop(l), part, flight)
 
@@ -199,20 +208,28 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     t_dist = clocks[1].times()
     w_dist = landing_disturbance(scenario, t_dist)
     flight = scenario.data["controller"]["backend"] == "c"
-    loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled")
+    sensed = sensors_enabled(scenario)
+    loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed)
     hover = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])["F"]
-    run = loop.sampled(lv.xp0, lv.xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
-                       lv.pc, TILT_MIN, envelope.bounds,
-                       delay=scenario.data["controller"]["delay_periods"], uh0=hover)
+    pc, xc0, N = lv.pc, lv.xc0, None
+    if sensed:
+        pc, xc0 = sensed_vectors(scenario, lv)
+        N = tick_table(scenario, len(clocks[2].times()))
+    run = loop.sampled(lv.xp0, xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
+                       pc, TILT_MIN, envelope.bounds,
+                       delay=scenario.data["controller"]["delay_periods"], uh0=hover, N=N)
+    recorded = loop.model.recorded
     done, times, X, R = run.rows, run.times, run.X, run.R
     Y = loop.outputs(X, w_dist[:, run.w_index].T, times, lv.pp)
     what = None
     if run.status == SIM_EVENT:
         t_td = run.t_stop
-        x_td = run.x_end
+        nxp = LANDING_PLANT_STATE.size
+        x_td = np.asarray(loop.model.assemble(run.x_end[:nxp], run.x_end[nxp:]),
+                          dtype=float).ravel()
         i_w = int(np.searchsorted(t_dist, t_td - grid_tolerance(clocks), side="right")) - 1
         y_td = loop.outputs(x_td[None, :], w_dist[:, [i_w]].T, np.array([t_td]), lv.pp)
-        R_td = R[-1] if len(R) else np.zeros(LANDING_RECORDED.size)
+        R_td = R[-1] if len(R) else np.zeros(recorded.size)
         ride = _ride(scenario, lv, loop, clocks[0], t_td, x_td, y_td[0], R_td)
         times = np.concatenate([times, [t_td], ride.times])
         X = np.vstack([X, x_td, ride.X])
@@ -224,7 +241,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
             how = "became non-finite" if ride.status == SIM_NONFINITE else "stopped"
             raise SimulationError(f"flight failed at t = {t_fail:.4g} s: the ride on the deck "
                                   f"after touchdown {how}", t_fail,
-                                  _result(scenario, times, X, R, Y))
+                                  _result(scenario, times, X, R, Y, recorded))
     elif run.status != SIM_OK:
         what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
                 SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
@@ -238,7 +255,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         name = LANDING_SIGNALS.element_names()[int(np.argmin(np.isfinite(Y[k])))]
         what, t_fail = f"the output {name} became non-finite", times[k]
         times, X, R, Y = times[:k], X[:k], R[:k], Y[:k]
-    result = _result(scenario, times, X, R, Y)
+    result = _result(scenario, times, X, R, Y, recorded)
     if what is not None:
         xp_last = X[-1, landing_loop_state(lv.l).slice("xp")] if len(X) else None
         raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
@@ -260,7 +277,8 @@ def _ride(scenario, lv, loop, rows, t_td, x_td, y_td, R_td):
     settle = scenario.data["landing"]["settle_time"]
     t_end = min(t_td + settle, scenario.data["simulation"]["duration"])
     z0, a = (np.asarray(v, dtype=float).ravel()
-             for v in landing_ride_start(lv.l)(x_td, y_td, R_td, t_td, settle))
+             for v in landing_ride_start(lv.l, loop.model.recorded)(x_td, y_td, R_td, t_td,
+                                                                      settle))
     h_max = float(landing_loop_params(lv.l).unpack(lv.pc)["dt"][0])
     ride = loop.ride(z0, a, rows, t_td, t_end, h_max, lv.pp)
     if len(ride.times):
@@ -271,10 +289,11 @@ def _ride(scenario, lv, loop, rows, t_td, x_td, y_td, R_td):
     return ride
 
 
-def _result(scenario, times, X, R, Y) -> SimulationResult:
+def _result(scenario, times, X, R, Y, recorded=LANDING_RECORDED) -> SimulationResult:
     """The result's columns: ``t``, every output and every recorded signal by name."""
     cols = {"t": times}
     cols.update(zip(LANDING_SIGNALS.element_names(), Y.T, strict=True))
-    cols.update(zip(LANDING_RECORDED.element_names(), R.T, strict=True))
+    cols.update(zip(recorded.element_names(), R.T, strict=True))
+    layout = LANDING_TRAJECTORY if recorded is LANDING_RECORDED else SENSED_TRAJECTORY
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
-                                       for k, v in cols.items()}, X, LANDING_TRAJECTORY)
+                                       for k, v in cols.items()}, X, layout)

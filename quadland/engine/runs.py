@@ -1,0 +1,111 @@
+"""What a simulator's driver returns, and the checks of what it is given.
+
+The status codes of the drivers (``symbolic/templates/simulator.c.jinja``), one run's
+rows (:class:`Run`) and a ride's (:class:`Ride`), shared by the compiled simulators
+(:mod:`quadland.engine.compiled`) and their mirror on CasADi's virtual machine
+(:mod:`quadland.engine.vm`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from quadland_symbolic.loop import LoopModel
+
+__all__ = ["SIM_OK", "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT",
+           "SIM_ENVELOPE", "SIM_ROWS", "Run", "Ride", "as_f64", "make_run", "tick_rows",
+           "envelope_bounds"]
+
+#: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
+SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT, SIM_ENVELOPE, SIM_ROWS = range(7)
+
+
+
+def as_f64(a) -> np.ndarray:
+    """``a`` as a C-contiguous array of doubles (a view when it already is one)."""
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+@dataclasses.dataclass(frozen=True)
+class Run:
+    """What one call of a driver gave.
+
+    Attributes
+    ----------
+    status : int
+        :data:`SIM_OK`, or the ``SIM_*`` code that stopped the run.
+    X : ndarray, (rows, nx)
+        The loop's state at each output row recorded.
+    R : ndarray, (rows, nrec) or None
+        The sampled loop's recorded signals at each row (None: continuous).
+    times : ndarray, (rows,)
+        Each row's time, s.
+    w_index : ndarray of int, (rows,)
+        Each row's disturbance sample (the row of ``W`` in force).
+    x_end : ndarray
+        The state where the run ended (the sampled loop's ``[xp, xc]``).
+    t_stop : float
+        s, where a run that did not reach its end stopped (an event's instant);
+        NaN otherwise.
+    envelope : ndarray or None
+        For :data:`SIM_ENVELOPE`: the envelope magnitudes that left their bounds.
+    """
+
+    status: int
+    X: np.ndarray
+    R: np.ndarray | None
+    times: np.ndarray
+    w_index: np.ndarray
+    x_end: np.ndarray
+    t_stop: float = float("nan")
+    envelope: np.ndarray | None = None
+
+    @property
+    def rows(self) -> int:
+        """Rows recorded."""
+        return len(self.times)
+
+
+@dataclasses.dataclass(frozen=True)
+class Ride:
+    """The rows of a ride after an event (:meth:`CompiledLoop.ride`).
+
+    ``status`` is :data:`SIM_OK` or the ``SIM_*`` code that stopped it; ``times``,
+    ``X`` (the loop's state), ``Y`` (its output signals) and ``R`` (its recorded
+    signals) hold the rows before that.
+    """
+
+    status: int
+    times: np.ndarray
+    X: np.ndarray
+    Y: np.ndarray
+    R: np.ndarray
+
+
+def make_run(m: LoopModel, status, X, R, times, w_index, x_end, t_stop, env) -> Run:
+    X = np.array(X, dtype=float).reshape(-1, m.state.size)
+    R = None if R is None else np.array(R, dtype=float).reshape(-1, m.recorded.size)
+    return Run(status, X, R, np.array(times, dtype=float), np.array(w_index, dtype=np.int_),
+               np.asarray(x_end, dtype=float), t_stop, env if status == SIM_ENVELOPE else None)
+
+
+def tick_rows(model: LoopModel, N) -> np.ndarray:
+    """The per-tick table of a model with tick inputs (rows of its width), else empty."""
+    width = 0 if model.tick_inputs is None else model.tick_inputs.size
+    N = np.zeros((0, width)) if N is None else as_f64(N)
+    if N.ndim != 2 or N.shape[1] != width:
+        raise ValueError(f"N must have {width} columns, got shape {N.shape}")
+    return np.ascontiguousarray(N)
+
+
+def envelope_bounds(model: LoopModel, bound) -> np.ndarray:
+    """The envelope's bounds as the drivers take them (none without an envelope)."""
+    if model.envelope is None:
+        return np.zeros(0)
+    bound = as_f64(bound)
+    if bound.shape != (model.envelope_layout.size,):
+        raise ValueError(f"bound: expected {model.envelope_layout.size} envelope bounds, "
+                         f"got shape {bound.shape}")
+    return bound

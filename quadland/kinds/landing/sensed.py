@@ -1,0 +1,137 @@
+"""A landing scenario's sensors and navigation filter as the sensed loop's vectors.
+
+With ``sensors.enabled = true`` a landing flies
+:func:`quadland_symbolic.landing.sensed_loop.landing_sensed_loop`: the world's sensors
+sampled on the control clock, their packets delivered after their latency, the
+navigation filter's estimate in place of the true state. This module forms what that
+loop needs beyond the unsensed one's vectors (:mod:`quadland.kinds.landing.values`):
+
+* the controller parameters ``pc``: the unsensed loop's, the filter's tuning
+  (``[estimator]`` and the gravity of the controller's model), the sensors' truth
+  constants and each sensor's delivery delay in control periods;
+* the memory ``xc0``: the unsensed loop's, the filter at handover (its estimate the
+  truth plus an error drawn from its initial covariance, seeded), empty delay lines;
+* the per-tick table ``N``: each control tick's sample and delivery flags and noise
+  (:func:`quadland.kinds.landing.sensing.draw_sensors`, seeded by ``simulation.seed``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from quadland.kinds.landing.sensing import draw_sensors, sensor_seed
+from quadland.kinds.landing.sensor_settings import sensor_params
+from quadland.kinds.landing.values import LandingValues
+from quadland.scenario import Scenario
+from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.deck import deck_pose
+from quadland_symbolic.landing.estimator import (
+    FLIGHT_COUPLING,
+    FLIGHT_DEPTH,
+    N_HIST,
+    estimator_init_function,
+)
+from quadland_symbolic.landing.loop import landing_loop_memory, landing_loop_params
+from quadland_symbolic.landing.navigation import DECK_INIT, IMU, NAV, estimator_params
+from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
+from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.sensed_loop import (
+    SENSED_TICK,
+    delivery_delay,
+    sensed_loop_memory,
+    sensed_loop_params,
+)
+from quadland_symbolic.landing.sensors import SENSOR_NAMES
+
+__all__ = ["INITIAL_ERROR_STREAM", "sensor_settings", "sensors_enabled", "sensed_vectors",
+           "tick_table", "estimator_p"]
+
+#: The random stream of the filter's initial error (beside the sensors').
+INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
+
+#: ``[estimator]`` keys of the initial standard deviations, in the order of NAV's fields.
+_P0_KEYS = ("p0_position", "p0_velocity", "p0_target_velocity", "p0_target_acceleration",
+            "p0_bias", "p0_input_bias")
+
+
+def sensors_enabled(scenario: Scenario) -> bool:
+    """True when the scenario's controller flies on its sensors and the filter."""
+    return bool(scenario.data["sensors"]["enabled"])
+
+
+def sensor_settings(scenario: Scenario) -> dict[str, dict]:
+    """The ``[sensors.<name>]`` tables, by sensor."""
+    return {name: dict(scenario.data[f"sensors.{name}"]) for name in SENSOR_NAMES}
+
+
+def estimator_p(scenario: Scenario, g: float) -> np.ndarray:
+    """The filter's parameters from ``[estimator]`` and the gravity ``g`` of its model."""
+    e = scenario.data["estimator"]
+    lay = estimator_params()
+    return lay.pack({f.name: g if f.name == "g" else e[f.name] for f in lay.fields})
+
+
+def _handover(scenario: Scenario, lv: LandingValues) -> np.ndarray:
+    """The filter's memory at t = 0: the true relative motion plus a draw from ``P0``."""
+    e, seed = scenario.data["estimator"], scenario.data["simulation"]["seed"]
+    xs = LANDING_PLANT_STATE.unpack(lv.xp0)
+    p = LANDING_PLANT_PARAMS.unpack(lv.pp)
+    q = QUAD6_STATE.unpack(xs["x1q"])
+    deck = deck_pose(xs["xv"], 0.0, p["p_veh"], p["p_deck"])
+    dense = [np.asarray(v, dtype=float).ravel() for v in (deck.p2, deck.v2E, deck.a2E,
+                                                          deck.eta2, deck.w2E, deck.w2E_dot)]
+    p2, v2, a2, eta2, w2, w2_dot = dense
+    v1 = np.asarray(rotation(q["eta1"]), dtype=float) @ q["V1"]
+    truth = NAV.pack(dict(p_r=q["p1"] - p2, v1=v1, v_t=v2, a_t=a2, b=np.zeros(3),
+                          a_b=np.zeros(3)))
+    sigma = np.concatenate([np.asarray(e[k], dtype=float) for k in _P0_KEYS])
+    rng = np.random.default_rng(sensor_seed(seed, INITIAL_ERROR_STREAM, 0))
+    error = sigma * rng.standard_normal(NAV.size)
+    error[NAV.slice("b")] = 0.0              # the GNSS bias' truth is the receivers' draw
+    error[NAV.slice("a_b")] = 0.0
+    x0 = truth + error
+    deck0 = DECK_INIT.pack(dict(eta2=eta2, w2E=w2, w2E_dot=w2_dot))
+    init = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    return np.asarray(init(x0, sigma ** 2, deck0, 0.0), dtype=float).ravel()
+
+
+def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, np.ndarray]:
+    """``(pc, xc0)`` of the sensed loop from the unsensed loop's values ``lv``."""
+    l = lv.l
+    base_pc = landing_loop_params(l).unpack(lv.pc)
+    base_xc = landing_loop_memory(l).unpack(lv.xc0)
+    rate = scenario.data["controller"]["rate_hz"]
+    settings = sensor_settings(scenario)
+    g = float(scenario.data["quadrotor"]["gravity"])
+    pc = sensed_loop_params(l).pack(dict(
+        pp=base_pc["pp"], p_ctrl=base_pc["p_ctrl"], p_guid=base_pc["p_guid"],
+        dt=base_pc["dt"], p_est=estimator_p(scenario, g), p_sens=sensor_params(settings),
+        delay=[delivery_delay(settings[n]["latency"], 1.0 / rate) for n in SENSOR_NAMES]))
+    q = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])
+    hover = IMU.pack(dict(eta_hat=q["eta1"], f_b=[0.0, 0.0, g], omega=q["Omega1"]))
+    lay = sensed_loop_memory(l)
+    lines = {f"line_{n}": np.zeros(lay[f"line_{n}"].size) for n in SENSOR_NAMES}
+    xc0 = lay.pack(dict(xg=base_xc["xg"], mem=base_xc["mem"], nav=_handover(scenario, lv),
+                        imu_held=hover, **lines))
+    return pc, xc0
+
+
+def tick_table(scenario: Scenario, n_ticks: int) -> np.ndarray:
+    """Each control tick's row of :data:`SENSED_TICK`: sample flags, delivery, noise.
+
+    A sensor's samples fall on control ticks (the schema checks that its rate divides
+    the control rate and its phase is a whole number of periods).
+    """
+    d = scenario.data
+    rate, duration = d["controller"]["rate_hz"], d["simulation"]["duration"]
+    samples = draw_sensors(sensor_settings(scenario), duration, d["simulation"]["seed"])
+    N = np.zeros((n_ticks, SENSED_TICK.size))
+    for name in SENSOR_NAMES:
+        s = samples[name]
+        ticks = np.rint(s.times * rate).astype(np.int64)
+        keep = ticks < n_ticks
+        ticks = ticks[keep]
+        N[ticks, SENSED_TICK.slice(f"{name}_sampled")] = 1.0
+        N[ticks, SENSED_TICK.slice(f"{name}_kept")] = s.delivered[keep, None]
+        N[ticks, SENSED_TICK.slice(f"{name}_noise")] = s.noise[keep]
+    return N

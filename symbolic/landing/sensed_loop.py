@@ -1,0 +1,252 @@
+"""The landing loop on what the aircraft can know: sensors, delivery, the navigation filter.
+
+:func:`landing_sensed_loop` is :func:`quadland_symbolic.landing.loop.landing_loop` with
+its perfect measurements replaced by the world's sensors and the flight code's
+navigation filter. The plant, the event, the envelope, the loop state ``x = [xp, xg,
+mem]`` and the ride after touchdown are the same; the controller, at each control
+tick ``t_k`` (period ``T``), does, in this order:
+
+1. **World: sampling.** Each sensor of
+   :data:`~quadland_symbolic.landing.sensors.SENSOR_NAMES` reads the true plant
+   (``sense_<name>(xp, uh, w, t, pp, p_sens, noise)``, the plant's own parameters
+   ``pp``, not the controller's model) with this tick's noise row. A sensor samples
+   on the control clock: its tick row's ``<name>_sampled`` is 1 on the ticks of its
+   rate (drawn by :mod:`quadland.kinds.landing.sensing`), and ``<name>_kept`` is 0
+   for a packet the link loses. The packet is ``fresh`` when sampled, kept and (for
+   the camera and the range finder) valid, stamped with its capture time ``tau =
+   t_k``.
+2. **World: delivery.** The packet enters the sensor's delay line (``line_<name>``,
+   :data:`DELIVERY_SLOTS` packets) and leaves it ``delay_<name>`` ticks later: a
+   packet of latency ``L`` arrives at ``t_k + L`` and is read at the first control
+   tick at or after it, ``delay = ceil(L / T)``. The latency is constant per sensor,
+   so packets arrive in the order they were taken, at most one per tick.
+3. **Flight code: the IMU.** The IMU's packet of this tick (or the last one
+   delivered, held, when none arrives).
+4. **Flight code: the filter.** One step of the navigation filter
+   (:func:`~quadland_symbolic.landing.estimator.estimator_step_function` at its flight
+   sizes :data:`~quadland_symbolic.landing.estimator.FLIGHT_DEPTH`,
+   :data:`~quadland_symbolic.landing.estimator.FLIGHT_COUPLING`) on the delivered
+   packets; its output is the controller's measurement.
+5. **Flight code: guidance and landing step** on the estimate, with the controller's
+   own model ``pc.pp`` (:func:`~quadland_symbolic.landing.loop.landing_flight_step`).
+
+The recorded signals add the estimate and the filter's health to the unsensed
+loop's (:data:`SENSED_RECORDED`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import casadi as ca
+
+from quadland_symbolic.landing.controller import (
+    LANDING_MEASUREMENT,
+    landing_controller_params,
+    landing_memory,
+)
+from quadland_symbolic.landing.estimator import (
+    FLIGHT_COUPLING,
+    FLIGHT_DEPTH,
+    N_HIST,
+    estimator_diagnostics,
+    estimator_memory,
+    estimator_step_function,
+)
+from quadland_symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE
+from quadland_symbolic.landing.loop import (
+    LANDING_ENVELOPE,
+    LANDING_RECORDED,
+    gear_gap_function,
+    landing_envelope_function,
+    landing_flight_step,
+    landing_loop_state,
+    landing_ride_functions,
+    loop_outputs,
+)
+from quadland_symbolic.landing.navigation import (
+    BLOCKS,
+    DATALINK,
+    GNSS,
+    IMU,
+    RANGE,
+    VISION,
+    estimator_params,
+)
+from quadland_symbolic.landing.plant import (
+    LANDING_DISTURBANCE,
+    LANDING_PLANT_PARAMS,
+    LANDING_PLANT_STATE,
+    loop_plant_function,
+)
+from quadland_symbolic.landing.quadrotor import COMMAND
+from quadland_symbolic.landing.sensors import (
+    NOISES,
+    SENSOR_NAMES,
+    SENSOR_PACKETS,
+    SENSOR_PARAMS,
+    sensor_function,
+)
+from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
+from quadland_symbolic.layout import Field, Layout
+from quadland_symbolic.loop import LoopModel
+
+__all__ = ["DELIVERY_SLOTS", "SENSED_TICK", "SENSED_RECORDED", "SENSED_TRAJECTORY", "NAV_PACKET_OF",
+           "delivery_record", "delivery_delay", "sensed_loop_memory", "sensed_loop_params",
+           "landing_sensed_loop"]
+
+#: The longest delivery delay a sensor's line holds, in control periods (0.256 s at
+#: 250 Hz: past the filter's 0.2 s horizon and its largest packet age).
+DELIVERY_SLOTS = 64
+
+#: The filter's packet layout each sensor delivers (the IMU's has no flag: it is held).
+NAV_PACKET_OF = {"imu": IMU, "vision": VISION, "gnss": GNSS, "rangefinder": RANGE,
+                 "datalink": DATALINK}
+
+#: One control tick's row of the world's random draws (``n``).
+SENSED_TICK = Layout("n_sensed", tuple(
+    f for name in SENSOR_NAMES for f in (
+        Field(f"{name}_sampled", 1, "0/1", f"1 when the {name} samples at this tick"),
+        Field(f"{name}_kept", 1, "0/1", f"1 unless the {name}'s packet of this tick is lost"),
+        Field.nested(f"{name}_noise", NOISES[name], f"the {name}'s noise at this tick"))),
+    "per control tick: each sensor's sample flag, delivery flag and noise")
+
+#: What the sensed loop records of each control step: the unsensed loop's, the
+#: estimate, the filter's horizon standard deviations and each block's NIS.
+SENSED_RECORDED = Layout("rec_sensed", (
+    *LANDING_RECORDED.fields,
+    Field("p_e_hat", 3, "m", "estimated relative position, deck frame (the step's input)",
+          elements=("x_e_hat", "y_e_hat", "z_e_hat")),
+    Field("v_e_hat", 3, "m/s", "estimated relative velocity, deck frame",
+          elements=("vx_e_hat", "vy_e_hat", "vz_e_hat")),
+    Field("sigma_p_r", 3, "m", "filter's standard deviation of p_r at its horizon, E",
+          elements=("sigma_p_x", "sigma_p_y", "sigma_p_z")),
+    Field("nis", len(BLOCKS), "-", "each block's NIS this step (0: not due, -1: not finite)",
+          elements=tuple(f"nis_{b.name}" for b in BLOCKS)),
+    Field("fused", len(BLOCKS), "0/1", "each block fused this step",
+          elements=tuple(f"fused_{b.name}" for b in BLOCKS)),
+), "the landing step's signals, the navigation estimate and the filter's health")
+
+
+#: The columns of a sensed landing's trajectory.csv: the unsensed one's, the true
+#: relative velocity, and the filter's estimate and standard deviations beside them.
+SENSED_TRAJECTORY = Layout("sensed_trajectory", (
+    *LANDING_TRAJECTORY.fields, LANDING_SIGNALS["v_e"],
+    *(SENSED_RECORDED[n] for n in ("p_e_hat", "v_e_hat", "sigma_p_r")),
+), "one row per output time of a sensed landing, and one at touchdown")
+
+
+def delivery_record(name: str) -> Layout:
+    """A packet in ``name``'s delay line: ``fresh``, ``tau``, the filter's packet values."""
+    nav = NAV_PACKET_OF[name]
+    values = nav.fields if name == "imu" else nav.fields[2:]
+    return Layout(f"line_{name}", (
+        Field("fresh", 1, "0/1", "1: a packet taken at tau, kept and valid"),
+        Field("tau", 1, "s", "capture time"), *values), f"a {name} packet in delivery")
+
+
+def delivery_delay(latency: float, period: float) -> int:
+    """Control ticks from a packet's capture to its reading: ``ceil(latency / period)``.
+
+    A packet arriving within ``1e-9`` of a tick is read at that tick (the ratio
+    of two decimals, such as 0.06 s over 0.004 s, is not exact in binary).
+    """
+    return max(0, math.ceil(latency / period - 1e-9))
+
+
+@functools.cache
+def sensed_loop_memory(l: int) -> Layout:
+    """The sensed loop's memory: guidance, landing step, filter, held IMU, delay lines."""
+    return Layout("xc_sensed", (
+        Field.nested("xg", GUIDANCE_STATE, "guidance: phase, dwell timer, z_ref, aborts"),
+        Field.nested("mem", landing_memory(l), "landing step: network, filter, compensator"),
+        Field.nested("nav", estimator_memory(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING),
+                     "navigation filter (flight code)"),
+        Field.nested("imu_held", IMU, "the last IMU packet delivered (flight code)"),
+        *(Field(f"line_{name}", DELIVERY_SLOTS * delivery_record(name).size, "-",
+                f"{name} packets in delivery, newest first (world)")
+          for name in SENSOR_NAMES),
+    ), "sensed landing loop memory")
+
+
+@functools.cache
+def sensed_loop_params(l: int) -> Layout:
+    """The sensed loop's controller parameters: the flight code's, then the world's sensors."""
+    return Layout("pc_sensed", (
+        Field.nested("pp", LANDING_PLANT_PARAMS, "the controller's own model of the plant"),
+        Field.nested("p_ctrl", landing_controller_params(l), "landing step"),
+        Field.nested("p_guid", GUIDANCE_PARAMS, "guidance"),
+        Field("dt", 1, "s", "control period"),
+        Field.nested("p_est", estimator_params(), "navigation filter"),
+        Field.nested("p_sens", SENSOR_PARAMS, "the sensors' truth models (world)"),
+        Field("delay", len(SENSOR_NAMES), "ticks", "each sensor's delivery delay (world)",
+              elements=tuple(f"delay_{n}" for n in SENSOR_NAMES)),
+    ), "sensed landing loop controller parameters")
+
+
+def _deliver(name, xp, uh, w, t, pp, p_sens, tick, line, delay):
+    """This tick's packet into ``name``'s line; the packet read now, and the line after."""
+    packet = SENSOR_PACKETS[name]
+    y = packet.unpack(sensor_function(name)(xp, uh, w, t, pp, p_sens, tick[f"{name}_noise"]))
+    fresh = tick[f"{name}_sampled"] * tick[f"{name}_kept"]
+    if "valid" in packet.names():
+        fresh = fresh * y["valid"]
+    record = delivery_record(name)
+    values = [y[f.name] for f in record.fields[2:]]
+    size = record.size
+    line_next = ca.vertcat(fresh, t, *values, line[:(DELIVERY_SLOTS - 1) * size])
+    read = ca.SX.zeros(size)
+    for i in range(DELIVERY_SLOTS):
+        read += ca.if_else(delay == i, line_next[i * size:(i + 1) * size], ca.SX.zeros(size))
+    return read, line_next
+
+
+@functools.cache
+def landing_sensed_loop(l: int) -> LoopModel:
+    """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring)."""
+    base_state, xc_lay, pc_lay = landing_loop_state(l), sensed_loop_memory(l), \
+        sensed_loop_params(l)
+    xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
+    t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    plant = ca.Function("plant", [xp, uh, w, t, pp], [loop_plant_function()(xp, uh, w, t, pp)],
+                        ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
+    xc, pc, first, n = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first"), SENSED_TICK.sym()
+    cs, ps, tick = xc_lay.unpack(xc), pc_lay.unpack(pc), SENSED_TICK.unpack(n)
+    delays = dict(zip(SENSOR_NAMES, ca.vertsplit(ps["delay"]), strict=True))
+    read, lines = {}, []
+    for name in SENSOR_NAMES:
+        read[name], line_next = _deliver(name, xp, uh, w, t, pp, ps["p_sens"], tick,
+                                         cs[f"line_{name}"], delays[name])
+        lines.append(line_next)
+    imu_rec = delivery_record("imu").unpack(read["imu"])
+    imu_now = ca.if_else(imu_rec["fresh"], ca.vertcat(*(imu_rec[f.name] for f in IMU.fields)),
+                         cs["imu_held"])
+    packets = [read[name] for name in ("vision", "gnss", "rangefinder", "datalink")]
+    nav_next, y, diag = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)(
+        cs["nav"], imu_now, *packets, ps["p_est"], ps["dt"], t)
+    _, xgm_next, rec, res = landing_flight_step(l, y, cs, ps)
+    m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
+    sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
+    rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"])
+    controller = ca.Function(
+        "controller", [xp, xc, pc, first, t, uh, w, pp, n],
+        [ca.vertcat(xgm_next, nav_next, imu_now, *lines), res["F_cmd"], rec, res["tilt"]],
+        ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
+        ["xc_next", "uh", "rec", "guard"])
+    assemble = ca.Function("assemble", [xp, xc], [ca.vertcat(xp, cs["xg"], cs["mem"])],
+                           ["xp", "xc"], ["x"])
+    x = base_state.sym()
+    ride_rhs, ride_row = landing_ride_functions(l, SENSED_RECORDED)
+    return LoopModel(
+        "landing_sensed", base_state, LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, LANDING_SIGNALS,
+        None, ca.Function("outputs", [x, w, t, pp], [loop_outputs(l, x, w, t, pp)],
+                          ["x", "w", "t", "p"], ["y"]),
+        LANDING_PLANT_STATE, COMMAND, xc_lay, LANDING_PLANT_PARAMS, pc_lay, SENSED_RECORDED,
+        plant, controller, assemble,
+        event=ca.Function("event", [xp, t, pp], [gear_gap_function()(xp, t, pp)],
+                          ["xp", "t", "pp"], ["g"]),
+        envelope=ca.Function("envelope", [x, uh], [landing_envelope_function(l)(x, uh)],
+                             ["x", "uh"], ["s"]),
+        envelope_layout=LANDING_ENVELOPE, ride_rhs=ride_rhs, ride_row=ride_row,
+        tick_inputs=SENSED_TICK)
