@@ -24,7 +24,8 @@ from quadland_symbolic.landing.navigation import (
 N = NAV.size
 PARAMS = estimator_params()
 DIAG = estimator_diagnostics()
-OPEN_GATES = {**{f"gate_{b.name}": 1e30 for b in BLOCKS}, "range_deck_radius": 1e30}
+OPEN_GATES = {**{f"gate_{b.name}": 1e30 for b in BLOCKS}, "range_deck_radius": 1e30,
+              "range_deck_sigmas": 0.0}
 
 
 def sl(name):

@@ -60,6 +60,9 @@ def test_prediction_equals_the_matrix_exponential_and_van_loan(rng):
         np.testing.assert_array_equal(Q, Q.T)
         assert np.linalg.eigvalsh(Q).min() > -1e-15 * scale
 
+#: The range fused wherever its beam points (E12a off): the reference has no deck extent.
+ANYWHERE = {"range_deck_radius": 1e30, "range_deck_sigmas": 0.0}
+
 
 def test_gates_default_to_the_chi_square_99_percent_quantile():
     for b in BLOCKS:
@@ -75,7 +78,7 @@ def test_gate_rejects_clean_data_at_the_chi_square_rate(name):
     f, model = nav_update_function(name), measurement_model_function(name)
     layout, x, P, vals, n2 = block_data(rng, name)
     block = next(b for b in BLOCKS if b.name == name)
-    p = params(vision_k_range=0.0)             # R not a function of the draw
+    p = params(vision_k_range=0.0, **ANYWHERE)  # R not a function of the draw
     _, h, H, r, _ = model(x, layout.pack(vals), n2, p)
     h, H, r = col(h), np.array(H), col(r)
     L = np.linalg.cholesky(H @ P @ H.T + np.diag(r))
@@ -190,7 +193,7 @@ def test_a_block_not_due_or_rejected_leaves_x_and_P_bit_exact(name):
     rng = np.random.default_rng([8, len(name)])
     f = nav_update_function(name)
     layout, x, P, vals, n2 = block_data(rng, name)
-    p = params(range_deck_radius=1e30)          # the random state's beam may miss the deck
+    p = params(**ANYWHERE)                      # the random state's beam may miss the deck
     nan_vals = {k: np.full(np.shape(v), np.nan) if k not in ("fresh", "tau") else v
                 for k, v in vals.items()}
     cases = [(layout.pack(vals), 0.0),                 # not due
@@ -225,22 +228,24 @@ def test_axes_fuse_a_tilted_range_on_z_with_the_rest_as_noise(rng):
     r = ESTIMATOR_DEFAULTS["range_sigma"] ** 2 + h_d @ P @ h_d
     x_ref, P_ref, _, _ = joseph_reference(x, P, h_z[None, :], np.array([s - h @ x + h_z @ x]),
                                  np.array([[r]]))
-    x_next, P_next, *_ = f(x, P, pkt, n2, params(range_deck_radius=1e30), 1.0)
+    x_next, P_next, *_ = f(x, P, pkt, n2, params(**ANYWHERE), 1.0)
     np.testing.assert_allclose(col(x_next), x_ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(np.array(P_next), P_ref, rtol=1e-12, atol=1e-14)
 
 
 def test_a_range_whose_beam_misses_the_deck_is_not_fused():
-    """(E12): the beam's predicted deck point ``p_r - h b3_E`` (a level deck, a vertical
-    beam: ``(x, y, 0)`` of ``p_r``) beyond ``range_deck_radius`` of the pad makes the
-    range invalid (it would measure the ground); within it, the range is fused."""
+    """(E12a): the beam's predicted deck point ``p_r - h b3_E`` (a level deck, a vertical
+    beam: ``(x, y, 0)`` of ``p_r``) must lie within ``range_deck_radius`` of the pad by
+    ``range_deck_sigmas`` horizontal standard deviations, else the range is not fused
+    (it may measure the ground); within it, it is."""
     f = nav_update_function("range")
-    P = np.eye(N)
     n2 = np.array([0.0, 0.0, 1.0])
     pkt = RANGE.pack(dict(fresh=1.0, tau=0.0, s=2.0, b3_E=n2))
-    for x_off, fused in ((0.3, 1.0), (0.4, 0.0)):       # |(x_off, 0.4)| = 0.5, 0.566
-        x = np.zeros(N)
+    # |(x_off, 0.4)| + 2 sqrt(2 var): 0.5 + 0.028 = 0.528, 0.566 + 0.028, 0.5 + 2.83
+    for x_off, var, fused in ((0.3, 1e-4, 1.0), (0.4, 1e-4, 0.0), (0.3, 1.0, 0.0)):
+        x, P = np.zeros(N), np.eye(N) * var
         x[sl("p_r")] = [x_off, 0.4, 2.0]
-        x_next, P_next, *_, ok = f(x, P, pkt, n2, params(range_deck_radius=0.55), 1.0)
+        p = params(range_deck_radius=0.55, range_deck_sigmas=2.0)
+        x_next, P_next, *_, ok = f(x, P, pkt, n2, p, 1.0)
         assert float(ok) == fused
         assert np.array_equal(np.array(P_next), P) == (fused == 0.0)

@@ -160,7 +160,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     g=9.8, q_acc=[0.02] * 3, q_at=[0.1] * 3, q_b=[0.001] * 3, q_ab=[1e-3] * 3,
     vision_sigma0=0.1, vision_k_range=0.02,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
-    range_sigma=0.05, range_min_cos=0.7, range_deck_radius=0.5,
+    range_sigma=0.05, range_min_cos=0.7, range_deck_radius=0.5, range_deck_sigmas=2.0,
     datalink_v_sigma=[0.1] * 3, datalink_a_sigma=[0.3] * 3,
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     **{f"max_age_{s}": 0.02 for s in SENSORS},
@@ -188,7 +188,9 @@ def estimator_params() -> Layout:
         Field("range_sigma", 1, "m", "range finder noise"),
         Field("range_min_cos", 1, "-", "smallest n2 . b3_E of a usable range (E12)"),
         Field("range_deck_radius", 1, "m", "largest distance from the pad centre of the "
-              "beam's predicted deck point of a usable range (E12)"),
+              "beam's predicted deck point of a usable range (E12a)"),
+        Field("range_deck_sigmas", 1, "-", "standard deviations of the horizontal position "
+              "the beam's deck point must lie within range_deck_radius by (E12a)"),
         _vec3("datalink_v_sigma", "m/s", "broadcast pad velocity noise"),
         _vec3("datalink_a_sigma", "m/s^2", "broadcast pad acceleration noise"),
         *[Field(f"gate_{b.name}", 1, "-", f"NIS threshold of the {b.name} block (E8)")
@@ -298,9 +300,7 @@ def _model(block: Block, nav, pkt, n2, p):
         cos_b = n2.T @ pkt["b3_E"]
         steep = cos_b >= p["range_min_cos"]
         h = (n2.T @ nav["p_r"]) / select(steep, cos_b, 1)
-        hit = nav["p_r"] - h * pkt["b3_E"]               # the beam's predicted deck point
-        on_deck = ca.sumsqr(hit) <= p["range_deck_radius"] ** 2
-        return z, h, p["range_sigma"] ** 2, ca.logic_and(steep, on_deck)
+        return z, h, p["range_sigma"] ** 2, steep
     h, sigma = {                                                             # (E11), (E13)
         "gnss_rel": (-nav["p_r"] + nav["b"], p["gnss_rel_sigma"]),
         "gnss_v1": (nav["v1"], p["gnss_v1_sigma"]),
@@ -359,6 +359,18 @@ def _project_row(h, P, pattern: CovariancePattern, home: int):
     return ca.sparsify(kept), dropped.T @ P @ dropped
 
 
+def _beam_on_deck(x, P, h, pkt, p):
+    """1 when the range's beam surely meets the deck (E12a): its predicted deck point
+    ``p_r - h b3_E`` lies within ``range_deck_radius`` of the pad centre by
+    ``range_deck_sigmas`` standard deviations of the horizontal relative position; a
+    beam that may miss the deck measures the ground beside it."""
+    nav = NAV.unpack(x)
+    i = NAV.slice("p_r").start
+    spread = ca.sqrt(ca.fmax(P[i, i] + P[i + 1, i + 1], 0))
+    hit = ca.norm_2(nav["p_r"] - h * RANGE.unpack(pkt)["b3_E"])
+    return hit + p["range_deck_sigmas"] * spread <= p["range_deck_radius"]
+
+
 def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePattern):
     """Gate one block, then fuse it by scalar Joseph updates.
 
@@ -370,6 +382,8 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
     block, model = _block(name), measurement_model_function(name)
     p = estimator_params().unpack(p_est)
     z, h, H, r, valid = model(x, pkt, n2, p_est)
+    if name == "range":
+        valid = ca.logic_and(valid, _beam_on_deck(x, P, h, pkt, p))
     home = NAV.slice("p_r").start + 2                  # the range's p_r_z (E9a)
     rows, r_eff = [], []
     for i in range(block.dim):

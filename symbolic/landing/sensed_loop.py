@@ -126,6 +126,8 @@ SENSED_RECORDED = Layout("rec_sensed", (
           elements=tuple(f"nis_{b.name}" for b in BLOCKS)),
     Field("fused", len(BLOCKS), "0/1", "each block fused this step",
           elements=tuple(f"fused_{b.name}" for b in BLOCKS)),
+    *(f for f in estimator_diagnostics().fields
+      if f.name in ("n_fused", "n_rejected", "n_discarded", "n_dropped")),
 ), "the landing step's signals, the navigation estimate and the filter's health")
 
 
@@ -228,7 +230,8 @@ def landing_sensed_loop(l: int) -> LoopModel:
     _, xgm_next, rec, res = landing_flight_step(l, y, cs, ps)
     m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
-    rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"])
+    rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
+                     d["n_rejected"], d["n_discarded"], d["n_dropped"])
     controller = ca.Function(
         "controller", [xp, xc, pc, first, t, uh, w, pp, n],
         [ca.vertcat(xgm_next, nav_next, imu_now, *lines), res["F_cmd"], rec, res["tilt"]],

@@ -17,6 +17,7 @@ from quadland_symbolic.landing.relative import (
 )
 
 __all__ = ["TOUCHDOWN_LIMITS", "TouchdownReport", "touchdown_report", "landing_summary",
+           "false_touchdown", "navigation_summary", "CONTACT_GAP",
            "LANDING_METRICS", "landing_run_metrics", "touchdown_limits"]
 
 
@@ -73,18 +74,25 @@ class TouchdownReport:
         return dataclasses.asdict(self)
 
 
+#: m: a true gear gap this small is contact (the simulator locates the touchdown's zero
+#: crossing to far below it; the ride after it keeps the gap at zero).
+CONTACT_GAP = 1e-6
+
+
 def touchdown_report(result: SimulationResult) -> TouchdownReport:
     """The touchdown's figures, read at the touchdown row of a landing's result.
 
-    The touchdown row is the first of phase 3 (``quadland_symbolic.landing.guidance.TOUCHDOWN``),
-    at the instant the gear met the deck; the figures are
+    The touchdown row is the first of phase 3 (``quadland_symbolic.landing.guidance.TOUCHDOWN``)
+    whose true gear gap is closed (within :data:`CONTACT_GAP` m), the instant the gear met
+    the deck (a flight code that declared touchdown above the deck, on its estimate, is
+    :func:`false_touchdown`'s); the figures are
     ``quadland_symbolic.landing.relative.touchdown_figures`` of its relative position
     and velocity and both attitudes (the generated C example computes them
     with the same function).
     """
     g = result.scenario.data["landing"]
     limits = {k: g[k] for k in TOUCHDOWN_LIMITS}
-    rows = np.flatnonzero(result["phase"] == TOUCHDOWN)
+    rows = np.flatnonzero((result["phase"] == TOUCHDOWN) & (result["gear_gap"] <= CONTACT_GAP))
     if rows.size == 0:
         aborts = int(result["aborts"][-1]) if len(result["t"]) else 0
         return TouchdownReport(False, None, None, None, None, None, aborts, False, limits)
@@ -115,10 +123,64 @@ def landing_summary(result: SimulationResult) -> dict:
         rows = np.flatnonzero(result["phase"] == number)
         phases[name] = float(t[rows[0]]) if rows.size else None
     rotors = np.vstack([result[f"F_{i}"] for i in range(1, 5)])
-    return {"landing": touchdown_report(result).to_dict(), "phases": phases,
-            "rotors": {"min": float(rotors.min()) if rotors.size else None,
-                       "max": float(rotors.max()) if rotors.size else None,
-                       "F_max": rotor_force_max(result.scenario)}}
+    out = {"landing": touchdown_report(result).to_dict(), "phases": phases,
+           "rotors": {"min": float(rotors.min()) if rotors.size else None,
+                      "max": float(rotors.max()) if rotors.size else None,
+                      "F_max": rotor_force_max(result.scenario)}}
+    if "x_e_hat" in result:
+        out["navigation"] = navigation_summary(result)
+    return out
+
+
+def false_touchdown(result: SimulationResult) -> float | None:
+    """The true gear gap (m) where the flight code declared touchdown before the gear met
+    the deck (its guidance entered the touchdown phase with the gap still open), or None.
+
+    The simulator's own touchdown is the gap's zero crossing: its row and the ride after
+    it are the touchdown phase by construction, so only rows before it can be false.
+    """
+    report = touchdown_report(result)
+    flying = result["t"] < report.time if report.touchdown else np.ones(len(result["t"]), bool)
+    early = np.flatnonzero(flying & (result["phase"] >= TOUCHDOWN))
+    return float(result["gear_gap"][early[0]]) if early.size else None
+
+
+def navigation_summary(result: SimulationResult) -> dict:
+    """summary.json's ``navigation`` object of a landing flown on its sensors.
+
+    The estimation error of the relative position and velocity (deck frame; the filter's
+    estimate at each output row against the truth) as an rms over the flight and at
+    touchdown, m and m/s; each measurement block's fused and rejected counts and each
+    sensor's discarded and dropped packets (the filter's counters at the end of the
+    flight); the false touchdown (:func:`false_touchdown`).
+    """
+    report = touchdown_report(result)
+    t = result["t"]
+    rows = np.flatnonzero(t <= report.time) if report.touchdown else np.arange(len(t))
+    err = {}
+    for what, true, est in (("position", ("x_e", "y_e", "z_e"),
+                             ("x_e_hat", "y_e_hat", "z_e_hat")),
+                            ("velocity", ("dx_e", "dy_e", "dz_e"),
+                             ("vx_e_hat", "vy_e_hat", "vz_e_hat"))):
+        e = np.column_stack([result[b][rows] - result[a][rows] for a, b in zip(true, est, strict=True)])
+        norm = np.linalg.norm(e, axis=1)
+        err[what] = {"rms": float(np.sqrt(np.mean(norm ** 2))) if norm.size else None,
+                     "at_touchdown": float(norm[-1]) if report.touchdown and norm.size
+                     else None}
+    last = rows[-1] if rows.size else None
+
+    def counts(prefix):
+        names = [n for n in result if n.startswith(prefix)]
+        return {n.removeprefix(prefix): (int(result[n][last]) if last is not None else 0)
+                for n in names}
+
+    gap = false_touchdown(result)
+    return {"error": err,
+            "blocks": {b: {"fused": f, "rejected": r} for (b, f), r in zip(
+                counts("n_fused_").items(), counts("n_rejected_").values(), strict=True)},
+            "sensors": {s: {"discarded": d, "dropped": p} for (s, d), p in zip(
+                counts("n_discarded_").items(), counts("n_dropped_").values(), strict=True)},
+            "false_touchdown": gap is not None, "false_touchdown_gap": gap}
 
 
 #: The metrics of a landing run, in the order of runs.csv's columns; the first
@@ -135,6 +197,7 @@ LANDING_METRICS = (
     Metric("touchdown_time", "s", "when the gear met the deck"),
     Metric("aborts", "-", "descents aborted before the touchdown"),
     Metric("rotor_max", "N", "largest rotor force"),
+    Metric("false_touchdown", "-", "1 when the flight code declared touchdown above the deck"),
 )
 
 
@@ -145,6 +208,7 @@ def landing_run_metrics(result) -> dict[str, float | None]:
     return {"sink_rate": report.sink_rate, "offset": report.offset,
             "relative_speed": report.relative_speed, "tilt_deg": report.tilt_deg,
             "touchdown_time": report.time, "aborts": report.aborts,
-            "rotor_max": float(rotors.max()) if rotors.size else None}
+            "rotor_max": float(rotors.max()) if rotors.size else None,
+            "false_touchdown": float(false_touchdown(result) is not None)}
 
 
