@@ -162,7 +162,8 @@ def navigation_summary(result: SimulationResult) -> dict:
                              ("x_e_hat", "y_e_hat", "z_e_hat")),
                             ("velocity", ("dx_e", "dy_e", "dz_e"),
                              ("vx_e_hat", "vy_e_hat", "vz_e_hat"))):
-        e = np.column_stack([result[b][rows] - result[a][rows] for a, b in zip(true, est, strict=True)])
+        e = np.column_stack([result[b][rows] - result[a][rows]
+                             for a, b in zip(true, est, strict=True)])
         norm = np.linalg.norm(e, axis=1)
         err[what] = {"rms": float(np.sqrt(np.mean(norm ** 2))) if norm.size else None,
                      "at_touchdown": float(norm[-1]) if report.touchdown and norm.size
