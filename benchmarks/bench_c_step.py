@@ -7,14 +7,15 @@ as ``generated/``; the landing's for the highway scenario with l = 100,
 ``quadland codegen --scenario highway --set rbf.nodes=100``) with the
 system's ``cc`` at -O2 and reports:
 
-* time per step (l = 100) of ``bench N paper`` (the paper's control step)
-  and ``bench N landing`` (the landing's guidance and landing step, one
-  control period of its flight code), double and float, the best of
-  several runs;
+* time per step (l = 100) of ``bench N paper`` (the paper's control step),
+  ``bench N landing`` (the landing's guidance and landing step, one
+  control period of its flight code) and ``bench N estimator`` (the
+  navigation filter's step at its flight sizes, every sensor due), double
+  and float, the best of several runs;
 * instructions per step from valgrind's callgrind (the difference of two
   run lengths, so start-up cost cancels), when valgrind is installed,
   against the double builds' budgets of 20,000 (paper) and 30,000
-  (landing);
+  (landing; the filter's 250 Hz period, issue 17);
 * the cost of one call from Python: the compiled step through ctypes and
   the CasADi function;
 * the float build's deviation from the double one over the paper's
@@ -49,7 +50,7 @@ from quadland_symbolic.parameters import VEHICLE
 
 ANGLES = ("phi_e", "theta_e", "psi_e")
 #: Instructions one double step (l = 100) may cost at -O2, by controller (docs/codegen.md).
-BUDGET = {"paper": 20_000, "landing": 30_000}
+BUDGET = {"paper": 20_000, "landing": 30_000, "estimator": 30_000}
 #: The landing's node count for the budget (the shipped highway flies l = 10).
 LANDING_L = 100
 
@@ -156,7 +157,7 @@ def main() -> None:
     l = model_values(quadland.load_scenario("paper")).l
     with tempfile.TemporaryDirectory() as tmp:
         build = _build(Path(tmp))
-        for which, nodes in (("paper", l), ("landing", LANDING_L)):
+        for which, nodes in (("paper", l), ("landing", LANDING_L), ("estimator", "-")):
             for name in ("bench", "bench_float"):
                 ns = _time_per_step(build / name, args.steps, args.repeats, which)
                 ir = _instructions(build / name, 1000, which)

@@ -12,8 +12,10 @@ Measured:
   compiled from CasADi's own C (``Function.generate``, ``gcc -O2``, double),
   counted by ``valgrind --tool=callgrind`` on a filter that is running (a
   handover state, packets due for every sensor). This is CasADi's raw C, not
-  the project's generated tree; the budget of issue 17 (30,000 instructions
-  per 250 Hz period in double) is measured there.
+  the project's generated tree: the flight C (``generated/``'s
+  ``ql_estimator_step``, its checks included) is measured against the budget of
+  issue 17 (30,000 instructions per 250 Hz period in double) by
+  ``benchmarks/bench_c_step.py`` (``bench N estimator``).
 
 Run from the repository root::
 

@@ -281,7 +281,8 @@ def fifo_push_pop(slots, count, record, push, pop_if):
     The FIFO is the columns of ``slots`` (``rec x depth``), oldest first, of
     which the first ``count`` are in use. The pushed record may be popped at
     once; one that finds the FIFO full after the pop is dropped. Every slot is
-    written by selection, with no branch.
+    written by selection, with no branch; a record that is not pushed never
+    reaches a slot (a pop then empties the last one to zeros).
 
     Parameters
     ----------
@@ -302,9 +303,11 @@ def fifo_push_pop(slots, count, record, push, pop_if):
         ``slots`` and ``count`` after both.
     """
     depth = slots.shape[1]
-    # one slot more than stored: the record lands at position ``count``
+    # one slot more than stored: the record lands at position ``count``. The extra
+    # slot is zero unless pushed: a record that is not pushed (not fresh, not
+    # finite) must not reach the memory through the shift, even beyond ``count``.
     ext = [select(ca.logic_and(push, count == i), record, slots[:, i]) for i in range(depth)]
-    ext.append(record)
+    ext.append(select(push, record, ca.DM.zeros(record.shape)))
     count1 = count + push
     head = ext[0]
     pop = pop_if(head, count1 > 0)

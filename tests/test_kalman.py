@@ -73,3 +73,23 @@ def test_joseph_updates_keep_an_ill_conditioned_covariance_positive(rng):
         ev = np.linalg.eigvalsh(P)
         worst = min(worst, ev.min() / ev.max())
     assert worst > 0
+
+
+def test_a_record_not_pushed_never_reaches_a_fifo_slot():
+    """A pop shifts the FIFO; the slot it empties is zero, not the record that was not
+    pushed (a NaN in a packet that is not fresh stays out of the memory)."""
+    from quadland_symbolic.kalman import fifo_push_pop
+
+    slots, count = ca.SX.sym("slots", 2, 3), ca.SX.sym("count")
+    record, push, due = ca.SX.sym("record", 2), ca.SX.sym("push"), ca.SX.sym("due")
+    f = fifo_push_pop(slots, count, record, push, lambda head, nonempty: ca.logic_and(
+        nonempty, due > 0.5))
+    fn = ca.Function("fifo", [slots, count, record, push, due], [f["slots"], f["count"]])
+    full = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    for n in (1, 3):                       # part full, full: the head pops
+        out, c = fn(full, n, [np.nan, np.inf], 0, 1)
+        np.testing.assert_array_equal(np.asarray(out), [[2.0, 3.0, 0.0], [5.0, 6.0, 0.0]])
+        assert float(c) == n - 1
+    out, c = fn(full, 3, [7.0, 8.0], 1, 1)  # full, pushed and popped: the record lands last
+    np.testing.assert_array_equal(np.asarray(out), [[2.0, 3.0, 7.0], [5.0, 6.0, 8.0]])
+    assert float(c) == 3

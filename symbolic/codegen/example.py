@@ -159,7 +159,7 @@ def generate_example(defaults: Defaults, landing: LandingDefaults) -> dict[str, 
 
     ``fly.c`` flies the paper's scenario (``defaults``, ``scenario.h``),
     ``land.c`` the landing scenario (``landing``, ``land_scenario.h``),
-    ``bench.c`` times either step. The sources are precision-independent
+    ``bench.c`` times either step or the navigation filter. The sources are precision-independent
     (``ql_real``; the float header spells its names ``ql_`` too when it is
     the only build included); the Makefile builds them against both the
     double (``../``) and the float (``../float/``) files.
@@ -168,7 +168,8 @@ def generate_example(defaults: Defaults, landing: LandingDefaults) -> dict[str, 
     paper = example_context(defaults)
     paper.update(land_scenario=landing.scenario, common_sources=[status],
                  step_sources=[f for f in paper["step_sources"] if f != status],
-                 land_sources=[f for f in c_sources(LAND_MODEL) if f != status])
+                 land_sources=[f for f in c_sources(LAND_MODEL) if f != status],
+                 estimator_sources=[f for f in c_sources(("estimator_step",)) if f != status])
     land = dict(common_context(None), scenario=landing.scenario, **land_context(landing))
     files = {f"example/{name}": render(f"example/{name}.jinja", **paper)
              for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}

@@ -32,8 +32,18 @@ __all__ = ["unit_text", "member_context", "struct_context", "paper_sizes", "vect
 
 
 def unit_text(f: Field) -> str:
+    """The unit of a member's comment: one unit, each entry's, or the distinct ones.
+
+    A long array of mixed units (a FIFO of records, a stored covariance) names
+    its distinct units in order, or says they are per entry when they are many.
+    """
     if isinstance(f.unit, tuple):
-        return f.unit[0] if len(set(f.unit)) == 1 else ", ".join(f.unit)
+        if len(set(f.unit)) == 1:
+            return f.unit[0]
+        if len(f.unit) <= 6:
+            return ", ".join(f.unit)
+        distinct = list(dict.fromkeys(f.unit))
+        return ", ".join(distinct) if len(distinct) <= 4 else "per entry (see its layout)"
     return f.unit
 
 

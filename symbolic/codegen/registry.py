@@ -18,6 +18,13 @@ from quadland_symbolic.landing.controller import (
     landing_guidance_function,
     landing_step_function,
 )
+from quadland_symbolic.landing.estimator import (
+    FLIGHT_COUPLING,
+    FLIGHT_DEPTH,
+    N_HIST,
+    estimator_init_function,
+    estimator_step_function,
+)
 from quadland_symbolic.landing.loop import gear_gap_function
 from quadland_symbolic.landing.plant import (
     loop_plant_function,
@@ -28,7 +35,12 @@ from quadland_symbolic.landing.sensors import measurement_function
 from quadland_symbolic.landing.signals import landing_signals_function
 from quadland_symbolic.vehicle import vehicle_function
 
-__all__ = ["GeneratedFunction", "FUNCTIONS", "BY_NAME", "API_FILE", "c_sources"]
+__all__ = ["GeneratedFunction", "ESTIMATOR_SIZES", "FUNCTIONS", "BY_NAME", "API_FILE",
+           "c_sources"]
+
+#: The navigation filter's sizes as flown: the horizon, the FIFO depths and the
+#: covariance coupling (quadland_symbolic.landing.estimator).
+ESTIMATOR_SIZES = (("n_hist", N_HIST), ("depth", FLIGHT_DEPTH), ("coupling", FLIGHT_COUPLING))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,10 +63,14 @@ class GeneratedFunction:
     doc : str
         Comment of the wrapper in its header (``{ql}``/``{QL}`` stand for
         the build's prefixes).
-    part : {"paper", "landing"}
+    part : {"paper", "landing", "estimator"}
         Which API it belongs to: ``quadland.h`` (the paper's control step,
-        ``l`` of the paper's scenario) or ``quadland_landing.h`` (the landing
-        step and guidance, ``l`` of the landing scenario).
+        ``l`` of the paper's scenario), ``quadland_landing.h`` (the landing
+        step and guidance, ``l`` of the landing scenario) or
+        ``quadland_estimator.h`` (the navigation filter).
+    sizes : tuple of (str, object)
+        Keyword arguments of the builder besides ``l`` (the filter's sizes),
+        which the banner names.
     """
 
     name: str
@@ -63,6 +79,7 @@ class GeneratedFunction:
     wrapper: str | None = None
     doc: str = ""
     part: str = "paper"
+    sizes: tuple[tuple[str, object], ...] = ()
 
     @property
     def source(self) -> str:
@@ -71,14 +88,16 @@ class GeneratedFunction:
 
     def function(self, l: int) -> ca.Function:
         """The ``casadi.Function`` for ``l`` RBF nodes."""
-        fn = self.builder(l) if self.per_node_count else self.builder()
+        kw = dict(self.sizes)
+        fn = self.builder(l, **kw) if self.per_node_count else self.builder(**kw)
         if fn.name() != self.name:
             raise ValueError(f"{self.source} builds {fn.name()!r}, registered as {self.name!r}")
         return fn
 
     def origin(self, l: int) -> str:
         """The builder's call, as the banner names it."""
-        return f"{self.source}(l={l})" if self.per_node_count else f"{self.source}()"
+        args = ([f"l={l}"] if self.per_node_count else []) + [f"{k}={v!r}" for k, v in self.sizes]
+        return f"{self.source}({', '.join(args)})"
 
     def c_name(self, config: CodegenConfig) -> str:
         """Its C symbol in a build: ``ql_casadi_control_step``."""
@@ -133,6 +152,10 @@ FUNCTIONS = (
          "Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a\n"
          " * contact."),
     )),
+    *(GeneratedFunction(name, builder, per_node_count=False, part="estimator",
+                        sizes=ESTIMATOR_SIZES)
+      for name, builder in (("estimator_step", estimator_step_function),
+                            ("estimator_init", estimator_init_function))),
 )
 
 
@@ -140,15 +163,17 @@ BY_NAME = {f.name: f for f in FUNCTIONS}
 
 
 #: The readable API's source of each part, which calls its functions without a wrapper.
-API_FILE = {"paper": "quadland.c", "landing": "quadland_landing.c"}
+API_FILE = {"paper": "quadland.c", "landing": "quadland_landing.c",
+            "estimator": "quadland_estimator.c"}
 
 
 def c_sources(functions=("control_step",)) -> tuple[str, ...]:
     """The ``.c`` files that link the API of ``functions`` (names in :data:`FUNCTIONS`).
 
-    For each part (``quadland.h``, ``quadland_landing.h``) a function belongs
-    to (the paper's without any): its API file and the functions it calls
-    (the paper's control step; the landing step and guidance); each other
+    For each part (``quadland.h``, ``quadland_landing.h``,
+    ``quadland_estimator.h``) a function belongs to (the paper's without any):
+    its API file and the functions it calls (the paper's control step; the
+    landing step and guidance; the filter's step and init); each other
     function with its wrapper's file; ``quadland_status.c`` always.
     """
     unknown = set(functions) - set(BY_NAME)

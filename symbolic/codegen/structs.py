@@ -56,7 +56,7 @@ __all__ = ["CStruct", "Range", "PARAM_RANGES", "ParamRange", "params_layout", "p
            "adaptive_state_layout", "output_layout", "api_structs", "LANDING_PARAM_RANGES",
            "GUIDANCE_PARAM_RANGES", "MAX_ABORTS", "landing_params_layout",
            "landing_output_layout", "guidance_state_layout", "landing_param_ranges",
-           "guidance_param_ranges", "landing_api_structs"]
+           "guidance_param_ranges", "landing_api_structs", "member_ranges"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -221,7 +221,7 @@ class ParamRange:
     at_least: int | None = None
 
 
-def _ranges(layout: Layout, table) -> tuple[ParamRange, ...]:
+def member_ranges(layout: Layout, table) -> tuple[ParamRange, ...]:
     """Every real member of ``layout`` in order, with its range in ``table``."""
     rows, offsets = [], {}
 
@@ -262,7 +262,7 @@ def param_ranges(l: int) -> tuple[ParamRange, ...]:
         When a member has no entry in :data:`PARAM_RANGES` or an entry
         names no member.
     """
-    return _ranges(params_layout(l), PARAM_RANGES)
+    return member_ranges(params_layout(l), PARAM_RANGES)
 
 
 @functools.cache
@@ -404,13 +404,13 @@ def guidance_state_layout() -> Layout:
 @functools.cache
 def landing_param_ranges(l: int) -> tuple[ParamRange, ...]:
     """Every real member of ``ql_landing_params`` in order, with its range."""
-    return _ranges(landing_params_layout(l), LANDING_PARAM_RANGES)
+    return member_ranges(landing_params_layout(l), LANDING_PARAM_RANGES)
 
 
 @functools.cache
 def guidance_param_ranges() -> tuple[ParamRange, ...]:
     """Every member of ``ql_guidance_params`` in order, with its range."""
-    return _ranges(GUIDANCE_PARAMS, GUIDANCE_PARAM_RANGES)
+    return member_ranges(GUIDANCE_PARAMS, GUIDANCE_PARAM_RANGES)
 
 
 @functools.cache

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from quadland_symbolic.codegen.config import CodegenConfig, Defaults, LandingDefaults
+from quadland_symbolic.codegen.estimator_api import generate_estimator
 from quadland_symbolic.codegen.example import generate_example
 from quadland_symbolic.codegen.landing_api import generate_landing
 from quadland_symbolic.codegen.paper_api import generate
@@ -21,7 +22,9 @@ def generate_tree(parts: Mapping[str, Defaults | LandingDefaults]) -> dict[str, 
 
     ``parts`` gives each of :data:`TREE_PARTS` its C defaults: the paper's
     step (``"paper"``, :class:`Defaults`) and the landing step
-    (``"landing"``, :class:`LandingDefaults`). The tree holds the double
+    (``"landing"``, :class:`LandingDefaults`); the navigation filter
+    (``quadland_estimator.h``) has no scenario values and is always there. The
+    tree holds the double
     build at the top, the float build in ``float/``, the example in
     ``example/`` and a ``.gitignore`` of the example's build outputs.
 
@@ -36,7 +39,8 @@ def generate_tree(parts: Mapping[str, Defaults | LandingDefaults]) -> dict[str, 
     defaults, landing = parts["paper"], parts["landing"]
     files = {}
     for config, folder in ((CodegenConfig("double"), ""), (CodegenConfig("float"), "float/")):
-        built = {**generate(defaults, config), **generate_landing(landing, config)}
+        built = {**generate(defaults, config), **generate_landing(landing, config),
+                 **generate_estimator(config)}
         files.update({folder + k: v for k, v in built.items()})
     files.update(generate_example(defaults, landing))
     files[".gitignore"] = render("gitignore.jinja", **common_context(None))

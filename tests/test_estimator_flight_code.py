@@ -1,0 +1,326 @@
+"""The navigation filter's generated C (``quadland_estimator.h``) against its CasADi
+functions and its documented contract (docs/codegen.md, "The navigation filter's API").
+
+The double build's ``ql_estimator_step`` equals ``estimator_step_function(N_HIST,
+FLIGHT_DEPTH, FLIGHT_COUPLING)`` evaluated by CasADi bit for bit: the C is CasADi's
+own code of the same expression graph, compiled without contraction into fused
+multiply-adds (``-std=c99``, x86-64's baseline has none), and the only libm calls
+(``sin``, ``cos``) are the ones CasADi's virtual machine makes. The flights below
+carry packets that are due, late (fused after the horizon passed them), too old
+(discarded), rejected by the gate, from the future or not finite (dropped), and
+garbage in packets that are not fresh.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+
+import numpy as np
+import pytest
+from estimator_c import Call, load
+from reference import have_compiler, rotation
+
+from quadland_symbolic.codegen import STATUS_CODES
+from quadland_symbolic.codegen.estimator_api import flight_memory
+from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
+from quadland_symbolic.landing.estimator import (
+    FLIGHT_COUPLING,
+    FLIGHT_DEPTH,
+    N_HIST,
+    estimator_diagnostics,
+    estimator_init_function,
+    estimator_step_function,
+)
+from quadland_symbolic.landing.navigation import (
+    BLOCKS,
+    ESTIMATOR_DEFAULTS,
+    NAV,
+    NAV_PACKETS,
+    SENSORS,
+    estimator_params,
+)
+
+pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
+
+STATUS = {name: value for name, value, _ in STATUS_CODES}
+DT = 0.004
+MEM = flight_memory()
+DIAG = estimator_diagnostics()
+
+
+def _bits(v):
+    return np.asarray(v, dtype=np.float64).view(np.uint64)
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_defaults_are_the_symbolic_defaults(precision):
+    c = Call(load(precision))
+    want = estimator_params().pack(dict(ESTIMATOR_DEFAULTS)).astype(c.api.dtype)
+    np.testing.assert_array_equal(c.v["params"], want)
+    assert c.check() == (STATUS["QL_OK"], None)
+
+
+def test_init_equals_its_casadi_function_and_refuses_bad_input():
+    c = Call(load("double"))
+    f = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    rng = np.random.default_rng(7)
+    x0, P0, deck0 = rng.normal(size=18), rng.uniform(0, 2, 18), rng.normal(size=9) * 0.1
+    assert c.init(x0, P0, deck0, 12.5) == STATUS["QL_OK"]
+    want = np.asarray(f(x0, P0, deck0, 12.5)).ravel()
+    np.testing.assert_array_equal(_bits(c.v["mem"]), _bits(want))
+    # the handover, by hand: the state, the variances on the diagonal, the horizon at t0
+    mem = MEM.unpack(c.v["mem"].copy())
+    np.testing.assert_array_equal(mem["x_h"], x0)
+    assert mem["t_h"] == mem["deck_tau"] == 12.5 and not np.any(mem["hist"])
+    assert sorted(mem["P_h"][mem["P_h"] != 0]) == sorted(P0)
+    assert c.init(x0, P0, None, 1.0) == STATUS["QL_OK"]              # NULL deck0: zeros
+    np.testing.assert_array_equal(MEM.unpack(c.v["mem"].copy())["deck_eta2"], 0.0)
+    before = bytes(c.s["mem"])
+    bad_P0 = P0.copy()
+    bad_P0[4] = -1e-9
+    nan_x0 = x0.copy()
+    nan_x0[3] = math.nan
+    assert c.init(x0, bad_P0, deck0, 1.0) == STATUS["QL_ERR_INVALID"]
+    assert c.init(nan_x0, P0, deck0, 1.0) == STATUS["QL_ERR_NONFINITE_INPUT"]
+    assert c.init(x0, P0, deck0, math.inf) == STATUS["QL_ERR_NONFINITE_INPUT"]
+    assert c.api.lib.ql_estimator_init(None, None, None, 0.0,
+                                       ctypes.byref(c.s["mem"])) == STATUS["QL_ERR_NULL"]
+    assert bytes(c.s["mem"]) == before
+
+
+# --- a flight with every kind of packet ---------------------------------------
+
+#: The truth: constant velocities, the pad's acceleration zero, a level deck turning.
+P_R0, V1, V_T, BIAS = (np.array(v) for v in ([0.3, -0.2, 3.0], [0.2, -0.1, -0.3],
+                                             [0.5, 0.1, 0.0], [0.1, 0.2, -0.1]))
+ETA_HAT, YAW_RATE, G = np.array([0.02, -0.01, 0.5]), 0.05, ESTIMATOR_DEFAULTS["g"]
+MAX_AGE = ESTIMATOR_DEFAULTS["max_age_vision"]
+
+
+def _truth(sensor, tau, rng, outlier):
+    """A packet's values at ``tau`` s after the handover."""
+    p_r = P_R0 + (V1 - V_T) * tau
+    if sensor == "vision":
+        v = dict(r_E=-p_r + rng.normal(size=3) * 0.05)
+    elif sensor == "gnss":
+        v = dict(rel=-p_r + BIAS + rng.normal(size=3) * 0.2, v1=V1 + rng.normal(size=3) * 0.1,
+                 vt=V_T + rng.normal(size=3) * 0.1)
+    elif sensor == "range":
+        b3 = rotation(ETA_HAT)[:, 2]
+        v = dict(s=p_r[2] / b3[2] + rng.normal() * 0.02, b3_E=b3)
+    else:
+        v = dict(eta2=[0.0, 0.0, 0.3 + YAW_RATE * tau], v2E=V_T, a2E=np.zeros(3),
+                 w2E=[0.0, 0.0, YAW_RATE], w2E_dot=np.zeros(3))
+    if outlier:                                        # 100 m or m/s off: the gate rejects it
+        key = next(iter(v))
+        v[key] = np.asarray(v[key], dtype=float) + 100.0
+    return v
+
+
+def _packets(c, rng, t, t_h, t0, p_fresh=0.15):
+    """Each sensor's packet of this step: fresh or not, and of which kind."""
+    D = N_HIST * DT
+    for layout in NAV_PACKETS:
+        v = c.v[layout.name]
+        if rng.uniform() > p_fresh:          # not fresh: garbage the step must not read
+            v[:] = rng.choice((math.nan, math.inf, 1e30, -3.0), size=v.size)
+            v[0] = 0.0
+            continue
+        kind = rng.choice(("due", "due", "due", "late", "old", "future", "nan", "outlier"))
+        tau = {"due": t - rng.uniform(0, D - DT), "late": t_h - rng.uniform(0, MAX_AGE - DT),
+               "old": t_h - MAX_AGE - rng.uniform(2 * DT, 0.1),
+               "future": t + rng.uniform(DT, 0.1)}.get(kind, t - rng.uniform(0, D - DT))
+        values = _truth(layout.name, tau - t0, rng, kind == "outlier")
+        v[:] = layout.pack(dict(fresh=1.0, tau=tau, **values))
+        if kind == "nan":
+            v[rng.integers(2, v.size)] = math.nan
+        if layout.name == "range" and kind == "due":        # n2 . b3 small: an invalid range
+            v[layout.slice("b3_E")] = [1.0, 0.0, 0.1] if rng.uniform() < 0.1 else \
+                v[layout.slice("b3_E")]
+
+
+def _imu(c, rng):
+    c.v["imu"][0:3] = ETA_HAT
+    c.v["imu"][3:6] = rotation(ETA_HAT).T @ [0.0, 0.0, G] + rng.normal(size=3) * 0.05
+    c.v["imu"][6:9] = rng.normal(size=3) * 0.01
+    if rng.uniform() < 0.02:                  # a non-finite sample: counted, not an error
+        c.v["imu"][rng.integers(9)] = math.nan
+
+
+def _fly(c, rng, steps, t0, oracle=None):
+    """Run the C step; with an oracle, compare each step's results with it bit for bit."""
+    x0 = np.r_[P_R0, V1, V_T, np.zeros(9)] + rng.normal(size=18) * 0.05
+    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3]
+    assert c.init(x0, P0, [0, 0, 0.3, 0, 0, YAW_RATE, 0, 0, 0], t0) == STATUS["QL_OK"]
+    t, rows = t0, []
+    for _ in range(steps):
+        t += DT
+        t_h = float(c.v["mem"][MEM.slice("t_h")][0])
+        _packets(c, rng, t, t_h, t0)
+        _imu(c, rng)
+        args = [c.v[n].astype(float) for n in ("mem", "imu", *SENSORS, "params")]
+        assert c.step(DT, t) == STATUS["QL_OK"]
+        if oracle is not None:
+            mem_next, y, diag = (np.asarray(v).ravel() for v in oracle(*args, DT, t))
+            np.testing.assert_array_equal(_bits(c.v["mem"]), _bits(mem_next))
+            np.testing.assert_array_equal(_bits(c.v["y"]), _bits(y))
+            np.testing.assert_array_equal(_bits(c.v["diag"]), _bits(diag))
+        rows.append((c.v["y"].astype(float), c.v["diag"].astype(float), args[1]))
+    return rows
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [1, 2])
+def test_step_equals_its_casadi_function_bit_for_bit(seed):
+    c = Call(load("double"))
+    rng = np.random.default_rng(seed)
+    oracle = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    rows = _fly(c, rng, 4 * N_HIST, 7.0 + seed, oracle)
+    last = DIAG.unpack(rows[-1][1])
+    # every kind of packet happened (the counters are the filter's own, C equal to CasADi)
+    assert np.all(last["n_fused"] > 0) and np.all(last["n_discarded"] > 0)
+    assert np.all(last["n_dropped"] > 0) and last["n_imu_invalid"] > 0
+    assert last["n_rejected"][[b.name for b in BLOCKS].index("vision")] > 0
+    # the IMU's attitude and rates pass through; a NaN there is the IMU's, nothing else is
+    for y, d, imu in rows:
+        yy = LANDING_MEASUREMENT.unpack(y)
+        np.testing.assert_array_equal(_bits(yy["eta1"]), _bits(imu[0:3]))
+        np.testing.assert_array_equal(_bits(yy["Omega1"]), _bits(imu[6:9]))
+        others = np.r_[yy["p_e"], yy["v_e"], yy["eta2"], yy["v2E"], yy["a2E"], yy["w2E"]]
+        assert np.all(np.isfinite(others)) and np.all(np.isfinite(d))
+    # and the filter tracks the truth: within four of its own standard deviations
+    t_end = 7.0 + seed + 4 * N_HIST * DT
+    d = DIAG.unpack(rows[-1][1])
+    t_h = float(d["t_h"][0])
+    assert t_h == pytest.approx(t_end - (N_HIST + 1) * DT, abs=1e-9)   # before the prediction
+    x, sd = NAV.unpack(d["x_h"]), NAV.unpack(np.sqrt(d["P_diag"]))
+    truth = dict(p_r=P_R0 + (V1 - V_T) * (t_h - 7.0 - seed), v1=V1, v_t=V_T, b=BIAS)
+    for name, want in truth.items():
+        assert np.all(np.abs(x[name] - want) <= 4 * sd[name]), (name, x[name], want, sd[name])
+
+
+@pytest.mark.slow
+def test_float_build_flies_the_same_filter():
+    """The float build on the same inputs: the relative position within 1 mm of double's."""
+    out = {}
+    for precision in ("double", "float"):
+        c = Call(load(precision))
+        out[precision] = _fly(c, np.random.default_rng(3), 3 * N_HIST, 2.0)
+    for (yd, _, _), (yf, _, _) in zip(out["double"], out["float"], strict=True):
+        a, b = LANDING_MEASUREMENT.unpack(yd), LANDING_MEASUREMENT.unpack(yf)
+        np.testing.assert_allclose(b["p_e"], a["p_e"], atol=1e-3)
+        np.testing.assert_allclose(b["v_e"], a["v_e"], atol=1e-3)
+
+
+# --- errors -------------------------------------------------------------------
+
+def _running(c):
+    rng = np.random.default_rng(11)
+    _fly(c, rng, N_HIST + 5, 1.0)
+    return 1.0 + (N_HIST + 6) * DT
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_errors_leave_the_memory_untouched_and_the_outputs_zero(precision):
+    c = Call(load(precision))
+    t = _running(c)
+    count = MEM.slice("count_vision").start
+    cases = [("dt = 0", dict(dt=0.0), "QL_ERR_INVALID"),
+             ("dt < 0", dict(dt=-DT), "QL_ERR_INVALID"),
+             ("dt NaN", dict(dt=math.nan), "QL_ERR_NONFINITE_INPUT"),
+             ("t infinite", dict(t=math.inf), "QL_ERR_NONFINITE_INPUT"),
+             ("memory NaN", dict(mem=(MEM.slice("P_h").start + 4, math.nan)),
+              "QL_ERR_NONFINITE_INPUT"),
+             ("count not whole", dict(mem=(count, 2.5)), "QL_ERR_INVALID"),
+             ("count beyond depth", dict(mem=(count, FLIGHT_DEPTH[0] + 1)), "QL_ERR_INVALID"),
+             ("count negative", dict(mem=(count, -1.0)), "QL_ERR_INVALID"),
+             ("param NaN", dict(params=(0, math.nan)), "QL_ERR_NONFINITE_INPUT"),
+             ("param out of range", dict(params=(estimator_params().slice("range_sigma").start,
+                                                 0.0)), "QL_ERR_PARAM")]
+    for what, change, status in cases:
+        mem0, p0 = c.v["mem"].copy(), c.v["params"].copy()
+        for key in ("mem", "params"):
+            if key in change:
+                c.v[key][change[key][0]] = change[key][1]
+        before = bytes(c.s["mem"])
+        c.v["y"][:] = 5.0
+        c.v["diag"][:] = 5.0
+        got = c.step(change.get("dt", DT), change.get("t", t))
+        assert got == STATUS[status], what
+        assert bytes(c.s["mem"]) == before, what
+        assert not np.any(c.v["y"]) and not np.any(c.v["diag"]), what
+        c.v["mem"][:], c.v["params"][:] = mem0, p0
+    for name in Call.ARGS:
+        before = bytes(c.s["mem"])
+        assert c.step(DT, t, null=(name,)) == STATUS["QL_ERR_NULL"], name
+        assert bytes(c.s["mem"]) == before
+    assert c.step(DT, t) == STATUS["QL_OK"]
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_bad_packets_and_imu_are_counted_not_errors(precision):
+    c = Call(load(precision))
+    t = _running(c)
+    mem = MEM.unpack(c.v["mem"].astype(float))
+    c.v["gnss"][:] = np.r_[1.0, t - 0.1, [math.nan] * 9]           # not finite: dropped
+    c.v["vision"][:] = np.r_[1.0, t + 1.0, 0.0, 0.0, -3.0]         # from the future: dropped
+    c.v["range"][0] = c.v["datalink"][0] = 0.0
+    c.v["imu"][3] = math.inf
+    assert c.step(DT, t) == STATUS["QL_OK"]
+    d = DIAG.unpack(c.v["diag"].astype(float))
+    np.testing.assert_array_equal(d["dropped"], [1, 1, 0, 0])
+    np.testing.assert_array_equal(d["n_dropped"], mem["n_dropped"] + [1, 1, 0, 0])
+    assert d["imu_invalid"] == 1 and d["n_imu_invalid"] == mem["n_imu_invalid"] + 1
+    assert np.all(np.isfinite(c.v["diag"])) and np.all(np.isfinite(c.v["mem"]))
+
+
+# --- the parameter check ------------------------------------------------------
+
+def _pos(v):
+    return v > 0
+
+
+def _nonneg(v):
+    return v >= 0
+
+
+#: The documented range of every member of ql_estimator_params (docs/codegen.md),
+#: written out here, not read from quadland_symbolic.codegen.estimator_api.
+DOCUMENTED = {
+    "g": _pos, "q_acc": _pos, "q_at": _pos, "q_b": _pos, "q_ab": _pos,
+    "vision_sigma0": _pos, "vision_k_range": _nonneg, "gnss_rel_sigma": _pos,
+    "gnss_v1_sigma": _pos, "gnss_vt_sigma": _pos, "range_sigma": _pos,
+    "range_min_cos": lambda v: (v > 0) & (v <= 1), "datalink_v_sigma": _pos,
+    "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS},
+    **{f"max_age_{s}": _nonneg for s in SENSORS}, "deck_extrapolation_max": _nonneg,
+}
+
+
+def first_bad(p) -> str | None:
+    """The first member of ``p`` outside its documented range, or None."""
+    lay = estimator_params()
+    with np.errstate(invalid="ignore"):
+        for name, ok in DOCUMENTED.items():
+            v = np.atleast_1d(p[lay.slice(name)]).astype(float)
+            if not (np.all(np.isfinite(v)) and np.all(ok(v))):
+                return name
+    return None
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_check_names_the_first_member_outside_its_range(precision):
+    assert tuple(DOCUMENTED) == estimator_params().names()
+    c = Call(load(precision))
+    p0 = c.v["params"].copy()
+    rng = np.random.default_rng(5)
+    seen = set()
+    for _ in range(2000):
+        c.v["params"][:] = p0
+        for _ in range(rng.integers(1, 3)):
+            c.v["params"][rng.integers(p0.size)] = rng.choice(
+                (0.0, -0.0, -1.0, 1.0, 1.5, 1e-30, math.nan, math.inf, -math.inf))
+        bad = first_bad(c.v["params"])
+        assert c.check() == ((STATUS["QL_ERR_PARAM"], bad) if bad else (STATUS["QL_OK"], None))
+        seen.add(bad)
+    assert seen == {*DOCUMENTED, None}            # every member named, and valid draws
