@@ -77,21 +77,23 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, gnss_vt_sigma, 21, 0) &&
     AT(ql_estimator_params, range_sigma, 24, 0) &&
     AT(ql_estimator_params, range_min_cos, 25, 0) &&
-    AT(ql_estimator_params, datalink_v_sigma, 26, 0) &&
-    AT(ql_estimator_params, datalink_a_sigma, 29, 0) &&
-    AT(ql_estimator_params, gate_vision, 32, 0) &&
-    AT(ql_estimator_params, gate_gnss_rel, 33, 0) &&
-    AT(ql_estimator_params, gate_gnss_v1, 34, 0) &&
-    AT(ql_estimator_params, gate_gnss_vt, 35, 0) &&
-    AT(ql_estimator_params, gate_range, 36, 0) &&
-    AT(ql_estimator_params, gate_datalink_v, 37, 0) &&
-    AT(ql_estimator_params, gate_datalink_a, 38, 0) &&
-    AT(ql_estimator_params, max_age_vision, 39, 0) &&
-    AT(ql_estimator_params, max_age_gnss, 40, 0) &&
-    AT(ql_estimator_params, max_age_range, 41, 0) &&
-    AT(ql_estimator_params, max_age_datalink, 42, 0) &&
-    AT(ql_estimator_params, deck_extrapolation_max, 43, 0) &&
-    sizeof(ql_estimator_params) == 44 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_params, range_deck_radius, 26, 0) &&
+    AT(ql_estimator_params, range_deck_sigmas, 27, 0) &&
+    AT(ql_estimator_params, datalink_v_sigma, 28, 0) &&
+    AT(ql_estimator_params, datalink_a_sigma, 31, 0) &&
+    AT(ql_estimator_params, gate_vision, 34, 0) &&
+    AT(ql_estimator_params, gate_gnss_rel, 35, 0) &&
+    AT(ql_estimator_params, gate_gnss_v1, 36, 0) &&
+    AT(ql_estimator_params, gate_gnss_vt, 37, 0) &&
+    AT(ql_estimator_params, gate_range, 38, 0) &&
+    AT(ql_estimator_params, gate_datalink_v, 39, 0) &&
+    AT(ql_estimator_params, gate_datalink_a, 40, 0) &&
+    AT(ql_estimator_params, max_age_vision, 41, 0) &&
+    AT(ql_estimator_params, max_age_gnss, 42, 0) &&
+    AT(ql_estimator_params, max_age_range, 43, 0) &&
+    AT(ql_estimator_params, max_age_datalink, 44, 0) &&
+    AT(ql_estimator_params, deck_extrapolation_max, 45, 0) &&
+    sizeof(ql_estimator_params) == 46 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 18, 0) &&
@@ -140,15 +142,15 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(ql_estimator_diagnostics) == 109 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[44] = {
+static const ql_real default_p_est[46] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
     0.001, 0.1, 0.02, 0.5, 0.5, 0.5,
     0.3, 0.3, 0.3, 0.3, 0.3, 0.3,
-    0.05, 0.7, 0.1, 0.1, 0.1, 0.3,
-    0.3, 0.3, 11.344867, 11.344867, 11.344867, 11.344867,
-    6.634897, 11.344867, 11.344867, 0.02, 0.02, 0.02,
-    0.02, 0.5,
+    0.05, 0.7, 0.5, 2.0, 0.1, 0.1,
+    0.1, 0.3, 0.3, 0.3, 11.344867, 11.344867,
+    11.344867, 11.344867, 6.634897, 11.344867, 11.344867, 0.02,
+    0.02, 0.02, 0.02, 0.5,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -169,6 +171,8 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   gnss_vt_sigma            > 0
  *   range_sigma              > 0
  *   range_min_cos            in (0, 1]
+ *   range_deck_radius        > 0
+ *   range_deck_sigmas        >= 0
  *   datalink_v_sigma         > 0
  *   datalink_a_sigma         > 0
  *   gate_vision              > 0
@@ -246,50 +250,56 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
     if (!bad && !(isfinite(p[25]) && ((p[25] > 0.0) && (p[25] <= 1.0)))) {
         bad = "range_min_cos";
     }
-    for (i = 26; !bad && i < 29; ++i) {
+    if (!bad && !(isfinite(p[26]) && (p[26] > 0.0))) {
+        bad = "range_deck_radius";
+    }
+    if (!bad && !(isfinite(p[27]) && (p[27] >= 0.0))) {
+        bad = "range_deck_sigmas";
+    }
+    for (i = 28; !bad && i < 31; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "datalink_v_sigma";
         }
     }
-    for (i = 29; !bad && i < 32; ++i) {
+    for (i = 31; !bad && i < 34; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "datalink_a_sigma";
         }
     }
-    if (!bad && !(isfinite(p[32]) && (p[32] > 0.0))) {
+    if (!bad && !(isfinite(p[34]) && (p[34] > 0.0))) {
         bad = "gate_vision";
     }
-    if (!bad && !(isfinite(p[33]) && (p[33] > 0.0))) {
+    if (!bad && !(isfinite(p[35]) && (p[35] > 0.0))) {
         bad = "gate_gnss_rel";
     }
-    if (!bad && !(isfinite(p[34]) && (p[34] > 0.0))) {
+    if (!bad && !(isfinite(p[36]) && (p[36] > 0.0))) {
         bad = "gate_gnss_v1";
     }
-    if (!bad && !(isfinite(p[35]) && (p[35] > 0.0))) {
+    if (!bad && !(isfinite(p[37]) && (p[37] > 0.0))) {
         bad = "gate_gnss_vt";
     }
-    if (!bad && !(isfinite(p[36]) && (p[36] > 0.0))) {
+    if (!bad && !(isfinite(p[38]) && (p[38] > 0.0))) {
         bad = "gate_range";
     }
-    if (!bad && !(isfinite(p[37]) && (p[37] > 0.0))) {
+    if (!bad && !(isfinite(p[39]) && (p[39] > 0.0))) {
         bad = "gate_datalink_v";
     }
-    if (!bad && !(isfinite(p[38]) && (p[38] > 0.0))) {
+    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0))) {
         bad = "gate_datalink_a";
     }
-    if (!bad && !(isfinite(p[39]) && (p[39] >= 0.0))) {
+    if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0))) {
         bad = "max_age_vision";
     }
-    if (!bad && !(isfinite(p[40]) && (p[40] >= 0.0))) {
+    if (!bad && !(isfinite(p[42]) && (p[42] >= 0.0))) {
         bad = "max_age_gnss";
     }
-    if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0))) {
+    if (!bad && !(isfinite(p[43]) && (p[43] >= 0.0))) {
         bad = "max_age_range";
     }
-    if (!bad && !(isfinite(p[42]) && (p[42] >= 0.0))) {
+    if (!bad && !(isfinite(p[44]) && (p[44] >= 0.0))) {
         bad = "max_age_datalink";
     }
-    if (!bad && !(isfinite(p[43]) && (p[43] >= 0.0))) {
+    if (!bad && !(isfinite(p[45]) && (p[45] >= 0.0))) {
         bad = "deck_extrapolation_max";
     }
     if (bad_field) {
@@ -299,7 +309,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 44 comparisons. The values are known to be finite; no names and no
+ * 46 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -331,7 +341,7 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[24] > 0.0);
     ok &= ((p[25] > 0.0) & (p[25] <= 1.0));
     ok &= (p[26] > 0.0);
-    ok &= (p[27] > 0.0);
+    ok &= (p[27] >= 0.0);
     ok &= (p[28] > 0.0);
     ok &= (p[29] > 0.0);
     ok &= (p[30] > 0.0);
@@ -343,11 +353,13 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[36] > 0.0);
     ok &= (p[37] > 0.0);
     ok &= (p[38] > 0.0);
-    ok &= (p[39] >= 0.0);
-    ok &= (p[40] >= 0.0);
+    ok &= (p[39] > 0.0);
+    ok &= (p[40] > 0.0);
     ok &= (p[41] >= 0.0);
     ok &= (p[42] >= 0.0);
     ok &= (p[43] >= 0.0);
+    ok &= (p[44] >= 0.0);
+    ok &= (p[45] >= 0.0);
     return ok;
 }
 

@@ -174,6 +174,11 @@ def _fly(c, rng, steps, t0, oracle=None):
 @pytest.mark.parametrize("seed", [1, 2])
 def test_step_equals_its_casadi_function_bit_for_bit(seed):
     c = Call(load("double"))
+    lay = estimator_params()
+    # the range fused wherever its beam points (E12a off): the random states are metres
+    # from the pad, and every block must be fused at least once
+    c.v["params"][lay.slice("range_deck_radius")] = 1e30
+    c.v["params"][lay.slice("range_deck_sigmas")] = 0.0
     rng = np.random.default_rng(seed)
     oracle = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
     rows = _fly(c, rng, 4 * N_HIST, 7.0 + seed, oracle)
@@ -291,7 +296,8 @@ DOCUMENTED = {
     "g": _pos, "q_acc": _pos, "q_at": _pos, "q_b": _pos, "q_ab": _pos,
     "vision_sigma0": _pos, "vision_k_range": _nonneg, "gnss_rel_sigma": _pos,
     "gnss_v1_sigma": _pos, "gnss_vt_sigma": _pos, "range_sigma": _pos,
-    "range_min_cos": lambda v: (v > 0) & (v <= 1), "datalink_v_sigma": _pos,
+    "range_min_cos": lambda v: (v > 0) & (v <= 1), "range_deck_radius": _pos,
+    "range_deck_sigmas": _nonneg, "datalink_v_sigma": _pos,
     "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS},
     **{f"max_age_{s}": _nonneg for s in SENSORS}, "deck_extrapolation_max": _nonneg,
 }

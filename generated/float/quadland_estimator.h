@@ -27,7 +27,7 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 63         /* stored covariance entries (coupling axes) */
 #define QLF_ESTIMATOR_MEMORY_SIZE 585            /* reals in qlf_estimator_memory */
-#define QLF_ESTIMATOR_PARAMS_SIZE 44             /* reals in qlf_estimator_params */
+#define QLF_ESTIMATOR_PARAMS_SIZE 46             /* reals in qlf_estimator_params */
 #define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 109       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
@@ -107,6 +107,8 @@ typedef struct {
     qlf_real gnss_vt_sigma[3];       /* m/s: target GNSS velocity noise (gnss_vt_sigma_x, gnss_vt_sigma_y, gnss_vt_sigma_z) */
     qlf_real range_sigma;            /* m: range finder noise */
     qlf_real range_min_cos;          /* -: smallest n2 . b3_E of a usable range (E12) */
+    qlf_real range_deck_radius;      /* m: largest distance from the pad centre of the beam's predicted deck point of a usable range (E12a) */
+    qlf_real range_deck_sigmas;      /* -: standard deviations of the horizontal position the beam's deck point must lie within range_deck_radius by (E12a) */
     qlf_real datalink_v_sigma[3];    /* m/s: broadcast pad velocity noise (datalink_v_sigma_x, datalink_v_sigma_y, datalink_v_sigma_z) */
     qlf_real datalink_a_sigma[3];    /* m/s^2: broadcast pad acceleration noise (datalink_a_sigma_x, datalink_a_sigma_y, datalink_a_sigma_z) */
     qlf_real gate_vision;            /* -: NIS threshold of the vision block (E8) */

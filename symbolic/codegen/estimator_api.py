@@ -55,7 +55,8 @@ _NONNEGATIVE = Range(lo=0.0)
 #: positive (a zero density or sigma makes a covariance or an innovation
 #: variance singular), the vision noise's growth with range and the ages not
 #: negative, ``range_min_cos`` in (0, 1] (the range model divides by
-#: ``n2 . b3_E`` once it is at least that), the gates positive.
+#: ``n2 . b3_E`` once it is at least that), the deck radius positive and its
+#: standard deviations not negative (E12a), the gates positive.
 ESTIMATOR_PARAM_RANGES = MappingProxyType({
     "g": _POSITIVE,
     **{k: _POSITIVE for k in ("q_acc", "q_at", "q_b", "q_ab", "vision_sigma0")},
@@ -63,6 +64,8 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     **{k: _POSITIVE for k in ("gnss_rel_sigma", "gnss_v1_sigma", "gnss_vt_sigma",
                               "range_sigma")},
     "range_min_cos": Range(lo=0.0, hi=1.0, lo_open=True),
+    "range_deck_radius": _POSITIVE,
+    "range_deck_sigmas": _NONNEGATIVE,
     **{k: _POSITIVE for k in ("datalink_v_sigma", "datalink_a_sigma")},
     **{f"gate_{b.name}": _POSITIVE for b in BLOCKS},
     **{f"max_age_{s}": _NONNEGATIVE for s in SENSORS},
