@@ -39,7 +39,7 @@ typedef double ql_real;
 typedef enum {
     QL_OK = 0,                     /* success; outputs and adaptive state updated */
     QL_ERR_NULL = 1,               /* a NULL pointer argument */
-    QL_ERR_INVALID = 2,            /* dt <= 0, or a guidance state out of range */
+    QL_ERR_INVALID = 2,            /* dt <= 0, or a state out of range (guidance, filter memory) */
     QL_ERR_NONFINITE_INPUT = 3,    /* an input, a parameter or the state is NaN or infinite */
     QL_ERR_TILT = 4,               /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
     QL_ERR_NONFINITE_OUTPUT = 5,   /* the law overflowed: a NaN or infinite value from finite inputs */

@@ -12,7 +12,7 @@ const char *ql_status_string(ql_status status)
     switch (status) {
     case QL_OK: return "success; outputs and adaptive state updated";
     case QL_ERR_NULL: return "a NULL pointer argument";
-    case QL_ERR_INVALID: return "dt <= 0, or a guidance state out of range";
+    case QL_ERR_INVALID: return "dt <= 0, or a state out of range (guidance, filter memory)";
     case QL_ERR_NONFINITE_INPUT: return "an input, a parameter or the state is NaN or infinite";
     case QL_ERR_TILT: return "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible";
     case QL_ERR_NONFINITE_OUTPUT: return "the law overflowed: a NaN or infinite value from finite inputs";

@@ -379,5 +379,11 @@ def test_bench_times_either_controller(examples):
                              text=True).stdout
         assert re.match(rf"{what} \(double, l = \d+\): 50 steps, [\d.]+ ns/step .*0 errors",
                         out), out
+    # the filter: a packet of every sensor due in each of the 50 timed steps, every
+    # one telling the truth, so all seven blocks are fused in each
+    out = subprocess.run([str(bench), "50", "estimator"], check=True, capture_output=True,
+                         text=True).stdout
+    assert re.match(r"estimator_step \(double, n_hist = 50\): 50 steps, [\d.]+ ns/step, "
+                    r"350 of 350 blocks fused .*0 errors", out), out
     bad = subprocess.run([str(bench), "5", "nope"], capture_output=True, text=True)
-    assert bad.returncode == 2 and "usage: bench N [paper|landing]" in bad.stderr
+    assert bad.returncode == 2 and "usage: bench N [paper|landing|estimator]" in bad.stderr

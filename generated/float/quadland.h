@@ -36,7 +36,7 @@ typedef float qlf_real;
 typedef enum {
     QLF_OK = 0,                    /* success; outputs and adaptive state updated */
     QLF_ERR_NULL = 1,              /* a NULL pointer argument */
-    QLF_ERR_INVALID = 2,           /* dt <= 0, or a guidance state out of range */
+    QLF_ERR_INVALID = 2,           /* dt <= 0, or a state out of range (guidance, filter memory) */
     QLF_ERR_NONFINITE_INPUT = 3,   /* an input, a parameter or the state is NaN or infinite */
     QLF_ERR_TILT = 4,              /* |cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible */
     QLF_ERR_NONFINITE_OUTPUT = 5,  /* the law overflowed: a NaN or infinite value from finite inputs */

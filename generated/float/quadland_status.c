@@ -12,7 +12,7 @@ const char *qlf_status_string(qlf_status status)
     switch (status) {
     case QLF_OK: return "success; outputs and adaptive state updated";
     case QLF_ERR_NULL: return "a NULL pointer argument";
-    case QLF_ERR_INVALID: return "dt <= 0, or a guidance state out of range";
+    case QLF_ERR_INVALID: return "dt <= 0, or a state out of range (guidance, filter memory)";
     case QLF_ERR_NONFINITE_INPUT: return "an input, a parameter or the state is NaN or infinite";
     case QLF_ERR_TILT: return "|cos(theta1) cos(phi1)| < tilt_min: thrust map not invertible";
     case QLF_ERR_NONFINITE_OUTPUT: return "the law overflowed: a NaN or infinite value from finite inputs";
