@@ -302,6 +302,17 @@ def _message(exc: QuadlandError) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``quadland`` console script."""
+    swallowed, default_hook = [], sys.unraisablehook
+
+    def hook(unraisable):
+        # a Ctrl-C landing in a callback Python cannot raise from (importlib's module
+        # locks while a module loads) is printed and dropped: keep it as the interrupt
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            swallowed.append(unraisable)
+            return
+        default_hook(unraisable)
+
+    sys.unraisablehook = hook
     try:                                        # Ctrl-C while the parser imports its modules
         parser = build_parser()
         try:
@@ -309,10 +320,15 @@ def main(argv: list[str] | None = None) -> int:
         except UsageError as exc:
             print(f"quadland: error: {exc}", file=sys.stderr)
             return 2
+        if swallowed:
+            raise KeyboardInterrupt
         _quiet_matplotlib()
         with warnings.catch_warnings():
             warnings.showwarning = _one_line_warning
-            return _dispatch(args)
+            status = _dispatch(args)
+        if swallowed:
+            raise KeyboardInterrupt
+        return status
     except KeyboardInterrupt:
         print("quadland: interrupted", file=sys.stderr)
         return 130
@@ -323,6 +339,8 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print("quadland: interrupted", file=sys.stderr)
         return 130
+    finally:
+        sys.unraisablehook = default_hook
 
 
 def _quiet_matplotlib() -> None:
