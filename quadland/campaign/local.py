@@ -139,13 +139,14 @@ class _Raised:
 def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) -> None:
     """A local worker process: fly the draws ``conn`` brings, send back each outcome.
 
-    Ctrl-C is the campaign's to handle (the forkserver, and so every worker,
-    starts with SIGINT ignored; set again here for a forkserver started by
-    another caller). Warnings stay silent: the campaign's process has given
-    each once, building the same simulator. ``lifeline`` is the read end of a
-    pipe whose only write end the campaign's process holds: it reads end of
-    file when that process ends, however it ends (a SIGKILL included), and
-    the worker exits at once, even in the middle of a run.
+    Ctrl-C is the campaign's to handle: the worker ignores it (it starts with
+    SIGINT blocked, inherited from the forkserver, :func:`_start_forkserver`;
+    ignoring it discards one already pending). Warnings stay silent: the
+    campaign's process has given each once, building the same simulator.
+    ``lifeline`` is the read end of a pipe whose only write end the campaign's
+    process holds: it reads end of file when that process ends, however it ends
+    (a SIGKILL included), and the worker exits at once, even in the middle of a
+    run.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     warnings.simplefilter("ignore")
@@ -181,14 +182,19 @@ def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) ->
 
 
 def _start_forkserver() -> None:
-    """Start the forkserver with SIGINT ignored, so that it and every worker ignore Ctrl-C.
+    """Start the forkserver with SIGINT blocked, so that neither it nor a worker sees Ctrl-C.
 
     A Ctrl-C meant for the campaign reaches its whole process group: a
     forkserver still importing its preloaded modules, or a worker not yet
-    running its first line, would print a traceback. A process started with
-    SIGINT ignored keeps it ignored (Python installs its handler only over
-    the default). SIGINT is blocked meanwhile in this process, so that a
-    Ctrl-C in that moment is delivered here afterwards, not lost.
+    running its first line, would print a traceback. The signal mask is
+    inherited through fork and exec: the forkserver starts with SIGINT blocked,
+    a Ctrl-C stays pending there until it ignores SIGINT itself (which discards
+    it), and each worker inherits the mask until :func:`_worker_main` ignores it
+    too. Only this thread's mask changes, never the process's disposition: a
+    Ctrl-C arriving meanwhile is taken by another thread of this process (a
+    BLAS thread) and raised here as usual. (Ignoring SIGINT for the start
+    instead lost such a Ctrl-C: with the disposition SIG_IGN the kernel discards
+    it in a thread that does not block it.)
     """
     from multiprocessing import forkserver, resource_tracker
 
@@ -198,13 +204,7 @@ def _start_forkserver() -> None:
         return
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
-        if signal.SIGINT in signal.sigpending():
-            return                              # raised as KeyboardInterrupt when unblocked
-        handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
-        try:
-            forkserver.ensure_running()
-        finally:
-            signal.signal(signal.SIGINT, signal.SIG_DFL if handler is None else handler)
+        forkserver.ensure_running()
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
