@@ -9,7 +9,7 @@ from types import MappingProxyType
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
-from quadland.schema.sensors import sensor_fields
+from quadland.schema.sensors import check_ranges, sensor_fields
 from quadland_symbolic.landing.navigation import estimator_params
 from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
 from quadland_symbolic.landing.sensors import SENSOR_NAMES
@@ -214,7 +214,4 @@ def _check_sensors(data: dict) -> None:
             raise ScenarioError(f"{where}.latency: {s['latency']:g} s is more than the "
                                 f"{DELIVERY_SLOTS - 1} control periods a packet can be held "
                                 f"({(DELIVERY_SLOTS - 1) / rate:g} s at {rate:g} Hz)")
-        for lo, hi in (("range_min", "range_max"), ("small_range_min", "small_range_max")):
-            if lo in s and s[hi] > 0 and s[lo] > s[hi]:
-                raise ScenarioError(f"{where}.{lo}: must not exceed {where}.{hi} "
-                                    f"({s[hi]:g} m)")
+        check_ranges(name, s)

@@ -13,9 +13,10 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import NamedTuple
 
+from quadland.exceptions import ScenarioError
 from quadland.schema.fields import Field
 
-__all__ = ["Setting", "SETTINGS", "sensor_fields"]
+__all__ = ["Setting", "SETTINGS", "sensor_fields", "check_ranges"]
 
 
 class Setting(NamedTuple):
@@ -122,3 +123,12 @@ def sensor_fields(name: str) -> dict[str, Field]:
     """The schema's fields of ``[sensors.<name>]``, from :data:`SETTINGS`."""
     return {key: Field(float, s.unit, s.doc, s.length, lo=s.lo, hi=s.hi)
             for key, s in SETTINGS[name].items()}
+
+
+def check_ranges(name: str, values: Mapping) -> None:
+    """Refuse a ``[sensors.<name>]`` table whose nearest range exceeds its farthest."""
+    where = f"sensors.{name}"
+    for lo, hi in (("range_min", "range_max"), ("small_range_min", "small_range_max")):
+        if lo in values and values[hi] > 0 and values[lo] > values[hi]:
+            raise ScenarioError(f"{where}.{lo}: must not exceed {where}.{hi} "
+                                f"({values[hi]:g} m)")

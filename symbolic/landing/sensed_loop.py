@@ -36,6 +36,7 @@ loop's (:data:`SENSED_RECORDED`).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 
@@ -56,14 +57,10 @@ from quadland_symbolic.landing.estimator import (
 )
 from quadland_symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE
 from quadland_symbolic.landing.loop import (
-    LANDING_ENVELOPE,
     LANDING_RECORDED,
-    gear_gap_function,
-    landing_envelope_function,
     landing_flight_step,
-    landing_loop_state,
+    landing_loop,
     landing_ride_functions,
-    loop_outputs,
 )
 from quadland_symbolic.landing.navigation import (
     BLOCKS,
@@ -78,7 +75,6 @@ from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
-    loop_plant_function,
 )
 from quadland_symbolic.landing.quadrotor import COMMAND
 from quadland_symbolic.landing.sensors import (
@@ -207,12 +203,9 @@ def _deliver(name, xp, uh, w, t, pp, p_sens, tick, line, delay):
 @functools.cache
 def landing_sensed_loop(l: int) -> LoopModel:
     """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring)."""
-    base_state, xc_lay, pc_lay = landing_loop_state(l), sensed_loop_memory(l), \
-        sensed_loop_params(l)
+    base, xc_lay, pc_lay = landing_loop(l), sensed_loop_memory(l), sensed_loop_params(l)
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    plant = ca.Function("plant", [xp, uh, w, t, pp], [loop_plant_function()(xp, uh, w, t, pp)],
-                        ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
     xc, pc, first, n = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first"), SENSED_TICK.sym()
     cs, ps, tick = xc_lay.unpack(xc), pc_lay.unpack(pc), SENSED_TICK.unpack(n)
     delays = dict(zip(SENSOR_NAMES, ca.vertsplit(ps["delay"]), strict=True))
@@ -239,17 +232,9 @@ def landing_sensed_loop(l: int) -> LoopModel:
         ["xc_next", "uh", "rec", "guard"])
     assemble = ca.Function("assemble", [xp, xc], [ca.vertcat(xp, cs["xg"], cs["mem"])],
                            ["xp", "xc"], ["x"])
-    x = base_state.sym()
     ride_rhs, ride_row = landing_ride_functions(l, SENSED_RECORDED)
-    return LoopModel(
-        "landing_sensed", base_state, LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, LANDING_SIGNALS,
-        None, ca.Function("outputs", [x, w, t, pp], [loop_outputs(l, x, w, t, pp)],
-                          ["x", "w", "t", "p"], ["y"]),
-        LANDING_PLANT_STATE, COMMAND, xc_lay, LANDING_PLANT_PARAMS, pc_lay, SENSED_RECORDED,
-        plant, controller, assemble,
-        event=ca.Function("event", [xp, t, pp], [gear_gap_function()(xp, t, pp)],
-                          ["xp", "t", "pp"], ["g"]),
-        envelope=ca.Function("envelope", [x, uh], [landing_envelope_function(l)(x, uh)],
-                             ["x", "uh"], ["s"]),
-        envelope_layout=LANDING_ENVELOPE, ride_rhs=ride_rhs, ride_row=ride_row,
-        tick_inputs=SENSED_TICK)
+    # the plant, the outputs, the event and the envelope are the unsensed loop's own
+    return dataclasses.replace(
+        base, name="landing_sensed", controller_state=xc_lay, controller_params=pc_lay,
+        recorded=SENSED_RECORDED, controller=controller, assemble=assemble, step_args=None,
+        flight=None, ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)

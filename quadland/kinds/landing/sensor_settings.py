@@ -16,7 +16,7 @@ from types import MappingProxyType
 import numpy as np
 
 from quadland.exceptions import ScenarioError
-from quadland.schema.sensors import SETTINGS, Setting
+from quadland.schema.sensors import SETTINGS, Setting, check_ranges
 from quadland_symbolic.landing.sensors import SENSOR_NAMES, SENSOR_PARAMS
 
 __all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "validate_settings",
@@ -110,9 +110,7 @@ def validate_settings(name: str, values: Mapping | None = None) -> dict:
                 raise ScenarioError(f"{where}: must be in [{s.lo:g}, {s.hi:g}] {s.unit}, "
                                     f"got {x!r}")
         out[key] = tuple(float(x) for x in v) if s.length is not None else float(v)
-    for lo, hi in (("range_min", "range_max"), ("small_range_min", "small_range_max")):
-        if lo in out and out[hi] > 0 and out[lo] > out[hi]:
-            raise ScenarioError(f"sensors.{name}.{lo}: must not exceed {hi} ({out[hi]:g} m)")
+    check_ranges(name, out)
     return out
 
 
