@@ -24,6 +24,7 @@ import time
 import warnings
 from pathlib import Path
 
+from quadland import interrupt
 from quadland.exceptions import QuadlandError, SimulationError
 
 __all__ = ["main", "build_parser", "UsageError"]
@@ -323,9 +324,11 @@ def main(argv: list[str] | None = None) -> int:
         if swallowed:
             raise KeyboardInterrupt
         _quiet_matplotlib()
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), interrupt.catching():
             warnings.showwarning = _one_line_warning
             status = _dispatch(args)
+            if status != 130:                   # not one _dispatch already reported
+                interrupt.check()
         if swallowed:
             raise KeyboardInterrupt
         return status

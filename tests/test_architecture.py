@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: The package ``quadland`` itself is a lazy face (its names load on first use)
 #: holding the version: any module may read it.
 LAYERS = (
-    ("quadland", "quadland.exceptions", "quadland.constants"),
+    ("quadland", "quadland.exceptions", "quadland.constants", "quadland.interrupt"),
     ("quadland.schema", "quadland.scenario", "quadland.output"),
     ("quadland.engine", "quadland.linear", "quadland.metrics", "quadland.analysis"),
     ("quadland.plots",),

@@ -94,3 +94,24 @@ def test_two_runs_into_one_folder_never_mix(tmp_path):
     if codes == [0, 2]:
         assert "in use by another quadland run" in (err_a + err_b)
     assert len(_seed_of(out)) == 1
+
+
+def test_a_ctrl_c_a_library_swallows_is_raised_again():
+    # V13: a campaign interrupted while CasADi built its loop flew all 300 runs and exited
+    # 0: CasADi's SWIG wrappers clear any error of a Python call back (here: a bare except)
+    from quadland import interrupt
+
+    def library():
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except BaseException:
+            pass
+
+    with interrupt.catching():
+        library()
+        with pytest.raises(KeyboardInterrupt):
+            interrupt.check()
+        interrupt.check()                       # raised once, then forgotten
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    library()                                   # outside: Python's own handler, as before
+    interrupt.check()

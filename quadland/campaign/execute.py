@@ -29,6 +29,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from quadland import interrupt
 from quadland.campaign.cluster import (
     check_address,
     connect,
@@ -231,6 +232,7 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
                     flown += sum(o.status != "invalid" for o in batch)
                     if bar is not None:
                         bar.update(len(new))
+                    interrupt.check()           # one a library swallowed (the runs are kept)
             finally:
                 batches.close()                 # workers and tasks stopped before the folder
         except KeyboardInterrupt:

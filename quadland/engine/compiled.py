@@ -19,6 +19,7 @@ import warnings
 
 import numpy as np
 
+from quadland import interrupt
 from quadland.engine.build import build_library, compiler_problem, have_compiler
 from quadland.engine.loop import Clock
 from quadland.engine.runs import (
@@ -257,6 +258,7 @@ def compiled_loop(loop: LoopModel, part: str,
         For ``"sampled_flight"`` when its build fails (one line; a budget
         refusal names ``rbf.nodes``).
     """
+    interrupt.check()                           # one a library swallowed while the loop was built
     if part not in SIMULATOR_PARTS:
         raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
     if (part == "sampled_flight") != (flight is not None):
