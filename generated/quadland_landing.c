@@ -30,6 +30,10 @@ typedef char landing_measurement_is_its_layout[
     AT(ql_landing_measurement, w2E, 21, 0) &&
     AT(ql_landing_measurement, w2E_dot, 24, 0) &&
     sizeof(ql_landing_measurement) == 27 * sizeof(ql_real) ? 1 : -1];
+typedef char guidance_cues_is_its_layout[
+    AT(ql_guidance_cues, touchdown, 0, 0) &&
+    AT(ql_guidance_cues, marker_age, 1, 0) &&
+    sizeof(ql_guidance_cues) == 2 * sizeof(ql_real) ? 1 : -1];
 typedef char position_reference_is_its_layout[
     AT(ql_position_reference, p_ref, 0, 0) &&
     AT(ql_position_reference, v_ref, 3, 0) &&
@@ -105,7 +109,9 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, max_relative_speed, 8, 0) &&
     AT(ql_guidance_params, max_deck_rise, 9, 0) &&
     AT(ql_guidance_params, settle_time, 10, 0) &&
-    sizeof(ql_guidance_params) == 11 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, marker_timeout, 11, 0) &&
+    AT(ql_guidance_params, search_height, 12, 0) &&
+    sizeof(ql_guidance_params) == 13 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -134,9 +140,10 @@ static const ql_real default_p_land[91] = {
 static const ql_real default_p_act[3] = {
     0.02, 9.8, 0.2,
 };
-static const ql_real default_p_guid[11] = {
+static const ql_real default_p_guid[13] = {
     3.0, 0.5, 1.0, 0.7, 1.0, 0.3,
-    0.2, 0.2, 0.5, 0.5, 2.0,
+    0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
+    6.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -334,6 +341,8 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   max_relative_speed       > 0
  *   max_deck_rise            > 0
  *   settle_time              >= 0
+ *   marker_timeout           >= 0
+ *   search_height            > 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -378,6 +387,12 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     }
     if (!bad && !(isfinite(p[10]) && (p[10] >= 0.0))) {
         bad = "settle_time";
+    }
+    if (!bad && !(isfinite(p[11]) && (p[11] >= 0.0))) {
+        bad = "marker_timeout";
+    }
+    if (!bad && !(isfinite(p[12]) && (p[12] > 0.0))) {
+        bad = "search_height";
     }
     if (bad_field) {
         *bad_field = bad;
@@ -434,7 +449,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 11 comparisons. The values are known to be finite; no names and no
+ * 13 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -450,6 +465,8 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[8] > 0.0);
     ok &= (p[9] > 0.0);
     ok &= (p[10] >= 0.0);
+    ok &= (p[11] >= 0.0);
+    ok &= (p[12] > 0.0);
     return ok;
 }
 
@@ -498,8 +515,9 @@ static int all_finite(const ql_real *v, int n)
     return 1;
 }
 
-ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_params *params,
-                           ql_real dt, ql_guidance_state *state, ql_position_reference *ref)
+ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cues *cues,
+                           const ql_guidance_params *params, ql_real dt,
+                           ql_guidance_state *state, ql_position_reference *ref)
 {
     /* xg = [phase, timer, z_ref, aborts], CasADi's guidance state; res_v = [xg_next, ref]. */
     ql_real xg[4], res_v[13];
@@ -508,7 +526,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_pa
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
     ql_real work_real[ql_casadi_landing_guidance_SZ_W + 1];
 
-    if (!y || !params || !state || !ref) {
+    if (!y || !cues || !params || !state || !ref) {
         if (ref) memset(ref, 0, sizeof *ref);
         return QL_ERR_NULL;
     }
@@ -517,7 +535,8 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_pa
     xg[1] = state->timer;
     xg[2] = state->z_ref;
     xg[3] = (ql_real)state->aborts;
-    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)params, 11)
+    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
+          & all_finite((const ql_real *)params, 13)
           & all_finite(xg, 4) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
@@ -530,8 +549,9 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_pa
     }
     arg[0] = xg;
     arg[1] = (const ql_real *)y;
-    arg[2] = &dt;
-    arg[3] = (const ql_real *)params;
+    arg[2] = (const ql_real *)cues;
+    arg[3] = &dt;
+    arg[4] = (const ql_real *)params;
     res[0] = res_v + 0;
     res[1] = res_v + 4;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);

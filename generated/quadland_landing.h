@@ -22,7 +22,7 @@ extern "C" {
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QL_LANDING_PARAMS_SIZE 108               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 76                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 11               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 13               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 22                   /* xp = [x1q (16), xv (6)] */
 #define QL_LANDING_PLANT_NP 57                   /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (31)] */
@@ -37,7 +37,7 @@ typedef enum {
     QL_PHASE_APPROACH = 0,         /* fly to the hover point above the pad */
     QL_PHASE_ALIGN = 1,            /* hold the hover point until offset and speed are within half their limits */
     QL_PHASE_DESCEND = 2,          /* descend along the profile; abort back to align when a limit is exceeded */
-    QL_PHASE_TOUCHDOWN = 3,        /* the gear met the deck: rotors idle, the reference holds */
+    QL_PHASE_TOUCHDOWN = 3,        /* the flight stack reports the gear on the deck: rotors idle, the reference holds */
     QL_PHASE_LANDED = 4,           /* settle_time after touchdown */
 } ql_phase;
 
@@ -54,6 +54,13 @@ typedef struct {
     ql_real w2E[3];                  /* rad/s: deck angular velocity in E (wx2, wy2, wz2) */
     ql_real w2E_dot[3];              /* rad/s^2: deck angular acceleration in E (wx2_dot, wy2_dot, wz2_dot) */
 } ql_landing_measurement;
+
+/* What the rest of the flight stack tells the guidance: the touchdown
+ * verdict (on sensors the land detector's) and the marker's age. */
+typedef struct {
+    ql_real touchdown;               /* 0/1: 1 when the gear is on the deck (perfect sensing: the measured gear gap at or below zero; sensors: the land detector's verdict) */
+    ql_real marker_age;              /* s: time since the navigation last fused the landing marker (0 on perfect sensing) */
+} ql_guidance_cues;
 
 /* The guidance's reference of the relative position, deck frame. */
 typedef struct {
@@ -148,6 +155,8 @@ typedef struct {
     ql_real max_relative_speed;      /* m/s: largest horizontal relative speed at touchdown */
     ql_real max_deck_rise;           /* m/s: largest deck rise rate at which a descent goes on */
     ql_real settle_time;             /* s: time from touchdown to landed */
+    ql_real marker_timeout;          /* s: largest marker age at which the align criteria count */
+    ql_real search_height;           /* m: hover height while the marker is not seen (in align) */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */
@@ -169,9 +178,11 @@ const char *ql_phase_name(int phase);
 ql_status ql_check_landing_params(const ql_landing_params *params, const char **bad_field);
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field);
 
-/* One guidance step of period dt (s): the phase, the descent profile,
- * touchdown detection (the gear gap measured from y closing during the
- * descent) and abort, and the position reference for the landing step.
+/* One guidance step of period dt (s): the phase, the descent profile, the
+ * touchdown (cues->touchdown during the descent: the land detector's verdict,
+ * or the measured gear gap at or below zero on perfect sensing), the search
+ * for the marker (cues->marker_age) and abort, and the position reference for
+ * the landing step.
  * Call it before ql_landing_step with the same measurements. On QL_OK *ref is
  * written and the state advanced; once the phase is QL_PHASE_TOUCHDOWN or
  * QL_PHASE_LANDED the flight stack idles the rotors. On any error the state is
@@ -179,8 +190,9 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
  * the enum or an abort count outside [0, QL_GUIDANCE_MAX_ABORTS]; QL_ERR_PARAM
  * for a parameter outside its range (ql_check_guidance_params names it). No
  * heap, no global state: reentrant. */
-ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_params *params,
-                           ql_real dt, ql_guidance_state *state, ql_position_reference *ref);
+ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cues *cues,
+                           const ql_guidance_params *params, ql_real dt,
+                           ql_guidance_state *state, ql_position_reference *ref);
 
 /* One landing step of period dt (s): the deck-frame position loop, the
  * thrust vector to attitude with its limits, the command filter, the
@@ -207,6 +219,11 @@ void ql_landing_loop_plant(const ql_real *xp, const ql_real *F_cmd, const ql_rea
 
 /* The landing step's measurements y from the plant's state: perfect sensors. */
 void ql_landing_sensors(const ql_real *xp, const ql_real *t, const ql_real *pp, ql_real *y);
+
+/* The guidance's cues on perfect sensing from y and the guidance's
+ * parameters: touchdown when the measured gear gap is at or below zero,
+ * the marker's age 0. */
+void ql_landing_cues(const ql_real *y, const ql_real *p_guid, ql_real *cues);
 
 /* The landing trajectory's signals y (QL_LANDING_NY): both bodies, the
  * relative state, the rotors, the external forces, phase and aborts. */

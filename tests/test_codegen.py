@@ -332,6 +332,8 @@ int main(void)
     qlf_landing_measurement yf;
     ql_guidance_params gp;
     qlf_guidance_params gpf;
+    ql_guidance_cues gc = {0.0, 0.0};
+    qlf_guidance_cues gcf = {0.0f, 0.0f};
     ql_guidance_state gs;
     qlf_guidance_state gsf;
     ql_position_reference pr;
@@ -362,8 +364,8 @@ int main(void)
     qlf_guidance_state_init(&gsf, &gpf);
     ql_landing_state_init(&ls, &y);
     qlf_landing_state_init(&lsf, &yf);
-    c = ql_guidance_step(&y, &gp, 0.004, &gs, &pr);
-    cf = qlf_guidance_step(&yf, &gpf, 0.004f, &gsf, &prf);
+    c = ql_guidance_step(&y, &gc, &gp, 0.004, &gs, &pr);
+    cf = qlf_guidance_step(&yf, &gcf, &gpf, 0.004f, &gsf, &prf);
     d = ql_landing_step(&y, &pr, &lp, 0.004, &ls, &lo);
     df = qlf_landing_step(&yf, &prf, &lpf, 0.004f, &lsf, &lof);
     printf("%d %d %d %d %d %d %.17g %.17g %.17g %.17g %d %d %d %d\n", (int)a, (int)b, (int)c,

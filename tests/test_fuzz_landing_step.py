@@ -103,6 +103,7 @@ GUIDANCE_DOCUMENTED = {
     "descent_speed": _positive, "descent_time": _positive, "touchdown_speed": _positive,
     "touchdown_height": _nonnegative, "max_offset": _positive,
     "max_relative_speed": _positive, "max_deck_rise": _positive, "settle_time": _nonnegative,
+    "marker_timeout": _nonnegative, "search_height": _positive,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -154,6 +155,8 @@ class _Harness:
         self.params, self.state = api.LandingParams(), api.LandingState()
         self.out, self.gp, self.gs = api.LandingOutput(), api.GuidanceParams(), \
             api.GuidanceState()
+        self.cues = api.GuidanceCues()
+        self.v_cues = _view(self.cues, d)
         self.v_y, self.v_ref, self.v_p = _view(self.y, d), _view(self.ref, d), _view(self.params, d)
         self.v_state, self.v_gp = _view(self.state, d), _view(self.gp, d)
         self.v_g = _view(self.gs, d, 2)                  # timer, z_ref (the ints follow)
@@ -232,15 +235,18 @@ class _Harness:
         self.gs.aborts = int(rng.integers(4)) if rng.uniform() < 0.9 else \
             int(rng.choice((-1, MAX_ABORTS, MAX_ABORTS + 1)))
         self.v_g[:] = [rng.uniform(0, 2), rng.uniform(-0.5, 4)]
+        # the touchdown verdict (0, 1 or a non-flag), the marker's age (seen or not)
+        self.v_cues[:] = [rng.choice((0.0, 1.0, rng.normal())), rng.choice((0.0, 0.4, 3.0))]
         dt = rng.choice((0.004, 10 ** rng.uniform(-6, 1)))
         if rng.uniform() < 0.03:       # the settling timer overflows
             self.gs.phase = TOUCHDOWN
             self.v_g[0] = dt = float(self.fi.max) * rng.uniform(0.5, 1)
         if rng.uniform() < 0.3:
             return float(self.dtype(dt)), ()
-        spoiled = self._spoil(rng, (self.v_y, "dt", self.v_gp, self.v_gp, self.v_g))
+        spoiled = self._spoil(rng, (self.v_y, "dt", self.v_gp, self.v_gp, self.v_g,
+                                    self.v_cues))
         dt = dt if spoiled is None else spoiled
-        null = () if rng.uniform() > 0.02 else (int(rng.choice((0, 1, 3, 4))),)
+        null = () if rng.uniform() > 0.02 else (int(rng.choice((0, 1, 2, 4, 5))),)
         return float(self.dtype(dt)), null
 
     def step(self, dt, null=()):
@@ -251,8 +257,8 @@ class _Harness:
         return self.api.lib.ql_landing_step(*args)
 
     def guide(self, dt, null=()):
-        args = [ctypes.byref(self.y), ctypes.byref(self.gp), dt, ctypes.byref(self.gs),
-                ctypes.byref(self.ref)]
+        args = [ctypes.byref(self.y), ctypes.byref(self.cues), ctypes.byref(self.gp), dt,
+                ctypes.byref(self.gs), ctypes.byref(self.ref)]
         for i in null:
             args[i] = None
         return self.api.lib.ql_guidance_step(*args)
@@ -352,7 +358,7 @@ def _check_guidance(h, rng, counts, oracle):
                                    else (STATUS["QL_OK"], None))
     phase, aborts = h.gs.phase, h.gs.aborts
     xg = np.array([phase, h.gs.timer, h.gs.z_ref, aborts], dtype=float)
-    y = h.v_y.astype(float)
+    y, cues = h.v_y.astype(float), h.v_cues.astype(float)
     before = bytes(h.gs)
     h.v_ref[:] = 7.0
     status = h.guide(dt, null)
@@ -361,7 +367,7 @@ def _check_guidance(h, rng, counts, oracle):
     if null:
         assert status == STATUS["QL_ERR_NULL"]
     elif not (np.all(np.isfinite(y)) and np.all(np.isfinite(gp)) and np.all(np.isfinite(xg))
-              and math.isfinite(dt)):
+              and np.all(np.isfinite(cues)) and math.isfinite(dt)):
         assert status == STATUS["QL_ERR_NONFINITE_INPUT"]
     elif not (dt > 0 and APPROACH <= phase <= LANDED and 0 <= aborts <= MAX_ABORTS):
         assert status == STATUS["QL_ERR_INVALID"]
@@ -371,7 +377,7 @@ def _check_guidance(h, rng, counts, oracle):
         assert status in (STATUS["QL_OK"], STATUS["QL_ERR_NONFINITE_OUTPUT"])
     if status != STATUS["QL_OK"]:
         assert bytes(h.gs) == before, "the state is untouched on error"
-        if 4 not in null:
+        if 5 not in null:
             assert not np.any(h.v_ref), "the reference is zero on error"
         return
     assert h.gs.phase in NEXT[phase]
@@ -380,7 +386,7 @@ def _check_guidance(h, rng, counts, oracle):
     assert np.all(np.isfinite(ref)) and math.isfinite(h.gs.timer) and math.isfinite(h.gs.z_ref)
     assert not np.any(ref[[0, 1, 3, 4, 6, 7]])          # over the pad, vertical only
     if oracle is not None:                              # the CasADi function, double only
-        xg_next, r = (np.asarray(v, dtype=float).ravel() for v in oracle(xg, y, dt, gp))
+        xg_next, r = (np.asarray(v, dtype=float).ravel() for v in oracle(xg, y, cues, dt, gp))
         np.testing.assert_array_equal([h.gs.phase, h.gs.aborts], xg_next[[0, 3]])
         np.testing.assert_allclose([h.gs.timer, h.gs.z_ref], xg_next[1:3], rtol=1e-12)
         np.testing.assert_allclose(ref, r, rtol=1e-12, atol=1e-300)
@@ -450,6 +456,7 @@ int main(int argc, char **argv)
     static ql_landing_state state, before;
     ql_guidance_params gdefaults, gp;
     ql_guidance_state gs, gbefore;
+    ql_guidance_cues cues;
     ql_landing_measurement y;
     ql_position_reference ref;
     ql_landing_output out;
@@ -549,7 +556,15 @@ int main(int argc, char **argv)
         targets[1] = (ql_real *)&gp; sizes[1] = QL_GUIDANCE_PARAMS_SIZE;
         targets[2] = xg; sizes[2] = 2;
         targets[3] = &dt; sizes[3] = 1;
-        spoil(targets, sizes, 4);
+        cues.touchdown = (ql_real)(next() % 2);
+        cues.marker_age = (ql_real)(uniform());
+        if (next() % 32 == 0) {     /* the settling timer overflows (as the Python harness) */
+            gs.phase = QL_PHASE_TOUCHDOWN;
+            xg[0] = dt = (ql_real)(0.75 * (sizeof(ql_real) == sizeof(float)
+                                           ? 3.4028234e38 : 1.7976931348623157e308));
+        }
+        targets[4] = (ql_real *)&cues; sizes[4] = N_REALS(cues);
+        spoil(targets, sizes, 5);
         gs.timer = xg[0];
         gs.z_ref = xg[1];
         check = ql_check_guidance_params(&gp, &bad);
@@ -557,7 +572,7 @@ int main(int argc, char **argv)
             return fail(k, "ql_check_guidance_params: status and bad_field disagree", check);
         }
         memcpy(&gbefore, &gs, sizeof gs);
-        status = ql_guidance_step(&y, &gp, dt, &gs, &ref);
+        status = ql_guidance_step(&y, &cues, &gp, dt, &gs, &ref);
         if (status < QL_OK || status > QL_ERR_PARAM) {
             return fail(k, "undocumented guidance status", status);
         }

@@ -9,6 +9,7 @@ from quadland_symbolic.landing.guidance import (
     ALIGN,
     APPROACH,
     DESCEND,
+    GUIDANCE_CUES,
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
     LANDED,
@@ -18,24 +19,30 @@ from quadland_symbolic.landing.guidance import (
 
 P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
          descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2, max_offset=0.2,
-         max_relative_speed=0.5, max_deck_rise=0.8, settle_time=0.1)
+         max_relative_speed=0.5, max_deck_rise=0.8, settle_time=0.1, marker_timeout=0.5,
+         search_height=6.0)
 DT = 0.002
 GUIDANCE = guidance_function()
 
 
 def _run(script, n, xg=None, p=P):
-    """Step the guidance n times; script(k, z_ref) -> (p_e, v_e, deck_rise[, gear_gap]).
+    """Step the guidance n times; script(k, z_ref) -> (p_e, v_e, deck_rise[, gear_gap[,
+    marker_age]]).
 
-    Without a gear gap the gear is well above the deck (1 m)."""
+    Without a gear gap the gear is well above the deck (1 m); the touchdown cue is the
+    gap at or below zero, as on perfect sensing. Without a marker age the marker is seen
+    (0 s)."""
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=p["hover_height"], aborts=0)) \
         if xg is None else xg
     pg = GUIDANCE_PARAMS.pack(p)
     rows = []
     for k in range(n):
         z_ref = GUIDANCE_STATE.unpack(xg)["z_ref"][0]
-        p_e, v_e, rise, *gap = script(k, z_ref)
+        p_e, v_e, rise, *more = script(k, z_ref)
+        gap, age = (more + [1.0, 0.0][len(more):])
+        cues = GUIDANCE_CUES.pack(dict(touchdown=float(gap <= 0), marker_age=age))
         xg_next, ref = (np.asarray(v, dtype=float).ravel()
-                        for v in GUIDANCE(xg, p_e, v_e, rise, gap[0] if gap else 1.0, DT, pg))
+                        for v in GUIDANCE(xg, p_e, v_e, rise, cues, DT, pg))
         rows.append((xg, ref))
         xg = xg_next
     return rows, xg
@@ -150,3 +157,59 @@ def test_landed_is_held():
     xg = GUIDANCE_STATE.pack(dict(phase=LANDED, timer=0.3, z_ref=0.1, aborts=2))
     rows, last = _run(lambda k, z: ([1.0, 1.0, 5.0], [3.0, 0, 0], 2.0, -1.0), 10, xg)
     np.testing.assert_array_equal(last, xg)
+
+
+def test_align_waits_for_the_marker_and_climbs_to_search_for_it():
+    """Unseen for 0.6 s > marker_timeout: no dwell, the hover point climbs at descent_speed
+    (0.7 m/s: 1.4 mm per 2 ms step) to search_height; seen again from step 2000, it
+    dwells 1 s and descends, the hover point gliding back down meanwhile."""
+    xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0))
+    step = 0.7 * DT
+    k_seen = 2000
+
+    def script(k, z_ref):              # over the pad, still; the marker lost, then found
+        age = 0.6 + k * DT if k < k_seen else 0.0
+        return [0.0, 0.0, z_ref], [0.0, 0.0, 0.0], 0.0, 1.0, age
+    rows, _ = _run(script, k_seen + 600, xg)
+    st = [GUIDANCE_STATE.unpack(x) for x, _ in rows]
+    z = np.array([s["z_ref"][0] for s in st])
+    phases = np.array([s["phase"][0] for s in st])
+    timer = np.array([s["timer"][0] for s in st])
+    assert np.all(phases[:k_seen + 1] == ALIGN) and np.all(timer[:k_seen + 1] == 0)
+    # the climb: 3 m -> 6 m in ceil(3 / 1.4 mm) = 2143 steps would pass k_seen: it is
+    # still climbing at k_seen, z_ref = 3 + k step
+    np.testing.assert_allclose(z[:k_seen + 1], 3.0 + np.arange(k_seen + 1) * step, atol=1e-9)
+    # seen: it glides back down, one step a tick, and the dwell counts
+    np.testing.assert_allclose(z[k_seen + 1:k_seen + 500] - z[k_seen:k_seen + 499], -step,
+                               atol=1e-9)
+    assert timer[k_seen + 1] == pytest.approx(DT)
+    k_descend = int(np.argmax(phases == DESCEND))
+    assert k_descend == k_seen + 500               # dwell_time 1 s = 500 steps
+
+
+def test_the_climb_stops_at_the_search_height():
+    xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=5.99, aborts=0))
+    rows, last = _run(lambda k, z: ([0.0, 0.0, z], [0.0, 0.0, 0.0], 0.0, 1.0, 10.0), 20, xg)
+    assert GUIDANCE_STATE.unpack(last)["z_ref"][0] == 6.0
+    assert GUIDANCE_STATE.unpack(last)["phase"][0] == ALIGN
+
+
+def test_perfect_cues_are_the_measured_gear_gap():
+    """measured_cues: touchdown where deck_gear_gap <= 0 (its hand formula
+    z_e - h n2 . b3), the marker always seen."""
+    from quadland_symbolic.kinematics import rotation
+    from quadland_symbolic.landing.controller import LANDING_MEASUREMENT, measured_cues_function
+
+    fn = measured_cues_function()
+    pg = GUIDANCE_PARAMS.pack(P)
+    eta1, eta2 = np.array([0.1, -0.05, 0.3]), np.array([0.02, 0.04, 1.0])
+    n2b3 = float(np.asarray(rotation(eta2))[:, 2] @ np.asarray(rotation(eta1))[:, 2])
+    for dz in (-1e-6, 0.0, 1e-6):
+        z_e = 0.2 * n2b3 + dz
+        y = LANDING_MEASUREMENT.pack(dict(p_e=[0.1, 0.0, z_e], v_e=[0, 0, -0.3], eta1=eta1,
+                                          Omega1=np.zeros(3), eta2=eta2, v2E=np.zeros(3),
+                                          a2E=np.zeros(3), w2E=np.zeros(3),
+                                          w2E_dot=np.zeros(3)))
+        cues = GUIDANCE_CUES.unpack(np.asarray(fn(y, pg), dtype=float).ravel())
+        assert cues["touchdown"][0] == (1.0 if dz < 0 else float(z_e - 0.2 * n2b3 <= 0))
+        assert cues["marker_age"][0] == 0.0

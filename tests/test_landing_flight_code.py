@@ -60,6 +60,7 @@ class Harness:
         self.api = api = load_landing_api(L, precision)
         self.dtype = np.float64 if precision == "double" else np.float32
         self.y, self.ref = api.LandingMeasurement(), api.PositionReference()
+        self.cues = api.GuidanceCues()          # the gear above the deck, the marker seen
         self.params, self.state = api.LandingParams(), api.LandingState()
         self.out, self.gp, self.gs = api.LandingOutput(), api.GuidanceParams(), \
             api.GuidanceState()
@@ -81,8 +82,8 @@ class Harness:
 
     def guide(self, dt):
         return self.api.lib.ql_guidance_step(
-            ctypes.byref(self.y), ctypes.byref(self.gp), dt, ctypes.byref(self.gs),
-            ctypes.byref(self.ref))
+            ctypes.byref(self.y), ctypes.byref(self.cues), ctypes.byref(self.gp), dt,
+            ctypes.byref(self.gs), ctypes.byref(self.ref))
 
     def check(self, name):
         bad = ctypes.c_char_p()
@@ -136,9 +137,11 @@ def test_steps_match_the_casadi_functions(harness, rng):
         h.v_y[:] = y
         h.v_state[:] = mem
         h.gs.phase, h.gs.timer, h.gs.z_ref, h.gs.aborts = int(xg[0]), xg[1], xg[2], int(xg[3])
+        h.cues.touchdown, h.cues.marker_age = k % 2, rng.uniform(0.0, 1.0)
         assert h.guide(dt) == STATUS["QL_OK"]
+        cues = [float(h.cues.touchdown), float(h.cues.marker_age)]
         xg_next, ref = (np.asarray(v, dtype=float).ravel() for v in guide(
-            xg, h.v_y.astype(float), dt, h.pc["p_guid"]))
+            xg, h.v_y.astype(float), cues, dt, h.pc["p_guid"]))
         got = [h.gs.phase, h.gs.timer, h.gs.z_ref, h.gs.aborts]
         np.testing.assert_allclose(got, xg_next, rtol=rtol, atol=1e-6)
         np.testing.assert_allclose(h.v_ref, ref, rtol=rtol, atol=1e-6)
@@ -167,6 +170,7 @@ def _guidance_at(h, phase, gap_closed):
     y["v_e"][2] = -0.3
     h.api.lib.ql_guidance_state_init(ctypes.byref(h.gs), ctypes.byref(h.gp))
     h.gs.phase, h.gs.z_ref = phase, 0.1
+    h.cues.touchdown, h.cues.marker_age = float(gap_closed), 0.0   # as ql_landing_cues
     return h.guide(0.004)
 
 
@@ -244,6 +248,7 @@ def test_landing_step_errors_leave_the_state_and_zero_the_outputs(harness, rng, 
 
 @pytest.mark.parametrize("case, status", [
     ("nan_measurement", "QL_ERR_NONFINITE_INPUT"),
+    ("nan_cue", "QL_ERR_NONFINITE_INPUT"),
     ("nan_timer", "QL_ERR_NONFINITE_INPUT"),
     ("zero_dt", "QL_ERR_INVALID"),
     ("unknown_phase", "QL_ERR_INVALID"),
@@ -258,8 +263,11 @@ def test_guidance_errors_leave_the_state_and_zero_the_reference(harness, rng, ca
     h.api.lib.ql_guidance_state_init(ctypes.byref(h.gs), ctypes.byref(h.gp))
     h.gs.phase = ALIGN
     dt = 0.004
+    h.cues.touchdown, h.cues.marker_age = 0.0, 0.0
     if case == "nan_measurement":
         h.y.v2E[2] = np.nan
+    elif case == "nan_cue":
+        h.cues.marker_age = np.nan
     elif case == "nan_timer":
         h.gs.timer = np.nan
     elif case == "zero_dt":

@@ -88,6 +88,7 @@ static int bench_landing(long n)
     ql_guidance_params guidance;
     ql_guidance_state gs;
     ql_landing_measurement y;
+    ql_guidance_cues cues;
     ql_position_reference ref;
     ql_landing_output out;
     ql_real xp[QL_LANDING_PLANT_NX], pp[QL_LANDING_PLANT_NP], t = 0, z_e;
@@ -104,11 +105,12 @@ static int bench_landing(long n)
     ql_guidance_params_init(&guidance);
     ql_guidance_state_init(&gs, &guidance);
     ql_landing_state_init(&state, &y);
+    ql_landing_cues((const ql_real *)&y, (const ql_real *)&guidance, (ql_real *)&cues);
     z_e = y.p_e[2];
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (i = 0; i < n; ++i) {
         y.p_e[2] = (ql_real)((double)z_e + 1e-6 * (double)(i & 1023));
-        bad += ql_guidance_step(&y, &guidance, dt, &gs, &ref) != QL_OK;
+        bad += ql_guidance_step(&y, &cues, &guidance, dt, &gs, &ref) != QL_OK;
         bad += ql_landing_step(&y, &ref, &params, dt, &state, &out) != QL_OK;
         check += (double)out.F_cmd[0];
     }

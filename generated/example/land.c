@@ -18,7 +18,7 @@
  * The plant (ql_landing_loop_plant: the quadrotor with motor lag, the vehicle
  * and its deck) integrated by classical RK4 over the merged grid of the
  * output, disturbance and control times, as quadland simulate does; at each
- * control time the perfect sensors (ql_landing_sensors) feed ql_guidance_step
+ * control time the perfect sensors (ql_landing_sensors, ql_landing_cues) feed ql_guidance_step
  * and ql_landing_step, whose rotor commands act QL_LAND_DELAY_PERIODS control
  * periods later (the computation delay) and are held until the next. The
  * touchdown is the zero crossing of the gear gap (ql_landing_gear_gap),
@@ -261,6 +261,7 @@ int main(void)
     ql_guidance_params guidance;
     ql_guidance_state gs;
     ql_landing_measurement y;
+    ql_guidance_cues cues;
     ql_position_reference ref;
     ql_landing_output out;
     ql_real xp[NXP], xp_start[NXP], trial[NXP], work[5 * NXP], pp[QL_LANDING_PLANT_NP];
@@ -305,7 +306,8 @@ int main(void)
         if (qll_tick(&clocks[CLK_CTRL], t, tol, &tick)) {
             tt = (ql_real)t;
             ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
-            status = ql_guidance_step(&y, &guidance, (ql_real)dt, &gs, &ref);
+            ql_landing_cues((const ql_real *)&y, (const ql_real *)&guidance, (ql_real *)&cues);
+            status = ql_guidance_step(&y, &cues, &guidance, (ql_real)dt, &gs, &ref);
             if (status != QL_OK) return failed(t, "ql_guidance_step", status);
             status = ql_landing_step(&y, &ref, &params, (ql_real)dt, &state, &out);
             if (status != QL_OK) return failed(t, "ql_landing_step", status);
@@ -346,7 +348,8 @@ int main(void)
     /* The contact: the guidance measures the closed gap. */
     tt = (ql_real)t_td;
     ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
-    status = ql_guidance_step(&y, &guidance, (ql_real)dt, &gs, &ref);
+    ql_landing_cues((const ql_real *)&y, (const ql_real *)&guidance, (ql_real *)&cues);
+    status = ql_guidance_step(&y, &cues, &guidance, (ql_real)dt, &gs, &ref);
     if (status != QL_OK) return failed(t_td, "ql_guidance_step", status);
     if (gs.phase != QL_PHASE_TOUCHDOWN) {
         fprintf(stderr, "land: t = %g s: the guidance did not detect the contact (%s)\n", t_td,

@@ -30,6 +30,10 @@ typedef char landing_measurement_is_its_layout[
     AT(qlf_landing_measurement, w2E, 21, 0) &&
     AT(qlf_landing_measurement, w2E_dot, 24, 0) &&
     sizeof(qlf_landing_measurement) == 27 * sizeof(qlf_real) ? 1 : -1];
+typedef char guidance_cues_is_its_layout[
+    AT(qlf_guidance_cues, touchdown, 0, 0) &&
+    AT(qlf_guidance_cues, marker_age, 1, 0) &&
+    sizeof(qlf_guidance_cues) == 2 * sizeof(qlf_real) ? 1 : -1];
 typedef char position_reference_is_its_layout[
     AT(qlf_position_reference, p_ref, 0, 0) &&
     AT(qlf_position_reference, v_ref, 3, 0) &&
@@ -105,7 +109,9 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, max_relative_speed, 8, 0) &&
     AT(qlf_guidance_params, max_deck_rise, 9, 0) &&
     AT(qlf_guidance_params, settle_time, 10, 0) &&
-    sizeof(qlf_guidance_params) == 11 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, marker_timeout, 11, 0) &&
+    AT(qlf_guidance_params, search_height, 12, 0) &&
+    sizeof(qlf_guidance_params) == 13 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -134,9 +140,10 @@ static const qlf_real default_p_land[91] = {
 static const qlf_real default_p_act[3] = {
     0.02f, 9.8f, 0.2f,
 };
-static const qlf_real default_p_guid[11] = {
+static const qlf_real default_p_guid[13] = {
     3.0f, 0.5f, 1.0f, 0.7f, 1.0f, 0.3f,
-    0.2f, 0.2f, 0.5f, 0.5f, 2.0f,
+    0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
+    6.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -334,6 +341,8 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   max_relative_speed       > 0
  *   max_deck_rise            > 0
  *   settle_time              >= 0
+ *   marker_timeout           >= 0
+ *   search_height            > 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -378,6 +387,12 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     }
     if (!bad && !(isfinite(p[10]) && (p[10] >= 0.0f))) {
         bad = "settle_time";
+    }
+    if (!bad && !(isfinite(p[11]) && (p[11] >= 0.0f))) {
+        bad = "marker_timeout";
+    }
+    if (!bad && !(isfinite(p[12]) && (p[12] > 0.0f))) {
+        bad = "search_height";
     }
     if (bad_field) {
         *bad_field = bad;
@@ -434,7 +449,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 11 comparisons. The values are known to be finite; no names and no
+ * 13 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -450,6 +465,8 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[8] > 0.0f);
     ok &= (p[9] > 0.0f);
     ok &= (p[10] >= 0.0f);
+    ok &= (p[11] >= 0.0f);
+    ok &= (p[12] > 0.0f);
     return ok;
 }
 
@@ -498,7 +515,7 @@ static int all_finite(const qlf_real *v, int n)
     return 1;
 }
 
-qlf_status qlf_guidance_step(const qlf_landing_measurement *y,
+qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidance_cues *cues,
                              const qlf_guidance_params *params, qlf_real dt,
                              qlf_guidance_state *state, qlf_position_reference *ref)
 {
@@ -509,7 +526,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y,
     casadi_int work_int[qlf_casadi_landing_guidance_SZ_IW + 1];
     qlf_real work_real[qlf_casadi_landing_guidance_SZ_W + 1];
 
-    if (!y || !params || !state || !ref) {
+    if (!y || !cues || !params || !state || !ref) {
         if (ref) memset(ref, 0, sizeof *ref);
         return QLF_ERR_NULL;
     }
@@ -518,7 +535,8 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y,
     xg[1] = state->timer;
     xg[2] = state->z_ref;
     xg[3] = (qlf_real)state->aborts;
-    if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)params, 11)
+    if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 2)
+          & all_finite((const qlf_real *)params, 13)
           & all_finite(xg, 4) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }
@@ -531,8 +549,9 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y,
     }
     arg[0] = xg;
     arg[1] = (const qlf_real *)y;
-    arg[2] = &dt;
-    arg[3] = (const qlf_real *)params;
+    arg[2] = (const qlf_real *)cues;
+    arg[3] = &dt;
+    arg[4] = (const qlf_real *)params;
     res[0] = res_v + 0;
     res[1] = res_v + 4;
     qlf_casadi_landing_guidance(arg, res, work_int, work_real, 0);

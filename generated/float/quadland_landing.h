@@ -22,7 +22,7 @@ extern "C" {
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QLF_LANDING_PARAMS_SIZE 108              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 76                /* reals in qlf_landing_state */
-#define QLF_GUIDANCE_PARAMS_SIZE 11              /* reals in qlf_guidance_params */
+#define QLF_GUIDANCE_PARAMS_SIZE 13              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 22                  /* xp = [x1q (16), xv (6)] */
 #define QLF_LANDING_PLANT_NP 57                  /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (31)] */
@@ -37,7 +37,7 @@ typedef enum {
     QLF_PHASE_APPROACH = 0,        /* fly to the hover point above the pad */
     QLF_PHASE_ALIGN = 1,           /* hold the hover point until offset and speed are within half their limits */
     QLF_PHASE_DESCEND = 2,         /* descend along the profile; abort back to align when a limit is exceeded */
-    QLF_PHASE_TOUCHDOWN = 3,       /* the gear met the deck: rotors idle, the reference holds */
+    QLF_PHASE_TOUCHDOWN = 3,       /* the flight stack reports the gear on the deck: rotors idle, the reference holds */
     QLF_PHASE_LANDED = 4,          /* settle_time after touchdown */
 } qlf_phase;
 
@@ -54,6 +54,13 @@ typedef struct {
     qlf_real w2E[3];                 /* rad/s: deck angular velocity in E (wx2, wy2, wz2) */
     qlf_real w2E_dot[3];             /* rad/s^2: deck angular acceleration in E (wx2_dot, wy2_dot, wz2_dot) */
 } qlf_landing_measurement;
+
+/* What the rest of the flight stack tells the guidance: the touchdown
+ * verdict (on sensors the land detector's) and the marker's age. */
+typedef struct {
+    qlf_real touchdown;              /* 0/1: 1 when the gear is on the deck (perfect sensing: the measured gear gap at or below zero; sensors: the land detector's verdict) */
+    qlf_real marker_age;             /* s: time since the navigation last fused the landing marker (0 on perfect sensing) */
+} qlf_guidance_cues;
 
 /* The guidance's reference of the relative position, deck frame. */
 typedef struct {
@@ -148,6 +155,8 @@ typedef struct {
     qlf_real max_relative_speed;     /* m/s: largest horizontal relative speed at touchdown */
     qlf_real max_deck_rise;          /* m/s: largest deck rise rate at which a descent goes on */
     qlf_real settle_time;            /* s: time from touchdown to landed */
+    qlf_real marker_timeout;         /* s: largest marker age at which the align criteria count */
+    qlf_real search_height;          /* m: hover height while the marker is not seen (in align) */
 } qlf_guidance_params;
 
 /* Fill the defaults (scenario highway). */
@@ -169,9 +178,11 @@ const char *qlf_phase_name(int phase);
 qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char **bad_field);
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field);
 
-/* One guidance step of period dt (s): the phase, the descent profile,
- * touchdown detection (the gear gap measured from y closing during the
- * descent) and abort, and the position reference for the landing step.
+/* One guidance step of period dt (s): the phase, the descent profile, the
+ * touchdown (cues->touchdown during the descent: the land detector's verdict,
+ * or the measured gear gap at or below zero on perfect sensing), the search
+ * for the marker (cues->marker_age) and abort, and the position reference for
+ * the landing step.
  * Call it before qlf_landing_step with the same measurements. On QLF_OK *ref is
  * written and the state advanced; once the phase is QLF_PHASE_TOUCHDOWN or
  * QLF_PHASE_LANDED the flight stack idles the rotors. On any error the state is
@@ -179,7 +190,7 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
  * the enum or an abort count outside [0, QLF_GUIDANCE_MAX_ABORTS]; QLF_ERR_PARAM
  * for a parameter outside its range (qlf_check_guidance_params names it). No
  * heap, no global state: reentrant. */
-qlf_status qlf_guidance_step(const qlf_landing_measurement *y,
+qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidance_cues *cues,
                              const qlf_guidance_params *params, qlf_real dt,
                              qlf_guidance_state *state, qlf_position_reference *ref);
 
@@ -208,6 +219,11 @@ void qlf_landing_loop_plant(const qlf_real *xp, const qlf_real *F_cmd, const qlf
 
 /* The landing step's measurements y from the plant's state: perfect sensors. */
 void qlf_landing_sensors(const qlf_real *xp, const qlf_real *t, const qlf_real *pp, qlf_real *y);
+
+/* The guidance's cues on perfect sensing from y and the guidance's
+ * parameters: touchdown when the measured gear gap is at or below zero,
+ * the marker's age 0. */
+void qlf_landing_cues(const qlf_real *y, const qlf_real *p_guid, qlf_real *cues);
 
 /* The landing trajectory's signals y (QLF_LANDING_NY): both bodies, the
  * relative state, the rotors, the external forces, phase and aborts. */
@@ -270,6 +286,7 @@ void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_r
 #define ql_actuator_params qlf_actuator_params
 #define ql_check_guidance_params qlf_check_guidance_params
 #define ql_check_landing_params qlf_check_landing_params
+#define ql_guidance_cues qlf_guidance_cues
 #define ql_guidance_params qlf_guidance_params
 #define ql_guidance_params_init qlf_guidance_params_init
 #define ql_guidance_state qlf_guidance_state
@@ -278,6 +295,7 @@ void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_r
 #define ql_landed_row qlf_landed_row
 #define ql_landing_anchor qlf_landing_anchor
 #define ql_landing_controller_params qlf_landing_controller_params
+#define ql_landing_cues qlf_landing_cues
 #define ql_landing_gear_gap qlf_landing_gear_gap
 #define ql_landing_loop_plant qlf_landing_loop_plant
 #define ql_landing_measurement qlf_landing_measurement

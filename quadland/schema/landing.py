@@ -10,6 +10,7 @@ from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
 from quadland.schema.sensors import check_ranges, sensor_fields
+from quadland_symbolic.landing.land_detector import LAND_DETECTOR_PARAMS
 from quadland_symbolic.landing.navigation import estimator_params
 from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
 from quadland_symbolic.landing.sensors import SENSOR_NAMES
@@ -137,6 +138,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                     hi=100.0, **_POS),
         "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0,
                              hi=1e3),
+        "marker_timeout": Field(F, "s", "the descent starts only while the marker was seen "
+                                "within this time", lo=0.0, hi=1e3),
+        "search_height": Field(F, "m", "hover height while the marker is not seen (in align)",
+                               hi=1e3, **_POS),
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.
     "sensors": {
@@ -160,6 +165,18 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                ("bias", "m", "the relative GNSS bias"),
                ("input_bias", "m/s^2", "the acceleration input's bias"))},
     },
+    # The flight code's land detector (docs/land_detector.md): its cues' thresholds and
+    # windows. Only the sensed loop has it; on the true state the touchdown is the gap's.
+    "land_detector": {
+        name: Field(F, unit, LAND_DETECTOR_PARAMS[name].doc, lo=lo, hi=hi,
+                    **({"lo_open": True} if name == "accel_tau" else {}))
+        for name, unit, lo, hi in (
+            ("gap_max", "m", 0.0, 100.0), ("vz_max", "m/s", 0.0, 100.0),
+            ("thrust_low", "-", 0.0, 10.0), ("contact_time", "s", 0.0, 1e3),
+            ("maybe_time", "s", 0.0, 1e3), ("landed_time", "s", 0.0, 1e3),
+            ("hold_factor", "-", 1.0, 100.0), ("no_range_factor", "-", 1.0, 100.0),
+            ("range_timeout", "s", 0.0, 1e3), ("spike_min", "m/s^2", 0.0, 1e3),
+            ("spike_window", "s", 0.0, 1e3), ("accel_tau", "s", 0.0, 1e3))},
     "disturbance": PAPER_SCHEMA["disturbance"],
     "wind": {
         "mean": Field(F, "m/s", "steady wind in E", 3, lo=-100.0, hi=100.0),

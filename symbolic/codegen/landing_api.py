@@ -33,6 +33,7 @@ from quadland_symbolic.landing.controller import (
     landing_step_outputs,
 )
 from quadland_symbolic.landing.guidance import (
+    GUIDANCE_CUES,
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
     PHASE_DOCS,
@@ -128,7 +129,8 @@ def landing_step_context(l: int, config: CodegenConfig) -> dict:
             res_size=sum(guide.nnz_out(i) for i in range(guide.n_out())), res_offset=g_offset,
             xg=[dict(name=n, index=i, int=guidance_state_layout()[n].ctype == "int")
                 for i, n in enumerate(GUIDANCE_STATE.names())],
-            xg_size=GUIDANCE_STATE.size, params_size=GUIDANCE_PARAMS.size),
+            xg_size=GUIDANCE_STATE.size, params_size=GUIDANCE_PARAMS.size,
+            cues_size=GUIDANCE_CUES.size),
     )
 
 

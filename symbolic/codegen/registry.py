@@ -17,6 +17,7 @@ from quadland_symbolic.control_step import control_step_function
 from quadland_symbolic.landing.controller import (
     landing_guidance_function,
     landing_step_function,
+    measured_cues_function,
 )
 from quadland_symbolic.landing.estimator import (
     FLIGHT_COUPLING,
@@ -135,6 +136,10 @@ FUNCTIONS = (
          " * d_M (body)]."),
         ("landing_sensors", measurement_function,
          "The landing step's measurements y from the plant's state: perfect sensors."),
+        ("landing_cues", measured_cues_function,
+         "The guidance's cues on perfect sensing from y and the guidance's\n"
+         " * parameters: touchdown when the measured gear gap is at or below zero,\n"
+         " * the marker's age 0."),
         ("landing_signals", landing_signals_function,
          "The landing trajectory's signals y ({QL}LANDING_NY): both bodies, the\n"
          " * relative state, the rotors, the external forces, phase and aborts."),

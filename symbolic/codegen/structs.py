@@ -45,7 +45,12 @@ from quadland_symbolic.landing.controller import (
     landing_memory,
     landing_step_outputs,
 )
-from quadland_symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE, POSITION_REFERENCE
+from quadland_symbolic.landing.guidance import (
+    GUIDANCE_CUES,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    POSITION_REFERENCE,
+)
 from quadland_symbolic.landing.quadrotor import ACTUATOR
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
@@ -358,6 +363,8 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "max_relative_speed": _POSITIVE,
     "max_deck_rise": _POSITIVE,
     "settle_time": _NONNEGATIVE,
+    "marker_timeout": _NONNEGATIVE,
+    "search_height": _POSITIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:
@@ -423,6 +430,9 @@ def landing_api_structs(l: int) -> tuple[CStruct, ...]:
         CStruct("landing_measurement", LANDING_MEASUREMENT,
                 "What the landing step and the guidance measure: the landing sensor (deck\n"
                 " * frame), the IMU and the vehicle's broadcast of its deck's motion (E)."),
+        CStruct("guidance_cues", GUIDANCE_CUES,
+                "What the rest of the flight stack tells the guidance: the touchdown\n"
+                " * verdict (on sensors the land detector's) and the marker's age."),
         CStruct("position_reference", POSITION_REFERENCE,
                 "The guidance's reference of the relative position, deck frame."),
         CStruct("landing_state", landing_memory(l),

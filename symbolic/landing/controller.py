@@ -49,6 +49,7 @@ from quadland_symbolic.landing.attitude import thrust_attitude
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
 from quadland_symbolic.landing.guidance import (
+    GUIDANCE_CUES,
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
     POSITION_REFERENCE,
@@ -76,6 +77,8 @@ __all__ = [
     "landing_step_function",
     "landing_guidance",
     "landing_guidance_function",
+    "measured_cues",
+    "measured_cues_function",
 ]
 
 #: Channels of the network: deck-frame x, y, z and body roll, pitch, yaw.
@@ -423,36 +426,56 @@ def landing_step_function(l: int) -> ca.Function:
     return ca.Function("landing_step", args, [out[n] for n in names_out], names_in, names_out)
 
 
-def landing_guidance(xg, y, dt, p_guid):
-    """One guidance step on the step's measurements.
+def measured_cues(y, p_guid):
+    """The guidance's cues on perfect sensing: the measured gear gap, the marker always seen.
 
-    The step is :func:`~quadland_symbolic.landing.guidance.guidance_step`.
-
-    The relative position and velocity are the landing sensor's, the deck's
-    rise is the pad velocity's vertical component ``v2E[2]`` and the gear
-    gap comes from ``p_e``, ``eta1`` and ``eta2``
+    ``touchdown`` is 1 when the gear gap from ``p_e``, ``eta1`` and ``eta2``
     (:func:`~quadland_symbolic.landing.relative.deck_gear_gap`, the gear
-    ``touchdown_height`` below the centre). Returns ``(xg_next, reference)``.
+    ``touchdown_height`` below the centre) is zero or below; ``marker_age`` is 0.
+    Returns :data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`.
     """
     ms = LANDING_MEASUREMENT.unpack(y)
     h = GUIDANCE_PARAMS.unpack(p_guid)["touchdown_height"]
     gap = deck_gear_gap(ms["p_e"], rotation(ms["eta2"]), rotation(ms["eta1"]), h)
-    return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], gap, dt, p_guid)
+    return ca.vertcat(gap <= 0, 0)
+
+
+@functools.cache
+def measured_cues_function() -> ca.Function:
+    """``landing_cues(y, p_guid) -> cues``: :func:`measured_cues`."""
+    y, p_guid = LANDING_MEASUREMENT.sym(), GUIDANCE_PARAMS.sym()
+    return ca.Function("landing_cues", [y, p_guid], [measured_cues(y, p_guid)],
+                       ["y", "p_guid"], ["cues"])
+
+
+def landing_guidance(xg, y, cues, dt, p_guid):
+    """One guidance step on the step's measurements and the flight stack's cues.
+
+    The step is :func:`~quadland_symbolic.landing.guidance.guidance_step`: the
+    relative position and velocity are the measurement's, the deck's rise is the
+    pad velocity's vertical component ``v2E[2]``, ``cues``
+    (:data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`) the touchdown
+    verdict and the marker's age (:func:`measured_cues` on perfect sensing).
+    Returns ``(xg_next, reference)``.
+    """
+    ms = LANDING_MEASUREMENT.unpack(y)
+    return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], cues, dt, p_guid)
 
 
 @functools.cache
 def landing_guidance_function() -> ca.Function:
-    """``landing_guidance(xg, y, dt, p_guid) -> (xg_next, ref)``: :func:`landing_guidance`.
+    """``landing_guidance(xg, y, cues, dt, p_guid) -> (xg_next, ref)``: :func:`landing_guidance`.
 
     ``xg``: :data:`quadland_symbolic.landing.guidance.GUIDANCE_STATE`;
-    ``y``: :data:`LANDING_MEASUREMENT`;
+    ``y``: :data:`LANDING_MEASUREMENT`; ``cues``:
+    :data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`;
     ``p_guid``: :data:`quadland_symbolic.landing.guidance.GUIDANCE_PARAMS`; ``ref``:
     :data:`quadland_symbolic.landing.guidance.POSITION_REFERENCE`, the landing step's.
     """
-    xg, y, dt, p_guid = GUIDANCE_STATE.sym(), LANDING_MEASUREMENT.sym(), ca.SX.sym("dt"), \
-        GUIDANCE_PARAMS.sym()
-    xg_next, ref = landing_guidance(xg, y, dt, p_guid)
-    return ca.Function("landing_guidance", [xg, y, dt, p_guid], [xg_next, ref],
-                       ["xg", "y", "dt", "p_guid"], ["xg_next", "ref"])
+    xg, y, cues = GUIDANCE_STATE.sym(), LANDING_MEASUREMENT.sym(), GUIDANCE_CUES.sym()
+    dt, p_guid = ca.SX.sym("dt"), GUIDANCE_PARAMS.sym()
+    xg_next, ref = landing_guidance(xg, y, cues, dt, p_guid)
+    return ca.Function("landing_guidance", [xg, y, cues, dt, p_guid], [xg_next, ref],
+                       ["xg", "y", "cues", "dt", "p_guid"], ["xg_next", "ref"])
 
 

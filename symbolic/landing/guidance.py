@@ -17,14 +17,22 @@ the abort count. Phases (:data:`PHASES`):
    ``touchdown_speed`` for the last part, which goes on below the touchdown
    height until contact (PX4 lands at 0.7 m/s and crawls at 0.3 m/s for the
    last metre); the horizontal reference stays at the pad;
-3. **touchdown**: entered from the descent when the landing gear meets the
-   deck: the gear gap ``z_e - touchdown_height n2 . b3`` measured from the
-   relative position and both attitudes
-   (:func:`quadland_symbolic.landing.relative.deck_gear_gap`) is zero or below. The
+3. **touchdown**: entered from the descent when the flight stack reports
+   the gear on the deck (:data:`GUIDANCE_CUES`' ``touchdown``: on perfect
+   sensing the measured gear gap at or below zero, on sensors the land
+   detector's verdict, :mod:`quadland_symbolic.landing.land_detector`). The
    reference holds; the flight stack idles the rotors. (The simulator
-   locates the contact within its step and ends the flight there, so its
-   guidance never sees a closed gap.)
+   locates the true contact within its step and ends the flight there.)
 4. **landed**: ``settle_time`` after touchdown.
+
+**The marker.** The descent starts only while the landing marker is seen:
+the align criteria hold only while :data:`GUIDANCE_CUES`' ``marker_age`` (the
+time since the navigation last fused a marker detection) is within
+``marker_timeout``. A quadrotor in align that has not seen the marker for
+longer climbs to ``search_height``, where the camera's cone covers more of
+the deck, at ``descent_speed``, and comes back down to ``hover_height`` once
+the marker is seen again (a GNSS bias larger than the camera's footprint at
+the hover point would otherwise hold it beside the pad).
 
 **Abort.** During the descent, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
@@ -44,7 +52,8 @@ import casadi as ca
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["PHASES", "PHASE_DOCS", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED",
-           "GUIDANCE_STATE", "GUIDANCE_PARAMS", "POSITION_REFERENCE", "guidance_step",
+           "GUIDANCE_STATE", "GUIDANCE_PARAMS", "GUIDANCE_CUES", "POSITION_REFERENCE",
+           "guidance_step",
            "guidance_function"]
 
 #: Phase numbers, as written to trajectory.csv's ``phase`` column.
@@ -53,7 +62,7 @@ PHASES = ("approach", "align", "descend", "touchdown", "landed")
 PHASE_DOCS = ("fly to the hover point above the pad",
               "hold the hover point until offset and speed are within half their limits",
               "descend along the profile; abort back to align when a limit is exceeded",
-              "the gear met the deck: rotors idle, the reference holds",
+              "the flight stack reports the gear on the deck: rotors idle, the reference holds",
               "settle_time after touchdown")
 APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED = range(len(PHASES))
 
@@ -78,7 +87,17 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("max_relative_speed", 1, "m/s", "largest horizontal relative speed at touchdown"),
     Field("max_deck_rise", 1, "m/s", "largest deck rise rate at which a descent goes on"),
     Field("settle_time", 1, "s", "time from touchdown to landed"),
+    Field("marker_timeout", 1, "s", "largest marker age at which the align criteria count"),
+    Field("search_height", 1, "m", "hover height while the marker is not seen (in align)"),
 ), "landing guidance parameters")
+
+#: What the rest of the flight stack tells the guidance each step.
+GUIDANCE_CUES = Layout("c_guid", (
+    Field("touchdown", 1, "0/1", "1 when the gear is on the deck (perfect sensing: the measured "
+          "gear gap at or below zero; sensors: the land detector's verdict)"),
+    Field("marker_age", 1, "s", "time since the navigation last fused the landing marker "
+          "(0 on perfect sensing)"),
+), "landing guidance cues")
 
 #: What the position loop tracks: the reference and its first two derivatives
 #: in the deck frame.
@@ -94,7 +113,7 @@ def _descent_rate(h, p):
     return ca.fmin(ca.fmax(h / p["descent_time"], p["touchdown_speed"]), p["descent_speed"])
 
 
-def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
+def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     """One guidance step of length ``dt`` (s).
 
     Parameters
@@ -105,9 +124,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
         Relative position and velocity in the deck frame, m, m/s.
     deck_rise : casadi.SX
         The deck's vertical velocity at the pad, m/s (up).
-    gear_gap : casadi.SX
-        The landing gear's height above the deck plane, m: zero or below
-        during the descent is the touchdown.
+    cues : casadi.SX, (2,)
+        :data:`GUIDANCE_CUES`: the touchdown verdict and the marker's age.
     dt : casadi.SX
         Step length, s.
     p_guid : casadi.SX
@@ -120,6 +138,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
         :data:`POSITION_REFERENCE` for the step.
     """
     g, p = GUIDANCE_STATE.unpack(xg), GUIDANCE_PARAMS.unpack(p_guid)
+    c = GUIDANCE_CUES.unpack(cues)
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
     hover = p["hover_height"]
     offset = ca.norm_2(p_e[0:2])
@@ -128,11 +147,13 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
 
     in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
     in_touchdown = phase == TOUCHDOWN
-    aligned = ca.logic_and(offset <= p["max_offset"] / 2, speed <= p["max_relative_speed"] / 2)
+    seen = c["marker_age"] <= p["marker_timeout"]
+    aligned = ca.logic_and(ca.logic_and(offset <= p["max_offset"] / 2,
+                                        speed <= p["max_relative_speed"] / 2), seen)
     # the timer: the align criteria's dwell, then the time since touchdown; held once landed
     timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, aligned), in_touchdown),
                             timer + dt, ca.if_else(phase == LANDED, timer, 0))
-    contact = ca.logic_and(in_descend, gear_gap <= 0)
+    contact = ca.logic_and(in_descend, c["touchdown"] >= 0.5)
     abort = ca.logic_and(ca.logic_and(in_descend, ca.logic_not(contact)), ca.logic_or(
         ca.logic_or(offset > p["max_offset"], speed > p["max_relative_speed"]),
         deck_rise > p["max_deck_rise"]))
@@ -153,8 +174,15 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
     # a heaving deck may have moved away, and the quadrotor must meet it
     descending = ca.logic_and(in_descend, ca.logic_not(ca.logic_or(abort, contact)))
     z_fall = z_ref - rate * dt
+    # in align the hover height glides to the search height while the marker is
+    # not seen, and back (exactly hover_height once there: hover + 0)
+    target = ca.if_else(seen, hover, p["search_height"])
+    step = p["descent_speed"] * dt
+    z_glide = z_ref + ca.fmin(ca.fmax(target - z_ref, -step), step)
     z_next = ca.if_else(descending, z_fall,
-                        ca.if_else(phase_next >= TOUCHDOWN, z_ref, hover))
+                        ca.if_else(phase_next >= TOUCHDOWN, z_ref,
+                                   ca.if_else(ca.logic_and(in_align, ca.logic_not(abort)),
+                                              z_glide, hover)))
 
     vz = ca.if_else(descending, -rate, 0)
     # d/dt of -rate: the rate is h / descent_time where it is not clamped
@@ -166,12 +194,12 @@ def guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid):
 
 
 def guidance_function() -> ca.Function:
-    """``guidance(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid) -> (xg_next, reference)``."""
+    """``guidance(xg, p_e, v_e, deck_rise, cues, dt, p_guid) -> (xg_next, reference)``."""
     xg, p_e, v_e = GUIDANCE_STATE.sym(), ca.SX.sym("p_e", 3), ca.SX.sym("v_e", 3)
-    deck_rise, gear_gap = ca.SX.sym("deck_rise"), ca.SX.sym("gear_gap")
+    deck_rise, cues = ca.SX.sym("deck_rise"), GUIDANCE_CUES.sym()
     dt, p_guid = ca.SX.sym("dt"), GUIDANCE_PARAMS.sym()
-    xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid)
-    return ca.Function("guidance", [xg, p_e, v_e, deck_rise, gear_gap, dt, p_guid],
+    xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid)
+    return ca.Function("guidance", [xg, p_e, v_e, deck_rise, cues, dt, p_guid],
                        [xg_next, reference],
-                       ["xg", "p_e", "v_e", "deck_rise", "gear_gap", "dt", "p_guid"],
+                       ["xg", "p_e", "v_e", "deck_rise", "cues", "dt", "p_guid"],
                        ["xg_next", "reference"])

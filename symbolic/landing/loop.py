@@ -42,6 +42,7 @@ from quadland_symbolic.landing.controller import (
     landing_law,
     landing_memory,
     landing_step_outputs,
+    measured_cues,
 )
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_PARAMS,
@@ -206,8 +207,9 @@ def landing_ride_functions(l: int, recorded: Layout = LANDING_RECORDED
     return ride_rhs, ride_row
 
 
-def landing_flight_step(l: int, y, cs: dict, ps: dict):
-    """One guidance step and one landing step on the measurements ``y``.
+def landing_flight_step(l: int, y, cues, cs: dict, ps: dict):
+    """One guidance step and one landing step on the measurements ``y`` and the
+    guidance's ``cues`` (:data:`~quadland_symbolic.landing.guidance.GUIDANCE_CUES`).
 
     ``cs``, ``ps``: the unpacked loop memory and controller parameters (with the
     fields ``xg``, ``mem`` and ``pp``, ``p_ctrl``, ``p_guid``, ``dt``). Returns
@@ -215,9 +217,10 @@ def landing_flight_step(l: int, y, cs: dict, ps: dict):
     step, the :data:`LANDING_RECORDED` signals and the landing step's results.
     """
     plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
-    args = dict(y=y, xg=cs["xg"], mem=cs["mem"], p_ctrl=ps["p_ctrl"], p_quad=plant_p["p_quad"],
-                p_act=plant_p["p_act"], p_guid=ps["p_guid"], dt=ps["dt"])
-    xg_next, ref = landing_guidance(cs["xg"], y, ps["dt"], ps["p_guid"])
+    args = dict(y=y, cues=cues, xg=cs["xg"], mem=cs["mem"], p_ctrl=ps["p_ctrl"],
+                p_quad=plant_p["p_quad"], p_act=plant_p["p_act"], p_guid=ps["p_guid"],
+                dt=ps["dt"])
+    xg_next, ref = landing_guidance(cs["xg"], y, cues, ps["dt"], ps["p_guid"])
     res = landing_law(l, y, ref, cs["mem"], ps["p_ctrl"], plant_p["p_quad"], plant_p["p_act"],
                       ps["dt"])
     rec = ca.vertcat(res["F_cmd"], res["eta_d"], POSITION_REFERENCE.unpack(ref)["p_ref"],
@@ -246,7 +249,7 @@ def landing_loop(l: int) -> LoopModel:
     xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
     cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
     y = measurement_function()(xp, t, ps["pp"])
-    args, xc_next, rec, res = landing_flight_step(l, y, cs, ps)
+    args, xc_next, rec, res = landing_flight_step(l, y, measured_cues(y, ps["p_guid"]), cs, ps)
     step_args = _named("step_args", [xp, xc, pc, first, t], list(args.values()),
                        ["xp", "xc", "pc", "first", "t"], list(args))
     controller = _named("controller", [xp, xc, pc, first, t],

@@ -27,8 +27,15 @@ tick ``t_k`` (period ``T``), does, in this order:
    sizes :data:`~quadland_symbolic.landing.estimator.FLIGHT_DEPTH`,
    :data:`~quadland_symbolic.landing.estimator.FLIGHT_COUPLING`) on the delivered
    packets; its output is the controller's measurement.
-5. **Flight code: guidance and landing step** on the estimate, with the controller's
-   own model ``pc.pp`` (:func:`~quadland_symbolic.landing.loop.landing_flight_step`).
+5. **Flight code: the land detector** (:mod:`quadland_symbolic.landing.land_detector`)
+   on its cues (:func:`detector_cues`): the delivered range, the estimated gear gap
+   and vertical speed, the thrust acting now over the model's hover thrust, the
+   IMU's specific force along body z and the guidance's phase. Its ground-contact
+   stage is the guidance's ``touchdown`` cue; the time since the filter last fused
+   a marker detection (the memory's ``marker_age``) is its ``marker_age``.
+6. **Flight code: guidance and landing step** on the estimate and those cues, with
+   the controller's own model ``pc.pp``
+   (:func:`~quadland_symbolic.landing.loop.landing_flight_step`).
 
 The recorded signals add the estimate and the filter's health to the unsensed
 loop's (:data:`SENSED_RECORDED`).
@@ -42,6 +49,7 @@ import math
 
 import casadi as ca
 
+from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
@@ -55,7 +63,18 @@ from quadland_symbolic.landing.estimator import (
     estimator_memory,
     estimator_step_function,
 )
-from quadland_symbolic.landing.guidance import GUIDANCE_PARAMS, GUIDANCE_STATE
+from quadland_symbolic.landing.guidance import (
+    DESCEND,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+)
+from quadland_symbolic.landing.land_detector import (
+    LAND_DETECTOR_FLAGS,
+    LAND_DETECTOR_PARAMS,
+    LAND_DETECTOR_STATE,
+    TIME_CAP,
+    land_detector_function,
+)
 from quadland_symbolic.landing.loop import (
     LANDING_RECORDED,
     landing_flight_step,
@@ -77,6 +96,7 @@ from quadland_symbolic.landing.plant import (
     LANDING_PLANT_STATE,
 )
 from quadland_symbolic.landing.quadrotor import COMMAND
+from quadland_symbolic.landing.relative import deck_gear_gap
 from quadland_symbolic.landing.sensors import (
     NOISES,
     SENSOR_NAMES,
@@ -87,10 +107,11 @@ from quadland_symbolic.landing.sensors import (
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.parameters import QUADROTOR
 
 __all__ = ["DELIVERY_SLOTS", "SENSED_TICK", "SENSED_RECORDED", "SENSED_TRAJECTORY", "NAV_PACKET_OF",
            "delivery_record", "delivery_delay", "sensed_loop_memory", "sensed_loop_params",
-           "landing_sensed_loop"]
+           "detector_cues", "landing_sensed_loop"]
 
 #: The longest delivery delay a sensor's line holds, in control periods (0.256 s at
 #: 250 Hz: past the filter's 0.2 s horizon and its largest packet age).
@@ -124,6 +145,9 @@ SENSED_RECORDED = Layout("rec_sensed", (
           elements=tuple(f"fused_{b.name}" for b in BLOCKS)),
     *(f for f in estimator_diagnostics().fields
       if f.name in ("n_fused", "n_rejected", "n_discarded", "n_dropped")),
+    Field("marker_age", 1, "s", "time since the filter last fused a marker detection"),
+    Field("detector", 3, "0/1", "the land detector's stages",
+          elements=("ground_contact", "maybe_landed", "landed")),
 ), "the landing step's signals, the navigation estimate and the filter's health")
 
 
@@ -162,6 +186,9 @@ def sensed_loop_memory(l: int) -> Layout:
         Field.nested("nav", estimator_memory(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING),
                      "navigation filter (flight code)"),
         Field.nested("imu_held", IMU, "the last IMU packet delivered (flight code)"),
+        Field.nested("xld", LAND_DETECTOR_STATE, "land detector (flight code)"),
+        Field("marker_age", 1, "s", "time since the filter last fused a marker detection "
+              "(flight code)"),
         *(Field(f"line_{name}", DELIVERY_SLOTS * delivery_record(name).size, "-",
                 f"{name} packets in delivery, newest first (world)")
           for name in SENSOR_NAMES),
@@ -177,6 +204,7 @@ def sensed_loop_params(l: int) -> Layout:
         Field.nested("p_guid", GUIDANCE_PARAMS, "guidance"),
         Field("dt", 1, "s", "control period"),
         Field.nested("p_est", estimator_params(), "navigation filter"),
+        Field.nested("p_ld", LAND_DETECTOR_PARAMS, "land detector"),
         Field.nested("p_sens", SENSOR_PARAMS, "the sensors' truth models (world)"),
         Field("delay", len(SENSOR_NAMES), "ticks", "each sensor's delivery delay (world)",
               elements=tuple(f"delay_{n}" for n in SENSOR_NAMES)),
@@ -200,6 +228,28 @@ def _deliver(name, xp, uh, w, t, pp, p_sens, tick, line, delay):
     return read, line_next
 
 
+def detector_cues(y, range_read, imu_now, uh_held, cs: dict, ps: dict):
+    """The land detector's :data:`~quadland_symbolic.landing.land_detector.LAND_DETECTOR_CUES`.
+
+    ``y``: the filter's :data:`LANDING_MEASUREMENT`; ``range_read``: the range
+    finder's delivered record (:func:`delivery_record`); ``imu_now``: this tick's
+    IMU packet; ``uh_held``: the rotor commands acting now. The ranged gap is
+    ``(s - h) n2 . b3`` (the beam and the gear both along ``-b3``, ``h`` the gear's
+    height below the centre, ``n2`` the deck normal from the broadcast attitude);
+    the thrust ratio uses the controller's own model of mass and gravity.
+    """
+    m, r = LANDING_MEASUREMENT.unpack(y), delivery_record("rangefinder").unpack(range_read)
+    h = GUIDANCE_PARAMS.unpack(ps["p_guid"])["touchdown_height"]
+    R2 = rotation(m["eta2"])
+    quad = QUADROTOR.unpack(LANDING_PLANT_PARAMS.unpack(ps["pp"])["p_quad"])
+    return ca.vertcat(
+        (r["s"] - h) * (R2[:, 2].T @ r["b3_E"]), r["fresh"],
+        deck_gear_gap(m["p_e"], R2, rotation(m["eta1"]), h), m["v_e"][2],
+        ca.sum1(uh_held) / (quad["m1"] * quad["g"]),
+        IMU.unpack(imu_now)["f_b"][2],
+        GUIDANCE_STATE.unpack(cs["xg"])["phase"] == DESCEND)
+
+
 @functools.cache
 def landing_sensed_loop(l: int) -> LoopModel:
     """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring)."""
@@ -220,14 +270,23 @@ def landing_sensed_loop(l: int) -> LoopModel:
     packets = [read[name] for name in ("vision", "gnss", "rangefinder", "datalink")]
     nav_next, y, diag = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)(
         cs["nav"], imu_now, *packets, ps["p_est"], ps["dt"], t)
-    _, xgm_next, rec, res = landing_flight_step(l, y, cs, ps)
     m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
+    xld_next, flags = land_detector_function()(
+        cs["xld"], detector_cues(y, read["rangefinder"], imu_now, uh, cs, ps), ps["p_ld"],
+        ps["dt"])
+    fl = LAND_DETECTOR_FLAGS.unpack(flags)
+    seen = d["fused"][[b.name for b in BLOCKS].index("vision")]
+    marker_age = ca.if_else(seen >= 0.5, 0, ca.fmin(cs["marker_age"] + ps["dt"], TIME_CAP))
+    cues = ca.vertcat(fl["ground_contact"], marker_age)
+    _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
     rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
-                     d["n_rejected"], d["n_discarded"], d["n_dropped"])
+                     d["n_rejected"], d["n_discarded"], d["n_dropped"], marker_age,
+                     fl["ground_contact"], fl["maybe_landed"], fl["landed"])
     controller = ca.Function(
         "controller", [xp, xc, pc, first, t, uh, w, pp, n],
-        [ca.vertcat(xgm_next, nav_next, imu_now, *lines), res["F_cmd"], rec, res["tilt"]],
+        [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],
+         rec, res["tilt"]],
         ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
         ["xc_next", "uh", "rec", "guard"])
     assemble = ca.Function("assemble", [xp, xc], [ca.vertcat(xp, cs["xg"], cs["mem"])],

@@ -119,8 +119,9 @@ class LandingApi:
         The library, its names spelled ``ql_`` in either precision
         (``ql_landing_step``, ``ql_guidance_step``, ``ql_check_landing_params``,
         ...).
-    LandingMeasurement, PositionReference, LandingState, LandingControllerParams,
-    ActuatorParams, LandingParams, LandingOutput, GuidanceState, GuidanceParams : type
+    LandingMeasurement, GuidanceCues, PositionReference, LandingState,
+    LandingControllerParams, ActuatorParams, LandingParams, LandingOutput, GuidanceState,
+    GuidanceParams : type
         ``ctypes.Structure`` mirrors of the header's structs (:func:`ctypes_struct`).
     real : type
         ``ctypes.c_double`` or ``ctypes.c_float``.
@@ -128,6 +129,7 @@ class LandingApi:
 
     lib: object
     LandingMeasurement: type
+    GuidanceCues: type
     PositionReference: type
     LandingState: type
     LandingControllerParams: type
@@ -154,8 +156,9 @@ def load_landing_api(l: int, precision: str = "double", opt: str = "-O2") -> Lan
     lib.ql_landing_step.argtypes = [P(api.LandingMeasurement), P(api.PositionReference),
                                     P(api.LandingParams), real, P(api.LandingState),
                                     P(api.LandingOutput)]
-    lib.ql_guidance_step.argtypes = [P(api.LandingMeasurement), P(api.GuidanceParams), real,
-                                     P(api.GuidanceState), P(api.PositionReference)]
+    lib.ql_guidance_step.argtypes = [P(api.LandingMeasurement), P(api.GuidanceCues),
+                                     P(api.GuidanceParams), real, P(api.GuidanceState),
+                                     P(api.PositionReference)]
     for name, struct in (("landing", api.LandingParams), ("guidance", api.GuidanceParams)):
         check = getattr(lib, f"ql_check_{name}_params")
         check.argtypes = [P(struct), P(ctypes.c_char_p)]

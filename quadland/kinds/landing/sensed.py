@@ -31,6 +31,11 @@ from quadland_symbolic.landing.estimator import (
     N_HIST,
     estimator_init_function,
 )
+from quadland_symbolic.landing.land_detector import (
+    LAND_DETECTOR_PARAMS,
+    LAND_DETECTOR_STATE,
+    TIME_CAP,
+)
 from quadland_symbolic.landing.loop import landing_loop_memory, landing_loop_params
 from quadland_symbolic.landing.navigation import DECK_INIT, IMU, NAV, estimator_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
@@ -106,13 +111,16 @@ def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, n
     pc = sensed_loop_params(l).pack(dict(
         pp=base_pc["pp"], p_ctrl=base_pc["p_ctrl"], p_guid=base_pc["p_guid"],
         dt=base_pc["dt"], p_est=estimator_p(scenario, g), p_sens=sensor_params(settings),
-        delay=[delivery_delay(settings[n]["latency"], 1.0 / rate) for n in SENSOR_NAMES]))
+        delay=[delivery_delay(settings[n]["latency"], 1.0 / rate) for n in SENSOR_NAMES],
+        p_ld=LAND_DETECTOR_PARAMS.pack(scenario.data["land_detector"])))
     q = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])
     hover = IMU.pack(dict(eta_hat=q["eta1"], f_b=[0.0, 0.0, g], omega=q["Omega1"]))
     lay = sensed_loop_memory(l)
     lines = {f"line_{n}": np.zeros(lay[f"line_{n}"].size) for n in SENSOR_NAMES}
+    # the detector starts from zero; the marker is not seen before the first detection
     xc0 = lay.pack(dict(xg=base_xc["xg"], mem=base_xc["mem"], nav=_handover(scenario, lv),
-                        imu_held=hover, **lines))
+                        imu_held=hover, xld=LAND_DETECTOR_STATE.zeros(), marker_age=TIME_CAP,
+                        **lines))
     return pc, xc0
 
 

@@ -132,7 +132,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         descent_time=g["descent_time"], touchdown_speed=g["touchdown_speed"],
         touchdown_height=q["gear_height"], max_offset=g["max_offset"],
         max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"],
-        settle_time=g["settle_time"]))
+        settle_time=g["settle_time"], marker_timeout=g["marker_timeout"],
+        search_height=g["search_height"]))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
