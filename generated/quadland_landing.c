@@ -143,7 +143,7 @@ static const ql_real default_p_act[3] = {
 static const ql_real default_p_guid[13] = {
     3.0, 0.5, 1.0, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
-    6.0,
+    10.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)

@@ -213,3 +213,23 @@ def test_perfect_cues_are_the_measured_gear_gap():
         cues = GUIDANCE_CUES.unpack(np.asarray(fn(y, pg), dtype=float).ravel())
         assert cues["touchdown"][0] == (1.0 if dz < 0 else float(z_e - 0.2 * n2b3 <= 0))
         assert cues["marker_age"][0] == 0.0
+
+
+def test_the_approach_holds_its_height_until_the_marker_is_seen():
+    """Started 2 m above the hover height without the marker, the approach flies level
+    (z_ref held); seen from step 100, the hover point glides down at descent_speed, and the
+    approach ends within align_radius of [0, 0, z_ref] (not of the hover height)."""
+    xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=5.0, aborts=0))
+
+    def script(k, z_ref):              # at the hover point's height, 1 m out
+        return [-1.0 + k * 1e-3, 0.0, z_ref], [0.5, 0.0, 0.0], 0.0, 1.0, \
+            (10.0 if k < 100 else 0.0)
+    rows, _ = _run(script, 600, xg)
+    st = [GUIDANCE_STATE.unpack(x) for x, _ in rows]
+    z = np.array([s["z_ref"][0] for s in st])
+    assert np.all(z[:101] == 5.0)
+    np.testing.assert_allclose(z[101:500] - z[100:499], -0.7 * DT, atol=1e-12)
+    # |-1 + k 1e-3| <= 0.5 first at step k = 500 (z_ref still 4.44 m there: 1.4 m above
+    # the hover height, so a distance to [0, 0, hover_height] would not end it)
+    phases = [s["phase"][0] for s in st]
+    assert phases.index(ALIGN) == 501 and z[500] > 4.4

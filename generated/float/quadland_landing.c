@@ -143,7 +143,7 @@ static const qlf_real default_p_act[3] = {
 static const qlf_real default_p_guid[13] = {
     3.0f, 0.5f, 1.0f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
-    6.0f,
+    10.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)

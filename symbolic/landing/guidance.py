@@ -6,8 +6,9 @@ origin) and produces the reference the position loop tracks. Its state is
 :data:`GUIDANCE_STATE`: the phase, a dwell timer, the descent reference height and
 the abort count. Phases (:data:`PHASES`):
 
-0. **approach**: the reference is the hover point ``[0, 0, hover_height]``;
-   it leaves when the quadrotor is within ``align_radius`` of it;
+0. **approach**: the reference is the hover point ``[0, 0, z_ref]``, ``z_ref``
+   the hover height (see "The marker" for where it differs); it leaves when the
+   quadrotor is within ``align_radius`` of it;
 1. **align**: hold the hover point until the horizontal offset is within
    half of ``max_offset`` and the horizontal relative speed within half of
    ``max_relative_speed`` for ``dwell_time`` without a break;
@@ -32,7 +33,10 @@ time since the navigation last fused a marker detection) is within
 longer climbs to ``search_height``, where the camera's cone covers more of
 the deck, at ``descent_speed``, and comes back down to ``hover_height`` once
 the marker is seen again (a GNSS bias larger than the camera's footprint at
-the hover point would otherwise hold it beside the pad).
+the hover point would otherwise hold it beside the pad). In the approach the
+hover point's height holds until the marker is seen: the flight stack starts
+it at the handover height, when that is above ``hover_height``, so that no
+descent is flown on a height only GNSS knows.
 
 **Abort.** During the descent, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
@@ -143,7 +147,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     hover = p["hover_height"]
     offset = ca.norm_2(p_e[0:2])
     speed = ca.norm_2(v_e[0:2])
-    to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, hover))
+    to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
 
     in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
     in_touchdown = phase == TOUCHDOWN
@@ -174,15 +178,16 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     # a heaving deck may have moved away, and the quadrotor must meet it
     descending = ca.logic_and(in_descend, ca.logic_not(ca.logic_or(abort, contact)))
     z_fall = z_ref - rate * dt
-    # in align the hover height glides to the search height while the marker is
-    # not seen, and back (exactly hover_height once there: hover + 0)
-    target = ca.if_else(seen, hover, p["search_height"])
+    # before the descent the hover point's height glides at descent_speed: to
+    # hover_height while the marker is seen; without it, it holds in the approach
+    # and climbs to search_height in align (exactly hover_height once there:
+    # hover + 0, and so always on perfect sensing)
+    target = ca.if_else(seen, hover, ca.if_else(in_align, p["search_height"], z_ref))
     step = p["descent_speed"] * dt
     z_glide = z_ref + ca.fmin(ca.fmax(target - z_ref, -step), step)
     z_next = ca.if_else(descending, z_fall,
                         ca.if_else(phase_next >= TOUCHDOWN, z_ref,
-                                   ca.if_else(ca.logic_and(in_align, ca.logic_not(abort)),
-                                              z_glide, hover)))
+                                   ca.if_else(abort, hover, z_glide)))
 
     vz = ca.if_else(descending, -rate, 0)
     # d/dt of -rate: the rate is h / descent_time where it is not clamped

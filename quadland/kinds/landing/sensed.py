@@ -31,6 +31,7 @@ from quadland_symbolic.landing.estimator import (
     N_HIST,
     estimator_init_function,
 )
+from quadland_symbolic.landing.guidance import GUIDANCE_STATE
 from quadland_symbolic.landing.land_detector import (
     LAND_DETECTOR_PARAMS,
     LAND_DETECTOR_STATE,
@@ -76,8 +77,9 @@ def estimator_p(scenario: Scenario, g: float) -> np.ndarray:
     return lay.pack({f.name: g if f.name == "g" else e[f.name] for f in lay.fields})
 
 
-def _handover(scenario: Scenario, lv: LandingValues) -> np.ndarray:
-    """The filter's memory at t = 0: the true relative motion plus a draw from ``P0``."""
+def _handover(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, np.ndarray]:
+    """The filter's memory at t = 0 and its state estimate ``NAV``: the true relative
+    motion plus a draw from ``P0``."""
     e, seed = scenario.data["estimator"], scenario.data["simulation"]["seed"]
     xs = LANDING_PLANT_STATE.unpack(lv.xp0)
     p = LANDING_PLANT_PARAMS.unpack(lv.pp)
@@ -97,7 +99,7 @@ def _handover(scenario: Scenario, lv: LandingValues) -> np.ndarray:
     x0 = truth + error
     deck0 = DECK_INIT.pack(dict(eta2=eta2, w2E=w2, w2E_dot=w2_dot))
     init = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
-    return np.asarray(init(x0, sigma ** 2, deck0, 0.0), dtype=float).ravel()
+    return np.asarray(init(x0, sigma ** 2, deck0, 0.0), dtype=float).ravel(), x0
 
 
 def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, np.ndarray]:
@@ -117,8 +119,13 @@ def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, n
     hover = IMU.pack(dict(eta_hat=q["eta1"], f_b=[0.0, 0.0, g], omega=q["Omega1"]))
     lay = sensed_loop_memory(l)
     lines = {f"line_{n}": np.zeros(lay[f"line_{n}"].size) for n in SENSOR_NAMES}
-    # the detector starts from zero; the marker is not seen before the first detection
-    xc0 = lay.pack(dict(xg=base_xc["xg"], mem=base_xc["mem"], nav=_handover(scenario, lv),
+    # the detector starts from zero; the marker is not seen before the first detection,
+    # and the hover point starts at the handover's estimated height when that is higher
+    # (no descent on a height only GNSS knows: the guidance's "The marker")
+    nav, x0 = _handover(scenario, lv)
+    xg = GUIDANCE_STATE.unpack(base_xc["xg"])
+    xg["z_ref"] = np.maximum(xg["z_ref"], NAV.unpack(x0)["p_r"][2])
+    xc0 = lay.pack(dict(xg=GUIDANCE_STATE.pack(xg), mem=base_xc["mem"], nav=nav,
                         imu_held=hover, xld=LAND_DETECTOR_STATE.zeros(), marker_age=TIME_CAP,
                         **lines))
     return pc, xc0
