@@ -7,21 +7,24 @@ its envelope and its result's columns.
 
 from __future__ import annotations
 
+import os
+
 from quadland.engine.plan import SimulationPlan
 from quadland.engine.result import SimulationResult, columns_sidecar
 from quadland.kinds import kind_of
-from quadland.scenario import Scenario
+from quadland.scenario import Scenario, load_scenario
 
 __all__ = ["simulate", "simulation_plan", "check_run", "SimulationResult", "columns_sidecar"]
 
 
-def simulate(scenario: Scenario) -> SimulationResult:
+def simulate(scenario: Scenario | str | os.PathLike) -> SimulationResult:
     """Simulate a scenario's closed loop.
 
     Parameters
     ----------
-    scenario : Scenario
-        From :func:`quadland.load_scenario`.
+    scenario : Scenario, str or path
+        From :func:`quadland.load_scenario`, or what it loads: a shipped
+        scenario's name or a TOML file.
 
     Returns
     -------
@@ -45,6 +48,8 @@ def simulate(scenario: Scenario) -> SimulationResult:
     >>> float(res["t"][-1]), len(res["t"])
     (0.5, 51)
     """
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
     return kind_of(scenario).simulate(scenario)
 
 

@@ -105,3 +105,18 @@ def test_sampled_data_loop_converges_to_continuous():
 def test_vehicle_reaches_its_steady_turn(default_run):
     """r2 -> tau_z / d33 = 5/80 rad/s (eq. 4 with m11 = m22)."""
     assert default_run["r2"][-1] == pytest.approx(5 / 80, rel=1e-3)
+
+
+def test_simulate_takes_a_name_and_a_landing_imports_no_scipy():
+    # issue 20: scipy.signal was most of a second of every landing process's start
+    import subprocess
+    import sys
+
+    code = ("import sys, quadland\n"
+            "r = quadland.simulate('highway')\n"
+            "assert r.scenario.name == 'highway'\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy'))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"

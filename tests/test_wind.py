@@ -62,3 +62,20 @@ def test_one_cosine_gust():
     assert speed.max() == pytest.approx(6.0) and t[np.argmax(speed)] == pytest.approx(3.5)
     inside = (t >= 2.0) & (t <= 5.0)
     np.testing.assert_allclose(speed[inside], 3.0 * (1 - np.cos(np.pi * (t[inside] - 2.0) / 1.5)))
+
+
+def test_the_turbulence_recursion_is_scipys_lfilter_bit_for_bit():
+    # issue 20: scipy.signal cost most of a second to import in every landing process;
+    # the recursion replacing its one call must give the same bits
+    import scipy.signal
+
+    from quadland.engine.wind import first_order_recursion
+
+    rng = np.random.default_rng(7)
+    for a, b, n in ((0.99935, 0.0366, 4000), (0.957, 0.29, 1000), (0.0, 1.3, 10),
+                    (1.0 - 1e-12, 1e-6, 100), (0.5, 2.0, 1)):
+        x, u0 = rng.standard_normal(n), float(rng.standard_normal())
+        ref = scipy.signal.lfilter([b], [1.0, -a], x, zi=[a * u0])[0]
+        got = first_order_recursion(a, b, x, u0)
+        assert got.tobytes() == ref.tobytes(), (a, b, n)
+    assert first_order_recursion(0.5, 1.0, np.zeros(0), 1.0).shape == (0,)
