@@ -120,3 +120,48 @@ def test_simulate_takes_a_name_and_a_landing_imports_no_scipy():
                          timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
+
+
+def test_a_result_is_read_only_and_converts_to_pandas():
+    pd = pytest.importorskip("pandas")
+    res = simulate(load_scenario("highway", ["simulation.duration=0.2"]))
+    with pytest.raises(ValueError, match="read-only"):
+        res["z_e"][0] = 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        res.states[0, 0] = 1.0
+    with pytest.raises(TypeError):
+        res.columns["z_e"] = np.zeros(3)
+    frame = res.to_pandas()
+    # the CSV's columns, in its order, and its numbers (to the CSV's 12 digits)
+    csv_frame = pd.read_csv(io.StringIO(res.to_csv()))
+    assert list(frame.columns) == list(csv_frame.columns)
+    np.testing.assert_allclose(frame.to_numpy(), csv_frame.to_numpy(), rtol=1e-11, atol=1e-300)
+    assert frame.attrs["units"]["z_e"] == "m" and frame.attrs["scenario"] == "highway"
+    frame.loc[0, "z_e"] = 5.0                       # a copy: the result is untouched
+    assert res["z_e"][0] != 5.0
+    picked = res.to_pandas(["t", "F_1"])
+    assert list(picked.columns) == ["t", "F_1"] and len(picked) == len(res["t"])
+    with pytest.raises(KeyError, match="no signal 'nope'"):
+        res.to_pandas(["t", "nope"])
+    # what pd.DataFrame of a mapping gives, and the way around it the docstring names
+    assert pd.DataFrame(dict(res)).shape == (len(res["t"]), len(res))
+
+
+def test_a_scheduler_without_dask_distributed_is_one_line(monkeypatch):
+    import builtins
+
+    from quadland.campaign.cluster import connect
+    from quadland.exceptions import QuadlandError
+
+    real = builtins.__import__
+
+    def no_distributed(name, *args, **kwargs):
+        if name.split(".")[0] == "distributed":
+            raise ImportError("No module named 'distributed'")
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_distributed)
+    with pytest.raises(QuadlandError) as err:
+        connect("tcp://127.0.0.1:8786")
+    assert str(err.value) == ("scheduler: needs the dask.distributed package "
+                              "(pip install 'quadland[cluster]')")

@@ -69,7 +69,7 @@ def connect(address: str):
         from distributed import Client
     except ImportError:
         raise CampaignError("scheduler: needs the dask.distributed package "
-                            "(pip install 'dask[distributed]')") from None
+                            "(pip install 'quadland[cluster]')") from None
     _reachable(address)
     _handshake(address)
     try:

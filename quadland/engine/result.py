@@ -5,7 +5,8 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -23,13 +24,22 @@ class SimulationResult(Mapping):
     ``result["t"]``, ``result["z_e"]``, ...; ``states`` is the loop's state at
     each row, ``(len(t), nx)``. ``layout`` names the columns of
     ``trajectory.csv`` (the loop kind's: the paper's loop writes all its
-    signals, a landing a selection of the many it records).
+    signals, a landing a selection of the many it records). Every array is
+    read-only, and so is the mapping: a result is a record of a run.
+    :meth:`to_pandas` gives a ``pandas.DataFrame`` (``pd.DataFrame(result)``
+    would see a mapping's keys only; ``pd.DataFrame(dict(result))`` works too).
     """
 
     scenario: Any
     columns: Mapping[str, np.ndarray]
     states: np.ndarray
     layout: Layout
+
+    def __post_init__(self):
+        for array in (*self.columns.values(), self.states):
+            if isinstance(array, np.ndarray):
+                array.flags.writeable = False
+        object.__setattr__(self, "columns", MappingProxyType(dict(self.columns)))
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
@@ -56,6 +66,44 @@ class SimulationResult(Mapping):
         if path is not None:
             write_text_atomic(path, text)
         return text
+
+    def to_pandas(self, columns: Iterable[str] | None = None):
+        """The trajectory as a ``pandas.DataFrame``, one column per signal.
+
+        Parameters
+        ----------
+        columns : iterable of str, optional
+            Which signals, in order; by default those of ``trajectory.csv``
+            (:attr:`layout`). ``list(result)`` names all of them.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Copies of the arrays (writable); ``attrs["units"]`` maps each
+            column of the layout to its unit, ``attrs["scenario"]`` is the
+            scenario's name.
+
+        Raises
+        ------
+        ImportError
+            Without pandas (``pip install 'quadland[pandas]'``).
+        KeyError
+            For a name the result does not have.
+        """
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("SimulationResult.to_pandas needs pandas "
+                              "(pip install 'quadland[pandas]')") from None
+        names = list(self.layout.element_names() if columns is None else columns)
+        missing = [n for n in names if n not in self.columns]
+        if missing:
+            raise KeyError(f"no signal {missing[0]!r} in this result (list(result) names them)")
+        frame = pd.DataFrame({n: np.array(self.columns[n]) for n in names})
+        frame.attrs["units"] = dict(zip(self.layout.element_names(),
+                                        self.layout.element_units(), strict=True))
+        frame.attrs["scenario"] = getattr(self.scenario, "name", None)
+        return frame
 
     def truncated(self, n: int) -> SimulationResult:
         """The first ``n`` rows."""
