@@ -201,7 +201,24 @@ def _run_simulate(args) -> int:
     out = run_simulation(args.scenario, args.overrides, args.out, plots=not args.no_plots,
                          animate=args.animate)
     print(f"quadland: wrote {out}")
+    for line in _result_lines(out):
+        print(line)
     return 0
+
+
+def _result_lines(out: Path) -> list[str]:
+    """The run's verdict and figures from the summary.json just written (none if absent)."""
+    import json
+
+    from quadland.kinds import KINDS
+    from quadland.scenario import DEFAULT_MODEL
+
+    try:
+        summary = json.loads((Path(out) / "summary.json").read_text())
+        model = summary["scenario"]["scenario"].get("model", DEFAULT_MODEL)
+        return KINDS[model].result_lines(summary)
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return []
 
 
 def _run_codegen(args) -> int:

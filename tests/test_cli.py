@@ -616,3 +616,34 @@ def test_the_console_script_is_the_early_entry_point():
 
     project = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
     assert project["project"]["scripts"]["quadland"] == "quadland.__main__:main"
+
+
+def test_simulate_prints_the_verdict_and_figures(tmp_path, capsys):
+    """A landing's verdict and first-contact figures against their limits, and the paper
+    loop's settling and its below-deck flag, as summary.json holds them (issue 21)."""
+    out = tmp_path / "hw"
+    assert main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    land = json.loads((out / "summary.json").read_text())["landing"]
+    assert lines[0] == f"quadland: wrote {out}"
+    assert lines[1] == f"landing: success (touchdown at {land['time']:.2f} s, 0 aborts)"
+    assert lines[2].split() == ["sink", "rate", f"{land['sink_rate']:.3f}", "m/s", "limit",
+                                "0.5"]
+    assert lines[5].split()[:2] == ["tilt", f"{land['tilt_deg']:.3f}"]
+    assert lines[6].startswith("  navigation: position error at touchdown ")
+    # a limit the touchdown misses is named, and its row marked
+    out2 = tmp_path / "hw2"
+    assert main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out2), "--set",
+                 "landing.max_sink_rate=0.1"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    land = json.loads((out2 / "summary.json").read_text())["landing"]
+    assert lines[1].startswith(f"landing: FAILED: sink rate {land['sink_rate']:.3g} > 0.1 m/s")
+    assert lines[2].endswith("limit 0.1  over")
+    out3 = tmp_path / "paper"
+    assert main(["simulate", "--no-plots", "--out", str(out3), "--set",
+                 "simulation.duration=2"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    errors = json.loads((out3 / "summary.json").read_text())["errors"]
+    settle = errors["phi_e"]["settling_time"]
+    assert lines[1].startswith("paper loop: settling (within the band to the end): z_e ")
+    assert (f"phi_e {settle:.2f} s" if settle is not None else "phi_e never") in lines[1]

@@ -102,6 +102,11 @@ class LoopKind(abc.ABC):
     def run_metrics(self, result: SimulationResult) -> dict[str, float | None]:
         """The run's :attr:`metrics` by name (None where undefined)."""
 
+    def result_lines(self, summary: Mapping[str, Any]) -> list[str]:
+        """What ``quadland simulate`` prints of a finished run: its verdict and figures,
+        a few lines read from its ``summary.json`` object (none by default)."""
+        return []
+
     def limits(self, scenario: Scenario,
                extra: Mapping[str, float] | None = None) -> dict[str, float]:
         """Each limited metric's upper limit: the scenario's own keys, then ``extra``'s."""

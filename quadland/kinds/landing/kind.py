@@ -63,6 +63,9 @@ class LandingKind(LoopKind):
     def summary(self, result: SimulationResult) -> dict:
         return report.landing_summary(result)
 
+    def result_lines(self, summary: Mapping[str, Any]) -> list[str]:
+        return report.landing_result_lines(summary)
+
     def run_metrics(self, result: SimulationResult) -> dict[str, float | None]:
         return report.landing_run_metrics(result)
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +19,7 @@ from quadland_symbolic.landing.relative import (
 )
 
 __all__ = ["TOUCHDOWN_LIMITS", "TouchdownReport", "touchdown_report", "landing_summary",
-           "false_touchdown", "navigation_summary", "CONTACT_GAP",
+           "false_touchdown", "navigation_summary", "CONTACT_GAP", "landing_result_lines",
            "LANDING_METRICS", "landing_run_metrics", "touchdown_limits"]
 
 
@@ -213,3 +215,34 @@ def landing_run_metrics(result) -> dict[str, float | None]:
             "false_touchdown": float(false_touchdown(result) is not None)}
 
 
+
+
+#: How ``quadland simulate`` names each touchdown figure, its unit and its limit's key.
+_PRINTED = (("sink rate", "sink_rate", "m/s", "max_sink_rate"),
+            ("offset", "offset", "m", "max_offset"),
+            ("relative speed", "relative_speed", "m/s", "max_relative_speed"),
+            ("tilt", "tilt_deg", "deg", "max_tilt_deg"))
+
+
+def landing_result_lines(summary: Mapping[str, Any]) -> list[str]:
+    """The landing's verdict and first-contact figures against their limits, for the
+    terminal (:meth:`quadland.kinds.base.LoopKind.result_lines`)."""
+    land = summary["landing"]
+    aborts = f"{land['aborts']} abort{'' if land['aborts'] == 1 else 's'}"
+    if not land["touchdown"]:
+        return [f"landing: FAILED: no touchdown ({aborts})"]
+    over = [f"{name} {land[key]:.3g} > {land['limits'][lim]:g} {unit}"
+            for name, key, unit, lim in _PRINTED if land[key] > land["limits"][lim]]
+    verdict = "success" if land["success"] else "FAILED: " + "; ".join(over)
+    lines = [f"landing: {verdict} (touchdown at {land['time']:.2f} s, {aborts})"]
+    for name, key, unit, lim in _PRINTED:
+        mark = "  over" if land[key] > land["limits"][lim] else ""
+        lines.append(f"  {name:<15}{land[key]:8.3f} {unit:<4} limit {land['limits'][lim]:g}"
+                     f"{mark}")
+    nav = summary.get("navigation")
+    if nav is not None:
+        err = nav["error"]["position"]["at_touchdown"]
+        lines.append(f"  navigation: position error at touchdown "
+                     f"{'-' if err is None else f'{100 * err:.1f} cm'}, false touchdown "
+                     f"{'yes' if nav['false_touchdown'] else 'no'}")
+    return lines

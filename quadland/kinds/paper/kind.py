@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from quadland.engine.envelope import Envelope
@@ -52,6 +53,9 @@ class PaperKind(LoopKind):
 
     def summary(self, result: SimulationResult) -> dict:
         return report.summarize(result)
+
+    def result_lines(self, summary: Mapping[str, Any]) -> list[str]:
+        return report.paper_result_lines(summary)
 
     def run_metrics(self, result: SimulationResult) -> dict[str, float | None]:
         return report.paper_run_metrics(result)

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 
 from quadland.engine.result import SimulationResult
 from quadland.metrics import Metric, settling_time
 
 __all__ = ["SETTLING_FRACTION", "SETTLING_FLOOR", "PAPER_METRICS", "summarize",
-           "paper_run_metrics"]
+           "paper_run_metrics", "paper_result_lines"]
 
 #: Settling band as a fraction of the initial error (the 2 % criterion).
 SETTLING_FRACTION = 0.02
@@ -105,3 +108,21 @@ def paper_run_metrics(result) -> dict[str, float | None]:
         abs(errors[n]["final"]) for n in ("phi_e", "theta_e", "psi_e"))))
     out["rotor_max"] = summary["inputs"]["rotor_max"]
     return {k: None if v is None or not np.isfinite(v) else float(v) for k, v in out.items()}
+
+
+def paper_result_lines(summary: Mapping[str, Any]) -> list[str]:
+    """The paper loop's settling figures and flags, for the terminal
+    (:meth:`quadland.kinds.base.LoopKind.result_lines`)."""
+    errors = summary["errors"]
+    parts = []
+    for name in ("z_e", "phi_e", "theta_e", "psi_e"):
+        e = errors[name]
+        settled = "never" if e["settling_time"] is None else f"{e['settling_time']:.2f} s"
+        parts.append(f"{name} {settled}")
+    lines = ["paper loop: settling (within the band to the end): " + ", ".join(parts)]
+    z = errors["z_e"]
+    lines.append(f"  z_e: peak {z['peak']['value']:.3g} m at {z['peak']['time']:.2f} s, final "
+                 f"{z['final']:.3g} m (band {z['settling_band']:g} m)")
+    if summary.get("landed_below_deck"):
+        lines.append("  flag: landed_below_deck: z_e went below the deck (z_e < 0)")
+    return lines
