@@ -103,20 +103,45 @@ def build_parser() -> argparse.ArgumentParser:
     ``--help`` and ``--version`` print and exit as usual.
     """
     from quadland import __version__
+    from quadland.scenario import scenario_names
 
     parser = _Parser(
         prog="quadland",
-        description="Adaptive RBFNN backstepping landing of a quadrotor on a moving vehicle.")
+        description="Adaptive RBFNN backstepping landing of a quadrotor on a moving vehicle.",
+        epilog=f"shipped scenarios: {', '.join(scenario_names())} (quadland scenarios "
+               "describes them)")
     parser.add_argument("--version", action="version", version=f"quadland {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for add in (_simulate_parser, _codegen_parser, _margins_parser, _campaign_parser):
+    for add in (_simulate_parser, _codegen_parser, _margins_parser, _campaign_parser,
+                _scenarios_parser):
         add(sub)
     return parser
 
 
+def _scenarios_parser(sub) -> None:
+    sc = sub.add_parser("scenarios", help="list the shipped scenarios",
+                        description="The shipped scenarios: name, model and description, "
+                                    "one line each.")
+    sc.set_defaults(handler=_run_scenarios)
+
+
+def _run_scenarios(args) -> int:
+    from quadland.scenario import load_scenario, scenario_names
+
+    rows = []
+    for name in scenario_names():
+        sc = load_scenario(name)
+        rows.append((name, sc.model, sc.data["scenario"].get("description", "")))
+    width = max(len(r[0]) for r in rows)
+    for name, model, text in rows:
+        print(f"{name:<{width}}  {model:<8} {text}")
+    return 0
+
+
 def _scenario_args(p) -> None:
     p.add_argument("--scenario", default="paper", metavar="NAME|PATH",
-                   help="a shipped scenario's name or a TOML file (default: paper)")
+                   help="a shipped scenario's name (quadland scenarios lists them) or a TOML "
+                        "file (default: paper)")
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="SECTION.KEY=VALUE",
                    help="override one scenario value (repeatable); the value is TOML")

@@ -647,3 +647,23 @@ def test_simulate_prints_the_verdict_and_figures(tmp_path, capsys):
     settle = errors["phi_e"]["settling_time"]
     assert lines[1].startswith("paper loop: settling (within the band to the end): z_e ")
     assert (f"phi_e {settle:.2f} s" if settle is not None else "phi_e never") in lines[1]
+
+
+def test_scenarios_lists_each_shipped_one_and_help_names_them(capsys):
+    import tomllib
+    from pathlib import Path
+
+    folder = Path(__file__).resolve().parents[1] / "quadland" / "scenarios"
+    files = sorted(folder.glob("*.toml"))
+    assert main(["scenarios"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == len(files)
+    for line, path in zip(lines, files, strict=True):
+        table = tomllib.loads(path.read_text())["scenario"]
+        name, model, text = line.split(None, 2)
+        assert name == path.stem and model == table.get("model", "paper")
+        assert text == table["description"]
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert f"shipped scenarios: {', '.join(p.stem for p in files)}" in \
+        " ".join(capsys.readouterr().out.split())
