@@ -221,10 +221,11 @@ def campaign_spec_of(scenario) -> CampaignSpec:
         One line naming the entry at fault.
     """
     from quadland.exceptions import CampaignError
+    from quadland.scenario import SCENARIO_DIR
 
     if scenario.campaign_table is None:
-        raise CampaignError(f"scenario: {scenario.name} has no [campaign] table "
-                            "(docs/campaign.md shows one)")
+        raise CampaignError(f"scenario: {scenario.name} has no [campaign] table (the "
+                            f"shipped {SCENARIO_DIR / 'highway.toml'} has one)")
     return campaign_spec(scenario.campaign_table, scenario.data, scenario.model,
                          scenario.source)
 
