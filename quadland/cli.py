@@ -268,9 +268,12 @@ def _run_margins(args) -> int:
     # OpenBLAS threads on matrices of a few hundred rows cost more than they
     # bring: 3-5x slower on a busy 2-core machine.
     with output_folder(args.out, scenario.name, "margins") as folder, threadpool_limits(1):
+        print(f"quadland: margins of {scenario.name}: linearizing, then the loops' frequency "
+              "responses...", flush=True)
         report = margin_report(scenario, args.at, requirement, args.delay_periods)
         figures = {}
         if not args.no_plots:
+            print(f"quadland: margins of {scenario.name}: the figures...", flush=True)
             from quadland.plots import margin_figures
 
             figures = {name: figure_png(fig) for name, fig in margin_figures(report).items()}

@@ -206,8 +206,8 @@ class LoopReport:
     multiloop_disk : MultiloopDiskMargin
     poles : PoleSummary
     passed : bool
-        Stable and every loop passed (the multiloop disk margin has its own
-        verdict and is not part of this one).
+        The requirement met: stable, every loop (with the others closed), and
+        the multiloop disk margin.
     rate_hz : float or None
         Hz, the controller's rate of a sampled loop; None for continuous time.
     computation_delay_periods : int or None
@@ -239,8 +239,9 @@ class LoopReport:
 
     @property
     def failed(self) -> tuple[str, ...]:
-        """Names of the loops that did not pass."""
-        return tuple(m.name for m in self.loops if not m.passed)
+        """Names of the loops that did not pass, then ``"multiloop disk"`` if it did not."""
+        return tuple(m.name for m in self.loops if not m.passed) + (
+            () if self.multiloop_disk.passed else ("multiloop disk",))
 
     def to_dict(self) -> dict:
         """The ``continuous`` or ``sampled`` entry of ``margins.json`` (infinities kept)."""

@@ -90,7 +90,8 @@ def _loop_report(L: control.StateSpace, names, req: Requirement, rate_hz: float 
     report = LoopReport(stable=stable, loops=loops,
                         multiloop_disk=MultiloopDiskMargin(multi, bool(multi_ok)),
                         poles=_pole_summary(poles, float(L.dt) if L.dt else 0.0),
-                        passed=bool(stable and all(m.passed for m in loops)), rate_hz=rate_hz,
+                        passed=bool(stable and multi_ok and all(m.passed for m in loops)),
+                        rate_hz=rate_hz,
                         computation_delay_periods=delay_periods)
     return report, poles
 
