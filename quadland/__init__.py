@@ -11,7 +11,7 @@ __all__ = ["__version__", "QuadlandError", "ScenarioError", "SimulationError", "
            "load_scenario", "SimulationResult", "simulate", "kind_of", "KINDS", "allmargin",
            "diskmargin", "equilibrium", "frozen_point", "linear_models", "sampled_models",
            "Requirement", "MarginReport", "margin_report", "format_report",
-           "simulation_figures", "margin_figures", "run_campaign"]
+           "simulation_figures", "margin_figures", "run_campaign", "nlsys"]
 
 _LAZY = {"QuadlandError": "quadland.exceptions", "ScenarioError": "quadland.exceptions",
          "SimulationError": "quadland.exceptions", "Scenario": "quadland.scenario",
@@ -23,7 +23,8 @@ _LAZY = {"QuadlandError": "quadland.exceptions", "ScenarioError": "quadland.exce
          "sampled_models": "quadland.linearization", "Requirement": "quadland.margins",
          "MarginReport": "quadland.margins", "margin_report": "quadland.margins",
          "format_report": "quadland.margins", "simulation_figures": "quadland.plots",
-         "margin_figures": "quadland.plots", "run_campaign": "quadland.campaign.execute"}
+         "margin_figures": "quadland.plots", "run_campaign": "quadland.campaign.execute",
+         "nlsys": "quadland.nonlinear"}
 
 
 def _version() -> str:

@@ -25,7 +25,7 @@ LAYERS = (
     ("quadland.plots",),
     ("quadland.kinds",),
     ("quadland.simulation", "quadland.linearization", "quadland.margins", "quadland.run",
-     "quadland.codegen", "quadland.campaign"),
+     "quadland.codegen", "quadland.campaign", "quadland.nonlinear"),
     ("quadland.cli", "quadland.__main__"),
 )
 

@@ -102,6 +102,15 @@ class LoopKind(abc.ABC):
     def run_metrics(self, result: SimulationResult) -> dict[str, float | None]:
         """The run's :attr:`metrics` by name (None where undefined)."""
 
+    def io_values(self, scenario: Scenario) -> dict[str, Any]:
+        """The numbers that close the loop model's functions for ``scenario``.
+
+        ``{"x0", "p"}``: the continuous closed loop's initial state and
+        parameters (None where the loop is sampled-data only); ``{"xp0",
+        "pp"}``: the plant's initial state and parameters (``quadland.nlsys``).
+        """
+        raise NotImplementedError(f"{self.name}: no values for quadland.nlsys")
+
     def result_lines(self, summary: Mapping[str, Any]) -> list[str]:
         """What ``quadland simulate`` prints of a finished run: its verdict and figures,
         a few lines read from its ``summary.json`` object (none by default)."""

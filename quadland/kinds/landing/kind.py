@@ -63,6 +63,12 @@ class LandingKind(LoopKind):
     def summary(self, result: SimulationResult) -> dict:
         return report.landing_summary(result)
 
+    def io_values(self, scenario: Scenario) -> dict[str, Any]:
+        from quadland.kinds.landing.values import landing_values
+
+        lv = landing_values(scenario)
+        return {"x0": None, "p": None, "xp0": lv.xp0, "pp": lv.pp}
+
     def result_lines(self, summary: Mapping[str, Any]) -> list[str]:
         return report.landing_result_lines(summary)
 

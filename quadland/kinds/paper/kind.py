@@ -54,6 +54,17 @@ class PaperKind(LoopKind):
     def summary(self, result: SimulationResult) -> dict:
         return report.summarize(result)
 
+    def io_values(self, scenario: Scenario) -> dict[str, Any]:
+        from quadland.kinds.paper.values import model_values
+        from quadland_symbolic.closed_loop import PAPER_PLANT_STATE, closed_loop_state
+        from quadland_symbolic.paper_loop import PAPER_PLANT_PARAMS
+
+        mv = model_values(scenario)
+        x = closed_loop_state(mv.l).unpack(mv.x0)
+        return {"x0": mv.x0, "p": mv.p,
+                "xp0": PAPER_PLANT_STATE.pack({n: x[n] for n in PAPER_PLANT_STATE.names()}),
+                "pp": PAPER_PLANT_PARAMS.pack(dict(p_quad=mv.p_quad, p_veh=mv.p_veh))}
+
     def result_lines(self, summary: Mapping[str, Any]) -> list[str]:
         return report.paper_result_lines(summary)
 
