@@ -139,6 +139,11 @@ def test_a_result_is_read_only_and_converts_to_pandas():
     assert frame.attrs["units"]["z_e"] == "m" and frame.attrs["scenario"] == "highway"
     frame.loc[0, "z_e"] = 5.0                       # a copy: the result is untouched
     assert res["z_e"][0] != 5.0
+    # the states' columns are named: the landing loop's plant first
+    assert len(res.state_labels) == res.states.shape[1]
+    assert res.state_labels[:3] == ("x1", "y1", "z1")
+    k = res.state_labels.index("z1")
+    np.testing.assert_array_equal(res.states[:, k], res["z1"])
     picked = res.to_pandas(["t", "F_1"])
     assert list(picked.columns) == ["t", "F_1"] and len(picked) == len(res["t"])
     with pytest.raises(KeyError, match="no signal 'nope'"):

@@ -22,9 +22,10 @@ class SimulationResult(Mapping):
     """The outputs of one simulation, each a NumPy array by name.
 
     ``result["t"]``, ``result["z_e"]``, ...; ``states`` is the loop's state at
-    each row, ``(len(t), nx)``. ``layout`` names the columns of
-    ``trajectory.csv`` (the loop kind's: the paper's loop writes all its
-    signals, a landing a selection of the many it records). Every array is
+    each row, ``(len(t), nx)``, its columns named by :attr:`state_labels`.
+    ``layout`` names the columns of ``trajectory.csv`` (the loop kind's: the
+    paper's loop writes all its signals, a landing a selection of the many it
+    records). Every array is
     read-only, and so is the mapping: a result is a record of a run.
     :meth:`to_pandas` gives a ``pandas.DataFrame`` (``pd.DataFrame(result)``
     would see a mapping's keys only; ``pd.DataFrame(dict(result))`` works too).
@@ -34,6 +35,7 @@ class SimulationResult(Mapping):
     columns: Mapping[str, np.ndarray]
     states: np.ndarray
     layout: Layout
+    state_layout: Layout | None = None
 
     def __post_init__(self):
         for array in (*self.columns.values(), self.states):
@@ -66,6 +68,13 @@ class SimulationResult(Mapping):
         if path is not None:
             write_text_atomic(path, text)
         return text
+
+    @property
+    def state_labels(self) -> tuple[str, ...]:
+        """The name of each column of :attr:`states` (the loop's state layout's)."""
+        if self.state_layout is None:
+            return tuple(f"x[{i}]" for i in range(self.states.shape[1]))
+        return tuple(self.state_layout.element_names())
 
     def to_pandas(self, columns: Iterable[str] | None = None):
         """The trajectory as a ``pandas.DataFrame``, one column per signal.
@@ -108,7 +117,7 @@ class SimulationResult(Mapping):
     def truncated(self, n: int) -> SimulationResult:
         """The first ``n`` rows."""
         return SimulationResult(self.scenario, {k: v[:n] for k, v in self.columns.items()},
-                                self.states[:n], self.layout)
+                                self.states[:n], self.layout, self.state_layout)
 
 
 def columns_sidecar(layout: Layout) -> dict:

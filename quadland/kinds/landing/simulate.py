@@ -296,4 +296,5 @@ def _result(scenario, times, X, R, Y, recorded=LANDING_RECORDED) -> SimulationRe
     cols.update(zip(recorded.element_names(), R.T, strict=True))
     layout = LANDING_TRAJECTORY if recorded is LANDING_RECORDED else SENSED_TRAJECTORY
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
-                                       for k, v in cols.items()}, X, layout)
+                                       for k, v in cols.items()}, X, layout,
+                            landing_loop_state(scenario["rbf.nodes"]))

@@ -468,4 +468,4 @@ def _result(scenario, mv, t_out, w_out, X, Y, held):
         rows = np.asarray(data[f.name], dtype=float).reshape(f.size, -1)
         cols.update(zip(f.element_names(), rows, strict=True))
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
-                                       for k, v in cols.items()}, X, TRAJECTORY)
+                                       for k, v in cols.items()}, X, TRAJECTORY, lay)
