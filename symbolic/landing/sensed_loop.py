@@ -124,6 +124,7 @@ SENSED_RECORDED = Layout("rec_sensed", (
           elements=tuple(f"fused_{b.name}" for b in BLOCKS)),
     *(f for f in estimator_diagnostics().fields
       if f.name in ("n_fused", "n_rejected", "n_discarded", "n_dropped")),
+    estimator_diagnostics()["n_held"],
 ), "the landing step's signals, the navigation estimate and the filter's health")
 
 
@@ -224,7 +225,7 @@ def landing_sensed_loop(l: int) -> LoopModel:
     m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
     rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
-                     d["n_rejected"], d["n_discarded"], d["n_dropped"])
+                     d["n_rejected"], d["n_discarded"], d["n_dropped"], d["n_held"])
     controller = ca.Function(
         "controller", [xp, xc, pc, first, t, uh, w, pp, n],
         [ca.vertcat(xgm_next, nav_next, imu_now, *lines), res["F_cmd"], rec, res["tilt"]],
