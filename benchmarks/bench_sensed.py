@@ -27,7 +27,7 @@ sensing):
 
 Run from the repository root::
 
-    python benchmarks/bench_sensed.py            # about five minutes
+    python benchmarks/bench_sensed.py            # about six minutes
     python benchmarks/bench_sensed.py --write    # and rewrite docs/performance.md's part
 
 ``--write`` replaces the text between ``<!-- bench_sensed: begin -->`` and
@@ -37,6 +37,7 @@ Run from the repository root::
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import tempfile
@@ -253,7 +254,8 @@ def campaign(name: str, mode: str, repeats: int) -> list[float]:
 
 def measure(repeats: int) -> dict:
     start = time.perf_counter()
-    m = {"machine": machine(), "sizes": sizes(), "filter_step": filter_step_seconds()}
+    m = {"machine": machine(), "load": [os.getloadavg()[0]], "sizes": sizes(),
+         "filter_step": filter_step_seconds()}
     for name in SCENARIOS:
         m[name] = {"warm": {mode: warm(name, mode) for mode in MODES},
                    "draws": draws(name), "ticks_flown": ticks_flown(name),
@@ -261,6 +263,7 @@ def measure(repeats: int) -> dict:
                    "cold": {mode: cold(name, mode) for mode in MODES},
                    "campaign": {mode: campaign(name, mode, repeats) for mode in MODES}}
     m["elapsed"] = time.perf_counter() - start
+    m["load"].append(os.getloadavg()[0])
     return m
 
 
@@ -328,13 +331,15 @@ def render(m: dict) -> str:
                        f"({e.wall - k.wall:,.2f}) |")
     out += ["", f"**A {CAMPAIGN_RUNS}-run campaign** (the shipped `[campaign]` table, "
             f"{WORKERS} local processes, wall time from the first run submitted to the last "
-            f"recorded, median of {len(m[SCENARIOS[0]]['campaign']['sensed'])}):", "",
-            "| scenario | on sensors (s) | perfect sensing (s) | sensors / perfect |",
+            f"recorded, median (min to max) of {len(m[SCENARIOS[0]]['campaign']['sensed'])}):",
+            "", "| scenario | on sensors (s) | perfect sensing (s) | sensors / perfect |",
             "| --- | ---: | ---: | ---: |"]
     for name in SCENARIOS:
-        c = {mode: statistics.median(v) for mode, v in m[name]["campaign"].items()}
-        out.append(f"| `{name}` | {c['sensed']:.2f} ({CAMPAIGN_RUNS / c['sensed']:.1f} runs/s) "
-                   f"| {c['perfect']:.2f} ({CAMPAIGN_RUNS / c['perfect']:.1f} runs/s) | "
+        v = m[name]["campaign"]
+        c = {mode: statistics.median(w) for mode, w in v.items()}
+        cells = [f"{c[k]:.2f} ({min(v[k]):.2f} to {max(v[k]):.2f}; "
+                 f"{CAMPAIGN_RUNS / c[k]:.1f} runs/s)" for k in ("sensed", "perfect")]
+        out.append(f"| `{name}` | {cells[0]} | {cells[1]} | "
                    f"{c['sensed'] / c['perfect']:.1f}x |")
     z = m["sizes"]
     s, p = z["sensed"], z["perfect"]
@@ -347,6 +352,9 @@ def render(m: dict) -> str:
             f"{p['controller_ops']:,}; the filter's step is {z['filter_ops']:,} of them "
             f"({100 * z['filter_ops'] / s['controller_ops']:.0f} %), the sensors' models and "
             "delivery lines most of the rest.",
+            f"- The machine is shared: its load average (1 min) was {m['load'][0]:.1f} when "
+            f"the run began and {m['load'][1]:.1f} when it ended, on 2 cores; the wall times "
+            "of the campaigns suffer most from other jobs, the CPU times least.",
             "- Machine: " + "; ".join(f"{k} {v}" for k, v in m["machine"].items()) + ".",
             "", END]
     return "\n".join(out)
@@ -363,7 +371,7 @@ def write(text: str, path: Path = DOC) -> None:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=3, help="campaigns per scenario and loop")
+    ap.add_argument("--repeats", type=int, default=5, help="campaigns per scenario and loop")
     ap.add_argument("--write", action="store_true", help="rewrite docs/performance.md's part")
     args = ap.parse_args(argv)
     m = measure(args.repeats)
