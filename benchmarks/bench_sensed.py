@@ -17,8 +17,9 @@ sensing):
   loop's compiled controller and cannot be timed inside it;
 * the build, cold: a fresh interpreter flying the landing with an empty cache (a
   fresh ``XDG_CACHE_HOME``: the simulator's C generated and compiled, then the first
-  call) and with the simulator cached (loaded); whole-process CPU time (user + system,
-  the compilers included) and wall time, medians; the build is their difference;
+  call) and with the simulator cached (loaded); CPU time (user + system, the
+  compilers included) and wall time, medians, of the whole process and, timed inside
+  it, of the simulator's build (or load) and of the first call;
 * the simulator's size: the C of its sampled part and the CasADi operations of its
   controller, the filter's among them;
 * a 100-run campaign of the scenario's shipped ``[campaign]`` table on 2 local
@@ -37,16 +38,19 @@ Run from the repository root::
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import resource
 import statistics
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
-from bench_simulate import Timing, empty_cache, machine, time_call, time_process
+from bench_simulate import Timing, empty_cache, machine, time_call
 
 import quadland
 from quadland.campaign.execute import run_campaign
@@ -227,14 +231,62 @@ def sizes() -> dict:
 
 # --- cold -----------------------------------------------------------------------
 
+#: A fresh interpreter flying one landing, timing its phases: the imports and the
+#: scenario, the simulator (generated and compiled, or loaded from the cache), the first
+#: call. CPU times count the compilers (children) too.
+COLD_CODE = """
+import json, resource, time
+def cpu():
+    s, c = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime
+def now():
+    return cpu(), time.perf_counter()
+a = now()
+import quadland
+from quadland.kinds.landing.simulate import landing_loop_part
+from quadland.kinds.landing.values import landing_values
+sc = quadland.load_scenario({name!r}, {overrides!r})
+b = now()
+landing_loop_part(landing_values(sc).l, "sampled", {sensed!r})
+c = now()
+quadland.simulate(sc)
+d = now()
+print(json.dumps(dict(build=[c[0] - b[0], c[1] - b[1]], first=[d[0] - c[0], d[1] - c[1]])))
+"""
+
+
+def _phases(code: str, env: dict | None) -> dict:
+    """One fresh interpreter: its phases, and the whole process's CPU and wall time."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    w = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT,
+                         env=dict(os.environ, **(env or {})), capture_output=True,
+                         text=True).stdout
+    wall = time.perf_counter() - w
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    phases = json.loads(out.strip().splitlines()[-1])
+    phases["whole"] = [after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime,
+                       wall]
+    return phases
+
+
 def cold(name: str, mode: str) -> dict:
-    """Fresh interpreters: with an empty cache (the build included) and a cached one."""
-    code = ("import quadland; "
-            f"quadland.simulate(quadland.load_scenario({name!r}, {MODES[mode]!r}))")
-    empty = time_process(code, COLD_EMPTY_RUNS, empty_cache)
-    time_process(code, 1)                                      # the default cache built
-    cached = time_process(code, COLD_CACHED_RUNS)
-    return {"empty": empty, "cached": cached}
+    """Fresh interpreters: with an empty cache (the build included) and a cached one.
+
+    Per case and phase (``whole``, ``build``, ``first``), the medians of CPU and wall s.
+    """
+    code = COLD_CODE.format(name=name, overrides=MODES[mode], sensed=mode == "sensed")
+    runs = {"empty": [], "cached": []}
+    for _ in range(COLD_EMPTY_RUNS):
+        env, clean = empty_cache()
+        try:
+            runs["empty"].append(_phases(code, env))
+        finally:
+            clean()
+    _phases(code, None)                                        # the default cache built
+    runs["cached"] = [_phases(code, None) for _ in range(COLD_CACHED_RUNS)]
+    return {case: {k: [statistics.median(r[k][i] for r in rs) for i in (0, 1)]
+                   for k in ("whole", "build", "first")} for case, rs in runs.items()}
 
 
 # --- campaign -------------------------------------------------------------------
@@ -271,10 +323,6 @@ def measure(repeats: int) -> dict:
 
 def _ms(t: Timing) -> str:
     return f"{t.median * 1e3:,.1f} ({t.low * 1e3:,.1f} to {t.high * 1e3:,.1f})"
-
-
-def _s(t: Timing) -> str:
-    return f"{t.median:,.2f} ({t.wall:,.2f})"
 
 
 def render(m: dict) -> str:
@@ -317,18 +365,24 @@ def render(m: dict) -> str:
         out.append(f"| `{name}` | {total * 1e3:.1f} | {pct(draws_t.median)}, {n:,} ticks | "
                    f"{pct(fl)}; perfect {fp * 1e3:.1f} | {pct(f_est)}, "
                    f"{r['ticks_flown']:,} ticks | {pct(rest)} |")
-    out += ["", f"**Cold** (a fresh interpreter flying the landing, whole process: CPU s "
-            f"(wall s); runs: {COLD_EMPTY_RUNS} with an empty cache, {COLD_CACHED_RUNS} "
-            "with the simulator cached; the build is their difference):", "",
-            "| scenario, loop | empty cache | cached | the build (generate, compile) |",
-            "| --- | ---: | ---: | ---: |"]
+    out += ["", "**Cold**: a fresh interpreter flying the landing, with an empty cache "
+            "(a fresh `XDG_CACHE_HOME`: the simulator's C generated and compiled, "
+            f"{COLD_EMPTY_RUNS} runs) and with the simulator cached (loaded, "
+            f"{COLD_CACHED_RUNS} runs); CPU s (wall s), medians; the whole process, and in "
+            "it the simulator's build or load and the first call (ms):", "",
+            "| scenario, loop | empty cache: whole | the build | its first call (ms) | "
+            "cached: whole | the load | its first call (ms) |",
+            "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for name in SCENARIOS:
         for mode in MODES:
-            c = m[name]["cold"][mode]
-            e, k = c["empty"], c["cached"]
+            e, k = m[name]["cold"][mode]["empty"], m[name]["cold"][mode]["cached"]
+            cells = []
+            for case in (e, k):
+                cells += [f"{case['whole'][0]:,.2f} ({case['whole'][1]:,.2f})",
+                          f"{case['build'][0]:,.2f} ({case['build'][1]:,.2f})",
+                          f"{case['first'][0] * 1e3:,.0f} ({case['first'][1] * 1e3:,.0f})"]
             out.append(f"| `{name}`, {'on sensors' if mode == 'sensed' else 'perfect'} | "
-                       f"{_s(e)} | {_s(k)} | {e.median - k.median:,.2f} "
-                       f"({e.wall - k.wall:,.2f}) |")
+                       + " | ".join(cells) + " |")
     out += ["", f"**A {CAMPAIGN_RUNS}-run campaign** (the shipped `[campaign]` table, "
             f"{WORKERS} local processes, wall time from the first run submitted to the last "
             f"recorded, median (min to max) of {len(m[SCENARIOS[0]]['campaign']['sensed'])}):",
