@@ -113,10 +113,11 @@ typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, deck_tau, 561, 0) &&
     AT(ql_estimator_memory, n_fused, 562, 0) &&
     AT(ql_estimator_memory, n_rejected, 569, 0) &&
-    AT(ql_estimator_memory, n_discarded, 576, 0) &&
-    AT(ql_estimator_memory, n_dropped, 580, 0) &&
-    AT(ql_estimator_memory, n_imu_invalid, 584, 0) &&
-    sizeof(ql_estimator_memory) == 585 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_memory, n_held, 576, 0) &&
+    AT(ql_estimator_memory, n_discarded, 583, 0) &&
+    AT(ql_estimator_memory, n_dropped, 587, 0) &&
+    AT(ql_estimator_memory, n_imu_invalid, 591, 0) &&
+    sizeof(ql_estimator_memory) == 592 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(ql_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -128,18 +129,20 @@ typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, nis, 19, 0) &&
     AT(ql_estimator_diagnostics, fused, 26, 0) &&
     AT(ql_estimator_diagnostics, rejected, 33, 0) &&
-    AT(ql_estimator_diagnostics, discarded, 40, 0) &&
-    AT(ql_estimator_diagnostics, dropped, 44, 0) &&
-    AT(ql_estimator_diagnostics, imu_invalid, 48, 0) &&
-    AT(ql_estimator_diagnostics, n_fused, 49, 0) &&
-    AT(ql_estimator_diagnostics, n_rejected, 56, 0) &&
-    AT(ql_estimator_diagnostics, n_discarded, 63, 0) &&
-    AT(ql_estimator_diagnostics, n_dropped, 67, 0) &&
-    AT(ql_estimator_diagnostics, n_imu_invalid, 71, 0) &&
-    AT(ql_estimator_diagnostics, x_h, 72, 0) &&
-    AT(ql_estimator_diagnostics, P_diag, 90, 0) &&
-    AT(ql_estimator_diagnostics, t_h, 108, 0) &&
-    sizeof(ql_estimator_diagnostics) == 109 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_diagnostics, held, 40, 0) &&
+    AT(ql_estimator_diagnostics, discarded, 47, 0) &&
+    AT(ql_estimator_diagnostics, dropped, 51, 0) &&
+    AT(ql_estimator_diagnostics, imu_invalid, 55, 0) &&
+    AT(ql_estimator_diagnostics, n_fused, 56, 0) &&
+    AT(ql_estimator_diagnostics, n_rejected, 63, 0) &&
+    AT(ql_estimator_diagnostics, n_held, 70, 0) &&
+    AT(ql_estimator_diagnostics, n_discarded, 77, 0) &&
+    AT(ql_estimator_diagnostics, n_dropped, 81, 0) &&
+    AT(ql_estimator_diagnostics, n_imu_invalid, 85, 0) &&
+    AT(ql_estimator_diagnostics, x_h, 86, 0) &&
+    AT(ql_estimator_diagnostics, P_diag, 104, 0) &&
+    AT(ql_estimator_diagnostics, t_h, 122, 0) &&
+    sizeof(ql_estimator_diagnostics) == 123 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
 static const ql_real default_p_est[46] = {

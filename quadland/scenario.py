@@ -27,6 +27,7 @@ from quadland.schema import (
     MODELS,
     SCHEMAS,
     check_value,
+    did_you_mean,
     nest_sections,
     show,
     split_dotted,
@@ -36,8 +37,6 @@ __all__ = ["Scenario", "load_scenario", "scenario_names", "SCENARIO_DIR", "toml_
 
 #: Folder of the scenarios shipped with quadland.
 SCENARIO_DIR = Path(__file__).parent / "scenarios"
-
-
 
 
 @dataclasses.dataclass(frozen=True)
@@ -218,12 +217,12 @@ def load_scenario(name_or_path: str | Path = "paper",
             continue
         if not any(section in schema for schema in SCHEMAS.values()):
             raise ScenarioError(f"override {show(dotted)}: "
-                                f"{_unknown('section', show(section), _SECTIONS)}")
+                                f"{_unknown('section', section, _SECTIONS)}")
         known = {k for schema in SCHEMAS.values() for k in schema.get(section, {})}
-        if key not in known:
-            name = f"{section}.{show(key)}"
-            raise ScenarioError(f"override {show(dotted)}: "
-                                f"{_unknown('key', name, _dotted_all(section))}")
+        if key not in known:                        # a dot left in it: a sub-section's
+            raise ScenarioError(f"override {show(dotted)}: " + (
+                _unknown("section", f"{section}.{key.rpartition('.')[0]}", _SECTIONS)
+                if "." in key else _unknown("key", f"{section}.{key}", _dotted_all(section))))
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise ScenarioError(f"{path}: [{section}] must be a table")
@@ -401,8 +400,8 @@ def _parse_overrides(overrides) -> list[tuple[str, Any]]:
 
 
 def _unknown(what: str, name: str, known: Iterable[str]) -> str:
-    hint = difflib.get_close_matches(name, list(known), n=1)
-    return f"unknown {what} '{name}'" + (f" (did you mean '{hint[0]}'?)" if hint else "")
+    hint = did_you_mean(name, known)
+    return f"unknown {what} '{show(name)}'" + (f" (did you mean '{hint}'?)" if hint else "")
 
 
 def _model(raw: Mapping) -> str:
@@ -435,16 +434,18 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario",
         if section not in schema:
             given = [d for (s, _), d in overridden.items() if s == section]
             where = f"override {show(given[0])}" if given else source
-            raise ScenarioError(f"{where}: {_unknown('section', show(section), schema)}"
+            raise ScenarioError(f"{where}: {_unknown('section', section, schema)}"
                                 + _other_model(section, model))
         if not isinstance(table, Mapping):
             raise ScenarioError(f"{source}: [{section}] must be a table")
         for key in table:
             if key not in schema[section]:
-                dotted = f"{section}.{show(key)}"
                 where = f"override {show(overridden[section, key])}" \
                     if (section, key) in overridden else source
-                raise ScenarioError(f"{where}: {_unknown('key', dotted, _dotted(section, model))}"
+                name = f"{section}.{key}"
+                if isinstance(table[key], Mapping):     # [sensors.visoin]: a sub-table
+                    raise ScenarioError(f"{where}: {_unknown('section', name, schema)}")
+                raise ScenarioError(f"{where}: {_unknown('key', name, _dotted(section, model))}"
                                     + _other_model(section, model, key))
     for section, fields in schema.items():
         table = raw.get(section, {})

@@ -140,6 +140,30 @@ def test_mistakes_are_one_line(tmp_path, table, message):
     assert "\n" not in str(info.value)
 
 
+
+HIGHWAY = (SCENARIO_DIR / "highway.toml").read_text().split("\n[campaign]")[0]
+
+
+@pytest.mark.parametrize("key, meant", [
+    ("sensors.visoin.latency", "sensors.vision.latency"),
+    ("sensors.vision.latncy", "sensors.vision.latency"),
+    ("estimatr.range_sigma", "estimator.range_sigma"),
+])
+def test_a_misspelt_sensor_key_dispersed_names_the_one_meant(tmp_path, key, meant):
+    table = GOOD.replace("quadrotor.mass", key).replace("relative", "absolute")
+    with pytest.raises(ScenarioError) as info:
+        _load(tmp_path, table, HIGHWAY)
+    assert str(info.value) == (f"campaign.dispersions.\"{key}\": not a key of this "
+                               f"scenario's schema (did you mean '{meant}'?)")
+
+
+def test_a_key_with_nothing_close_suggests_nothing(tmp_path):
+    # before, the section's shared prefix made 'quadrotor.mass' the closest
+    with pytest.raises(ScenarioError) as info:
+        _load(tmp_path, GOOD.replace("quadrotor.mass", "quadrotor.xyz"))
+    assert str(info.value) == ("campaign.dispersions.\"quadrotor.xyz\": not a key of this "
+                               "scenario's schema")
+
 def test_a_landing_key_in_a_paper_campaign_is_refused(tmp_path):
     with pytest.raises(ScenarioError, match="not a key of this scenario's schema"):
         _load(tmp_path, GOOD.replace("quadrotor.mass", "deck.height"))

@@ -7,6 +7,7 @@ import re
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -90,6 +91,54 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, args, message):
     assert not out.exists()
     assert list(tmp_path.iterdir()) == []
 
+
+
+HIGHWAY = Path(__file__).resolve().parents[1] / "quadland" / "scenarios" / "highway.toml"
+
+#: A misspelt sensor section or key by each path: the scenario file, --set and a campaign's
+#: dispersion key (the command, the file's change or override, the line's end).
+MISSPELT = [
+    ("simulate", ("[sensors.vision]\n", "[sensors.visoin]\n"), None,
+     "unknown section 'sensors.visoin' (did you mean 'sensors.vision'?)"),
+    ("simulate", ("[sensors.vision]\nrate_hz", "[sensors.vision]\nratehz"), None,
+     "unknown key 'sensors.vision.ratehz' (did you mean 'sensors.vision.rate_hz'?)"),
+    ("simulate", ("[estimator]", "[estimatr]"), None,
+     "unknown section 'estimatr' (did you mean 'estimator'?)"),
+    ("simulate", None, "sensors.gnss.latncy=0.1",
+     "--set sensors.gnss.latncy: unknown key 'sensors.gnss.latncy' "
+     "(did you mean 'sensors.gnss.latency'?)"),
+    ("simulate", None, "sensors.visoin.latency=0.1",
+     "--set sensors.visoin.latency: unknown section 'sensors.visoin' "
+     "(did you mean 'sensors.vision'?)"),
+    ("campaign", ('"sensors.vision.latency"', '"sensors.visoin.latency"'), None,
+     "campaign.dispersions.\"sensors.visoin.latency\": not a key of this scenario's "
+     "schema (did you mean 'sensors.vision.latency'?)"),
+    ("campaign", None, "sensors.vision.latncy=0.1",
+     "--set sensors.vision.latncy: unknown key 'sensors.vision.latncy' "
+     "(did you mean 'sensors.vision.latency'?)"),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command, change, override, message", MISSPELT)
+def test_a_misspelt_sensor_is_one_line_exit_2_and_writes_nothing(tmp_path, command, change,
+                                                                 override, message):
+    scenario, made = "highway", []
+    if change is not None:
+        text = HIGHWAY.read_text()
+        assert text.count(change[0]) == 1
+        scenario = tmp_path / "s.toml"
+        scenario.write_text(text.replace(*change))
+        made = [scenario]
+    args = [command, "--scenario", str(scenario), "--out", str(tmp_path / "out"),
+            *(["--set", override] if override else []), *(["--runs", "2"]
+                                                          if command == "campaign" else [])]
+    proc = _run(*args, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    (line,) = proc.stderr.splitlines()
+    where = f"{scenario}: " if change and command == "simulate" else ""
+    assert line == f"quadland: error: {where}{message}"
+    assert proc.stdout == "" and list(tmp_path.iterdir()) == made
 
 def test_malformed_file(tmp_path):
     bad = tmp_path / "bad.toml"

@@ -187,6 +187,10 @@ def test_step_equals_its_casadi_function_bit_for_bit(seed):
     assert np.all(last["n_fused"] > 0) and np.all(last["n_discarded"] > 0)
     assert np.all(last["n_dropped"] > 0) and last["n_imu_invalid"] > 0
     assert last["n_rejected"][[b.name for b in BLOCKS].index("vision")] > 0
+    # only a range is ever held back before its gate (a grazing beam; E12a is off here)
+    held = dict(zip([b.name for b in BLOCKS], last["n_held"], strict=True))
+    held.pop("range")
+    assert not any(held.values())
     # the IMU's attitude and rates pass through; a NaN there is the IMU's, nothing else is
     for y, d, imu in rows:
         yy = LANDING_MEASUREMENT.unpack(y)
@@ -216,6 +220,75 @@ def test_float_build_flies_the_same_filter():
         a, b = LANDING_MEASUREMENT.unpack(yd), LANDING_MEASUREMENT.unpack(yf)
         np.testing.assert_allclose(b["p_e"], a["p_e"], atol=1e-3)
         np.testing.assert_allclose(b["v_e"], a["v_e"], atol=1e-3)
+
+
+# --- rejected by the gate, or held back off the deck -------------------------
+
+#: Ranges in the order they arrive, worked out by hand: the quadrotor 3 m above the
+#: pad of a level deck (``p_r = (0, 0, 3)``, the deck's normal e_z), its position known
+#: to 1 cm per axis (variances 1e-4 m^2), the beam tilted by ``deg`` about y
+#: (``b3_E = (sin, 0, cos)``), the measured distance ``3 / cos + off``. The beam's
+#: predicted deck point is ``3 tan(deg)`` from the pad centre, the margin
+#: ``range_deck_sigmas sqrt(2e-4) = 0.028 m``, the deck radius 0.5 m (E12a);
+#: ``range_min_cos`` 0.7 (E12); the gate 6.63 on ``NIS = off^2 / S`` with
+#: ``S <= 1e-4 / cos^2 + 0.05^2`` (the variance only shrinks as ranges are fused).
+HAND_RANGES = (
+    (0, 0.0, "fused"),      # on the pad, NIS 0
+    (0, 1.0, "rejected"),   # NIS >= 1 / 0.0026 = 385
+    (5, 0.0, "fused"),      # deck point 0.262 + 0.028 <= 0.5
+    (20, 0.0, "held"),      # deck point 1.092: the beam may miss the deck (E12a)
+    (20, 1.0, "held"),      # off the deck and off the prediction: held, never gated
+    (50, 0.0, "held"),      # cos 0.643 < 0.7: a beam grazing the deck (E12)
+    (5, -0.5, "rejected"),  # NIS >= 0.25 / 0.0026 = 96
+    (30, 1.0, "held"),      # deck point 1.73
+    (0, 0.0, "fused"),
+)
+
+
+def _hand_ranges(c, oracle=None):
+    """Fly :data:`HAND_RANGES`, one per step while the horizon stays at the handover (its
+    buffer of empty periods filling), so each is due in the step it arrives."""
+    t0 = 3.0
+    x0, P0 = np.zeros(18), np.r_[[1e-4] * 3, [0.25] * 15]
+    x0[2] = 3.0
+    assert c.init(x0, P0, np.zeros(9), t0) == STATUS["QL_OK"]
+    for layout in NAV_PACKETS:
+        c.v[layout.name][:] = 0.0
+    c.v["imu"][:] = np.r_[0.0, 0.0, 0.0, 0.0, 0.0, G, 0.0, 0.0, 0.0]
+    flags = []
+    for k, (deg, off, _) in enumerate(HAND_RANGES):
+        a = math.radians(deg)
+        c.v["range"][:] = [1.0, t0, 3.0 / math.cos(a) + off, math.sin(a), 0.0, math.cos(a)]
+        t = t0 + (k + 1) * DT
+        args = [c.v[n].astype(float) for n in ("mem", "imu", *SENSORS, "params")]
+        assert c.step(DT, t) == STATUS["QL_OK"]
+        if oracle is not None:
+            for got, want in zip((c.v["mem"], c.v["y"], c.v["diag"]), oracle(*args, DT, t),
+                                 strict=True):
+                np.testing.assert_array_equal(_bits(got), _bits(np.asarray(want).ravel()))
+        flags.append(DIAG.unpack(c.v["diag"].astype(float)))
+    return flags
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_gate_rejections_and_ranges_off_the_deck_are_counted_apart(precision):
+    """Each range of :data:`HAND_RANGES` fused, rejected by its gate or held back as its
+    hand derivation says, in the step's flags and counters, C equal to CasADi."""
+    c = Call(load(precision))
+    oracle = (estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+              if precision == "double" else None)
+    flags = _hand_ranges(c, oracle)
+    r = [b.name for b in BLOCKS].index("range")
+    for d, (deg, off, want) in zip(flags, HAND_RANGES, strict=True):
+        got = [k for k in ("fused", "rejected", "held") if d[k][r] == 1]
+        assert got == [want], (deg, off, got)
+        others = np.delete(np.r_[d["fused"], d["rejected"], d["held"]], [r, r + 7, r + 14])
+        assert not np.any(others)
+    last = flags[-1]
+    want = {k: sum(w == k for _, _, w in HAND_RANGES) for k in ("fused", "rejected", "held")}
+    assert want == {"fused": 3, "rejected": 2, "held": 4}
+    for k, n in want.items():
+        np.testing.assert_array_equal(last[f"n_{k}"], np.eye(7)[r] * n)
 
 
 # --- errors -------------------------------------------------------------------

@@ -18,8 +18,10 @@ Each call starts from a random memory (a handover, then random buffered inputs,
 FIFO contents and counts, counters and broadcast), random packets (fresh or not,
 due, late, old or from the future) and a random IMU sample, then overwrites a few
 entries with extreme (huge, tiny, subnormal, negative zero), non-finite or raw-bit
-values. Two campaigns per precision, as tests/test_fuzz_landing_step.py: through
-``ctypes`` (:data:`CALLS` calls, the oracle above) and, where the compiler has
+values; one call in twenty holds a covariance entry at the largest finite value,
+whose products overflow (``QL_ERR_NONFINITE_OUTPUT`` by design, not by chance).
+Two campaigns per precision, as tests/test_fuzz_landing_step.py: through ``ctypes``
+(:data:`CALLS` calls, the oracle above) and, where the compiler has
 AddressSanitizer and UndefinedBehaviorSanitizer, a C driver built with them
 (:data:`SANITIZED_CALLS` calls). ``python tests/test_fuzz_estimator_step.py N [SEED]``
 runs a longer ctypes campaign and prints the outcomes.
@@ -63,6 +65,7 @@ MEM = flight_memory()
 DT = 0.004
 COUNTS = [MEM.slice(f"count_{s}").start for s in SENSORS]
 RANGE_MIN_COS = estimator_params().slice("range_min_cos").start
+P_H = MEM.offsets()["P_h"]
 Y_IMU = np.r_[np.arange(*LANDING_MEASUREMENT.offsets()["eta1"]),
               np.arange(*LANDING_MEASUREMENT.offsets()["Omega1"])]
 Y_FILTER = np.setdiff1d(np.arange(LANDING_MEASUREMENT.size), Y_IMU)
@@ -99,7 +102,8 @@ class _Harness:
             fifo[:, :n] = rng.normal(size=(fifo.shape[0], n))
             fifo[0, :n] = np.sort(t0 + rng.uniform(-0.1, 0.3, n))
             mem[f"fifo_{s}"], mem[f"count_{s}"] = fifo, float(n)
-        for name in ("n_fused", "n_rejected", "n_discarded", "n_dropped", "n_imu_invalid"):
+        for name in ("n_fused", "n_rejected", "n_discarded", "n_dropped", "n_held",
+                     "n_imu_invalid"):
             mem[name] = rng.integers(0, 1000, size=np.size(mem[name])).astype(float)
         v["mem"][:] = MEM.pack(mem)
         v["params"][:] = self.p0
@@ -114,6 +118,8 @@ class _Harness:
             p[1] = t - rng.choice((0.0, 0.1, 0.2, 0.25, 0.5, -0.05)) + rng.normal() * 0.01
         v["imu"][:] = rng.normal(size=9) * [0.3, 0.3, 3, 1, 1, 10, 1, 1, 1]
         dt = DT if rng.uniform() < 0.9 else 10 ** rng.uniform(-6, 1)
+        if rng.uniform() < 0.05:                       # finite, but overflows: no output
+            v["mem"][rng.integers(*P_H)] = np.finfo(self.dtype).max
         if rng.uniform() < 0.05:                       # a corrupted FIFO count
             v["mem"][COUNTS[rng.integers(4)]] = rng.choice((-1.0, 0.5, 27.0, 9.0, 5.0))
         if rng.uniform() < 0.3:

@@ -332,6 +332,12 @@ def test_simulate_writes_the_landing_columns_and_summary(tmp_path):
     assert summary["landing"]["limits"] == {"max_sink_rate": 0.5, "max_offset": 0.2,
                                             "max_tilt_deg": 10.0, "max_relative_speed": 0.5}
     assert summary["landing"]["success"] is True
+    blocks = summary["navigation"]["blocks"]
+    assert all(set(b) == {"fused", "rejected", "held"} for b in blocks.values())
+    # only a range is ever held back before its gate, and the first ones are: at the
+    # handover the horizontal position is known to 1 m per axis (p0_position), and
+    # 2 sqrt(2) m > range_deck_radius 0.5 m (E12a)
+    assert blocks.pop("range")["held"] > 0 and not any(b["held"] for b in blocks.values())
     again = load_scenario(out / "scenario.toml")
     assert again.model == "landing" and again.data == load_scenario("highway").data
 

@@ -98,7 +98,8 @@ def test_ten_sigma_outliers_are_rejected_and_change_nothing(name):
     f, model = nav_update_function(name), measurement_model_function(name)
     layout, x, P, vals, n2 = block_data(rng, name)
     block = next(b for b in BLOCKS if b.name == name)
-    p = params(vision_k_range=0.0)             # sigma not a function of the outlier
+    p = params(vision_k_range=0.0, **ANYWHERE)  # sigma not a function of the outlier; the
+    #                                              range's beam on the deck: gated, not held
     _, h, H, r, _ = model(x, layout.pack(vals), n2, p)
     h, H = col(h), np.array(H)
     for _ in range(20):
@@ -108,8 +109,8 @@ def test_ten_sigma_outliers_are_rejected_and_change_nothing(name):
         S = H @ P @ H.T + np.diag(col(r))
         z = h + 10.5 * np.linalg.cholesky(S) @ u
         vals[block.field] = z if block.dim > 1 else z[0]
-        x_next, P_next, _, nis, fused = f(x, P, layout.pack(vals), n2, p, 1.0)
-        assert float(fused) == 0 and float(nis) > 100
+        x_next, P_next, _, nis, fused, held = f(x, P, layout.pack(vals), n2, p, 1.0)
+        assert float(fused) == 0 and float(held) == 0 and float(nis) > 100
         np.testing.assert_array_equal(col(x_next), x)
         np.testing.assert_array_equal(np.array(P_next), P)
 
@@ -196,17 +197,21 @@ def test_a_block_not_due_or_rejected_leaves_x_and_P_bit_exact(name):
     p = params(**ANYWHERE)                      # the random state's beam may miss the deck
     nan_vals = {k: np.full(np.shape(v), np.nan) if k not in ("fresh", "tau") else v
                 for k, v in vals.items()}
-    cases = [(layout.pack(vals), 0.0),                 # not due
-             (layout.pack(nan_vals), 1.0),             # due, NaN: rejected
-             (layout.pack(nan_vals), 0.0),
-             (np.zeros(layout.size), float(name == "range"))]   # an empty slot: b3 = 0
-    for pkt, due in cases:
-        x_next, P_next, nu, nis, fused = f(x, P, pkt, n2, p, due)
-        assert float(fused) == 0
+    # (packet, due, held): a NaN range has no valid beam (n2 . b3 is NaN), so it is held
+    # back before the gate; a NaN of another block reaches the gate and fails it
+    rng_ = float(name == "range")
+    cases = [(layout.pack(vals), 0.0, 0.0),             # not due
+             (layout.pack(nan_vals), 1.0, rng_),        # due, NaN: rejected or held
+             (layout.pack(nan_vals), 0.0, 0.0),
+             (np.zeros(layout.size), rng_, rng_)]       # an empty slot: b3 = 0, held
+    for pkt, due, want_held in cases:
+        x_next, P_next, nu, nis, fused, held = f(x, P, pkt, n2, p, due)
+        assert float(fused) == 0 and float(held) == want_held
         np.testing.assert_array_equal(col(x_next), x)
         np.testing.assert_array_equal(np.array(P_next), P)
-    x_next, P_next, *_, fused = f(x, P, layout.pack(vals), n2, p, 1.0)
-    assert float(fused) == 1 and not np.array_equal(np.array(P_next), P)
+    x_next, P_next, *_, fused, held = f(x, P, layout.pack(vals), n2, p, 1.0)
+    assert float(fused) == 1 and float(held) == 0
+    assert not np.array_equal(np.array(P_next), P)
 
 # ---------------------------------------------------------------- decoupled axes
 
@@ -237,7 +242,7 @@ def test_a_range_whose_beam_misses_the_deck_is_not_fused():
     """(E12a): the beam's predicted deck point ``p_r - h b3_E`` (a level deck, a vertical
     beam: ``(x, y, 0)`` of ``p_r``) must lie within ``range_deck_radius`` of the pad by
     ``range_deck_sigmas`` horizontal standard deviations, else the range is not fused
-    (it may measure the ground); within it, it is."""
+    (it may measure the ground) but held back, before its gate; within it, it is fused."""
     f = nav_update_function("range")
     n2 = np.array([0.0, 0.0, 1.0])
     pkt = RANGE.pack(dict(fresh=1.0, tau=0.0, s=2.0, b3_E=n2))
@@ -246,6 +251,6 @@ def test_a_range_whose_beam_misses_the_deck_is_not_fused():
         x, P = np.zeros(N), np.eye(N) * var
         x[sl("p_r")] = [x_off, 0.4, 2.0]
         p = params(range_deck_radius=0.55, range_deck_sigmas=2.0)
-        x_next, P_next, *_, ok = f(x, P, pkt, n2, p, 1.0)
-        assert float(ok) == fused
+        x_next, P_next, _, _, ok, held = f(x, P, pkt, n2, p, 1.0)
+        assert float(ok) == fused and float(held) == 1.0 - fused
         assert np.array_equal(np.array(P_next), P) == (fused == 0.0)

@@ -141,6 +141,56 @@ def test_unknown_key_in_file(tmp_path):
         load_scenario(_write(tmp_path, text))
 
 
+
+def _highway_text(old: str, new: str) -> str:
+    text = (SCENARIO_DIR / "highway.toml").read_text()
+    assert text.count(old) == 1
+    return text.replace(old, new)
+
+
+#: A misspelt sensor or filter section or key, in the file and by an override: the one
+#: line names it and the name meant, matched part by part (sensors.visoin is a section,
+#: not a key of [sensors]; before, it was blamed as one, with 'sensors.enabled' suggested).
+MISSPELT_SENSORS = [
+    ("file", ("[sensors.vision]\n", "[sensors.visoin]\n"),
+     r"s\.toml: unknown section 'sensors\.visoin' \(did you mean 'sensors\.vision'\?\)$"),
+    ("file", ("[sensors.vision]\nrate_hz", "[sensors.vision]\nratehz"),
+     r"s\.toml: unknown key 'sensors\.vision\.ratehz' "
+     r"\(did you mean 'sensors\.vision\.rate_hz'\?\)$"),
+    ("file", ("[estimator]", "[estimatr]"),
+     r"s\.toml: unknown section 'estimatr' \(did you mean 'estimator'\?\)$"),
+    ("file", ("enabled = true", "enabled = true\ngnsss.latency = 0.1"),     # a dotted key
+     r"s\.toml: unknown section 'sensors\.gnsss' \(did you mean 'sensors\.gnss'\?\)$"),
+    ("set", "sensors.gnss.latncy=0.1",
+     r"^override sensors\.gnss\.latncy: unknown key 'sensors\.gnss\.latncy' "
+     r"\(did you mean 'sensors\.gnss\.latency'\?\)$"),
+    ("set", "sensors.visoin.latency=0.1",
+     r"^override sensors\.visoin\.latency: unknown section 'sensors\.visoin' "
+     r"\(did you mean 'sensors\.vision'\?\)$"),
+    ("set", "sensors.vision.ratehz=3",
+     r"unknown key 'sensors\.vision\.ratehz' \(did you mean 'sensors\.vision\.rate_hz'\?\)$"),
+    ("set", "estimatr.range_sigma=0.1",
+     r"^override estimatr\.range_sigma: unknown section 'estimatr' "
+     r"\(did you mean 'estimator'\?\)$"),
+    ("set", "sensor.enabled=false", r"unknown section 'sensor' \(did you mean 'sensors'\?\)$"),
+    # nothing close: no suggestion (the section's shared prefix suggested
+    # 'quadrotor.mass' and 'sensors.enabled' before)
+    ("set", "quadrotor.xyz=1", r"^override quadrotor\.xyz: unknown key 'quadrotor\.xyz'$"),
+    ("set", "sensors.xyz=1", r"^override sensors\.xyz: unknown key 'sensors\.xyz'$"),
+    ("set", "sensors.vision.foo.bar=1", r"unknown section 'sensors\.vision\.foo'$"),
+]
+
+
+@pytest.mark.parametrize("where, change, message", MISSPELT_SENSORS)
+def test_misspelt_sensor_sections_and_keys_name_the_one_meant(tmp_path, where, change,
+                                                              message):
+    if where == "file":
+        args = (_write(tmp_path, _highway_text(*change)), [])
+    else:
+        args = ("highway", [change])
+    with pytest.raises(ScenarioError, match=message):
+        load_scenario(*args)
+
 def test_missing_key_in_file(tmp_path):
     text = _paper_text(**{"mass = 2.0 ": "# no mass "})
     with pytest.raises(ScenarioError, match=r"missing key quadrotor\.mass"):

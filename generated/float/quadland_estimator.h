@@ -26,9 +26,9 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_RANGE 26             /* FIFO depth of range packets */
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 63         /* stored covariance entries (coupling axes) */
-#define QLF_ESTIMATOR_MEMORY_SIZE 585            /* reals in qlf_estimator_memory */
+#define QLF_ESTIMATOR_MEMORY_SIZE 592            /* reals in qlf_estimator_memory */
 #define QLF_ESTIMATOR_PARAMS_SIZE 46             /* reals in qlf_estimator_params */
-#define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 109       /* reals in qlf_estimator_diagnostics */
+#define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 123       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
 
@@ -147,6 +147,7 @@ typedef struct {
     qlf_real deck_tau;               /* s: sample time of the latest broadcast */
     qlf_real n_fused[7];             /* -: blocks fused, per block */
     qlf_real n_rejected[7];          /* -: blocks due but rejected by the gate, per block */
+    qlf_real n_held[7];              /* -: blocks due but held back as unusable (E12, E12a), per block */
     qlf_real n_discarded[4];         /* -: packets older than the horizon by max_age, per sensor (n_discarded_vision, n_discarded_gnss, n_discarded_range, n_discarded_datalink) */
     qlf_real n_dropped[4];           /* -: packets not queued: FIFO full, not finite, future (n_dropped_vision, n_dropped_gnss, n_dropped_range, n_dropped_datalink) */
     qlf_real n_imu_invalid;          /* -: periods with a non-finite IMU sample */
@@ -163,12 +164,14 @@ typedef struct {
     qlf_real nu_datalink_a[3];       /* m/s^2: datalink_a innovation z - h(x) when due, else 0 */
     qlf_real nis[7];                 /* -: NIS when due (-1 if not finite), else 0 */
     qlf_real fused[7];               /* -: 1 if the block was fused this step */
-    qlf_real rejected[7];            /* -: 1 if the block was due and rejected */
+    qlf_real rejected[7];            /* -: 1 if the block was due and rejected by the gate */
+    qlf_real held[7];                /* -: 1 if the block was due and held back as unusable */
     qlf_real discarded[4];           /* -: 1 if the FIFO head was too old (discarded_vision, discarded_gnss, discarded_range, discarded_datalink) */
     qlf_real dropped[4];             /* -: 1 if a fresh packet was not queued (dropped_vision, dropped_gnss, dropped_range, dropped_datalink) */
     qlf_real imu_invalid;            /* -: 1 if the IMU sample was not finite */
     qlf_real n_fused[7];             /* -: blocks fused, per block */
     qlf_real n_rejected[7];          /* -: blocks due but rejected by the gate, per block */
+    qlf_real n_held[7];              /* -: blocks due but held back as unusable (E12, E12a), per block */
     qlf_real n_discarded[4];         /* -: packets older than the horizon by max_age, per sensor (n_discarded_vision, n_discarded_gnss, n_discarded_range, n_discarded_datalink) */
     qlf_real n_dropped[4];           /* -: packets not queued: FIFO full, not finite, future (n_dropped_vision, n_dropped_gnss, n_dropped_range, n_dropped_datalink) */
     qlf_real n_imu_invalid;          /* -: periods with a non-finite IMU sample */

@@ -24,7 +24,14 @@ from typing import Any
 from quadland.campaign.draws import U_EDGE, apply_mode, check_finite, check_reach, where
 from quadland.exceptions import ScenarioError
 from quadland.kinds import KINDS
-from quadland.schema import CAMPAIGN_KEYS, SCHEMAS, check_value, show, split_dotted
+from quadland.schema import (
+    CAMPAIGN_KEYS,
+    SCHEMAS,
+    check_value,
+    did_you_mean,
+    show,
+    split_dotted,
+)
 
 __all__ = ["Dispersion", "Target", "CampaignSpec", "campaign_spec", "campaign_spec_of",
            "apply_mode", "DISTRIBUTIONS", "MODES", "SAMPLINGS", "MAX_RUNS", "U_EDGE"]
@@ -314,10 +321,10 @@ def _field(key: str, schema, given_by: str | None = None) -> Any:
     section, name = split_dotted(key)
     if not name or section not in schema or name not in schema[section] or section == "scenario":
         known = [f"{s}.{k}" for s in schema if s != "scenario" for k in schema[s]]
-        hint = difflib.get_close_matches(key, known, n=1)
+        hint = did_you_mean(key, known)
         what = f"{_show(key)} is not" if given_by else "not"
         raise ScenarioError(f"{given_by or where(key)}: {what} a key of this scenario's schema"
-                            + (f" (did you mean '{hint[0]}'?)" if hint else ""))
+                            + (f" (did you mean '{hint}'?)" if hint else ""))
     return schema[section][name]
 
 

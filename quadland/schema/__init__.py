@@ -8,7 +8,8 @@ and one line to :data:`SCHEMAS` and :data:`CROSS_CHECKS`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+import difflib
+from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
 
 from quadland.schema.fields import (
@@ -23,7 +24,8 @@ from quadland.schema.paper import PAPER_SCHEMA, check_paper
 
 __all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
            "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "DEFAULT_MODEL",
-           "SHARED_KEYS", "CAMPAIGN_KEYS", "SECTIONS", "split_dotted", "nest_sections"]
+           "SHARED_KEYS", "CAMPAIGN_KEYS", "SECTIONS", "split_dotted", "nest_sections",
+           "did_you_mean"]
 
 #: The schema of each model (``scenario.model``; "paper" when absent).
 SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
@@ -88,3 +90,32 @@ def nest_sections(raw: dict) -> dict:
             out[section] = table.pop(child)
             out[parent] = table
     return out
+
+
+def did_you_mean(name: str, known: Iterable[str]) -> str | None:
+    """The dotted name of ``known`` closest to ``name``, or None.
+
+    Matched part by part: each dot-separated part of ``name`` against the parts that
+    can follow those already matched (itself when it is one, else difflib's closest at
+    a ratio of 0.6 or more), so that a shared section does not make every key of it look
+    close: ``quadrotor.xyz`` suggests nothing, ``sensors.visoin.latency``
+    ``sensors.vision.latency``.
+
+    Examples
+    --------
+    >>> did_you_mean("sensors.visoin", ["sensors", "sensors.vision", "sensors.imu"])
+    'sensors.vision'
+    >>> did_you_mean("quadrotor.xyz", ["quadrotor.mass", "quadrotor.inertia"]) is None
+    True
+    """
+    split = [str(k).split(".") for k in known]
+    done: list[str] = []
+    for part in str(name).split("."):
+        n = len(done)
+        after = list(dict.fromkeys(k[n] for k in split if len(k) > n and k[:n] == done))
+        match = part if part in after else next(
+            iter(difflib.get_close_matches(part, after, n=1)), None)
+        if match is None:
+            return None
+        done.append(match)
+    return ".".join(done) if done in split else None

@@ -20,8 +20,8 @@ model (state, packets, parameters, prediction, measurement blocks) is
 4. ``x_h``, ``P_h`` are predicted over the oldest buffered input (E6); this
    period's input joins the buffer.
 
-Everything is selected, never branched: a block that is not due, or is
-rejected, runs the same instructions with a zero gain.
+Everything is selected, never branched: a block that is not due, held back or
+rejected runs the same instructions with a zero gain.
 """
 
 from __future__ import annotations
@@ -109,6 +109,8 @@ def _counters() -> tuple[Field, ...]:
     return (
         _counter("n_fused", _BLOCK_NAMES, "blocks fused, per block"),
         _counter("n_rejected", _BLOCK_NAMES, "blocks due but rejected by the gate, per block"),
+        _counter("n_held", _BLOCK_NAMES, "blocks due but held back as unusable (E12, E12a), "
+                 "per block"),
         _counter("n_discarded", SENSORS, "packets older than the horizon by max_age, per sensor"),
         _counter("n_dropped", SENSORS, "packets not queued: FIFO full, not finite, future"),
         Field("n_imu_invalid", 1, "-", "periods with a non-finite IMU sample"),
@@ -173,7 +175,8 @@ def estimator_diagnostics() -> Layout:
         *innov,
         _counter("nis", _BLOCK_NAMES, "NIS when due (-1 if not finite), else 0"),
         _counter("fused", _BLOCK_NAMES, "1 if the block was fused this step"),
-        _counter("rejected", _BLOCK_NAMES, "1 if the block was due and rejected"),
+        _counter("rejected", _BLOCK_NAMES, "1 if the block was due and rejected by the gate"),
+        _counter("held", _BLOCK_NAMES, "1 if the block was due and held back as unusable"),
         _counter("discarded", SENSORS, "1 if the FIFO head was too old"),
         _counter("dropped", SENSORS, "1 if a fresh packet was not queued"),
         Field("imu_invalid", 1, "-", "1 if the IMU sample was not finite"),
@@ -263,13 +266,13 @@ def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
     head_pkt = ca.vertcat(1, f["head"])
     x, P = state["x"], state["P"]
     for b in (b for b in BLOCKS if b.sensor == name):
-        x, P, nu, nis, fused = block_update(b.name, x, P, head_pkt, n2, p_est, due,
-                                            state["pattern"])
+        x, P, nu, nis, fused, held = block_update(b.name, x, P, head_pkt, n2, p_est, due,
+                                                  state["pattern"])
         nis_ok = is_finite(nis)
         state["blocks"][b.name] = dict(
             nu=select(ca.logic_and(due, nis_ok), nu, 0),
-            nis=select(due, select(nis_ok, nis, -1), 0),
-            fused=fused, rejected=ca.logic_and(due, ca.logic_not(fused)))
+            nis=select(due, select(nis_ok, nis, -1), 0), fused=fused, held=held,
+            rejected=ca.logic_and(due, ca.logic_not(ca.logic_or(fused, held))))
     state.update(x=x, P=P)
     state["sensors"][name] = dict(
         fifo=ca.vec(f["slots"]), count=f["count"], discarded=stale,
@@ -319,11 +322,13 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     flags = dict(
         fused=ca.vertcat(*[blk[b]["fused"] for b in _BLOCK_NAMES]),
         rejected=ca.vertcat(*[blk[b]["rejected"] for b in _BLOCK_NAMES]),
+        held=ca.vertcat(*[blk[b]["held"] for b in _BLOCK_NAMES]),
         discarded=ca.vertcat(*[sen[s]["discarded"] for s in SENSORS]),
         dropped=ca.vertcat(*[sen[s]["dropped"] for s in SENSORS]),
         imu_invalid=ca.logic_not(imu_ok))
     counters = dict(n_fused=m["n_fused"] + flags["fused"],
                     n_rejected=m["n_rejected"] + flags["rejected"],
+                    n_held=m["n_held"] + flags["held"],
                     n_discarded=m["n_discarded"] + flags["discarded"],
                     n_dropped=m["n_dropped"] + flags["dropped"],
                     n_imu_invalid=m["n_imu_invalid"] + flags["imu_invalid"])
@@ -337,7 +342,8 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     diag = ca.vertcat(
         *[blk[b]["nu"] for b in _BLOCK_NAMES],
         ca.vertcat(*[blk[b]["nis"] for b in _BLOCK_NAMES]),
-        *[flags[k] for k in ("fused", "rejected", "discarded", "dropped", "imu_invalid")],
+        *[flags[k] for k in ("fused", "rejected", "held", "discarded", "dropped",
+                             "imu_invalid")],
         *[counters[f.name] for f in _counters()],
         x, ca.diag(P), state["t_h"])
     return mem_next, y, diag

@@ -374,10 +374,12 @@ def _beam_on_deck(x, P, h, pkt, p):
 def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePattern):
     """Gate one block, then fuse it by scalar Joseph updates.
 
-    (E8), (E9). Returns ``(x_next, P_next, nu, nis, accept)``: the innovation ``z - h(x)``
-    and ``nu^T S^-1 nu`` with ``S = H P H^T + R`` before the update, and 1 if
-    the block was fused (``due``, valid and NIS within its gate). A block not
-    fused leaves ``x`` and ``P`` unchanged.
+    (E8), (E9). Returns ``(x_next, P_next, nu, nis, accept, held)``: the innovation
+    ``z - h(x)`` and ``nu^T S^-1 nu`` with ``S = H P H^T + R`` before the update, 1 if
+    the block was fused (``due``, valid and NIS within its gate), and 1 if it was due
+    but held back as unusable before the gate (a range whose beam grazes the deck (E12)
+    or may miss it (E12a)). A block due, neither fused nor held, was refused by its
+    gate. A block not fused leaves ``x`` and ``P`` unchanged.
     """
     block, model = _block(name), measurement_model_function(name)
     p = estimator_params().unpack(p_est)
@@ -398,7 +400,7 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
     for i in range(block.dim):
         h_i = model(x, pkt, n2, p_est)[1][i]                # at the updated state
         x, P = scalar_update(x, P, rows[i], z[i] - h_i, r_eff[i], accept, pattern)
-    return x, P, nu, nis, accept
+    return x, P, nu, nis, accept, ca.logic_and(due, ca.logic_not(valid))
 
 
 @functools.cache
@@ -406,8 +408,8 @@ def nav_update_function(name: str, coupling: str = "full") -> ca.Function:
     """One block's gated update as a Function.
 
     ``nav_update_<name>(x, P, pkt, n2, p_est, due) -> (x_next, P_next, nu, nis,
-    fused)``: :func:`block_update` with full symmetric 18 x 18 ``P`` in and out (only
-    the stored upper-triangle entries of :func:`covariance_pattern` are read).
+    fused, held)``: :func:`block_update` with full symmetric 18 x 18 ``P`` in and out
+    (only the stored upper-triangle entries of :func:`covariance_pattern` are read).
     """
     pattern = covariance_pattern(coupling)
     layout = _packet(_block(name).sensor)
@@ -417,7 +419,7 @@ def nav_update_function(name: str, coupling: str = "full") -> ca.Function:
     out = [out[0], ca.densify(out[1]), *out[2:]]
     return ca.Function(f"nav_update_{name}", [x, P, pkt, n2, p, due], out,
                        ["x", "P", "pkt", "n2", "p_est", "due"],
-                       ["x_next", "P_next", "nu", "nis", "fused"])
+                       ["x_next", "P_next", "nu", "nis", "fused", "held"])
 
 
 # ---------------------------------------------------------------- outputs

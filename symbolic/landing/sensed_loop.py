@@ -145,6 +145,7 @@ SENSED_RECORDED = Layout("rec_sensed", (
           elements=tuple(f"fused_{b.name}" for b in BLOCKS)),
     *(f for f in estimator_diagnostics().fields
       if f.name in ("n_fused", "n_rejected", "n_discarded", "n_dropped")),
+    estimator_diagnostics()["n_held"],
     Field("marker_age", 1, "s", "time since the filter last fused a marker detection"),
     Field("detector", 3, "0/1", "the land detector's stages",
           elements=("ground_contact", "maybe_landed", "landed")),
@@ -281,8 +282,8 @@ def landing_sensed_loop(l: int) -> LoopModel:
     _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
     rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
-                     d["n_rejected"], d["n_discarded"], d["n_dropped"], marker_age,
-                     fl["ground_contact"], fl["maybe_landed"], fl["landed"])
+                     d["n_rejected"], d["n_discarded"], d["n_dropped"], d["n_held"],
+                     marker_age, fl["ground_contact"], fl["maybe_landed"], fl["landed"])
     controller = ca.Function(
         "controller", [xp, xc, pc, first, t, uh, w, pp, n],
         [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],

@@ -152,9 +152,10 @@ def navigation_summary(result: SimulationResult) -> dict:
 
     The estimation error of the relative position and velocity (deck frame; the filter's
     estimate at each output row against the truth) as an rms over the flight and at
-    touchdown, m and m/s; each measurement block's fused and rejected counts and each
-    sensor's discarded and dropped packets (the filter's counters at the end of the
-    flight); the false touchdown (:func:`false_touchdown`).
+    touchdown, m and m/s; each measurement block's counts of fused, rejected by its gate
+    and held back before the gate as unusable (a range whose beam grazes the deck or may
+    miss it, E12 and E12a), and each sensor's discarded and dropped packets (the filter's
+    counters at the end of the flight); the false touchdown (:func:`false_touchdown`).
     """
     report = touchdown_report(result)
     t = result["t"]
@@ -179,8 +180,9 @@ def navigation_summary(result: SimulationResult) -> dict:
 
     gap = false_touchdown(result)
     return {"error": err,
-            "blocks": {b: {"fused": f, "rejected": r} for (b, f), r in zip(
-                counts("n_fused_").items(), counts("n_rejected_").values(), strict=True)},
+            "blocks": {b: {"fused": f, "rejected": r, "held": h} for (b, f), r, h in zip(
+                counts("n_fused_").items(), counts("n_rejected_").values(),
+                counts("n_held_").values(), strict=True)},
             "sensors": {s: {"discarded": d, "dropped": p} for (s, d), p in zip(
                 counts("n_discarded_").items(), counts("n_dropped_").values(), strict=True)},
             "false_touchdown": gap is not None, "false_touchdown_gap": gap}
