@@ -122,7 +122,10 @@ def test_to_dict_is_the_json_of_the_command(report, tmp_path, capsys):
     assert entry["disk"]["disk_margin"] == roll.disk.disk_margin
     assert cont["multiloop_disk"]["passed"] is report.continuous.multiloop_disk.passed
     assert cont["poles"]["count"] == report.continuous.poles.count
-    assert capsys.readouterr().out.startswith(format_report(report))
+    # what it is doing, then the table
+    printed = capsys.readouterr().out
+    assert printed.startswith("quadland: margins of paper: linearizing, then the loops' "
+                              "frequency responses...\n" + format_report(report))
 
 
 def test_infinities_become_null(report):
