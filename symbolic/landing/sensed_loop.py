@@ -111,7 +111,7 @@ from quadland_symbolic.parameters import QUADROTOR
 
 __all__ = ["DELIVERY_SLOTS", "SENSED_TICK", "SENSED_RECORDED", "SENSED_TRAJECTORY", "NAV_PACKET_OF",
            "delivery_record", "delivery_delay", "sensed_loop_memory", "sensed_loop_params",
-           "detector_cues", "landing_sensed_loop"]
+           "detector_cues", "detector_cues_function", "landing_sensed_loop"]
 
 #: The longest delivery delay a sensor's line holds, in control periods (0.256 s at
 #: 250 Hz: past the filter's 0.2 s horizon and its largest packet age).
@@ -238,16 +238,40 @@ def detector_cues(y, range_read, imu_now, uh_held, cs: dict, ps: dict):
     height below the centre, ``n2`` the deck normal from the broadcast attitude);
     the thrust ratio uses the controller's own model of mass and gravity.
     """
+    return _cues(y, range_read, imu_now, uh_held, cs["xg"], ps["p_guid"],
+                 LANDING_PLANT_PARAMS.unpack(ps["pp"])["p_quad"])
+
+
+def _cues(y, range_read, imu_now, uh_held, xg, p_guid, p_quad):
+    """:func:`detector_cues` on the guidance's state and parameters and the model's ``p_quad``."""
     m, r = LANDING_MEASUREMENT.unpack(y), delivery_record("rangefinder").unpack(range_read)
-    h = GUIDANCE_PARAMS.unpack(ps["p_guid"])["touchdown_height"]
+    h = GUIDANCE_PARAMS.unpack(p_guid)["touchdown_height"]
     R2 = rotation(m["eta2"])
-    quad = QUADROTOR.unpack(LANDING_PLANT_PARAMS.unpack(ps["pp"])["p_quad"])
+    quad = QUADROTOR.unpack(p_quad)
     return ca.vertcat(
         (r["s"] - h) * (R2[:, 2].T @ r["b3_E"]), r["fresh"],
         deck_gear_gap(m["p_e"], R2, rotation(m["eta1"]), h), m["v_e"][2],
         ca.sum1(uh_held) / (quad["m1"] * quad["g"]),
         IMU.unpack(imu_now)["f_b"][2],
-        GUIDANCE_STATE.unpack(cs["xg"])["phase"] == DESCEND)
+        GUIDANCE_STATE.unpack(xg)["phase"] == DESCEND)
+
+
+@functools.cache
+def detector_cues_function() -> ca.Function:
+    """``land_detector_cues(y, range, imu, F_cmd, xg, p_guid, p_quad) -> cues``.
+
+    :func:`detector_cues` as one Function, the flight code's
+    (``ql_land_detector_form_cues``): ``range`` the range finder's packet
+    (:data:`~quadland_symbolic.landing.navigation.RANGE`, the layout of its delivery
+    record), ``imu`` this period's IMU, ``F_cmd`` the rotor commands acting now,
+    ``xg`` the guidance's state, ``p_quad`` the controller's model of the quadrotor.
+    """
+    y, rng, imu = LANDING_MEASUREMENT.sym(), delivery_record("rangefinder").sym(), IMU.sym()
+    F_cmd, xg, p_guid, p_quad = COMMAND.sym(), GUIDANCE_STATE.sym(), GUIDANCE_PARAMS.sym(), \
+        QUADROTOR.sym()
+    return ca.Function("land_detector_cues", [y, rng, imu, F_cmd, xg, p_guid, p_quad],
+                       [_cues(y, rng, imu, F_cmd, xg, p_guid, p_quad)],
+                       ["y", "range", "imu", "F_cmd", "xg", "p_guid", "p_quad"], ["cues"])
 
 
 @functools.cache

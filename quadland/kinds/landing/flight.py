@@ -2,8 +2,10 @@
 
 The landing step and guidance generated as C (``quadland_landing.h``, one tree
 with the paper's step), with a landing scenario's values as its C defaults
-(:func:`landing_defaults`; ``generated/`` carries the highway scenario's),
-built on first use and loaded with ``ctypes`` (:func:`load_landing_api`).
+(:func:`landing_defaults`; ``generated/`` carries the highway scenario's), and
+beside them the navigation filter (``quadland_estimator.h``) and the land
+detector (``quadland_land_detector.h``), which have no scenario values; built on
+first use and loaded with ``ctypes`` (:func:`load_landing_api`).
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from quadland_symbolic.codegen import (
     LandingDefaults,
     c_sources,
     generate,
+    generate_estimator,
+    generate_land_detector,
     generate_landing,
 )
 from quadland_symbolic.codegen.structs import landing_api_structs
@@ -89,6 +93,8 @@ def _flight_files(l: int, precision: str) -> tuple[tuple[str, str], ...]:
     config = CodegenConfig(precision)
     files = generate(default_paper(load_scenario(PAPER_SCENARIO)["rbf.nodes"]), config)
     files.update(generate_landing(default_landing(l), config))
+    files.update(generate_estimator(config))
+    files.update(generate_land_detector(config))
     return tuple(sorted(files.items()))
 
 
@@ -96,8 +102,9 @@ def flight_files(l: int, precision: str = "double") -> dict[str, str]:
     """The C files of one build of the landing's flight code for ``l`` nodes.
 
     The landing step and guidance with :data:`LANDING_SCENARIO`'s defaults and
-    ``rbf.nodes = l``, beside the paper's step (the tree they share); for the
-    scenarios' own ``l`` the files equal ``generated/`` (``generated/float/``).
+    ``rbf.nodes = l``, beside the paper's step (the tree they share), the
+    navigation filter and the land detector; for the scenarios' own ``l`` the
+    files equal ``generated/`` (``generated/float/``).
     """
     if precision not in ("double", "float"):
         raise ValueError(f"precision must be 'double' or 'float', got {precision!r}")
