@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import ctypes
 import json
+import os
 import re
 import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -292,8 +294,8 @@ def test_guidance_errors_leave_the_state_and_zero_the_reference(harness, rng, ca
 
 @pytest.mark.parametrize("name", ["highway", "ship"])
 def test_the_flight_code_flies_the_same_landing(name):
-    """controller.backend = "c" against "casadi": states to 1e-9, identical touchdown (on
-    the true state: the filter's C is not in this backend yet)."""
+    """controller.backend = "c" against "casadi" on the true state: states to 1e-9,
+    identical touchdown."""
     base = quadland.load_scenario(name, ["sensors.enabled=false"])
     a = quadland.simulate(base)
     b = quadland.simulate(quadland.load_scenario(name, ['controller.backend="c"',
@@ -304,6 +306,37 @@ def test_the_flight_code_flies_the_same_landing(name):
         np.testing.assert_allclose(b[column], a[column], rtol=0, atol=1e-9, err_msg=column)
     ra, rb = touchdown_report(a), touchdown_report(b)
     assert ra == rb and ra.success
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["highway", "turning", "ship"])
+def test_the_sensed_flight_code_flies_the_same_landing_to_the_bit(name):
+    """On sensors (the shipped scenarios, default seeds), controller.backend = "c" flies the
+    filter's, the land detector's, the guidance's and the landing step's C behind the world
+    CasADi samples and delivers: trajectory.csv byte for byte the same as "casadi", every
+    state to the bit, the same touchdown; and the run lands."""
+    a = quadland.simulate(quadland.load_scenario(name))
+    b = quadland.simulate(quadland.load_scenario(name, ['controller.backend="c"']))
+    assert a.states.shape == b.states.shape
+    np.testing.assert_array_equal(a.states.view(np.uint64), b.states.view(np.uint64))
+    assert a.to_csv() == b.to_csv()
+    ra, rb = touchdown_report(a), touchdown_report(b)
+    assert ra == rb and ra.success
+    # the flight code flew on the filter's estimate, not on the truth
+    assert np.max(np.abs(b["x_e_hat"] - b["x_e"])) > 1e-4
+
+
+def test_the_sensed_flight_code_without_a_compiler_is_one_line(tmp_path):
+    """What stays impossible is one line: the sensed loop's flight C needs a compiler."""
+    out = tmp_path / "run"
+    env = {**os.environ, "CC": str(tmp_path / "no-such-cc")}
+    proc = subprocess.run([sys.executable, "-m", "quadland", "simulate", "--scenario",
+                           "highway", "--no-plots", "--set", 'controller.backend="c"',
+                           "--out", str(out)], capture_output=True, text=True, env=env)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and proc.stderr.startswith(
+        "quadland: error: controller.backend = \"c\" flies the compiled flight code, and CC=")
+    assert not out.exists()
 
 
 # --- the pure-C example land -------------------------------------------------

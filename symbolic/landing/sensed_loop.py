@@ -39,6 +39,15 @@ tick ``t_k`` (period ``T``), does, in this order:
 
 The recorded signals add the estimate and the filter's health to the unsensed
 loop's (:data:`SENSED_RECORDED`).
+
+The model's **step_args** (same signature as the controller) gives the flight code's
+arguments: the world's next delay lines, the packets read now and the IMU of step 3,
+the flight memory and parameters. With ``controller.backend = "c"`` the compiled
+simulator flies steps 4 to 6 as the generated flight C behind the controller's
+signature (``ql_estimator_step``, ``ql_land_detector_form_cues``,
+``ql_land_detector_step``, ``ql_guidance_step``, ``ql_landing_step``;
+``symbolic/templates/landing_sensed_flight_controller.c.jinja``), the world part and
+the IMU's hold staying CasADi's.
 """
 
 from __future__ import annotations
@@ -307,6 +316,18 @@ def landing_sensed_loop(l: int) -> LoopModel:
     rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
                      d["n_rejected"], d["n_discarded"], d["n_dropped"], marker_age,
                      fl["ground_contact"], fl["maybe_landed"], fl["landed"])
+    # the flight code's arguments, for the flight C behind the controller's signature
+    plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
+    args = dict(imu=imu_now, vision=packets[0], gnss=packets[1], range=packets[2],
+                datalink=packets[3], nav=cs["nav"], p_est=ps["p_est"], dt=ps["dt"], time=t,
+                F_cmd=uh, xld=cs["xld"], p_ld=ps["p_ld"], marker_age=cs["marker_age"],
+                xg=cs["xg"], mem=cs["mem"], p_guid=ps["p_guid"], p_ctrl=ps["p_ctrl"],
+                p_quad=plant_p["p_quad"], p_act=plant_p["p_act"],
+                **{f"line_{name}": line for name, line in zip(SENSOR_NAMES, lines, strict=True)})
+    step_args = ca.Function("step_args", [xp, xc, pc, first, t, uh, w, pp, n],
+                            list(args.values()),
+                            ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
+                            list(args))
     controller = ca.Function(
         "controller", [xp, xc, pc, first, t, uh, w, pp, n],
         [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],
@@ -319,5 +340,6 @@ def landing_sensed_loop(l: int) -> LoopModel:
     # the plant, the outputs, the event and the envelope are the unsensed loop's own
     return dataclasses.replace(
         base, name="landing_sensed", controller_state=xc_lay, controller_params=pc_lay,
-        recorded=SENSED_RECORDED, controller=controller, assemble=assemble, step_args=None,
-        flight=None, ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)
+        recorded=SENSED_RECORDED, controller=controller, assemble=assemble,
+        step_args=step_args, flight="landing_sensed_flight_controller.c.jinja",
+        ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)

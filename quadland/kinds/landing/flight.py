@@ -111,9 +111,12 @@ def flight_files(l: int, precision: str = "double") -> dict[str, str]:
     return dict(_flight_files(l, precision))
 
 
-def flight_code(l: int) -> FlightCode:
-    """The landing step and guidance the simulator flies with ``controller.backend = "c"``."""
-    return FlightCode(_flight_files(l, "double"), c_sources(("landing_step",)))
+def flight_code(l: int, sensed: bool = False) -> FlightCode:
+    """The flight C the simulator flies with ``controller.backend = "c"``: the landing step
+    and guidance, and on sensors (``sensed``) the navigation filter and the land detector."""
+    functions = ("landing_step", "estimator_step", "land_detector") if sensed else \
+        ("landing_step",)
+    return FlightCode(_flight_files(l, "double"), c_sources(functions))
 
 
 @dataclasses.dataclass(frozen=True)
