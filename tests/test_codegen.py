@@ -31,6 +31,7 @@ from quadland_symbolic.codegen import (
 from quadland_symbolic.codegen.estimator_api import estimator_api_structs
 from quadland_symbolic.codegen.land_detector_api import land_detector_api_structs
 from quadland_symbolic.codegen.structs import api_structs, landing_api_structs
+from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY
 from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
 
 GENERATED_DIR = codegen.generated_dir()
@@ -184,8 +185,10 @@ def test_example_columns_are_the_trajectory_names(files):
 
 
 def test_land_columns_are_the_landing_trajectory_names(files):
-    names = [n for n, _ in land_columns()]
-    assert names == list(LANDING_TRAJECTORY.element_names())
+    assert [n for n, _ in land_columns()] == list(LANDING_TRAJECTORY.element_names())
+    # generated/ is the highway's, on its sensors: the sensed trajectory's columns
+    names = [n for n, _ in land_columns(sensed=True)]
+    assert names == list(SENSED_TRAJECTORY.element_names())
     body = files["example/land.c"].partition("static void write_header(void)")[2]
     body = body.partition("\n}\n")[0]
     header = "".join(re.findall(r'printf\("([^"%\\]*)"\);', body))

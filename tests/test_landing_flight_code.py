@@ -40,6 +40,7 @@ from quadland_symbolic.landing.guidance import (
 )
 from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY
 from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
@@ -341,27 +342,35 @@ def test_the_sensed_flight_code_without_a_compiler_is_one_line(tmp_path):
 
 # --- the pure-C example land -------------------------------------------------
 
-#: Deterministic parts only: the C example leaves the random ones out.
+#: Deterministic parts only: the C example leaves the random ones out (on perfect
+#: sensing, and on the sensors with their draws off).
 QUIET = ["disturbance.noise=false", "wind.turbulence_w20=0.0", "sensors.enabled=false"]
+QUIET_SENSED = ["disturbance.noise=false", "wind.turbulence_w20=0.0", "sensors.random=false"]
+
+#: The example trees: generated/ (highway on its sensors), the ship's, and the
+#: highway's on perfect sensing; each with the scenario its land flies.
+TREES = {"highway": ("highway", QUIET_SENSED), "ship": ("ship", QUIET_SENSED),
+         "highway_perfect": ("highway", QUIET)}
 
 
 @pytest.fixture(scope="module")
 def examples(tmp_path_factory):
     """land, land_float and bench built from a copy of generated/ (highway), and land
-    from a tree generated for the ship (nothing is written in the tree)."""
+    from trees generated for the ship and for the highway on perfect sensing (nothing is
+    written in the tree)."""
     if shutil.which("make") is None:
         pytest.skip("no make")
     cc = build.find_compiler()
-    trees = {"highway": tmp_path_factory.mktemp("generated"),
-             "ship": tmp_path_factory.mktemp("ship")}
+    trees = {name: tmp_path_factory.mktemp(name) for name in TREES}
     shutil.copytree(codegen.generated_dir(), trees["highway"], dirs_exist_ok=True,
                     ignore=shutil.ignore_patterns("build", "closed_loop_jacobian.c"))
-    codegen.write(trees["ship"], codegen.generated_files(
-        quadland.load_scenario("ship")))
+    codegen.write(trees["ship"], codegen.generated_files(quadland.load_scenario("ship")))
+    codegen.write(trees["highway_perfect"], codegen.generated_files(
+        quadland.load_scenario("highway", ["sensors.enabled=false"])))
     procs = [subprocess.Popen(["make", "-s", f"CC={cc}", *targets], cwd=trees[name] / "example",
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
              for name, targets in (("highway", ["build/land", "build/land_float", "build/bench"]),
-                                   ("ship", ["build/land"]))]
+                                   ("ship", ["build/land"]), ("highway_perfect", ["build/land"]))]
     for proc in procs:
         out, _ = proc.communicate(timeout=600)
         assert proc.returncode == 0, out.decode()
@@ -378,13 +387,18 @@ def _land(exe):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["highway", "ship"])
-def test_pure_c_landing_is_quadland_simulates(examples, name):
-    """The same columns and rows to 1e-9, the same touchdown report; it lands."""
-    header, c, report = _land(examples[name] / "land")
-    py = quadland.simulate(quadland.load_scenario(name, QUIET))
+@pytest.mark.parametrize("tree", list(TREES))
+def test_pure_c_landing_is_quadland_simulates(examples, tree):
+    """The same columns and rows to 1e-9, the same touchdown report; it lands. On the
+    sensors (the shipped scenarios), the C flies the filter, the detector and the
+    delivery of every packet after its latency; the trajectory's estimate columns
+    too."""
+    name, quiet = TREES[tree]
+    header, c, report = _land(examples[tree] / "land")
+    py = quadland.simulate(quadland.load_scenario(name, quiet))
     want = touchdown_report(py).to_dict()
-    assert header == list(LANDING_TRAJECTORY.element_names())
+    layout = LANDING_TRAJECTORY if tree == "highway_perfect" else SENSED_TRAJECTORY
+    assert header == list(layout.element_names())
     assert list(report) == list(want) and report["limits"] == want["limits"]
     assert report["touchdown"] and report["success"] and want["success"]
     for key in ("time", "sink_rate", "offset", "relative_speed", "tilt_deg"):
@@ -396,6 +410,8 @@ def test_pure_c_landing_is_quadland_simulates(examples, name):
         scale = max(1.0, float(np.max(np.abs(py[column]))))
         np.testing.assert_allclose(c[column], py[column], rtol=0, atol=1e-9 * scale,
                                    err_msg=column)
+    if layout is SENSED_TRAJECTORY:                 # the estimate is not the truth
+        assert np.max(np.abs(c["x_e_hat"] - c["x_e"])) > 1e-4
 
 
 @pytest.mark.slow

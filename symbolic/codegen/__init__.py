@@ -48,6 +48,7 @@ from quadland_symbolic.codegen.config import (
     CodegenConfig,
     Defaults,
     LandingDefaults,
+    SensorDefaults,
 )
 from quadland_symbolic.codegen.estimator_api import generate_estimator
 from quadland_symbolic.codegen.example import example_columns, generate_example, land_columns
@@ -58,7 +59,8 @@ from quadland_symbolic.codegen.registry import FUNCTIONS, GeneratedFunction, c_s
 from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS, loop_header, simulator_sources
 from quadland_symbolic.codegen.tree import TREE_PARTS, generate_tree
 
-__all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "GeneratedFunction",
+__all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "SensorDefaults",
+           "GeneratedFunction",
            "FUNCTIONS", "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns",
            "land_columns", "generate", "generate_landing", "generate_estimator",
            "generate_land_detector",

@@ -34,7 +34,15 @@ from quadland_symbolic.landing.plant import (
 from quadland_symbolic.landing.relative import touchdown_figures_function
 from quadland_symbolic.landing.ride import anchor_function, landed_row_function
 from quadland_symbolic.landing.sensed_loop import detector_cues_function
-from quadland_symbolic.landing.sensors import measurement_function
+from quadland_symbolic.landing.sensors import (
+    SENSOR_NAMES,
+    measurement_function,
+    sense_datalink_function,
+    sense_gnss_function,
+    sense_imu_function,
+    sense_rangefinder_function,
+    sense_vision_function,
+)
 from quadland_symbolic.landing.signals import landing_signals_function
 from quadland_symbolic.vehicle import vehicle_function
 
@@ -113,6 +121,11 @@ class GeneratedFunction:
         return tuple(fn.name_in()), tuple(fn.name_out())
 
 
+#: The sensors' truth models (``sense_<name>``), in the order of ``SENSOR_NAMES``.
+SENSOR_BUILDERS = (sense_imu_function, sense_vision_function, sense_gnss_function,
+                   sense_rangefinder_function, sense_datalink_function)
+
+
 #: The CasADi functions written as C, in file order: the one registry.
 FUNCTIONS = (
     GeneratedFunction("control_step", control_step_function),
@@ -156,6 +169,10 @@ FUNCTIONS = (
          " * of the quadrotor pinned to the deck at anchor, its rotor forces winding\n"
          " * down from F_td, the phase LANDED from t_td + settle."),
         ("vehicle", vehicle_function, "xv_dot of the vehicle alone (eq. 3-4)."),
+        *((f"sense_{name}", builder,
+           f"The {name}'s packet y from the plant's state under its noise (a zero\n"
+           " * noise vector: the exact truth; quadland_symbolic.landing.sensors).")
+          for name, builder in zip(SENSOR_NAMES, SENSOR_BUILDERS, strict=True)),
         ("touchdown_figures", touchdown_figures_function,
          "Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a\n"
          " * contact."),

@@ -21,12 +21,20 @@ from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
 from quadland.kinds.landing.report import TOUCHDOWN_LIMITS
+from quadland.kinds.landing.sensed import (
+    handover,
+    imu_at_rest,
+    sensed_vectors,
+    sensor_settings,
+    sensors_enabled,
+)
 from quadland.kinds.landing.values import landing_values
 from quadland.kinds.paper.flight import PAPER_SCENARIO, default_paper
 from quadland.scenario import Scenario, load_scenario
 from quadland_symbolic.codegen import (
     CodegenConfig,
     LandingDefaults,
+    SensorDefaults,
     c_sources,
     generate,
     generate_estimator,
@@ -36,6 +44,8 @@ from quadland_symbolic.codegen import (
 from quadland_symbolic.codegen.structs import landing_api_structs
 from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.sensed_loop import sensed_loop_params
+from quadland_symbolic.landing.sensors import SENSOR_NAMES
 
 __all__ = ["LANDING_SCENARIO", "landing_defaults", "default_landing", "flight_files",
            "flight_code", "LandingApi", "load_landing_api"]
@@ -74,7 +84,24 @@ def landing_defaults(sc: Scenario) -> LandingDefaults:
         gust_start=float(wind["gust_start"]), gust_half_length=float(wind["gust_half_length"]),
         gust_amplitude=float(wind["gust_amplitude"]), gust_direction=floats(e),
         settle_time=float(g["settle_time"]),
-        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS))
+        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS),
+        sensors=_sensor_defaults(sc, lv) if sensors_enabled(sc) else None)
+
+
+def _sensor_defaults(sc: Scenario, lv) -> SensorDefaults:
+    """The example's sensors, filter and detector: the sensed loop's vectors
+    (:func:`quadland.kinds.landing.sensed.sensed_vectors`), its random parts off."""
+    pc = sensed_loop_params(lv.l).unpack(sensed_vectors(sc, lv)[0])
+    rate = float(sc.data["controller"]["rate_hz"])
+    settings = sensor_settings(sc)
+    g = float(sc.data["quadrotor"]["gravity"])
+    nav0, P0_diag, deck0 = handover(sc, lv, random=False)
+    return SensorDefaults(
+        p_sens=pc["p_sens"], p_est=pc["p_est"], p_ld=pc["p_ld"],
+        every=tuple(int(round(rate / settings[n]["rate_hz"])) for n in SENSOR_NAMES),
+        first=tuple(int(round(settings[n]["phase"] * rate)) for n in SENSOR_NAMES),
+        delay=tuple(int(d) for d in pc["delay"]), nav0=nav0, P0_diag=P0_diag, deck0=deck0,
+        imu0=imu_at_rest(lv.xp0, g))
 
 
 
