@@ -514,6 +514,9 @@ int main(void)
     }
     status = ql_estimator_init(&nav0, P0_diag, &deck0, 0, &flight.nav);
     if (status != QL_OK) return failed(0, "ql_estimator_init", status);
+    /* no descent on a height only GNSS knows: the hover point starts at the handover's
+     * estimated height when that is higher (the guidance's "The marker") */
+    gs.z_ref = (ql_real)fmax((double)gs.z_ref, (double)nav0.p_r[2]);
     ql_land_detector_state_init(&flight.xld);
     flight.marker_age = QL_LAND_DETECTOR_TIME_CAP;
     memset(flight.est, 0, sizeof flight.est);
