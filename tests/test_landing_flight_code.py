@@ -442,5 +442,13 @@ def test_bench_times_either_controller(examples):
                          text=True).stdout
     assert re.match(r"estimator_step \(double, n_hist = 50\): 50 steps, [\d.]+ ns/step, "
                     r"350 of 350 blocks fused .*0 errors", out), out
+    # the land detector: settled on the deck, every cue holding (the range every other
+    # period), so landed sets on the hand-counted step 247 (docs/land_detector.md) and
+    # stays for the 54 steps after it of 300
+    out = subprocess.run([str(bench), "300", "detector"], check=True, capture_output=True,
+                         text=True).stdout
+    assert re.match(r"land_detector_form_cues \+ land_detector_step \(double\): 300 steps, "
+                    r"[\d.]+ ns/step, 54 steps landed \(0 errors\)", out), out
     bad = subprocess.run([str(bench), "5", "nope"], capture_output=True, text=True)
-    assert bad.returncode == 2 and "usage: bench N [paper|landing|estimator]" in bad.stderr
+    assert bad.returncode == 2 and "usage: bench N [paper|landing|estimator|detector]" \
+        in bad.stderr
