@@ -327,6 +327,22 @@ def test_the_sensed_flight_code_flies_the_same_landing_to_the_bit(name):
     assert np.max(np.abs(b["x_e_hat"] - b["x_e"])) > 1e-4
 
 
+def test_a_recorded_field_the_flight_code_does_not_give_stops_generation():
+    """The sensed adapter writes every recorded field by name: a new one it does not know
+    is refused when its C is generated, naming it, not left unwritten in the run."""
+    import dataclasses
+
+    from quadland_symbolic.codegen.simulator import simulator_sources
+    from quadland_symbolic.landing.sensed_loop import SENSED_RECORDED, landing_sensed_loop
+    from quadland_symbolic.layout import Field, Layout
+
+    rec = Layout("rec_more", (*SENSED_RECORDED.fields, Field("nees", 1, "-", "a new one")),
+                 "recorded")
+    model = dataclasses.replace(landing_sensed_loop(L), recorded=rec)
+    with pytest.raises(ValueError, match="no flight code gives the recorded field nees"):
+        simulator_sources(model, "sampled_flight")
+
+
 def test_the_sensed_flight_code_without_a_compiler_is_one_line(tmp_path):
     """What stays impossible is one line: the sensed loop's flight C needs a compiler."""
     out = tmp_path / "run"
