@@ -10,8 +10,9 @@ system's ``cc`` at -O2 and reports:
 * time per step (l = 100) of ``bench N paper`` (the paper's control step),
   ``bench N landing`` (the landing's guidance and landing step, one
   control period of its flight code) and ``bench N estimator`` (the
-  navigation filter's step at its flight sizes, every sensor due), double
-  and float, the best of several runs;
+  navigation filter's step at its flight sizes, every sensor due) and
+  ``bench N detector`` (the land detector's cues and step), double and
+  float, the best of several runs;
 * instructions per step from valgrind's callgrind (the difference of two
   run lengths, so start-up cost cancels), when valgrind is installed,
   against the double builds' budgets of 20,000 (paper) and 30,000
@@ -157,12 +158,13 @@ def main() -> None:
     l = model_values(quadland.load_scenario("paper")).l
     with tempfile.TemporaryDirectory() as tmp:
         build = _build(Path(tmp))
-        for which, nodes in (("paper", l), ("landing", LANDING_L), ("estimator", "-")):
+        for which, nodes in (("paper", l), ("landing", LANDING_L), ("estimator", "-"),
+                             ("detector", "-")):
             for name in ("bench", "bench_float"):
                 ns = _time_per_step(build / name, args.steps, args.repeats, which)
                 ir = _instructions(build / name, 1000, which)
                 ir_text = f"{ir:,.0f} instructions" if ir is not None else "valgrind not found"
-                if name == "bench" and ir is not None:
+                if name == "bench" and ir is not None and which in BUDGET:
                     budget = BUDGET[which]
                     ir_text += f" (budget {budget:,}: {'met' if ir <= budget else 'EXCEEDED'})"
                 print(f"{name} {which}: {ns / 1000:.3f} us/step, {ir_text} per step "

@@ -247,6 +247,33 @@ void ql_landed_row(const ql_real *xv, const ql_real *t, const ql_real *pp,
 /* xv_dot of the vehicle alone (eq. 3-4). */
 void ql_vehicle(const ql_real *xv, const ql_real *p_veh, ql_real *xv_dot);
 
+/* The imu's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void ql_sense_imu(const ql_real *xp, const ql_real *uh, const ql_real *w, const ql_real *t,
+                  const ql_real *pp, const ql_real *p_sens, const ql_real *noise, ql_real *y);
+
+/* The vision's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void ql_sense_vision(const ql_real *xp, const ql_real *uh, const ql_real *w, const ql_real *t,
+                     const ql_real *pp, const ql_real *p_sens, const ql_real *noise, ql_real *y);
+
+/* The gnss's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void ql_sense_gnss(const ql_real *xp, const ql_real *uh, const ql_real *w, const ql_real *t,
+                   const ql_real *pp, const ql_real *p_sens, const ql_real *noise, ql_real *y);
+
+/* The rangefinder's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void ql_sense_rangefinder(const ql_real *xp, const ql_real *uh, const ql_real *w,
+                          const ql_real *t, const ql_real *pp, const ql_real *p_sens,
+                          const ql_real *noise, ql_real *y);
+
+/* The datalink's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void ql_sense_datalink(const ql_real *xp, const ql_real *uh, const ql_real *w, const ql_real *t,
+                       const ql_real *pp, const ql_real *p_sens, const ql_real *noise,
+                       ql_real *y);
+
 /* Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a
  * contact. */
 void ql_touchdown_figures(const ql_real *p_e, const ql_real *v_e, const ql_real *eta1,

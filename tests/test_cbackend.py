@@ -29,7 +29,12 @@ from quadland_symbolic.closed_loop import (
     closed_loop_state,
     plant_function,
 )
-from quadland_symbolic.codegen import STATUS_CODES, CodegenConfig, generate_estimator
+from quadland_symbolic.codegen import (
+    STATUS_CODES,
+    CodegenConfig,
+    generate_estimator,
+    generate_land_detector,
+)
 from quadland_symbolic.control_step import control_step_function
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
@@ -590,21 +595,19 @@ def test_sources_are_generated_not_read(tmp_path, monkeypatch):
         committed = codegen.generated_files()
         top = {k: v for k, v in committed.items()
                if "/" not in k and k not in (".gitignore", codegen.MANIFEST)}
-        # the landing build is the whole tree (the paper's quadland.h with it), l = 10, but
-        # the navigation filter's API, which no loop flies yet and has no scenario values
-        estimator = {"double": generate_estimator(CodegenConfig("double")),
-                     "float": generate_estimator(CodegenConfig("float"))}
-        assert {k: v for k, v in top.items() if k in estimator["double"]} == estimator["double"]
-        top = {k: v for k, v in top.items() if k not in estimator["double"]}
+        # the landing build is the whole tree (the paper's quadland.h with it, the
+        # navigation filter's and the land detector's APIs, which have no scenario values),
+        # l = 10
         assert landing_flight.flight_files(10) == top
         paper = paper_flight.flight_files(L)
         assert paper == {k: v for k, v in top.items() if k in paper}
         assert "quadland_landing.h" not in paper
+        for extra in (generate_estimator, generate_land_detector):
+            assert {k: top[k] for k in extra(CodegenConfig("double"))} == \
+                extra(CodegenConfig("double"))
         floats = {k.removeprefix("float/"): v for k, v in committed.items()
                   if k.startswith("float/")}
-        assert {k: v for k, v in floats.items() if k in estimator["float"]} == estimator["float"]
-        assert landing_flight.flight_files(10, "float") == {
-            k: v for k, v in floats.items() if k not in estimator["float"]}
+        assert landing_flight.flight_files(10, "float") == floats
         assert "#define QL_RBF_NODES 7 " in paper_flight.flight_files(7)["quadland.h"]
         assert "#define QL_LANDING_RBF_NODES 7 " in \
             landing_flight.flight_files(7)["quadland_landing.h"]

@@ -29,7 +29,9 @@ from quadland_symbolic.codegen import (
     land_columns,
 )
 from quadland_symbolic.codegen.estimator_api import estimator_api_structs
+from quadland_symbolic.codegen.land_detector_api import land_detector_api_structs
 from quadland_symbolic.codegen.structs import api_structs, landing_api_structs
+from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY
 from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
 
 GENERATED_DIR = codegen.generated_dir()
@@ -129,6 +131,7 @@ def test_no_heap_and_no_casadi_runtime():
         includes = set(re.findall(r"#include [<\"]([^>\"]+)[>\"]", text))
         assert includes <= {"math.h", "stddef.h", "string.h", "stdio.h", "stdlib.h", "time.h",
                             "quadland.h", "quadland_landing.h", "quadland_estimator.h",
+                            "quadland_land_detector.h",
                             "scenario.h", "land_scenario.h",
                             "quadland_loop.h",
                             *(f"{f.name}.h" for f in FUNCTIONS)}, (src, includes)
@@ -138,7 +141,8 @@ def test_no_heap_and_no_casadi_runtime():
 
 #: Each part's header and the node count generated/ has for it (paper, highway).
 PARTS = {"paper": ("quadland.h", 100), "landing": ("quadland_landing.h", 10),
-         "estimator": ("quadland_estimator.h", 0)}
+         "estimator": ("quadland_estimator.h", 0),
+         "land_detector": ("quadland_land_detector.h", 0)}
 
 
 def test_one_registry_gives_files_symbols_and_wrappers(files):
@@ -166,6 +170,8 @@ def test_one_registry_gives_files_symbols_and_wrappers(files):
     assert c_sources(("vehicle",))[-2:] == ("quadland_landing_model.c", "quadland_status.c")
     assert c_sources(("estimator_step",)) == ("estimator_step.c", "estimator_init.c",
                                               "quadland_estimator.c", "quadland_status.c")
+    assert c_sources(("land_detector",)) == ("land_detector.c", "land_detector_cues.c",
+                                             "quadland_land_detector.c", "quadland_status.c")
 
 
 def test_example_columns_are_the_trajectory_names(files):
@@ -179,8 +185,10 @@ def test_example_columns_are_the_trajectory_names(files):
 
 
 def test_land_columns_are_the_landing_trajectory_names(files):
-    names = [n for n, _ in land_columns()]
-    assert names == list(LANDING_TRAJECTORY.element_names())
+    assert [n for n, _ in land_columns()] == list(LANDING_TRAJECTORY.element_names())
+    # generated/ is the highway's, on its sensors: the sensed trajectory's columns
+    names = [n for n, _ in land_columns(sensed=True)]
+    assert names == list(SENSED_TRAJECTORY.element_names())
     body = files["example/land.c"].partition("static void write_header(void)")[2]
     body = body.partition("\n}\n")[0]
     header = "".join(re.findall(r'printf\("([^"%\\]*)"\);', body))
@@ -277,13 +285,14 @@ def test_structs_match_the_layouts_and_the_ctypes_mirrors(tmp_path, precision):
     config = CodegenConfig(precision)
     ql = config.prefix
     lines = []
-    structs = (*api_structs(100), *landing_api_structs(10), *estimator_api_structs())
+    structs = (*api_structs(100), *landing_api_structs(10), *estimator_api_structs(),
+               *land_detector_api_structs())
     for s in structs:
         lines.append(f'    printf("{s.name} . %lu\\n", (unsigned long)sizeof({ql}{s.name}));')
         lines.extend(f'    printf("{s.name} {f.name} %lu\\n", '
                      f'(unsigned long)offsetof({ql}{s.name}, {f.name}));'
                      for f in s.layout.fields)
-    prog = ("#include <stddef.h>\n#include <stdio.h>\n#include \"quadland_estimator.h\"\n\n"
+    prog = ("#include <stddef.h>\n#include <stdio.h>\n#include \"quadland_land_detector.h\"\n\n"
             "int main(void)\n{\n" + "\n".join(lines) + "\n    return 0;\n}\n")
     folder = GENERATED_DIR / ("float" if config.is_float else "")
     out = _run_c(tmp_path, prog, [folder])
@@ -381,7 +390,8 @@ int main(void)
 def test_double_and_float_builds_link_into_one_program(tmp_path):
     import shutil
 
-    sources = (*c_sources(), *c_sources(("landing_step",)), *c_sources(("estimator_step",)))
+    sources = (*c_sources(), *c_sources(("landing_step",)), *c_sources(("estimator_step",)),
+               *c_sources(("land_detector",)))
     for name, folder in (("double", GENERATED_DIR), ("float", GENERATED_DIR / "float")):
         shutil.copytree(folder, tmp_path / name, ignore=shutil.ignore_patterns("example"))
     units = [tmp_path / p / f for p in ("double", "float") for f in dict.fromkeys(sources)]
@@ -437,6 +447,12 @@ def test_float_header_spells_ql_names_alone_and_refuses_a_collision(tmp_path):
     declared = set(re.findall(r"\b(?:qlf|QLF)_\w+", body)) - {"QLF_QUADLAND_ESTIMATOR_H"}
     assert "qlf_estimator_step" in declared and declared <= set(re.findall(
         r"#define (?:ql|QL)_\w+ ((?:qlf|QLF)_\w+)", estimator))
+    detector = (GENERATED_DIR / "float" / "quadland_land_detector.h").read_text()
+    body = detector.partition("#ifdef QLF_QL_NAMES")[0]
+    body = body.partition('#include "quadland_estimator.h"')[2]
+    declared = set(re.findall(r"\b(?:qlf|QLF)_\w+", body)) - {"QLF_QUADLAND_LAND_DETECTOR_H"}
+    assert "qlf_land_detector_step" in declared and declared <= set(re.findall(
+        r"#define (?:ql|QL)_\w+ ((?:qlf|QLF)_\w+)", detector))
     g = GENERATED_DIR
     proc = syntax(f'#include "{g}/float/quadland.h"\n#include "{g}/quadland.h"\n'
                   "int main(void) { return 0; }\n")

@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import ctypes
 import json
+import os
 import re
 import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -38,6 +40,7 @@ from quadland_symbolic.landing.guidance import (
 )
 from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY
 from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
@@ -292,8 +295,8 @@ def test_guidance_errors_leave_the_state_and_zero_the_reference(harness, rng, ca
 
 @pytest.mark.parametrize("name", ["highway", "ship"])
 def test_the_flight_code_flies_the_same_landing(name):
-    """controller.backend = "c" against "casadi": states to 1e-9, identical touchdown (on
-    the true state: the filter's C is not in this backend yet)."""
+    """controller.backend = "c" against "casadi" on the true state: states to 1e-9,
+    identical touchdown."""
     base = quadland.load_scenario(name, ["sensors.enabled=false"])
     a = quadland.simulate(base)
     b = quadland.simulate(quadland.load_scenario(name, ['controller.backend="c"',
@@ -306,29 +309,84 @@ def test_the_flight_code_flies_the_same_landing(name):
     assert ra == rb and ra.success
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["highway", "turning", "ship"])
+def test_the_sensed_flight_code_flies_the_same_landing_to_the_bit(name):
+    """On sensors (the shipped scenarios, default seeds), controller.backend = "c" flies the
+    filter's, the land detector's, the guidance's and the landing step's C behind the world
+    CasADi samples and delivers: trajectory.csv byte for byte the same as "casadi", every
+    state to the bit, the same touchdown; and the run lands."""
+    a = quadland.simulate(quadland.load_scenario(name))
+    b = quadland.simulate(quadland.load_scenario(name, ['controller.backend="c"']))
+    assert a.states.shape == b.states.shape
+    np.testing.assert_array_equal(a.states.view(np.uint64), b.states.view(np.uint64))
+    assert a.to_csv() == b.to_csv()
+    ra, rb = touchdown_report(a), touchdown_report(b)
+    assert ra == rb and ra.success
+    # the flight code flew on the filter's estimate, not on the truth
+    assert np.max(np.abs(b["x_e_hat"] - b["x_e"])) > 1e-4
+
+
+def test_a_recorded_field_the_flight_code_does_not_give_stops_generation():
+    """The sensed adapter writes every recorded field by name: a new one it does not know
+    is refused when its C is generated, naming it, not left unwritten in the run."""
+    import dataclasses
+
+    from quadland_symbolic.codegen.simulator import simulator_sources
+    from quadland_symbolic.landing.sensed_loop import SENSED_RECORDED, landing_sensed_loop
+    from quadland_symbolic.layout import Field, Layout
+
+    rec = Layout("rec_more", (*SENSED_RECORDED.fields, Field("nees", 1, "-", "a new one")),
+                 "recorded")
+    model = dataclasses.replace(landing_sensed_loop(L), recorded=rec)
+    with pytest.raises(ValueError, match="no flight code gives the recorded field nees"):
+        simulator_sources(model, "sampled_flight")
+
+
+def test_the_sensed_flight_code_without_a_compiler_is_one_line(tmp_path):
+    """What stays impossible is one line: the sensed loop's flight C needs a compiler."""
+    out = tmp_path / "run"
+    env = {**os.environ, "CC": str(tmp_path / "no-such-cc")}
+    proc = subprocess.run([sys.executable, "-m", "quadland", "simulate", "--scenario",
+                           "highway", "--no-plots", "--set", 'controller.backend="c"',
+                           "--out", str(out)], capture_output=True, text=True, env=env)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and proc.stderr.startswith(
+        "quadland: error: controller.backend = \"c\" flies the compiled flight code, and CC=")
+    assert not out.exists()
+
+
 # --- the pure-C example land -------------------------------------------------
 
-#: Deterministic parts only: the C example leaves the random ones out.
+#: Deterministic parts only: the C example leaves the random ones out (on perfect
+#: sensing, and on the sensors with their draws off).
 QUIET = ["disturbance.noise=false", "wind.turbulence_w20=0.0", "sensors.enabled=false"]
+QUIET_SENSED = ["disturbance.noise=false", "wind.turbulence_w20=0.0", "sensors.random=false"]
+
+#: The example trees: generated/ (highway on its sensors), the ship's, and the
+#: highway's on perfect sensing; each with the scenario its land flies.
+TREES = {"highway": ("highway", QUIET_SENSED), "ship": ("ship", QUIET_SENSED),
+         "highway_perfect": ("highway", QUIET)}
 
 
 @pytest.fixture(scope="module")
 def examples(tmp_path_factory):
     """land, land_float and bench built from a copy of generated/ (highway), and land
-    from a tree generated for the ship (nothing is written in the tree)."""
+    from trees generated for the ship and for the highway on perfect sensing (nothing is
+    written in the tree)."""
     if shutil.which("make") is None:
         pytest.skip("no make")
     cc = build.find_compiler()
-    trees = {"highway": tmp_path_factory.mktemp("generated"),
-             "ship": tmp_path_factory.mktemp("ship")}
+    trees = {name: tmp_path_factory.mktemp(name) for name in TREES}
     shutil.copytree(codegen.generated_dir(), trees["highway"], dirs_exist_ok=True,
                     ignore=shutil.ignore_patterns("build", "closed_loop_jacobian.c"))
-    codegen.write(trees["ship"], codegen.generated_files(
-        quadland.load_scenario("ship")))
+    codegen.write(trees["ship"], codegen.generated_files(quadland.load_scenario("ship")))
+    codegen.write(trees["highway_perfect"], codegen.generated_files(
+        quadland.load_scenario("highway", ["sensors.enabled=false"])))
     procs = [subprocess.Popen(["make", "-s", f"CC={cc}", *targets], cwd=trees[name] / "example",
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
              for name, targets in (("highway", ["build/land", "build/land_float", "build/bench"]),
-                                   ("ship", ["build/land"]))]
+                                   ("ship", ["build/land"]), ("highway_perfect", ["build/land"]))]
     for proc in procs:
         out, _ = proc.communicate(timeout=600)
         assert proc.returncode == 0, out.decode()
@@ -345,13 +403,18 @@ def _land(exe):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["highway", "ship"])
-def test_pure_c_landing_is_quadland_simulates(examples, name):
-    """The same columns and rows to 1e-9, the same touchdown report; it lands."""
-    header, c, report = _land(examples[name] / "land")
-    py = quadland.simulate(quadland.load_scenario(name, QUIET))
+@pytest.mark.parametrize("tree", list(TREES))
+def test_pure_c_landing_is_quadland_simulates(examples, tree):
+    """The same columns and rows to 1e-9, the same touchdown report; it lands. On the
+    sensors (the shipped scenarios), the C flies the filter, the detector and the
+    delivery of every packet after its latency; the trajectory's estimate columns
+    too."""
+    name, quiet = TREES[tree]
+    header, c, report = _land(examples[tree] / "land")
+    py = quadland.simulate(quadland.load_scenario(name, quiet))
     want = touchdown_report(py).to_dict()
-    assert header == list(LANDING_TRAJECTORY.element_names())
+    layout = LANDING_TRAJECTORY if tree == "highway_perfect" else SENSED_TRAJECTORY
+    assert header == list(layout.element_names())
     assert list(report) == list(want) and report["limits"] == want["limits"]
     assert report["touchdown"] and report["success"] and want["success"]
     for key in ("time", "sink_rate", "offset", "relative_speed", "tilt_deg"):
@@ -363,6 +426,8 @@ def test_pure_c_landing_is_quadland_simulates(examples, name):
         scale = max(1.0, float(np.max(np.abs(py[column]))))
         np.testing.assert_allclose(c[column], py[column], rtol=0, atol=1e-9 * scale,
                                    err_msg=column)
+    if layout is SENSED_TRAJECTORY:                 # the estimate is not the truth
+        assert np.max(np.abs(c["x_e_hat"] - c["x_e"])) > 1e-4
 
 
 @pytest.mark.slow
@@ -393,5 +458,13 @@ def test_bench_times_either_controller(examples):
                          text=True).stdout
     assert re.match(r"estimator_step \(double, n_hist = 50\): 50 steps, [\d.]+ ns/step, "
                     r"350 of 350 blocks fused .*0 errors", out), out
+    # the land detector: settled on the deck, every cue holding (the range every other
+    # period), so landed sets on the hand-counted step 247 (docs/land_detector.md) and
+    # stays for the 54 steps after it of 300
+    out = subprocess.run([str(bench), "300", "detector"], check=True, capture_output=True,
+                         text=True).stdout
+    assert re.match(r"land_detector_form_cues \+ land_detector_step \(double\): 300 steps, "
+                    r"[\d.]+ ns/step, 54 steps landed \(0 errors\)", out), out
     bad = subprocess.run([str(bench), "5", "nope"], capture_output=True, text=True)
-    assert bad.returncode == 2 and "usage: bench N [paper|landing|estimator]" in bad.stderr
+    assert bad.returncode == 2 and "usage: bench N [paper|landing|estimator|detector]" \
+        in bad.stderr

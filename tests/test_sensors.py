@@ -429,3 +429,40 @@ def test_sensor_params_carry_the_settings():
                                             "rangefinder": {"deck_half_width": 2.0}}))
     assert p["vision_half_angle"] == 0.4 and p["deck_half_width"] == 2.0
     assert p["rangefinder_range_max"] == SENSOR_DEFAULTS["rangefinder"]["range_max"]
+
+
+# ---- the scenario switch sensors.random --------------------------------------------------
+
+def test_scenario_switch_random_off_samples_on_time_with_zero_draws():
+    """sensors.random = false: each sensor samples every control_rate / rate_hz ticks from
+    its phase, every packet is kept, every noise entry is zero, and the filter starts at
+    the true relative motion; true (the shipped value) draws noise and loses packets."""
+    import quadland
+    from quadland.kinds.landing.sensed import handover, tick_table
+    from quadland.kinds.landing.values import landing_values
+    from quadland_symbolic.landing.navigation import NAV
+    from quadland_symbolic.landing.sensed_loop import SENSED_TICK
+
+    off = quadland.load_scenario("highway", ["sensors.random=false"])
+    n = 2500                                       # 10 s of ticks at 250 Hz
+    N = tick_table(off, n)
+    every = {"imu": 1, "vision": 10, "gnss": 50, "rangefinder": 2, "datalink": 25}  # 250 / rate
+    for name, k in every.items():
+        sampled = N[:, SENSED_TICK.index(f"{name}_sampled")]
+        np.testing.assert_array_equal(sampled, (np.arange(n) % k == 0).astype(float))
+        np.testing.assert_array_equal(N[:, SENSED_TICK.index(f"{name}_kept")], sampled)
+        assert not np.any(N[:, SENSED_TICK.slice(f"{name}_noise")])
+    x0, P0, _ = handover(off, landing_values(off))
+    init = off.data["initial"]
+    truth = np.array([*init["position1"], init["z1"]]) - np.array(
+        [*init["position2"], off.data["deck"]["height"]])
+    np.testing.assert_allclose(x0[NAV.slice("p_r")], truth - off.data["deck"]["pad_offset"],
+                               atol=1e-12)
+    assert not np.any(x0[NAV.slice("b")]) and np.all(P0 > 0)
+    on = quadland.load_scenario("highway")
+    N_on = tick_table(on, n)
+    vision = SENSED_TICK.index("vision_sampled"), SENSED_TICK.index("vision_kept")
+    assert np.any(N_on[:, vision[0]] > N_on[:, vision[1]])          # a packet lost
+    assert np.any(N_on[:, SENSED_TICK.slice("vision_noise")])
+    x0_on, _, _ = handover(on, landing_values(on))
+    assert np.any(x0_on[NAV.slice("p_r")] != x0[NAV.slice("p_r")])

@@ -10,26 +10,34 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "quadland_landing.h"
+#include "quadland_land_detector.h"
 #include "land_scenario.h"
 
 /* Usage: land > trajectory.csv
  *
  * The plant (ql_landing_loop_plant: the quadrotor with motor lag, the vehicle
  * and its deck) integrated by classical RK4 over the merged grid of the
- * output, disturbance and control times, as quadland simulate does; at each
- * control time the perfect sensors (ql_landing_sensors, ql_landing_cues) feed ql_guidance_step
- * and ql_landing_step, whose rotor commands act QL_LAND_DELAY_PERIODS control
- * periods later (the computation delay) and are held until the next. The
- * touchdown is the zero crossing of the gear gap (ql_landing_gear_gap),
- * located within its step by bisection; there the guidance reports the
- * contact, and from then on the quadrotor rides on the deck
- * (ql_landed_outputs) until QL_LAND_SETTLE_TIME later. The disturbance is the
- * scenario's bias + sine and the wind its mean + 1-cosine gust, held over
- * each disturbance sample; the random parts (the disturbance's noise, the
- * turbulence) are left out, so that runs are reproducible everywhere: compare
- * with quadland simulate --set disturbance.noise=false --set
- * wind.turbulence_w20=0.0.
+ * output, disturbance and control times, as quadland simulate does. At each
+ * control time, the sensed loop of quadland_symbolic.landing.sensed_loop:
+ *   world: each sensor that samples now reads the true plant (ql_sense_<name>,
+ *     zero noise) and its packet enters its delay line, to be read
+ *     QL_LAND_DELAY_<NAME> control periods later (its latency);
+ *   flight code: the IMU delivered now (or the last one), one step of the
+ *     navigation filter on the packets read now (ql_estimator_step), the land
+ *     detector on its cues (ql_land_detector_form_cues, ql_land_detector_step),
+ *     the marker's age, ql_guidance_step and ql_landing_step on the estimate,
+ *     whose rotor commands act QL_LAND_DELAY_PERIODS control periods later
+ *     (the computation delay) and are held until the next.
+ * The touchdown is the zero crossing of the gear gap (ql_landing_gear_gap),
+ * located within its step by bisection; from then on the quadrotor rides on
+ * the deck (ql_landed_row) until QL_LAND_SETTLE_TIME later. The disturbance
+ * is the scenario's bias + sine and the wind its mean + 1-cosine gust, held
+ * over each disturbance sample. The random parts are left out, so that runs
+ * are reproducible everywhere: the disturbance's noise, the turbulence and
+ * the sensors' draws (every sample on time and delivered, no noise, bias,
+ * dropout or outlier; the filter starts at the truth): compare with quadland
+ * simulate --set disturbance.noise=false --set wind.turbulence_w20=0.0 --set
+ * sensors.random=false.
  *
  * The CSV's columns are quadland simulate's trajectory.csv's (the layouts'
  * names). The last line on stdout is the touchdown's figures as one JSON
@@ -96,7 +104,7 @@ static void vehicle(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
  * rotor forces then, and the yaw's unwrapping. */
 typedef struct {
     ql_real xv[NXV], anchor[QL_LANDING_ANCHOR_SIZE], F_td[4], t_td, settle, aborts;
-    const ql_real *pp;
+    const ql_real *pp, *est;
     double psi_prev, correction;
 } ride_ctx;
 
@@ -106,7 +114,7 @@ static void vehicle_of_ride(void *vctx, const ql_real *xv, double t, ql_real *xv
 }
 
 static double unwrap_step(double psi, double psi_prev, double *correction);
-static void write_row(double t, const ql_real *y);
+static void write_row(double t, const ql_real *y, const ql_real *est);
 
 /* One row of the ride at tk (ql_landed_row: the rotors winding down, the quadrotor
  * pinned); nonzero, with a line on stderr, when it is not finite. */
@@ -125,7 +133,7 @@ static int ride_row(void *vctx, const ql_real *xv, double tk, long row)
     psi = (double)sig[6];
     sig[6] = (ql_real)unwrap_step(psi, r->psi_prev, &r->correction);
     r->psi_prev = psi;
-    write_row(tk, sig);
+    write_row(tk, sig, r->est);
     return 0;
 }
 
@@ -153,13 +161,15 @@ static void write_header(void)
     printf("t,phase,x1,y1,z1,phi1,theta1,psi1");
     printf(",x2,y2,z2,phi2,theta2,psi2,x_e,y_e");
     printf(",z_e,F_total,M_x,M_y,M_z,F_1,F_2,F_3");
-    printf(",F_4,d_Fx,d_Fy,d_Fz");
+    printf(",F_4,d_Fx,d_Fy,d_Fz,dx_e,dy_e,dz_e,x_e_hat");
+    printf(",y_e_hat,z_e_hat,vx_e_hat,vy_e_hat,vz_e_hat,sigma_p_x,sigma_p_y,sigma_p_z");
     printf("\n");
 }
 
-static void write_row(double t, const ql_real *y)
+/* One CSV row: the signals y and the estimate recorded at the last control step, est. */
+static void write_row(double t, const ql_real *y, const ql_real *est)
 {
-    double row[28];
+    double row[40];
     int i;
     row[0] = t;   /* t */
     row[1] = (double)y[0];   /* phase */
@@ -189,7 +199,19 @@ static void write_row(double t, const ql_real *y)
     row[25] = (double)y[35];   /* d_Fx */
     row[26] = (double)y[36];   /* d_Fy */
     row[27] = (double)y[37];   /* d_Fz */
-    for (i = 0; i < 28; ++i) printf(i ? ",%.17g" : "%.17g", row[i]);
+    row[28] = (double)y[16];   /* dx_e */
+    row[29] = (double)y[17];   /* dy_e */
+    row[30] = (double)y[18];   /* dz_e */
+    row[31] = (double)est[0];   /* x_e_hat */
+    row[32] = (double)est[1];   /* y_e_hat */
+    row[33] = (double)est[2];   /* z_e_hat */
+    row[34] = (double)est[3];   /* vx_e_hat */
+    row[35] = (double)est[4];   /* vy_e_hat */
+    row[36] = (double)est[5];   /* vz_e_hat */
+    row[37] = (double)est[6];   /* sigma_p_x */
+    row[38] = (double)est[7];   /* sigma_p_y */
+    row[39] = (double)est[8];   /* sigma_p_z */
+    for (i = 0; i < 40; ++i) printf(i ? ",%.17g" : "%.17g", row[i]);
     printf("\n");
 }
 
@@ -254,6 +276,194 @@ static int failed(double t, const char *what, ql_status status)
     return 1;
 }
 
+/* --- the world: sensors and their delivery ------------------------------- */
+
+#define SLOTS 64            /* records a delay line holds */
+#define N_SENSORS 5
+#define MAX_RECORD 17
+#define MAX_PACKET 15
+#define MAX_NOISE 15
+#define EST 9               /* the recorded estimate: p_e_hat, v_e_hat, sigma_p_r */
+enum { IMU, VISION, GNSS, RANGEFINDER, DATALINK };
+
+/* A sensor's delay line: the records of the last SLOTS control ticks (fresh, its
+ * capture time tau, the filter's packet values), one pushed per tick. */
+typedef struct {
+    ql_real record[SLOTS][MAX_RECORD];
+    long count;                                 /* records pushed so far */
+} line_t;
+
+/* The world: each sensor's delay line and the record read from it this tick. */
+typedef struct {
+    line_t line[N_SENSORS];
+    ql_real read[N_SENSORS][MAX_RECORD];
+} world_t;
+
+/* Push this tick's record (size reals) and read the one pushed `delay` ticks ago
+ * (zeros, not fresh, before the first). */
+static void deliver(line_t *line, const ql_real *record, int size, long delay, ql_real *read)
+{
+    long k = line->count - delay;
+    memcpy(line->record[line->count % SLOTS], record, (size_t)size * sizeof *record);
+    ++line->count;
+    if (k >= 0) {
+        memcpy(read, line->record[k % SLOTS], (size_t)size * sizeof *read);
+    } else {
+        memset(read, 0, (size_t)size * sizeof *read);
+    }
+}
+
+/* The world at control tick `tick`, time tt: each sensor that samples now reads the
+ * true plant (xp under the rotor commands F_cmd and the disturbance w acting now)
+ * with its random parts off (zero noise, every packet kept); its record is fresh
+ * when the packet is valid; every line moves on by one tick. */
+static void sense(world_t *world, long tick, ql_real tt, const ql_real *xp, const ql_real *F_cmd,
+                  const ql_real *w, const ql_real *pp, const ql_real *p_sens)
+{
+    static const ql_real no_noise[MAX_NOISE] = {0};
+    ql_real packet[MAX_PACKET], record[MAX_RECORD];
+
+    /* imu: [fresh, tau, eta_hat, f_b, omega] */
+    memset(record, 0, sizeof record);
+    record[1] = tt;
+    if (tick >= QL_LAND_FIRST_IMU
+        && (tick - QL_LAND_FIRST_IMU) % QL_LAND_EVERY_IMU == 0) {
+        ql_sense_imu(xp, F_cmd, w, &tt, pp, p_sens, no_noise, packet);
+        record[0] = 1;
+        memcpy(record + 2, packet + 0, 3 * sizeof *packet);   /* eta_hat */
+        memcpy(record + 5, packet + 3, 3 * sizeof *packet);   /* f_b */
+        memcpy(record + 8, packet + 6, 3 * sizeof *packet);   /* omega */
+    }
+    deliver(&world->line[IMU], record, 11, QL_LAND_DELAY_IMU,
+            world->read[IMU]);
+
+    /* vision: [fresh, tau, r_E] */
+    memset(record, 0, sizeof record);
+    record[1] = tt;
+    if (tick >= QL_LAND_FIRST_VISION
+        && (tick - QL_LAND_FIRST_VISION) % QL_LAND_EVERY_VISION == 0) {
+        ql_sense_vision(xp, F_cmd, w, &tt, pp, p_sens, no_noise, packet);
+        record[0] = packet[3];
+        memcpy(record + 2, packet + 0, 3 * sizeof *packet);   /* r_E */
+    }
+    deliver(&world->line[VISION], record, 5, QL_LAND_DELAY_VISION,
+            world->read[VISION]);
+
+    /* gnss: [fresh, tau, rel, v1, vt] */
+    memset(record, 0, sizeof record);
+    record[1] = tt;
+    if (tick >= QL_LAND_FIRST_GNSS
+        && (tick - QL_LAND_FIRST_GNSS) % QL_LAND_EVERY_GNSS == 0) {
+        ql_sense_gnss(xp, F_cmd, w, &tt, pp, p_sens, no_noise, packet);
+        record[0] = 1;
+        memcpy(record + 2, packet + 0, 3 * sizeof *packet);   /* rel */
+        memcpy(record + 5, packet + 3, 3 * sizeof *packet);   /* v1 */
+        memcpy(record + 8, packet + 6, 3 * sizeof *packet);   /* vt */
+    }
+    deliver(&world->line[GNSS], record, 11, QL_LAND_DELAY_GNSS,
+            world->read[GNSS]);
+
+    /* rangefinder: [fresh, tau, s, b3_E] */
+    memset(record, 0, sizeof record);
+    record[1] = tt;
+    if (tick >= QL_LAND_FIRST_RANGEFINDER
+        && (tick - QL_LAND_FIRST_RANGEFINDER) % QL_LAND_EVERY_RANGEFINDER == 0) {
+        ql_sense_rangefinder(xp, F_cmd, w, &tt, pp, p_sens, no_noise, packet);
+        record[0] = packet[4];
+        memcpy(record + 2, packet + 0, 1 * sizeof *packet);   /* s */
+        memcpy(record + 3, packet + 1, 3 * sizeof *packet);   /* b3_E */
+    }
+    deliver(&world->line[RANGEFINDER], record, 6, QL_LAND_DELAY_RANGEFINDER,
+            world->read[RANGEFINDER]);
+
+    /* datalink: [fresh, tau, eta2, v2E, a2E, w2E, w2E_dot] */
+    memset(record, 0, sizeof record);
+    record[1] = tt;
+    if (tick >= QL_LAND_FIRST_DATALINK
+        && (tick - QL_LAND_FIRST_DATALINK) % QL_LAND_EVERY_DATALINK == 0) {
+        ql_sense_datalink(xp, F_cmd, w, &tt, pp, p_sens, no_noise, packet);
+        record[0] = 1;
+        memcpy(record + 2, packet + 0, 3 * sizeof *packet);   /* eta2 */
+        memcpy(record + 5, packet + 3, 3 * sizeof *packet);   /* v2E */
+        memcpy(record + 8, packet + 6, 3 * sizeof *packet);   /* a2E */
+        memcpy(record + 11, packet + 9, 3 * sizeof *packet);   /* w2E */
+        memcpy(record + 14, packet + 12, 3 * sizeof *packet);   /* w2E_dot */
+    }
+    deliver(&world->line[DATALINK], record, 17, QL_LAND_DELAY_DATALINK,
+            world->read[DATALINK]);
+}
+
+/* --- the flight code on the sensors --------------------------------------- */
+
+/* The flight computer's navigation: the filter, the IMU held, the land detector, the
+ * marker's age, and the estimate recorded for the CSV. */
+typedef struct {
+    ql_estimator_params p_est;
+    ql_estimator_memory nav;
+    ql_imu imu;                                 /* the last IMU packet delivered */
+    ql_land_detector_params p_ld;
+    ql_land_detector_state xld;
+    ql_real marker_age;                         /* s since the filter last fused a marker detection */
+    ql_real est[EST];
+} flight_t;
+
+/* One control period of the flight code on the packets read now (the sensed loop's
+ * steps 3 to 6): the IMU, the filter, the detector, the marker's age, the guidance
+ * and the landing step. *what names the call that failed. */
+static ql_status fly(flight_t *f, const world_t *world, const ql_real *F_cmd,
+                     const ql_guidance_params *guidance, ql_guidance_state *gs,
+                     const ql_landing_params *params, ql_landing_state *state, ql_real dt,
+                     ql_real tt, ql_landing_output *out, const char **what)
+{
+    ql_vision_packet vision;
+    ql_gnss_packet gnss;
+    ql_range_packet range;
+    ql_datalink_packet datalink;
+    ql_estimator_diagnostics diag;
+    ql_landing_measurement y;
+    ql_land_detector_cues cues;
+    ql_land_detector_flags flags;
+    ql_guidance_cues gcues;
+    ql_position_reference ref;
+    ql_status status;
+    int i;
+
+    if (world->read[IMU][0] != 0) {             /* this period's IMU, else the last one */
+        memcpy(&f->imu, world->read[IMU] + 2, sizeof f->imu);
+    }
+    memcpy(&vision, world->read[VISION], sizeof vision);
+    memcpy(&gnss, world->read[GNSS], sizeof gnss);
+    memcpy(&range, world->read[RANGEFINDER], sizeof range);
+    memcpy(&datalink, world->read[DATALINK], sizeof datalink);
+    *what = "ql_estimator_step";
+    status = ql_estimator_step(&f->imu, &vision, &gnss, &range, &datalink, &f->p_est, dt, tt,
+                               &f->nav, &y, &diag);
+    if (status != QL_OK) return status;
+    *what = "ql_land_detector_form_cues";
+    status = ql_land_detector_form_cues(&y, &range, &f->imu, F_cmd, gs, guidance,
+                                        &params->quad, &cues);
+    if (status != QL_OK) return status;
+    *what = "ql_land_detector_step";
+    status = ql_land_detector_step(&cues, &f->p_ld, dt, &f->xld, &flags);
+    if (status != QL_OK) return status;
+    f->marker_age = diag.fused[0] >= 0.5 ? (ql_real)0
+        : (ql_real)fmin(f->marker_age + dt, QL_LAND_DETECTOR_TIME_CAP);
+    gcues.touchdown = flags.ground_contact;     /* the detector's verdict */
+    gcues.marker_age = f->marker_age;
+    *what = "ql_guidance_step";
+    status = ql_guidance_step(&y, &gcues, guidance, dt, gs, &ref);
+    if (status != QL_OK) return status;
+    *what = "ql_landing_step";
+    status = ql_landing_step(&y, &ref, params, dt, state, out);
+    if (status != QL_OK) return status;
+    memcpy(f->est + 0, y.p_e, sizeof y.p_e);
+    memcpy(f->est + 3, y.v_e, sizeof y.v_e);
+    for (i = 0; i < 3; ++i) {
+        f->est[6 + i] = (ql_real)sqrt(fmax((double)diag.P_diag[i], 0.0));
+    }
+    return QL_OK;
+}
+
 int main(void)
 {
     static ql_landing_params params;
@@ -261,13 +471,18 @@ int main(void)
     ql_guidance_params guidance;
     ql_guidance_state gs;
     ql_landing_measurement y;
-    ql_guidance_cues cues;
-    ql_position_reference ref;
     ql_landing_output out;
     ql_real xp[NXP], xp_start[NXP], trial[NXP], work[5 * NXP], pp[QL_LANDING_PLANT_NP];
     ql_real w[QL_LANDING_NW], sig[NY], F_cmd[4] = {0, 0, 0, 0};
     ql_real queue[4 * (QL_LAND_DELAY_PERIODS + 1)];    /* commands, newest first */
     ql_real figures[QL_TOUCHDOWN_FIGURES], tt;
+    static world_t world;                       /* the sensors' delay lines */
+    static flight_t flight;                     /* the filter, the detector, ... */
+    ql_real p_sens[13], est_row[EST];
+    ql_nav_state nav0;
+    ql_deck_init deck0;
+    ql_real P0_diag[QL_NAV_SIZE];
+    const char *what;
     qll_clock clocks[N_CLOCKS];
     plant_ctx ctx;
     double t = 0, t_next, t_td = 0, t_w = 0, dt = 1.0 / QL_LAND_CONTROL_RATE_HZ, tol, g_start,
@@ -281,6 +496,31 @@ int main(void)
     ql_landing_params_init(&params);
     ql_guidance_params_init(&guidance);
     ql_guidance_state_init(&gs, &guidance);
+    /* the flight computer's navigation at handover: the scenario's tuning, the filter
+     * at the truth, the detector unset, the marker not yet seen, a hover's IMU */
+    for (i = 0; i < (int)(sizeof p_sens / sizeof *p_sens); ++i) p_sens[i] = (ql_real)ql_land_p_sens[i];
+    for (i = 0; i < QL_ESTIMATOR_PARAMS_SIZE; ++i) ((ql_real *)&flight.p_est)[i] = (ql_real)ql_land_p_est[i];
+    for (i = 0; i < QL_LAND_DETECTOR_PARAMS_SIZE; ++i) ((ql_real *)&flight.p_ld)[i] = (ql_real)ql_land_p_ld[i];
+    for (i = 0; i < QL_NAV_SIZE; ++i) {
+        ((ql_real *)&nav0)[i] = (ql_real)ql_land_nav0[i];
+        P0_diag[i] = (ql_real)ql_land_P0_diag[i];
+    }
+    for (i = 0; i < (int)(sizeof deck0 / sizeof(ql_real)); ++i) ((ql_real *)&deck0)[i] = (ql_real)ql_land_deck0[i];
+    for (i = 0; i < (int)(sizeof flight.imu / sizeof(ql_real)); ++i) ((ql_real *)&flight.imu)[i] = (ql_real)ql_land_imu0[i];
+    if ((status = ql_check_estimator_params(&flight.p_est, &what)) != QL_OK
+        || (status = ql_check_land_detector_params(&flight.p_ld, &what)) != QL_OK) {
+        fprintf(stderr, "land: the scenario's %s is outside its range\n", what);
+        return 1;
+    }
+    status = ql_estimator_init(&nav0, P0_diag, &deck0, 0, &flight.nav);
+    if (status != QL_OK) return failed(0, "ql_estimator_init", status);
+    /* no descent on a height only GNSS knows: the hover point starts at the handover's
+     * estimated height when that is higher (the guidance's "The marker") */
+    gs.z_ref = (ql_real)fmax((double)gs.z_ref, (double)nav0.p_r[2]);
+    ql_land_detector_state_init(&flight.xld);
+    flight.marker_age = QL_LAND_DETECTOR_TIME_CAP;
+    memset(flight.est, 0, sizeof flight.est);
+    memset(est_row, 0, sizeof est_row);
     tt = 0;
     ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
     ql_landing_state_init(&state, &y);       /* the command filter at the initial attitude */
@@ -305,12 +545,10 @@ int main(void)
         }
         if (qll_tick(&clocks[CLK_CTRL], t, tol, &tick)) {
             tt = (ql_real)t;
-            ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
-            ql_landing_cues((const ql_real *)&y, (const ql_real *)&guidance, (ql_real *)&cues);
-            status = ql_guidance_step(&y, &cues, &guidance, (ql_real)dt, &gs, &ref);
-            if (status != QL_OK) return failed(t, "ql_guidance_step", status);
-            status = ql_landing_step(&y, &ref, &params, (ql_real)dt, &state, &out);
-            if (status != QL_OK) return failed(t, "ql_landing_step", status);
+            sense(&world, tick, tt, xp, F_cmd, w, pp, p_sens);
+            status = fly(&flight, &world, F_cmd, &guidance, &gs, &params, &state, (ql_real)dt, tt,
+                         &out, &what);
+            if (status != QL_OK) return failed(t, what, status);
             /* the computation delay: this step's commands act QL_LAND_DELAY_PERIODS
              * control periods later */
             memmove(queue + 4, queue, 4 * QL_LAND_DELAY_PERIODS * sizeof *queue);
@@ -319,8 +557,9 @@ int main(void)
         }
         if (qll_tick(&clocks[CLK_OUT], t, tol, &tick)) {
             double t_row = qll_clock_time(&clocks[CLK_OUT], tick);
+            memcpy(est_row, flight.est, sizeof est_row);   /* the last control step's */
             signals(xp, &gs, t_row, t_w, pp, sig);
-            write_row(t_row, sig);
+            write_row(t_row, sig, est_row);
         }
         t_next = qll_grid_next(clocks, N_CLOCKS);
         if (isinf(t_next)) break;
@@ -345,18 +584,13 @@ int main(void)
         return 0;
     }
 
-    /* The contact: the guidance measures the closed gap. */
-    tt = (ql_real)t_td;
-    ql_landing_sensors(xp, &tt, pp, (ql_real *)&y);
-    ql_landing_cues((const ql_real *)&y, (const ql_real *)&guidance, (ql_real *)&cues);
-    status = ql_guidance_step(&y, &cues, &guidance, (ql_real)dt, &gs, &ref);
-    if (status != QL_OK) return failed(t_td, "ql_guidance_step", status);
-    if (gs.phase != QL_PHASE_TOUCHDOWN) {
-        fprintf(stderr, "land: t = %g s: the guidance did not detect the contact (%s)\n", t_td,
-                ql_phase_name(gs.phase));
-    }
+    /* The contact: the gear is on the deck (the event), the row says touchdown, as
+     * quadland simulate's; the land detector's verdict would come on the deck, after a
+     * whole window, and is not flown: the quadrotor rides from here. The recorded
+     * estimate is the last row's. */
+    gs.phase = QL_PHASE_TOUCHDOWN;
     signals(xp, &gs, t_td, t_w, pp, sig);
-    write_row(t_td, sig);
+    write_row(t_td, sig, est_row);
     ql_touchdown_figures(sig + 13, sig + 16, sig + 4, sig + 10,
                          figures);
 
@@ -369,6 +603,7 @@ int main(void)
         memcpy(ride.xv, xp + 16, sizeof ride.xv);
         memcpy(ride.F_td, xp + 12, sizeof ride.F_td);
         ride.pp = pp;
+        ride.est = est_row;
         ride.t_td = (ql_real)t_td;
         ride.settle = (ql_real)QL_LAND_SETTLE_TIME;
         ride.aborts = (ql_real)gs.aborts;

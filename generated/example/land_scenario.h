@@ -63,4 +63,75 @@ static const double ql_land_xp0[22] = {
     0.0, 13.88888888888889, 0.0, 0.0,
 };
 
+
+/* The sensors (sensors.enabled = true), their random parts off: each samples every
+ * QL_LAND_EVERY_<NAME> control ticks from tick QL_LAND_FIRST_<NAME>, and its packet
+ * is read QL_LAND_DELAY_<NAME> ticks later (ceil(latency / control period)). */
+#define QL_LAND_EVERY_IMU 1
+#define QL_LAND_FIRST_IMU 0
+#define QL_LAND_DELAY_IMU 0
+#define QL_LAND_EVERY_VISION 10
+#define QL_LAND_FIRST_VISION 0
+#define QL_LAND_DELAY_VISION 15
+#define QL_LAND_EVERY_GNSS 50
+#define QL_LAND_FIRST_GNSS 0
+#define QL_LAND_DELAY_GNSS 28
+#define QL_LAND_EVERY_RANGEFINDER 2
+#define QL_LAND_FIRST_RANGEFINDER 0
+#define QL_LAND_DELAY_RANGEFINDER 2
+#define QL_LAND_EVERY_DATALINK 25
+#define QL_LAND_FIRST_DATALINK 0
+#define QL_LAND_DELAY_DATALINK 25
+
+/* The sensors' constants p_sens (vision_sigma0 (1), vision_sigma_per_m (1), vision_half_angle (1), vision_range_min (1), vision_range_max (1), vision_small_range_min (1), vision_small_range_max (1), rangefinder_sigma0 (1), rangefinder_sigma_per_m (1), rangefinder_range_min (1), rangefinder_range_max (1), deck_half_length (1), deck_half_width (1)). */
+static const double ql_land_p_sens[13] = {
+    0.02, 0.01, 0.5846852994181004, 0.45, 12.0, 0.08,
+    0.0, 0.03, 0.005, 0.1, 7.0, 1.0,
+    0.7,
+};
+
+/* The navigation filter's parameters ([estimator], the model's gravity) (g (1), q_acc (3), q_at (3), q_b (3), q_ab (3), vision_sigma0 (1), vision_k_range (1), gnss_rel_sigma (3), gnss_v1_sigma (3), gnss_vt_sigma (3), range_sigma (1), range_min_cos (1), range_deck_radius (1), range_deck_sigmas (1), datalink_v_sigma (3), datalink_a_sigma (3), gate_vision (1), gate_gnss_rel (1), gate_gnss_v1 (1), gate_gnss_vt (1), gate_range (1), gate_datalink_v (1), gate_datalink_a (1), max_age_vision (1), max_age_gnss (1), max_age_range (1), max_age_datalink (1), deck_extrapolation_max (1)). */
+static const double ql_land_p_est[46] = {
+    9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
+    0.1, 0.006, 0.006, 0.021, 0.003, 0.003,
+    0.0001, 0.02, 0.02, 0.1, 0.1, 0.1,
+    0.05, 0.05, 0.05, 0.05, 0.05, 0.05,
+    0.05, 0.7, 0.5, 2.0, 0.05, 0.05,
+    0.05, 0.05, 0.05, 0.05, 11.344867, 11.344867,
+    11.344867, 11.344867, 6.634897, 11.344867, 11.344867, 0.02,
+    0.02, 0.02, 0.02, 0.5,
+};
+
+/* The land detector's parameters ([land_detector]) (gap_max (1), vz_max (1), thrust_low (1), contact_time (1), maybe_time (1), landed_time (1), hold_factor (1), no_range_factor (1), range_timeout (1), spike_min (1), spike_window (1), accel_tau (1)). */
+static const double ql_land_p_ld[12] = {
+    0.1, 0.25, 0.6, 0.3333333333333333, 0.3333333333333333, 0.3333333333333333,
+    2.5, 3.0, 0.1, 3.0, 1.0, 0.5,
+};
+
+/* The filter's initial estimate: the true relative motion at t = 0 (p_r (3), v1 (3), v_t (3), a_t (3), b (3), a_b (3)). */
+static const double ql_land_nav0[18] = {
+    -6.0, 3.0, 4.0, 13.88888888888889, 0.0, 0.0,
+    13.88888888888889, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+};
+
+/* Its initial variances (the [estimator]'s p0_* squared), in nav0's order. */
+static const double ql_land_P0_diag[18] = {
+    1.0, 1.0, 1.0, 0.25, 0.25, 0.25,
+    0.25, 0.25, 0.25, 0.09, 0.09, 0.09,
+    3.24, 3.24, 11.559999999999999, 0.04000000000000001, 0.04000000000000001, 0.04000000000000001,
+};
+
+/* The deck's rotation at t = 0 (eta2 (3), w2E (3), w2E_dot (3)). */
+static const double ql_land_deck0[9] = {
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0,
+};
+
+/* The IMU sample held before the first arrives: the initial attitude and rates, a hover's specific force (eta_hat (3), f_b (3), omega (3)). */
+static const double ql_land_imu0[9] = {
+    0.0, 0.0, 0.0, 0.0, 0.0, 9.8,
+    0.0, 0.0, 0.0,
+};
+
 #endif /* QL_EXAMPLE_LAND_SCENARIO_H */

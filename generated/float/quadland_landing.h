@@ -248,6 +248,36 @@ void qlf_landed_row(const qlf_real *xv, const qlf_real *t, const qlf_real *pp,
 /* xv_dot of the vehicle alone (eq. 3-4). */
 void qlf_vehicle(const qlf_real *xv, const qlf_real *p_veh, qlf_real *xv_dot);
 
+/* The imu's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void qlf_sense_imu(const qlf_real *xp, const qlf_real *uh, const qlf_real *w, const qlf_real *t,
+                   const qlf_real *pp, const qlf_real *p_sens, const qlf_real *noise,
+                   qlf_real *y);
+
+/* The vision's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void qlf_sense_vision(const qlf_real *xp, const qlf_real *uh, const qlf_real *w,
+                      const qlf_real *t, const qlf_real *pp, const qlf_real *p_sens,
+                      const qlf_real *noise, qlf_real *y);
+
+/* The gnss's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void qlf_sense_gnss(const qlf_real *xp, const qlf_real *uh, const qlf_real *w,
+                    const qlf_real *t, const qlf_real *pp, const qlf_real *p_sens,
+                    const qlf_real *noise, qlf_real *y);
+
+/* The rangefinder's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void qlf_sense_rangefinder(const qlf_real *xp, const qlf_real *uh, const qlf_real *w,
+                           const qlf_real *t, const qlf_real *pp, const qlf_real *p_sens,
+                           const qlf_real *noise, qlf_real *y);
+
+/* The datalink's packet y from the plant's state under its noise (a zero
+ * noise vector: the exact truth; quadland_symbolic.landing.sensors). */
+void qlf_sense_datalink(const qlf_real *xp, const qlf_real *uh, const qlf_real *w,
+                        const qlf_real *t, const qlf_real *pp, const qlf_real *p_sens,
+                        const qlf_real *noise, qlf_real *y);
+
 /* Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a
  * contact. */
 void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_real *eta1,
@@ -312,6 +342,11 @@ void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_r
 #define ql_position_reference qlf_position_reference
 #define ql_quadrotor_params qlf_quadrotor_params
 #define ql_real qlf_real
+#define ql_sense_datalink qlf_sense_datalink
+#define ql_sense_gnss qlf_sense_gnss
+#define ql_sense_imu qlf_sense_imu
+#define ql_sense_rangefinder qlf_sense_rangefinder
+#define ql_sense_vision qlf_sense_vision
 #define ql_status qlf_status
 #define ql_touchdown_figures qlf_touchdown_figures
 #define ql_vehicle qlf_vehicle

@@ -147,6 +147,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     "sensors": {
         "enabled": Field(B, "-", "true: the controller flies on the sensors and the navigation "
                          "filter; false: on the true state, at once"),
+        "random": Field(B, "-", "false: the world's draws are zero (no noise, biases, "
+                        "dropouts or outliers; the filter starts at the truth)"),
     },
     **{f"sensors.{name}": sensor_fields(name) for name in SENSOR_NAMES},
     # The navigation filter's own tuning (docs/estimator.md): what it assumes of the

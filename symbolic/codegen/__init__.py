@@ -6,8 +6,9 @@ settings and the values the C carries), :mod:`~quadland_symbolic.codegen.registr
 Jinja2 environment), :mod:`~quadland_symbolic.codegen.casadi_files` (CasADi's C,
 post-processed), :mod:`~quadland_symbolic.codegen.structs` (the API's structs as
 layouts), :mod:`~quadland_symbolic.codegen.paper_api`,
-:mod:`~quadland_symbolic.codegen.landing_api` and
-:mod:`~quadland_symbolic.codegen.estimator_api` (the readable APIs),
+:mod:`~quadland_symbolic.codegen.landing_api`,
+:mod:`~quadland_symbolic.codegen.estimator_api` and
+:mod:`~quadland_symbolic.codegen.land_detector_api` (the readable APIs),
 :mod:`~quadland_symbolic.codegen.example` (the pure-C example),
 :mod:`~quadland_symbolic.codegen.tree` (all of ``generated/``) and
 :mod:`~quadland_symbolic.codegen.simulator` (the compiled simulators' C).
@@ -47,17 +48,21 @@ from quadland_symbolic.codegen.config import (
     CodegenConfig,
     Defaults,
     LandingDefaults,
+    SensorDefaults,
 )
 from quadland_symbolic.codegen.estimator_api import generate_estimator
 from quadland_symbolic.codegen.example import example_columns, generate_example, land_columns
+from quadland_symbolic.codegen.land_detector_api import generate_land_detector
 from quadland_symbolic.codegen.landing_api import generate_landing
 from quadland_symbolic.codegen.paper_api import generate
 from quadland_symbolic.codegen.registry import FUNCTIONS, GeneratedFunction, c_sources
 from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS, loop_header, simulator_sources
 from quadland_symbolic.codegen.tree import TREE_PARTS, generate_tree
 
-__all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "GeneratedFunction",
+__all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "SensorDefaults",
+           "GeneratedFunction",
            "FUNCTIONS", "STATUS_CODES", "TEMPLATE_DIR", "c_sources", "example_columns",
            "land_columns", "generate", "generate_landing", "generate_estimator",
+           "generate_land_detector",
            "generate_example", "generate_tree", "TREE_PARTS",
            "SIMULATOR_PARTS", "loop_header", "simulator_sources"]

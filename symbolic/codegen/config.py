@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["TEMPLATE_DIR", "STATUS_CODES", "CodegenConfig", "DEFAULT_CONFIG", "FlightDefaults",
-           "Defaults", "LandingDefaults"]
+           "Defaults", "SensorDefaults", "LandingDefaults"]
 
 #: Folder of the Jinja2 templates (installed with the package).
 TEMPLATE_DIR = Path(__file__).resolve().parent.parent / "templates"
@@ -164,6 +164,38 @@ class Defaults(FlightDefaults):
 
 
 @dataclasses.dataclass(frozen=True)
+class SensorDefaults:
+    """What the example ``land`` needs to fly a landing on its sensors (random parts off).
+
+    Attributes
+    ----------
+    p_sens, p_est, p_ld : ndarray
+        The sensors' constants (``quadland_symbolic.landing.sensors.SENSOR_PARAMS``),
+        the filter's parameters (``estimator_params()``) and the land detector's
+        (``LAND_DETECTOR_PARAMS``), the scenario's.
+    every, first, delay : tuple of int
+        Per sensor (``SENSOR_NAMES``' order): control ticks between two samples,
+        the tick of the first, and the ticks from a sample to its reading.
+    nav0, P0_diag, deck0 : ndarray
+        The filter's handover (``ql_estimator_init``) at t = 0, its initial
+        estimate the truth.
+    imu0 : ndarray
+        The IMU sample held before the first arrives.
+    """
+
+    p_sens: np.ndarray
+    p_est: np.ndarray
+    p_ld: np.ndarray
+    every: tuple[int, ...]
+    first: tuple[int, ...]
+    delay: tuple[int, ...]
+    nav0: np.ndarray
+    P0_diag: np.ndarray
+    deck0: np.ndarray
+    imu0: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
 class LandingDefaults(FlightDefaults):
     """Numeric defaults of the landing API and its example (one landing scenario's values).
 
@@ -191,6 +223,9 @@ class LandingDefaults(FlightDefaults):
         s from touchdown to the end of the run.
     limits : tuple of (str, float)
         The touchdown limits by name (``max_sink_rate``, ...), in report order.
+    sensors : SensorDefaults or None
+        The example's sensors, filter and land detector (``sensors.enabled``);
+        None: it flies on perfect sensing.
 
     The rest is :class:`FlightDefaults`'.
     """
@@ -210,4 +245,5 @@ class LandingDefaults(FlightDefaults):
     gust_direction: tuple[float, float, float]
     settle_time: float
     limits: tuple[tuple[str, float], ...]
+    sensors: SensorDefaults | None = None
 

@@ -18,6 +18,14 @@ from quadland_symbolic.codegen.structs import (
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_STATE,
 )
+from quadland_symbolic.landing.land_detector import LAND_DETECTOR_PARAMS
+from quadland_symbolic.landing.navigation import (
+    BLOCKS,
+    DECK_INIT,
+    IMU,
+    NAV,
+    estimator_params,
+)
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
@@ -25,13 +33,21 @@ from quadland_symbolic.landing.plant import (
 )
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
 from quadland_symbolic.landing.relative import TOUCHDOWN_FIGURES
+from quadland_symbolic.landing.sensed_loop import (
+    DELIVERY_SLOTS,
+    NAV_PACKET_OF,
+    SENSED_TRAJECTORY,
+    delivery_record,
+)
+from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES, SENSOR_PACKETS, SENSOR_PARAMS
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
+from quadland_symbolic.layout import Layout
 from quadland_symbolic.quadrotor import QUAD_STATE
 from quadland_symbolic.relative import E1
 from quadland_symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE
 
-__all__ = ["example_columns", "example_context", "land_columns", "land_context", "LAND_MODEL",
-           "generate_example"]
+__all__ = ["example_columns", "example_context", "LAND_ESTIMATE", "land_columns", "land_context",
+           "LAND_MODEL", "generate_example"]
 
 
 def example_columns(l: int) -> list[tuple[str, str]]:
@@ -102,36 +118,83 @@ def example_context(d: Defaults) -> dict:
     )
 
 
-def land_columns() -> list[tuple[str, str]]:
+#: What the sensed example records of each control step for its CSV (the columns of
+#: ``SENSED_TRAJECTORY`` that are not signals): the filter's estimate and its sigmas.
+LAND_ESTIMATE = Layout("est", tuple(f for f in SENSED_TRAJECTORY.fields
+                                    if f.name != "t" and f.name not in LANDING_SIGNALS.names()),
+                       "the sensed example's recorded signals")
+
+
+def land_columns(sensed: bool = False) -> list[tuple[str, str]]:
     """Columns of the example ``land``'s CSV: ``(name, C expression)``, from the layouts.
 
     The names are ``quadland_symbolic.landing.signals.LANDING_TRAJECTORY``'s (``quadland
-    simulate``'s trajectory.csv of a landing); the expressions read the time
-    ``t`` and the signals ``y`` (``quadland_symbolic.landing.loop.LANDING_SIGNALS``).
+    simulate``'s trajectory.csv of a landing), on sensors (``sensed``)
+    ``quadland_symbolic.landing.sensed_loop.SENSED_TRAJECTORY``'s; the expressions read
+    the time ``t``, the signals ``y`` (``quadland_symbolic.landing.loop.LANDING_SIGNALS``)
+    and on sensors the recorded estimate ``est`` (:data:`LAND_ESTIMATE`).
     """
     cols = []
-    for f in LANDING_TRAJECTORY.fields:
+    for f in (SENSED_TRAJECTORY if sensed else LANDING_TRAJECTORY).fields:
         if f.name == "t":
             cols.append(("t", "t"))
             continue
-        at = LANDING_SIGNALS.slice(f.name).start
-        cols += [(n, f"(double)y[{at + i}]") for i, n in enumerate(f.element_names())]
+        vec, lay = ("y", LANDING_SIGNALS) if f.name in LANDING_SIGNALS.names() else \
+            ("est", LAND_ESTIMATE)
+        at = lay.slice(f.name).start
+        cols += [(n, f"(double){vec}[{at + i}]") for i, n in enumerate(f.element_names())]
     return cols
+
+
+def _sensed_context(d: LandingDefaults) -> dict | None:
+    """The sensed example's sensors, delay lines and flight code, from the layouts."""
+    s = d.sensors
+    if s is None:
+        return None
+    sensors = []
+    for k, name in enumerate(SENSOR_NAMES):
+        packet, record = SENSOR_PACKETS[name], delivery_record(name)
+        sensors.append(dict(
+            name=name, index=k, packet_size=packet.size, noise_size=NOISES[name].size,
+            record_size=record.size, every=s.every[k], first=s.first[k], delay=s.delay[k],
+            valid=packet.slice("valid").start if "valid" in packet.names() else None,
+            values=[dict(name=f.name, record=record.slice(f.name).start,
+                         packet=packet.slice(f.name).start, size=f.size)
+                    for f in record.fields[2:]],
+            struct=None if name == "imu" else f"{NAV_PACKET_OF[name].name}_packet"))
+    return dict(
+        sensors=sensors, slots=DELIVERY_SLOTS,
+        max_noise=max(x["noise_size"] for x in sensors),
+        max_packet=max(x["packet_size"] for x in sensors),
+        max_record=max(x["record_size"] for x in sensors),
+        vision_block=[b.name for b in BLOCKS].index("vision"),
+        est=[dict(name=f.name, offset=LAND_ESTIMATE.slice(f.name).start, size=f.size)
+             for f in LAND_ESTIMATE.fields], est_size=LAND_ESTIMATE.size,
+        vectors={name: _rows(getattr(s, attr)) for name, attr in (
+            ("p_sens", "p_sens"), ("p_est", "p_est"), ("p_ld", "p_ld"), ("nav0", "nav0"),
+            ("P0_diag", "P0_diag"), ("deck0", "deck0"), ("imu0", "imu0"))},
+        fields={name: ", ".join(f"{f.name} ({f.size})" for f in lay.fields) for name, lay in (
+            ("p_sens", SENSOR_PARAMS), ("p_est", estimator_params()),
+            ("p_ld", LAND_DETECTOR_PARAMS), ("nav0", NAV), ("deck0", DECK_INIT),
+            ("imu0", IMU))},
+    )
+
+
+def _rows(values) -> list[list[str]]:
+    values = [repr(float(v)) for v in np.asarray(values, dtype=float).ravel()]
+    return [values[i:i + 6] for i in range(0, len(values), 6)]
 
 
 def land_context(d: LandingDefaults) -> dict:
     """The example ``land``'s context: its scenario's values and the layouts' offsets."""
-    def rows(values):
-        values = [repr(float(v)) for v in np.asarray(values, dtype=float).ravel()]
-        return [values[i:i + 6] for i in range(0, len(values), 6)]
-
     def fields(layout):
         return ", ".join(f"{f.name} ({f.size})" for f in layout.fields)
 
     x1q = LANDING_PLANT_STATE.slice("x1q").start
     return dict(
         d=d,
-        columns=[dict(name=n, expr=e) for n, e in land_columns()],
+        sensed=_sensed_context(d),
+        columns=[dict(name=n, expr=e) for n, e in land_columns(d.sensors is not None)],
         xg=[dict(name=n, index=i) for i, n in enumerate(GUIDANCE_STATE.names())],
         w={n: a for n, (a, _) in LANDING_DISTURBANCE.offsets().items()},
         y={n: LANDING_SIGNALS.slice(n).start for n in ("p_e", "v_e", "eta1", "eta2")}
@@ -142,8 +205,8 @@ def land_context(d: LandingDefaults) -> dict:
         bias=[repr(float(v)) for v in (*d.force_bias, *d.moment_bias)],
         wind_mean=[repr(float(v)) for v in d.wind_mean],
         gust_direction=[repr(float(v)) for v in d.gust_direction],
-        pp_rows=rows(d.pp), pp_size=len(d.pp), pp_fields=fields(LANDING_PLANT_PARAMS),
-        xp_rows=rows(d.xp0), xp_size=len(d.xp0), xp_fields=fields(LANDING_PLANT_STATE),
+        pp_rows=_rows(d.pp), pp_size=len(d.pp), pp_fields=fields(LANDING_PLANT_PARAMS),
+        xp_rows=_rows(d.xp0), xp_size=len(d.xp0), xp_fields=fields(LANDING_PLANT_STATE),
         xv=LANDING_PLANT_STATE.slice("xv").start, x1q_size=QUAD6_STATE.size,
         rotors=x1q + QUAD6_STATE.slice("F").start,
         p_veh=LANDING_PLANT_PARAMS.slice("p_veh").start,
@@ -169,7 +232,9 @@ def generate_example(defaults: Defaults, landing: LandingDefaults) -> dict[str, 
     paper.update(land_scenario=landing.scenario, common_sources=[status],
                  step_sources=[f for f in paper["step_sources"] if f != status],
                  land_sources=[f for f in c_sources(LAND_MODEL) if f != status],
-                 estimator_sources=[f for f in c_sources(("estimator_step",)) if f != status])
+                 estimator_sources=[f for f in c_sources(("estimator_step",)) if f != status],
+                 detector_sources=[f for f in c_sources(("land_detector",)) if f != status],
+                 land_sensed=landing.sensors is not None)
     land = dict(common_context(None), scenario=landing.scenario, **land_context(landing))
     files = {f"example/{name}": render(f"example/{name}.jinja", **paper)
              for name in ("scenario.h", "fly.c", "bench.c", "Makefile")}

@@ -26,13 +26,23 @@ from quadland_symbolic.landing.estimator import (
     estimator_init_function,
     estimator_step_function,
 )
+from quadland_symbolic.landing.land_detector import land_detector_function
 from quadland_symbolic.landing.loop import gear_gap_function
 from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.relative import touchdown_figures_function
 from quadland_symbolic.landing.ride import anchor_function, landed_row_function
-from quadland_symbolic.landing.sensors import measurement_function
+from quadland_symbolic.landing.sensed_loop import detector_cues_function
+from quadland_symbolic.landing.sensors import (
+    SENSOR_NAMES,
+    measurement_function,
+    sense_datalink_function,
+    sense_gnss_function,
+    sense_imu_function,
+    sense_rangefinder_function,
+    sense_vision_function,
+)
 from quadland_symbolic.landing.signals import landing_signals_function
 from quadland_symbolic.vehicle import vehicle_function
 
@@ -64,11 +74,12 @@ class GeneratedFunction:
     doc : str
         Comment of the wrapper in its header (``{ql}``/``{QL}`` stand for
         the build's prefixes).
-    part : {"paper", "landing", "estimator"}
+    part : {"paper", "landing", "estimator", "land_detector"}
         Which API it belongs to: ``quadland.h`` (the paper's control step,
         ``l`` of the paper's scenario), ``quadland_landing.h`` (the landing
-        step and guidance, ``l`` of the landing scenario) or
-        ``quadland_estimator.h`` (the navigation filter).
+        step and guidance, ``l`` of the landing scenario),
+        ``quadland_estimator.h`` (the navigation filter) or
+        ``quadland_land_detector.h`` (the land detector and its cues).
     sizes : tuple of (str, object)
         Keyword arguments of the builder besides ``l`` (the filter's sizes),
         which the banner names.
@@ -108,6 +119,11 @@ class GeneratedFunction:
         """Names of its inputs and outputs: the wrapper's arguments."""
         fn = self.function(l)
         return tuple(fn.name_in()), tuple(fn.name_out())
+
+
+#: The sensors' truth models (``sense_<name>``), in the order of ``SENSOR_NAMES``.
+SENSOR_BUILDERS = (sense_imu_function, sense_vision_function, sense_gnss_function,
+                   sense_rangefinder_function, sense_datalink_function)
 
 
 #: The CasADi functions written as C, in file order: the one registry.
@@ -153,6 +169,10 @@ FUNCTIONS = (
          " * of the quadrotor pinned to the deck at anchor, its rotor forces winding\n"
          " * down from F_td, the phase LANDED from t_td + settle."),
         ("vehicle", vehicle_function, "xv_dot of the vehicle alone (eq. 3-4)."),
+        *((f"sense_{name}", builder,
+           f"The {name}'s packet y from the plant's state under its noise (a zero\n"
+           " * noise vector: the exact truth; quadland_symbolic.landing.sensors).")
+          for name, builder in zip(SENSOR_NAMES, SENSOR_BUILDERS, strict=True)),
         ("touchdown_figures", touchdown_figures_function,
          "Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a\n"
          " * contact."),
@@ -161,6 +181,9 @@ FUNCTIONS = (
                         sizes=ESTIMATOR_SIZES)
       for name, builder in (("estimator_step", estimator_step_function),
                             ("estimator_init", estimator_init_function))),
+    *(GeneratedFunction(name, builder, per_node_count=False, part="land_detector")
+      for name, builder in (("land_detector", land_detector_function),
+                            ("land_detector_cues", detector_cues_function))),
 )
 
 
@@ -169,16 +192,17 @@ BY_NAME = {f.name: f for f in FUNCTIONS}
 
 #: The readable API's source of each part, which calls its functions without a wrapper.
 API_FILE = {"paper": "quadland.c", "landing": "quadland_landing.c",
-            "estimator": "quadland_estimator.c"}
+            "estimator": "quadland_estimator.c", "land_detector": "quadland_land_detector.c"}
 
 
 def c_sources(functions=("control_step",)) -> tuple[str, ...]:
     """The ``.c`` files that link the API of ``functions`` (names in :data:`FUNCTIONS`).
 
     For each part (``quadland.h``, ``quadland_landing.h``,
-    ``quadland_estimator.h``) a function belongs to (the paper's without any):
-    its API file and the functions it calls (the paper's control step; the
-    landing step and guidance; the filter's step and init); each other
+    ``quadland_estimator.h``, ``quadland_land_detector.h``) a function belongs
+    to (the paper's without any): its API file and the functions it calls (the
+    paper's control step; the landing step and guidance; the filter's step and
+    init; the detector's step and cues); each other
     function with its wrapper's file; ``quadland_status.c`` always.
     """
     unknown = set(functions) - set(BY_NAME)

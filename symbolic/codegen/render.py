@@ -10,7 +10,7 @@ import jinja2
 
 from quadland_symbolic.codegen.config import TEMPLATE_DIR, CodegenConfig
 
-__all__ = ["pad", "signature", "declared", "environment", "render", "common_context"]
+__all__ = ["pad", "signature", "declared", "fail", "environment", "render", "common_context"]
 
 
 def pad(text: str, width: int) -> str:
@@ -37,6 +37,11 @@ def declared(text: str, ql: str, QL: str) -> list[str]:
     return sorted(set(re.findall(rf"\b(?:{ql}|{QL})\w+", text)))
 
 
+def fail(message: str):
+    """Stop a rendering with ``message`` (a template meets what it cannot write)."""
+    raise ValueError(message)
+
+
 @functools.cache
 def environment() -> jinja2.Environment:
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
@@ -44,6 +49,7 @@ def environment() -> jinja2.Environment:
                              trim_blocks=True, lstrip_blocks=True, autoescape=False)
     env.filters.update(pad=pad, signature=signature, declared=declared,
                        prefix=lambda text, head: head + text)
+    env.globals["fail"] = fail
     return env
 
 

@@ -24,9 +24,10 @@ __all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
 #: The parts of a compiled simulator: each one's driver and the functions it calls.
 #: ``"sampled_flight"`` flies the flight code (``quadland.h``'s
 #: ``ql_control_step``; ``quadland_landing.h``'s ``ql_guidance_step`` and
-#: ``ql_landing_step``) in place of the symbolic controller, through the
-#: model's adapter (:attr:`LoopModel.flight`); its build adds the flight
-#: sources.
+#: ``ql_landing_step``; on sensors also ``quadland_estimator.h``'s and
+#: ``quadland_land_detector.h``'s steps) in place of the symbolic controller,
+#: through the model's adapter (:attr:`LoopModel.flight`); its build adds the
+#: flight sources.
 SIMULATOR_PARTS = {"continuous": ("continuous", ("rhs", "outputs", "envelope")),
                    "sampled": ("sampled", ("plant", "controller", "assemble", "outputs",
                                            "envelope")),
@@ -142,5 +143,6 @@ def _flight_controller(model: LoopModel, prefix: str, args: ca.Function) -> dict
             for f in model.controller_state.fields],
         rec=[(f.name, offsets[model.recorded.name][f.name][0])
              for f in model.recorded.fields],
+        rec_elements=list(model.recorded.element_names()),
         nested=nested)
     return files

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 from quadland_symbolic.codegen.config import CodegenConfig, Defaults, LandingDefaults
 from quadland_symbolic.codegen.estimator_api import generate_estimator
 from quadland_symbolic.codegen.example import generate_example
+from quadland_symbolic.codegen.land_detector_api import generate_land_detector
 from quadland_symbolic.codegen.landing_api import generate_landing
 from quadland_symbolic.codegen.paper_api import generate
 from quadland_symbolic.codegen.render import common_context, render
@@ -40,7 +41,7 @@ def generate_tree(parts: Mapping[str, Defaults | LandingDefaults]) -> dict[str, 
     files = {}
     for config, folder in ((CodegenConfig("double"), ""), (CodegenConfig("float"), "float/")):
         built = {**generate(defaults, config), **generate_landing(landing, config),
-                 **generate_estimator(config)}
+                 **generate_estimator(config), **generate_land_detector(config)}
         files.update({folder + k: v for k, v in built.items()})
     files.update(generate_example(defaults, landing))
     files[".gitignore"] = render("gitignore.jinja", **common_context(None))

@@ -39,6 +39,15 @@ tick ``t_k`` (period ``T``), does, in this order:
 
 The recorded signals add the estimate and the filter's health to the unsensed
 loop's (:data:`SENSED_RECORDED`).
+
+The model's **step_args** (same signature as the controller) gives the flight code's
+arguments: the world's next delay lines, the packets read now and the IMU of step 3,
+the flight memory and parameters. With ``controller.backend = "c"`` the compiled
+simulator flies steps 4 to 6 as the generated flight C behind the controller's
+signature (``ql_estimator_step``, ``ql_land_detector_form_cues``,
+``ql_land_detector_step``, ``ql_guidance_step``, ``ql_landing_step``;
+``symbolic/templates/landing_sensed_flight_controller.c.jinja``), the world part and
+the IMU's hold staying CasADi's.
 """
 
 from __future__ import annotations
@@ -111,7 +120,7 @@ from quadland_symbolic.parameters import QUADROTOR
 
 __all__ = ["DELIVERY_SLOTS", "SENSED_TICK", "SENSED_RECORDED", "SENSED_TRAJECTORY", "NAV_PACKET_OF",
            "delivery_record", "delivery_delay", "sensed_loop_memory", "sensed_loop_params",
-           "detector_cues", "landing_sensed_loop"]
+           "detector_cues", "detector_cues_function", "landing_sensed_loop"]
 
 #: The longest delivery delay a sensor's line holds, in control periods (0.256 s at
 #: 250 Hz: past the filter's 0.2 s horizon and its largest packet age).
@@ -239,16 +248,40 @@ def detector_cues(y, range_read, imu_now, uh_held, cs: dict, ps: dict):
     height below the centre, ``n2`` the deck normal from the broadcast attitude);
     the thrust ratio uses the controller's own model of mass and gravity.
     """
+    return _cues(y, range_read, imu_now, uh_held, cs["xg"], ps["p_guid"],
+                 LANDING_PLANT_PARAMS.unpack(ps["pp"])["p_quad"])
+
+
+def _cues(y, range_read, imu_now, uh_held, xg, p_guid, p_quad):
+    """:func:`detector_cues` on the guidance's state and parameters and the model's ``p_quad``."""
     m, r = LANDING_MEASUREMENT.unpack(y), delivery_record("rangefinder").unpack(range_read)
-    h = GUIDANCE_PARAMS.unpack(ps["p_guid"])["touchdown_height"]
+    h = GUIDANCE_PARAMS.unpack(p_guid)["touchdown_height"]
     R2 = rotation(m["eta2"])
-    quad = QUADROTOR.unpack(LANDING_PLANT_PARAMS.unpack(ps["pp"])["p_quad"])
+    quad = QUADROTOR.unpack(p_quad)
     return ca.vertcat(
         (r["s"] - h) * (R2[:, 2].T @ r["b3_E"]), r["fresh"],
         deck_gear_gap(m["p_e"], R2, rotation(m["eta1"]), h), m["v_e"][2],
         ca.sum1(uh_held) / (quad["m1"] * quad["g"]),
         IMU.unpack(imu_now)["f_b"][2],
-        GUIDANCE_STATE.unpack(cs["xg"])["phase"] == DESCEND)
+        GUIDANCE_STATE.unpack(xg)["phase"] == DESCEND)
+
+
+@functools.cache
+def detector_cues_function() -> ca.Function:
+    """``land_detector_cues(y, range, imu, F_cmd, xg, p_guid, p_quad) -> cues``.
+
+    :func:`detector_cues` as one Function, the flight code's
+    (``ql_land_detector_form_cues``): ``range`` the range finder's packet
+    (:data:`~quadland_symbolic.landing.navigation.RANGE`, the layout of its delivery
+    record), ``imu`` this period's IMU, ``F_cmd`` the rotor commands acting now,
+    ``xg`` the guidance's state, ``p_quad`` the controller's model of the quadrotor.
+    """
+    y, rng, imu = LANDING_MEASUREMENT.sym(), delivery_record("rangefinder").sym(), IMU.sym()
+    F_cmd, xg, p_guid, p_quad = COMMAND.sym(), GUIDANCE_STATE.sym(), GUIDANCE_PARAMS.sym(), \
+        QUADROTOR.sym()
+    return ca.Function("land_detector_cues", [y, rng, imu, F_cmd, xg, p_guid, p_quad],
+                       [_cues(y, rng, imu, F_cmd, xg, p_guid, p_quad)],
+                       ["y", "range", "imu", "F_cmd", "xg", "p_guid", "p_quad"], ["cues"])
 
 
 @functools.cache
@@ -284,6 +317,18 @@ def landing_sensed_loop(l: int) -> LoopModel:
     rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
                      d["n_rejected"], d["n_discarded"], d["n_dropped"], d["n_held"],
                      marker_age, fl["ground_contact"], fl["maybe_landed"], fl["landed"])
+    # the flight code's arguments, for the flight C behind the controller's signature
+    plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
+    args = dict(imu=imu_now, vision=packets[0], gnss=packets[1], range=packets[2],
+                datalink=packets[3], nav=cs["nav"], p_est=ps["p_est"], dt=ps["dt"], time=t,
+                F_cmd=uh, xld=cs["xld"], p_ld=ps["p_ld"], marker_age=cs["marker_age"],
+                xg=cs["xg"], mem=cs["mem"], p_guid=ps["p_guid"], p_ctrl=ps["p_ctrl"],
+                p_quad=plant_p["p_quad"], p_act=plant_p["p_act"],
+                **{f"line_{name}": line for name, line in zip(SENSOR_NAMES, lines, strict=True)})
+    step_args = ca.Function("step_args", [xp, xc, pc, first, t, uh, w, pp, n],
+                            list(args.values()),
+                            ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
+                            list(args))
     controller = ca.Function(
         "controller", [xp, xc, pc, first, t, uh, w, pp, n],
         [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],
@@ -296,5 +341,6 @@ def landing_sensed_loop(l: int) -> LoopModel:
     # the plant, the outputs, the event and the envelope are the unsensed loop's own
     return dataclasses.replace(
         base, name="landing_sensed", controller_state=xc_lay, controller_params=pc_lay,
-        recorded=SENSED_RECORDED, controller=controller, assemble=assemble, step_args=None,
-        flight=None, ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)
+        recorded=SENSED_RECORDED, controller=controller, assemble=assemble,
+        step_args=step_args, flight="landing_sensed_flight_controller.c.jinja",
+        ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)

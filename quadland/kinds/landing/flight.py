@@ -2,8 +2,10 @@
 
 The landing step and guidance generated as C (``quadland_landing.h``, one tree
 with the paper's step), with a landing scenario's values as its C defaults
-(:func:`landing_defaults`; ``generated/`` carries the highway scenario's),
-built on first use and loaded with ``ctypes`` (:func:`load_landing_api`).
+(:func:`landing_defaults`; ``generated/`` carries the highway scenario's), and
+beside them the navigation filter (``quadland_estimator.h``) and the land
+detector (``quadland_land_detector.h``), which have no scenario values; built on
+first use and loaded with ``ctypes`` (:func:`load_landing_api`).
 """
 
 from __future__ import annotations
@@ -19,19 +21,31 @@ from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
 from quadland.kinds.landing.report import TOUCHDOWN_LIMITS
+from quadland.kinds.landing.sensed import (
+    handover,
+    imu_at_rest,
+    sensed_vectors,
+    sensor_settings,
+    sensors_enabled,
+)
 from quadland.kinds.landing.values import landing_values
 from quadland.kinds.paper.flight import PAPER_SCENARIO, default_paper
 from quadland.scenario import Scenario, load_scenario
 from quadland_symbolic.codegen import (
     CodegenConfig,
     LandingDefaults,
+    SensorDefaults,
     c_sources,
     generate,
+    generate_estimator,
+    generate_land_detector,
     generate_landing,
 )
 from quadland_symbolic.codegen.structs import landing_api_structs
 from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+from quadland_symbolic.landing.sensed_loop import sensed_loop_params
+from quadland_symbolic.landing.sensors import SENSOR_NAMES
 
 __all__ = ["LANDING_SCENARIO", "landing_defaults", "default_landing", "flight_files",
            "flight_code", "LandingApi", "load_landing_api"]
@@ -70,7 +84,24 @@ def landing_defaults(sc: Scenario) -> LandingDefaults:
         gust_start=float(wind["gust_start"]), gust_half_length=float(wind["gust_half_length"]),
         gust_amplitude=float(wind["gust_amplitude"]), gust_direction=floats(e),
         settle_time=float(g["settle_time"]),
-        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS))
+        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS),
+        sensors=_sensor_defaults(sc, lv) if sensors_enabled(sc) else None)
+
+
+def _sensor_defaults(sc: Scenario, lv) -> SensorDefaults:
+    """The example's sensors, filter and detector: the sensed loop's vectors
+    (:func:`quadland.kinds.landing.sensed.sensed_vectors`), its random parts off."""
+    pc = sensed_loop_params(lv.l).unpack(sensed_vectors(sc, lv)[0])
+    rate = float(sc.data["controller"]["rate_hz"])
+    settings = sensor_settings(sc)
+    g = float(sc.data["quadrotor"]["gravity"])
+    nav0, P0_diag, deck0 = handover(sc, lv, random=False)
+    return SensorDefaults(
+        p_sens=pc["p_sens"], p_est=pc["p_est"], p_ld=pc["p_ld"],
+        every=tuple(int(round(rate / settings[n]["rate_hz"])) for n in SENSOR_NAMES),
+        first=tuple(int(round(settings[n]["phase"] * rate)) for n in SENSOR_NAMES),
+        delay=tuple(int(d) for d in pc["delay"]), nav0=nav0, P0_diag=P0_diag, deck0=deck0,
+        imu0=imu_at_rest(lv.xp0, g))
 
 
 
@@ -89,6 +120,8 @@ def _flight_files(l: int, precision: str) -> tuple[tuple[str, str], ...]:
     config = CodegenConfig(precision)
     files = generate(default_paper(load_scenario(PAPER_SCENARIO)["rbf.nodes"]), config)
     files.update(generate_landing(default_landing(l), config))
+    files.update(generate_estimator(config))
+    files.update(generate_land_detector(config))
     return tuple(sorted(files.items()))
 
 
@@ -96,17 +129,21 @@ def flight_files(l: int, precision: str = "double") -> dict[str, str]:
     """The C files of one build of the landing's flight code for ``l`` nodes.
 
     The landing step and guidance with :data:`LANDING_SCENARIO`'s defaults and
-    ``rbf.nodes = l``, beside the paper's step (the tree they share); for the
-    scenarios' own ``l`` the files equal ``generated/`` (``generated/float/``).
+    ``rbf.nodes = l``, beside the paper's step (the tree they share), the
+    navigation filter and the land detector; for the scenarios' own ``l`` the
+    files equal ``generated/`` (``generated/float/``).
     """
     if precision not in ("double", "float"):
         raise ValueError(f"precision must be 'double' or 'float', got {precision!r}")
     return dict(_flight_files(l, precision))
 
 
-def flight_code(l: int) -> FlightCode:
-    """The landing step and guidance the simulator flies with ``controller.backend = "c"``."""
-    return FlightCode(_flight_files(l, "double"), c_sources(("landing_step",)))
+def flight_code(l: int, sensed: bool = False) -> FlightCode:
+    """The flight C the simulator flies with ``controller.backend = "c"``: the landing step
+    and guidance, and on sensors (``sensed``) the navigation filter and the land detector."""
+    functions = ("landing_step", "estimator_step", "land_detector") if sensed else \
+        ("landing_step",)
+    return FlightCode(_flight_files(l, "double"), c_sources(functions))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -13,6 +13,10 @@ loop needs beyond the unsensed one's vectors (:mod:`quadland.kinds.landing.value
   truth plus an error drawn from its initial covariance, seeded), empty delay lines;
 * the per-tick table ``N``: each control tick's sample and delivery flags and noise
   (:func:`quadland.kinds.landing.sensing.draw_sensors`, seeded by ``simulation.seed``).
+
+``sensors.random = false`` zeroes every draw of the world: no noise, biases,
+dropouts or outliers (every sample taken is delivered, the exact truth), and the
+filter's initial estimate is the truth (its initial covariance unchanged).
 """
 
 from __future__ import annotations
@@ -49,8 +53,8 @@ from quadland_symbolic.landing.sensed_loop import (
 )
 from quadland_symbolic.landing.sensors import SENSOR_NAMES
 
-__all__ = ["INITIAL_ERROR_STREAM", "sensor_settings", "sensors_enabled", "sensed_vectors",
-           "tick_table", "estimator_p"]
+__all__ = ["INITIAL_ERROR_STREAM", "sensor_settings", "sensors_enabled", "handover",
+           "sensed_vectors", "tick_table", "estimator_p", "imu_at_rest"]
 
 #: The random stream of the filter's initial error (beside the sensors').
 INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
@@ -77,10 +81,18 @@ def estimator_p(scenario: Scenario, g: float) -> np.ndarray:
     return lay.pack({f.name: g if f.name == "g" else e[f.name] for f in lay.fields})
 
 
-def _handover(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, np.ndarray]:
-    """The filter's memory at t = 0 and its state estimate ``NAV``: the true relative
-    motion plus a draw from ``P0``."""
+def handover(scenario: Scenario, lv: LandingValues,
+             random: bool | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The filter's handover at t = 0: ``(x0, P0_diag, deck0)``.
+
+    ``x0`` is the true relative motion plus a draw from ``P0`` (seeded by
+    ``simulation.seed``; none when ``random`` is False, by default when
+    ``sensors.random`` is false), ``P0_diag`` the ``[estimator]``'s initial
+    variances, ``deck0`` the deck's rotation at t = 0.
+    """
     e, seed = scenario.data["estimator"], scenario.data["simulation"]["seed"]
+    if random is None:
+        random = bool(scenario.data["sensors"]["random"])
     xs = LANDING_PLANT_STATE.unpack(lv.xp0)
     p = LANDING_PLANT_PARAMS.unpack(lv.pp)
     q = QUAD6_STATE.unpack(xs["x1q"])
@@ -92,14 +104,13 @@ def _handover(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, np.nda
     truth = NAV.pack(dict(p_r=q["p1"] - p2, v1=v1, v_t=v2, a_t=a2, b=np.zeros(3),
                           a_b=np.zeros(3)))
     sigma = np.concatenate([np.asarray(e[k], dtype=float) for k in _P0_KEYS])
-    rng = np.random.default_rng(sensor_seed(seed, INITIAL_ERROR_STREAM, 0))
-    error = sigma * rng.standard_normal(NAV.size)
-    error[NAV.slice("b")] = 0.0              # the GNSS bias' truth is the receivers' draw
-    error[NAV.slice("a_b")] = 0.0
-    x0 = truth + error
-    deck0 = DECK_INIT.pack(dict(eta2=eta2, w2E=w2, w2E_dot=w2_dot))
-    init = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
-    return np.asarray(init(x0, sigma ** 2, deck0, 0.0), dtype=float).ravel(), x0
+    error = np.zeros(NAV.size)
+    if random:
+        rng = np.random.default_rng(sensor_seed(seed, INITIAL_ERROR_STREAM, 0))
+        error = sigma * rng.standard_normal(NAV.size)
+        error[NAV.slice("b")] = 0.0          # the GNSS bias' truth is the receivers' draw
+        error[NAV.slice("a_b")] = 0.0
+    return truth + error, sigma ** 2, DECK_INIT.pack(dict(eta2=eta2, w2E=w2, w2E_dot=w2_dot))
 
 
 def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, np.ndarray]:
@@ -115,20 +126,28 @@ def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, n
         dt=base_pc["dt"], p_est=estimator_p(scenario, g), p_sens=sensor_params(settings),
         delay=[delivery_delay(settings[n]["latency"], 1.0 / rate) for n in SENSOR_NAMES],
         p_ld=LAND_DETECTOR_PARAMS.pack(scenario.data["land_detector"])))
-    q = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])
-    hover = IMU.pack(dict(eta_hat=q["eta1"], f_b=[0.0, 0.0, g], omega=q["Omega1"]))
+    hover = imu_at_rest(lv.xp0, g)
     lay = sensed_loop_memory(l)
     lines = {f"line_{n}": np.zeros(lay[f"line_{n}"].size) for n in SENSOR_NAMES}
     # the detector starts from zero; the marker is not seen before the first detection,
     # and the hover point starts at the handover's estimated height when that is higher
     # (no descent on a height only GNSS knows: the guidance's "The marker")
-    nav, x0 = _handover(scenario, lv)
+    x0, P0_diag, deck0 = handover(scenario, lv)
+    nav = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)(x0, P0_diag, deck0, 0.0)
+    nav = np.asarray(nav, dtype=float).ravel()
     xg = GUIDANCE_STATE.unpack(base_xc["xg"])
     xg["z_ref"] = np.maximum(xg["z_ref"], NAV.unpack(x0)["p_r"][2])
     xc0 = lay.pack(dict(xg=GUIDANCE_STATE.pack(xg), mem=base_xc["mem"], nav=nav,
                         imu_held=hover, xld=LAND_DETECTOR_STATE.zeros(), marker_age=TIME_CAP,
                         **lines))
     return pc, xc0
+
+
+def imu_at_rest(xp0, g: float) -> np.ndarray:
+    """The IMU sample held before the first arrives: the initial attitude and rates, the
+    specific force of a hover (``g`` along body z)."""
+    q = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(xp0)["x1q"])
+    return IMU.pack(dict(eta_hat=q["eta1"], f_b=[0.0, 0.0, g], omega=q["Omega1"]))
 
 
 def tick_table(scenario: Scenario, n_ticks: int) -> np.ndarray:
@@ -139,7 +158,8 @@ def tick_table(scenario: Scenario, n_ticks: int) -> np.ndarray:
     """
     d = scenario.data
     rate, duration = d["controller"]["rate_hz"], d["simulation"]["duration"]
-    samples = draw_sensors(sensor_settings(scenario), duration, d["simulation"]["seed"])
+    samples = draw_sensors(sensor_settings(scenario), duration, d["simulation"]["seed"],
+                           random=bool(d["sensors"]["random"]))
     N = np.zeros((n_ticks, SENSED_TICK.size))
     for name in SENSOR_NAMES:
         s = samples[name]

@@ -5,7 +5,9 @@ A landing scenario (``scenario.model = "landing"``, schema
 ``quadland_symbolic.landing.loop`` in one call of its compiled simulator (on CasADi's
 virtual machine without a C compiler): the guidance and the landing step at
 ``controller.rate_hz`` (CasADi's functions, or with ``controller.backend =
-"c"`` the generated flight code of ``quadland_landing.h``), their rotor
+"c"`` the generated flight code of ``quadland_landing.h``; on sensors, the
+sensed loop of ``quadland_symbolic.landing.sensed_loop``, whose flight part is
+then also the filter's and the land detector's C), their rotor
 commands held on the 6-DOF plant, RK4 on
 the exact grid of the output, disturbance and control times, and the
 touchdown (the gear gap's zero crossing) located within its step, where the
@@ -172,14 +174,8 @@ def landing_loop_part(l: int, part: str, sensed: bool = False):
     loop on the true state, or (``sensed``) on the sensors and the navigation filter."""
     from quadland.kinds.landing.flight import flight_code
 
-    if sensed:
-        if part == "sampled_flight":
-            raise ScenarioError("controller.backend: \"c\" flies the landing step's C on the "
-                                "true state only for now; set sensors.enabled = false or "
-                                "controller.backend = \"casadi\"")
-        return compiled_loop(landing_sensed_loop(l), part)
-    flight = flight_code(l) if part == "sampled_flight" else None
-    return compiled_loop(landing_loop(l), part, flight)
+    flight = flight_code(l, sensed) if part == "sampled_flight" else None
+    return compiled_loop(landing_sensed_loop(l) if sensed else landing_loop(l), part, flight)
 
 
 def simulate_landing(scenario: Scenario) -> SimulationResult:
