@@ -67,8 +67,10 @@ from quadland_symbolic.landing.navigation import (
     DATALINK,
     GNSS,
     IMU,
+    NAV,
     RANGE,
     VISION,
+    covariance_pattern,
     estimator_params,
 )
 from quadland_symbolic.landing.plant import (
@@ -108,8 +110,12 @@ SENSED_TICK = Layout("n_sensed", tuple(
         Field.nested(f"{name}_noise", NOISES[name], f"the {name}'s noise at this tick"))),
     "per control tick: each sensor's sample flag, delivery flag and noise")
 
+#: The filter's memory at its flight sizes.
+_NAV_MEMORY = estimator_memory(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+
 #: What the sensed loop records of each control step: the unsensed loop's, the
-#: estimate, the filter's horizon standard deviations and each block's NIS.
+#: estimate, the filter's horizon standard deviations and each block's NIS; last, the
+#: filter's horizon state, covariance and time (its consistency, docs/estimator.md).
 SENSED_RECORDED = Layout("rec_sensed", (
     *LANDING_RECORDED.fields,
     Field("p_e_hat", 3, "m", "estimated relative position, deck frame (the step's input)",
@@ -124,6 +130,14 @@ SENSED_RECORDED = Layout("rec_sensed", (
           elements=tuple(f"fused_{b.name}" for b in BLOCKS)),
     *(f for f in estimator_diagnostics().fields
       if f.name in ("n_fused", "n_rejected", "n_discarded", "n_dropped")),
+    # the filter's memory after the step: the horizon's prior for the next (world-side
+    # analysis reads it; the flight code's outputs do not change)
+    Field("nav_x_h", NAV.size, NAV.element_units(), "filter state at its horizon t_h",
+          elements=tuple(f"x_h_{e}" for e in NAV.element_names())),
+    Field("nav_P_h", _NAV_MEMORY["P_h"].size, _NAV_MEMORY["P_h"].unit,
+          "its covariance: the stored upper-triangle entries, row by row",
+          elements=covariance_pattern(FLIGHT_COUPLING).element_names("P_h")),
+    Field("nav_t_h", 1, "s", "the horizon's time t_h", elements=("t_h",)),
 ), "the landing step's signals, the navigation estimate and the filter's health")
 
 
@@ -223,8 +237,10 @@ def landing_sensed_loop(l: int) -> LoopModel:
     _, xgm_next, rec, res = landing_flight_step(l, y, cs, ps)
     m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
+    nav = _NAV_MEMORY.unpack(nav_next)
     rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
-                     d["n_rejected"], d["n_discarded"], d["n_dropped"])
+                     d["n_rejected"], d["n_discarded"], d["n_dropped"], nav["x_h"],
+                     nav["P_h"], nav["t_h"])
     controller = ca.Function(
         "controller", [xp, xc, pc, first, t, uh, w, pp, n],
         [ca.vertcat(xgm_next, nav_next, imu_now, *lines), res["F_cmd"], rec, res["tilt"]],
