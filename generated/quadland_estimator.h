@@ -19,16 +19,16 @@ extern "C" {
 
 /* Sizes, from the layouts of symbolic/ (quadland_symbolic.landing.estimator:
  * n_hist = 50, depth = (8, 4, 26, 4), coupling = 'axes'). */
-#define QL_NAV_SIZE 18                           /* reals in ql_nav_state: p_r, v1, v_t, a_t, b, a_b */
+#define QL_NAV_SIZE 21                           /* reals in ql_nav_state: p_r, v1, v_t, a_t, b, a_b, a_tilt */
 #define QL_ESTIMATOR_N_HIST 50                   /* periods between the horizon and now: D = n_hist dt */
 #define QL_ESTIMATOR_DEPTH_VISION 8              /* FIFO depth of vision packets */
 #define QL_ESTIMATOR_DEPTH_GNSS 4                /* FIFO depth of gnss packets */
 #define QL_ESTIMATOR_DEPTH_RANGE 26              /* FIFO depth of range packets */
 #define QL_ESTIMATOR_DEPTH_DATALINK 4            /* FIFO depth of datalink packets */
-#define QL_ESTIMATOR_COVARIANCE_SIZE 63          /* stored covariance entries (coupling axes) */
-#define QL_ESTIMATOR_MEMORY_SIZE 592             /* reals in ql_estimator_memory */
-#define QL_ESTIMATOR_PARAMS_SIZE 46              /* reals in ql_estimator_params */
-#define QL_ESTIMATOR_DIAGNOSTICS_SIZE 123        /* reals in ql_estimator_diagnostics */
+#define QL_ESTIMATOR_COVARIANCE_SIZE 84          /* stored covariance entries (coupling axes) */
+#define QL_ESTIMATOR_MEMORY_SIZE 616             /* reals in ql_estimator_memory */
+#define QL_ESTIMATOR_PARAMS_SIZE 50              /* reals in ql_estimator_params */
+#define QL_ESTIMATOR_DIAGNOSTICS_SIZE 129        /* reals in ql_estimator_diagnostics */
 #define QL_ESTIMATOR_BLOCKS 7                    /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QL_ESTIMATOR_SENSORS 4                   /* sensors: vision, gnss, range, datalink */
 
@@ -39,7 +39,8 @@ typedef struct {
     ql_real v_t[3];                  /* m/s: pad centre velocity (v_t_x, v_t_y, v_t_z) */
     ql_real a_t[3];                  /* m/s^2: pad centre acceleration (random walk) (a_t_x, a_t_y, a_t_z) */
     ql_real b[3];                    /* m: relative GNSS bias: GNSS-measured (p_pad - p1) minus the true one (b_x, b_y, b_z) */
-    ql_real a_b[3];                  /* m/s^2: bias of the acceleration input (accelerometer bias, attitude error g) (a_b_x, a_b_y, a_b_z) */
+    ql_real a_b[3];                  /* m/s^2: bias of the acceleration input: the accelerometer's (random walk) (a_b_x, a_b_y, a_b_z) */
+    ql_real a_tilt[3];               /* m/s^2: bias of the acceleration input from the attitude estimate's tilt error eps: g eps x e_z (Gauss-Markov; z is 0) (a_tilt_x, a_tilt_y, a_tilt_z) */
 } ql_nav_state;
 
 /* This period's IMU sample and attitude estimate (every period). */
@@ -99,7 +100,9 @@ typedef struct {
     ql_real q_acc[3];                /* m^2/s^3: PSD of the acceleration input's white noise, per axis (q_acc_x, q_acc_y, q_acc_z) */
     ql_real q_at[3];                 /* m^2/s^5: PSD of the pad acceleration's random walk, per axis (q_at_x, q_at_y, q_at_z) */
     ql_real q_b[3];                  /* m^2/s: PSD of the relative GNSS bias' random walk, per axis (q_b_x, q_b_y, q_b_z) */
-    ql_real q_ab[3];                 /* m^2/s^5: PSD of the input bias' random walk, per axis (q_ab_x, q_ab_y, q_ab_z) */
+    ql_real q_ab[3];                 /* m^2/s^5: PSD of the accelerometer bias' random walk, per axis (q_ab_x, q_ab_y, q_ab_z) */
+    ql_real tilt_sigma[3];           /* m/s^2: stationary standard deviation of the tilt bias, per axis (z: 0) (tilt_sigma_x, tilt_sigma_y, tilt_sigma_z) */
+    ql_real tilt_tau;                /* s: correlation time of the tilt bias (first-order Gauss-Markov) */
     ql_real vision_sigma0;           /* m: vision noise at zero range (E10) */
     ql_real vision_k_range;          /* -: vision noise growth per metre of range (E10) */
     ql_real gnss_rel_sigma[3];       /* m: relative GNSS position noise (gnss_rel_sigma_x, gnss_rel_sigma_y, gnss_rel_sigma_z) */
@@ -130,7 +133,7 @@ typedef struct {
  * ql_estimator_init. */
 typedef struct {
     ql_nav_state x_h;                /* state at the horizon t_h */
-    ql_real P_h[63];                 /* per entry (see its layout): covariance at the horizon: stored upper-triangle entries, row by row */
+    ql_real P_h[84];                 /* per entry (see its layout): covariance at the horizon: stored upper-triangle entries, row by row */
     ql_real t_h;                     /* s: time of the horizon */
     ql_real hist[50][4];             /* m/s^2, s: acceleration inputs (E) and their periods from t_h to now, oldest first */
     ql_real fifo_vision[8][4];       /* s, m: vision packets waiting for the horizon, oldest first */
@@ -176,7 +179,7 @@ typedef struct {
     ql_real n_dropped[4];            /* -: packets not queued: FIFO full, not finite, future (n_dropped_vision, n_dropped_gnss, n_dropped_range, n_dropped_datalink) */
     ql_real n_imu_invalid;           /* -: periods with a non-finite IMU sample */
     ql_nav_state x_h;                /* state at the horizon after this step's fusion */
-    ql_real P_diag[18];              /* (m)^2, (m/s)^2, (m/s^2)^2: its variances */
+    ql_real P_diag[21];              /* (m)^2, (m/s)^2, (m/s^2)^2: its variances */
     ql_real t_h;                     /* s: time of the horizon */
 } ql_estimator_diagnostics;
 

@@ -46,12 +46,14 @@ def params(**over):
 # ---------------------------------------------------------------- the NumPy reference
 
 def model_matrices(q):
-    """A, B, W of (E2), entry by entry from the state equations."""
+    """A, B, W of (E2), entry by entry from the state equations (``a_tilt`` held: its
+    decay over the period is :func:`discrete`'s, (E2a))."""
     A, B, W = np.zeros((N, N)), np.zeros((N, 3)), np.zeros((N, N))
     I3 = np.eye(3)
     A[sl("p_r"), sl("v1")] = I3                     # p_r' = v1 - v_t
     A[sl("p_r"), sl("v_t")] = -I3
-    A[sl("v1"), sl("a_b")] = -I3                    # v1' = a_in - a_b
+    A[sl("v1"), sl("a_b")] = -I3                    # v1' = a_in - a_b - a_tilt
+    A[sl("v1"), sl("a_tilt")] = -I3
     B[sl("v1"), :] = I3
     A[sl("v_t"), sl("a_t")] = I3                    # v_t' = a_t
     for name, key in (("v1", "q_acc"), ("a_t", "q_at"), ("b", "q_b"), ("a_b", "q_ab")):
@@ -62,30 +64,39 @@ def model_matrices(q):
 _DISCRETE = {}
 
 
-def discrete(dt, q):
-    """Phi, Gamma by expm of [[A, B], [0, 0]]; Q by Van Loan."""
-    key = (dt, *(tuple(np.broadcast_to(q[k], 3)) for k in ("q_acc", "q_at", "q_b", "q_ab")))
+def discrete(dt, q, held=False):
+    """Phi, Gamma by expm of [[A, B], [0, 0]]; Q by Van Loan; then ``a_tilt`` decays as
+    a Gauss-Markov process sampled every ``dt`` (E2a), unless ``held`` (as the output
+    predictor carries it, (E17))."""
+    key = (dt, held, *(tuple(np.broadcast_to(q[k], 3)) for k in (
+        "q_acc", "q_at", "q_b", "q_ab", "tilt_sigma")), q["tilt_tau"])
     if key not in _DISCRETE:
-        _DISCRETE[key] = _discrete_uncached(dt, q)
+        _DISCRETE[key] = _discrete_uncached(dt, q, held)
     return _DISCRETE[key]
 
 
-def _discrete_uncached(dt, q):
+def _discrete_uncached(dt, q, held):
     A, B, W = model_matrices(q)
     M = np.zeros((N + 3, N + 3))
     M[:N, :N], M[:N, N:] = A, B
     E = expm(M * dt)
     V = expm(np.block([[-A, W], [np.zeros((N, N)), A.T]]) * dt)
-    Phi = V[N:, N:].T
-    return E[:N, :N], E[:N, N:], Phi @ V[:N, N:]
+    Phi, Q = E[:N, :N].copy(), V[N:, N:].T @ V[:N, N:]
+    a = 1.0 if held else np.exp(-dt / q["tilt_tau"])   # x+ = a x + sigma sqrt(1 - a^2) n
+    i = sl("a_tilt")
+    Phi[i, i] = a * np.eye(3)
+    Q[i, i] = np.diag(np.asarray(q["tilt_sigma"], dtype=float) ** 2 * (1 - a * a))
+    return Phi, E[:N, N:], Q
 
 
-def h_rows(name, n2=None, b3=None):
-    """H of each block from (E10)-(E13); the range's row n2^T / (n2 . b3)."""
+def h_rows(name, n2=None, b3=None, z=None, g=None):
+    """H of each block from (E10)-(E13); the range's row n2^T / (n2 . b3); the vision's
+    ``-p_r + (z_z / g) a_tilt`` with ``z`` its packet's ``r_E``."""
     H = np.zeros((3, N))
     I3 = np.eye(3)
     if name == "vision":
         H[:, sl("p_r")] = -I3
+        H[:, sl("a_tilt")] = z[2] / g * I3
     elif name == "gnss_rel":
         H[:, sl("p_r")], H[:, sl("b")] = -I3, I3
     elif name == "gnss_v1":
@@ -134,7 +145,7 @@ class ReferenceKF:
             if pk is None:
                 continue
             z = np.atleast_1d(pk[b.field])
-            H = h_rows(b.name, n2, pk.get("b3_E"))
+            H = h_rows(b.name, n2, pk.get("b3_E"), z, self.q["g"])
             R = np.diag(variances(b.name, z, self.q))
             self.x, self.P, _, nis[b.name] = joseph_reference(self.x, self.P, H, z, R)
         return nis
@@ -171,7 +182,7 @@ def packet_values(rng, sensor, x, tau, eta2, n2):
     """A packet near what the state predicts (noise about 0.3)."""
     e = rng.normal(size=3) * 0.3
     if sensor == "vision":
-        return dict(fresh=1.0, tau=tau, r_E=-x[sl("p_r")] + e)
+        return dict(fresh=1.0, tau=tau, r_E=vision_vector(x, e, 9.8))
     if sensor == "gnss":
         return dict(fresh=1.0, tau=tau, rel=-x[sl("p_r")] + x[sl("b")] + e,
                     v1=x[sl("v1")] + e[::-1], vt=x[sl("v_t")] - e)
@@ -181,6 +192,14 @@ def packet_values(rng, sensor, x, tau, eta2, n2):
         return dict(fresh=1.0, tau=tau, s=n2 @ x[sl("p_r")] / (n2 @ b3) + e[0], b3_E=b3)
     return dict(fresh=1.0, tau=tau, eta2=eta2, v2E=x[sl("v_t")] + e,
                 a2E=x[sl("a_t")] + e[::-1], w2E=np.zeros(3), w2E_dot=np.zeros(3))
+
+
+def vision_vector(x, noise, g):
+    """The vision packet's ``r_E = -p_r + (r_z / g) a_tilt + noise`` (E10), solved for its
+    own ``r_z`` first."""
+    p_r, a_tilt = x[sl("p_r")], x[sl("a_tilt")]
+    r_z = (-p_r[2] + noise[2]) / (1 - a_tilt[2] / g)
+    return -p_r + r_z / g * a_tilt + noise
 
 
 def empty(layout):

@@ -24,6 +24,7 @@ from nav_reference import (
     random_imu,
     sl,
     unpack_P,
+    vision_vector,
     x0_P0,
 )
 from reference import rotation
@@ -151,7 +152,7 @@ def test_delayed_fusion_is_the_undelayed_filter_shifted_by_the_horizon():
         # the output predictor: x_ref carried through inputs j .. k-1 by expm
         x_now = x_ref.copy()
         for a in inputs[j:k]:
-            Phi, Gamma, _ = discrete(dt, q)
+            Phi, Gamma, _ = discrete(dt, q, held=True)
             x_now = Phi @ x_now + Gamma @ a
         ys = LANDING_MEASUREMENT.unpack(y)
         np.testing.assert_allclose(ys["p_e"], R2.T @ x_now[sl("p_r")], rtol=1e-10, atol=1e-10)
@@ -166,7 +167,8 @@ def test_delayed_fusion_is_the_undelayed_filter_shifted_by_the_horizon():
 
 
 def test_output_predictor_is_the_chained_prediction(rng):
-    """(E17) in closed form against N steps of Phi, Gamma with varying periods."""
+    """(E17) in closed form against N steps of Phi, Gamma with varying periods (the tilt
+    bias held, as (E17) carries it)."""
     n = 7
     f = output_predictor_function(n)
     q = dict(ESTIMATOR_DEFAULTS)
@@ -175,7 +177,7 @@ def test_output_predictor_is_the_chained_prediction(rng):
     hist[3, 2] = 0.0                                       # an empty period
     x_ref = x.copy()
     for k in range(n):
-        Phi, Gamma, _ = discrete(hist[3, k], q)
+        Phi, Gamma, _ = discrete(hist[3, k], q, held=True)
         x_ref = Phi @ x_ref + Gamma @ hist[:3, k]
     np.testing.assert_allclose(col(f(x, hist)), x_ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(col(output_predictor_function(0)(x, np.zeros((4, 0)))), x)
@@ -206,7 +208,8 @@ def _mc_packet(rng, sensor, x, tau, eta2, n2, b3, q):
     def noise(sigma):
         return rng.normal(size=3) * sigma
     if sensor == "vision":
-        return dict(fresh=1.0, tau=tau, r_E=-x[sl("p_r")] + noise(q["vision_sigma0"]))
+        return dict(fresh=1.0, tau=tau, r_E=vision_vector(x, noise(q["vision_sigma0"]),
+                                                          q["g"]))
     if sensor == "gnss":
         return dict(fresh=1.0, tau=tau,
                     rel=-x[sl("p_r")] + x[sl("b")] + noise(np.array(q["gnss_rel_sigma"])),
@@ -224,18 +227,19 @@ def _mc_packet(rng, sensor, x, tau, eta2, n2, b3, q):
 @pytest.mark.slow
 def test_monte_carlo_nees_and_nis_lie_in_their_chi_square_bounds():
     """100 runs on truth from the process model, every sensor late by less than the
-    horizon: the average NEES of the 18 states at the end and each block's average NIS
+    horizon: the average NEES of the 21 states at the end and each block's average NIS
     (innovations of a consistent filter are white, so all fusions pool) lie inside their
     two-sided 95 % chi-square bounds. Gates open and the vision noise range-free: both
     make R or the accepted set depend on the draw, which (E8) tests apart."""
     rng = np.random.default_rng(20171)
     n_hist, depth = 4, 4
     q = {**ESTIMATOR_DEFAULTS, **OPEN_GATES, "q_acc": [0.05] * 3, "q_at": [0.2] * 3,
-         "q_b": [0.01] * 3, "q_ab": [0.01] * 3, "vision_k_range": 0.0}
+         "q_b": [0.01] * 3, "q_ab": [0.01] * 3, "tilt_sigma": [0.1] * 3, "tilt_tau": 2.0,
+         "vision_k_range": 0.0}
     p = PARAMS.pack(q)
     x0 = np.zeros(N)
     x0[sl("p_r")] = [0.5, -0.5, 4.0]
-    P0 = np.concatenate([[1.0] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.01] * 3])
+    P0 = np.concatenate([[1.0] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.01] * 6])
     Phi, Gamma, Q = discrete(MC_DT, q)
     xs, imus = _mc_truth(rng, q, x0, P0, Phi, Gamma, Q)
     eta2 = np.array([0.03, -0.02, 0.5])

@@ -47,6 +47,7 @@ STATUS = {name: value for name, value, _ in STATUS_CODES}
 DT = 0.004
 MEM = flight_memory()
 DIAG = estimator_diagnostics()
+N = NAV.size
 
 
 def _bits(v):
@@ -65,7 +66,7 @@ def test_init_equals_its_casadi_function_and_refuses_bad_input():
     c = Call(load("double"))
     f = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
     rng = np.random.default_rng(7)
-    x0, P0, deck0 = rng.normal(size=18), rng.uniform(0, 2, 18), rng.normal(size=9) * 0.1
+    x0, P0, deck0 = rng.normal(size=N), rng.uniform(0, 2, N), rng.normal(size=9) * 0.1
     assert c.init(x0, P0, deck0, 12.5) == STATUS["QL_OK"]
     want = np.asarray(f(x0, P0, deck0, 12.5)).ravel()
     np.testing.assert_array_equal(_bits(c.v["mem"]), _bits(want))
@@ -150,8 +151,9 @@ def _imu(c, rng):
 
 def _fly(c, rng, steps, t0, oracle=None):
     """Run the C step; with an oracle, compare each step's results with it bit for bit."""
-    x0 = np.r_[P_R0, V1, V_T, np.zeros(9)] + rng.normal(size=18) * 0.05
-    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3]
+    # the tilt bias starts at 0 (appended: the draws of the other states are the same)
+    x0 = np.r_[np.r_[P_R0, V1, V_T, np.zeros(9)] + rng.normal(size=18) * 0.05, np.zeros(3)]
+    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3, [0.01] * 3]
     assert c.init(x0, P0, [0, 0, 0.3, 0, 0, YAW_RATE, 0, 0, 0], t0) == STATUS["QL_OK"]
     t, rows = t0, []
     for _ in range(steps):
@@ -367,6 +369,7 @@ def _nonneg(v):
 #: written out here, not read from quadland_symbolic.codegen.estimator_api.
 DOCUMENTED = {
     "g": _pos, "q_acc": _pos, "q_at": _pos, "q_b": _pos, "q_ab": _pos,
+    "tilt_sigma": _nonneg, "tilt_tau": _pos,
     "vision_sigma0": _pos, "vision_k_range": _nonneg, "gnss_rel_sigma": _pos,
     "gnss_v1_sigma": _pos, "gnss_vt_sigma": _pos, "range_sigma": _pos,
     "range_min_cos": lambda v: (v > 0) & (v <= 1), "range_deck_radius": _pos,

@@ -51,7 +51,7 @@ from quadland_symbolic.landing.estimator import (
     N_HIST,
     estimator_step_function,
 )
-from quadland_symbolic.landing.navigation import NAV_PACKETS, SENSORS, estimator_params
+from quadland_symbolic.landing.navigation import NAV, NAV_PACKETS, SENSORS, estimator_params
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -88,7 +88,8 @@ class _Harness:
         """Fill the arguments; return dt, t and the pointer arguments to pass as NULL."""
         c, v = self.c, self.c.v
         t0 = rng.uniform(-10, 1000)
-        assert c.init(rng.normal(size=18), rng.uniform(0, 2, 18), rng.normal(size=9) * 0.2,
+        assert c.init(rng.normal(size=NAV.size), rng.uniform(0, 2, NAV.size),
+                      rng.normal(size=9) * 0.2,
                       t0) == STATUS["QL_OK"]
         mem = MEM.unpack(v["mem"].astype(float))
         k = rng.integers(N_HIST + 1)                   # periods flown since the handover

@@ -90,16 +90,17 @@ static const double ql_land_p_sens[13] = {
     0.7,
 };
 
-/* The navigation filter's parameters ([estimator], the model's gravity) (g (1), q_acc (3), q_at (3), q_b (3), q_ab (3), vision_sigma0 (1), vision_k_range (1), gnss_rel_sigma (3), gnss_v1_sigma (3), gnss_vt_sigma (3), range_sigma (1), range_min_cos (1), range_deck_radius (1), range_deck_sigmas (1), datalink_v_sigma (3), datalink_a_sigma (3), gate_vision (1), gate_gnss_rel (1), gate_gnss_v1 (1), gate_gnss_vt (1), gate_range (1), gate_datalink_v (1), gate_datalink_a (1), max_age_vision (1), max_age_gnss (1), max_age_range (1), max_age_datalink (1), deck_extrapolation_max (1)). */
-static const double ql_land_p_est[46] = {
-    9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
-    0.1, 0.006, 0.006, 0.021, 0.003, 0.003,
-    0.0001, 0.02, 0.02, 0.1, 0.1, 0.1,
-    0.05, 0.05, 0.05, 0.05, 0.05, 0.05,
-    0.05, 0.7, 0.5, 2.0, 0.05, 0.05,
-    0.05, 0.05, 0.05, 0.05, 11.344867, 11.344867,
-    11.344867, 11.344867, 6.634897, 11.344867, 11.344867, 0.02,
-    0.02, 0.02, 0.02, 0.5,
+/* The navigation filter's parameters ([estimator], the model's gravity) (g (1), q_acc (3), q_at (3), q_b (3), q_ab (3), tilt_sigma (3), tilt_tau (1), vision_sigma0 (1), vision_k_range (1), gnss_rel_sigma (3), gnss_v1_sigma (3), gnss_vt_sigma (3), range_sigma (1), range_min_cos (1), range_deck_radius (1), range_deck_sigmas (1), datalink_v_sigma (3), datalink_a_sigma (3), gate_vision (1), gate_gnss_rel (1), gate_gnss_v1 (1), gate_gnss_vt (1), gate_range (1), gate_datalink_v (1), gate_datalink_a (1), max_age_vision (1), max_age_gnss (1), max_age_range (1), max_age_datalink (1), deck_extrapolation_max (1)). */
+static const double ql_land_p_est[50] = {
+    9.8, 7.5e-06, 7.5e-06, 2e-06, 1e-06, 1e-06,
+    1e-06, 0.006, 0.006, 0.021, 7.2e-07, 7.2e-07,
+    7.2e-07, 0.0855, 0.0855, 0.0, 5.0, 0.02,
+    0.01, 0.001, 0.001, 0.001, 0.05, 0.05,
+    0.05, 0.05, 0.05, 0.05, 0.045, 0.7,
+    0.5, 2.0, 0.05, 0.05, 0.05, 0.05,
+    0.05, 0.05, 11.344867, 11.344867, 11.344867, 11.344867,
+    6.634897, 11.344867, 11.344867, 0.02, 0.02, 0.02,
+    0.02, 0.5,
 };
 
 /* The land detector's parameters ([land_detector]) (gap_max (1), vz_max (1), thrust_low (1), contact_time (1), maybe_time (1), landed_time (1), hold_factor (1), no_range_factor (1), range_timeout (1), spike_min (1), spike_window (1), accel_tau (1)). */
@@ -108,18 +109,20 @@ static const double ql_land_p_ld[12] = {
     2.5, 3.0, 0.1, 3.0, 1.0, 0.5,
 };
 
-/* The filter's initial estimate: the true relative motion at t = 0 (p_r (3), v1 (3), v_t (3), a_t (3), b (3), a_b (3)). */
-static const double ql_land_nav0[18] = {
+/* The filter's initial estimate: the true relative motion at t = 0 (p_r (3), v1 (3), v_t (3), a_t (3), b (3), a_b (3), a_tilt (3)). */
+static const double ql_land_nav0[21] = {
     -6.0, 3.0, 4.0, 13.88888888888889, 0.0, 0.0,
     13.88888888888889, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0,
 };
 
 /* Its initial variances (the [estimator]'s p0_* squared), in nav0's order. */
-static const double ql_land_P0_diag[18] = {
+static const double ql_land_P0_diag[21] = {
     1.0, 1.0, 1.0, 0.25, 0.25, 0.25,
     0.25, 0.25, 0.25, 0.09, 0.09, 0.09,
-    3.24, 3.24, 11.559999999999999, 0.04000000000000001, 0.04000000000000001, 0.04000000000000001,
+    3.24, 3.24, 11.559999999999999, 0.0009, 0.0009, 0.0009,
+    0.007310250000000001, 0.007310250000000001, 0.0,
 };
 
 /* The deck's rotation at t = 0 (eta2 (3), w2E (3), w2E_dot (3)). */

@@ -26,7 +26,8 @@ typedef char nav_state_is_its_layout[
     AT(qlf_nav_state, a_t, 9, 0) &&
     AT(qlf_nav_state, b, 12, 0) &&
     AT(qlf_nav_state, a_b, 15, 0) &&
-    sizeof(qlf_nav_state) == 18 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_nav_state, a_tilt, 18, 0) &&
+    sizeof(qlf_nav_state) == 21 * sizeof(qlf_real) ? 1 : -1];
 typedef char imu_is_its_layout[
     AT(qlf_imu, eta_hat, 0, 0) &&
     AT(qlf_imu, f_b, 3, 0) &&
@@ -70,54 +71,56 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, q_at, 4, 0) &&
     AT(qlf_estimator_params, q_b, 7, 0) &&
     AT(qlf_estimator_params, q_ab, 10, 0) &&
-    AT(qlf_estimator_params, vision_sigma0, 13, 0) &&
-    AT(qlf_estimator_params, vision_k_range, 14, 0) &&
-    AT(qlf_estimator_params, gnss_rel_sigma, 15, 0) &&
-    AT(qlf_estimator_params, gnss_v1_sigma, 18, 0) &&
-    AT(qlf_estimator_params, gnss_vt_sigma, 21, 0) &&
-    AT(qlf_estimator_params, range_sigma, 24, 0) &&
-    AT(qlf_estimator_params, range_min_cos, 25, 0) &&
-    AT(qlf_estimator_params, range_deck_radius, 26, 0) &&
-    AT(qlf_estimator_params, range_deck_sigmas, 27, 0) &&
-    AT(qlf_estimator_params, datalink_v_sigma, 28, 0) &&
-    AT(qlf_estimator_params, datalink_a_sigma, 31, 0) &&
-    AT(qlf_estimator_params, gate_vision, 34, 0) &&
-    AT(qlf_estimator_params, gate_gnss_rel, 35, 0) &&
-    AT(qlf_estimator_params, gate_gnss_v1, 36, 0) &&
-    AT(qlf_estimator_params, gate_gnss_vt, 37, 0) &&
-    AT(qlf_estimator_params, gate_range, 38, 0) &&
-    AT(qlf_estimator_params, gate_datalink_v, 39, 0) &&
-    AT(qlf_estimator_params, gate_datalink_a, 40, 0) &&
-    AT(qlf_estimator_params, max_age_vision, 41, 0) &&
-    AT(qlf_estimator_params, max_age_gnss, 42, 0) &&
-    AT(qlf_estimator_params, max_age_range, 43, 0) &&
-    AT(qlf_estimator_params, max_age_datalink, 44, 0) &&
-    AT(qlf_estimator_params, deck_extrapolation_max, 45, 0) &&
-    sizeof(qlf_estimator_params) == 46 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_params, tilt_sigma, 13, 0) &&
+    AT(qlf_estimator_params, tilt_tau, 16, 0) &&
+    AT(qlf_estimator_params, vision_sigma0, 17, 0) &&
+    AT(qlf_estimator_params, vision_k_range, 18, 0) &&
+    AT(qlf_estimator_params, gnss_rel_sigma, 19, 0) &&
+    AT(qlf_estimator_params, gnss_v1_sigma, 22, 0) &&
+    AT(qlf_estimator_params, gnss_vt_sigma, 25, 0) &&
+    AT(qlf_estimator_params, range_sigma, 28, 0) &&
+    AT(qlf_estimator_params, range_min_cos, 29, 0) &&
+    AT(qlf_estimator_params, range_deck_radius, 30, 0) &&
+    AT(qlf_estimator_params, range_deck_sigmas, 31, 0) &&
+    AT(qlf_estimator_params, datalink_v_sigma, 32, 0) &&
+    AT(qlf_estimator_params, datalink_a_sigma, 35, 0) &&
+    AT(qlf_estimator_params, gate_vision, 38, 0) &&
+    AT(qlf_estimator_params, gate_gnss_rel, 39, 0) &&
+    AT(qlf_estimator_params, gate_gnss_v1, 40, 0) &&
+    AT(qlf_estimator_params, gate_gnss_vt, 41, 0) &&
+    AT(qlf_estimator_params, gate_range, 42, 0) &&
+    AT(qlf_estimator_params, gate_datalink_v, 43, 0) &&
+    AT(qlf_estimator_params, gate_datalink_a, 44, 0) &&
+    AT(qlf_estimator_params, max_age_vision, 45, 0) &&
+    AT(qlf_estimator_params, max_age_gnss, 46, 0) &&
+    AT(qlf_estimator_params, max_age_range, 47, 0) &&
+    AT(qlf_estimator_params, max_age_datalink, 48, 0) &&
+    AT(qlf_estimator_params, deck_extrapolation_max, 49, 0) &&
+    sizeof(qlf_estimator_params) == 50 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
-    AT(qlf_estimator_memory, P_h, 18, 0) &&
-    AT(qlf_estimator_memory, t_h, 81, 0) &&
-    AT(qlf_estimator_memory, hist, 82, 0) &&
-    AT(qlf_estimator_memory, fifo_vision, 282, 0) &&
-    AT(qlf_estimator_memory, count_vision, 314, 0) &&
-    AT(qlf_estimator_memory, fifo_gnss, 315, 0) &&
-    AT(qlf_estimator_memory, count_gnss, 355, 0) &&
-    AT(qlf_estimator_memory, fifo_range, 356, 0) &&
-    AT(qlf_estimator_memory, count_range, 486, 0) &&
-    AT(qlf_estimator_memory, fifo_datalink, 487, 0) &&
-    AT(qlf_estimator_memory, count_datalink, 551, 0) &&
-    AT(qlf_estimator_memory, deck_eta2, 552, 0) &&
-    AT(qlf_estimator_memory, deck_w2E, 555, 0) &&
-    AT(qlf_estimator_memory, deck_w2E_dot, 558, 0) &&
-    AT(qlf_estimator_memory, deck_tau, 561, 0) &&
-    AT(qlf_estimator_memory, n_fused, 562, 0) &&
-    AT(qlf_estimator_memory, n_rejected, 569, 0) &&
-    AT(qlf_estimator_memory, n_held, 576, 0) &&
-    AT(qlf_estimator_memory, n_discarded, 583, 0) &&
-    AT(qlf_estimator_memory, n_dropped, 587, 0) &&
-    AT(qlf_estimator_memory, n_imu_invalid, 591, 0) &&
-    sizeof(qlf_estimator_memory) == 592 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_memory, P_h, 21, 0) &&
+    AT(qlf_estimator_memory, t_h, 105, 0) &&
+    AT(qlf_estimator_memory, hist, 106, 0) &&
+    AT(qlf_estimator_memory, fifo_vision, 306, 0) &&
+    AT(qlf_estimator_memory, count_vision, 338, 0) &&
+    AT(qlf_estimator_memory, fifo_gnss, 339, 0) &&
+    AT(qlf_estimator_memory, count_gnss, 379, 0) &&
+    AT(qlf_estimator_memory, fifo_range, 380, 0) &&
+    AT(qlf_estimator_memory, count_range, 510, 0) &&
+    AT(qlf_estimator_memory, fifo_datalink, 511, 0) &&
+    AT(qlf_estimator_memory, count_datalink, 575, 0) &&
+    AT(qlf_estimator_memory, deck_eta2, 576, 0) &&
+    AT(qlf_estimator_memory, deck_w2E, 579, 0) &&
+    AT(qlf_estimator_memory, deck_w2E_dot, 582, 0) &&
+    AT(qlf_estimator_memory, deck_tau, 585, 0) &&
+    AT(qlf_estimator_memory, n_fused, 586, 0) &&
+    AT(qlf_estimator_memory, n_rejected, 593, 0) &&
+    AT(qlf_estimator_memory, n_held, 600, 0) &&
+    AT(qlf_estimator_memory, n_discarded, 607, 0) &&
+    AT(qlf_estimator_memory, n_dropped, 611, 0) &&
+    AT(qlf_estimator_memory, n_imu_invalid, 615, 0) &&
+    sizeof(qlf_estimator_memory) == 616 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(qlf_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(qlf_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -140,20 +143,21 @@ typedef char estimator_diagnostics_is_its_layout[
     AT(qlf_estimator_diagnostics, n_dropped, 81, 0) &&
     AT(qlf_estimator_diagnostics, n_imu_invalid, 85, 0) &&
     AT(qlf_estimator_diagnostics, x_h, 86, 0) &&
-    AT(qlf_estimator_diagnostics, P_diag, 104, 0) &&
-    AT(qlf_estimator_diagnostics, t_h, 122, 0) &&
-    sizeof(qlf_estimator_diagnostics) == 123 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_diagnostics, P_diag, 107, 0) &&
+    AT(qlf_estimator_diagnostics, t_h, 128, 0) &&
+    sizeof(qlf_estimator_diagnostics) == 129 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[46] = {
+static const qlf_real default_p_est[50] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
-    0.001f, 0.1f, 0.02f, 0.5f, 0.5f, 0.5f,
-    0.3f, 0.3f, 0.3f, 0.3f, 0.3f, 0.3f,
-    0.05f, 0.7f, 0.5f, 2.0f, 0.1f, 0.1f,
-    0.1f, 0.3f, 0.3f, 0.3f, 11.344867f, 11.344867f,
-    11.344867f, 11.344867f, 6.634897f, 11.344867f, 11.344867f, 0.02f,
-    0.02f, 0.02f, 0.02f, 0.5f,
+    0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.1f,
+    0.02f, 0.5f, 0.5f, 0.5f, 0.3f, 0.3f,
+    0.3f, 0.3f, 0.3f, 0.3f, 0.05f, 0.7f,
+    0.5f, 2.0f, 0.1f, 0.1f, 0.1f, 0.3f,
+    0.3f, 0.3f, 11.344867f, 11.344867f, 11.344867f, 11.344867f,
+    6.634897f, 11.344867f, 11.344867f, 0.02f, 0.02f, 0.02f,
+    0.02f, 0.5f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -167,6 +171,8 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   q_at                     > 0
  *   q_b                      > 0
  *   q_ab                     > 0
+ *   tilt_sigma               >= 0
+ *   tilt_tau                 > 0
  *   vision_sigma0            > 0
  *   vision_k_range           >= 0
  *   gnss_rel_sigma           > 0
@@ -227,83 +233,91 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
             bad = "q_ab";
         }
     }
-    if (!bad && !(isfinite(p[13]) && (p[13] > 0.0f))) {
+    for (i = 13; !bad && i < 16; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
+            bad = "tilt_sigma";
+        }
+    }
+    if (!bad && !(isfinite(p[16]) && (p[16] > 0.0f))) {
+        bad = "tilt_tau";
+    }
+    if (!bad && !(isfinite(p[17]) && (p[17] > 0.0f))) {
         bad = "vision_sigma0";
     }
-    if (!bad && !(isfinite(p[14]) && (p[14] >= 0.0f))) {
+    if (!bad && !(isfinite(p[18]) && (p[18] >= 0.0f))) {
         bad = "vision_k_range";
     }
-    for (i = 15; !bad && i < 18; ++i) {
+    for (i = 19; !bad && i < 22; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "gnss_rel_sigma";
         }
     }
-    for (i = 18; !bad && i < 21; ++i) {
+    for (i = 22; !bad && i < 25; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "gnss_v1_sigma";
         }
     }
-    for (i = 21; !bad && i < 24; ++i) {
+    for (i = 25; !bad && i < 28; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "gnss_vt_sigma";
         }
     }
-    if (!bad && !(isfinite(p[24]) && (p[24] > 0.0f))) {
+    if (!bad && !(isfinite(p[28]) && (p[28] > 0.0f))) {
         bad = "range_sigma";
     }
-    if (!bad && !(isfinite(p[25]) && ((p[25] > 0.0f) && (p[25] <= 1.0f)))) {
+    if (!bad && !(isfinite(p[29]) && ((p[29] > 0.0f) && (p[29] <= 1.0f)))) {
         bad = "range_min_cos";
     }
-    if (!bad && !(isfinite(p[26]) && (p[26] > 0.0f))) {
+    if (!bad && !(isfinite(p[30]) && (p[30] > 0.0f))) {
         bad = "range_deck_radius";
     }
-    if (!bad && !(isfinite(p[27]) && (p[27] >= 0.0f))) {
+    if (!bad && !(isfinite(p[31]) && (p[31] >= 0.0f))) {
         bad = "range_deck_sigmas";
     }
-    for (i = 28; !bad && i < 31; ++i) {
+    for (i = 32; !bad && i < 35; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "datalink_v_sigma";
         }
     }
-    for (i = 31; !bad && i < 34; ++i) {
+    for (i = 35; !bad && i < 38; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "datalink_a_sigma";
         }
     }
-    if (!bad && !(isfinite(p[34]) && (p[34] > 0.0f))) {
+    if (!bad && !(isfinite(p[38]) && (p[38] > 0.0f))) {
         bad = "gate_vision";
     }
-    if (!bad && !(isfinite(p[35]) && (p[35] > 0.0f))) {
+    if (!bad && !(isfinite(p[39]) && (p[39] > 0.0f))) {
         bad = "gate_gnss_rel";
     }
-    if (!bad && !(isfinite(p[36]) && (p[36] > 0.0f))) {
+    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0f))) {
         bad = "gate_gnss_v1";
     }
-    if (!bad && !(isfinite(p[37]) && (p[37] > 0.0f))) {
+    if (!bad && !(isfinite(p[41]) && (p[41] > 0.0f))) {
         bad = "gate_gnss_vt";
     }
-    if (!bad && !(isfinite(p[38]) && (p[38] > 0.0f))) {
+    if (!bad && !(isfinite(p[42]) && (p[42] > 0.0f))) {
         bad = "gate_range";
     }
-    if (!bad && !(isfinite(p[39]) && (p[39] > 0.0f))) {
+    if (!bad && !(isfinite(p[43]) && (p[43] > 0.0f))) {
         bad = "gate_datalink_v";
     }
-    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0f))) {
+    if (!bad && !(isfinite(p[44]) && (p[44] > 0.0f))) {
         bad = "gate_datalink_a";
     }
-    if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0f))) {
+    if (!bad && !(isfinite(p[45]) && (p[45] >= 0.0f))) {
         bad = "max_age_vision";
     }
-    if (!bad && !(isfinite(p[42]) && (p[42] >= 0.0f))) {
+    if (!bad && !(isfinite(p[46]) && (p[46] >= 0.0f))) {
         bad = "max_age_gnss";
     }
-    if (!bad && !(isfinite(p[43]) && (p[43] >= 0.0f))) {
+    if (!bad && !(isfinite(p[47]) && (p[47] >= 0.0f))) {
         bad = "max_age_range";
     }
-    if (!bad && !(isfinite(p[44]) && (p[44] >= 0.0f))) {
+    if (!bad && !(isfinite(p[48]) && (p[48] >= 0.0f))) {
         bad = "max_age_datalink";
     }
-    if (!bad && !(isfinite(p[45]) && (p[45] >= 0.0f))) {
+    if (!bad && !(isfinite(p[49]) && (p[49] >= 0.0f))) {
         bad = "deck_extrapolation_max";
     }
     if (bad_field) {
@@ -313,7 +327,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 46 comparisons. The values are known to be finite; no names and no
+ * 50 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -331,25 +345,25 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[10] > 0.0f);
     ok &= (p[11] > 0.0f);
     ok &= (p[12] > 0.0f);
-    ok &= (p[13] > 0.0f);
+    ok &= (p[13] >= 0.0f);
     ok &= (p[14] >= 0.0f);
-    ok &= (p[15] > 0.0f);
+    ok &= (p[15] >= 0.0f);
     ok &= (p[16] > 0.0f);
     ok &= (p[17] > 0.0f);
-    ok &= (p[18] > 0.0f);
+    ok &= (p[18] >= 0.0f);
     ok &= (p[19] > 0.0f);
     ok &= (p[20] > 0.0f);
     ok &= (p[21] > 0.0f);
     ok &= (p[22] > 0.0f);
     ok &= (p[23] > 0.0f);
     ok &= (p[24] > 0.0f);
-    ok &= ((p[25] > 0.0f) & (p[25] <= 1.0f));
+    ok &= (p[25] > 0.0f);
     ok &= (p[26] > 0.0f);
-    ok &= (p[27] >= 0.0f);
+    ok &= (p[27] > 0.0f);
     ok &= (p[28] > 0.0f);
-    ok &= (p[29] > 0.0f);
+    ok &= ((p[29] > 0.0f) & (p[29] <= 1.0f));
     ok &= (p[30] > 0.0f);
-    ok &= (p[31] > 0.0f);
+    ok &= (p[31] >= 0.0f);
     ok &= (p[32] > 0.0f);
     ok &= (p[33] > 0.0f);
     ok &= (p[34] > 0.0f);
@@ -359,11 +373,15 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[38] > 0.0f);
     ok &= (p[39] > 0.0f);
     ok &= (p[40] > 0.0f);
-    ok &= (p[41] >= 0.0f);
-    ok &= (p[42] >= 0.0f);
-    ok &= (p[43] >= 0.0f);
-    ok &= (p[44] >= 0.0f);
+    ok &= (p[41] > 0.0f);
+    ok &= (p[42] > 0.0f);
+    ok &= (p[43] > 0.0f);
+    ok &= (p[44] > 0.0f);
     ok &= (p[45] >= 0.0f);
+    ok &= (p[46] >= 0.0f);
+    ok &= (p[47] >= 0.0f);
+    ok &= (p[48] >= 0.0f);
+    ok &= (p[49] >= 0.0f);
     return ok;
 }
 

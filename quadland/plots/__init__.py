@@ -2,7 +2,8 @@
 
 :mod:`quadland.plots.simulation` draws a simulation (the paper's Figures
 2-5 and the ground track), :mod:`quadland.plots.margins` a margin review
-(Bode, Nyquist, singular values, poles). Every function returns a
+(Bode, Nyquist, singular values, poles), :mod:`quadland.plots.navigation` the
+navigation filter's estimate and consistency. Every function returns a
 :class:`matplotlib.figure.Figure` made without pyplot: nothing is shown or
 kept behind the caller's back and no backend is chosen, so a figure
 displays in a notebook as it is, and ``quadland.output.figure_png`` turns
@@ -22,6 +23,11 @@ from quadland.plots.landing import (
     rotor_forces_plot,
     trajectory_3d_plot,
 )
+from quadland.plots.navigation import (
+    NAVIGATION_FIGURES,
+    consistency_plot,
+    navigation_plot,
+)
 from quadland.plots.simulation import (
     SIMULATION_FIGURES,
     control_inputs_plot,
@@ -38,7 +44,7 @@ __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "nyquist_plot", "sigma_plot", "pole_plot",
            "LANDING_FIGURES", "landing_figures", "landing_limits", "trajectory_3d_plot",
            "relative_position_plot", "landing_ground_track_plot", "rotor_forces_plot",
-           "landing_animation"]
+           "landing_animation", "NAVIGATION_FIGURES", "navigation_plot", "consistency_plot"]
 
 _LAZY = {"MARGIN_FIGURES": "MARGIN_FIGURES", "margin_figures": "margin_figures",
          "bode_plot": "bode_plot", "nyquist_plot": "nyquist_plot", "sigma_plot": "sigma_plot",

@@ -20,6 +20,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from quadland.plots.finite import drawable
+from quadland.plots.navigation import NAVIGATION_FIGURES, has_estimate, navigation_plot
 from quadland.plots.style import finish
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
@@ -332,10 +333,16 @@ def landing_figures(result: LandingResult, limits: Mapping | None = None) -> dic
     Returns
     -------
     dict of str to matplotlib.figure.Figure
-        Keys are those of :data:`LANDING_FIGURES`, in that order.
+        Keys are those of :data:`LANDING_FIGURES`, in that order, then, for a landing
+        flown on its sensors (:func:`quadland.plots.navigation.has_estimate`), those of
+        :data:`quadland.plots.navigation.NAVIGATION_FIGURES`: the filter's estimate, the
+        truth and its 3-sigma band (a landing on the true state has no estimate to draw).
     """
     result = drawable(result)                 # a failed flight's last rows may diverge
     figs = (trajectory_3d_plot(result), relative_position_plot(result, limits),
             landing_ground_track_plot(result), rotor_forces_plot(result, limits))
-    return dict(zip(LANDING_FIGURES, figs, strict=True))
+    out = dict(zip(LANDING_FIGURES, figs, strict=True))
+    if has_estimate(result):
+        out.update(zip(NAVIGATION_FIGURES, (navigation_plot(result),), strict=True))
+    return out
 

@@ -19,6 +19,8 @@ from quadland_symbolic.loop import MAX_DELAY_PERIODS
 __all__ = ["LANDING_SCHEMA", "check_landing"]
 
 _POS = dict(lo=0.0, lo_open=True)
+#: [estimator] keys that must be positive: the tilt bias decays as exp(-dt / tilt_tau).
+_ESTIMATOR_POSITIVE = ("tilt_tau",)
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
@@ -155,7 +157,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     # sensors. A campaign's dispersions of [sensors.*] leave it at its nominal.
     "estimator": {
         **{f.name: Field(F, f.unit if isinstance(f.unit, str) else f.unit[0], f.doc,
-                         f.size if f.size > 1 else None, lo=0.0, hi=1e6)
+                         f.size if f.size > 1 else None, lo=0.0, hi=1e6,
+                         lo_open=f.name in _ESTIMATOR_POSITIVE)
            for f in estimator_params().fields if f.name != "g"},
         **{f"p0_{name}": Field(F, unit, f"initial standard deviation of {what}, per axis",
                                3, lo=0.0, hi=1e4)
@@ -165,7 +168,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                ("target_velocity", "m/s", "the pad's velocity"),
                ("target_acceleration", "m/s^2", "the pad's acceleration"),
                ("bias", "m", "the relative GNSS bias"),
-               ("input_bias", "m/s^2", "the acceleration input's bias"))},
+               ("input_bias", "m/s^2", "the accelerometer's bias in the acceleration input"),
+               ("tilt_bias", "m/s^2", "the acceleration input's bias from the attitude "
+                "estimate's tilt error"))},
     },
     # The flight code's land detector (docs/land_detector.md): its cues' thresholds and
     # windows. Only the sensed loop has it; on the true state the touchdown is the gap's.

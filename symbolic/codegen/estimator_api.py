@@ -53,13 +53,18 @@ _NONNEGATIVE = Range(lo=0.0)
 #: Valid values of every member of ``ql_estimator_params`` by member path (NaN and
 #: infinities are invalid everywhere): gravity, the noise densities and sigmas
 #: positive (a zero density or sigma makes a covariance or an innovation
-#: variance singular), the vision noise's growth with range and the ages not
+#: variance singular; the tilt bias' sigma may be zero, its time constant not),
+#: the vision noise's growth with range and the ages not
 #: negative, ``range_min_cos`` in (0, 1] (the range model divides by
 #: ``n2 . b3_E`` once it is at least that), the deck radius positive and its
 #: standard deviations not negative (E12a), the gates positive.
 ESTIMATOR_PARAM_RANGES = MappingProxyType({
     "g": _POSITIVE,
     **{k: _POSITIVE for k in ("q_acc", "q_at", "q_b", "q_ab", "vision_sigma0")},
+    # the tilt bias: its standard deviation may be 0 (z: the tilt moves the input
+    # horizontally only), its correlation time must be positive (exp(-dt / tilt_tau))
+    "tilt_sigma": _NONNEGATIVE,
+    "tilt_tau": _POSITIVE,
     "vision_k_range": _NONNEGATIVE,
     **{k: _POSITIVE for k in ("gnss_rel_sigma", "gnss_v1_sigma", "gnss_vt_sigma",
                               "range_sigma")},

@@ -195,8 +195,9 @@ def output_predictor(x_h, hist):
 
     The state ``sum(dt_k)`` after the horizon; ``hist`` is ``4 x N``: inputs
     ``a_k`` (E) held over ``dt_k``, oldest first. With ``T = sum dt_k``, ``S1 = sum a_k dt_k`` and
-    ``S2 = sum a_k dt_k (dt_k / 2 + sum_{j>k} dt_j)``: ``v1 += S1 - T a_b``,
-    ``p_r += T (v1 - v_t) + S2 - T^2 (a_b + a_t) / 2``, ``v_t += T a_t``;
+    ``S2 = sum a_k dt_k (dt_k / 2 + sum_{j>k} dt_j)``: ``v1 += S1 - T a_u`` with
+    ``a_u = a_b + a_tilt`` the input's bias, ``p_r += T (v1 - v_t) + S2 - T^2 (a_u + a_t) / 2``,
+    ``v_t += T a_t``;
     the rest is constant. The same map as (E6)'s ``Phi``, ``Gamma`` chained.
     """
     x = NAV.unpack(x_h)
@@ -208,9 +209,11 @@ def output_predictor(x_h, hist):
         S2 = S2 + a_k * (dt_k * (dt_k / 2 + after))
         after = after + dt_k
     T = after
-    v1 = x["v1"] + S1 - T * x["a_b"]
-    p_r = x["p_r"] + T * (x["v1"] - x["v_t"]) + S2 - (T**2 / 2) * (x["a_b"] + x["a_t"])
-    return ca.vertcat(p_r, v1, x["v_t"] + T * x["a_t"], x["a_t"], x["b"], x["a_b"])
+    a_u = x["a_b"] + x["a_tilt"]                       # the acceleration input's bias
+    v1 = x["v1"] + S1 - T * a_u
+    p_r = x["p_r"] + T * (x["v1"] - x["v_t"]) + S2 - (T**2 / 2) * (a_u + x["a_t"])
+    return ca.vertcat(p_r, v1, x["v_t"] + T * x["a_t"], x["a_t"], x["b"], x["a_b"],
+                      x["a_tilt"])
 
 
 @functools.cache
@@ -292,11 +295,12 @@ def _output(x_now, deck, ims, t, p):
 def _input(ims, x_h, p):
     """This period's acceleration input (E2).
 
-    A non-finite one is replaced by ``a_b``.
+    A non-finite one is replaced by the input's bias ``a_b + a_tilt`` (no acceleration).
     """
     a_in = acceleration_input(ims["eta_hat"], ims["f_b"], p["g"])
     ok = ca.logic_and(ca.logic_and(is_finite(a_in[0]), is_finite(a_in[1])), is_finite(a_in[2]))
-    return select(ok, a_in, NAV.unpack(x_h)["a_b"]), ok
+    x = NAV.unpack(x_h)
+    return select(ok, a_in, x["a_b"] + x["a_tilt"]), ok
 
 
 def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):

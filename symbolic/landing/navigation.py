@@ -5,9 +5,10 @@ State, packets, parameters, prediction, measurement blocks, outputs.
 docs/estimator.md gives the design and the equations (E1)-(E14) cited here.
 Frame E has z up. The filter's state :data:`NAV` is PX4's moving-target
 vision target estimator's (relative position, the vehicle's and the pad's
-velocities, the pad's acceleration, the relative GNSS bias) plus ``a_b``, the
-bias of the acceleration input, which quadland forms from the raw
-accelerometer through an attitude estimate (E1).
+velocities, the pad's acceleration, the relative GNSS bias) plus the two biases
+of the acceleration input, which quadland forms from the raw accelerometer
+through an attitude estimate: ``a_b`` (the accelerometer's) and ``a_tilt`` (the
+attitude estimate's tilt error times g, which the camera's vector shares) (E1).
 
 The sequencing (delayed horizon, FIFOs, output predictor) is in
 :mod:`quadland_symbolic.landing.estimator`; this module holds what one prediction and
@@ -26,6 +27,7 @@ import numpy as np
 from quadland_symbolic.kalman import (
     CovariancePattern,
     block_nis,
+    is_finite,
     nilpotent_discretization,
     scalar_update,
     select,
@@ -64,7 +66,9 @@ NAV = Layout("nav", (
     _vec3("v_t", "m/s", "pad centre velocity"),
     _vec3("a_t", "m/s^2", "pad centre acceleration (random walk)"),
     _vec3("b", "m", "relative GNSS bias: GNSS-measured (p_pad - p1) minus the true one"),
-    _vec3("a_b", "m/s^2", "bias of the acceleration input (accelerometer bias, attitude error g)"),
+    _vec3("a_b", "m/s^2", "bias of the acceleration input: the accelerometer's (random walk)"),
+    _vec3("a_tilt", "m/s^2", "bias of the acceleration input from the attitude estimate's "
+          "tilt error eps: g eps x e_z (Gauss-Markov; z is 0)"),
 ), "navigation filter state, frame E (z up)")
 
 #: The IMU's sample of this period (no flag: every period).
@@ -158,6 +162,7 @@ BLOCKS = (
 #: Default parameter values; docs/estimator.md cites each one's source.
 ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     g=9.8, q_acc=[0.02] * 3, q_at=[0.1] * 3, q_b=[0.001] * 3, q_ab=[1e-3] * 3,
+    tilt_sigma=[0.0855, 0.0855, 0.0], tilt_tau=5.0,
     vision_sigma0=0.1, vision_k_range=0.02,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
     range_sigma=0.05, range_min_cos=0.7, range_deck_radius=0.5, range_deck_sigmas=2.0,
@@ -179,7 +184,10 @@ def estimator_params() -> Layout:
         _vec3("q_acc", "m^2/s^3", "PSD of the acceleration input's white noise, per axis"),
         _vec3("q_at", "m^2/s^5", "PSD of the pad acceleration's random walk, per axis"),
         _vec3("q_b", "m^2/s", "PSD of the relative GNSS bias' random walk, per axis"),
-        _vec3("q_ab", "m^2/s^5", "PSD of the input bias' random walk, per axis"),
+        _vec3("q_ab", "m^2/s^5", "PSD of the accelerometer bias' random walk, per axis"),
+        _vec3("tilt_sigma", "m/s^2", "stationary standard deviation of the tilt bias, per "
+              "axis (z: 0)"),
+        Field("tilt_tau", 1, "s", "correlation time of the tilt bias (first-order Gauss-Markov)"),
         Field("vision_sigma0", 1, "m", "vision noise at zero range (E10)"),
         Field("vision_k_range", 1, "-", "vision noise growth per metre of range (E10)"),
         _vec3("gnss_rel_sigma", "m", "relative GNSS position noise"),
@@ -218,14 +226,16 @@ def covariance_pattern(coupling: str = "full") -> CovariancePattern:
 
 # ---------------------------------------------------------------- prediction
 
-#: One axis of (E2): [p_r, v1, v_t, a_t, b, a_b]' = A6 [...] + B6 a_in + w.
-_A6 = np.array([[0, 1, -1, 0, 0, 0],
-                [0, 0, 0, 0, 0, -1],
-                [0, 0, 0, 1, 0, 0],
-                [0, 0, 0, 0, 0, 0],
-                [0, 0, 0, 0, 0, 0],
-                [0, 0, 0, 0, 0, 0]], dtype=float)
-_B6 = np.array([[0], [1], [0], [0], [0], [0]], dtype=float)
+#: One axis of (E2): [p_r, v1, v_t, a_t, b, a_b, a_tilt]' = A7 [...] + B7 a_in + w, with
+#: a_tilt held over the period (E2a).
+_A7 = np.array([[0, 1, -1, 0, 0, 0, 0],
+                [0, 0, 0, 0, 0, -1, -1],
+                [0, 0, 0, 1, 0, 0, 0],
+                [0, 0, 0, 0, 0, 0, 0],
+                [0, 0, 0, 0, 0, 0, 0],
+                [0, 0, 0, 0, 0, 0, 0],
+                [0, 0, 0, 0, 0, 0, 0]], dtype=float)
+_B7 = np.array([[0], [1], [0], [0], [0], [0], [0]], dtype=float)
 
 
 def acceleration_input(eta_hat, f_b, g):
@@ -237,21 +247,30 @@ def acceleration_input(eta_hat, f_b, g):
 
 
 def nav_transition(dt, p_est):
-    """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E3)-(E5).
+    """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E2a), (E3)-(E5).
 
-    Sizes 18 x 18, 18 x 3, 18 x 18: one axis' 6 x 6 discretization
-    (:func:`~quadland_symbolic.kalman.nilpotent_discretization`) on x, y and z, each
-    with its own noise densities; the state is field-major, so the 18-state
-    matrices are ``kron(M6, I3)``, and ``Q = sum_a kron(Q6_a, e_a e_a^T)``.
+    Sizes 21 x 21, 21 x 3, 21 x 21: one axis' 7 x 7 discretization
+    (:func:`~quadland_symbolic.kalman.nilpotent_discretization`, ``a_tilt`` held) on
+    x, y and z, each with its own noise densities; the state is field-major, so the
+    21-state matrices are ``kron(M7, I3)``, and ``Q = sum_a kron(Q7_a, e_a e_a^T)``.
+    Then ``a_tilt`` decays as the sampled Gauss-Markov process it is (E2a):
+    ``Phi[a_tilt, a_tilt] = e^(-dt / tilt_tau)`` and ``Q[a_tilt, a_tilt] = tilt_sigma^2
+    (1 - e^(-2 dt / tilt_tau))``.
     """
     p = estimator_params().unpack(p_est)
     I3 = ca.DM.eye(3)
     Q = ca.SX(NAV.size, NAV.size)
     for a in range(3):
-        W6 = ca.diag(ca.vertcat(0, p["q_acc"][a], 0, p["q_at"][a], p["q_b"][a], p["q_ab"][a]))
-        Phi6, Gamma6, Q6 = nilpotent_discretization(_A6, _B6, W6, dt)
-        Q += ca.kron(Q6, I3[:, a] @ I3[a, :])
-    return ca.kron(Phi6, I3), ca.kron(Gamma6, I3), Q
+        W7 = ca.diag(ca.vertcat(0, p["q_acc"][a], 0, p["q_at"][a], p["q_b"][a], p["q_ab"][a], 0))
+        Phi7, Gamma7, Q7 = nilpotent_discretization(_A7, _B7, W7, dt)
+        Q += ca.kron(Q7, I3[:, a] @ I3[a, :])
+    decay = ca.exp(-dt / p["tilt_tau"])                                      # (E2a)
+    i = NAV.slice("a_tilt").start
+    Phi = ca.kron(Phi7, I3)
+    for a in range(3):
+        Phi[i + a, i + a] = decay
+        Q[i + a, i + a] = p["tilt_sigma"][a] ** 2 * (1 - decay**2)
+    return Phi, ca.kron(Gamma7, I3), Q
 
 
 @functools.cache
@@ -275,7 +294,7 @@ def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern):
 def nav_predict_function(coupling: str = "full") -> ca.Function:
     """``nav_predict(x, P, a_in, dt, p_est) -> (x_next, P_next)``.
 
-    (E6). ``P`` and ``P_next`` are full symmetric 18 x 18 matrices; only the upper
+    (E6). ``P`` and ``P_next`` are full symmetric 21 x 21 matrices; only the upper
     triangle of the entries :func:`covariance_pattern` keeps is read.
     """
     pattern = covariance_pattern(coupling)
@@ -295,7 +314,10 @@ def _model(block: Block, nav, pkt, n2, p):
     ones = ca.DM.ones(3)
     if block.name == "vision":                                               # (E10)
         sigma = p["vision_sigma0"] + p["vision_k_range"] * ca.norm_2(z)
-        return z, -nav["p_r"], sigma**2 * ones, 1
+        # the tilt rotates the vector: eps x r_E = (r_E_z / g) a_tilt for a pad below
+        # (E10); a non-finite packet, never fused, must not make the row non-finite
+        lever = select(is_finite(z[2]), z[2], 0) / p["g"]
+        return z, -nav["p_r"] + lever * nav["a_tilt"], sigma**2 * ones, 1
     if block.name == "range":                                                # (E12)
         cos_b = n2.T @ pkt["b3_E"]
         steep = cos_b >= p["range_min_cos"]
@@ -408,8 +430,8 @@ def nav_update_function(name: str, coupling: str = "full") -> ca.Function:
     """One block's gated update as a Function.
 
     ``nav_update_<name>(x, P, pkt, n2, p_est, due) -> (x_next, P_next, nu, nis,
-    fused, held)``: :func:`block_update` with full symmetric 18 x 18 ``P`` in and out
-    (only the stored upper-triangle entries of :func:`covariance_pattern` are read).
+    fused, held)``: :func:`block_update` with full symmetric 21 x 21 ``P`` in and out (only
+    the stored upper-triangle entries of :func:`covariance_pattern` are read).
     """
     pattern = covariance_pattern(coupling)
     layout = _packet(_block(name).sensor)

@@ -95,8 +95,10 @@ from quadland_symbolic.landing.navigation import (
     DATALINK,
     GNSS,
     IMU,
+    NAV,
     RANGE,
     VISION,
+    covariance_pattern,
     estimator_params,
 )
 from quadland_symbolic.landing.plant import (
@@ -138,8 +140,12 @@ SENSED_TICK = Layout("n_sensed", tuple(
         Field.nested(f"{name}_noise", NOISES[name], f"the {name}'s noise at this tick"))),
     "per control tick: each sensor's sample flag, delivery flag and noise")
 
+#: The filter's memory at its flight sizes.
+_NAV_MEMORY = estimator_memory(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+
 #: What the sensed loop records of each control step: the unsensed loop's, the
-#: estimate, the filter's horizon standard deviations and each block's NIS.
+#: estimate, the filter's horizon standard deviations and each block's NIS; last, the
+#: filter's horizon state, covariance and time (its consistency, docs/estimator.md).
 SENSED_RECORDED = Layout("rec_sensed", (
     *LANDING_RECORDED.fields,
     Field("p_e_hat", 3, "m", "estimated relative position, deck frame (the step's input)",
@@ -158,6 +164,14 @@ SENSED_RECORDED = Layout("rec_sensed", (
     Field("marker_age", 1, "s", "time since the filter last fused a marker detection"),
     Field("detector", 3, "0/1", "the land detector's stages",
           elements=("ground_contact", "maybe_landed", "landed")),
+    # the filter's memory after the step: the horizon's prior for the next (world-side
+    # analysis reads it; the flight code's outputs do not change)
+    Field("nav_x_h", NAV.size, NAV.element_units(), "filter state at its horizon t_h",
+          elements=tuple(f"x_h_{e}" for e in NAV.element_names())),
+    Field("nav_P_h", _NAV_MEMORY["P_h"].size, _NAV_MEMORY["P_h"].unit,
+          "its covariance: the stored upper-triangle entries, row by row",
+          elements=covariance_pattern(FLIGHT_COUPLING).element_names("P_h")),
+    Field("nav_t_h", 1, "s", "the horizon's time t_h", elements=("t_h",)),
 ), "the landing step's signals, the navigation estimate and the filter's health")
 
 
@@ -314,9 +328,11 @@ def landing_sensed_loop(l: int) -> LoopModel:
     cues = ca.vertcat(fl["ground_contact"], marker_age)
     _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
+    nav = _NAV_MEMORY.unpack(nav_next)
     rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
                      d["n_rejected"], d["n_discarded"], d["n_dropped"], d["n_held"],
-                     marker_age, fl["ground_contact"], fl["maybe_landed"], fl["landed"])
+                     marker_age, fl["ground_contact"], fl["maybe_landed"], fl["landed"],
+                     nav["x_h"], nav["P_h"], nav["t_h"])
     # the flight code's arguments, for the flight C behind the controller's signature
     plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
     args = dict(imu=imu_now, vision=packets[0], gnss=packets[1], range=packets[2],

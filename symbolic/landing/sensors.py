@@ -47,6 +47,7 @@ import casadi as ca
 
 from quadland_symbolic.kinematics import rotation, skew
 from quadland_symbolic.landing.deck import DECK_POSE, deck_pose
+from quadland_symbolic.landing.navigation import NAV
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
@@ -63,7 +64,7 @@ __all__ = ["measurement_function", "SENSOR_NAMES", "SENSOR_PARAMS", "IMU_PACKET"
            "VISION_NOISE", "GNSS_NOISE", "RANGEFINDER_NOISE", "DATALINK_NOISE", "SENSOR_PACKETS",
            "NOISES", "specific_force", "rangefinder_distance", "sense_imu_function",
            "sense_vision_function", "sense_gnss_function", "sense_rangefinder_function",
-           "sense_datalink_function", "sensor_function"]
+           "sense_datalink_function", "sensor_function", "NAV_TRUTH", "navigation_truth_function"]
 
 #: The sensors, in the order of their random streams (:mod:`quadland.kinds.landing.sensing`).
 SENSOR_NAMES = ("imu", "vision", "gnss", "rangefinder", "datalink")
@@ -372,3 +373,36 @@ def measurement_function() -> ca.Function:
     y = ca.vertcat(p_e, v_e, q["eta1"], q["Omega1"], deck.eta2, deck.v2E, deck.a2E, deck.w2E,
                    deck.w2E_dot)
     return ca.Function("landing_sensors", [xp, t, pp], [y], ["xp", "t", "pp"], ["y"])
+
+
+#: The navigation filter's states whose truth the world defines at every control tick:
+#: those of :data:`~quadland_symbolic.landing.navigation.NAV` but the relative GNSS bias
+#: ``b`` (the receivers' errors exist only at the GNSS's samples) and the accelerometer
+#: bias ``a_b`` (it also carries what the filter does not model).
+NAV_TRUTH = Layout("nav_truth", (*NAV.fields[:4], NAV["a_tilt"]),
+                   "the navigation state's true part, E")
+
+
+@functools.cache
+def navigation_truth_function() -> ca.Function:
+    """``nav_truth(xp, t, pp, e_att) -> x``: :data:`NAV_TRUTH` from the true plant state.
+
+    ``p_r = p1 - p2``, ``v1 = R1 V1``, ``v_t = v2E``, ``a_t = a2E``
+    (:func:`~quadland_symbolic.landing.deck.deck_pose`), and the tilt bias of the
+    acceleration input ``a_tilt = g eps x e_z`` of the attitude estimate's error
+    ``e_att`` (the IMU's noise of the tick): ``eps`` is the rotation vector of
+    ``R(eta1 + e_att) R1^T`` (its skew part, exact to second order in ``e_att``), so that
+    ``R(eta1 + e_att) f = f + eps x f`` (docs/estimator.md, (E1)). World-side: the
+    filter never reads it.
+    """
+    xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    e_att = ca.SX.sym("e_att", 3)
+    q, deck, p = _truth(xp, t, pp)
+    R1 = rotation(q["eta1"])
+    D = rotation(q["eta1"] + e_att) @ R1.T
+    eps = ca.vertcat(D[2, 1] - D[1, 2], D[0, 2] - D[2, 0], D[1, 0] - D[0, 1]) / 2
+    g = QUADROTOR.unpack(p["p_quad"])["g"]
+    x = ca.vertcat(q["p1"] - deck.p2, R1 @ q["V1"], deck.v2E, deck.a2E,
+                   g * ca.cross(eps, ca.vertcat(0, 0, 1)))
+    return ca.Function("nav_truth", [xp, t, pp, e_att], [x], ["xp", "t", "pp", "e_att"],
+                       ["x"])

@@ -61,7 +61,7 @@ INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
 
 #: ``[estimator]`` keys of the initial standard deviations, in the order of NAV's fields.
 _P0_KEYS = ("p0_position", "p0_velocity", "p0_target_velocity", "p0_target_acceleration",
-            "p0_bias", "p0_input_bias")
+            "p0_bias", "p0_input_bias", "p0_tilt_bias")
 
 
 def sensors_enabled(scenario: Scenario) -> bool:
@@ -102,14 +102,14 @@ def handover(scenario: Scenario, lv: LandingValues,
     p2, v2, a2, eta2, w2, w2_dot = dense
     v1 = np.asarray(rotation(q["eta1"]), dtype=float) @ q["V1"]
     truth = NAV.pack(dict(p_r=q["p1"] - p2, v1=v1, v_t=v2, a_t=a2, b=np.zeros(3),
-                          a_b=np.zeros(3)))
+                          a_b=np.zeros(3), a_tilt=np.zeros(3)))
     sigma = np.concatenate([np.asarray(e[k], dtype=float) for k in _P0_KEYS])
     error = np.zeros(NAV.size)
     if random:
         rng = np.random.default_rng(sensor_seed(seed, INITIAL_ERROR_STREAM, 0))
         error = sigma * rng.standard_normal(NAV.size)
-        error[NAV.slice("b")] = 0.0          # the GNSS bias' truth is the receivers' draw
-        error[NAV.slice("a_b")] = 0.0
+        for name in ("b", "a_b", "a_tilt"):   # the biases' truth is the sensors' draw
+            error[NAV.slice(name)] = 0.0
     return truth + error, sigma ** 2, DECK_INIT.pack(dict(eta2=eta2, w2E=w2, w2E_dot=w2_dot))
 
 

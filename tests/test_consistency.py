@@ -1,0 +1,152 @@
+"""The navigation filter's consistency over a Monte Carlo of hovers (issue 17, sec. 6).
+
+The machinery against independent values: the chi-square bounds against their closed
+form (two degrees of freedom) and the normal approximation; the NEES against the matrix
+inverse; the errors against the logged positions and the car's known motion. Then the
+Monte Carlo itself: 100 seeded hovers of 8 s over the highway's moving pad, the average
+NEES and NIS against their two-sided 95 % chi-square bounds, as docs/estimator.md
+("Consistency") states them; what the filter does not meet is an expected failure that
+names the measured value and its cause (strict: it fails once the filter meets it).
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from quadland.exceptions import ScenarioError
+from quadland.kinds.landing.consistency import (
+    NEES_GROUPS,
+    chi2_bounds,
+    consistency_monte_carlo,
+    hover_scenario,
+    run_errors,
+)
+from quadland.kinds.landing.simulate import simulate_landing
+from quadland.scenario import load_scenario
+from quadland_symbolic.landing.navigation import BLOCKS, NAV
+
+
+def test_chi2_bounds_of_two_degrees_of_freedom_are_exponential_quantiles():
+    """chi2(2) is an exponential of mean 2: its quantile at p is -2 ln(1 - p)."""
+    lo, hi = chi2_bounds(2, 1)
+    assert float(lo) == pytest.approx(-2 * math.log(0.975), rel=1e-12)
+    assert float(hi) == pytest.approx(-2 * math.log(0.025), rel=1e-12)
+    lo, hi = chi2_bounds(3, np.array([0, 4]))                   # no draw: no bounds
+    assert np.isnan(lo[0]) and np.isnan(hi[0]) and lo[1] < 3 < hi[1]
+
+
+@pytest.mark.parametrize("dof,n", [(1, 150_000), (3, 28_000), (6, 100)])
+def test_chi2_bounds_of_many_draws_are_wilson_hilferty(dof, n):
+    """The average of n chi2(dof) draws is chi2(k) / n, k = n dof; for large k the cube
+    root of chi2(k) / k is normal, mean 1 - 2 / (9 k), variance 2 / (9 k) (Wilson and
+    Hilferty 1931): its 2.5 % and 97.5 % points."""
+    k = n * dof
+    lo, hi = chi2_bounds(dof, n)
+    for bound, z in ((lo, -1.959963984540054), (hi, 1.959963984540054)):
+        want = dof * (1 - 2 / (9 * k) + z * math.sqrt(2 / (9 * k))) ** 3
+        assert float(bound) == pytest.approx(want, rel=1e-5)
+
+
+def test_hover_starts_above_the_pad_and_never_descends():
+    sc = hover_scenario(load_scenario("highway"), duration=2.0)
+    d = sc.data
+    assert list(d["initial"]["position1"]) == list(d["initial"]["position2"]) == [0.0, 0.0]
+    assert d["initial"]["z1"] == d["deck"]["height"] + d["landing"]["hover_height"] == 4.5
+    assert d["landing"]["dwell_time"] > d["simulation"]["duration"] == 2.0
+    assert d["simulation"]["output_rate_hz"] == d["controller"]["rate_hz"]
+    assert d["sensors"]["enabled"] and d["sensors.vision"]["outlier_rate"] == 0.0
+
+
+@pytest.mark.parametrize("overrides,duration,word", [
+    (["sensors.enabled=false"], 2.0, "sensors.enabled"),
+    ([], 1000.0, "duration"),
+])
+def test_hover_refuses_what_it_cannot_fly_in_one_line(overrides, duration, word):
+    with pytest.raises(ScenarioError) as err:
+        hover_scenario(load_scenario("highway", overrides), duration)
+    assert str(err.value).startswith(f"{word}: ") and "\n" not in str(err.value)
+
+
+def test_nees_is_the_quadratic_form_of_the_inverse():
+    """On random errors and covariances: the group's block (not its diagonal) inverted."""
+    from quadland.kinds.landing.consistency import _nees
+
+    rng = np.random.default_rng(17)
+    e = rng.normal(size=(5, NAV.size))
+    L = rng.normal(size=(5, NAV.size, NAV.size))
+    P = L @ np.swapaxes(L, 1, 2) + 0.1 * np.eye(NAV.size)
+    for T in NEES_GROUPS.values():
+        want = [(T @ e[k]) @ np.linalg.inv(T @ P[k] @ T.T) @ (T @ e[k]) for k in range(5)]
+        np.testing.assert_allclose(_nees(e, P, T), want, rtol=1e-10)
+
+
+@pytest.fixture(scope="module")
+def hover():
+    return simulate_landing(hover_scenario(load_scenario("highway"), duration=2.0))
+
+
+def test_errors_are_against_the_truth_at_the_horizon(hover):
+    """The relative position's against the logged positions at the row of the horizon
+    time; the pad's velocity and acceleration against the car's steady 50 km/h."""
+    t_h, e, P = run_errors(hover)
+    k = np.flatnonzero(t_h > 0.5)
+    rows = np.rint(t_h[k] * 250).astype(int)
+    assert np.all(hover["t"][rows] == pytest.approx(t_h[k], abs=1e-12))
+    for a, axis in enumerate("xyz"):
+        want = hover[f"x_h_p_r_{axis}"][k] - (hover[f"{axis}1"] - hover[f"{axis}2"])[rows]
+        np.testing.assert_allclose(e[k, NAV.slice("p_r")][:, a], want, rtol=0, atol=1e-12)
+    u2 = hover.scenario["initial.velocity2"][0]
+    np.testing.assert_allclose(e[:, NAV.slice("v_t")],
+                               np.column_stack([hover["x_h_v_t_x"] - u2, hover["x_h_v_t_y"],
+                                                hover["x_h_v_t_z"]]), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(e[:, NAV.slice("a_t")],
+                               np.column_stack([hover[f"x_h_a_t_{a}"] for a in "xyz"]),
+                               rtol=0, atol=1e-9)
+    assert np.all(np.isnan(e[:, NAV.slice("b")])) and np.all(np.isnan(e[:, NAV.slice("a_b")]))
+    # the covariance: the recorded entries, mirrored; x and y never coupled ("axes")
+    np.testing.assert_array_equal(P, np.swapaxes(P, 1, 2))
+    assert P[0, 0, 0] == hover["P_h_1_1"][0] and np.all(P[:, 0, 1] == 0)
+
+
+# ---------------------------------------------------------------- the Monte Carlo
+
+#: What the Monte Carlo below measures where the filter is not consistent (docs/estimator.md,
+#: "Consistency"): the share of the settled times inside the bounds, or the average NIS.
+NOT_MET = {
+    "relative": "73 % of the times inside, average 6.52: the attitude estimate's heading "
+                "error (2 deg), which the filter does not model, turns the camera's vector; "
+                "with it zero in the world, 97 %",
+    "position": "90 % of the times inside, average 3.31: the heading error as above; with it "
+                "zero in the world, 95 %",
+    "pad": "30 % of the times inside, average 5.13 < 6: q_at = 1e-6 lets the pad's "
+           "acceleration drift, the highway car's is exactly zero; with q_at = 1e-9, 100 %",
+    "gnss_rel": "average 3.29 > 3.10: in two hovers (seeds 2121, 2123) the receivers' bias is "
+                "drawn beyond the 99 % gate of the handover's covariance, and every GNSS "
+                "relative position is rejected (NIS 12-14): the filter never learns the bias",
+}
+
+
+@pytest.fixture(scope="module")
+def mc():
+    return consistency_monte_carlo(load_scenario("highway"), runs=100, duration=8.0)
+
+
+def _expect(name):
+    return pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=NOT_MET[name])) \
+        if name in NOT_MET else name
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("group", [_expect(g) for g in NEES_GROUPS])
+def test_average_nees_lies_in_its_bounds_at_95_percent_of_the_times(mc, group):
+    assert mc.runs == 100 and mc.settled.sum() > 1000
+    assert mc.nees_inside(group) >= 0.95, mc.summary()["nees"][group]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("block", [_expect(b.name) for b in BLOCKS])
+def test_average_nis_of_every_packet_lies_in_its_bounds(mc, block):
+    mean, n, lo, hi = mc.nis_pooled(block)
+    assert n >= 20 * mc.runs
+    assert lo <= mean <= hi, (block, mean, n, lo, hi)
