@@ -91,12 +91,13 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, gate_range, 42, 0) &&
     AT(ql_estimator_params, gate_datalink_v, 43, 0) &&
     AT(ql_estimator_params, gate_datalink_a, 44, 0) &&
-    AT(ql_estimator_params, max_age_vision, 45, 0) &&
-    AT(ql_estimator_params, max_age_gnss, 46, 0) &&
-    AT(ql_estimator_params, max_age_range, 47, 0) &&
-    AT(ql_estimator_params, max_age_datalink, 48, 0) &&
-    AT(ql_estimator_params, deck_extrapolation_max, 49, 0) &&
-    sizeof(ql_estimator_params) == 50 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_params, gate_lockout, 45, 0) &&
+    AT(ql_estimator_params, max_age_vision, 46, 0) &&
+    AT(ql_estimator_params, max_age_gnss, 47, 0) &&
+    AT(ql_estimator_params, max_age_range, 48, 0) &&
+    AT(ql_estimator_params, max_age_datalink, 49, 0) &&
+    AT(ql_estimator_params, deck_extrapolation_max, 50, 0) &&
+    sizeof(ql_estimator_params) == 51 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 21, 0) &&
@@ -120,7 +121,8 @@ typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, n_discarded, 607, 0) &&
     AT(ql_estimator_memory, n_dropped, 611, 0) &&
     AT(ql_estimator_memory, n_imu_invalid, 615, 0) &&
-    sizeof(ql_estimator_memory) == 616 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_memory, streak, 616, 0) &&
+    sizeof(ql_estimator_memory) == 623 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(ql_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -142,13 +144,14 @@ typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, n_discarded, 77, 0) &&
     AT(ql_estimator_diagnostics, n_dropped, 81, 0) &&
     AT(ql_estimator_diagnostics, n_imu_invalid, 85, 0) &&
-    AT(ql_estimator_diagnostics, x_h, 86, 0) &&
-    AT(ql_estimator_diagnostics, P_diag, 107, 0) &&
-    AT(ql_estimator_diagnostics, t_h, 128, 0) &&
-    sizeof(ql_estimator_diagnostics) == 129 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_diagnostics, streak, 86, 0) &&
+    AT(ql_estimator_diagnostics, x_h, 93, 0) &&
+    AT(ql_estimator_diagnostics, P_diag, 114, 0) &&
+    AT(ql_estimator_diagnostics, t_h, 135, 0) &&
+    sizeof(ql_estimator_diagnostics) == 136 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[50] = {
+static const ql_real default_p_est[51] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
     0.001, 0.0855, 0.0855, 0.0, 5.0, 0.1,
@@ -156,8 +159,8 @@ static const ql_real default_p_est[50] = {
     0.3, 0.3, 0.3, 0.3, 0.05, 0.7,
     0.5, 2.0, 0.1, 0.1, 0.1, 0.3,
     0.3, 0.3, 11.344867, 11.344867, 11.344867, 11.344867,
-    6.634897, 11.344867, 11.344867, 0.02, 0.02, 0.02,
-    0.02, 0.5,
+    6.634897, 11.344867, 11.344867, 10.0, 0.02, 0.02,
+    0.02, 0.02, 0.5,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -191,6 +194,7 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   gate_range               > 0
  *   gate_datalink_v          > 0
  *   gate_datalink_a          > 0
+ *   gate_lockout             >= 0
  *   max_age_vision           >= 0
  *   max_age_gnss             >= 0
  *   max_age_range            >= 0
@@ -305,18 +309,21 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
         bad = "gate_datalink_a";
     }
     if (!bad && !(isfinite(p[45]) && (p[45] >= 0.0))) {
-        bad = "max_age_vision";
+        bad = "gate_lockout";
     }
     if (!bad && !(isfinite(p[46]) && (p[46] >= 0.0))) {
-        bad = "max_age_gnss";
+        bad = "max_age_vision";
     }
     if (!bad && !(isfinite(p[47]) && (p[47] >= 0.0))) {
-        bad = "max_age_range";
+        bad = "max_age_gnss";
     }
     if (!bad && !(isfinite(p[48]) && (p[48] >= 0.0))) {
-        bad = "max_age_datalink";
+        bad = "max_age_range";
     }
     if (!bad && !(isfinite(p[49]) && (p[49] >= 0.0))) {
+        bad = "max_age_datalink";
+    }
+    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0))) {
         bad = "deck_extrapolation_max";
     }
     if (bad_field) {
@@ -326,7 +333,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 50 comparisons. The values are known to be finite; no names and no
+ * 51 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -381,6 +388,7 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[47] >= 0.0);
     ok &= (p[48] >= 0.0);
     ok &= (p[49] >= 0.0);
+    ok &= (p[50] >= 0.0);
     return ok;
 }
 

@@ -91,12 +91,13 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, gate_range, 42, 0) &&
     AT(qlf_estimator_params, gate_datalink_v, 43, 0) &&
     AT(qlf_estimator_params, gate_datalink_a, 44, 0) &&
-    AT(qlf_estimator_params, max_age_vision, 45, 0) &&
-    AT(qlf_estimator_params, max_age_gnss, 46, 0) &&
-    AT(qlf_estimator_params, max_age_range, 47, 0) &&
-    AT(qlf_estimator_params, max_age_datalink, 48, 0) &&
-    AT(qlf_estimator_params, deck_extrapolation_max, 49, 0) &&
-    sizeof(qlf_estimator_params) == 50 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_params, gate_lockout, 45, 0) &&
+    AT(qlf_estimator_params, max_age_vision, 46, 0) &&
+    AT(qlf_estimator_params, max_age_gnss, 47, 0) &&
+    AT(qlf_estimator_params, max_age_range, 48, 0) &&
+    AT(qlf_estimator_params, max_age_datalink, 49, 0) &&
+    AT(qlf_estimator_params, deck_extrapolation_max, 50, 0) &&
+    sizeof(qlf_estimator_params) == 51 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
     AT(qlf_estimator_memory, P_h, 21, 0) &&
@@ -120,7 +121,8 @@ typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, n_discarded, 607, 0) &&
     AT(qlf_estimator_memory, n_dropped, 611, 0) &&
     AT(qlf_estimator_memory, n_imu_invalid, 615, 0) &&
-    sizeof(qlf_estimator_memory) == 616 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_memory, streak, 616, 0) &&
+    sizeof(qlf_estimator_memory) == 623 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(qlf_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(qlf_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -142,13 +144,14 @@ typedef char estimator_diagnostics_is_its_layout[
     AT(qlf_estimator_diagnostics, n_discarded, 77, 0) &&
     AT(qlf_estimator_diagnostics, n_dropped, 81, 0) &&
     AT(qlf_estimator_diagnostics, n_imu_invalid, 85, 0) &&
-    AT(qlf_estimator_diagnostics, x_h, 86, 0) &&
-    AT(qlf_estimator_diagnostics, P_diag, 107, 0) &&
-    AT(qlf_estimator_diagnostics, t_h, 128, 0) &&
-    sizeof(qlf_estimator_diagnostics) == 129 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_diagnostics, streak, 86, 0) &&
+    AT(qlf_estimator_diagnostics, x_h, 93, 0) &&
+    AT(qlf_estimator_diagnostics, P_diag, 114, 0) &&
+    AT(qlf_estimator_diagnostics, t_h, 135, 0) &&
+    sizeof(qlf_estimator_diagnostics) == 136 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[50] = {
+static const qlf_real default_p_est[51] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
     0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.1f,
@@ -156,8 +159,8 @@ static const qlf_real default_p_est[50] = {
     0.3f, 0.3f, 0.3f, 0.3f, 0.05f, 0.7f,
     0.5f, 2.0f, 0.1f, 0.1f, 0.1f, 0.3f,
     0.3f, 0.3f, 11.344867f, 11.344867f, 11.344867f, 11.344867f,
-    6.634897f, 11.344867f, 11.344867f, 0.02f, 0.02f, 0.02f,
-    0.02f, 0.5f,
+    6.634897f, 11.344867f, 11.344867f, 10.0f, 0.02f, 0.02f,
+    0.02f, 0.02f, 0.5f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -191,6 +194,7 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   gate_range               > 0
  *   gate_datalink_v          > 0
  *   gate_datalink_a          > 0
+ *   gate_lockout             >= 0
  *   max_age_vision           >= 0
  *   max_age_gnss             >= 0
  *   max_age_range            >= 0
@@ -306,18 +310,21 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
         bad = "gate_datalink_a";
     }
     if (!bad && !(isfinite(p[45]) && (p[45] >= 0.0f))) {
-        bad = "max_age_vision";
+        bad = "gate_lockout";
     }
     if (!bad && !(isfinite(p[46]) && (p[46] >= 0.0f))) {
-        bad = "max_age_gnss";
+        bad = "max_age_vision";
     }
     if (!bad && !(isfinite(p[47]) && (p[47] >= 0.0f))) {
-        bad = "max_age_range";
+        bad = "max_age_gnss";
     }
     if (!bad && !(isfinite(p[48]) && (p[48] >= 0.0f))) {
-        bad = "max_age_datalink";
+        bad = "max_age_range";
     }
     if (!bad && !(isfinite(p[49]) && (p[49] >= 0.0f))) {
+        bad = "max_age_datalink";
+    }
+    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0f))) {
         bad = "deck_extrapolation_max";
     }
     if (bad_field) {
@@ -327,7 +334,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 50 comparisons. The values are known to be finite; no names and no
+ * 51 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -382,6 +389,7 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[47] >= 0.0f);
     ok &= (p[48] >= 0.0f);
     ok &= (p[49] >= 0.0f);
+    ok &= (p[50] >= 0.0f);
     return ok;
 }
 

@@ -26,9 +26,9 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_RANGE 26             /* FIFO depth of range packets */
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 84         /* stored covariance entries (coupling axes) */
-#define QLF_ESTIMATOR_MEMORY_SIZE 616            /* reals in qlf_estimator_memory */
-#define QLF_ESTIMATOR_PARAMS_SIZE 50             /* reals in qlf_estimator_params */
-#define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 129       /* reals in qlf_estimator_diagnostics */
+#define QLF_ESTIMATOR_MEMORY_SIZE 623            /* reals in qlf_estimator_memory */
+#define QLF_ESTIMATOR_PARAMS_SIZE 51             /* reals in qlf_estimator_params */
+#define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 136       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
 
@@ -121,6 +121,7 @@ typedef struct {
     qlf_real gate_range;             /* -: NIS threshold of the range block (E8) */
     qlf_real gate_datalink_v;        /* -: NIS threshold of the datalink_v block (E8) */
     qlf_real gate_datalink_a;        /* -: NIS threshold of the datalink_a block (E8) */
+    qlf_real gate_lockout;           /* -: consecutive gate refusals of a block after which its next one is fused with the covariance inflated to admit it (E8a) */
     qlf_real max_age_vision;         /* s: oldest vision sample fused, before the horizon */
     qlf_real max_age_gnss;           /* s: oldest gnss sample fused, before the horizon */
     qlf_real max_age_range;          /* s: oldest range sample fused, before the horizon */
@@ -154,6 +155,7 @@ typedef struct {
     qlf_real n_discarded[4];         /* -: packets older than the horizon by max_age, per sensor (n_discarded_vision, n_discarded_gnss, n_discarded_range, n_discarded_datalink) */
     qlf_real n_dropped[4];           /* -: packets not queued: FIFO full, not finite, future (n_dropped_vision, n_dropped_gnss, n_dropped_range, n_dropped_datalink) */
     qlf_real n_imu_invalid;          /* -: periods with a non-finite IMU sample */
+    qlf_real streak[7];              /* -: consecutive gate refusals, per block (E8a) */
 } qlf_estimator_memory;
 
 /* What one step reports besides the landing step's measurements. */
@@ -178,6 +180,7 @@ typedef struct {
     qlf_real n_discarded[4];         /* -: packets older than the horizon by max_age, per sensor (n_discarded_vision, n_discarded_gnss, n_discarded_range, n_discarded_datalink) */
     qlf_real n_dropped[4];           /* -: packets not queued: FIFO full, not finite, future (n_dropped_vision, n_dropped_gnss, n_dropped_range, n_dropped_datalink) */
     qlf_real n_imu_invalid;          /* -: periods with a non-finite IMU sample */
+    qlf_real streak[7];              /* -: consecutive gate refusals, per block (E8a) */
     qlf_nav_state x_h;               /* state at the horizon after this step's fusion */
     qlf_real P_diag[21];             /* (m)^2, (m/s)^2, (m/s^2)^2: its variances */
     qlf_real t_h;                    /* s: time of the horizon */

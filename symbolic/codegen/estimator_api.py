@@ -73,6 +73,7 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     "range_deck_sigmas": _NONNEGATIVE,
     **{k: _POSITIVE for k in ("datalink_v_sigma", "datalink_a_sigma")},
     **{f"gate_{b.name}": _POSITIVE for b in BLOCKS},
+    "gate_lockout": _NONNEGATIVE,
     **{f"max_age_{s}": _NONNEGATIVE for s in SENSORS},
     "deck_extrapolation_max": _NONNEGATIVE,
 })

@@ -114,6 +114,7 @@ def _counters() -> tuple[Field, ...]:
         _counter("n_discarded", SENSORS, "packets older than the horizon by max_age, per sensor"),
         _counter("n_dropped", SENSORS, "packets not queued: FIFO full, not finite, future"),
         Field("n_imu_invalid", 1, "-", "periods with a non-finite IMU sample"),
+        _counter("streak", _BLOCK_NAMES, "consecutive gate refusals, per block (E8a)"),
     )
 
 
@@ -269,8 +270,9 @@ def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
     head_pkt = ca.vertcat(1, f["head"])
     x, P = state["x"], state["P"]
     for b in (b for b in BLOCKS if b.sensor == name):
+        streak = m["streak"][_BLOCK_NAMES.index(b.name)]
         x, P, nu, nis, fused, held = block_update(b.name, x, P, head_pkt, n2, p_est, due,
-                                                  state["pattern"])
+                                                  state["pattern"], streak)
         nis_ok = is_finite(nis)
         state["blocks"][b.name] = dict(
             nu=select(ca.logic_and(due, nis_ok), nu, 0),
@@ -335,7 +337,10 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
                     n_held=m["n_held"] + flags["held"],
                     n_discarded=m["n_discarded"] + flags["discarded"],
                     n_dropped=m["n_dropped"] + flags["dropped"],
-                    n_imu_invalid=m["n_imu_invalid"] + flags["imu_invalid"])
+                    n_imu_invalid=m["n_imu_invalid"] + flags["imu_invalid"],
+                    streak=ca.vertcat(*[select(blk[b]["fused"], 0, select(
+                        blk[b]["rejected"], m["streak"][i] + 1, m["streak"][i]))
+                        for i, b in enumerate(_BLOCK_NAMES)]))
     fifos = []
     for s in SENSORS:
         fifos += [sen[s]["fifo"], sen[s]["count"]]

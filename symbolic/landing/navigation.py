@@ -168,6 +168,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     range_sigma=0.05, range_min_cos=0.7, range_deck_radius=0.5, range_deck_sigmas=2.0,
     datalink_v_sigma=[0.1] * 3, datalink_a_sigma=[0.3] * 3,
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
+    gate_lockout=10.0,
     **{f"max_age_{s}": 0.02 for s in SENSORS},
     deck_extrapolation_max=0.5,
 ))
@@ -203,6 +204,8 @@ def estimator_params() -> Layout:
         _vec3("datalink_a_sigma", "m/s^2", "broadcast pad acceleration noise"),
         *[Field(f"gate_{b.name}", 1, "-", f"NIS threshold of the {b.name} block (E8)")
           for b in BLOCKS],
+        Field("gate_lockout", 1, "-", "consecutive gate refusals of a block after which its "
+              "next one is fused with the covariance inflated to admit it (E8a)"),
         *[Field(f"max_age_{s}", 1, "s", f"oldest {s} sample fused, before the horizon")
           for s in SENSORS],
         Field("deck_extrapolation_max", 1, "s", "longest extrapolation of the broadcast (E7)"),
@@ -393,15 +396,24 @@ def _beam_on_deck(x, P, h, pkt, p):
     return hit + p["range_deck_sigmas"] * spread <= p["range_deck_radius"]
 
 
-def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePattern):
+def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePattern,
+                 streak=0):
     """Gate one block, then fuse it by scalar Joseph updates.
 
-    (E8), (E9). Returns ``(x_next, P_next, nu, nis, accept, held)``: the innovation
-    ``z - h(x)`` and ``nu^T S^-1 nu`` with ``S = H P H^T + R`` before the update, 1 if
-    the block was fused (``due``, valid and NIS within its gate), and 1 if it was due
-    but held back as unusable before the gate (a range whose beam grazes the deck (E12)
-    or may miss it (E12a)). A block due, neither fused nor held, was refused by its
-    gate. A block not fused leaves ``x`` and ``P`` unchanged.
+    (E8), (E8a), (E9). Returns ``(x_next, P_next, nu, nis, accept, held)``: the
+    innovation ``z - h(x)`` and ``nu^T S^-1 nu`` with ``S = H P H^T + R`` before the
+    update, 1 if the block was fused (``due``, valid and NIS within its gate, or
+    re-admitted), and 1 if it was due but held back as unusable before the gate (a
+    range whose beam grazes the deck (E12) or may miss it (E12a)). A block due,
+    neither fused nor held, was refused by its gate. A block not fused leaves ``x``
+    and ``P`` unchanged.
+
+    (E8a) ``streak`` counts the block's consecutive gate refusals before this one.
+    From ``gate_lockout`` of them on, a valid block its gate refuses is fused with
+    the covariance inflated by ``NIS / gate`` (the whole of ``P``, so its pattern
+    holds): a filter too sure of a wrong estimate (a GNSS bias beyond its sigmas, a
+    velocity whose variance stopped growing) would otherwise refuse every later
+    measurement of it and never recover.
     """
     block, model = _block(name), measurement_model_function(name)
     p = estimator_params().unpack(p_est)
@@ -409,16 +421,27 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
     if name == "range":
         valid = ca.logic_and(valid, _beam_on_deck(x, P, h, pkt, p))
     home = NAV.slice("p_r").start + 2                  # the range's p_r_z (E9a)
-    rows, r_eff = [], []
-    for i in range(block.dim):
-        row, extra = _project_row(H[i, :].T, P, pattern, home)
-        rows.append(row)
-        r_eff.append(r[i] + extra)
+
+    def projected(P):
+        rows, r_eff = [], []
+        for i in range(block.dim):
+            row, extra = _project_row(H[i, :].T, P, pattern, home)
+            rows.append(row)
+            r_eff.append(r[i] + extra)
+        return rows, r_eff
+
+    rows, r_eff = projected(P)
     Hk = ca.horzcat(*rows).T
     S = Hk @ P @ Hk.T + ca.diag(ca.vertcat(*r_eff))
     nu = z - h
     nis = block_nis(S, nu)
-    accept = ca.logic_and(ca.logic_and(due, valid), nis <= p[f"gate_{name}"])
+    gate = p[f"gate_{name}"]
+    usable = ca.logic_and(due, valid)
+    readmit = ca.logic_and(ca.logic_and(usable, nis > gate), streak >= p["gate_lockout"])
+    accept = ca.logic_and(usable, ca.logic_or(nis <= gate, readmit))
+    inflation = ca.if_else(readmit, ca.fmax(nis / ca.fmax(gate, 1e-300), 1), 1)
+    P = P * inflation
+    rows, r_eff = projected(P)
     for i in range(block.dim):
         h_i = model(x, pkt, n2, p_est)[1][i]                # at the updated state
         x, P = scalar_update(x, P, rows[i], z[i] - h_i, r_eff[i], accept, pattern)
