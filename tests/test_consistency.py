@@ -121,9 +121,6 @@ NOT_MET = {
                 "zero in the world, 95 %",
     "pad": "30 % of the times inside, average 5.13 < 6: q_at = 1e-6 lets the pad's "
            "acceleration drift, the highway car's is exactly zero; with q_at = 1e-9, 100 %",
-    "gnss_rel": "average 3.29 > 3.10: in two hovers (seeds 2121, 2123) the receivers' bias is "
-                "drawn beyond the 99 % gate of the handover's covariance, and every GNSS "
-                "relative position is rejected (NIS 12-14): the filter never learns the bias",
 }
 
 

@@ -251,7 +251,7 @@ def _hand_ranges(c, oracle=None):
     """Fly :data:`HAND_RANGES`, one per step while the horizon stays at the handover (its
     buffer of empty periods filling), so each is due in the step it arrives."""
     t0 = 3.0
-    x0, P0 = np.zeros(18), np.r_[[1e-4] * 3, [0.25] * 15]
+    x0, P0 = np.zeros(NAV.size), np.r_[[1e-4] * 3, [0.25] * (NAV.size - 3)]
     x0[2] = 3.0
     assert c.init(x0, P0, np.zeros(9), t0) == STATUS["QL_OK"]
     for layout in NAV_PACKETS:
@@ -374,7 +374,7 @@ DOCUMENTED = {
     "gnss_v1_sigma": _pos, "gnss_vt_sigma": _pos, "range_sigma": _pos,
     "range_min_cos": lambda v: (v > 0) & (v <= 1), "range_deck_radius": _pos,
     "range_deck_sigmas": _nonneg, "datalink_v_sigma": _pos,
-    "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS},
+    "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS}, "gate_lockout": _nonneg,
     **{f"max_age_{s}": _nonneg for s in SENSORS}, "deck_extrapolation_max": _nonneg,
 }
 

@@ -263,3 +263,48 @@ def test_a_range_whose_beam_misses_the_deck_is_not_fused():
         x_next, P_next, _, _, ok, held = f(x, P, pkt, n2, p, 1.0)
         assert float(ok) == fused and float(held) == 1.0 - fused
         assert np.array_equal(np.array(P_next), P) == (fused == 0.0)
+
+
+@pytest.mark.parametrize("name", ["vision", "gnss_rel", "gnss_v1"])
+def test_a_locked_out_block_is_readmitted_with_its_covariance_inflated(name):
+    """(E8a): a 10.5-sigma packet is refused with fewer than gate_lockout refusals before
+    it; from gate_lockout on it is fused, exactly as the ordinary update fuses it from
+    the covariance inflated by NIS / gate with the gate opened (no gate: the same Joseph
+    updates, from alpha P)."""
+    from quadland_symbolic.landing.navigation import block_update, estimator_params
+
+    rng = np.random.default_rng([43, len(name)])
+    layout, x, P, vals, n2 = block_data(rng, name)
+    block = next(b for b in BLOCKS if b.name == name)
+    pattern = covariance_pattern("full")
+    p = params(vision_k_range=0.0, **ANYWHERE)
+    model = measurement_model_function(name)
+    _, h, H, r, _ = model(x, layout.pack(vals), n2, p)
+    h, H = col(h), np.array(H)
+    u = rng.normal(size=block.dim)
+    z = h + 10.5 * np.linalg.cholesky(H @ P @ H.T + np.diag(col(r))) @ (u / np.linalg.norm(u))
+    vals[block.field] = z if block.dim > 1 else z[0]
+    pkt = layout.pack(vals)
+    xs, Ps, ks = NAV.sym("x"), ca.SX.sym("P", N, N), ca.SX.sym("streak")
+    ps = estimator_params().sym()
+    out = block_update(name, xs, pattern.unpack(pattern.pack(Ps)), pkt, n2, ps, 1.0, pattern,
+                       ks)
+    f = ca.Function("f", [xs, Ps, ps, ks], [out[0], ca.densify(out[1]), out[3], out[4]])
+    gate = estimator_params().unpack(p)[f"gate_{name}"]
+    lockout = estimator_params().unpack(p)["gate_lockout"]
+    assert lockout == 10
+    x9, P9, nis, fused9 = f(x, P, p, lockout - 1)
+    assert float(fused9) == 0 and float(nis) > gate
+    np.testing.assert_array_equal(col(x9), x)
+    x10, P10, nis10, fused10 = f(x, P, p, lockout)
+    assert float(fused10) == 1 and float(nis10) == float(nis)
+    alpha = float(nis) / gate
+    open_gate = params(vision_k_range=0.0, **ANYWHERE, **{f"gate_{name}": 1e300})
+    x_ref, P_ref, _, _, fused_ref, _ = nav_update_function(name)(x, alpha * P, pkt, n2,
+                                                                 open_gate, 1.0)
+    assert float(fused_ref) == 1
+    np.testing.assert_allclose(col(x10), col(x_ref), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(np.array(P10), np.array(P_ref), rtol=1e-10, atol=1e-14)
+    # the innovation shrinks: the fused state explains the packet better
+    _, h10, _, _, _ = model(col(x10), pkt, n2, p)
+    assert np.linalg.norm(z - col(h10)) < np.linalg.norm(z - h)

@@ -458,7 +458,10 @@ def test_scenario_switch_random_off_samples_on_time_with_zero_draws():
         [*init["position2"], off.data["deck"]["height"]])
     np.testing.assert_allclose(x0[NAV.slice("p_r")], truth - off.data["deck"]["pad_offset"],
                                atol=1e-12)
-    assert not np.any(x0[NAV.slice("b")]) and np.all(P0 > 0)
+    # every initial variance positive but the tilt bias' vertical one (none, by its model)
+    tilt_z = NAV.slice("a_tilt").start + 2
+    assert not np.any(x0[NAV.slice("b")]) and np.all(np.delete(P0, tilt_z) > 0)
+    assert P0[tilt_z] == 0
     on = quadland.load_scenario("highway")
     N_on = tick_table(on, n)
     vision = SENSED_TICK.index("vision_sampled"), SENSED_TICK.index("vision_kept")

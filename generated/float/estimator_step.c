@@ -297,7 +297,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a050&&a053);
   a048=(a048||a050);
   a025=(a025&&a048);
-  a048=1.0000000000000000e-300f;
+  a048=1.0000000000000001e-30f;
   a046=casadi_fmax(a046,a048);
   a046=(a033/a046);
   a046=casadi_fmax(a046,a024);

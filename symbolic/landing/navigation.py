@@ -439,7 +439,7 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
     usable = ca.logic_and(due, valid)
     readmit = ca.logic_and(ca.logic_and(usable, nis > gate), streak >= p["gate_lockout"])
     accept = ca.logic_and(usable, ca.logic_or(nis <= gate, readmit))
-    inflation = ca.if_else(readmit, ca.fmax(nis / ca.fmax(gate, 1e-300), 1), 1)
+    inflation = ca.if_else(readmit, ca.fmax(nis / ca.fmax(gate, 1e-30), 1), 1)
     P = P * inflation
     rows, r_eff = projected(P)
     for i in range(block.dim):
