@@ -301,3 +301,25 @@ def test_an_unknown_override_key_is_named_as_an_override():
     with pytest.raises(ScenarioError, match=r"^override quadrotor\.masss: unknown key "
                                             r"'quadrotor\.masss' \(did you mean"):
         load_scenario("paper", ["quadrotor.masss=2"])
+
+
+@pytest.mark.parametrize("override, message", [
+    ("landing.touchdown_speed=0.8", "landing.touchdown_speed: must be <= landing.descent_speed"),
+    ("landing.hover_height=0.1", "landing.hover_height: must be above quadrotor.gear_height"),
+    ("landing.search_height=2.9", "landing.search_height: must be at or above "
+                                  "landing.hover_height (the search for the marker climbs)"),
+    ("landing.marker_timeout=0.039", "landing.marker_timeout: must be at least one camera "
+                                     "period (1 / sensors.vision.rate_hz = 0.04 s), got 0.039: "
+                                     "the descent could never start"),
+    ("estimator.gate_lockout=0", "estimator.gate_lockout: must be a whole number of refusals "
+                                 ">= 1, got 0"),
+    ("estimator.gate_lockout=2.5", "estimator.gate_lockout: must be a whole number of refusals "
+                                   ">= 1, got 2.5"),
+])
+def test_the_landing_cross_key_rules_name_the_key(override, message):
+    """A value each key's own range admits but the others make meaningless: one line."""
+    with pytest.raises(ScenarioError) as err:
+        load_scenario("highway", [override])
+    assert str(err.value) == message
+    load_scenario("highway", ["landing.search_height=3.0", "landing.marker_timeout=0.04",
+                              "estimator.gate_lockout=1"])     # the edges are admitted

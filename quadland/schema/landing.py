@@ -218,6 +218,18 @@ def check_landing(data: dict) -> None:
         raise ScenarioError("landing.touchdown_speed: must be <= landing.descent_speed")
     if guidance["hover_height"] <= data["quadrotor"]["gear_height"]:
         raise ScenarioError("landing.hover_height: must be above quadrotor.gear_height")
+    if guidance["search_height"] < guidance["hover_height"]:
+        raise ScenarioError("landing.search_height: must be at or above landing.hover_height "
+                            "(the search for the marker climbs)")
+    vision_period = 1.0 / data["sensors.vision"]["rate_hz"]
+    if guidance["marker_timeout"] < vision_period:
+        raise ScenarioError(f"landing.marker_timeout: must be at least one camera period "
+                            f"(1 / sensors.vision.rate_hz = {vision_period:g} s), got "
+                            f"{guidance['marker_timeout']:g}: the descent could never start")
+    lockout = data["estimator"]["gate_lockout"]
+    if lockout < 1 or lockout != int(lockout):
+        raise ScenarioError(f"estimator.gate_lockout: must be a whole number of refusals >= 1, "
+                            f"got {lockout:g}")
 
 
 def _check_sensors(data: dict) -> None:
