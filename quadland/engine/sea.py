@@ -26,11 +26,11 @@ sinusoids ``a_i sin(w_i t + phase_i)`` the deck model takes
 5. **The components** (:func:`sea_components`): the frequency axis is cut
    into ``n`` bins of equal share of the three responses' normalized spectra
    (so each motion's energy is resolved where it lies), at each bin's
-   root-mean-square frequency; each bin is one wave
-   component with a seeded random phase, shared by heave, roll and pitch
-   (one wave moves all three), of amplitude ``sqrt(2 * the bin's variance)``
-   per motion. The components' variance ``sum a_i^2 / 2`` is the response
-   spectrum's area over the discretized band.
+   root-mean-square frequency; each bin is one wave component with a seeded
+   random phase, shared by heave, roll and pitch (one wave moves all three), of
+   amplitude ``sqrt(2 * the bin's variance)`` per motion. The components'
+   variance ``sum a_i^2 / 2`` is the response spectrum's area over the
+   discretized band.
 
 Units: SI, angles in rad; the deck frame has x forward, y to port, z up;
 roll ``phi2`` is positive port side up, pitch ``theta2`` positive bow down
@@ -52,9 +52,10 @@ import dataclasses
 import math
 
 import numpy as np
+import scipy.integrate
 
-__all__ = ["Vessel", "DeckComponents", "wave_spectrum",
-           "encounter_frequency", "deck_response", "sea_components", "MOTIONS"]
+__all__ = ["MOTIONS", "Vessel", "DeckComponents", "wave_spectrum", "encounter_frequency",
+           "deck_response", "sea_components"]
 
 #: The deck motions, in the order of every ``(3, n)`` array here.
 MOTIONS = ("heave", "roll", "pitch")
@@ -138,7 +139,7 @@ def wave_spectrum(omega, hs: float, tp: float, gamma: float = 1.0) -> np.ndarray
     Examples
     --------
     >>> w = np.linspace(0.01, 20.0, 200001)
-    >>> round(float(np.trapezoid(wave_spectrum(w, 2.0, 8.0), w)), 4)   # Hs^2 / 16
+    >>> round(float(scipy.integrate.trapezoid(wave_spectrum(w, 2.0, 8.0), w)), 4)   # Hs^2 / 16
     0.25
     """
     omega = np.asarray(omega, dtype=float)
@@ -147,7 +148,7 @@ def wave_spectrum(omega, hs: float, tp: float, gamma: float = 1.0) -> np.ndarray
         scale = 5 / 16 * hs ** 2 * omega_p ** 4
     else:
         w = np.linspace(0.2 * omega_p, 12 * omega_p, 20001)
-        area = float(np.trapezoid(_shape(w, omega_p, gamma), w))
+        area = float(scipy.integrate.trapezoid(_shape(w, omega_p, gamma), w))
         area += 0.2 * omega_p ** -4 * (1.0 - math.exp(-1.25 / 12 ** 4))      # the PM tails
         scale = hs ** 2 / 16 / area
     return scale * _shape(omega, omega_p, gamma)
@@ -202,16 +203,16 @@ def deck_response(omega, vessel: Vessel, g: float) -> np.ndarray:
     >>> v = Vessel(40.0, 8.0, 7.0, 0.1, 0.0, math.pi)
     >>> k = math.pi / 40.0
     >>> H = deck_response(math.sqrt(k * 9.81), v, 9.81)
-    >>> round(abs(H[0, 0]), 6), round(abs(H[2, 0]) * 40 * math.pi ** 2 / 24, 6)
+    >>> round(float(abs(H[0, 0])), 6), round(float(abs(H[2, 0])) * 40 * math.pi ** 2 / 24, 6)
     (0.63662, 1.0)
     """
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     k = omega ** 2 / g
     kx, ky = k * math.cos(vessel.heading), k * math.sin(vessel.heading)
-    s = np.where(encounter_frequency(omega, vessel.speed, vessel.heading, g) < 0, -1.0, 1.0)
+    w_e = encounter_frequency(omega, vessel.speed, vessel.heading, g)
+    s = np.where(w_e < 0, -1.0, 1.0)
     L, B = vessel.length, vessel.beam
-    r = np.abs(encounter_frequency(omega, vessel.speed, vessel.heading, g)) * \
-        vessel.roll_period / (2 * math.pi)
+    r = np.abs(w_e) * vessel.roll_period / (2 * math.pi)
     heave = _mean(kx, L) * _mean(ky, B) + 0j
     pitch = 1j * s * _slope(kx, L) * _mean(ky, B)
     roll = -1j * s * _slope(ky, B) * _mean(kx, L) / (1 - r ** 2 + 2j * vessel.roll_damping * r)
