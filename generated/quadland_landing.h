@@ -25,7 +25,7 @@ extern "C" {
 #define QL_GUIDANCE_PARAMS_SIZE 13               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 22                   /* xp = [x1q (16), xv (6)] */
-#define QL_LANDING_PLANT_NP 57                   /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (31)] */
+#define QL_LANDING_PLANT_NP 273                  /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (247)] */
 #define QL_LANDING_NW 9                          /* w = [v_wind (3), d_F (3), d_M (3)] */
 #define QL_LANDING_NY 42                         /* signals y of a landing */
 #define QL_LANDING_ANCHOR_SIZE 12                /* anchor = [p_e (3), R_rel (9)] */

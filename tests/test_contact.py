@@ -44,7 +44,7 @@ from quadland_symbolic.landing.contact import (
     tip_over_angles,
     tip_over_function,
 )
-from quadland_symbolic.landing.deck import DECK_PARAMS, deck_function
+from quadland_symbolic.landing.deck import DECK_PARAMS, deck_function, pack_deck
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_rhs
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
@@ -116,7 +116,7 @@ def params(F_cmd=(0.0,) * 4, t_signal=np.inf, gear=None, lock=None, deck=None, v
     lk = lock_defaults()
     lk.update(lock or {})
     return np.concatenate([np.asarray(F_cmd, float), [t_signal], QUADROTOR.pack(quad),
-                           ACTUATOR.pack(act), VEHICLE.pack(vehicle), DECK_PARAMS.pack(d),
+                           ACTUATOR.pack(act), VEHICLE.pack(vehicle), pack_deck(d),
                            GEAR.pack(g), LOCK.pack(lk)])
 
 

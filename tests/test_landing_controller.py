@@ -24,7 +24,7 @@ from quadland_symbolic.landing.controller import (
     landing_step_function,
     landing_step_outputs,
 )
-from quadland_symbolic.landing.deck import DECK_PARAMS
+from quadland_symbolic.landing.deck import DECK_PARAMS, pack_deck
 from quadland_symbolic.landing.guidance import POSITION_REFERENCE
 from quadland_symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_function
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
@@ -209,7 +209,7 @@ def test_known_acceleration_is_the_plants_at_zero_thrust(rng):
     """f_p = a_e of the plant's own derivation with the rotors off and no disturbance,
     for a rough deck on a turning vehicle."""
     DEG = np.pi / 180
-    pd = DECK_PARAMS.pack(dict(
+    pd = pack_deck(dict(
         heave_amp=[0.7, 0.2, 0.1], heave_freq=[1.5, 0.7, 2.1], heave_phase=rng.uniform(0, 6, 3),
         roll_amp=[15 * DEG, 3 * DEG, 0], roll_freq=[2.0, 0.9, 1], roll_phase=rng.uniform(0, 6, 3),
         pitch_amp=[10 * DEG, 2 * DEG, 0], pitch_freq=[2.5, 1.1, 1],

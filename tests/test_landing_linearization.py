@@ -30,7 +30,7 @@ from quadland_symbolic.vehicle import VEHICLE_STATE
 
 #: A still deck: the analysis freezes heave, roll and pitch at their mean, zero.
 STILL = [f"deck.{m}_amplitude{'_deg' if m != 'heave' else ''}=[0.0]"
-         for m in ("heave", "roll", "pitch")]
+         for m in ("heave", "roll", "pitch")] + ["deck.sea_state=0"]
 SMALL = ["rbf.nodes=3"]
 
 #: (scenario, overrides, vehicle heading psi2 in rad for the check)

@@ -11,7 +11,7 @@ import pytest
 from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 
-from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_function
+from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, N_SINES, deck_function, pack_deck
 from quadland_symbolic.landing.plant import (
     LANDING_PLANT_OUTPUTS,
     LANDING_PLANT_PARAMS,
@@ -113,12 +113,12 @@ def _deck_params(rng, kind):
                  "car": ((0.0, 0.0, 0.0), (0.35, 0.5, 0.5))}[kind]
     vals = {}
     for name, a, w in zip(("heave", "roll", "pitch"), amp, freq, strict=True):
-        vals[f"{name}_amp"] = a * rng.uniform(0.3, 1.0, N_DECK) / np.sqrt(N_DECK)
-        vals[f"{name}_freq"] = w * rng.uniform(0.5, 1.5, N_DECK)
-        vals[f"{name}_phase"] = rng.uniform(-np.pi, np.pi, N_DECK)
+        vals[f"{name}_amp"] = a * rng.uniform(0.3, 1.0, N_SINES) / np.sqrt(N_SINES)
+        vals[f"{name}_freq"] = w * rng.uniform(0.5, 1.5, N_SINES)
+        vals[f"{name}_phase"] = rng.uniform(-np.pi, np.pi, N_SINES)
     vals["pad_offset"] = rng.normal(size=3) * [2.0, 1.0, 0.3]
     vals["deck_height"] = rng.uniform(0.5, 3.0)
-    return DECK_PARAMS.pack(vals)
+    return pack_deck(vals)
 
 
 def _params(values, rng, kind):
@@ -302,7 +302,7 @@ def _fixed_deck(roll=0.0, pitch=0.0, heave=0.0, pad=(0.0, 0.0, 0.0), height=1.0)
         vals[f"{name}_amp"] = [a, 0, 0]
         vals[f"{name}_freq"] = np.zeros(N_DECK)
         vals[f"{name}_phase"] = np.full(N_DECK, np.pi / 2)
-    return DECK_PARAMS.pack(vals)
+    return pack_deck(vals)
 
 
 def test_gear_gap_level_quadrotor_over_a_tilted_deck(values):

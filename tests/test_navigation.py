@@ -26,7 +26,7 @@ from scipy.linalg import expm
 from scipy.optimize import newton
 from scipy.stats import binom, chi2
 
-from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose
+from quadland_symbolic.landing.deck import deck_pose, pack_deck
 from quadland_symbolic.landing.navigation import (
     BLOCKS,
     ESTIMATOR_DEFAULTS,
@@ -150,7 +150,7 @@ def test_output_is_the_relative_state_of_symbolic_landing_relative(values, seed)
     its symbolic time derivative, on a rolling, pitching, heaving, turning deck."""
     rng = np.random.default_rng([7, seed])
     deg = np.pi / 180
-    p_deck = DECK_PARAMS.pack(dict(
+    p_deck = pack_deck(dict(
         heave_amp=rng.uniform(0, 0.7, 3), heave_freq=rng.uniform(0.2, 1.5, 3),
         heave_phase=rng.uniform(-3, 3, 3), roll_amp=rng.uniform(0, 10 * deg, 3),
         roll_freq=rng.uniform(0.3, 2, 3), roll_phase=rng.uniform(-3, 3, 3),

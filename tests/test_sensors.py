@@ -23,7 +23,7 @@ from quadland.kinds.landing.sensor_settings import (
     sensor_params,
     validate_settings,
 )
-from quadland_symbolic.landing.deck import DECK_PARAMS
+from quadland_symbolic.landing.deck import pack_deck
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
@@ -70,7 +70,8 @@ def R_zyx(eta):
 def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
     """Plant parameters: a 2 kg quadrotor, a car, a rolled deck."""
     zeros = np.zeros(3)
-    deck = {f.name: zeros for f in DECK_PARAMS.fields if f.size == 3}
+    deck = {f"{n}_{w}": zeros for n in ("heave", "roll", "pitch")
+            for w in ("amp", "freq", "phase")}
     deck.update(roll_amp=[roll, 0, 0], roll_phase=[math.pi / 2, 0, 0],
                 pad_offset=pad_offset, deck_height=deck_height)
     return LANDING_PLANT_PARAMS.pack({
@@ -79,7 +80,7 @@ def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
         "p_act": ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=20.0, gear_height=0.2)),
         "p_veh": VEHICLE.pack(dict(m11=1500, m22=1500, m33=2500, d11=150, d22=1500, d33=2500,
                                    tau=[150 * u2_hold, 0, 0], z2=0)),
-        "p_deck": DECK_PARAMS.pack(deck),
+        "p_deck": pack_deck(deck),
     })
 
 

@@ -16,7 +16,7 @@ import scipy.optimize
 
 from quadland.engine.compiled import SIM_EVENT, CompiledLoop, VMLoop
 from quadland.engine.loop import Clock
-from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK
+from quadland_symbolic.landing.deck import N_DECK, pack_deck
 from quadland_symbolic.landing.plant import (
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
@@ -66,7 +66,7 @@ def _free_fall_model() -> LoopModel:
 
 def _params():
     zeros = np.zeros(N_DECK)
-    deck = DECK_PARAMS.pack(dict(
+    deck = pack_deck(dict(
         heave_amp=[A, 0, 0], heave_freq=[W, 0, 0], heave_phase=[PHI, 0, 0],
         roll_amp=zeros, roll_freq=zeros, roll_phase=zeros, pitch_amp=zeros,
         pitch_freq=zeros, pitch_phase=zeros, pad_offset=np.zeros(3), deck_height=H))

@@ -9,7 +9,9 @@ from types import MappingProxyType
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
+from quadland.schema.sea_state import SEA_STATES
 from quadland.schema.sensors import check_ranges, sensor_fields
+from quadland_symbolic.landing.deck import N_SINES
 from quadland_symbolic.landing.land_detector import LAND_DETECTOR_PARAMS
 from quadland_symbolic.landing.navigation import estimator_params
 from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
@@ -24,15 +26,37 @@ _ESTIMATOR_POSITIVE = ("tilt_tau",)
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
-    """The three keys of one prescribed deck motion: up to three sinusoids."""
+    """The three keys of one prescribed deck motion: up to N_SINES sinusoids."""
     amp = f"{name}_amplitude" + ("_deg" if unit == "deg" else "")
     return {
-        amp: Field(float, unit, f"{what} amplitudes a_i of sum a_i sin(w_i t + phase_i)", 3,
-                   min_length=1, lo=0.0, hi=amp_hi),
-        f"{name}_frequency": Field(float, "rad/s", f"{what} frequencies w_i", 3, min_length=1,
-                                   lo=0.0, hi=100.0),
-        f"{name}_phase_deg": Field(float, "deg", f"{what} phases", 3, min_length=1, lo=-3600.0,
-                                   hi=3600.0),
+        amp: Field(float, unit, f"{what} amplitudes a_i of sum a_i sin(w_i t + phase_i)",
+                   N_SINES, min_length=1, lo=0.0, hi=amp_hi),
+        f"{name}_frequency": Field(float, "rad/s", f"{what} frequencies w_i", N_SINES,
+                                   min_length=1, lo=0.0, hi=100.0),
+        f"{name}_phase_deg": Field(float, "deg", f"{what} phases", N_SINES, min_length=1,
+                                   lo=-3600.0, hi=3600.0),
+    }
+
+
+def _sea() -> dict[str, Field]:
+    """The sea state's keys of [deck] (docs/sea.md): the waves and the vessel's response."""
+    return {
+        "sea_state": Field(int, "-", "WMO sea state code: 1 to 6 add that sea's wave components "
+                           "to the sinusoids; 0: the sinusoids alone", lo=0, hi=max(SEA_STATES)),
+        "significant_wave_height": Field(float, "m", "Hs (0: the sea state's most probable); "
+                                         "within the sea state's WMO band", lo=0.0, hi=20.0),
+        "peak_period": Field(float, "s", "Tp, the spectrum's peak period (0: the sea state's most "
+                             "probable)", lo=1.0, hi=30.0, zero_ok=True),
+        "peak_enhancement": Field(float, "-", "JONSWAP's gamma: 1 is Pierson-Moskowitz, 3.3 "
+                                  "JONSWAP's mean", lo=1.0, hi=10.0),
+        "wave_heading_deg": Field(float, "deg", "the waves' direction of travel from the bow "
+                                  "toward port: 180 head seas, 0 following, 90 from starboard",
+                                  lo=-360.0, hi=360.0),
+        "vessel_length": Field(float, "m", "waterline length: the hull averages the waves over it",
+                               hi=1e3, **_POS),
+        "vessel_beam": Field(float, "m", "waterline breadth", hi=1e3, **_POS),
+        "roll_period": Field(float, "s", "natural roll period", hi=100.0, **_POS),
+        "roll_damping": Field(float, "-", "roll damping ratio (linearized)", hi=2.0, **_POS),
     }
 
 
@@ -74,6 +98,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         **_sines("heave", "m", "heave", 100.0),
         **_sines("roll", "deg", "roll", 45.0),
         **_sines("pitch", "deg", "pitch", 45.0),
+        **_sea(),
     },
     "initial": {
         "position1": Field(F, "m", "quadrotor x1, y1 in E", 2, lo=-1e7, hi=1e7),
@@ -205,9 +230,11 @@ def check_landing(data: dict) -> None:
     check_rbf(data)
     deck = data["deck"]
     for name in ("heave", "roll", "pitch"):
-        keys = [k for k in deck if k.startswith(f"{name}_")]
+        keys = [k for k in deck if k.startswith(f"{name}_") and
+                k.endswith(("_amplitude", "_amplitude_deg", "_frequency", "_phase_deg"))]
         if len({len(deck[k]) for k in keys}) != 1:
             raise ScenarioError(f"deck.{keys[1]}: must have as many values as deck.{keys[0]}")
+    _check_sea(deck)
     wind = data["wind"]
     if wind["gust_amplitude"] > 0 and not any(wind["gust_direction"]):
         raise ScenarioError("wind.gust_direction: must not be all zero when "
@@ -230,6 +257,18 @@ def check_landing(data: dict) -> None:
     if lockout < 1 or lockout != int(lockout):
         raise ScenarioError(f"estimator.gate_lockout: must be a whole number of refusals >= 1, "
                             f"got {lockout:g}")
+
+
+def _check_sea(deck: dict) -> None:
+    """A significant wave height given lies in its sea state's WMO band."""
+    hs, code = deck["significant_wave_height"], deck["sea_state"]
+    if code == 0 or hs == 0:
+        return
+    lo, hi = SEA_STATES[code].hs_band
+    if not lo <= hs <= hi:
+        raise ScenarioError(f"deck.significant_wave_height: {hs:g} m is outside sea state "
+                            f"{code}'s band, {lo:g} to {hi:g} m (WMO; 0 takes its most probable "
+                            f"{SEA_STATES[code].hs:g} m)")
 
 
 def _check_sensors(data: dict) -> None:

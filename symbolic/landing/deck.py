@@ -4,7 +4,11 @@ The vehicle's planar motion is the model of eq. (4) (:mod:`quadland_symbolic.veh
 state ``xv``, driven by ``p_veh``'s ``tau``). Its deck moves in heave, roll
 and pitch as prescribed sums of :data:`N_DECK` sinusoids
 ``s(t) = sum_i a_i sin(omega_i t + phase_i)`` (parameters :data:`DECK_PARAMS`);
-a car has zero amplitudes. The deck's yaw is the vehicle's heading psi2.
+a car has zero amplitudes. The first :data:`N_SINES` are a scenario's explicit
+sinusoids, the other :data:`N_SEA` a sea state's wave components (drawn by the
+runtime from a wave spectrum through the vessel's response,
+``quadland.engine.sea``; docs/sea.md). The deck's yaw is the vehicle's heading
+psi2.
 
 Frames: E has z up. The deck frame's origin is the vehicle's reference point
 ``O2 = [x2, y2, deck_height + heave(t)]`` (the centre of roll and pitch) and
@@ -20,6 +24,7 @@ import functools
 from typing import NamedTuple
 
 import casadi as ca
+import numpy as np
 
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.layout import Field, Layout
@@ -27,10 +32,13 @@ from quadland_symbolic.parameters import VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = [
+    "N_SINES",
+    "N_SEA",
     "N_DECK",
     "DECK_PARAMS",
     "DECK_POSE",
     "DeckPose",
+    "pack_deck",
     "deck_motion",
     "time_derivative",
     "vee",
@@ -38,8 +46,13 @@ __all__ = [
     "deck_function",
 ]
 
+#: A scenario's explicit sinusoids per deck motion (``[deck]``'s lists): the first slots.
+N_SINES = 3
+#: A sea state's wave components per deck motion: the slots after the explicit ones
+#: (docs/sea.md, "How many components": the cost against the spectrum's resolution).
+N_SEA = 24
 #: Sinusoids per prescribed deck motion (heave, roll, pitch).
-N_DECK = 3
+N_DECK = N_SINES + N_SEA
 
 
 def _sines(name: str, unit: str, what: str) -> tuple[Field, ...]:
@@ -87,6 +100,22 @@ class DeckPose(NamedTuple):
     a2E: ca.SX
     w2E: ca.SX
     w2E_dot: ca.SX
+
+
+def pack_deck(values: dict):
+    """``DECK_PARAMS.pack(values)`` with each sinusoid list zero-padded to :data:`N_DECK`.
+
+    A list of fewer values fills the first slots (a scenario's explicit
+    sinusoids), e.g. ``heave_amp=[0.5]``.
+    """
+    sines = {f.name for f in DECK_PARAMS.fields if f.size == N_DECK}
+    padded = {}
+    for name, v in values.items():
+        if name in sines:
+            flat = np.atleast_1d(np.asarray(v, dtype=float))
+            v = np.concatenate([flat, np.zeros(N_DECK - flat.size)])
+        padded[name] = v
+    return DECK_PARAMS.pack(padded)
 
 
 def _sum_of_sines(amp, freq, phase, t):

@@ -45,12 +45,14 @@ from quadland.exceptions import ScenarioError, SimulationError
 from quadland.kinds.landing.sensed import sensed_vectors, sensors_enabled, tick_table
 from quadland.kinds.landing.values import (
     LandingValues,
+    deck_params,
     landing_clocks,
     landing_disturbance,
     landing_values,
     rotor_force_max,
 )
 from quadland.scenario import Scenario
+from quadland_symbolic.landing.deck import DECK_PARAMS
 from quadland_symbolic.landing.guidance import TOUCHDOWN
 from quadland_symbolic.landing.loop import (
     LANDING_ENVELOPE,
@@ -99,7 +101,8 @@ def landing_envelope(scenario: Scenario) -> Envelope:
     k = ENVELOPE_FACTOR
     # a vehicle that outruns the quadrotor draws away at most at its own speed
     distance, speed, rate = k * L0 + offset + T * vehicle, k * V0, k * W0
-    height = abs(dk["height"]) + sum(dk["heave_amplitude"]) + k * L0
+    heave = DECK_PARAMS.unpack(deck_params(scenario))["heave_amp"]
+    height = abs(dk["height"]) + float(np.sum(np.abs(heave))) + k * L0
     F_max = rotor_force_max(scenario)
     z2_bound = max(speed, rate) + max(*c["k1p"], *c["k1"]) * max(distance, k * np.pi)
     bounds = np.array([distance, height, speed, rate, 2 * F_max, z2_bound / c["k_w"],

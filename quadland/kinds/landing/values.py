@@ -14,10 +14,11 @@ from quadland.engine.wind import (
     gust_samples,
     turbulence_samples,
 )
+from quadland.kinds.landing.sea import deck_components
 from quadland.scenario import Scenario, require_model
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import landing_controller_params, landing_memory
-from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, deck_pose
+from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, N_SEA, deck_pose
 from quadland_symbolic.landing.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE
 from quadland_symbolic.landing.loop import landing_loop_memory, landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
@@ -25,8 +26,8 @@ from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["LandingValues", "rotor_force_max", "landing_values", "landing_clocks", "wind_samples",
-           "landing_disturbance"]
+__all__ = ["LandingValues", "rotor_force_max", "deck_params", "landing_values", "landing_clocks",
+           "wind_samples", "landing_disturbance"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,10 +57,28 @@ class LandingValues:
     F_max: float
 
 
-def _padded(values, scale: float = 1.0) -> np.ndarray:
-    out = np.zeros(N_DECK)
-    out[:len(values)] = np.multiply(values, scale)
-    return out
+def deck_params(scenario: Scenario) -> np.ndarray:
+    """``[deck]`` as the deck's parameters ``p_deck`` (:data:`DECK_PARAMS`).
+
+    The explicit sinusoids fill the first slots of each motion (zeros after
+    them); at ``sea_state > 0`` the sea's :data:`N_SEA` wave components
+    (:func:`quadland.kinds.landing.sea.deck_components`, seeded) fill the
+    last ones, added to them.
+    """
+    dk, deg = scenario.data["deck"], np.pi / 180
+    sea = deck_components(scenario)
+    deck = {}
+    for row, (name, scale) in enumerate((("heave", 1.0), ("roll", deg), ("pitch", deg))):
+        amp = dk[f"{name}_amplitude" + ("_deg" if name != "heave" else "")]
+        parts = {"amp": np.multiply(amp, scale), "freq": np.asarray(dk[f"{name}_frequency"]),
+                 "phase": np.multiply(dk[f"{name}_phase_deg"], deg)}
+        for part, values in parts.items():
+            out = np.zeros(N_DECK)
+            out[:len(values)] = values
+            if sea is not None:
+                out[N_DECK - N_SEA:] = sea.freq if part == "freq" else getattr(sea, part)[row]
+            deck[f"{name}_{part}"] = out
+    return DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
 
 
 def rotor_force_max(scenario) -> float:
@@ -96,8 +115,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
     """
     require_model(scenario, "landing", "the landing loop")
     d = scenario.data
-    q, v, dk, c, r, g = (d[k] for k in ("quadrotor", "vehicle", "deck", "controller", "rbf",
-                                        "landing"))
+    q, v, c, r, g = (d[k] for k in ("quadrotor", "vehicle", "controller", "rbf", "landing"))
     l, deg = r["nodes"], np.pi / 180
     p_quad = QUADROTOR.pack(dict(
         m1=q["mass"], I=q["inertia"], Kt=q["drag_translational"], Kr=q["drag_rotational"],
@@ -107,13 +125,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
                                gear_height=q["gear_height"]))
     p_veh = VEHICLE.pack(dict(m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"],
                               d22=v["d22"], d33=v["d33"], tau=v["tau"], z2=0.0))
-    deck = {}
-    for name, scale in (("heave", 1.0), ("roll", deg), ("pitch", deg)):
-        amp = dk[f"{name}_amplitude" + ("_deg" if name != "heave" else "")]
-        deck[f"{name}_amp"] = _padded(amp, scale)
-        deck[f"{name}_freq"] = _padded(dk[f"{name}_frequency"])
-        deck[f"{name}_phase"] = _padded(dk[f"{name}_phase_deg"], deg)
-    p_deck = DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
+    p_deck = deck_params(scenario)
     pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
     model = _controller_model(d, p_veh, p_deck)
 
