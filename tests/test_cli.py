@@ -655,7 +655,10 @@ def test_ctrl_c_while_the_command_imports_is_one_line(tmp_path):
     ready = ("import sys\nimport quadland.__main__ as m\nprint('ready', flush=True)\n"
              "sys.exit(m.main(sys.argv[1:]))\n")
     for trial in range(6):
-        p = subprocess.Popen([sys.executable, "-c", ready, "simulate", "--no-plots", "--out",
+        # a run long enough to be under way at every moment drawn (the paper's 10 s flies in
+        # about 0.4 s once the simulator is cached: a Ctrl-C after its end is not this test's)
+        p = subprocess.Popen([sys.executable, "-c", ready, "simulate", "--no-plots", "--set",
+                              "simulation.duration=200", "--out",
                               str(tmp_path / f"b{trial}")], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
         assert p.stdout.readline() == "ready\n"
