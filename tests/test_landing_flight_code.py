@@ -4,6 +4,7 @@ it came from, in the loop, and its contract on explicit cases."""
 from __future__ import annotations
 
 import ctypes
+import io
 import json
 import os
 import re
@@ -394,12 +395,17 @@ def examples(tmp_path_factory):
 
 
 def _land(exe):
-    """The CSV's columns by name and the last line's JSON report."""
-    lines = subprocess.run([str(exe)], check=True, capture_output=True,
-                           text=True).stdout.splitlines()
+    """The CSV's columns by name (stdout, the CSV alone: pandas reads it as numbers) and the
+    JSON report (stderr's last line)."""
+    proc = subprocess.run([str(exe)], check=True, capture_output=True, text=True)
+    lines = proc.stdout.splitlines()
     header = lines[0].split(",")
-    data = np.array([[float(v) for v in line.split(",")] for line in lines[1:-1]])
-    return header, {h: data[:, i] for i, h in enumerate(header)}, json.loads(lines[-1])
+    data = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    pd = pytest.importorskip("pandas")
+    frame = pd.read_csv(io.StringIO(proc.stdout))
+    assert all(str(t).startswith(("float", "int")) for t in frame.dtypes), frame.dtypes
+    return header, {h: data[:, i] for i, h in enumerate(header)}, json.loads(
+        proc.stderr.splitlines()[-1])
 
 
 @pytest.mark.slow

@@ -40,8 +40,9 @@
  * sensors.random=false.
  *
  * The CSV's columns are quadland simulate's trajectory.csv's (the layouts'
- * names). The last line on stdout is the touchdown's figures as one JSON
- * object with the keys of summary.json's "landing". Exit status 0 when the
+ * names); stdout holds the CSV alone. The last line on stderr is the
+ * touchdown's figures as one JSON object with the keys of summary.json's
+ * "landing" (after any warning). Exit status 0 when the
  * flight ran (landed or not), 1 when the flight code returned an error. */
 
 #define QLL_REAL ql_real
@@ -227,47 +228,47 @@ static double unwrap_step(double psi, double prev, double *correction)
     return psi + *correction;
 }
 
-/* The touchdown's figures as one JSON object (summary.json's "landing"). */
+/* The touchdown's figures as one JSON object (summary.json's "landing"), on stderr. */
 static void write_report(int touchdown, double t, const ql_real *figures, int aborts)
 {
     int success = touchdown;
-    printf("{\"touchdown\": %s, \"time\": ", touchdown ? "true" : "false");
+    fprintf(stderr, "{\"touchdown\": %s, \"time\": ", touchdown ? "true" : "false");
     if (touchdown) {
-        printf("%.17g", t);
+        fprintf(stderr, "%.17g", t);
     } else {
-        printf("null");
+        fprintf(stderr, "null");
     }
     if (touchdown) {
-        printf(", \"sink_rate\": %.17g", (double)figures[0]);
+        fprintf(stderr, ", \"sink_rate\": %.17g", (double)figures[0]);
         success = success && (double)figures[0] <= QL_LAND_MAX_SINK_RATE;
     } else {
-        printf(", \"sink_rate\": null");
+        fprintf(stderr, ", \"sink_rate\": null");
     }
     if (touchdown) {
-        printf(", \"offset\": %.17g", (double)figures[1]);
+        fprintf(stderr, ", \"offset\": %.17g", (double)figures[1]);
         success = success && (double)figures[1] <= QL_LAND_MAX_OFFSET;
     } else {
-        printf(", \"offset\": null");
+        fprintf(stderr, ", \"offset\": null");
     }
     if (touchdown) {
-        printf(", \"relative_speed\": %.17g", (double)figures[2]);
+        fprintf(stderr, ", \"relative_speed\": %.17g", (double)figures[2]);
         success = success && (double)figures[2] <= QL_LAND_MAX_RELATIVE_SPEED;
     } else {
-        printf(", \"relative_speed\": null");
+        fprintf(stderr, ", \"relative_speed\": null");
     }
     if (touchdown) {
-        printf(", \"tilt_deg\": %.17g", (double)figures[3]);
+        fprintf(stderr, ", \"tilt_deg\": %.17g", (double)figures[3]);
         success = success && (double)figures[3] <= QL_LAND_MAX_TILT_DEG;
     } else {
-        printf(", \"tilt_deg\": null");
+        fprintf(stderr, ", \"tilt_deg\": null");
     }
-    printf(", \"aborts\": %d, \"success\": %s, \"limits\": {", aborts,
+    fprintf(stderr, ", \"aborts\": %d, \"success\": %s, \"limits\": {", aborts,
            success ? "true" : "false");
-    printf("\"max_sink_rate\": %.17g", QL_LAND_MAX_SINK_RATE);
-    printf(", \"max_offset\": %.17g", QL_LAND_MAX_OFFSET);
-    printf(", \"max_tilt_deg\": %.17g", QL_LAND_MAX_TILT_DEG);
-    printf(", \"max_relative_speed\": %.17g", QL_LAND_MAX_RELATIVE_SPEED);
-    printf("}}\n");
+    fprintf(stderr, "\"max_sink_rate\": %.17g", QL_LAND_MAX_SINK_RATE);
+    fprintf(stderr, ", \"max_offset\": %.17g", QL_LAND_MAX_OFFSET);
+    fprintf(stderr, ", \"max_tilt_deg\": %.17g", QL_LAND_MAX_TILT_DEG);
+    fprintf(stderr, ", \"max_relative_speed\": %.17g", QL_LAND_MAX_RELATIVE_SPEED);
+    fprintf(stderr, "}}\n");
 }
 
 static int failed(double t, const char *what, ql_status status)
