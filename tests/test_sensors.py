@@ -470,3 +470,26 @@ def test_scenario_switch_random_off_samples_on_time_with_zero_draws():
     assert np.any(N_on[:, SENSED_TICK.slice("vision_noise")])
     x0_on, _, _ = handover(on, landing_values(on))
     assert np.any(x0_on[NAV.slice("p_r")] != x0[NAV.slice("p_r")])
+
+
+def test_rtk_receivers_scale_the_gnss_position_errors_to_the_rtk_fix():
+    """sensors.gnss.rtk = true: the same seeded draws, each receiver's Gauss-Markov error
+    scaled per axis from the standard receiver's sigma to the RTK fix's (the process is
+    linear in its sigma); the rest of the GNSS draws unchanged."""
+    from quadland.kinds.landing.sensed import sensor_settings
+    from quadland.kinds.landing.sensor_settings import GNSS_RTK
+    from quadland.scenario import load_scenario
+
+    std, rtk = (sensor_settings(load_scenario("highway", [f"sensors.gnss.rtk={v}"]))
+                for v in ("false", "true"))
+    a, b = (draw_sensors(s, 10.0, 7)["gnss"] for s in (std, rtk))
+    ratio = np.asarray(GNSS_RTK["position_sigma"]) / np.asarray(std["gnss"]["position_sigma"])
+    layout = NOISES["gnss"]
+    for name in ("e_q", "e_t"):
+        np.testing.assert_allclose(b.noise[:, layout.slice(name)],
+                                   a.noise[:, layout.slice(name)] * ratio, rtol=1e-12)
+    for name in ("n_v1", "n_vt"):
+        np.testing.assert_array_equal(b.noise[:, layout.slice(name)],
+                                      a.noise[:, layout.slice(name)])
+    with pytest.raises(ScenarioError, match="sensors.gnss.rtk: expected true or false"):
+        load_scenario("highway", ["sensors.gnss.rtk=1"])

@@ -94,6 +94,8 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
                                 1e9),
         "velocity_sigma": Setting("m/s", "std of each velocity's white noise per axis", 0.0,
                                   100.0),
+        "rtk": Setting("bool", "true: both receivers are RTK (position_sigma gives way to the "
+                       "RTK fix's, docs/sensors.md, RTK)", 0.0, 1.0),
     }),
     "rangefinder": MappingProxyType({
         **_common(1e5), **_OUTLIERS,
@@ -121,7 +123,8 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
 
 def sensor_fields(name: str) -> dict[str, Field]:
     """The schema's fields of ``[sensors.<name>]``, from :data:`SETTINGS`."""
-    return {key: Field(float, s.unit, s.doc, s.length, lo=s.lo, hi=s.hi)
+    return {key: (Field(bool, "-", s.doc) if s.unit == "bool"
+                  else Field(float, s.unit, s.doc, s.length, lo=s.lo, hi=s.hi))
             for key, s in SETTINGS[name].items()}
 
 

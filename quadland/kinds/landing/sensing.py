@@ -53,7 +53,7 @@ import numpy as np
 from quadland.engine.loop import GRID_TOL
 from quadland.engine.noise import gauss_markov, gauss_markov_fill, random_walk, sample_times
 from quadland.exceptions import ScenarioError
-from quadland.kinds.landing.sensor_settings import validate_settings
+from quadland.kinds.landing.sensor_settings import GNSS_RTK, validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
 
@@ -202,7 +202,7 @@ def _noise(name, s, times, seed, stream, attitude, random):
         blocks["o_r" if k == 3 else "o_s"] = _outliers(_rng(seed, stream, _OUTLIER), n, k,
                                                        s["outlier_rate"], s["outlier_sigma"])
     elif name == "gnss":
-        sigma = np.asarray(s["position_sigma"])
+        sigma = np.asarray(GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"])
         for e in ("e_q", "e_t"):
             blocks[e] = gauss_markov(times, sigma, s["position_tau"],
                                      rng.standard_normal((n, 3)))

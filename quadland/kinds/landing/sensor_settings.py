@@ -55,7 +55,7 @@ SENSOR_DEFAULTS: Mapping[str, Mapping] = MappingProxyType({
     "gnss": MappingProxyType({
         "rate_hz": 5.0, "latency": 0.11, "phase": 0.0, "dropout": 0.01,
         "position_sigma": (1.5 / 1.1774, 1.5 / 1.1774, 1.9 * 1.5 / 1.1774),
-        "position_tau": 1100.0, "velocity_sigma": 0.05,
+        "position_tau": 1100.0, "velocity_sigma": 0.05, "rtk": False,
     }),
     # Benewake TFmini-S, PX4's EKF2_RNG_DELAY: docs/sensors.md, "Rangefinder".
     "rangefinder": MappingProxyType({
@@ -100,6 +100,11 @@ def validate_settings(name: str, values: Mapping | None = None) -> dict:
         if key not in schema:
             raise ScenarioError(f"{where}: unknown key; keys are {', '.join(schema)}")
         s = schema[key]
+        if s.unit == "bool":
+            if not isinstance(v, bool):
+                raise ScenarioError(f"{where}: must be true or false, got {v!r}")
+            out[key] = v
+            continue
         items = v if s.length is not None else [v]
         if s.length is not None and (not isinstance(v, list | tuple) or len(v) != s.length):
             raise ScenarioError(f"{where}: must be a list of {s.length} numbers ({s.unit})")
