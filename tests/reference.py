@@ -143,3 +143,45 @@ def sanitizer_missing(cc: str, folder) -> str | None:
         return (f"the sanitizer runtime does not run here: "
                 f"{(res.stderr.strip().splitlines() or ['?'])[0]}")
     return None
+
+
+def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str) -> dict:
+    """A fuzz driver built with the sanitizers against one part's flight C, both
+    precisions, compiled in parallel: ``{"double": path, "float": path}``.
+
+    ``files(precision)`` gives the part's C files by name, ``sources`` the ``.c``
+    files to compile, ``driver`` the driver's C text. Skips the test when the
+    compiler or the sanitizers' runtime is missing here.
+    """
+    import subprocess
+
+    import pytest
+
+    from quadland.engine import build
+
+    cc = build.find_compiler()
+    why = sanitizer_missing(cc, tmp_path_factory.mktemp("sanitizer_probe"))
+    if why:
+        pytest.skip(why)
+    srcs = (*sources, "driver.c")
+    procs, roots = [], {}
+    for precision in ("double", "float"):
+        root = tmp_path_factory.mktemp(f"sanitized_{label}_{precision}")
+        for name, text in files(precision).items():
+            (root / name).write_text(text)
+        (root / "driver.c").write_text(driver)
+        for src in srcs:
+            procs.append(subprocess.Popen(
+                [cc, *build.STRICT_CFLAGS, "-O1", *SANITIZE, "-c", src],
+                cwd=root, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True))
+        roots[precision] = root
+    for p in procs:
+        out, _ = p.communicate(timeout=600)
+        assert p.returncode == 0, out
+    exes = {}
+    for precision, root in roots.items():
+        objs = [f"{src[:-2]}.o" for src in srcs]
+        res = run([cc, *SANITIZE, *objs, "-lm", "-o", "driver"], cwd=root)
+        assert res.returncode == 0, res.stderr
+        exes[precision] = root / "driver"
+    return exes

@@ -31,17 +31,16 @@ from __future__ import annotations
 
 import collections
 import math
-import subprocess
 import sys
 
 import numpy as np
 import pytest
 from estimator_c import Call, files, load, sources
-from reference import C_RANDOM, SANITIZE, extreme, have_compiler, sanitizer_missing
+from reference import C_RANDOM, extreme, have_compiler
 from reference import run as _run
+from reference import sanitized_drivers as build_sanitized
 from test_estimator_flight_code import first_bad
 
-from quadland.engine import build
 from quadland_symbolic.codegen import STATUS_CODES
 from quadland_symbolic.codegen.estimator_api import flight_memory
 from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
@@ -383,32 +382,7 @@ int main(int argc, char **argv)
 @pytest.fixture(scope="module")
 def sanitized_drivers(tmp_path_factory):
     """The driver with the filter's C, both precisions, compiled in parallel."""
-    cc = build.find_compiler()
-    why = sanitizer_missing(cc, tmp_path_factory.mktemp("sanitizer_probe"))
-    if why:
-        pytest.skip(why)
-    srcs = (*sources(), "driver.c")
-    procs, roots = [], {}
-    for precision in ("double", "float"):
-        root = tmp_path_factory.mktemp(f"sanitized_estimator_{precision}")
-        for name, text in files(precision).items():
-            (root / name).write_text(text)
-        (root / "driver.c").write_text(DRIVER)
-        for src in srcs:
-            procs.append(subprocess.Popen(
-                [cc, *build.STRICT_CFLAGS, "-O1", *SANITIZE, "-c", src],
-                cwd=root, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True))
-        roots[precision] = root
-    for p in procs:
-        out, _ = p.communicate(timeout=600)
-        assert p.returncode == 0, out
-    exes = {}
-    for precision, root in roots.items():
-        objs = [f"{src[:-2]}.o" for src in srcs]
-        res = _run([cc, *SANITIZE, *objs, "-lm", "-o", "driver"], cwd=root)
-        assert res.returncode == 0, res.stderr
-        exes[precision] = root / "driver"
-    return exes
+    return build_sanitized(tmp_path_factory, "estimator", files, sources(), DRIVER)
 
 
 @pytest.mark.slow
