@@ -8,9 +8,9 @@ be ..."``) is shown with the flag that sets it (``"--at: must be ..."``).
 Exit status: 0 success; 1 a check failed (``codegen --check`` differences,
 ``margins`` below the requirement); 2 bad input (scenario, override, flag,
 output folder, budget), nothing written; 3 the simulated flight failed (the
-trajectory up to the failure is written, marked failed); 4 a campaign
-stopped before its end (its finished runs are kept; run it again to
-resume); 130 interrupted.
+trajectory up to the failure is written, marked failed); 4 a campaign or
+envelope stopped before its end (its finished runs are kept; run it again
+to resume); 130 interrupted (a campaign's or envelope's runs are kept too).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import warnings
 from pathlib import Path
 
 from quadland import interrupt
-from quadland.exceptions import QuadlandError, SimulationError
+from quadland.exceptions import CampaignStopped, QuadlandError, SimulationError
 
 __all__ = ["main", "build_parser", "UsageError"]
 
@@ -33,7 +33,8 @@ __all__ = ["main", "build_parser", "UsageError"]
 _FLAGS = {"at": "--at", "out": "--out", "gain_margin_db": "--gain-margin-db",
           "phase_margin_deg": "--phase-margin-deg", "animate": "--animate", "runs": "--runs",
           "workers": "--workers", "scheduler": "--scheduler", "scenario": "--scenario",
-          "delay_periods": "--delay-periods"}
+          "delay_periods": "--delay-periods", "axis": "--axis",
+          "runs_per_cell": "--runs-per-cell", "hold": "--hold", "polar": "--polar"}
 
 
 class UsageError(QuadlandError, ValueError):
@@ -76,7 +77,7 @@ def _usage_message(message: str, prog: str) -> str:
 
 
 #: The subcommands, as the messages list them.
-_COMMANDS = "simulate, codegen, margins or campaign"
+_COMMANDS = "simulate, codegen, margins, campaign or envelope"
 
 
 def _integer(text: str) -> int:
@@ -113,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"quadland {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for add in (_simulate_parser, _codegen_parser, _margins_parser, _campaign_parser,
-                _scenarios_parser):
+                _envelope_parser, _scenarios_parser):
         add(sub)
     return parser
 
@@ -210,14 +211,38 @@ def _campaign_parser(sub) -> None:
     _scenario_args(cp)
     cp.add_argument("--runs", type=_integer, metavar="N",
                     help="number of runs (default: the table's campaign.runs)")
-    _out_arg(cp, "campaign folder")
-    cp.add_argument("--workers", type=_integer, metavar="K",
-                    help="local processes (default: one per core; 1: in this process)")
-    cp.add_argument("--scheduler", metavar="ADDRESS",
-                    help="run on the dask.distributed scheduler at ADDRESS (tcp://HOST:PORT) "
-                         "instead of local processes")
-    cp.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    _campaign_args(cp, "campaign folder")
     cp.set_defaults(handler=_run_campaign)
+
+
+def _campaign_args(p, what: str) -> None:
+    _out_arg(p, what)
+    p.add_argument("--workers", type=_integer, metavar="K",
+                   help="local processes (default: one per core; 1: in this process)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on the dask.distributed scheduler at ADDRESS (tcp://HOST:PORT) "
+                        "instead of local processes")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+
+
+def _envelope_parser(sub) -> None:
+    ev = sub.add_parser("envelope", help="map the success probability over two scenario keys",
+                        description="Fly a grid of two keys, each cell a campaign of the "
+                                    "scenario's [campaign] dispersions; write runs.csv, "
+                                    "envelope.json and envelope.png (resumable as a campaign).")
+    _scenario_args(ev)
+    ev.add_argument("--axis", action="append", default=[], metavar="KEY=LO:HI:N",
+                    help="N values of a key (section.key, section.key[i], "
+                         "wind.over_deck_speed or _direction_deg) from LO to HI; twice")
+    ev.add_argument("--runs-per-cell", type=_integer, metavar="K",
+                    help="runs in each cell (default: the table's campaign.runs)")
+    ev.add_argument("--seed", type=_integer, help="the campaign seed (campaign.seed)")
+    ev.add_argument("--hold", action="append", default=[], metavar="KEY",
+                    help="hold a dispersed key at the scenario's value (repeatable)")
+    ev.add_argument("--polar", action="store_true", help="a polar map: the axis in degrees "
+                                                         "as the angle")
+    _campaign_args(ev, "envelope folder")
+    ev.set_defaults(handler=_run_envelope)
 
 
 def _run_simulate(args) -> int:
@@ -296,19 +321,10 @@ def _run_margins(args) -> int:
 
 
 def _run_campaign(args) -> int:
-    from quadland.campaign.execute import CampaignInterrupted, run_campaign
-    from quadland.exceptions import CampaignStopped
+    from quadland.campaign.execute import run_campaign
 
-    try:
-        result = run_campaign(args.scenario, args.overrides, args.runs, args.out, args.workers,
-                              args.scheduler, progress=sys.stderr.isatty(),
-                              plots=not args.no_plots)
-    except CampaignInterrupted as exc:
-        print(f"quadland: interrupted: {exc}", file=sys.stderr)
-        return 130
-    except CampaignStopped as exc:
-        print(f"quadland: error: {_message(exc)}", file=sys.stderr)
-        return 4
+    result = run_campaign(args.scenario, args.overrides, args.runs, args.out, args.workers,
+                          args.scheduler, progress=sys.stderr.isatty(), plots=not args.no_plots)
     summary = result.summary
     rate = ""
     if summary is not None and summary.get("flown"):
@@ -320,6 +336,20 @@ def _run_campaign(args) -> int:
         rate = (f": no run flown, the draws of all {summary['runs']} were invalid (runs.csv "
                 "says why)")
     print(f"quadland: wrote {result.folder}{rate}{_session(result)}")
+    return 0
+
+
+def _run_envelope(args) -> int:
+    from quadland.campaign.grid import run_envelope
+
+    seed = [] if args.seed is None else [f"campaign.seed={args.seed}"]
+    result = run_envelope(args.scenario, args.overrides + seed, args.axis, args.runs_per_cell,
+                          args.out, args.workers, args.scheduler, args.hold, args.polar,
+                          progress=sys.stderr.isatty(), plots=not args.no_plots)
+    env = result.envelope
+    cells = "" if env is None else (f": {len(env['cells'])} cells, {env['successes']} of "
+                                    f"{env['flown']} runs within limits")
+    print(f"quadland: wrote {result.folder}{cells}{_session(result)}")
     return 0
 
 
@@ -441,11 +471,14 @@ def _dispatch(args) -> int:
     except SimulationError as exc:
         print(f"quadland: error: {_message(exc)}", file=sys.stderr)
         return 3
+    except CampaignStopped as exc:              # resumable: its finished runs are kept
+        print(f"quadland: error: {_message(exc)}", file=sys.stderr)
+        return 4
     except QuadlandError as exc:
         print(f"quadland: error: {_message(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("quadland: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:            # a campaign's says what it kept
+        print(f"quadland: interrupted{': ' if str(exc) else ''}{exc}", file=sys.stderr)
         return 130
     except OSError as exc:
         if exc.errno not in (errno.ENAMETOOLONG, errno.ELOOP):

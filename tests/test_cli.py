@@ -471,8 +471,9 @@ def test_a_cvodes_failure_is_one_line(tmp_path):
     (["simulate", "--out"], "--out: expected one argument"),
     (["simulate", "--bogus"], "unrecognized arguments: --bogus (see quadland simulate --help)"),
     (["codegen", "stray"], "unrecognized arguments: stray (see quadland codegen --help)"),
-    ([], "a command is required: simulate, codegen, margins or campaign"),
-    (["fly"], "unknown command 'fly': the commands are simulate, codegen, margins or campaign"),
+    ([], "a command is required: simulate, codegen, margins, campaign or envelope"),
+    (["fly"], "unknown command 'fly': the commands are simulate, codegen, margins, campaign "
+              "or envelope"),
 ])
 def test_a_bad_command_line_is_one_line(tmp_path, capsys, monkeypatch, args, line):
     monkeypatch.chdir(tmp_path)
