@@ -294,6 +294,24 @@ def test_an_interrupted_envelope_resumes_to_the_same_bytes(whole, tmp_path, monk
     assert again.flown == 0 and again.complete
 
 
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore")
+def test_a_dask_cluster_and_two_processes_give_the_same_runs(whole, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    pool = tmp_path / "pool"
+    run_envelope("paper", FAST, AXES, 2, pool, workers=2)
+    assert (pool / "runs.csv").read_bytes() == (whole / "runs.csv").read_bytes()
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None,
+                                  silence_logs=50) as cluster:
+        out = tmp_path / "dask"
+        result = run_envelope("paper", FAST, AXES, 2, out, scheduler=cluster.scheduler_address)
+        assert result.complete and result.flown == 8
+    assert (out / "runs.csv").read_bytes() == (whole / "runs.csv").read_bytes()
+    assert json.loads((out / "envelope.json").read_text())["last_session"]["where"] \
+        .startswith("tcp://127.0.0.1:")
+
+
 def test_a_folder_of_another_envelope_or_a_campaign_is_refused(whole, tmp_path, capsys):
     before = {p.name: p.read_bytes() for p in whole.iterdir()}
     status = main(["envelope", "--scenario", "paper", "--set", FAST[0], "--axis",

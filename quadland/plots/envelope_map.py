@@ -23,6 +23,7 @@ CONTOUR_LEVELS = (0.5, 0.9, 0.99)
 INTERVAL_LW = 2.0
 _NOTE = ("contours: 50 % dotted, 90 % dashed, 99 % solid\nin each cell: its interval as a "
          "bar on the cell's own scale (bottom 0, top 1), a dot at its rate, successes/runs")
+_ARC_STEPS = 16                             # straight pieces of a polar cell's arc
 _LABELLED_CELLS = 144                       # above this many cells, no k/n in each
 
 
@@ -93,8 +94,13 @@ def envelope_map_figure(values: Sequence[np.ndarray], rate: np.ndarray, low: np.
     ax.set_title(f"{title}\n{_NOTE}", fontsize=8)
     rate_g, low_g, high_g, k_g, n_g = grids            # [x index, y index]
     xe, ye = cell_edges(xv), cell_edges(yv)
-    mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(rate_g.T), cmap="RdYlGn", vmin=0.0,
-                         vmax=1.0, shading="flat")
+    fine = _ARC_STEPS if polar else 1           # a polar cell's sides are arcs
+    xf = np.concatenate([np.linspace(a, b, fine, endpoint=False) for a, b in
+                         zip(xe[:-1], xe[1:], strict=True)] + [xe[-1:]])
+    mesh = ax.pcolormesh(xf, ye, np.ma.masked_invalid(np.repeat(rate_g, fine, axis=0).T),
+                         cmap="RdYlGn", vmin=0.0, vmax=1.0, shading="flat")
+    if polar:
+        ax.set_rlabel_position(float(np.degrees(xe[min(3, len(xe) - 2)])))
     fig.colorbar(mesh, ax=ax, label="success probability (cell's rate)", shrink=0.8)
     _contours(ax, xv, yv, rate_g, polar)
     _intervals(ax, xv, yv, xe, ye, rate_g, low_g, high_g, k_g, n_g)
