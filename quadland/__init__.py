@@ -11,7 +11,7 @@ __all__ = ["__version__", "QuadlandError", "ScenarioError", "SimulationError", "
            "load_scenario", "SimulationResult", "simulate", "kind_of", "KINDS", "allmargin",
            "diskmargin", "equilibrium", "frozen_point", "linear_models", "sampled_models",
            "Requirement", "MarginReport", "margin_report", "format_report",
-           "simulation_figures", "margin_figures", "run_campaign", "nlsys"]
+           "simulation_figures", "margin_figures", "run_campaign", "run_envelope", "nlsys"]
 
 _LAZY = {"QuadlandError": "quadland.exceptions", "ScenarioError": "quadland.exceptions",
          "SimulationError": "quadland.exceptions", "Scenario": "quadland.scenario",
@@ -24,7 +24,7 @@ _LAZY = {"QuadlandError": "quadland.exceptions", "ScenarioError": "quadland.exce
          "MarginReport": "quadland.margins", "margin_report": "quadland.margins",
          "format_report": "quadland.margins", "simulation_figures": "quadland.plots",
          "margin_figures": "quadland.plots", "run_campaign": "quadland.campaign.execute",
-         "nlsys": "quadland.nonlinear"}
+         "run_envelope": "quadland.campaign.grid", "nlsys": "quadland.nonlinear"}
 
 
 def _version() -> str:

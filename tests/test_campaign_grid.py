@@ -7,6 +7,10 @@ import csv
 import json
 import math
 import os
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -292,6 +296,41 @@ def test_an_interrupted_envelope_resumes_to_the_same_bytes(whole, tmp_path, monk
     assert mine == theirs
     again = run_envelope("paper", FAST, AXES, 2, out, workers=1)
     assert again.flown == 0 and again.complete
+
+
+def _envelope_process(out, axes, k, duration):
+    return subprocess.Popen(
+        [sys.executable, "-m", "quadland", "envelope", "--axis", axes[0], "--axis", axes[1],
+         "--runs-per-cell", str(k), "--out", str(out), "--workers", "2", "--no-plots",
+         "--set", f"simulation.duration={duration}"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.mark.slow
+def test_ctrl_c_on_two_processes_keeps_the_runs_and_the_resume_is_the_same(tmp_path):
+    axes, k, duration = ["vehicle.tau[0]=15:25:3", "controller.k1[0]=3:4:3"], 20, 3.0
+    whole = tmp_path / "whole"
+    run_envelope("paper", [f"simulation.duration={duration}"], axes, k, whole, workers=1,
+                 plots=False)
+    out = tmp_path / "stopped"
+    proc = _envelope_process(out, axes, k, duration)
+    end = time.monotonic() + 120
+    while not ((out / "runs.csv").exists()
+               and (out / "runs.csv").read_bytes().count(b"\n") - 1 >= 20):
+        assert proc.poll() is None and time.monotonic() < end, proc.communicate()
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("quadland: interrupted: ")
+    recorded = len(_rows(out)) - 1
+    assert 20 <= recorded < 9 * k and not (out / "envelope.json").exists()
+    proc = _envelope_process(out, axes, k, duration)
+    text, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err
+    assert f"flew {9 * k - recorded} runs" in text
+    assert (out / "runs.csv").read_bytes() == (whole / "runs.csv").read_bytes()
 
 
 @pytest.mark.slow

@@ -10,13 +10,16 @@ Clopper-Pearson interval, the order statistics and the separation of failures;
 :mod:`~quadland.campaign.execute` runs a campaign (``quadland campaign``), with
 :mod:`~quadland.campaign.local`, :mod:`~quadland.campaign.cluster`,
 :mod:`~quadland.campaign.resume` and :mod:`~quadland.campaign.summary`.
-See docs/campaign.md.
+:mod:`~quadland.campaign.grid` flies an envelope (``quadland envelope``): a grid
+of two keys (:mod:`~quadland.campaign.axes`), each cell a small campaign,
+counted by :mod:`~quadland.campaign.cells`. See docs/campaign.md and docs/cli.md.
 """
 
 __all__ = ["CampaignSpec", "Dispersion", "campaign_spec", "campaign_spec_of", "RunDraw",
            "draws", "run_seed", "RunOutcome", "fly", "clopper_pearson", "order_statistic",
            "separation",
-           "CampaignResult", "run_campaign", "summarize_campaign"]
+           "CampaignResult", "run_campaign", "summarize_campaign", "EnvelopeResult",
+           "run_envelope", "cell_statistics"]
 
 # The submodules import NumPy, SciPy and the simulator: load them on first use.
 _LAZY = {"CampaignSpec": "spec", "Dispersion": "spec", "campaign_spec": "spec",
@@ -26,7 +29,8 @@ _LAZY = {"CampaignSpec": "spec", "Dispersion": "spec", "campaign_spec": "spec",
          "clopper_pearson": "statistics", "order_statistic": "statistics",
          "separation": "statistics",
          "CampaignResult": "execute", "run_campaign": "execute",
-         "summarize_campaign": "summary"}
+         "summarize_campaign": "summary", "EnvelopeResult": "grid", "run_envelope": "grid",
+         "cell_statistics": "cells"}
 
 
 def __getattr__(name):
