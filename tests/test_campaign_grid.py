@@ -199,12 +199,16 @@ def test_bad_axes_are_one_line_and_write_nothing(tmp_path, capsys, axis, message
     (["--axis", "quadrotor.mass=1:2:2", "--axis", "vehicle.m11=1:2:2", "--polar"],
      "--polar: needs exactly one axis of angles in degrees (a key ending in _deg) as the "
      "map's angle"),
+    (["--scenario", "ship", "--axis", "wind.over_deck_speed=1:2:2", "--axis",
+      "wind.mean[1]=0:1:2"], "--axis: the wind over the deck sets wind.mean[0] and "
+                             "wind.mean[1] itself; choose one or the other"),
     (["--axis", "quadrotor.mass=1:2:2", "--axis", "simulation.duration=0:1:2"],
      "--axis: simulation.duration=0:1:2: simulation.duration = 0 is outside its range "
      "[0.001, 100000] s"),
 ])
 def test_bad_envelopes_are_one_line_and_write_nothing(tmp_path, capsys, args, message):
-    status = main(["envelope", "--scenario", "paper", *args, "--out", str(tmp_path / "e")])
+    status = main(["envelope", *([] if "--scenario" in args else ["--scenario", "paper"]),
+                   *args, "--out", str(tmp_path / "e")])
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and err == [f"quadland: error: {message}"]
     assert os.listdir(tmp_path) == []

@@ -92,8 +92,7 @@ class Envelope:
     def identity(self) -> dict:
         """What must not change for its folder to be resumed (campaign.json's ``envelope``)."""
         return {"format": ENVELOPE_FORMAT, "axes": [a.to_dict() for a in self.axes],
-                "runs_per_cell": self.runs_per_cell, "hold": list(self.hold),
-                "polar": self.polar}
+                "runs_per_cell": self.runs_per_cell, "hold": list(self.hold)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -154,6 +153,10 @@ def plan_envelope(scenario, overrides, axes: Sequence[str], runs_per_cell: int |
             parsed[0].key == parsed[1].key and parsed[0].element == parsed[1].element
             and not (parsed[0].derived and parsed[1].derived)):
         raise CampaignError(f"axis: both axes set {parsed[0].name}")
+    if any(a.derived for a in parsed) and any(
+            a.key == "wind.mean" and a.element in (0, 1) for a in parsed):
+        raise CampaignError("axis: the wind over the deck sets wind.mean[0] and wind.mean[1] "
+                            "itself; choose one or the other")
     k = spec.runs if runs_per_cell is None else runs_per_cell
     if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_RUNS_PER_CELL:
         raise CampaignError(f"runs_per_cell: must be in [1, {MAX_RUNS_PER_CELL}], got {k}")
