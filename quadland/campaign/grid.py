@@ -46,7 +46,7 @@ from quadland.kinds import kind_of
 from quadland.scenario import Scenario, load_scenario
 
 __all__ = ["EnvelopeResult", "Envelope", "plan_envelope", "run_envelope", "envelope_header",
-           "ENVELOPE_FORMAT", "MAX_RUNS_PER_CELL"]
+           "cell_draws", "ENVELOPE_FORMAT", "MAX_RUNS_PER_CELL"]
 
 #: Format of the ``envelope`` entry of an envelope's campaign.json.
 ENVELOPE_FORMAT = 1
