@@ -2,7 +2,7 @@
 
 :mod:`quadland.plots.simulation` draws a simulation (the paper's Figures
 2-5 and the ground track), :mod:`quadland.plots.margins` a margin review
-(Bode, Nyquist, singular values, poles), :mod:`quadland.plots.navigation` the
+(Bode, Nyquist, Nichols, singular values, poles), :mod:`quadland.plots.navigation` the
 navigation filter's estimate and consistency. Every function returns a
 :class:`matplotlib.figure.Figure` made without pyplot: nothing is shown or
 kept behind the caller's back and no backend is chosen, so a figure
@@ -41,14 +41,14 @@ from quadland.plots.simulation import (
 __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "velocity_errors_plot", "control_inputs_plot", "uncertainty_plot",
            "ground_track_plot", "MARGIN_FIGURES", "margin_figures", "bode_plot",
-           "nyquist_plot", "sigma_plot", "pole_plot",
+           "nyquist_plot", "nichols_plot", "sigma_plot", "pole_plot",
            "LANDING_FIGURES", "landing_figures", "landing_limits", "trajectory_3d_plot",
            "relative_position_plot", "landing_ground_track_plot", "rotor_forces_plot",
            "landing_animation", "NAVIGATION_FIGURES", "navigation_plot", "consistency_plot"]
 
 _LAZY = {"MARGIN_FIGURES": "MARGIN_FIGURES", "margin_figures": "margin_figures",
-         "bode_plot": "bode_plot", "nyquist_plot": "nyquist_plot", "sigma_plot": "sigma_plot",
-         "pole_plot": "pole_plot"}
+         "bode_plot": "bode_plot", "nyquist_plot": "nyquist_plot",
+         "nichols_plot": "nichols_plot", "sigma_plot": "sigma_plot", "pole_plot": "pole_plot"}
 
 
 def __getattr__(name):
