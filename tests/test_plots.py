@@ -90,6 +90,8 @@ def test_uncertainty_plot(result, nominal):
         for line, name in zip(a.lines, names, strict=True):
             np.testing.assert_array_equal(_data(line)[1], res[name])
         assert a.lines[-1].get_linestyle() == "--"
+        # the units of u_k, whose channel Delta_k is (Fig. 4's)
+        assert a.get_ylabel() == f"Delta_{k} [{'m/s^2' if k == 1 else 'rad/s^2'}]"
     assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-1] == "W_hat^T Psi"
 
 
@@ -112,3 +114,30 @@ def test_import_chooses_no_backend():
                           timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "svg"
+
+
+@pytest.mark.parametrize("plot", [relative_errors_plot, velocity_errors_plot,
+                                  control_inputs_plot, uncertainty_plot])
+def test_two_runs_overlay_on_one_figure(result, plot):
+    """``ax=``: a second run drawn into the first one's axes adds one line per axis."""
+    other = quadland.simulate(quadland.load_scenario("paper", ["simulation.duration=0.3"]))
+    fig = plot(result)
+    before = [len(a.lines) for a in fig.axes]
+    assert plot(other, ax=fig.axes) is fig
+    assert len(fig.axes) == 4
+    for a, n in zip(fig.axes, before, strict=True):
+        assert len(a.lines) == 2 * n
+        np.testing.assert_array_equal(a.lines[n].get_xdata(), other["t"])
+
+
+def test_two_ground_tracks_overlay(result):
+    fig = ground_track_plot(result)
+    assert ground_track_plot(result, ax=fig.axes[0]) is fig
+    labels = [ln.get_label() for ln in fig.axes[0].lines]
+    assert labels.count("quadrotor") == 1 and labels.count("quadrotor (paper)") == 1
+
+
+def test_ax_of_the_wrong_count_is_refused(result):
+    fig = relative_errors_plot(result)
+    with pytest.raises(ValueError, match="4 axes expected, got 2"):
+        relative_errors_plot(result, ax=fig.axes[:2])
