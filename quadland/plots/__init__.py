@@ -9,9 +9,20 @@ kept behind the caller's back and no backend is chosen, so a figure
 displays in a notebook as it is, and ``quadland.output.figure_png`` turns
 it into the PNG the command line writes.
 
+In IPython (a Jupyter notebook), importing this package lets a Figure made
+without pyplot display inline as a PNG: matplotlib's inline backend registers
+its display formatter only once pyplot is imported, so without it a notebook
+shows ``<Figure size 700x820 with 4 Axes>``. Nothing happens outside IPython,
+and the backend is never changed.
+
 The margin figures import python-control; they are loaded on first use so
 that drawing a simulation does not pay for it.
 """
+
+import io
+import sys
+
+from matplotlib.figure import Figure
 
 from quadland.plots.animation import landing_animation
 from quadland.plots.landing import (
@@ -57,3 +68,22 @@ def __getattr__(name):
 
         return getattr(margins, _LAZY[name])
     raise AttributeError(f"module 'quadland.plots' has no attribute {name!r}")
+
+
+def _figure_png(fig: Figure) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", bbox_inches="tight")
+    return buf.getvalue()
+
+
+def _show_figures_in_ipython() -> None:
+    """Register a PNG display formatter for Figure in a running IPython, unless one is."""
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    formatters = getattr(getattr(shell, "display_formatter", None), "formatters", {})
+    png = formatters.get("image/png")
+    if png is not None and Figure not in png.type_printers:
+        png.for_type(Figure, _figure_png)
+
+
+_show_figures_in_ipython()
