@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from quadland.exceptions import ScenarioError
+from quadland.extends import resolve_extends
 from quadland.schema import (
     CAMPAIGN_KEYS,
     CROSS_CHECKS,
@@ -179,7 +180,7 @@ def load_scenario(name_or_path: str | Path = "paper",
     Parameters
     ----------
     name_or_path : str or Path
-        A shipped scenario's name (``"paper"``) or the path of a TOML file.
+        A shipped scenario's name (``"paper"``) or a TOML file (:mod:`quadland.extends`).
     overrides : iterable of str or mapping, optional
         ``"section.key=value"`` strings (the value is read as TOML, or as a
         bare string when it is not valid TOML), or a mapping
@@ -201,7 +202,7 @@ def load_scenario(name_or_path: str | Path = "paper",
     2.0
     """
     path = _resolve(name_or_path)
-    raw = nest_sections(_parse_toml(_read_text(path), str(path)))
+    raw = resolve_extends(path, _read_raw, _resolve)     # extends = "highway": its bases
     campaign = raw.pop("campaign", None)
     if campaign is not None and not isinstance(campaign, dict):
         raise ScenarioError(f"{path}: [campaign] must be a table")
@@ -233,6 +234,11 @@ def load_scenario(name_or_path: str | Path = "paper",
                      overridden=overridden)
     return Scenario(data["scenario"]["name"], str(path), data,
                     tuple(f"{k}={show(v)}" for k, v in pairs), _plain_copy(campaign))
+
+
+def _read_raw(path: Path) -> dict:
+    """A scenario file's sections as written (``extends`` left in)."""
+    return nest_sections(_parse_toml(_read_text(path), str(path)))
 
 
 def _plain_copy(value):

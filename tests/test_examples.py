@@ -44,3 +44,30 @@ def test_flight_code_for_a_heavier_quadrotor_carries_its_weight(tmp_path):
     forces = _load("flight_code_for_another_quadrotor").main(tmp_path / "tree", mass=3.0)
     np.testing.assert_allclose(forces[:4], 3.0 * 9.8 / 4, rtol=1e-12)
     assert forces[4] == pytest.approx(3.0 * 9.8, rel=1e-12)
+
+
+@pytest.mark.slow
+def test_the_notebook_runs_and_shows_its_results_inline(tmp_path):
+    """The notebook runs top to bottom in a Jupyter kernel: importing quadland leaves the
+    inline backend in place, each figure cell shows a PNG, a result shows in one line."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    import quadland
+
+    nb = nbformat.read(EXAMPLES / "quadland_in_a_notebook.ipynb", as_version=4)
+    nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+    assert not [o for o in outputs if o.output_type == "error"]
+    results = [o.data for o in outputs if o.output_type == "execute_result"]
+    assert results[0]["text/plain"] == "'module://matplotlib_inline.backend_inline'"
+    assert results[1]["text/plain"] == ("<SimulationResult of 'paper': 301 rows over 0..3 s, "
+                                        "57 columns (list(result)), 422 states; .to_pandas()>")
+    figures = [r for r in results if r["text/plain"].startswith("<Figure size")]
+    assert len(figures) == 4 and all(r["image/png"] for r in figures)    # shown inline
+    paper = quadland.load_scenario("paper")
+    assert results[-1]["text/plain"] == repr(("slow_paper", (1.5, 5.0, 10.0, 10.0),
+                                              paper["rbf.nodes"]))
+    printed = "".join(o.text for o in outputs if o.output_type == "stream")
+    assert "sampled-data controller, zero-order hold at 50 Hz" in printed
+    assert list(tmp_path.iterdir()) == []         # the notebook writes nothing where it runs

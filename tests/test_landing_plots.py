@@ -125,14 +125,15 @@ def test_landing_figures(result):
         assert any(t.get_text() == "scenario synthetic" for t in fig.texts)
 
 
-def test_trajectory_3d_draws_both_paths_and_starts(result):
+def test_trajectory_3d_draws_the_approach_from_the_pad_centre(result):
     (a,) = trajectory_3d_plot(result).axes
-    for label, body in (("quadrotor", "1"), ("pad centre", "2")):
-        xyz = _by_label(a, label).get_data_3d()
-        for got, name in zip(xyz, "xyz", strict=True):
-            np.testing.assert_array_equal(got, result[f"{name}{body}"])
-        start = np.ravel(_by_label(a, f"{label.split()[0]} start").get_data_3d())
-        np.testing.assert_array_equal(start, [result[f"{n}{body}"][0] for n in "xyz"])
+    xyz = _by_label(a, "quadrotor").get_data_3d()
+    for got, name in zip(xyz, "xyz", strict=True):
+        np.testing.assert_array_equal(got, result[f"{name}1"] - result[f"{name}2"])
+    start = np.ravel(_by_label(a, "quadrotor start").get_data_3d())
+    np.testing.assert_array_equal(start, [result[f"{n}1"][0] - result[f"{n}2"][0]
+                                          for n in "xyz"])
+    np.testing.assert_array_equal(np.ravel(_by_label(a, "pad centre").get_data_3d()), 0.0)
 
 
 @pytest.mark.parametrize("landing, pad_size, side", [
@@ -146,17 +147,16 @@ def test_pad_square_lies_at_touchdown_in_the_deck_plane(landing, pad_size, side)
     square = np.column_stack(_by_label(a, "pad at touchdown").get_data_3d())
     row = round(TOUCHDOWN * RATE)                 # the first row with phase 3
     assert res["phase"][row] == 3 and res["phase"][row - 1] == 2
-    # by hand: p2 + R_deck [+-s/2, +-s/2, 0]
+    # by hand, from the pad centre: R_deck [+-s/2, +-s/2, 0]
     R = _deck_rotation([res["psi2"][row]], [res["theta2"][row]], [res["phi2"][row]])[0]
-    p2 = np.array([res[n][row] for n in ("x2", "y2", "z2")])
     h = side / 2
-    expected = [p2 + R @ np.array([sx * h, sy * h, 0.0]) for sx in (1, -1) for sy in (1, -1)]
+    expected = [R @ np.array([sx * h, sy * h, 0.0]) for sx in (1, -1) for sy in (1, -1)]
     assert square.shape == (5, 3)
     np.testing.assert_array_equal(square[0], square[-1])          # closed
     for corner in expected:
         assert np.min(np.linalg.norm(square[:4] - corner, axis=1)) < 1e-12
     # the corners are in the deck plane and the sides are a square's
-    np.testing.assert_allclose((square[:4] - p2) @ R[:, 2], 0, atol=1e-12)
+    np.testing.assert_allclose(square[:4] @ R[:, 2], 0, atol=1e-12)
     np.testing.assert_allclose(np.linalg.norm(np.diff(square, axis=0), axis=1), side,
                                rtol=1e-12)
 
@@ -166,8 +166,7 @@ def test_pad_square_without_touchdown_is_at_the_end():
     assert res["phase"].max() < 3
     (a,) = trajectory_3d_plot(res).axes
     square = np.column_stack(_by_label(a, "pad at the end (no touchdown)").get_data_3d())
-    np.testing.assert_allclose(square[:4].mean(axis=0),
-                               [res[n][-1] for n in ("x2", "y2", "z2")], atol=1e-12)
+    np.testing.assert_allclose(square[:4].mean(axis=0), 0.0, atol=1e-12)   # on the pad centre
 
 
 def test_relative_position_plots_the_columns_and_rates(result):
@@ -194,18 +193,41 @@ LIMITS = {"max_offset": 0.3, "max_sink_rate": 0.7, "max_tilt_deg": 8.0,
           "max_relative_speed": 0.4, "F_max": 5.0}
 
 
+def _touchdown_limits(ax, t_end):
+    """y of every touchdown limit segment of an axis, each checked to run from the
+    hand-made landing's touchdown (3 s) to its end."""
+    lines = [ln for ln in ax.lines if ln.get_gid() == "limit"]
+    for ln in lines:
+        assert list(ln.get_xdata()) == [TOUCHDOWN, t_end]
+        assert ln.get_ydata()[0] == ln.get_ydata()[1]
+    return sorted(float(ln.get_ydata()[0]) for ln in lines)
+
+
 @pytest.mark.parametrize("limits", [LIMITS, {"max_offset": 0.25, "max_tilt_deg": 12.0}, None])
 def test_relative_position_limit_lines(limits):
-    """Each limit given is drawn where it is; one not given is not drawn."""
-    pos, height, speed, tilt = relative_position_plot(_landing(), limits).axes
+    """Each limit given is drawn where it applies, from touchdown to the end; one not
+    given is not drawn; none is drawn across the flight."""
+    res = _landing()
+    pos, height, speed, tilt = relative_position_plot(res, limits).axes
+    t_end = res["t"][-1]
     lim = {k: (limits or {}).get(k) for k in LIMIT_NAMES}
     off = lim["max_offset"]
-    assert _limit_values(pos) == ([] if off is None else [-off, off])
-    assert _limit_values(height) == []
+    assert _touchdown_limits(pos, t_end) == ([] if off is None else [-off, off])
+    assert _touchdown_limits(height, t_end) == []
     for name in ("max_relative_speed", "max_sink_rate"):
         lines = [ln for ln in speed.lines if ln.get_label() == name]
         assert [ln.get_ydata()[0] for ln in lines] == ([] if lim[name] is None else [lim[name]])
-    assert _limit_values(tilt) == ([] if lim["max_tilt_deg"] is None else [lim["max_tilt_deg"]])
+        assert all(ln.get_gid() == "limit" for ln in lines)
+    assert _touchdown_limits(tilt, t_end) == ([] if lim["max_tilt_deg"] is None
+                                              else [lim["max_tilt_deg"]])
+    for a in (pos, height, speed, tilt):
+        assert _limit_values(a) == []             # no line across the whole flight
+
+
+def test_no_touchdown_no_touchdown_limits():
+    res = _landing(duration=2.0, touchdown=10.0)
+    for a in relative_position_plot(res, LIMITS).axes:
+        assert [ln for ln in a.lines if ln.get_gid() == "limit"] == []
 
 
 @pytest.mark.parametrize("plot", [relative_position_plot, rotor_forces_plot])
@@ -240,12 +262,50 @@ def test_ground_track_plot(result):
         row = round(TOUCHDOWN * RATE)
         end = _data(_by_label(a, f"{label.split()[0]} at touchdown"))
         assert (end[0][0], end[1][0]) == (result[f"x{body}"][row], result[f"y{body}"][row])
-    assert a.get_aspect() == 1.0
+    assert a.get_aspect() == "auto"               # the approach is not squeezed flat
+    (inset,) = a.child_axes                       # true scale around the pad at touchdown
+    assert inset.get_aspect() == 1.0
+    row = round(TOUCHDOWN * RATE)
+    cx, cy = result["x2"][row], result["y2"][row]
+    assert inset.get_xlim() == (cx - 2 * PAD_SIZE, cx + 2 * PAD_SIZE)
+    assert inset.get_ylim() == (cy - 2 * PAD_SIZE, cy + 2 * PAD_SIZE)
+    square = np.column_stack(_data(_by_label(inset, "pad at touchdown")))
+    np.testing.assert_allclose(square[:4].mean(axis=0), [cx, cy], atol=1e-12)
 
 
 def test_ground_track_without_touchdown_has_no_touchdown_mark():
     (a,) = landing_ground_track_plot(_landing(duration=2.0, touchdown=10.0)).axes
     assert not [ln for ln in a.lines if "touchdown" in ln.get_label()]
+    assert a.child_axes == []
+
+
+def test_trajectory_3d_has_equal_scales(result):
+    """A metre is as long on every axis: each axis's span over its box side is one number."""
+    (a,) = trajectory_3d_plot(result).axes
+    spans = np.array([np.diff(a.get_xlim())[0], np.diff(a.get_ylim())[0],
+                      np.diff(a.get_zlim())[0]])
+    box = np.asarray(a.get_box_aspect())
+    np.testing.assert_allclose(spans / box, (spans / box)[0], rtol=1e-9)
+    for name, lim in zip("xyz", (a.get_xlim(), a.get_ylim(), a.get_zlim()), strict=True):
+        rel = result[f"{name}1"] - result[f"{name}2"]
+        assert lim[0] <= min(rel.min(), 0.0) and max(rel.max(), 0.0) <= lim[1]
+
+
+def test_two_landings_overlay_on_one_figure(result):
+    """``ax=``: a second run drawn into the first one's axes adds its lines there."""
+    other = _landing(duration=3.5, touchdown=2.5)
+    fig = relative_position_plot(result)
+    assert relative_position_plot(other, ax=fig.axes) is fig
+    assert len([ln for ln in fig.axes[1].lines if ln.get_label() == "z_e"]) == 2
+    fig = rotor_forces_plot(result)
+    assert rotor_forces_plot(other, ax=fig.axes) is fig
+    assert len([ln for ln in fig.axes[1].lines if ln.get_label() == "F_total"]) == 2
+    fig = landing_ground_track_plot(result)
+    assert landing_ground_track_plot(other, ax=fig.axes[0]) is fig
+    assert len([ln for ln in fig.axes[0].lines if ln.get_label() == "quadrotor"]) == 2
+    fig = trajectory_3d_plot(result)
+    assert trajectory_3d_plot(other, ax=fig.axes[0]) is fig
+    assert len([ln for ln in fig.axes[0].lines if ln.get_label() == "quadrotor"]) == 2
 
 
 @pytest.mark.parametrize("limits, F_max", [
@@ -298,7 +358,7 @@ def test_animation_writes_a_gif(tmp_path):
         assert im.format == "GIF"
         assert im.n_frames == round(2.0 * fps) + 1
         assert im.info["duration"] == 1000 // fps
-        assert im.size == (512, 416)
+        assert im.size == (800, 650)                # FRAME_SIZE at FRAME_DPI
     again = landing_animation(res, tmp_path / "again.gif", fps=fps)
     assert again.read_bytes() == path.read_bytes()
 

@@ -41,6 +41,10 @@ def test_result_api(default_run):
         assert default_run[name].shape == t.shape
         assert np.all(np.isfinite(default_run[name]))
     assert set(dict(default_run)) == {n for n, _ in COLUMNS}
+    # what a notebook shows: one line, not 57 arrays (1001 rows of 10 s at 100 Hz)
+    assert repr(default_run) == (
+        f"<SimulationResult of 'paper': 1001 rows over 0..10 s, {len(COLUMNS)} columns "
+        f"(list(result)), {default_run.states.shape[1]} states; .to_pandas()>")
 
 
 def test_initial_relative_state(default_run):

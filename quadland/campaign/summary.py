@@ -211,9 +211,13 @@ def campaign_figures(base: Scenario, header, rows, summary) -> dict[str, bytes]:
         corr = summary["most_correlated"]
         name = corr["parameter"]
         rho = corr["spearman_rho"]
-        title = (f"No {'failure' if success[flown].all() else 'success'}: the runs against "
-                 + (f"{name}, the parameter the severity follows most (Spearman rho = "
-                    f"{rho:.2f})" if rho is not None else f"{name} (the severity is constant)"))
+        if success[flown].all():                # nothing failed: no correlation to point at
+            title = f"No failures in {int(flown.sum())} runs: the severity against {name}"
+        else:
+            title = ("No success: the runs against "
+                     + (f"{name}, the parameter the severity follows most (Spearman rho = "
+                        f"{rho:.2f})" if rho is not None
+                        else f"{name} (the severity is constant)"))
     else:
         return files
     files["failures.png"] = figure_png(failures_figure(numbers[name], severity,

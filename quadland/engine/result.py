@@ -52,6 +52,15 @@ class SimulationResult(Mapping):
     def __len__(self) -> int:
         return len(self.columns)
 
+    def __repr__(self) -> str:
+        """One line: the scenario, the rows and their time span, the columns and states
+        (a notebook shows this, not every array)."""
+        t = self.columns.get("t")
+        span = "" if t is None or not len(t) else f" over {float(t[0]):g}..{float(t[-1]):g} s"
+        return (f"<SimulationResult of {getattr(self.scenario, 'name', '?')!r}: "
+                f"{self.states.shape[0]} rows{span}, {len(self.columns)} columns "
+                f"(list(result)), {self.states.shape[1]} states; .to_pandas()>")
+
     def to_csv(self, path=None) -> str:
         """The trajectory as CSV text with a header of plain names; written to ``path`` if given.
 

@@ -87,6 +87,9 @@ def failures_figure(parameter: np.ndarray, severity: np.ndarray, failed: np.ndar
     Returns
     -------
     matplotlib.figure.Figure
+        Without a failure the right panel says "no failures" instead of
+        comparing the parameter's distributions (there is nothing to
+        separate), and the default title claims no correlation.
     """
     x = np.asarray(parameter, dtype=float)
     s = np.asarray(severity, dtype=float)
@@ -97,7 +100,8 @@ def failures_figure(parameter: np.ndarray, severity: np.ndarray, failed: np.ndar
     fig = Figure(figsize=(10.4, 3.8), layout="constrained")
     left, right = fig.subplots(1, 2)
     left.scatter(x[~failed], shown[~failed], s=12, color="0.5", label="success")
-    left.scatter(x[failed], shown[failed], s=22, color="C3", marker="x", label="failure")
+    if failed.any():
+        left.scatter(x[failed], shown[failed], s=22, color="C3", marker="x", label="failure")
     left.axhline(1.0, color="C3", ls="--", lw=1, label="limit")
     if not finite.all():
         left.axhline(top, color="0.3", ls=":", lw=1,
@@ -106,6 +110,14 @@ def failures_figure(parameter: np.ndarray, severity: np.ndarray, failed: np.ndar
     left.set_ylabel("largest metric / limit")
     left.grid(alpha=0.3)
     left.legend(fontsize="small")
+    if not failed.any():                        # no failure: nothing to separate
+        right.text(0.5, 0.5, f"no failures\n({x.size} of {x.size} runs succeeded)",
+                   ha="center", va="center", fontsize="large", transform=right.transAxes)
+        right.set_xticks([])
+        right.set_yticks([])
+        fig.suptitle(title or f"No failures: the runs against {name}")
+        left.set_xlabel(name)
+        return fig
     for group, color, text in ((~failed, "0.4", "successes"), (failed, "C3", "failures")):
         if group.any():
             xs, ps = _ecdf(x[group], int(group.sum()))

@@ -33,7 +33,7 @@ __all__ = ["LANDING_FIGURES", "LIMIT_NAMES", "PAD_SIZE", "LandingResult", "landi
 
 #: File name and title of each figure, in the order of :func:`landing_figures`.
 LANDING_FIGURES = types.MappingProxyType({
-    "landing_3d.png": "Quadrotor and pad centre in E",
+    "landing_3d.png": "Quadrotor relative to the pad centre, equal scales",
     "relative_position.png": "Relative position, speeds and tilt against the touchdown limits",
     "ground_tracks.png": "Ground tracks of the quadrotor and the pad centre",
     "rotor_forces.png": "Rotor forces against their limits",
@@ -155,6 +155,18 @@ def _limit_lines(ax, values, label: str, ls: str = ":") -> None:
         ax.axhline(v, color="k", ls=ls, lw=1, label=label if i == 0 else "_limit")
 
 
+def _touchdown_lines(ax, result: LandingResult, values, label: str, ls: str = ":") -> None:
+    """Segments at ``values`` from the touchdown to the end, where a touchdown limit
+    applies (none without a touchdown; a None limit is not drawn). ``gid`` "limit"."""
+    row = touchdown_row(result)
+    if row is None:
+        return
+    t = np.asarray(result["t"])
+    for i, v in enumerate(x for x in values if x is not None):
+        ax.plot([t[row], t[-1]], [v, v], color="k", ls=ls, lw=1.5, gid="limit",
+                label=label if i == 0 else "_limit")
+
+
 def _finish_time(fig: Figure, result: LandingResult, axes) -> Figure:
     for a in axes:
         a.legend(loc="upper right", fontsize="small")
@@ -163,8 +175,9 @@ def _finish_time(fig: Figure, result: LandingResult, axes) -> Figure:
     return fig
 
 
-def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None) -> Figure:
-    """Both trajectories in 3D, the pad at touchdown and the starts.
+def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None,
+                       ax=None) -> Figure:
+    """The approach in 3D, seen from the pad centre, equal scales.
 
     Parameters
     ----------
@@ -172,40 +185,63 @@ def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None) -> 
     pad_size : float, optional
         m, side of the square pad; by default the scenario's ``pad_size`` (in
         ``[landing]`` or ``[deck]``), else :data:`PAD_SIZE`.
+    ax : matplotlib 3D Axes, optional
+        Where to draw (``projection="3d"``); a new figure if None.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One 3D axis, m: lines ``(x1, y1, z1)`` and ``(x2, y2, z2)``, each
-        start as a marker, and the pad as a closed square (5 vertices) in the
-        deck plane at :func:`touchdown_row` (at the last row, labelled so,
-        when there is no touchdown).
+        One 3D axis, m, along E's axes with the origin on the pad centre (the
+        deck's travel, tens of metres against a few of height, is the ground
+        track's): the quadrotor's ``(x1 - x2, y1 - y2, z1 - z2)`` and its
+        start, the pad centre, and the pad as a closed square (5 vertices) in
+        the deck plane at :func:`touchdown_row` (at the last row, labelled
+        so, when there is no touchdown). Equal scales: a metre is as long on
+        every axis (the box has the proportions of the flight, each side at
+        least a pad).
     """
     size = pad_size_of(result) if pad_size is None else float(pad_size)
-    fig = Figure(figsize=(7, 6))
-    a = fig.add_subplot(projection="3d")
-    a.plot(result["x1"], result["y1"], result["z1"], color="C0", label="quadrotor")
-    a.plot(result["x2"], result["y2"], result["z2"], color="C1", label="pad centre")
-    a.plot([result["x1"][0]], [result["y1"][0]], [result["z1"][0]], "o", color="C0",
-           label="quadrotor start")
-    a.plot([result["x2"][0]], [result["y2"][0]], [result["z2"][0]], "o", color="C1",
-           label="pad start")
+    own = ax is None
+    if own:
+        fig = Figure(figsize=(8, 6.5))
+        ax = fig.add_subplot(projection="3d")
+    fig, a = ax.figure, ax
+    rel = [np.asarray(result[f"{n}1"], dtype=float) - np.asarray(result[f"{n}2"], dtype=float)
+           for n in "xyz"]
+    a.plot(*rel, color="C0", label="quadrotor")
+    a.plot(*[[r[0]] for r in rel], "o", color="C0", label="quadrotor start")
+    a.plot([0.0], [0.0], [0.0], "o", color="C1", label="pad centre")
     row = touchdown_row(result)
     label = "pad at touchdown"
     if row is None:
         row, label = len(result["t"]) - 1, "pad at the end (no touchdown)"
     square = deck_rectangle(result, row, size, size)
-    closed = np.vstack([square, square[:1]])
+    closed = np.vstack([square, square[:1]]) - [result[f"{n}2"][row] for n in "xyz"]
     a.plot(closed[:, 0], closed[:, 1], closed[:, 2], color="C3", label=label)
-    a.set_xlabel("x [m]")
-    a.set_ylabel("y [m]")
-    a.set_zlabel("z [m]")
+    drawn = [np.column_stack(ln.get_data_3d()) for ln in a.lines]    # an overlay's too
+    _equal_scales(a, np.vstack(drawn), size)
+    a.set_xlabel("x - x2 [m]")
+    a.set_ylabel("y - y2 [m]")
+    a.set_zlabel("z - z2 [m]")
     a.set_title(LANDING_FIGURES["landing_3d.png"])
     a.legend(loc="upper left", fontsize="small")
-    return finish(fig, result)
+    return finish(fig, result) if own else fig
 
 
-def relative_position_plot(result: LandingResult, limits: Mapping | None = None) -> Figure:
+def _equal_scales(a, points: np.ndarray, least: float) -> None:
+    """Limits around ``points`` and a box of the same proportions: one metre is as long
+    on every axis (an axis spans at least ``least``, so a flat flight keeps a visible box)."""
+    lo, hi = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+    span = np.maximum(hi - lo, least) * 1.05
+    mid = (lo + hi) / 2
+    a.set_xlim(mid[0] - span[0] / 2, mid[0] + span[0] / 2)
+    a.set_ylim(mid[1] - span[1] / 2, mid[1] + span[1] / 2)
+    a.set_zlim(mid[2] - span[2] / 2, mid[2] + span[2] / 2)
+    a.set_box_aspect(tuple(span), zoom=0.9)
+
+
+def relative_position_plot(result: LandingResult, limits: Mapping | None = None,
+                           ax=None) -> Figure:
     """Relative position, speeds and tilt over time against the limits.
 
     Parameters
@@ -213,6 +249,9 @@ def relative_position_plot(result: LandingResult, limits: Mapping | None = None)
     result : LandingResult
     limits : mapping, optional
         See :func:`landing_limits`.
+    ax : sequence of four matplotlib Axes, optional
+        Where to draw, to overlay runs (no phase shading then); a new figure
+        if None.
 
     Returns
     -------
@@ -229,50 +268,81 @@ def relative_position_plot(result: LandingResult, limits: Mapping | None = None)
         3. the tilt of the thrust axis from the deck normal, deg, with
            ``max_tilt_deg``.
 
-        Limit lines are dotted black, after the data lines.
+        The touchdown limits hold at touchdown: each is a black segment
+        (dotted, the sink rate's dashed; ``gid`` "limit") from
+        :func:`touchdown_row`'s time to the end, after the data lines, and
+        is not drawn without a touchdown (the descent above the deck is not
+        held to them).
     """
     lim = landing_limits(limits)
     t = np.asarray(result["t"])
     x_e, y_e, z_e = (np.asarray(result[n]) for n in ("x_e", "y_e", "z_e"))
-    fig, ax = _time_grid(LANDING_FIGURES["relative_position.png"], 4)
+    own = ax is None
+    fig, ax = _time_grid(LANDING_FIGURES["relative_position.png"], 4) if own else \
+        (ax[0].figure, list(ax))
     ax[0].plot(t, x_e, label="x_e")
     ax[0].plot(t, y_e, label="y_e")
     ax[0].plot(t, np.hypot(x_e, y_e), label="offset")
     offset = lim["max_offset"]
-    _limit_lines(ax[0], () if offset is None else (offset, -offset), "max_offset")
+    _touchdown_lines(ax[0], result, () if offset is None else (offset, -offset), "max_offset")
     ax[0].set_ylabel("position [m]")
     ax[1].plot(t, z_e, label="z_e")
     ax[1].set_ylabel("z_e [m]")
     ax[2].plot(t, np.hypot(result["dx_e"], result["dy_e"]), label="horizontal speed")
     ax[2].plot(t, -np.asarray(result["dz_e"]), label="sink rate")
-    _limit_lines(ax[2], (lim["max_relative_speed"],), "max_relative_speed")
-    _limit_lines(ax[2], (lim["max_sink_rate"],), "max_sink_rate", ls="--")
+    _touchdown_lines(ax[2], result, (lim["max_relative_speed"],), "max_relative_speed")
+    _touchdown_lines(ax[2], result, (lim["max_sink_rate"],), "max_sink_rate", ls="--")
     ax[2].set_ylabel("speed [m/s]")
     ax[3].plot(t, result["tilt_deg"], label="tilt from deck normal")
-    _limit_lines(ax[3], (lim["max_tilt_deg"],), "max_tilt_deg")
+    _touchdown_lines(ax[3], result, (lim["max_tilt_deg"],), "max_tilt_deg")
     ax[3].set_ylabel("tilt [deg]")
+    if not own:
+        return fig
     _shade_phases(fig, ax, result)
     return _finish_time(fig, result, ax)
 
 
-def landing_ground_track_plot(result: LandingResult) -> Figure:
-    """Both tracks from above, the starts and the touchdown.
+def landing_ground_track_plot(result: LandingResult, ax=None) -> Figure:
+    """Both tracks from above, the starts and the touchdown, with a true-scale inset.
 
     Parameters
     ----------
     result : LandingResult
+    ax : matplotlib Axes, optional
+        Where to draw the tracks; a new figure if None.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axis, equal scales, m: ``(x2, y2)``, ``(x1, y1)`` (dashed), the
-        two starts (circles) and, if there is a touchdown, both positions at
-        :func:`touchdown_row` (crosses).
+        One axis, m, its scales free so that the approach shows whatever the
+        deck's travel: ``(x2, y2)``, ``(x1, y1)`` (dashed), the two starts
+        (circles) and, if there is a touchdown, both positions at
+        :func:`touchdown_row` (crosses). With a touchdown (and a new
+        figure), an inset with equal scales, four pads wide, around the pad
+        at touchdown: both tracks and the pad square.
     """
-    fig = Figure(figsize=(6, 6))
-    a = fig.subplots()
+    own = ax is None
+    if own:
+        fig = Figure(figsize=(8, 5))
+        ax = fig.subplots()
+    fig, a = ax.figure, ax
+    _tracks(a, result, markers=True)
+    row = touchdown_row(result)
+    if own and row is not None:
+        _touchdown_inset(a, result, row)
+    a.set_xlabel("x [m]")
+    a.set_ylabel("y [m]")
+    a.set_title(LANDING_FIGURES["ground_tracks.png"])
+    a.legend(loc="best", fontsize="small")
+    a.grid(True)
+    return finish(fig, result) if own else fig
+
+
+def _tracks(a, result: LandingResult, markers: bool) -> None:
     a.plot(result["x2"], result["y2"], color="C1", label="pad centre")
     a.plot(result["x1"], result["y1"], "--", color="C0", label="quadrotor")
+    if not markers:
+        return
     a.plot(result["x2"][0], result["y2"][0], "o", color="C1", label="pad start")
     a.plot(result["x1"][0], result["y1"][0], "o", color="C0", label="quadrotor start")
     row = touchdown_row(result)
@@ -281,16 +351,27 @@ def landing_ground_track_plot(result: LandingResult) -> Figure:
                label="pad at touchdown")
         a.plot(result["x1"][row], result["y1"][row], "+", color="C0", ms=12,
                label="quadrotor at touchdown")
-    a.set_xlabel("x [m]")
-    a.set_ylabel("y [m]")
-    a.set_aspect("equal", adjustable="datalim")
-    a.set_title(LANDING_FIGURES["ground_tracks.png"])
-    a.legend(loc="best", fontsize="small")
-    a.grid(True)
-    return finish(fig, result)
 
 
-def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None) -> Figure:
+def _touchdown_inset(a, result: LandingResult, row: int) -> None:
+    """Equal scales, four pads wide, around the pad centre at touchdown."""
+    size = pad_size_of(result)
+    inset = a.inset_axes((0.4, 0.3, 0.3, 0.55))     # the middle: the tracks run low
+    _tracks(inset, result, markers=False)
+    square = deck_rectangle(result, row, size, size)
+    closed = np.vstack([square, square[:1]])
+    inset.plot(closed[:, 0], closed[:, 1], color="C3", label="pad at touchdown")
+    cx, cy = result["x2"][row], result["y2"][row]
+    inset.set_xlim(cx - 2 * size, cx + 2 * size)
+    inset.set_ylim(cy - 2 * size, cy + 2 * size)
+    inset.set_aspect("equal")
+    inset.set_title("at touchdown, equal scales", fontsize="x-small")
+    inset.tick_params(labelsize="x-small")
+    inset.grid(True, alpha=0.3)
+
+
+def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None,
+                      ax=None) -> Figure:
     """Rotor forces and their sum against ``[0, F_max]``.
 
     Parameters
@@ -298,6 +379,9 @@ def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None) -> F
     result : LandingResult
     limits : mapping, optional
         See :func:`landing_limits`; only ``F_max`` is read.
+    ax : sequence of two matplotlib Axes, optional
+        Where to draw, to overlay runs (no phase shading then); a new figure
+        if None.
 
     Returns
     -------
@@ -308,7 +392,9 @@ def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None) -> F
     """
     F_max = landing_limits(limits)["F_max"]
     t = result["t"]
-    fig, ax = _time_grid(LANDING_FIGURES["rotor_forces.png"], 2)
+    own = ax is None
+    fig, ax = _time_grid(LANDING_FIGURES["rotor_forces.png"], 2) if own else \
+        (ax[0].figure, list(ax))
     for k in range(1, 5):
         ax[0].plot(t, result[f"F_{k}"], label=f"F_{k}")
     ax[1].plot(t, result["F_total"], label="F_total")
@@ -317,6 +403,8 @@ def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None) -> F
                      "0" if F_max is None else f"[0, {'4 ' * (n == 4)}F_max]")
     ax[0].set_ylabel("rotor force [N]")
     ax[1].set_ylabel("F_total [N]")
+    if not own:
+        return fig
     _shade_phases(fig, ax, result)
     return _finish_time(fig, result, ax)
 

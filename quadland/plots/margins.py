@@ -1,202 +1,240 @@
-"""Figures of a margin review: Bode, Nyquist, singular values, poles.
+"""Figures of a margin review: Bode, Nyquist, Nichols, singular values, poles.
 
-Each loop is drawn broken at its input with the other loops closed,
+Each loop is drawn broken at its input with the others closed,
 ``l_i = 1 / [(I + L)^-1]_ii - 1`` (:func:`quadland.analysis.loop_at_a_time`);
-a sampled-data loop is drawn dashed beside the continuous one, up to its
-Nyquist frequency.
+a sampled-data loop (zero-order hold and computation delay) is drawn dashed
+beside the continuous one, up to its Nyquist frequency. Every phase is drawn
+in one convention (:func:`quadland.plots.frequency.phase_deg`): unwrapped,
+and turned by whole turns so that the phase at the gain crossover lies in
+[-360, 0) deg, where the phase margin is read against -180 deg.
+
+Each function takes ``ax=``: axes to draw into (of the shape the figure
+would have), so that two reports overlay on one figure; it then returns
+the axes' figure.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.patches import Circle
 
-from quadland.analysis import FrequencyResponse, frequency_grid, loop_at_a_time, sensitivity_sigma
+from quadland.plots.frequency import (
+    LoopCurves,
+    crossing_phase,
+    exclusion_circle,
+    loop_curves,
+    m_circle,
+)
+from quadland.plots.sensitivity import pole_plot, sigma_plot
 
 if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
     from quadland.margins import MarginReport
 
-__all__ = ["MARGIN_FIGURES", "bode_plot", "nyquist_plot", "sigma_plot", "pole_plot",
-           "margin_figures"]
+__all__ = ["MARGIN_FIGURES", "M_CIRCLES_DB", "bode_plot", "nyquist_plot", "nichols_plot",
+           "sigma_plot", "pole_plot", "margin_figures"]
 
 #: File names of :func:`margin_figures`, in order.
-MARGIN_FIGURES = ("bode.png", "nyquist.png", "sigma.png", "poles.png")
+MARGIN_FIGURES = ("bode.png", "nyquist.png", "nichols.png", "sigma.png", "poles.png")
 
-#: Grid density of the figures, points per decade (the margins use a finer one).
-_POINTS_PER_DECADE = 30
-
-
-@dataclasses.dataclass(frozen=True)
-class _LoopResponse:
-    """Loop-at-a-time responses on the figures' grid, shared by Bode and Nyquist."""
-
-    omega: np.ndarray                   # rad/s
-    loops: np.ndarray                   # (len(omega), m), continuous
-    sampled_omega: np.ndarray | None    # rad/s, below the Nyquist frequency
-    sampled_loops: np.ndarray | None
-
-
-def _loop_response(report: MarginReport) -> _LoopResponse:
-    resp = FrequencyResponse(report.models.loop_input)
-    omega = frequency_grid(resp, points_per_decade=_POINTS_PER_DECADE,
-                           extra_poles=report.poles)
-    loops = loop_at_a_time(resp(omega))
-    wd = ld = None
-    if report.sampled_models is not None:
-        discrete = FrequencyResponse(report.sampled_models.loop_input)
-        wd = omega[omega < math.pi / report.sampled_models.dt]
-        ld = loop_at_a_time(discrete(wd))
-    return _LoopResponse(omega, loops, wd, ld)
+#: dB, the closed-loop gains ``|l / (1 + l)|`` of the Nichols chart's M-circles.
+M_CIRCLES_DB = (6.0, 3.0, 1.0, 0.5, -1.0, -3.0, -6.0, -12.0)
 
 
 def _names(report: MarginReport) -> list[str]:
     return [m.name for m in report.continuous.loops]
 
 
-def _bode(report: MarginReport, r: _LoopResponse) -> Figure:
-    names = _names(report)
-    fig = Figure(figsize=(15, 6.5))
-    ax = fig.subplots(2, len(names), sharex=True, squeeze=False)
-    for i, name in enumerate(names):
-        ax[0, i].semilogx(r.omega, 20 * np.log10(np.abs(r.loops[:, i])), label="continuous")
-        ax[1, i].semilogx(r.omega, np.degrees(np.unwrap(np.angle(r.loops[:, i]))))
-        if r.sampled_loops is not None:
-            ax[0, i].semilogx(r.sampled_omega, 20 * np.log10(np.abs(r.sampled_loops[:, i])),
-                              "--", label="sampled")
-            ax[1, i].semilogx(r.sampled_omega,
-                              np.degrees(np.unwrap(np.angle(r.sampled_loops[:, i]))), "--")
-        ax[0, i].axhline(0, color="k", lw=0.6)
-        ax[0, i].set_title(f"{name} loop (others closed)")
-        ax[1, i].set_xlabel("frequency [rad/s]")
-        ax[0, i].grid(True, which="both", alpha=0.3)
-        ax[1, i].grid(True, which="both", alpha=0.3)
-    ax[0, 0].set_ylabel("|L| [dB]")
-    ax[1, 0].set_ylabel("arg L [deg]")
-    ax[0, 0].legend()
-    fig.tight_layout()
-    return fig
+def _axes(ax, shape: tuple[int, ...], make) -> tuple[Figure, np.ndarray]:
+    """``ax`` as an array of ``shape`` and its figure, or a new figure from ``make()``."""
+    if ax is None:
+        fig, axes = make()
+        return fig, np.asarray(axes).reshape(shape)
+    axes = np.asarray(ax, dtype=object).reshape(shape)
+    return axes.flat[0].figure, axes
 
 
-def _nyquist(report: MarginReport, r: _LoopResponse) -> Figure:
-    names = _names(report)
-    fig = Figure(figsize=(10, 9))
-    ax = fig.subplots(2, 2)
-    t = np.linspace(0, 2 * np.pi, 200)
-    for i, (name, a) in enumerate(zip(names, ax.ravel(), strict=True)):
-        curves = [(r.loops[:, i], "-", "C0")]
-        if r.sampled_loops is not None:
-            curves.append((r.sampled_loops[:, i], "--", "C1"))
-        for vals, style, color in curves:
-            a.plot(vals.real, vals.imag, style, color=color)
-            a.plot(vals.real, -vals.imag, style, color=color, alpha=0.35)
-        a.plot(np.cos(t), np.sin(t), "k:", lw=0.6)
-        a.plot([-1], [0], "r+", ms=12)
-        a.set_xlim(-3, 2)
-        a.set_ylim(-2.5, 2.5)
-        a.set_aspect("equal")
-        a.set_title(f"{name} loop: Nyquist (zoom on -1)")
-        a.grid(True, alpha=0.3)
-    fig.tight_layout()
-    return fig
+def _bode_markers(mag, phase, c: LoopCurves, i: int) -> None:
+    """The phase margin at the gain crossover, the gain margins at the phase crossovers."""
+    m = c.margins[i]
+    if m.crossover_frequency is not None:
+        wc = m.crossover_frequency
+        mag.plot([wc], [0.0], "o", color=c.color, ms=5, gid=f"{c.label}-crossover")
+        phase.plot([wc, wc], [-180.0, crossing_phase(c, i, wc)], "-o", color=c.color, lw=2,
+                   ms=4, markevery=[1], gid=f"{c.label}-phase-margin",
+                   label=f"{c.label}: PM {m.phase_margin_deg:.1f} deg at {wc:.3g} rad/s")
+    for gm, w, side in ((m.gain_margin_up_db, m.gain_margin_up_frequency, "up"),
+                        (m.gain_margin_down_db, m.gain_margin_down_frequency, "down")):
+        if w is None:
+            continue
+        db = float(np.interp(np.log(w), np.log(c.omega), 20 * np.log10(np.abs(c.loops[:, i]))))
+        mag.plot([w, w], [0.0, db], "-s", color=c.color, lw=2, ms=4, markevery=[1],
+                 gid=f"{c.label}-gain-margin-{side}",
+                 label=f"{c.label}: GM {gm:+.1f} dB at {w:.3g} rad/s")
+        phase.plot([w], [crossing_phase(c, i, w)], "s", color=c.color, ms=4,
+                   gid=f"{c.label}-phase-crossover-{side}")
 
 
-def _sigma(report: MarginReport, omega: np.ndarray) -> Figure:
-    sS, sT = sensitivity_sigma(report.models.loop_input, omega)
-    fig = Figure(figsize=(12, 4.5))
-    ax = fig.subplots(1, 2, sharey=True)
-    for a, sv, name in ((ax[0], sS, "S = (I + L)^-1"), (ax[1], sT, "T = I - S")):
-        a.semilogx(omega, 20 * np.log10(sv))
-        a.set_title(f"singular values of {name} at the plant input")
-        a.set_xlabel("frequency [rad/s]")
-        a.grid(True, which="both", alpha=0.3)
-    ax[0].set_ylabel("sigma [dB]")
-    fig.tight_layout()
-    return fig
-
-
-def bode_plot(report: MarginReport) -> Figure:
-    """Bode diagram of each loop with the others closed.
+def bode_plot(report: MarginReport, ax=None) -> Figure:
+    """Bode diagram of each loop with the others closed, with its margins marked.
 
     Parameters
     ----------
     report : MarginReport
+    ax : array of matplotlib Axes, shape (2, loops), optional
+        Where to draw (magnitudes in the first row); a new figure if None.
 
     Returns
     -------
     matplotlib.figure.Figure
         Two rows of one axis per loop: magnitude of ``l_i`` (dB, with the
-        0 dB line) and its unwrapped phase (deg) against frequency (rad/s);
-        the sampled loop dashed.
+        0 dB line) and its phase (deg, :func:`~quadland.plots.frequency.phase_deg`,
+        with the -180 deg line) against frequency (rad/s); the sampled loop
+        dashed. Margins are marked in each curve's colour: the phase margin
+        as a bar from -180 deg up to the phase at the gain crossover (a dot
+        at 0 dB above it), each gain margin as a bar from 0 dB to the
+        magnitude at its phase crossover (a square at the phase there).
+        Each marker's ``gid`` names it (``"sampled-phase-margin"``,
+        ``"continuous-gain-margin-down"``, ...).
     """
-    return _bode(report, _loop_response(report))
+    return _bode(report, loop_curves(report), ax)
 
 
-def nyquist_plot(report: MarginReport) -> Figure:
+def _bode(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
+    names = _names(report)
+    fig, ax = _axes(ax, (2, len(names)), lambda: _new(2, len(names), (15, 7.5), sharex=True))
+    for i, name in enumerate(names):
+        mag, phase = ax[0, i], ax[1, i]
+        for c in curves:
+            mag.semilogx(c.omega, 20 * np.log10(np.abs(c.loops[:, i])), c.style, color=c.color,
+                         label=c.label)
+            phase.semilogx(c.omega, c.phase(i), c.style, color=c.color)
+            _bode_markers(mag, phase, c, i)
+        mag.axhline(0, color="k", lw=0.6)
+        phase.axhline(-180, color="k", lw=0.6)
+        mag.set_title(f"{name} loop (others closed)")
+        phase.set_xlabel("frequency [rad/s]")
+        for a in (mag, phase):
+            a.grid(True, which="both", alpha=0.3)
+            a.legend(fontsize="x-small", loc="best")
+    ax[0, 0].set_ylabel("|l| [dB]")
+    ax[1, 0].set_ylabel("arg l [deg], crossover in [-360, 0)")
+    fig.tight_layout()
+    return fig
+
+
+def _new(rows: int, cols: int, size, **kw):
+    fig = Figure(figsize=size)
+    return fig, fig.subplots(rows, cols, squeeze=False, **kw)
+
+
+def _exclusion(a, c: LoopCurves, i: int) -> None:
+    """The values of ``l_i`` that the loop's disk margin excludes, shaded."""
+    alpha = c.margins[i].disk.disk_margin
+    centre, radius, inside = exclusion_circle(alpha)
+    if not np.isfinite(centre):
+        a.axvspan(-1e3, 0, color=c.color, alpha=0.12, lw=0,
+                  label=f"{c.label}: excluded by its disk margin (alpha {alpha:.3g})")
+        return
+    a.add_patch(Circle((centre, 0.0), radius, fill=inside, facecolor=c.color, alpha=0.15,
+                       edgecolor=c.color, ls=":", gid=f"{c.label}-exclusion",
+                       label=f"{c.label}: excluded by its disk margin (alpha {alpha:.3g})"
+                       + ("" if inside else ", outside the circle")))
+
+
+def nyquist_plot(report: MarginReport, ax=None) -> Figure:
     """Nyquist diagram of each loop with the others closed, zoomed on -1.
 
     Parameters
     ----------
     report : MarginReport
+    ax : array of matplotlib Axes, one per loop, optional
+        Where to draw; a new 2 x 2 figure if None.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axis per loop (2 x 2): ``l_i(j w)`` for ``w > 0`` and its mirror
-        image (faint), the unit circle and the critical point -1; the
-        sampled loop dashed.
+        One axis per loop: ``l_i(j w)`` for ``w > 0`` and its mirror image
+        (faint), the unit circle, the critical point -1 and the region its
+        loop-at-a-time disk margin excludes (shaded, a
+        :class:`matplotlib.patches.Circle` of
+        :func:`~quadland.plots.frequency.exclusion_circle`, the curve
+        touches it at the disk margin's frequency); the sampled loop dashed.
     """
-    return _nyquist(report, _loop_response(report))
+    return _nyquist(report, loop_curves(report), ax)
 
 
-def sigma_plot(report: MarginReport) -> Figure:
-    """Singular values of S and T at the plant input.
-
-    Parameters
-    ----------
-    report : MarginReport
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Two axes: the singular values (dB) of ``S = (I + L)^-1`` and of
-        ``T = I - S`` of the continuous loop against frequency (rad/s), one
-        line per singular value, largest first.
-    """
-    return _sigma(report, _loop_response(report).omega)
-
-
-def pole_plot(report: MarginReport) -> Figure:
-    """Map of the continuous closed loop's poles.
-
-    Parameters
-    ----------
-    report : MarginReport
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        Two axes: every pole, and a zoom on the slow adaptive and
-        translational poles near the origin.
-    """
-    p = report.poles
-    fig = Figure(figsize=(12, 5))
-    ax = fig.subplots(1, 2)
-    for a, zoom in zip(ax, (False, True), strict=True):
-        a.plot(p.real, p.imag, "x")
-        a.axvline(0, color="k", lw=0.6)
-        a.set_xlabel("Re [1/s]")
-        a.set_ylabel("Im [rad/s]")
+def _nyquist(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
+    names = _names(report)
+    fig, ax = _axes(ax, (len(names),), lambda: _new(2, (len(names) + 1) // 2, (11, 10)))
+    t = np.linspace(0, 2 * np.pi, 200)
+    for i, (name, a) in enumerate(zip(names, ax, strict=True)):
+        for c in curves:
+            vals = c.loops[:, i]
+            a.plot(vals.real, vals.imag, c.style, color=c.color, label=f"{c.label}, w > 0")
+            a.plot(vals.real, -vals.imag, c.style, color=c.color, alpha=0.35,
+                   label=f"{c.label}, w < 0")
+            _exclusion(a, c, i)
+        a.plot(np.cos(t), np.sin(t), "k:", lw=0.6, label="unit circle")
+        a.plot([-1], [0], "r+", ms=12, mew=2, label="-1")
+        a.set_xlim(-3, 2)
+        a.set_ylim(-2.5, 2.5)
+        a.set_aspect("equal")
+        a.set_xlabel("Re l")
+        a.set_ylabel("Im l")
+        a.set_title(f"{name} loop (others closed): Nyquist, zoom on -1")
         a.grid(True, alpha=0.3)
-        if zoom:
-            a.set_xlim(-0.5, 0.05)
-            a.set_ylim(-0.3, 0.3)
-            a.set_title("zoom: the slow adaptive and translational poles")
-        else:
-            a.set_title(f"closed-loop poles ({p.size})")
+        a.legend(fontsize="x-small", loc="lower right")
+    fig.tight_layout()
+    return fig
+
+
+def nichols_plot(report: MarginReport, ax=None) -> Figure:
+    """Nichols chart of each loop with the others closed, with M-circles.
+
+    Parameters
+    ----------
+    report : MarginReport
+    ax : array of matplotlib Axes, one per loop, optional
+        Where to draw; a new 2 x 2 figure if None.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One axis per loop: gain (dB) against phase (deg, the figures' one
+        convention) of ``l_i``, the sampled loop dashed; the critical point
+        (-180 deg, 0 dB); the M-circles ``|l / (1 + l)| = M`` of
+        :data:`M_CIRCLES_DB` (:func:`~quadland.plots.frequency.m_circle`,
+        grey, ``gid`` ``"M 3 dB"`` ...); zoomed on [-360, 0] deg and
+        [-30, 40] dB around the critical point.
+    """
+    return _nichols(report, loop_curves(report), ax)
+
+
+def _nichols(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
+    names = _names(report)
+    fig, ax = _axes(ax, (len(names),), lambda: _new(2, (len(names) + 1) // 2, (11, 10)))
+    for i, (name, a) in enumerate(zip(names, ax, strict=True)):
+        for m_db in M_CIRCLES_DB:
+            ph, db = m_circle(m_db)
+            a.plot(ph, db, color="0.6", lw=0.7, gid=f"M {m_db:g} dB")
+            k = int(np.argmax(db)) if m_db > 0 else int(np.argmin(np.abs(ph + 90)))
+            a.annotate(f"{m_db:g} dB", (ph[k], db[k]), fontsize="xx-small", color="0.4",
+                       ha="center", va="bottom")
+        for c in curves:
+            a.plot(c.phase(i), 20 * np.log10(np.abs(c.loops[:, i])), c.style, color=c.color,
+                   label=c.label)
+        a.plot([-180], [0], "r+", ms=12, mew=2, label="critical point")
+        a.set_xlim(-360, 0)
+        a.set_ylim(-30, 40)
+        a.set_xticks(np.arange(-360, 1, 45))
+        a.set_xlabel("arg l [deg]")
+        a.set_ylabel("|l| [dB]")
+        a.set_title(f"{name} loop (others closed): Nichols, M-circles of |l/(1+l)|")
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize="x-small", loc="upper left")
     fig.tight_layout()
     return fig
 
@@ -211,9 +249,11 @@ def margin_figures(report: MarginReport) -> dict[str, Figure]:
     Returns
     -------
     dict of str to matplotlib.figure.Figure
-        Keys are :data:`MARGIN_FIGURES`: Bode, Nyquist, singular values and poles.
-        The frequency responses are evaluated once for all of them.
+        Keys are :data:`MARGIN_FIGURES`: Bode, Nyquist, Nichols, singular
+        values and poles. The frequency responses are evaluated once for all
+        of them.
     """
-    r = _loop_response(report)
-    return dict(zip(MARGIN_FIGURES, (_bode(report, r), _nyquist(report, r), _sigma(report, r.omega),
-                              pole_plot(report)), strict=True))
+    curves = loop_curves(report)
+    figs = (_bode(report, curves, None), _nyquist(report, curves, None),
+            _nichols(report, curves, None), sigma_plot(report), pole_plot(report))
+    return dict(zip(MARGIN_FIGURES, figs, strict=True))

@@ -9,7 +9,7 @@ from quadland.engine.result import SimulationResult
 from quadland.plots.finite import drawable
 from quadland.plots.style import finish
 
-__all__ = ["SIMULATION_FIGURES", "relative_errors_plot", "velocity_errors_plot",
+__all__ = ["SIMULATION_FIGURES", "CHANNEL_UNITS", "relative_errors_plot", "velocity_errors_plot",
            "control_inputs_plot", "uncertainty_plot", "ground_track_plot", "simulation_figures"]
 
 #: File name and title of each figure, in the order of :func:`simulation_figures`.
@@ -22,31 +22,55 @@ SIMULATION_FIGURES = {
 }
 
 
-def _grid(title: str, rows: int = 4):
+#: Units of the channels of u, Delta and its estimate: the altitude channel's and
+#: the three attitude channels' accelerations.
+CHANNEL_UNITS = ("m/s^2", "rad/s^2", "rad/s^2", "rad/s^2")
+
+
+def _grid(title: str, ax=None, rows: int = 4):
+    """A new figure of ``rows`` time axes, or the figure of the axes ``ax`` given."""
+    if ax is not None:
+        axes = list(np.ravel(np.asarray(ax, dtype=object)))
+        if len(axes) != rows:
+            raise ValueError(f"ax: {rows} axes expected, got {len(axes)}")
+        return axes[0].figure, axes
     fig = Figure(figsize=(7, 1.9 * rows + 0.6))
     axes = fig.subplots(rows, 1, sharex=True)
     fig.suptitle(title)
     return fig, axes
 
 
-def _four_panel(result, fig_name, first, first_unit, rest, rest_unit) -> Figure:
+def _done(fig: Figure, result, axes, own: bool) -> Figure:
+    """A new figure finished (:func:`quadland.plots.style.finish`); an overlay as it is."""
+    if own:
+        return finish(fig, result, axes)
+    for a in axes:
+        a.legend(fontsize="small")
+    return fig
+
+
+def _four_panel(result, fig_name, first, first_unit, rest, rest_unit, ax) -> Figure:
     """One linear signal and three angular ones (shown in degrees)."""
-    fig, ax = _grid(SIMULATION_FIGURES[fig_name])
+    fig, axes = _grid(SIMULATION_FIGURES[fig_name], ax)
     t = result["t"]
-    ax[0].plot(t, result[first])
-    ax[0].set_ylabel(f"{first} [{first_unit}]")
-    for a, name in zip(ax[1:], rest, strict=True):
-        a.plot(t, np.rad2deg(result[name]))
+    label = result.scenario.name
+    axes[0].plot(t, result[first], label=label)
+    axes[0].set_ylabel(f"{first} [{first_unit}]")
+    for a, name in zip(axes[1:], rest, strict=True):
+        a.plot(t, np.rad2deg(result[name]), label=label)
         a.set_ylabel(f"{name} [{rest_unit}]")
-    return finish(fig, result, ax)
+    return _done(fig, result, axes, ax is None)
 
 
-def relative_errors_plot(result: SimulationResult) -> Figure:
+def relative_errors_plot(result: SimulationResult, ax=None) -> Figure:
     """Relative altitude and attitude errors against time (the paper's Fig. 2).
 
     Parameters
     ----------
     result : SimulationResult
+    ax : sequence of four matplotlib Axes, optional
+        Where to draw, to overlay runs (each line labelled with its
+        scenario's name); a new figure if None.
 
     Returns
     -------
@@ -54,15 +78,18 @@ def relative_errors_plot(result: SimulationResult) -> Figure:
         Four axes: ``z_e`` (m), then ``phi_e``, ``theta_e``, ``psi_e`` (deg).
     """
     return _four_panel(result, "fig2_relative_altitude_attitude.png", "z_e", "m",
-                       ("phi_e", "theta_e", "psi_e"), "deg")
+                       ("phi_e", "theta_e", "psi_e"), "deg", ax)
 
 
-def velocity_errors_plot(result: SimulationResult) -> Figure:
+def velocity_errors_plot(result: SimulationResult, ax=None) -> Figure:
     """Velocity errors e2 against time (the paper's Fig. 3).
 
     Parameters
     ----------
     result : SimulationResult
+    ax : sequence of four matplotlib Axes, optional
+        Where to draw, to overlay runs (each line labelled with its
+        scenario's name); a new figure if None.
 
     Returns
     -------
@@ -70,64 +97,76 @@ def velocity_errors_plot(result: SimulationResult) -> Figure:
         Four axes: ``dz_e`` (m/s), then ``p_e``, ``q_e``, ``r_e`` (deg/s).
     """
     return _four_panel(result, "fig3_velocity_errors.png", "dz_e", "m/s",
-                       ("p_e", "q_e", "r_e"), "deg/s")
+                       ("p_e", "q_e", "r_e"), "deg/s", ax)
 
 
-def control_inputs_plot(result: SimulationResult) -> Figure:
+def control_inputs_plot(result: SimulationResult, ax=None) -> Figure:
     """Virtual control inputs u_1..u_4 against time (the paper's Fig. 4).
 
     Parameters
     ----------
     result : SimulationResult
+    ax : sequence of four matplotlib Axes, optional
+        Where to draw, to overlay runs (each line labelled with its
+        scenario's name); a new figure if None.
 
     Returns
     -------
     matplotlib.figure.Figure
         Four axes, ``u_1`` (m/s^2) and ``u_2..u_4`` (rad/s^2).
     """
-    fig, ax = _grid(SIMULATION_FIGURES["fig4_control_inputs.png"])
+    fig, axes = _grid(SIMULATION_FIGURES["fig4_control_inputs.png"], ax)
     t = result["t"]
-    units = ("m/s^2", "rad/s^2", "rad/s^2", "rad/s^2")
-    for i, a in enumerate(ax):
-        a.plot(t, result[f"u_{i + 1}"])
-        a.set_ylabel(f"u_{i + 1} [{units[i]}]")
-    return finish(fig, result, ax)
+    for i, a in enumerate(axes):
+        a.plot(t, result[f"u_{i + 1}"], label=result.scenario.name)
+        a.set_ylabel(f"u_{i + 1} [{CHANNEL_UNITS[i]}]")
+    return _done(fig, result, axes, ax is None)
 
 
-def uncertainty_plot(result: SimulationResult) -> Figure:
+def uncertainty_plot(result: SimulationResult, ax=None) -> Figure:
     """Uncertainty and its RBFNN estimate against time (the paper's Fig. 5).
 
     Parameters
     ----------
     result : SimulationResult
+    ax : sequence of four matplotlib Axes, optional
+        Where to draw, to overlay runs (each line labelled with its
+        scenario's name); a new figure if None.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axis per channel k: ``Delta_k`` (``f + d``), with
+        One axis per channel k, in the channel's unit (``m/s^2`` for
+        altitude, ``rad/s^2`` for the attitude channels, those of ``u_k``):
+        ``Delta_k`` (``f + d``), with
         ``controller.nominal_model`` also the network's target
         ``Delta_target_k``, and the estimate ``Delta_hat_k`` (dashed).
     """
-    fig, ax = _grid(SIMULATION_FIGURES["fig5_uncertainty_estimation.png"])
+    own = ax is None
+    fig, axes = _grid(SIMULATION_FIGURES["fig5_uncertainty_estimation.png"], ax)
     t = result["t"]
     nominal = result.scenario.data["controller"]["nominal_model"]
-    for i, a in enumerate(ax):
+    tag = "" if own else f" ({result.scenario.name})"
+    for i, a in enumerate(axes):
         k = i + 1
-        a.plot(t, result[f"Delta_{k}"], label="Delta = f + d")
+        a.plot(t, result[f"Delta_{k}"], label="Delta = f + d" + tag)
         if nominal:
-            a.plot(t, result[f"Delta_target_{k}"], label="Delta - fed-forward part")
-        a.plot(t, result[f"Delta_hat_{k}"], "--", label="W_hat^T Psi")
-        a.set_ylabel(f"channel {k}")
-    ax[0].legend(loc="best", fontsize="small")
-    return finish(fig, result, ax)
+            a.plot(t, result[f"Delta_target_{k}"], label="Delta - fed-forward part" + tag)
+        a.plot(t, result[f"Delta_hat_{k}"], "--", label="W_hat^T Psi" + tag)
+        a.set_ylabel(f"Delta_{k} [{CHANNEL_UNITS[i]}]")
+    axes[0].legend(loc="best", fontsize="small")
+    return finish(fig, result, axes) if own else fig
 
 
-def ground_track_plot(result: SimulationResult) -> Figure:
+def ground_track_plot(result: SimulationResult, ax=None) -> Figure:
     """Planar tracks of the vehicle and the quadrotor.
 
     Parameters
     ----------
     result : SimulationResult
+    ax : matplotlib Axes, optional
+        Where to draw, to overlay runs (each line labelled with its
+        scenario's name); a new figure if None.
 
     Returns
     -------
@@ -135,10 +174,14 @@ def ground_track_plot(result: SimulationResult) -> Figure:
         One axis, equal scales: ``(x2, y2)``, ``(x1, y1)`` (dashed) and the
         vehicle's start, m.
     """
-    fig = Figure(figsize=(6, 6))
-    a = fig.subplots()
-    a.plot(result["x2"], result["y2"], label="vehicle")
-    a.plot(result["x1"], result["y1"], "--", label="quadrotor")
+    own = ax is None
+    if own:
+        fig = Figure(figsize=(6, 6))
+        ax = fig.subplots()
+    fig, a = ax.figure, ax
+    tag = "" if own else f" ({result.scenario.name})"
+    a.plot(result["x2"], result["y2"], label="vehicle" + tag)
+    a.plot(result["x1"], result["y1"], "--", label="quadrotor" + tag)
     a.plot(result["x2"][0], result["y2"][0], "ko", label="start")
     a.set_xlabel("x [m]")
     a.set_ylabel("y [m]")
@@ -146,7 +189,7 @@ def ground_track_plot(result: SimulationResult) -> Figure:
     a.set_title(SIMULATION_FIGURES["ground_track.png"])
     a.legend(loc="best")
     a.grid(True)
-    return finish(fig, result)
+    return finish(fig, result) if own else fig
 
 
 def simulation_figures(result: SimulationResult) -> dict[str, Figure]:

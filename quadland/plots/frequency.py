@@ -1,0 +1,170 @@
+"""What the margin figures share: the loops' responses, one phase convention, the regions.
+
+A margin figure draws each loop broken at its input with the others closed,
+``l_i = 1 / [(I + L)^-1]_ii - 1`` (:func:`quadland.analysis.loop_at_a_time`),
+of the continuous loop and, when the report has one, of the sampled-data loop
+(zero-order hold and computation delay) up to its Nyquist frequency.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from quadland.analysis import FrequencyResponse, frequency_grid, loop_at_a_time
+
+if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
+    from quadland.margins import MarginReport
+
+__all__ = ["POINTS_PER_DECADE", "LoopCurves", "loop_curves", "phase_deg", "crossing_phase",
+           "exclusion_circle", "m_circle"]
+
+#: Grid density of the figures, points per decade (the margins use a finer one).
+POINTS_PER_DECADE = 30
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopCurves:
+    """One controller's loop-at-a-time responses and margins, ready to draw.
+
+    Attributes
+    ----------
+    label : str
+        ``"continuous"`` or ``"sampled"``.
+    omega : ndarray
+        rad/s (a sampled loop's stop below its Nyquist frequency).
+    loops : ndarray, shape (len(omega), m)
+        ``l_i(j omega)``.
+    margins : tuple of LoopMargins
+        The report's margins of each loop, in the same order.
+    style : str
+        Line style: ``"-"`` continuous, ``"--"`` sampled.
+    color : str
+    """
+
+    label: str
+    omega: np.ndarray
+    loops: np.ndarray
+    margins: tuple
+    style: str
+    color: str
+
+    def phase(self, i: int) -> np.ndarray:
+        """deg, loop ``i``'s phase in the figures' convention (:func:`phase_deg`)."""
+        return phase_deg(self.loops[:, i], self.omega, self.margins[i].crossover_frequency)
+
+
+def loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
+    """The continuous loop's curves, then the sampled loop's if the report has one.
+
+    Evaluated on one BLAS thread: on matrices of a few hundred rows more
+    threads cost more than they bring (``quadland margins`` does the same).
+    """
+    with threadpool_limits(1):
+        return _loop_curves(report)
+
+
+def _loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
+    resp = FrequencyResponse(report.models.loop_input)
+    omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
+    out = [LoopCurves("continuous", omega, loop_at_a_time(resp(omega)),
+                      report.continuous.loops, "-", "C0")]
+    if report.sampled_models is not None and report.sampled is not None:
+        wd = omega[omega < math.pi / report.sampled_models.dt]
+        discrete = FrequencyResponse(report.sampled_models.loop_input)
+        out.append(LoopCurves("sampled", wd, loop_at_a_time(discrete(wd)),
+                              report.sampled.loops, "--", "C1"))
+    return tuple(out)
+
+
+def phase_deg(values: np.ndarray, omega: np.ndarray, crossover: float | None) -> np.ndarray:
+    """Unwrapped phase, deg, turned by whole turns so the crossover's lies in [-360, 0).
+
+    Parameters
+    ----------
+    values : ndarray of complex
+        A loop's response on the grid ``omega``.
+    omega : ndarray
+        rad/s, increasing.
+    crossover : float or None
+        rad/s, the gain crossover of the loop's phase margin; None (no
+        crossing) refers to the grid's first frequency instead.
+
+    Returns
+    -------
+    ndarray
+        deg. At the crossover the phase is ``-180 + PM``, so every loop's
+        margin is read against the same -180 deg line, whatever the
+        number of integrators or right-half-plane poles of the loop.
+    """
+    raw = np.degrees(np.unwrap(np.angle(values)))
+    if crossover is None or not math.isfinite(crossover):
+        ref = raw[0]
+    else:
+        ref = np.interp(math.log(crossover), np.log(omega), raw)
+    return raw - 360.0 * math.floor((ref + 360.0) / 360.0)
+
+
+def crossing_phase(curves: LoopCurves, i: int, frequency: float) -> float:
+    """deg, loop ``i``'s drawn phase at ``frequency`` (interpolated in log frequency)."""
+    return float(np.interp(math.log(frequency), np.log(curves.omega), curves.phase(i)))
+
+
+def exclusion_circle(alpha: float) -> tuple[float, float, bool]:
+    """The values of ``l`` that a balanced disk margin ``alpha`` excludes.
+
+    Parameters
+    ----------
+    alpha : float
+        Disk margin (skew 0): the loop tolerates every factor ``f`` in the
+        disk ``(1 + alpha/2 d) / (1 - alpha/2 d)``, ``|d| < 1``.
+
+    Returns
+    -------
+    centre, radius, inside : float, float, bool
+        The circle of the critical points ``l = -1/f`` of the disk's
+        boundary: centre ``-(1 + h^2) / (1 - h^2)`` on the real axis and
+        radius ``2 h / |1 - h^2|``, ``h = alpha / 2``. ``inside`` says whether
+        the excluded region is the disk (``alpha < 2``; it contains -1) or
+        the plane outside it (``alpha > 2``). At ``alpha = 2`` it is the left
+        half-plane: centre ``-inf``.
+    """
+    h = alpha / 2.0
+    if abs(1.0 - h * h) < 1e-12:
+        return -math.inf, math.inf, True
+    return -(1.0 + h * h) / (1.0 - h * h), 2.0 * h / abs(1.0 - h * h), h < 1.0
+
+
+def m_circle(m_db: float, n: int = 721) -> tuple[np.ndarray, np.ndarray]:
+    """A Nichols chart's M-circle: where ``|l / (1 + l)| = M``, as (phase deg, gain dB).
+
+    Parameters
+    ----------
+    m_db : float
+        ``20 log10 M``, nonzero.
+    n : int
+        Points.
+
+    Returns
+    -------
+    phase, gain : ndarray
+        In the l-plane the locus is the circle of centre ``-M^2 / (M^2 - 1)``
+        and radius ``M / |M^2 - 1|``; its points in Nichols coordinates, the
+        phase in ``[-360, 0]`` deg and sorted along the curve. M > 1 closes
+        around -1 (a loop inside it is amplified by more than M); M < 1 is
+        an open curve from -360 to 0 deg.
+    """
+    M = 10.0 ** (m_db / 20.0)
+    centre, radius = -M * M / (M * M - 1.0), M / abs(M * M - 1.0)
+    t = np.linspace(0.0, 2.0 * np.pi, n)
+    z = centre + radius * np.exp(1j * t)       # never 0: |centre| != radius
+    phase = np.degrees(np.angle(z))             # (-180, 180]
+    phase = np.where(phase > 0, phase - 360.0, phase)
+    # M > 1: the circle stays in Re l < 0 and its phase is continuous around -180 in
+    # the order of t; M < 1: it encloses 0 and is cut where it crosses Re l > 0
+    order = np.arange(t.size) if M > 1 else np.argsort(phase)
+    return phase[order], 20.0 * np.log10(np.abs(z[order]))

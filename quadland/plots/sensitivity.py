@@ -1,0 +1,156 @@
+"""Figures of the closed loop of a margin review: singular values of S and T, poles.
+
+Both draw the sampled-data loop (zero-order hold and computation delay, the
+one that fails its requirement first) beside the continuous one. Like the
+other margin figures they take ``ax=`` (:mod:`quadland.plots.margins`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from matplotlib.figure import Figure
+from threadpoolctl import threadpool_limits
+
+from quadland.analysis import (
+    FrequencyResponse,
+    closed_loop_poles,
+    frequency_grid,
+    sensitivity_sigma,
+)
+from quadland.plots.frequency import POINTS_PER_DECADE
+
+if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
+    from quadland.margins import MarginReport
+
+__all__ = ["SIGMA_FLOOR_DB", "sigma_plot", "pole_plot"]
+
+#: dB, the bottom of the singular value axes: the peaks that set the margins
+#: (a few dB) stay readable; deep low-frequency attenuation is cut off.
+SIGMA_FLOOR_DB = -40.0
+
+
+def _sigma_curves(report: MarginReport):
+    """``(label, style, colour, omega, sigma_S, sigma_T)`` of each loop of the report."""
+    resp = FrequencyResponse(report.models.loop_input)
+    omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
+    out = [("continuous", "-", "C0", omega, *sensitivity_sigma(report.models.loop_input, omega))]
+    if report.sampled_models is not None:
+        wd = omega[omega < math.pi / report.sampled_models.dt]
+        out.append(("sampled", "--", "C1", wd,
+                    *sensitivity_sigma(report.sampled_models.loop_input, wd)))
+    return out
+
+
+def _axes(ax, count: int, size) -> tuple[Figure, list]:
+    if ax is None:
+        fig = Figure(figsize=size)
+        return fig, list(np.ravel(fig.subplots(1, count)))
+    axes = list(np.ravel(np.asarray(ax, dtype=object)))
+    return axes[0].figure, axes
+
+
+def sigma_plot(report: MarginReport, ax=None) -> Figure:
+    """Singular values of S and T at the plant input, with their peaks.
+
+    Parameters
+    ----------
+    report : MarginReport
+    ax : sequence of two matplotlib Axes, optional
+        Where to draw S and T; a new figure if None.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two axes: the singular values (dB) of ``S = (I + L)^-1`` and of
+        ``T = I - S`` against frequency (rad/s), one line per singular value,
+        largest first, the continuous loop solid and the sampled loop dashed
+        (up to its Nyquist frequency). Each loop's peak of the largest
+        singular value (``Ms``, ``Mt`` on the grid) is marked and labelled;
+        the axes run from :data:`SIGMA_FLOOR_DB` to 6 dB above the highest peak.
+    """
+    fig, (a_S, a_T) = _axes(ax, 2, (13, 5))
+    top = 0.0
+    with threadpool_limits(1):      # see quadland.plots.frequency.loop_curves
+        curves = _sigma_curves(report)
+    for label, style, color, w, sS, sT in curves:
+        for a, sv, peak_name in ((a_S, sS, "Ms"), (a_T, sT, "Mt")):
+            db = 20 * np.log10(sv)
+            for k in range(db.shape[1]):
+                a.semilogx(w, db[:, k], style, color=color, lw=1.6 if k == 0 else 0.8,
+                           label=label if k == 0 else f"_{label} sigma {k + 1}")
+            j = int(np.argmax(db[:, 0]))
+            a.plot([w[j]], [db[j, 0]], "v", color=color, ms=7, gid=f"{label}-{peak_name}",
+                   label=f"{label} {peak_name} {db[j, 0]:.1f} dB at {w[j]:.3g} rad/s")
+            top = max(top, float(db[j, 0]))
+    for a, name in ((a_S, "S = (I + L)^-1"), (a_T, "T = I - S")):
+        a.axhline(0, color="k", lw=0.6)
+        a.set_ylim(SIGMA_FLOOR_DB, top + 6.0)
+        a.set_title(f"singular values of {name} at the plant input")
+        a.set_xlabel("frequency [rad/s]")
+        a.set_ylabel("sigma [dB]")
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize="small", loc="lower left" if a is a_T else "lower right")
+    fig.tight_layout()
+    return fig
+
+
+def pole_plot(report: MarginReport, ax=None) -> Figure:
+    """Map of the closed loop's poles, continuous and sampled.
+
+    Parameters
+    ----------
+    report : MarginReport
+    ax : sequence of matplotlib Axes, optional
+        Two (s-plane, zoom), or three with a sampled loop (and its z-plane);
+        a new figure if None.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The s-plane with every continuous pole (x) and the sampled loop's
+        poles mapped by ``s = log(z) / dt`` (+; those with ``|z| < exp(-pi)``,
+        faster than the Nyquist frequency, are the computation delay's near
+        ``z = 0``: not mapped, counted in the legend),
+        a zoom on the slow adaptive and translational poles near the origin,
+        and, for a sampled loop, its poles in the z-plane with the unit circle.
+    """
+    p = report.poles
+    z = None if report.sampled_models is None else closed_loop_poles(
+        report.sampled_models.loop_input)
+    fig, ax = _axes(ax, 2 if z is None else 3, (12, 5) if z is None else (17, 5))
+    # |z| < exp(-pi): faster than the Nyquist frequency, the computation delay's poles
+    # near z = 0, which have no continuous counterpart
+    fast = None if z is None else np.abs(z) < math.exp(-math.pi)
+    s_z = None if z is None else np.log(z[~fast]) / report.sampled_models.dt
+    for a, zoom in zip(ax[:2], (False, True), strict=True):
+        a.plot(p.real, p.imag, "x", color="C0", label=f"continuous ({p.size})")
+        if s_z is not None:
+            a.plot(s_z.real, s_z.imag, "+", color="C1", ms=8,
+                   label=f"sampled, log(z)/dt ({s_z.size}; {int(fast.sum())} near z = 0)")
+        a.axvline(0, color="k", lw=0.6)
+        a.set_xlabel("Re s [1/s]")
+        a.set_ylabel("Im s [rad/s]")
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize="small", loc="upper left")
+        if zoom:
+            a.set_xlim(-0.5, 0.05)
+            a.set_ylim(-0.3, 0.3)
+            a.set_title("zoom: the slow adaptive and translational poles")
+        else:
+            a.set_title(f"closed-loop poles ({p.size})")
+    if z is not None:
+        a = ax[2]
+        t = np.linspace(0, 2 * np.pi, 400)
+        a.plot(np.cos(t), np.sin(t), "k", lw=0.6, label="unit circle")
+        a.plot(z.real, z.imag, "+", color="C1", ms=8, label=f"sampled ({z.size})")
+        a.set_aspect("equal")
+        a.set_xlabel("Re z")
+        a.set_ylabel("Im z")
+        a.set_title(f"sampled loop in the z-plane, max |z| = {np.max(np.abs(z)):.4f}")
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize="small", loc="upper left")
+    fig.tight_layout()
+    return fig
