@@ -79,7 +79,9 @@ class LandingKind(LoopKind):
               limits: Mapping[str, float]) -> list[str]:
         if metrics["touchdown_time"] is None:
             return [f"no touchdown by t = {result['t'][-1]:.4g} s"]
-        return super().judge(result, metrics, limits)
+        if metrics.get("secured") is None:              # welded: no gear contact to judge
+            limits = {k: v for k, v in limits.items() if k not in report.GEAR_METRICS}
+        return super().judge(result, metrics, limits) + report.gear_violations(result, metrics)
 
     def figures(self, result: SimulationResult) -> dict[str, Any]:
         from quadland.plots.landing import landing_figures
