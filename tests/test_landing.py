@@ -149,6 +149,63 @@ def test_a_rising_deck_aborts_the_descent_and_a_later_try_lands():
     assert np.all(np.diff(res["aborts"]) >= 0) and res["aborts"][back] >= 1
 
 
+# ---------------------------------------------------------------- landed and secured
+
+#: The turning car on the true state, with no lock-down: what the gear alone holds.
+LOOSE = ["sensors.enabled=false", 'touchdown.lock="none"']
+
+
+def test_a_too_hard_landing_bounces_and_tips_and_the_report_says_why(tmp_path, capsys):
+    """A crawl forced to 2.5 m/s hits the deck at 3 m/s, past 14 CFR 27.725's 2.55 m/s
+    drop: the gear rebounds (restitution 0.45, no lock to hold it), its load passes the
+    default gear's 27.725 limit load (424 N) and the quadrotor rolls over on the deck. The
+    run stops there at the singular attitude: a landing that failed, judged and reported
+    (exit 0, summary.json written), not a failed flight; the verdict says why."""
+    out = tmp_path / "hard"
+    sets = [*LOOSE, "landing.touchdown_speed=2.5", "landing.descent_speed=2.5"]
+    assert main(["simulate", "--scenario", "turning", "--no-plots", "--out", str(out),
+                 *(a for s in sets for a in ("--set", s))]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    land = json.loads((out / "summary.json").read_text())["landing"]
+    assert land["touchdown"] and not land["success"]
+    assert land["bounced"] and land["tipped"] and not land["secured"]
+    assert land["bounce"] > 0.02 and land["peak_gear_force"] > 424
+    assert land["sink_rate"] > 2.55
+    assert land["failures"] == ["sink_rate", "bounced", "tipped", "gear load", "off the pad",
+                                "not secured"]
+    assert lines[1].startswith(f"landing: FAILED: sink rate {land['sink_rate']:.3g} > 0.5 m/s; "
+                               f"bounced {100 * land['bounce']:.1f} cm > 2 cm; tipped over on "
+                               "the deck; gear load ")
+    assert "  secured NO, tipped YES, on the pad NO" in lines
+
+
+def test_a_gear_narrower_than_the_tilt_at_contact_tips_over():
+    """The static tip-over angle atan(half_track / h_cg) (docs/contact.md): skids 2 cm apart
+    under a 0.2 m high centre tip at 2.9 deg; the turning car's landing meets its roof
+    tilted by more (5.3 deg: the lateral acceleration), so without a lock it rolls over;
+    on the default 0.25 m track (32 deg) the same landing rests."""
+    narrow = touchdown_report(_fly("turning", *LOOSE, "gear.feet_y=0.01"))
+    assert narrow.tilt_deg > np.degrees(np.arctan(0.01 / 0.2))
+    assert narrow.tipped and not narrow.secured and not narrow.success
+    wide = touchdown_report(_fly("turning", *LOOSE))
+    assert not wide.tipped and wide.secured and wide.success      # friction holds it
+
+
+def test_the_welded_idealization_stays_a_switch():
+    """gear.welded = true is the old touchdown: the gear point's crossing ends the flight,
+    the ride pins the pose; the gear's figures are undefined, and the campaign's gear
+    limits do not apply to it."""
+    from quadland.kinds.landing.kind import LandingKind
+
+    res = _fly("highway", PERFECT, "gear.welded=true")
+    rep = touchdown_report(res)
+    assert rep.touchdown and rep.success and rep.secured is None and rep.peak_gear_force is None
+    assert "touched" not in res
+    metrics = LandingKind().run_metrics(res)
+    assert metrics["secured"] is None
+    assert LandingKind().judge(res, metrics, LandingKind().limits(res.scenario)) == []
+
+
 # ---------------------------------------------------------------- physics from the log
 
 @pytest.fixture(scope="module")

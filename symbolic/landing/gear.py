@@ -58,9 +58,12 @@ from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.quadrotor import WRENCH, wrench_from_rotors
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["GEAR_STATE", "TOUCHDOWN_POLICY", "GEAR_SIGNALS", "PEAK_RATE", "CUT_RAMP",
+__all__ = ["GEAR_STATE", "TOUCHDOWN_POLICY", "GEAR_SIGNALS", "FAILURES", "PEAK_RATE", "CUT_RAMP",
            "contact_params", "contact_switch", "gear_terms", "foot_gap",
            "foot_gap_function", "gear_signals_function"]
+
+#: Why a landing on the gear failed, in the order a verdict names them (the report's).
+FAILURES = ("bounced", "tipped", "gear load", "off the pad", "not secured")
 
 #: 1/s: the rate at which ``F_peak`` follows a rising gear load.
 PEAK_RATE = 2000.0

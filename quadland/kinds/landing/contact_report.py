@@ -27,7 +27,7 @@ import functools
 
 import numpy as np
 
-from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE
+from quadland_symbolic.landing.gear import FAILURES, GEAR_SIGNALS, GEAR_STATE
 from quadland_symbolic.landing.loop import landing_gear_signals_function
 from quadland_symbolic.landing.plant import LANDING_PLANT_STATE
 
@@ -36,8 +36,6 @@ __all__ = ["gear_columns", "contact_figures", "ENGAGED", "FAILURES"]
 #: The lock counts as engaged at this engagement.
 ENGAGED = 0.95
 
-#: Why a landing on the gear failed, in the order the verdict names them.
-FAILURES = ("bounced", "tipped", "gear load", "off the pad", "not secured")
 
 
 def gear_columns(pp, times, X, touched) -> dict[str, np.ndarray]:

@@ -145,8 +145,7 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
         row("x_e", "y_e", "z_e"), row("dx_e", "dy_e", "dz_e"), row("phi1", "theta1", "psi1"),
         row("phi2", "theta2", "psi2")), dtype=float).ravel()
     f = {name: float(v) for name, v in zip(TOUCHDOWN_FIGURES.names(), figures, strict=True)}
-    failures = [k.removeprefix("max_") for k in TOUCHDOWN_LIMITS
-                if not f[k.removeprefix("max_")] <= limits[k]]
+    failures = [n for n in TOUCHDOWN_FIGURES.names() if not f[n] <= limits["max_" + n]]
     gear = {}
     if contact:
         gear = contact_figures(result, limits, result.scenario.data["quadrotor"]["mass"])

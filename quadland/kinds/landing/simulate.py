@@ -133,7 +133,7 @@ def _landing_hint(scenario: Scenario, lv: LandingValues, xp_last) -> str:
     a body spun up to hundreds of radians per second leaves it.
     """
     c = scenario.data["controller"]
-    f = loop_plant_function()
+    f = loop_plant_function(contact=False)      # in flight; the gear's step is its own
     held = (np.zeros(f.size1_in(1)), np.zeros(f.size1_in(2)), 0.0, lv.pp)
     initial = loop_modes(f, lv.xp0, *held)
     last = loop_modes(f, xp_last, *held) if xp_last is not None else np.zeros(0)
