@@ -204,6 +204,27 @@ def test_the_welded_idealization_stays_a_switch():
     metrics = LandingKind().run_metrics(res)
     assert metrics["secured"] is None
     assert LandingKind().judge(res, metrics, LandingKind().limits(res.scenario)) == []
+    # the pure-C example flies the contact only: its generation refuses the weld
+    with pytest.raises(ScenarioError, match="^gear.welded: the pure-C example flies"):
+        LandingKind().codegen_defaults(res.scenario)
+
+
+@pytest.mark.parametrize("setting,message", [
+    ("gear.stiffness=-5.0", "gear.stiffness"),
+    ("gear.friction=3.0", "gear.friction"),
+    ('touchdown.lock="harpoon"', "touchdown.lock"),
+    ('touchdown.policy="brake"', "touchdown.policy"),
+    ("touchdown.switch_impulse=0.0", "touchdown.switch_impulse"),
+    ("landing.max_friction_margin=1.5", "landing.max_friction_margin"),
+    ("quadrotor.gear_height=0.0", "quadrotor.gear_height: must be positive for the gear's"),
+])
+def test_a_bad_gear_or_touchdown_value_is_one_line(tmp_path, capsys, setting, message):
+    out = tmp_path / "run"
+    assert main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out),
+                 "--set", setting]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("quadland: error: ") and message in err[0]
+    assert not out.exists()
 
 
 # ---------------------------------------------------------------- physics from the log

@@ -355,7 +355,7 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
         [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],
          rec, res["tilt"]],
         ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
-        ["xc_next", "uh", "rec", "guard"])
+        ["xc_next", "uh", "rec", "guard"], {"cse": True})      # the deck's pose, once
     assemble = ca.Function("assemble", [xp, xc], [ca.vertcat(xp, cs["xg"], cs["mem"])],
                            ["xp", "xc"], ["x"])
     ride_rhs, ride_row = landing_ride_functions(l, SENSED_RECORDED) if welded else (None, None)

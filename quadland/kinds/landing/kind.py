@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from quadland.engine.envelope import Envelope
 from quadland.engine.plan import SimulationPlan
 from quadland.engine.result import SimulationResult
-from quadland.exceptions import MarginsError
+from quadland.exceptions import MarginsError, ScenarioError
 from quadland.kinds.base import LoopKind
 from quadland.kinds.landing import flight, report, simulate
 from quadland.scenario import Scenario
@@ -136,6 +136,9 @@ class LandingKind(LoopKind):
         return int(scenario.data["controller"]["delay_periods"])
 
     def codegen_defaults(self, scenario: Scenario) -> LandingDefaults:
+        if scenario.data["gear"]["welded"]:
+            raise ScenarioError("gear.welded: the pure-C example flies the gear's contact; "
+                                "generate it from a scenario with gear.welded = false")
         return flight.landing_defaults(scenario)
 
 
