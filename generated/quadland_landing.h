@@ -24,8 +24,8 @@ extern "C" {
 #define QL_LANDING_STATE_SIZE 76                 /* reals in ql_landing_state */
 #define QL_GUIDANCE_PARAMS_SIZE 13               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
-#define QL_LANDING_PLANT_NX 22                   /* xp = [x1q (16), xv (6)] */
-#define QL_LANDING_PLANT_NP 273                  /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (247)] */
+#define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
+#define QL_LANDING_PLANT_NP 299                  /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (247), p_gear (18), p_lock (4), p_td (4)] */
 #define QL_LANDING_NW 9                          /* w = [v_wind (3), d_F (3), d_M (3)] */
 #define QL_LANDING_NY 42                         /* signals y of a landing */
 #define QL_LANDING_ANCHOR_SIZE 12                /* anchor = [p_e (3), R_rel (9)] */
@@ -233,6 +233,16 @@ void ql_landing_signals(const ql_real *xp, const ql_real *xg, const ql_real *w,
 /* The landing gear's height above the deck plane, m: touchdown is its zero
  * crossing. */
 void ql_landing_gear_gap(const ql_real *xp, const ql_real *t, const ql_real *pp, ql_real *g);
+
+/* The lowest foot's height above the deck plane, m: the gear's first
+ * contact is its zero crossing (the integration goes on through it). */
+void ql_landing_first_contact(const ql_real *xp, const ql_real *t, const ql_real *pp,
+                              ql_real *g);
+
+/* The gear's signals (foot and centre gaps, load, feet down, lock, relative
+ * roll, pitch and tilt, tip-over and friction margins, the lowest foot's
+ * sink rate) of the plant's state. */
+void ql_landing_gear_signals(const ql_real *xp, const ql_real *t, const ql_real *pp, ql_real *s);
 
 /* The pose at touchdown (p_e, R_deck^T R1) from the signals y there. */
 void ql_landing_anchor(const ql_real *y, ql_real *anchor);

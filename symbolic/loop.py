@@ -13,7 +13,11 @@ model but the sizes of these functions' flat vector arguments:
   continuous loop's state, so that ``outputs`` serves both loops; and,
   optionally, an event ``event(xp, t, pp) -> g`` whose crossing from
   positive to zero or below ends the run at the instant it happens (a
-  touchdown), located within the step;
+  touchdown), located within the step; or, for a model whose event
+  *continues* (:attr:`LoopModel.event_continues`), is located the same way,
+  its instant and state recorded, and the integration goes on from that
+  state, in steps no longer than a bound the run gives (a stiffer phase,
+  the gear on the deck), to a given time after it;
 
 optionally, the per-tick inputs ``n`` of the controller (:attr:`LoopModel.tick_inputs`:
 one row of a table per control tick, drawn before the run, such as the sensors'
@@ -126,6 +130,9 @@ class LoopModel:
     tick_inputs : Layout or None
         The layout of ``n``, the controller's per-tick row (see the module
         docstring); None: ``controller(xp, xc, pc, first, t)``.
+    event_continues : bool
+        The event does not end the run: its first crossing is located and
+        recorded, and the integration goes on (see the module docstring).
     """
 
     name: str
@@ -152,6 +159,7 @@ class LoopModel:
     ride_rhs: ca.Function | None = None
     ride_row: ca.Function | None = None
     tick_inputs: Layout | None = None
+    event_continues: bool = False
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""

@@ -688,11 +688,17 @@ def test_simulate_prints_the_verdict_and_figures(tmp_path, capsys):
     lines = capsys.readouterr().out.splitlines()
     land = json.loads((out / "summary.json").read_text())["landing"]
     assert lines[0] == f"quadland: wrote {out}"
-    assert lines[1] == f"landing: success (touchdown at {land['time']:.2f} s, 0 aborts)"
+    assert lines[1] == f"landing: success (first contact at {land['time']:.2f} s, 0 aborts)"
     assert lines[2].split() == ["sink", "rate", f"{land['sink_rate']:.3f}", "m/s", "limit",
                                 "0.5"]
     assert lines[5].split()[:2] == ["tilt", f"{land['tilt_deg']:.3f}"]
-    assert lines[6].startswith("  navigation: position error at touchdown ")
+    # landed and secured: the gear's figures (issue 18)
+    assert lines[6].split() == ["peak", "gear", "load", f"{land['peak_gear_force']:.1f}", "N",
+                                "limit", "424"]
+    assert lines[7].split() == ["impact", "energy", f"{land['impact_energy']:.3f}", "J"]
+    assert lines[8].split()[:2] == ["bounce", f"{land['bounce']:.4f}"]
+    assert lines[9] == "  secured yes, tipped no, on the pad yes"
+    assert lines[10].startswith("  navigation: position error at touchdown ")
     # a limit the touchdown misses is named, and its row marked
     out2 = tmp_path / "hw2"
     assert main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out2), "--set",

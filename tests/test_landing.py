@@ -27,15 +27,17 @@ from quadland.exceptions import ScenarioError
 from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
 from quadland.schema import LANDING_SCHEMA
-from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
+from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, TOUCHDOWN
 
 SCENARIOS = ("highway", "turning", "ship", "ship_ss5")
 #: Descents aborted at the default seed, on the sensors and on the true state: the
 #: scenarios' measured ones (docs/landing.md, docs/sea.md). A ship deck in sea state 4
-#: or 5 rises faster than landing.max_deck_rise a fifth to a third of the time.
+#: or 5 rises faster than landing.max_deck_rise a fifth to a third of the time. On the
+#: gear's contact the first foot to touch ends the count: ship_ss5 on its sensors 19
+#: (42 to the welded gear point's crossing), the ship on the true state 0 (1).
 ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 16,
-          ("ship_ss5", "sensors"): 42, ("highway", "perfect"): 0, ("turning", "perfect"): 0,
-          ("ship", "perfect"): 1, ("ship_ss5", "perfect"): 6}
+          ("ship_ss5", "sensors"): 19, ("highway", "perfect"): 0, ("turning", "perfect"): 0,
+          ("ship", "perfect"): 0, ("ship_ss5", "perfect"): 6}
 #: trajectory.csv's columns, as the issue names them.
 COLUMNS = ["t", "phase", "x1", "y1", "z1", "phi1", "theta1", "psi1",
            "x2", "y2", "z2", "phi2", "theta2", "psi2", "x_e", "y_e", "z_e",
@@ -82,19 +84,28 @@ def test_lands_within_the_limits_at_the_default_seed(name, sensing):
     res = _fly(name, *([PERFECT] if sensing == "perfect" else []))
     rep = touchdown_report(res)
     assert rep.touchdown and rep.success, rep
+    assert rep.secured and not rep.bounced and not rep.tipped and rep.on_pad
     assert rep.aborts == ABORTS[name, sensing]
-    assert _first_rows(res["phase"]) == [APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED]
-    # the phases only go forward, but for each abort's one step back to align (a descent
-    # aborted within one output period, 10 ms, shows no step back in the log)
-    back = np.flatnonzero(np.diff(res["phase"]) < 0)
-    assert len(back) <= rep.aborts and res["aborts"][-1] == rep.aborts
+    flying = res["t"] < rep.time
+    assert _first_rows(res["phase"][flying]) == [APPROACH, ALIGN, DESCEND]
+    # before the contact the phases only go forward, but for each abort's one step back
+    # to align (a descent aborted within one output period, 10 ms, shows no step back)
+    phase = res["phase"][flying]
+    back = np.flatnonzero(np.diff(phase) < 0)
+    assert len(back) <= rep.aborts and res["aborts"][flying][-1] == rep.aborts
     assert np.all(np.diff(res["aborts"]) >= 0)
-    assert all(res["phase"][k] == DESCEND and res["phase"][k + 1] == ALIGN for k in back)
-    # the run ends settle_time after touchdown, the last row landed, the ride in between
+    assert all(phase[k] == DESCEND and phase[k + 1] == ALIGN for k in back)
+    # descending at the contact, the flight code hears the gear's contact switch (closed
+    # at 2 ms of the weight's impulse) and enters touchdown within a few control periods
+    k = int(np.argmax(~flying))
+    if res["phase"][k - 1] == DESCEND:
+        assert res["phase"][res["t"] >= rep.time + 0.05][0] == TOUCHDOWN
+    # the run ends at the first grid point settle_time after the first contact: its last
+    # row is within an output period (10 ms) of that instant
     settle = res.scenario["landing.settle_time"]
-    assert res["t"][-1] == pytest.approx(rep.time + settle, abs=1e-12)
-    riding = (res["t"] >= rep.time) & (res["t"] < rep.time + settle - 1e-9)
-    assert np.all(res["phase"][riding] == TOUCHDOWN) and res["phase"][-1] == LANDED
+    assert abs(res["t"][-1] - (rep.time + settle)) <= 0.01 + 1e-9
+    # the lock holds the gear down: engaged, every foot on the deck
+    assert res["engaged"][-1] > 0.99 and res["feet_down"][-1] == 4
     q = res.scenario.data["quadrotor"]
     F_max = q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
     rotors = np.vstack([res[f"F_{i}"] for i in range(1, 5)])
@@ -138,12 +149,96 @@ def test_a_rising_deck_aborts_the_descent_and_a_later_try_lands():
     assert np.all(np.diff(res["aborts"]) >= 0) and res["aborts"][back] >= 1
 
 
+# ---------------------------------------------------------------- landed and secured
+
+#: The turning car on the true state, with no lock-down: what the gear alone holds.
+LOOSE = ["sensors.enabled=false", 'touchdown.lock="none"']
+
+
+def test_a_too_hard_landing_bounces_and_tips_and_the_report_says_why(tmp_path, capsys):
+    """A crawl forced to 2.5 m/s hits the deck at 3 m/s, past 14 CFR 27.725's 2.55 m/s
+    drop: the gear rebounds (restitution 0.45, no lock to hold it), its load passes the
+    default gear's 27.725 limit load (424 N) and the quadrotor rolls over on the deck. The
+    run stops there at the singular attitude: a landing that failed, judged and reported
+    (exit 0, summary.json written), not a failed flight; the verdict says why."""
+    out = tmp_path / "hard"
+    sets = [*LOOSE, "landing.touchdown_speed=2.5", "landing.descent_speed=2.5"]
+    assert main(["simulate", "--scenario", "turning", "--no-plots", "--out", str(out),
+                 *(a for s in sets for a in ("--set", s))]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    land = json.loads((out / "summary.json").read_text())["landing"]
+    assert land["touchdown"] and not land["success"]
+    assert land["bounced"] and land["tipped"] and not land["secured"]
+    assert land["bounce"] > 0.02 and land["peak_gear_force"] > 424
+    assert land["sink_rate"] > 2.55
+    assert land["failures"] == ["sink_rate", "bounced", "tipped", "gear load", "off the pad",
+                                "not secured"]
+    assert lines[1].startswith(f"landing: FAILED: sink rate {land['sink_rate']:.3g} > 0.5 m/s; "
+                               f"bounced {100 * land['bounce']:.1f} cm > 2 cm; tipped over on "
+                               "the deck; gear load ")
+    assert "  secured NO, tipped YES, on the pad NO" in lines
+
+
+def test_a_gear_narrower_than_the_tilt_at_contact_tips_over():
+    """The static tip-over angle atan(half_track / h_cg) (docs/contact.md): skids 2 cm apart
+    under a 0.2 m high centre tip at 2.9 deg; the turning car's landing meets its roof
+    tilted by more (5.3 deg: the lateral acceleration), so without a lock it rolls over;
+    on the default 0.25 m track (32 deg) the same landing rests."""
+    narrow = touchdown_report(_fly("turning", *LOOSE, "gear.feet_y=0.01"))
+    assert narrow.tilt_deg > np.degrees(np.arctan(0.01 / 0.2))
+    assert narrow.tipped and not narrow.secured and not narrow.success
+    wide = touchdown_report(_fly("turning", *LOOSE))
+    assert not wide.tipped and wide.secured and wide.success      # friction holds it
+
+
+def test_the_welded_idealization_stays_a_switch():
+    """gear.welded = true is the old touchdown: the gear point's crossing ends the flight,
+    the ride pins the pose; the gear's figures are undefined, and the campaign's gear
+    limits do not apply to it."""
+    from quadland.kinds.landing.kind import LandingKind
+
+    res = _fly("highway", PERFECT, "gear.welded=true")
+    rep = touchdown_report(res)
+    assert rep.touchdown and rep.success and rep.secured is None and rep.peak_gear_force is None
+    assert "touched" not in res
+    metrics = LandingKind().run_metrics(res)
+    assert metrics["secured"] is None
+    assert LandingKind().judge(res, metrics, LandingKind().limits(res.scenario)) == []
+    # the pure-C example flies the contact only: its generation refuses the weld
+    with pytest.raises(ScenarioError, match="^gear.welded: the pure-C example flies"):
+        LandingKind().codegen_defaults(res.scenario)
+
+
+@pytest.mark.parametrize("setting,message", [
+    ("gear.stiffness=-5.0", "gear.stiffness"),
+    ("gear.friction=3.0", "gear.friction"),
+    ('touchdown.lock="harpoon"', "touchdown.lock"),
+    ('touchdown.policy="brake"', "touchdown.policy"),
+    ("touchdown.switch_impulse=0.0", "touchdown.switch_impulse"),
+    ("landing.max_friction_margin=1.5", "landing.max_friction_margin"),
+    ("quadrotor.gear_height=0.0", "quadrotor.gear_height: must be positive for the gear's"),
+])
+def test_a_bad_gear_or_touchdown_value_is_one_line(tmp_path, capsys, setting, message):
+    out = tmp_path / "run"
+    assert main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out),
+                 "--set", setting]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("quadland: error: ") and message in err[0]
+    assert not out.exists()
+
+
 # ---------------------------------------------------------------- physics from the log
 
 @pytest.fixture(scope="module")
 def fine_result():
     """highway logged at 1 kHz."""
     return _fly("highway", "simulation.output_rate_hz=1000")
+
+
+@pytest.fixture(scope="module")
+def welded_result():
+    """highway logged at 1 kHz, the welded idealization (gear.welded)."""
+    return _fly("highway", "simulation.output_rate_hz=1000", "gear.welded=true")
 
 
 @pytest.fixture(scope="module")
@@ -188,22 +283,32 @@ def _smooth_rows(c, t_td, rate_hz):
     return k[even & ~switch & away]
 
 
-def test_plant_obeys_newton_from_the_logged_thrust_attitude_and_forces(fine):
+def test_plant_obeys_newton_from_the_logged_thrust_attitude_and_forces(fine, fine_result,
+                                                                       welded_result):
     c, sc = fine
-    t_td = c["t"][np.argmax(c["phase"] == TOUCHDOWN)]
+    t_td = touchdown_report(fine_result).time
     k = _smooth_rows(c, t_td, sc["controller.rate_hz"])
-    before, after = k[c["t"][k] < t_td], k[c["t"][k] > t_td]
-    assert len(before) > 5000 and len(after) > 1000
+    # in flight up to 5 ms before the contact (the contact's onset, smoothed over 0.1 mm,
+    # passes in 0.3 ms at the sink rate: a 1 ms difference cannot follow it), and resting
+    # on the deck a second after it: the rotors cut, the lock pulled in
+    before, after = k[c["t"][k] < t_td - 5e-3], k[c["t"][k] > t_td + 1.0]
+    assert len(before) > 5000 and len(after) > 500
     r = _newton_residual(c, sc, before)
     assert np.max(np.abs(r)) < 5e-3                       # N, of forces up to 20 N
-    # on the deck, d_F holds the contact force too: Newton's law still holds
-    assert np.max(np.abs(_newton_residual(c, sc, after))) < 5e-3
+    # on the deck, d_F holds the gear's contact and the lock's pull too: Newton's law
+    # still holds (the load, 120 N, is 6 times the flight's forces)
+    assert np.max(np.abs(_newton_residual(c, sc, after))) < 3e-2
+    # and on the welded idealization's ride, whose d_F is what holds the pose
+    cw = _csv(welded_result)
+    t_w = cw["t"][np.argmax(cw["phase"] == TOUCHDOWN)]
+    kw = _smooth_rows(cw, t_w, sc["controller.rate_hz"])
+    assert np.max(np.abs(_newton_residual(cw, sc, kw[cw["t"][kw] > t_w]))) < 5e-3
 
 
-def test_touchdown_figures_by_hand_at_the_touchdown_row(fine):
+def test_touchdown_figures_by_hand_at_the_touchdown_row(fine, fine_result):
     c, sc = fine
-    k = int(np.argmax(c["phase"] == TOUCHDOWN))
-    rep = touchdown_report(quadland.simulate(sc))
+    k = int(np.argmax(fine_result["touched"] > 0.5))
+    rep = touchdown_report(fine_result)
     assert rep.time == pytest.approx(c["t"][k], abs=1e-9)
     assert c["t"][k] - c["t"][k - 1] <= 1e-3 + 1e-12     # the touchdown row is its own
     p_e = np.array([c["x_e"], c["y_e"], c["z_e"]])
@@ -219,16 +324,25 @@ def test_touchdown_figures_by_hand_at_the_touchdown_row(fine):
     assert rep.success == (rep.sink_rate <= limits["max_sink_rate"]
                            and rep.offset <= limits["max_offset"]
                            and rep.tilt_deg <= limits["max_tilt_deg"]
-                           and rep.relative_speed <= limits["max_relative_speed"])
-    # the touchdown is located within the step: the gear is on the deck plane
+                           and rep.relative_speed <= limits["max_relative_speed"]
+                           and rep.peak_gear_force <= limits["max_gear_load"]
+                           and not rep.bounced and not rep.tipped and rep.on_pad
+                           and rep.secured)
+    # the first contact is located within the step: the lowest foot is on the deck
+    # plane, every other above it
     p1 = np.array([c["x1"][k], c["y1"][k], c["z1"][k]])
     p2 = np.array([c["x2"][k], c["y2"][k], c["z2"][k]])
-    gear = p1 - sc["quadrotor.gear_height"] * R1[:, 2]
-    assert R2[:, 2] @ (gear - p2) == pytest.approx(0, abs=1e-9)
+    g = sc.data["gear"]
+    feet = [p1 + R1 @ [sx * g["feet_x"], sy * g["feet_y"], -sc["quadrotor.gear_height"]]
+            for sx in (1, -1) for sy in (1, -1)]
+    heights = sorted(R2[:, 2] @ (foot - p2) for foot in feet)
+    assert heights[0] == pytest.approx(0, abs=1e-9) and heights[1] > 1e-6
 
 
-def test_on_the_deck_the_pose_is_rigid_and_the_rotors_wind_down(fine, fine_result):
-    c, sc = fine
+def test_on_the_deck_the_pose_is_rigid_and_the_rotors_wind_down(welded_result):
+    """The welded idealization (gear.welded = true): pinned at the touchdown pose."""
+    fine_result = welded_result
+    c, sc = _csv(welded_result), welded_result.scenario
     k = int(np.argmax(c["phase"] == TOUCHDOWN))
     t = c["t"]
     p_e = np.array([c["x_e"], c["y_e"], c["z_e"]])
@@ -291,7 +405,7 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     )
     from quadland_symbolic.landing.signals import LANDING_SIGNALS
 
-    sc = load_scenario("highway", ["simulation.duration=12", PERFECT])
+    sc = load_scenario("highway", ["simulation.duration=12", PERFECT, "gear.welded=true"])
     res, lv = quadland.simulate(sc), landing_values(sc)
     k = int(np.argmax(res["phase"] == TOUCHDOWN))
     x_td, t_td = res.states[k], float(res["t"][k])
@@ -299,7 +413,7 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     rec = np.array([res[n][k] for n in LANDING_RECORDED.element_names()])
     z0, a = (np.asarray(v, dtype=float).ravel()
              for v in landing_ride_start(lv.l)(x_td, y_td, rec, t_td, 2.0))
-    rows, model = Clock(100.0, 0.0, 12.0, True), landing_loop(lv.l)
+    rows, model = Clock(100.0, 0.0, 12.0, True), landing_loop(lv.l, welded=True)
     runs = [loop.ride(z0, a, rows, t_td, t_td + 2.0, 0.004, lv.pp)
             for loop in (CompiledLoop(model, "sampled"), VMLoop(model, "sampled"))]
     times, _ = ride_grid(rows, t_td, t_td + 2.0, 0.004)
@@ -338,9 +452,14 @@ def test_simulate_writes_the_landing_columns_and_summary(tmp_path):
     assert summary["status"] == "ok"
     assert set(summary["landing"]) == {"touchdown", "time", "sink_rate", "offset",
                                        "relative_speed", "tilt_deg", "aborts", "success",
-                                       "limits"}
+                                       "limits", "secured", "bounced", "tipped",
+                                       "peak_gear_force", "impact_energy", "bounce", "on_pad",
+                                       "failures"}
     assert summary["landing"]["limits"] == {"max_sink_rate": 0.5, "max_offset": 0.2,
-                                            "max_tilt_deg": 10.0, "max_relative_speed": 0.5}
+                                            "max_tilt_deg": 10.0, "max_relative_speed": 0.5,
+                                            "max_gear_load": 424.0, "max_bounce": 0.02,
+                                            "max_friction_margin": 1.0}
+    assert summary["landing"]["secured"] is True and summary["landing"]["failures"] == []
     assert summary["landing"]["success"] is True
     blocks = summary["navigation"]["blocks"]
     assert all(set(b) == {"fused", "rejected", "held"} for b in blocks.values())

@@ -25,6 +25,7 @@ from quadland_symbolic.landing.controller import (
     landing_step_outputs,
 )
 from quadland_symbolic.landing.deck import DECK_PARAMS, pack_deck
+from quadland_symbolic.landing.gear import contact_params
 from quadland_symbolic.landing.guidance import POSITION_REFERENCE
 from quadland_symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_function
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
@@ -227,8 +228,8 @@ def test_known_acceleration_is_the_plants_at_zero_thrust(rng):
         p_e, v_e, *_ = relative6(*args)
         a_e, _ = relative6_acceleration(x1q, xv, t, np.zeros(4), np.zeros(6), P_QUAD, P_ACT, pv,
                                         pd)
-        xp = np.concatenate([x1q, xv])
-        pp = np.concatenate([P_QUAD, P_ACT, pv, pd])
+        xp = np.concatenate([x1q, xv, np.zeros(3)])
+        pp = np.concatenate([P_QUAD, P_ACT, pv, pd, *contact_params().values()])
         m = LANDING_MEASUREMENT.unpack(np.array(measurement_function()(xp, t, pp)).ravel())
         np.testing.assert_allclose(m["p_e"], np.array(p_e).ravel(), atol=1e-14)
         np.testing.assert_allclose(m["v_e"], np.array(v_e).ravel(), atol=1e-13)
@@ -391,13 +392,14 @@ def test_hover_over_a_stationary_deck(step, nominal):
                            tau=[0, 0, 0], z2=0))
     pd = DECK_PARAMS.zeros()
     pd[DECK_PARAMS.slice("deck_height")] = 1.0
-    pp = np.concatenate([P_QUAD, P_ACT, pv, pd])
+    pp = np.concatenate([P_QUAD, P_ACT, pv, pd, *contact_params().values()])
     psi2, hover = 0.4, np.array([0.0, 0.0, 2.0])
     xp = LANDING_PLANT_STATE.pack(dict(
         x1q=QUAD6_STATE.pack(dict(p1=[1.5, -1.0, 1.0 + 3.0], eta1=[0, 0, psi2 + 0.05],
                                   V1=np.zeros(3),
                             Omega1=np.zeros(3), F=[M1 * G / 4] * 4)),
-        xv=VEHICLE_STATE.pack(dict(x2=0, y2=0, psi2=psi2, u2=0, v2=0, r2=0))))
+        xv=VEHICLE_STATE.pack(dict(x2=0, y2=0, psi2=psi2, u2=0, v2=0, r2=0)),
+        gear=np.zeros(3)))
     ref = POSITION_REFERENCE.pack(dict(p_ref=hover, v_ref=np.zeros(3), a_ref=np.zeros(3)))
     p_ctrl, mem = _p_ctrl(nominal), landing_memory(L_NODES).zeros()
     measure, rk4 = measurement_function(), rk4_step(landing_plant_function())

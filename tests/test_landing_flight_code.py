@@ -422,10 +422,16 @@ def test_pure_c_landing_is_quadland_simulates(examples, tree):
     layout = LANDING_TRAJECTORY if tree == "highway_perfect" else SENSED_TRAJECTORY
     assert header == list(layout.element_names())
     assert list(report) == list(want) and report["limits"] == want["limits"]
-    assert report["touchdown"] and report["success"] and want["success"]
-    for key in ("time", "sink_rate", "offset", "relative_speed", "tilt_deg"):
-        assert report[key] == pytest.approx(want[key], rel=1e-12, abs=1e-12), key
-    assert report["aborts"] == want["aborts"]
+    assert report["touchdown"] and report["success"] == want["success"]
+    for key in ("time", "sink_rate", "offset", "relative_speed", "tilt_deg",
+                "peak_gear_force", "impact_energy", "bounce"):
+        assert report[key] == pytest.approx(want[key], rel=1e-9, abs=1e-9), key
+    for key in ("aborts", "secured", "bounced", "tipped", "on_pad", "failures"):
+        assert report[key] == want[key], key
+    # the highway lands and is secured; the quiet ship's heaving deck meets one foot at
+    # 0.04 m/s during the descent, too lightly to close the contact switch, and the
+    # quadrotor flies on: a touch and go, not a landing (the welded gear counted it one)
+    assert want["success"] == (name == "highway")
     np.testing.assert_array_equal(c["t"], py["t"])
     np.testing.assert_array_equal(c["phase"], py["phase"])
     for column in header:
@@ -446,7 +452,7 @@ def test_pure_c_landing_in_float_lands_alike(examples):
     for key, tol in (("sink_rate", 2e-3), ("offset", 2e-3), ("relative_speed", 2e-3),
                      ("tilt_deg", 0.05)):
         assert report[key] == pytest.approx(double[key], abs=tol), key
-    assert c["phase"][-1] == LANDED
+    assert report["secured"] and c["phase"][-1] == TOUCHDOWN    # ends settle_time after contact
 
 
 @pytest.mark.slow

@@ -69,7 +69,7 @@ def _full_state(sc, point, z, mem, psi2, t=0.0):
     xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0,
                                   z_ref=sc.data["landing"]["hover_height"], aborts=0.0))
     xc = landing_loop_memory(lv.l).pack(dict(xg=xg, mem=mem))
-    return LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv)), xc
+    return LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(3))), xc
 
 
 def _wind_in_E(sc, psi2):

@@ -12,6 +12,7 @@ from reference import euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 
 from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, N_SINES, deck_function, pack_deck
+from quadland_symbolic.landing.gear import contact_params
 from quadland_symbolic.landing.plant import (
     LANDING_PLANT_OUTPUTS,
     LANDING_PLANT_PARAMS,
@@ -333,15 +334,17 @@ def test_gear_gap_level_quadrotor_over_a_tilted_deck(values):
 def test_landing_plant_and_outputs(values, rng):
     """The plant's ODE is both bodies' Newton-Euler; its outputs carry the issue's names."""
     p_quad, p_act, p_veh, p_deck = _params(values, rng, "ship")
-    pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
+    pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck,
+                                        **contact_params()))
     x1q, xv = _random_states(rng)
-    xp = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
+    xp = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(3)))
     F_cmd, w, t = rng.uniform(-1, F_MAX + 1, 4), rng.normal(size=6), 3.0
     xp_dot = _col(landing_plant_function()(xp, F_cmd, w, t, pp))
     pq, pv = QUADROTOR.unpack(p_quad), VEHICLE.unpack(p_veh)
+    # far above the deck the gear's forces and memory's rates are exactly zero
     np.testing.assert_allclose(xp_dot, np.concatenate([_quad6(x1q, F_cmd, w[:3], w[3:], pq),
-                                                       _vehicle(xv, pv)]), rtol=1e-12,
-                               atol=1e-12)
+                                                       _vehicle(xv, pv), np.zeros(3)]),
+                               rtol=1e-12, atol=1e-12)
     y = LANDING_PLANT_OUTPUTS.unpack(_col(landing_outputs_function()(xp, F_cmd, w, t, pp)))
     names = LANDING_PLANT_OUTPUTS.element_names()
     for required in ("x1 y1 z1 phi1 theta1 psi1 x2 y2 z2 phi2 theta2 psi2 x_e y_e z_e "
@@ -373,4 +376,4 @@ def test_a_car_gives_the_papers_relative_altitude_and_rates(values, rng):
     Rr1 = euler_rate_matrix(*x1q[3:5])
     np.testing.assert_allclose(Omega_e, x1q[9:12] - np.linalg.solve(Rr1, [0, 0, xv[5]]),
                                atol=1e-13)
-    assert QUAD6_STATE.size == 16 and LANDING_PLANT_STATE.size == 22
+    assert QUAD6_STATE.size == 16 and LANDING_PLANT_STATE.size == 22 + 3      # + the gear

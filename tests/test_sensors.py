@@ -24,6 +24,7 @@ from quadland.kinds.landing.sensor_settings import (
     validate_settings,
 )
 from quadland_symbolic.landing.deck import pack_deck
+from quadland_symbolic.landing.gear import contact_params
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
@@ -81,13 +82,15 @@ def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
         "p_veh": VEHICLE.pack(dict(m11=1500, m22=1500, m33=2500, d11=150, d22=1500, d33=2500,
                                    tau=[150 * u2_hold, 0, 0], z2=0)),
         "p_deck": pack_deck(deck),
+        **contact_params(),
     })
 
 
 def state(p1=(0, 0, 5), eta1=(0, 0, 0), V1=(0, 0, 0), Omega1=(0, 0, 0), F=None,
           xv=(0, 0, 0, 0, 0, 0)):
     F = [M1 * G / 4] * 4 if F is None else F
-    return LANDING_PLANT_STATE.pack({"x1q": np.concatenate([p1, eta1, V1, Omega1, F]), "xv": xv})
+    return LANDING_PLANT_STATE.pack({"x1q": np.concatenate([p1, eta1, V1, Omega1, F]), "xv": xv,
+                                     "gear": np.zeros(3)})
 
 
 def sense(name, xp, pp, noise=None, settings=None, uh=None, w=None, t=0.0):

@@ -17,6 +17,7 @@ import scipy.optimize
 from quadland.engine.compiled import SIM_EVENT, CompiledLoop, VMLoop
 from quadland.engine.loop import Clock
 from quadland_symbolic.landing.deck import N_DECK, pack_deck
+from quadland_symbolic.landing.gear import contact_params
 from quadland_symbolic.landing.plant import (
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
@@ -75,7 +76,8 @@ def _params():
     act = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=10.0, gear_height=GEAR))
     veh = VEHICLE.pack(dict(m11=100, m22=100, m33=80, d11=100, d22=100, d33=80,
                             tau=np.zeros(3), z2=0.0))
-    return LANDING_PLANT_PARAMS.pack(dict(p_quad=quad, p_act=act, p_veh=veh, p_deck=deck))
+    return LANDING_PLANT_PARAMS.pack(dict(p_quad=quad, p_act=act, p_veh=veh, p_deck=deck,
+                                          **contact_params()))
 
 
 def _meeting_time():
@@ -92,7 +94,7 @@ def test_free_fall_meets_a_heaving_deck_at_the_closed_form_time(loop_kind):
     loop = loop_kind(model, "sampled")
     x1q = QUAD6_STATE.pack(dict(p1=[3.0, -2.0, Z0], eta1=np.zeros(3), V1=np.zeros(3),
                                 Omega1=np.zeros(3), F=np.zeros(4)))
-    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=VEHICLE_STATE.zeros()))
+    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=VEHICLE_STATE.zeros(), gear=np.zeros(3)))
     clocks = (Clock(100.0, 0.0, 5.0, True), Clock(100.0, 0.0, 5.0, True),
               Clock(100.0, 0.0, 5.0, False))                # 10 ms steps up to 5 s
     run = loop.sampled(xp0, np.zeros(1), clocks, np.zeros((501, BODY_DISTURBANCE.size)), 1,

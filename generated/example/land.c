@@ -28,9 +28,11 @@
  *     the marker's age, ql_guidance_step and ql_landing_step on the estimate,
  *     whose rotor commands act QL_LAND_DELAY_PERIODS control periods later
  *     (the computation delay) and are held until the next.
- * The touchdown is the zero crossing of the gear gap (ql_landing_gear_gap),
- * located within its step by bisection; from then on the quadrotor rides on
- * the deck (ql_landed_row) until QL_LAND_SETTLE_TIME later. The disturbance
+ * The gear's first contact is the zero crossing of the lowest foot's height
+ * (ql_landing_first_contact), located within its step by bisection; the plant
+ * (whose gear contact carries the quadrotor, a free body on the deck) goes on
+ * from there in RK4 steps of at most QL_LAND_H_AFTER until QL_LAND_SETTLE_TIME
+ * later; the gear's contact switch joins the detector's verdict. The disturbance
  * is the scenario's bias + sine and the wind its mean + 1-cosine gust, held
  * over each disturbance sample. The random parts are left out, so that runs
  * are reproducible everywhere: the disturbance's noise, the turbulence and
@@ -41,8 +43,9 @@
  *
  * The CSV's columns are quadland simulate's trajectory.csv's (the layouts'
  * names); stdout holds the CSV alone. The last line on stderr is the
- * touchdown's figures as one JSON object with the keys of summary.json's
- * "landing" (after any warning). Exit status 0 when the
+ * landing's figures as one JSON object with the keys of summary.json's
+ * "landing" (after any warning): the first contact's, and landed and secured
+ * (quadland.kinds.landing.contact_report) from the rows after it. Exit status 0 when the
  * flight ran (landed or not), 1 when the flight code returned an error. */
 
 #define QLL_REAL ql_real
@@ -90,52 +93,34 @@ static ql_real gap(void *vctx, const ql_real *xp, double t)
 {
     const plant_ctx *c = (const plant_ctx *)vctx;
     ql_real g, tt = (ql_real)t;
-    ql_landing_gear_gap(xp, &tt, c->pp, &g);
+    ql_landing_first_contact(xp, &tt, c->pp, &g);
     return g;
 }
 
-/* The vehicle alone (the ride on the deck); the context is its parameters. */
-static void vehicle(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
-{
-    (void)t;
-    ql_vehicle(xv, (const ql_real *)vctx, xv_dot);
-}
-
-/* The ride on the deck: the vehicle's state, the pose pinned at touchdown, the
- * rotor forces then, and the yaw's unwrapping. */
-typedef struct {
-    ql_real xv[NXV], anchor[QL_LANDING_ANCHOR_SIZE], F_td[4], t_td, settle, aborts;
-    const ql_real *pp, *est;
-    double psi_prev, correction;
-} ride_ctx;
-
-static void vehicle_of_ride(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
-{
-    vehicle((void *)(((const ride_ctx *)vctx)->pp + 16), xv, t, xv_dot);
-}
-
-static double unwrap_step(double psi, double psi_prev, double *correction);
 static void write_row(double t, const ql_real *y, const ql_real *est);
 
-/* One row of the ride at tk (ql_landed_row: the rotors winding down, the quadrotor
- * pinned); nonzero, with a line on stderr, when it is not finite. */
-static int ride_row(void *vctx, const ql_real *xv, double tk, long row)
+/* What the rows from the first contact on tell (quadland.kinds.landing.contact_report). */
+typedef struct {
+    double t_td, t_last, bounce, tip, offset, engaged, margin, feet, peak, impact;
+    int aborts;                                 /* descents aborted before the contact */
+    ql_real figures[QL_TOUCHDOWN_FIGURES];
+} landed_t;
+
+/* A row from the first contact on: the gear's signals judged. */
+static void judge_row(landed_t *l, const ql_real *xp, const ql_real *sig, double t,
+                      const ql_real *pp)
 {
-    ride_ctx *r = (ride_ctx *)vctx;
-    ql_real x1q[16], tt = (ql_real)tk, sig[NY];
-    double psi;
-    (void)row;
-    ql_landed_row(xv, &tt, r->pp, r->anchor, r->F_td, &r->t_td, &r->settle, &r->aborts, sig,
-                  x1q);
-    if (!qll_all_finite(sig, NY)) {
-        fprintf(stderr, "land: t = %g s: the ride on the deck became non-finite\n", tk);
-        return 1;
-    }
-    psi = (double)sig[6];
-    sig[6] = (ql_real)unwrap_step(psi, r->psi_prev, &r->correction);
-    r->psi_prev = psi;
-    write_row(tk, sig, r->est);
-    return 0;
+    ql_real s[12], tt = (ql_real)t;
+    double off = hypot((double)sig[13], (double)sig[13 + 1]);
+    ql_landing_gear_signals(xp, &tt, pp, s);
+    if (s[3] < 0.5 && s[0] > l->bounce) l->bounce = s[0];
+    if (s[9] > l->tip) l->tip = s[9];
+    if (!(off <= l->offset)) l->offset = off;
+    if (xp[24] > l->peak) l->peak = xp[24];
+    l->engaged = s[4];
+    l->margin = s[10];
+    l->feet = s[3];
+    l->t_last = t;
 }
 
 /* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts]. */
@@ -216,59 +201,78 @@ static void write_row(double t, const ql_real *y, const ql_real *est)
     printf("\n");
 }
 
-/* numpy.unwrap's step: psi continued from the previous raw angle prev. */
-static double unwrap_step(double psi, double prev, double *correction)
+static void json_bool(const char *key, int value)
 {
-    const double pi = 3.141592653589793;
-    double dd = psi - prev, mod = fmod(dd + pi, 2 * pi);
-    if (mod != 0 && mod < 0) mod += 2 * pi;
-    mod -= pi;
-    if (mod == -pi && dd > 0) mod = pi;
-    if (fabs(dd) >= pi) *correction += mod - dd;
-    return psi + *correction;
+    fprintf(stderr, ", \"%s\": %s", key, value ? "true" : "false");
 }
 
-/* The touchdown's figures as one JSON object (summary.json's "landing"), on stderr. */
-static void write_report(int touchdown, double t, const ql_real *figures, int aborts)
+/* The landing's figures as one JSON object (summary.json's "landing"), on stderr: the
+ * first contact's, then landed and secured from the rows after it (l). */
+static void write_report(int touchdown, const landed_t *l, int aborts)
 {
-    int success = touchdown;
-    fprintf(stderr, "{\"touchdown\": %s, \"time\": ", touchdown ? "true" : "false");
-    if (touchdown) {
-        fprintf(stderr, "%.17g", t);
-    } else {
-        fprintf(stderr, "null");
-    }
-    if (touchdown) {
-        fprintf(stderr, ", \"sink_rate\": %.17g", (double)figures[0]);
-        success = success && (double)figures[0] <= QL_LAND_MAX_SINK_RATE;
-    } else {
+    const double row = 1.0 / QL_LAND_OUTPUT_RATE_HZ;
+    const char *failures[9];
+    int n = 0, i, settled, stopped, tipped, bounced, on_pad, secured;
+    if (!touchdown) {
+        fprintf(stderr, "{\"touchdown\": false, \"time\": null");
         fprintf(stderr, ", \"sink_rate\": null");
-    }
-    if (touchdown) {
-        fprintf(stderr, ", \"offset\": %.17g", (double)figures[1]);
-        success = success && (double)figures[1] <= QL_LAND_MAX_OFFSET;
-    } else {
         fprintf(stderr, ", \"offset\": null");
-    }
-    if (touchdown) {
-        fprintf(stderr, ", \"relative_speed\": %.17g", (double)figures[2]);
-        success = success && (double)figures[2] <= QL_LAND_MAX_RELATIVE_SPEED;
-    } else {
         fprintf(stderr, ", \"relative_speed\": null");
-    }
-    if (touchdown) {
-        fprintf(stderr, ", \"tilt_deg\": %.17g", (double)figures[3]);
-        success = success && (double)figures[3] <= QL_LAND_MAX_TILT_DEG;
-    } else {
         fprintf(stderr, ", \"tilt_deg\": null");
+        fprintf(stderr, ", \"aborts\": %d, \"success\": false, \"limits\": {", aborts);
+        fprintf(stderr, "\"max_sink_rate\": %.17g", QL_LAND_MAX_SINK_RATE);
+        fprintf(stderr, ", \"max_offset\": %.17g", QL_LAND_MAX_OFFSET);
+        fprintf(stderr, ", \"max_tilt_deg\": %.17g", QL_LAND_MAX_TILT_DEG);
+        fprintf(stderr, ", \"max_relative_speed\": %.17g", QL_LAND_MAX_RELATIVE_SPEED);
+        fprintf(stderr, ", \"max_gear_load\": %.17g", QL_LAND_MAX_GEAR_LOAD);
+        fprintf(stderr, ", \"max_bounce\": %.17g", QL_LAND_MAX_BOUNCE);
+        fprintf(stderr, ", \"max_friction_margin\": %.17g", QL_LAND_MAX_FRICTION_MARGIN);
+        fprintf(stderr, "}, \"secured\": null, \"bounced\": null, \"tipped\": null, "
+                "\"peak_gear_force\": null, \"impact_energy\": null, \"bounce\": null, "
+                "\"on_pad\": null, \"failures\": [\"no touchdown\"]}\n");
+        return;
     }
-    fprintf(stderr, ", \"aborts\": %d, \"success\": %s, \"limits\": {", aborts,
-           success ? "true" : "false");
+    if (!((double)l->figures[0] <= QL_LAND_MAX_SINK_RATE)) failures[n++] = "sink_rate";
+    if (!((double)l->figures[1] <= QL_LAND_MAX_OFFSET)) failures[n++] = "offset";
+    if (!((double)l->figures[2] <= QL_LAND_MAX_RELATIVE_SPEED)) failures[n++] = "relative_speed";
+    if (!((double)l->figures[3] <= QL_LAND_MAX_TILT_DEG)) failures[n++] = "tilt_deg";
+    settled = l->t_last >= l->t_td + QL_LAND_SETTLE_TIME - row - 1e-9;
+    stopped = l->t_last < fmin(l->t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION) - row - 1e-9;
+    tipped = l->tip > 1 || stopped;
+    bounced = l->bounce > QL_LAND_MAX_BOUNCE;
+    on_pad = settled && l->offset <= QL_LAND_MAX_OFFSET;
+    secured = settled && l->feet >= 3.5
+        && (l->engaged >= 0.95 || l->margin < QL_LAND_MAX_FRICTION_MARGIN);
+    if (bounced) failures[n++] = "bounced";
+    if (tipped) failures[n++] = "tipped";
+    if (l->peak > QL_LAND_MAX_GEAR_LOAD) failures[n++] = "gear load";
+    if (!on_pad) failures[n++] = "off the pad";
+    if (!secured) failures[n++] = "not secured";
+    fprintf(stderr, "{\"touchdown\": true, \"time\": %.17g", l->t_td);
+    fprintf(stderr, ", \"sink_rate\": %.17g", (double)l->figures[0]);
+    fprintf(stderr, ", \"offset\": %.17g", (double)l->figures[1]);
+    fprintf(stderr, ", \"relative_speed\": %.17g", (double)l->figures[2]);
+    fprintf(stderr, ", \"tilt_deg\": %.17g", (double)l->figures[3]);
+    fprintf(stderr, ", \"aborts\": %d", aborts);
+    json_bool("success", n == 0);
+    fprintf(stderr, ", \"limits\": {");
     fprintf(stderr, "\"max_sink_rate\": %.17g", QL_LAND_MAX_SINK_RATE);
     fprintf(stderr, ", \"max_offset\": %.17g", QL_LAND_MAX_OFFSET);
     fprintf(stderr, ", \"max_tilt_deg\": %.17g", QL_LAND_MAX_TILT_DEG);
     fprintf(stderr, ", \"max_relative_speed\": %.17g", QL_LAND_MAX_RELATIVE_SPEED);
-    fprintf(stderr, "}}\n");
+    fprintf(stderr, ", \"max_gear_load\": %.17g", QL_LAND_MAX_GEAR_LOAD);
+    fprintf(stderr, ", \"max_bounce\": %.17g", QL_LAND_MAX_BOUNCE);
+    fprintf(stderr, ", \"max_friction_margin\": %.17g", QL_LAND_MAX_FRICTION_MARGIN);
+    fprintf(stderr, "}");
+    json_bool("secured", secured);
+    json_bool("bounced", bounced);
+    json_bool("tipped", tipped);
+    fprintf(stderr, ", \"peak_gear_force\": %.17g, \"impact_energy\": %.17g, \"bounce\": %.17g",
+            l->peak, l->impact, l->bounce);
+    json_bool("on_pad", on_pad);
+    fprintf(stderr, ", \"failures\": [");
+    for (i = 0; i < n; ++i) fprintf(stderr, "%s\"%s\"", i ? ", " : "", failures[i]);
+    fprintf(stderr, "]}\n");
 }
 
 static int failed(double t, const char *what, ql_status status)
@@ -411,7 +415,7 @@ typedef struct {
 /* One control period of the flight code on the packets read now (the sensed loop's
  * steps 3 to 6): the IMU, the filter, the detector, the marker's age, the guidance
  * and the landing step. *what names the call that failed. */
-static ql_status fly(flight_t *f, const world_t *world, const ql_real *F_cmd,
+static ql_status fly(flight_t *f, const world_t *world, const ql_real *F_cmd, int contact,
                      const ql_guidance_params *guidance, ql_guidance_state *gs,
                      const ql_landing_params *params, ql_landing_state *state, ql_real dt,
                      ql_real tt, ql_landing_output *out, const char **what)
@@ -449,7 +453,8 @@ static ql_status fly(flight_t *f, const world_t *world, const ql_real *F_cmd,
     if (status != QL_OK) return status;
     f->marker_age = diag.fused[0] >= 0.5 ? (ql_real)0
         : (ql_real)fmin(f->marker_age + dt, QL_LAND_DETECTOR_TIME_CAP);
-    gcues.touchdown = flags.ground_contact;     /* the detector's verdict */
+    /* the detector's verdict, or the gear's contact switch */
+    gcues.touchdown = (flags.ground_contact > 0.5 || contact) ? 1 : 0;
     gcues.marker_age = f->marker_age;
     *what = "ql_guidance_step";
     status = ql_guidance_step(&y, &gcues, guidance, dt, gs, &ref);
@@ -476,7 +481,8 @@ int main(void)
     ql_real xp[NXP], xp_start[NXP], trial[NXP], work[5 * NXP], pp[QL_LANDING_PLANT_NP];
     ql_real w[QL_LANDING_NW], sig[NY], F_cmd[4] = {0, 0, 0, 0};
     ql_real queue[4 * (QL_LAND_DELAY_PERIODS + 1)];    /* commands, newest first */
-    ql_real figures[QL_TOUCHDOWN_FIGURES], tt;
+    ql_real gsig[12], tt;
+    landed_t landed;
     static world_t world;                       /* the sensors' delay lines */
     static flight_t flight;                     /* the filter, the detector, ... */
     ql_real p_sens[13], est_row[EST];
@@ -488,7 +494,7 @@ int main(void)
     plant_ctx ctx;
     double t = 0, t_next, t_td = 0, t_w = 0, dt = 1.0 / QL_LAND_CONTROL_RATE_HZ, tol, g_start,
         g_end;
-    long tick;
+    long tick, m;
     int i, touchdown = 0;
     ql_status status;
 
@@ -547,8 +553,8 @@ int main(void)
         if (qll_tick(&clocks[CLK_CTRL], t, tol, &tick)) {
             tt = (ql_real)t;
             sense(&world, tick, tt, xp, F_cmd, w, pp, p_sens);
-            status = fly(&flight, &world, F_cmd, &guidance, &gs, &params, &state, (ql_real)dt, tt,
-                         &out, &what);
+            status = fly(&flight, &world, F_cmd, xp[23] > 0, &guidance, &gs,
+                         &params, &state, (ql_real)dt, tt, &out, &what);
             if (status != QL_OK) return failed(t, what, status);
             /* the computation delay: this step's commands act QL_LAND_DELAY_PERIODS
              * control periods later */
@@ -561,60 +567,57 @@ int main(void)
             memcpy(est_row, flight.est, sizeof est_row);   /* the last control step's */
             signals(xp, &gs, t_row, t_w, pp, sig);
             write_row(t_row, sig, est_row);
+            if (touchdown) judge_row(&landed, xp, sig, t_row, pp);
         }
+        /* the run ends at the first grid point QL_LAND_SETTLE_TIME after the contact */
+        if (touchdown && t >= t_td + QL_LAND_SETTLE_TIME - tol) break;
         t_next = qll_grid_next(clocks, N_CLOCKS);
         if (isinf(t_next)) break;
         memcpy(xp_start, xp, sizeof xp);
-        qll_rk4_span(plant, &ctx, xp, NXP, t, t_next - t, QL_LAND_RK_STEPS, work);
+        m = QL_LAND_RK_STEPS;
+        if (touchdown) {                        /* on the deck: steps for the gear's modes */
+            m = (long)ceil((t_next - t) / QL_LAND_H_AFTER - 1e-9);
+            if (m < QL_LAND_RK_STEPS) m = QL_LAND_RK_STEPS;
+        }
+        qll_rk4_span(plant, &ctx, xp, NXP, t, t_next - t, m, work);
         if (!qll_all_finite(xp, NXP)) {
             fprintf(stderr, "land: t = %g s: the state became non-finite\n", t_next);
             return 1;
         }
         g_end = (double)gap(&ctx, xp, t_next);
-        if (g_start > 0 && !(g_end > 0)) {
+        if (!touchdown && g_start > 0 && !(g_end > 0)) {
+            /* the first contact: located, its row written, the span finished from there */
             t_td = t + qll_locate(plant, gap, &ctx, xp_start, xp, NXP, t, t_next - t,
                                   QL_LAND_RK_STEPS, trial, work);
             touchdown = 1;
-            break;
+            signals(xp, &gs, t_td, t_w, pp, sig);
+            write_row(t_td, sig, est_row);
+            ql_touchdown_figures(sig + 13, sig + 16, sig + 4,
+                                 sig + 10, landed.figures);
+            tt = (ql_real)t_td;
+            ql_landing_gear_signals(xp, &tt, pp, gsig);
+            landed.t_td = t_td;
+            landed.bounce = 0;
+            landed.tip = -INFINITY;
+            landed.offset = 0;
+            landed.peak = -INFINITY;
+            landed.impact = 0.5 * QL_LAND_MASS * (double)gsig[11]
+                * (double)gsig[11];
+            landed.aborts = gs.aborts;
+            judge_row(&landed, xp, sig, t_td, pp);
+            if (t_next > t_td) {
+                m = (long)ceil((t_next - t_td) / QL_LAND_H_AFTER - 1e-9);
+                if (m < 1) m = 1;
+                qll_rk4_span(plant, &ctx, xp, NXP, t_td, t_next - t_td, m, work);
+                if (!qll_all_finite(xp, NXP)) {
+                    fprintf(stderr, "land: t = %g s: the state became non-finite\n", t_next);
+                    return 1;
+                }
+            }
         }
         g_start = g_end;
         t = t_next;
     }
-    if (!touchdown) {
-        write_report(0, 0, figures, gs.aborts);
-        return 0;
-    }
-
-    /* The contact: the gear is on the deck (the event), the row says touchdown, as
-     * quadland simulate's; the land detector's verdict would come on the deck, after a
-     * whole window, and is not flown: the quadrotor rides from here. The recorded
-     * estimate is the last row's. */
-    gs.phase = QL_PHASE_TOUCHDOWN;
-    signals(xp, &gs, t_td, t_w, pp, sig);
-    write_row(t_td, sig, est_row);
-    ql_touchdown_figures(sig + 13, sig + 16, sig + 4, sig + 10,
-                         figures);
-
-    /* The ride on the deck (quadland_loop.h's qll_ride): pinned at the touchdown
-     * pose, the rotors winding down by the motors' lag, the vehicle going on. */
-    {
-        ride_ctx ride;
-        double t_end = fmin(t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION);
-        ql_landing_anchor(sig, ride.anchor);
-        memcpy(ride.xv, xp + 16, sizeof ride.xv);
-        memcpy(ride.F_td, xp + 12, sizeof ride.F_td);
-        ride.pp = pp;
-        ride.est = est_row;
-        ride.t_td = (ql_real)t_td;
-        ride.settle = (ql_real)QL_LAND_SETTLE_TIME;
-        ride.aborts = (ql_real)gs.aborts;
-        ride.psi_prev = (double)sig[6];
-        ride.correction = 0;
-        if (qll_ride(vehicle_of_ride, ride_row, &ride, ride.xv, NXV, &clocks[CLK_OUT], t_td,
-                     t_end, dt, work) < 0) {
-            return 1;
-        }
-    }
-    write_report(1, t_td, figures, gs.aborts);
+    write_report(touchdown, &landed, touchdown ? landed.aborts : gs.aborts);
     return 0;
 }

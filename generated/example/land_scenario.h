@@ -24,7 +24,9 @@
 #define QL_LAND_GUST_START 8.0                 /* s, 1-cosine gust */
 #define QL_LAND_GUST_HALF_LENGTH 1.0           /* s */
 #define QL_LAND_GUST_AMPLITUDE 3.0             /* m/s, 0: none */
-#define QL_LAND_SETTLE_TIME 2.0                /* s, the run ends this long after touchdown */
+#define QL_LAND_SETTLE_TIME 2.0                /* s, the run ends this long after the first contact */
+#define QL_LAND_H_AFTER 0.0008842201788588194   /* s, the longest RK4 step from the first contact on */
+#define QL_LAND_MASS 2.0                       /* kg, the impact energy's */
 
 /* Disturbance bias [d_F (N), d_M (N m)], body frame; the random part is left out. */
 static const double ql_land_bias[6] = {
@@ -40,9 +42,12 @@ static const double ql_land_gust_direction[3] = { 0.0, 1.0, 0.0 };
 #define QL_LAND_MAX_OFFSET 0.2
 #define QL_LAND_MAX_TILT_DEG 10.0
 #define QL_LAND_MAX_RELATIVE_SPEED 0.5
+#define QL_LAND_MAX_GEAR_LOAD 424.0
+#define QL_LAND_MAX_BOUNCE 0.02
+#define QL_LAND_MAX_FRICTION_MARGIN 1.0
 
-/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (3), p_veh (10), p_deck (247)). */
-static const double ql_land_pp[273] = {
+/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (3), p_veh (10), p_deck (247), p_gear (18), p_lock (4), p_td (4)). */
+static const double ql_land_pp[299] = {
     2.0, 0.025, 0.025, 0.045, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 9.8, 0.25,
     0.05, 0.02, 9.8, 0.2, 1500.0, 1500.0,
@@ -88,15 +93,20 @@ static const double ql_land_pp[273] = {
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-    0.0, 0.0, 1.5,
+    0.0, 0.0, 1.5, 0.15, 0.125, -0.2,
+    -0.15, 0.125, -0.2, -0.15, -0.125, -0.2,
+    0.15, -0.125, -0.2, 5000.0, 30.0, 0.5,
+    0.01, 300.0, 0.0001, 100.0, 0.25, 0.17,
+    0.001, 1.0, 0.0, 0.0, 0.002,
 };
 
-/* The initial plant state xp (QL_LANDING_PLANT_NX: x1q (16), xv (6)). */
-static const double ql_land_xp0[22] = {
+/* The initial plant state xp (QL_LANDING_PLANT_NX: x1q (16), xv (6), gear (3)). */
+static const double ql_land_xp0[25] = {
     -6.0, 3.0, 5.5, 0.0, 0.0, 0.0,
     13.88888888888889, 0.0, 0.0, 0.0, 0.0, 0.0,
     4.9, 4.9, 4.9, 4.9, 0.0, 0.0,
-    0.0, 13.88888888888889, 0.0, 0.0,
+    0.0, 13.88888888888889, 0.0, 0.0, 0.0, 0.0,
+    0.0,
 };
 
 

@@ -24,8 +24,8 @@ extern "C" {
 #define QLF_LANDING_STATE_SIZE 76                /* reals in qlf_landing_state */
 #define QLF_GUIDANCE_PARAMS_SIZE 13              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
-#define QLF_LANDING_PLANT_NX 22                  /* xp = [x1q (16), xv (6)] */
-#define QLF_LANDING_PLANT_NP 273                 /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (247)] */
+#define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
+#define QLF_LANDING_PLANT_NP 299                 /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (247), p_gear (18), p_lock (4), p_td (4)] */
 #define QLF_LANDING_NW 9                         /* w = [v_wind (3), d_F (3), d_M (3)] */
 #define QLF_LANDING_NY 42                        /* signals y of a landing */
 #define QLF_LANDING_ANCHOR_SIZE 12               /* anchor = [p_e (3), R_rel (9)] */
@@ -235,6 +235,17 @@ void qlf_landing_signals(const qlf_real *xp, const qlf_real *xg, const qlf_real 
 void qlf_landing_gear_gap(const qlf_real *xp, const qlf_real *t, const qlf_real *pp,
                           qlf_real *g);
 
+/* The lowest foot's height above the deck plane, m: the gear's first
+ * contact is its zero crossing (the integration goes on through it). */
+void qlf_landing_first_contact(const qlf_real *xp, const qlf_real *t, const qlf_real *pp,
+                               qlf_real *g);
+
+/* The gear's signals (foot and centre gaps, load, feet down, lock, relative
+ * roll, pitch and tilt, tip-over and friction margins, the lowest foot's
+ * sink rate) of the plant's state. */
+void qlf_landing_gear_signals(const qlf_real *xp, const qlf_real *t, const qlf_real *pp,
+                              qlf_real *s);
+
 /* The pose at touchdown (p_e, R_deck^T R1) from the signals y there. */
 void qlf_landing_anchor(const qlf_real *y, qlf_real *anchor);
 
@@ -326,7 +337,9 @@ void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_r
 #define ql_landing_anchor qlf_landing_anchor
 #define ql_landing_controller_params qlf_landing_controller_params
 #define ql_landing_cues qlf_landing_cues
+#define ql_landing_first_contact qlf_landing_first_contact
 #define ql_landing_gear_gap qlf_landing_gear_gap
+#define ql_landing_gear_signals qlf_landing_gear_signals
 #define ql_landing_loop_plant qlf_landing_loop_plant
 #define ql_landing_measurement qlf_landing_measurement
 #define ql_landing_output qlf_landing_output

@@ -104,7 +104,8 @@ class CompiledLoop:
             self._sampled.argtypes = [_REAL, _REAL, _REAL, D, _REAL, _REAL, L, L, L, _REAL,
                                       _REAL, _REAL,
                                       D, _REAL, _REAL, _REAL, _REAL, _LONG, L, _LONG, _REAL,
-                                      _REAL, ctypes.POINTER(D), _REAL]
+                                      _REAL, ctypes.POINTER(D), _REAL, D, D,
+                                      ctypes.POINTER(D), _REAL]
             if model.ride_rhs is not None:
                 self._ride = getattr(lib, f"{prefix}ride")
                 self._ride.argtypes = [_REAL, _REAL, _REAL, D, D, D, D, _REAL, _REAL, _REAL,
@@ -149,7 +150,8 @@ class CompiledLoop:
                    env if status == SIM_ENVELOPE else None)
 
     def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
-                bound=None, delay: int = 0, uh0=None, N=None) -> Run:
+                bound=None, delay: int = 0, uh0=None, N=None, h_after: float = np.inf,
+                after: float = np.inf) -> Run:
         """The sampled-data loop over the merged grid of its output, disturbance and
         control clocks.
 
@@ -159,7 +161,10 @@ class CompiledLoop:
         ``delay`` control periods pass between computing a command and applying
         it (``uh0`` is held before the first arrives; zero by default). A model
         with an event stops where it happens: the run's status is
-        :data:`SIM_EVENT`, ``t_stop`` its instant and ``x_end`` the state then.
+        :data:`SIM_EVENT`, ``t_stop`` its instant and ``x_end`` the state then; a
+        model whose event continues (:attr:`LoopModel.event_continues`) records its
+        first crossing (the run's ``t_event``, ``x_event``) and goes on in RK4 steps
+        of at most ``h_after`` until ``after`` seconds past it.
         ``bound`` (nenv,) are the envelope's bounds: the run stops at the first
         grid point outside them (:data:`SIM_ENVELOPE`).
         """
@@ -176,16 +181,20 @@ class CompiledLoop:
         xp_end, xc_end = np.empty(m.plant_state.size), np.empty(m.controller_state.size)
         env = np.full(max(bound.size, 1), np.nan)
         n_rows, t_stop = ctypes.c_long(0), ctypes.c_double(np.nan)
+        t_event, x_event = ctypes.c_double(np.nan), np.full(m.state.size, np.nan)
         N = tick_rows(m, N)
         status = self._sampled(
             _ptr(xp0), _ptr(xc0), _ptr(_clock_table(clocks)), float(out.T), _ptr(W),
             _ptr(N), N.shape[0], int(substeps), int(delay), _ptr(uh0), _ptr(pp), _ptr(pc),
             float(guard_min),
             _ptr(bound), _ptr(X), _ptr(R), _ptr(times), _ptr(w_index, _LONG), rows,
-            ctypes.byref(n_rows), _ptr(xp_end), _ptr(xc_end), ctypes.byref(t_stop), _ptr(env))
+            ctypes.byref(n_rows), _ptr(xp_end), _ptr(xc_end), ctypes.byref(t_stop), _ptr(env),
+            float(h_after), float(after), ctypes.byref(t_event), _ptr(x_event))
         n = n_rows.value
+        hit = not np.isnan(t_event.value)
         return Run(status, X[:n], R[:n], times[:n], w_index[:n], np.concatenate([xp_end, xc_end]),
-                   t_stop.value, env if status == SIM_ENVELOPE else None)
+                   t_stop.value, env if status == SIM_ENVELOPE else None, t_event.value,
+                   x_event if hit else None)
 
     def ride(self, z0, a, rows: Clock, t_ev: float, t_end: float, h_max: float, pp) -> Ride:
         """The ride after the event at ``t_ev`` (a model with ``ride_rhs``, ``ride_row``):

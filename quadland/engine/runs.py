@@ -51,6 +51,10 @@ class Run:
         NaN otherwise.
     envelope : ndarray or None
         For :data:`SIM_ENVELOPE`: the envelope magnitudes that left their bounds.
+    t_event : float
+        s, the first crossing of a continuing event (NaN: none).
+    x_event : ndarray or None
+        The loop's state at that instant.
     """
 
     status: int
@@ -61,6 +65,8 @@ class Run:
     x_end: np.ndarray
     t_stop: float = float("nan")
     envelope: np.ndarray | None = None
+    t_event: float = float("nan")
+    x_event: np.ndarray | None = None
 
     @property
     def rows(self) -> int:
@@ -84,11 +90,13 @@ class Ride:
     R: np.ndarray
 
 
-def make_run(m: LoopModel, status, X, R, times, w_index, x_end, t_stop, env) -> Run:
+def make_run(m: LoopModel, status, X, R, times, w_index, x_end, t_stop, env,
+             t_event=float("nan"), x_event=None) -> Run:
     X = np.array(X, dtype=float).reshape(-1, m.state.size)
     R = None if R is None else np.array(R, dtype=float).reshape(-1, m.recorded.size)
     return Run(status, X, R, np.array(times, dtype=float), np.array(w_index, dtype=np.int_),
-               np.asarray(x_end, dtype=float), t_stop, env if status == SIM_ENVELOPE else None)
+               np.asarray(x_end, dtype=float), t_stop, env if status == SIM_ENVELOPE else None,
+               float(t_event), None if x_event is None else np.asarray(x_event, dtype=float))
 
 
 def tick_rows(model: LoopModel, N) -> np.ndarray:

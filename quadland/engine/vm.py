@@ -10,7 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from quadland.engine.loop import Clock, locate_event, merged_grid, ride_grid, rk4_span
+from quadland.engine.loop import (
+    Clock,
+    grid_tolerance,
+    locate_event,
+    merged_grid,
+    ride_grid,
+    rk4_span,
+)
 from quadland.engine.runs import (
     SIM_ENVELOPE,
     SIM_EVENT,
@@ -27,6 +34,14 @@ from quadland.engine.runs import (
 from quadland_symbolic.loop import LoopModel, rk4_step
 
 __all__ = ["VMLoop"]
+
+
+def _span_steps(span: float, substeps: int, h_after: float, x_ev) -> int:
+    """RK4 steps over a span: ``substeps``, or after a continuing event at least
+    ``ceil(span / h_after)`` (``quadland_loop``'s driver alike)."""
+    if x_ev is None:
+        return substeps
+    return max(substeps, int(np.ceil(span / h_after - 1e-9)))
 
 
 class VMLoop:
@@ -84,7 +99,8 @@ class VMLoop:
         return make_run(m, status, X, None, times, w_index, x, t_stop, env)
 
     def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
-                bound=None, delay: int = 0, uh0=None, N=None) -> Run:
+                bound=None, delay: int = 0, uh0=None, N=None, h_after: float = np.inf,
+                after: float = np.inf) -> Run:
         """As :meth:`CompiledLoop.sampled`."""
         m = self.model
         N = tick_rows(m, N)
@@ -97,6 +113,7 @@ class VMLoop:
         i_w, status, t_stop, env = 0, SIM_OK, np.nan, None
         event = None if m.event is None else (lambda x, t: float(m.event(x, t, pp)))
         g_start = event(xp, grid[0]) if event is not None else None
+        t_ev, x_ev, tol = np.nan, None, grid_tolerance(clocks)
         for j, t in enumerate(grid):
             if dist[j] >= 0:
                 i_w = dist[j]
@@ -128,7 +145,7 @@ class VMLoop:
                 R.append(rv)
                 times.append(clocks[0].times()[out[j]])
                 w_index.append(i_w)
-            if j + 1 == len(grid):
+            if j + 1 == len(grid) or (x_ev is not None and t >= t_ev + after - tol):
                 break
             w, span = W[i_w], grid[j + 1] - t
 
@@ -136,18 +153,37 @@ class VMLoop:
                 return self._plant(xx, uh, w, tt, pp, h)
 
             start = xp
-            xp = rk4_span(step, start, t, span, substeps)
+            xp = rk4_span(step, start, t, span, _span_steps(span, substeps, h_after, x_ev))
             if not np.all(np.isfinite(xp)):
                 status, t_stop = SIM_NONFINITE, grid[j + 1]
                 break
-            if event is not None:
+            if event is not None and x_ev is None:
                 g_end = event(xp, grid[j + 1])
                 if g_start > 0 and not g_end > 0:
                     offset, xp = locate_event(step, event, start, xp, t, span, substeps)
-                    status, t_stop = SIM_EVENT, t + offset
-                    break
+                    if not m.event_continues:
+                        status, t_stop = SIM_EVENT, t + offset
+                        break
+                    t_ev, x_ev = t + offset, np.asarray(m.assemble(xp, xc), dtype=float).ravel()
+                    xp = self._after_event(xp, uh, w, pp, t_ev, grid[j + 1], h_after)
+                    if not np.all(np.isfinite(xp)):
+                        status, t_stop = SIM_NONFINITE, grid[j + 1]
+                        break
                 g_start = g_end
-        return make_run(m, status, X, R, times, w_index, np.concatenate([xp, xc]), t_stop, env)
+        return make_run(m, status, X, R, times, w_index, np.concatenate([xp, xc]), t_stop, env,
+                        t_ev, x_ev)
+
+    def _after_event(self, xp, uh, w, pp, t_ev: float, t_next: float, h_after: float):
+        """The rest of the span from a continuing event's state, in steps of at most
+        ``h_after``."""
+        if not t_next > t_ev:
+            return xp
+
+        def step(xx, tt, h):
+            return self._plant(xx, uh, w, tt, pp, h)
+
+        return rk4_span(step, xp, t_ev, t_next - t_ev,
+                        max(1, int(np.ceil((t_next - t_ev) / h_after - 1e-9))))
 
     def ride(self, z0, a, rows: Clock, t_ev: float, t_end: float, h_max: float, pp) -> Ride:
         """As :meth:`CompiledLoop.ride` (:func:`quadland.engine.loop.ride_grid`)."""

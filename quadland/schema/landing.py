@@ -165,10 +165,57 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                     hi=100.0, **_POS),
         "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0,
                              hi=1e3),
+        "max_gear_load": Field(F, "N", "limit: the gear's peak total normal load", hi=1e6,
+                               **_POS),
+        "max_bounce": Field(F, "m", "limit: the lowest foot's rebound above the deck with "
+                            "every foot off it", hi=100.0, **_POS),
+        "max_friction_margin": Field(F, "-", "secured without a lock: friction needed over "
+                                     "available at rest, at the end, below this", hi=1.0,
+                                     **_POS),
         "marker_timeout": Field(F, "s", "the descent starts only while the marker was seen "
                                 "within this time", lo=0.0, hi=1e3),
         "search_height": Field(F, "m", "hover height while the marker is not seen (in align)",
                                hi=1e3, **_POS),
+    },
+    # The landing gear on the deck (docs/contact.md): four feet at (+-feet_x, +-feet_y,
+    # -quadrotor.gear_height) in the body frame.
+    "gear": {
+        "welded": Field(B, "-", "true: the idealization of a touchdown that ends the flight at "
+                        "the gear gap's zero crossing, the quadrotor then pinned to the deck; "
+                        "false: the gear's contact carries it (docs/contact.md)"),
+        "feet_x": Field(F, "m", "the feet's distance from the centre along body x (half the "
+                        "skids' length)", hi=10.0, **_POS),
+        "feet_y": Field(F, "m", "the feet's distance from the centre along body y (half the "
+                        "track)", hi=10.0, **_POS),
+        "stiffness": Field(F, "N/m", "normal stiffness of one foot", hi=1e7, **_POS),
+        "damping": Field(F, "N s/m", "normal damping of one foot", lo=0.0, hi=1e5),
+        "friction": Field(F, "-", "Coulomb friction coefficient of a foot on the deck", lo=0.0,
+                          hi=2.0),
+        "slip_speed": Field(F, "m/s", "friction's regularisation speed at light loads",
+                            hi=1.0, **_POS),
+        "slip_damping_max": Field(F, "N s/m", "largest friction slope of a foot at zero slip",
+                                  hi=1e5, **_POS),
+        "onset_width": Field(F, "m", "smoothing width of the contact's onset", hi=0.01, **_POS),
+    },
+    # What happens once the gear touches (docs/landing.md, "Touchdown policy").
+    "touchdown": {
+        "policy": Field(S, "-", "idle: the gear's contact switch cuts the rotors to "
+                        "idle_thrust; hold: the flight code keeps commanding them",
+                        choices=("idle", "hold")),
+        "cut_delay": Field(F, "s", "time from the contact switch closing to the rotor cut",
+                           lo=0.0, hi=10.0),
+        "idle_thrust": Field(F, "N", "each rotor's command once cut", lo=0.0, hi=1e3),
+        "switch_impulse": Field(F, "s", "load impulse over the weight that closes the contact "
+                                "switch", hi=1.0, **_POS),
+        "lock": Field(S, "-", "lock-down device: none, or magnet (an electro-permanent magnet "
+                      "under the gear's centre)", choices=("none", "magnet")),
+        "lock_hold_force": Field(F, "N", "the lock's largest holding force", lo=0.0, hi=1e5),
+        "lock_delay": Field(F, "s", "dead time from the contact switch to the lock's pull",
+                            lo=0.0, hi=10.0),
+        "lock_rise_time": Field(F, "s", "time constant of the lock's first-order rise",
+                                hi=10.0, **_POS),
+        "lock_gap_scale": Field(F, "m", "gap at which the lock's pull falls to a quarter",
+                                hi=1e6, **_POS),
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.
     "sensors": {
@@ -245,6 +292,7 @@ def check_landing(data: dict) -> None:
         raise ScenarioError("landing.touchdown_speed: must be <= landing.descent_speed")
     if guidance["hover_height"] <= data["quadrotor"]["gear_height"]:
         raise ScenarioError("landing.hover_height: must be above quadrotor.gear_height")
+    _check_gear(data)
     if guidance["search_height"] < guidance["hover_height"]:
         raise ScenarioError("landing.search_height: must be at or above landing.hover_height "
                             "(the search for the marker climbs)")
@@ -257,6 +305,13 @@ def check_landing(data: dict) -> None:
     if lockout < 1 or lockout != int(lockout):
         raise ScenarioError(f"estimator.gate_lockout: must be a whole number of refusals >= 1, "
                             f"got {lockout:g}")
+
+
+def _check_gear(data: dict) -> None:
+    """The gear's contact needs a positive gear height; a friction of 0 is allowed."""
+    if not data["gear"]["welded"] and data["quadrotor"]["gear_height"] <= 0:
+        raise ScenarioError("quadrotor.gear_height: must be positive for the gear's contact "
+                            "(the feet's depth below the centre; gear.welded = true takes none)")
 
 
 def _check_sea(deck: dict) -> None:

@@ -222,7 +222,12 @@ class LandingDefaults(FlightDefaults):
     settle_time : float
         s from touchdown to the end of the run.
     limits : tuple of (str, float)
-        The touchdown limits by name (``max_sink_rate``, ...), in report order.
+        The touchdown limits by name (``max_sink_rate``, ...), in report order: the
+        first-contact figures', then the gear's (``max_gear_load``, ...).
+    h_after : float
+        s, the longest RK4 step from the gear's first contact on.
+    mass : float
+        kg, the quadrotor's (the impact energy's).
     sensors : SensorDefaults or None
         The example's sensors, filter and land detector (``sensors.enabled``);
         None: it flies on perfect sensing.
@@ -245,5 +250,7 @@ class LandingDefaults(FlightDefaults):
     gust_direction: tuple[float, float, float]
     settle_time: float
     limits: tuple[tuple[str, float], ...]
+    h_after: float = 1e-3
+    mass: float = 2.0
     sensors: SensorDefaults | None = None
 

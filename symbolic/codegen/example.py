@@ -15,6 +15,7 @@ from quadland_symbolic.codegen.simulator import loop_header
 from quadland_symbolic.codegen.structs import (
     output_layout,
 )
+from quadland_symbolic.landing.gear import FAILURES, GEAR_SIGNALS, GEAR_STATE
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_STATE,
 )
@@ -210,6 +211,10 @@ def land_context(d: LandingDefaults) -> dict:
         xv=LANDING_PLANT_STATE.slice("xv").start, x1q_size=QUAD6_STATE.size,
         rotors=x1q + QUAD6_STATE.slice("F").start,
         p_veh=LANDING_PLANT_PARAMS.slice("p_veh").start,
+        gear={n: LANDING_PLANT_STATE.slice("gear").start + GEAR_STATE.slice(n).start
+              for n in GEAR_STATE.names()},
+        gs={n: GEAR_SIGNALS.slice(n).start for n in GEAR_SIGNALS.names()}, ngs=GEAR_SIGNALS.size,
+        failures=FAILURES,
     )
 
 

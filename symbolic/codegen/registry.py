@@ -27,7 +27,11 @@ from quadland_symbolic.landing.estimator import (
     estimator_step_function,
 )
 from quadland_symbolic.landing.land_detector import land_detector_function
-from quadland_symbolic.landing.loop import gear_gap_function
+from quadland_symbolic.landing.loop import (
+    first_contact_function,
+    gear_gap_function,
+    landing_gear_signals_function,
+)
 from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
@@ -162,6 +166,13 @@ FUNCTIONS = (
         ("landing_gear_gap", gear_gap_function,
          "The landing gear's height above the deck plane, m: touchdown is its zero\n"
          " * crossing."),
+        ("landing_first_contact", first_contact_function,
+         "The lowest foot's height above the deck plane, m: the gear's first\n"
+         " * contact is its zero crossing (the integration goes on through it)."),
+        ("landing_gear_signals", landing_gear_signals_function,
+         "The gear's signals (foot and centre gaps, load, feet down, lock, relative\n"
+         " * roll, pitch and tilt, tip-over and friction margins, the lowest foot's\n"
+         " * sink rate) of the plant's state."),
         ("landing_anchor", anchor_function,
          "The pose at touchdown (p_e, R_deck^T R1) from the signals y there."),
         ("landed_row", landed_row_function,

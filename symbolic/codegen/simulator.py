@@ -107,6 +107,8 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     files[f"{prefix}{part}.c"] = render("simulator.c.jinja",
         prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
         has_event=driver == "sampled" and model.event is not None,
+        event_continues=driver == "sampled" and model.event is not None
+        and model.event_continues,
         has_envelope=model.envelope is not None, max_delay=MAX_DELAY_PERIODS,
         has_ride=has_ride, has_tick=driver == "sampled" and model.tick_inputs is not None,
         casadi_version=ca.__version__, sizes=sizes,

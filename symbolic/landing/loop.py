@@ -17,16 +17,23 @@
   (the phase among it) and the step's; the held input is the rotor commands,
   the guard the measured tilt; **step_args** gives both steps' arguments, for
   the flight code behind the same signature (``controller.backend = "c"``);
-* **event** ``event(xp, t, pp)``: the gear gap; touchdown ends the
-  integration at the instant it happens;
+* **event** ``event(xp, t, pp)``: the lowest foot's height above the deck
+  (:func:`quadland_symbolic.landing.gear.foot_gap`); the first contact is
+  located at the instant it happens and the integration goes on through it
+  (``event_continues``): the gear's contact, in the plant, carries the
+  quadrotor from then on, a free body on the deck;
 * **assemble** ``x = [xp, xc]`` and **outputs** ``y`` (:func:`loop_outputs`):
   the signals of the landing trajectory.
 
-After touchdown the quadrotor rides on the deck, pinned at its touchdown
-pose with its rotors idle (:mod:`quadland_symbolic.landing.ride`): the loop's
-*ride* (:func:`landing_ride_start`, and the model's ``ride_rhs``, the vehicle
-alone, and ``ride_row``, the loop's state, signals and recorded signals of a
-row, from the vehicle's state, the deck's motion and that pose).
+``landing_loop(l, welded=True)`` is the idealization the gear's contact
+replaced, for a user who asks for it: the event is the gear gap (a point
+``gear_height`` below the centre), touchdown ends the integration, and the
+quadrotor rides on the deck, pinned at its touchdown pose with its rotors
+idle (:mod:`quadland_symbolic.landing.ride`): the loop's *ride*
+(:func:`landing_ride_start`, and the model's ``ride_rhs``, the vehicle alone,
+and ``ride_row``, the loop's state, signals and recorded signals of a row, from
+the vehicle's state, the deck's motion and that pose); its plant is
+``landing_free_plant``, without the gear's contact.
 """
 
 from __future__ import annotations
@@ -43,6 +50,12 @@ from quadland_symbolic.landing.controller import (
     landing_memory,
     landing_step_outputs,
     measured_cues,
+)
+from quadland_symbolic.landing.gear import (
+    GEAR_STATE,
+    contact_switch,
+    foot_gap_function,
+    gear_signals_function,
 )
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_PARAMS,
@@ -65,7 +78,9 @@ from quadland_symbolic.loop import LoopModel
 from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
 
 __all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
-           "landing_loop_state", "loop_outputs", "gear_gap_function", "landing_ride_constants",
+           "landing_loop_state", "loop_outputs", "gear_gap_function", "first_contact_function",
+           "landing_gear_signals_function",
+           "landing_ride_constants",
            "landing_ride_start", "landing_ride_functions", "landing_flight_step",
            "landing_envelope_function", "landing_loop"]
 
@@ -141,6 +156,30 @@ def gear_gap_function() -> ca.Function:
 
 
 @functools.cache
+def first_contact_function() -> ca.Function:
+    """``landing_first_contact(xp, t, pp) -> g``: the lowest foot's height above the deck
+    plane, m (:func:`quadland_symbolic.landing.gear.foot_gap`); the first contact is its
+    zero crossing (the simulator's event, which the integration goes on through)."""
+    xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    s, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
+    return ca.Function("landing_first_contact", [xp, t, pp],
+                       [foot_gap_function()(s["x1q"], s["xv"], t, p["p_veh"], p["p_deck"],
+                                            p["p_gear"])],
+                       ["xp", "t", "pp"], ["g"])
+
+
+@functools.cache
+def landing_gear_signals_function() -> ca.Function:
+    """``landing_gear_signals(xp, t, pp) -> s``: the gear's signals
+    (:data:`quadland_symbolic.landing.gear.GEAR_SIGNALS`) of the plant's state."""
+    xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    s, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
+    sig = gear_signals_function()(s["x1q"], s["xv"], s["gear"], t, p["p_quad"], p["p_veh"],
+                                  p["p_deck"], p["p_gear"], p["p_lock"])
+    return ca.Function("landing_gear_signals", [xp, t, pp], [sig], ["xp", "t", "pp"], ["s"])
+
+
+@functools.cache
 def landing_envelope_function(l: int) -> ca.Function:
     """``envelope(x, uh) -> s``: the :data:`LANDING_ENVELOPE` magnitudes of the loop state ``x``
     (:func:`landing_loop_state`); ``uh``, the held rotor commands, is not needed (they are
@@ -163,6 +202,7 @@ def landing_ride_constants(l: int, recorded: Layout = LANDING_RECORDED) -> Layou
     loop's ``recorded`` layout, :data:`LANDING_RECORDED` or a sensed loop's)."""
     return Layout("ride_land" if recorded is LANDING_RECORDED else f"ride_{recorded.name}", (
         Field.nested("anchor", ANCHOR, "the pose pinned to the deck"),
+        Field.nested("gear", GEAR_STATE, "the gear's memory at touchdown, held"),
         Field("F_td", 4, "N", "rotor forces at touchdown (then winding down)"),
         Field("t_td", 1, "s", "touchdown time"),
         Field("settle", 1, "s", "landing.settle_time: the phase is LANDED from t_td + settle"),
@@ -182,7 +222,8 @@ def landing_ride_start(l: int, recorded: Layout = LANDING_RECORDED) -> ca.Functi
     xs = landing_loop_state(l).unpack(x)
     ps, rs = LANDING_PLANT_STATE.unpack(xs["xp"]), recorded.unpack(rec)
     idle = ca.vertcat(ca.SX.zeros(4), *(rs[f.name] for f in recorded.fields[1:]))
-    a = ca.vertcat(anchor_function()(y), QUAD6_STATE.unpack(ps["x1q"])["F"], t, settle,
+    a = ca.vertcat(anchor_function()(y), ps["gear"], QUAD6_STATE.unpack(ps["x1q"])["F"], t,
+                   settle,
                    LANDING_SIGNALS.unpack(y)["aborts"], xs["xc"], idle)
     return ca.Function("ride_start", [x, y, rec, t, settle], [ps["xv"], a],
                        ["x", "y", "rec", "t", "settle"], ["z", "a"])
@@ -202,7 +243,8 @@ def landing_ride_functions(l: int, recorded: Layout = LANDING_RECORDED
     c = landing_ride_constants(l, recorded).unpack(a)
     y, x1q = landed_row_function()(z, t, pp, ca.vertcat(c["anchor"]), c["F_td"], c["t_td"],
                                    c["settle"], c["aborts"])
-    ride_row = _named("ride_row", [z, a, t, pp], [ca.vertcat(x1q, z, c["xc"]), y, c["rec"]],
+    ride_row = _named("ride_row", [z, a, t, pp],
+                      [ca.vertcat(x1q, z, c["gear"], c["xc"]), y, c["rec"]],
                       ["z", "a", "t", "pp"], ["x", "y", "rec"])
     return ride_rhs, ride_row
 
@@ -233,23 +275,29 @@ def _named(name, ins, outs, in_names, out_names):
 
 
 @functools.cache
-def landing_loop(l: int) -> LoopModel:
+def landing_loop(l: int, welded: bool = False) -> LoopModel:
     """The landing loop for ``l`` RBF nodes (see the module docstring).
 
     Sampled-data only: the landing step runs at the control rate (``pc``'s
     ``dt``) and its rotor commands are held; there is no continuous loop
-    (``rhs`` is None). ``p`` of ``outputs`` is the plant's ``pp``.
+    (``rhs`` is None). ``p`` of ``outputs`` is the plant's ``pp``. ``welded``:
+    the idealization of a touchdown that ends the flight, the quadrotor then
+    pinned to the deck (the runtime zeroes the gear's forces for it).
     """
     xc_lay, pc_lay, x_lay = landing_loop_memory(l), landing_loop_params(l), landing_loop_state(l)
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    plant = _named("plant", [xp, uh, w, t, pp], [loop_plant_function()(xp, uh, w, t, pp)],
+    plant = _named("plant", [xp, uh, w, t, pp],
+                   [loop_plant_function(not welded)(xp, uh, w, t, pp)],
                    ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
 
     xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
     cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
     y = measurement_function()(xp, t, ps["pp"])
-    args, xc_next, rec, res = landing_flight_step(l, y, measured_cues(y, ps["p_guid"]), cs, ps)
+    cues = measured_cues(y, ps["p_guid"])
+    switch = contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"])
+    cues = ca.vertcat(ca.fmax(cues[0], switch), cues[1])         # the gear's switch, too
+    args, xc_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     step_args = _named("step_args", [xp, xc, pc, first, t], list(args.values()),
                        ["xp", "xc", "pc", "first", "t"], list(args))
     controller = _named("controller", [xp, xc, pc, first, t],
@@ -257,13 +305,14 @@ def landing_loop(l: int) -> LoopModel:
                         ["xp", "xc", "pc", "first", "t"], ["xc_next", "uh", "rec", "guard"])
 
     assemble = _named("assemble", [xp, xc], [ca.vertcat(xp, xc)], ["xp", "xc"], ["x"])
-    ride_rhs, ride_row = landing_ride_functions(l)
+    ride_rhs, ride_row = landing_ride_functions(l) if welded else (None, None)
     x = x_lay.sym()
     output_fn = _named("outputs", [x, w, t, pp], [loop_outputs(l, x, w, t, pp)],
                        ["x", "w", "t", "p"], ["y"])
-    event = _named("event", [xp, t, pp], [gear_gap_function()(xp, t, pp)],
-                   ["xp", "t", "pp"], ["g"])
-    return LoopModel("landing", x_lay, LANDING_DISTURBANCE, LANDING_PLANT_PARAMS, LANDING_SIGNALS,
+    gap = gear_gap_function() if welded else first_contact_function()
+    event = _named("event", [xp, t, pp], [gap(xp, t, pp)], ["xp", "t", "pp"], ["g"])
+    return LoopModel("landing_welded" if welded else "landing", x_lay, LANDING_DISTURBANCE,
+                     LANDING_PLANT_PARAMS, LANDING_SIGNALS,
                      None, output_fn,
                      LANDING_PLANT_STATE, COMMAND, xc_lay, LANDING_PLANT_PARAMS, pc_lay,
                      LANDING_RECORDED, plant,
@@ -271,4 +320,4 @@ def landing_loop(l: int) -> LoopModel:
                      envelope=_named("envelope", [x, uh], [landing_envelope_function(l)(x, uh)],
                                      ["x", "uh"], ["s"]),
                      envelope_layout=LANDING_ENVELOPE, flight="landing_flight_controller.c.jinja",
-                     ride_rhs=ride_rhs, ride_row=ride_row)
+                     ride_rhs=ride_rhs, ride_row=ride_row, event_continues=not welded)

@@ -1,10 +1,16 @@
 """The landing plant as one ODE: 6-DOF quadrotor and vehicle (eq. 1-4).
 
-State ``xp`` (:data:`LANDING_PLANT_STATE`) = ``[x1q (16), xv (6)]``; inputs held over
+State ``xp`` (:data:`LANDING_PLANT_STATE`) = ``[x1q (16), xv (6), x_gear (3)]``; inputs held over
 a control period: the rotor commands ``F_cmd`` (:data:`~quadland_symbolic.landing.
 quadrotor.COMMAND`) and the disturbance ``w = [d_F, d_M]``
 (:data:`quadland_symbolic.quadrotor.BODY_DISTURBANCE`, body frame); the time ``t`` drives
 the deck. The deck's heave, roll and pitch are prescribed, not integrated.
+
+The landing gear's contact (:mod:`quadland_symbolic.landing.gear`, on
+:mod:`quadland_symbolic.landing.contact`) adds its wrench to ``d_F``, ``d_M``
+from the first touch on, and its memory ``x_gear`` (load impulse, contact
+clock, peak load) to the state; the touchdown policy's rotor cut acts on
+the commands. Far above the deck the contact's forces are exactly zero.
 """
 
 from __future__ import annotations
@@ -14,7 +20,9 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.contact import GEAR, LOCK
 from quadland_symbolic.landing.deck import DECK_PARAMS, DECK_POSE, deck_pose
+from quadland_symbolic.landing.gear import GEAR_STATE, TOUCHDOWN_POLICY, gear_terms
 from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
 from quadland_symbolic.landing.relative import RELATIVE6, relative6
 from quadland_symbolic.layout import Field, Layout
@@ -30,7 +38,8 @@ __all__ = ["LANDING_PLANT_STATE", "LANDING_PLANT_PARAMS", "LANDING_PLANT_OUTPUTS
 LANDING_PLANT_STATE = Layout("xp_land", (
     Field.nested("x1q", QUAD6_STATE, "6-DOF quadrotor"),
     Field.nested("xv", VEHICLE_STATE, "vehicle (planar, eq. 4)"),
-), "landing plant state: 6-DOF quadrotor and vehicle")
+    Field.nested("gear", GEAR_STATE, "landing gear's memory: load impulse, contact clock, peak"),
+), "landing plant state: 6-DOF quadrotor, vehicle and the gear's memory")
 
 #: Parameters of the landing plant.
 LANDING_PLANT_PARAMS = Layout("pp_land", (
@@ -38,6 +47,9 @@ LANDING_PLANT_PARAMS = Layout("pp_land", (
     Field.nested("p_act", ACTUATOR, "motors and landing gear"),
     Field.nested("p_veh", VEHICLE, "vehicle constants and inputs (its z2 is unused)"),
     Field.nested("p_deck", DECK_PARAMS, "prescribed deck motion and pad"),
+    Field.nested("p_gear", GEAR, "landing gear's feet, stiffness, damping and friction"),
+    Field.nested("p_lock", LOCK, "lock-down device (F_hold = 0: none)"),
+    Field.nested("p_td", TOUCHDOWN_POLICY, "touchdown policy: the rotor cut"),
 ), "landing plant parameters")
 
 #: Signals of :func:`landing_outputs_function`: the landing trajectory's columns.
@@ -53,18 +65,27 @@ LANDING_PLANT_OUTPUTS = Layout("y6", (
 ), "landing signals: both bodies in E, the relative state, rotors and disturbance")
 
 
-def landing_plant_rhs(xp, F_cmd, w, t, pp):
-    """``xp_dot``: eq. (1)-(2) with motor lag for x1q, eq. (3)-(4) for xv.
+def landing_plant_rhs(xp, F_cmd, w, t, pp, contact: bool = True):
+    """``xp_dot``: eq. (1)-(2) with motor lag for x1q, eq. (3)-(4) for xv, the gear's memory.
 
-    ``t`` does not enter: the deck's prescribed motion moves no state.
-    It is an argument so that the simulator's signature does not change
-    when something time-dependent does.
+    ``t`` drives the deck's prescribed motion, which the gear's contact feels
+    (:func:`quadland_symbolic.landing.gear.gear_terms`: its wrench joins ``w``'s
+    ``d_F``, ``d_M``; the touchdown policy's cut acts on ``F_cmd``). ``contact =
+    False``: the plant in free flight, the gear's forces and memory left out (the
+    simulator's plant before the first contact, where they vanish).
     """
     x, ws = LANDING_PLANT_STATE.unpack(xp), BODY_DISTURBANCE.unpack(w)
     p = LANDING_PLANT_PARAMS.unpack(pp)
+    d_F, d_M, gear_dot = ca.SX.zeros(3), ca.SX.zeros(3), ca.SX.zeros(GEAR_STATE.size)
+    if contact:
+        d_F, d_M, gear_dot, F_cmd = gear_terms(x["x1q"], x["xv"], x["gear"], F_cmd, t,
+                                               p["p_quad"], p["p_veh"], p["p_deck"],
+                                               p["p_gear"], p["p_lock"], p["p_td"])
     return ca.vertcat(
-        quadrotor6_rhs(x["x1q"], F_cmd, ws["d_F"], ws["d_M"], p["p_quad"], p["p_act"]),
+        quadrotor6_rhs(x["x1q"], F_cmd, ws["d_F"] + d_F, ws["d_M"] + d_M, p["p_quad"],
+                       p["p_act"]),
         vehicle_rhs(x["xv"], p["p_veh"]),
+        gear_dot,
     )
 
 
@@ -118,11 +139,15 @@ def body_disturbance(xp, w, pp):
 
 
 @functools.cache
-def loop_plant_function() -> ca.Function:
+def loop_plant_function(contact: bool = True) -> ca.Function:
     """``landing_loop_plant(xp, F_cmd, w, t, pp) -> xp_dot``: the landing plant under
-    the loop's disturbance ``w`` (:data:`LANDING_DISTURBANCE`: wind in E, body ``d_F``, ``d_M``)."""
+    the loop's disturbance ``w`` (:data:`LANDING_DISTURBANCE`: wind in E, body ``d_F``, ``d_M``);
+    ``contact = False``: ``landing_free_plant``, in free flight (:func:`landing_plant_rhs`).
+    Common subexpressions are merged (the deck's pose serves the feet and the lock)."""
     xp, F_cmd, w, t, pp = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym(), \
         ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    return ca.Function("landing_loop_plant", [xp, F_cmd, w, t, pp],
-                       [landing_plant_rhs(xp, F_cmd, body_disturbance(xp, w, pp), t, pp)],
-                       ["xp", "F_cmd", "w", "t", "pp"], ["xp_dot"])
+    return ca.Function("landing_loop_plant" if contact else "landing_free_plant",
+                       [xp, F_cmd, w, t, pp],
+                       [landing_plant_rhs(xp, F_cmd, body_disturbance(xp, w, pp), t, pp,
+                                          contact)],
+                       ["xp", "F_cmd", "w", "t", "pp"], ["xp_dot"], {"cse": True})

@@ -31,7 +31,9 @@ tick ``t_k`` (period ``T``), does, in this order:
    on its cues (:func:`detector_cues`): the delivered range, the estimated gear gap
    and vertical speed, the thrust acting now over the model's hover thrust, the
    IMU's specific force along body z and the guidance's phase. Its ground-contact
-   stage is the guidance's ``touchdown`` cue; the time since the filter last fused
+   stage, or the gear's contact switch
+   (:func:`~quadland_symbolic.landing.gear.contact_switch`, the touchdown
+   policy's), is the guidance's ``touchdown`` cue; the time since the filter last fused
    a marker detection (the memory's ``marker_age``) is its ``marker_age``.
 6. **Flight code: guidance and landing step** on the estimate and those cues, with
    the controller's own model ``pc.pp``
@@ -72,6 +74,7 @@ from quadland_symbolic.landing.estimator import (
     estimator_memory,
     estimator_step_function,
 )
+from quadland_symbolic.landing.gear import contact_switch
 from quadland_symbolic.landing.guidance import (
     DESCEND,
     GUIDANCE_PARAMS,
@@ -299,9 +302,10 @@ def detector_cues_function() -> ca.Function:
 
 
 @functools.cache
-def landing_sensed_loop(l: int) -> LoopModel:
-    """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring)."""
-    base, xc_lay, pc_lay = landing_loop(l), sensed_loop_memory(l), sensed_loop_params(l)
+def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
+    """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring);
+    ``welded`` as in :func:`~quadland_symbolic.landing.loop.landing_loop`."""
+    base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     xc, pc, first, n = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first"), SENSED_TICK.sym()
@@ -325,7 +329,8 @@ def landing_sensed_loop(l: int) -> LoopModel:
     fl = LAND_DETECTOR_FLAGS.unpack(flags)
     seen = d["fused"][[b.name for b in BLOCKS].index("vision")]
     marker_age = ca.if_else(seen >= 0.5, 0, ca.fmin(cs["marker_age"] + ps["dt"], TIME_CAP))
-    cues = ca.vertcat(fl["ground_contact"], marker_age)
+    switch = contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"])
+    cues = ca.vertcat(ca.fmax(fl["ground_contact"], switch), marker_age)
     _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
     nav = _NAV_MEMORY.unpack(nav_next)
@@ -339,7 +344,7 @@ def landing_sensed_loop(l: int) -> LoopModel:
                 datalink=packets[3], nav=cs["nav"], p_est=ps["p_est"], dt=ps["dt"], time=t,
                 F_cmd=uh, xld=cs["xld"], p_ld=ps["p_ld"], marker_age=cs["marker_age"],
                 xg=cs["xg"], mem=cs["mem"], p_guid=ps["p_guid"], p_ctrl=ps["p_ctrl"],
-                p_quad=plant_p["p_quad"], p_act=plant_p["p_act"],
+                p_quad=plant_p["p_quad"], p_act=plant_p["p_act"], contact_switch=switch,
                 **{f"line_{name}": line for name, line in zip(SENSOR_NAMES, lines, strict=True)})
     step_args = ca.Function("step_args", [xp, xc, pc, first, t, uh, w, pp, n],
                             list(args.values()),
@@ -350,13 +355,14 @@ def landing_sensed_loop(l: int) -> LoopModel:
         [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],
          rec, res["tilt"]],
         ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
-        ["xc_next", "uh", "rec", "guard"])
+        ["xc_next", "uh", "rec", "guard"], {"cse": True})      # the deck's pose, once
     assemble = ca.Function("assemble", [xp, xc], [ca.vertcat(xp, cs["xg"], cs["mem"])],
                            ["xp", "xc"], ["x"])
-    ride_rhs, ride_row = landing_ride_functions(l, SENSED_RECORDED)
+    ride_rhs, ride_row = landing_ride_functions(l, SENSED_RECORDED) if welded else (None, None)
     # the plant, the outputs, the event and the envelope are the unsensed loop's own
     return dataclasses.replace(
-        base, name="landing_sensed", controller_state=xc_lay, controller_params=pc_lay,
+        base, name="landing_sensed_welded" if welded else "landing_sensed",
+        controller_state=xc_lay, controller_params=pc_lay,
         recorded=SENSED_RECORDED, controller=controller, assemble=assemble,
         step_args=step_args, flight="landing_sensed_flight_controller.c.jinja",
         ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)

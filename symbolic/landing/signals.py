@@ -15,6 +15,7 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.landing.deck import DECK_POSE, deck_pose
+from quadland_symbolic.landing.gear import gear_terms
 from quadland_symbolic.landing.guidance import GUIDANCE_STATE
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
@@ -81,12 +82,18 @@ def landing_signals_function() -> ca.Function:
     """``landing_signals(xp, xg, w, t, pp) -> y``: :data:`LANDING_SIGNALS` in flight.
 
     The plant's state ``xp``, the guidance's state ``xg`` (its phase and
-    abort count) and the disturbance ``w`` (:data:`LANDING_DISTURBANCE`).
+    abort count) and the disturbance ``w`` (:data:`LANDING_DISTURBANCE`); ``d_F``,
+    ``d_M`` add the gear's contact and the lock-down's pull
+    (:func:`quadland_symbolic.landing.gear.gear_terms`) to the wind and the disturbance.
     """
     xp, xg, w = LANDING_PLANT_STATE.sym(), GUIDANCE_STATE.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     ps, gs = LANDING_PLANT_STATE.unpack(xp), GUIDANCE_STATE.unpack(xg)
     d = BODY_DISTURBANCE.unpack(body_disturbance(xp, w, pp))
-    y = landing_signals(ps["x1q"], ps["xv"], t, pp, d["d_F"], d["d_M"], gs["phase"], gs["aborts"])
+    p = LANDING_PLANT_PARAMS.unpack(pp)
+    F_c, M_c, _, _ = gear_terms(ps["x1q"], ps["xv"], ps["gear"], ca.SX.zeros(4), t, p["p_quad"],
+                                p["p_veh"], p["p_deck"], p["p_gear"], p["p_lock"], p["p_td"])
+    y = landing_signals(ps["x1q"], ps["xv"], t, pp, d["d_F"] + F_c, d["d_M"] + M_c,
+                        gs["phase"], gs["aborts"])
     return ca.Function("landing_signals", [xp, xg, w, t, pp], [y],
                        ["xp", "xg", "w", "t", "pp"], ["y"])

@@ -20,7 +20,8 @@ from quadland.constants import TILT_MIN
 from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
-from quadland.kinds.landing.report import TOUCHDOWN_LIMITS
+from quadland.kinds.landing.gear import contact_step
+from quadland.kinds.landing.report import GEAR_LIMITS, TOUCHDOWN_LIMITS
 from quadland.kinds.landing.sensed import (
     handover,
     imu_at_rest,
@@ -84,7 +85,10 @@ def landing_defaults(sc: Scenario) -> LandingDefaults:
         gust_start=float(wind["gust_start"]), gust_half_length=float(wind["gust_half_length"]),
         gust_amplitude=float(wind["gust_amplitude"]), gust_direction=floats(e),
         settle_time=float(g["settle_time"]),
-        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS),
+        limits=tuple((k, float(g[k])) for k in TOUCHDOWN_LIMITS + GEAR_LIMITS),
+        h_after=contact_step(sc, np.asarray(LANDING_PLANT_PARAMS.unpack(lv.pp)["p_quad"],
+                                            dtype=float).ravel()),
+        mass=float(sc.data["quadrotor"]["mass"]),
         sensors=_sensor_defaults(sc, lv) if sensors_enabled(sc) else None)
 
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from quadland.engine.envelope import Envelope
 from quadland.engine.plan import SimulationPlan
 from quadland.engine.result import SimulationResult
-from quadland.exceptions import MarginsError
+from quadland.exceptions import MarginsError, ScenarioError
 from quadland.kinds.base import LoopKind
 from quadland.kinds.landing import flight, report, simulate
 from quadland.scenario import Scenario
@@ -79,7 +79,9 @@ class LandingKind(LoopKind):
               limits: Mapping[str, float]) -> list[str]:
         if metrics["touchdown_time"] is None:
             return [f"no touchdown by t = {result['t'][-1]:.4g} s"]
-        return super().judge(result, metrics, limits)
+        if metrics.get("secured") is None:              # welded: no gear contact to judge
+            limits = {k: v for k, v in limits.items() if k not in report.GEAR_METRICS}
+        return super().judge(result, metrics, limits) + report.gear_violations(result, metrics)
 
     def figures(self, result: SimulationResult) -> dict[str, Any]:
         from quadland.plots.landing import landing_figures
@@ -134,6 +136,9 @@ class LandingKind(LoopKind):
         return int(scenario.data["controller"]["delay_periods"])
 
     def codegen_defaults(self, scenario: Scenario) -> LandingDefaults:
+        if scenario.data["gear"]["welded"]:
+            raise ScenarioError("gear.welded: the pure-C example flies the gear's contact; "
+                                "generate it from a scenario with gear.welded = false")
         return flight.landing_defaults(scenario)
 
 

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from quadland.engine.result import SimulationResult
+from quadland.kinds.landing.contact_report import FAILURES, contact_figures
 from quadland.kinds.landing.values import rotor_force_max
 from quadland.metrics import Metric
 from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
@@ -18,11 +19,17 @@ from quadland_symbolic.landing.relative import (
     touchdown_figures_function,
 )
 
-__all__ = ["TOUCHDOWN_LIMITS", "TouchdownReport", "touchdown_report", "landing_summary",
-           "false_touchdown", "navigation_summary", "CONTACT_GAP", "landing_result_lines",
-           "LANDING_METRICS", "landing_run_metrics", "touchdown_limits"]
+__all__ = ["TOUCHDOWN_LIMITS", "GEAR_LIMITS", "TouchdownReport", "touchdown_report",
+           "landing_summary", "false_touchdown", "navigation_summary", "CONTACT_GAP",
+           "landing_result_lines",
+           "LANDING_METRICS", "GEAR_METRICS", "landing_run_metrics", "gear_violations",
+           "touchdown_limits"]
 
 
+
+
+#: The ``[landing]`` limits of a landing on the gear's contact, beside :data:`TOUCHDOWN_LIMITS`.
+GEAR_LIMITS = ("max_gear_load", "max_bounce", "max_friction_margin")
 
 
 def touchdown_limits(scenario) -> dict[str, float]:
@@ -58,7 +65,24 @@ class TouchdownReport:
         A touchdown with every figure within its limit.
     limits : dict
         ``max_sink_rate``, ``max_offset``, ``max_tilt_deg``,
-        ``max_relative_speed``: the scenario's ``[landing]`` limits.
+        ``max_relative_speed`` and, on the gear's contact, ``max_gear_load``,
+        ``max_bounce``, ``max_friction_margin``: the scenario's ``[landing]`` limits.
+    secured, bounced, tipped : bool or None
+        On the gear's contact (:mod:`quadland.kinds.landing.contact_report`): held
+        by the lock or by friction at the end; rebounded above ``max_bounce``;
+        rolled or pitched past the tip-over angle. None: the welded idealization
+        (``gear.welded``), or no touchdown.
+    peak_gear_force : float or None
+        The gear's peak total normal load, N, over every RK4 substep.
+    impact_energy : float or None
+        ``m1 v_n^2 / 2`` of the lowest foot's sink rate ``v_n`` at first contact, J.
+    bounce : float or None
+        The lowest foot's highest rebound above the deck with every foot off it, m.
+    on_pad : bool or None
+        Within ``max_offset`` of the pad centre for ``settle_time`` after the contact.
+    failures : list of str
+        Why the landing failed: the first-contact figures over their limits, then
+        :data:`~quadland.kinds.landing.contact_report.FAILURES`'s.
     """
 
     touchdown: bool
@@ -70,6 +94,14 @@ class TouchdownReport:
     aborts: int
     success: bool
     limits: dict
+    secured: bool | None = None
+    bounced: bool | None = None
+    tipped: bool | None = None
+    peak_gear_force: float | None = None
+    impact_energy: float | None = None
+    bounce: float | None = None
+    on_pad: bool | None = None
+    failures: list = dataclasses.field(default_factory=list)
 
     def to_dict(self) -> dict:
         """The report as plain JSON data."""
@@ -93,11 +125,17 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
     with the same function).
     """
     g = result.scenario.data["landing"]
-    limits = {k: g[k] for k in TOUCHDOWN_LIMITS}
-    rows = np.flatnonzero((result["phase"] == TOUCHDOWN) & (result["gear_gap"] <= CONTACT_GAP))
+    contact = "touched" in result
+    limits = {k: g[k] for k in TOUCHDOWN_LIMITS + (GEAR_LIMITS if contact else ())}
+    if contact:
+        rows = np.flatnonzero(result["touched"] > 0.5)
+    else:
+        rows = np.flatnonzero((result["phase"] == TOUCHDOWN)
+                              & (result["gear_gap"] <= CONTACT_GAP))
     if rows.size == 0:
         aborts = int(result["aborts"][-1]) if len(result["t"]) else 0
-        return TouchdownReport(False, None, None, None, None, None, aborts, False, limits)
+        return TouchdownReport(False, None, None, None, None, None, aborts, False, limits,
+                               failures=["no touchdown"])
     k = int(rows[0])
 
     def row(*names):
@@ -107,10 +145,16 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
         row("x_e", "y_e", "z_e"), row("dx_e", "dy_e", "dz_e"), row("phi1", "theta1", "psi1"),
         row("phi2", "theta2", "psi2")), dtype=float).ravel()
     f = {name: float(v) for name, v in zip(TOUCHDOWN_FIGURES.names(), figures, strict=True)}
-    success = all(f[k.removeprefix("max_")] <= limits[k] for k in TOUCHDOWN_LIMITS)
+    failures = [n for n in TOUCHDOWN_FIGURES.names() if not f[n] <= limits["max_" + n]]
+    gear = {}
+    if contact:
+        gear = contact_figures(result, limits, result.scenario.data["quadrotor"]["mass"])
+        failures += gear.pop("failures")
+        gear = {k: gear[k] for k in ("secured", "bounced", "tipped", "peak_gear_force",
+                                     "impact_energy", "bounce", "on_pad")}
     return TouchdownReport(True, float(result["t"][k]), f["sink_rate"], f["offset"],
                            f["relative_speed"], f["tilt_deg"], int(result["aborts"][k]),
-                           bool(success), limits)
+                           not failures, limits, **gear, failures=failures)
 
 
 def landing_summary(result: SimulationResult) -> dict:
@@ -203,7 +247,18 @@ LANDING_METRICS = (
     Metric("aborts", "-", "descents aborted before the touchdown"),
     Metric("rotor_max", "N", "largest rotor force"),
     Metric("false_touchdown", "-", "1 when the flight code declared touchdown above the deck"),
+    Metric("peak_gear_force", "N", "the gear's peak total normal load (gear contact)",
+           "landing.max_gear_load"),
+    Metric("bounce", "m", "the lowest foot's highest rebound with every foot off the deck",
+           "landing.max_bounce"),
+    Metric("impact_energy", "J", "m1 v_n^2 / 2 of the lowest foot's sink rate at first contact"),
+    Metric("secured", "-", "1 when held by the lock-down or by friction at the end"),
+    Metric("tipped", "-", "1 when the quadrotor tipped over on the deck"),
 )
+
+#: The gear contact's metrics: undefined (None) for the welded idealization, whose limits
+#: then do not apply.
+GEAR_METRICS = ("peak_gear_force", "bounce", "impact_energy", "secured", "tipped")
 
 
 def landing_run_metrics(result) -> dict[str, float | None]:
@@ -214,7 +269,20 @@ def landing_run_metrics(result) -> dict[str, float | None]:
             "relative_speed": report.relative_speed, "tilt_deg": report.tilt_deg,
             "touchdown_time": report.time, "aborts": report.aborts,
             "rotor_max": float(rotors.max()) if rotors.size else None,
-            "false_touchdown": float(false_touchdown(result) is not None)}
+            "false_touchdown": float(false_touchdown(result) is not None),
+            "peak_gear_force": report.peak_gear_force, "bounce": report.bounce,
+            "impact_energy": report.impact_energy,
+            "secured": None if report.secured is None else float(report.secured),
+            "tipped": None if report.tipped is None else float(report.tipped)}
+
+
+def gear_violations(result, metrics: Mapping[str, float | None]) -> list[str]:
+    """The gear contact's failures a campaign row names beside its limits' (tipped, off the
+    pad, not secured: the bounce and the gear load are limited metrics)."""
+    if metrics.get("secured") is None:
+        return []
+    return [f for f in touchdown_report(result).failures
+            if f in FAILURES and f not in ("bounced", "gear load")]
 
 
 
@@ -235,12 +303,18 @@ def landing_result_lines(summary: Mapping[str, Any]) -> list[str]:
         return [f"landing: FAILED: no touchdown ({aborts})"]
     over = [f"{name} {land[key]:.3g} > {land['limits'][lim]:g} {unit}"
             for name, key, unit, lim in _PRINTED if land[key] > land["limits"][lim]]
+    gear = land.get("secured") is not None
+    if gear:
+        over += [_gear_reason(land, f) for f in land.get("failures", []) if f in FAILURES]
     verdict = "success" if land["success"] else "FAILED: " + "; ".join(over)
-    lines = [f"landing: {verdict} (touchdown at {land['time']:.2f} s, {aborts})"]
+    what = "first contact" if gear else "touchdown"
+    lines = [f"landing: {verdict} ({what} at {land['time']:.2f} s, {aborts})"]
     for name, key, unit, lim in _PRINTED:
         mark = "  over" if land[key] > land["limits"][lim] else ""
         lines.append(f"  {name:<15}{land[key]:8.3f} {unit:<4} limit {land['limits'][lim]:g}"
                      f"{mark}")
+    if gear:
+        lines += _gear_lines(land)
     nav = summary.get("navigation")
     if nav is not None:
         err = nav["error"]["position"]["at_touchdown"]
@@ -248,3 +322,32 @@ def landing_result_lines(summary: Mapping[str, Any]) -> list[str]:
                      f"{'-' if err is None else f'{100 * err:.1f} cm'}, false touchdown "
                      f"{'yes' if nav['false_touchdown'] else 'no'}")
     return lines
+
+
+def _gear_reason(land: Mapping[str, Any], failure: str) -> str:
+    """One failure of the gear contact's, with its figure."""
+    lim = land["limits"]
+    return {"bounced": f"bounced {100 * land['bounce']:.1f} cm > {100 * lim['max_bounce']:g} cm",
+            "tipped": "tipped over on the deck",
+            "gear load": f"gear load {land['peak_gear_force']:.0f} > "
+                         f"{lim['max_gear_load']:g} N",
+            "off the pad": f"left the pad ({lim['max_offset']:g} m) before the settle time",
+            "not secured": "not secured (no lock engaged, friction margin not below "
+                           f"{lim['max_friction_margin']:g})"}[failure]
+
+
+def _gear_lines(land: Mapping[str, Any]) -> list[str]:
+    """The gear contact's figures, for the terminal."""
+    lim = land["limits"]
+
+    def mark(bad):
+        return "  over" if bad else ""
+
+    return [f"  {'peak gear load':<15}{land['peak_gear_force']:8.1f} N    limit "
+            f"{lim['max_gear_load']:g}{mark(land['peak_gear_force'] > lim['max_gear_load'])}",
+            f"  {'impact energy':<15}{land['impact_energy']:8.3f} J",
+            f"  {'bounce':<15}{land['bounce']:8.4f} m    limit {lim['max_bounce']:g}"
+            f"{mark(land['bounced'])}",
+            f"  secured {'yes' if land['secured'] else 'NO'}, tipped "
+            f"{'YES' if land['tipped'] else 'no'}, on the pad "
+            f"{'yes' if land['on_pad'] else 'NO'}"]

@@ -42,6 +42,8 @@ from quadland.engine.loop import grid_tolerance
 from quadland.engine.plan import SimulationPlan, check_plan, plan_run
 from quadland.engine.result import SimulationResult
 from quadland.exceptions import ScenarioError, SimulationError
+from quadland.kinds.landing.contact_report import gear_columns
+from quadland.kinds.landing.gear import contact_step
 from quadland.kinds.landing.sensed import sensed_vectors, sensors_enabled, tick_table
 from quadland.kinds.landing.values import (
     LandingValues,
@@ -64,6 +66,7 @@ from quadland_symbolic.landing.loop import (
 )
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
+    LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
     loop_plant_function,
 )
@@ -130,7 +133,7 @@ def _landing_hint(scenario: Scenario, lv: LandingValues, xp_last) -> str:
     a body spun up to hundreds of radians per second leaves it.
     """
     c = scenario.data["controller"]
-    f = loop_plant_function()
+    f = loop_plant_function(contact=False)      # in flight; the gear's step is its own
     held = (np.zeros(f.size1_in(1)), np.zeros(f.size1_in(2)), 0.0, lv.pp)
     initial = loop_modes(f, lv.xp0, *held)
     last = loop_modes(f, xp_last, *held) if xp_last is not None else np.zeros(0)
@@ -172,13 +175,15 @@ def _check_motor_step(scenario: Scenario) -> None:
             f"simulation.rk_steps_per_interval to {need}")
 
 
-def landing_loop_part(l: int, part: str, sensed: bool = False):
+def landing_loop_part(l: int, part: str, sensed: bool = False, welded: bool = False):
     """The compiled (or VM) ``part`` of the landing loop's simulator for ``l`` nodes: the
-    loop on the true state, or (``sensed``) on the sensors and the navigation filter."""
+    loop on the true state, or (``sensed``) on the sensors and the navigation filter;
+    ``welded``: the idealization pinned to the deck at touchdown (``gear.welded``)."""
     from quadland.kinds.landing.flight import flight_code
 
     flight = flight_code(l, sensed) if part == "sampled_flight" else None
-    return compiled_loop(landing_sensed_loop(l) if sensed else landing_loop(l), part, flight)
+    model = landing_sensed_loop(l, welded) if sensed else landing_loop(l, welded)
+    return compiled_loop(model, part, flight)
 
 
 def simulate_landing(scenario: Scenario) -> SimulationResult:
@@ -208,24 +213,84 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     w_dist = landing_disturbance(scenario, t_dist)
     flight = scenario.data["controller"]["backend"] == "c"
     sensed = sensors_enabled(scenario)
-    loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed)
+    welded = scenario.data["gear"]["welded"]
+    loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed, welded)
     hover = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])["F"]
     pc, xc0, N = lv.pc, lv.xc0, None
     if sensed:
         pc, xc0 = sensed_vectors(scenario, lv)
         N = tick_table(scenario, len(clocks[2].times()))
+    p_quad = LANDING_PLANT_PARAMS.unpack(lv.pp)["p_quad"]
     run = loop.sampled(lv.xp0, xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
                        pc, TILT_MIN, envelope.bounds,
-                       delay=scenario.data["controller"]["delay_periods"], uh0=hover, N=N)
+                       delay=scenario.data["controller"]["delay_periods"], uh0=hover, N=N,
+                       h_after=contact_step(scenario, np.asarray(p_quad, dtype=float).ravel()),
+                       after=scenario.data["landing"]["settle_time"])
+    recorded = loop.model.recorded
+    if welded:
+        times, X, R, Y, what, t_fail = _welded(scenario, run, loop, clocks, w_dist, lv,
+                                               envelope)
+    else:
+        times, X, R, Y, what, t_fail = _first_contact(run, loop, clocks, w_dist, lv, envelope)
+    touched = None if welded else (times >= run.t_event).astype(float)
+    bad = ~np.all(np.isfinite(Y), axis=1)
+    if bad.any():
+        k = int(np.argmax(bad))
+        name = LANDING_SIGNALS.element_names()[int(np.argmin(np.isfinite(Y[k])))]
+        what, t_fail = f"the output {name} became non-finite", times[k]
+        times, X, R, Y = times[:k], X[:k], R[:k], Y[:k]
+        touched = None if touched is None else touched[:k]
+    result = _result(scenario, times, X, R, Y, recorded, touched, lv.pp)
+    if what is not None:
+        xp_last = X[-1, landing_loop_state(lv.l).slice("xp")] if len(X) else None
+        raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
+                              f"{_landing_hint(scenario, lv, xp_last)}", t_fail,
+                              result if len(times) else None)
+    return result
+
+
+def _first_contact(run, loop, clocks, w_dist, lv, envelope):
+    """The rows of a landing on the gear's contact, with the first contact's row.
+
+    The run went on through the first contact (the event, located by bisection):
+    its row is inserted at its instant, the loop's state then and the recorded
+    signals of the control step in force. A run that stopped after the contact
+    at the singular attitude or outside its envelope is a landing that went
+    wrong on the deck (tipped over): its rows up to then are the result, the
+    report judges them. Returns ``times, X, R, Y`` and, for a failure before
+    the contact (or a non-finite state), its description and time.
+    """
+    times, X, R = run.times, run.X, run.R
+    Y = loop.outputs(X, w_dist[:, run.w_index].T, times, lv.pp)
+    if run.x_event is not None:
+        t_ev = run.t_event
+        k = int(np.searchsorted(times, t_ev, side="left"))
+        t_dist = clocks[1].times()
+        i_w = int(np.searchsorted(t_dist, t_ev - grid_tolerance(clocks), side="right")) - 1
+        y_ev = loop.outputs(run.x_event[None, :], w_dist[:, [i_w]].T, np.array([t_ev]), lv.pp)
+        R_ev = R[k - 1] if k > 0 else np.zeros(loop.model.recorded.size)
+        times = np.insert(times, k, t_ev)
+        X, R, Y = (np.insert(a, k, v, axis=0) for a, v in ((X, run.x_event), (R, R_ev),
+                                                            (Y, y_ev[0])))
+        if run.status in (SIM_GUARD, SIM_ENVELOPE):
+            return times, X, R, Y, None, None
+    if run.status == SIM_OK:
+        return times, X, R, Y, None, None
+    return (times, X, R, Y, *_failure(run, envelope))
+
+
+def _welded(scenario, run, loop, clocks, w_dist, lv, envelope):
+    """The rows of the welded idealization: the flight to the gear gap's zero crossing,
+    its row, then the ride pinned to the deck (:func:`_ride`)."""
     recorded = loop.model.recorded
     done, times, X, R = run.rows, run.times, run.X, run.R
     Y = loop.outputs(X, w_dist[:, run.w_index].T, times, lv.pp)
-    what = None
     if run.status == SIM_EVENT:
         t_td = run.t_stop
         nxp = LANDING_PLANT_STATE.size
         x_td = np.asarray(loop.model.assemble(run.x_end[:nxp], run.x_end[nxp:]),
                           dtype=float).ravel()
+        t_dist = clocks[1].times()
         i_w = int(np.searchsorted(t_dist, t_td - grid_tolerance(clocks), side="right")) - 1
         y_td = loop.outputs(x_td[None, :], w_dist[:, [i_w]].T, np.array([t_td]), lv.pp)
         R_td = R[-1] if len(R) else np.zeros(recorded.size)
@@ -241,26 +306,20 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
             raise SimulationError(f"flight failed at t = {t_fail:.4g} s: the ride on the deck "
                                   f"after touchdown {how}", t_fail,
                                   _result(scenario, times, X, R, Y, recorded))
-    elif run.status != SIM_OK:
-        what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
-                SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
-                                "error status"}.get(run.status, "the state became non-finite")
-        if run.status == SIM_ENVELOPE:
-            what = envelope.describe(run.envelope)
-        t_fail = run.t_stop
-    bad = ~np.all(np.isfinite(Y), axis=1)
-    if bad.any():
-        k = int(np.argmax(bad))
-        name = LANDING_SIGNALS.element_names()[int(np.argmin(np.isfinite(Y[k])))]
-        what, t_fail = f"the output {name} became non-finite", times[k]
-        times, X, R, Y = times[:k], X[:k], R[:k], Y[:k]
-    result = _result(scenario, times, X, R, Y, recorded)
-    if what is not None:
-        xp_last = X[-1, landing_loop_state(lv.l).slice("xp")] if len(X) else None
-        raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
-                              f"{_landing_hint(scenario, lv, xp_last)}", t_fail,
-                              result if len(times) else None)
-    return result
+        return times, X, R, Y, None, None
+    if run.status == SIM_OK:
+        return times, X, R, Y, None, None
+    return (times, X, R, Y, *_failure(run, envelope))
+
+
+def _failure(run, envelope) -> tuple[str, float]:
+    """What stopped a run, and when."""
+    what = {SIM_GUARD: f"singular attitude, |cos(theta) cos(phi)| < {TILT_MIN:g}",
+            SIM_CONTROLLER: "the flight code (controller.backend = \"c\") returned an "
+                            "error status"}.get(run.status, "the state became non-finite")
+    if run.status == SIM_ENVELOPE:
+        what = envelope.describe(run.envelope)
+    return what, run.t_stop
 
 
 def _ride(scenario, lv, loop, rows, t_td, x_td, y_td, R_td):
@@ -288,11 +347,17 @@ def _ride(scenario, lv, loop, rows, t_td, x_td, y_td, R_td):
     return ride
 
 
-def _result(scenario, times, X, R, Y, recorded=LANDING_RECORDED) -> SimulationResult:
-    """The result's columns: ``t``, every output and every recorded signal by name."""
+def _result(scenario, times, X, R, Y, recorded=LANDING_RECORDED,
+            touched=None, pp=None) -> SimulationResult:
+    """The result's columns: ``t``, every output and every recorded signal by name; on the
+    gear's contact also ``touched`` (1 from the first contact's row on) and the gear's
+    signals (:func:`quadland.kinds.landing.contact_report.gear_columns`)."""
     cols = {"t": times}
     cols.update(zip(LANDING_SIGNALS.element_names(), Y.T, strict=True))
     cols.update(zip(recorded.element_names(), R.T, strict=True))
+    if touched is not None:
+        cols["touched"] = touched
+        cols.update(gear_columns(pp, times, X, touched))
     layout = LANDING_TRAJECTORY if recorded is LANDING_RECORDED else SENSED_TRAJECTORY
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
                                        for k, v in cols.items()}, X, layout,

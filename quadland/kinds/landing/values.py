@@ -14,6 +14,7 @@ from quadland.engine.wind import (
     gust_samples,
     turbulence_samples,
 )
+from quadland.kinds.landing.gear import gear_params, lock_params, policy_params
 from quadland.kinds.landing.sea import deck_components
 from quadland.scenario import Scenario, require_model
 from quadland_symbolic.kinematics import rotation
@@ -87,7 +88,7 @@ def rotor_force_max(scenario) -> float:
     return q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
 
 
-def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray) -> np.ndarray:
+def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict) -> np.ndarray:
     """The controller's own model as plant parameters: ``[controller_model]``'s mass,
     inertia, drag, motor lag and rotor limit; the geometry (gravity, arm, rotor drag
     factor, gear) and the vehicle's and the deck's parameters (its sensors' models)
@@ -102,7 +103,7 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray) -> np.ndar
             motor_time_constant=cm["motor_time_constant"],
             F_max=cm["thrust_to_weight"] * cm["mass"] * q["gravity"] / 4,
             gear_height=q["gear_height"])),
-        p_veh=p_veh, p_deck=p_deck))
+        p_veh=p_veh, p_deck=p_deck, **gear))
 
 
 def landing_values(scenario: Scenario) -> LandingValues:
@@ -126,8 +127,11 @@ def landing_values(scenario: Scenario) -> LandingValues:
     p_veh = VEHICLE.pack(dict(m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"],
                               d22=v["d22"], d33=v["d33"], tau=v["tau"], z2=0.0))
     p_deck = deck_params(scenario)
-    pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck))
-    model = _controller_model(d, p_veh, p_deck)
+    gear = dict(p_gear=gear_params(scenario), p_lock=lock_params(scenario),
+                p_td=policy_params(scenario))
+    pp = LANDING_PLANT_PARAMS.pack(dict(p_quad=p_quad, p_act=p_act, p_veh=p_veh, p_deck=p_deck,
+                                        **gear))
+    model = _controller_model(d, p_veh, p_deck, gear)
 
     centers = np.linspace(r["center_min"], r["center_max"], l) if l > 1 else \
         np.array([(r["center_min"] + r["center_max"]) / 2])
@@ -161,7 +165,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         p1=[*init["position1"], init["z1"]], eta1=eta1, V1=V1,
         Omega1=np.multiply(init["omega1_deg_s"], deg),
         F=np.full(4, q["mass"] * q["gravity"] / 4)))
-    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv))
+    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(3)))
     mem = landing_memory(l).zeros()
     mem[landing_memory(l).slice("eta_f")] = eta1[:2]
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],

@@ -1,0 +1,61 @@
+"""A landing scenario's gear, touchdown policy and lock-down device as the plant's vectors."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from quadland.scenario import Scenario
+from quadland_symbolic.landing.contact import (
+    GEAR,
+    LOCK,
+    RK4_REAL_STABILITY,
+    lock_defaults,
+    stiffest_rate,
+)
+from quadland_symbolic.landing.gear import PEAK_RATE, TOUCHDOWN_POLICY
+
+__all__ = ["gear_params", "lock_params", "policy_params", "contact_step", "STEP_MARGIN"]
+
+#: RK4's step on the deck is this fraction of its stability edge on the stiffest mode
+#: (docs/contact.md: 5 steps per 4 ms for the default gear, ``h lambda = 2.0``).
+STEP_MARGIN = 0.8
+
+
+def gear_params(scenario: Scenario) -> np.ndarray:
+    """``[gear]`` as :data:`~quadland_symbolic.landing.contact.GEAR`: four feet at
+    ``(+-feet_x, +-feet_y, -quadrotor.gear_height)``; ``welded`` zeroes the feet's
+    stiffness, damping and friction (the pinned idealization feels no contact)."""
+    g, h = scenario.data["gear"], scenario.data["quadrotor"]["gear_height"]
+    x, y = g["feet_x"], g["feet_y"]
+    feet = [[x, y, -h], [-x, y, -h], [-x, -y, -h], [x, -y, -h]]
+    on = 0.0 if g["welded"] else 1.0
+    return GEAR.pack(dict(r_feet=[v for foot in feet for v in foot], k=on * g["stiffness"],
+                          c=on * g["damping"], mu=on * g["friction"], v_eps=g["slip_speed"],
+                          b_slip=g["slip_damping_max"], delta_eps=g["onset_width"]))
+
+
+def lock_params(scenario: Scenario) -> np.ndarray:
+    """``[touchdown]``'s lock-down device as :data:`~quadland_symbolic.landing.contact.LOCK`
+    (``lock = "none"``: no holding force)."""
+    td = scenario.data["touchdown"]
+    if td["lock"] == "none" or scenario.data["gear"]["welded"]:
+        return LOCK.pack(dict(lock_defaults(), F_hold=0.0))
+    return LOCK.pack(dict(F_hold=td["lock_hold_force"], lock_delay=td["lock_delay"],
+                          lock_rise_time=td["lock_rise_time"],
+                          lock_gap_scale=td["lock_gap_scale"]))
+
+
+def policy_params(scenario: Scenario) -> np.ndarray:
+    """``[touchdown]``'s policy as :data:`~quadland_symbolic.landing.gear.TOUCHDOWN_POLICY`."""
+    td = scenario.data["touchdown"]
+    return TOUCHDOWN_POLICY.pack(dict(cut=float(td["policy"] == "idle"),
+                                      cut_delay=td["cut_delay"], F_idle=td["idle_thrust"],
+                                      s_switch=td["switch_impulse"]))
+
+
+def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
+    """The longest RK4 step on the deck, s: :data:`STEP_MARGIN` of RK4's stability edge
+    on the gear's stiffest mode (``stiffest_rate``) and the peak follower's rate."""
+    rate = max(float(stiffest_rate(p_quad, gear_params(scenario))),
+               PEAK_RATE)
+    return STEP_MARGIN * RK4_REAL_STABILITY / rate
