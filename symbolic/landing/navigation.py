@@ -324,7 +324,13 @@ def _model(block: Block, nav, pkt, n2, p):
     if block.name == "range":                                                # (E12)
         cos_b = n2.T @ pkt["b3_E"]
         steep = cos_b >= p["range_min_cos"]
-        h = (n2.T @ nav["p_r"]) / select(steep, cos_b, 1)
+        c = select(steep, cos_b, 1)
+        # the tilt turns the beam: the true n2 . b3 is cos_b - eps . (b3_E x n2), eps_x,
+        # eps_y = -a_tilt_y / g, a_tilt_x / g (E12b); a non-finite packet, never fused,
+        # must not make the row non-finite
+        w = [select(is_finite(wi), wi, 0) for wi in ca.vertsplit(ca.cross(pkt["b3_E"], n2))]
+        tilt = nav["a_tilt"][0] * w[1] - nav["a_tilt"][1] * w[0]
+        h = (n2.T @ nav["p_r"]) / c + select(is_finite(z), z, 0) / (c * p["g"]) * tilt
         return z, h, p["range_sigma"] ** 2, steep
     h, sigma = {                                                             # (E11), (E13)
         "gnss_rel": (-nav["p_r"] + nav["b"], p["gnss_rel_sigma"]),
