@@ -120,7 +120,7 @@ def variances(name, z, q):
     if name == "vision":
         return np.full(3, (q["vision_sigma0"] + q["vision_k_range"] * np.linalg.norm(z)) ** 2)
     if name == "range":
-        return np.array([q["range_sigma"] ** 2])
+        return np.array([(q["range_sigma"] + q["range_k_range"] * abs(z[0])) ** 2])
     key = {"gnss_rel": "gnss_rel_sigma", "gnss_v1": "gnss_v1_sigma", "gnss_vt": "gnss_vt_sigma",
            "datalink_v": "datalink_v_sigma", "datalink_a": "datalink_a_sigma"}[name]
     return np.asarray(q[key], dtype=float) ** 2
