@@ -90,8 +90,10 @@ def _discrete_uncached(dt, q, held):
 
 
 def h_rows(name, n2=None, b3=None, z=None, g=None):
-    """H of each block from (E10)-(E13); the range's row n2^T / (n2 . b3); the vision's
-    ``-p_r + (z_z / g) a_tilt`` with ``z`` its packet's ``r_E``."""
+    """H of each block from (E10)-(E13); the range's row n2^T / c on ``p_r`` and
+    ``s / (c g) (w_y, -w_x)`` on ``a_tilt``'s x, y, ``c = n2 . b3``, ``w = b3 x n2``, ``s``
+    its packet's (E12b); the vision's ``-p_r + (z_z / g) a_tilt`` with ``z`` its packet's
+    ``r_E``."""
     H = np.zeros((3, N))
     I3 = np.eye(3)
     if name == "vision":
@@ -107,7 +109,9 @@ def h_rows(name, n2=None, b3=None, z=None, g=None):
         H[:, sl("a_t")] = I3
     else:
         H = np.zeros((1, N))
-        H[0, sl("p_r")] = n2 / (n2 @ b3)
+        c, w = n2 @ b3, np.cross(b3, n2)
+        H[0, sl("p_r")] = n2 / c
+        H[0, sl("a_tilt")] = z[0] / (c * g) * np.array([w[1], -w[0], 0.0])
     return H
 
 
@@ -116,7 +120,7 @@ def variances(name, z, q):
     if name == "vision":
         return np.full(3, (q["vision_sigma0"] + q["vision_k_range"] * np.linalg.norm(z)) ** 2)
     if name == "range":
-        return np.array([q["range_sigma"] ** 2])
+        return np.array([(q["range_sigma"] + q["range_k_range"] * abs(z[0])) ** 2])
     key = {"gnss_rel": "gnss_rel_sigma", "gnss_v1": "gnss_v1_sigma", "gnss_vt": "gnss_vt_sigma",
            "datalink_v": "datalink_v_sigma", "datalink_a": "datalink_a_sigma"}[name]
     return np.asarray(q[key], dtype=float) ** 2

@@ -372,6 +372,7 @@ DOCUMENTED = {
     "tilt_sigma": _nonneg, "tilt_tau": _pos,
     "vision_sigma0": _pos, "vision_k_range": _nonneg, "gnss_rel_sigma": _pos,
     "gnss_v1_sigma": _pos, "gnss_vt_sigma": _pos, "range_sigma": _pos,
+    "range_k_range": _nonneg,
     "range_min_cos": lambda v: (v > 0) & (v <= 1), "range_deck_radius": _pos,
     "range_deck_sigmas": _nonneg, "datalink_v_sigma": _pos,
     "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS}, "gate_lockout": _nonneg,

@@ -16,6 +16,7 @@ from nav_reference import (
     block_data,
     col,
     discrete,
+    h_rows,
     joseph_reference,
     params,
     random_spd,
@@ -103,7 +104,8 @@ def test_ten_sigma_outliers_are_rejected_and_change_nothing(name):
     #                                              range's beam on the deck: gated, not held
     for _ in range(20):
         # 10.5 sigma along a random direction of the innovation's covariance; the vision's
-        # h and H read the packet's own r_z (E10): z_z is the root of a scalar equation
+        # h and H read the packet's own r_z (E10), the range's its own s (E12b): that value
+        # is the root of a scalar equation
         u = rng.normal(size=block.dim)
         u /= np.linalg.norm(u)
 
@@ -114,8 +116,9 @@ def test_ten_sigma_outliers_are_rejected_and_change_nothing(name):
             return h + 10.5 * np.linalg.cholesky(H @ P @ H.T + np.diag(col(r))) @ u
 
         z = outlier(0.0)
-        if name == "vision":
-            z = outlier(newton(lambda c: outlier(c)[2] - c, z[2], tol=1e-14, maxiter=100))
+        if name in ("vision", "range"):
+            k = 2 if name == "vision" else 0
+            z = outlier(newton(lambda c, k=k: outlier(c)[k] - c, z[k], tol=1e-14, maxiter=100))
         vals[block.field] = z if block.dim > 1 else z[0]
         x_next, P_next, _, nis, fused, held = f(x, P, layout.pack(vals), n2, p, 1.0)
         assert float(fused) == 0 and float(held) == 0
@@ -137,10 +140,13 @@ def test_measurement_jacobians_equal_finite_differences(name):
                            - col(model(x - eps * e, pkt, n2, p)[1])) / (2 * eps)
                           for e in np.eye(N)])
     np.testing.assert_allclose(H, fd, rtol=1e-8, atol=1e-9)
-    if name == "range":                              # the model itself, written out
-        b3 = vals["b3_E"]
+    if name == "range":                              # the model itself, written out (E12b)
+        b3, s = vals["b3_E"], vals["s"]
+        c, w = n2 @ b3, np.cross(b3, n2)
+        a = x[sl("a_tilt")]
         np.testing.assert_allclose(col(model(x, pkt, n2, p)[1]),
-                                   n2 @ x[sl("p_r")] / (n2 @ b3), rtol=1e-14)
+                                   n2 @ x[sl("p_r")] / c
+                                   + s / (c * 9.8) * (a[0] * w[1] - a[1] * w[0]), rtol=1e-14)
 
 # ---------------------------------------------------------------- the controller's v_e
 
@@ -234,8 +240,7 @@ def test_axes_fuse_a_tilted_range_on_z_with_the_rest_as_noise(rng):
     b3 = np.array([0.1, 0.05, 1.0]) / np.linalg.norm([0.1, 0.05, 1.0])
     s = n2 @ x[sl("p_r")] / (n2 @ b3) + 0.2
     pkt = RANGE.pack(dict(fresh=1.0, tau=0.0, s=s, b3_E=b3))
-    h = np.zeros(N)
-    h[sl("p_r")] = n2 / (n2 @ b3)
+    h = h_rows("range", n2, b3, [s], 9.8)[0]
     iz = NAV.slice("p_r").start + 2
     h_z, h_d = np.zeros(N), h.copy()
     h_z[iz], h_d[iz] = h[iz], 0.0

@@ -27,7 +27,7 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 84         /* stored covariance entries (coupling axes) */
 #define QLF_ESTIMATOR_MEMORY_SIZE 623            /* reals in qlf_estimator_memory */
-#define QLF_ESTIMATOR_PARAMS_SIZE 51             /* reals in qlf_estimator_params */
+#define QLF_ESTIMATOR_PARAMS_SIZE 52             /* reals in qlf_estimator_params */
 #define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 136       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
@@ -108,7 +108,8 @@ typedef struct {
     qlf_real gnss_rel_sigma[3];      /* m: relative GNSS position noise (gnss_rel_sigma_x, gnss_rel_sigma_y, gnss_rel_sigma_z) */
     qlf_real gnss_v1_sigma[3];       /* m/s: quadrotor GNSS velocity noise (gnss_v1_sigma_x, gnss_v1_sigma_y, gnss_v1_sigma_z) */
     qlf_real gnss_vt_sigma[3];       /* m/s: target GNSS velocity noise (gnss_vt_sigma_x, gnss_vt_sigma_y, gnss_vt_sigma_z) */
-    qlf_real range_sigma;            /* m: range finder noise */
+    qlf_real range_sigma;            /* m: range finder noise at zero range (E12) */
+    qlf_real range_k_range;          /* -: range finder noise growth per metre of range (E12) */
     qlf_real range_min_cos;          /* -: smallest n2 . b3_E of a usable range (E12) */
     qlf_real range_deck_radius;      /* m: largest distance from the pad centre of the beam's predicted deck point of a usable range (E12a) */
     qlf_real range_deck_sigmas;      /* -: standard deviations of the horizontal position the beam's deck point must lie within range_deck_radius by (E12a) */

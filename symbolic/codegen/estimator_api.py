@@ -66,6 +66,7 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     "tilt_sigma": _NONNEGATIVE,
     "tilt_tau": _POSITIVE,
     "vision_k_range": _NONNEGATIVE,
+    "range_k_range": _NONNEGATIVE,
     **{k: _POSITIVE for k in ("gnss_rel_sigma", "gnss_v1_sigma", "gnss_vt_sigma",
                               "range_sigma")},
     "range_min_cos": Range(lo=0.0, hi=1.0, lo_open=True),

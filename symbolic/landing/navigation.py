@@ -165,8 +165,8 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     tilt_sigma=[0.0855, 0.0855, 0.0], tilt_tau=5.0,
     vision_sigma0=0.1, vision_k_range=0.02,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
-    range_sigma=0.05, range_min_cos=0.7, range_deck_radius=0.5, range_deck_sigmas=2.0,
-    datalink_v_sigma=[0.1] * 3, datalink_a_sigma=[0.3] * 3,
+    range_sigma=0.05, range_k_range=0.0, range_min_cos=0.7, range_deck_radius=0.5,
+    range_deck_sigmas=2.0, datalink_v_sigma=[0.1] * 3, datalink_a_sigma=[0.3] * 3,
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     gate_lockout=10.0,
     **{f"max_age_{s}": 0.02 for s in SENSORS},
@@ -194,7 +194,8 @@ def estimator_params() -> Layout:
         _vec3("gnss_rel_sigma", "m", "relative GNSS position noise"),
         _vec3("gnss_v1_sigma", "m/s", "quadrotor GNSS velocity noise"),
         _vec3("gnss_vt_sigma", "m/s", "target GNSS velocity noise"),
-        Field("range_sigma", 1, "m", "range finder noise"),
+        Field("range_sigma", 1, "m", "range finder noise at zero range (E12)"),
+        Field("range_k_range", 1, "-", "range finder noise growth per metre of range (E12)"),
         Field("range_min_cos", 1, "-", "smallest n2 . b3_E of a usable range (E12)"),
         Field("range_deck_radius", 1, "m", "largest distance from the pad centre of the "
               "beam's predicted deck point of a usable range (E12a)"),
@@ -324,8 +325,14 @@ def _model(block: Block, nav, pkt, n2, p):
     if block.name == "range":                                                # (E12)
         cos_b = n2.T @ pkt["b3_E"]
         steep = cos_b >= p["range_min_cos"]
-        h = (n2.T @ nav["p_r"]) / select(steep, cos_b, 1)
-        return z, h, p["range_sigma"] ** 2, steep
+        c = select(steep, cos_b, 1)
+        # the tilt turns the beam (E12b): true n2 . b3 = cos_b - eps . (b3_E x n2), eps_x,
+        # eps_y = -a_tilt_y / g, a_tilt_x / g; a non-finite packet's row stays finite
+        w = [select(is_finite(wi), wi, 0) for wi in ca.vertsplit(ca.cross(pkt["b3_E"], n2))]
+        s = select(is_finite(z), z, 0)
+        h = (n2.T @ nav["p_r"]) / c + s / (c * p["g"]) * (nav["a_tilt"][0] * w[1]
+                                                          - nav["a_tilt"][1] * w[0])
+        return z, h, (p["range_sigma"] + p["range_k_range"] * ca.fabs(s)) ** 2, steep
     h, sigma = {                                                             # (E11), (E13)
         "gnss_rel": (-nav["p_r"] + nav["b"], p["gnss_rel_sigma"]),
         "gnss_v1": (nav["v1"], p["gnss_v1_sigma"]),
