@@ -26,6 +26,15 @@ def test_first_order_loop_peaks_at_zero_frequency(k, a):
     assert multi.ms.value == pytest.approx(p.ms.value, rel=1e-12)
 
 
+@pytest.mark.parametrize("k, a", [(4.0, 0.0), (2.0, 1.0)])
+def test_peaks_at_the_ends_of_the_axis(k, a):
+    """L = k/(s + a): |S| = |jw + a|/|jw + a + k| rises to 1 as w -> inf; |T| = k/|jw + a + k|
+    is largest at w = 0, k/(k + a) (1 for the integrator, whose L(0) is not defined)."""
+    (p,), _ = sensitivity_peaks(control.tf([k], [1, a]))
+    assert p.ms.value == pytest.approx(1.0, rel=1e-12) and p.ms.frequency == math.inf
+    assert p.mt.value == pytest.approx(k / (k + a), rel=1e-12) and p.mt.frequency == 0.0
+
+
 @pytest.mark.parametrize("zeta", [0.2, 0.35, 0.5])
 def test_second_order_resonance(zeta):
     """L = wn^2/(s (s + 2 zeta wn)): T is the standard second-order system,
@@ -194,3 +203,20 @@ def test_landing_sensor_margins_are_consistent(highway):
         loops = getattr(highway, section).loops
         assert everything.delay_margin == pytest.approx(min(m.delay_margin_s for m in loops),
                                                         rel=1e-3)
+
+
+@pytest.mark.parametrize("section", ["continuous", "sampled"])
+def test_landing_peaks_bound_the_classical_margins(highway, section):
+    """|1 + l_i| >= 1/Ms_i and |l_i / (1 + l_i)| <= Mt_i everywhere: GM up >= Ms/(Ms - 1)
+    and >= 1 + 1/Mt, GM down <= Ms/(Ms + 1), PM >= 2 asin(1/(2 Ms)) and 2 asin(1/(2 Mt))."""
+    def db(ratio):
+        return 20 * math.log10(ratio)
+
+    sec = getattr(highway, section)
+    for lm in sec.loops:
+        p = sec.sensitivity.loop(lm.name)
+        ms, mt = p.ms.value, p.mt.value
+        assert lm.gain_margin_up_db >= db(ms / (ms - 1)) and lm.gain_margin_up_db >= db(1 + 1 / mt)
+        assert lm.gain_margin_down_db <= db(ms / (ms + 1))
+        pm = math.radians(lm.phase_margin_deg)
+        assert pm >= 2 * math.asin(1 / (2 * ms)) and pm >= 2 * math.asin(1 / (2 * mt))

@@ -51,7 +51,9 @@ class Peak:
     value : float
         The peak, a ratio (``inf`` for an unstable closed loop).
     frequency : float or None
-        rad/s, where it is attained (None for an unstable closed loop).
+        rad/s, where it is attained; ``inf`` for a supremum approached as the
+        frequency grows (a continuous loop's ``|S| -> 1``); None for an
+        unstable closed loop.
     """
 
     value: float
@@ -138,12 +140,23 @@ def _refined_max(fun, grid, values) -> tuple[float, float]:
     return best, best_w
 
 
-def _peak(fun, grid, values) -> Peak:
-    """The refined peak of ``fun`` over the grid and zero frequency."""
+def _peak(fun, grid, values, continuous: bool) -> Peak:
+    """The refined peak of ``fun`` over the grid and zero frequency.
+
+    A continuous loop's value still growing at the top of the grid (which
+    reaches past its dynamics) is the supremum approached as ``w -> inf``:
+    reported at frequency ``inf``, with the value there (``|S| -> 1`` for a
+    strictly proper loop). One largest at the bottom of the grid is compared
+    with the value at zero frequency, or with its limit (evaluated six decades
+    lower) where the loop has a pole at zero.
+    """
     best, w = _refined_max(fun, grid, values)
+    if continuous and w == grid[-1]:
+        best, w = max(best, float(fun(1e6 * grid[-1]))), math.inf
     with np.errstate(all="ignore"):
         try:
-            at0 = float(fun(0.0))
+            # at a pole at zero (an integrator) G(0) is not defined: its limit instead
+            at0 = float(fun(0.0 if w > grid[0] else 1e-6 * grid[0]))
         except (np.linalg.LinAlgError, ValueError, ZeroDivisionError):
             at0 = math.nan
     if math.isfinite(at0) and at0 > best:
@@ -201,7 +214,7 @@ def sensitivity_peaks(L, omega=None) -> tuple[list[SensitivityPeaks], Sensitivit
     if not stable:
         inf = Peak(math.inf, None)
         return [SensitivityPeaks(inf, inf)] * m, SensitivityPeaks(inf, inf)
-    eye = np.eye(m)
+    eye, continuous = np.eye(m), not resp.dt
 
     def S_at(w):
         return np.linalg.inv(eye + resp.at(resp.point(w)))
@@ -211,13 +224,14 @@ def sensitivity_peaks(L, omega=None) -> tuple[list[SensitivityPeaks], Sensitivit
     for i in range(m):
         s_ii = S[:, i, i]
         per_loop.append(SensitivityPeaks(
-            _peak(lambda w, i=i: abs(S_at(w)[i, i]), grid, np.abs(s_ii)),
-            _peak(lambda w, i=i: abs(1.0 - S_at(w)[i, i]), grid, np.abs(1.0 - s_ii))))
+            _peak(lambda w, i=i: abs(S_at(w)[i, i]), grid, np.abs(s_ii), continuous),
+            _peak(lambda w, i=i: abs(1.0 - S_at(w)[i, i]), grid, np.abs(1.0 - s_ii),
+                  continuous)))
     sv_S = np.linalg.norm(S, ord=2, axis=(-2, -1))
     sv_T = np.linalg.norm(eye - S, ord=2, axis=(-2, -1))
     multi = SensitivityPeaks(
-        _peak(lambda w: np.linalg.norm(S_at(w), 2), grid, sv_S),
-        _peak(lambda w: np.linalg.norm(eye - S_at(w), 2), grid, sv_T))
+        _peak(lambda w: np.linalg.norm(S_at(w), 2), grid, sv_S, continuous),
+        _peak(lambda w: np.linalg.norm(eye - S_at(w), 2), grid, sv_T, continuous))
     return per_loop, multi
 
 
@@ -276,10 +290,18 @@ def group_delay_margin(L, channels, omega=None) -> GroupDelayMargin:
         return np.linalg.eigvals(np.linalg.inv(S_g) - np.eye(len(g)))
 
     def log_moduli(w):
-        return np.sort(np.log(np.maximum(np.abs(eigs(resp.at(resp.point(w)))), 1e-300)))
+        """Sorted ``log |lambda|`` at ``w``; NaN where ``L_g`` is not defined (a pole)."""
+        try:
+            lam = eigs(resp.at(resp.point(w)))
+        except np.linalg.LinAlgError:
+            return np.full(len(g), np.nan)
+        return np.sort(np.log(np.maximum(np.abs(lam), 1e-300)))
 
     grid = grid[grid > 0]
-    values = np.sort(np.log(np.maximum(np.abs(eigs(resp(grid))), 1e-300)), axis=-1)
+    try:
+        values = np.sort(np.log(np.maximum(np.abs(eigs(resp(grid))), 1e-300)), axis=-1)
+    except np.linalg.LinAlgError:
+        values = np.array([log_moduli(w) for w in grid])
     crossings = []
     for k in range(len(g)):
         v = values[:, k]
@@ -287,9 +309,9 @@ def group_delay_margin(L, channels, omega=None) -> GroupDelayMargin:
             try:
                 w = scipy.optimize.brentq(lambda w, k=k: log_moduli(w)[k], grid[j], grid[j + 1],
                                           xtol=1e-14, rtol=1e-12)
-            except (ValueError, RuntimeError):
+                lam = eigs(resp.at(resp.point(w)))
+            except (ValueError, RuntimeError, np.linalg.LinAlgError):
                 continue
-            lam = eigs(resp.at(resp.point(w)))
             lam = lam[np.argmin(np.abs(np.log(np.maximum(np.abs(lam), 1e-300))))]
             pm = _wrap180(math.degrees(np.angle(lam)) + 180.0)
             crossings.append((float(w), pm, math.radians(pm % 360.0) / w))
