@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 
 from quadland.constants import TILT_MIN
-from quadland.exceptions import SingularAttitudeError
+from quadland.exceptions import OperatingPointError, SingularAttitudeError
 from quadland.kinds.landing.values import landing_values
 from quadland.linear import (
     LinearModels,
@@ -135,11 +135,16 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
         z0[HOVER_PLANT.slice("eta1")][:2] = c
     xi = np.concatenate([z0, mem0, hv.speeds])
 
-    def residual(x):
-        r, J = F(x, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref)
-        return np.asarray(r, dtype=float).ravel(), np.asarray(J, dtype=float)
+    def residual_at(pp):
+        def residual(x):
+            r, J = F(x, hv.w, pp, hv.pm, hv.p_ctrl, hv.ref)
+            return np.asarray(r, dtype=float).ravel(), np.asarray(J, dtype=float)
+        return residual
 
-    xi, it = newton(residual, xi, tol, max_iter)
+    try:
+        xi, it = newton(residual_at(hv.pp), xi, tol, max_iter)
+    except OperatingPointError:
+        xi, it = _continuation(residual_at, xi, hv.pm, hv.pp, tol, max_iter)
     z, mem, speeds = xi[:nz], xi[nz:nz + nm], xi[nz + nm:]
     out = lin(z, mem, speeds, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref, 0.0)
     u, z_dot, mem_dot = (np.asarray(v, dtype=float).ravel() for v in out[0:3])
@@ -156,6 +161,32 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
                           dict(zeta_hat=ms["zeta_hat"].tolist(),
                                norm_W_hat=float(np.linalg.norm(ms["W_hat"])),
                                wrench=dict(zip(LANDING_INPUT_NAMES, u.tolist(), strict=True))))
+
+
+def _continuation(residual_at, xi, pm, pp, tol: float, max_iter: int, steps: int = 64):
+    """Newton's method along the plant ``pm + lam (pp - pm)``, ``lam`` from 0 to 1.
+
+    From a cold start Newton's method can stall where the plant differs from
+    the controller's model (``ship`` with a lighter quadrotor: the robust
+    terms far from rest); the loop without the mismatch converges from it, and
+    each step starts from the last point. Steps halve on a stall, at most
+    ``steps`` of them.
+    """
+    xi, it = newton(residual_at(pm), xi, tol, max_iter)
+    lam, step = 0.0, 0.25
+    while lam < 1.0 and steps > 0:
+        steps -= 1
+        trial = min(1.0, lam + step)
+        try:
+            xi, k = newton(residual_at(pm + trial * (pp - pm)), xi, tol, max_iter)
+        except OperatingPointError:
+            step /= 2
+            continue
+        lam, it, step = trial, it + k, min(2 * step, 1.0)
+    if lam < 1.0:
+        raise OperatingPointError(f"no equilibrium: Newton's method stalled, and along the "
+                                  f"plant from the controller's model to {lam:.3g} of the way")
+    return xi, it
 
 
 def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
