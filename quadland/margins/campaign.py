@@ -25,10 +25,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from quadland.exceptions import MarginsError, OperatingPointError, ScenarioError
+from quadland.exceptions import (
+    MarginsError,
+    OperatingPointError,
+    ScenarioError,
+    SingularAttitudeError,
+)
 from quadland.margins.report import Requirement, decibels
 
 if TYPE_CHECKING:
+    from quadland.campaign.spec import CampaignSpec
     from quadland.margins.report import MarginReport
     from quadland.scenario import Scenario
 
@@ -210,7 +216,7 @@ def _commands(scenario_arg: str, overrides: Sequence[str], draw: Sequence[str]
 
 
 def check_campaign_request(base: Scenario, runs: int | None, delay_periods: int | None
-                           ) -> tuple[object, int]:
+                           ) -> tuple[CampaignSpec, int]:
     """Refuse, before any work, a request :func:`campaign_margins` cannot answer.
 
     Returns
@@ -255,7 +261,7 @@ def _review_draw(base, draw, requirement, delay_periods, commands):
     except ScenarioError as exc:
         return DrawMargins(status="invalid", passed=False, figures={},
                            message=" ".join(str(exc).split()), **common), {}, None
-    except (OperatingPointError, MarginsError) as exc:
+    except (OperatingPointError, SingularAttitudeError, MarginsError) as exc:
         return DrawMargins(status="failed", passed=False, figures={},
                            message=" ".join(str(exc).split()), **common), {}, None
     section, values, kinds = _section_figures(report)
