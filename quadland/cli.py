@@ -199,6 +199,11 @@ def _margins_parser(sub) -> None:
                          "(default: a landing scenario's controller.delay_periods; "
                          "1 for the paper's loop)")
     mg.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    mg.add_argument("--campaign", action="store_true",
+                    help="review every draw of the scenario's [campaign] table, as "
+                         "quadland campaign flies them: the distribution and the worst draws")
+    mg.add_argument("--runs", type=_integer, metavar="N",
+                    help="with --campaign: draws 0 .. N-1 (default: the table's campaign.runs)")
     mg.set_defaults(handler=_run_margins)
 
 
@@ -288,6 +293,8 @@ def _run_margins(args) -> int:
 
     start = time.perf_counter()
     requirement = Requirement(args.gain_margin_db, args.phase_margin_deg)
+    if args.campaign or args.runs is not None:
+        return _run_margins_campaign(args, requirement)
     scenario = load_scenario(args.scenario, args.overrides)
     check_request(scenario, args.at, args.delay_periods)     # nothing claimed before this
     # OpenBLAS threads on matrices of a few hundred rows cost more than they
@@ -317,6 +324,33 @@ def _run_margins(args) -> int:
               if section is not None and not section.passed]
     print(f"quadland: margins below the requirement {requirement.gain_margin_db:g} dB / "
           f"{requirement.phase_margin_deg:g} deg: {'; '.join(failed)}", file=sys.stderr)
+    return 1
+
+
+def _run_margins_campaign(args, requirement) -> int:
+    from quadland.margins.campaign_run import run_campaign_margins
+    from quadland.margins.campaign_text import format_campaign
+
+    if not args.campaign:
+        raise UsageError("--runs: counts the draws of --campaign; add --campaign")
+    if args.at is not None:
+        raise UsageError("--at: a campaign's draws are reviewed at their equilibrium; drop --at")
+
+    def progress(done, runs):
+        if done == runs or done % 10 == 0:
+            print(f"quadland: margins --campaign: {done} of {runs} draws reviewed", flush=True)
+
+    result, path = run_campaign_margins(args.scenario, args.overrides, args.runs, args.out,
+                                        requirement, args.delay_periods, progress)
+    print(format_campaign(result), end="")
+    print(f"quadland: wrote {path} ({result.runtime_s:.1f} s)")
+    if result.all_passed:
+        return 0
+    n = len(result.draws)
+    print(f"quadland: margins below the requirement {requirement.gain_margin_db:g} dB / "
+          f"{requirement.phase_margin_deg:g} deg: {n - result.passed} of {n} draws "
+          f"({result.count('invalid')} invalid, {result.count('failed')} without an operating "
+          "point)", file=sys.stderr)
     return 1
 
 

@@ -44,6 +44,10 @@ CASES = {
     "turning": ("turning", [], 0.7),
     # the aft pad, 15 m behind and 4 m above the centre of roll and pitch, wind across
     "ship": ("ship", STILL, -0.4),
+    # a quadrotor 1 % lighter than the controller's model: Newton's method from the cold
+    # start stalls, the point is found along the plant from the model's (it hovers 2.5 cm
+    # high: the law has no integral action, issue 19)
+    "ship, lighter": ("ship", [*STILL, "quadrotor.mass=1.98"], 0.3),
 }
 
 

@@ -110,7 +110,9 @@ def test_to_dict_is_the_json_of_the_command(report, tmp_path, capsys):
     assert list(data) == ["scenario", "overrides", "operating_point", "requirement",
                           "loop_break", "continuous"]
     cont = data["continuous"]
-    assert list(cont) == ["stable", "loops", "multiloop_disk", "passed", "poles"]
+    assert list(cont) == ["stable", "loops", "multiloop_disk", "passed", "poles", "sensitivity"]
+    ms = report.continuous.sensitivity.multiloop.ms
+    assert cont["sensitivity"]["multiloop"]["ms"] == ms.value
     assert list(cont["loops"]) == LOOPS
     assert data["requirement"] == {"gain_margin_db": 6.0, "phase_margin_deg": 45.0}
     assert data["overrides"] == SMALL

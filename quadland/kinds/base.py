@@ -150,6 +150,11 @@ class LoopKind(abc.ABC):
         the flight code's one period)."""
         return 1
 
+    def sensor_channels(self, scenario: Scenario) -> dict[str, tuple[tuple[str, ...], float]]:
+        """Its sensors for the margin review's sensor side: name -> (the linear models'
+        measured outputs the sensor feeds, its flown latency in s); none by default."""
+        return {}
+
     def check_operating_time(self, scenario: Scenario, at: float) -> None:
         """Refuse, before any work, a time :meth:`operating_point` cannot reach."""
         raise MarginsError(f"at: the {self.name} loop is analysed at its equilibrium only")

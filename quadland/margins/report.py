@@ -14,6 +14,7 @@ from quadland.output import json_ready
 if TYPE_CHECKING:
     from quadland.analysis import DiskMargin, Margins
     from quadland.linear import LinearModels, OperatingPoint
+    from quadland.margins.sensitivity import SensitivityReport, SensorMargin
     from quadland.scenario import Scenario
 
 __all__ = ["Requirement", "LoopMargins", "MultiloopDiskMargin", "Pole", "PoleSummary",
@@ -213,6 +214,11 @@ class LoopReport:
     computation_delay_periods : int or None
         Control periods from sampling to commanding modelled in a sampled
         loop (a ``z^-1`` on the command each); None for continuous time.
+    sensitivity : SensitivityReport or None
+        Ms and Mt at the plant input, per loop and multiloop.
+    sensors : tuple of SensorMargin
+        The latency each of the kind's sensors tolerates (none: the kind
+        names no sensors).
     """
 
     stable: bool
@@ -222,6 +228,8 @@ class LoopReport:
     passed: bool
     rate_hz: float | None = None
     computation_delay_periods: int | None = None
+    sensitivity: SensitivityReport | None = None
+    sensors: tuple[SensorMargin, ...] = ()
 
     @property
     def computation_delay_s(self) -> float | None:
@@ -253,6 +261,10 @@ class LoopReport:
         if self.computation_delay_periods is not None:
             out["computation_delay_periods"] = self.computation_delay_periods
             out["computation_delay_s"] = self.computation_delay_s
+        if self.sensitivity is not None:
+            out["sensitivity"] = self.sensitivity.to_dict()
+        if self.sensors:
+            out["sensors"] = {s.sensor: s.to_dict() for s in self.sensors}
         return out
 
 

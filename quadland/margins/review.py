@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING
 
@@ -94,6 +95,15 @@ def _loop_report(L: control.StateSpace, names, req: Requirement, rate_hz: float 
                         rate_hz=rate_hz,
                         computation_delay_periods=delay_periods)
     return report, poles
+
+
+def _with_extras(section: LoopReport, models, scenario: Scenario,
+                 requirement: Requirement) -> LoopReport:
+    """The section with its sensitivity peaks and sensor margins (:mod:`.sensitivity`)."""
+    from quadland.margins.sensitivity import section_extras
+
+    sens, sensors = section_extras(models, scenario, requirement)
+    return dataclasses.replace(section, sensitivity=sens, sensors=sensors)
 
 
 def check_request(scenario: Scenario, at: float | None = None,
@@ -217,12 +227,14 @@ def margin_report(scenario: Scenario, at: float | None = None,
     point = kind.operating_point(scenario, at)
     models = kind.linear_models(scenario, point)
     continuous, poles = _loop_report(models.loop_input, models.loop_names, requirement)
+    continuous = _with_extras(continuous, models, scenario, requirement)
     rate = float(scenario.data["controller"]["rate_hz"])
     sampled = discrete = None
     if rate > 0:
         discrete = kind.sampled_models(scenario, point, rate, int(delay_periods))
         sampled, _ = _loop_report(discrete.loop_input, discrete.loop_names, requirement,
                                   rate_hz=rate, delay_periods=int(delay_periods))
+        sampled = _with_extras(sampled, discrete, scenario, requirement)
     return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
                         poles)
 

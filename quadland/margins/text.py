@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from quadland.margins.report import LoopReport, MarginReport, Requirement, decibels
+from quadland.margins.sensitivity import extras_lines
 
 __all__ = ["format_report"]
 
@@ -44,6 +45,7 @@ def _table(section: LoopReport, title: str, req: Requirement) -> list[str]:
                  f"(+-{_fmt(decibels(m.gain_margin[1]), '.1f')} dB), phase +-"
                  f"{m.phase_margin:.1f} deg, at {m.frequency:.3g} rad/s: "
                  f"{_verdict(section.multiloop_disk.passed)}")
+    lines += extras_lines(section.sensitivity, section.sensors, req)
     p = section.poles
     slow = ", ".join(f"{q.real:.4g}{q.imag:+.4g}j" for q in p.slowest)
     least = ", ".join(f"{q.real:.4g}{q.imag:+.4g}j (zeta {q.damping:.3f})"

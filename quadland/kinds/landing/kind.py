@@ -132,6 +132,11 @@ class LandingKind(LoopKind):
                  "each loop with the others closed", ""]
         return lines, "continuous-time limit of the landing step (dt -> 0)"
 
+    def sensor_channels(self, scenario: Scenario) -> dict[str, tuple[tuple[str, ...], float]]:
+        from quadland.kinds.landing.sensor_break import sensor_channels
+
+        return sensor_channels(scenario)
+
     def computation_delay(self, scenario: Scenario) -> int:
         return int(scenario.data["controller"]["delay_periods"])
 

@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 
 from quadland.constants import TILT_MIN
-from quadland.exceptions import SingularAttitudeError
+from quadland.exceptions import OperatingPointError, SingularAttitudeError
 from quadland.kinds.landing.values import landing_values
 from quadland.linear import (
     LinearModels,
@@ -135,11 +135,20 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
         z0[HOVER_PLANT.slice("eta1")][:2] = c
     xi = np.concatenate([z0, mem0, hv.speeds])
 
-    def residual(x):
-        r, J = F(x, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref)
-        return np.asarray(r, dtype=float).ravel(), np.asarray(J, dtype=float)
+    def residual_at(lam):
+        """The residual with the plant ``lam`` of the way from the controller's model
+        (no wind, no disturbance) to the scenario's."""
+        pp, w = hv.pm + lam * (hv.pp - hv.pm), lam * hv.w
 
-    xi, it = newton(residual, xi, tol, max_iter)
+        def residual(x):
+            r, J = F(x, w, pp, hv.pm, hv.p_ctrl, hv.ref)
+            return np.asarray(r, dtype=float).ravel(), np.asarray(J, dtype=float)
+        return residual
+
+    try:
+        xi, it = newton(residual_at(1.0), xi, tol, max_iter)
+    except OperatingPointError:
+        xi, it = _continuation(residual_at, xi, tol, max_iter)
     z, mem, speeds = xi[:nz], xi[nz:nz + nm], xi[nz + nm:]
     out = lin(z, mem, speeds, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref, 0.0)
     u, z_dot, mem_dot = (np.asarray(v, dtype=float).ravel() for v in out[0:3])
@@ -156,6 +165,33 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
                           dict(zeta_hat=ms["zeta_hat"].tolist(),
                                norm_W_hat=float(np.linalg.norm(ms["W_hat"])),
                                wrench=dict(zip(LANDING_INPUT_NAMES, u.tolist(), strict=True))))
+
+
+def _continuation(residual_at, xi, tol: float, max_iter: int, steps: int = 64):
+    """Newton's method along ``residual_at(lam)``, ``lam`` from 0 to 1.
+
+    From a cold start Newton's method can stall where the plant differs from
+    the controller's model or the wind is strong (``ship`` with a lighter
+    quadrotor: the robust terms far from rest); the loop without mismatch,
+    wind or disturbance (``lam = 0``) converges from it, and each step starts
+    from the last point. Steps halve on a stall, at most ``steps`` of them.
+    """
+    xi, it = newton(residual_at(0.0), xi, tol, max_iter)
+    lam, step = 0.0, 0.25
+    while lam < 1.0 and steps > 0:
+        steps -= 1
+        trial = min(1.0, lam + step)
+        try:
+            xi, k = newton(residual_at(trial), xi, tol, max_iter)
+        except OperatingPointError:
+            step /= 2
+            continue
+        lam, it, step = trial, it + k, min(2 * step, 1.0)
+    if lam < 1.0:
+        raise OperatingPointError(f"no equilibrium: Newton's method stalled, and along the "
+                                  f"way from the controller's model without wind only "
+                                  f"{lam:.3g} of it")
+    return xi, it
 
 
 def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
