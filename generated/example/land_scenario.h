@@ -38,15 +38,16 @@ static const double ql_land_gust_direction[3] = { 0.0, 1.0, 0.0 };
 /* The touchdown limits, in the order of summary.json's "limits". */
 #define QL_LAND_MAX_SINK_RATE 0.5
 #define QL_LAND_MAX_OFFSET 0.2
-#define QL_LAND_MAX_TILT_DEG 10.0
+#define QL_LAND_MAX_TILT_DEG 28.1
 #define QL_LAND_MAX_RELATIVE_SPEED 0.5
 
-/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (3), p_veh (10), p_deck (247)). */
-static const double ql_land_pp[273] = {
-    2.0, 0.025, 0.025, 0.045, 0.1, 0.1,
-    0.1, 0.001, 0.001, 0.001, 9.8, 0.25,
-    0.05, 0.02, 9.8, 0.2, 1500.0, 1500.0,
-    2500.0, 150.0, 1500.0, 2500.0, 2083.3333333333335, 0.0,
+/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (8), p_veh (10), p_deck (267)). */
+static const double ql_land_pp[298] = {
+    2.0, 0.025, 0.025, 0.045, 0.3, 0.3,
+    0.3, 0.001, 0.001, 0.001, 9.8, 0.25,
+    0.05, 0.02, 9.8, 0.2, 0.01225, 0.01225,
+    0.01225, 0.127, 1.225, 1500.0, 1500.0, 2500.0,
+    150.0, 1500.0, 2500.0, 2083.3333333333335, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
@@ -88,7 +89,10 @@ static const double ql_land_pp[273] = {
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-    0.0, 0.0, 1.5,
+    0.0, 1.5, 0.0, 0.0, 0.0, 0.0,
+    1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0,
 };
 
 /* The initial plant state xp (QL_LANDING_PLANT_NX: x1q (16), xv (6)). */

@@ -86,7 +86,7 @@ def landing_signals_function() -> ca.Function:
     xp, xg, w = LANDING_PLANT_STATE.sym(), GUIDANCE_STATE.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     ps, gs = LANDING_PLANT_STATE.unpack(xp), GUIDANCE_STATE.unpack(xg)
-    d = BODY_DISTURBANCE.unpack(body_disturbance(xp, w, pp))
+    d = BODY_DISTURBANCE.unpack(body_disturbance(xp, w, pp, t))
     y = landing_signals(ps["x1q"], ps["xv"], t, pp, d["d_F"], d["d_M"], gs["phase"], gs["aborts"])
     return ca.Function("landing_signals", [xp, xg, w, t, pp], [y],
                        ["xp", "xg", "w", "t", "pp"], ["y"])
