@@ -284,14 +284,16 @@ def test_wind_acts_as_the_drag_of_the_air_velocity():
         np.testing.assert_allclose(d_F, Kt * (R.T @ wind), atol=1e-9)
 
 
-def test_compiled_and_virtual_machine_fly_the_same_landing(monkeypatch):
-    ref = _fly("highway")
+@pytest.mark.parametrize("name", ["highway", "highway_100"])
+def test_compiled_and_virtual_machine_fly_the_same_landing(monkeypatch, name):
+    """The same landing on both, highway_100's drive profile and lane change too."""
+    ref = _fly(name)
     monkeypatch.setattr(compiled, "have_compiler", lambda: False)
     compiled.compiled_loop.cache_clear()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", compiled.QuadlandWarning)
-            vm = _fly("highway")
+            vm = _fly(name)
     finally:
         monkeypatch.undo()
         compiled.compiled_loop.cache_clear()
