@@ -93,6 +93,9 @@ LANDING_DOCUMENTED = {
     "ctrl.centers": _finite, "ctrl.widths": _positive,
     "act.motor_time_constant": _positive, "act.F_max": _positive,
     "act.gear_height": _nonnegative,
+    "act.drag_quadratic": _nonnegative,
+    "act.rotor_radius": _nonnegative,
+    "act.air_density": lambda v, p: v > 0,
     "tilt_min": lambda v, p: (v >= 0) & (v < 1),
 }
 #: Members that only ql_check_landing_params tests (the step would test l values a call).
