@@ -113,13 +113,14 @@ def test_errors_are_against_the_truth_at_the_horizon(hover):
 
 #: What the Monte Carlo below measures where the filter is not consistent (docs/estimator.md,
 #: "Consistency"): the share of the settled times inside the bounds, or the average NIS.
+#: (With issue 18's drag, the quadrotor leaning 18 deg into the highway's airflow: the
+#: position's NEES is inside at 98 % of the times, average 3.17, where it was 92 %, 3.30;
+#: the relative's 94 %, 6.40, was 77 %, 6.49.)
 NOT_MET = {
-    "relative": "77 % of the times inside, average 6.49: the attitude estimate's heading "
+    "relative": "94 % of the times inside, average 6.40: the attitude estimate's heading "
                 "error (2 deg), which the filter does not model, turns the camera's vector; "
                 "with it zero in the world, 97 %",
-    "position": "92 % of the times inside, average 3.30: the heading error as above; with it "
-                "zero in the world, 95 %",
-    "pad": "30 % of the times inside, average 5.12 < 6: q_at = 1e-6 lets the pad's "
+    "pad": "32 % of the times inside, average 5.13 < 6: q_at = 1e-6 lets the pad's "
            "acceleration drift, the highway car's is exactly zero; with q_at = 1e-9, 100 %",
 }
 

@@ -8,7 +8,8 @@
 * the drive profile's integrated path against hand computations: a lane change's
   sideways offset (``u A T^2 / (2 pi)``, and the exact quadrature of ``u sin(psi)``),
   a speed change's distance, a turn's heading;
-* bad profiles: one line naming the key, exit 2.
+* bad profiles: one line naming the key, exit 2;
+* the law's feed-forward of the quadratic drag is the plant's (eq. 5 at zero thrust).
 """
 
 import math
@@ -22,6 +23,7 @@ from quadland.cli import main
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import load_scenario
 from quadland_symbolic.landing.aero import aero_force
+from quadland_symbolic.landing.controller import LANDING_MEASUREMENT, known_acceleration
 from quadland_symbolic.landing.deck import DECK_PARAMS, vehicle_motion
 from quadland_symbolic.landing.drive import DRIVE_PARAMS, pack_drive
 from quadland_symbolic.landing.plant import (
@@ -31,6 +33,8 @@ from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
+from quadland_symbolic.landing.relative import relative6_acceleration
+from quadland_symbolic.landing.sensors import measurement_function
 from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
@@ -234,3 +238,30 @@ def test_bad_profiles_are_one_line_and_exit_2(overrides, message, capsys, tmp_pa
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(message), err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_law_feeds_forward_the_plants_quadratic_drag():
+    """The law's known acceleration with the shipped Kq is the plant's own at zero thrust
+    (no ground effect without thrust) and no wind: the relative acceleration of eq. (5)
+    under the disturbance aero_force, for a car in highway_100's lane change."""
+    sc, p = _params("highway_100")
+    rng = np.random.default_rng(7)
+    pp = LANDING_PLANT_PARAMS.pack(p)
+    Kq = ACTUATOR.unpack(p["p_act"])["drag_quadratic"]
+    assert Kq.tolist() == [0.01225] * 3
+    for _ in range(5):
+        x1q = QUAD6_STATE.pack(dict(p1=rng.normal(0, 2, 3) + [0, 0, 5],
+                                    eta1=rng.uniform(-0.6, 0.6, 3), V1=rng.normal(0, 15, 3),
+                                    Omega1=rng.normal(0, 0.5, 3), F=np.zeros(4)))
+        xv = VEHICLE_STATE.pack(dict(x2=1, y2=2, psi2=0.02, u2=27.7, v2=0.0, r2=0.03))
+        t = rng.uniform(12.0, 16.0)                                       # in the lane change
+        d_F = np.array(aero_force(x1q, xv, np.zeros(3), t, p["p_act"], p["p_veh"],
+                                  p["p_deck"])).ravel()
+        a_e, _ = relative6_acceleration(x1q, xv, t, np.zeros(4), np.concatenate([d_F, [0] * 3]),
+                                        p["p_quad"], p["p_act"], p["p_veh"], p["p_deck"])
+        xp = np.concatenate([x1q, xv])
+        m = LANDING_MEASUREMENT.unpack(np.array(measurement_function()(xp, t, pp)).ravel())
+        f_g, f_r = (np.array(v).ravel() for v in known_acceleration(
+            m["p_e"], m["v_e"], m["eta1"], m["eta2"], m["v2E"], m["a2E"], m["w2E"],
+            m["w2E_dot"], p["p_quad"], Kq))
+        np.testing.assert_allclose(f_g + f_r, np.array(a_e).ravel(), atol=1e-10)

@@ -254,12 +254,12 @@ def known_acceleration_function() -> ca.Function:
                         "Kq"], ["f_g", "f_r"])
 
 
-def known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad, Kq=(0.0, 0.0, 0.0)):
-    """``(f_g, f_r)`` of :func:`known_acceleration_function` (``Kq``: no quadratic drag by
-    default)."""
+def known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad, Kq=None):
+    """``(f_g, f_r)`` of :func:`known_acceleration_function` (``Kq`` None: no quadratic
+    drag)."""
+    Kq = ca.DM.zeros(3) if Kq is None else Kq
     return tuple(known_acceleration_function()(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot,
-                                               p_quad, ca.vertcat(*Kq) if isinstance(Kq, tuple)
-                                               else Kq))
+                                               p_quad, Kq))
 
 
 # ---------------------------------------------------------------- the law
