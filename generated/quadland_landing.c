@@ -68,13 +68,16 @@ typedef char actuator_params_is_its_layout[
     AT(ql_actuator_params, motor_time_constant, 0, 0) &&
     AT(ql_actuator_params, F_max, 1, 0) &&
     AT(ql_actuator_params, gear_height, 2, 0) &&
-    sizeof(ql_actuator_params) == 3 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_actuator_params, drag_quadratic, 3, 0) &&
+    AT(ql_actuator_params, rotor_radius, 6, 0) &&
+    AT(ql_actuator_params, air_density, 7, 0) &&
+    sizeof(ql_actuator_params) == 8 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_params_is_its_layout[
     AT(ql_landing_params, quad, 0, 0) &&
     AT(ql_landing_params, ctrl, 13, 0) &&
     AT(ql_landing_params, act, 104, 0) &&
-    AT(ql_landing_params, tilt_min, 107, 0) &&
-    sizeof(ql_landing_params) == 108 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_params, tilt_min, 112, 0) &&
+    sizeof(ql_landing_params) == 113 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_output_is_its_layout[
     AT(ql_landing_output, F_cmd, 0, 0) &&
     AT(ql_landing_output, wrench, 4, 0) &&
@@ -115,8 +118,8 @@ typedef char guidance_params_is_its_layout[
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
-    2.0, 0.025, 0.025, 0.045, 0.1, 0.1,
-    0.1, 0.001, 0.001, 0.001, 9.8, 0.25,
+    2.0, 0.025, 0.025, 0.045, 0.3, 0.3,
+    0.3, 0.001, 0.001, 0.001, 9.8, 0.25,
     0.05,
 };
 static const ql_real default_p_land[91] = {
@@ -137,8 +140,9 @@ static const ql_real default_p_land[91] = {
     2.0, 2.0, 2.0, 2.0, 2.0, 2.0,
     2.0,
 };
-static const ql_real default_p_act[3] = {
-    0.02, 9.8, 0.2,
+static const ql_real default_p_act[8] = {
+    0.02, 9.8, 0.2, 0.01225, 0.01225, 0.01225,
+    0.127, 1.225,
 };
 static const ql_real default_p_guid[13] = {
     3.0, 0.5, 1.0, 0.7, 1.0, 0.3,
@@ -213,6 +217,9 @@ const char *ql_phase_name(int phase)
  *   act.motor_time_constant  > 0
  *   act.F_max                > 0
  *   act.gear_height          >= 0
+ *   act.drag_quadratic       >= 0
+ *   act.rotor_radius         >= 0
+ *   act.air_density          > 0
  *   tilt_min                 in [0, 1)
  * NaN and infinities are outside every range. */
 ql_status ql_check_landing_params(const ql_landing_params *params, const char **bad_field)
@@ -320,7 +327,18 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
     if (!bad && !(isfinite(p[106]) && (p[106] >= 0.0))) {
         bad = "act.gear_height";
     }
-    if (!bad && !(isfinite(p[107]) && ((p[107] >= 0.0) && (p[107] < 1.0)))) {
+    for (i = 107; !bad && i < 110; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
+            bad = "act.drag_quadratic";
+        }
+    }
+    if (!bad && !(isfinite(p[110]) && (p[110] >= 0.0))) {
+        bad = "act.rotor_radius";
+    }
+    if (!bad && !(isfinite(p[111]) && (p[111] > 0.0))) {
+        bad = "act.air_density";
+    }
+    if (!bad && !(isfinite(p[112]) && ((p[112] >= 0.0) && (p[112] < 1.0)))) {
         bad = "tilt_min";
     }
     if (bad_field) {
@@ -402,7 +420,7 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
 
 /* 1 when every parameter lies in its range, the per-node arrays aside
  * (ctrl.widths: ql_check_landing_params only): the step's invariant,
- * 38 comparisons. The values are known to be finite; no names and no
+ * 43 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_landing_params finds the culprit. */
 static int landing_params_in_range(const ql_real *p)
 {
@@ -444,7 +462,12 @@ static int landing_params_in_range(const ql_real *p)
     ok &= (p[104] > 0.0);
     ok &= (p[105] > 0.0);
     ok &= (p[106] >= 0.0);
-    ok &= ((p[107] >= 0.0) & (p[107] < 1.0));
+    ok &= (p[107] >= 0.0);
+    ok &= (p[108] >= 0.0);
+    ok &= (p[109] >= 0.0);
+    ok &= (p[110] >= 0.0);
+    ok &= (p[111] > 0.0);
+    ok &= ((p[112] >= 0.0) & (p[112] < 1.0));
     return ok;
 }
 

@@ -5,6 +5,10 @@ import math
 
 import numpy as np
 
+#: The landing plant's aerodynamics beyond eq. (2) switched off (ACTUATOR's quadratic drag
+#: and ground effect): a test of eq. (2)'s plant alone packs these.
+NO_AERO = dict(drag_quadratic=[0.0, 0.0, 0.0], rotor_radius=0.0, air_density=1.225)
+
 
 def euler_rate_matrix(phi, theta):
     """Rr of eq. (1), written out from the printed matrix."""

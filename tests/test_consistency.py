@@ -110,6 +110,25 @@ def test_errors_are_against_the_truth_at_the_horizon(hover):
 
 # ---------------------------------------------------------------- the Monte Carlo
 
+#: What the Monte Carlo below measures where the filter is not consistent (docs/estimator.md,
+#: "Consistency"): the share of the settled times inside the bounds, or the average NIS.
+#: (With issue 18's drag, the quadrotor leaning 18 deg into the highway's airflow: the
+#: position's NEES is inside at 98 % of the times, average 3.17, where it was 92 %, 3.30;
+#: the relative's 94 %, 6.40, was 77 %, 6.49.)
+NOT_MET = {
+    "relative": "94 % of the times inside, average 6.40: the attitude estimate's heading "
+                "error (2 deg), which the filter does not model, turns the camera's vector; "
+                "with it zero in the world, 97 %",
+    "pad": "32 % of the times inside, average 5.13 < 6: q_at = 1e-6 lets the pad's "
+           "acceleration drift, the highway car's is exactly zero; with q_at = 1e-9, 100 %",
+    "range": "average 464 over 59313 due packets: leaning 14-18 deg into the highway's "
+             "airflow (issue 18's drag), the body-fixed beam from 3 m meets the deck plane "
+             "0.75-1 m behind the pad, at the roof's 1 m half-length, and reads the road "
+             "1.5 m below (median NIS 1040 in seed 2024's hover); the filter holds those "
+             "back (E12a: 914 held, 54 fused) but the NIS counts every due packet",
+}
+
+
 @pytest.fixture(scope="module")
 def mc():
     return consistency_monte_carlo(load_scenario("highway"), runs=100, duration=8.0)

@@ -376,10 +376,12 @@ def test_a_sample_of_landing_and_campaign_mutants_runs_or_fails_cleanly(tmp_path
         assert len(err) <= 1 and (status == 0 or len(err) == 1), (k, err)
         assert out.exists() == (status != 2), k
     assert 2 in statuses and statuses & {0, 3}
-    # campaign tables: a two-run campaign of each of a sample of mutants
+    # campaign tables: a two-run campaign of each of a sample of mutants (40: most
+    # mutants are refused at once; after the table gained the quadratic drag's dispersion
+    # the first 12 of this seed held no valid one, the first 40 hold two)
     base = load_scenario("highway")
     campaigns = set()
-    for k in range(12):
+    for k in range(40):
         table = _table_mutant(rng, base.campaign_table)
         path, out = tmp_path / f"c{k}.toml", tmp_path / f"campaign{k}"
         path.write_text(dataclasses.replace(base, campaign_table=table).to_toml())

@@ -93,6 +93,9 @@ LANDING_DOCUMENTED = {
     "ctrl.centers": _finite, "ctrl.widths": _positive,
     "act.motor_time_constant": _positive, "act.F_max": _positive,
     "act.gear_height": _nonnegative,
+    "act.drag_quadratic": _nonnegative,
+    "act.rotor_radius": _nonnegative,
+    "act.air_density": lambda v, p: v > 0,
     "tilt_min": lambda v, p: (v >= 0) & (v < 1),
 }
 #: Members that only ql_check_landing_params tests (the step would test l values a call).
@@ -177,8 +180,10 @@ class _Harness:
         y["eta2"] = rng.normal(size=3) * [0.05, 0.05, 2.0]
         y["eta1"] = rng.normal(size=3) * 0.4 * scale + [0, 0, y["eta2"][2]]
         y["Omega1"] = rng.normal(size=3) * scale
+        # the deck's velocity 5 m/s per axis: with issue 18's real drag fed forward (Kt 0.3,
+        # Kq 0.01225) 10 m/s left 140 of 3000 calls unclipped, under the 150 asked below
         for k in ("v2E", "a2E", "w2E", "w2E_dot"):
-            y[k] = rng.normal(size=3) * (10.0 if k == "v2E" else 0.3 * scale)
+            y[k] = rng.normal(size=3) * (5.0 if k == "v2E" else 0.3 * scale)
         self.v_y[:] = LANDING_MEASUREMENT.pack(y)
 
     def _retune(self, rng, p, p0, what):

@@ -1,7 +1,8 @@
 """Landing scenarios flown end to end, against checks independent of the loop's code.
 
 The shipped scenarios must land within their limits at their default seed,
-at every seed 0-19 and, for ``highway``, at 80 km/h. The trajectory is
+at every seed 0-19 and, for ``highway``, at 80 km/h (its tilt limits raised by the
+steady tilt's closed form, docs/landing.md "Real drag and thrust"). The trajectory is
 checked from its CSV columns alone: Newton's law by finite differences of
 the logged positions (the thrust, attitude and external force as logged, a
 rotation multiplied out by hand); the touchdown figures by hand at the
@@ -19,6 +20,7 @@ import warnings
 import numpy as np
 import pytest
 from reference import rotation
+from scipy.optimize import brentq
 
 import quadland
 from quadland.cli import main
@@ -29,15 +31,17 @@ from quadland.scenario import load_scenario
 from quadland.schema import LANDING_SCHEMA
 from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, TOUCHDOWN
 
-SCENARIOS = ("highway", "turning", "ship", "ship_ss5")
+SCENARIOS = ("highway", "turning", "ship", "ship_ss5", "highway_100")
 #: Descents aborted at the default seed, on the sensors and on the true state: the
 #: scenarios' measured ones (docs/landing.md, docs/sea.md). A ship deck in sea state 4
-#: or 5 rises faster than landing.max_deck_rise a fifth to a third of the time. On the
-#: gear's contact the first foot to touch ends the count: ship_ss5 on its sensors 19
-#: (42 to the welded gear point's crossing), the ship on the true state 0 (1).
-ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 16,
-          ("ship_ss5", "sensors"): 19, ("highway", "perfect"): 0, ("turning", "perfect"): 0,
-          ("ship", "perfect"): 0, ("ship_ss5", "perfect"): 6}
+#: or 5 rises faster than landing.max_deck_rise a fifth to a third of the time;
+#: highway_100's lane change aborts its first descent on the sensors. (Before the drag
+#: of issue 18 item 5 the ships aborted 16 and 42 times on their sensors, 1 and 6 times
+#: on the true state.)
+ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 6,
+          ("ship_ss5", "sensors"): 17, ("highway_100", "sensors"): 1,
+          ("highway", "perfect"): 0, ("turning", "perfect"): 0, ("ship", "perfect"): 3,
+          ("ship_ss5", "perfect"): 0, ("highway_100", "perfect"): 0}
 #: trajectory.csv's columns, as the issue names them.
 COLUMNS = ["t", "phase", "x1", "y1", "z1", "phi1", "theta1", "psi1",
            "x2", "y2", "z2", "phi2", "theta2", "psi2", "x_e", "y_e", "z_e",
@@ -62,9 +66,23 @@ def _csv(result) -> dict:
     return {name: data[:, i] for i, name in enumerate(rows[0])}
 
 
+def _steady_tilt_deg(V, m=2.0, g=9.8, Kt=0.3, Kq=0.01225):
+    """The tilt that holds V m/s through still air at the shipped drag: the root of
+    m g sin(theta) = Kt V cos(theta) + Kq (V cos(theta))^2 (docs/landing.md)."""
+    th = brentq(lambda th: m * g * np.sin(th) - Kt * V * np.cos(th) - Kq * (V * np.cos(th)) ** 2,
+                0.0, np.pi / 2)
+    return float(np.degrees(th))
+
+
 def _speed(kmh):
+    """highway at kmh: the car's speed and the drive force that holds it, the tilt limit at
+    contact 10 deg beyond the steady tilt (as the shipped scenarios'), and above 25 deg of
+    steady tilt the controller's tilt limit at PX4's 45 deg (30 deg tops out at 21.4 m/s)."""
     u2 = kmh / 3.6
-    return [f"initial.velocity2=[{u2!r}, 0.0]", f"vehicle.tau=[{150.0 * u2!r}, 0.0, 0.0]"]
+    tilt = _steady_tilt_deg(u2)
+    return [f"initial.velocity2=[{u2!r}, 0.0]", f"vehicle.tau=[{150.0 * u2!r}, 0.0, 0.0]",
+            f"landing.max_tilt_deg={tilt + 10.0!r}",
+            *(["controller.tilt_max_deg=45.0"] if tilt > 25 else [])]
 
 
 def _first_rows(phase):
@@ -75,8 +93,16 @@ def _first_rows(phase):
 
 # ---------------------------------------------------------------- the scenarios land
 
+#: highway_100 on the gear's contact (issue 18): it touches down leaning 39 deg into the
+#: 100 km/h airflow, past the default gear's static tip-over angle (36.9 deg about y), and
+#: with the rotors cut at the switch the airflow's drag rolls it over before the magnet
+#: holds. A wider gear or a later cut moves the failure to a 2.4 cm bounce. Not met yet.
+TIPS_OVER = pytest.mark.xfail(strict=True, reason="highway_100 tips over on the gear's contact")
+
+
 @pytest.mark.parametrize("sensing", ["sensors", "perfect"])
-@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("name", [pytest.param(n, marks=TIPS_OVER) if n == "highway_100" else n
+                                  for n in SCENARIOS])
 def test_lands_within_the_limits_at_the_default_seed(name, sensing):
     """On its sensors and on the true state, each lands at the default seed after the
     measured number of aborted descents (:data:`ABORTS`: none on a car's roof; before the
@@ -138,7 +164,7 @@ def test_a_rising_deck_aborts_the_descent_and_a_later_try_lands():
     back to the hover height, then tried again."""
     res = _fly("ship", "deck.sea_state=0", "deck.heave_amplitude=[0.68]",
                "deck.heave_frequency=[0.349]", "deck.heave_phase_deg=[180.0]",
-               "landing.max_deck_rise=0.1", "simulation.duration=60.0")
+               "landing.max_deck_rise=0.1", "simulation.duration=120.0")
     rep = touchdown_report(res)
     assert rep.success and rep.aborts >= 1
     phase = res["phase"]
@@ -361,9 +387,13 @@ def test_on_the_deck_the_pose_is_rigid_and_the_rotors_wind_down(welded_result):
 
 
 def test_wind_acts_as_the_drag_of_the_air_velocity():
-    """With a steady wind alone, the logged external force is ``Kt R^T v_wind``."""
+    """With a steady wind alone and eq. (2)'s linear drag alone (the quadratic drag and
+    the ground effect off: tests/test_drive_aero.py checks those), the logged external
+    force is ``Kt R^T v_wind``."""
     wind = np.array([3.0, -4.0, 1.0])
-    res = _fly("highway", "wind.turbulence_w20=0.0", "wind.gust_amplitude=0.0",
+    res = _fly("highway", "quadrotor.drag_quadratic=[0.0, 0.0, 0.0]",
+               "controller_model.drag_quadratic=[0.0, 0.0, 0.0]", "quadrotor.rotor_radius=0.0",
+               "wind.turbulence_w20=0.0", "wind.gust_amplitude=0.0",
                f"wind.mean={wind.tolist()}", "disturbance.force_bias=[0.0, 0.0, 0.0]",
                "disturbance.force_amplitude=0.0", "disturbance.noise=false")
     c, Kt = _csv(res), np.asarray(res.scenario["quadrotor.drag_translational"])
@@ -374,14 +404,16 @@ def test_wind_acts_as_the_drag_of_the_air_velocity():
         np.testing.assert_allclose(d_F, Kt * (R.T @ wind), atol=1e-9)
 
 
-def test_compiled_and_virtual_machine_fly_the_same_landing(monkeypatch):
-    ref = _fly("highway")
+@pytest.mark.parametrize("name", ["highway", "highway_100"])
+def test_compiled_and_virtual_machine_fly_the_same_landing(monkeypatch, name):
+    """The same landing on both, highway_100's drive profile and lane change too."""
+    ref = _fly(name)
     monkeypatch.setattr(compiled, "have_compiler", lambda: False)
     compiled.compiled_loop.cache_clear()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", compiled.QuadlandWarning)
-            vm = _fly("highway")
+            vm = _fly(name)
     finally:
         monkeypatch.undo()
         compiled.compiled_loop.cache_clear()
@@ -405,7 +437,7 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     )
     from quadland_symbolic.landing.signals import LANDING_SIGNALS
 
-    sc = load_scenario("highway", ["simulation.duration=12", PERFECT, "gear.welded=true"])
+    sc = load_scenario("highway", ["simulation.duration=22", PERFECT, "gear.welded=true"])
     res, lv = quadland.simulate(sc), landing_values(sc)
     k = int(np.argmax(res["phase"] == TOUCHDOWN))
     x_td, t_td = res.states[k], float(res["t"][k])
@@ -413,12 +445,12 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     rec = np.array([res[n][k] for n in LANDING_RECORDED.element_names()])
     z0, a = (np.asarray(v, dtype=float).ravel()
              for v in landing_ride_start(lv.l)(x_td, y_td, rec, t_td, 2.0))
-    rows, model = Clock(100.0, 0.0, 12.0, True), landing_loop(lv.l, welded=True)
+    rows, model = Clock(100.0, 0.0, 22.0, True), landing_loop(lv.l, welded=True)
     runs = [loop.ride(z0, a, rows, t_td, t_td + 2.0, 0.004, lv.pp)
             for loop in (CompiledLoop(model, "sampled"), VMLoop(model, "sampled"))]
     times, _ = ride_grid(rows, t_td, t_td + 2.0, 0.004)
-    # touchdown at 9.2397 s: the 100 Hz ticks 9.24 .. 11.23 s, then the end itself
-    assert len(times) == 201 and times[0] == 9.24 and times[-1] == t_td + 2.0
+    # touchdown at 17.4049 s: the 100 Hz ticks 17.41 .. 19.40 s, then the end itself
+    assert len(times) == 201 and times[0] == 17.41 and times[-1] == t_td + 2.0
     for ride in runs:
         assert ride.status == SIM_OK
         np.testing.assert_array_equal(ride.times, times)
@@ -456,7 +488,7 @@ def test_simulate_writes_the_landing_columns_and_summary(tmp_path):
                                        "peak_gear_force", "impact_energy", "bounce", "on_pad",
                                        "failures"}
     assert summary["landing"]["limits"] == {"max_sink_rate": 0.5, "max_offset": 0.2,
-                                            "max_tilt_deg": 10.0, "max_relative_speed": 0.5,
+                                            "max_tilt_deg": 28.1, "max_relative_speed": 0.5,
                                             "max_gear_load": 424.0, "max_bounce": 0.02,
                                             "max_friction_margin": 1.0}
     assert summary["landing"]["secured"] is True and summary["landing"]["failures"] == []
@@ -544,12 +576,16 @@ def test_the_landing_schema_has_the_keys_the_issue_names():
                    "controller.rate_hz"):
         section, key = dotted.split(".")
         assert key in LANDING_SCHEMA[section], dotted
-    defaults = {"max_sink_rate": 0.5, "max_offset": 0.2, "max_tilt_deg": 10.0,
-                "max_relative_speed": 0.5}
+    defaults = {"max_sink_rate": 0.5, "max_offset": 0.2, "max_relative_speed": 0.5}
     for name in SCENARIOS:
         sc = load_scenario(name)
         assert sc.model == "landing"
         assert {k: sc.data["landing"][k] for k in defaults} == defaults
+        # the tilt at contact: 10 deg beyond the steady tilt into the scenario's airflow
+        # (the vehicle's speed through its mean wind), docs/landing.md
+        v2, wind = sc["initial.velocity2"], sc["wind.mean"]
+        air = np.hypot(v2[0] - wind[0], v2[1] - wind[1])
+        assert sc["landing.max_tilt_deg"] == pytest.approx(_steady_tilt_deg(air) + 10, abs=0.05)
 
 
 def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
@@ -615,21 +651,33 @@ def test_the_law_reads_its_own_model_and_the_plant_is_the_quadrotor():
 
 def test_with_a_wrong_mass_the_hover_holds_the_true_weight():
     """At the hover equilibrium on a level deck, with no wind and no disturbance, the
-    quadrotor moves with the vehicle at constant velocity: the thrust's vertical part
-    T cos(phi) cos(theta) is the plant's weight m g (drag is horizontal), whatever
-    mass the controller assumes; the altitude settles off its reference instead."""
+    quadrotor moves with the vehicle at constant velocity: the vertical force is the
+    plant's weight m g, whatever mass the controller assumes; the altitude settles off
+    its reference instead. The vertical force, by hand: the thrust T cos(phi) cos(theta)
+    times Cheeseman and Bennett's ground-effect ratio at the height z_e above the deck,
+    plus the vertical part of the body's quadratic drag -Kq V1 |V1| (eq. 2's linear drag
+    is the same on every axis: horizontal)."""
     from quadland.linearization import equilibrium
 
     calm = ["wind.mean=[0.0, 0.0, 0.0]", "disturbance.force_bias=[0.0, 0.0, 0.0]",
             "disturbance.moment_bias=[0.0, 0.0, 0.0]"]
     sc = load_scenario("highway", calm)
+    q, Kq, R_rotor = sc.data["quadrotor"], np.asarray(sc["quadrotor.drag_quadratic"]), 0.127
+    assert list(q["drag_translational"]) == [0.3, 0.3, 0.3]
+    assert sc["quadrotor.rotor_radius"] == R_rotor
     nominal = equilibrium(sc)
     wrong = equilibrium(load_scenario("highway", [*calm, "controller_model.mass=2.4"]))
     for point in (nominal, wrong):
         z = {n: point.xr[i] for i, n in enumerate(point.state_names)}
         T = point.u[0]
-        assert T * np.cos(z["phi1"]) * np.cos(z["theta1"]) == pytest.approx(2.0 * 9.8,
-                                                                             rel=1e-9)
+        R = rotation((z["phi1"], z["theta1"], 0.0))
+        V1 = np.array([z["u1"], z["v1"], z["w1"]])
+        v_E = R @ V1
+        assert abs(v_E[2]) < 1e-9                             # level flight with the car
+        v_i2 = T / 4 / (2 * 1.225 * np.pi * R_rotor ** 2)
+        k = 1 / (1 - (R_rotor / (4 * z["z_e"])) ** 2 / (1 + (v_E[0] ** 2 + v_E[1] ** 2) / v_i2))
+        up = T * k * np.cos(z["phi1"]) * np.cos(z["theta1"]) + (R @ (-Kq * V1 * np.abs(V1)))[2]
+        assert up == pytest.approx(2.0 * 9.8, rel=1e-9)
     assert abs(wrong.xr[2] - nominal.xr[2]) > 1e-3      # z_e off its reference
 
 

@@ -9,7 +9,7 @@ centripetal and Euler terms, and ODE solutions from ``solve_ivp``.
 
 import numpy as np
 import pytest
-from reference import euler_rate_matrix, rotation
+from reference import NO_AERO, euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
@@ -40,7 +40,8 @@ M1, G = 2.0, 9.8
 F_MAX = 2 * M1 * G / 4                   # thrust_to_weight = 2
 P_QUAD = QUADROTOR.pack(dict(m1=M1, I=[1.2416, 1.2416, 2.4832], Kt=[0.01] * 3, Kr=[0.001] * 3,
                              g=G, arm=0.25, c=0.05))
-P_ACT = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=F_MAX, gear_height=0.2))
+P_ACT = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=F_MAX, gear_height=0.2,
+                           **NO_AERO))
 #: The hover test's controller parameters (besides the network's centres and widths).
 GAINS = dict(k1p=[1.0] * 3, k2p=[1.0] * 3, k1=[3.0] * 3, k2=[3.0] * 3, gamma1=0.05,
              gamma2=0.1, k_w=5.0, k_zeta=0.1, rho=0.1, w_f=12.0, zeta_f=1.0, tilt_max=0.5)

@@ -8,7 +8,7 @@ finite differences, never taken from the code under test.
 
 import numpy as np
 import pytest
-from reference import euler_rate_matrix, rotation
+from reference import NO_AERO, euler_rate_matrix, rotation
 from scipy.integrate import solve_ivp
 
 from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, N_SINES, deck_function, pack_deck
@@ -34,7 +34,8 @@ REL6 = relative6_function()
 ACC6 = relative6_acceleration_function()
 DEG = np.pi / 180
 TAU_M, F_MAX, GEAR = 0.05, 10.0, 0.2
-P_ACT = ACTUATOR.pack(dict(motor_time_constant=TAU_M, F_max=F_MAX, gear_height=GEAR))
+P_ACT = ACTUATOR.pack(dict(motor_time_constant=TAU_M, F_max=F_MAX, gear_height=GEAR,
+                           **NO_AERO))
 
 
 # ---------------------------------------------------------------- references (NumPy)

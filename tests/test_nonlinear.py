@@ -50,7 +50,8 @@ def test_its_linearization_is_quadlands_jacobian():
 def test_find_eqpt_holds_a_hovering_landing_plant():
     """The landing plant at its handover state (level, rotors at the weight shared by
     four): find_eqpt finds the rotor commands that rest the motors' lag, the weight
-    again; there the vertical and angular accelerations vanish, as hover requires."""
+    again; there the angular accelerations vanish, as hover requires, and the vertical
+    one is the ground effect's."""
     sc = quadland.load_scenario("highway", ["initial.eta1_deg=[0.0, 0.0, 0.0]",
                                             "initial.omega1_deg_s=[0.0, 0.0, 0.0]"])
     sys = quadland.nlsys(sc, "plant")
@@ -67,8 +68,15 @@ def test_find_eqpt_holds_a_hovering_landing_plant():
                                      ix=list(range(sys.nstates)), idx=motors)
     np.testing.assert_allclose(ueq[:4], q["mass"] * q["gravity"] / 4, rtol=1e-9)
     dx = sys._rhs(0.0, xeq, ueq)
-    for n in ("w1", "p1", "q1", "r1"):
+    for n in ("p1", "q1", "r1"):
         assert abs(dx[names.index(n)]) < 1e-9, (n, dx[names.index(n)])
+    # vertically, the ground effect 4 m above the roof is left (Cheeseman and Bennett's
+    # k = 1 / (1 - (R / 4z)^2 / (1 + (V / v_i)^2)) at the car's 50 km/h through still
+    # air, docs/landing.md): (k - 1) g, 1e-4 m/s^2
+    R, z, V, g = sc["quadrotor.rotor_radius"], 4.0, 50 / 3.6, q["gravity"]
+    v_i2 = q["mass"] * g / 4 / (2 * sc["wind.air_density"] * np.pi * R ** 2)
+    k = 1 / (1 - (R / (4 * z)) ** 2 / (1 + V ** 2 / v_i2))
+    assert dx[names.index("w1")] == pytest.approx((k - 1) * g, rel=1e-6)
 
 
 def test_what_nlsys_refuses_is_one_line():

@@ -227,6 +227,7 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
         fprintf(stderr, ", \"max_gear_load\": %.17g", QL_LAND_MAX_GEAR_LOAD);
         fprintf(stderr, ", \"max_bounce\": %.17g", QL_LAND_MAX_BOUNCE);
         fprintf(stderr, ", \"max_friction_margin\": %.17g", QL_LAND_MAX_FRICTION_MARGIN);
+        fprintf(stderr, ", \"pad_radius\": %.17g", QL_LAND_PAD_RADIUS);
         fprintf(stderr, "}, \"secured\": null, \"bounced\": null, \"tipped\": null, "
                 "\"peak_gear_force\": null, \"impact_energy\": null, \"bounce\": null, "
                 "\"on_pad\": null, \"failures\": [\"no touchdown\"]}\n");
@@ -240,7 +241,7 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     stopped = l->t_last < fmin(l->t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION) - row - 1e-9;
     tipped = l->tip > 1 || stopped;
     bounced = l->bounce > QL_LAND_MAX_BOUNCE;
-    on_pad = settled && l->offset <= QL_LAND_MAX_OFFSET;
+    on_pad = settled && l->offset <= QL_LAND_PAD_RADIUS;
     secured = settled && l->feet >= 3.5
         && (l->engaged >= 0.95 || l->margin < QL_LAND_MAX_FRICTION_MARGIN);
     if (bounced) failures[n++] = "bounced";
@@ -263,6 +264,7 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     fprintf(stderr, ", \"max_gear_load\": %.17g", QL_LAND_MAX_GEAR_LOAD);
     fprintf(stderr, ", \"max_bounce\": %.17g", QL_LAND_MAX_BOUNCE);
     fprintf(stderr, ", \"max_friction_margin\": %.17g", QL_LAND_MAX_FRICTION_MARGIN);
+    fprintf(stderr, ", \"pad_radius\": %.17g", QL_LAND_PAD_RADIUS);
     fprintf(stderr, "}");
     json_bool("secured", secured);
     json_bool("bounced", bounced);

@@ -40,18 +40,20 @@ static const double ql_land_gust_direction[3] = { 0.0, 1.0, 0.0 };
 /* The touchdown limits, in the order of summary.json's "limits". */
 #define QL_LAND_MAX_SINK_RATE 0.5
 #define QL_LAND_MAX_OFFSET 0.2
-#define QL_LAND_MAX_TILT_DEG 10.0
+#define QL_LAND_MAX_TILT_DEG 28.1
 #define QL_LAND_MAX_RELATIVE_SPEED 0.5
 #define QL_LAND_MAX_GEAR_LOAD 424.0
 #define QL_LAND_MAX_BOUNCE 0.02
 #define QL_LAND_MAX_FRICTION_MARGIN 1.0
+#define QL_LAND_PAD_RADIUS 0.5
 
-/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (3), p_veh (10), p_deck (247), p_gear (18), p_lock (4), p_td (4)). */
-static const double ql_land_pp[299] = {
-    2.0, 0.025, 0.025, 0.045, 0.1, 0.1,
-    0.1, 0.001, 0.001, 0.001, 9.8, 0.25,
-    0.05, 0.02, 9.8, 0.2, 1500.0, 1500.0,
-    2500.0, 150.0, 1500.0, 2500.0, 2083.3333333333335, 0.0,
+/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (8), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)). */
+static const double ql_land_pp[324] = {
+    2.0, 0.025, 0.025, 0.045, 0.3, 0.3,
+    0.3, 0.001, 0.001, 0.001, 9.8, 0.25,
+    0.05, 0.02, 9.8, 0.2, 0.01225, 0.01225,
+    0.01225, 0.127, 1.225, 1500.0, 1500.0, 2500.0,
+    150.0, 1500.0, 2500.0, 2083.3333333333335, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
@@ -93,11 +95,14 @@ static const double ql_land_pp[299] = {
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-    0.0, 0.0, 1.5, 0.15, 0.125, -0.2,
-    -0.15, 0.125, -0.2, -0.15, -0.125, -0.2,
-    0.15, -0.125, -0.2, 5000.0, 30.0, 0.5,
-    0.01, 300.0, 0.0001, 100.0, 0.25, 0.17,
-    0.001, 1.0, 0.0, 0.0, 0.002,
+    0.0, 1.5, 0.0, 0.0, 0.0, 0.0,
+    1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.15, 0.125,
+    -0.2, -0.15, 0.125, -0.2, -0.15, -0.125,
+    -0.2, 0.15, -0.125, -0.2, 5000.0, 30.0,
+    0.5, 0.01, 300.0, 0.0001, 100.0, 0.25,
+    0.17, 0.001, 1.0, 0.0, 0.0, 0.002,
 };
 
 /* The initial plant state xp (QL_LANDING_PLANT_NX: x1q (16), xv (6), gear (3)). */

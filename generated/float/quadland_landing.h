@@ -20,12 +20,12 @@ extern "C" {
 #define QLF_LANDING_RBF_NODES 10                 /* l, RBF nodes of the landing step */
 #define QLF_LANDING_NETWORK_INPUT_DIM 6          /* dimension of the network's input [v_e, Omega_e] */
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
-#define QLF_LANDING_PARAMS_SIZE 108              /* reals in qlf_landing_params */
+#define QLF_LANDING_PARAMS_SIZE 113              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 76                /* reals in qlf_landing_state */
 #define QLF_GUIDANCE_PARAMS_SIZE 13              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
-#define QLF_LANDING_PLANT_NP 299                 /* pp = [p_quad (13), p_act (3), p_veh (10), p_deck (247), p_gear (18), p_lock (4), p_td (4)] */
+#define QLF_LANDING_PLANT_NP 324                 /* pp = [p_quad (13), p_act (8), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
 #define QLF_LANDING_NW 9                         /* w = [v_wind (3), d_F (3), d_M (3)] */
 #define QLF_LANDING_NY 42                        /* signals y of a landing */
 #define QLF_LANDING_ANCHOR_SIZE 12               /* anchor = [p_e (3), R_rel (9)] */
@@ -105,6 +105,9 @@ typedef struct {
     qlf_real motor_time_constant;    /* s: first-order lag tau_m of each rotor force */
     qlf_real F_max;                  /* N: largest force of one rotor */
     qlf_real gear_height;            /* m: depth of the landing gear's lowest point below the centre */
+    qlf_real drag_quadratic[3];      /* N s^2/m^2: the body's quadratic (bluff-body) drag, body axes (quadland_symbolic.landing.aero) (Kq1, Kq2, Kq3) */
+    qlf_real rotor_radius;           /* m: rotor radius R of the ground effect (0: none) */
+    qlf_real air_density;            /* kg/m^3: air density rho of the ground effect's induced velocity */
 } qlf_actuator_params;
 
 /* Everything qlf_landing_step is tuned with; qlf_landing_params_init fills

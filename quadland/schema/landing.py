@@ -12,6 +12,7 @@ from quadland.schema.paper import PAPER_SCHEMA, check_rbf
 from quadland.schema.sea_state import SEA_STATES
 from quadland.schema.sensors import check_ranges, sensor_fields
 from quadland_symbolic.landing.deck import N_SINES
+from quadland_symbolic.landing.drive import N_LEGS, pack_drive, planned_speed_change
 from quadland_symbolic.landing.land_detector import LAND_DETECTOR_PARAMS
 from quadland_symbolic.landing.navigation import estimator_params
 from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
@@ -35,6 +36,23 @@ def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
                                    min_length=1, lo=0.0, hi=100.0),
         f"{name}_phase_deg": Field(float, "deg", f"{what} phases", N_SINES, min_length=1,
                                    lo=-3600.0, hi=3600.0),
+    }
+
+
+def _profile() -> dict[str, Field]:
+    """The drive profile's keys of [vehicle] (docs/landing.md, "Cars that drive"): one
+    value per leg, up to N_LEGS legs, the legs' effects adding up."""
+    def leg(unit, doc, lo, hi, **kw):
+        return Field(float, unit, doc, N_LEGS, min_length=1, lo=lo, hi=hi, **kw)
+    return {
+        "profile_start": leg("s", "time each leg starts", 0.0, MAX_DURATION_S),
+        "profile_duration": leg("s", "each leg's duration T", 0.0, 1e3, lo_open=True),
+        "profile_speed_change": leg("m/s", "surge speed change (raised-cosine acceleration, "
+                                    "peak 2 dv / T)", -100.0, 100.0),
+        "profile_heading_change_deg": leg("deg", "heading change (raised-cosine yaw rate), "
+                                          "positive to the left", -360.0, 360.0),
+        "profile_lane_offset": leg("m", "lane change: sideways offset (sinusoidal yaw rate "
+                                   "over the leg), positive to the left", -100.0, 100.0),
     }
 
 
@@ -66,6 +84,8 @@ F, I, B, S = float, int, bool, str
 #: sampled step, a moving deck and wind (docs/landing.md).
 _THRUST_TO_WEIGHT = Field(F, "-", "4 F_max / (m1 g): sets the rotor limit F_max", lo=1.0,
                           hi=20.0, lo_open=True)
+_DRAG_QUADRATIC = Field(F, "N s^2/m^2", "quadratic (bluff-body) drag Kq1..Kq3 on the airspeed, "
+                        "body axes", 3, lo=0.0, hi=1e3)
 _MOTOR_TIME_CONSTANT = Field(F, "s", "first-order lag of each rotor force", lo=1e-3, hi=1.0)
 
 LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
@@ -87,9 +107,13 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "motor_time_constant": _MOTOR_TIME_CONSTANT,
         "gear_height": Field(F, "m", "landing gear's lowest point below the centre", lo=0.0,
                              hi=10.0),
+        "drag_quadratic": _DRAG_QUADRATIC,
+        "rotor_radius": Field(F, "m", "rotor radius R of the ground effect (Cheeseman-Bennett; "
+                              "0: none)", lo=0.0, hi=10.0),
     },
-    "vehicle": {k: PAPER_SCHEMA["vehicle"][k] for k in ("m11", "m22", "m33", "d11", "d22", "d33",
-                                                  "tau")},
+    "vehicle": {**{k: PAPER_SCHEMA["vehicle"][k] for k in ("m11", "m22", "m33", "d11", "d22",
+                                                     "d33", "tau")},
+                **_profile()},
     "deck": {
         "height": Field(F, "m", "altitude of the vehicle's reference point (the centre of roll "
                         "and pitch) at zero heave", lo=-1e4, hi=1e4),
@@ -139,6 +163,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                      ("inertia", PAPER_SCHEMA["quadrotor"]["inertia"]),
                      ("drag_translational", PAPER_SCHEMA["quadrotor"]["drag_translational"]),
                      ("drag_rotational", PAPER_SCHEMA["quadrotor"]["drag_rotational"]),
+                     ("drag_quadratic", _DRAG_QUADRATIC),
                      ("thrust_to_weight", _THRUST_TO_WEIGHT),
                      ("motor_time_constant", _MOTOR_TIME_CONSTANT))},
     "rbf": PAPER_SCHEMA["rbf"],
@@ -169,6 +194,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                **_POS),
         "max_bounce": Field(F, "m", "limit: the lowest foot's rebound above the deck with "
                             "every foot off it", hi=100.0, **_POS),
+        "pad_radius": Field(F, "m", "limit: the landing area's radius, which the centre "
+                            "stays within from the first contact to the settle time", hi=100.0,
+                            **_POS),
         "max_friction_margin": Field(F, "-", "secured without a lock: friction needed over "
                                      "available at rest, at the end, below this", hi=1.0,
                                      **_POS),
@@ -267,6 +295,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "gust_half_length": Field(F, "s", "gust build-up time d", hi=1e3, **_POS),
         "gust_direction": Field(F, "-", "gust direction in E (normalized)", 3, lo=-1.0,
                                 hi=1.0),
+        "air_density": Field(F, "kg/m^3", "air density rho (the ground effect's induced "
+                             "velocity)", lo=0.1, hi=2.0),
     },
 })
 del F, I, B, S
@@ -282,6 +312,7 @@ def check_landing(data: dict) -> None:
         if len({len(deck[k]) for k in keys}) != 1:
             raise ScenarioError(f"deck.{keys[1]}: must have as many values as deck.{keys[0]}")
     _check_sea(deck)
+    _check_profile(data)
     wind = data["wind"]
     if wind["gust_amplitude"] > 0 and not any(wind["gust_direction"]):
         raise ScenarioError("wind.gust_direction: must not be all zero when "
@@ -308,10 +339,37 @@ def check_landing(data: dict) -> None:
 
 
 def _check_gear(data: dict) -> None:
-    """The gear's contact needs a positive gear height; a friction of 0 is allowed."""
+    """The gear's contact needs a positive gear height; a friction of 0 is allowed; the
+    landing area holds the first contact's offset limit."""
+    g = data["landing"]
+    if g["pad_radius"] < g["max_offset"]:
+        raise ScenarioError(f"landing.pad_radius: {g['pad_radius']:g} m is smaller than "
+                            f"landing.max_offset ({g['max_offset']:g} m): a first contact "
+                            "within the limit would already be off the pad")
     if not data["gear"]["welded"] and data["quadrotor"]["gear_height"] <= 0:
         raise ScenarioError("quadrotor.gear_height: must be positive for the gear's contact "
                             "(the feet's depth below the centre; gear.welded = true takes none)")
+
+
+def _check_profile(data: dict) -> None:
+    """The profile's lists are as long as each other; the planned speed stays forward."""
+    v = data["vehicle"]
+    keys = [k for k in v if k.startswith("profile_")]
+    if len({len(v[k]) for k in keys}) != 1:
+        raise ScenarioError(f"vehicle.{keys[1]}: must have as many values as vehicle.{keys[0]} "
+                            "(one per leg of the drive profile)")
+    u0 = data["initial"]["velocity2"][0]
+    try:
+        p = pack_drive(v["profile_start"], v["profile_duration"], v["profile_speed_change"],
+                       [0.0] * len(v["profile_start"]), v["profile_lane_offset"], u0)
+    except ValueError as e:
+        raise ScenarioError(f"vehicle.profile_lane_offset: {e}") from None
+    for start, T in zip(v["profile_start"], v["profile_duration"], strict=True):
+        u = u0 + planned_speed_change(start + T, p)
+        if u < 0:
+            raise ScenarioError(f"vehicle.profile_speed_change: the planned speed falls to "
+                                f"{u:g} m/s by t = {start + T:g} s: the profile drives forward "
+                                f"(initial.velocity2 = {u0:g} m/s)")
 
 
 def _check_sea(deck: dict) -> None:

@@ -331,7 +331,8 @@ _QUAD_RANGES = {k: v for k, v in PARAM_RANGES.items() if k.startswith("quad.")}
 #: quadrotor's as in :data:`PARAM_RANGES`; gains, adaptation rates, leakages,
 #: the filter's frequency and damping positive (eq. 14, 20, 22 and a stable
 #: filter); the tilt limit inside (0, pi/2) (the thrust must point up); the
-#: rotor limit and the motors' lag positive; the gear not above the centre.
+#: rotor limit and the motors' lag positive; the gear not above the centre; the
+#: quadratic drag and the rotor radius not negative, the air's density positive.
 LANDING_PARAM_RANGES = MappingProxyType({
     **_QUAD_RANGES,
     **{f"ctrl.{k}": _POSITIVE for k in ("k1p", "k2p", "k1", "k2", "gamma1", "gamma2", "k_w",
@@ -345,6 +346,9 @@ LANDING_PARAM_RANGES = MappingProxyType({
     "act.motor_time_constant": _POSITIVE,
     "act.F_max": _POSITIVE,
     "act.gear_height": _NONNEGATIVE,
+    "act.drag_quadratic": _NONNEGATIVE,
+    "act.rotor_radius": _NONNEGATIVE,
+    "act.air_density": _POSITIVE,
     "tilt_min": Range(lo=0.0, hi=1.0, hi_open=True),
 })
 

@@ -218,7 +218,7 @@ def deck_rates(eta2, w2E, w2E_dot):
 
 @functools.cache
 def known_acceleration_function() -> ca.Function:
-    """``known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad)
+    """``known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad, Kq)
     -> (f_g, f_r)``: the known part ``f_p = f_g + f_r`` of ``p_e''`` (deck frame).
 
     ``p_e'' = a_T + f_p + d_p`` with ``a_T`` the thrust's acceleration. ``f_g``
@@ -227,13 +227,15 @@ def known_acceleration_function() -> ca.Function:
     along the deck's rotation (``R_deck' = S(w2E) R_deck``, here through
     ``eta2_dot``) with ``p_e'' = 0``, as :mod:`quadland_symbolic.landing.relative` does,
     never written by hand. The quadrotor's velocity for the drag is
-    ``p1' = v2E + d/dt (R_deck p_e)``.
+    ``p1' = v2E + d/dt (R_deck p_e)``; the drag is eq. (2)'s ``Kt V1`` plus the body's
+    quadratic drag ``Kq (V1 |V1|)`` (:mod:`quadland_symbolic.landing.aero`), both on the
+    velocity over the ground: the law knows no wind.
     """
     p_e, v_e = ca.SX.sym("p_e", 3), ca.SX.sym("v_e", 3)
     eta1, eta2 = ca.SX.sym("eta1", 3), ca.SX.sym("eta2", 3)
     v2E, a2E = ca.SX.sym("v2E", 3), ca.SX.sym("a2E", 3)
     w2E, w2E_dot = ca.SX.sym("w2E", 3), ca.SX.sym("w2E_dot", 3)
-    p_quad = QUADROTOR.sym()
+    p_quad, Kq = QUADROTOR.sym(), ca.SX.sym("Kq", 3)
     q = QUADROTOR.unpack(p_quad)
     eta2_dot, _ = deck_rates(eta2, w2E, w2E_dot)
     x = ca.vertcat(eta2, p_e, v_e, w2E)
@@ -243,19 +245,21 @@ def known_acceleration_function() -> ca.Function:
     rel_dot = time_derivative(R_deck @ p_e, x, x_dot, t)               # (p1 - p2)'
     frame = time_derivative(rel_dot, x, x_dot, t)                      # (p1 - p2)'' at p_e'' = 0
     V1 = R1.T @ (v2E + rel_dot)                                        # body velocity
-    drag = -R1 @ (q["Kt"] * V1) / q["m1"]                              # eq. 2, in E
+    drag = -R1 @ (q["Kt"] * V1 + Kq * V1 * ca.fabs(V1)) / q["m1"]      # eq. 2 and aero, in E
     f_g = R_deck.T @ ca.vertcat(0, 0, -q["g"])
     f_r = R_deck.T @ (drag - a2E - frame)
     return ca.Function("known_acceleration",
-                       [p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad], [f_g, f_r],
-                       ["p_e", "v_e", "eta1", "eta2", "v2E", "a2E", "w2E", "w2E_dot", "p_quad"],
-                       ["f_g", "f_r"])
+                       [p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad, Kq], [f_g, f_r],
+                       ["p_e", "v_e", "eta1", "eta2", "v2E", "a2E", "w2E", "w2E_dot", "p_quad",
+                        "Kq"], ["f_g", "f_r"])
 
 
-def known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad):
-    """``(f_g, f_r)`` of :func:`known_acceleration_function`."""
+def known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad, Kq=None):
+    """``(f_g, f_r)`` of :func:`known_acceleration_function` (``Kq`` None: no quadratic
+    drag)."""
+    Kq = ca.DM.zeros(3) if Kq is None else Kq
     return tuple(known_acceleration_function()(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot,
-                                               p_quad))
+                                               p_quad, Kq))
 
 
 # ---------------------------------------------------------------- the law
@@ -306,7 +310,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     z2p_bar = z2p - mm["xi2"]                                                  # compensated
     squash_p = ca.tanh(z2p_bar / rho)
     f_g, f_r = known_acceleration(p_e, v_e, eta1, eta2, ms["v2E"], ms["a2E"], ms["w2E"],
-                                  ms["w2E_dot"], p_quad)
+                                  ms["w2E_dot"], p_quad, act["drag_quadratic"])
     a_des = (-k2p * z2p - z1p - Delta_hat[_POSITION] - squash_p * zeta_hat[_POSITION] + alpha_p_dot
              - f_g - nominal * f_r)                                            # eq. 20
     t_E = m1 * R_deck @ a_des                                                  # N, in E

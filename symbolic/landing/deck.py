@@ -15,7 +15,8 @@ Frames: E has z up. The deck frame's origin is the vehicle's reference point
 its attitude ``eta2 = [phi2(t), theta2(t), psi2]`` (ZYX),
 ``R_deck = Rz(psi2) Ry(theta2) Rx(phi2)`` maps deck vectors to E. The pad
 centre is ``p2 = O2 + R_deck pad_offset``. All time derivatives are taken
-symbolically along ``xv_dot = vehicle_rhs(xv)`` plus the explicit time terms.
+symbolically along ``xv_dot = vehicle_motion(xv, t)`` (eq. 4 under its inputs plus the
+drive profile's, :mod:`quadland_symbolic.landing.drive`) and the explicit time terms.
 """
 
 from __future__ import annotations
@@ -27,9 +28,10 @@ import casadi as ca
 import numpy as np
 
 from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.drive import DRIVE_PARAMS, drive_idle, driven_vehicle_rhs
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import VEHICLE
-from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = [
     "N_SINES",
@@ -39,6 +41,7 @@ __all__ = [
     "DECK_POSE",
     "DeckPose",
     "pack_deck",
+    "vehicle_motion",
     "deck_motion",
     "time_derivative",
     "vee",
@@ -75,7 +78,9 @@ DECK_PARAMS = Layout("p_deck", (
     Field("pad_offset", 3, "m", "pad centre in the deck frame (z up) from the vehicle's "
           "reference point", elements=("pad_x", "pad_y", "pad_z")),
     Field("deck_height", 1, "m", "altitude of the vehicle's reference point at zero heave"),
-), "prescribed deck motion: sums of sinusoids; zero amplitudes for a car")
+    Field.nested("drive", DRIVE_PARAMS, "the vehicle's drive profile "
+                 "(quadland_symbolic.landing.drive)"),
+), "prescribed deck motion: sums of sinusoids (zero amplitudes for a car) and the drive")
 
 #: Outputs of :func:`deck_function`, in order.
 DECK_POSE = Layout("deck", (
@@ -106,16 +111,23 @@ def pack_deck(values: dict):
     """``DECK_PARAMS.pack(values)`` with each sinusoid list zero-padded to :data:`N_DECK`.
 
     A list of fewer values fills the first slots (a scenario's explicit
-    sinusoids), e.g. ``heave_amp=[0.5]``.
+    sinusoids), e.g. ``heave_amp=[0.5]``. Without ``drive`` the vehicle is not
+    driven (:func:`~quadland_symbolic.landing.drive.drive_idle`).
     """
     sines = {f.name for f in DECK_PARAMS.fields if f.size == N_DECK}
-    padded = {}
+    padded = {"drive": DRIVE_PARAMS.pack(drive_idle())}
     for name, v in values.items():
         if name in sines:
             flat = np.atleast_1d(np.asarray(v, dtype=float))
             v = np.concatenate([flat, np.zeros(N_DECK - flat.size)])
         padded[name] = v
     return DECK_PARAMS.pack(padded)
+
+
+def vehicle_motion(xv, t, p_veh, p_deck):
+    """``xv_dot``: eq. (4) driven by ``p_deck``'s profile
+    (:func:`~quadland_symbolic.landing.drive.driven_vehicle_rhs`)."""
+    return driven_vehicle_rhs(xv, t, p_veh, DECK_PARAMS.unpack(p_deck)["drive"])
 
 
 def _sum_of_sines(amp, freq, phase, t):
@@ -162,12 +174,13 @@ def deck_function() -> ca.Function:
 
     Eq. (3)-(4) for the vehicle's planar motion and heading, with heave, roll
     and pitch prescribed. The derivatives are symbolic, along
-    ``xv_dot = vehicle_rhs(xv, p_veh)`` and the explicit time terms;
+    ``xv_dot = vehicle_motion(xv, t, p_veh, p_deck)`` (eq. 4 and the drive profile)
+    and the explicit time terms;
     ``S(w2E) = R_deck_dot R_deck^T``. Outputs: :data:`DECK_POSE`.
     """
     xv, t = VEHICLE_STATE.sym(), ca.SX.sym("t")
     p_veh, p_deck = VEHICLE.sym(), DECK_PARAMS.sym()
-    xv_dot = vehicle_rhs(xv, p_veh)
+    xv_dot = vehicle_motion(xv, t, p_veh, p_deck)
 
     def d_dt(e):
         return time_derivative(e, xv, xv_dot, t)

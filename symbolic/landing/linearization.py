@@ -41,6 +41,7 @@ import functools
 
 import casadi as ca
 
+from quadland_symbolic.landing.aero import aero_force
 from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
@@ -98,14 +99,17 @@ def hover_plant_rhs(z, u, v2, w, pp):
 
     The rotors are commanded ``rotors_from_wrench(u)``; the disturbance is
     :data:`quadland_symbolic.landing.loop.LANDING_DISTURBANCE` (wind in the heading frame,
-    ``d_F``, ``d_M``). ``p_e_dot = v_e`` (:func:`~quadland_symbolic.landing.relative.relative6`),
+    ``d_F``, ``d_M``; the quadratic drag and ground effect of
+    :func:`~quadland_symbolic.landing.aero.aero_force` on top).
+    ``p_e_dot = v_e`` (:func:`~quadland_symbolic.landing.relative.relative6`),
     ``psi_e_dot = psi1_dot - psi2_dot``; the other rows are the quadrotor's own.
     """
     p, ws = LANDING_PLANT_PARAMS.unpack(pp), LANDING_DISTURBANCE.unpack(w)
     xv = hover_vehicle(v2)
     x1q = hover_quadrotor(z, xv, pp)
     eta1 = QUAD6_STATE.unpack(x1q)["eta1"]
-    d_F = ws["d_F"] + wind_force(eta1, ws["v_wind"], p["p_quad"])
+    d_F = (ws["d_F"] + wind_force(eta1, ws["v_wind"], p["p_quad"])
+           + aero_force(x1q, xv, ws["v_wind"], 0, p["p_act"], p["p_veh"], p["p_deck"]))
     x1q_dot = QUAD6_STATE.unpack(quadrotor6_rhs(x1q, rotors_from_wrench(u, p["p_quad"]), d_F,
                                                 ws["d_M"], p["p_quad"], p["p_act"]))
     psi2_dot = VEHICLE_STATE.unpack(vehicle_rhs(xv, p["p_veh"]))["psi2"]

@@ -51,6 +51,7 @@ from quadland_symbolic.landing.controller import (
     landing_step_outputs,
     measured_cues,
 )
+from quadland_symbolic.landing.deck import vehicle_motion
 from quadland_symbolic.landing.gear import (
     GEAR_STATE,
     contact_switch,
@@ -75,7 +76,7 @@ from quadland_symbolic.landing.sensors import measurement_function
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, landing_signals_function
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import LoopModel
-from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["LANDING_RECORDED", "LANDING_ENVELOPE", "landing_loop_memory", "landing_loop_params",
            "landing_loop_state", "loop_outputs", "gear_gap_function", "first_contact_function",
@@ -231,13 +232,13 @@ def landing_ride_start(l: int, recorded: Layout = LANDING_RECORDED) -> ca.Functi
 
 def landing_ride_functions(l: int, recorded: Layout = LANDING_RECORDED
                            ) -> tuple[ca.Function, ca.Function]:
-    """``ride_rhs(z, t, pp) -> z_dot``: the vehicle (eq. 4); ``ride_row(z, a, t, pp) ->
+    """``ride_rhs(z, t, pp) -> z_dot``: the vehicle (eq. 4, driven); ``ride_row(z, a, t, pp) ->
     (x, y, rec)``: the quadrotor pinned at ``a``'s anchor, its rotor forces
     ``F_td exp(-(t - t_td) / tau_m)`` (commands zero, the motors' lag), the phase
     TOUCHDOWN, then LANDED from ``t_td + settle``."""
     z, t, pp = VEHICLE_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     p = LANDING_PLANT_PARAMS.unpack(pp)
-    ride_rhs = _named("ride_rhs", [z, t, pp], [vehicle_rhs(z, p["p_veh"])],
+    ride_rhs = _named("ride_rhs", [z, t, pp], [vehicle_motion(z, t, p["p_veh"], p["p_deck"])],
                       ["z", "t", "pp"], ["z_dot"])
     a = landing_ride_constants(l, recorded).sym()
     c = landing_ride_constants(l, recorded).unpack(a)

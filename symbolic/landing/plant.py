@@ -20,15 +20,16 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.aero import aero_force
 from quadland_symbolic.landing.contact import GEAR, LOCK
-from quadland_symbolic.landing.deck import DECK_PARAMS, DECK_POSE, deck_pose
+from quadland_symbolic.landing.deck import DECK_PARAMS, DECK_POSE, deck_pose, vehicle_motion
 from quadland_symbolic.landing.gear import GEAR_STATE, TOUCHDOWN_POLICY, gear_terms
 from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
 from quadland_symbolic.landing.relative import RELATIVE6, relative6
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE
-from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["LANDING_PLANT_STATE", "LANDING_PLANT_PARAMS", "LANDING_PLANT_OUTPUTS",
            "LANDING_DISTURBANCE", "landing_plant_rhs", "landing_plant_function",
@@ -68,7 +69,9 @@ LANDING_PLANT_OUTPUTS = Layout("y6", (
 def landing_plant_rhs(xp, F_cmd, w, t, pp, contact: bool = True):
     """``xp_dot``: eq. (1)-(2) with motor lag for x1q, eq. (3)-(4) for xv, the gear's memory.
 
-    ``t`` drives the deck's prescribed motion, which the gear's contact feels
+    ``t`` drives the vehicle's profile (:func:`~quadland_symbolic.landing.deck.vehicle_motion`);
+    the deck's prescribed heave, roll and pitch move no state. The gear's contact
+    feels the deck's motion
     (:func:`quadland_symbolic.landing.gear.gear_terms`: its wrench joins ``w``'s
     ``d_F``, ``d_M``; the touchdown policy's cut acts on ``F_cmd``). ``contact =
     False``: the plant in free flight, the gear's forces and memory left out (the
@@ -84,7 +87,7 @@ def landing_plant_rhs(xp, F_cmd, w, t, pp, contact: bool = True):
     return ca.vertcat(
         quadrotor6_rhs(x["x1q"], F_cmd, ws["d_F"] + d_F, ws["d_M"] + d_M, p["p_quad"],
                        p["p_act"]),
-        vehicle_rhs(x["xv"], p["p_veh"]),
+        vehicle_motion(x["xv"], t, p["p_veh"], p["p_deck"]),
         gear_dot,
     )
 
@@ -130,11 +133,14 @@ def wind_force(eta1, v_wind, p_quad):
     return QUADROTOR.unpack(p_quad)["Kt"] * (rotation(eta1).T @ v_wind)
 
 
-def body_disturbance(xp, w, pp):
-    """``[d_F + wind_force, d_M]``: the landing plant's disturbance input."""
-    ws = LANDING_DISTURBANCE.unpack(w)
-    eta1 = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(xp)["x1q"])["eta1"]
-    d_F = ws["d_F"] + wind_force(eta1, ws["v_wind"], LANDING_PLANT_PARAMS.unpack(pp)["p_quad"])
+def body_disturbance(xp, w, pp, t):
+    """``[d_F + wind_force + aero_force, d_M]``: the landing plant's disturbance input
+    (:func:`~quadland_symbolic.landing.aero.aero_force`: quadratic drag, ground effect)."""
+    ws, x = LANDING_DISTURBANCE.unpack(w), LANDING_PLANT_STATE.unpack(xp)
+    p = LANDING_PLANT_PARAMS.unpack(pp)
+    eta1 = QUAD6_STATE.unpack(x["x1q"])["eta1"]
+    d_F = (ws["d_F"] + wind_force(eta1, ws["v_wind"], p["p_quad"])
+           + aero_force(x["x1q"], x["xv"], ws["v_wind"], t, p["p_act"], p["p_veh"], p["p_deck"]))
     return ca.vertcat(d_F, ws["d_M"])
 
 
@@ -148,6 +154,6 @@ def loop_plant_function(contact: bool = True) -> ca.Function:
         ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     return ca.Function("landing_loop_plant" if contact else "landing_free_plant",
                        [xp, F_cmd, w, t, pp],
-                       [landing_plant_rhs(xp, F_cmd, body_disturbance(xp, w, pp), t, pp,
+                       [landing_plant_rhs(xp, F_cmd, body_disturbance(xp, w, pp, t), t, pp,
                                           contact)],
                        ["xp", "F_cmd", "w", "t", "pp"], ["xp_dot"], {"cse": True})

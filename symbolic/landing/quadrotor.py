@@ -42,7 +42,11 @@ ACTUATOR = Layout("p_act", (
     Field("motor_time_constant", 1, "s", "first-order lag tau_m of each rotor force"),
     Field("F_max", 1, "N", "largest force of one rotor"),
     Field("gear_height", 1, "m", "depth of the landing gear's lowest point below the centre"),
-), "actuator and landing-gear constants")
+    Field("drag_quadratic", 3, "N s^2/m^2", "the body's quadratic (bluff-body) drag, body axes "
+          "(quadland_symbolic.landing.aero)", elements=("Kq1", "Kq2", "Kq3")),
+    Field("rotor_radius", 1, "m", "rotor radius R of the ground effect (0: none)"),
+    Field("air_density", 1, "kg/m^3", "air density rho of the ground effect's induced velocity"),
+), "actuator, landing-gear and aerodynamic constants")
 
 #: The rotor force commands, the plant's control input.
 COMMAND = Layout("F_cmd", (

@@ -17,12 +17,12 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.kinematics import euler_rate_matrix_inv, rotation
-from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose, time_derivative
+from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose, time_derivative, vehicle_motion
 from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE, quadrotor6_rhs
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE
-from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["TOUCHDOWN_LIMITS",
     "RELATIVE6",
@@ -129,7 +129,7 @@ def _build():
     ws = BODY_DISTURBANCE.unpack(w)
     x = ca.vertcat(x1q, xv)
     x_dot = ca.vertcat(quadrotor6_rhs(x1q, F_cmd, ws["d_F"], ws["d_M"], p_quad, p_act),
-                       vehicle_rhs(xv, p_veh))
+                       vehicle_motion(xv, t, p_veh, p_deck))
 
     def d_dt(e):
         return time_derivative(e, x, x_dot, t)

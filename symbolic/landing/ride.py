@@ -13,7 +13,7 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
-from quadland_symbolic.landing.deck import deck_pose, time_derivative, vee
+from quadland_symbolic.landing.deck import deck_pose, time_derivative, vee, vehicle_motion
 from quadland_symbolic.landing.guidance import LANDED, TOUCHDOWN
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
 from quadland_symbolic.landing.quadrotor import ACTUATOR
@@ -22,7 +22,7 @@ from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import RIDE_TOL
 from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.quadrotor import WRENCH, wrench_from_rotors
-from quadland_symbolic.vehicle import VEHICLE_STATE, vehicle_rhs
+from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["ANCHOR", "landed_outputs_function", "landed_row_function", "anchor_function"]
 
@@ -55,7 +55,7 @@ def landed_outputs_function() -> ca.Function:
     phase, aborts = ca.SX.sym("phase"), ca.SX.sym("aborts")
     p, a = LANDING_PLANT_PARAMS.unpack(pp), ANCHOR.unpack(anchor)
     q = QUADROTOR.unpack(p["p_quad"])
-    xv_dot = vehicle_rhs(xv, p["p_veh"])
+    xv_dot = vehicle_motion(xv, t, p["p_veh"], p["p_deck"])
 
     def d_dt(e):
         return time_derivative(e, xv, xv_dot, t)

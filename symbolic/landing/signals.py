@@ -89,7 +89,7 @@ def landing_signals_function() -> ca.Function:
     xp, xg, w = LANDING_PLANT_STATE.sym(), GUIDANCE_STATE.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     ps, gs = LANDING_PLANT_STATE.unpack(xp), GUIDANCE_STATE.unpack(xg)
-    d = BODY_DISTURBANCE.unpack(body_disturbance(xp, w, pp))
+    d = BODY_DISTURBANCE.unpack(body_disturbance(xp, w, pp, t))
     p = LANDING_PLANT_PARAMS.unpack(pp)
     F_c, M_c, _, _ = gear_terms(ps["x1q"], ps["xv"], ps["gear"], ca.SX.zeros(4), t, p["p_quad"],
                                 p["p_veh"], p["p_deck"], p["p_gear"], p["p_lock"], p["p_td"])

@@ -13,7 +13,7 @@ limit's source there):
 * **tipped**: the relative roll or pitch past the gear's static tip-over
   angle (``tip_margin > 1``), or the run stopped on the deck at the
   singular attitude or outside its envelope;
-* **on the pad**: the centre within ``landing.max_offset`` of the pad
+* **on the pad**: the centre within ``landing.pad_radius`` of the pad
   centre (deck frame) from the first contact to ``settle_time`` after it,
   the run reaching that instant;
 * **secured**: at the last row, the lock-down engaged (95 %) with every foot
@@ -94,7 +94,7 @@ def contact_figures(result, limits: dict, mass: float) -> dict:
     v_n = float(result["foot_sink_rate"][k0])
     fig = {"peak_gear_force": peak, "impact_energy": 0.5 * mass * v_n ** 2,
            "bounce": bounce, "bounced": bounce > limits["max_bounce"], "tipped": tipped,
-           "on_pad": bool(settled and np.all(offset <= limits["max_offset"])),
+           "on_pad": bool(settled and np.all(offset <= limits["pad_radius"])),
            "settled": settled, "lock": lock, "friction_margin": margin, "secured": secured}
     fig["failures"] = [name for name, bad in zip(FAILURES, (
         fig["bounced"], tipped, peak > limits["max_gear_load"], not fig["on_pad"],

@@ -133,6 +133,10 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
         c = mem_lay.unpack(mem0)["eta_f"] + mem_dot["eta_f_dot"] / ctrl["w_f"] ** 2
         mem0[mem_lay.slice("eta_f")] = c
         z0[HOVER_PLANT.slice("eta1")][:2] = c
+        # the body velocity of moving with the vehicle at that attitude (the drag's
+        # steady tilt is 18 deg at 50 km/h: a level body's velocity would climb)
+        R = np.asarray(rotation([*c, 0.0]), dtype=float)
+        z0[HOVER_PLANT.slice("V1")] = R.T @ np.array([*hv.speeds[:2], 0.0])
     xi = np.concatenate([z0, mem0, hv.speeds])
 
     def residual_at(lam):

@@ -29,7 +29,7 @@ __all__ = ["TOUCHDOWN_LIMITS", "GEAR_LIMITS", "TouchdownReport", "touchdown_repo
 
 
 #: The ``[landing]`` limits of a landing on the gear's contact, beside :data:`TOUCHDOWN_LIMITS`.
-GEAR_LIMITS = ("max_gear_load", "max_bounce", "max_friction_margin")
+GEAR_LIMITS = ("max_gear_load", "max_bounce", "max_friction_margin", "pad_radius")
 
 
 def touchdown_limits(scenario) -> dict[str, float]:
@@ -79,7 +79,7 @@ class TouchdownReport:
     bounce : float or None
         The lowest foot's highest rebound above the deck with every foot off it, m.
     on_pad : bool or None
-        Within ``max_offset`` of the pad centre for ``settle_time`` after the contact.
+        Within ``pad_radius`` of the pad centre for ``settle_time`` after the contact.
     failures : list of str
         Why the landing failed: the first-contact figures over their limits, then
         :data:`~quadland.kinds.landing.contact_report.FAILURES`'s.
@@ -331,7 +331,7 @@ def _gear_reason(land: Mapping[str, Any], failure: str) -> str:
             "tipped": "tipped over on the deck",
             "gear load": f"gear load {land['peak_gear_force']:.0f} > "
                          f"{lim['max_gear_load']:g} N",
-            "off the pad": f"left the pad ({lim['max_offset']:g} m) before the settle time",
+            "off the pad": f"left the pad ({lim['pad_radius']:g} m) before the settle time",
             "not secured": "not secured (no lock engaged, friction margin not below "
                            f"{lim['max_friction_margin']:g})"}[failure]
 

@@ -20,6 +20,7 @@ from quadland.scenario import Scenario, require_model
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import landing_controller_params, landing_memory
 from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, N_SEA, deck_pose
+from quadland_symbolic.landing.drive import pack_drive
 from quadland_symbolic.landing.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE
 from quadland_symbolic.landing.loop import landing_loop_memory, landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
@@ -64,7 +65,8 @@ def deck_params(scenario: Scenario) -> np.ndarray:
     The explicit sinusoids fill the first slots of each motion (zeros after
     them); at ``sea_state > 0`` the sea's :data:`N_SEA` wave components
     (:func:`quadland.kinds.landing.sea.deck_components`, seeded) fill the
-    last ones, added to them.
+    last ones, added to them. The vehicle's drive profile (``[vehicle]``'s
+    ``profile_*``, :func:`~quadland_symbolic.landing.drive.pack_drive`) rides along.
     """
     dk, deg = scenario.data["deck"], np.pi / 180
     sea = deck_components(scenario)
@@ -79,7 +81,12 @@ def deck_params(scenario: Scenario) -> np.ndarray:
             if sea is not None:
                 out[N_DECK - N_SEA:] = sea.freq if part == "freq" else getattr(sea, part)[row]
             deck[f"{name}_{part}"] = out
-    return DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"]))
+    v = scenario.data["vehicle"]
+    drive = pack_drive(v["profile_start"], v["profile_duration"], v["profile_speed_change"],
+                       np.multiply(v["profile_heading_change_deg"], deg),
+                       v["profile_lane_offset"], scenario.data["initial"]["velocity2"][0])
+    return DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"],
+                                 drive=drive))
 
 
 def rotor_force_max(scenario) -> float:
@@ -102,7 +109,8 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict
         p_act=ACTUATOR.pack(dict(
             motor_time_constant=cm["motor_time_constant"],
             F_max=cm["thrust_to_weight"] * cm["mass"] * q["gravity"] / 4,
-            gear_height=q["gear_height"])),
+            gear_height=q["gear_height"], drag_quadratic=cm["drag_quadratic"],
+            rotor_radius=q["rotor_radius"], air_density=d["wind"]["air_density"])),
         p_veh=p_veh, p_deck=p_deck, **gear))
 
 
@@ -123,7 +131,9 @@ def landing_values(scenario: Scenario) -> LandingValues:
         g=q["gravity"], arm=q["arm_length"], c=q["rotor_drag_factor"]))
     F_max = rotor_force_max(scenario)
     p_act = ACTUATOR.pack(dict(motor_time_constant=q["motor_time_constant"], F_max=F_max,
-                               gear_height=q["gear_height"]))
+                               gear_height=q["gear_height"], drag_quadratic=q["drag_quadratic"],
+                               rotor_radius=q["rotor_radius"],
+                               air_density=d["wind"]["air_density"]))
     p_veh = VEHICLE.pack(dict(m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"],
                               d22=v["d22"], d33=v["d33"], tau=v["tau"], z2=0.0))
     p_deck = deck_params(scenario)
