@@ -266,7 +266,10 @@ def _run_margins(args) -> int:
     scenario = load_scenario(args.scenario, args.overrides)
     check_request(scenario, args.at, args.delay_periods)     # nothing claimed before this
     # OpenBLAS threads on matrices of a few hundred rows cost more than they
-    # bring: 3-5x slower on a busy 2-core machine.
+    # bring: 3-5x slower on a busy 2-core machine. threadpoolctl limits the
+    # libraries loaded when it is called: SciPy's own OpenBLAS loads with
+    # scipy.linalg, which the analysis imports, so load it first.
+    import scipy.linalg  # noqa: F401
     with output_folder(args.out, scenario.name, "margins") as folder, threadpool_limits(1):
         print(f"quadland: margins of {scenario.name}: linearizing, then the loops' frequency "
               "responses...", flush=True)
