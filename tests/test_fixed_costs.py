@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
 import sys
 
+import casadi as ca
 import pytest
+
+from quadland.engine.build import have_compiler
 
 _BLAS_THREADS = """
 from quadland.__main__ import main
@@ -31,3 +35,77 @@ def test_the_command_line_asks_blas_for_one_thread_unless_told(given, expected):
                          env=env, check=True)
     counts = json.loads(out.stdout.strip().splitlines()[-1])
     assert counts and counts == [expected] * len(counts)
+
+
+# --- the cache key of a compiled simulator ------------------------------------------
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """A private build cache for the test."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    return tmp_path / "xdg" / "quadland"
+
+
+def _key(model, part="continuous", flight=None):
+    from quadland.engine.recall import recall_key
+
+    return recall_key(model, part, flight, (), f"qlsim_{model.name}_{part}", "-O2", False)
+
+
+@pytest.mark.skipif(not have_compiler(), reason="needs a C compiler")
+def test_the_key_changes_whenever_the_generated_c_does(monkeypatch):
+    """Models whose generated C differs (2 and 3 nodes; the same model with another
+    constant), another generator or other flight files give other keys; the same
+    model, rebuilt, the same key."""
+    from quadland.engine import recall
+    from quadland_symbolic.codegen import simulator_sources
+    from quadland_symbolic.paper_loop import paper_loop
+
+    two, three = paper_loop.__wrapped__(2), paper_loop.__wrapped__(3)
+    assert simulator_sources(two, "continuous") != simulator_sources(three, "continuous")
+    assert _key(two) != _key(three)
+    assert _key(two) == _key(paper_loop.__wrapped__(2))
+    assert _key(two) != _key(two, "sampled")
+    assert _key(two, "sampled_flight", {"a.c": "int x;"}) != \
+        _key(two, "sampled_flight", {"a.c": "int y;"})
+    scaled = dataclasses.replace(two, output_fn=_times_two(two.output_fn))
+    assert simulator_sources(scaled, "continuous") != simulator_sources(two, "continuous")
+    assert _key(scaled) != _key(two)
+    before = _key(two)
+    monkeypatch.setattr(recall, "generator_digest", lambda: "another generator")
+    assert _key(two) != before
+
+
+def _times_two(f):
+    """``f`` with every output doubled, under the same name and signature."""
+    args = f.sx_in()
+    return ca.Function(f.name(), args, [2 * out for out in f.call(args)], f.name_in(),
+                       f.name_out())
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not have_compiler(), reason="needs a C compiler")
+def test_a_cached_simulator_loads_without_generating_its_c(cache, monkeypatch):
+    """The second load finds the library its generated text was built into, without
+    generating it; a damaged library is not recalled but generated and rebuilt."""
+    from quadland.engine import compiled
+    from quadland_symbolic.paper_loop import paper_loop
+
+    model, generate = paper_loop(2), compiled.simulator_sources
+    calls = []
+
+    def counted(*args):
+        calls.append(args)
+        return generate(*args)
+
+    monkeypatch.setattr(compiled, "simulator_sources", counted)
+    first = compiled.CompiledLoop(model, "continuous").library
+    good = first.read_bytes()
+    assert len(calls) == 1 and first.is_relative_to(cache)
+    assert compiled.CompiledLoop(model, "continuous").library == first
+    assert len(calls) == 1
+    damaged = first.with_name("damaged")          # a new file: this process maps the old one
+    damaged.write_bytes(good[:1000])
+    os.replace(damaged, first)
+    assert compiled.CompiledLoop(model, "continuous").library == first
+    assert len(calls) == 2 and first.read_bytes() == good

@@ -20,8 +20,9 @@ import warnings
 import numpy as np
 
 from quadland import interrupt
-from quadland.engine.build import build_library, compiler_problem, have_compiler
+from quadland.engine.build import build_library, compiler_problem, have_compiler, plan_build
 from quadland.engine.loop import Clock
+from quadland.engine.recall import recall_key, recalled, remember
 from quadland.engine.runs import (
     SIM_CONTROLLER,
     SIM_ENVELOPE,
@@ -83,13 +84,18 @@ class CompiledLoop:
     def __init__(self, model: LoopModel, part: str, opt: str = "-O2",
                  flight: dict[str, str] | None = None, flight_sources: tuple[str, ...] = ()):
         self.model, self.part = model, part
-        files = simulator_sources(model, part)
-        sources = tuple(sorted(n for n in files if n.endswith(".c")))
-        if flight is not None:                       # the flight code's own sources
-            files = {**flight, **files}
-            sources += flight_sources
-        self.library = build_library(files, sources, opt, f"qlsim_{model.name}_{part}",
-                                     strict=False)
+        name = f"qlsim_{model.name}_{part}"
+        key = recall_key(model, part, flight, flight_sources, name, opt, strict=False)
+        self.library = recalled(key)                 # without generating the C
+        if self.library is None:
+            files = simulator_sources(model, part)
+            sources = tuple(sorted(n for n in files if n.endswith(".c")))
+            if flight is not None:                   # the flight code's own sources
+                files = {**flight, **files}
+                sources += flight_sources
+            self.library = build_library(files, sources, opt, name, strict=False)
+            if not plan_build(files, sources, opt).lowered:   # a lowered build warns each time
+                remember(key, self.library)
         lib = ctypes.CDLL(str(self.library))
         prefix = f"qlsim_{model.name}_"
         self._outputs = getattr(lib, f"{prefix}{part}_outputs")
