@@ -109,3 +109,27 @@ def test_a_cached_simulator_loads_without_generating_its_c(cache, monkeypatch):
     os.replace(damaged, first)
     assert compiled.CompiledLoop(model, "continuous").library == first
     assert len(calls) == 2 and first.read_bytes() == good
+
+
+# --- a run's rows in small pages ------------------------------------------------------
+
+def test_a_row_buffer_is_zeroed_and_leaves_numpy_s_huge_page_advice_as_it_was():
+    """The buffer is the zeros NumPy would give; NumPy's process-wide switch is back
+    where it was (either way) after each allocation."""
+    import numpy as np
+
+    from quadland.engine.runs import row_buffer
+
+    switch = getattr(np._core.multiarray, "_set_madvise_hugepage", None)
+    if switch is None:
+        pytest.skip("this NumPy has no huge-page switch")
+    initial = switch(True)
+    try:
+        for setting in (True, False, True):
+            switch(setting)
+            buf = row_buffer(1500, 700)                      # 8.4 MB: over NumPy's 4 MiB
+            assert buf.shape == (1500, 700) and buf.dtype == np.float64
+            assert buf.flags.c_contiguous and buf.flags.writeable and not buf.any()
+            assert switch(setting) is setting
+    finally:
+        switch(initial)

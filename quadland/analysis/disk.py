@@ -10,11 +10,11 @@ import scipy.linalg
 import scipy.optimize
 
 from quadland.analysis.response import (
-    FrequencyResponse,
     closed_loop_poles,
     closed_loop_stable,
     freqresp,
     frequency_grid,
+    response_of,
     square_loop,
 )
 
@@ -155,7 +155,7 @@ def diskmargin(L, omega=None) -> tuple[list[DiskMargin], DiskMargin]:
     if not closed_loop_stable(L, poles):
         zero = _disk(0.0, 0.0)
         return [zero] * m, zero
-    resp = FrequencyResponse(L)
+    resp = response_of(L)
     grid = (frequency_grid(resp, extra_poles=poles) if omega is None
             else np.asarray(omega, dtype=float))
     half = 0.5 * np.eye(m)

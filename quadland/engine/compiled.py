@@ -35,6 +35,7 @@ from quadland.engine.runs import (
     Run,
     as_f64,
     envelope_bounds,
+    row_buffer,
     tick_rows,
 )
 from quadland.engine.vm import VMLoop
@@ -142,7 +143,7 @@ class CompiledLoop:
         x0, W, p, bound = as_f64(x0), as_f64(W), as_f64(p), envelope_bounds(m, bound)
         rows = len(out.times())
         assert W.shape == (len(dist.times()), m.disturbance.size)
-        X = np.zeros((rows, m.state.size))
+        X = row_buffer(rows, m.state.size)
         times, w_index = np.zeros(rows), np.zeros(rows, dtype=np.int_)
         x_end, env = np.empty(m.state.size), np.full(max(bound.size, 1), np.nan)
         n_rows, t_stop = ctypes.c_long(0), ctypes.c_double(np.nan)
@@ -176,8 +177,8 @@ class CompiledLoop:
         uh0 = np.zeros(m.held.size) if uh0 is None else as_f64(uh0)
         rows = len(out.times())
         assert W.shape == (len(dist.times()), m.disturbance.size)
-        X = np.zeros((rows, m.state.size))
-        R = np.zeros((rows, m.recorded.size))
+        X = row_buffer(rows, m.state.size)
+        R = row_buffer(rows, m.recorded.size)
         times, w_index = np.zeros(rows), np.zeros(rows, dtype=np.int_)
         xp_end, xc_end = np.empty(m.plant_state.size), np.empty(m.controller_state.size)
         env = np.full(max(bound.size, 1), np.nan)
