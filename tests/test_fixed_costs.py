@@ -66,8 +66,7 @@ def test_the_key_changes_whenever_the_generated_c_does(monkeypatch):
     assert _key(two) != _key(three)
     assert _key(two) == _key(paper_loop.__wrapped__(2))
     assert _key(two) != _key(two, "sampled")
-    assert _key(two, "sampled_flight", {"a.c": "int x;"}) != \
-        _key(two, "sampled_flight", {"a.c": "int y;"})
+    assert _key(two, "sampled_flight", "one recipe") != _key(two, "sampled_flight", "another")
     scaled = dataclasses.replace(two, output_fn=_times_two(two.output_fn))
     assert simulator_sources(scaled, "continuous") != simulator_sources(two, "continuous")
     assert _key(scaled) != _key(two)
@@ -133,3 +132,36 @@ def test_a_row_buffer_is_zeroed_and_leaves_numpy_s_huge_page_advice_as_it_was():
             assert switch(setting) is setting
     finally:
         switch(initial)
+
+
+def test_flight_code_is_keyed_by_what_it_is_generated_from():
+    """Equal requests give equal flight code (one simulator per process) without
+    generating it; another node count or another set of functions another recipe."""
+    from quadland.kinds.landing.flight import flight_code as landing_flight
+    from quadland.kinds.paper.flight import flight_code as paper_flight
+
+    assert paper_flight(2) == paper_flight(2) and hash(paper_flight(2)) == hash(paper_flight(2))
+    recipes = {paper_flight(2).recipe, paper_flight(3).recipe, landing_flight(2).recipe,
+               landing_flight(2, sensed=True).recipe, landing_flight(3).recipe}
+    assert len(recipes) == 5
+    assert dict(paper_flight(2).files) != dict(paper_flight(3).files)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not have_compiler(), reason="needs a C compiler")
+def test_a_cached_flight_simulator_loads_without_generating_the_flight_code(cache):
+    """The flight code's files are generated for the first build only."""
+    from quadland.engine import compiled
+    from quadland.kinds.paper.flight import flight_code
+    from quadland_symbolic.paper_loop import paper_loop
+
+    calls = []
+
+    def counted():
+        code = flight_code(2)
+        return dataclasses.replace(code, make=lambda: calls.append(1) or code.make())
+
+    first = compiled.CompiledLoop(paper_loop(2), "sampled_flight", flight=counted()).library
+    assert calls == [1]
+    again = compiled.CompiledLoop(paper_loop(2), "sampled_flight", flight=counted()).library
+    assert again == first and calls == [1]

@@ -16,6 +16,7 @@ import ctypes
 import dataclasses
 import functools
 import warnings
+from collections.abc import Callable
 
 import numpy as np
 
@@ -83,17 +84,18 @@ class CompiledLoop:
     """
 
     def __init__(self, model: LoopModel, part: str, opt: str = "-O2",
-                 flight: dict[str, str] | None = None, flight_sources: tuple[str, ...] = ()):
+                 flight: FlightCode | None = None):
         self.model, self.part = model, part
         name = f"qlsim_{model.name}_{part}"
-        key = recall_key(model, part, flight, flight_sources, name, opt, strict=False)
+        key = recall_key(model, part, None if flight is None else flight.recipe,
+                         () if flight is None else flight.sources, name, opt, strict=False)
         self.library = recalled(key)                 # without generating the C
         if self.library is None:
             files = simulator_sources(model, part)
             sources = tuple(sorted(n for n in files if n.endswith(".c")))
             if flight is not None:                   # the flight code's own sources
-                files = {**flight, **files}
-                sources += flight_sources
+                files = {**dict(flight.files), **files}
+                sources += flight.sources
             self.library = build_library(files, sources, opt, name, strict=False)
             if not plan_build(files, sources, opt).lowered:   # a lowered build warns each time
                 remember(key, self.library)
@@ -232,10 +234,20 @@ class CompiledLoop:
 @dataclasses.dataclass(frozen=True)
 class FlightCode:
     """Flight C a simulator flies in place of the symbolic controller (part
-    ``"sampled_flight"``): every file of its build by name, and the sources to compile."""
+    ``"sampled_flight"``): the sources to compile, a recipe key of what its files are
+    generated from (:func:`quadland.engine.recall.code_recipe`: equal keys, equal files),
+    and ``make()``, which generates them (every file of the build by name), called only
+    when the simulator is not in the cache."""
 
-    files: tuple[tuple[str, str], ...]
     sources: tuple[str, ...]
+    recipe: str
+    make: Callable[[], tuple[tuple[str, str], ...]] = dataclasses.field(
+        compare=False, repr=False)
+
+    @property
+    def files(self) -> tuple[tuple[str, str], ...]:
+        """Every file of the build by name (generated on each call)."""
+        return self.make()
 
 
 @functools.cache
@@ -282,8 +294,7 @@ def compiled_loop(loop: LoopModel, part: str,
         _warn_no_compiler(why if given else "no C compiler found (set CC or install gcc)")
         return VMLoop(loop, part)
     try:
-        return CompiledLoop(loop, part, flight=None if flight is None else dict(flight.files),
-                            flight_sources=() if flight is None else flight.sources)
+        return CompiledLoop(loop, part, flight=flight)
     except (CompileError, OSError, AttributeError) as exc:
         # A broken compiler or cache (the build checks the library loads; a library
         # without the driver's symbols is the last resort): CasADi's VM still works.

@@ -8,7 +8,8 @@ The text is a function of fewer things, each cheap to hash:
 * the loop model (:class:`quadland_symbolic.loop.LoopModel`): its CasADi
   functions serialized (``Function.serialize``, the expression graph with
   every constant, deterministic across processes) and its layouts;
-* the part, and the flight code's files of a ``"sampled_flight"`` part;
+* the part, and the flight code's recipe (:func:`code_recipe`) of a
+  ``"sampled_flight"`` part;
 * the code that writes the C: every module and template of
   ``quadland_symbolic`` (:func:`generator_digest`);
 * CasADi's version, the compiler (path and ``--version``), the flags and
@@ -37,7 +38,8 @@ from quadland.engine import build
 from quadland.output import write_text_atomic
 from quadland_symbolic.loop import LoopModel
 
-__all__ = ["generator_digest", "model_digest", "recall_key", "recalled", "remember"]
+__all__ = ["generator_digest", "package_digest", "model_digest", "code_recipe", "recall_key",
+           "recalled", "remember"]
 
 #: Folder of the cache that maps recipe keys to libraries.
 RECIPES = "recipes"
@@ -72,7 +74,36 @@ def model_digest(model: LoopModel) -> str:
     return digest.hexdigest()
 
 
-def recall_key(model: LoopModel, part: str, flight: dict[str, str] | None,
+@functools.cache
+def package_digest() -> str:
+    """SHA-256 of every module, template and shipped scenario of ``quadland`` and
+    ``quadland_symbolic``, read once per process."""
+    import quadland
+    import quadland_symbolic
+
+    digest = hashlib.sha256()
+    for package in (quadland, quadland_symbolic):
+        root = Path(package.__file__).parent
+        for path in sorted(root.rglob("*")):
+            if path.is_file() and path.suffix in (".py", ".jinja", ".toml"):
+                digest.update(f"{package.__name__}/{path.relative_to(root).as_posix()}"
+                              .encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def code_recipe(*what: str) -> str:
+    """A recipe key of C that the runtime generates from ``what`` (e.g. ``"landing",
+    "l=10"``) with the defaults of its shipped scenarios: SHA-256 of ``what``, every
+    source of both packages (:func:`package_digest`), NumPy's and CasADi's versions."""
+    import numpy as np
+
+    digest = hashlib.sha256()
+    for part in ("code-1", package_digest(), np.__version__, ca.__version__, *what):
+        digest.update(part.encode() + b"\0")
+    return digest.hexdigest()
+
+
+def recall_key(model: LoopModel, part: str, flight: str | None,
                flight_sources: tuple[str, ...], name: str, opt: str, strict: bool) -> str:
     """The recipe key of one simulator's library (see the module's docstring).
 
@@ -89,8 +120,7 @@ def recall_key(model: LoopModel, part: str, flight: dict[str, str] | None,
                   repr((build.SHARED_CFLAGS, build.COMPILE_MEMORY_BUDGET,
                         build.COMPILE_TIME_BUDGET, build.COMPILE_FIT)), *flight_sources):
         digest.update(part_.encode() + b"\0")
-    for fname, text in sorted((flight or {}).items()):
-        digest.update(fname.encode() + b"\0" + text.encode() + b"\0")
+    digest.update(b"flight=" + (flight or "none").encode())
     return digest.hexdigest()
 
 

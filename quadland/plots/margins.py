@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
-from quadland.analysis import FrequencyResponse, frequency_grid, loop_at_a_time, sensitivity_sigma
+from quadland.analysis import frequency_grid, loop_at_a_time, response_of, sensitivity_sigma
 
 if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
     from quadland.margins import MarginReport
@@ -41,13 +41,13 @@ class _LoopResponse:
 
 
 def _loop_response(report: MarginReport) -> _LoopResponse:
-    resp = FrequencyResponse(report.models.loop_input)
+    resp = response_of(report.models.loop_input)        # the margins' own, shared
     omega = frequency_grid(resp, points_per_decade=_POINTS_PER_DECADE,
                            extra_poles=report.poles)
     loops = loop_at_a_time(resp(omega))
     wd = ld = None
     if report.sampled_models is not None:
-        discrete = FrequencyResponse(report.sampled_models.loop_input)
+        discrete = response_of(report.sampled_models.loop_input)
         wd = omega[omega < math.pi / report.sampled_models.dt]
         ld = loop_at_a_time(discrete(wd))
     return _LoopResponse(omega, loops, wd, ld)

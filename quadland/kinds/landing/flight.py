@@ -20,6 +20,7 @@ from quadland.constants import TILT_MIN
 from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
+from quadland.engine.recall import code_recipe
 from quadland.kinds.landing.report import TOUCHDOWN_LIMITS
 from quadland.kinds.landing.sensed import (
     handover,
@@ -143,7 +144,9 @@ def flight_code(l: int, sensed: bool = False) -> FlightCode:
     and guidance, and on sensors (``sensed``) the navigation filter and the land detector."""
     functions = ("landing_step", "estimator_step", "land_detector") if sensed else \
         ("landing_step",)
-    return FlightCode(_flight_files(l, "double"), c_sources(functions))
+    return FlightCode(c_sources(functions),
+                      code_recipe("landing flight", f"l={l}", f"functions={functions}"),
+                      functools.partial(_flight_files, l, "double"))
 
 
 @dataclasses.dataclass(frozen=True)
