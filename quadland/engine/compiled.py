@@ -41,7 +41,7 @@ from quadland.engine.runs import (
 )
 from quadland.engine.vm import VMLoop
 from quadland.exceptions import CompileError, CompilerNotFoundError
-from quadland_symbolic.codegen import SIMULATOR_PARTS, simulator_sources
+from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS
 from quadland_symbolic.loop import LoopModel
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK",
@@ -56,6 +56,14 @@ _LONG = ctypes.POINTER(ctypes.c_long)
 
 class QuadlandWarning(UserWarning):
     """Something quadland worked around (e.g. no C compiler: a slower path)."""
+
+
+def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
+    """:func:`quadland_symbolic.codegen.simulator_sources`, its module (Jinja2 and the C
+    writers) loaded on the first call: a cached simulator needs none of it."""
+    from quadland_symbolic.codegen.simulator import simulator_sources as sources
+
+    return sources(model, part)
 
 
 def _ptr(a: np.ndarray, kind=_REAL):
@@ -91,7 +99,7 @@ class CompiledLoop:
                          () if flight is None else flight.sources, name, opt, strict=False)
         self.library = recalled(key)                 # without generating the C
         if self.library is None:
-            files = simulator_sources(model, part)
+            files = simulator_sources(model, part)   # (the C writers load only here)
             sources = tuple(sorted(n for n in files if n.endswith(".c")))
             if flight is not None:                   # the flight code's own sources
                 files = {**dict(flight.files), **files}

@@ -32,16 +32,7 @@ from quadland.kinds.landing.sensed import (
 from quadland.kinds.landing.values import landing_values
 from quadland.kinds.paper.flight import PAPER_SCENARIO, default_paper
 from quadland.scenario import Scenario, load_scenario
-from quadland_symbolic.codegen import (
-    CodegenConfig,
-    LandingDefaults,
-    SensorDefaults,
-    c_sources,
-    generate,
-    generate_estimator,
-    generate_land_detector,
-    generate_landing,
-)
+from quadland_symbolic.codegen import CodegenConfig, LandingDefaults, SensorDefaults, c_sources
 from quadland_symbolic.codegen.structs import landing_api_structs
 from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
@@ -118,6 +109,13 @@ def default_landing(l: int) -> LandingDefaults:
 
 @functools.lru_cache(maxsize=8)
 def _flight_files(l: int, precision: str) -> tuple[tuple[str, str], ...]:
+    from quadland_symbolic.codegen import (  # the C writers: on use
+        generate,
+        generate_estimator,
+        generate_land_detector,
+        generate_landing,
+    )
+
     config = CodegenConfig(precision)
     files = generate(default_paper(load_scenario(PAPER_SCENARIO)["rbf.nodes"]), config)
     files.update(generate_landing(default_landing(l), config))

@@ -23,7 +23,7 @@ from quadland.engine.flightcode import Library, ctypes_struct, label, pointer_ar
 from quadland.engine.recall import code_recipe
 from quadland.kinds.paper.values import model_values
 from quadland.scenario import Scenario, load_scenario
-from quadland_symbolic.codegen import FUNCTIONS, CodegenConfig, Defaults, c_sources, generate
+from quadland_symbolic.codegen import FUNCTIONS, CodegenConfig, Defaults, c_sources
 from quadland_symbolic.codegen.structs import api_structs
 from quadland_symbolic.control_step import step_inputs, step_outputs
 
@@ -74,6 +74,8 @@ def default_paper(l: int) -> Defaults:
 
 @functools.lru_cache(maxsize=8)
 def _flight_files(l: int, precision: str) -> tuple[tuple[str, str], ...]:
+    from quadland_symbolic.codegen import generate  # the C writers: on use
+
     return tuple(sorted(generate(default_paper(l), CodegenConfig(precision)).items()))
 
 
