@@ -11,8 +11,10 @@ system of the whole child process, from ``getrusage``, for commands), medians
   allocates them (small pages) and once with NumPy's huge-page advice (as
   before);
 * ``quadland margins`` (paper and highway, ``--no-plots`` and with the
-  figures) as the command line runs it (one BLAS thread), and with
-  ``OPENBLAS_NUM_THREADS=2`` given (the machine's default);
+  figures), whole process; and ``margin_report`` in this process as the
+  command line runs it, with SciPy's OpenBLAS on two threads (as before its
+  limit was fixed) and with the modal form off (triangular solves on every
+  grid, as before);
 * loading a cached compiled simulator: by its recipe key, and by generating
   its C to hash it (as before).
 
@@ -50,9 +52,9 @@ def _cpu(fn):
     return time.process_time() - c, out
 
 
-def _stats(xs, scale=1e3):
-    return (f"{statistics.median(xs) * scale:,.1f} ({min(xs) * scale:,.1f} to "
-            f"{max(xs) * scale:,.1f})")
+def _stats(xs, scale=1e3, digits=1):
+    return (f"{statistics.median(xs) * scale:,.{digits}f} ({min(xs) * scale:,.{digits}f} to "
+            f"{max(xs) * scale:,.{digits}f})")
 
 
 def warm_ratio(pairs: int, alone: int):
@@ -101,17 +103,54 @@ def process_cpu(args, env=None, repeat=3):
     return out
 
 
-def margins(repeat: int):
-    """``quadland margins`` per scenario and figures, one BLAS thread and two, CPU s."""
+def margins_commands(repeat: int):
+    """``quadland margins`` per scenario, with and without the figures: whole process, CPU s."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name in ("paper", "highway"):
-            for plots in ((), ("--no-plots",)):
-                for threads in (None, "2"):
-                    env = {} if threads is None else {"OPENBLAS_NUM_THREADS": threads}
-                    args = [sys.executable, "-m", "quadland", "margins", "--scenario", name,
-                            *plots, "--out", str(Path(tmp, f"{name}{len(out)}"))]
-                    out[(name, bool(plots), threads)] = process_cpu(args, env, repeat)
+            for figures in (False, True):
+                args = [sys.executable, "-m", "quadland", "margins", "--scenario", name,
+                        *(() if figures else ("--no-plots",)),
+                        "--out", str(Path(tmp, f"{name}{len(out)}"))]
+                out[(name, figures)] = process_cpu(args, repeat=repeat)
+    return out
+
+
+def margins_in_process(repeat: int):
+    """``margin_report`` (the linearized loop given) in this process, CPU s: as the
+    command line runs it (every BLAS one thread, the modal form on grids); with SciPy's
+    OpenBLAS left at two threads (as when threadpoolctl ran before it loaded); with the
+    triangular solves on grids too (the modal form off)."""
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import ThreadpoolController
+
+    from quadland.analysis import modal, response
+    from quadland.margins import margin_report
+
+    blas = ThreadpoolController().select(user_api="blas")
+    scipy_blas = [lib for lib in blas.lib_controllers if "scipy.libs" in lib.filepath]
+    out = {}
+    for name in ("paper", "highway"):
+        sc = quadland.load_scenario(name)
+        margin_report(sc)                                   # linearization's caches, imports
+        for label, two, cond in (
+                ("as the command line runs it", False, modal.MODAL_COND),
+                ("SciPy's OpenBLAS on two threads (before)", True, None),
+                ("triangular solves on grids (no modal form)", False, 0.0),
+                ("both, as before", True, 0.0)):
+            saved = modal.MODAL_COND
+            times = []
+            try:
+                modal.MODAL_COND = saved if cond is None else cond
+                with blas.limit(limits=1):
+                    for lib in scipy_blas if two else ():
+                        lib.set_num_threads(2)
+                    for _ in range(repeat):
+                        response._RECENT.clear()            # each report factors its loops
+                        times.append(_cpu(lambda sc=sc: margin_report(sc))[0])
+            finally:
+                modal.MODAL_COND = saved
+            out[(name, label)] = times
     return out
 
 
@@ -160,11 +199,11 @@ def main(argv=None):
               f"{_stats(gen)}")
 
     print("\n## quadland margins, whole process, CPU s")
-    for (name, no_plots, threads), cpu in margins(3).items():
-        how = "one BLAS thread (the command line)" if threads is None else \
-            "OPENBLAS_NUM_THREADS=2"
-        print(f"- {name}{' --no-plots' if no_plots else ''}, {how}: {_stats(cpu, 1)}")
-
+    for (name, figures), cpu in margins_commands(3).items():
+        print(f"- {name}{' (with the figures)' if figures else ' --no-plots'}: {_stats(cpu, 1, 2)}")
+    print("\n## margin_report in this process (linearization included), CPU s")
+    for (name, label), cpu in margins_in_process(3).items():
+        print(f"- {name}, {label}: {_stats(cpu, 1, 2)}")
 
 if __name__ == "__main__":
     main()
