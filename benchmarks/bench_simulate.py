@@ -62,7 +62,12 @@ from scipy.integrate import solve_ivp
 import quadland
 from quadland.engine.build import find_compiler
 from quadland.engine.disturbance import disturbance_samples
-from quadland.kinds.paper.simulate import paper_loop_part, run_clocks, time_grid
+from quadland.kinds.paper.simulate import (
+    paper_envelope,
+    paper_loop_part,
+    run_clocks,
+    time_grid,
+)
 from quadland.kinds.paper.values import model_values
 from quadland_symbolic.closed_loop import (
     closed_loop_function,
@@ -284,11 +289,12 @@ def breakdown(sc, runs):
     w_dist = disturbance_samples(sc, clocks[1].times())
     substeps = sc.data["simulation"]["rk_steps_per_interval"]
     loop = paper_loop_part(mv.l, "continuous")
-    run = loop.integrate(mv.x0, clocks, w_dist.T, substeps, mv.p)
+    bounds = paper_envelope(sc, mv).bounds
+    run = loop.integrate(mv.x0, clocks, w_dist.T, substeps, mv.p, bounds)
     assert run.status == 0 and np.array_equal(run.X, quadland.simulate(sc).states)
     W_out = np.ascontiguousarray(w_dist[:, run.w_index].T)
     return dict(integrate=time_call(lambda: loop.integrate(mv.x0, clocks, w_dist.T, substeps,
-                                                           mv.p), runs),
+                                                           mv.p, bounds), runs),
                 outputs=time_call(lambda: loop.outputs(run.X, W_out, run.times, mv.p), runs),
                 evaluations=4 * substeps * (len(time_grid(sc)[2]) - 1))
 

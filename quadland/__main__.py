@@ -8,6 +8,14 @@ package itself imports nothing on import (``quadland/__init__.py``). Once
 the command's modules are loaded, Python's own handler is back and
 :func:`quadland.cli.main` handles ``KeyboardInterrupt`` (a campaign keeps
 its recorded runs).
+
+Before NumPy loads, :func:`main` also asks BLAS for one thread (unless the
+environment already says how many): quadland's matrices have at most a few
+hundred rows, where OpenBLAS's thread pool costs more than it brings. Each
+OpenBLAS library (NumPy and SciPy load one each) starts its pool on import,
+and its threads spin on the second core after every call; a process pool's
+workers inherit the setting. ``threadpoolctl`` limits only the libraries
+already loaded, which SciPy's is not until ``scipy.linalg`` is imported.
 """
 
 import os
@@ -16,6 +24,8 @@ import sys
 
 #: Exit status of an interrupted command (128 + SIGINT).
 INTERRUPTED = 130
+#: The BLAS libraries' thread counts set to one unless given (OpenBLAS, MKL, OpenMP builds).
+BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS")
 
 
 def _interrupted(signum, frame) -> None:
@@ -28,6 +38,8 @@ def main(argv: list[str] | None = None) -> int:
     previous = signal.getsignal(signal.SIGINT)
     if previous is signal.default_int_handler:              # not where SIGINT is ignored
         signal.signal(signal.SIGINT, _interrupted)          # before any heavy import
+    for name in BLAS_THREADS:                               # before NumPy is imported
+        os.environ.setdefault(name, "1")
     try:
         from quadland.cli import main as cli_main
 

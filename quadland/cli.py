@@ -20,7 +20,6 @@ import errno
 import logging
 import os
 import sys
-import time
 import warnings
 from pathlib import Path
 
@@ -251,29 +250,14 @@ def _envelope_parser(sub) -> None:
 
 
 def _run_simulate(args) -> int:
-    from quadland.run import run_simulation
+    from quadland.run import result_lines, run_simulation
 
     out = run_simulation(args.scenario, args.overrides, args.out, plots=not args.no_plots,
                          animate=args.animate)
     print(f"quadland: wrote {out}")
-    for line in _result_lines(out):
+    for line in result_lines(out):
         print(line)
     return 0
-
-
-def _result_lines(out: Path) -> list[str]:
-    """The run's verdict and figures from the summary.json just written (none if absent)."""
-    import json
-
-    from quadland.kinds import KINDS
-    from quadland.scenario import DEFAULT_MODEL
-
-    try:
-        summary = json.loads((Path(out) / "summary.json").read_text())
-        model = summary["scenario"]["scenario"].get("model", DEFAULT_MODEL)
-        return KINDS[model].result_lines(summary)
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return []
 
 
 def _run_codegen(args) -> int:
@@ -284,37 +268,17 @@ def _run_codegen(args) -> int:
 
 
 def _run_margins(args) -> int:
-    from threadpoolctl import threadpool_limits
+    from quadland.margins import Requirement, format_report
+    from quadland.margins.command import review_scenario
 
-    from quadland.margins import Requirement, check_request, format_report, margin_report
-    from quadland.output import figure_png, output_folder, strict_json
-    from quadland.run import versions
-    from quadland.scenario import load_scenario
-
-    start = time.perf_counter()
     requirement = Requirement(args.gain_margin_db, args.phase_margin_deg)
     if args.campaign or args.runs is not None:
         return _run_margins_campaign(args, requirement)
-    scenario = load_scenario(args.scenario, args.overrides)
-    check_request(scenario, args.at, args.delay_periods)     # nothing claimed before this
-    # OpenBLAS threads on matrices of a few hundred rows cost more than they
-    # bring: 3-5x slower on a busy 2-core machine.
-    with output_folder(args.out, scenario.name, "margins") as folder, threadpool_limits(1):
-        print(f"quadland: margins of {scenario.name}: linearizing, then the loops' frequency "
-              "responses...", flush=True)
-        report = margin_report(scenario, args.at, requirement, args.delay_periods)
-        figures = {}
-        if not args.no_plots:
-            print(f"quadland: margins of {scenario.name}: the figures...", flush=True)
-            from quadland.plots import margin_figures
-
-            figures = {name: figure_png(fig) for name, fig in margin_figures(report).items()}
-        data = dict(report.to_dict(), runtime_s=time.perf_counter() - start,
-                    versions=versions())
-        folder.write({"margins.json": strict_json(data),
-                      "scenario.toml": scenario.to_toml().encode("utf-8"), **figures})
+    report, path, elapsed = review_scenario(
+        args.scenario, args.overrides, args.out, args.at, requirement, args.delay_periods,
+        plots=not args.no_plots, say=lambda line: print(line, flush=True))
     print(format_report(report), end="")
-    print(f"quadland: wrote {folder.path} ({time.perf_counter() - start:.1f} s)")
+    print(f"quadland: wrote {path} ({elapsed:.1f} s)")
     if report.passed:
         return 0
     failed = [f"{label}{'' if section.stable else ' (closed loop unstable)'}: "

@@ -15,7 +15,7 @@ from quadland.kinds import KINDS, kind_of
 from quadland.output import figure_png, output_folder, strict_json
 from quadland.scenario import Scenario, load_scenario
 
-__all__ = ["run_simulation", "provenance", "versions", "DEPENDENCIES"]
+__all__ = ["run_simulation", "provenance", "versions", "result_lines", "DEPENDENCIES"]
 
 
 #: Distributions whose versions shape a result, recorded in every output.
@@ -127,3 +127,19 @@ def _render(result: SimulationResult, plots: bool, animate: bool = False,
         with tempfile.TemporaryDirectory() as tmp, np.errstate(all="ignore"):
             files["landing.gif"] = kind.animation(result, Path(tmp) / "landing.gif").read_bytes()
     return files
+
+
+def result_lines(out) -> list[str]:
+    """The verdict and figures of the run written to ``out``, from its summary.json (the
+    lines ``quadland simulate`` prints; none if the file is absent or unreadable)."""
+    import json
+
+    from quadland.kinds import KINDS
+    from quadland.scenario import DEFAULT_MODEL
+
+    try:
+        summary = json.loads((Path(out) / "summary.json").read_text())
+        model = summary["scenario"]["scenario"].get("model", DEFAULT_MODEL)
+        return KINDS[model].result_lines(summary)
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return []

@@ -189,7 +189,9 @@ def test_landing_sensor_delay_margin_is_where_pade_delays_destabilize(highway, s
 def test_landing_sensor_margins_are_consistent(highway):
     """One output alone is the classical delay margin at the plant output; the datalink
     feeds no loop at hover; every measurement delayed alike is a delay common to every input,
-    within 1e-3 of the weakest loop's own delay margin (the loops are nearly decoupled)."""
+    near the weakest loop's own delay margin: the loops are nearly decoupled (with issue 18's
+    drag and ground effect they differ by 1.02e-3 relative, 0.7e-3 before; a coupled loop
+    would differ by tens of per cent), hence 2e-3."""
     for section, models in (("continuous", highway.models), ("sampled", highway.sampled_models)):
         sensors = {m.sensor: m for m in getattr(highway, section).sensors}
         rng = sensors["rangefinder"]
@@ -202,7 +204,7 @@ def test_landing_sensor_margins_are_consistent(highway):
         everything = group_delay_margin(models.loop_output, range(12))
         loops = getattr(highway, section).loops
         assert everything.delay_margin == pytest.approx(min(m.delay_margin_s for m in loops),
-                                                        rel=1e-3)
+                                                        rel=2e-3)
 
 
 @pytest.mark.parametrize("section", ["continuous", "sampled"])

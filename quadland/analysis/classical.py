@@ -15,6 +15,7 @@ from quadland.analysis.response import (
     closed_loop_stable,
     frequency_grid,
     loop_at_a_time,
+    response_of,
     square_loop,
 )
 
@@ -203,7 +204,7 @@ def allmargin(sys, omega=None) -> list[Margins]:
     (6.0, 2.0)
     """
     sys = square_loop(sys, "allmargin")
-    resp = FrequencyResponse(sys)
+    resp = response_of(sys)
     poles = closed_loop_poles(sys)
     grid = (frequency_grid(resp, extra_poles=poles) if omega is None
             else np.asarray(omega, dtype=float))

@@ -10,11 +10,11 @@ import scipy.linalg
 import scipy.optimize
 
 from quadland.analysis.response import (
-    FrequencyResponse,
     closed_loop_poles,
     closed_loop_stable,
     freqresp,
     frequency_grid,
+    response_of,
     square_loop,
 )
 
@@ -77,7 +77,11 @@ def _perron_scaling(M: np.ndarray, iterations: int = 30) -> np.ndarray:
 
 
 def _scaled_norm(M, d):
-    return np.linalg.norm(d[..., :, None] * M / d[..., None, :], ord=2, axis=(-2, -1))
+    """``sigma_max(D M D^-1)`` (batched): the root of the largest eigenvalue of
+    ``S^H S``, accurate to a relative eps and cheaper than an SVD for small ``m``."""
+    S = d[..., :, None] * M / d[..., None, :]
+    H = np.swapaxes(S, -1, -2).conj() @ S
+    return np.sqrt(np.maximum(np.linalg.eigvalsh(H)[..., -1], 0.0))
 
 
 def _mu_upper(M: np.ndarray) -> float:
@@ -155,7 +159,7 @@ def diskmargin(L, omega=None) -> tuple[list[DiskMargin], DiskMargin]:
     if not closed_loop_stable(L, poles):
         zero = _disk(0.0, 0.0)
         return [zero] * m, zero
-    resp = FrequencyResponse(L)
+    resp = response_of(L)
     grid = (frequency_grid(resp, extra_poles=poles) if omega is None
             else np.asarray(omega, dtype=float))
     half = 0.5 * np.eye(m)

@@ -6,6 +6,8 @@ package :mod:`quadland.analysis`).
 
 from __future__ import annotations
 
+import collections
+import hashlib
 import math
 
 import control
@@ -13,13 +15,18 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-__all__ = ["FrequencyResponse", "freqresp", "frequency_grid", "closed_loop_poles",
+from quadland.analysis.modal import MODAL_CHECK, Modal
+
+__all__ = ["FrequencyResponse", "response_of", "freqresp", "frequency_grid", "closed_loop_poles",
            "closed_loop_stable", "loop_at_a_time", "square_loop", "is_discrete",
            "POINTS_PER_DECADE"]
 
 POINTS_PER_DECADE = 60
 #: Roundoffs of ||A|| assumed in a realization's entries (see FrequencyResponse).
 _REALIZATION_ROUNDOFFS = 1e3
+#: Systems whose response and closed-loop poles :func:`response_of` keeps.
+_KEPT = 4
+_RECENT: collections.OrderedDict = collections.OrderedDict()
 
 
 def is_discrete(sys) -> bool:
@@ -32,7 +39,11 @@ class FrequencyResponse:
 
     Built once from a complex Schur form of ``A``; calling it at ``omega``
     (rad/s) evaluates ``s = j omega`` (continuous) or ``z = exp(j omega
-    dt)`` (discrete) with one triangular solve per frequency.
+    dt)`` (discrete): from the modal form (:mod:`quadland.analysis.modal`),
+    one product for the whole grid, where the eigenvectors are well
+    conditioned and the two forms agree; otherwise with one triangular
+    solve per frequency. :func:`response_of` keeps the latest few, so that
+    the analyses of one loop share one.
 
     Parameters
     ----------
@@ -52,13 +63,48 @@ class FrequencyResponse:
         # errors of a few hundred roundoffs of ||A|| in its entries.
         self.a_uncertainty = (_REALIZATION_ROUNDOFFS * np.finfo(float).eps
                               * (np.linalg.norm(A, 2) if A.size else 0.0))
+        self._modal = None
         if A.shape[0]:
             T, Z = scipy.linalg.schur(A, output="complex")
             self._T, self._B, self._C = T, Z.conj().T @ B, C @ Z
             self.poles = np.diag(T).copy()
+            self._modal = self._checked_modal()
         else:
             self._T = None
             self.poles = np.zeros(0, dtype=complex)
+
+    def _checked_modal(self) -> Modal | None:
+        """The modal form, if conditioned well enough and equal to the Schur form's solves
+        (to :data:`~quadland.analysis.modal.MODAL_CHECK`) at three frequencies across the
+        poles' magnitudes."""
+        modal = Modal(self._T, self._B, self._C)
+        if not modal.usable:
+            return None
+        mags = np.abs(np.log(self.poles[self.poles != 0]) / self.dt if self.dt else self.poles)
+        mags = mags[np.isfinite(mags) & (mags > 0)]
+        omega = np.geomspace(mags.min(), mags.max(), 3) if mags.size else np.ones(1)
+        for w in omega:
+            p = self.point(min(w, 0.9 * math.pi / self.dt) if self.dt else w)
+            with np.errstate(all="ignore"):
+                try:
+                    direct = self._solve(p)
+                except np.linalg.LinAlgError:                   # on a pole
+                    continue
+                diff = np.linalg.norm(modal.response([p])[0] + self._D - direct)
+            if not diff <= MODAL_CHECK * np.linalg.norm(direct):
+                return None
+        return modal
+
+    @property
+    def modal(self) -> bool:
+        """Whether the response comes from the modal form (else from triangular solves)."""
+        return self._modal is not None
+
+    def _solve(self, point: complex) -> np.ndarray:
+        """``G`` at ``point`` by a triangular solve of the Schur form."""
+        M = -self._T
+        M.flat[::M.shape[0] + 1] += point
+        return self._C @ scipy.linalg.solve_triangular(M, self._B, check_finite=False) + self._D
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -66,13 +112,15 @@ class FrequencyResponse:
         return self._D.shape
 
     def at(self, point: complex) -> np.ndarray:
-        """``G`` at one point of the complex plane (s or z)."""
+        """``G`` at one point of the complex plane (s or z), by a triangular solve.
+
+        Backward stable, unlike the modal form (whose error grows with the
+        eigenvectors' condition): the refinements of crossings and peaks, and
+        the values reported, come from here; grids from :meth:`__call__`.
+        """
         if self._T is None:
             return self._D.copy()
-        n = self._T.shape[0]
-        X = scipy.linalg.solve_triangular(point * np.eye(n) - self._T, self._B,
-                                          check_finite=False)
-        return self._C @ X + self._D
+        return self._solve(point)
 
     def uncertainty(self, point: complex, left=None, right=None) -> float:
         """Bound on ``|left^T dG right|`` at ``point`` for ``||dA|| <= a_uncertainty``.
@@ -103,7 +151,40 @@ class FrequencyResponse:
     def __call__(self, omega) -> np.ndarray:
         """Response at each of ``omega`` (rad/s), shape ``(len(omega), p, m)``."""
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
-        return np.stack([self.at(self.point(w)) for w in omega])
+        if self._modal is None or not omega.size:
+            return np.stack([self.at(self.point(w)) for w in omega])
+        points = np.array([self.point(w) for w in omega], dtype=complex)
+        with np.errstate(all="ignore"):
+            G = self._modal.response(points) + self._D
+        for k in np.flatnonzero(~np.all(np.isfinite(G), axis=(1, 2))):
+            G[k] = self._solve(points[k])                 # on a pole: as the solve says
+        return G
+
+
+def _digest(sys: control.StateSpace) -> str:
+    digest = hashlib.sha256(repr(sys.dt).encode())
+    for M in (sys.A, sys.B, sys.C, sys.D):
+        a = np.ascontiguousarray(M, dtype=float)
+        digest.update(repr(a.shape).encode() + a.tobytes())
+    return digest.hexdigest()
+
+
+def _kept(sys, what: str, make):
+    sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+    key = (_digest(sys), what)
+    if key not in _RECENT:
+        _RECENT[key] = make(sys)
+        while len(_RECENT) > 2 * _KEPT:
+            _RECENT.popitem(last=False)
+    _RECENT.move_to_end(key)
+    return _RECENT[key]
+
+
+def response_of(sys) -> FrequencyResponse:
+    """The :class:`FrequencyResponse` of ``sys``, shared with the latest calls for equal
+    systems (equal matrices and sampling time: the same loop's margins, disk margins and
+    singular values factor it once)."""
+    return _kept(sys, "response", FrequencyResponse)
 
 
 def freqresp(sys, omega) -> np.ndarray:
@@ -122,12 +203,16 @@ def freqresp(sys, omega) -> np.ndarray:
     >>> complex(freqresp(G, [1.0])[0, 0, 0])
     (0.5-0.5j)
     """
-    return FrequencyResponse(sys)(omega)
+    return response_of(sys)(omega)
 
 
 def closed_loop_poles(L) -> np.ndarray:
-    """Poles of the loop closed as ``u = -L u``: eig(A - B (I + D)^-1 C)."""
-    L = L if isinstance(L, control.StateSpace) else control.ss(L)
+    """Poles of the loop closed as ``u = -L u``: eig(A - B (I + D)^-1 C) (kept for the
+    latest few loops, as :func:`response_of`; a copy)."""
+    return _kept(L, "closed-loop poles", _closed_loop_poles).copy()
+
+
+def _closed_loop_poles(L: control.StateSpace) -> np.ndarray:
     A, B, C, D = (np.asarray(m, dtype=float) for m in (L.A, L.B, L.C, L.D))
     if not A.shape[0]:
         return np.zeros(0, dtype=complex)

@@ -69,7 +69,7 @@ __all__ = ["STRICT_CFLAGS", "RUNTIME_CFLAGS", "SHARED_CFLAGS", "COMPILE_MEMORY_B
            "CompileBudgetError", "compile_cost", "BuildPlan", "plan_build", "find_compiler",
            "have_compiler", "compiler_problem", "compiler_version", "cache_dir",
            "build_library", "COMPILE_TIMEOUT", "VERSION_TIMEOUT", "TIMEOUT_ENV",
-           "compile_timeout"]
+           "compile_timeout", "compiler_identity", "verified_library"]
 
 #: Flags every generated flight file compiles under, alone.
 STRICT_CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror")
@@ -337,7 +337,7 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
     cache = cache_dir()
     target = cache / digest.hexdigest()[:24] / f"{name}.so"
     for attempt in range(2):
-        if not _verified(target):
+        if not verified_library(target):
             _build(cc, lang, plan, files, compile_, target, cache, timeout)
         try:
             ctypes.CDLL(str(target))
@@ -360,7 +360,7 @@ def _sha256(path: Path) -> str:
         return hashlib.file_digest(fh, "sha256").hexdigest()
 
 
-def _verified(target: Path) -> bool:
+def verified_library(target: Path) -> bool:
     """Whether ``target`` is a library of the user's own, in a safe folder, whose content
     is what its build recorded; a corrupt or unchecked one is removed."""
     try:

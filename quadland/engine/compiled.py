@@ -16,12 +16,14 @@ import ctypes
 import dataclasses
 import functools
 import warnings
+from collections.abc import Callable
 
 import numpy as np
 
 from quadland import interrupt
-from quadland.engine.build import build_library, compiler_problem, have_compiler
+from quadland.engine.build import build_library, compiler_problem, have_compiler, plan_build
 from quadland.engine.loop import Clock
+from quadland.engine.recall import recall_key, recalled, remember
 from quadland.engine.runs import (
     SIM_CONTROLLER,
     SIM_ENVELOPE,
@@ -34,11 +36,12 @@ from quadland.engine.runs import (
     Run,
     as_f64,
     envelope_bounds,
+    row_buffer,
     tick_rows,
 )
 from quadland.engine.vm import VMLoop
 from quadland.exceptions import CompileError, CompilerNotFoundError
-from quadland_symbolic.codegen import SIMULATOR_PARTS, simulator_sources
+from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS
 from quadland_symbolic.loop import LoopModel
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK",
@@ -53,6 +56,14 @@ _LONG = ctypes.POINTER(ctypes.c_long)
 
 class QuadlandWarning(UserWarning):
     """Something quadland worked around (e.g. no C compiler: a slower path)."""
+
+
+def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
+    """:func:`quadland_symbolic.codegen.simulator_sources`, its module (Jinja2 and the C
+    writers) loaded on the first call: a cached simulator needs none of it."""
+    from quadland_symbolic.codegen.simulator import simulator_sources as sources
+
+    return sources(model, part)
 
 
 def _ptr(a: np.ndarray, kind=_REAL):
@@ -81,15 +92,21 @@ class CompiledLoop:
     """
 
     def __init__(self, model: LoopModel, part: str, opt: str = "-O2",
-                 flight: dict[str, str] | None = None, flight_sources: tuple[str, ...] = ()):
+                 flight: FlightCode | None = None):
         self.model, self.part = model, part
-        files = simulator_sources(model, part)
-        sources = tuple(sorted(n for n in files if n.endswith(".c")))
-        if flight is not None:                       # the flight code's own sources
-            files = {**flight, **files}
-            sources += flight_sources
-        self.library = build_library(files, sources, opt, f"qlsim_{model.name}_{part}",
-                                     strict=False)
+        name = f"qlsim_{model.name}_{part}"
+        key = recall_key(model, part, None if flight is None else flight.recipe,
+                         () if flight is None else flight.sources, name, opt, strict=False)
+        self.library = recalled(key)                 # without generating the C
+        if self.library is None:
+            files = simulator_sources(model, part)   # (the C writers load only here)
+            sources = tuple(sorted(n for n in files if n.endswith(".c")))
+            if flight is not None:                   # the flight code's own sources
+                files = {**dict(flight.files), **files}
+                sources += flight.sources
+            self.library = build_library(files, sources, opt, name, strict=False)
+            if not plan_build(files, sources, opt).lowered:   # a lowered build warns each time
+                remember(key, self.library)
         lib = ctypes.CDLL(str(self.library))
         prefix = f"qlsim_{model.name}_"
         self._outputs = getattr(lib, f"{prefix}{part}_outputs")
@@ -137,7 +154,7 @@ class CompiledLoop:
         x0, W, p, bound = as_f64(x0), as_f64(W), as_f64(p), envelope_bounds(m, bound)
         rows = len(out.times())
         assert W.shape == (len(dist.times()), m.disturbance.size)
-        X = np.zeros((rows, m.state.size))
+        X = row_buffer(rows, m.state.size)
         times, w_index = np.zeros(rows), np.zeros(rows, dtype=np.int_)
         x_end, env = np.empty(m.state.size), np.full(max(bound.size, 1), np.nan)
         n_rows, t_stop = ctypes.c_long(0), ctypes.c_double(np.nan)
@@ -175,8 +192,8 @@ class CompiledLoop:
         uh0 = np.zeros(m.held.size) if uh0 is None else as_f64(uh0)
         rows = len(out.times())
         assert W.shape == (len(dist.times()), m.disturbance.size)
-        X = np.zeros((rows, m.state.size))
-        R = np.zeros((rows, m.recorded.size))
+        X = row_buffer(rows, m.state.size)
+        R = row_buffer(rows, m.recorded.size)
         times, w_index = np.zeros(rows), np.zeros(rows, dtype=np.int_)
         xp_end, xc_end = np.empty(m.plant_state.size), np.empty(m.controller_state.size)
         env = np.full(max(bound.size, 1), np.nan)
@@ -234,10 +251,20 @@ class CompiledLoop:
 @dataclasses.dataclass(frozen=True)
 class FlightCode:
     """Flight C a simulator flies in place of the symbolic controller (part
-    ``"sampled_flight"``): every file of its build by name, and the sources to compile."""
+    ``"sampled_flight"``): the sources to compile, a recipe key of what its files are
+    generated from (:func:`quadland.engine.recall.code_recipe`: equal keys, equal files),
+    and ``make()``, which generates them (every file of the build by name), called only
+    when the simulator is not in the cache."""
 
-    files: tuple[tuple[str, str], ...]
     sources: tuple[str, ...]
+    recipe: str
+    make: Callable[[], tuple[tuple[str, str], ...]] = dataclasses.field(
+        compare=False, repr=False)
+
+    @property
+    def files(self) -> tuple[tuple[str, str], ...]:
+        """Every file of the build by name (generated on each call)."""
+        return self.make()
 
 
 @functools.cache
@@ -284,8 +311,7 @@ def compiled_loop(loop: LoopModel, part: str,
         _warn_no_compiler(why if given else "no C compiler found (set CC or install gcc)")
         return VMLoop(loop, part)
     try:
-        return CompiledLoop(loop, part, flight=None if flight is None else dict(flight.files),
-                            flight_sources=() if flight is None else flight.sources)
+        return CompiledLoop(loop, part, flight=flight)
     except (CompileError, OSError, AttributeError) as exc:
         # A broken compiler or cache (the build checks the library loads; a library
         # without the driver's symbols is the last resort): CasADi's VM still works.

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from quadland.analysis import FrequencyResponse, frequency_grid, loop_at_a_time
+from quadland.analysis import frequency_grid, loop_at_a_time, response_of
 
 if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
     from quadland.margins import MarginReport
@@ -69,13 +69,13 @@ def loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
 
 
 def _loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
-    resp = FrequencyResponse(report.models.loop_input)
+    resp = response_of(report.models.loop_input)
     omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
     out = [LoopCurves("continuous", omega, loop_at_a_time(resp(omega)),
                       report.continuous.loops, "-", "C0")]
     if report.sampled_models is not None and report.sampled is not None:
         wd = omega[omega < math.pi / report.sampled_models.dt]
-        discrete = FrequencyResponse(report.sampled_models.loop_input)
+        discrete = response_of(report.sampled_models.loop_input)
         out.append(LoopCurves("sampled", wd, loop_at_a_time(discrete(wd)),
                               report.sampled.loops, "--", "C1"))
     return tuple(out)

@@ -15,9 +15,9 @@ from matplotlib.figure import Figure
 from threadpoolctl import threadpool_limits
 
 from quadland.analysis import (
-    FrequencyResponse,
     closed_loop_poles,
     frequency_grid,
+    response_of,
     sensitivity_sigma,
 )
 from quadland.plots.frequency import POINTS_PER_DECADE
@@ -34,7 +34,7 @@ SIGMA_FLOOR_DB = -40.0
 
 def _sigma_curves(report: MarginReport):
     """``(label, style, colour, omega, sigma_S, sigma_T)`` of each loop of the report."""
-    resp = FrequencyResponse(report.models.loop_input)
+    resp = response_of(report.models.loop_input)
     omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
     out = [("continuous", "-", "C0", omega, *sensitivity_sigma(report.models.loop_input, omega))]
     if report.sampled_models is not None:

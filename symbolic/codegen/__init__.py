@@ -41,23 +41,36 @@ its inputs and on the CasADi version, never on time or paths, so
 regeneration is byte for byte reproducible.
 """
 
-from quadland_symbolic.codegen.config import (
-    DEFAULT_CONFIG,
-    STATUS_CODES,
-    TEMPLATE_DIR,
-    CodegenConfig,
-    Defaults,
-    LandingDefaults,
-    SensorDefaults,
-)
-from quadland_symbolic.codegen.estimator_api import generate_estimator
-from quadland_symbolic.codegen.example import example_columns, generate_example, land_columns
-from quadland_symbolic.codegen.land_detector_api import generate_land_detector
-from quadland_symbolic.codegen.landing_api import generate_landing
-from quadland_symbolic.codegen.paper_api import generate
-from quadland_symbolic.codegen.registry import FUNCTIONS, GeneratedFunction, c_sources
-from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS, loop_header, simulator_sources
-from quadland_symbolic.codegen.tree import TREE_PARTS, generate_tree
+import importlib
+
+#: The module of each name this package exports. They load on first use (PEP 562):
+#: a process that only loads a cached simulator never imports the C writers (Jinja2
+#: and the API generators, about 90 ms of CPU).
+_EXPORTS = {
+    **dict.fromkeys(("DEFAULT_CONFIG", "STATUS_CODES", "TEMPLATE_DIR", "CodegenConfig",
+                     "Defaults", "LandingDefaults", "SensorDefaults"), "config"),
+    "generate_estimator": "estimator_api",
+    **dict.fromkeys(("example_columns", "generate_example", "land_columns"), "example"),
+    "generate_land_detector": "land_detector_api",
+    "generate_landing": "landing_api",
+    "generate": "paper_api",
+    **dict.fromkeys(("FUNCTIONS", "GeneratedFunction", "c_sources"), "registry"),
+    **dict.fromkeys(("SIMULATOR_PARTS", "loop_header", "simulator_sources"), "simulator"),
+    **dict.fromkeys(("TREE_PARTS", "generate_tree"), "tree"),
+}
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))
+
 
 __all__ = ["CodegenConfig", "DEFAULT_CONFIG", "Defaults", "LandingDefaults", "SensorDefaults",
            "GeneratedFunction",

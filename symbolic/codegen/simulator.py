@@ -16,7 +16,6 @@ from pathlib import Path
 
 import casadi as ca
 
-from quadland_symbolic.codegen.render import common_context, render
 from quadland_symbolic.loop import MAX_DELAY_PERIODS, RIDE_TOL, LoopModel
 
 __all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
@@ -42,6 +41,8 @@ def loop_header(precision: str | None = None) -> str:
     (``symbolic/templates/quadland_loop.h.jinja``); ``quadland.engine.loop``
     mirrors it in Python.
     """
+    from quadland_symbolic.codegen.render import common_context, render  # Jinja2: on use
+
     return render("quadland_loop.h.jinja", **dict(common_context(None), precision=precision,
                                                    ride_tol=repr(RIDE_TOL)))
 
@@ -67,6 +68,8 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         ``qlsim_<model name>_``. The text depends only on the model and the
         CasADi version.
     """
+    from quadland_symbolic.codegen.render import render  # Jinja2: on use
+
     if part not in SIMULATOR_PARTS:
         raise ValueError(f"part must be one of {', '.join(SIMULATOR_PARTS)}, got {part!r}")
     prefix = f"qlsim_{model.name}_"
@@ -125,6 +128,8 @@ def _flight_controller(model: LoopModel, prefix: str, args: ca.Function) -> dict
     ``args`` is the model's ``step_args`` Function (the step's arguments
     from the loop's state); the C is the model's ``flight`` template.
     """
+    from quadland_symbolic.codegen.render import render  # Jinja2: on use
+
     if model.flight is None:
         raise ValueError(f"the loop {model.name!r} has no flight code")
     offsets = {lay.name: lay.offsets() for lay in (model.controller_state, model.recorded)}

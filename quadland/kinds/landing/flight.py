@@ -20,6 +20,7 @@ from quadland.constants import TILT_MIN
 from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
+from quadland.engine.recall import code_recipe
 from quadland.kinds.landing.gear import contact_step
 from quadland.kinds.landing.report import GEAR_LIMITS, TOUCHDOWN_LIMITS
 from quadland.kinds.landing.sensed import (
@@ -32,16 +33,7 @@ from quadland.kinds.landing.sensed import (
 from quadland.kinds.landing.values import landing_values
 from quadland.kinds.paper.flight import PAPER_SCENARIO, default_paper
 from quadland.scenario import Scenario, load_scenario
-from quadland_symbolic.codegen import (
-    CodegenConfig,
-    LandingDefaults,
-    SensorDefaults,
-    c_sources,
-    generate,
-    generate_estimator,
-    generate_land_detector,
-    generate_landing,
-)
+from quadland_symbolic.codegen import CodegenConfig, LandingDefaults, SensorDefaults, c_sources
 from quadland_symbolic.codegen.structs import landing_api_structs
 from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
@@ -121,6 +113,13 @@ def default_landing(l: int) -> LandingDefaults:
 
 @functools.lru_cache(maxsize=8)
 def _flight_files(l: int, precision: str) -> tuple[tuple[str, str], ...]:
+    from quadland_symbolic.codegen import (  # the C writers: on use
+        generate,
+        generate_estimator,
+        generate_land_detector,
+        generate_landing,
+    )
+
     config = CodegenConfig(precision)
     files = generate(default_paper(load_scenario(PAPER_SCENARIO)["rbf.nodes"]), config)
     files.update(generate_landing(default_landing(l), config))
@@ -147,7 +146,9 @@ def flight_code(l: int, sensed: bool = False) -> FlightCode:
     and guidance, and on sensors (``sensed``) the navigation filter and the land detector."""
     functions = ("landing_step", "estimator_step", "land_detector") if sensed else \
         ("landing_step",)
-    return FlightCode(_flight_files(l, "double"), c_sources(functions))
+    return FlightCode(c_sources(functions),
+                      code_recipe("landing flight", f"l={l}", f"functions={functions}"),
+                      functools.partial(_flight_files, l, "double"))
 
 
 @dataclasses.dataclass(frozen=True)

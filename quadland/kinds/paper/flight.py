@@ -20,9 +20,10 @@ from quadland.constants import TILT_MIN
 from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, pointer_array, real_type
+from quadland.engine.recall import code_recipe
 from quadland.kinds.paper.values import model_values
 from quadland.scenario import Scenario, load_scenario
-from quadland_symbolic.codegen import FUNCTIONS, CodegenConfig, Defaults, c_sources, generate
+from quadland_symbolic.codegen import FUNCTIONS, CodegenConfig, Defaults, c_sources
 from quadland_symbolic.codegen.structs import api_structs
 from quadland_symbolic.control_step import step_inputs, step_outputs
 
@@ -73,6 +74,8 @@ def default_paper(l: int) -> Defaults:
 
 @functools.lru_cache(maxsize=8)
 def _flight_files(l: int, precision: str) -> tuple[tuple[str, str], ...]:
+    from quadland_symbolic.codegen import generate  # the C writers: on use
+
     return tuple(sorted(generate(default_paper(l), CodegenConfig(precision)).items()))
 
 
@@ -89,7 +92,8 @@ def flight_files(l: int, precision: str = "double") -> dict[str, str]:
 
 def flight_code(l: int) -> FlightCode:
     """The control step the sampled simulator flies with ``controller.backend = "c"``."""
-    return FlightCode(_flight_files(l, "double"), c_sources(("control_step",)))
+    return FlightCode(c_sources(("control_step",)), code_recipe("paper flight", f"l={l}"),
+                      functools.partial(_flight_files, l, "double"))
 
 
 class CControlStep:

@@ -1,0 +1,160 @@
+"""A cheap key for a compiled simulator: what its C is generated from, not the C itself.
+
+:func:`quadland.engine.build.build_library` keys a library by its sources'
+text, so finding a cached simulator meant generating all of its C first
+(CasADi's code generation of every function a part calls: 35 to 40 ms a part).
+The text is a function of fewer things, each cheap to hash:
+
+* the loop model (:class:`quadland_symbolic.loop.LoopModel`): its CasADi
+  functions serialized (``Function.serialize``, the expression graph with
+  every constant, deterministic across processes) and its layouts;
+* the part, and the flight code's recipe (:func:`code_recipe`) of a
+  ``"sampled_flight"`` part;
+* the code that writes the C: every module and template of
+  ``quadland_symbolic`` (:func:`generator_digest`);
+* CasADi's version, the compiler (path and ``--version``), the flags and
+  the build's budgets (a lowered build is never remembered).
+
+:func:`recall_key` hashes them; the cache's ``recipes/`` folder maps such a
+key to the library built from the generated text (:func:`remember`), and
+:func:`recalled` returns that library, checked as every cached library is,
+without generating anything. A key that changes whenever the generated code
+would is enough for correctness: a stale or missing entry only costs one
+generation and build.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import functools
+import hashlib
+import re
+from pathlib import Path
+
+import casadi as ca
+
+from quadland.engine import build
+from quadland.output import write_text_atomic
+from quadland_symbolic.loop import LoopModel
+
+__all__ = ["generator_digest", "package_digest", "model_digest", "code_recipe", "recall_key",
+           "recalled", "remember"]
+
+#: Folder of the cache that maps recipe keys to libraries.
+RECIPES = "recipes"
+#: What a recipe file may name: a key folder and a library in it.
+_ENTRY = re.compile(r"^[0-9a-f]{24}/[A-Za-z0-9_]+\.so$")
+
+
+@functools.cache
+def generator_digest() -> str:
+    """SHA-256 of every module and template of ``quadland_symbolic`` (the code that
+    writes the C), read once per process."""
+    import quadland_symbolic
+
+    root = Path(quadland_symbolic.__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and path.suffix in (".py", ".jinja"):
+            digest.update(path.relative_to(root).as_posix().encode() + b"\0"
+                          + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def model_digest(model: LoopModel) -> str:
+    """SHA-256 of a loop model: each field, its functions serialized, its layouts as
+    their ``repr`` (names, sizes, units). Not memoized: hashing the model for a
+    cache costs half as much as the digest (its layouts' nested fields)."""
+    digest = hashlib.sha256()
+    for field in dataclasses.fields(model):
+        value = getattr(model, field.name)
+        text = value.serialize() if isinstance(value, ca.Function) else repr(value)
+        digest.update(field.name.encode() + b"=" + text.encode() + b"\0")
+    return digest.hexdigest()
+
+
+@functools.cache
+def package_digest() -> str:
+    """SHA-256 of every module, template and shipped scenario of ``quadland`` and
+    ``quadland_symbolic``, read once per process."""
+    import quadland
+    import quadland_symbolic
+
+    digest = hashlib.sha256()
+    for package in (quadland, quadland_symbolic):
+        root = Path(package.__file__).parent
+        for path in sorted(root.rglob("*")):
+            if path.is_file() and path.suffix in (".py", ".jinja", ".toml"):
+                digest.update(f"{package.__name__}/{path.relative_to(root).as_posix()}"
+                              .encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def code_recipe(*what: str) -> str:
+    """A recipe key of C that the runtime generates from ``what`` (e.g. ``"landing",
+    "l=10"``) with the defaults of its shipped scenarios: SHA-256 of ``what``, every
+    source of both packages (:func:`package_digest`), NumPy's and CasADi's versions."""
+    import numpy as np
+
+    digest = hashlib.sha256()
+    for part in ("code-1", package_digest(), np.__version__, ca.__version__, *what):
+        digest.update(part.encode() + b"\0")
+    return digest.hexdigest()
+
+
+def recall_key(model: LoopModel, part: str, flight: str | None,
+               flight_sources: tuple[str, ...], name: str, opt: str, strict: bool) -> str:
+    """The recipe key of one simulator's library (see the module's docstring).
+
+    Raises
+    ------
+    CompileError
+        When the compiler's ``--version`` cannot run.
+    """
+    cc = build.find_compiler()
+    digest = hashlib.sha256()
+    for part_ in ("recipe-1", build.compiler_identity(cc), ca.__version__, generator_digest(),
+                  model_digest(model), part, name, opt,
+                  repr(build.STRICT_CFLAGS if strict else build.RUNTIME_CFLAGS),
+                  repr((build.SHARED_CFLAGS, build.COMPILE_MEMORY_BUDGET,
+                        build.COMPILE_TIME_BUDGET, build.COMPILE_FIT)), *flight_sources):
+        digest.update(part_.encode() + b"\0")
+    digest.update(b"flight=" + (flight or "none").encode())
+    return digest.hexdigest()
+
+
+def _entry(key: str) -> Path:
+    return build.cache_dir() / RECIPES / key[:32]
+
+
+def recalled(key: str) -> Path | None:
+    """The library remembered for ``key``, verified and loadable; None if there is none
+    (or it was removed, damaged or does not load)."""
+    try:
+        rel = _entry(key).read_text(encoding="ascii").strip()
+    except (OSError, ValueError):
+        return None
+    if not _ENTRY.match(rel):
+        return None
+    target = build.cache_dir() / rel
+    if not build.verified_library(target):
+        return None
+    try:
+        ctypes.CDLL(str(target))
+    except OSError:
+        return None
+    return target
+
+
+def remember(key: str, library: Path) -> None:
+    """Record that ``key``'s library is ``library`` (a file of the cache); a cache that
+    cannot be written is only a missed shortcut."""
+    cache = build.cache_dir()
+    try:
+        rel = library.relative_to(cache).as_posix()
+        if _ENTRY.match(rel):
+            (cache / RECIPES).mkdir(mode=0o700, exist_ok=True)
+            write_text_atomic(_entry(key), rel + "\n")
+    except (OSError, ValueError):
+        pass
