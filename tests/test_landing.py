@@ -32,10 +32,12 @@ from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED,
 SCENARIOS = ("highway", "turning", "ship", "ship_ss5")
 #: Descents aborted at the default seed, on the sensors and on the true state: the
 #: scenarios' measured ones (docs/landing.md, docs/sea.md). A ship deck in sea state 4
-#: or 5 rises faster than landing.max_deck_rise a fifth to a third of the time.
-ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 16,
-          ("ship_ss5", "sensors"): 42, ("highway", "perfect"): 0, ("turning", "perfect"): 0,
-          ("ship", "perfect"): 1, ("ship_ss5", "perfect"): 6}
+#: or 5 rises faster than landing.max_deck_rise a fifth to a third of the time. With the
+#: gains retuned for their margins (issue 19) the ship's count rose from 16 and 1, sea
+#: state 5's on the sensors fell from 42.
+ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 17,
+          ("ship_ss5", "sensors"): 27, ("highway", "perfect"): 0, ("turning", "perfect"): 0,
+          ("ship", "perfect"): 4, ("ship_ss5", "perfect"): 6}
 #: trajectory.csv's columns, as the issue names them.
 COLUMNS = ["t", "phase", "x1", "y1", "z1", "phi1", "theta1", "psi1",
            "x2", "y2", "z2", "phi2", "theta2", "psi2", "x_e", "y_e", "z_e",
@@ -303,8 +305,8 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     runs = [loop.ride(z0, a, rows, t_td, t_td + 2.0, 0.004, lv.pp)
             for loop in (CompiledLoop(model, "sampled"), VMLoop(model, "sampled"))]
     times, _ = ride_grid(rows, t_td, t_td + 2.0, 0.004)
-    # touchdown at 9.2397 s: the 100 Hz ticks 9.24 .. 11.23 s, then the end itself
-    assert len(times) == 201 and times[0] == 9.24 and times[-1] == t_td + 2.0
+    # touchdown at 9.9656 s: the 100 Hz ticks 9.97 .. 11.96 s, then the end itself
+    assert len(times) == 201 and times[0] == 9.97 and times[-1] == t_td + 2.0
     for ride in runs:
         assert ride.status == SIM_OK
         np.testing.assert_array_equal(ride.times, times)
@@ -394,7 +396,7 @@ def test_failed_landing_exits_3_with_the_partial_trajectory(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     # the tumble passes 90 degrees of tilt (the envelope, checked at every grid
     # point) before the guard's |cos(theta) cos(phi)| falls below its minimum
-    assert status == 3 and len(err) == 1 and "flight failed at t = 0.036 s: the tilt" in err[0]
+    assert status == 3 and len(err) == 1 and "flight failed at t = 0.032 s: the tilt" in err[0]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and summary["landing"]["touchdown"] is False
     with open(out / "trajectory.csv") as fh:
@@ -498,11 +500,12 @@ def test_with_a_wrong_mass_the_hover_holds_the_true_weight():
     """At the hover equilibrium on a level deck, with no wind and no disturbance, the
     quadrotor moves with the vehicle at constant velocity: the thrust's vertical part
     T cos(phi) cos(theta) is the plant's weight m g (drag is horizontal), whatever
-    mass the controller assumes; the altitude settles off its reference instead."""
+    mass the controller assumes; without the bias estimates (ki_p = 0) the altitude
+    settles off its reference instead (with them it does not: tests/test_landing_robust.py)."""
     from quadland.linearization import equilibrium
 
     calm = ["wind.mean=[0.0, 0.0, 0.0]", "disturbance.force_bias=[0.0, 0.0, 0.0]",
-            "disturbance.moment_bias=[0.0, 0.0, 0.0]"]
+            "disturbance.moment_bias=[0.0, 0.0, 0.0]", "controller.ki_p=[0.0, 0.0, 0.0]"]
     sc = load_scenario("highway", calm)
     nominal = equilibrium(sc)
     wrong = equilibrium(load_scenario("highway", [*calm, "controller_model.mass=2.4"]))

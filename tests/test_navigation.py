@@ -159,7 +159,8 @@ def test_output_is_the_relative_state_of_symbolic_landing_relative(values, seed)
         deck_height=rng.uniform(0.5, 3)))
     p_veh = values.p_veh.copy()
     p_veh[VEHICLE.slice("tau")] = rng.normal(size=3) * [50, 30, 20]
-    p_act = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=10.0, gear_height=0.2))
+    p_act = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=10.0, gear_height=0.2,
+                               rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3))
     x1q = np.concatenate([rng.normal(size=3) + [0, 0, 4], rng.uniform(-0.5, 0.5, 3),
                           rng.normal(size=3), rng.normal(size=3), rng.uniform(0, 10, 4)])
     xv = np.concatenate([rng.normal(size=2) * 5, rng.uniform(-3, 3, 1), rng.normal(size=2) * 2,

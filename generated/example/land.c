@@ -111,7 +111,7 @@ typedef struct {
 
 static void vehicle_of_ride(void *vctx, const ql_real *xv, double t, ql_real *xv_dot)
 {
-    vehicle((void *)(((const ride_ctx *)vctx)->pp + 16), xv, t, xv_dot);
+    vehicle((void *)(((const ride_ctx *)vctx)->pp + 23), xv, t, xv_dot);
 }
 
 static double unwrap_step(double psi, double psi_prev, double *correction);

@@ -41,12 +41,13 @@ static const double ql_land_gust_direction[3] = { 0.0, 1.0, 0.0 };
 #define QL_LAND_MAX_TILT_DEG 10.0
 #define QL_LAND_MAX_RELATIVE_SPEED 0.5
 
-/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (3), p_veh (10), p_deck (247)). */
-static const double ql_land_pp[273] = {
+/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (10), p_veh (10), p_deck (247)). */
+static const double ql_land_pp[280] = {
     2.0, 0.025, 0.025, 0.045, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 9.8, 0.25,
-    0.05, 0.02, 9.8, 0.2, 1500.0, 1500.0,
-    2500.0, 150.0, 1500.0, 2500.0, 2083.3333333333335, 0.0,
+    0.05, 0.02, 9.8, 0.2, 1.0, 1.0,
+    1.0, 1.0, 0.0, 0.0, 0.0, 1500.0,
+    1500.0, 2500.0, 150.0, 1500.0, 2500.0, 2083.3333333333335,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
@@ -88,7 +89,7 @@ static const double ql_land_pp[273] = {
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-    0.0, 0.0, 1.5,
+    0.0, 0.0, 0.0, 1.5,
 };
 
 /* The initial plant state xp (QL_LANDING_PLANT_NX: x1q (16), xv (6)). */

@@ -91,7 +91,7 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray) -> np.ndar
     """The controller's own model as plant parameters: ``[controller_model]``'s mass,
     inertia, drag, motor lag and rotor limit; the geometry (gravity, arm, rotor drag
     factor, gear) and the vehicle's and the deck's parameters (its sensors' models)
-    are the plant's."""
+    are the plant's; its rotors are whole and its centre of gravity centred."""
     q, cm = d["quadrotor"], d["controller_model"]
     return LANDING_PLANT_PARAMS.pack(dict(
         p_quad=QUADROTOR.pack(dict(
@@ -101,7 +101,7 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray) -> np.ndar
         p_act=ACTUATOR.pack(dict(
             motor_time_constant=cm["motor_time_constant"],
             F_max=cm["thrust_to_weight"] * cm["mass"] * q["gravity"] / 4,
-            gear_height=q["gear_height"])),
+            gear_height=q["gear_height"], rotor_efficiency=np.ones(4), cg_offset=np.zeros(3))),
         p_veh=p_veh, p_deck=p_deck))
 
 
@@ -122,7 +122,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         g=q["gravity"], arm=q["arm_length"], c=q["rotor_drag_factor"]))
     F_max = rotor_force_max(scenario)
     p_act = ACTUATOR.pack(dict(motor_time_constant=q["motor_time_constant"], F_max=F_max,
-                               gear_height=q["gear_height"]))
+                               gear_height=q["gear_height"],
+                               rotor_efficiency=q["rotor_efficiency"], cg_offset=q["cg_offset"]))
     p_veh = VEHICLE.pack(dict(m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"],
                               d22=v["d22"], d33=v["d33"], tau=v["tau"], z2=0.0))
     p_deck = deck_params(scenario)
@@ -137,6 +138,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         gamma2=c["gamma2"], k_w=c["k_w"], k_zeta=c["k_zeta"], rho=c["rho"],
         nominal_model=float(c["nominal_model"]), w_f=c["filter_frequency"],
         zeta_f=c["filter_damping"], tilt_max=c["tilt_max_deg"] * deg,
+        ki_p=c["ki_p"], ki=c["ki"], d_max_p=c["bias_max_p"], d_max=c["bias_max"],
         centers=np.tile(centers, (lay["centers"].shape[0], 1)), widths=np.full(l, r["width"])))
     p_guid = GUIDANCE_PARAMS.pack(dict(
         hover_height=g["hover_height"], align_radius=g["align_radius"],
