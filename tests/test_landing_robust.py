@@ -117,3 +117,45 @@ def test_lands_with_a_4_newton_steady_side_force():
     need = math.degrees(math.atan(4.0 / (M * G)))
     assert need > load_scenario("highway")["landing.max_tilt_deg"]
     _lands("disturbance.force_bias=[0.0, 4.0, 0.0]", WIDE_TILT)
+
+
+# ---------------------------------------------------------------- the margins (item 2)
+
+#: The corners of the shipped campaigns' dispersions of [quadrotor] (highway's and the
+#: ships'; turning's campaign disperses none, its corners are taken the same):
+#: mass and inertia +-10 %, drag +-30 %, motor lag 15 and 30 ms.
+CORNERS = [[f"quadrotor.mass={m}", f"quadrotor.inertia=[{i}, {i}, {1.8 * i}]",
+            f"quadrotor.drag_translational=[{d}, {d}, {d}]",
+            f"quadrotor.motor_time_constant={tau}"]
+           for m in (1.8, 2.2) for i in (0.0225, 0.0275) for d in (0.07, 0.13)
+           for tau in (0.015, 0.03)]
+
+
+def _meets(name, overrides=()):
+    from threadpoolctl import threadpool_limits
+
+    from quadland.margins import margin_report
+
+    with threadpool_limits(1):
+        report = margin_report(load_scenario(name, list(overrides)))
+    assert report.continuous.passed and report.sampled.passed, (name, overrides)
+    return report
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5"])
+def test_the_gains_meet_6_db_and_45_deg_at_every_hover_point_and_corner(name):
+    """6 dB / 45 deg per loop with the others closed and the multiloop disk margin,
+    continuous and sampled with one period of computation delay, at the hover point
+    and at each of the 16 corners (the controller's model at the nominal)."""
+    for corner in [[], *CORNERS]:
+        _meets(name, corner)
+
+
+def test_highway_meets_its_margins_at_the_worst_corner():
+    """The hover point, and the corner with the least multiloop disk margin: 30 ms of
+    motor lag with -10 % mass and +10 % inertia (docs/landing.md, "Gains")."""
+    _meets("highway")
+    worst = _meets("highway", ["quadrotor.mass=1.8", "quadrotor.inertia=[0.0275, 0.0275, "
+                               "0.0495]", "quadrotor.motor_time_constant=0.03"])
+    assert worst.sampled.multiloop_disk.disk.phase_margin < 48.0
