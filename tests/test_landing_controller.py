@@ -85,6 +85,13 @@ def _known_acceleration(m, pq):
     return f_g, f_r
 
 
+def _mix():
+    """The mixer of eq. (2): [T, M] = mix F."""
+    pq = QUADROTOR.unpack(P_QUAD)
+    d, cq = pq["arm"][0], pq["c"][0]
+    return np.array([[1, 1, 1, 1], [0, d, 0, -d], [-d, 0, d, 0], [cq, -cq, cq, -cq]])
+
+
 def _rbf(x):
     return np.exp(-np.sum((CENTERS - x[:, None]) ** 2, axis=0) / WIDTHS**2)
 
@@ -271,7 +278,12 @@ def test_outer_law_by_hand(step, rng, nominal):
         np.testing.assert_allclose(out["a_des"].ravel(), a_des, atol=1e-12)
         t_E = M1 * rotation(m["eta2"]) @ a_des
         assert out["limits"].ravel()[:2].tolist() == [0, 0]
-        np.testing.assert_allclose(out["wrench"].ravel()[0], np.linalg.norm(t_E), rtol=1e-12)
+        # |t_E|, moved into the band where every rotor can make its share of the moments
+        wrench = out["wrench"].ravel()
+        share = np.linalg.solve(_mix(), np.r_[0.0, wrench[1:]])
+        band = (4 * np.max(-share), 4 * (F_MAX - np.max(share)))
+        T = max(min(max(np.linalg.norm(t_E), band[0]), band[1]), 0.0)
+        np.testing.assert_allclose(wrench[0], T, rtol=1e-12)
         eta_c = out["eta_c"].ravel()
         np.testing.assert_allclose(eta_c[2], m["eta2"][2])
         np.testing.assert_allclose(rotation(eta_c)[:, 2], t_E / np.linalg.norm(t_E), atol=1e-12)
@@ -329,11 +341,33 @@ def test_inner_law_by_hand(step, nominal, seed):
     np.testing.assert_allclose(out["bs_z2"].ravel()[3:], z2, atol=1e-12)
     wrench = out["wrench"].ravel()
     np.testing.assert_allclose(wrench[1:] / I, u, rtol=1e-7, atol=1e-7)
-    d, cq = pq["arm"][0], pq["c"][0]
-    mix = np.array([[1, 1, 1, 1], [0, d, 0, -d], [-d, 0, d, 0], [cq, -cq, cq, -cq]])
-    rotors = np.linalg.solve(mix, wrench)
+    rotors = np.linalg.solve(_mix(), wrench)
     np.testing.assert_allclose(out["F_cmd"].ravel(), np.clip(rotors, 0, F_MAX), atol=1e-12)
-    assert out["limits"].ravel()[2] == np.sum((rotors < 0) | (rotors > F_MAX))
+    tol = 1e-5 * F_MAX                      # a rotor at its limit to roundoff is not clipped
+    assert out["limits"].ravel()[2] == np.sum((rotors < -tol) | (rotors > F_MAX + tol))
+
+
+def test_the_moments_come_first_and_the_thrust_takes_what_they_leave(step):
+    """Level deck, at rest 1.5 m below the reference (a climb: |t_E| = 25.6 N) and rolled
+    -0.15 rad from a level command: the roll moment needs rotor 2 near F_max, so the
+    collective thrust drops to 4 (F_max - max m_i) and the rotors make the moments
+    exactly, none clipped."""
+    y = LANDING_MEASUREMENT.pack(dict(
+        p_e=[0.0, 0.0, 1.5], v_e=np.zeros(3), eta1=[-0.15, 0.0, 0.4], Omega1=np.zeros(3),
+        eta2=[0.0, 0.0, 0.4], v2E=np.zeros(3), a2E=np.zeros(3), w2E=np.zeros(3),
+        w2E_dot=np.zeros(3)))
+    ref = POSITION_REFERENCE.pack(dict(p_ref=[0.0, 0.0, 3.0], v_ref=np.zeros(3),
+                                       a_ref=np.zeros(3)))
+    out = _call(step, y, ref, landing_memory(L_NODES).zeros(), _p_ctrl(1.0), P_QUAD, P_ACT,
+                0.004)
+    wrench = out["wrench"].ravel()
+    share = np.linalg.solve(_mix(), np.r_[0.0, wrench[1:]])
+    t_E = M1 * rotation([0.0, 0.0, 0.4]) @ out["a_des"].ravel()
+    assert out["limits"].ravel()[:2].tolist() == [0, 0]            # no thrust or tilt limit
+    assert wrench[0] < np.linalg.norm(t_E) - 1.0                   # the thrust gave way
+    np.testing.assert_allclose(wrench[0], 4 * (F_MAX - np.max(share)), rtol=1e-12)
+    assert out["limits"].ravel()[2] == 0
+    np.testing.assert_allclose(_mix() @ out["F_cmd"].ravel(), wrench, rtol=1e-12, atol=1e-12)
 
 
 # ---------------------------------------------------------------- memory over dt

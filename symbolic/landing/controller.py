@@ -29,7 +29,9 @@ The design is docs/landing.md's "The controller"; its choices are in
    (:func:`quadland_symbolic.backstepping.virtual_control` for eq. 14, 18); moments
    ``M = I u``; with ``nominal_model = 1`` the drag and gyroscopic terms
    (:func:`quadland_symbolic.relative.nominal_drift`) are fed forward.
-6. **Rotors**: ``[T, M]`` through the mixer's inverse, clipped to ``[0, F_max]``.
+6. **Rotors**: ``T`` moved into the band where every rotor can make its share of
+   the moments (attitude priority), then ``[T, M]`` through the mixer's
+   inverse, clipped to ``[0, F_max]``; the compensator's ``delta`` uses this ``T``.
 7. **Memory** over ``dt`` with the measurements held: the adaptive laws of
    eq. (22) for all six channels, the filter and the compensator, each
    integrated exactly (the latter two by the 2x2 matrix exponential,
@@ -53,6 +55,11 @@ from quadland_symbolic.landing.attitude import thrust_attitude
 from quadland_symbolic.landing.bias import bias_next
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
+from quadland_symbolic.landing.desaturation import (
+    clip_forces,
+    clipped_count,
+    thrust_within_moments,
+)
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_CUES,
     GUIDANCE_PARAMS,
@@ -267,12 +274,6 @@ def known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad):
 
 # ---------------------------------------------------------------- the law
 
-def _clip(F, F_min, F_max):
-    """Clip finite forces; a NaN or an infinity passes through, never hidden by a limit."""
-    return ca.if_else(ca.logic_and(F < F_min, F > -ca.inf), F_min,
-                      ca.if_else(ca.logic_and(F > F_max, F < ca.inf), F_max, F))
-
-
 def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     """The step's expressions, a dict keyed by :func:`landing_step_outputs`' names.
 
@@ -314,12 +315,10 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     squash_p = ca.tanh(z2p_bar / rho)
     f_g, f_r = known_acceleration(p_e, v_e, eta1, eta2, ms["v2E"], ms["a2E"], ms["w2E"],
                                   ms["w2E_dot"], p_quad)
-    d_hat = mm["d_hat"]
     a_des = (-k2p * z2p - z1p - Delta_hat[_POSITION] - squash_p * zeta_hat[_POSITION] + alpha_p_dot
-             - f_g - nominal * f_r - d_hat[_POSITION])                         # eq. 20, bias
+             - f_g - nominal * f_r - mm["d_hat"][_POSITION])                   # eq. 20, bias
     t_E = m1 * R_deck @ a_des                                                  # N, in E
     th = thrust_attitude(t_E, eta2[2], c["tilt_max"], 4 * act["F_max"])
-    delta = R_deck.T @ (th["T"] * th["b3"] - t_E) / m1                         # limits' shortfall
 
     # command filter: its state at t_k is the inner loop's reference
     eta_c = ca.vertcat(th["phi"], th["theta"])
@@ -331,19 +330,21 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     e1d_ddot = ca.vertcat(eta_f_ddot, eta2_ddot[2])
 
     z1a, z2a, squash_a, u_a = _inner_loop(eta1, Omega1, (e1d, e1d_dot, e1d_ddot), c,
-                                          Delta_hat[_ATTITUDE] + d_hat[_ATTITUDE],
+                                          Delta_hat[_ATTITUDE] + mm["d_hat"][_ATTITUDE],
                                           zeta_hat[_ATTITUDE], p_quad)
 
-    # rotors
-    wrench = ca.vertcat(th["T"], q["I"] * u_a)
+    # rotors: the moments first, the collective thrust within what they leave
+    T = thrust_within_moments(th["T"], q["I"] * u_a, p_quad, act["F_max"])
+    delta = R_deck.T @ (T * th["b3"] - t_E) / m1                               # limits' shortfall
+    wrench = ca.vertcat(T, q["I"] * u_a)
     unclipped = rotors_from_wrench(wrench, p_quad)
-    F_cmd = _clip(unclipped, 0, act["F_max"])
-    n_clipped = ca.sum1(unclipped < 0) + ca.sum1(unclipped > act["F_max"])
+    F_cmd = clip_forces(unclipped, 0, act["F_max"])
+    n_clipped = clipped_count(unclipped, act["F_max"])
 
     # memory over dt, measurements held
     mem_next = _memory_next(mm, c, Psi, ca.vertcat(z2p_bar, z2a), ca.vertcat(squash_p, squash_a),
                             delta, eta_f_next, eta_f_dot_next, dt)
-    mem_next = ca.vertcat(mem_next, bias_next(d_hat, ca.vertcat(c["ki_p"], c["ki"]),
+    mem_next = ca.vertcat(mem_next, bias_next(mm["d_hat"], ca.vertcat(c["ki_p"], c["ki"]),
                                               c["d_max_p"], c["d_max"],
                                               ca.vertcat(z2p_bar, z2a), n_clipped, dt))
 
