@@ -46,7 +46,8 @@ typedef char landing_state_is_its_layout[
     AT(ql_landing_state, eta_f_dot, 68, 0) &&
     AT(ql_landing_state, xi1, 70, 0) &&
     AT(ql_landing_state, xi2, 73, 0) &&
-    sizeof(ql_landing_state) == 76 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_state, d_hat, 76, 0) &&
+    sizeof(ql_landing_state) == 82 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_controller_params_is_its_layout[
     AT(ql_landing_controller_params, k1p, 0, 0) &&
     AT(ql_landing_controller_params, k2p, 3, 0) &&
@@ -61,9 +62,13 @@ typedef char landing_controller_params_is_its_layout[
     AT(ql_landing_controller_params, w_f, 18, 0) &&
     AT(ql_landing_controller_params, zeta_f, 19, 0) &&
     AT(ql_landing_controller_params, tilt_max, 20, 0) &&
-    AT(ql_landing_controller_params, centers, 21, 0) &&
-    AT(ql_landing_controller_params, widths, 81, 0) &&
-    sizeof(ql_landing_controller_params) == 91 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_controller_params, ki_p, 21, 0) &&
+    AT(ql_landing_controller_params, ki, 24, 0) &&
+    AT(ql_landing_controller_params, d_max_p, 27, 0) &&
+    AT(ql_landing_controller_params, d_max, 28, 0) &&
+    AT(ql_landing_controller_params, centers, 29, 0) &&
+    AT(ql_landing_controller_params, widths, 89, 0) &&
+    sizeof(ql_landing_controller_params) == 99 * sizeof(ql_real) ? 1 : -1];
 typedef char actuator_params_is_its_layout[
     AT(ql_actuator_params, motor_time_constant, 0, 0) &&
     AT(ql_actuator_params, F_max, 1, 0) &&
@@ -71,13 +76,15 @@ typedef char actuator_params_is_its_layout[
     AT(ql_actuator_params, drag_quadratic, 3, 0) &&
     AT(ql_actuator_params, rotor_radius, 6, 0) &&
     AT(ql_actuator_params, air_density, 7, 0) &&
-    sizeof(ql_actuator_params) == 8 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_actuator_params, rotor_efficiency, 8, 0) &&
+    AT(ql_actuator_params, cg_offset, 12, 0) &&
+    sizeof(ql_actuator_params) == 15 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_params_is_its_layout[
     AT(ql_landing_params, quad, 0, 0) &&
     AT(ql_landing_params, ctrl, 13, 0) &&
-    AT(ql_landing_params, act, 104, 0) &&
-    AT(ql_landing_params, tilt_min, 112, 0) &&
-    sizeof(ql_landing_params) == 113 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_params, act, 112, 0) &&
+    AT(ql_landing_params, tilt_min, 127, 0) &&
+    sizeof(ql_landing_params) == 128 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_output_is_its_layout[
     AT(ql_landing_output, F_cmd, 0, 0) &&
     AT(ql_landing_output, wrench, 4, 0) &&
@@ -122,27 +129,29 @@ static const ql_real default_p_quad[13] = {
     0.3, 0.001, 0.001, 0.001, 9.8, 0.25,
     0.05,
 };
-static const ql_real default_p_land[91] = {
+static const ql_real default_p_land[99] = {
     1.5, 1.5, 1.5, 1.5, 1.5, 1.5,
-    6.0, 6.0, 6.0, 6.0, 6.0, 6.0,
+    2.0, 2.0, 2.0, 14.0, 14.0, 14.0,
     0.05, 0.1, 5.0, 0.1, 0.1, 1.0,
-    25.0, 1.0, 0.5235987755982988, -2.0, -2.0, -2.0,
-    -2.0, -2.0, -2.0, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556,
-    -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112,
-    -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667,
-    -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232,
-    -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232,
-    0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665,
-    0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107,
-    1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554,
-    1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 2.0, 2.0, 2.0,
+    10.0, 1.0, 0.5235987755982988, 0.5, 0.5, 1.0,
+    2.0, 2.0, 2.0, 4.0, 40.0, -2.0,
+    -2.0, -2.0, -2.0, -2.0, -2.0, -1.5555555555555556,
+    -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.1111111111111112,
+    -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -0.6666666666666667,
+    -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.22222222222222232,
+    -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, 0.22222222222222232,
+    0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.6666666666666665,
+    0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 1.1111111111111107,
+    1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.5555555555555554,
+    1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 2.0,
     2.0, 2.0, 2.0, 2.0, 2.0, 2.0,
     2.0, 2.0, 2.0, 2.0, 2.0, 2.0,
-    2.0,
+    2.0, 2.0, 2.0,
 };
-static const ql_real default_p_act[8] = {
+static const ql_real default_p_act[15] = {
     0.02, 9.8, 0.2, 0.01225, 0.01225, 0.01225,
-    0.127, 1.225,
+    0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
+    0.0, 0.0, 0.0,
 };
 static const ql_real default_p_guid[13] = {
     3.0, 0.5, 1.0, 0.7, 1.0, 0.3,
@@ -212,6 +221,10 @@ const char *ql_phase_name(int phase)
  *   ctrl.w_f                 > 0
  *   ctrl.zeta_f              > 0
  *   ctrl.tilt_max            in (0, 1.5708)
+ *   ctrl.ki_p                >= 0
+ *   ctrl.ki                  >= 0
+ *   ctrl.d_max_p             >= 0
+ *   ctrl.d_max               >= 0
  *   ctrl.centers             finite
  *   ctrl.widths              > 0
  *   act.motor_time_constant  > 0
@@ -220,6 +233,8 @@ const char *ql_phase_name(int phase)
  *   act.drag_quadratic       >= 0
  *   act.rotor_radius         >= 0
  *   act.air_density          > 0
+ *   act.rotor_efficiency     >= 0
+ *   act.cg_offset            finite
  *   tilt_min                 in [0, 1)
  * NaN and infinities are outside every range. */
 ql_status ql_check_landing_params(const ql_landing_params *params, const char **bad_field)
@@ -308,37 +323,63 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
     if (!bad && !(isfinite(p[33]) && ((p[33] > 0.0) && (p[33] < 1.5707963267948966)))) {
         bad = "ctrl.tilt_max";
     }
-    for (i = 34; !bad && i < 94; ++i) {
+    for (i = 34; !bad && i < 37; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
+            bad = "ctrl.ki_p";
+        }
+    }
+    for (i = 37; !bad && i < 40; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
+            bad = "ctrl.ki";
+        }
+    }
+    if (!bad && !(isfinite(p[40]) && (p[40] >= 0.0))) {
+        bad = "ctrl.d_max_p";
+    }
+    if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0))) {
+        bad = "ctrl.d_max";
+    }
+    for (i = 42; !bad && i < 102; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "ctrl.centers";
         }
     }
-    for (i = 94; !bad && i < 104; ++i) {
+    for (i = 102; !bad && i < 112; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "ctrl.widths";
         }
     }
-    if (!bad && !(isfinite(p[104]) && (p[104] > 0.0))) {
+    if (!bad && !(isfinite(p[112]) && (p[112] > 0.0))) {
         bad = "act.motor_time_constant";
     }
-    if (!bad && !(isfinite(p[105]) && (p[105] > 0.0))) {
+    if (!bad && !(isfinite(p[113]) && (p[113] > 0.0))) {
         bad = "act.F_max";
     }
-    if (!bad && !(isfinite(p[106]) && (p[106] >= 0.0))) {
+    if (!bad && !(isfinite(p[114]) && (p[114] >= 0.0))) {
         bad = "act.gear_height";
     }
-    for (i = 107; !bad && i < 110; ++i) {
+    for (i = 115; !bad && i < 118; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
             bad = "act.drag_quadratic";
         }
     }
-    if (!bad && !(isfinite(p[110]) && (p[110] >= 0.0))) {
+    if (!bad && !(isfinite(p[118]) && (p[118] >= 0.0))) {
         bad = "act.rotor_radius";
     }
-    if (!bad && !(isfinite(p[111]) && (p[111] > 0.0))) {
+    if (!bad && !(isfinite(p[119]) && (p[119] > 0.0))) {
         bad = "act.air_density";
     }
-    if (!bad && !(isfinite(p[112]) && ((p[112] >= 0.0) && (p[112] < 1.0)))) {
+    for (i = 120; !bad && i < 124; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
+            bad = "act.rotor_efficiency";
+        }
+    }
+    for (i = 124; !bad && i < 127; ++i) {
+        if (!(isfinite(p[i]))) {
+            bad = "act.cg_offset";
+        }
+    }
+    if (!bad && !(isfinite(p[127]) && ((p[127] >= 0.0) && (p[127] < 1.0)))) {
         bad = "tilt_min";
     }
     if (bad_field) {
@@ -420,7 +461,7 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
 
 /* 1 when every parameter lies in its range, the per-node arrays aside
  * (ctrl.widths: ql_check_landing_params only): the step's invariant,
- * 43 comparisons. The values are known to be finite; no names and no
+ * 55 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_landing_params finds the culprit. */
 static int landing_params_in_range(const ql_real *p)
 {
@@ -459,15 +500,27 @@ static int landing_params_in_range(const ql_real *p)
     ok &= (p[31] > 0.0);
     ok &= (p[32] > 0.0);
     ok &= ((p[33] > 0.0) & (p[33] < 1.5707963267948966));
-    ok &= (p[104] > 0.0);
-    ok &= (p[105] > 0.0);
-    ok &= (p[106] >= 0.0);
-    ok &= (p[107] >= 0.0);
-    ok &= (p[108] >= 0.0);
-    ok &= (p[109] >= 0.0);
-    ok &= (p[110] >= 0.0);
-    ok &= (p[111] > 0.0);
-    ok &= ((p[112] >= 0.0) & (p[112] < 1.0));
+    ok &= (p[34] >= 0.0);
+    ok &= (p[35] >= 0.0);
+    ok &= (p[36] >= 0.0);
+    ok &= (p[37] >= 0.0);
+    ok &= (p[38] >= 0.0);
+    ok &= (p[39] >= 0.0);
+    ok &= (p[40] >= 0.0);
+    ok &= (p[41] >= 0.0);
+    ok &= (p[112] > 0.0);
+    ok &= (p[113] > 0.0);
+    ok &= (p[114] >= 0.0);
+    ok &= (p[115] >= 0.0);
+    ok &= (p[116] >= 0.0);
+    ok &= (p[117] >= 0.0);
+    ok &= (p[118] >= 0.0);
+    ok &= (p[119] > 0.0);
+    ok &= (p[120] >= 0.0);
+    ok &= (p[121] >= 0.0);
+    ok &= (p[122] >= 0.0);
+    ok &= (p[123] >= 0.0);
+    ok &= ((p[127] >= 0.0) & (p[127] < 1.0));
     return ok;
 }
 
@@ -600,7 +653,7 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
                           ql_landing_output *out)
 {
     /* res_v = [F_cmd, wrench, eta_c, eta_d, eta_d_dot, eta_d_ddot, mem_next, Delta_hat, a_des, bs_z1, bs_z2], staged so that it is checked in one pass. */
-    ql_real res_v[117], tilt, limits[3];
+    ql_real res_v[123], tilt, limits[3];
     const ql_real *arg[ql_casadi_landing_step_SZ_ARG];
     ql_real *res[ql_casadi_landing_step_SZ_RES];
     casadi_int work_int[ql_casadi_landing_step_SZ_IW + 1];
@@ -641,10 +694,10 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     res[4] = res_v + 14;
     res[5] = res_v + 17;
     res[6] = res_v + 20;
-    res[7] = res_v + 96;
-    res[8] = res_v + 102;
-    res[9] = res_v + 105;
-    res[10] = res_v + 111;
+    res[7] = res_v + 102;
+    res[8] = res_v + 108;
+    res[9] = res_v + 111;
+    res[10] = res_v + 117;
     res[11] = &tilt;
     res[12] = limits;
     ql_casadi_landing_step(arg, res, work_int, work_real, 0);
@@ -653,9 +706,9 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
         output_zero(out, tilt);
         return QL_ERR_TILT;
     }
-    if (!all_finite(res_v, 117)) {
+    if (!all_finite(res_v, 123)) {
         output_zero(out, tilt);
-        return all_finite((const ql_real *)state, 76) ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
+        return all_finite((const ql_real *)state, 82) ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
     }
     memcpy(out->F_cmd, res_v + 0, sizeof out->F_cmd);
     memcpy(out->wrench, res_v + 4, sizeof out->wrench);
@@ -663,10 +716,10 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     memcpy(out->eta_d, res_v + 11, sizeof out->eta_d);
     memcpy(out->eta_d_dot, res_v + 14, sizeof out->eta_d_dot);
     memcpy(out->eta_d_ddot, res_v + 17, sizeof out->eta_d_ddot);
-    memcpy(out->Delta_hat, res_v + 96, sizeof out->Delta_hat);
-    memcpy(out->a_des, res_v + 102, sizeof out->a_des);
-    memcpy(out->bs_z1, res_v + 105, sizeof out->bs_z1);
-    memcpy(out->bs_z2, res_v + 111, sizeof out->bs_z2);
+    memcpy(out->Delta_hat, res_v + 102, sizeof out->Delta_hat);
+    memcpy(out->a_des, res_v + 108, sizeof out->a_des);
+    memcpy(out->bs_z1, res_v + 111, sizeof out->bs_z1);
+    memcpy(out->bs_z2, res_v + 117, sizeof out->bs_z2);
     out->tilt = tilt;
     out->thrust_limited = (int)limits[0];
     out->tilt_limited = (int)limits[1];

@@ -20,12 +20,12 @@ extern "C" {
 #define QL_LANDING_RBF_NODES 10                  /* l, RBF nodes of the landing step */
 #define QL_LANDING_NETWORK_INPUT_DIM 6           /* dimension of the network's input [v_e, Omega_e] */
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
-#define QL_LANDING_PARAMS_SIZE 113               /* reals in ql_landing_params */
-#define QL_LANDING_STATE_SIZE 76                 /* reals in ql_landing_state */
+#define QL_LANDING_PARAMS_SIZE 128               /* reals in ql_landing_params */
+#define QL_LANDING_STATE_SIZE 82                 /* reals in ql_landing_state */
 #define QL_GUIDANCE_PARAMS_SIZE 13               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
-#define QL_LANDING_PLANT_NP 324                  /* pp = [p_quad (13), p_act (8), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
+#define QL_LANDING_PLANT_NP 331                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
 #define QL_LANDING_NW 9                          /* w = [v_wind (3), d_F (3), d_M (3)] */
 #define QL_LANDING_NY 42                         /* signals y of a landing */
 #define QL_LANDING_ANCHOR_SIZE 12                /* anchor = [p_e (3), R_rel (9)] */
@@ -78,6 +78,7 @@ typedef struct {
     ql_real eta_f_dot[2];            /* rad/s: command filter state: their rates (phi_f_dot, theta_f_dot) */
     ql_real xi1[3];                  /* m: saturation compensator, position (deck frame) (xi1_x, xi1_y, xi1_z) */
     ql_real xi2[3];                  /* m/s: saturation compensator, velocity (deck frame) (xi2_x, xi2_y, xi2_z) */
+    ql_real d_hat[6];                /* m/s^2, m/s^2, m/s^2, rad/s^2, rad/s^2, rad/s^2: bias estimates (integral action): deck-frame x, y, z; body roll, pitch, yaw */
 } ql_landing_state;
 
 /* Gains, adaptation, command filter, tilt limit and RBF network: layout
@@ -96,6 +97,10 @@ typedef struct {
     ql_real w_f;                     /* rad/s: command filter natural frequency */
     ql_real zeta_f;                  /* -: command filter damping ratio */
     ql_real tilt_max;                /* rad: largest tilt of the thrust axis, below pi/2 */
+    ql_real ki_p[3];                 /* 1/s^2: outer bias adaptation gain: d_hat_p' = ki_p z2_bar (ki_p_x, ki_p_y, ki_p_z) */
+    ql_real ki[3];                   /* 1/s: inner bias adaptation gain: d_hat_a' = ki z2 (ki_phi, ki_theta, ki_psi) */
+    ql_real d_max_p;                 /* m/s^2: projection bound of each outer bias estimate */
+    ql_real d_max;                   /* rad/s^2: projection bound of each inner bias estimate */
     ql_real centers[10][6];          /* -: RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e]) */
     ql_real widths[10];              /* -: RBF widths epsilon_i */
 } ql_landing_controller_params;
@@ -108,6 +113,8 @@ typedef struct {
     ql_real drag_quadratic[3];       /* N s^2/m^2: the body's quadratic (bluff-body) drag, body axes (quadland_symbolic.landing.aero) (Kq1, Kq2, Kq3) */
     ql_real rotor_radius;            /* m: rotor radius R of the ground effect (0: none) */
     ql_real air_density;             /* kg/m^3: air density rho of the ground effect's induced velocity */
+    ql_real rotor_efficiency[4];     /* -: force each rotor makes per newton commanded (1: as modelled; a damaged rotor less) (eff_F_1, eff_F_2, eff_F_3, eff_F_4) */
+    ql_real cg_offset[3];            /* m: centre of gravity from the rotors' centre, body axes (0: centred) (cg_x, cg_y, cg_z) */
 } ql_actuator_params;
 
 /* Everything ql_landing_step is tuned with; ql_landing_params_init fills

@@ -104,7 +104,8 @@ def params(F_cmd=(0.0,) * 4, t_signal=np.inf, gear=None, lock=None, deck=None, v
            surface="ship_deck"):
     """The harness's parameter vector: 2 kg quadrotor, drag off, a still level deck."""
     quad = dict(m1=M, I=INERTIA, Kt=[0.0] * 3, Kr=[0.0] * 3, g=G, arm=0.25, c=0.05)
-    act = dict(motor_time_constant=0.02, F_max=20.0, gear_height=GEAR_HEIGHT, **NO_AERO)
+    act = dict(motor_time_constant=0.02, F_max=20.0, gear_height=GEAR_HEIGHT, **NO_AERO,
+               rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3)
     vehicle = dict(m11=1500.0, m22=1500.0, m33=2500.0, d11=150.0, d22=1500.0, d33=2500.0,
                    tau=[0.0, 0.0, 0.0], z2=0.0)
     vehicle.update(veh or {})

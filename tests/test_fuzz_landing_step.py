@@ -90,12 +90,16 @@ LANDING_DOCUMENTED = {
     "ctrl.nominal_model": lambda v, p: (v == 0) | (v == 1),
     "ctrl.w_f": _positive, "ctrl.zeta_f": _positive,
     "ctrl.tilt_max": lambda v, p: (v > 0) & (v < math.pi / 2),
+    "ctrl.ki_p": _nonnegative, "ctrl.ki": _nonnegative, "ctrl.d_max_p": _nonnegative,
+    "ctrl.d_max": _nonnegative,
     "ctrl.centers": _finite, "ctrl.widths": _positive,
     "act.motor_time_constant": _positive, "act.F_max": _positive,
     "act.gear_height": _nonnegative,
     "act.drag_quadratic": _nonnegative,
     "act.rotor_radius": _nonnegative,
     "act.air_density": lambda v, p: v > 0,
+    "act.rotor_efficiency": _nonnegative,
+    "act.cg_offset": _finite,
     "tilt_min": lambda v, p: (v >= 0) & (v < 1),
 }
 #: Members that only ql_check_landing_params tests (the step would test l values a call).

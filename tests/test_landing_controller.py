@@ -41,10 +41,11 @@ F_MAX = 2 * M1 * G / 4                   # thrust_to_weight = 2
 P_QUAD = QUADROTOR.pack(dict(m1=M1, I=[1.2416, 1.2416, 2.4832], Kt=[0.01] * 3, Kr=[0.001] * 3,
                              g=G, arm=0.25, c=0.05))
 P_ACT = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=F_MAX, gear_height=0.2,
-                           **NO_AERO))
+                           rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3, **NO_AERO))
 #: The hover test's controller parameters (besides the network's centres and widths).
 GAINS = dict(k1p=[1.0] * 3, k2p=[1.0] * 3, k1=[3.0] * 3, k2=[3.0] * 3, gamma1=0.05,
-             gamma2=0.1, k_w=5.0, k_zeta=0.1, rho=0.1, w_f=12.0, zeta_f=1.0, tilt_max=0.5)
+             gamma2=0.1, k_w=5.0, k_zeta=0.1, rho=0.1, w_f=12.0, zeta_f=1.0, tilt_max=0.5,
+             ki_p=[0.5, 0.7, 0.9], ki=[1.0, 2.0, 3.0], d_max_p=0.4, d_max=5.0)
 CENTERS = np.tile(np.linspace(-2.0, 2.0, L_NODES), (NETWORK_INPUT_DIM, 1))
 WIDTHS = np.full(L_NODES, 2.0)
 
@@ -85,6 +86,13 @@ def _known_acceleration(m, pq):
     return f_g, f_r
 
 
+def _mix():
+    """The mixer of eq. (2): [T, M] = mix F."""
+    pq = QUADROTOR.unpack(P_QUAD)
+    d, cq = pq["arm"][0], pq["c"][0]
+    return np.array([[1, 1, 1, 1], [0, d, 0, -d], [-d, 0, d, 0], [cq, -cq, cq, -cq]])
+
+
 def _rbf(x):
     return np.exp(-np.sum((CENTERS - x[:, None]) ** 2, axis=0) / WIDTHS**2)
 
@@ -101,7 +109,8 @@ def _random_case(rng, scale=1.0):
     mem = landing_memory(L_NODES).pack(dict(
         W_hat=rng.normal(0, 0.05, (L_NODES, 6)), zeta_hat=rng.uniform(0, 0.2, 6),
         eta_f=rng.uniform(-0.1, 0.1, 2), eta_f_dot=rng.normal(0, 0.1, 2),
-        xi1=rng.normal(0, 0.05, 3), xi2=rng.normal(0, 0.05, 3)))
+        xi1=rng.normal(0, 0.05, 3), xi2=rng.normal(0, 0.05, 3),
+        d_hat=np.concatenate([rng.uniform(-0.4, 0.4, 3), rng.uniform(-5, 5, 3)])))
     return y, ref, mem
 
 
@@ -246,8 +255,8 @@ def test_known_acceleration_is_the_plants_at_zero_thrust(rng):
 @pytest.mark.parametrize("nominal", [0.0, 1.0])
 def test_outer_law_by_hand(step, rng, nominal):
     """a_des = -k2p z2 - z1 - W_p^T Psi - tanh(z2_bar / rho) zeta_p + alpha_dot - f_g
-    - nominal f_r, with alpha_dot = -k1p (v_e - v_ref) + a_ref; the thrust is |m1 R a_des|
-    along the commanded body z."""
+    - nominal f_r - d_hat_p, with alpha_dot = -k1p (v_e - v_ref) + a_ref; the thrust is
+    |m1 R a_des| along the commanded body z."""
     p_ctrl = _p_ctrl(nominal, k1p=[0.8, 1.0, 1.3], k2p=[1.1, 0.9, 1.6])
     for _ in range(5):
         y, ref, mem = _random_case(rng)
@@ -263,14 +272,19 @@ def test_outer_law_by_hand(step, rng, nominal):
         Delta = mm["W_hat"].T @ _rbf(np.concatenate([m["v_e"], Omega_e]))
         f_g, f_r = _known_acceleration(m, QUADROTOR.unpack(P_QUAD))
         a_des = (-k2p * z2 - z1 - Delta[:3] - np.tanh((z2 - mm["xi2"]) / rho) * mm["zeta_hat"][:3]
-                 + alpha_dot - f_g - nominal * f_r)
+                 + alpha_dot - f_g - nominal * f_r - mm["d_hat"][:3])
         np.testing.assert_allclose(out["bs_z1"].ravel()[:3], z1, atol=1e-14)
         np.testing.assert_allclose(out["bs_z2"].ravel()[:3], z2, atol=1e-14)
         np.testing.assert_allclose(out["Delta_hat"].ravel(), Delta, atol=1e-14)
         np.testing.assert_allclose(out["a_des"].ravel(), a_des, atol=1e-12)
         t_E = M1 * rotation(m["eta2"]) @ a_des
         assert out["limits"].ravel()[:2].tolist() == [0, 0]
-        np.testing.assert_allclose(out["wrench"].ravel()[0], np.linalg.norm(t_E), rtol=1e-12)
+        # |t_E|, moved into the band where every rotor can make its share of the moments
+        wrench = out["wrench"].ravel()
+        share = np.linalg.solve(_mix(), np.r_[0.0, wrench[1:]])
+        band = (4 * np.max(-share), 4 * (F_MAX - np.max(share)))
+        T = max(min(max(np.linalg.norm(t_E), band[0]), band[1]), 0.0)
+        np.testing.assert_allclose(wrench[0], T, rtol=1e-12)
         eta_c = out["eta_c"].ravel()
         np.testing.assert_allclose(eta_c[2], m["eta2"][2])
         np.testing.assert_allclose(rotation(eta_c)[:, 2], t_E / np.linalg.norm(t_E), atol=1e-12)
@@ -280,8 +294,9 @@ def test_outer_law_by_hand(step, rng, nominal):
 @pytest.mark.parametrize("nominal", [0.0, 1.0])
 def test_inner_law_by_hand(step, nominal, seed):
     """M / I = -k2 z2 - Rr^T z1 - W_a^T Psi - tanh(z2 / rho) zeta_a + alpha_dot - nominal f_a
-    (eq. 20) with e1d = [filter state, psi2]; alpha_dot by a central difference of
-    alpha = Rr^-1 (-k1 z1 + e1d_dot) (eq. 14); the rotors realise [T, M] (eq. 2)."""
+    - d_hat_a (eq. 20 and the bias estimate) with e1d = [filter state, psi2]; alpha_dot
+    by a central difference of alpha = Rr^-1 (-k1 z1 + e1d_dot) (eq. 14); the rotors
+    realise [T, M] (eq. 2)."""
     p_ctrl = _p_ctrl(nominal, k1=[2.0, 3.0, 1.5], k2=[2.5, 3.5, 1.0])
     k1, k2, rho = np.array([2.0, 3.0, 1.5]), np.array([2.5, 3.5, 1.0]), GAINS["rho"]
     w_f, zeta_f = GAINS["w_f"], GAINS["zeta_f"]
@@ -322,16 +337,38 @@ def test_inner_law_by_hand(step, nominal, seed):
     Delta = mm["W_hat"].T @ _rbf(np.concatenate([m["v_e"], Omega_e]))
     f_a = -pq["Kr"] * Om / I - np.cross(Om, I * Om) / I
     u = (-k2 * z2 - Rr.T @ z1 - Delta[3:] - np.tanh(z2 / rho) * mm["zeta_hat"][3:]
-         + alpha_dot - nominal * f_a)
+         + alpha_dot - nominal * f_a - mm["d_hat"][3:])
     np.testing.assert_allclose(out["bs_z1"].ravel()[3:], z1, atol=1e-14)
     np.testing.assert_allclose(out["bs_z2"].ravel()[3:], z2, atol=1e-12)
     wrench = out["wrench"].ravel()
     np.testing.assert_allclose(wrench[1:] / I, u, rtol=1e-7, atol=1e-7)
-    d, cq = pq["arm"][0], pq["c"][0]
-    mix = np.array([[1, 1, 1, 1], [0, d, 0, -d], [-d, 0, d, 0], [cq, -cq, cq, -cq]])
-    rotors = np.linalg.solve(mix, wrench)
+    rotors = np.linalg.solve(_mix(), wrench)
     np.testing.assert_allclose(out["F_cmd"].ravel(), np.clip(rotors, 0, F_MAX), atol=1e-12)
-    assert out["limits"].ravel()[2] == np.sum((rotors < 0) | (rotors > F_MAX))
+    tol = 1e-5 * F_MAX                      # a rotor at its limit to roundoff is not clipped
+    assert out["limits"].ravel()[2] == np.sum((rotors < -tol) | (rotors > F_MAX + tol))
+
+
+def test_the_moments_come_first_and_the_thrust_takes_what_they_leave(step):
+    """Level deck, at rest 1.5 m below the reference (a climb: |t_E| = 25.6 N) and rolled
+    -0.15 rad from a level command: the roll moment needs rotor 2 near F_max, so the
+    collective thrust drops to 4 (F_max - max m_i) and the rotors make the moments
+    exactly, none clipped."""
+    y = LANDING_MEASUREMENT.pack(dict(
+        p_e=[0.0, 0.0, 1.5], v_e=np.zeros(3), eta1=[-0.15, 0.0, 0.4], Omega1=np.zeros(3),
+        eta2=[0.0, 0.0, 0.4], v2E=np.zeros(3), a2E=np.zeros(3), w2E=np.zeros(3),
+        w2E_dot=np.zeros(3)))
+    ref = POSITION_REFERENCE.pack(dict(p_ref=[0.0, 0.0, 3.0], v_ref=np.zeros(3),
+                                       a_ref=np.zeros(3)))
+    out = _call(step, y, ref, landing_memory(L_NODES).zeros(), _p_ctrl(1.0), P_QUAD, P_ACT,
+                0.004)
+    wrench = out["wrench"].ravel()
+    share = np.linalg.solve(_mix(), np.r_[0.0, wrench[1:]])
+    t_E = M1 * rotation([0.0, 0.0, 0.4]) @ out["a_des"].ravel()
+    assert out["limits"].ravel()[:2].tolist() == [0, 0]            # no thrust or tilt limit
+    assert wrench[0] < np.linalg.norm(t_E) - 1.0                   # the thrust gave way
+    np.testing.assert_allclose(wrench[0], 4 * (F_MAX - np.max(share)), rtol=1e-12)
+    assert out["limits"].ravel()[2] == 0
+    np.testing.assert_allclose(_mix() @ out["F_cmd"].ravel(), wrench, rtol=1e-12, atol=1e-12)
 
 
 # ---------------------------------------------------------------- memory over dt
@@ -380,6 +417,15 @@ def test_memory_update_is_the_exact_solution(step, seed):
     sol = solve_ivp(comp, (0, dt), np.concatenate([mm["xi1"], mm["xi2"]]), method="DOP853",
                     rtol=1e-13, atol=1e-15).y[:, -1]
     np.testing.assert_allclose(np.concatenate([nxt["xi1"], nxt["xi2"]]), sol, atol=1e-13)
+
+    # bias estimates: d_hat' = k z2 (outer on z2_bar; inner frozen while a rotor clips),
+    # then each clipped to its box
+    clipped = out["limits"].ravel()[2] > 0
+    rate = np.concatenate([np.array(GAINS["ki_p"]) * z2[:3],
+                           np.array(GAINS["ki"]) * z2[3:] * (not clipped)])
+    box = np.repeat([GAINS["d_max_p"], GAINS["d_max"]], 3)
+    np.testing.assert_allclose(nxt["d_hat"], np.clip(mm["d_hat"] + dt * rate, -box, box),
+                               atol=1e-14)
 
 
 # ---------------------------------------------------------------- closed loop

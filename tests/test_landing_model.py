@@ -35,7 +35,7 @@ ACC6 = relative6_acceleration_function()
 DEG = np.pi / 180
 TAU_M, F_MAX, GEAR = 0.05, 10.0, 0.2
 P_ACT = ACTUATOR.pack(dict(motor_time_constant=TAU_M, F_max=F_MAX, gear_height=GEAR,
-                           **NO_AERO))
+                           rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3, **NO_AERO))
 
 
 # ---------------------------------------------------------------- references (NumPy)

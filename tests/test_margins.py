@@ -312,11 +312,11 @@ def test_landing_report_is_the_same_review(landing):
     assert landing.sampled.computation_delay_periods == 1
     assert landing.sampled.computation_delay_s == pytest.approx(0.004)
     # the plant has 16 states (deck frame, motors), the controller the step's memory
-    # (6 l + 16) and, sampled, the four held commands of the delay
+    # (6 l + 22) and, sampled, the four held commands of the delay
     assert landing.models.plant.nstates == 16
-    assert landing.models.controller.nstates == 6 * 3 + 16
-    assert landing.sampled_models.controller.nstates == 6 * 3 + 16 + 4
-    assert landing.continuous.poles.count == 16 + 6 * 3 + 16
+    assert landing.models.controller.nstates == 6 * 3 + 22
+    assert landing.sampled_models.controller.nstates == 6 * 3 + 22 + 4
+    assert landing.continuous.poles.count == 16 + 6 * 3 + 22
     # sampling and the delay cost phase in every loop
     for m in landing.sampled.loops:
         assert m.phase_margin_deg < landing.continuous.loop(m.name).phase_margin_deg

@@ -166,7 +166,7 @@ def test_output_is_the_relative_state_of_symbolic_landing_relative(values, seed)
     p_veh = values.p_veh.copy()
     p_veh[VEHICLE.slice("tau")] = rng.normal(size=3) * [50, 30, 20]
     p_act = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=10.0, gear_height=0.2,
-                               **NO_AERO))
+                               rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3, **NO_AERO))
     x1q = np.concatenate([rng.normal(size=3) + [0, 0, 4], rng.uniform(-0.5, 0.5, 3),
                           rng.normal(size=3), rng.normal(size=3), rng.uniform(0, 10, 4)])
     xv = np.concatenate([rng.normal(size=2) * 5, rng.uniform(-3, 3, 1), rng.normal(size=2) * 2,

@@ -80,7 +80,7 @@ def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
         "p_quad": QUADROTOR.pack(dict(m1=M1, I=[0.025, 0.025, 0.045], Kt=KT,
                                       Kr=[0.001] * 3, g=G, arm=0.25, c=0.05)),
         "p_act": ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=20.0, gear_height=0.2,
-                                    **NO_AERO)),
+                                    rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3, **NO_AERO)),
         "p_veh": VEHICLE.pack(dict(m11=1500, m22=1500, m33=2500, d11=150, d22=1500, d33=2500,
                                    tau=[150 * u2_hold, 0, 0], z2=0)),
         "p_deck": pack_deck(deck),

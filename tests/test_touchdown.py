@@ -75,7 +75,7 @@ def _params():
     quad = QUADROTOR.pack(dict(m1=2.0, I=[1.2416, 1.2416, 2.4832], Kt=np.zeros(3),
                                Kr=np.zeros(3), g=G, arm=0.25, c=0.05))
     act = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=10.0, gear_height=GEAR,
-                             **NO_AERO))
+                             rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3, **NO_AERO))
     veh = VEHICLE.pack(dict(m11=100, m22=100, m33=80, d11=100, d22=100, d33=80,
                             tau=np.zeros(3), z2=0.0))
     return LANDING_PLANT_PARAMS.pack(dict(p_quad=quad, p_act=act, p_veh=veh, p_deck=deck,

@@ -110,6 +110,11 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "drag_quadratic": _DRAG_QUADRATIC,
         "rotor_radius": Field(F, "m", "rotor radius R of the ground effect (Cheeseman-Bennett; "
                               "0: none)", lo=0.0, hi=10.0),
+        "rotor_efficiency": Field(F, "-", "force each rotor makes per newton commanded (1: as "
+                                  "the controller models it; a damaged rotor less)", 4, lo=0.0,
+                                  hi=2.0),
+        "cg_offset": Field(F, "m", "centre of gravity from the rotors' centre, body axes (the "
+                           "controller assumes it centred)", 3, lo=-1.0, hi=1.0),
     },
     "vehicle": {**{k: PAPER_SCHEMA["vehicle"][k] for k in ("m11", "m22", "m33", "d11", "d22",
                                                      "d33", "tau")},
@@ -142,6 +147,14 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "k2p": Field(F, "1/s", "outer k2: deck-frame x, y, z", 3, hi=1e3, **_POS),
         "k1": Field(F, "1/s", "inner k1: roll, pitch, yaw", 3, hi=1e3, **_POS),
         "k2": Field(F, "1/s", "inner k2: roll, pitch, yaw", 3, hi=1e3, **_POS),
+        "ki_p": Field(F, "1/s^2", "outer bias adaptation (integral action): deck-frame x, y, z; "
+                      "0: none", 3, lo=0.0, hi=1e3),
+        "ki": Field(F, "1/s", "inner bias adaptation (integral action): roll, pitch, yaw; 0: none",
+                    3, lo=0.0, hi=1e3),
+        "bias_max_p": Field(F, "m/s^2", "projection bound of each outer bias estimate", lo=0.0,
+                            hi=1e3),
+        "bias_max": Field(F, "rad/s^2", "projection bound of each inner bias estimate", lo=0.0,
+                          hi=1e4),
         **{k: PAPER_SCHEMA["controller"][k] for k in ("gamma1", "gamma2", "k_w", "k_zeta", "rho",
                                                 "nominal_model")},
         "filter_frequency": Field(F, "rad/s", "command filter w_f", hi=1e4, **_POS),

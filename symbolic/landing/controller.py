@@ -19,6 +19,8 @@ The design is docs/landing.md's "The controller"; its choices are in
    ``xi1' = -k1p xi1 + xi2``, ``xi2' = -k2p xi2 - xi1 + delta`` and the
    adaptive laws and the robust term of the outer channels see
    ``z2_bar = z2 - xi2``, so that they do not learn the limits.
+   The bias estimates ``d_hat`` (integral action, docs/landing.md "Integral
+   action") enter ``a_des`` and the inner law as ``- d_hat``.
 4. **Command filter** per attitude command: ``x'' = w_f^2 (c - x) - 2 zeta_f
    w_f x'``; its state at ``t_k`` is the inner loop's ``e1d``, ``e1d_dot``
    and ``e1d_ddot = x''``.
@@ -27,11 +29,15 @@ The design is docs/landing.md's "The controller"; its choices are in
    (:func:`quadland_symbolic.backstepping.virtual_control` for eq. 14, 18); moments
    ``M = I u``; with ``nominal_model = 1`` the drag and gyroscopic terms
    (:func:`quadland_symbolic.relative.nominal_drift`) are fed forward.
-6. **Rotors**: ``[T, M]`` through the mixer's inverse, clipped to ``[0, F_max]``.
+6. **Rotors**: ``T`` moved into the band where every rotor can make its share of
+   the moments (attitude priority), then ``[T, M]`` through the mixer's
+   inverse, clipped to ``[0, F_max]``; the compensator's ``delta`` uses this ``T``.
 7. **Memory** over ``dt`` with the measurements held: the adaptive laws of
    eq. (22) for all six channels, the filter and the compensator, each
    integrated exactly (the latter two by the 2x2 matrix exponential,
-   :func:`linear2_zoh`).
+   :func:`linear2_zoh`); the bias estimates ``d_hat' = ki_p z2_bar`` (outer)
+   and ``ki z2`` (inner, stopped while a rotor is clipped), projected onto
+   ``|d_hat_i| <= d_max``.
 
 The network: ``W_hat`` is ``l x 6`` (deck-frame x, y, z; body roll, pitch,
 yaw), its input ``vartheta = [v_e, Omega_e]`` (:data:`NETWORK_INPUT_DIM`).
@@ -46,8 +52,14 @@ import casadi as ca
 from quadland_symbolic.backstepping import virtual_control
 from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
 from quadland_symbolic.landing.attitude import thrust_attitude
+from quadland_symbolic.landing.bias import bias_next
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
+from quadland_symbolic.landing.desaturation import (
+    clip_forces,
+    clipped_count,
+    thrust_within_moments,
+)
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_CUES,
     GUIDANCE_PARAMS,
@@ -133,6 +145,12 @@ def landing_controller_params(l: int) -> Layout:
         Field("w_f", 1, "rad/s", "command filter natural frequency"),
         Field("zeta_f", 1, "-", "command filter damping ratio"),
         Field("tilt_max", 1, "rad", "largest tilt of the thrust axis, below pi/2"),
+        Field("ki_p", 3, "1/s^2", "outer bias adaptation gain: d_hat_p' = ki_p z2_bar",
+              elements=tuple(f"ki_p_{a}" for a in xyz)),
+        Field("ki", 3, "1/s", "inner bias adaptation gain: d_hat_a' = ki z2",
+              elements=tuple(f"ki_{a}" for a in att)),
+        Field("d_max_p", 1, "m/s^2", "projection bound of each outer bias estimate"),
+        Field("d_max", 1, "rad/s^2", "projection bound of each inner bias estimate"),
         Field("centers", NETWORK_INPUT_DIM * l, "-",
               "RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e])",
               shape=(NETWORK_INPUT_DIM, l)),
@@ -155,6 +173,9 @@ def landing_memory(l: int) -> Layout:
               elements=("xi1_x", "xi1_y", "xi1_z")),
         Field("xi2", 3, "m/s", "saturation compensator, velocity (deck frame)",
               elements=("xi2_x", "xi2_y", "xi2_z")),
+        Field("d_hat", N_CHANNELS, _CHANNEL_UNITS,
+              "bias estimates (integral action): deck-frame x, y, z; body roll, pitch, yaw",
+              elements=tuple(f"d_hat_{i + 1}" for i in range(N_CHANNELS))),
     ), "landing controller memory")
 
 
@@ -187,13 +208,6 @@ def landing_step_outputs(l: int) -> Layout:
         Field("limits", 3, "-", "thrust limited (0/1), tilt limited (0/1), clipped rotors",
               elements=("thrust_limited", "tilt_limited", "n_clipped")),
     ), "results of landing_step")
-
-
-
-
-
-
-
 
 
 # ---------------------------------------------------------------- deck kinematics
@@ -264,12 +278,6 @@ def known_acceleration(p_e, v_e, eta1, eta2, v2E, a2E, w2E, w2E_dot, p_quad, Kq=
 
 # ---------------------------------------------------------------- the law
 
-def _clip(F, F_min, F_max):
-    """Clip finite forces; a NaN or an infinity passes through, never hidden by a limit."""
-    return ca.if_else(ca.logic_and(F < F_min, F > -ca.inf), F_min,
-                      ca.if_else(ca.logic_and(F > F_max, F < ca.inf), F_max, F))
-
-
 def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     """The step's expressions, a dict keyed by :func:`landing_step_outputs`' names.
 
@@ -312,10 +320,9 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     f_g, f_r = known_acceleration(p_e, v_e, eta1, eta2, ms["v2E"], ms["a2E"], ms["w2E"],
                                   ms["w2E_dot"], p_quad, act["drag_quadratic"])
     a_des = (-k2p * z2p - z1p - Delta_hat[_POSITION] - squash_p * zeta_hat[_POSITION] + alpha_p_dot
-             - f_g - nominal * f_r)                                            # eq. 20
+             - f_g - nominal * f_r - mm["d_hat"][_POSITION])                   # eq. 20, bias
     t_E = m1 * R_deck @ a_des                                                  # N, in E
     th = thrust_attitude(t_E, eta2[2], c["tilt_max"], 4 * act["F_max"])
-    delta = R_deck.T @ (th["T"] * th["b3"] - t_E) / m1                         # limits' shortfall
 
     # command filter: its state at t_k is the inner loop's reference
     eta_c = ca.vertcat(th["phi"], th["theta"])
@@ -327,17 +334,23 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     e1d_ddot = ca.vertcat(eta_f_ddot, eta2_ddot[2])
 
     z1a, z2a, squash_a, u_a = _inner_loop(eta1, Omega1, (e1d, e1d_dot, e1d_ddot), c,
-                                          Delta_hat[_ATTITUDE], zeta_hat[_ATTITUDE], p_quad)
+                                          Delta_hat[_ATTITUDE] + mm["d_hat"][_ATTITUDE],
+                                          zeta_hat[_ATTITUDE], p_quad)
 
-    # rotors
-    wrench = ca.vertcat(th["T"], q["I"] * u_a)
+    # rotors: the moments first, the collective thrust within what they leave
+    T = thrust_within_moments(th["T"], q["I"] * u_a, p_quad, act["F_max"])
+    delta = R_deck.T @ (T * th["b3"] - t_E) / m1                               # limits' shortfall
+    wrench = ca.vertcat(T, q["I"] * u_a)
     unclipped = rotors_from_wrench(wrench, p_quad)
-    F_cmd = _clip(unclipped, 0, act["F_max"])
-    n_clipped = ca.sum1(unclipped < 0) + ca.sum1(unclipped > act["F_max"])
+    F_cmd = clip_forces(unclipped, 0, act["F_max"])
+    n_clipped = clipped_count(unclipped, act["F_max"])
 
     # memory over dt, measurements held
     mem_next = _memory_next(mm, c, Psi, ca.vertcat(z2p_bar, z2a), ca.vertcat(squash_p, squash_a),
                             delta, eta_f_next, eta_f_dot_next, dt)
+    mem_next = ca.vertcat(mem_next, bias_next(mm["d_hat"], ca.vertcat(c["ki_p"], c["ki"]),
+                                              c["d_max_p"], c["d_max"],
+                                              ca.vertcat(z2p_bar, z2a), n_clipped, dt))
 
     return dict(
         F_cmd=F_cmd, wrench=wrench, eta_c=ca.vertcat(eta_c, eta2[2]),

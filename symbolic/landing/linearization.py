@@ -202,12 +202,22 @@ def hover_linearization_function(l: int) -> ca.Function:
                        ["z", "mem", "v2", "w", "pp", "pm", "p_ctrl", "ref", "dt"], names)
 
 
+def _bias_pinned(l, mem, mem_dot, p_ctrl):
+    """``mem_dot`` with each bias estimate whose gain is zero pinned at zero instead: its
+    rate is then identically zero, which would leave the estimate undetermined."""
+    lay, c = landing_memory(l), landing_controller_params(l).unpack(p_ctrl)
+    rows = lay.slice("d_hat")
+    gains = ca.vertcat(c["ki_p"], c["ki"])
+    pinned = ca.if_else(gains == 0, mem[rows], mem_dot[rows])
+    return ca.vertcat(mem_dot[:rows.start], pinned, mem_dot[rows.stop:])
+
+
 @functools.cache
 def hover_equilibrium_residual_function(l: int) -> ca.Function:
     """Residual and exact Jacobian of the landing loop's steady hover.
 
     ``hover_equilibrium_residual(xi, w, pp, pm, p_ctrl, ref) -> (F, dF)`` with
-    unknowns ``xi = [z (16), mem (6 l + 16), u2, v2, r2]`` and residual
+    unknowns ``xi = [z (16), mem (6 l + 22), u2, v2, r2]`` and residual
     ``F = [z_dot, mem_dot, (u2, v2, r2)_dot]``: the vehicle in its steady
     motion (eq. 4), the quadrotor at rest in the deck frame, the memory at
     rest. The step integrates its memory exactly with the measurement held,
@@ -219,7 +229,8 @@ def hover_equilibrium_residual_function(l: int) -> ca.Function:
     u, mem_next = _law(l, y, z, mem, v2, pp, pm, p_ctrl, ref, dt)
     xv_dot = VEHICLE_STATE.unpack(vehicle_rhs(hover_vehicle(v2),
                                               LANDING_PLANT_PARAMS.unpack(pp)["p_veh"]))
-    F = ca.vertcat(hover_plant_rhs(z, u, v2, w, pp), _memory_rate(mem_next, dt),
+    mem_dot = _bias_pinned(l, mem, _memory_rate(mem_next, dt), p_ctrl)
+    F = ca.vertcat(hover_plant_rhs(z, u, v2, w, pp), mem_dot,
                    *[xv_dot[n] for n in VEHICLE_SPEEDS.names()])
     xi = ca.vertcat(z, mem, v2)
     return ca.Function("hover_equilibrium_residual", [xi, w, pp, pm, p_ctrl, ref],

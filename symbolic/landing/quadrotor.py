@@ -46,7 +46,11 @@ ACTUATOR = Layout("p_act", (
           "(quadland_symbolic.landing.aero)", elements=("Kq1", "Kq2", "Kq3")),
     Field("rotor_radius", 1, "m", "rotor radius R of the ground effect (0: none)"),
     Field("air_density", 1, "kg/m^3", "air density rho of the ground effect's induced velocity"),
-), "actuator, landing-gear and aerodynamic constants")
+    Field("rotor_efficiency", 4, "-", "force each rotor makes per newton commanded (1: as "
+          "modelled; a damaged rotor less)", elements=tuple(f"eff_{n}" for n in _ROTOR_NAMES)),
+    Field("cg_offset", 3, "m", "centre of gravity from the rotors' centre, body axes (0: "
+          "centred)", elements=("cg_x", "cg_y", "cg_z")),
+), "actuator, landing-gear and aerodynamic constants, and the airframe's departures from its model")
 
 #: The rotor force commands, the plant's control input.
 COMMAND = Layout("F_cmd", (
@@ -70,15 +74,23 @@ def quadrotor6_rhs(x1q, F_cmd, d_F, d_M, p_quad, p_act):
     ``p1_dot = R(eta1) V1`` (eq. 1, all three rows: its last is J V1);
     ``eta1_dot``, ``V1_dot``, ``Omega1_dot`` are eq. (1)-(2) with the wrench
     of the actual rotor forces through the mixer;
-    ``F_dot = (sat(F_cmd) - F) / tau_m``. ``d_F``, ``d_M``: body frame.
+    ``F_dot = (e sat(F_cmd) - F) / tau_m`` with each rotor's efficiency ``e``
+    (1 as modelled). A centre of gravity ``r`` off the rotors' centre (body
+    axes) adds the thrust's moment about it, ``-r x T e_z = T [-r_y, r_x, 0]``
+    (the inertia and the drag's point of action are left as they are).
+    ``d_F``, ``d_M``: body frame.
     """
-    x = QUAD6_STATE.unpack(x1q)
+    x, act = QUAD6_STATE.unpack(x1q), ACTUATOR.unpack(p_act)
     p1, eta1, V1, Omega1, F = x["p1"], x["eta1"], x["V1"], x["Omega1"], x["F"]
-    tau_m = ACTUATOR.unpack(p_act)["motor_time_constant"]                # s
+    tau_m = act["motor_time_constant"]                                    # s
     wrench = wrench_from_rotors(F, p_quad)                                # under eq. 2
-    xq_dot = quadrotor_rhs(ca.vertcat(p1[2], eta1, V1, Omega1), wrench, d_F, d_M, p_quad)
+    # thrust T e_z acts at the rotors' centre, r from the centre of gravity: + (-r) x T e_z
+    r = act["cg_offset"]
+    d_M_cg = wrench[0] * ca.vertcat(-r[1], r[0], 0)
+    xq_dot = quadrotor_rhs(ca.vertcat(p1[2], eta1, V1, Omega1), wrench, d_F, d_M + d_M_cg,
+                           p_quad)
     p1_dot = rotation(eta1) @ V1                                          # eq. 1
-    F_dot = (saturate(F_cmd, p_act) - F) / tau_m                          # motor lag
+    F_dot = (act["rotor_efficiency"] * saturate(F_cmd, p_act) - F) / tau_m  # motor lag
     return ca.vertcat(p1_dot, xq_dot[1:], F_dot)
 
 

@@ -199,22 +199,44 @@ def _continuation(residual_at, xi, tol: float, max_iter: int, steps: int = 64):
 
 
 def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
+    """The Jacobians at the point, without the memory's bias estimates whose gain is zero:
+    constant, they are modes at rest that no measurement moves."""
     hv = _hover_values(scenario)
     out = hover_linearization_function(hv.l)(point.xr, point.xc, point.vehicle, point.w, hv.pp,
                                              hv.pm, hv.p_ctrl, hv.ref, dt)
-    return dict(zip(("A_p", "B_p", "C_p", "A_c", "B_c", "Phi_c", "Gamma_c", "C_c", "D_c"),
-                    (np.asarray(v, dtype=float) for v in out[3:]), strict=True))
+    J = dict(zip(("A_p", "B_p", "C_p", "A_c", "B_c", "Phi_c", "Gamma_c", "C_c", "D_c"),
+                 (np.asarray(v, dtype=float) for v in out[3:]), strict=True))
+    keep = _kept_memory(hv.l, hv.p_ctrl)
+    for name in ("A_c", "Phi_c"):
+        J[name] = J[name][np.ix_(keep, keep)]
+    for name in ("B_c", "Gamma_c"):
+        J[name] = J[name][keep, :]
+    J["C_c"] = J["C_c"][:, keep]
+    return J
+
+
+def _kept_memory(l: int, p_ctrl: np.ndarray) -> np.ndarray:
+    """Indices of the memory the linear models keep: all but the zero-gain bias estimates."""
+    lay, c = landing_memory(l), landing_controller_params(l).unpack(p_ctrl)
+    rows = lay.slice("d_hat")
+    pinned = rows.start + np.flatnonzero(np.concatenate([c["ki_p"], c["ki"]]) == 0)
+    return np.setdiff1d(np.arange(lay.size), pinned)
+
+
+def _p_ctrl(scenario: Scenario) -> np.ndarray:
+    return _hover_values(scenario).p_ctrl
 
 
 def _landing_nodes(memory_size: int) -> int:
-    """The node count l of a landing step's memory of ``6 l + 16`` entries."""
+    """The node count l of a landing step's memory of ``6 l + 22`` entries."""
     return (memory_size - landing_memory(1).size) // N_CHANNELS + 1
 
 
-def _landing_names(l: int):
+def _landing_names(l: int, p_ctrl: np.ndarray):
+    names = landing_memory(l).element_names()
     return dict(x=list(HOVER_PLANT.element_names()), y=list(HOVER_OUTPUT.element_names()),
-                u=list(LANDING_INPUT_NAMES), c=list(landing_memory(l).element_names()),
-                loops=LANDING_LOOP_NAMES)
+                u=list(LANDING_INPUT_NAMES),
+                c=[names[i] for i in _kept_memory(l, p_ctrl)], loops=LANDING_LOOP_NAMES)
 
 
 def hover_linear_models(scenario: Scenario, point: OperatingPoint) -> LinearModels:
@@ -226,7 +248,7 @@ def hover_linear_models(scenario: Scenario, point: OperatingPoint) -> LinearMode
     """
     J = _hover_jacobians(scenario, point, 0.0)
     return assemble(point, J["A_p"], J["B_p"], J["C_p"], J["A_c"], J["B_c"], J["C_c"],
-                    J["D_c"], 0.0, _landing_names(_landing_nodes(point.xc.size)))
+                    J["D_c"], 0.0, _landing_names(_landing_nodes(point.xc.size), _p_ctrl(scenario)))
 
 
 def hover_sampled_models(scenario: Scenario, point: OperatingPoint, rate_hz: float,
@@ -242,4 +264,5 @@ def hover_sampled_models(scenario: Scenario, point: OperatingPoint, rate_hz: flo
     Phi_p, Gam_p = zoh(J["A_p"], J["B_p"], dt)
     K = delayed(J["Phi_c"], J["Gamma_c"], J["C_c"], J["D_c"], delay_periods)
     return assemble(point, Phi_p, Gam_p, J["C_p"], *K, dt,
-                    _landing_names(_landing_nodes(point.xc.size)), delay_periods)
+                    _landing_names(_landing_nodes(point.xc.size), _p_ctrl(scenario)),
+                    delay_periods)

@@ -99,7 +99,7 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict
     """The controller's own model as plant parameters: ``[controller_model]``'s mass,
     inertia, drag, motor lag and rotor limit; the geometry (gravity, arm, rotor drag
     factor, gear) and the vehicle's and the deck's parameters (its sensors' models)
-    are the plant's."""
+    are the plant's; its rotors are whole and its centre of gravity centred."""
     q, cm = d["quadrotor"], d["controller_model"]
     return LANDING_PLANT_PARAMS.pack(dict(
         p_quad=QUADROTOR.pack(dict(
@@ -110,7 +110,8 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict
             motor_time_constant=cm["motor_time_constant"],
             F_max=cm["thrust_to_weight"] * cm["mass"] * q["gravity"] / 4,
             gear_height=q["gear_height"], drag_quadratic=cm["drag_quadratic"],
-            rotor_radius=q["rotor_radius"], air_density=d["wind"]["air_density"])),
+            rotor_radius=q["rotor_radius"], air_density=d["wind"]["air_density"],
+            rotor_efficiency=np.ones(4), cg_offset=np.zeros(3))),
         p_veh=p_veh, p_deck=p_deck, **gear))
 
 
@@ -133,7 +134,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
     p_act = ACTUATOR.pack(dict(motor_time_constant=q["motor_time_constant"], F_max=F_max,
                                gear_height=q["gear_height"], drag_quadratic=q["drag_quadratic"],
                                rotor_radius=q["rotor_radius"],
-                               air_density=d["wind"]["air_density"]))
+                               air_density=d["wind"]["air_density"],
+                               rotor_efficiency=q["rotor_efficiency"], cg_offset=q["cg_offset"]))
     p_veh = VEHICLE.pack(dict(m11=v["m11"], m22=v["m22"], m33=v["m33"], d11=v["d11"],
                               d22=v["d22"], d33=v["d33"], tau=v["tau"], z2=0.0))
     p_deck = deck_params(scenario)
@@ -151,6 +153,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         gamma2=c["gamma2"], k_w=c["k_w"], k_zeta=c["k_zeta"], rho=c["rho"],
         nominal_model=float(c["nominal_model"]), w_f=c["filter_frequency"],
         zeta_f=c["filter_damping"], tilt_max=c["tilt_max_deg"] * deg,
+        ki_p=c["ki_p"], ki=c["ki"], d_max_p=c["bias_max_p"], d_max=c["bias_max"],
         centers=np.tile(centers, (lay["centers"].shape[0], 1)), widths=np.full(l, r["width"])))
     p_guid = GUIDANCE_PARAMS.pack(dict(
         hover_height=g["hover_height"], align_radius=g["align_radius"],

@@ -1,0 +1,50 @@
+"""Attitude priority at the rotors: the collective thrust gives way to the moments.
+
+Rotor ``i`` makes ``T / 4 + m_i`` (eq. 2's mixer), ``m_i`` its share of the moments
+``M``. A rotor clipped at 0 or ``F_max`` loses its share, and the attitude with it;
+the thrust is the one quantity the moments do not need. PX4's mixer desaturates the
+same way (docs/landing.md, "Limits").
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from quadland_symbolic.quadrotor import rotors_from_wrench
+
+__all__ = ["thrust_within_moments", "clip_forces", "clipped_count"]
+
+
+def thrust_within_moments(T, M, p_quad, F_max):
+    """``T`` moved into the band where every rotor can make its share of ``M``.
+
+    The band is ``[4 max(-m_i), 4 (F_max - max m_i)]``; where it is empty (moments
+    beyond the rotors) its upper end is taken, and the result is never below 0.
+
+    Parameters
+    ----------
+    T : casadi.SX
+        Collective thrust asked for, N.
+    M : casadi.SX, (3, 1)
+        Moments, N m.
+    p_quad : casadi.SX
+        :data:`~quadland_symbolic.parameters.QUADROTOR` (the mixer's arm and drag factor).
+    F_max : casadi.SX
+        Largest force of one rotor, N.
+    """
+    m = rotors_from_wrench(ca.vertcat(0, M), p_quad)
+    lo, hi = 4 * ca.mmax(-m), 4 * (F_max - ca.mmax(m))
+    return ca.fmax(ca.fmin(ca.fmax(T, lo), hi), 0)
+
+
+def clipped_count(F, F_max):
+    """Rotor commands beyond ``[0, F_max]`` by more than ``1e-5 F_max``: one the thrust's
+    band puts at a limit is not clipped, whatever its roundoff (float flight code)."""
+    tol = 1e-5 * F_max
+    return ca.sum1(F < -tol) + ca.sum1(F > F_max + tol)
+
+
+def clip_forces(F, F_min, F_max):
+    """Clip finite forces; a NaN or an infinity passes through, never hidden by a limit."""
+    return ca.if_else(ca.logic_and(F < F_min, F > -ca.inf), F_min,
+                      ca.if_else(ca.logic_and(F > F_max, F < ca.inf), F_max, F))
