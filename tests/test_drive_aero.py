@@ -26,6 +26,7 @@ from quadland_symbolic.landing.aero import aero_force
 from quadland_symbolic.landing.controller import LANDING_MEASUREMENT, known_acceleration
 from quadland_symbolic.landing.deck import DECK_PARAMS, vehicle_motion
 from quadland_symbolic.landing.drive import DRIVE_PARAMS, pack_drive
+from quadland_symbolic.landing.gear import GEAR_STATE
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
@@ -63,7 +64,8 @@ def _cruise_state(p, V, theta, z=100.0):
     x1q = QUAD6_STATE.pack(dict(p1=[0.0, 0.0, z], eta1=[0.0, theta, 0.0],
                                 V1=[c * V, 0.0, s * V], Omega1=np.zeros(3), F=np.full(4, T / 4)))
     xv = VEHICLE_STATE.pack(dict(x2=0, y2=0, psi2=0, u2=0, v2=0, r2=0))
-    return LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv)), np.full(4, T / 4)
+    return (LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(GEAR_STATE.size))),
+            np.full(4, T / 4))
 
 
 def _body_acceleration(xp, F, pp):
@@ -259,7 +261,7 @@ def test_the_law_feeds_forward_the_plants_quadratic_drag():
                                   p["p_deck"])).ravel()
         a_e, _ = relative6_acceleration(x1q, xv, t, np.zeros(4), np.concatenate([d_F, [0] * 3]),
                                         p["p_quad"], p["p_act"], p["p_veh"], p["p_deck"])
-        xp = np.concatenate([x1q, xv])
+        xp = np.concatenate([x1q, xv, np.zeros(GEAR_STATE.size)])
         m = LANDING_MEASUREMENT.unpack(np.array(measurement_function()(xp, t, pp)).ravel())
         f_g, f_r = (np.array(v).ravel() for v in known_acceleration(
             m["p_e"], m["v_e"], m["eta1"], m["eta2"], m["v2E"], m["a2E"], m["w2E"],

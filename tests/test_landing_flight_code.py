@@ -428,10 +428,10 @@ def test_pure_c_landing_is_quadland_simulates(examples, tree):
         assert report[key] == pytest.approx(want[key], rel=1e-9, abs=1e-9), key
     for key in ("aborts", "secured", "bounced", "tipped", "on_pad", "failures"):
         assert report[key] == want[key], key
-    # the highway lands and is secured; the quiet ship's heaving deck meets one foot at
-    # 0.04 m/s during the descent, too lightly to close the contact switch, and the
-    # quadrotor flies on: a touch and go, not a landing (the welded gear counted it one)
-    assert want["success"] == (name == "highway")
+    # both land and are secured (with issue 19's gains the quiet ship no longer brushes its
+    # heaving deck with one foot too lightly to close the contact switch, flying on as a
+    # touch and go, as it did before them)
+    assert want["success"]
     np.testing.assert_array_equal(c["t"], py["t"])
     np.testing.assert_array_equal(c["phase"], py["phase"])
     for column in header:
@@ -444,11 +444,14 @@ def test_pure_c_landing_is_quadland_simulates(examples, tree):
 
 @pytest.mark.slow
 def test_pure_c_landing_in_float_lands_alike(examples):
-    """The float build, plant included, lands within its limits near the double's figures."""
+    """The float build, plant included, lands within its limits near the double's figures.
+    The guidance's phase changes are decisions on whole control periods (4 ms): rounded in
+    float, one of them can fall a period from the double's (with issue 19's bias estimates
+    the descent starts one period apart, and the contact is 3.9 ms from the double's)."""
     _, c, report = _land(examples["highway"] / "land_float")
     _, _, double = _land(examples["highway"] / "land")
     assert report["success"] and report["aborts"] == double["aborts"] == 0
-    assert report["time"] == pytest.approx(double["time"], abs=2e-3)
+    assert report["time"] == pytest.approx(double["time"], abs=4e-3 + 1e-4)
     for key, tol in (("sink_rate", 2e-3), ("offset", 2e-3), ("relative_speed", 2e-3),
                      ("tilt_deg", 0.05)):
         assert report[key] == pytest.approx(double[key], abs=tol), key

@@ -5,10 +5,10 @@ rotors, a centred centre of gravity); each case makes the plant ([quadrotor],
 [disturbance]) differ from it on purpose, and ``highway`` is flown on its sensors at
 its default seed. The checks are the touchdown report's, against the scenario's limits.
 
-Two cases need a steady tilt beyond ``landing.max_tilt_deg`` (10 deg) by the force
-balance alone: no controller can hold the pad against a horizontal force ``F`` with
-its thrust tilted less than ``atan(F / (m g))``. Each test checks that premise by hand
-first, then lands with the tilt limit raised to 15 deg.
+No controller can hold the pad against a horizontal force ``F`` with its thrust tilted
+less than ``atan(F / (m g))``: each drag and side-force case checks that premise by hand
+against the scenario's limits first. With issue 18's drag, three times it cannot hold
+the highway car at any tilt allowed; on the ship it is feasible but not met yet.
 
 The bias estimates' effect is checked where it is exact: at the hover equilibrium a
 constant mismatch leaves no position error with them, and leaves one without.
@@ -29,8 +29,6 @@ from quadland_symbolic.parameters import QUADROTOR
 M, G = 2.0, 9.8
 #: highway's car speed, m/s (50 km/h): the quadrotor flies through still air at it.
 U_CAR = 50 / 3.6
-#: The tilt limit raised above the force balance's need, deg.
-WIDE_TILT = "landing.max_tilt_deg=15.0"
 
 
 def _lands(*overrides):
@@ -50,7 +48,8 @@ def test_a_weak_rotor_and_an_offset_centre_of_gravity_by_hand():
 
     def act(eff, r):
         return ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=9.8, gear_height=0.2,
-                                  rotor_efficiency=eff, cg_offset=r))
+                                  drag_quadratic=[0.0] * 3, rotor_radius=0.0,
+                                  air_density=1.225, rotor_efficiency=eff, cg_offset=r))
 
     F = np.array([4.0, 5.0, 6.0, 5.5])
     x = QUAD6_STATE.pack(dict(p1=[0, 0, 3], eta1=[0.05, -0.03, 0.2], V1=[1, 0.5, 0],
@@ -73,7 +72,7 @@ def test_a_weak_rotor_and_an_offset_centre_of_gravity_by_hand():
 # ---------------------------------------------------------------- integral action, exactly
 
 @pytest.mark.parametrize("case", ["controller_model.mass=2.4",
-                                  "quadrotor.drag_translational=[0.3, 0.3, 0.3]",
+                                  "quadrotor.drag_translational=[0.6, 0.6, 0.6]",
                                   "disturbance.force_bias=[0.0, 4.0, 0.0]"])
 def test_a_constant_mismatch_leaves_no_hover_error_with_the_bias_estimates(case):
     """At the hover equilibrium (the vehicle in its steady motion) the bias estimates'
@@ -103,20 +102,42 @@ def test_lands_with_the_centre_of_gravity_2_cm_off(offset):
     _lands(f"quadrotor.cg_offset={offset}")
 
 
-def test_lands_with_three_times_the_modelled_drag():
-    """Through still air at the car's 50 km/h, drag 0.3 N s/m needs the thrust tilted
-    atan(0.3 u / (m g)) = 12 deg to hold the pad: beyond the 10 deg contact limit."""
-    need = math.degrees(math.atan(0.3 * U_CAR / (M * G)))
-    assert need > load_scenario("highway")["landing.max_tilt_deg"]
-    _lands("quadrotor.drag_translational=[0.3, 0.3, 0.3]", WIDE_TILT)
+def _drag_lean_deg(Kt, Kq, u, side=0.0):
+    """deg: the steady tilt that holds the pad at airspeed u against the drag Kt u + Kq u^2
+    and a side force, by the force balance alone."""
+    return math.degrees(math.atan(math.hypot(Kt * u + Kq * u * u, side) / (M * G)))
+
+
+def test_three_times_the_drag_cannot_hold_the_highway_car_at_any_tilt_allowed():
+    """Issue 18's drag (Kt = 0.3 N s/m, Kq = 0.01225 N s^2/m^2) three times over, at the
+    car's 50 km/h: 19.6 N, a 45 deg lean, past the controller's 30 deg tilt limit. No
+    controller holds the pad there (the issue's case was three times the old 0.1 N s/m)."""
+    sc = load_scenario("highway")
+    Kt, Kq = sc["quadrotor.drag_translational"][0], sc["quadrotor.drag_quadratic"][0]
+    assert (Kt, Kq) == (0.3, 0.01225)
+    assert _drag_lean_deg(3 * Kt, 3 * Kq, U_CAR) == pytest.approx(45.0, abs=0.1)
+    assert _drag_lean_deg(3 * Kt, 3 * Kq, U_CAR) > sc["controller.tilt_max_deg"]
+
+
+@pytest.mark.xfail(strict=True, reason="ship, 3x drag: no touchdown in 120 s (11 descents "
+                   "aborted by the heave): not met yet")
+def test_lands_on_the_ship_with_three_times_the_modelled_drag():
+    """At the ship's 5 m/s three times the drag needs a 15 deg lean, inside its limits."""
+    sc = load_scenario("ship")
+    assert _drag_lean_deg(0.9, 0.03675, 5.0) < sc["landing.max_tilt_deg"]
+    rep = touchdown_report(quadland.simulate(load_scenario("ship", [
+        "quadrotor.drag_translational=[0.9, 0.9, 0.9]",
+        "quadrotor.drag_quadratic=[0.03675, 0.03675, 0.03675]"])))
+    assert rep.touchdown and rep.success, rep
 
 
 def test_lands_with_a_4_newton_steady_side_force():
-    """4 N sideways needs the thrust tilted atan(4 / (m g)) = 11.5 deg: beyond the 10 deg
-    contact limit."""
-    need = math.degrees(math.atan(4.0 / (M * G)))
-    assert need > load_scenario("highway")["landing.max_tilt_deg"]
-    _lands("disturbance.force_bias=[0.0, 4.0, 0.0]", WIDE_TILT)
+    """4 N sideways beside the 6.5 N of drag at 50 km/h needs a 21.3 deg lean: inside the
+    highway's 28.1 deg contact limit (the drag's own 18.1 deg plus 10)."""
+    sc = load_scenario("highway")
+    need = _drag_lean_deg(0.3, 0.01225, U_CAR, side=4.0)
+    assert need == pytest.approx(21.34, abs=0.01) and need < sc["landing.max_tilt_deg"]
+    _lands("disturbance.force_bias=[0.0, 4.0, 0.0]")
 
 
 # ---------------------------------------------------------------- the margins (item 2)
