@@ -224,6 +224,26 @@ def test_relative_position_limit_lines(limits):
         assert _limit_values(a) == []             # no line across the whole flight
 
 
+def test_no_legend_hides_a_touchdown_limit():
+    """Drawn, each axis' legend leaves the touchdown limit segments (the end of the
+    flight) in view: at "upper right" it covered highway's tilt limit (28.1 deg, near
+    the approach's 30) and its offset limit (review of issue 21). Here the tilt limit
+    sits near the top of its axis too, at 0.97 of the largest tilt, in the top right
+    corner."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    res = _landing()
+    tilt_limit = 0.97 * float(np.max(res["tilt_deg"]))
+    assert tilt_limit > np.max(res["tilt_deg"][res["t"] >= TOUCHDOWN])
+    fig = relative_position_plot(res, {**LIMITS, "max_tilt_deg": tilt_limit})
+    FigureCanvasAgg(fig).draw()
+    renderer = fig.canvas.get_renderer()
+    for a in fig.axes:
+        box = a.get_legend().get_window_extent(renderer)
+        for line in (ln for ln in a.lines if ln.get_gid() == "limit"):
+            assert not box.overlaps(line.get_window_extent(renderer)), line.get_label()
+
+
 def test_no_touchdown_no_touchdown_limits():
     res = _landing(duration=2.0, touchdown=10.0)
     for a in relative_position_plot(res, LIMITS).axes:

@@ -265,6 +265,22 @@ def test_poles_continuous_and_sampled(report, figures):
     assert zoom.get_xlim() == (-0.5, 0.05)
 
 
+def test_the_z_plane_title_tells_the_largest_pole_from_the_unit_circle(report, figures):
+    """The title's max |z| is closer to python-control's largest pole modulus than that
+    is to 1: a slow pole (here the adaptive ones) no longer reads "1.0000", as if on the
+    unit circle (review of issue 21: highway's 0.99996 did)."""
+    import re as regex
+
+    zd = control.feedback(report.sampled_models.loop_input, np.eye(4)).poles()
+    m = float(np.max(np.abs(zd)))
+    assert 0 < 1 - m < 1e-3                     # the case: within 1e-3 of the circle
+    title = figures["poles.png"].axes[2].get_title()
+    near = regex.search(r"max \|z\| = 1 ([-+]) ([0-9.e+-]+)$", title)
+    assert near is not None, title
+    shown = 1 + (1 if near.group(1) == "+" else -1) * float(near.group(2))
+    assert abs(shown - m) < 0.1 * abs(1 - m)
+
+
 @pytest.mark.slow
 def test_single_plots_equal_the_set(report, figures):
     for plot, name in ((bode_plot, "bode.png"), (nyquist_plot, "nyquist.png"),

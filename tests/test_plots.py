@@ -130,6 +130,36 @@ def test_two_runs_overlay_on_one_figure(result, plot):
         np.testing.assert_array_equal(a.lines[n].get_xdata(), other["t"])
 
 
+@pytest.mark.parametrize("plot", [relative_errors_plot, velocity_errors_plot,
+                                  control_inputs_plot, uncertainty_plot])
+def test_two_runs_of_one_scenario_keep_their_own_legend_names(result, plot):
+    """Two runs of one scenario (other gains, say) overlaid: ``label=`` names each in
+    the legend; without it both were the scenario's name, "paper" twice (review of
+    issue 21)."""
+    other = quadland.simulate(quadland.load_scenario(
+        "paper", ["simulation.duration=0.3", "controller.k1=[1.5, 5.0, 10.0, 10.0]"]))
+    fig = plot(result, label="k1_z = 3")
+    plot(other, ax=fig.axes, label="k1_z = 1.5")
+    legends = [a.get_legend() for a in fig.axes if a.get_legend() is not None]
+    assert fig.axes[0].get_legend() in legends      # Fig. 5's legend is on its first axis
+    for legend in legends:
+        names = [t.get_text() for t in legend.get_texts()]
+        mine = [n for n in names if "k1_z = 1.5" in n]
+        theirs = [n for n in names if "k1_z = 3" in n]
+        assert mine and theirs and len(mine) == len(theirs), names
+    # by default a run is still named after its scenario
+    fig = plot(result)
+    plot(other, ax=fig.axes)
+    assert any("paper" in t.get_text() for t in fig.axes[0].get_legend().get_texts())
+
+
+def test_a_labelled_ground_track_overlay(result):
+    fig = ground_track_plot(result, label="first")
+    ground_track_plot(result, ax=fig.axes[0], label="second")
+    labels = [ln.get_label() for ln in fig.axes[0].lines]
+    assert labels.count("quadrotor (first)") == 1 and labels.count("quadrotor (second)") == 1
+
+
 def test_two_ground_tracks_overlay(result):
     fig = ground_track_plot(result)
     assert ground_track_plot(result, ax=fig.axes[0]) is fig

@@ -323,3 +323,25 @@ def test_the_landing_cross_key_rules_name_the_key(override, message):
     assert str(err.value) == message
     load_scenario("highway", ["landing.search_height=3.0", "landing.marker_timeout=0.04",
                               "estimator.gate_lockout=1"])     # the edges are admitted
+
+
+def test_no_key_description_points_to_docs_an_install_lacks():
+    """A key's description reaches the user in "missing key ..." errors, from an installed
+    package that ships no docs/ folder: none may send them to docs/*.md (review of issue
+    21: gear.welded and sensors.gnss.rtk did)."""
+    from quadland.schema import SCHEMAS
+
+    cites = [f"{model}: {section}.{key}" for model, schema in SCHEMAS.items()
+             for section, fields in schema.items() for key, field in fields.items()
+             if "docs/" in field.doc or ".md" in field.doc]
+    assert cites == []
+
+
+def test_a_missing_key_error_names_no_docs_file(tmp_path):
+    text = (SCENARIO_DIR / "highway.toml").read_text()
+    path = tmp_path / "nowelded.toml"
+    path.write_text("\n".join(ln for ln in text.splitlines() if not ln.startswith("welded")))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert str(info.value).startswith(f"{path}: missing key gear.welded (true: the idealization")
+    assert "docs/" not in str(info.value)

@@ -169,7 +169,7 @@ def _touchdown_lines(ax, result: LandingResult, values, label: str, ls: str = ":
 
 def _finish_time(fig: Figure, result: LandingResult, axes) -> Figure:
     for a in axes:
-        a.legend(loc="upper right", fontsize="small")
+        a.legend(loc="best", fontsize="small")    # clear of the touchdown limits at the end
     finish(fig, result, axes)
     fig.subplots_adjust(top=1 - 0.8 / fig.get_figheight())    # room for the phase legend
     return fig

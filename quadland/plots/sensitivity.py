@@ -97,6 +97,15 @@ def sigma_plot(report: MarginReport, ax=None) -> Figure:
     return fig
 
 
+def _modulus(m: float) -> str:
+    """``m`` as a title shows it: within 1e-3 of the unit circle as ``1 - d`` (or ``1 + d``),
+    so that a slow pole's ``0.99996`` does not read ``1.0000``."""
+    d = 1.0 - float(m)
+    if 0 < abs(d) < 1e-3:
+        return f"1 {'-' if d > 0 else '+'} {abs(d):.2g}"
+    return f"{m:.4f}"
+
+
 def pole_plot(report: MarginReport, ax=None) -> Figure:
     """Map of the closed loop's poles, continuous and sampled.
 
@@ -149,7 +158,7 @@ def pole_plot(report: MarginReport, ax=None) -> Figure:
         a.set_aspect("equal")
         a.set_xlabel("Re z")
         a.set_ylabel("Im z")
-        a.set_title(f"sampled loop in the z-plane, max |z| = {np.max(np.abs(z)):.4f}")
+        a.set_title(f"sampled loop in the z-plane, max |z| = {_modulus(np.max(np.abs(z)))}")
         a.grid(True, alpha=0.3)
         a.legend(fontsize="small", loc="upper left")
     fig.tight_layout()

@@ -49,11 +49,17 @@ def _done(fig: Figure, result, axes, own: bool) -> Figure:
     return fig
 
 
-def _four_panel(result, fig_name, first, first_unit, rest, rest_unit, ax) -> Figure:
+def _run_label(result, label: str | None) -> str:
+    """The name of a run in an overlay's legend: ``label``, else its scenario's name."""
+    return result.scenario.name if label is None else str(label)
+
+
+def _four_panel(result, fig_name, first, first_unit, rest, rest_unit, ax,
+                label=None) -> Figure:
     """One linear signal and three angular ones (shown in degrees)."""
     fig, axes = _grid(SIMULATION_FIGURES[fig_name], ax)
     t = result["t"]
-    label = result.scenario.name
+    label = _run_label(result, label)
     axes[0].plot(t, result[first], label=label)
     axes[0].set_ylabel(f"{first} [{first_unit}]")
     for a, name in zip(axes[1:], rest, strict=True):
@@ -62,15 +68,19 @@ def _four_panel(result, fig_name, first, first_unit, rest, rest_unit, ax) -> Fig
     return _done(fig, result, axes, ax is None)
 
 
-def relative_errors_plot(result: SimulationResult, ax=None) -> Figure:
+def relative_errors_plot(result: SimulationResult, ax=None,
+                         label: str | None = None) -> Figure:
     """Relative altitude and attitude errors against time (the paper's Fig. 2).
 
     Parameters
     ----------
     result : SimulationResult
     ax : sequence of four matplotlib Axes, optional
-        Where to draw, to overlay runs (each line labelled with its
-        scenario's name); a new figure if None.
+        Where to draw, to overlay runs (each line labelled with ``label``);
+        a new figure if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name (two
+        runs of one scenario, say with different gains, need their own).
 
     Returns
     -------
@@ -78,18 +88,22 @@ def relative_errors_plot(result: SimulationResult, ax=None) -> Figure:
         Four axes: ``z_e`` (m), then ``phi_e``, ``theta_e``, ``psi_e`` (deg).
     """
     return _four_panel(result, "fig2_relative_altitude_attitude.png", "z_e", "m",
-                       ("phi_e", "theta_e", "psi_e"), "deg", ax)
+                       ("phi_e", "theta_e", "psi_e"), "deg", ax, label)
 
 
-def velocity_errors_plot(result: SimulationResult, ax=None) -> Figure:
+def velocity_errors_plot(result: SimulationResult, ax=None,
+                         label: str | None = None) -> Figure:
     """Velocity errors e2 against time (the paper's Fig. 3).
 
     Parameters
     ----------
     result : SimulationResult
     ax : sequence of four matplotlib Axes, optional
-        Where to draw, to overlay runs (each line labelled with its
-        scenario's name); a new figure if None.
+        Where to draw, to overlay runs (each line labelled with ``label``);
+        a new figure if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name (two
+        runs of one scenario, say with different gains, need their own).
 
     Returns
     -------
@@ -97,18 +111,22 @@ def velocity_errors_plot(result: SimulationResult, ax=None) -> Figure:
         Four axes: ``dz_e`` (m/s), then ``p_e``, ``q_e``, ``r_e`` (deg/s).
     """
     return _four_panel(result, "fig3_velocity_errors.png", "dz_e", "m/s",
-                       ("p_e", "q_e", "r_e"), "deg/s", ax)
+                       ("p_e", "q_e", "r_e"), "deg/s", ax, label)
 
 
-def control_inputs_plot(result: SimulationResult, ax=None) -> Figure:
+def control_inputs_plot(result: SimulationResult, ax=None,
+                        label: str | None = None) -> Figure:
     """Virtual control inputs u_1..u_4 against time (the paper's Fig. 4).
 
     Parameters
     ----------
     result : SimulationResult
     ax : sequence of four matplotlib Axes, optional
-        Where to draw, to overlay runs (each line labelled with its
-        scenario's name); a new figure if None.
+        Where to draw, to overlay runs (each line labelled with ``label``);
+        a new figure if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name (two
+        runs of one scenario, say with different gains, need their own).
 
     Returns
     -------
@@ -118,20 +136,24 @@ def control_inputs_plot(result: SimulationResult, ax=None) -> Figure:
     fig, axes = _grid(SIMULATION_FIGURES["fig4_control_inputs.png"], ax)
     t = result["t"]
     for i, a in enumerate(axes):
-        a.plot(t, result[f"u_{i + 1}"], label=result.scenario.name)
+        a.plot(t, result[f"u_{i + 1}"], label=_run_label(result, label))
         a.set_ylabel(f"u_{i + 1} [{CHANNEL_UNITS[i]}]")
     return _done(fig, result, axes, ax is None)
 
 
-def uncertainty_plot(result: SimulationResult, ax=None) -> Figure:
+def uncertainty_plot(result: SimulationResult, ax=None,
+                     label: str | None = None) -> Figure:
     """Uncertainty and its RBFNN estimate against time (the paper's Fig. 5).
 
     Parameters
     ----------
     result : SimulationResult
     ax : sequence of four matplotlib Axes, optional
-        Where to draw, to overlay runs (each line labelled with its
-        scenario's name); a new figure if None.
+        Where to draw, to overlay runs (each line labelled with ``label``);
+        a new figure if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name (two
+        runs of one scenario, say with different gains, need their own).
 
     Returns
     -------
@@ -146,7 +168,7 @@ def uncertainty_plot(result: SimulationResult, ax=None) -> Figure:
     fig, axes = _grid(SIMULATION_FIGURES["fig5_uncertainty_estimation.png"], ax)
     t = result["t"]
     nominal = result.scenario.data["controller"]["nominal_model"]
-    tag = "" if own else f" ({result.scenario.name})"
+    tag = "" if own and label is None else f" ({_run_label(result, label)})"
     for i, a in enumerate(axes):
         k = i + 1
         a.plot(t, result[f"Delta_{k}"], label="Delta = f + d" + tag)
@@ -158,15 +180,19 @@ def uncertainty_plot(result: SimulationResult, ax=None) -> Figure:
     return finish(fig, result, axes) if own else fig
 
 
-def ground_track_plot(result: SimulationResult, ax=None) -> Figure:
+def ground_track_plot(result: SimulationResult, ax=None,
+                      label: str | None = None) -> Figure:
     """Planar tracks of the vehicle and the quadrotor.
 
     Parameters
     ----------
     result : SimulationResult
     ax : matplotlib Axes, optional
-        Where to draw, to overlay runs (each line labelled with its
-        scenario's name); a new figure if None.
+        Where to draw, to overlay runs (each line labelled with ``label``);
+        a new figure if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name (two
+        runs of one scenario, say with different gains, need their own).
 
     Returns
     -------
@@ -179,7 +205,7 @@ def ground_track_plot(result: SimulationResult, ax=None) -> Figure:
         fig = Figure(figsize=(6, 6))
         ax = fig.subplots()
     fig, a = ax.figure, ax
-    tag = "" if own else f" ({result.scenario.name})"
+    tag = "" if own and label is None else f" ({_run_label(result, label)})"
     a.plot(result["x2"], result["y2"], label="vehicle" + tag)
     a.plot(result["x1"], result["y1"], "--", label="quadrotor" + tag)
     a.plot(result["x2"][0], result["y2"][0], "ko", label="start")

@@ -223,7 +223,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     "gear": {
         "welded": Field(B, "-", "true: the idealization of a touchdown that ends the flight at "
                         "the gear gap's zero crossing, the quadrotor then pinned to the deck; "
-                        "false: the gear's contact carries it (docs/contact.md)"),
+                        "false: the gear's contact carries it"),
         "feet_x": Field(F, "m", "the feet's distance from the centre along body x (half the "
                         "skids' length)", hi=10.0, **_POS),
         "feet_y": Field(F, "m", "the feet's distance from the centre along body y (half the "

@@ -95,7 +95,7 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
         "velocity_sigma": Setting("m/s", "std of each velocity's white noise per axis", 0.0,
                                   100.0),
         "rtk": Setting("bool", "true: both receivers are RTK (position_sigma gives way to the "
-                       "RTK fix's, docs/sensors.md, RTK)", 0.0, 1.0),
+                       "RTK fix's)", 0.0, 1.0),
     }),
     "rangefinder": MappingProxyType({
         **_common(1e5), **_OUTLIERS,
