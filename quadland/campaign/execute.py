@@ -38,7 +38,7 @@ from quadland.campaign.cluster import (
     quiet_cluster_logs,
 )
 from quadland.campaign.fly import RunOutcome, warm_up
-from quadland.campaign.journal import CampaignFolder
+from quadland.campaign.journal import CampaignFolder, new_folder
 from quadland.campaign.local import MAX_WORKERS, local_workers, pool_runs, serial_runs
 from quadland.campaign.resume import campaign_manifest, check_folder
 from quadland.campaign.sampling import format_value, iter_draws
@@ -208,7 +208,8 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
                   scenario_arg, given, progress, plots) -> CampaignResult:
     """:func:`run_campaign` once every check has passed: build, claim, fly, summarize."""
     warm_up(base)                               # the compiled simulator, built or loaded
-    folder = CampaignFolder(path).claim() if path is not None else _new_folder(base.name)
+    folder = (CampaignFolder(path).claim() if path is not None
+              else new_folder(base.name, "campaign"))
     with folder:
         rows = check_folder(folder, manifest, header)  # again, now that it is ours
         folder.start(manifest, header, {"scenario.toml": base.to_toml().encode("utf-8")})
@@ -258,23 +259,6 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
                 files.update(campaign_figures(base, header, ordered, summary))
             folder.finish(header, ordered, files)
         return CampaignResult(folder.path, n_runs, len(rows), flown, elapsed, summary, invalid)
-
-
-def _new_folder(name: str) -> CampaignFolder:
-    """A new folder ``<name>-campaign-<YYYYmmdd-HHMMSS>[-N]`` here, claimed."""
-    import datetime
-
-    stem = f"{name}-campaign-{datetime.datetime.now().strftime('%Y%m%d-%H%M%S')}"
-    for n in range(1, 1000):
-        path = Path.cwd() / (stem if n == 1 else f"{stem}-{n}")
-        if path.exists():
-            continue
-        try:
-            return CampaignFolder(path).claim()
-        except CampaignError:               # taken meanwhile by a campaign started with it
-            if not path.parent.is_dir() or not os.access(path.parent, os.W_OK):
-                raise
-    raise CampaignError(f"out: no free folder name {stem}-N in {Path.cwd()}")
 
 
 def _override_texts(overrides) -> list[str]:

@@ -36,7 +36,7 @@ from quadland.campaign.cluster import (
 )
 from quadland.campaign.execute import CampaignInterrupted
 from quadland.campaign.fly import warm_up
-from quadland.campaign.journal import CampaignFolder
+from quadland.campaign.journal import CampaignFolder, new_folder
 from quadland.campaign.local import MAX_WORKERS, local_workers, pool_runs, serial_runs
 from quadland.campaign.resume import campaign_manifest, check_folder
 from quadland.campaign.sampling import RunDraw, draws, format_value
@@ -293,7 +293,8 @@ def _fly(env, header, manifest, path, connection, local, scheduler, progress, pl
          ) -> EnvelopeResult:
     """:func:`run_envelope` once every check has passed: build, claim, fly, count."""
     warm_up(env.base)
-    folder = CampaignFolder(path).claim() if path is not None else _new_folder(env.base.name)
+    folder = (CampaignFolder(path).claim() if path is not None
+              else new_folder(env.base.name, "envelope"))
     with folder:
         rows = _check_envelope_folder(folder, manifest, header)
         folder.start(manifest, header, {"scenario.toml": env.base.to_toml().encode("utf-8")})
@@ -351,17 +352,3 @@ def _progress_bar(show: bool, total: int, done: int):
                 desc="envelope", smoothing=0.1)
 
 
-def _new_folder(name: str) -> CampaignFolder:
-    """A new folder ``<name>-envelope-<YYYYmmdd-HHMMSS>[-N]`` here, claimed."""
-    import datetime
-
-    stem = f"{name}-envelope-{datetime.datetime.now().strftime('%Y%m%d-%H%M%S')}"
-    for n in range(1, 1000):
-        path = Path.cwd() / (stem if n == 1 else f"{stem}-{n}")
-        if path.exists():
-            continue
-        try:
-            return CampaignFolder(path).claim()
-        except CampaignError:
-            continue
-    raise CampaignError(f"out: no free folder name {stem}-N in {Path.cwd()}")

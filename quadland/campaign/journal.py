@@ -44,8 +44,8 @@ from pathlib import Path
 from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.output import fsync_dir, lock_folder, strict_json, unlock_folder, write_bytes_atomic
 
-__all__ = ["CampaignFolder", "MANIFEST", "RUNS", "MAX_MANIFEST_BYTES", "MAX_ROW_BYTES",
-           "format_row", "damaged_manifest", "json_kind", "read_regular"]
+__all__ = ["CampaignFolder", "new_folder", "MANIFEST", "RUNS", "MAX_MANIFEST_BYTES",
+           "MAX_ROW_BYTES", "format_row", "damaged_manifest", "json_kind", "read_regular"]
 
 #: The manifest: the campaign's identity.
 MANIFEST = "campaign.json"
@@ -358,3 +358,22 @@ def _run_index(row: list[str] | None, header: Sequence[str]) -> int | None:
         return int(row[0])
     except ValueError:
         return None
+
+
+def new_folder(name: str, kind: str) -> CampaignFolder:
+    """A new folder ``<name>-<kind>-<YYYYmmdd-HHMMSS>[-N]`` in the current folder, claimed
+    (``kind``: ``"campaign"`` or ``"envelope"``); a name taken meanwhile by a command
+    started in the same second is passed over for the next."""
+    import datetime
+
+    stem = f"{name}-{kind}-{datetime.datetime.now().strftime('%Y%m%d-%H%M%S')}"
+    for n in range(1, 1000):
+        path = Path.cwd() / (stem if n == 1 else f"{stem}-{n}")
+        if path.exists():
+            continue
+        try:
+            return CampaignFolder(path).claim()
+        except CampaignError:               # taken meanwhile by a command started with it
+            if not path.parent.is_dir() or not os.access(path.parent, os.W_OK):
+                raise
+    raise CampaignError(f"out: no free folder name {stem}-N in {Path.cwd()}")
