@@ -108,6 +108,30 @@ def test_errors_are_against_the_truth_at_the_horizon(hover):
     assert P[0, 0, 0] == hover["P_h_1_1"][0] and np.all(P[:, 0, 1] == 0)
 
 
+def test_a_range_beam_beside_the_roof_is_told_apart_by_hand(hover):
+    """The world-side beam: ``p1 - s b3`` meets the flat roof's plane ``z = z2`` at ``s =
+    (z1 - z2) / b3_z``; on the deck where that point lies within the roof's half-length
+    and half-width of the pad (the car drives along x). Handed over level, then leaning
+    20-25 deg into the airflow from 3 m, the beam meets the plane over 1 m behind the
+    pad, on the road: both kinds occur."""
+    from quadland.kinds.landing.consistency import _on_deck
+
+    from quadland_symbolic.kinematics import rotation
+
+    c = hover.scenario.data["sensors.rangefinder"]
+    got = _on_deck(hover)
+    want = np.zeros(len(got), bool)
+    for k in range(len(got)):
+        b3 = np.array(rotation([hover[a][k] for a in ("phi1", "theta1", "psi1")]),
+                      dtype=float)[:, 2]
+        s = (hover["z1"][k] - hover["z2"][k]) / b3[2]
+        dx, dy = hover["x1"][k] - s * b3[0] - hover["x2"][k], \
+            hover["y1"][k] - s * b3[1] - hover["y2"][k]
+        want[k] = abs(dx) <= c["deck_half_length"] and abs(dy) <= c["deck_half_width"]
+    np.testing.assert_array_equal(got, want)
+    assert want[0] and not want[250:].any()
+
+
 # ---------------------------------------------------------------- the Monte Carlo
 
 #: What the Monte Carlo below measures where the filter is not consistent (docs/estimator.md,
