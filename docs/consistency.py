@@ -48,6 +48,10 @@ def main(argv=None):
     for b, v in s["nis"].items():
         print(f"| {b} | {v['dof']} | {v['n']} | {v['mean']:.3f} | {v['lo']:.3f}-{v['hi']:.3f} "
               f"| {v['inside']:.0%} |")
+    for b, v in s["outliers"].items():
+        if v["n"]:
+            print(f"{b}: {v['n']} of {v['due']} due packets outliers of the world, kept "
+                  f"apart (median NIS {v['median_nis']:.0f})")
 
 
 if __name__ == "__main__":

@@ -231,24 +231,34 @@ def test_a_block_not_due_or_rejected_leaves_x_and_P_bit_exact(name):
 
 # ---------------------------------------------------------------- decoupled axes
 
-def test_axes_fuse_a_tilted_range_on_z_with_the_rest_as_noise(rng):
-    """(E9a): the decoupled range update against its formula written out."""
+@pytest.mark.parametrize("scale", [1.0, 1e-6])
+def test_axes_fuse_a_tilted_range_on_z_with_the_rest_as_noise(rng, scale):
+    """(E9a), (E9b): the decoupled range update against its formula written out. With a
+    covariance of 1e-6 the height's variance ``h_z^T P h_z`` is below the range's ``r``
+    and the dropped part's variance counts ``r / h_z^T P h_z`` times in the update, once
+    in the NIS."""
     f = nav_update_function("range", "axes")
     pattern = covariance_pattern("axes")
     x = rng.normal(size=N)
-    P = pattern.unpack_numeric(pattern.pack_numeric(random_spd(rng, N)))
+    P = pattern.unpack_numeric(pattern.pack_numeric(random_spd(rng, N))) * scale
     n2 = rotation([0.1, -0.08, 0.3])[:, 2]
     b3 = np.array([0.1, 0.05, 1.0]) / np.linalg.norm([0.1, 0.05, 1.0])
-    s = n2 @ x[sl("p_r")] / (n2 @ b3) + 0.2
+    s = n2 @ x[sl("p_r")] / (n2 @ b3) + 0.2 * scale      # inside the gate
     pkt = RANGE.pack(dict(fresh=1.0, tau=0.0, s=s, b3_E=b3))
     h = h_rows("range", n2, b3, [s], 9.8)[0]
     iz = NAV.slice("p_r").start + 2
     h_z, h_d = np.zeros(N), h.copy()
     h_z[iz], h_d[iz] = h[iz], 0.0
-    r = ESTIMATOR_DEFAULTS["range_sigma"] ** 2 + h_d @ P @ h_d
-    x_ref, P_ref, _, _ = joseph_reference(x, P, h_z[None, :], np.array([s - h @ x + h_z @ x]),
+    r0 = ESTIMATOR_DEFAULTS["range_sigma"] ** 2
+    memory = max(1.0, r0 / (h_z @ P @ h_z))
+    assert (memory > 1) == (scale < 1)
+    r = r0 + memory * h_d @ P @ h_d
+    nu = s - h @ x
+    x_ref, P_ref, _, _ = joseph_reference(x, P, h_z[None, :], np.array([nu + h_z @ x]),
                                  np.array([[r]]))
-    x_next, P_next, *_ = f(x, P, pkt, n2, params(**ANYWHERE), 1.0)
+    x_next, P_next, _, nis, *_ = f(x, P, pkt, n2, params(**ANYWHERE), 1.0)
+    assert float(nis) == pytest.approx(nu ** 2 / (h_z @ P @ h_z + r0 + h_d @ P @ h_d),
+                                       rel=1e-12)
     np.testing.assert_allclose(col(x_next), x_ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(np.array(P_next), P_ref, rtol=1e-12, atol=1e-14)
 

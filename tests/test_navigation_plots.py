@@ -93,7 +93,8 @@ def _by_hand(runs=4, times=30):
         v[0, ::4] = np.nan                        # one run short of a packet sometimes
         nis[b.name] = v
     sc = Scenario(name="byhand", source="<test>", data={})
-    return ConsistencyResult(sc, tuple(range(7, 7 + runs)), 2.0, t, nees, nis)
+    outliers = {b: np.full((runs, times), np.nan) for b in nis}
+    return ConsistencyResult(sc, tuple(range(7, 7 + runs)), 2.0, t, nees, nis, outliers)
 
 
 def test_the_consistency_figure_draws_the_averages_and_the_bounds():

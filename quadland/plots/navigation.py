@@ -133,9 +133,11 @@ def _nis_axis(ax, mc, block, level):
     lo, hi = mc.nis_bounds(block, level)
     _band(ax, t, lo[due], hi[due], f"{level:.0%} bounds")
     mean, n, plo, phi = mc.nis_pooled(block, level)
+    n_out, n_due = mc.outlier_count(block)
+    apart = f"; {n_out} of {n_due} outliers apart" if n_out else ""
     ax.plot(t, mc.nis_mean(block)[due], ".", ms=2, color="C1",
             label=f"{mc.nis_inside(block, level):.0%} inside; all {n}: {mean:.3f} "
-                  f"[{plo:.3f}, {phi:.3f}]")
+                  f"[{plo:.3f}, {phi:.3f}]{apart}")
     ax.set_ylabel(f"NIS {block}")
     ax.legend(loc="upper right", fontsize="x-small")
 
@@ -159,7 +161,7 @@ def consistency_plot(mc, level: float = 0.95) -> Figure:
         bias (2), each with the band of ``chi2.ppf`` bounds for the runs; then each
         measurement block's NIS averaged over the runs where it was due, with the bounds
         of that count at each time, and in its legend the average of every due packet
-        with its bounds.
+        with its bounds, and the outliers kept apart (a range beside the deck).
     """
     blocks = list(mc.nis)
     rows = 3 + (len(blocks) + 1) // 2

@@ -2,13 +2,13 @@
 
 State, packets, parameters, prediction, measurement blocks, outputs.
 
-docs/estimator.md gives the design and the equations (E1)-(E14) cited here.
-Frame E has z up. The filter's state :data:`NAV` is PX4's moving-target
-vision target estimator's (relative position, the vehicle's and the pad's
-velocities, the pad's acceleration, the relative GNSS bias) plus the two biases
-of the acceleration input, which quadland forms from the raw accelerometer
-through an attitude estimate: ``a_b`` (the accelerometer's) and ``a_tilt`` (the
-attitude estimate's tilt error times g, which the camera's vector shares) (E1).
+docs/estimator.md gives the design and the equations (E1)-(E14) cited here. Frame E
+has z up. The filter's state :data:`NAV` is PX4's moving-target vision target
+estimator's (relative position, the vehicle's and the pad's velocities, the pad's
+acceleration, the relative GNSS bias) plus the two biases of the acceleration input,
+which quadland forms from the raw accelerometer through an attitude estimate: ``a_b``
+(the accelerometer's) and ``a_tilt`` (the attitude's tilt error times g, which the
+camera's vector shares) (E1).
 
 The sequencing (delayed horizon, FIFOs, output predictor) is in
 :mod:`quadland_symbolic.landing.estimator`; this module holds what one prediction and
@@ -36,13 +36,12 @@ from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import deck_rates
 from quadland_symbolic.layout import Field, Layout
 
-__all__ = [
-    "NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
-    "SENSORS", "Block", "BLOCKS", "COUPLINGS", "estimator_params", "ESTIMATOR_DEFAULTS",
-    "covariance_pattern", "acceleration_input", "nav_transition", "nav_transition_function",
-    "nav_predict", "nav_predict_function", "measurement_model_function", "block_update",
-    "nav_update_function", "deck_at", "relative_output",
-]
+__all__ = ["NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
+           "SENSORS", "Block", "BLOCKS", "COUPLINGS", "estimator_params", "ESTIMATOR_DEFAULTS",
+           "covariance_pattern", "acceleration_input", "nav_transition",
+           "nav_transition_function", "nav_predict", "nav_predict_function",
+           "measurement_model_function", "block_update", "nav_update_function", "deck_at",
+           "relative_output"]
 
 _XYZ = ("x", "y", "z")
 
@@ -375,20 +374,18 @@ def _packet(sensor: str) -> Layout:
     raise KeyError(f"no sensor {sensor!r}")
 
 
-def _project_row(h, P, pattern: CovariancePattern, home: int):
-    """A row across groups: keep ``home``'s group, the rest as noise.
-
-    The dropped part's variance ``h_d^T P h_d`` becomes measurement noise
-    (E9a). Identity when the row lies in one group.
-    """
+def _project_row(h, P, pattern: CovariancePattern, home: int, r=None):
+    """A row across groups: keep ``home``'s group, its rest's variance ``h_d^T P h_d`` as
+    noise (E9a), given the update's ``r`` ``max(1, r / h_z^T P h_z)`` times (E9b)."""
     groups = {pattern.group_of[i] for i in ca.sparsify(h).sparsity().row()}
     if len(groups) <= 1:
         return h, 0
     keep = [i for i in range(pattern.n) if pattern.group_of[i] == pattern.group_of[home]]
     mask = ca.DM.zeros(pattern.n)
     mask[keep] = 1
-    kept, dropped = h * mask, h * (1 - mask)
-    return ca.sparsify(kept), dropped.T @ P @ dropped
+    kept, dropped = ca.sparsify(h * mask), h * (1 - mask)
+    memory = 1 if r is None else ca.fmax(r / ca.fmax(kept.T @ P @ kept, 1e-30), 1)
+    return kept, memory * (dropped.T @ P @ dropped)
 
 
 def _beam_on_deck(x, P, h, pkt, p):
@@ -429,10 +426,10 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
         valid = ca.logic_and(valid, _beam_on_deck(x, P, h, pkt, p))
     home = NAV.slice("p_r").start + 2                  # the range's p_r_z (E9a)
 
-    def projected(P):
+    def projected(P, update=False):                  # the update's noise: (E9b)
         rows, r_eff = [], []
         for i in range(block.dim):
-            row, extra = _project_row(H[i, :].T, P, pattern, home)
+            row, extra = _project_row(H[i, :].T, P, pattern, home, r[i] if update else None)
             rows.append(row)
             r_eff.append(r[i] + extra)
         return rows, r_eff
@@ -448,7 +445,7 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
     accept = ca.logic_and(usable, ca.logic_or(nis <= gate, readmit))
     inflation = ca.if_else(readmit, ca.fmax(nis / ca.fmax(gate, 1e-30), 1), 1)
     P = P * inflation
-    rows, r_eff = projected(P)
+    rows, r_eff = projected(P, update=True)
     for i in range(block.dim):
         h_i = model(x, pkt, n2, p_est)[1][i]                # at the updated state
         x, P = scalar_update(x, P, rows[i], z[i] - h_i, r_eff[i], accept, pattern)

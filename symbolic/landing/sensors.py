@@ -64,7 +64,8 @@ __all__ = ["measurement_function", "SENSOR_NAMES", "SENSOR_PARAMS", "IMU_PACKET"
            "VISION_NOISE", "GNSS_NOISE", "RANGEFINDER_NOISE", "DATALINK_NOISE", "SENSOR_PACKETS",
            "NOISES", "specific_force", "rangefinder_distance", "sense_imu_function",
            "sense_vision_function", "sense_gnss_function", "sense_rangefinder_function",
-           "sense_datalink_function", "sensor_function", "NAV_TRUTH", "navigation_truth_function"]
+           "sense_datalink_function", "sensor_function", "NAV_TRUTH", "navigation_truth_function",
+           "range_on_deck_function"]
 
 #: The sensors, in the order of their random streams (:mod:`quadland.kinds.landing.sensing`).
 SENSOR_NAMES = ("imu", "vision", "gnss", "rangefinder", "datalink")
@@ -211,6 +212,18 @@ def _inside(v, lo, hi):
     return ca.logic_and(v >= lo, v <= hi)
 
 
+def _deck_hit(p1, d, p2, R_deck, half_length, half_width):
+    """``(s_deck, on_deck)``: the beam ``p1 + s d`` against the deck's extent."""
+    n2 = R_deck[:, 2]
+    den = ca.dot(n2, d)
+    s_deck = ca.dot(n2, p2 - p1) / ca.if_else(den < 0, den, -1)
+    q = R_deck.T @ (p1 + s_deck * d - p2)                              # hit in deck axes
+    on_deck = ca.logic_and(ca.logic_and(den < 0, s_deck >= 0),
+                           ca.logic_and(ca.fabs(q[0]) <= half_length,
+                                        ca.fabs(q[1]) <= half_width))
+    return s_deck, on_deck
+
+
 def rangefinder_distance(p1, b3, p2, R_deck, half_length, half_width):
     """Distance along ``-b3`` from ``p1`` to the deck or to ``z = 0``.
 
@@ -221,13 +234,7 @@ def rangefinder_distance(p1, b3, p2, R_deck, half_length, half_width):
     i.e. when the body's down axis points at or above the horizon.
     """
     d = -b3                                                            # the beam, E
-    n2 = R_deck[:, 2]
-    den = ca.dot(n2, d)
-    s_deck = ca.dot(n2, p2 - p1) / ca.if_else(den < 0, den, -1)
-    q = R_deck.T @ (p1 + s_deck * d - p2)                              # hit in deck axes
-    on_deck = ca.logic_and(ca.logic_and(den < 0, s_deck >= 0),
-                           ca.logic_and(ca.fabs(q[0]) <= half_length,
-                                        ca.fabs(q[1]) <= half_width))
+    s_deck, on_deck = _deck_hit(p1, d, p2, R_deck, half_length, half_width)
     s_ground = p1[2] / ca.if_else(d[2] < 0, -d[2], 1)
     ground = ca.logic_and(d[2] < 0, s_ground >= 0)
     s = ca.if_else(on_deck, s_deck, ca.if_else(ground, s_ground, 0))
@@ -406,3 +413,23 @@ def navigation_truth_function() -> ca.Function:
                    g * ca.cross(eps, ca.vertcat(0, 0, 1)))
     return ca.Function("nav_truth", [xp, t, pp, e_att], [x], ["xp", "t", "pp", "e_att"],
                        ["x"])
+
+
+@functools.cache
+def range_on_deck_function() -> ca.Function:
+    """``range_on_deck(xp, t, pp, p_sens) -> on_deck``: 1 where the range finder's beam
+    meets the deck within its extent (:func:`rangefinder_distance`'s deck), 0 where it
+    reads the ground beside it or nothing.
+
+    World-side, as :func:`navigation_truth_function`: the filter's range model (E12)
+    describes a distance to the deck's plane, so a beam that reads the road is an
+    outlier of the world, not noise (docs/estimator.md, "Consistency").
+    """
+    xp, t, pp, ps = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym(), \
+        SENSOR_PARAMS.sym()
+    q, deck, _ = _truth(xp, t, pp)
+    c = SENSOR_PARAMS.unpack(ps)
+    _, on_deck = _deck_hit(q["p1"], -rotation(q["eta1"])[:, 2], deck.p2, deck.R_deck,
+                           c["deck_half_length"], c["deck_half_width"])
+    return ca.Function("range_on_deck", [xp, t, pp, ps], [on_deck],
+                       ["xp", "t", "pp", "p_sens"], ["on_deck"])

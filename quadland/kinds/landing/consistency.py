@@ -13,7 +13,11 @@ descending) and measures, at each control tick of the filter's horizon:
   ``P`` the filter's own covariance of that state (the recorded memory, every stored
   entry: the full block, not its diagonal);
 * the **NIS** of each measurement block fused at that horizon (the filter's own
-  ``nu^T S^-1 nu``, due blocks only, rejected ones included).
+  ``nu^T S^-1 nu``, due blocks only, rejected and held ones included), of the packets
+  its measurement model describes. A range whose beam reads the ground beside the deck
+  (:func:`~quadland_symbolic.landing.sensors.range_on_deck_function`, world-side at the
+  packet's sample time) is an outlier of the world, not the noise (E12) models: its NIS
+  is kept apart (:attr:`ConsistencyResult.outliers`) and reported, not averaged.
 
 Averaged over the runs, a consistent filter's NEES of an ``n``-dimensional group lies
 within the two-sided chi-square bounds ``chi2.ppf(0.025, N n) / N`` ..
@@ -31,7 +35,8 @@ import types
 import numpy as np
 
 from quadland.exceptions import ScenarioError
-from quadland.kinds.landing.sensed import sensors_enabled, tick_table
+from quadland.kinds.landing.sensed import sensor_settings, sensors_enabled, tick_table
+from quadland.kinds.landing.sensor_settings import sensor_params
 from quadland.kinds.landing.simulate import simulate_landing
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import Scenario
@@ -40,7 +45,12 @@ from quadland_symbolic.landing.estimator import FLIGHT_COUPLING
 from quadland_symbolic.landing.navigation import BLOCKS, NAV, covariance_pattern
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 from quadland_symbolic.landing.sensed_loop import SENSED_TICK
-from quadland_symbolic.landing.sensors import IMU_NOISE, NAV_TRUTH, navigation_truth_function
+from quadland_symbolic.landing.sensors import (
+    IMU_NOISE,
+    NAV_TRUTH,
+    navigation_truth_function,
+    range_on_deck_function,
+)
 
 __all__ = ["NEES_GROUPS", "HOVER_SETTLE", "ConsistencyResult", "chi2_bounds",
            "hover_scenario", "run_errors", "consistency_monte_carlo"]
@@ -183,14 +193,31 @@ def _nees(e: np.ndarray, P: np.ndarray, T: np.ndarray) -> np.ndarray:
     return np.einsum("ni,ni->n", te, np.linalg.solve(S, te[..., None])[..., 0])
 
 
-def _nis(result) -> dict[str, np.ndarray]:
-    """Each block's NIS of the step after each row (it fused on that row's prior);
-    NaN where the block was not due or its NIS not finite."""
-    out = {}
+def _on_deck(result) -> np.ndarray:
+    """1 at each row where the true range beam meets the deck (world-side)."""
+    scenario, t = result.scenario, result["t"]
+    xp = result.states[:, :LANDING_PLANT_STATE.size]
+    f = range_on_deck_function().map(len(t))
+    ps = sensor_params(sensor_settings(scenario))
+    return np.asarray(f(xp.T, t[None, :], landing_values(scenario).pp, ps),
+                      dtype=float).ravel() > 0.5
+
+
+def _nis(result) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """``(nis, outliers)``: each block's NIS of the step after each row (it fused on
+    that row's prior, packets sampled at that row's horizon time), NaN where the block
+    was not due or its NIS not finite; the range's split by its beam, on the deck
+    (``nis``) or beside it (``outliers``, NaN elsewhere)."""
+    out, outliers = {}, {}
+    k = np.searchsorted(result["t"], result["t_h"] - 1e-9)
+    on_deck = _on_deck(result)[np.minimum(k, len(result["t"]) - 1)]
     for b in BLOCKS:
         v = np.append(result[f"nis_{b.name}"][1:], 0.0)
-        out[b.name] = np.where(v > 0, v, np.nan)
-    return out
+        v = np.where(v > 0, v, np.nan)
+        off = np.zeros(len(v), bool) if b.name != "range" else ~on_deck
+        out[b.name] = np.where(off, np.nan, v)
+        outliers[b.name] = np.where(off, v, np.nan)
+    return out, outliers
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -210,7 +237,10 @@ class ConsistencyResult:
     nees : dict of str to numpy.ndarray
         ``(runs, times)`` per group of :data:`NEES_GROUPS`.
     nis : dict of str to numpy.ndarray
-        ``(runs, times)`` per measurement block, NaN where not due.
+        ``(runs, times)`` per measurement block, NaN where not due or an outlier.
+    outliers : dict of str to numpy.ndarray
+        ``(runs, times)`` per block: the NIS of the due packets its model does not
+        describe (a range whose beam reads the ground beside the deck), NaN elsewhere.
     """
 
     scenario: Scenario
@@ -219,6 +249,7 @@ class ConsistencyResult:
     times: np.ndarray
     nees: dict
     nis: dict
+    outliers: dict
 
     @property
     def runs(self) -> int:
@@ -279,6 +310,12 @@ class ConsistencyResult:
         lo, hi = chi2_bounds(_dim(block), len(v), level)
         return float(v.mean()) if v.size else float("nan"), int(v.size), float(lo), float(hi)
 
+    def outlier_count(self, block: str) -> tuple[int, int]:
+        """``(outliers, due)``: the settled due packets of the block its model does not
+        describe, and all its settled due packets."""
+        n_out = int(np.isfinite(self.outliers[block][:, self.settled]).sum())
+        return n_out, n_out + int(np.isfinite(self.nis[block][:, self.settled]).sum())
+
     def summary(self, level: float = 0.95) -> dict:
         """Every figure as plain data: per group and per block."""
         return {
@@ -291,7 +328,15 @@ class ConsistencyResult:
                                 strict=True))
                     | {"dof": _dim(b), "inside": self.nis_inside(b, level)}
                     for b in self.nis},
+            "outliers": {b: dict(zip(("n", "due"), self.outlier_count(b), strict=True))
+                         | {"median_nis": _median(self.outliers[b][:, self.settled])}
+                         for b in self.outliers},
         }
+
+
+def _median(v: np.ndarray) -> float:
+    v = v[np.isfinite(v)]
+    return float(np.median(v)) if v.size else float("nan")
 
 
 def _dim(block: str) -> int:
@@ -335,6 +380,7 @@ def consistency_monte_carlo(scenario: Scenario, runs: int = 100, duration: float
     seeds = tuple(first + i for i in range(runs))
     nees = {g: [] for g in NEES_GROUPS}
     nis = {b.name: [] for b in BLOCKS}
+    outliers = {b.name: [] for b in BLOCKS}
     times = None
     for s in seeds:
         result = simulate_landing(base.replace(**{"simulation.seed": s}))
@@ -344,9 +390,12 @@ def consistency_monte_carlo(scenario: Scenario, runs: int = 100, duration: float
                                 f"{result['t'][-1]:.4g} s, before its duration")
         for g, T in NEES_GROUPS.items():
             nees[g].append(_nees(e, P, T))
-        for b, v in _nis(result).items():
-            nis[b].append(v)
+        inside, outside = _nis(result)
+        for b in nis:
+            nis[b].append(inside[b])
+            outliers[b].append(outside[b])
         times = t_h if times is None else times
     return ConsistencyResult(base.replace(**{"simulation.seed": first}), seeds, float(settle),
                              times, {g: np.array(v) for g, v in nees.items()},
-                             {b: np.array(v) for b, v in nis.items()})
+                             {b: np.array(v) for b, v in nis.items()},
+                             {b: np.array(v) for b, v in outliers.items()})
