@@ -698,3 +698,19 @@ def test_the_last_line_of_an_all_invalid_campaign_agrees_with_its_summary(tmp_pa
     session = json.loads((out / "summary.json").read_text())["last_session"]
     assert session["runs_flown"] == 0 and session["invalid_draws"] == 2
     assert session["runs_per_s"] is None
+
+
+def test_the_forkserver_hook_silences_only_a_truncated_start():
+    # V13: Ctrl-C while the campaign sent a worker its process object left the forkserver's
+    # child an EOFError, whose traceback multiprocessing printed under the one line. The
+    # hook the forkserver preloads ends that child silently; any other exception prints.
+    for exc, printed in (("EOFError('Ran out of input')", False), ("ValueError('x')", True)):
+        proc = subprocess.run(
+            [sys.executable, "-c", "import quadland.campaign.forkserver_hook\n"
+             f"raise {exc}\n"], capture_output=True, text=True, env=_env(), timeout=60)
+        assert proc.returncode == 1
+        assert ("Traceback" in proc.stderr) is printed, proc.stderr
+    import inspect
+
+    import quadland.campaign.local as local
+    assert '"quadland.campaign.forkserver_hook"' in inspect.getsource(local.pool_runs)

@@ -235,7 +235,8 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
     campaign would leave to the resource tracker.
     """
     context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(["quadland.campaign.local"])
+    context.set_forkserver_preload(["quadland.campaign.local",
+                                    "quadland.campaign.forkserver_hook"])
     _start_forkserver()
     queue = RunQueue(todo)
     lifeline, keep = context.Pipe(duplex=False)
