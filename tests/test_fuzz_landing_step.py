@@ -27,16 +27,15 @@ import collections
 import ctypes
 import functools
 import math
-import subprocess
 import sys
 from fractions import Fraction as Q
 
 import numpy as np
 import pytest
-from reference import C_RANDOM, SANITIZE, extreme, have_compiler, sanitizer_missing
+from reference import C_RANDOM, extreme, have_compiler
 from reference import run as _run
+from reference import sanitized_drivers as build_sanitized
 
-from quadland.engine import build
 from quadland.kinds.landing.flight import flight_files, load_landing_api
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import load_scenario
@@ -617,32 +616,8 @@ int main(int argc, char **argv)
 @pytest.fixture(scope="module")
 def sanitized_drivers(tmp_path_factory):
     """The driver with the landing's flight code, both precisions, compiled in parallel."""
-    cc = build.find_compiler()
-    why = sanitizer_missing(cc, tmp_path_factory.mktemp("sanitizer_probe"))
-    if why:
-        pytest.skip(why)
-    sources = (*c_sources(("landing_step",)), "driver.c")
-    procs, roots = [], {}
-    for precision in ("double", "float"):
-        root = tmp_path_factory.mktemp(f"sanitized_landing_{precision}")
-        for name, text in flight_files(L, precision).items():
-            (root / name).write_text(text)
-        (root / "driver.c").write_text(DRIVER)
-        for src in sources:
-            procs.append(subprocess.Popen(
-                [cc, *build.STRICT_CFLAGS, "-O1", *SANITIZE, "-c", src],
-                cwd=root, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True))
-        roots[precision] = root
-    for p in procs:
-        out, _ = p.communicate(timeout=300)
-        assert p.returncode == 0, out
-    exes = {}
-    for precision, root in roots.items():
-        objs = [f"{src[:-2]}.o" for src in sources]
-        res = _run([cc, *SANITIZE, *objs, "-lm", "-o", "driver"], cwd=root)
-        assert res.returncode == 0, res.stderr
-        exes[precision] = root / "driver"
-    return exes
+    return build_sanitized(tmp_path_factory, "landing", lambda p: flight_files(L, p),
+                           c_sources(("landing_step",)), DRIVER)
 
 
 @pytest.mark.slow
