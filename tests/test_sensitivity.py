@@ -207,6 +207,35 @@ def test_landing_sensor_margins_are_consistent(highway):
                                                         rel=2e-3)
 
 
+@pytest.mark.parametrize("sensor", ["imu", "gnss"])
+def test_no_sensor_crossing_where_the_return_difference_is_unresolved(highway, sensor):
+    """Below 1e-2 rad/s the integral action makes ``I + L`` ill-conditioned (1e21 at
+    3e-5 rad/s), and inverting it gave dozens of rounding-noise "crossings" (the IMU's
+    latency to 45 deg printed as -9.65e4 s). python-control closes the other channels in
+    the state space instead (no inversion of ``I + L``): there the group's loop has no
+    eigenvalue within a factor of 20 of the unit circle on 1e-6..1e-2 rad/s, so no
+    crossing may be reported there, and the latency to the requirement is the one the
+    reported crossings give by hand."""
+    models = highway.models
+    L = models.loop_output
+    outputs = list(L.input_labels)
+    group = [outputs.index(f) for f in {m.sensor: m for m in highway.continuous.sensors}[
+        sensor].outputs]
+    others_closed = control.feedback(L, np.diag([0.0 if i in group else 1.0
+                                                 for i in range(L.ninputs)]))
+    w = np.logspace(-6, -2, 200)
+    resp = others_closed(1j * w)[np.ix_(group, group)]
+    moduli = np.abs(np.linalg.eigvals(np.moveaxis(resp, -1, 0)))
+    assert np.all(np.abs(np.log(moduli)) > math.log(20.0))
+    dm = group_delay_margin(L, group)
+    assert dm.unresolved > 0
+    assert min(c[0] for c in dm.crossings) > 1.0
+    by_hand = min(math.radians(pm % 360.0 - 45.0) / wc for wc, pm, _ in dm.crossings)
+    margin = {m.sensor: m for m in highway.continuous.sensors}[sensor]
+    assert margin.latency_to_requirement_s == pytest.approx(by_hand, rel=1e-12)
+    assert abs(margin.latency_to_requirement_s) < 1.0
+
+
 @pytest.mark.parametrize("section", ["continuous", "sampled"])
 def test_landing_peaks_bound_the_classical_margins(highway, section):
     """|1 + l_i| >= 1/Ms_i and |l_i / (1 + l_i)| <= Mt_i everywhere: GM up >= Ms/(Ms - 1)

@@ -20,6 +20,14 @@ negative-feedback convention (closed as ``u = -L u``), ``S = (I + L)^-1`` and
   ``|lambda| = 1`` and the delay has turned it onto -1: ``tau = mod(180 + arg
   lambda, 360) / w``. For one channel that is the classical delay margin of
   :func:`quadland.analysis.allmargin`.
+
+  ``(I + L)^-1`` is formed in double precision: where the return difference's
+  condition number exceeds :data:`RESOLVABLE_CONDITION` (integral action makes
+  it grow as ``1/w`` or faster toward zero frequency: 1e21 at 3e-5 rad/s on
+  ``highway``), the eigenvalues' moduli carry errors of order one and their
+  "crossings" are rounding noise, dozens of them at 1e-6 to 1e-4 rad/s with
+  any phase at all. Such crossings are dropped (:attr:`GroupDelayMargin.unresolved`
+  counts them).
 """
 
 from __future__ import annotations
@@ -98,10 +106,13 @@ class GroupDelayMargin:
         deg, ``180 + arg lambda`` at that crossing, in (-180, 180]
         (``inf`` without a crossing).
     crossings : tuple of tuple of float
-        Every unit-magnitude crossing of an eigenvalue: ``(frequency rad/s,
-        phase margin deg, delay s)``.
+        Every resolved unit-magnitude crossing of an eigenvalue: ``(frequency
+        rad/s, phase margin deg, delay s)``.
     stable : bool
         Whether the loop, all channels closed and on time, is stable.
+    unresolved : int
+        Sign changes dropped because the return difference ``I + L`` was too
+        ill-conditioned there to resolve ``|lambda| = 1`` (module notes).
     """
 
     channels: tuple[int, ...]
@@ -110,6 +121,7 @@ class GroupDelayMargin:
     phase_margin: float
     crossings: tuple[tuple[float, float, float], ...]
     stable: bool
+    unresolved: int = 0
 
     def delay_to(self, phase_margin_deg: float) -> float:
         """s, the common delay that leaves ``phase_margin_deg`` at the tightest crossing.
@@ -124,6 +136,13 @@ class GroupDelayMargin:
             return math.inf
         return min(math.radians(pm % 360.0 - phase_margin_deg) / w
                    for w, pm, _ in self.crossings)
+
+
+#: The largest condition number of ``I + L(jw)`` at which :func:`group_delay_margin`
+#: trusts a unit-modulus crossing: ``1e-3 / eps``, so that the inverse's relative
+#: error bound ``cond * eps`` stays at or below 1e-3 (Golub and Van Loan, Matrix
+#: Computations, 4th ed., sec. 2.6).
+RESOLVABLE_CONDITION = 1e-3 / np.finfo(float).eps
 
 
 def _refined_max(fun, grid, values) -> tuple[float, float]:
@@ -285,6 +304,9 @@ def group_delay_margin(L, channels, omega=None) -> GroupDelayMargin:
     eye = np.eye(L.ninputs)
     idx = np.ix_(g, g)
 
+    def resolved(w):
+        return np.linalg.cond(eye + resp.at(resp.point(w))) <= RESOLVABLE_CONDITION
+
     def eigs(G):
         S_g = np.linalg.inv(eye + G)[..., idx[0], idx[1]]
         return np.linalg.eigvals(np.linalg.inv(S_g) - np.eye(len(g)))
@@ -302,10 +324,13 @@ def group_delay_margin(L, channels, omega=None) -> GroupDelayMargin:
         values = np.sort(np.log(np.maximum(np.abs(eigs(resp(grid))), 1e-300)), axis=-1)
     except np.linalg.LinAlgError:
         values = np.array([log_moduli(w) for w in grid])
-    crossings = []
+    crossings, unresolved = [], 0
     for k in range(len(g)):
         v = values[:, k]
         for j in np.flatnonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0):
+            if not (resolved(grid[j]) and resolved(grid[j + 1])):
+                unresolved += 1
+                continue
             try:
                 w = scipy.optimize.brentq(lambda w, k=k: log_moduli(w)[k], grid[j], grid[j + 1],
                                           xtol=1e-14, rtol=1e-12)
@@ -317,6 +342,6 @@ def group_delay_margin(L, channels, omega=None) -> GroupDelayMargin:
             crossings.append((float(w), pm, math.radians(pm % 360.0) / w))
     crossings.sort()
     if not crossings:
-        return GroupDelayMargin(tuple(g), math.inf, None, math.inf, (), True)
+        return GroupDelayMargin(tuple(g), math.inf, None, math.inf, (), True, unresolved)
     w, pm, tau = min(crossings, key=lambda c: c[2])
-    return GroupDelayMargin(tuple(g), tau, w, pm, tuple(crossings), True)
+    return GroupDelayMargin(tuple(g), tau, w, pm, tuple(crossings), True, unresolved)
