@@ -370,3 +370,62 @@ def test_the_sampled_review_assumes_the_scenario_s_computation_delay():
         assert report.sampled.computation_delay_s == pytest.approx(delay / 250.0)
     paper = load_scenario("paper", ["rbf.nodes=3", "controller.rate_hz=100"])
     assert margin_report(paper).sampled.computation_delay_periods == 1
+
+
+# ------------------------------------------------------------------ the report's repr
+
+def _worst(section):
+    """The smallest gain margin of any loop either way and the smallest phase margin,
+    with where, from the loops' fields."""
+    gains = [(m.gain_margin_up_db, f"{m.name} up") for m in section.loops] + \
+        [(-m.gain_margin_down_db, f"{m.name} down") for m in section.loops]
+    gm = min(gains, key=lambda g: g[0])
+    pm = min(((m.phase_margin_deg, m.name) for m in section.loops), key=lambda p: p[0])
+    return gm, pm
+
+
+def _check_repr(rep: MarginReport):
+    text = repr(rep)
+    lines = text.splitlines()
+    sections = [rep.continuous] + ([rep.sampled] if rep.sampled is not None else [])
+    assert len(lines) == 2 + len(sections) and len(text) < 800
+    req = rep.requirement
+    assert lines[0] == (f"<MarginReport of {rep.scenario.name!r} ({rep.point.kind}): "
+                        f"{'PASS' if rep.passed else 'FAIL'} against "
+                        f"{req.gain_margin_db:g} dB / {req.phase_margin_deg:g} deg")
+    for section, line in zip(sections, lines[1:], strict=False):
+        (gm, gm_at), (pm, pm_at) = _worst(section)
+        disk = section.multiloop_disk.disk
+        assert f"GM {gm:.1f} dB ({gm_at})" in line and f"PM {pm:.1f} deg ({pm_at})" in line
+        assert f"multiloop disk +-{20 * math.log10(disk.gain_margin[1]):.1f} dB / " \
+               f"{disk.phase_margin:.1f} deg" in line
+        assert ("stable," if section.stable else "UNSTABLE,") in line
+        failed = [m.name for m in section.loops if not m.passed] + \
+            ([] if section.multiloop_disk.passed else ["multiloop disk"])
+        assert line.endswith(": pass" if section.passed else f": FAIL ({', '.join(failed)})")
+    assert lines[-1] == ("  print(quadland.margins.format_report(report)) for every margin, "
+                         "report.to_dict() for margins.json>")
+    # the notebook's table: a header and a row per controller, the line's words in cells
+    page = rep._repr_html_()
+    assert page.count("<tr>") == 1 + len(sections)
+    for section, line in zip(sections, lines[1:], strict=False):
+        (gm, gm_at), (pm, pm_at) = _worst(section)
+        for cell in (section.title(), f"{gm:.1f} dB ({gm_at})", f"{pm:.1f} deg ({pm_at})"):
+            assert f"<td>{cell}</td>" in page and cell in line
+
+
+def test_repr_is_a_short_summary_of_the_fields(report, landing):
+    """The continuous paper loop and the landing's two controllers: a handful of lines
+    (the dataclass's own repr was over 70,000 characters)."""
+    for rep in (report, landing):
+        _check_repr(rep)
+    assert repr(landing).splitlines()[2].startswith("  sampled 250 Hz, delay 1 period: ")
+
+
+def test_repr_of_a_failed_review_names_what_failed():
+    """A requirement the paper's loop misses (its phase margins are 72-76 deg, its
+    lower gain margins -25 to -48 dB): every loop fails, and the multiloop disk."""
+    rep = _report(requirement=Requirement(30.0, 80.0))
+    assert not rep.passed and rep.continuous.failed
+    _check_repr(rep)
+    assert repr(rep).splitlines()[0].endswith(": FAIL against 30 dB / 80 deg")

@@ -80,7 +80,153 @@ def test_find_eqpt_holds_a_hovering_landing_plant():
 
 
 def test_what_nlsys_refuses_is_one_line():
-    with pytest.raises(ScenarioError, match="sampled-data, with no continuous closed loop"):
-        quadland.nlsys("highway")
     with pytest.raises(ScenarioError, match="which: must be one of closed_loop, plant"):
         quadland.nlsys("paper", "loop")
+
+
+# ------------------------------------------------------------ a landing's sampled loop
+
+#: A landing on perfect sensors under a constant disturbance (its biases): the loop
+#: nlsys gives, and a disturbance that holding it per control period does not change.
+LANDING_QUIET = ["sensors.enabled=false", "disturbance.noise=false",
+                 "disturbance.force_amplitude=0.0", "disturbance.moment_amplitude=0.0",
+                 "wind.turbulence_w20=0.0", "wind.gust_amplitude=0.0"]
+#: ... over a parked car, the guidance holding the hover point (align, a long dwell):
+#: the loop has an equilibrium there, the one quadland margins linearizes at.
+PARKED = [*LANDING_QUIET, "vehicle.tau=[0.0, 0.0, 0.0]", "initial.velocity2=[0.0, 0.0]",
+          "landing.dwell_time=1000.0", "initial.position1=[0.4, -0.3]", "initial.z1=5.0"]
+#: States the hover leaves where they are: the parked car's, the gear's memory (no
+#: contact), the guidance's (held in align, its dwell timer a clock).
+HELD = ("x2", "y2", "psi2", "u2", "v2", "r2", "impulse", "t_contact", "F_peak", "phase",
+        "timer", "z_ref", "aborts")
+
+
+def _constant_w(sc) -> np.ndarray:
+    d = sc.data["disturbance"]
+    return np.r_[sc.data["wind"]["mean"], d["force_bias"], d["moment_bias"]]
+
+
+def test_a_landing_closed_loop_is_the_simulated_flight_up_to_first_contact():
+    """The discrete-time loop from control instant to control instant against
+    quadland.simulate's rows at the instants both have (every 20 ms: 250 Hz control,
+    100 Hz rows) before the first contact: the same CasADi functions and the same RK4
+    steps on the same grid, so the two differ only by evaluating them compiled or on
+    CasADi's virtual machine, rounding (they are bit for bit equal here)."""
+    sc = quadland.load_scenario("highway", LANDING_QUIET)
+    res = quadland.simulate(sc)
+    sys = quadland.nlsys(sc)
+    assert sys.dt == pytest.approx(1 / 250) and sys.ninputs == 9
+    t_contact = float(res["t"][np.argmax(res["touched"] == 1.0)])
+    assert set(res["phase"][res["t"] < t_contact]) == {0.0, 1.0, 2.0}   # approach..descend
+    n = int(np.floor(t_contact / sys.dt))
+    T = sys.dt * np.arange(n + 1)
+    resp = control.input_output_response(sys, T, np.tile(_constant_w(sc)[:, None], n + 1),
+                                         sys.x0)
+    t = np.asarray(res["t"])
+    rows = np.flatnonzero(np.isclose(t * 50, np.rint(t * 50), rtol=0, atol=1e-6) & (t < T[-1]))
+    k = np.rint(res["t"][rows] / sys.dt).astype(int)
+    np.testing.assert_allclose(T[k], res["t"][rows], rtol=0, atol=1e-12)
+    assert len(rows) > 500
+    for name in sys.output_labels:
+        got, want = resp.outputs[sys.output_labels.index(name)][k], res[name][rows]
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12, err_msg=name)
+    # the state: the plant's at the instant, the memory after that instant's step
+    nxp, nxc = 25, res.states.shape[1] - 25
+    np.testing.assert_allclose(resp.states[:nxp, k].T, res.states[rows, :nxp], rtol=1e-12,
+                               atol=1e-12)
+    np.testing.assert_allclose(resp.states[nxp:nxp + nxc, k + 1].T, res.states[rows, nxp:],
+                               rtol=1e-12, atol=1e-12)
+    # the queue holds the command of the step before (controller.delay_periods = 1)
+    queue = [sys.state_labels.index(f"F_{i}_cmd_delay1") for i in range(1, 5)]
+    commands = [sys.output_labels.index(f"F_{i}_cmd") for i in range(1, 5)]
+    np.testing.assert_array_equal(resp.states[queue, 1:], resp.outputs[commands, :-1])
+
+
+def test_a_landing_on_sensors_warns_that_nlsys_reads_the_true_state():
+    with pytest.warns(UserWarning, match=r"nlsys: highway flies on its sensors .* true state"):
+        sys = quadland.nlsys("highway")
+    # the plant (25), the guidance (4), the step's memory (6 l + 22, l = 10 nodes), the
+    # four rotor commands of one period's delay: no filter, no sensor delay lines
+    assert sys.nstates == 25 + 4 + 6 * 10 + 22 + 4 and sys.dt == pytest.approx(0.004)
+
+
+def _hover(rk_steps: int = 1):
+    """The parked scenario, nlsys's equilibrium at its hover by control.find_eqpt (from
+    the scenario's initial state, 0.6 m off and the memory at zero), and quadland's."""
+    from quadland.linearization import equilibrium
+
+    sc = quadland.load_scenario("highway", [*PARKED, f"simulation.rk_steps_per_interval="
+                                                     f"{rk_steps}"])
+    sys = quadland.nlsys(sc)
+    names = sys.state_labels
+    x0 = sys.x0.copy()
+    x0[names.index("phase")] = 1.0                  # align: the hover point, held
+    ix = [names.index(n) for n in HELD]
+    with warnings.catch_warnings():
+        # python-control counts the outputs as constraints although no output is asked
+        # for, and warns; the equations are the free states' updates, as many as they
+        warnings.filterwarnings("ignore", "number of constraints", UserWarning)
+        op = control.find_eqpt(sys, x0, _constant_w(sc), iu=list(range(sys.ninputs)), ix=ix,
+                               idx=[i for i in range(sys.nstates) if i not in ix],
+                               return_result=True)
+    assert op.result.success, op.result.message
+    return sc, sys, op, equilibrium(sc)
+
+
+def test_find_eqpt_finds_quadlands_hover_equilibrium():
+    """find_eqpt on the discrete loop (x = f(x)) against quadland's own hover
+    (Newton's method on the continuous plant's and the memory's rates at rest): the
+    same point, to scipy's root tolerance (1.5e-8 relative)."""
+    sc, sys, op, pt = _hover()
+    x = dict(zip(sys.state_labels, op.states, strict=True))
+    deck = sc.data["deck"]["height"]
+    from_nlsys = dict(x_e=x["x1"], y_e=x["y1"], z_e=x["z1"] - deck, psi_e=x["psi1"] - x["psi2"])
+    for name, value in zip(pt.state_names, pt.xr, strict=True):
+        assert from_nlsys.get(name, x.get(name)) == pytest.approx(value, abs=1e-7), name
+    assert pt.xr[pt.state_names.index("z_e")] == pytest.approx(3.0)    # hover_height
+    memory = sys.state_labels[29:29 + pt.xc.size]           # after the guidance's four
+    np.testing.assert_allclose([x[n] for n in memory], pt.xc, rtol=1e-7, atol=1e-7)
+    # the command in the queue is the step's own at the hover: the equilibrium's forces
+    for i in range(1, 5):
+        assert x[f"F_{i}_cmd_delay1"] == pytest.approx(x[f"F_{i}"], abs=1e-7)
+
+
+def _eigenvalue_gap(sys, op, sc, pt):
+    """The largest distance between the margins' sampled closed loop's eigenvalues and
+    their partners (matched one to one) among control.linearize's; and the rest."""
+    from scipy.optimize import linear_sum_assignment
+
+    from quadland.linearization import sampled_models
+
+    lin = control.linearize(sys, op.states, op.inputs, copy_names=True)
+    assert lin.dt == sys.dt and lin.state_labels == sys.state_labels
+    ours = np.linalg.eigvals(lin.A)
+    c = sc.data["controller"]
+    theirs = np.linalg.eigvals(sampled_models(sc, pt, c["rate_hz"], c["delay_periods"])
+                               .closed_loop.A)
+    gap = np.abs(theirs[:, None] - ours[None, :])
+    rows, cols = linear_sum_assignment(gap)
+    return gap[rows, cols].max(), np.sort(np.delete(ours, cols).real)
+
+
+def test_linearize_at_the_hover_is_quadlands_sampled_loop():
+    """control.linearize of the discrete loop (finite differences through one period)
+    against ``quadland margins``' sampled-data closed loop at the same hover (the
+    plant's Jacobian under an exact zero-order hold, the step's Jacobians, one period of
+    delay): its 102 eigenvalues are among the 115, within RK4's error over a 4 ms step
+    (the fastest plant mode's |lambda h|^5 / 120 is 2e-6), which falls sixteenfold as
+    the steps halve (RK4 is fourth order); the 13 others are the modes the margins'
+    model leaves out, in closed form."""
+    sc, sys, op, pt = _hover()
+    gap, extra = _eigenvalue_gap(sys, op, sc, pt)
+    assert gap < 5e-6
+    # the parked car: its position and heading (1), its speeds' damping exp(-d/m dt); the
+    # gear's memory and the guidance's phase, timer and aborts (1); z_ref, which glides
+    # back onto the hover height in one step (0)
+    v, dt = sc.data["vehicle"], sys.dt
+    expected = np.sort([0.0, *np.exp(-dt * np.array([v["d11"] / v["m11"], v["d22"] / v["m22"],
+                                                     v["d33"] / v["m33"]])), *[1.0] * 9])
+    np.testing.assert_allclose(extra, expected, rtol=0, atol=1e-7)
+    sc2, sys2, op2, pt2 = _hover(rk_steps=2)
+    gap2, _ = _eigenvalue_gap(sys2, op2, sc2, pt2)
+    assert gap2 < gap / 10

@@ -152,7 +152,7 @@ def test_a_result_is_read_only_and_converts_to_pandas():
     assert list(picked.columns) == ["t", "F_1"] and len(picked) == len(res["t"])
     with pytest.raises(KeyError, match="no signal 'nope'"):
         res.to_pandas(["t", "nope"])
-    # what pd.DataFrame of a mapping gives, and the way around it the docstring names
+    # dict(result) is a plain dict of the same columns (tests/test_result.py: pd.DataFrame)
     assert pd.DataFrame(dict(res)).shape == (len(res["t"]), len(res))
 
 

@@ -7,7 +7,7 @@ import dataclasses
 import io
 from collections.abc import Iterable, Mapping
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -18,17 +18,23 @@ __all__ = ["SimulationResult", "columns_sidecar"]
 
 
 @dataclasses.dataclass(frozen=True)
-class SimulationResult(Mapping):
+class SimulationResult(dict):
     """The outputs of one simulation, each a NumPy array by name.
 
     ``result["t"]``, ``result["z_e"]``, ...; ``states`` is the loop's state at
     each row, ``(len(t), nx)``, its columns named by :attr:`state_labels`.
     ``layout`` names the columns of ``trajectory.csv`` (the loop kind's: the
     paper's loop writes all its signals, a landing a selection of the many it
-    records). Every array is
-    read-only, and so is the mapping: a result is a record of a run.
-    :meth:`to_pandas` gives a ``pandas.DataFrame`` (``pd.DataFrame(result)``
-    would see a mapping's keys only; ``pd.DataFrame(dict(result))`` works too).
+    records). Every array is read-only, and so is the mapping: a result is a
+    record of a run.
+
+    A result is a read-only ``dict`` of its signals (a subclass: ``dict``'s
+    methods that would change it raise ``TypeError``), so that what takes a
+    ``dict`` of columns takes it as one: ``pd.DataFrame(result)`` is a
+    ``pandas.DataFrame`` with one column per signal (every one of
+    ``list(result)``, in that order; copies, so the frame is writable), and
+    ``pd.DataFrame(result, columns=[...])`` picks some. :meth:`to_pandas`
+    gives ``trajectory.csv``'s columns with their units in ``attrs``.
     """
 
     scenario: Any
@@ -42,15 +48,19 @@ class SimulationResult(Mapping):
             if isinstance(array, np.ndarray):
                 array.flags.writeable = False
         object.__setattr__(self, "columns", MappingProxyType(dict(self.columns)))
+        dict.update(self, self.columns)
 
-    def __getitem__(self, name: str) -> np.ndarray:
-        return self.columns[name]
+    def _read_only(self, *args, **kwargs) -> NoReturn:
+        raise TypeError("a SimulationResult is read-only (a record of a run): "
+                        "dict(result) or result.to_pandas() gives a copy to change")
 
-    def __iter__(self):
-        return iter(self.columns)
+    __setitem__ = __delitem__ = __ior__ = _read_only
+    clear = pop = popitem = setdefault = update = _read_only
 
-    def __len__(self) -> int:
-        return len(self.columns)
+    def __reduce__(self):
+        """Pickled by its fields (``dict``'s own way would set its items one by one)."""
+        return (type(self), (self.scenario, dict(self.columns), self.states, self.layout,
+                             self.state_layout))
 
     def __repr__(self) -> str:
         """One line: the scenario, the rows and their time span, the columns and states
@@ -92,7 +102,8 @@ class SimulationResult(Mapping):
         ----------
         columns : iterable of str, optional
             Which signals, in order; by default those of ``trajectory.csv``
-            (:attr:`layout`). ``list(result)`` names all of them.
+            (:attr:`layout`). ``list(result)`` names all of them (and
+            ``pd.DataFrame(result)`` gives all of them).
 
         Returns
         -------

@@ -107,7 +107,13 @@ class LoopKind(abc.ABC):
 
         ``{"x0", "p"}``: the continuous closed loop's initial state and
         parameters (None where the loop is sampled-data only); ``{"xp0",
-        "pp"}``: the plant's initial state and parameters (``quadland.nlsys``).
+        "pp"}``: the plant's initial state and parameters (``quadland.nlsys``);
+        for a sampled-data loop, ``"sampled"``: ``{"xc0", "pc", "uh0", "dt",
+        "delay", "substeps", "break_rates", "sensed"}``, the controller's
+        memory, parameters and first held command, the period (s), the delay
+        (periods), the RK4 steps per piece of the grid, the rates (Hz) of the
+        other clocks that split a period, and whether the scenario flies on
+        sensors (:class:`quadland.engine.period.SampledPeriod`).
         """
         raise NotImplementedError(f"{self.name}: no values for quadland.nlsys")
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import html
 import math
 from typing import TYPE_CHECKING
 
@@ -251,6 +252,41 @@ class LoopReport:
         return tuple(m.name for m in self.loops if not m.passed) + (
             () if self.multiloop_disk.passed else ("multiloop disk",))
 
+    @property
+    def worst_gain_margin(self) -> tuple[float, str]:
+        """dB and ``"<loop> up"`` or ``"<loop> down"``: the smallest gain margin of any
+        loop either way (the lower one as a magnitude, ``-gain_margin_down_db``)."""
+        return min(((g, f"{m.name} {way}") for m in self.loops for g, way in
+                    ((m.gain_margin_up_db, "up"), (-m.gain_margin_down_db, "down"))),
+                   key=lambda c: c[0])
+
+    @property
+    def worst_phase_margin(self) -> tuple[float, str]:
+        """deg and the loop: the smallest phase margin of any loop."""
+        m = min(self.loops, key=lambda m: m.phase_margin_deg)
+        return m.phase_margin_deg, m.name
+
+    def title(self) -> str:
+        """``continuous``, or ``sampled 250 Hz, delay 1 period``."""
+        if self.rate_hz is None:
+            return "continuous"
+        k = self.computation_delay_periods
+        return f"sampled {self.rate_hz:g} Hz, delay {k} period{'' if k == 1 else 's'}"
+
+    def digest(self) -> dict[str, str]:
+        """The section in a few words: stability, worst margins, multiloop disk, verdict
+        (:meth:`MarginReport.__repr__`'s line)."""
+        gm, gm_at = self.worst_gain_margin
+        pm, pm_at = self.worst_phase_margin
+        disk = self.multiloop_disk.disk
+        failed = ", ".join(self.failed)
+        return dict(stable="stable" if self.stable else "UNSTABLE",
+                    gain=f"{_number(gm)} dB ({gm_at})", phase=f"{_number(pm)} deg ({pm_at})",
+                    disk=f"+-{_number(decibels(disk.gain_margin[1]))} dB / "
+                         f"{_number(disk.phase_margin)} deg",
+                    verdict="pass" if self.passed else
+                    f"FAIL ({failed})" if failed else "FAIL")
+
     def to_dict(self) -> dict:
         """The ``continuous`` or ``sampled`` entry of ``margins.json`` (infinities kept)."""
         out = dict(stable=self.stable, loops={m.name: m.to_dict() for m in self.loops},
@@ -303,6 +339,49 @@ class MarginReport:
         """Every loop of every reported controller passed."""
         return self.continuous.passed and (self.sampled is None or self.sampled.passed)
 
+    def _sections(self) -> list[LoopReport]:
+        return [self.continuous] + ([] if self.sampled is None else [self.sampled])
+
+    def _heading(self) -> str:
+        at = self.point.kind if self.point.time is None else \
+            f"{self.point.kind} at t = {self.point.time:g} s"
+        req = self.requirement
+        return (f"MarginReport of {self.scenario.name!r} ({at}): "
+                f"{'PASS' if self.passed else 'FAIL'} against {req.gain_margin_db:g} dB / "
+                f"{req.phase_margin_deg:g} deg")
+
+    _HINT = ("print(quadland.margins.format_report(report)) for every margin, "
+             "report.to_dict() for margins.json")
+
+    def __repr__(self) -> str:
+        """A few lines: the scenario, the verdict, each controller's worst margins.
+
+        One line per controller (continuous, then sampled): stability, the
+        smallest gain margin of any loop either way and the smallest phase
+        margin with their loops, the multiloop disk margin and the verdict
+        with what failed; then where the rest is.
+        """
+        lines = [f"<{self._heading()}"]
+        for section in self._sections():
+            d = section.digest()
+            lines.append(f"  {section.title()}: {d['stable']}, GM {d['gain']}, "
+                         f"PM {d['phase']}, multiloop disk {d['disk']}: {d['verdict']}")
+        lines.append(f"  {self._HINT}>")
+        return "\n".join(lines)
+
+    def _repr_html_(self) -> str:
+        """The same as a table, for a notebook."""
+        head = "".join(f"<th>{h}</th>" for h in ("controller", "closed loop", "worst GM",
+                                                 "worst PM", "multiloop disk", "verdict"))
+        rows = []
+        for section in self._sections():
+            d = section.digest()
+            cells = (section.title(), d["stable"], d["gain"], d["phase"], d["disk"],
+                     d["verdict"])
+            rows.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells) + "</tr>")
+        return (f"<p><b>{html.escape(self._heading())}</b></p><table><tr>{head}</tr>"
+                f"{''.join(rows)}</table><p><code>{html.escape(self._HINT)}</code></p>")
+
     def to_dict(self) -> dict:
         """The JSON-ready review, as ``margins.json`` holds it.
 
@@ -333,6 +412,11 @@ class MarginReport:
         if self.sampled is not None:
             data["sampled"] = self.sampled.to_dict()
         return json_ready(data)
+
+
+def _number(x: float) -> str:
+    """``x`` to one decimal, ``inf`` or ``-inf``."""
+    return ("inf" if x > 0 else "-inf") if math.isinf(x) else f"{x:.1f}"
 
 
 def decibels(ratio: float) -> float:

@@ -21,6 +21,7 @@ from matplotlib.patches import Patch
 
 from quadland.plots.finite import drawable
 from quadland.plots.navigation import NAVIGATION_FIGURES, has_estimate, navigation_plot
+from quadland.plots.overlay import redraw_legend, run_index, run_tag
 from quadland.plots.style import finish
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.guidance import PHASES, TOUCHDOWN
@@ -167,16 +168,20 @@ def _touchdown_lines(ax, result: LandingResult, values, label: str, ls: str = ":
                 label=label if i == 0 else "_limit")
 
 
-def _finish_time(fig: Figure, result: LandingResult, axes) -> Figure:
+def _finish_time(fig: Figure, result: LandingResult, axes, own: bool = True) -> Figure:
+    """The legends (again, over every run in an overlay); a new figure's phases and frame."""
     for a in axes:
-        a.legend(loc="best", fontsize="small")    # clear of the touchdown limits at the end
+        redraw_legend(a, loc="best", fontsize="small")   # clear of the touchdown limits
+    if not own:
+        return fig
+    _shade_phases(fig, axes, result)
     finish(fig, result, axes)
     fig.subplots_adjust(top=1 - 0.8 / fig.get_figheight())    # room for the phase legend
     return fig
 
 
 def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None,
-                       ax=None) -> Figure:
+                       ax=None, label: str | None = None) -> Figure:
     """The approach in 3D, seen from the pad centre, equal scales.
 
     Parameters
@@ -186,7 +191,11 @@ def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None,
         m, side of the square pad; by default the scenario's ``pad_size`` (in
         ``[landing]`` or ``[deck]``), else :data:`PAD_SIZE`.
     ax : matplotlib 3D Axes, optional
-        Where to draw (``projection="3d"``); a new figure if None.
+        Where to draw (``projection="3d"``), to overlay runs (each in its own
+        colours, its lines labelled with ``label``); a new figure if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name in an
+        overlay, none alone.
 
     Returns
     -------
@@ -206,25 +215,28 @@ def trajectory_3d_plot(result: LandingResult, pad_size: float | None = None,
         fig = Figure(figsize=(8, 6.5))
         ax = fig.add_subplot(projection="3d")
     fig, a = ax.figure, ax
+    tag, run = run_tag(result, label, own), run_index(ax, "quadrotor")
     rel = [np.asarray(result[f"{n}1"], dtype=float) - np.asarray(result[f"{n}2"], dtype=float)
            for n in "xyz"]
-    a.plot(*rel, color="C0", label="quadrotor")
-    a.plot(*[[r[0]] for r in rel], "o", color="C0", label="quadrotor start")
+    a.plot(*rel, color=f"C{2 * run % 10}", label=f"quadrotor{tag}", gid="quadrotor")
+    a.plot(*[[r[0]] for r in rel], "o", color=f"C{2 * run % 10}",
+           label=f"quadrotor start{tag}")
     a.plot([0.0], [0.0], [0.0], "o", color="C1", label="pad centre")
     row = touchdown_row(result)
-    label = "pad at touchdown"
+    what = "pad at touchdown"
     if row is None:
-        row, label = len(result["t"]) - 1, "pad at the end (no touchdown)"
+        row, what = len(result["t"]) - 1, "pad at the end (no touchdown)"
     square = deck_rectangle(result, row, size, size)
     closed = np.vstack([square, square[:1]]) - [result[f"{n}2"][row] for n in "xyz"]
-    a.plot(closed[:, 0], closed[:, 1], closed[:, 2], color="C3", label=label)
+    a.plot(closed[:, 0], closed[:, 1], closed[:, 2], color=f"C{(2 * run + 3) % 10}",
+           label=what + tag)
     drawn = [np.column_stack(ln.get_data_3d()) for ln in a.lines]    # an overlay's too
     _equal_scales(a, np.vstack(drawn), size)
     a.set_xlabel("x - x2 [m]")
     a.set_ylabel("y - y2 [m]")
     a.set_zlabel("z - z2 [m]")
     a.set_title(LANDING_FIGURES["landing_3d.png"])
-    a.legend(loc="upper left", fontsize="small")
+    redraw_legend(a, loc="upper left", fontsize="small")
     return finish(fig, result) if own else fig
 
 
@@ -241,7 +253,7 @@ def _equal_scales(a, points: np.ndarray, least: float) -> None:
 
 
 def relative_position_plot(result: LandingResult, limits: Mapping | None = None,
-                           ax=None) -> Figure:
+                           ax=None, label: str | None = None) -> Figure:
     """Relative position, speeds and tilt over time against the limits.
 
     Parameters
@@ -250,8 +262,12 @@ def relative_position_plot(result: LandingResult, limits: Mapping | None = None,
     limits : mapping, optional
         See :func:`landing_limits`.
     ax : sequence of four matplotlib Axes, optional
-        Where to draw, to overlay runs (no phase shading then); a new figure
+        Where to draw, to overlay runs (no phase shading then; each run's
+        lines labelled with ``label``, the legends drawn again); a new figure
         if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name in an
+        overlay, none alone.
 
     Returns
     -------
@@ -278,38 +294,41 @@ def relative_position_plot(result: LandingResult, limits: Mapping | None = None,
     t = np.asarray(result["t"])
     x_e, y_e, z_e = (np.asarray(result[n]) for n in ("x_e", "y_e", "z_e"))
     own = ax is None
+    tag = run_tag(result, label, own)
     fig, ax = _time_grid(LANDING_FIGURES["relative_position.png"], 4) if own else \
         (ax[0].figure, list(ax))
-    ax[0].plot(t, x_e, label="x_e")
-    ax[0].plot(t, y_e, label="y_e")
-    ax[0].plot(t, np.hypot(x_e, y_e), label="offset")
+    ax[0].plot(t, x_e, label=f"x_e{tag}")
+    ax[0].plot(t, y_e, label=f"y_e{tag}")
+    ax[0].plot(t, np.hypot(x_e, y_e), label=f"offset{tag}")
     offset = lim["max_offset"]
     _touchdown_lines(ax[0], result, () if offset is None else (offset, -offset), "max_offset")
     ax[0].set_ylabel("position [m]")
-    ax[1].plot(t, z_e, label="z_e")
+    ax[1].plot(t, z_e, label=f"z_e{tag}")
     ax[1].set_ylabel("z_e [m]")
-    ax[2].plot(t, np.hypot(result["dx_e"], result["dy_e"]), label="horizontal speed")
-    ax[2].plot(t, -np.asarray(result["dz_e"]), label="sink rate")
+    ax[2].plot(t, np.hypot(result["dx_e"], result["dy_e"]), label=f"horizontal speed{tag}")
+    ax[2].plot(t, -np.asarray(result["dz_e"]), label=f"sink rate{tag}")
     _touchdown_lines(ax[2], result, (lim["max_relative_speed"],), "max_relative_speed")
     _touchdown_lines(ax[2], result, (lim["max_sink_rate"],), "max_sink_rate", ls="--")
     ax[2].set_ylabel("speed [m/s]")
-    ax[3].plot(t, result["tilt_deg"], label="tilt from deck normal")
+    ax[3].plot(t, result["tilt_deg"], label=f"tilt from deck normal{tag}")
     _touchdown_lines(ax[3], result, (lim["max_tilt_deg"],), "max_tilt_deg")
     ax[3].set_ylabel("tilt [deg]")
-    if not own:
-        return fig
-    _shade_phases(fig, ax, result)
-    return _finish_time(fig, result, ax)
+    return _finish_time(fig, result, ax, own)
 
 
-def landing_ground_track_plot(result: LandingResult, ax=None) -> Figure:
+def landing_ground_track_plot(result: LandingResult, ax=None,
+                              label: str | None = None) -> Figure:
     """Both tracks from above, the starts and the touchdown, with a true-scale inset.
 
     Parameters
     ----------
     result : LandingResult
     ax : matplotlib Axes, optional
-        Where to draw the tracks; a new figure if None.
+        Where to draw the tracks, to overlay runs (each in its own colours,
+        its lines labelled with ``label``); a new figure if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name in an
+        overlay, none alone.
 
     Returns
     -------
@@ -326,31 +345,34 @@ def landing_ground_track_plot(result: LandingResult, ax=None) -> Figure:
         fig = Figure(figsize=(8, 5))
         ax = fig.subplots()
     fig, a = ax.figure, ax
-    _tracks(a, result, markers=True)
+    _tracks(a, result, markers=True, tag=run_tag(result, label, own), n=run_index(a, "quadrotor"))
     row = touchdown_row(result)
     if own and row is not None:
         _touchdown_inset(a, result, row)
     a.set_xlabel("x [m]")
     a.set_ylabel("y [m]")
     a.set_title(LANDING_FIGURES["ground_tracks.png"])
-    a.legend(loc="best", fontsize="small")
+    redraw_legend(a, loc="best", fontsize="small")
     a.grid(True)
     return finish(fig, result) if own else fig
 
 
-def _tracks(a, result: LandingResult, markers: bool) -> None:
-    a.plot(result["x2"], result["y2"], color="C1", label="pad centre")
-    a.plot(result["x1"], result["y1"], "--", color="C0", label="quadrotor")
+def _tracks(a, result: LandingResult, markers: bool, tag: str = "", n: int = 0) -> None:
+    """The pad's and the quadrotor's tracks, the ``n``-th run's colours, labels + ``tag``."""
+    pad, quad = f"C{(2 * n + 1) % 10}", f"C{2 * n % 10}"
+    a.plot(result["x2"], result["y2"], color=pad, label=f"pad centre{tag}")
+    a.plot(result["x1"], result["y1"], "--", color=quad, label=f"quadrotor{tag}",
+           gid="quadrotor")
     if not markers:
         return
-    a.plot(result["x2"][0], result["y2"][0], "o", color="C1", label="pad start")
-    a.plot(result["x1"][0], result["y1"][0], "o", color="C0", label="quadrotor start")
+    a.plot(result["x2"][0], result["y2"][0], "o", color=pad, label=f"pad start{tag}")
+    a.plot(result["x1"][0], result["y1"][0], "o", color=quad, label=f"quadrotor start{tag}")
     row = touchdown_row(result)
     if row is not None:
-        a.plot(result["x2"][row], result["y2"][row], "x", color="C1", ms=10,
-               label="pad at touchdown")
-        a.plot(result["x1"][row], result["y1"][row], "+", color="C0", ms=12,
-               label="quadrotor at touchdown")
+        a.plot(result["x2"][row], result["y2"][row], "x", color=pad, ms=10,
+               label=f"pad at touchdown{tag}")
+        a.plot(result["x1"][row], result["y1"][row], "+", color=quad, ms=12,
+               label=f"quadrotor at touchdown{tag}")
 
 
 def _touchdown_inset(a, result: LandingResult, row: int) -> None:
@@ -371,7 +393,7 @@ def _touchdown_inset(a, result: LandingResult, row: int) -> None:
 
 
 def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None,
-                      ax=None) -> Figure:
+                      ax=None, label: str | None = None) -> Figure:
     """Rotor forces and their sum against ``[0, F_max]``.
 
     Parameters
@@ -380,8 +402,12 @@ def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None,
     limits : mapping, optional
         See :func:`landing_limits`; only ``F_max`` is read.
     ax : sequence of two matplotlib Axes, optional
-        Where to draw, to overlay runs (no phase shading then); a new figure
+        Where to draw, to overlay runs (no phase shading then; each run's
+        lines labelled with ``label``, the legends drawn again); a new figure
         if None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name in an
+        overlay, none alone.
 
     Returns
     -------
@@ -393,20 +419,18 @@ def rotor_forces_plot(result: LandingResult, limits: Mapping | None = None,
     F_max = landing_limits(limits)["F_max"]
     t = result["t"]
     own = ax is None
+    tag = run_tag(result, label, own)
     fig, ax = _time_grid(LANDING_FIGURES["rotor_forces.png"], 2) if own else \
         (ax[0].figure, list(ax))
     for k in range(1, 5):
-        ax[0].plot(t, result[f"F_{k}"], label=f"F_{k}")
-    ax[1].plot(t, result["F_total"], label="F_total")
+        ax[0].plot(t, result[f"F_{k}"], label=f"F_{k}{tag}")
+    ax[1].plot(t, result["F_total"], label=f"F_total{tag}")
     for a, n in ((ax[0], 1), (ax[1], 4)):
         _limit_lines(a, (0.0,) if F_max is None else (0.0, n * F_max),
                      "0" if F_max is None else f"[0, {'4 ' * (n == 4)}F_max]")
     ax[0].set_ylabel("rotor force [N]")
     ax[1].set_ylabel("F_total [N]")
-    if not own:
-        return fig
-    _shade_phases(fig, ax, result)
-    return _finish_time(fig, result, ax)
+    return _finish_time(fig, result, ax, own)
 
 
 def landing_figures(result: LandingResult, limits: Mapping | None = None) -> dict[str, Figure]:

@@ -15,6 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from quadland.plots.finite import drawable
+from quadland.plots.overlay import redraw_legend, run_index, run_tag
 from quadland.plots.style import finish
 from quadland_symbolic.landing.estimator import FLIGHT_COUPLING
 from quadland_symbolic.landing.guidance import TOUCHDOWN
@@ -64,7 +65,7 @@ def _horizon_rows(result) -> np.ndarray:
     return rows
 
 
-def navigation_plot(result) -> Figure:
+def navigation_plot(result, ax=None, label: str | None = None) -> Figure:
     """The filter's relative position against the truth, with its 3-sigma band.
 
     Parameters
@@ -73,6 +74,13 @@ def navigation_plot(result) -> Figure:
         A landing flown on its sensors: ``t``, ``phase``, both bodies' positions
         ``x1 .. z1``, ``x2 .. z2`` and the filter's recorded horizon (``t_h``, the state
         ``x_h_p_r_*`` and its covariance ``P_h_*``).
+    ax : sequence of three matplotlib Axes, optional
+        Where to draw, to overlay runs (each in its own colour, its lines
+        labelled with ``label``, the legends drawn again); a new figure if
+        None.
+    label : str, optional
+        The run's name in the legend; by default its scenario's name in an
+        overlay, none alone.
 
     Returns
     -------
@@ -88,10 +96,17 @@ def navigation_plot(result) -> Figure:
     rows = _horizon_rows(result)
     t = np.asarray(result["t"], dtype=float)
     t_h = np.asarray(result["t_h"], dtype=float)[rows]
-    fig = Figure(figsize=(7, 6.6))
-    axes = fig.subplots(3, 1, sharex=True)
-    fig.suptitle(NAVIGATION_FIGURES["navigation.png"], y=1 - 0.1 / fig.get_figheight(),
-                 va="top")
+    own = ax is None
+    if own:
+        fig = Figure(figsize=(7, 6.6))
+        axes = fig.subplots(3, 1, sharex=True)
+        fig.suptitle(NAVIGATION_FIGURES["navigation.png"], y=1 - 0.1 / fig.get_figheight(),
+                     va="top")
+    else:
+        axes = list(np.ravel(np.asarray(ax, dtype=object)))
+        fig = axes[0].figure
+    tag, run = run_tag(result, label, own), run_index(axes[0], "estimate")
+    color = f"C{run % 10}"
     for a, (ax, var) in enumerate(zip(axes, _variance_names(), strict=True)):
         body1, body2 = (np.asarray(result[f"{n}{b}"], dtype=float)
                         for n, b in ((_AXES[a], "1"), (_AXES[a], "2")))
@@ -99,12 +114,15 @@ def navigation_plot(result) -> Figure:
         truth = np.interp(t_h, t[ok], (body1 - body2)[ok]) if ok.any() else t_h * np.nan
         est = np.asarray(result[f"x_h_p_r_{_AXES[a]}"], dtype=float)[rows]
         sigma = np.sqrt(np.clip(np.asarray(result[var], dtype=float)[rows], 0, None))
-        ax.fill_between(t_h, est - 3 * sigma, est + 3 * sigma, color="C0", alpha=0.25,
-                        lw=0, label="estimate +- 3 sigma")
-        ax.plot(t_h, est, color="C0", label="estimate")
-        ax.plot(t_h, truth, color="k", ls="--", lw=1, label="truth")
+        ax.fill_between(t_h, est - 3 * sigma, est + 3 * sigma, color=color, alpha=0.25,
+                        lw=0, label=f"estimate +- 3 sigma{tag}")
+        ax.plot(t_h, est, color=color, label=f"estimate{tag}", gid="estimate")
+        ax.plot(t_h, truth, color="k" if run == 0 else color, ls="--", lw=1,
+                label=f"truth{tag}")
         ax.set_ylabel(f"p_r {_AXES[a]} [m]")
-        ax.legend(loc="upper right", fontsize="small")
+        redraw_legend(ax, loc="upper right", fontsize="small")
+    if not own:
+        return fig
     finish(fig, result, axes)
     axes[-1].set_xlabel("filter horizon time t_h [s]")
     return fig

@@ -64,10 +64,23 @@ class LandingKind(LoopKind):
         return report.landing_summary(result)
 
     def io_values(self, scenario: Scenario) -> dict[str, Any]:
+        from quadland.kinds.landing.sensed import sensors_enabled
         from quadland.kinds.landing.values import landing_values
+        from quadland_symbolic.landing.plant import LANDING_PLANT_STATE
+        from quadland_symbolic.landing.quadrotor import QUAD6_STATE
 
         lv = landing_values(scenario)
-        return {"x0": None, "p": None, "xp0": lv.xp0, "pp": lv.pp}
+        d = scenario.data
+        hover = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])["F"]
+        # the sampled loop on perfect sensors, as simulate_landing flies it without them
+        sampled = {"xc0": lv.xc0, "pc": lv.pc, "uh0": hover,
+                   "dt": 1.0 / d["controller"]["rate_hz"],
+                   "delay": d["controller"]["delay_periods"],
+                   "substeps": d["simulation"]["rk_steps_per_interval"],
+                   "break_rates": (d["simulation"]["output_rate_hz"],
+                                   d["disturbance"]["sample_rate_hz"]),
+                   "sensed": sensors_enabled(scenario)}
+        return {"x0": None, "p": None, "xp0": lv.xp0, "pp": lv.pp, "sampled": sampled}
 
     def result_lines(self, summary: Mapping[str, Any]) -> list[str]:
         return report.landing_result_lines(summary)
