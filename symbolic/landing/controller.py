@@ -296,7 +296,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     mm, c = landing_memory(l).unpack(mem), landing_controller_params(l).unpack(p_ctrl)
     q, act = QUADROTOR.unpack(p_quad), ACTUATOR.unpack(p_act)
     p_e, v_e, Omega1, eta2 = ms["p_e"], ms["v_e"], ms["Omega1"], ms["eta2"]
-    td = bounded_commands(rs, c["tilt_max"])                     # the touchdown policy's
+    td = bounded_commands(rs, c["tilt_max"])                     # the touchdown policy
     # the yaw within half a turn of the deck's heading, its reference: a yaw
     # measured 2 pi k away is the same attitude, not k turns to unwind
     yaw_error = ms["eta1"][2] - eta2[2]
