@@ -38,7 +38,11 @@ typedef char position_reference_is_its_layout[
     AT(ql_position_reference, p_ref, 0, 0) &&
     AT(ql_position_reference, v_ref, 3, 0) &&
     AT(ql_position_reference, a_ref, 6, 0) &&
-    sizeof(ql_position_reference) == 9 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_position_reference, tilt_limit, 9, 0) &&
+    AT(ql_position_reference, level, 10, 0) &&
+    AT(ql_position_reference, thrust_scale, 11, 0) &&
+    AT(ql_position_reference, power, 12, 0) &&
+    sizeof(ql_position_reference) == 13 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_state_is_its_layout[
     AT(ql_landing_state, W_hat, 0, 0) &&
     AT(ql_landing_state, zeta_hat, 60, 0) &&
@@ -121,7 +125,13 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, settle_time, 10, 0) &&
     AT(ql_guidance_params, marker_timeout, 11, 0) &&
     AT(ql_guidance_params, search_height, 12, 0) &&
-    sizeof(ql_guidance_params) == 13 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, fly_on, 13, 0) &&
+    AT(ql_guidance_params, flare_height, 14, 0) &&
+    AT(ql_guidance_params, flare_tilt, 15, 0) &&
+    AT(ql_guidance_params, hold_time, 16, 0) &&
+    AT(ql_guidance_params, level_time, 17, 0) &&
+    AT(ql_guidance_params, cut_time, 18, 0) &&
+    sizeof(ql_guidance_params) == 19 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -153,10 +163,11 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[13] = {
+static const ql_real default_p_guid[19] = {
     3.0, 0.5, 1.0, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
-    10.0,
+    10.0, 0.0, 0.15, 0.5934119456780721, 0.0, 0.35,
+    0.5,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -402,6 +413,12 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   settle_time              >= 0
  *   marker_timeout           >= 0
  *   search_height            > 0
+ *   fly_on                   0 or 1
+ *   flare_height             >= 0
+ *   flare_tilt               in (0, 1.5708)
+ *   hold_time                >= 0
+ *   level_time               > 0
+ *   cut_time                 >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -452,6 +469,24 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     }
     if (!bad && !(isfinite(p[12]) && (p[12] > 0.0))) {
         bad = "search_height";
+    }
+    if (!bad && !(isfinite(p[13]) && ((p[13] == 0.0) || (p[13] == 1.0)))) {
+        bad = "fly_on";
+    }
+    if (!bad && !(isfinite(p[14]) && (p[14] >= 0.0))) {
+        bad = "flare_height";
+    }
+    if (!bad && !(isfinite(p[15]) && ((p[15] > 0.0) && (p[15] < 1.5707963267948966)))) {
+        bad = "flare_tilt";
+    }
+    if (!bad && !(isfinite(p[16]) && (p[16] >= 0.0))) {
+        bad = "hold_time";
+    }
+    if (!bad && !(isfinite(p[17]) && (p[17] > 0.0))) {
+        bad = "level_time";
+    }
+    if (!bad && !(isfinite(p[18]) && (p[18] >= 0.0))) {
+        bad = "cut_time";
     }
     if (bad_field) {
         *bad_field = bad;
@@ -525,7 +560,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 13 comparisons. The values are known to be finite; no names and no
+ * 19 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -543,6 +578,12 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[10] >= 0.0);
     ok &= (p[11] >= 0.0);
     ok &= (p[12] > 0.0);
+    ok &= ((p[13] == 0.0) | (p[13] == 1.0));
+    ok &= (p[14] >= 0.0);
+    ok &= ((p[15] > 0.0) & (p[15] < 1.5707963267948966));
+    ok &= (p[16] >= 0.0);
+    ok &= (p[17] > 0.0);
+    ok &= (p[18] >= 0.0);
     return ok;
 }
 
@@ -596,7 +637,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            ql_guidance_state *state, ql_position_reference *ref)
 {
     /* xg = [phase, timer, z_ref, aborts], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[4], res_v[13];
+    ql_real xg[4], res_v[17];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -612,7 +653,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[2] = state->z_ref;
     xg[3] = (ql_real)state->aborts;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
-          & all_finite((const ql_real *)params, 13)
+          & all_finite((const ql_real *)params, 19)
           & all_finite(xg, 4) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
@@ -631,7 +672,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     res[0] = res_v + 0;
     res[1] = res_v + 4;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 13)) {
+    if (!all_finite(res_v, 17)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -666,7 +707,7 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     /* The measurements, the reference, dt and every parameter. The state is
      * checked through the outputs: each of its values reaches mem_next (a NaN
      * or an infinity in W_hat through a_w W_hat, 0 * inf being NaN, and so on). */
-    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 9)
+    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 13)
           & all_finite((const ql_real *)params, QL_LANDING_PARAMS_SIZE) & (isfinite(dt) != 0))) {
         output_zero(out, 0);
         return QL_ERR_NONFINITE_INPUT;

@@ -22,7 +22,7 @@ extern "C" {
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QL_LANDING_PARAMS_SIZE 128               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 82                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 13               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 19               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
 #define QL_LANDING_PLANT_NP 331                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
@@ -37,7 +37,7 @@ typedef enum {
     QL_PHASE_APPROACH = 0,         /* fly to the hover point above the pad */
     QL_PHASE_ALIGN = 1,            /* hold the hover point until offset and speed are within half their limits */
     QL_PHASE_DESCEND = 2,          /* descend along the profile; abort back to align when a limit is exceeded */
-    QL_PHASE_TOUCHDOWN = 3,        /* the flight stack reports the gear on the deck: rotors idle, the reference holds */
+    QL_PHASE_TOUCHDOWN = 3,        /* the flight stack reports the gear on the deck: rotors idle (or, flying on, level out and cut once the lock holds), the reference holds */
     QL_PHASE_LANDED = 4,           /* settle_time after touchdown */
 } ql_phase;
 
@@ -67,6 +67,10 @@ typedef struct {
     ql_real p_ref[3];                /* m: reference position (x_ref, y_ref, z_ref) */
     ql_real v_ref[3];                /* m/s: its rate (vx_ref, vy_ref, vz_ref) */
     ql_real a_ref[3];                /* m/s^2: its acceleration (ax_ref, ay_ref, az_ref) */
+    ql_real tilt_limit;              /* rad: largest tilt of the thrust axis (with the controller's own) */
+    ql_real level;                   /* -: blend of the attitude command towards the deck's level, 0 to 1 */
+    ql_real thrust_scale;            /* -: factor on the collective thrust before the mixer, 0 to 1 */
+    ql_real power;                   /* -: factor on the rotor commands: 0 cuts them */
 } ql_position_reference;
 
 /* The landing step's memory: network, robust terms, command filter and
@@ -167,6 +171,12 @@ typedef struct {
     ql_real settle_time;             /* s: time from touchdown to landed */
     ql_real marker_timeout;          /* s: largest marker age at which the align criteria count */
     ql_real search_height;           /* m: hover height while the marker is not seen (in align) */
+    ql_real fly_on;                  /* 0/1: 1: the touchdown policy flies on until the lock holds (quadland_symbolic.landing.touchdown_policy); 0: its commands are inert */
+    ql_real flare_height;            /* m: reference height above touchdown below which the tilt is limited to flare_tilt */
+    ql_real flare_tilt;              /* rad: tilt limit of the thrust axis from the flare on */
+    ql_real hold_time;               /* s: time from touchdown during which the flight code flies on */
+    ql_real level_time;              /* s: time of the level-out and the thrust's ramp-down after it */
+    ql_real cut_time;                /* s: time from touchdown to the cut (at least hold_time + level_time) */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */

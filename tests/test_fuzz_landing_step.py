@@ -51,7 +51,14 @@ from quadland_symbolic.landing.controller import (
     landing_guidance_function,
     landing_memory,
 )
-from quadland_symbolic.landing.guidance import ALIGN, APPROACH, DESCEND, LANDED, TOUCHDOWN
+from quadland_symbolic.landing.guidance import (
+    ALIGN,
+    APPROACH,
+    DESCEND,
+    LANDED,
+    POSITION_REFERENCE,
+    TOUCHDOWN,
+)
 from quadland_symbolic.landing.loop import landing_loop_params
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
@@ -110,6 +117,9 @@ GUIDANCE_DOCUMENTED = {
     "touchdown_height": _nonnegative, "max_offset": _positive,
     "max_relative_speed": _positive, "max_deck_rise": _positive, "settle_time": _nonnegative,
     "marker_timeout": _nonnegative, "search_height": _positive,
+    "fly_on": lambda v, p: (v == 0) | (v == 1), "flare_height": _nonnegative,
+    "flare_tilt": lambda v, p: (v > 0) & (v < math.pi / 2), "hold_time": _nonnegative,
+    "level_time": _positive, "cut_time": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -219,8 +229,12 @@ class _Harness:
         self._retune(rng, self.v_p, self.p0, "landing")
         self.v_p[_offset("landing", "tilt_min")] = rng.choice((0.0, 1e-3, rng.uniform(0, 0.9)))
         p_e = self.v_y[LANDING_MEASUREMENT.slice("p_e")]
-        self.v_ref[:] = np.r_[p_e, 0, 0, -rng.uniform(0, 0.7), 0, 0, rng.normal() * 0.3] + \
-            scale * rng.normal(size=9)
+        self.v_ref[:] = np.r_[np.r_[p_e, 0, 0, -rng.uniform(0, 0.7), 0, 0, rng.normal() * 0.3]
+                              + scale * rng.normal(size=9),
+                              # the touchdown policy's commands: a tilt limit, the level-out
+                              # and the collective's ramp, the cut
+                              rng.uniform(0.05, math.pi / 2), rng.uniform(0, 1),
+                              rng.uniform(0, 1), rng.choice((0.0, 1.0))]
         mem = landing_memory(L).unpack(np.zeros(landing_memory(L).size))
         st = {k: rng.normal(size=v.shape) * scale * 0.2 for k, v in mem.items()}
         st["W_hat"] *= rng.choice((0.0, 0.1, 1.0, 30.0))
@@ -341,6 +355,12 @@ def _check_step(h, rng, counts):
     # every force the step computed is representable: a NaN or an infinite force
     # must not be clipped into a finite command
     assert largest <= Q(float(h.fi.max)) * (1 + Q(1, 10 ** 6)), "QL_OK although a force overflowed"
+    # the touchdown policy's power, read within [0, 1]: 0 cuts every rotor, a fraction
+    # scales the clipped commands
+    power = min(max(float(h.v_ref[POSITION_REFERENCE.slice("power").start]), 0.0), 1.0)
+    if power < 1:
+        assert np.all(F <= power * F_max * (1 + 8 * float(h.fi.eps)))
+        return
     if max(p[_offset("landing", "quad.arm")], p[_offset("landing", "quad.c")]) > \
             float(h.fi.max) / 8:
         return

@@ -20,7 +20,8 @@ from quadland_symbolic.landing.guidance import (
 P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
          descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2, max_offset=0.2,
          max_relative_speed=0.5, max_deck_rise=0.8, settle_time=0.1, marker_timeout=0.5,
-         search_height=6.0)
+         search_height=6.0, fly_on=0.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
+         level_time=0.3, cut_time=0.5)
 DT = 0.002
 GUIDANCE = guidance_function()
 
@@ -148,7 +149,10 @@ def test_descent_touches_down_when_the_gap_closes_then_lands_after_settling():
     assert np.all(phases[:41] == DESCEND) and phases[41] == TOUCHDOWN
     k_landed = int(np.argmax(phases == LANDED))
     assert k_landed == 41 + 50                         # settle_time 0.1 s at 2 ms
-    np.testing.assert_array_equal(rows[k_landed][1][3:], 0)   # the reference is at rest
+    np.testing.assert_array_equal(rows[k_landed][1][3:9], 0)  # the reference is at rest
+    # the touchdown policy off (fly_on = 0): its commands are inert throughout
+    commands = np.array([ref[9:] for _, ref in rows])
+    np.testing.assert_array_equal(commands, [[math.pi / 2, 0.0, 1.0, 1.0]] * len(rows))
     z = [GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows[41:]]
     assert len(set(z)) == 1
 

@@ -31,6 +31,7 @@ from quadland_symbolic.landing.plant import LANDING_PLANT_STATE, landing_plant_f
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from quadland_symbolic.landing.relative import relative6, relative6_acceleration
 from quadland_symbolic.landing.sensors import measurement_function
+from quadland_symbolic.landing.touchdown_policy import INERT_COMMANDS
 from quadland_symbolic.loop import rk4_step
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE
@@ -105,7 +106,8 @@ def _random_case(rng, scale=1.0):
         eta2=rng.uniform(-0.1, 0.1, 3) + [0, 0, 0.4], v2E=rng.normal(0, 2, 3),
         a2E=rng.normal(0, 0.5, 3), w2E=rng.normal(0, 0.1, 3), w2E_dot=rng.normal(0, 0.1, 3)))
     ref = POSITION_REFERENCE.pack(dict(p_ref=rng.normal(0, 0.3, 3) + [0, 0, 1.5],
-                              v_ref=rng.normal(0, 0.2, 3), a_ref=rng.normal(0, 0.2, 3)))
+                              v_ref=rng.normal(0, 0.2, 3), a_ref=rng.normal(0, 0.2, 3),
+                              **INERT_COMMANDS))
     mem = landing_memory(L_NODES).pack(dict(
         W_hat=rng.normal(0, 0.05, (L_NODES, 6)), zeta_hat=rng.uniform(0, 0.2, 6),
         eta_f=rng.uniform(-0.1, 0.1, 2), eta_f_dot=rng.normal(0, 0.1, 2),
@@ -358,7 +360,7 @@ def test_the_moments_come_first_and_the_thrust_takes_what_they_leave(step):
         eta2=[0.0, 0.0, 0.4], v2E=np.zeros(3), a2E=np.zeros(3), w2E=np.zeros(3),
         w2E_dot=np.zeros(3)))
     ref = POSITION_REFERENCE.pack(dict(p_ref=[0.0, 0.0, 3.0], v_ref=np.zeros(3),
-                                       a_ref=np.zeros(3)))
+                                       a_ref=np.zeros(3), **INERT_COMMANDS))
     out = _call(step, y, ref, landing_memory(L_NODES).zeros(), _p_ctrl(1.0), P_QUAD, P_ACT,
                 0.004)
     wrench = out["wrench"].ravel()
@@ -447,7 +449,8 @@ def test_hover_over_a_stationary_deck(step, nominal):
                             Omega1=np.zeros(3), F=[M1 * G / 4] * 4)),
         xv=VEHICLE_STATE.pack(dict(x2=0, y2=0, psi2=psi2, u2=0, v2=0, r2=0)),
         gear=np.zeros(3)))
-    ref = POSITION_REFERENCE.pack(dict(p_ref=hover, v_ref=np.zeros(3), a_ref=np.zeros(3)))
+    ref = POSITION_REFERENCE.pack(dict(p_ref=hover, v_ref=np.zeros(3), a_ref=np.zeros(3),
+                                       **INERT_COMMANDS))
     p_ctrl, mem = _p_ctrl(nominal), landing_memory(L_NODES).zeros()
     measure, rk4 = measurement_function(), rk4_step(landing_plant_function())
     out_lay = landing_step_outputs(L_NODES)

@@ -43,6 +43,7 @@ from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
 from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY
 from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
+from quadland_symbolic.landing.touchdown_policy import INERT_COMMANDS
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -211,7 +212,7 @@ def test_landing_step_errors_leave_the_state_and_zero_the_outputs(harness, rng, 
     h = harness
     h.api.lib.ql_landing_params_init(ctypes.byref(h.params))
     h.v_y[:] = _measurement(rng, 0.3)
-    h.v_ref[:] = [0, 0, 2, 0, 0, -0.3, 0, 0, 0]
+    h.v_ref[:] = [0, 0, 2, 0, 0, -0.3, 0, 0, 0, *INERT_COMMANDS.values()]
     h.v_state[:] = rng.normal(size=h.v_state.size) * 0.1
     p = landing_params_layout(L)
     dt = 0.004
@@ -364,17 +365,18 @@ def test_the_sensed_flight_code_without_a_compiler_is_one_line(tmp_path):
 QUIET = ["disturbance.noise=false", "wind.turbulence_w20=0.0", "sensors.enabled=false"]
 QUIET_SENSED = ["disturbance.noise=false", "wind.turbulence_w20=0.0", "sensors.random=false"]
 
-#: The example trees: generated/ (highway on its sensors), the ship's, and the
-#: highway's on perfect sensing; each with the scenario its land flies.
+#: The example trees: generated/ (highway on its sensors), the ship's, the highway's on
+#: perfect sensing and highway_100's (its touchdown policy flies on until the magnet
+#: holds); each with the scenario its land flies.
 TREES = {"highway": ("highway", QUIET_SENSED), "ship": ("ship", QUIET_SENSED),
-         "highway_perfect": ("highway", QUIET)}
+         "highway_perfect": ("highway", QUIET), "highway_100": ("highway_100", QUIET_SENSED)}
 
 
 @pytest.fixture(scope="module")
 def examples(tmp_path_factory):
     """land, land_float and bench built from a copy of generated/ (highway), and land
-    from trees generated for the ship and for the highway on perfect sensing (nothing is
-    written in the tree)."""
+    from trees generated for the ship, for the highway on perfect sensing and for
+    highway_100 (nothing is written in the tree)."""
     if shutil.which("make") is None:
         pytest.skip("no make")
     cc = build.find_compiler()
@@ -384,10 +386,13 @@ def examples(tmp_path_factory):
     codegen.write(trees["ship"], codegen.generated_files(quadland.load_scenario("ship")))
     codegen.write(trees["highway_perfect"], codegen.generated_files(
         quadland.load_scenario("highway", ["sensors.enabled=false"])))
+    codegen.write(trees["highway_100"], codegen.generated_files(
+        quadland.load_scenario("highway_100")))
     procs = [subprocess.Popen(["make", "-s", f"CC={cc}", *targets], cwd=trees[name] / "example",
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
              for name, targets in (("highway", ["build/land", "build/land_float", "build/bench"]),
-                                   ("ship", ["build/land"]), ("highway_perfect", ["build/land"]))]
+                                   ("ship", ["build/land"]), ("highway_perfect", ["build/land"]),
+                                   ("highway_100", ["build/land"]))]
     for proc in procs:
         out, _ = proc.communicate(timeout=600)
         assert proc.returncode == 0, out.decode()

@@ -241,13 +241,24 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     # What happens once the gear touches (docs/landing.md, "Touchdown policy").
     "touchdown": {
         "policy": Field(S, "-", "idle: the gear's contact switch cuts the rotors to "
-                        "idle_thrust; hold: the flight code keeps commanding them",
-                        choices=("idle", "hold")),
+                        "idle_thrust; hold: the flight code keeps commanding them; secure: "
+                        "the flight code flies on until the lock holds, then cuts them",
+                        choices=("idle", "hold", "secure")),
         "cut_delay": Field(F, "s", "time from the contact switch closing to the rotor cut",
                            lo=0.0, hi=10.0),
         "idle_thrust": Field(F, "N", "each rotor's command once cut", lo=0.0, hi=1e3),
         "switch_impulse": Field(F, "s", "load impulse over the weight that closes the contact "
                                 "switch", hi=1.0, **_POS),
+        "flare_height": Field(F, "m", "secure: reference height above touchdown from which the "
+                              "tilt is limited to flare_tilt_deg", lo=0.0, hi=100.0),
+        "flare_tilt_deg": Field(F, "deg", "secure: tilt limit of the thrust axis from the flare "
+                                "on", hi=89.0, **_POS),
+        "hold_time": Field(F, "s", "secure: time from touchdown during which the flight code "
+                           "flies on as in the descent", lo=0.0, hi=10.0),
+        "level_time": Field(F, "s", "secure: time of the level-out to the deck's attitude and "
+                            "the thrust's ramp-down, after hold_time", hi=10.0, **_POS),
+        "cut_time": Field(F, "s", "secure: time from touchdown to the rotor cut (at least "
+                          "hold_time + level_time)", lo=0.0, hi=10.0),
         "lock": Field(S, "-", "lock-down device: none, or magnet (an electro-permanent magnet "
                       "under the gear's centre)", choices=("none", "magnet")),
         "lock_hold_force": Field(F, "N", "the lock's largest holding force", lo=0.0, hi=1e5),

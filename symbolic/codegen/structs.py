@@ -374,6 +374,12 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "settle_time": _NONNEGATIVE,
     "marker_timeout": _NONNEGATIVE,
     "search_height": _POSITIVE,
+    "fly_on": Range(choices=(0.0, 1.0)),
+    "flare_height": _NONNEGATIVE,
+    "flare_tilt": Range(lo=0.0, hi=math.pi / 2, lo_open=True, hi_open=True),
+    "hold_time": _NONNEGATIVE,
+    "level_time": _POSITIVE,
+    "cut_time": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

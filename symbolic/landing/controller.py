@@ -69,6 +69,7 @@ from quadland_symbolic.landing.guidance import (
 )
 from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from quadland_symbolic.landing.relative import RELATIVE6, deck_gear_gap
+from quadland_symbolic.landing.touchdown_policy import apply_touchdown_commands, bounded_commands
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.quadrotor import WRENCH, rotors_from_wrench
@@ -294,8 +295,8 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     ms, rs = LANDING_MEASUREMENT.unpack(y), POSITION_REFERENCE.unpack(ref)
     mm, c = landing_memory(l).unpack(mem), landing_controller_params(l).unpack(p_ctrl)
     q, act = QUADROTOR.unpack(p_quad), ACTUATOR.unpack(p_act)
-    p_e, v_e, Omega1 = ms["p_e"], ms["v_e"], ms["Omega1"]
-    eta2 = ms["eta2"]
+    p_e, v_e, Omega1, eta2 = ms["p_e"], ms["v_e"], ms["Omega1"], ms["eta2"]
+    td = bounded_commands(rs, c["tilt_max"])                     # the touchdown policy
     # the yaw within half a turn of the deck's heading, its reference: a yaw
     # measured 2 pi k away is the same attitude, not k turns to unwind
     yaw_error = ms["eta1"][2] - eta2[2]
@@ -322,10 +323,10 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     a_des = (-k2p * z2p - z1p - Delta_hat[_POSITION] - squash_p * zeta_hat[_POSITION] + alpha_p_dot
              - f_g - nominal * f_r - mm["d_hat"][_POSITION])                   # eq. 20, bias
     t_E = m1 * R_deck @ a_des                                                  # N, in E
-    th = thrust_attitude(t_E, eta2[2], c["tilt_max"], 4 * act["F_max"])
+    th = thrust_attitude(t_E, eta2[2], td["tilt_limit"], 4 * act["F_max"])
 
-    # command filter: its state at t_k is the inner loop's reference
-    eta_c = ca.vertcat(th["phi"], th["theta"])
+    # command filter (its state is the inner loop's reference); the touchdown policy levels
+    eta_c = apply_touchdown_commands(td["level"], ca.vertcat(th["phi"], th["theta"]), eta2[0:2])
     eta_f, eta_f_dot = mm["eta_f"], mm["eta_f_dot"]
     eta_f_next, eta_f_dot_next, eta_f_ddot = command_filter(eta_f, eta_f_dot, eta_c, c["w_f"],
                                                             c["zeta_f"], dt)
@@ -338,11 +339,11 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
                                           zeta_hat[_ATTITUDE], p_quad)
 
     # rotors: the moments first, the collective thrust within what they leave
-    T = thrust_within_moments(th["T"], q["I"] * u_a, p_quad, act["F_max"])
+    T = thrust_within_moments(td["thrust_scale"] * th["T"], q["I"] * u_a, p_quad, act["F_max"])
     delta = R_deck.T @ (T * th["b3"] - t_E) / m1                               # limits' shortfall
     wrench = ca.vertcat(T, q["I"] * u_a)
     unclipped = rotors_from_wrench(wrench, p_quad)
-    F_cmd = clip_forces(unclipped, 0, act["F_max"])
+    F_cmd = td["power"] * clip_forces(unclipped, 0, act["F_max"])
     n_clipped = clipped_count(unclipped, act["F_max"])
 
     # memory over dt, measurements held

@@ -22,8 +22,11 @@ the abort count. Phases (:data:`PHASES`):
    the gear on the deck (:data:`GUIDANCE_CUES`' ``touchdown``: on perfect
    sensing the measured gear gap at or below zero, on sensors the land
    detector's verdict, :mod:`quadland_symbolic.landing.land_detector`). The
-   reference holds; the flight stack idles the rotors. (The simulator
-   locates the true contact within its step and ends the flight there.)
+   reference holds; the flight stack idles the rotors. With the touchdown
+   policy that flies on until the lock-down holds (``fly_on``,
+   :mod:`quadland_symbolic.landing.touchdown_policy`) the reference crawls on
+   into the deck, and the reference carries the policy's flare, level-out and
+   cut (:data:`POSITION_REFERENCE`'s last fields) from the descent on.
 4. **landed**: ``settle_time`` after touchdown.
 
 **The marker.** The descent starts only while the landing marker is seen:
@@ -53,6 +56,11 @@ from __future__ import annotations
 
 import casadi as ca
 
+from quadland_symbolic.landing.touchdown_policy import (
+    TOUCHDOWN_COMMANDS,
+    touchdown_commands,
+    touchdown_crawl,
+)
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["PHASES", "PHASE_DOCS", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED",
@@ -66,7 +74,8 @@ PHASES = ("approach", "align", "descend", "touchdown", "landed")
 PHASE_DOCS = ("fly to the hover point above the pad",
               "hold the hover point until offset and speed are within half their limits",
               "descend along the profile; abort back to align when a limit is exceeded",
-              "the flight stack reports the gear on the deck: rotors idle, the reference holds",
+              "the flight stack reports the gear on the deck: rotors idle (or, flying on, "
+              "level out and cut once the lock holds), the reference holds",
               "settle_time after touchdown")
 APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED = range(len(PHASES))
 
@@ -93,6 +102,14 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("settle_time", 1, "s", "time from touchdown to landed"),
     Field("marker_timeout", 1, "s", "largest marker age at which the align criteria count"),
     Field("search_height", 1, "m", "hover height while the marker is not seen (in align)"),
+    Field("fly_on", 1, "0/1", "1: the touchdown policy flies on until the lock holds "
+          "(quadland_symbolic.landing.touchdown_policy); 0: its commands are inert"),
+    Field("flare_height", 1, "m", "reference height above touchdown below which the tilt "
+          "is limited to flare_tilt"),
+    Field("flare_tilt", 1, "rad", "tilt limit of the thrust axis from the flare on"),
+    Field("hold_time", 1, "s", "time from touchdown during which the flight code flies on"),
+    Field("level_time", 1, "s", "time of the level-out and the thrust's ramp-down after it"),
+    Field("cut_time", 1, "s", "time from touchdown to the cut (at least hold_time + level_time)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -109,7 +126,8 @@ POSITION_REFERENCE = Layout("r_pos", (
     Field("p_ref", 3, "m", "reference position", elements=("x_ref", "y_ref", "z_ref")),
     Field("v_ref", 3, "m/s", "its rate", elements=("vx_ref", "vy_ref", "vz_ref")),
     Field("a_ref", 3, "m/s^2", "its acceleration", elements=("ax_ref", "ay_ref", "az_ref")),
-), "position reference in the deck frame")
+    *TOUCHDOWN_COMMANDS.fields,
+), "position reference in the deck frame and the touchdown policy's commands")
 
 
 def _descent_rate(h, p):
@@ -138,15 +156,14 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     Returns
     -------
     xg_next : casadi.SX, (4,)
-    reference : casadi.SX, (9,)
-        :data:`POSITION_REFERENCE` for the step.
+    reference : casadi.SX, (13,)
+        :data:`POSITION_REFERENCE` for the step, the touchdown policy's commands with it.
     """
     g, p = GUIDANCE_STATE.unpack(xg), GUIDANCE_PARAMS.unpack(p_guid)
     c = GUIDANCE_CUES.unpack(cues)
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
     hover = p["hover_height"]
-    offset = ca.norm_2(p_e[0:2])
-    speed = ca.norm_2(v_e[0:2])
+    offset, speed = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2])
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
 
     in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
@@ -177,6 +194,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     # below the touchdown height the reference goes on at the crawl until contact:
     # a heaving deck may have moved away, and the quadrotor must meet it
     descending = ca.logic_and(in_descend, ca.logic_not(ca.logic_or(abort, contact)))
+    crawl = touchdown_crawl(phase_next == TOUCHDOWN, p)
     z_fall = z_ref - rate * dt
     # before the descent the hover point's height glides at descent_speed: to
     # hover_height while the marker is seen; without it, it holds in the approach
@@ -186,15 +204,16 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     step = p["descent_speed"] * dt
     z_glide = z_ref + ca.fmin(ca.fmax(target - z_ref, -step), step)
     z_next = ca.if_else(descending, z_fall,
-                        ca.if_else(phase_next >= TOUCHDOWN, z_ref,
+                        ca.if_else(phase_next >= TOUCHDOWN, z_ref - crawl * dt,
                                    ca.if_else(abort, hover, z_glide)))
 
-    vz = ca.if_else(descending, -rate, 0)
+    vz = ca.if_else(descending, -rate, -crawl)
     # d/dt of -rate: the rate is h / descent_time where it is not clamped
     unclamped = ca.logic_and(h / p["descent_time"] > p["touchdown_speed"],
                              h / p["descent_time"] < p["descent_speed"])
     az = ca.if_else(ca.logic_and(descending, unclamped), rate / p["descent_time"], 0)
-    reference = ca.vertcat(0, 0, z_ref, 0, 0, vz, 0, 0, az)
+    reference = ca.vertcat(0, 0, z_ref, 0, 0, vz, 0, 0, az, touchdown_commands(
+        phase_next >= TOUCHDOWN, phase_next == DESCEND, timer_next, z_next, p))
     return ca.vertcat(phase_next, timer_next, z_next, aborts + abort), reference
 
 

@@ -14,7 +14,8 @@ from quadland_symbolic.landing.contact import (
 )
 from quadland_symbolic.landing.gear import PEAK_RATE, TOUCHDOWN_POLICY
 
-__all__ = ["gear_params", "lock_params", "policy_params", "contact_step", "STEP_MARGIN"]
+__all__ = ["gear_params", "lock_params", "policy_params", "touchdown_guidance", "contact_step",
+           "STEP_MARGIN"]
 
 #: RK4's step on the deck is this fraction of its stability edge on the stiffest mode
 #: (docs/contact.md: 5 steps per 4 ms for the default gear, ``h lambda = 2.0``).
@@ -51,6 +52,16 @@ def policy_params(scenario: Scenario) -> np.ndarray:
     return TOUCHDOWN_POLICY.pack(dict(cut=float(td["policy"] == "idle"),
                                       cut_delay=td["cut_delay"], F_idle=td["idle_thrust"],
                                       s_switch=td["switch_impulse"]))
+
+
+def touchdown_guidance(scenario: Scenario) -> dict:
+    """``[touchdown]``'s flight-code policy as the guidance's parameters
+    (:mod:`quadland_symbolic.landing.touchdown_policy`): ``policy = "secure"`` turns it
+    on; otherwise it is inert (``fly_on = 0``) and the hardware cut (or none) acts."""
+    td = scenario.data["touchdown"]
+    return dict(fly_on=float(td["policy"] == "secure"), flare_height=td["flare_height"],
+                flare_tilt=np.radians(td["flare_tilt_deg"]), hold_time=td["hold_time"],
+                level_time=td["level_time"], cut_time=td["cut_time"])
 
 
 def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:

@@ -47,6 +47,7 @@ from quadland_symbolic.landing.plant import (
     LANDING_PLANT_PARAMS,
     LANDING_PLANT_STATE,
 )
+from quadland_symbolic.landing.touchdown_policy import INERT_COMMANDS
 from quadland_symbolic.linearization import VEHICLE_SPEEDS
 from quadland_symbolic.quadrotor import WRENCH
 from quadland_symbolic.vehicle import VEHICLE_STATE
@@ -94,7 +95,7 @@ def _hover_values(scenario: Scenario) -> _HoverValues:
                                       d_F=d["disturbance"]["force_bias"],
                                       d_M=d["disturbance"]["moment_bias"]))
     ref = POSITION_REFERENCE.pack(dict(p_ref=[0.0, 0.0, d["landing"]["hover_height"]],
-                              v_ref=np.zeros(3), a_ref=np.zeros(3)))
+                              v_ref=np.zeros(3), a_ref=np.zeros(3), **INERT_COMMANDS))
     q = d["quadrotor"]
     return _HoverValues(lv.l, frozen(lv.pp), frozen(pc["pp"]), pc["p_ctrl"], ref, w,
                         np.concatenate([xv0[n] for n in VEHICLE_SPEEDS.names()]),

@@ -14,7 +14,7 @@ from quadland.engine.wind import (
     gust_samples,
     turbulence_samples,
 )
-from quadland.kinds.landing.gear import gear_params, lock_params, policy_params
+from quadland.kinds.landing.gear import gear_params, lock_params, policy_params, touchdown_guidance
 from quadland.kinds.landing.sea import deck_components
 from quadland.scenario import Scenario, require_model
 from quadland_symbolic.kinematics import rotation
@@ -162,7 +162,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         touchdown_height=q["gear_height"], max_offset=g["max_offset"],
         max_relative_speed=g["max_relative_speed"], max_deck_rise=g["max_deck_rise"],
         settle_time=g["settle_time"], marker_timeout=g["marker_timeout"],
-        search_height=g["search_height"]))
+        search_height=g["search_height"], **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 

@@ -1,0 +1,128 @@
+"""The flight code's touchdown policy: fly on until the lock-down holds, then cut.
+
+At high airspeed a quadrotor on a car's roof cannot let go of the air at the
+contact: at 100 km/h the drag (``Kt V + Kq V^2``, 17.8 N for the shipped
+2 kg quadrotor) is close to its weight and acts 0.2 m above the feet, so a
+body resting level on the deck with its rotors cut is rolled backwards over
+its rear feet (``D h > m g a``: 3.6 N m against 2.9 N m) and slides (``D >
+mu m g``) until the lock-down holds it; and it flies in leaning about 39 deg
+into the airflow, past the gear's static tip-over angle about y (36.9 deg).
+A rotor cut at the contact switch (``[touchdown] policy = "idle"``) lets the
+drag slam the body from its lean onto its rear feet before the magnet has
+engaged: it bounces or goes over (issue 18).
+
+What a real system does is keep flying until the lock-down holds, then cut.
+A ship helicopter landing with a haul-down system hovers on its own thrust while
+the winch's cable (its tension up to the aircraft's weight) draws it into the
+trap that grabs its probe, and the rotor is unloaded once it is held (the
+Canadian "Beartrap", Helicopters Magazine, "Big helicopter - Little ship",
+2007). PX4's multicopter land detector unloads in stages: at ground contact the
+position controller drops the horizontal thrust, at "maybe landed" it sets the
+thrust to zero, and the motors are disarmed only once "landed" has held
+(PX4 land_detector module documentation; COM_DISARM_LAND). With
+``fly_on = 1`` this module's schedule, a function of the guidance's phase,
+its timer (the time since touchdown) and its reference height, tells the
+landing step (:func:`~quadland_symbolic.landing.controller.landing_law`)
+through :data:`TOUCHDOWN_COMMANDS`, appended to the position reference:
+
+1. **flare** (descend, the reference within ``flare_height`` of touchdown,
+   and after): the tilt of the thrust axis is limited to ``flare_tilt``
+   (below the static tip-over angle), so the gear meets the deck inside it.
+   The horizontal thrust it gives up is a small backward drift relative to
+   the deck over the last few centimetres;
+2. **hold** (touchdown, the first ``hold_time``): the flight code keeps
+   flying as in the descent, its reference crawling on into the deck at
+   ``touchdown_speed`` (:func:`touchdown_crawl`: the gear stays pressed on it
+   rather than hovering at the contact's height), while the lock-down's delay
+   runs (the contact switch starts it);
+3. **level** (the next ``level_time``): the attitude command is blended
+   linearly from the position loop's to the deck's level attitude and the
+   collective thrust down to zero (the attitude loop keeps priority over the
+   collective, :func:`~quadland_symbolic.landing.desaturation.thrust_within_moments`):
+   the body rotates onto its rear feet under control, and the gap closing
+   brings the engaging lock's pull in;
+4. **cut** (from ``cut_time`` after touchdown, at least ``hold_time +
+   level_time``): the rotor commands are zero. ``cut_time`` is chosen where
+   the lock's pull exceeds what the drag needs of it (the shipped
+   highway_100: 77 N at 0.5 s against 16 N to stop the slide and 4 N to stop
+   the roll-over).
+
+The commands come from the flight code's own touchdown verdict (the
+guidance's touchdown phase: the contact switch, or the land detector on
+sensors): a false verdict in the air would level out and cut there, as
+PX4's false ground contact does (PX4-Autopilot issue 11683).
+
+With ``fly_on = 0`` every command is inert (no tilt limit beyond the
+controller's, no blend, full thrust, no cut), and the rotor cut, if any, is
+the gear's contact switch's in hardware (:mod:`quadland_symbolic.landing.gear`).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from quadland_symbolic.layout import Field, Layout
+
+__all__ = ["TOUCHDOWN_COMMANDS", "NO_TILT_LIMIT", "INERT_COMMANDS", "touchdown_commands",
+           "touchdown_crawl", "bounded_commands", "apply_touchdown_commands"]
+
+#: rad: the tilt limit of an inert policy, above any controller's (``tilt_max < pi/2``).
+NO_TILT_LIMIT = ca.pi / 2
+
+#: What the guidance's touchdown policy tells the landing step each period.
+TOUCHDOWN_COMMANDS = Layout("td_cmd", (
+    Field("tilt_limit", 1, "rad", "largest tilt of the thrust axis (with the controller's own)"),
+    Field("level", 1, "-", "blend of the attitude command towards the deck's level, 0 to 1"),
+    Field("thrust_scale", 1, "-", "factor on the collective thrust before the mixer, 0 to 1"),
+    Field("power", 1, "-", "factor on the rotor commands: 0 cuts them"),
+), "touchdown policy's commands to the landing step")
+
+#: :data:`TOUCHDOWN_COMMANDS` that change nothing (the policy off, or before its flare).
+INERT_COMMANDS = dict(tilt_limit=float(NO_TILT_LIMIT), level=0.0, thrust_scale=1.0, power=1.0)
+
+
+def touchdown_commands(down, descending, timer_next, z_next, p):
+    """The policy's :data:`TOUCHDOWN_COMMANDS` for the step (module docstring).
+
+    ``down`` is 1 when the guidance's phase after the step is touchdown or landed,
+    ``descending`` when it is the descent; ``timer_next`` the guidance's timer after
+    the step (the time since touchdown in the touchdown phase; it holds once landed),
+    ``z_next`` the reference height after the step (m), ``p`` the unpacked
+    :data:`~quadland_symbolic.landing.guidance.GUIDANCE_PARAMS`.
+    """
+    on = p["fly_on"] > 0.5
+    low = z_next - p["touchdown_height"] <= p["flare_height"]
+    flaring = ca.logic_or(down, ca.logic_and(descending, low))
+    tilt_limit = ca.if_else(ca.logic_and(on, flaring), p["flare_tilt"], NO_TILT_LIMIT)
+    ramp = ca.fmin(ca.fmax((timer_next - p["hold_time"]) / p["level_time"], 0), 1)
+    level = on * down * ramp
+    cut = on * down * (timer_next >= ca.fmax(p["cut_time"], p["hold_time"] + p["level_time"]))
+    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut)
+
+
+def touchdown_crawl(in_touchdown, p):
+    """The reference's descent rate in the touchdown phase, m/s (down): the crawl
+    ``touchdown_speed`` goes on into the deck while the policy flies on (so that the
+    position loop keeps the gear pressed on it instead of hovering at the height of the
+    contact), else 0 (the reference holds). ``in_touchdown``: the phase after the step
+    is touchdown; ``p`` the unpacked guidance parameters."""
+    return ca.if_else(ca.logic_and(p["fly_on"] > 0.5, in_touchdown), p["touchdown_speed"], 0)
+
+
+def bounded_commands(commands: dict, tilt_max) -> dict:
+    """The landing step's reading of :data:`TOUCHDOWN_COMMANDS` (``commands``, unpacked):
+    the tilt limit within ``[0, tilt_max]`` (the controller's own), the blend, the
+    collective's factor and the power within ``[0, 1]``, whatever the caller passed, so
+    that the rotor commands stay within ``[0, F_max]`` and the thrust within ``[0, 4
+    F_max]``."""
+    def unit(v):
+        return ca.fmin(ca.fmax(v, 0), 1)
+    return dict(tilt_limit=ca.fmin(tilt_max, ca.fmax(commands["tilt_limit"], 0)),
+                level=unit(commands["level"]), thrust_scale=unit(commands["thrust_scale"]),
+                power=unit(commands["power"]))
+
+
+def apply_touchdown_commands(level, eta_c, eta_level):
+    """The attitude command ``eta_c`` blended towards ``eta_level`` by
+    :data:`TOUCHDOWN_COMMANDS`' ``level``; ``level = 0`` returns ``eta_c`` exactly."""
+    return eta_c + level * (eta_level - eta_c)
