@@ -40,7 +40,7 @@ SCENARIOS = ("highway", "turning", "ship", "ship_ss5", "highway_100")
 #: tilt term (E9b), which moved no touchdown time: 130.92 s). (With the old drag and gains the
 #: ships aborted 16 and 42 times on their sensors, 1 and 6 on the true state.)
 ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 14,
-          ("ship_ss5", "sensors"): 27, ("highway_100", "sensors"): 1,
+          ("ship_ss5", "sensors"): 28, ("highway_100", "sensors"): 1,
           ("highway", "perfect"): 0, ("turning", "perfect"): 0, ("ship", "perfect"): 3,
           ("ship_ss5", "perfect"): 4, ("highway_100", "perfect"): 0}
 #: trajectory.csv's columns, as the issue names them.
@@ -97,13 +97,15 @@ def _first_rows(phase):
 #: highway_100 on the gear's contact (issue 18): it touches down leaning 39 deg into the
 #: 100 km/h airflow, past the default gear's static tip-over angle (36.9 deg about y), and
 #: with the rotors cut at the switch the airflow's drag rolls it over before the magnet
-#: holds. A wider gear or a later cut moves the failure to a 2.4 cm bounce. Not met yet.
+#: holds. A wider gear or a later cut moves the failure to a 2.4 cm bounce. Not met yet on
+#: the true state; on its sensors, since the filter turns the accelerometer's bias with the
+#: body (docs/estimator.md, (E6a)), the default seed's touchdown holds (one abort).
 TIPS_OVER = pytest.mark.xfail(strict=True, reason="highway_100 tips over on the gear's contact")
 
 
-@pytest.mark.parametrize("sensing", ["sensors", "perfect"])
-@pytest.mark.parametrize("name", [pytest.param(n, marks=TIPS_OVER) if n == "highway_100" else n
-                                  for n in SCENARIOS])
+@pytest.mark.parametrize("name,sensing", [
+    pytest.param(n, s, marks=TIPS_OVER) if (n, s) == ("highway_100", "perfect") else (n, s)
+    for s in ("sensors", "perfect") for n in SCENARIOS])
 def test_lands_within_the_limits_at_the_default_seed(name, sensing):
     """On its sensors and on the true state, each lands at the default seed after the
     measured number of aborted descents (:data:`ABORTS`: none on a car's roof; before the
