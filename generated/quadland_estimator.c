@@ -104,26 +104,26 @@ typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, P_h, 21, 0) &&
     AT(ql_estimator_memory, t_h, 105, 0) &&
     AT(ql_estimator_memory, hist, 106, 0) &&
-    AT(ql_estimator_memory, fifo_vision, 306, 0) &&
-    AT(ql_estimator_memory, count_vision, 338, 0) &&
-    AT(ql_estimator_memory, fifo_gnss, 339, 0) &&
-    AT(ql_estimator_memory, count_gnss, 379, 0) &&
-    AT(ql_estimator_memory, fifo_range, 380, 0) &&
-    AT(ql_estimator_memory, count_range, 510, 0) &&
-    AT(ql_estimator_memory, fifo_datalink, 511, 0) &&
-    AT(ql_estimator_memory, count_datalink, 575, 0) &&
-    AT(ql_estimator_memory, deck_eta2, 576, 0) &&
-    AT(ql_estimator_memory, deck_w2E, 579, 0) &&
-    AT(ql_estimator_memory, deck_w2E_dot, 582, 0) &&
-    AT(ql_estimator_memory, deck_tau, 585, 0) &&
-    AT(ql_estimator_memory, n_fused, 586, 0) &&
-    AT(ql_estimator_memory, n_rejected, 593, 0) &&
-    AT(ql_estimator_memory, n_held, 600, 0) &&
-    AT(ql_estimator_memory, n_discarded, 607, 0) &&
-    AT(ql_estimator_memory, n_dropped, 611, 0) &&
-    AT(ql_estimator_memory, n_imu_invalid, 615, 0) &&
-    AT(ql_estimator_memory, streak, 616, 0) &&
-    sizeof(ql_estimator_memory) == 623 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_memory, fifo_vision, 456, 0) &&
+    AT(ql_estimator_memory, count_vision, 488, 0) &&
+    AT(ql_estimator_memory, fifo_gnss, 489, 0) &&
+    AT(ql_estimator_memory, count_gnss, 529, 0) &&
+    AT(ql_estimator_memory, fifo_range, 530, 0) &&
+    AT(ql_estimator_memory, count_range, 660, 0) &&
+    AT(ql_estimator_memory, fifo_datalink, 661, 0) &&
+    AT(ql_estimator_memory, count_datalink, 725, 0) &&
+    AT(ql_estimator_memory, deck_eta2, 726, 0) &&
+    AT(ql_estimator_memory, deck_w2E, 729, 0) &&
+    AT(ql_estimator_memory, deck_w2E_dot, 732, 0) &&
+    AT(ql_estimator_memory, deck_tau, 735, 0) &&
+    AT(ql_estimator_memory, n_fused, 736, 0) &&
+    AT(ql_estimator_memory, n_rejected, 743, 0) &&
+    AT(ql_estimator_memory, n_held, 750, 0) &&
+    AT(ql_estimator_memory, n_discarded, 757, 0) &&
+    AT(ql_estimator_memory, n_dropped, 761, 0) &&
+    AT(ql_estimator_memory, n_imu_invalid, 765, 0) &&
+    AT(ql_estimator_memory, streak, 766, 0) &&
+    sizeof(ql_estimator_memory) == 773 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(ql_estimator_diagnostics, nu_gnss_rel, 3, 0) &&

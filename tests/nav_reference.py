@@ -154,11 +154,19 @@ class ReferenceKF:
             self.x, self.P, _, nis[b.name] = joseph_reference(self.x, self.P, H, z, R)
         return nis
 
-    def predict(self, a_in, dt):
-        """Predict over ``dt`` with ``a_in`` held."""
+    def predict(self, a_in, dt, turn=(0.0, 0.0, 0.0)):
+        """Predict over ``dt`` with ``a_in`` held, the accelerometer's bias turned by
+        ``turn`` (E6a): ``Phi[a_b, a_b] = I + S(turn)``, ``S(w) v = w x v``."""
         Phi, Gamma, Q = discrete(dt, self.q)
+        Phi = Phi.copy()
+        Phi[sl("a_b"), sl("a_b")] = np.eye(3) + cross_matrix(turn)
         self.x = Phi @ self.x + Gamma @ a_in
         self.P = Phi @ self.P @ Phi.T + Q
+
+
+def cross_matrix(w):
+    """``S(w)``, written here: ``S(w) v = w x v``."""
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 # ---------------------------------------------------------------- helpers
@@ -180,6 +188,12 @@ def acceleration(imu, g):
     """a_in = R(eta_hat) f_b - g e_z, written here."""
     v = IMU.unpack(imu)
     return rotation(v["eta_hat"]) @ v["f_b"] - np.array([0, 0, g])
+
+
+def body_turn(imu, dt):
+    """The body's turn over ``dt`` in E (E6a): ``R(eta_hat) omega dt``, written here."""
+    v = IMU.unpack(imu)
+    return rotation(v["eta_hat"]) @ v["omega"] * dt
 
 
 def packet_values(rng, sensor, x, tau, eta2, n2):

@@ -15,6 +15,7 @@ from nav_reference import (
     N,
     ReferenceKF,
     acceleration,
+    body_turn,
     col,
     discrete,
     empty,
@@ -76,7 +77,7 @@ def _run_undelayed(rng, coupling="full", steps=30, p_fresh=0.6, n_hist=0, depth=
         mem, y, diag = (col(v) for v in step(mem, imu, *vecs, p, dt, t))
         nis = ref.fuse(packets, n2)
         fused = dict(x=ref.x.copy(), P=ref.P.copy())
-        ref.predict(acceleration(imu, q["g"]), dt)
+        ref.predict(acceleration(imu, q["g"]), dt, body_turn(imu, dt))
         yield dict(diag=DIAG.unpack(diag), y=y, mem=mem, lay=lay, ref=ref, nis=nis, t=t,
                    packets=packets, fused=fused, imu=imu, p=p)
 
@@ -134,7 +135,7 @@ def test_delayed_fusion_is_the_undelayed_filter_shifted_by_the_horizon():
         history.append((ref.x.copy(), ref.P.copy()))
         a_in = acceleration(imu, q["g"])
         inputs.append(a_in)
-        ref.predict(a_in, dt)
+        ref.predict(a_in, dt, body_turn(imu, dt))
         for s, pk in packets.items():
             arrivals[(k + LATENCY[s], s)] = pk
         vecs = [layout.pack(arrivals[(k, layout.name)]) if (k, layout.name) in arrivals
@@ -190,7 +191,8 @@ MC_EVERY = dict(vision=3, gnss=10, range=2, datalink=5)
 
 
 def _mc_truth(rng, q, x0, P0, Phi, Gamma, Q):
-    """Truth from the filter's own model: x0 ~ N(x0_hat, P0), x+ = Phi x + Gamma a + w."""
+    """Truth from the filter's own model: x0 ~ N(x0_hat, P0), x+ = Phi x + Gamma a + w,
+    the accelerometer's bias turned with the body (E6a)."""
     L = np.linalg.cholesky(Q + 1e-18 * np.eye(N))
     xs = np.empty((MC_STEPS + 1, MC_RUNS, N))
     xs[0] = x0 + rng.normal(size=(MC_RUNS, N)) * np.sqrt(P0)
@@ -200,6 +202,8 @@ def _mc_truth(rng, q, x0, P0, Phi, Gamma, Q):
             imus[k, r] = random_imu(rng)
         a = np.array([acceleration(imu, q["g"]) for imu in imus[k]])
         xs[k + 1] = xs[k] @ Phi.T + a @ Gamma.T + rng.normal(size=(MC_RUNS, N)) @ L.T
+        turn = np.array([body_turn(imu, MC_DT) for imu in imus[k]])
+        xs[k + 1][:, sl("a_b")] += np.cross(turn, xs[k][:, sl("a_b")])
     return xs, imus
 
 
@@ -378,8 +382,9 @@ def test_init_is_the_handover_estimate():
 # ---------------------------------------------------------------- decoupled axes
 
 def test_axes_equal_full_when_no_measurement_couples_the_axes():
-    """A level deck and a vertical range: every block is separable, so the decoupled
-    filter is the full one and the full one's cross-axis covariances stay zero."""
+    """A level deck, a vertical range and a body that does not turn (the bias' turn
+    (E6a) couples the axes): every block is separable, so the decoupled filter is the
+    full one and the full one's cross-axis covariances stay zero."""
     rng = np.random.default_rng(31)
     n_hist, depth = 3, 4
     full, axes = (estimator_step_function(n_hist, depth, c) for c in ("full", "axes"))
@@ -395,7 +400,7 @@ def test_axes_equal_full_when_no_measurement_couples_the_axes():
                                                                   "datalink")}
         pk["range"]["b3_E"] = up
         vecs = [layout.pack(pk[layout.name]) for layout in NAV_PACKETS]
-        imu = random_imu(rng)
+        imu = IMU.pack(IMU.unpack(random_imu(rng)) | dict(omega=zero))
         mem_f = col(full(mem_f, imu, *vecs, p, 0.01, t)[0])
         mem_a = col(axes(mem_a, imu, *vecs, p, 0.01, t)[0])
     P_f, P_a = unpack_P(lay_f, "full", mem_f), unpack_P(lay_a, "axes", mem_a)

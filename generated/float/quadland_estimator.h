@@ -26,7 +26,7 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_RANGE 26             /* FIFO depth of range packets */
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 84         /* stored covariance entries (coupling axes) */
-#define QLF_ESTIMATOR_MEMORY_SIZE 623            /* reals in qlf_estimator_memory */
+#define QLF_ESTIMATOR_MEMORY_SIZE 773            /* reals in qlf_estimator_memory */
 #define QLF_ESTIMATOR_PARAMS_SIZE 52             /* reals in qlf_estimator_params */
 #define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 136       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
@@ -39,7 +39,7 @@ typedef struct {
     qlf_real v_t[3];                 /* m/s: pad centre velocity (v_t_x, v_t_y, v_t_z) */
     qlf_real a_t[3];                 /* m/s^2: pad centre acceleration (random walk) (a_t_x, a_t_y, a_t_z) */
     qlf_real b[3];                   /* m: relative GNSS bias: GNSS-measured (p_pad - p1) minus the true one (b_x, b_y, b_z) */
-    qlf_real a_b[3];                 /* m/s^2: bias of the acceleration input: the accelerometer's (random walk) (a_b_x, a_b_y, a_b_z) */
+    qlf_real a_b[3];                 /* m/s^2: the accelerometer's bias, body-fixed, in E (random walk) (a_b_x, a_b_y, a_b_z) */
     qlf_real a_tilt[3];              /* m/s^2: bias of the acceleration input from the attitude estimate's tilt error eps: g eps x e_z (Gauss-Markov; z is 0) (a_tilt_x, a_tilt_y, a_tilt_z) */
 } qlf_nav_state;
 
@@ -137,7 +137,7 @@ typedef struct {
     qlf_nav_state x_h;               /* state at the horizon t_h */
     qlf_real P_h[84];                /* per entry (see its layout): covariance at the horizon: stored upper-triangle entries, row by row */
     qlf_real t_h;                    /* s: time of the horizon */
-    qlf_real hist[50][4];            /* m/s^2, s: acceleration inputs (E) and their periods from t_h to now, oldest first */
+    qlf_real hist[50][7];            /* m/s^2, s, rad: acceleration inputs (E), their periods and the body's turns (E, E6a) from t_h to now, oldest first */
     qlf_real fifo_vision[8][4];      /* s, m: vision packets waiting for the horizon, oldest first */
     qlf_real count_vision;           /* -: vision packets in the FIFO */
     qlf_real fifo_gnss[4][10];       /* s, m, m/s: gnss packets waiting for the horizon, oldest first */

@@ -77,8 +77,8 @@ FLIGHT_DEPTH = (8, 4, 26, 4)
 #: The covariance coupling flown: x, y, z decoupled (the 30,000-instruction budget).
 FLIGHT_COUPLING = "axes"
 
-_HIST_ROWS = ("a_in_x", "a_in_y", "a_in_z", "dt")
-_HIST_UNITS = ("m/s^2",) * 3 + ("s",)
+_HIST_ROWS = ("a_in_x", "a_in_y", "a_in_z", "dt", "turn_x", "turn_y", "turn_z")
+_HIST_UNITS = ("m/s^2",) * 3 + ("s",) + ("rad",) * 3
 
 
 def _depths(depth) -> tuple[int, ...]:
@@ -150,9 +150,10 @@ def estimator_memory(n_hist: int = N_HIST, depth=FIFO_DEPTH, coupling: str = "fu
               "covariance at the horizon: stored upper-triangle entries, row by row",
               elements=pattern.element_names()),
         Field("t_h", 1, "s", "time of the horizon"),
-        Field("hist", 4 * n_hist, _HIST_UNITS * n_hist,
-              "acceleration inputs (E) and their periods from t_h to now, oldest first",
-              shape=(4, n_hist),
+        Field("hist", len(_HIST_ROWS) * n_hist, _HIST_UNITS * n_hist,
+              "acceleration inputs (E), their periods and the body's turns (E, E6a) from "
+              "t_h to now, oldest first",
+              shape=(len(_HIST_ROWS), n_hist),
               elements=tuple(f"{r}_{k + 1}" for k in range(n_hist) for r in _HIST_ROWS)),
         *fifos,
         Field("deck_eta2", 3, "rad", "deck attitude of the latest broadcast"),
@@ -194,8 +195,10 @@ def estimator_diagnostics() -> Layout:
 def output_predictor(x_h, hist):
     """The state carried through the buffered inputs (E17).
 
-    The state ``sum(dt_k)`` after the horizon; ``hist`` is ``4 x N``: inputs
-    ``a_k`` (E) held over ``dt_k``, oldest first. With ``T = sum dt_k``, ``S1 = sum a_k dt_k`` and
+    The state ``sum(dt_k)`` after the horizon; ``hist`` has ``N`` columns, oldest first,
+    whose first four rows are the inputs ``a_k`` (E) held over ``dt_k`` (the body's turns,
+    rows 5-7, are not carried: the bias turns by a few milliradians over the horizon).
+    With ``T = sum dt_k``, ``S1 = sum a_k dt_k`` and
     ``S2 = sum a_k dt_k (dt_k / 2 + sum_{j>k} dt_j)``: ``v1 += S1 - T a_u`` with
     ``a_u = a_b + a_tilt`` the input's bias, ``p_r += T (v1 - v_t) + S2 - T^2 (a_u + a_t) / 2``,
     ``v_t += T a_t``;
@@ -294,15 +297,31 @@ def _output(x_now, deck, ims, t, p):
                       deck["w2E_dot"])
 
 
-def _input(ims, x_h, p):
-    """This period's acceleration input (E2).
+def _bias_turn(eta_hat, omega, dt):
+    """The body's rotation over a period as a vector in E, from the gyro (E6a).
 
-    A non-finite one is replaced by the input's bias ``a_b + a_tilt`` (no acceleration).
+    ``theta = R(eta_hat) omega dt``. The accelerometer's bias is fixed in the body, so its
+    share of the input, ``a_b = R1 b_a`` in E, turns with the body:
+    ``a_b+ = a_b + theta x a_b`` to first order in ``theta``.
+    """
+    return rotation(eta_hat) @ omega * dt
+
+
+def _finite3(v):
+    return ca.logic_and(ca.logic_and(is_finite(v[0]), is_finite(v[1])), is_finite(v[2]))
+
+
+def _input(ims, x_h, p, dt):
+    """This period's acceleration input (E2) and the body's turn (E6a).
+
+    A non-finite input is replaced by the input's bias ``a_b + a_tilt`` (no acceleration),
+    a non-finite turn by none.
     """
     a_in = acceleration_input(ims["eta_hat"], ims["f_b"], p["g"])
-    ok = ca.logic_and(ca.logic_and(is_finite(a_in[0]), is_finite(a_in[1])), is_finite(a_in[2]))
+    ok = _finite3(a_in)
+    turn = _bias_turn(ims["eta_hat"], ims["omega"], dt)
     x = NAV.unpack(x_h)
-    return select(ok, a_in, x["a_b"] + x["a_tilt"]), ok
+    return select(ok, a_in, x["a_b"] + x["a_tilt"]), select(_finite3(turn), turn, 0), ok
 
 
 def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
@@ -320,9 +339,9 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     x, P = state["x"], state["P"]
     y = _output(output_predictor(x, m["hist"]), deck, ims, t, p)
 
-    a_in, imu_ok = _input(ims, x, p)
-    hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt))                # oldest first
-    x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern)
+    a_in, turn, imu_ok = _input(ims, x, p, dt)
+    hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn))          # oldest first
+    x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern, hist[4:7, 0])
 
     blk, sen = state["blocks"], state["sensors"]
     flags = dict(

@@ -32,7 +32,7 @@ from quadland_symbolic.kalman import (
     scalar_update,
     select,
 )
-from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.kinematics import rotation, skew
 from quadland_symbolic.landing.controller import deck_rates
 from quadland_symbolic.layout import Field, Layout
 
@@ -65,7 +65,7 @@ NAV = Layout("nav", (
     _vec3("v_t", "m/s", "pad centre velocity"),
     _vec3("a_t", "m/s^2", "pad centre acceleration (random walk)"),
     _vec3("b", "m", "relative GNSS bias: GNSS-measured (p_pad - p1) minus the true one"),
-    _vec3("a_b", "m/s^2", "bias of the acceleration input: the accelerometer's (random walk)"),
+    _vec3("a_b", "m/s^2", "the accelerometer's bias, body-fixed, in E (random walk)"),
     _vec3("a_tilt", "m/s^2", "bias of the acceleration input from the attitude estimate's "
           "tilt error eps: g eps x e_z (Gauss-Markov; z is 0)"),
 ), "navigation filter state, frame E (z up)")
@@ -284,29 +284,32 @@ def nav_transition_function() -> ca.Function:
                        ["dt", "p_est"], ["Phi", "Gamma", "Q"])
 
 
-def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern):
-    """One prediction over ``dt`` (E6).
-
-    ``x+ = Phi x + Gamma a_in``, ``P+ = Phi P Phi^T + Q`` on ``pattern``'s entries.
-    """
+def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern, turn=None):
+    """One prediction over ``dt`` (E6): ``x+ = Phi x + Gamma a_in``, ``P+ = Phi P Phi^T + Q``
+    on ``pattern``'s entries; the body's ``turn`` (E, rad) turns ``a_b``:
+    ``Phi[a_b, a_b] = I + S(turn)`` (E6a)."""
     Phi, Gamma, Q = nav_transition(dt, p_est)
+    if turn is not None:                                                    # (E6a)
+        i = NAV.slice("a_b")
+        Phi[i, i] = ca.DM.eye(3) + skew(turn)
     return Phi @ x + Gamma @ a_in, pattern.unpack(pattern.pack(Phi @ P @ Phi.T + Q))
 
 
 @functools.cache
 def nav_predict_function(coupling: str = "full") -> ca.Function:
-    """``nav_predict(x, P, a_in, dt, p_est) -> (x_next, P_next)``.
+    """``nav_predict(x, P, a_in, dt, p_est, turn) -> (x_next, P_next)``.
 
-    (E6). ``P`` and ``P_next`` are full symmetric 21 x 21 matrices; only the upper
+    (E6), (E6a). ``P`` and ``P_next`` are full symmetric 21 x 21 matrices; only the upper
     triangle of the entries :func:`covariance_pattern` keeps is read.
     """
     pattern = covariance_pattern(coupling)
     x, P = NAV.sym("x"), ca.SX.sym("P", NAV.size, NAV.size)
-    a_in, dt, p = ca.SX.sym("a_in", 3), ca.SX.sym("dt"), estimator_params().sym()
+    a_in, dt, turn = ca.SX.sym("a_in", 3), ca.SX.sym("dt"), ca.SX.sym("turn", 3)
+    p = estimator_params().sym()
     Ps = pattern.unpack(pattern.pack(P))
-    x_next, P_next = nav_predict(x, Ps, a_in, dt, p, pattern)
-    return ca.Function("nav_predict", [x, P, a_in, dt, p], [x_next, ca.densify(P_next)],
-                       ["x", "P", "a_in", "dt", "p_est"], ["x_next", "P_next"])
+    x_next, P_next = nav_predict(x, Ps, a_in, dt, p, pattern, turn)
+    return ca.Function("nav_predict", [x, P, a_in, dt, p, turn], [x_next, ca.densify(P_next)],
+                       ["x", "P", "a_in", "dt", "p_est", "turn"], ["x_next", "P_next"])
 
 
 # ---------------------------------------------------------------- measurements
