@@ -287,6 +287,12 @@ class MarginReport:
         Zero-order-hold models at ``controller.rate_hz``, if > 0.
     poles : ndarray
         Poles of the continuous closed loop, 1/s.
+    filtered : LoopReport or None
+        The sampled loop with the navigation filter in it (a landing scenario
+        flying its sensors, ``sensors.enabled``): the flown loop, whose verdict is
+        the review's (:attr:`passed`).
+    filtered_models : LinearModels or None
+        Its models (:func:`quadland.kinds.landing.filter_loop.hover_filter_models`).
     """
 
     scenario: Scenario
@@ -297,11 +303,25 @@ class MarginReport:
     models: LinearModels
     sampled_models: LinearModels | None
     poles: np.ndarray
+    filtered: LoopReport | None = None
+    filtered_models: LinearModels | None = None
 
     @property
     def passed(self) -> bool:
-        """Every loop of every reported controller passed."""
+        """The flown loop passed: the loop with the filter when there is one (the
+        perfect-sensing sections are then for reference), else every loop of every
+        reported controller."""
+        if self.filtered is not None:
+            return self.filtered.passed
         return self.continuous.passed and (self.sampled is None or self.sampled.passed)
+
+    @property
+    def judged(self) -> tuple[tuple[str, LoopReport], ...]:
+        """The sections :attr:`passed` judges, with their labels."""
+        if self.filtered is not None:
+            return (("sampled, filter in the loop", self.filtered),)
+        return tuple((label, s) for label, s in (("continuous", self.continuous),
+                                                 ("sampled", self.sampled)) if s is not None)
 
     def to_dict(self) -> dict:
         """The JSON-ready review, as ``margins.json`` holds it.
@@ -332,6 +352,9 @@ class MarginReport:
                     loop_break=loop_break, continuous=self.continuous.to_dict())
         if self.sampled is not None:
             data["sampled"] = self.sampled.to_dict()
+        if self.filtered is not None:
+            data["filtered"] = self.filtered.to_dict()
+        data["verdict_from"] = [label for label, _ in self.judged]
         return json_ready(data)
 
 

@@ -166,7 +166,7 @@ def loop_states(scenario: Scenario) -> tuple[int, int]:
 
 def margin_report(scenario: Scenario, at: float | None = None,
                   requirement: Requirement = Requirement(),
-                  delay_periods: int | None = None) -> MarginReport:
+                  delay_periods: int | None = None, filtered: bool = True) -> MarginReport:
     """Linearize a scenario's loop and compute the margin review.
 
     Parameters
@@ -187,6 +187,11 @@ def margin_report(scenario: Scenario, at: float | None = None,
         ``controller.delay_periods``, the paper's 1: flight code sends its
         command one period after it samples); see the kind's
         ``sampled_models``.
+    filtered : bool, optional
+        Also review the sampled loop with the navigation filter in it, when the
+        kind has one for the scenario (the kind's ``filtered_models``: a landing
+        flying its sensors); its verdict is then the review's. False skips it
+        (the campaign's draws: a few seconds each).
 
     Returns
     -------
@@ -235,7 +240,20 @@ def margin_report(scenario: Scenario, at: float | None = None,
         sampled, _ = _loop_report(discrete.loop_input, discrete.loop_names, requirement,
                                   rate_hz=rate, delay_periods=int(delay_periods))
         sampled = _with_extras(sampled, discrete, scenario, requirement)
+    flown = flown_models = None
+    make = getattr(kind, "filtered_models", None)
+    if rate > 0 and filtered and make is not None:
+        flown_models = make(scenario, point, rate, int(delay_periods))
+    if flown_models is not None:
+        from quadland.analysis.sensitivity import sensitivity_peaks
+        from quadland.margins.sensitivity import SensitivityReport
+
+        flown, _ = _loop_report(flown_models.loop_input, flown_models.loop_names, requirement,
+                                rate_hz=rate, delay_periods=int(delay_periods))
+        per_loop, multi = sensitivity_peaks(flown_models.loop_input)
+        flown = dataclasses.replace(flown, sensitivity=SensitivityReport(
+            tuple(zip(flown_models.loop_names, per_loop, strict=True)), multi))
     return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
-                        poles)
+                        poles, flown, flown_models)
 
 
