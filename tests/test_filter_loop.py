@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
+import scipy.optimize
 
 import quadland
 from quadland.kinds.landing import filter_loop, linearize
@@ -87,3 +88,94 @@ def test_the_rate_equivalent_covariance_is_the_dare_on_the_x_axis(highway):
     Pm = covariance_pattern(FLIGHT_COUPLING).unpack_numeric(P)
     X, ix = _x_axis_dare(h, schedule)
     np.testing.assert_allclose(Pm[np.ix_(ix, ix)], X, rtol=1e-7, atol=1e-14)
+
+
+# ---------------------------------------------------------------- a closed-form loop
+
+def _alpha_beta(lam):
+    """Kalata's steady-state alpha-beta gains of the white-acceleration model with tracking
+    index ``lam = sigma_a dt^2 / sigma_r`` (Kalata 1984, eq. 21-22)."""
+    alpha = -(lam**2 + 8 * lam - (lam + 4) * np.sqrt(lam**2 + 8 * lam)) / 8
+    return alpha, 2 * (2 - alpha) - 4 * np.sqrt(1 - alpha)
+
+
+def _toy(N=3, delay=1, dt=0.01, tau=0.05, sigma_a=50.0, sigma_r=0.05, kp=4.0, kd=4.0):
+    """A double integrator behind a motor lag, an accelerometer and a position sensor, an
+    alpha-beta filter at a horizon ``N`` periods behind with its output predictor, a PD law."""
+    from quadland.linear import zoh
+
+    Ac = np.array([[0, 1, 0], [0, 0, 1], [0, 0, -1 / tau]])
+    Bc = np.array([[0], [0], [1 / tau]])
+    Phi_p, Gam_p = zoh(Ac, Bc, dt)
+    S_z = np.array([[0, 0, 1.0], [1.0, 0, 0]])                # [accelerometer; position]
+    Phi = np.array([[1, dt], [0, 1]])
+    Gam = np.array([[dt**2 / 2], [dt]])
+    alpha, beta = _alpha_beta(sigma_a * dt**2 / sigma_r)
+    K = np.array([[alpha], [beta / dt]])
+    H = np.array([[1.0, 0.0]])
+    X_x = np.eye(2) - K @ H
+    Y_x = np.linalg.matrix_power(Phi, N)
+    Y_hist = np.zeros((2, 3 * N))
+    for i in range(N):
+        Y_hist[:, 3 * i] = (np.linalg.matrix_power(Phi, N - 1 - i) @ Gam).ravel()
+    A_imu = np.array([[1.0], [0.0], [0.0]])
+    law = (np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), np.array([[-kp, -kd]]), [])
+    h = dict(S_z=S_z, imu=np.zeros(1), packets=[np.zeros(1)] + [np.zeros(0)] * 3)
+    names = [p.name for p in NAV_PACKETS]
+    sch = filter_loop.FilterSchedule(1 / dt, N, dict.fromkeys(names, 1), dict.fromkeys(names, 0),
+                                     dict.fromkeys(names, 1.0), dict.fromkeys(names, ""))
+    ctrl = filter_loop._filter_controller(
+        h, sch, (X_x, np.hstack([K, np.zeros((2, 0))])), (Phi, np.hstack([Gam, np.zeros((2, 2))])),
+        (Y_x, Y_hist, np.zeros((2, 1)), A_imu), law)
+    hand = dict(Phi_p=Phi_p, Gam_p=Gam_p, S_z=S_z, Phi=Phi, Gam=Gam, K=K, X_x=X_x, N=N,
+                delay=delay, kp=kp, kd=kd, dt=dt, sigma_a=sigma_a, sigma_r=sigma_r)
+    return ctrl, hand
+
+
+def _hand_loop(hd, w):
+    """``L = -K(z) P(z)`` at ``z = exp(j w dt)``, from the filter's equations in z."""
+    z = np.exp(1j * w * hd["dt"])
+    N, Phi, Gam, K, X_x = hd["N"], hd["Phi"], hd["Gam"], hd["K"], hd["X_x"]
+    P = hd["S_z"] @ np.linalg.solve(z * np.eye(3) - hd["Phi_p"], hd["Gam_p"])   # [a; p] per u
+    a, p = P[0, 0], P[1, 0]
+    h = np.linalg.solve(z * np.eye(2) - Phi @ X_x, (Phi @ K * p + Gam * a) * z**-N)
+    x_now = np.linalg.matrix_power(Phi, N) @ (X_x @ h + K * p * z**-N)
+    for i in range(N):
+        x_now = x_now + np.linalg.matrix_power(Phi, N - 1 - i) @ Gam * a * z**-(N - i)
+    u = -(hd["kp"] * x_now[0, 0] + hd["kd"] * x_now[1, 0]) * z**-hd["delay"]
+    return -u
+
+
+def test_alpha_beta_gains_are_the_dare():
+    _, hd = _toy()
+    Q = hd["Gam"] @ hd["Gam"].T * hd["sigma_a"] ** 2
+    H = np.array([[1.0, 0.0]])
+    P = scipy.linalg.solve_discrete_are(hd["Phi"].T, H.T, Q, np.array([[hd["sigma_r"] ** 2]]))
+    np.testing.assert_allclose(P @ H.T / (H @ P @ H.T + hd["sigma_r"] ** 2), hd["K"], rtol=1e-10)
+
+
+def test_the_assembled_filter_loop_is_the_hand_loop_and_its_margins():
+    """The state space (horizon, line, output predictor, command delay) against the
+    filter's equations in z; the phase margin against the hand loop's crossover."""
+    from quadland.analysis import allmargin
+    from quadland.linear import OperatingPoint, assemble, delayed
+
+    (A, B, C, D, _), hd = _toy()
+    Kd = delayed(A, B, C, D, hd["delay"])
+    point = OperatingPoint("equilibrium", None, np.zeros(3), np.zeros(0), np.zeros(3), 0.0,
+                           np.zeros(0), np.zeros(1), 0.0, 0, "toy", ("p", "v", "F"))
+    models = assemble(point, hd["Phi_p"], hd["Gam_p"], hd["S_z"], *Kd, hd["dt"],
+                      dict(x=["p", "v", "F"], y=["a", "p_m"], u=["u"], c=[f"c{i}" for i in
+                                                                         range(A.shape[0])],
+                           loops=("x",)), hd["delay"])
+    L = models.loop_input
+    for w in (0.3, 2.0, 7.0, 40.0, 250.0):
+        z = np.exp(1j * w * hd["dt"])
+        ss = (L.C @ np.linalg.solve(z * np.eye(L.nstates) - L.A, L.B) + L.D)[0, 0]
+        assert ss == pytest.approx(_hand_loop(hd, w), rel=1e-9)
+    wc = scipy.optimize.brentq(lambda w: abs(_hand_loop(hd, w)) - 1, 0.5, 50)
+    pm = 180 + np.degrees(np.angle(_hand_loop(hd, wc)))
+    m = allmargin(L)[0]
+    assert m.stable
+    assert min(m.phase_margin) == pytest.approx(pm, abs=1e-6)
+    assert 30 < pm < 80                               # a loop worth the name

@@ -295,7 +295,7 @@ def _filter_controller(h: dict, schedule: FilterSchedule, J_fuse, J_pred, out, l
     Phi, Gamma = J_pred
     Y_x, Y_hist, Y_imu, A_imu = out
     Phi_c, Gam_c, C_c, D_c, mem_names = law
-    N, nc, nx = schedule.n_hist, Phi_c.shape[0], NAV.size
+    N, nc, nx = schedule.n_hist, Phi_c.shape[0], X_x.shape[0]
     rows = _rows(h)
     extra = max(schedule.extra.values())
     length = N + extra
@@ -337,7 +337,8 @@ def _filter_controller(h: dict, schedule: FilterSchedule, J_fuse, J_pred, out, l
             A[o + j * taps.r:o + (j + 1) * taps.r, o + (j - 1) * taps.r:o + j * taps.r] = \
                 np.eye(taps.r)
     C, D = C_c @ np.eye(nc, n) + D_c @ Fx, D_c @ Fy
-    names = (list(mem_names) + [f"x_h_{e}" for e in NAV.element_names()]
+    nav = NAV.element_names() if nx == NAV.size else [str(i) for i in range(nx)]
+    names = (list(mem_names) + [f"x_h_{e}" for e in nav]
              + [f"line{j + 1}[{i}]" for j in range(length) for i in range(taps.r)])
     return A, B, C, D, names
 
