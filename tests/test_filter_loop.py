@@ -179,3 +179,49 @@ def test_the_assembled_filter_loop_is_the_hand_loop_and_its_margins():
     assert m.stable
     assert min(m.phase_margin) == pytest.approx(pm, abs=1e-6)
     assert 30 < pm < 80                               # a loop worth the name
+
+
+def test_the_periodic_covariance_is_the_flight_steps_fixed_point(highway):
+    """The flight step itself (estimator_step_function at its flight sizes), fed the hover's
+    packets on their schedule through its FIFOs, returns over one hyperperiod to the
+    periodic steady covariance, phase by phase as the recursion the linear model uses."""
+    from quadland_symbolic.landing.estimator import (
+        FLIGHT_DEPTH,
+        N_HIST,
+        estimator_memory,
+        estimator_step_function,
+    )
+    from quadland_symbolic.landing.navigation import IMU
+
+    _, _, h, sch = highway
+    P0, _ = filter_loop.steady_covariance(h, sch, periodic=True)
+    dt, N = 1 / RATE, N_HIST
+    lay = estimator_memory(N, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    mem = lay.zeros()
+    hist = np.vstack([np.tile(h["a_in"][:, None], (1, N)), np.full((1, N), dt)])
+    for name, v in dict(x_h=h["x_nav"], P_h=P0, t_h=[0.0], hist=hist.T.ravel(),
+                        deck_eta2=h["eta2"], deck_w2E=h["w2E"], deck_w2E_dot=h["w2E_dot"],
+                        deck_tau=[N * dt]).items():
+        mem[lay.slice(name)] = v
+    for k, p in enumerate(NAV_PACKETS):            # samples in transit: ticks 0 .. N - 1
+        due = [j for j in range(N) if sch.period[p.name] and j % sch.period[p.name] == 0]
+        slots = np.zeros(lay[f"fifo_{p.name}"].shape)
+        for c, j in enumerate(due):
+            slots[:, c] = np.r_[j * dt, h["packets"][k]]
+        mem[lay.slice(f"fifo_{p.name}")] = slots.T.ravel()
+        mem[lay.slice(f"count_{p.name}")] = len(due)
+    step = estimator_step_function(N, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    fuse, pred = (filter_loop.filter_fusion_function(FLIGHT_COUPLING),
+                  filter_loop.filter_prediction_function(FLIGHT_COUPLING))
+    P = P0
+    for j in range(sch.hyperperiod()):
+        t = (N + j) * dt
+        pkts = [np.r_[1.0, t, v] if sch.period[p.name] and (N + j) % sch.period[p.name] == 0
+                else np.zeros(p.size) for p, v in zip(NAV_PACKETS, h["packets"], strict=True)]
+        mem = np.asarray(step(mem, h["imu"][:IMU.size], *pkts, h["p_est"], dt, t)[0]).ravel()
+        P = np.asarray(fuse(h["x_nav"], P, *h["packets"], sch.due_at(j), h["n2"],
+                            h["p_est"])[1]).ravel()
+        P = np.asarray(pred(h["x_nav"], P, h["a_in"], dt, h["p_est"])[1]).ravel()
+        np.testing.assert_allclose(mem[lay.slice("P_h")], P, rtol=1e-9, atol=1e-18)
+        assert mem[lay.slice("t_h")][0] == pytest.approx((j + 1) * dt)
+    np.testing.assert_allclose(P, P0, rtol=1e-8, atol=1e-18)
