@@ -225,3 +225,135 @@ def test_the_periodic_covariance_is_the_flight_steps_fixed_point(highway):
         np.testing.assert_allclose(mem[lay.slice("P_h")], P, rtol=1e-9, atol=1e-18)
         assert mem[lay.slice("t_h")][0] == pytest.approx((j + 1) * dt)
     np.testing.assert_allclose(P, P0, rtol=1e-8, atol=1e-18)
+
+
+def _gust_jacobians(sc, point, h, dt):
+    """The plant's and the sensors' Jacobians in the wind at the point (heading frame),
+    the plant's under a zero-order hold with the wrench's."""
+    import casadi as ca
+
+    from quadland.linear import zoh
+    from quadland_symbolic.landing.filter_linearization import hover_sensing_function
+    from quadland_symbolic.landing.linearization import hover_plant_rhs
+    from quadland_symbolic.landing.plant import LANDING_DISTURBANCE
+
+    hv = linearize.hover_values(sc)
+    w = LANDING_DISTURBANCE.sym()
+    f = hover_plant_rhs(point.xr, point.u, point.vehicle, w, hv.pp)
+    wind = LANDING_DISTURBANCE.slice("v_wind")
+    A_w = np.asarray(ca.Function("a", [w], [ca.jacobian(f, w)])(point.w), dtype=float)[:, wind]
+    out = hover_sensing_function()(point.xr, point.u, point.vehicle, w, hv.pp,
+                                   filter_loop.sensor_params(filter_loop.sensor_settings(sc)))
+    s = ca.vertcat(*out[:5])
+    S_w = np.asarray(ca.Function("s", [w], [ca.jacobian(s, w)])(point.w), dtype=float)[:, wind]
+    J = linearize.hover_jacobians(sc, point, dt)
+    M = zoh(J["A_p"], np.hstack([J["B_p"], A_w]), dt)[1]
+    return M[:, 4:], S_w
+
+
+def _time_varying_response(sc, point, h, sch, G_w, S_w, gust, periodic=True, delay=1):
+    """The linear loop stepped in time with its buffers written out, the filter's gains
+    per phase of its multirate schedule (``periodic``) or the rate-equivalent ones: the
+    deck-frame position's response to the wind ``gust`` (``(n, 3)``, one per period)."""
+    from quadland.linear import zoh
+
+    dt, N = 1 / RATE, sch.n_hist
+    fuse, pred = (filter_loop.filter_fusion_function(FLIGHT_COUPLING),
+                  filter_loop.filter_prediction_function(FLIGHT_COUPLING))
+    p_fuse = h["p_est"] if periodic else filter_loop._equivalent_p_est(h["p_est"], sch)
+    P, _ = filter_loop.steady_covariance(h, sch, periodic=periodic)
+    gains = []
+    for j in range(sch.hyperperiod() if periodic else 1):
+        out = fuse(h["x_nav"], P, *h["packets"], sch.due_at(j) if periodic else sch.due(),
+                   h["n2"], p_fuse)
+        gains.append([np.asarray(v, dtype=float) for v in out[3:5]])
+        P = np.asarray(pred(h["x_nav"], np.asarray(out[1]).ravel(), h["a_in"], dt,
+                            h["p_est"])[1]).ravel()
+    _, _, Phi, Gam = (np.asarray(v, dtype=float) for v in pred(h["x_nav"], P, h["a_in"], dt,
+                                                              h["p_est"]))
+    y0, _, Y_x, Y_hist, Y_imu, A_imu = filter_loop._output_jacobians(h, h["x_nav"])
+    Phi_c, Gam_c, C_c, D_c, _ = filter_loop._law(sc, point, y0.ravel(), dt)
+    J = linearize.hover_jacobians(sc, point, dt)
+    Phi_p, Gam_p = zoh(J["A_p"], J["B_p"], dt)
+    rows = filter_loop._rows(h)
+    pk_rows = np.concatenate(rows[1:])
+    z, c, hx = np.zeros(Phi_p.shape[0]), np.zeros(Phi_c.shape[0]), np.zeros(NAV.size)
+    past = [np.zeros(h["S_z"].shape[0])] * (N + 1)         # past[j]: the packets j ago
+    queue, out = [np.zeros(4)] * delay, []
+    for k, w in enumerate(gust):
+        past = [h["S_z"] @ z + S_w @ w] + past[:N]
+        X_x, X_pkt = gains[(k - N) % len(gains)]
+        xp = X_x @ hx + X_pkt @ past[N][pk_rows]
+        acc = np.concatenate([A_imu @ past[N - i][rows[0]] for i in range(N)])
+        yf = Y_x @ xp + Y_hist @ acc + Y_imu @ past[0][rows[0]]
+        queue.append(C_c @ c + D_c @ yf)
+        c = Phi_c @ c + Gam_c @ yf
+        hx = Phi @ xp + Gam @ A_imu @ past[N][rows[0]]
+        out.append(z[0:3].copy())
+        z = Phi_p @ z + Gam_p @ queue.pop(0) + G_w @ w
+    return np.array(out)
+
+
+def _gust(n, dt, amplitude=0.03, half=1.0):
+    """A 1-cosine crosswind (y) gust from the first period, held each period."""
+    t = dt * np.arange(n)
+    g = amplitude / 2 * (1 - np.cos(np.pi * np.clip(t, 0, 2 * half) / half))
+    return np.column_stack([np.zeros(n), g, np.zeros(n)])
+
+
+def test_the_state_space_is_the_loop_stepped_in_time(highway):
+    """The rate-equivalent loop's state space (the line compressed to its rank, the
+    horizon, the law) against the same loop stepped with its buffers written out, for a
+    roll moment added to the command (the packets stay in the range of their Jacobian)."""
+    sc, point, h, sch = highway
+    dt = 1 / RATE
+    models = filter_loop.hover_filter_models(sc, point, RATE, 1)
+    P, K = models.plant, models.controller
+    d = np.zeros((400, 4))
+    d[:, 1] = _gust(400, dt, amplitude=1e-3)[:, 1]                  # N m
+    stepped = _time_varying_response(sc, point, h, sch, P.B, np.zeros((P.noutputs, 4)), d,
+                                     periodic=False)
+    z, c, ss = np.zeros(P.nstates), np.zeros(K.nstates), []
+    for dk in d:
+        y = P.C @ z
+        u = K.C @ c + K.D @ y
+        ss.append(z[0:3].copy())
+        z, c = P.A @ z + P.B @ (u + dk), K.A @ c + K.B @ y
+    ss = np.array(ss)
+    assert np.max(np.abs(ss)) > 1e-4
+    np.testing.assert_allclose(ss, stepped, rtol=0, atol=1e-9 * np.max(np.abs(stepped)))
+
+
+@pytest.mark.slow
+def test_the_linear_loop_answers_a_small_gust_as_the_flown_loop(highway):
+    """A 3 cm/s crosswind 1-cosine gust at 600 s into the hover (the memory's slowest mode,
+    the robust terms' leakage, has 100 s: at 60 s the flight is still off the hover point
+    and even the perfect-sensing model is 69 % off), sensors without noise: the flown
+    loop's deviation from the same flight without the gust (quadland.simulate, the
+    filter's flight code on its multirate schedule) against the linear loop's response
+    with the filter's gains per phase of the schedule, deck-frame position. Measured:
+    0.37 % of the peak (the linearization's second order), the rate-equivalent gains
+    0.022 % from the periodic ones."""
+    sc0, point, h, sch = highway
+    dt, T0 = 1 / RATE, 600
+    calm = ["landing.dwell_time=1000", f"simulation.duration={T0 + 6}", "sensors.random=false",
+            "wind.turbulence_w20=0", "disturbance.noise=false", "disturbance.force_amplitude=0",
+            "disturbance.moment_amplitude=0", f"disturbance.sample_rate_hz={RATE}",
+            f"wind.gust_start={T0}", "wind.gust_half_length=1.0",
+            "wind.gust_direction=[0.0, 1.0, 0.0]"]
+    runs = [quadland.simulate(quadland.load_scenario("highway",
+                                                     calm + [f"wind.gust_amplitude={a}"]))
+            for a in (0, 0.03)]
+    t = runs[0]["t"]
+    keep = (t >= T0 - 1e-9) & (np.abs(t / dt - np.rint(t / dt)) < 1e-6)
+    dev = np.column_stack([runs[1][n][keep] - runs[0][n][keep] for n in ("x_e", "y_e", "z_e")])
+    steps = np.rint((t[keep] - T0) / dt).astype(int)
+    G_w, S_w = _gust_jacobians(sc0, point, h, dt)
+    gust = _gust(steps[-1] + 1, dt)
+    lin = _time_varying_response(sc0, point, h, sch, G_w, S_w, gust)[steps]
+    peak = np.max(np.abs(dev[:, 1]))
+    assert peak > 3e-4                                     # a fraction of a millimetre
+    np.testing.assert_allclose(lin, dev, rtol=0, atol=0.005 * peak)
+    equivalent = _time_varying_response(sc0, point, h, sch, G_w, S_w, gust,
+                                        periodic=False)[steps]
+    np.testing.assert_allclose(equivalent, lin, rtol=0, atol=0.001 * peak)

@@ -339,6 +339,15 @@ def test_landing_report_is_the_same_review(landing):
                                                     rel=0.01)
     assert list(data["sampled"]["loops"]) == LANDING_LOOPS
     assert data["sampled"]["computation_delay_s"] == pytest.approx(0.004)
+    # the flown loop: the filter's horizon state (21) and its delay line (the packets'
+    # 13 independent channels over the 50-period horizon) beside the step's memory; its
+    # verdict is the review's
+    assert landing.filtered.stable and landing.filtered.rate_hz == 250.0
+    assert [m.name for m in landing.filtered.loops] == LANDING_LOOPS
+    assert landing.filtered_models.controller.nstates == 6 * 3 + 22 + 21 + 13 * 50 + 4
+    assert landing.passed == landing.filtered.passed
+    assert data["verdict_from"] == ["sampled, filter in the loop"]
+    assert list(data["filtered"]["loops"]) == LANDING_LOOPS
     json.dumps(data, allow_nan=False)
 
 
@@ -348,8 +357,9 @@ def test_landing_table(landing):
     assert "wrench [T, M_x, M_y, M_z] into the mixer" in table
     assert "continuous-time limit of the landing step (dt -> 0)" in table
     assert "zero-order hold at 250 Hz, computation delay 1 period (4 ms)" in table
+    assert "sampled, filter in the loop: the navigation filter at its steady state" in table
     for name in LANDING_LOOPS:
-        assert sum(line.startswith(f"  {name} ") for line in table.splitlines()) == 2
+        assert sum(line.startswith(f"  {name} ") for line in table.splitlines()) == 3
 
 
 def test_landing_refuses_a_frozen_point():

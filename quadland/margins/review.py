@@ -106,6 +106,25 @@ def _with_extras(section: LoopReport, models, scenario: Scenario,
     return dataclasses.replace(section, sensitivity=sens, sensors=sensors)
 
 
+def _filtered_section(kind, scenario: Scenario, point, rate: float, delay_periods: int,
+                      requirement: Requirement):
+    """The sampled loop with the navigation filter in it and its models, when the kind
+    has one for the scenario (its ``filtered_models``); ``(None, None)`` otherwise. No
+    sensor-side margins: the filter time-stamps its packets (docs/margins.md)."""
+    make = getattr(kind, "filtered_models", None)
+    models = None if make is None else make(scenario, point, rate, delay_periods)
+    if models is None:
+        return None, None
+    from quadland.analysis.sensitivity import sensitivity_peaks
+    from quadland.margins.sensitivity import SensitivityReport
+
+    section, _ = _loop_report(models.loop_input, models.loop_names, requirement,
+                              rate_hz=rate, delay_periods=delay_periods)
+    per_loop, multi = sensitivity_peaks(models.loop_input)
+    return dataclasses.replace(section, sensitivity=SensitivityReport(
+        tuple(zip(models.loop_names, per_loop, strict=True)), multi)), models
+
+
 def check_request(scenario: Scenario, at: float | None = None,
                   delay_periods: int | None = None) -> None:
     """Refuse, before any work, a request :func:`margin_report` cannot answer.
@@ -241,18 +260,9 @@ def margin_report(scenario: Scenario, at: float | None = None,
                                   rate_hz=rate, delay_periods=int(delay_periods))
         sampled = _with_extras(sampled, discrete, scenario, requirement)
     flown = flown_models = None
-    make = getattr(kind, "filtered_models", None)
-    if rate > 0 and filtered and make is not None:
-        flown_models = make(scenario, point, rate, int(delay_periods))
-    if flown_models is not None:
-        from quadland.analysis.sensitivity import sensitivity_peaks
-        from quadland.margins.sensitivity import SensitivityReport
-
-        flown, _ = _loop_report(flown_models.loop_input, flown_models.loop_names, requirement,
-                                rate_hz=rate, delay_periods=int(delay_periods))
-        per_loop, multi = sensitivity_peaks(flown_models.loop_input)
-        flown = dataclasses.replace(flown, sensitivity=SensitivityReport(
-            tuple(zip(flown_models.loop_names, per_loop, strict=True)), multi))
+    if rate > 0 and filtered:
+        flown, flown_models = _filtered_section(kind, scenario, point, rate, int(delay_periods),
+                                                requirement)
     return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
                         poles, flown, flown_models)
 

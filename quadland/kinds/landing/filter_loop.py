@@ -86,7 +86,7 @@ from quadland_symbolic.landing.navigation import (
 from quadland_symbolic.landing.sensed_loop import delivery_delay
 
 __all__ = ["FilterSchedule", "filter_schedule", "steady_covariance", "hover_filter_models",
-           "RICCATI_TOL"]
+           "RICCATI_TOL", "truth_measurement", "sensor_params", "sensor_settings"]
 
 #: Relative change of the covariance per step at which the recursion has converged.
 RICCATI_TOL = 1e-12
