@@ -207,10 +207,8 @@ def margin_report(scenario: Scenario, at: float | None = None,
         command one period after it samples); see the kind's
         ``sampled_models``.
     filtered : bool, optional
-        Also review the sampled loop with the navigation filter in it, when the
-        kind has one for the scenario (the kind's ``filtered_models``: a landing
-        flying its sensors); its verdict is then the review's. False skips it
-        (the campaign's draws: a few seconds each).
+        Also review the sampled loop with the navigation filter in it, if the kind
+        has one (``filtered_models``); its verdict is then the review's.
 
     Returns
     -------
@@ -259,10 +257,8 @@ def margin_report(scenario: Scenario, at: float | None = None,
         sampled, _ = _loop_report(discrete.loop_input, discrete.loop_names, requirement,
                                   rate_hz=rate, delay_periods=int(delay_periods))
         sampled = _with_extras(sampled, discrete, scenario, requirement)
-    flown = flown_models = None
-    if rate > 0 and filtered:
-        flown, flown_models = _filtered_section(kind, scenario, point, rate, int(delay_periods),
-                                                requirement)
+    flown, flown_models = _filtered_section(kind, scenario, point, rate, int(delay_periods),
+                                            requirement) if rate > 0 and filtered else (None, None)
     return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
                         poles, flown, flown_models)
 
