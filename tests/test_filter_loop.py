@@ -357,3 +357,23 @@ def test_the_linear_loop_answers_a_small_gust_as_the_flown_loop(highway):
     equivalent = _time_varying_response(sc0, point, h, sch, G_w, S_w, gust,
                                         periodic=False)[steps]
     np.testing.assert_allclose(equivalent, lin, rtol=0, atol=0.001 * peak)
+
+
+def test_the_compact_loop_is_the_assembled_one(highway):
+    """The loop broken at the plant input realized with the plant's state delayed (323
+    states) has the frequency response of -K P assembled from the plant and the filter
+    controller (773), and the same closed-loop poles off the delay lines' zero."""
+    from quadland.analysis import closed_loop_poles
+
+    sc, point, _, _ = highway
+    full = filter_loop.hover_filter_models(sc, point, RATE, 1, compact=False).loop_input
+    compact = filter_loop.hover_filter_models(sc, point, RATE, 1).loop_input
+    assert (full.nstates, compact.nstates) == (773, 323)
+    for w in (0.3, 3.0, 14.0, 100.0, 700.0):
+        z = np.exp(1j * w / RATE)
+        G = [L.C @ np.linalg.solve(z * np.eye(L.nstates) - L.A, L.B) + L.D
+             for L in (full, compact)]
+        np.testing.assert_allclose(G[1], G[0], rtol=0, atol=1e-11 * np.abs(G[0]).max())
+    p = [np.sort_complex(q[np.abs(q) > 0.9]) for q in (closed_loop_poles(full),
+                                                       closed_loop_poles(compact))]
+    np.testing.assert_allclose(p[1], p[0], rtol=0, atol=1e-8)

@@ -35,8 +35,10 @@ comparison docs/margins.md reports.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
+import control
 import numpy as np
 
 from quadland.kinds.landing.linearize import (
@@ -86,7 +88,8 @@ from quadland_symbolic.landing.navigation import (
 from quadland_symbolic.landing.sensed_loop import delivery_delay
 
 __all__ = ["FilterSchedule", "filter_schedule", "steady_covariance", "hover_filter_models",
-           "RICCATI_TOL", "truth_measurement", "sensor_params", "sensor_settings"]
+           "delayed_plant_loop", "RICCATI_TOL", "truth_measurement", "sensor_params",
+           "sensor_settings"]
 
 #: Relative change of the covariance per step at which the recursion has converged.
 RICCATI_TOL = 1e-12
@@ -344,12 +347,15 @@ def _filter_controller(h: dict, schedule: FilterSchedule, J_fuse, J_pred, out, l
 
 
 def hover_filter_models(scenario: Scenario, point: OperatingPoint, rate_hz: float,
-                        delay_periods: int = 1) -> LinearModels:
+                        delay_periods: int = 1, compact: bool = True) -> LinearModels:
     """The sampled hover loop with the navigation filter in it (module docstring).
 
     The plant's outputs are the sensors' packets; the controller is the filter (its
     gain frozen at the rate-equivalent steady covariance) and the landing step, with
-    ``delay_periods`` unit delays on its command.
+    ``delay_periods`` unit delays on its command. With ``compact`` the loop broken at
+    the plant input (``loop_input``, what the margins read) is realized with the plant's
+    state delayed (:func:`delayed_plant_loop`: 357 states on ``highway`` instead of
+    773); the plant, the controller and the other loops are the full ones.
     """
     delay_periods = check_delay_periods(delay_periods)
     dt = 1.0 / rate_hz
@@ -375,9 +381,18 @@ def hover_filter_models(scenario: Scenario, point: OperatingPoint, rate_hz: floa
     K = delayed(A, B, C, D, delay_periods)
     y_names = [f"{layout.name}_{e}" for layout in (IMU, *NAV_PACKETS)
                for n in packet_values(layout) for e in layout[n].element_names()]
-    return assemble(point, Phi_p, Gam_p, h["S_z"], *K, dt,
-                    dict(x=list(point.state_names), y=y_names, u=list(LANDING_INPUT_NAMES),
-                         c=c_names, loops=LANDING_LOOP_NAMES), delay_periods)
+    models = assemble(point, Phi_p, Gam_p, h["S_z"], *K, dt,
+                      dict(x=list(point.state_names), y=y_names, u=list(LANDING_INPUT_NAMES),
+                           c=c_names, loops=LANDING_LOOP_NAMES), delay_periods)
+    if not compact:
+        return models
+    L = delayed_plant_loop(Phi_p, Gam_p, h["S_z"], h, schedule,
+                           [np.asarray(v, dtype=float) for v in fz[3:5]],
+                           [np.asarray(v, dtype=float) for v in pr[2:4]],
+                           (Y_x, Y_hist, Y_imu, A_imu), law[:4], delay_periods)
+    li = models.loop_input
+    return dataclasses.replace(models, loop_input=control.ss(
+        *L, dt, inputs=li.input_labels, outputs=li.output_labels, name="loop_input"))
 
 
 def truth_measurement(scenario: Scenario, point: OperatingPoint) -> np.ndarray:
@@ -385,3 +400,57 @@ def truth_measurement(scenario: Scenario, point: OperatingPoint) -> np.ndarray:
     hv = hover_values(scenario)
     return np.asarray(hover_measurement(point.xr, point.vehicle, hv.pp),
                       dtype=float).ravel()[:LANDING_MEASUREMENT.size]
+
+
+def delayed_plant_loop(Phi_p, Gam_p, S_z, h: dict, schedule: FilterSchedule, J_fuse, J_pred,
+                       out, law, delay_periods: int):
+    """``L = -K P`` broken at the plant input, realized with the plant's state delayed.
+
+    The same loop as :func:`quadland.linear.assemble` makes of the plant and the filter
+    controller, with ``M = n_hist + extra`` periods of the plant's inputs in a line
+    instead of ``M`` periods of its packets: states ``[z[k - M], u[k - M] .. u[k - 1],
+    mem, x_h, commands]``, and every past packet ``S_z z[k - m]`` rebuilt from them
+    (``z[k - m + 1] = Phi_p z[k - m] + Gam_p u[k - m]``). The wrench has 4 entries and
+    the packets' Jacobian rank 13: 4 M states instead of 13 M. Returns ``(A, B, C, D)``.
+    """
+    X_x, X_pkt = J_fuse
+    Phi, Gamma = J_pred
+    Y_x, Y_hist, Y_imu, A_imu = out
+    Phi_c, Gam_c, C_c, D_c = law
+    N, nz, m = schedule.n_hist, Phi_p.shape[0], Gam_p.shape[1]
+    M, nc, nx = N + max(schedule.extra.values()), Phi_c.shape[0], X_x.shape[0]
+    o_c, o_h = nz + m * M, nz + m * M + nc
+    n0 = o_h + nx
+    T = [None] * (M + 1)                    # T[j]: z[k - j] as a map of the state
+    T[M] = np.eye(nz, n0)
+    for j in range(M, 0, -1):
+        Eu = np.zeros((m, n0))
+        Eu[:, nz + m * (M - j):nz + m * (M - j + 1)] = np.eye(m)
+        T[j - 1] = Phi_p @ T[j] + Gam_p @ Eu
+    rows = _rows(h)
+    Hx = np.zeros((nx, n0))
+    Hx[:, o_h:] = X_x
+    col = 0
+    for k, p in enumerate(NAV_PACKETS):
+        width = rows[k + 1].size
+        Hx += X_pkt[:, col:col + width] @ S_z[rows[k + 1], :] @ T[N + schedule.extra[p.name]]
+        col += width
+    imu = S_z[rows[0], :]
+    Fx = Y_x @ Hx + Y_imu @ imu @ T[0]
+    for i in range(N):
+        Fx += Y_hist[:, 3 * i:3 * i + 3] @ A_imu @ imu @ T[N - i]
+    A, B = np.zeros((n0, n0)), np.zeros((n0, m))
+    A[:nz, :] = T[M - 1]                                 # z[k - M + 1]
+    for j in range(M - 1):                               # the inputs' line moves up
+        A[nz + m * j:nz + m * (j + 1), nz + m * (j + 1):nz + m * (j + 2)] = np.eye(m)
+    B[nz + m * (M - 1):nz + m * M, :] = np.eye(m)
+    A[o_c:o_h, :] = Gam_c @ Fx
+    A[o_c:o_h, o_c:o_h] += Phi_c
+    A[o_h:, :] = Phi @ Hx + Gamma @ A_imu @ imu @ T[N]
+    C = C_c @ np.eye(nc, n0, o_c) + D_c @ Fx             # the command, before its delay
+    Ad, Bd, Cd, Dd = delayed(A, np.zeros((n0, 0)), C, np.zeros((m, 0)), delay_periods)
+    Ad[:n0, :n0] = A
+    Bd = np.vstack([B, np.zeros((Ad.shape[0] - n0, m))])
+    if delay_periods == 0:
+        return A, B, -C, np.zeros((m, m))
+    return Ad, Bd, -Cd, np.zeros((m, m))
