@@ -109,7 +109,8 @@ def test_to_dict_is_the_json_of_the_command(report, tmp_path, capsys):
     assert data.pop("versions")["control"]
     assert data == report.to_dict()
     assert list(data) == ["scenario", "overrides", "operating_point", "requirement",
-                          "loop_break", "continuous"]
+                          "loop_break", "continuous", "verdict_from"]
+    assert data["verdict_from"] == ["continuous"]        # no sampled loop, no filter
     cont = data["continuous"]
     assert list(cont) == ["stable", "loops", "multiloop_disk", "passed", "poles", "sensitivity"]
     ms = report.continuous.sensitivity.multiloop.ms
