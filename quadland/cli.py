@@ -283,9 +283,7 @@ def _run_margins(args) -> int:
         return 0
     failed = [f"{label}{'' if section.stable else ' (closed loop unstable)'}: "
               f"{', '.join(section.failed)}"
-              for label, section in (("continuous", report.continuous),
-                                     ("sampled", report.sampled))
-              if section is not None and not section.passed]
+              for label, section in report.judged if not section.passed]
     print(f"quadland: margins below the requirement {requirement.gain_margin_db:g} dB / "
           f"{requirement.phase_margin_deg:g} deg: {'; '.join(failed)}", file=sys.stderr)
     return 1

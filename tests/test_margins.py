@@ -109,7 +109,8 @@ def test_to_dict_is_the_json_of_the_command(report, tmp_path, capsys):
     assert data.pop("versions")["control"]
     assert data == report.to_dict()
     assert list(data) == ["scenario", "overrides", "operating_point", "requirement",
-                          "loop_break", "continuous"]
+                          "loop_break", "continuous", "verdict_from"]
+    assert data["verdict_from"] == ["continuous"]        # no sampled loop, no filter
     cont = data["continuous"]
     assert list(cont) == ["stable", "loops", "multiloop_disk", "passed", "poles", "sensitivity"]
     ms = report.continuous.sensitivity.multiloop.ms
@@ -339,6 +340,15 @@ def test_landing_report_is_the_same_review(landing):
                                                     rel=0.01)
     assert list(data["sampled"]["loops"]) == LANDING_LOOPS
     assert data["sampled"]["computation_delay_s"] == pytest.approx(0.004)
+    # the flown loop: the filter's horizon state (21) and its delay line (the packets'
+    # 13 independent channels over the 50-period horizon) beside the step's memory; its
+    # verdict is the review's
+    assert landing.filtered.stable and landing.filtered.rate_hz == 250.0
+    assert [m.name for m in landing.filtered.loops] == LANDING_LOOPS
+    assert landing.filtered_models.controller.nstates == 6 * 3 + 22 + 21 + 13 * 50 + 4
+    assert landing.passed == landing.filtered.passed
+    assert data["verdict_from"] == ["sampled, filter in the loop"]
+    assert list(data["filtered"]["loops"]) == LANDING_LOOPS
     json.dumps(data, allow_nan=False)
 
 
@@ -348,8 +358,9 @@ def test_landing_table(landing):
     assert "wrench [T, M_x, M_y, M_z] into the mixer" in table
     assert "continuous-time limit of the landing step (dt -> 0)" in table
     assert "zero-order hold at 250 Hz, computation delay 1 period (4 ms)" in table
+    assert "sampled, filter in the loop: the navigation filter at its steady state" in table
     for name in LANDING_LOOPS:
-        assert sum(line.startswith(f"  {name} ") for line in table.splitlines()) == 2
+        assert sum(line.startswith(f"  {name} ") for line in table.splitlines()) == 3
 
 
 def test_landing_refuses_a_frozen_point():
@@ -387,7 +398,9 @@ def _worst(section):
 def _check_repr(rep: MarginReport):
     text = repr(rep)
     lines = text.splitlines()
-    sections = [rep.continuous] + ([rep.sampled] if rep.sampled is not None else [])
+    sections = [rep.continuous] + [s for s in (rep.sampled, rep.filtered) if s is not None]
+    titles = [s.title() + (", filter in the loop" if s is rep.filtered else "")
+              for s in sections]
     assert len(lines) == 2 + len(sections) and len(text) < 800
     req = rep.requirement
     assert lines[0] == (f"<MarginReport of {rep.scenario.name!r} ({rep.point.kind}): "
@@ -408,18 +421,21 @@ def _check_repr(rep: MarginReport):
     # the notebook's table: a header and a row per controller, the line's words in cells
     page = rep._repr_html_()
     assert page.count("<tr>") == 1 + len(sections)
-    for section, line in zip(sections, lines[1:], strict=False):
+    for section, title, line in zip(sections, titles, lines[1:], strict=False):
         (gm, gm_at), (pm, pm_at) = _worst(section)
-        for cell in (section.title(), f"{gm:.1f} dB ({gm_at})", f"{pm:.1f} deg ({pm_at})"):
+        assert line.startswith(f"  {title}: ")
+        for cell in (title, f"{gm:.1f} dB ({gm_at})", f"{pm:.1f} deg ({pm_at})"):
             assert f"<td>{cell}</td>" in page and cell in line
 
 
 def test_repr_is_a_short_summary_of_the_fields(report, landing):
-    """The continuous paper loop and the landing's two controllers: a handful of lines
+    """The continuous paper loop and the landing's three sections: a handful of lines
     (the dataclass's own repr was over 70,000 characters)."""
     for rep in (report, landing):
         _check_repr(rep)
     assert repr(landing).splitlines()[2].startswith("  sampled 250 Hz, delay 1 period: ")
+    assert repr(landing).splitlines()[3].startswith(
+        "  sampled 250 Hz, delay 1 period, filter in the loop: ")
 
 
 def test_repr_of_a_failed_review_names_what_failed():

@@ -259,6 +259,52 @@ def _wrap180(deg: float) -> float:
     return 180.0 if d == -180.0 else d
 
 
+def _unit_crossings(resp: FrequencyResponse, grid: np.ndarray, g: list[int], n: int
+                    ) -> tuple[list[tuple[float, float, float]], int]:
+    """Each resolved unit-modulus crossing of an eigenvalue of ``L_g`` on ``grid``, refined,
+    as ``(w, phase margin deg, delay s)``, and how many sign changes were unresolved."""
+    eye = np.eye(n)
+    idx = np.ix_(g, g)
+
+    def resolved(w):
+        return np.linalg.cond(eye + resp.at(resp.point(w))) <= RESOLVABLE_CONDITION
+
+    def eigs(G):
+        S_g = np.linalg.inv(eye + G)[..., idx[0], idx[1]]
+        return np.linalg.eigvals(np.linalg.inv(S_g) - np.eye(len(g)))
+
+    def log_moduli(w):
+        """Sorted ``log |lambda|`` at ``w``; NaN where ``L_g`` is not defined (a pole)."""
+        try:
+            lam = eigs(resp.at(resp.point(w)))
+        except np.linalg.LinAlgError:
+            return np.full(len(g), np.nan)
+        return np.sort(np.log(np.maximum(np.abs(lam), 1e-300)))
+
+    grid = grid[grid > 0]
+    try:
+        values = np.sort(np.log(np.maximum(np.abs(eigs(resp(grid))), 1e-300)), axis=-1)
+    except np.linalg.LinAlgError:
+        values = np.array([log_moduli(w) for w in grid])
+    crossings, unresolved = [], 0
+    for k in range(len(g)):
+        v = values[:, k]
+        for j in np.flatnonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0):
+            if not (resolved(grid[j]) and resolved(grid[j + 1])):
+                unresolved += 1
+                continue
+            try:
+                w = scipy.optimize.brentq(lambda w, k=k: log_moduli(w)[k], grid[j], grid[j + 1],
+                                          xtol=1e-14, rtol=1e-12)
+                lam = eigs(resp.at(resp.point(w)))
+            except (ValueError, RuntimeError, np.linalg.LinAlgError):
+                continue
+            lam = lam[np.argmin(np.abs(np.log(np.maximum(np.abs(lam), 1e-300))))]
+            pm = _wrap180(math.degrees(np.angle(lam)) + 180.0)
+            crossings.append((float(w), pm, math.radians(pm % 360.0) / w))
+    return crossings, unresolved
+
+
 def group_delay_margin(L, channels, omega=None) -> GroupDelayMargin:
     """The smallest delay common to ``channels`` that destabilizes the loop.
 
@@ -301,45 +347,7 @@ def group_delay_margin(L, channels, omega=None) -> GroupDelayMargin:
     resp, grid, stable = _grid(L, omega)
     if not stable:
         return GroupDelayMargin(tuple(g), 0.0, None, math.inf, (), False)
-    eye = np.eye(L.ninputs)
-    idx = np.ix_(g, g)
-
-    def resolved(w):
-        return np.linalg.cond(eye + resp.at(resp.point(w))) <= RESOLVABLE_CONDITION
-
-    def eigs(G):
-        S_g = np.linalg.inv(eye + G)[..., idx[0], idx[1]]
-        return np.linalg.eigvals(np.linalg.inv(S_g) - np.eye(len(g)))
-
-    def log_moduli(w):
-        """Sorted ``log |lambda|`` at ``w``; NaN where ``L_g`` is not defined (a pole)."""
-        try:
-            lam = eigs(resp.at(resp.point(w)))
-        except np.linalg.LinAlgError:
-            return np.full(len(g), np.nan)
-        return np.sort(np.log(np.maximum(np.abs(lam), 1e-300)))
-
-    grid = grid[grid > 0]
-    try:
-        values = np.sort(np.log(np.maximum(np.abs(eigs(resp(grid))), 1e-300)), axis=-1)
-    except np.linalg.LinAlgError:
-        values = np.array([log_moduli(w) for w in grid])
-    crossings, unresolved = [], 0
-    for k in range(len(g)):
-        v = values[:, k]
-        for j in np.flatnonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0):
-            if not (resolved(grid[j]) and resolved(grid[j + 1])):
-                unresolved += 1
-                continue
-            try:
-                w = scipy.optimize.brentq(lambda w, k=k: log_moduli(w)[k], grid[j], grid[j + 1],
-                                          xtol=1e-14, rtol=1e-12)
-                lam = eigs(resp.at(resp.point(w)))
-            except (ValueError, RuntimeError, np.linalg.LinAlgError):
-                continue
-            lam = lam[np.argmin(np.abs(np.log(np.maximum(np.abs(lam), 1e-300))))]
-            pm = _wrap180(math.degrees(np.angle(lam)) + 180.0)
-            crossings.append((float(w), pm, math.radians(pm % 360.0) / w))
+    crossings, unresolved = _unit_crossings(resp, grid, g, L.ninputs)
     crossings.sort()
     if not crossings:
         return GroupDelayMargin(tuple(g), math.inf, None, math.inf, (), True, unresolved)

@@ -257,7 +257,7 @@ def _review_draw(base, draw, requirement, delay_periods, commands):
         return DrawMargins(status="invalid", passed=False, figures={},
                            message=" ".join(str(exc).split()), **common), {}, None
     try:
-        report = margin_report(scenario, None, requirement, delay_periods)
+        report = margin_report(scenario, None, requirement, delay_periods, filtered=False)
     except ScenarioError as exc:
         return DrawMargins(status="invalid", passed=False, figures={},
                            message=" ".join(str(exc).split()), **common), {}, None

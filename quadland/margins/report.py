@@ -323,6 +323,12 @@ class MarginReport:
         Zero-order-hold models at ``controller.rate_hz``, if > 0.
     poles : ndarray
         Poles of the continuous closed loop, 1/s.
+    filtered : LoopReport or None
+        The sampled loop with the navigation filter in it (a landing scenario
+        flying its sensors, ``sensors.enabled``): the flown loop, whose verdict is
+        the review's (:attr:`passed`).
+    filtered_models : LinearModels or None
+        Its models (:func:`quadland.kinds.landing.filter_loop.hover_filter_models`).
     """
 
     scenario: Scenario
@@ -333,14 +339,25 @@ class MarginReport:
     models: LinearModels
     sampled_models: LinearModels | None
     poles: np.ndarray
+    filtered: LoopReport | None = None
+    filtered_models: LinearModels | None = None
 
     @property
     def passed(self) -> bool:
-        """Every loop of every reported controller passed."""
+        """The flown loop passed: the loop with the filter when there is one (the
+        perfect-sensing sections are then for reference), else every loop of every
+        reported controller."""
+        if self.filtered is not None:
+            return self.filtered.passed
         return self.continuous.passed and (self.sampled is None or self.sampled.passed)
 
-    def _sections(self) -> list[LoopReport]:
-        return [self.continuous] + ([] if self.sampled is None else [self.sampled])
+    def _sections(self) -> list[tuple[str, LoopReport]]:
+        titled = [(self.continuous.title(), self.continuous)]
+        if self.sampled is not None:
+            titled.append((self.sampled.title(), self.sampled))
+        if self.filtered is not None:
+            titled.append((f"{self.filtered.title()}, filter in the loop", self.filtered))
+        return titled
 
     def _heading(self) -> str:
         at = self.point.kind if self.point.time is None else \
@@ -362,9 +379,9 @@ class MarginReport:
         with what failed; then where the rest is.
         """
         lines = [f"<{self._heading()}"]
-        for section in self._sections():
+        for title, section in self._sections():
             d = section.digest()
-            lines.append(f"  {section.title()}: {d['stable']}, GM {d['gain']}, "
+            lines.append(f"  {title}: {d['stable']}, GM {d['gain']}, "
                          f"PM {d['phase']}, multiloop disk {d['disk']}: {d['verdict']}")
         lines.append(f"  {self._HINT}>")
         return "\n".join(lines)
@@ -374,13 +391,21 @@ class MarginReport:
         head = "".join(f"<th>{h}</th>" for h in ("controller", "closed loop", "worst GM",
                                                  "worst PM", "multiloop disk", "verdict"))
         rows = []
-        for section in self._sections():
+        for title, section in self._sections():
             d = section.digest()
-            cells = (section.title(), d["stable"], d["gain"], d["phase"], d["disk"],
+            cells = (title, d["stable"], d["gain"], d["phase"], d["disk"],
                      d["verdict"])
             rows.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells) + "</tr>")
         return (f"<p><b>{html.escape(self._heading())}</b></p><table><tr>{head}</tr>"
                 f"{''.join(rows)}</table><p><code>{html.escape(self._HINT)}</code></p>")
+
+    @property
+    def judged(self) -> tuple[tuple[str, LoopReport], ...]:
+        """The sections :attr:`passed` judges, with their labels."""
+        if self.filtered is not None:
+            return (("sampled, filter in the loop", self.filtered),)
+        return tuple((label, s) for label, s in (("continuous", self.continuous),
+                                                 ("sampled", self.sampled)) if s is not None)
 
     def to_dict(self) -> dict:
         """The JSON-ready review, as ``margins.json`` holds it.
@@ -411,6 +436,9 @@ class MarginReport:
                     loop_break=loop_break, continuous=self.continuous.to_dict())
         if self.sampled is not None:
             data["sampled"] = self.sampled.to_dict()
+        if self.filtered is not None:
+            data["filtered"] = self.filtered.to_dict()
+        data["verdict_from"] = [label for label, _ in self.judged]
         return json_ready(data)
 
 

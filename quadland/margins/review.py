@@ -106,6 +106,25 @@ def _with_extras(section: LoopReport, models, scenario: Scenario,
     return dataclasses.replace(section, sensitivity=sens, sensors=sensors)
 
 
+def _filtered_section(kind, scenario: Scenario, point, rate: float, delay_periods: int,
+                      requirement: Requirement):
+    """The sampled loop with the navigation filter in it and its models, when the kind
+    has one for the scenario (its ``filtered_models``); ``(None, None)`` otherwise. No
+    sensor-side margins: the filter time-stamps its packets (docs/margins.md)."""
+    make = getattr(kind, "filtered_models", None)
+    models = None if make is None else make(scenario, point, rate, delay_periods)
+    if models is None:
+        return None, None
+    from quadland.analysis.sensitivity import sensitivity_peaks
+    from quadland.margins.sensitivity import SensitivityReport
+
+    section, _ = _loop_report(models.loop_input, models.loop_names, requirement,
+                              rate_hz=rate, delay_periods=delay_periods)
+    per_loop, multi = sensitivity_peaks(models.loop_input)
+    return dataclasses.replace(section, sensitivity=SensitivityReport(
+        tuple(zip(models.loop_names, per_loop, strict=True)), multi)), models
+
+
 def check_request(scenario: Scenario, at: float | None = None,
                   delay_periods: int | None = None) -> None:
     """Refuse, before any work, a request :func:`margin_report` cannot answer.
@@ -166,7 +185,7 @@ def loop_states(scenario: Scenario) -> tuple[int, int]:
 
 def margin_report(scenario: Scenario, at: float | None = None,
                   requirement: Requirement = Requirement(),
-                  delay_periods: int | None = None) -> MarginReport:
+                  delay_periods: int | None = None, filtered: bool = True) -> MarginReport:
     """Linearize a scenario's loop and compute the margin review.
 
     Parameters
@@ -187,6 +206,9 @@ def margin_report(scenario: Scenario, at: float | None = None,
         ``controller.delay_periods``, the paper's 1: flight code sends its
         command one period after it samples); see the kind's
         ``sampled_models``.
+    filtered : bool, optional
+        Also review the sampled loop with the navigation filter in it, if the kind
+        has one (``filtered_models``); its verdict is then the review's.
 
     Returns
     -------
@@ -235,7 +257,9 @@ def margin_report(scenario: Scenario, at: float | None = None,
         sampled, _ = _loop_report(discrete.loop_input, discrete.loop_names, requirement,
                                   rate_hz=rate, delay_periods=int(delay_periods))
         sampled = _with_extras(sampled, discrete, scenario, requirement)
+    flown, flown_models = _filtered_section(kind, scenario, point, rate, int(delay_periods),
+                                            requirement) if rate > 0 and filtered else (None, None)
     return MarginReport(scenario, point, requirement, continuous, sampled, models, discrete,
-                        poles)
+                        poles, flown, flown_models)
 
 

@@ -88,4 +88,12 @@ def format_report(report: MarginReport) -> str:
                                    f"period{'' if delay == 1 else 's'} "
                                    f"({1e3 * sd.computation_delay_s:.3g} ms)",
                                report.requirement)
+    if report.filtered is not None:
+        fd = report.filtered
+        delay = fd.computation_delay_periods
+        lines += [""] + _table(fd, f"sampled, filter in the loop: the navigation filter at its "
+                                   f"steady state (rate-equivalent gain), its horizon and "
+                                   f"output predictor, computation delay {delay} "
+                                   f"period{'' if delay == 1 else 's'}; the flown loop, "
+                                   "the verdict's", report.requirement)
     return "\n".join(lines) + "\n"

@@ -77,7 +77,9 @@ FLIGHT_DEPTH = (8, 4, 26, 4)
 #: The covariance coupling flown: x, y, z decoupled (the 30,000-instruction budget).
 FLIGHT_COUPLING = "axes"
 
-_HIST_ROWS = ("a_in_x", "a_in_y", "a_in_z", "dt", "turn_x", "turn_y", "turn_z")
+#: The rows of the filter's input history, one column per period: the acceleration input
+#: (E2), the period, the body's turn over it (E6a).
+HIST_ROWS = ("a_in_x", "a_in_y", "a_in_z", "dt", "turn_x", "turn_y", "turn_z")
 _HIST_UNITS = ("m/s^2",) * 3 + ("s",) + ("rad",) * 3
 
 
@@ -150,11 +152,11 @@ def estimator_memory(n_hist: int = N_HIST, depth=FIFO_DEPTH, coupling: str = "fu
               "covariance at the horizon: stored upper-triangle entries, row by row",
               elements=pattern.element_names()),
         Field("t_h", 1, "s", "time of the horizon"),
-        Field("hist", len(_HIST_ROWS) * n_hist, _HIST_UNITS * n_hist,
+        Field("hist", len(HIST_ROWS) * n_hist, _HIST_UNITS * n_hist,
               "acceleration inputs (E), their periods and the body's turns (E, E6a) from "
               "t_h to now, oldest first",
-              shape=(len(_HIST_ROWS), n_hist),
-              elements=tuple(f"{r}_{k + 1}" for k in range(n_hist) for r in _HIST_ROWS)),
+              shape=(len(HIST_ROWS), n_hist),
+              elements=tuple(f"{r}_{k + 1}" for k in range(n_hist) for r in HIST_ROWS)),
         *fifos,
         Field("deck_eta2", 3, "rad", "deck attitude of the latest broadcast"),
         Field("deck_w2E", 3, "rad/s", "deck angular velocity of the latest broadcast"),

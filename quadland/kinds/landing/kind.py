@@ -128,6 +128,18 @@ class LandingKind(LoopKind):
 
         return linearize.hover_sampled_models(scenario, point, rate_hz, delay_periods)
 
+    def filtered_models(self, scenario: Scenario, point: OperatingPoint, rate_hz: float,
+                        delay_periods: int = 1) -> LinearModels | None:
+        """The sampled loop with the navigation filter in it; None unless the scenario
+        flies its sensors (``sensors.enabled``)."""
+        from quadland.kinds.landing.sensed import sensors_enabled
+
+        if not sensors_enabled(scenario):
+            return None
+        from quadland.kinds.landing import filter_loop
+
+        return filter_loop.hover_filter_models(scenario, point, rate_hz, delay_periods)
+
     def describe_point(self, scenario: Scenario, point: OperatingPoint
                        ) -> tuple[list[str], str]:
         op = point.to_dict()

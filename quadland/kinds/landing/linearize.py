@@ -53,7 +53,8 @@ from quadland_symbolic.quadrotor import WRENCH
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
 __all__ = ["LANDING_LOOP_NAMES", "LANDING_INPUT_NAMES", "hover_equilibrium",
-           "hover_linear_models", "hover_sampled_models"]
+           "hover_linear_models", "hover_sampled_models", "hover_values", "hover_jacobians",
+           "kept_memory"]
 
 #: The four loops of the landing loop, one per entry of the wrench into the mixer.
 LANDING_LOOP_NAMES = ("thrust", "roll", "pitch", "yaw")
@@ -267,3 +268,21 @@ def hover_sampled_models(scenario: Scenario, point: OperatingPoint, rate_hz: flo
     return assemble(point, Phi_p, Gam_p, J["C_p"], *K, dt,
                     _landing_names(_landing_nodes(point.xc.size), _p_ctrl(scenario)),
                     delay_periods)
+
+
+def hover_values(scenario: Scenario) -> _HoverValues:
+    """The scenario's vectors at its hover point: ``l``, ``pp``, ``pm`` (the deck's heave,
+    roll and pitch zeroed), ``p_ctrl``, ``ref``, ``w``, ``speeds``, ``hover_thrust``."""
+    return _hover_values(scenario)
+
+
+def hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float) -> dict:
+    """The plant's and the landing step's Jacobians at the point (:func:`hover_linear_models`'
+    ``A_p`` ... ``D_c``, the zero-gain bias estimates dropped from the memory)."""
+    return _hover_jacobians(scenario, point, dt)
+
+
+def kept_memory(l: int, p_ctrl: np.ndarray) -> np.ndarray:
+    """Indices of the step's memory the linear models keep: all but the zero-gain bias
+    estimates."""
+    return _kept_memory(l, p_ctrl)
