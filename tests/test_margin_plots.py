@@ -295,17 +295,34 @@ def test_single_plots_equal_the_set(report, figures):
 
 
 def test_two_reports_overlay_on_one_figure(report):
-    """``ax=``: a second report drawn into the first one's axes adds its lines there."""
+    """``ax=``: a second report drawn into the first one's axes adds its lines there, its
+    labels tagged with its ``label=`` and its curves in the next colours, and each legend
+    is redrawn with one entry per label (the critical point, the unit circle once)."""
     other = _report("controller.rate_hz=50", "controller.k1=[2.0, 5.0, 10.0, 10.0]")
     for plot, label in ((bode_plot, "continuous"), (nyquist_plot, "continuous, w > 0"),
                         (nichols_plot, "continuous"), (sigma_plot, "continuous")):
         fig = plot(report)
         axes = np.array(fig.axes)
-        again = plot(other, ax=axes.reshape(2, 4) if plot is bode_plot else axes)
+        again = plot(other, ax=axes.reshape(2, 4) if plot is bode_plot else axes,
+                     label="k1 = 2, 50 Hz")
         assert again is fig and len(fig.axes) == axes.size
-        curves = _by_label(fig.axes[0], label)
-        assert len(curves) == 2
-        assert not np.array_equal(curves[0].get_ydata(), curves[1].get_ydata())
+        mine, theirs = _by_label(fig.axes[0], label), _by_label(fig.axes[0], label.replace(
+            "continuous", "continuous (k1 = 2, 50 Hz)"))
+        assert len(mine) == 1 and len(theirs) == 1
+        assert mine[0].get_color() != theirs[0].get_color()
+        assert not np.array_equal(mine[0].get_ydata(), theirs[0].get_ydata())
+        for a in fig.axes:
+            legend = a.get_legend()
+            if legend is None:
+                continue
+            texts = [t.get_text() for t in legend.get_texts()]
+            assert len(texts) == len(set(texts))
+            assert any("k1 = 2, 50 Hz" in t for t in texts)
+    fig = pole_plot(report)
+    pole_plot(other, ax=fig.axes, label="k1 = 2, 50 Hz")
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert any(t.startswith("continuous (") for t in texts)
+    assert any(t.startswith("continuous (k1 = 2, 50 Hz) (") for t in texts)
 
 
 def test_bode_starts_two_decades_below_the_lowest_crossover_where_sampled_meets_continuous():

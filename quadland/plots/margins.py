@@ -10,11 +10,15 @@ and turned by whole turns so that the phase at the gain crossover lies in
 
 Each function takes ``ax=``: axes to draw into (of the shape the figure
 would have), so that two reports overlay on one figure; it then returns
-the axes' figure.
+the axes' figure. A report drawn into axes already drawn (or given
+``label=``) has its lines' labels end with `` (label)``, the label by default
+its scenario's name, its curves take the next colours, and each legend is
+drawn again with one entry per label (:mod:`quadland.plots.overlay`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -28,7 +32,8 @@ from quadland.plots.frequency import (
     loop_curves,
     m_circle,
 )
-from quadland.plots.sensitivity import pole_plot, sigma_plot
+from quadland.plots.overlay import redraw_legend, run_index, run_tag
+from quadland.plots.sensitivity import RUN_GID, pole_plot, sigma_plot
 
 if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
     from quadland.margins import MarginReport
@@ -56,6 +61,19 @@ def _axes(ax, shape: tuple[int, ...], make) -> tuple[Figure, np.ndarray]:
     return axes.flat[0].figure, axes
 
 
+def _for_run(report: MarginReport, curves: tuple[LoopCurves, ...], ax, label: str | None
+             ) -> tuple[LoopCurves, ...]:
+    """The curves as this report's run draws them: labels tagged and colours moved on
+    past the reports the axes already show (:mod:`quadland.plots.overlay`)."""
+    tag = run_tag(report, label, ax is None)
+    if not tag:
+        return curves
+    first = None if ax is None else np.ravel(np.asarray(ax, dtype=object))[0]
+    k = 0 if first is None else run_index(first, RUN_GID)
+    return tuple(dataclasses.replace(c, label=c.label + tag, color=f"C{(3 * k + j) % 10}")
+                 for j, c in enumerate(curves))
+
+
 def _bode_markers(mag, phase, c: LoopCurves, i: int) -> None:
     """The phase margin at the gain crossover, the gain margins at the phase crossovers."""
     m = c.margins[i]
@@ -77,7 +95,7 @@ def _bode_markers(mag, phase, c: LoopCurves, i: int) -> None:
                    gid=f"{c.label}-phase-crossover-{side}")
 
 
-def bode_plot(report: MarginReport, ax=None) -> Figure:
+def bode_plot(report: MarginReport, ax=None, label: str | None = None) -> Figure:
     """Bode diagram of each loop with the others closed, with its margins marked.
 
     Parameters
@@ -85,6 +103,8 @@ def bode_plot(report: MarginReport, ax=None) -> Figure:
     report : MarginReport
     ax : array of matplotlib Axes, shape (2, loops), optional
         Where to draw (magnitudes in the first row); a new figure if None.
+    label : str, optional
+        This report's name in the labels when overlaid (module docstring).
 
     Returns
     -------
@@ -99,7 +119,7 @@ def bode_plot(report: MarginReport, ax=None) -> Figure:
         Each marker's ``gid`` names it (``"sampled-phase-margin"``,
         ``"continuous-gain-margin-down"``, ...).
     """
-    return _bode(report, loop_curves(report), ax)
+    return _bode(report, _for_run(report, loop_curves(report), ax, label), ax)
 
 
 def _bode(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
@@ -107,9 +127,9 @@ def _bode(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
     fig, ax = _axes(ax, (2, len(names)), lambda: _new(2, len(names), (15, 7.5), sharex=True))
     for i, name in enumerate(names):
         mag, phase = ax[0, i], ax[1, i]
-        for c in curves:
+        for j, c in enumerate(curves):
             mag.semilogx(c.omega, 20 * np.log10(np.abs(c.loops[:, i])), c.style, color=c.color,
-                         label=c.label)
+                         label=c.label, gid=RUN_GID if j == 0 else None)
             phase.semilogx(c.omega, c.phase(i), c.style, color=c.color)
             _bode_markers(mag, phase, c, i)
         mag.axhline(0, color="k", lw=0.6)
@@ -118,7 +138,7 @@ def _bode(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
         phase.set_xlabel("frequency [rad/s]")
         for a in (mag, phase):
             a.grid(True, which="both", alpha=0.3)
-            a.legend(fontsize="x-small", loc="best")
+            redraw_legend(a, fontsize="x-small", loc="best")
     ax[0, 0].set_ylabel("|l| [dB]")
     ax[1, 0].set_ylabel("arg l [deg], crossover in [-360, 0)")
     fig.tight_layout()
@@ -144,7 +164,7 @@ def _exclusion(a, c: LoopCurves, i: int) -> None:
                        + ("" if inside else ", outside the circle")))
 
 
-def nyquist_plot(report: MarginReport, ax=None) -> Figure:
+def nyquist_plot(report: MarginReport, ax=None, label: str | None = None) -> Figure:
     """Nyquist diagram of each loop with the others closed, zoomed on -1.
 
     Parameters
@@ -152,6 +172,8 @@ def nyquist_plot(report: MarginReport, ax=None) -> Figure:
     report : MarginReport
     ax : array of matplotlib Axes, one per loop, optional
         Where to draw; a new 2 x 2 figure if None.
+    label : str, optional
+        This report's name in the labels when overlaid (module docstring).
 
     Returns
     -------
@@ -163,7 +185,7 @@ def nyquist_plot(report: MarginReport, ax=None) -> Figure:
         :func:`~quadland.plots.frequency.exclusion_circle`, the curve
         touches it at the disk margin's frequency); the sampled loop dashed.
     """
-    return _nyquist(report, loop_curves(report), ax)
+    return _nyquist(report, _for_run(report, loop_curves(report), ax, label), ax)
 
 
 def _nyquist(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
@@ -171,9 +193,10 @@ def _nyquist(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure
     fig, ax = _axes(ax, (len(names),), lambda: _new(2, (len(names) + 1) // 2, (11, 10)))
     t = np.linspace(0, 2 * np.pi, 200)
     for i, (name, a) in enumerate(zip(names, ax, strict=True)):
-        for c in curves:
+        for j, c in enumerate(curves):
             vals = c.loops[:, i]
-            a.plot(vals.real, vals.imag, c.style, color=c.color, label=f"{c.label}, w > 0")
+            a.plot(vals.real, vals.imag, c.style, color=c.color, label=f"{c.label}, w > 0",
+                   gid=RUN_GID if j == 0 else None)
             a.plot(vals.real, -vals.imag, c.style, color=c.color, alpha=0.35,
                    label=f"{c.label}, w < 0")
             _exclusion(a, c, i)
@@ -186,12 +209,12 @@ def _nyquist(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure
         a.set_ylabel("Im l")
         a.set_title(f"{name} loop (others closed): Nyquist, zoom on -1")
         a.grid(True, alpha=0.3)
-        a.legend(fontsize="x-small", loc="lower right")
+        redraw_legend(a, fontsize="x-small", loc="lower right")
     fig.tight_layout()
     return fig
 
 
-def nichols_plot(report: MarginReport, ax=None) -> Figure:
+def nichols_plot(report: MarginReport, ax=None, label: str | None = None) -> Figure:
     """Nichols chart of each loop with the others closed, with M-circles.
 
     Parameters
@@ -199,6 +222,8 @@ def nichols_plot(report: MarginReport, ax=None) -> Figure:
     report : MarginReport
     ax : array of matplotlib Axes, one per loop, optional
         Where to draw; a new 2 x 2 figure if None.
+    label : str, optional
+        This report's name in the labels when overlaid (module docstring).
 
     Returns
     -------
@@ -210,7 +235,7 @@ def nichols_plot(report: MarginReport, ax=None) -> Figure:
         grey, ``gid`` ``"M 3 dB"`` ...); zoomed on [-360, 0] deg and
         [-30, 40] dB around the critical point.
     """
-    return _nichols(report, loop_curves(report), ax)
+    return _nichols(report, _for_run(report, loop_curves(report), ax, label), ax)
 
 
 def _nichols(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
@@ -223,9 +248,9 @@ def _nichols(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure
             k = int(np.argmax(db)) if m_db > 0 else int(np.argmin(np.abs(ph + 90)))
             a.annotate(f"{m_db:g} dB", (ph[k], db[k]), fontsize="xx-small", color="0.4",
                        ha="center", va="bottom")
-        for c in curves:
+        for j, c in enumerate(curves):
             a.plot(c.phase(i), 20 * np.log10(np.abs(c.loops[:, i])), c.style, color=c.color,
-                   label=c.label)
+                   label=c.label, gid=RUN_GID if j == 0 else None)
         a.plot([-180], [0], "r+", ms=12, mew=2, label="critical point")
         a.set_xlim(-360, 0)
         a.set_ylim(-30, 40)
@@ -234,7 +259,7 @@ def _nichols(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure
         a.set_ylabel("|l| [dB]")
         a.set_title(f"{name} loop (others closed): Nichols, M-circles of |l/(1+l)|")
         a.grid(True, alpha=0.3)
-        a.legend(fontsize="x-small", loc="upper left")
+        redraw_legend(a, fontsize="x-small", loc="upper left")
     fig.tight_layout()
     return fig
 

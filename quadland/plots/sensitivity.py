@@ -2,7 +2,7 @@
 
 Both draw the sampled-data loop (zero-order hold and computation delay, the
 one that fails its requirement first) beside the continuous one. Like the
-other margin figures they take ``ax=`` (:mod:`quadland.plots.margins`).
+other margin figures they take ``ax=`` and ``label=`` (:mod:`quadland.plots.margins`).
 """
 
 from __future__ import annotations
@@ -21,11 +21,16 @@ from quadland.analysis import (
     sensitivity_sigma,
 )
 from quadland.plots.frequency import POINTS_PER_DECADE
+from quadland.plots.overlay import redraw_legend, run_index, run_tag
 
 if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
     from quadland.margins import MarginReport
 
-__all__ = ["SIGMA_FLOOR_DB", "sigma_plot", "pole_plot"]
+__all__ = ["SIGMA_FLOOR_DB", "RUN_GID", "sigma_plot", "pole_plot"]
+
+#: The ``gid`` of one line per report on each axis of a margin figure: how many
+#: reports the axes already show (:func:`quadland.plots.overlay.run_index`).
+RUN_GID = "margin-report"
 
 #: dB, the bottom of the singular value axes: the peaks that set the margins
 #: (a few dB) stay readable; deep low-frequency attenuation is cut off.
@@ -52,7 +57,7 @@ def _axes(ax, count: int, size) -> tuple[Figure, list]:
     return axes[0].figure, axes
 
 
-def sigma_plot(report: MarginReport, ax=None) -> Figure:
+def sigma_plot(report: MarginReport, ax=None, label: str | None = None) -> Figure:
     """Singular values of S and T at the plant input, with their peaks.
 
     Parameters
@@ -60,6 +65,9 @@ def sigma_plot(report: MarginReport, ax=None) -> Figure:
     report : MarginReport
     ax : sequence of two matplotlib Axes, optional
         Where to draw S and T; a new figure if None.
+    label : str, optional
+        This report's name in the labels when overlaid
+        (:mod:`quadland.plots.margins`).
 
     Returns
     -------
@@ -71,20 +79,26 @@ def sigma_plot(report: MarginReport, ax=None) -> Figure:
         singular value (``Ms``, ``Mt`` on the grid) is marked and labelled;
         the axes run from :data:`SIGMA_FLOOR_DB` to 6 dB above the highest peak.
     """
+    tag = run_tag(report, label, ax is None)
     fig, (a_S, a_T) = _axes(ax, 2, (13, 5))
-    top = 0.0
+    shift = 2 * run_index(a_S, RUN_GID) if tag else 0
+    top = max([0.0] + [float(np.max(line.get_ydata()))          # the peaks already drawn
+                       for line in [*a_S.get_lines(), *a_T.get_lines()]
+                       if line.get_marker() == "v"])
     with threadpool_limits(1):      # see quadland.plots.frequency.loop_curves
         curves = _sigma_curves(report)
-    for label, style, color, w, sS, sT in curves:
+    for j, (name, style, _, w, sS, sT) in enumerate(curves):
+        name, color = name + tag, f"C{(shift + j) % 10}"
         for a, sv, peak_name in ((a_S, sS, "Ms"), (a_T, sT, "Mt")):
             db = 20 * np.log10(sv)
             for k in range(db.shape[1]):
                 a.semilogx(w, db[:, k], style, color=color, lw=1.6 if k == 0 else 0.8,
-                           label=label if k == 0 else f"_{label} sigma {k + 1}")
-            j = int(np.argmax(db[:, 0]))
-            a.plot([w[j]], [db[j, 0]], "v", color=color, ms=7, gid=f"{label}-{peak_name}",
-                   label=f"{label} {peak_name} {db[j, 0]:.1f} dB at {w[j]:.3g} rad/s")
-            top = max(top, float(db[j, 0]))
+                           label=name if k == 0 else f"_{name} sigma {k + 1}",
+                           gid=RUN_GID if j == 0 and k == 0 else None)
+            i = int(np.argmax(db[:, 0]))
+            a.plot([w[i]], [db[i, 0]], "v", color=color, ms=7, gid=f"{name}-{peak_name}",
+                   label=f"{name} {peak_name} {db[i, 0]:.1f} dB at {w[i]:.3g} rad/s")
+            top = max(top, float(db[i, 0]))
     for a, name in ((a_S, "S = (I + L)^-1"), (a_T, "T = I - S")):
         a.axhline(0, color="k", lw=0.6)
         a.set_ylim(SIGMA_FLOOR_DB, top + 6.0)
@@ -92,7 +106,7 @@ def sigma_plot(report: MarginReport, ax=None) -> Figure:
         a.set_xlabel("frequency [rad/s]")
         a.set_ylabel("sigma [dB]")
         a.grid(True, which="both", alpha=0.3)
-        a.legend(fontsize="small", loc="lower left" if a is a_T else "lower right")
+        redraw_legend(a, fontsize="small", loc="lower left" if a is a_T else "lower right")
     fig.tight_layout()
     return fig
 
@@ -106,7 +120,7 @@ def _modulus(m: float) -> str:
     return f"{m:.4f}"
 
 
-def pole_plot(report: MarginReport, ax=None) -> Figure:
+def pole_plot(report: MarginReport, ax=None, label: str | None = None) -> Figure:
     """Map of the closed loop's poles, continuous and sampled.
 
     Parameters
@@ -115,6 +129,9 @@ def pole_plot(report: MarginReport, ax=None) -> Figure:
     ax : sequence of matplotlib Axes, optional
         Two (s-plane, zoom), or three with a sampled loop (and its z-plane);
         a new figure if None.
+    label : str, optional
+        This report's name in the labels when overlaid
+        (:mod:`quadland.plots.margins`).
 
     Returns
     -------
@@ -129,21 +146,25 @@ def pole_plot(report: MarginReport, ax=None) -> Figure:
     p = report.poles
     z = None if report.sampled_models is None else closed_loop_poles(
         report.sampled_models.loop_input)
+    tag = run_tag(report, label, ax is None)
     fig, ax = _axes(ax, 2 if z is None else 3, (12, 5) if z is None else (17, 5))
+    shift = 2 * run_index(ax[0], RUN_GID) if tag else 0
+    c_cont, c_samp = f"C{shift % 10}", f"C{(shift + 1) % 10}"
     # |z| < exp(-pi): faster than the Nyquist frequency, the computation delay's poles
     # near z = 0, which have no continuous counterpart
     fast = None if z is None else np.abs(z) < math.exp(-math.pi)
     s_z = None if z is None else np.log(z[~fast]) / report.sampled_models.dt
     for a, zoom in zip(ax[:2], (False, True), strict=True):
-        a.plot(p.real, p.imag, "x", color="C0", label=f"continuous ({p.size})")
+        a.plot(p.real, p.imag, "x", color=c_cont, label=f"continuous{tag} ({p.size})",
+               gid=RUN_GID)
         if s_z is not None:
-            a.plot(s_z.real, s_z.imag, "+", color="C1", ms=8,
-                   label=f"sampled, log(z)/dt ({s_z.size}; {int(fast.sum())} near z = 0)")
+            a.plot(s_z.real, s_z.imag, "+", color=c_samp, ms=8,
+                   label=f"sampled{tag}, log(z)/dt ({s_z.size}; {int(fast.sum())} near z = 0)")
         a.axvline(0, color="k", lw=0.6)
         a.set_xlabel("Re s [1/s]")
         a.set_ylabel("Im s [rad/s]")
         a.grid(True, alpha=0.3)
-        a.legend(fontsize="small", loc="upper left")
+        redraw_legend(a, fontsize="small", loc="upper left")
         if zoom:
             a.set_xlim(-0.5, 0.05)
             a.set_ylim(-0.3, 0.3)
@@ -154,12 +175,13 @@ def pole_plot(report: MarginReport, ax=None) -> Figure:
         a = ax[2]
         t = np.linspace(0, 2 * np.pi, 400)
         a.plot(np.cos(t), np.sin(t), "k", lw=0.6, label="unit circle")
-        a.plot(z.real, z.imag, "+", color="C1", ms=8, label=f"sampled ({z.size})")
+        a.plot(z.real, z.imag, "+", color=c_samp, ms=8, label=f"sampled{tag} ({z.size})",
+               gid=RUN_GID)
         a.set_aspect("equal")
         a.set_xlabel("Re z")
         a.set_ylabel("Im z")
         a.set_title(f"sampled loop in the z-plane, max |z| = {_modulus(np.max(np.abs(z)))}")
         a.grid(True, alpha=0.3)
-        a.legend(fontsize="small", loc="upper left")
+        redraw_legend(a, fontsize="small", loc="upper left")
     fig.tight_layout()
     return fig
