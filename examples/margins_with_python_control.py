@@ -14,7 +14,9 @@ import numpy as np
 import quadland
 
 
-def main(scenario: str = "paper") -> dict[str, tuple[float, float]]:
+def main(scenario: str = "paper") -> dict[str, dict[str, tuple[float, float]]]:
+    """Each loop's margins by python-control and by quadland: ``{loop: {"phase margin deg":
+    (python-control, quadland), "gain margin dB": (...), "gain margin rad/s": (...)}}``."""
     report = quadland.margin_report(quadland.load_scenario(scenario))
     m = report.models
     # the loop transfer L = -K P broken at the plant input: K from P's outputs to its inputs
@@ -25,13 +27,22 @@ def main(scenario: str = "paper") -> dict[str, tuple[float, float]]:
         K = np.eye(L.ninputs)
         K[i, i] = 0.0
         Li = control.feedback(L, K)[i, i]
-        gm, pm, *_ = control.stability_margins(Li)
+        gm, pm, _, w_180, _, _ = control.stability_margins(Li)
         mine = report.continuous.loop(name)
-        out[name] = (pm, mine.phase_margin_deg)
+        # python-control gives the gain margin nearest 1 of every -180 deg crossing;
+        # quadland the nearest above (up) and below (down): the one at the same crossing
+        up = mine.gain_margin_up_frequency is not None and \
+            abs(mine.gain_margin_up_frequency - w_180) <= 1e-6 * w_180
+        ours_db, ours_w = ((mine.gain_margin_up_db, mine.gain_margin_up_frequency) if up else
+                           (mine.gain_margin_down_db, mine.gain_margin_down_frequency))
+        out[name] = {"phase margin deg": (pm, mine.phase_margin_deg),
+                     "gain margin dB": (20 * np.log10(gm), ours_db),
+                     "gain margin rad/s": (w_180, ours_w)}
         print(f"{name:>9}: phase margin python-control {pm:6.2f} deg, quadland "
-              f"{mine.phase_margin_deg:6.2f} deg")
+              f"{mine.phase_margin_deg:6.2f} deg; gain margin python-control "
+              f"{20 * np.log10(gm):+6.2f} dB at {w_180:.4g} rad/s, quadland {ours_db:+6.2f} dB "
+              f"at {ours_w:.4g} rad/s")
     return out
-
 
 if __name__ == "__main__":
     main()

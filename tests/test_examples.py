@@ -17,8 +17,18 @@ def _load(name):
 
 
 def test_margins_with_python_control_agree():
-    for name, (theirs, ours) in _load("margins_with_python_control").main().items():
+    """python-control's stability_margins on the exported state-space models against
+    quadland's table (its own crossings on its own frequency grid): the same phase and
+    gain margins at the same frequencies."""
+    loops = _load("margins_with_python_control").main()
+    assert list(loops) == ["altitude", "roll", "pitch", "yaw"]
+    for name, pairs in loops.items():
+        theirs, ours = pairs["phase margin deg"]
         assert theirs == pytest.approx(ours, abs=1e-6), name
+        theirs, ours = pairs["gain margin dB"]
+        assert np.isfinite(theirs) and theirs == pytest.approx(ours, abs=1e-6), name
+        theirs, ours = pairs["gain margin rad/s"]
+        assert theirs == pytest.approx(ours, rel=1e-9), name
 
 
 @pytest.mark.slow
