@@ -445,3 +445,24 @@ def test_repr_of_a_failed_review_names_what_failed():
     assert not rep.passed and rep.continuous.failed
     _check_repr(rep)
     assert repr(rep).splitlines()[0].endswith(": FAIL against 30 dB / 80 deg")
+
+
+def test_the_text_ends_with_one_verdict_naming_what_it_judged(report, landing):
+    """One verdict closes the text: the report's ``passed`` and the sections it judges (the
+    paper's continuous loop and its sampled one; a landing's filter section alone), each
+    section's own requirement line above it agreeing with its ``passed``."""
+    from quadland.margins import format_report
+
+    for rep, judged in ((report, [s for s in ("continuous", "sampled")
+                                  if getattr(report, s) is not None]),
+                        (landing, ["sampled, filter in the loop"])):
+        text = format_report(rep).splitlines()
+        assert [label for label, _ in rep.judged] == judged
+        assert text[-1] == (f"verdict: {'PASS' if rep.passed else 'FAIL'} against 6 dB / "
+                            f"45 deg, judged on the {' and '.join(judged)} section"
+                            f"{'s' if len(judged) > 1 else ''}")
+        verdicts = [line for line in text if line.startswith("  requirement ")]
+        sections = [rep.continuous] + [s for s in (rep.sampled, rep.filtered) if s is not None]
+        assert [v.endswith("PASS") for v in verdicts] == [s.passed for s in sections]
+    failed = _report(requirement=Requirement(30.0, 80.0))
+    assert format_report(failed).splitlines()[-1].startswith("verdict: FAIL against 30 dB")

@@ -74,7 +74,9 @@ def format_report(report: MarginReport) -> str:
         row per loop (gain margins up and down, phase margin, crossover,
         delay margin, phase crossover, loop-at-a-time disk margin, verdict),
         the multiloop disk margin, stability, the slowest and least damped
-        poles and the verdict; ends with a newline.
+        poles and the section's verdict; then the one verdict of the review
+        (:attr:`MarginReport.passed`, which sections it judges); ends with a
+        newline.
     """
     from quadland.kinds import kind_of
 
@@ -96,4 +98,9 @@ def format_report(report: MarginReport) -> str:
                                    f"output predictor, computation delay {delay} "
                                    f"period{'' if delay == 1 else 's'}; the flown loop, "
                                    "the verdict's", report.requirement)
+    judged = " and ".join(label for label, _ in report.judged)
+    req = report.requirement
+    lines += ["", f"verdict: {'PASS' if report.passed else 'FAIL'} against "
+                  f"{req.gain_margin_db:g} dB / {req.phase_margin_deg:g} deg, judged on the "
+                  f"{judged} section{'s' if len(report.judged) > 1 else ''}"]
     return "\n".join(lines) + "\n"
