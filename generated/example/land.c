@@ -13,7 +13,7 @@
 #include "quadland_land_detector.h"
 #include "land_scenario.h"
 
-/* Usage: land > trajectory.csv
+/* Usage: land > trajectory.csv   (land -q: no CSV, the report alone: the pure-C reference)
  *
  * The plant (ql_landing_loop_plant: the quadrotor with motor lag, the vehicle
  * and its deck) integrated by classical RK4 over the merged grid of the
@@ -472,7 +472,7 @@ static ql_status fly(flight_t *f, const world_t *world, const ql_real *F_cmd, in
     return QL_OK;
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
     static ql_landing_params params;
     static ql_landing_state state;
@@ -497,7 +497,7 @@ int main(void)
     double t = 0, t_next, t_td = 0, t_w = 0, dt = 1.0 / QL_LAND_CONTROL_RATE_HZ, tol, g_start,
         g_end;
     long tick, m;
-    int i, touchdown = 0;
+    int i, touchdown = 0, quiet;
     ql_status status;
 
     for (i = 0; i < NXP; ++i) xp[i] = (ql_real)ql_land_xp0[i];
@@ -543,7 +543,8 @@ int main(void)
     ctx.F_cmd = F_cmd;
     ctx.w = w;
     ctx.pp = pp;
-    write_header();
+    quiet = argc > 1 && strcmp(argv[1], "-q") == 0;   /* no CSV: the report alone */
+    if (!quiet) write_header();
 
     g_start = (double)gap(&ctx, xp, t);
     for (;;) {
@@ -567,8 +568,8 @@ int main(void)
         if (qll_tick(&clocks[CLK_OUT], t, tol, &tick)) {
             double t_row = qll_clock_time(&clocks[CLK_OUT], tick);
             memcpy(est_row, flight.est, sizeof est_row);   /* the last control step's */
-            signals(xp, &gs, t_row, t_w, pp, sig);
-            write_row(t_row, sig, est_row);
+            if (!quiet || touchdown) signals(xp, &gs, t_row, t_w, pp, sig);
+            if (!quiet) write_row(t_row, sig, est_row);
             if (touchdown) judge_row(&landed, xp, sig, t_row, pp);
         }
         /* the run ends at the first grid point QL_LAND_SETTLE_TIME after the contact */
@@ -593,7 +594,7 @@ int main(void)
                                   QL_LAND_RK_STEPS, trial, work);
             touchdown = 1;
             signals(xp, &gs, t_td, t_w, pp, sig);
-            write_row(t_td, sig, est_row);
+            if (!quiet) write_row(t_td, sig, est_row);
             ql_touchdown_figures(sig + 13, sig + 16, sig + 4,
                                  sig + 10, landed.figures);
             tt = (ql_real)t_td;
