@@ -115,17 +115,20 @@ def warm(name: str, repeats: int) -> dict:
     return {"before": times[True], "now": times[False], "same": same}
 
 
-def campaign(runs: int, workers: int, chunk: int | None = None) -> tuple[float, str]:
-    """(wall s of flying, runs.csv's text) of a highway campaign into a new folder."""
+def campaign(runs: int, workers: int, chunk: int | None = None) -> tuple[float, str, float]:
+    """(wall s of flying, runs.csv's text, CPU s of this process) of a highway campaign
+    into a new folder (with one worker, the CPU is the runs')."""
     saved = execute.chunk_size
     if chunk is not None:
         execute.chunk_size = lambda n, w: chunk
     try:
         with tempfile.TemporaryDirectory() as tmp:
+            cpu = time.process_time()
             result = run_campaign("highway", runs=runs, out=Path(tmp) / "c", plots=False,
                                   workers=workers)
+            cpu = time.process_time() - cpu
             assert result.complete and result.flown == runs
-            return result.elapsed, (result.folder / "runs.csv").read_text()
+            return result.elapsed, (result.folder / "runs.csv").read_text(), cpu
     finally:
         execute.chunk_size = saved
 
@@ -165,14 +168,16 @@ def main() -> None:
                   f"{statistics.median(w[key]) / c_ms:.2f} |")
         gain = statistics.median(w["before"]) / statistics.median(w["now"])
         print(f"| {name}: before / now | | {gain:.2f}x faster; bit for bit: {w['same']} |")
-    t_small, _ = campaign(small, 1)
-    t_large, _ = campaign(large, 1)
+    t_small, _, c_small = campaign(small, 1)
+    t_large, _, c_large = campaign(large, 1)
     slope = (t_large - t_small) / (large - small)
+    cpu_slope = (c_large - c_small) / (large - small)
     print(f"\n- one worker: {small} runs {t_small:.2f} s, {large} runs {t_large:.2f} s wall: "
           f"**{1e3 * slope:.1f} ms per landing**, {slope / c_ms:.2f}x `land -q`'s CPU "
-          "(target <= 1.5x)")
-    per_run, runs_csv = campaign(large, cores, chunk=1)
-    chunked, chunk_csv = campaign(large, cores)
+          f"(target <= 1.5x); in CPU time {1e3 * cpu_slope:.1f} ms per landing, "
+          f"{cpu_slope / c_ms:.2f}x")
+    per_run, runs_csv, _ = campaign(large, cores, chunk=1)
+    chunked, chunk_csv, _ = campaign(large, cores)
     k = local.chunk_size(large, cores)
     print(f"- {large} runs on {cores} processes, one run per message: {per_run:.2f} s wall; "
           f"in chunks of {k}: {chunked:.2f} s ({per_run / chunked:.2f}x); runs.csv "
