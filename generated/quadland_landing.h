@@ -309,6 +309,11 @@ void ql_sense_datalink(const ql_real *xp, const ql_real *uh, const ql_real *w, c
 void ql_touchdown_figures(const ql_real *p_e, const ql_real *v_e, const ql_real *eta1,
                           const ql_real *eta2, ql_real *figures);
 
+/* xp_dot of the landing plant in free flight: landing_loop_plant without the
+ * gear's contact, exactly zero while every foot is far above the deck. */
+void ql_landing_free_plant(const ql_real *xp, const ql_real *F_cmd, const ql_real *w,
+                           const ql_real *t, const ql_real *pp, ql_real *xp_dot);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

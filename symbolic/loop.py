@@ -133,6 +133,13 @@ class LoopModel:
     event_continues : bool
         The event does not end the run: its first crossing is located and
         recorded, and the integration goes on (see the module docstring).
+    free_plant : casadi.Function or None
+        ``free_plant(xp, uh, w, t, pp) -> xp_dot``: the plant without what
+        happens only near the event (the gear's contact, exactly zero while
+        ``g`` is large), for a model whose event continues: the sampled
+        driver integrates it over a grid interval whose ``g`` is above a
+        switch gap the run gives (``near``) at both ends, ``plant`` otherwise
+        and from the first crossing on.
     """
 
     name: str
@@ -160,12 +167,13 @@ class LoopModel:
     ride_row: ca.Function | None = None
     tick_inputs: Layout | None = None
     event_continues: bool = False
+    free_plant: ca.Function | None = None
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""
         return tuple(f for f in (self.rhs, self.output_fn, self.plant, self.controller,
                                  self.assemble, self.step_args, self.event, self.envelope,
-                                 self.ride_rhs, self.ride_row)
+                                 self.ride_rhs, self.ride_row, self.free_plant)
                      if f is not None)
 
 

@@ -433,6 +433,10 @@ def test_pure_c_landing_is_quadland_simulates(examples, tree):
         assert report[key] == pytest.approx(want[key], rel=1e-9, abs=1e-9), key
     for key in ("aborts", "secured", "bounced", "tipped", "on_pad", "failures"):
         assert report[key] == want[key], key
+    # land -q (the pure-C reference of the benchmarks): no CSV, the same report
+    proc = subprocess.run([str(examples[tree] / "land"), "-q"], check=True,
+                          capture_output=True, text=True)
+    assert proc.stdout == "" and json.loads(proc.stderr.splitlines()[-1]) == report
     # both land and are secured (with issue 19's gains the quiet ship no longer brushes its
     # heaving deck with one foot too lightly to close the contact switch, flying on as a
     # touch and go, as it did before them)

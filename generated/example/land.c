@@ -13,10 +13,13 @@
 #include "quadland_land_detector.h"
 #include "land_scenario.h"
 
-/* Usage: land > trajectory.csv
+/* Usage: land > trajectory.csv   (land -q: no CSV, the report alone: the pure-C reference)
  *
  * The plant (ql_landing_loop_plant: the quadrotor with motor lag, the vehicle
- * and its deck) integrated by classical RK4 over the merged grid of the
+ * and its deck; ql_landing_free_plant, without the gear's contact, over a step
+ * that starts and ends with every foot more than QL_LAND_FREE_GAP above the
+ * deck, where the contact is exactly zero) integrated by classical RK4 over the
+ * merged grid of the
  * output, disturbance and control times, as quadland simulate does. At each
  * control time, the sensed loop of quadland_symbolic.landing.sensed_loop:
  *   world: each sensor that samples now reads the true plant (ql_sense_<name>,
@@ -87,6 +90,14 @@ static void plant(void *vctx, const ql_real *xp, double t, ql_real *xp_dot)
     const plant_ctx *c = (const plant_ctx *)vctx;
     ql_real tt = (ql_real)t;
     ql_landing_loop_plant(xp, c->F_cmd, c->w, &tt, c->pp, xp_dot);
+}
+
+/* The plant without the gear's contact (exactly zero while every foot is far above). */
+static void free_plant(void *vctx, const ql_real *xp, double t, ql_real *xp_dot)
+{
+    const plant_ctx *c = (const plant_ctx *)vctx;
+    ql_real tt = (ql_real)t;
+    ql_landing_free_plant(xp, c->F_cmd, c->w, &tt, c->pp, xp_dot);
 }
 
 static ql_real gap(void *vctx, const ql_real *xp, double t)
@@ -472,7 +483,7 @@ static ql_status fly(flight_t *f, const world_t *world, const ql_real *F_cmd, in
     return QL_OK;
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
     static ql_landing_params params;
     static ql_landing_state state;
@@ -497,7 +508,7 @@ int main(void)
     double t = 0, t_next, t_td = 0, t_w = 0, dt = 1.0 / QL_LAND_CONTROL_RATE_HZ, tol, g_start,
         g_end;
     long tick, m;
-    int i, touchdown = 0;
+    int i, touchdown = 0, quiet, free;
     ql_status status;
 
     for (i = 0; i < NXP; ++i) xp[i] = (ql_real)ql_land_xp0[i];
@@ -543,9 +554,11 @@ int main(void)
     ctx.F_cmd = F_cmd;
     ctx.w = w;
     ctx.pp = pp;
-    write_header();
+    quiet = argc > 1 && strcmp(argv[1], "-q") == 0;   /* no CSV: the report alone */
+    if (!quiet) write_header();
 
     g_start = (double)gap(&ctx, xp, t);
+    g_end = g_start;
     for (;;) {
         /* this grid point's clocks: the disturbance sample, a control step, a row */
         if (qll_tick(&clocks[CLK_DIST], t, tol, &tick)) {
@@ -567,8 +580,8 @@ int main(void)
         if (qll_tick(&clocks[CLK_OUT], t, tol, &tick)) {
             double t_row = qll_clock_time(&clocks[CLK_OUT], tick);
             memcpy(est_row, flight.est, sizeof est_row);   /* the last control step's */
-            signals(xp, &gs, t_row, t_w, pp, sig);
-            write_row(t_row, sig, est_row);
+            if (!quiet || touchdown) signals(xp, &gs, t_row, t_w, pp, sig);
+            if (!quiet) write_row(t_row, sig, est_row);
             if (touchdown) judge_row(&landed, xp, sig, t_row, pp);
         }
         /* the run ends at the first grid point QL_LAND_SETTLE_TIME after the contact */
@@ -581,19 +594,30 @@ int main(void)
             m = (long)ceil((t_next - t) / QL_LAND_H_AFTER - 1e-9);
             if (m < QL_LAND_RK_STEPS) m = QL_LAND_RK_STEPS;
         }
-        qll_rk4_span(plant, &ctx, xp, NXP, t, t_next - t, m, work);
+        /* far from the deck: the plant without the contact, kept when the interval ends
+         * above QL_LAND_FREE_GAP too, else redone with the whole plant (the same numbers) */
+        free = !touchdown && g_start > QL_LAND_FREE_GAP;
+        if (free) {
+            qll_rk4_span(free_plant, &ctx, xp, NXP, t, t_next - t, m, work);
+            g_end = qll_all_finite(xp, NXP) ? (double)gap(&ctx, xp, t_next) : NAN;
+            if (!(g_end > QL_LAND_FREE_GAP)) {
+                memcpy(xp, xp_start, sizeof xp);
+                free = 0;
+            }
+        }
+        if (!free) qll_rk4_span(plant, &ctx, xp, NXP, t, t_next - t, m, work);
         if (!qll_all_finite(xp, NXP)) {
             fprintf(stderr, "land: t = %g s: the state became non-finite\n", t_next);
             return 1;
         }
-        g_end = (double)gap(&ctx, xp, t_next);
+        if (!free && !touchdown) g_end = (double)gap(&ctx, xp, t_next);
         if (!touchdown && g_start > 0 && !(g_end > 0)) {
             /* the first contact: located, its row written, the span finished from there */
             t_td = t + qll_locate(plant, gap, &ctx, xp_start, xp, NXP, t, t_next - t,
                                   QL_LAND_RK_STEPS, trial, work);
             touchdown = 1;
             signals(xp, &gs, t_td, t_w, pp, sig);
-            write_row(t_td, sig, est_row);
+            if (!quiet) write_row(t_td, sig, est_row);
             ql_touchdown_figures(sig + 13, sig + 16, sig + 4,
                                  sig + 10, landed.figures);
             tt = (ql_real)t_td;

@@ -314,6 +314,11 @@ void qlf_sense_datalink(const qlf_real *xp, const qlf_real *uh, const qlf_real *
 void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_real *eta1,
                            const qlf_real *eta2, qlf_real *figures);
 
+/* xp_dot of the landing plant in free flight: landing_loop_plant without the
+ * gear's contact, exactly zero while every foot is far above the deck. */
+void qlf_landing_free_plant(const qlf_real *xp, const qlf_real *F_cmd, const qlf_real *w,
+                            const qlf_real *t, const qlf_real *pp, qlf_real *xp_dot);
+
 #ifdef __cplusplus
 } /* extern "C" */
 #endif
@@ -358,6 +363,7 @@ void qlf_touchdown_figures(const qlf_real *p_e, const qlf_real *v_e, const qlf_r
 #define ql_landing_controller_params qlf_landing_controller_params
 #define ql_landing_cues qlf_landing_cues
 #define ql_landing_first_contact qlf_landing_first_contact
+#define ql_landing_free_plant qlf_landing_free_plant
 #define ql_landing_gear_gap qlf_landing_gear_gap
 #define ql_landing_gear_signals qlf_landing_gear_signals
 #define ql_landing_loop_plant qlf_landing_loop_plant

@@ -39,7 +39,13 @@ from quadland.campaign.cluster import (
 )
 from quadland.campaign.fly import RunOutcome, warm_up
 from quadland.campaign.journal import CampaignFolder, new_folder
-from quadland.campaign.local import MAX_WORKERS, local_workers, pool_runs, serial_runs
+from quadland.campaign.local import (
+    MAX_WORKERS,
+    chunk_size,
+    local_workers,
+    pool_runs,
+    serial_runs,
+)
 from quadland.campaign.resume import campaign_manifest, check_folder
 from quadland.campaign.sampling import format_value, iter_draws
 from quadland.campaign.spec import MAX_RUNS, campaign_spec_of
@@ -223,7 +229,9 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
             elif local == 1 or len(pending) <= 1:
                 batches = serial_runs(base, todo, spec.limits)
             else:
-                batches = pool_runs(base, todo, min(local, len(pending)), spec.limits)
+                workers = min(local, len(pending))
+                batches = pool_runs(base, todo, workers, spec.limits,
+                                    chunk_size(len(pending), workers))
             try:
                 for batch in batches:
                     new = [_row(o, header) for o in batch]

@@ -37,7 +37,13 @@ from quadland.campaign.cluster import (
 from quadland.campaign.execute import CampaignInterrupted
 from quadland.campaign.fly import warm_up
 from quadland.campaign.journal import CampaignFolder, new_folder
-from quadland.campaign.local import MAX_WORKERS, local_workers, pool_runs, serial_runs
+from quadland.campaign.local import (
+    MAX_WORKERS,
+    chunk_size,
+    local_workers,
+    pool_runs,
+    serial_runs,
+)
 from quadland.campaign.resume import campaign_manifest, check_folder
 from quadland.campaign.sampling import RunDraw, draws, format_value
 from quadland.campaign.spec import MAX_RUNS, CampaignSpec, campaign_spec_of
@@ -286,7 +292,9 @@ def _batches(env, todo, connection, local, pending):
         return dask_runs(connection, env.base, todo, env.spec.limits)
     if local == 1 or len(pending) <= 1:
         return serial_runs(env.base, todo, env.spec.limits)
-    return pool_runs(env.base, todo, min(local, len(pending)), env.spec.limits)
+    workers = min(local, len(pending))
+    return pool_runs(env.base, todo, workers, env.spec.limits,
+                     chunk_size(len(pending), workers))
 
 
 def _fly(env, header, manifest, path, connection, local, scheduler, progress, plots

@@ -25,8 +25,8 @@ from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.kinds import kind_of
 from quadland.scenario import Scenario
 
-__all__ = ["MAX_WORKERS", "WORKER_MEMORY", "AHEAD", "RunQueue", "available_memory",
-           "worker_memory", "local_workers", "serial_runs", "pool_runs"]
+__all__ = ["MAX_WORKERS", "WORKER_MEMORY", "AHEAD", "CHUNK", "RunQueue", "available_memory",
+           "worker_memory", "local_workers", "serial_runs", "pool_runs", "chunk_size"]
 
 #: Most local worker processes one campaign may ask for.
 MAX_WORKERS = 1024
@@ -41,6 +41,9 @@ WORKER_MEMORY = 128 * 2**20
 
 #: Runs queued ahead on each local worker process or Dask thread.
 AHEAD = 4
+
+#: Most runs a local worker process flies per message (:func:`chunk_size`).
+CHUNK = 8
 
 
 def _cores() -> int:
@@ -123,6 +126,18 @@ class RunQueue:
         return item
 
 
+def chunk_size(runs: int, workers: int) -> int:
+    """Runs per message to a local worker: up to :data:`CHUNK`, so that every worker
+    still gets at least :data:`AHEAD` messages' worth (the last ones balance the load).
+
+    Examples
+    --------
+    >>> chunk_size(300, 2), chunk_size(40, 2), chunk_size(8, 2)
+    (8, 5, 1)
+    """
+    return max(1, min(CHUNK, runs // max(1, workers * AHEAD)))
+
+
 def serial_runs(base: Scenario, todo: Iterable[RunDraw], limits: Mapping[str, float]
                  ) -> Iterator[list[RunOutcome]]:
     for draw in todo:
@@ -137,7 +152,8 @@ class _Raised:
 
 
 def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) -> None:
-    """A local worker process: fly the draws ``conn`` brings, send back each outcome.
+    """A local worker process: fly the chunks of draws ``conn`` brings (lists), send back
+    each chunk's outcomes (a list).
 
     Ctrl-C is the campaign's to handle: the worker ignores it (it starts with
     SIGINT blocked, inherited from the forkserver, :func:`_start_forkserver`;
@@ -164,13 +180,13 @@ def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) ->
     threading.Thread(target=watch, name="quadland-lifeline", daemon=True).start()
     while True:
         try:
-            draw = conn.recv()
+            chunk = conn.recv()
         except (EOFError, OSError):
             return
-        if draw is None:
+        if chunk is None:
             return
         try:
-            result = fly(base, draw, limits)
+            result = [fly(base, draw, limits) for draw in chunk]
         except Exception as exc:                # a bug, or out of memory: the campaign's
             result = _Raised(exc)               # process raises it
         try:
@@ -220,19 +236,25 @@ class _Worker:
         theirs.close()
         self.busy = 0
 
-    def send(self, draw: RunDraw) -> None:
-        self.conn.send(draw)
+    def send(self, queue: RunQueue, chunk: int) -> None:
+        """Send the next ``chunk`` runs of ``queue`` (fewer at its end) as one message."""
+        draws = [queue.pop()]
+        while queue and len(draws) < chunk:
+            draws.append(queue.pop())
+        self.conn.send(draws)
         self.busy += 1
 
 
 def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
-               limits: Mapping[str, float]) -> Iterator[list[RunOutcome]]:
+               limits: Mapping[str, float], chunk: int = 1) -> Iterator[list[RunOutcome]]:
     """Fly ``todo`` on ``workers`` local processes; yield outcomes as they finish.
 
     Each worker is a process of the ``forkserver`` (no fork of a process
-    that holds threads) fed through its own pipe, at most :data:`AHEAD`
-    runs ahead. Only pipes connect them: no semaphore that a SIGKILLed
-    campaign would leave to the resource tracker.
+    that holds threads), started once with the scenario, and fed through its
+    own pipe chunks of ``chunk`` runs (:func:`chunk_size`), at most
+    :data:`AHEAD` chunks ahead; a chunk's outcomes come back together. Only
+    pipes connect them: no semaphore that a SIGKILLed campaign would leave to
+    the resource tracker.
     """
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(["quadland.campaign.local",
@@ -247,7 +269,7 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
         lifeline.close()
         for worker in pool:
             while queue and worker.busy < AHEAD:
-                worker.send(queue.pop())
+                worker.send(queue, chunk)
         while any(w.busy for w in pool):
             ready = multiprocessing.connection.wait([w.conn for w in pool if w.busy])
             outcomes, lost = [], None
@@ -262,10 +284,10 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
                 worker.busy -= 1
                 if isinstance(result, _Raised):
                     raise result.error
-                outcomes.append(result)
+                outcomes.extend(result)
                 try:
                     while queue and worker.busy < AHEAD:
-                        worker.send(queue.pop())
+                        worker.send(queue, chunk)
                 except OSError:
                     lost = worker
             if outcomes:

@@ -122,7 +122,7 @@ class CompiledLoop:
                                       _REAL, _REAL,
                                       D, _REAL, _REAL, _REAL, _REAL, _LONG, L, _LONG, _REAL,
                                       _REAL, ctypes.POINTER(D), _REAL, D, D,
-                                      ctypes.POINTER(D), _REAL]
+                                      ctypes.POINTER(D), _REAL, D]
             if model.ride_rhs is not None:
                 self._ride = getattr(lib, f"{prefix}ride")
                 self._ride.argtypes = [_REAL, _REAL, _REAL, D, D, D, D, _REAL, _REAL, _REAL,
@@ -168,7 +168,7 @@ class CompiledLoop:
 
     def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
                 bound=None, delay: int = 0, uh0=None, N=None, h_after: float = np.inf,
-                after: float = np.inf) -> Run:
+                after: float = np.inf, near: float = np.inf) -> Run:
         """The sampled-data loop over the merged grid of its output, disturbance and
         control clocks.
 
@@ -183,7 +183,10 @@ class CompiledLoop:
         first crossing (the run's ``t_event``, ``x_event``) and goes on in RK4 steps
         of at most ``h_after`` until ``after`` seconds past it.
         ``bound`` (nenv,) are the envelope's bounds: the run stops at the first
-        grid point outside them (:data:`SIM_ENVELOPE`).
+        grid point outside them (:data:`SIM_ENVELOPE`). A model with a
+        :attr:`~quadland_symbolic.loop.LoopModel.free_plant` integrates it, before
+        the first crossing, over each grid interval whose event function is above
+        ``near`` at both ends (infinity, the default: never).
         """
         m = self.model
         out, dist, _ = clocks
@@ -206,7 +209,7 @@ class CompiledLoop:
             float(guard_min),
             _ptr(bound), _ptr(X), _ptr(R), _ptr(times), _ptr(w_index, _LONG), rows,
             ctypes.byref(n_rows), _ptr(xp_end), _ptr(xc_end), ctypes.byref(t_stop), _ptr(env),
-            float(h_after), float(after), ctypes.byref(t_event), _ptr(x_event))
+            float(h_after), float(after), ctypes.byref(t_event), _ptr(x_event), float(near))
         n = n_rows.value
         hit = not np.isnan(t_event.value)
         return Run(status, X[:n], R[:n], times[:n], w_index[:n], np.concatenate([xp_end, xc_end]),

@@ -72,8 +72,15 @@ def gauss_markov(times, sigma, tau, normals) -> np.ndarray:
     a = _decay(np.diff(np.asarray(times, dtype=float))[:, None], tau[None, :])
     b = sigma * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
     x[0] = sigma * normals[0]
-    for k in range(n - 1):
-        x[k + 1] = a[k] * x[k] + b[k] * normals[k + 1]
+    # column by column over Python floats: the same two products and one sum per sample
+    # as the rows of NumPy's arrays, bit for bit, four times faster (issue 20)
+    for j, (aj, bj, nj) in enumerate(zip(a.T.tolist(), b.T.tolist(),
+                                         normals[1:].T.tolist(), strict=True)):
+        u, col = float(x[0, j]), [float(x[0, j])]
+        for ak, bk, nk in zip(aj, bj, nj, strict=True):
+            u = ak * u + bk * nk
+            col.append(u)
+        x[:, j] = col
     return x
 
 

@@ -58,6 +58,8 @@ class VMLoop:
         self.model, self.part = model, part
         self._rhs = rk4_step(model.rhs) if model.rhs is not None else None
         self._plant = rk4_step(model.plant)
+        self._free = rk4_step(model.free_plant) if model.free_plant is not None \
+            and model.event_continues else None
         self._ride_step = rk4_step(model.ride_rhs) if model.ride_rhs is not None else None
         self._outputs = model.output_fn.map("outputs_map", "serial", self.CHUNK, [3], [])
         self._no_input = np.zeros(model.held.size)
@@ -100,7 +102,7 @@ class VMLoop:
 
     def sampled(self, xp0, xc0, clocks, W, substeps: int, pp, pc, guard_min: float,
                 bound=None, delay: int = 0, uh0=None, N=None, h_after: float = np.inf,
-                after: float = np.inf) -> Run:
+                after: float = np.inf, near: float = np.inf) -> Run:
         """As :meth:`CompiledLoop.sampled`."""
         m = self.model
         N = tick_rows(m, N)
@@ -152,13 +154,16 @@ class VMLoop:
             def step(xx, tt, h, uh=uh, w=w):
                 return self._plant(xx, uh, w, tt, pp, h)
 
-            start = xp
-            xp = rk4_span(step, start, t, span, _span_steps(span, substeps, h_after, x_ev))
+            start, n_steps = xp, _span_steps(span, substeps, h_after, x_ev)
+            xp, g_end = self._free_span(start, uh, w, pp, t, grid[j + 1], n_steps, near,
+                                        g_start, x_ev, event)
+            if xp is None:
+                xp = rk4_span(step, start, t, span, n_steps)
             if not np.all(np.isfinite(xp)):
                 status, t_stop = SIM_NONFINITE, grid[j + 1]
                 break
             if event is not None and x_ev is None:
-                g_end = event(xp, grid[j + 1])
+                g_end = event(xp, grid[j + 1]) if g_end is None else g_end
                 if g_start > 0 and not g_end > 0:
                     offset, xp = locate_event(step, event, start, xp, t, span, substeps)
                     if not m.event_continues:
@@ -172,6 +177,20 @@ class VMLoop:
                 g_start = g_end
         return make_run(m, status, X, R, times, w_index, np.concatenate([xp, xc]), t_stop, env,
                         t_ev, x_ev)
+
+    def _free_span(self, xp, uh, w, pp, t: float, t_next: float, n_steps: int, near: float,
+                   g_start, x_ev, event):
+        """A span on the free plant before the first crossing, where the event function is
+        above ``near`` at both ends: ``(xp, g_end)``; ``(None, None)`` where the driver
+        integrates the whole plant instead."""
+        if self._free is None or x_ev is not None or not g_start > near:
+            return None, None
+        xp = rk4_span(lambda xx, tt, h: self._free(xx, uh, w, tt, pp, h), xp, t, t_next - t,
+                      n_steps)
+        if not np.all(np.isfinite(xp)):
+            return None, None
+        g_end = event(xp, t_next)
+        return (xp, g_end) if g_end > near else (None, None)
 
     def _after_event(self, xp, uh, w, pp, t_ev: float, t_next: float, h_after: float):
         """The rest of the span from a continuing event's state, in steps of at most

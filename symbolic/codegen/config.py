@@ -226,6 +226,9 @@ class LandingDefaults(FlightDefaults):
         first-contact figures', then the gear's (``max_gear_load``, ...).
     h_after : float
         s, the longest RK4 step from the gear's first contact on.
+    free_gap : float
+        m: above it (the lowest foot's height over the deck at both ends of a grid
+        interval) the plant without the contact flies (``landing_free_plant``).
     mass : float
         kg, the quadrotor's (the impact energy's).
     sensors : SensorDefaults or None
@@ -251,6 +254,7 @@ class LandingDefaults(FlightDefaults):
     settle_time: float
     limits: tuple[tuple[str, float], ...]
     h_after: float = 1e-3
+    free_gap: float = 0.1
     mass: float = 2.0
     sensors: SensorDefaults | None = None
 

@@ -188,6 +188,12 @@ FUNCTIONS = (
          "Sink rate (m/s), offset (m), relative speed (m/s) and tilt (deg) of a\n"
          " * contact."),
     )),
+    GeneratedFunction("landing_free_plant", loop_plant_function, per_node_count=False,
+                      wrapper="quadland_landing_model.c", part="landing",
+                      sizes=(("contact", False),),
+                      doc="xp_dot of the landing plant in free flight: landing_loop_plant "
+                          "without the\n * gear's contact, exactly zero while every foot is "
+                          "far above the deck."),
     *(GeneratedFunction(name, builder, per_node_count=False, part="estimator",
                         sizes=ESTIMATOR_SIZES)
       for name, builder in (("estimator_step", estimator_step_function),

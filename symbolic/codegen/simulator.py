@@ -77,6 +77,9 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     driver, names = SIMULATOR_PARTS[part]
     if driver == "sampled" and model.event is not None:
         names = (*names, "event")
+    has_free = driver == "sampled" and model.free_plant is not None and model.event_continues
+    if has_free:
+        names = (*names, "free_plant")
     has_ride = driver == "sampled" and model.ride_rhs is not None
     if has_ride:
         names = (*names, "ride_rhs", "ride_row")
@@ -113,7 +116,8 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         event_continues=driver == "sampled" and model.event is not None
         and model.event_continues,
         has_envelope=model.envelope is not None, max_delay=MAX_DELAY_PERIODS,
-        has_ride=has_ride, has_tick=driver == "sampled" and model.tick_inputs is not None,
+        has_ride=has_ride, has_free=has_free,
+        has_tick=driver == "sampled" and model.tick_inputs is not None,
         casadi_version=ca.__version__, sizes=sizes,
         sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
         sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))

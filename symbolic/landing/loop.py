@@ -291,6 +291,9 @@ def landing_loop(l: int, welded: bool = False) -> LoopModel:
     plant = _named("plant", [xp, uh, w, t, pp],
                    [loop_plant_function(not welded)(xp, uh, w, t, pp)],
                    ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
+    free_plant = None if welded else _named(
+        "free_plant", [xp, uh, w, t, pp], [loop_plant_function(False)(xp, uh, w, t, pp)],
+        ["xp", "uh", "w", "t", "pp"], ["xp_dot"])
 
     xc, pc, first = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first")
     cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
@@ -321,4 +324,5 @@ def landing_loop(l: int, welded: bool = False) -> LoopModel:
                      envelope=_named("envelope", [x, uh], [landing_envelope_function(l)(x, uh)],
                                      ["x", "uh"], ["s"]),
                      envelope_layout=LANDING_ENVELOPE, flight="landing_flight_controller.c.jinja",
-                     ride_rhs=ride_rhs, ride_row=ride_row, event_continues=not welded)
+                     ride_rhs=ride_rhs, ride_row=ride_row, event_continues=not welded,
+                     free_plant=free_plant)

@@ -15,11 +15,15 @@ from quadland_symbolic.landing.contact import (
 from quadland_symbolic.landing.gear import PEAK_RATE, TOUCHDOWN_POLICY
 
 __all__ = ["gear_params", "lock_params", "policy_params", "touchdown_guidance", "contact_step",
-           "STEP_MARGIN"]
+           "STEP_MARGIN", "FREE_GAP_WIDTHS", "free_flight_gap"]
 
 #: RK4's step on the deck is this fraction of its stability edge on the stiffest mode
 #: (docs/contact.md: 5 steps per 4 ms for the default gear, ``h lambda = 2.0``).
 STEP_MARGIN = 0.8
+
+#: The simulator flies the plant without the contact while the lowest foot is more than
+#: this many onset widths above the deck (:func:`free_flight_gap`).
+FREE_GAP_WIDTHS = 1000.0
 
 
 def gear_params(scenario: Scenario) -> np.ndarray:
@@ -70,3 +74,20 @@ def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
     rate = max(float(stiffest_rate(p_quad, gear_params(scenario))),
                PEAK_RATE)
     return STEP_MARGIN * RK4_REAL_STABILITY / rate
+
+
+def free_flight_gap(scenario: Scenario) -> float:
+    """The lowest foot's height above the deck, m, above which the simulator integrates
+    the plant without the gear's contact (the loop's ``free_plant``, ``near`` of its
+    sampled driver): :data:`FREE_GAP_WIDTHS` onset widths (10 cm for the default 0.1 mm).
+
+    There the contact is exactly zero in double precision, so the run is the same bit
+    for bit: a foot ``delta`` below the plane (negative above) presses with ``k
+    delta_eps softplus(delta / delta_eps) + c sigma delta_dot``, whose ``exp(-|x|)``
+    underflows to zero for ``|x| > 745.2`` and whose ``sigma = (1 + tanh(x / 2)) / 2``
+    is zero for ``x < -38``; the lock-down's engagement and the rotor cut are zero
+    until the contact switch closes (``t_contact = 0``), the gear's memory still. The
+    margin beyond 746 widths covers the motion within a grid interval (both of whose
+    ends must be above the gap; the driver integrates the whole plant otherwise).
+    """
+    return FREE_GAP_WIDTHS * float(scenario.data["gear"]["onset_width"])

@@ -43,7 +43,7 @@ from quadland.engine.plan import SimulationPlan, check_plan, plan_run
 from quadland.engine.result import SimulationResult
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.kinds.landing.contact_report import gear_columns
-from quadland.kinds.landing.gear import contact_step
+from quadland.kinds.landing.gear import contact_step, free_flight_gap
 from quadland.kinds.landing.sensed import sensed_vectors, sensors_enabled, tick_table
 from quadland.kinds.landing.values import (
     LandingValues,
@@ -225,7 +225,8 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
                        pc, TILT_MIN, envelope.bounds,
                        delay=scenario.data["controller"]["delay_periods"], uh0=hover, N=N,
                        h_after=contact_step(scenario, np.asarray(p_quad, dtype=float).ravel()),
-                       after=scenario.data["landing"]["settle_time"])
+                       after=scenario.data["landing"]["settle_time"],
+                       near=free_flight_gap(scenario))
     recorded = loop.model.recorded
     if welded:
         times, X, R, Y, what, t_fail = _welded(scenario, run, loop, clocks, w_dist, lv,

@@ -1,0 +1,34 @@
+"""gauss_markov's recursion, column by column over Python floats (issue 20): the same
+numbers, bit for bit, as the recursion written out row by row on NumPy's arrays."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from quadland.engine.noise import gauss_markov
+
+
+def _by_rows(times, sigma, tau, normals):
+    """x_0 = sigma n_0, x_(k+1) = a_k x_k + b_k n_(k+1), a_k = exp(-dt_k / tau), b_k =
+    sigma sqrt(1 - a_k^2): the definition, one NumPy row at a time."""
+    n, m = normals.shape
+    x = np.empty((n, m))
+    x[0] = sigma * normals[0]
+    for k in range(n - 1):
+        dt = times[k + 1] - times[k]
+        a = np.array([np.exp(-dt / s) if 0 < s < np.inf else (1.0 if s == np.inf else 0.0)
+                      for s in tau])
+        b = sigma * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
+        x[k + 1] = a * x[k] + b * normals[k + 1]
+    return x
+
+
+@pytest.mark.parametrize("n", [1, 2, 500])
+def test_gauss_markov_is_its_row_recursion_bit_for_bit(n):
+    rng = np.random.default_rng(20)
+    times = np.cumsum(rng.uniform(1e-3, 1e-2, n))
+    sigma, tau = np.array([0.5, 1.5, 2.0, 0.1]), np.array([0.0, np.inf, 0.3, 4.0])
+    normals = rng.standard_normal((n, 4))
+    np.testing.assert_array_equal(gauss_markov(times, sigma, tau, normals),
+                                  _by_rows(times, sigma, tau, normals))
