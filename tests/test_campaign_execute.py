@@ -253,10 +253,14 @@ def test_dask_cluster_gives_the_same_runs(reference, tmp_path):
 
 
 def test_command_line_errors_are_one_line(tmp_path, capsys):
-    assert main(["campaign", "--scenario", "turning", "--out", str(tmp_path / "t")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
     from quadland.scenario import SCENARIO_DIR
 
+    # every shipped scenario has a [campaign] table: turning's file without it
+    plain = tmp_path / "plain" / "turning.toml"
+    plain.parent.mkdir()
+    plain.write_text((SCENARIO_DIR / "turning.toml").read_text().split("\n[campaign]")[0])
+    assert main(["campaign", "--scenario", str(plain), "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
     shipped = SCENARIO_DIR / "highway.toml"    # what an installed package holds
     assert shipped.is_file() and "\n[campaign]" in shipped.read_text()
     assert err == ["quadland: error: --scenario: turning has no [campaign] table (the "
@@ -267,7 +271,7 @@ def test_command_line_errors_are_one_line(tmp_path, capsys):
     assert main(["campaign", "--workers", "0", "--out", str(tmp_path / "w")]) == 2
     assert "--workers: must be in [1, 1024]" in capsys.readouterr().err
     assert not any((tmp_path / n).exists() for n in "trw")
-    assert os.listdir(tmp_path) == []
+    assert os.listdir(tmp_path) == ["plain"]
 
 
 def test_campaign_md_lists_every_metric_and_its_unit():

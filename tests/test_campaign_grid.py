@@ -215,11 +215,17 @@ def test_bad_envelopes_are_one_line_and_write_nothing(tmp_path, capsys, args, me
 
 
 def test_a_scenario_without_a_campaign_is_refused(tmp_path, capsys):
-    status = main(["envelope", "--scenario", "turning", "--axis", "quadrotor.mass=1:2:2",
+    from quadland.scenario import SCENARIO_DIR
+
+    # every shipped scenario has a [campaign] table: turning's file without it
+    plain = tmp_path / "plain" / "turning.toml"
+    plain.parent.mkdir()
+    plain.write_text((SCENARIO_DIR / "turning.toml").read_text().split("\n[campaign]")[0])
+    status = main(["envelope", "--scenario", str(plain), "--axis", "quadrotor.mass=1:2:2",
                    "--axis", "wind.mean[1]=0:1:2", "--out", str(tmp_path / "e")])
     err = capsys.readouterr().err.strip().splitlines()
     assert status == 2 and len(err) == 1 and "turning has no [campaign] table" in err[0]
-    assert os.listdir(tmp_path) == []
+    assert os.listdir(tmp_path) == ["plain"]
 
 
 # ------------------------------------------------------------------- end to end

@@ -104,9 +104,65 @@ def test_descent_profile_against_its_closed_form():
     assert z[-1] < 0.2 - 0.3                             # crawls on below contact height
 
 
+@pytest.mark.parametrize("cause", ["offset", "speed"])
+def test_the_descent_pauses_out_of_the_align_band_and_goes_on_within_it(cause):
+    """From 2 m (h = 1.8 m, the linear part at 0.7 m/s: 1.4 mm a 2 ms step), steps 100-199
+    out of the align band but within the abort's limits (offset 0.15 m, half the limit
+    0.1; speed 0.3 m/s, half 0.25): the reference holds at its height with no climb, no
+    abort, a zero rate; back in the band it falls at 0.7 m/s again."""
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
+
+    def script(k, z_ref):
+        out = 100 <= k < 200
+        return ([0.15 if out and cause == "offset" else 0.0, 0.0, z_ref],
+                [0.3 if out and cause == "speed" else 0.0, 0.0, 0.0], 0.0)
+    rows, _ = _run(script, 300, xg)
+    st = [GUIDANCE_STATE.unpack(x) for x, _ in rows]
+    z = np.array([s["z_ref"][0] for s in st])
+    assert all(s["phase"][0] == DESCEND and s["aborts"][0] == 0 for s in st)
+    step = 0.7 * DT
+    np.testing.assert_allclose(z[:101], 2.0 - step * np.arange(101), atol=1e-12)
+    assert np.all(z[101:201] == z[100])                  # paused at 2 - 100 steps
+    np.testing.assert_allclose(z[201:], z[100] - step * np.arange(1, 100), atol=1e-12)
+    vz = np.array([ref[5] for _, ref in rows])
+    assert np.all(vz[100:200] == 0) and np.all(vz[:100] == -0.7) and np.all(vz[200:] == -0.7)
+
+
+def test_the_crawl_is_committed_out_of_the_align_band():
+    """Below h = touchdown_speed x descent_time = 0.3 m the descent does not pause: from
+    z_ref = 0.4 m (h = 0.2 m) with the offset at 0.15 m, out of the band, it crawls on at
+    0.3 m/s (0.6 mm a step), never hovering over the deck."""
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.4, aborts=0))
+    rows, _ = _run(lambda k, z: ([0.15, 0.0, z], [0.0, 0.0, 0.0], 0.0), 50, xg)
+    z = np.array([GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows])
+    np.testing.assert_allclose(z, 0.4 - 0.3 * DT * np.arange(50), atol=1e-12)
+
+
+@pytest.mark.parametrize("cause", ["offset", "speed"])
+def test_above_the_crawl_a_touchdown_limit_exceeded_pauses_and_does_not_abort(cause):
+    """At 2 m (h = 1.8 m, above the crawl's 0.3 m) an offset of 0.25 m or a speed of 0.6
+    m/s, past the touchdown limits (0.2 m, 0.5 m/s), for one step: the reference holds its
+    height for that step, no abort, and falls again after it."""
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
+
+    def script(k, z_ref):
+        bad = k == 100
+        return ([0.25 if bad and cause == "offset" else 0.0, 0.0, z_ref],
+                [0.6 if bad and cause == "speed" else 0.0, 0.0, 0.0], 0.0)
+    rows, last = _run(script, 102, xg)
+    z = [GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows] + [
+        GUIDANCE_STATE.unpack(last)["z_ref"][0]]
+    assert all(GUIDANCE_STATE.unpack(x)["phase"][0] == DESCEND for x, _ in rows)
+    assert GUIDANCE_STATE.unpack(last)["aborts"][0] == 0
+    assert z[101] == z[100] and z[102] == pytest.approx(z[101] - 0.7 * DT, abs=1e-12)
+
+
 @pytest.mark.parametrize("cause", ["offset", "speed", "deck"])
 def test_abort_climbs_back_to_hover_and_counts(cause):
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
+    """In the committed crawl (from z_ref = 0.4 m, h = 0.2 m) a touchdown limit exceeded
+    aborts; a deck rising too fast aborts anywhere (from 2 m)."""
+    z0 = 2.0 if cause == "deck" else 0.4
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z0, aborts=0))
 
     def script(k, z_ref):
         bad = k == 100
@@ -118,7 +174,7 @@ def test_abort_climbs_back_to_hover_and_counts(cause):
     assert after["phase"][0] == ALIGN and after["aborts"][0] == 1
     assert after["z_ref"][0] == 3.0                       # back to the hover height
     before = GUIDANCE_STATE.unpack(rows[100][0])
-    assert before["phase"][0] == DESCEND and before["z_ref"][0] < 2.0
+    assert before["phase"][0] == DESCEND and before["z_ref"][0] < z0
 
 
 @pytest.mark.parametrize("cause", ["offset", "speed", "deck"])

@@ -456,11 +456,16 @@ def test_pure_c_landing_in_float_lands_alike(examples):
     """The float build, plant included, lands within its limits near the double's figures.
     The guidance's phase changes are decisions on whole control periods (4 ms): rounded in
     float, one of them can fall a period from the double's (with issue 19's bias estimates
-    the descent starts one period apart, and the contact is 3.9 ms from the double's)."""
+    the descent starts one period apart, and the contact is 3.9 ms from the double's). Since
+    the descent pauses out of the align band (issue 19's bar), more of them are made on
+    the estimate near a band's edge; the descent starts on the same 10 ms output row in
+    both, and the contact is 4.24 ms from the double's, a period and a quarter
+    millisecond: the bound is a period and half a millisecond (it was a period and a
+    tenth)."""
     _, c, report = _land(examples["highway"] / "land_float")
     _, _, double = _land(examples["highway"] / "land")
     assert report["success"] and report["aborts"] == double["aborts"] == 0
-    assert report["time"] == pytest.approx(double["time"], abs=4e-3 + 1e-4)
+    assert report["time"] == pytest.approx(double["time"], abs=4e-3 + 5e-4)
     for key, tol in (("sink_rate", 2e-3), ("offset", 2e-3), ("relative_speed", 2e-3),
                      ("tilt_deg", 0.05)):
         assert report[key] == pytest.approx(double[key], abs=tol), key

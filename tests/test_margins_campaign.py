@@ -143,8 +143,13 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, args, line):
 
 
 def test_a_scenario_without_a_campaign_is_one_line(tmp_path, capsys):
+    from quadland.scenario import SCENARIO_DIR
+
+    # every shipped scenario has a [campaign] table: turning's file without it
+    plain = tmp_path / "turning.toml"
+    plain.write_text((SCENARIO_DIR / "turning.toml").read_text().split("\n[campaign]")[0])
     out = tmp_path / "never"
-    assert main(["margins", "--scenario", "turning", "--campaign", "--out", str(out)]) == 2
+    assert main(["margins", "--scenario", str(plain), "--campaign", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("quadland: error: --scenario: turning has no "
                                                "[campaign] table")

@@ -17,7 +17,16 @@ the abort count. Phases (:data:`PHASES`):
    (the gear on the deck), a rate that is large high up and the crawl
    ``touchdown_speed`` for the last part, which goes on below the touchdown
    height until contact (PX4 lands at 0.7 m/s and crawls at 0.3 m/s for the
-   last metre); the horizontal reference stays at the pad;
+   last metre); the horizontal reference stays at the pad. The reference
+   falls only while the align criteria's offset and speed bands hold (half
+   of ``max_offset`` and of ``max_relative_speed``): a gust that pushes the
+   quadrotor out of them pauses the descent at its height, and it goes on
+   once they hold again, so that the contact is made aligned, with no climb
+   back and no dwell again. The crawl (``h`` at or below ``touchdown_speed x
+   descent_time``) is committed: it does not pause, so that the quadrotor
+   never hovers within centimetres of the deck, where the land detector
+   would read a hover as a touchdown; there a touchdown out of the limits is
+   aborted (below);
 3. **touchdown**: entered from the descent when the flight stack reports
    the gear on the deck (:data:`GUIDANCE_CUES`' ``touchdown``: on perfect
    sensing the measured gear gap at or below zero, on sensors the land
@@ -41,12 +50,13 @@ hover point's height holds until the marker is seen: the flight stack starts
 it at the handover height, when that is above ``hover_height``, so that no
 descent is flown on a height only GNSS knows.
 
-**Abort.** During the descent, when the horizontal offset exceeds
+**Abort.** In the committed crawl, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
-(the criteria of a good touchdown could no longer be met), or when the deck
-rises faster than ``max_deck_rise`` (a heaving ship deck), the phase goes
-back to align, the reference climbs back to the hover height, and the abort
-count grows by one.
+(the criteria of a good touchdown could no longer be met), and anywhere in
+the descent when the deck rises faster than ``max_deck_rise`` (a heaving
+ship deck), the phase goes back to align, the reference climbs back to the
+hover height, and the abort count grows by one. (Above the crawl an offset
+or a speed out of the align band pauses the descent instead.)
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -135,6 +145,51 @@ def _descent_rate(h, p):
     return ca.fmin(ca.fmax(h / p["descent_time"], p["touchdown_speed"]), p["descent_speed"])
 
 
+def _reference_height(z_ref, p, f, dt):
+    """The reference height's next value and the step's reference.
+
+    ``f`` holds the step's flags (CasADi 0/1): ``descend``, ``align`` (the phase),
+    ``abort``, ``contact``, ``band`` (in the align band, or in the committed crawl),
+    ``seen`` (the marker), ``landing`` (the next phase touchdown or landed),
+    ``touchdown`` and ``descending_next`` (the next phase touchdown, the descent), and
+    ``timer_next`` (the guidance's timer after the step), for the touchdown policy
+    (:mod:`~quadland_symbolic.landing.touchdown_policy`).
+    """
+    # the descent reference: it falls only while descending, and is reset to the
+    # hover height by an abort or before the descent starts
+    h = z_ref - p["touchdown_height"]
+    rate = _descent_rate(h, p)
+    # below the touchdown height the reference goes on at the crawl until contact:
+    # a heaving deck may have moved away, and the quadrotor must meet it; out of the
+    # align band, above the crawl, the descent pauses at its height (no climb)
+    descending = ca.logic_and(ca.logic_and(f["descend"], ca.logic_not(
+        ca.logic_or(f["abort"], f["contact"]))), f["band"])
+    z_fall = z_ref - rate * dt
+    # before the descent the hover point's height glides at descent_speed: to
+    # hover_height while the marker is seen; without it, it holds in the approach
+    # and climbs to search_height in align (exactly hover_height once there:
+    # hover + 0, and so always on perfect sensing)
+    hover = p["hover_height"]
+    target = ca.if_else(f["seen"], hover, ca.if_else(f["align"], p["search_height"], z_ref))
+    step = p["descent_speed"] * dt
+    z_glide = z_ref + ca.fmin(ca.fmax(target - z_ref, -step), step)
+    # after the touchdown the reference crawls on into the deck while the policy flies on
+    crawl = touchdown_crawl(f["touchdown"], p)
+    z_next = ca.if_else(descending, z_fall,
+                        ca.if_else(f["landing"], z_ref - crawl * dt,
+                                   ca.if_else(f["abort"], hover,
+                                              ca.if_else(f["descend"], z_ref, z_glide))))
+
+    vz = ca.if_else(descending, -rate, -crawl)
+    # d/dt of -rate: the rate is h / descent_time where it is not clamped
+    unclamped = ca.logic_and(h / p["descent_time"] > p["touchdown_speed"],
+                             h / p["descent_time"] < p["descent_speed"])
+    az = ca.if_else(ca.logic_and(descending, unclamped), rate / p["descent_time"], 0)
+    reference = ca.vertcat(0, 0, z_ref, 0, 0, vz, 0, 0, az, touchdown_commands(
+        f["landing"], f["descending_next"], f["timer_next"], z_next, p))
+    return z_next, reference
+
+
 def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     """One guidance step of length ``dt`` (s).
 
@@ -162,22 +217,26 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
     g, p = GUIDANCE_STATE.unpack(xg), GUIDANCE_PARAMS.unpack(p_guid)
     c = GUIDANCE_CUES.unpack(cues)
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
-    hover = p["hover_height"]
-    offset, speed = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2])
+    offset = ca.norm_2(p_e[0:2])
+    speed = ca.norm_2(v_e[0:2])
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
 
     in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
     in_touchdown = phase == TOUCHDOWN
     seen = c["marker_age"] <= p["marker_timeout"]
-    aligned = ca.logic_and(ca.logic_and(offset <= p["max_offset"] / 2,
-                                        speed <= p["max_relative_speed"] / 2), seen)
+    in_band = ca.logic_and(offset <= p["max_offset"] / 2, speed <= p["max_relative_speed"] / 2)
+    aligned = ca.logic_and(in_band, seen)
     # the timer: the align criteria's dwell, then the time since touchdown; held once landed
     timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, aligned), in_touchdown),
                             timer + dt, ca.if_else(phase == LANDED, timer, 0))
     contact = ca.logic_and(in_descend, c["touchdown"] >= 0.5)
+    # the crawl (h / descent_time at or below touchdown_speed) is committed: it does not
+    # pause, and there a touchdown out of the limits is aborted; above it, out of the
+    # align band the descent pauses instead (_reference_height)
+    committed = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
+    off_limits = ca.logic_or(offset > p["max_offset"], speed > p["max_relative_speed"])
     abort = ca.logic_and(ca.logic_and(in_descend, ca.logic_not(contact)), ca.logic_or(
-        ca.logic_or(offset > p["max_offset"], speed > p["max_relative_speed"]),
-        deck_rise > p["max_deck_rise"]))
+        ca.logic_and(committed, off_limits), deck_rise > p["max_deck_rise"]))
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
@@ -187,33 +246,11 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
                                              in_touchdown, timer_next >= p["settle_time"]),
                                              LANDED, phase)))))
 
-    # the descent reference: it falls only while descending, and is reset to the
-    # hover height by an abort or before the descent starts
-    h = z_ref - p["touchdown_height"]
-    rate = _descent_rate(h, p)
-    # below the touchdown height the reference goes on at the crawl until contact:
-    # a heaving deck may have moved away, and the quadrotor must meet it
-    descending = ca.logic_and(in_descend, ca.logic_not(ca.logic_or(abort, contact)))
-    crawl = touchdown_crawl(phase_next == TOUCHDOWN, p)
-    z_fall = z_ref - rate * dt
-    # before the descent the hover point's height glides at descent_speed: to
-    # hover_height while the marker is seen; without it, it holds in the approach
-    # and climbs to search_height in align (exactly hover_height once there:
-    # hover + 0, and so always on perfect sensing)
-    target = ca.if_else(seen, hover, ca.if_else(in_align, p["search_height"], z_ref))
-    step = p["descent_speed"] * dt
-    z_glide = z_ref + ca.fmin(ca.fmax(target - z_ref, -step), step)
-    z_next = ca.if_else(descending, z_fall,
-                        ca.if_else(phase_next >= TOUCHDOWN, z_ref - crawl * dt,
-                                   ca.if_else(abort, hover, z_glide)))
-
-    vz = ca.if_else(descending, -rate, -crawl)
-    # d/dt of -rate: the rate is h / descent_time where it is not clamped
-    unclamped = ca.logic_and(h / p["descent_time"] > p["touchdown_speed"],
-                             h / p["descent_time"] < p["descent_speed"])
-    az = ca.if_else(ca.logic_and(descending, unclamped), rate / p["descent_time"], 0)
-    reference = ca.vertcat(0, 0, z_ref, 0, 0, vz, 0, 0, az, touchdown_commands(
-        phase_next >= TOUCHDOWN, phase_next == DESCEND, timer_next, z_next, p))
+    z_next, reference = _reference_height(
+        z_ref, p, dict(descend=in_descend, align=in_align, abort=abort, contact=contact,
+                       band=ca.logic_or(in_band, committed), seen=seen,
+                       landing=phase_next >= TOUCHDOWN, touchdown=phase_next == TOUCHDOWN,
+                       descending_next=phase_next == DESCEND, timer_next=timer_next), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + abort), reference
 
 
