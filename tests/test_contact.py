@@ -651,3 +651,51 @@ def test_defaults_and_layouts():
     assert f.name_in() == ["x1q", "xv", "t", "t_signal", "p_veh", "p_deck", "p_gear", "p_lock"]
     assert f.name_out() == ["d_F", "d_M", "foot", "hold"]
     assert f.size1_out(2) == FOOT.size and f.size1_out(3) == HOLD.size
+
+
+# --- the report's gear signals: what holds a body resting on a moving roof ------------
+
+def _resting_on_a_car(V, Kt, Kq, lock):
+    """``gear_signals`` (quadland_symbolic.landing.gear) of the body resting level, at
+    its static deflection, on a level roof driving straight at a steady ``V`` m/s
+    (``d11 V`` holds it) through still air, rotors off, long after the contact switch
+    closed (lock fully engaged if there is one)."""
+    from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
+    veh = dict(tau=[150.0 * V, 0.0, 0.0])
+    p = params(gear=dict(mu=0.5), lock=lock, veh=veh)
+    xv = np.zeros(VEHICLE_STATE.size)
+    xv[VEHICLE_STATE.index("u2")] = V
+    z = state_on_deck(np.zeros(3), M * G / (N_FEET * gear_defaults()["k"]), xv=xv)
+    z[6] = V                                                    # V1: moving with the roof
+    quad = dict(m1=M, I=INERTIA, Kt=[Kt] * 3, Kr=[0.0] * 3, g=G, arm=0.25, c=0.05)
+    act = dict(motor_time_constant=0.02, F_max=20.0, gear_height=GEAR_HEIGHT,
+               drag_quadratic=[Kq] * 3, rotor_radius=0.0, air_density=1.225,
+               rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3)
+    t = 100.0
+    xg = GEAR_STATE.pack(dict(impulse=t, t_contact=t, F_peak=M * G))
+    s = gear_signals_function()(z[:QUAD6_STATE.size], xv, xg, t, QUADROTOR.pack(quad),
+                                ACTUATOR.pack(act), part(p, "p_veh"), part(p, "p_deck"),
+                                part(p, "p_gear"), part(p, "p_lock"))
+    return GEAR_SIGNALS.unpack(np.array(s).ravel())
+
+
+def test_the_friction_margin_of_a_body_on_a_car_roof_carries_the_drag():
+    # Resting level on the roof at 100 km/h, the still air's drag Kt V + Kq V^2 (the
+    # shipped 0.3 and 0.01225: 17.8 N) is all the feet must hold against mu m g: the
+    # margin is (Kt V + Kq V^2) / (mu m g) = 1.82, not 0 (the drag left out, a body
+    # sliding off the roof was "resting with a friction margin").
+    V, Kt, Kq, mu = 100 / 3.6, 0.3, 0.01225, 0.5
+    s = _resting_on_a_car(V, Kt, Kq, dict(F_hold=0.0))
+    drag = Kt * V + Kq * V ** 2
+    assert s["friction_margin"] == pytest.approx(drag / (mu * M * G), rel=1e-12)
+    assert s["friction_margin"] > 1
+    # no device: nothing is engaged, however long the switch has been closed
+    assert s["engaged"] == 0.0 and s["F_lock"] == 0.0
+    # a magnet engaged at the deck: its pull F_lock joins the weight on the feet
+    held = _resting_on_a_car(V, Kt, Kq, dict(F_hold=100.0))
+    assert held["engaged"] == pytest.approx(1.0, abs=1e-12)
+    assert held["friction_margin"] == pytest.approx(
+        drag / (mu * (M * G + held["F_lock"])), rel=1e-12)
+    # in still air on a still roof the margin is 0
+    assert _resting_on_a_car(0.0, Kt, Kq, dict(F_hold=0.0))["friction_margin"] == \
+        pytest.approx(0.0, abs=1e-9)

@@ -227,6 +227,19 @@ def test_a_gear_narrower_than_the_tilt_at_contact_tips_over():
     assert not wide.tipped and wide.secured and wide.success      # friction holds it
 
 
+def test_without_a_lock_highway_100_s_drag_leaves_it_not_secured():
+    """No device on the 100 km/h roof: the still air's drag (Kt V + Kq V^2 = 17.8 N) is
+    more than friction holds (mu m g = 9.8 N), so the body does not rest secured. Before
+    the report's margin carried the drag and a missing device engaged nothing, this
+    landing read "secured yes" (the lock's clock at 1, the margin 0) beside "off the
+    pad"."""
+    res = _fly("highway_100", 'touchdown.lock="none"')
+    rep = touchdown_report(res)
+    assert res["engaged"][-1] == 0.0 and res["F_lock"][-1] == 0.0
+    assert res["friction_margin"][-1] > 1
+    assert not rep.secured and not rep.success and "not secured" in rep.failures
+
+
 def test_the_welded_idealization_stays_a_switch():
     """gear.welded = true is the old touchdown: the gear point's crossing ends the flight,
     the ride pins the pose; the gear's figures are undefined, and the campaign's gear

@@ -40,6 +40,7 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.aero import quadratic_drag
 from quadland_symbolic.landing.contact import (
     FOOT,
     GEAR,
@@ -52,7 +53,7 @@ from quadland_symbolic.landing.contact import (
     tip_over_angles,
 )
 from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose
-from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.quadrotor import WRENCH, wrench_from_rotors
@@ -92,7 +93,7 @@ GEAR_SIGNALS = Layout("gear_sig", (
     Field("centre_gap", 1, "m", "the gear centre's height above the deck plane"),
     Field("F_gear", 1, "N", "total normal load of the feet"),
     Field("feet_down", 1, "-", "feet below the plane and pressing"),
-    Field("engaged", 1, "-", "lock-down engagement, 0 to 1"),
+    Field("engaged", 1, "-", "lock-down engagement, 0 to 1 (0 without a device)"),
     Field("F_lock", 1, "N", "lock-down pull"),
     Field("roll_rel", 1, "rad", "body roll relative to the deck (about the body x axis)"),
     Field("pitch_rel", 1, "rad", "body pitch relative to the deck (about the body y axis)"),
@@ -176,17 +177,19 @@ def foot_gap_function() -> ca.Function:
 
 @functools.cache
 def gear_signals_function() -> ca.Function:
-    """``gear_signals(x1q, xv, xg, t, p_quad, p_veh, p_deck, p_gear, p_lock) -> s``
+    """``gear_signals(x1q, xv, xg, t, p_quad, p_act, p_veh, p_deck, p_gear, p_lock) -> s``
     (:data:`GEAR_SIGNALS`).
 
     The friction margin is :func:`~quadland_symbolic.landing.contact.friction_margin`
-    with the rotors' thrust (their forces now) and the lock's pull as the other
-    forces; the sink rate is the lowest foot's ``-n2 . v_i`` relative to the deck's
-    material point under it.
+    with the rotors' thrust (their forces now), the drag of the body's velocity through
+    still air (eq. 2's ``-Kt V1`` and the quadratic ``-Kq V1 |V1|``: on a car's roof
+    at 100 km/h, 17.8 N, more than friction alone holds) and the lock's pull as the
+    other forces (the wind, a disturbance input, is not part of it); the sink rate is
+    the lowest foot's ``-n2 . v_i`` relative to the deck's material point under it.
     """
     x1q, xv, xg, t = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), GEAR_STATE.sym(), ca.SX.sym("t")
     p_quad, p_veh, p_deck = QUADROTOR.sym(), VEHICLE.sym(), DECK_PARAMS.sym()
-    p_gear, p_lock = GEAR.sym(), LOCK.sym()
+    p_gear, p_lock, p_act = GEAR.sym(), LOCK.sym(), ACTUATOR.sym()
     q = QUAD6_STATE.unpack(x1q)
     t_contact = GEAR_STATE.unpack(xg)["t_contact"]
     _, _, foot, hold = _contact(x1q, xv, t, t_contact, p_veh, p_deck, p_gear, p_lock)
@@ -206,12 +209,16 @@ def gear_signals_function() -> ca.Function:
     roll, pitch, tilt = _relative_attitude(x1q, deck.R_deck)
     tip = tip_over_angles(p_gear)
     thrust = WRENCH.unpack(wrench_from_rotors(q["F"], p_quad))["F_total"]
-    F_other = R1 @ ca.vertcat(0, 0, thrust) - hs["F_lock"] * n2
+    drag = -QUADROTOR.unpack(p_quad)["Kt"] * q["V1"] + quadratic_drag(q["V1"], p_act)
+    F_other = R1 @ (ca.vertcat(0, 0, thrust) + drag) - hs["F_lock"] * n2
     margin = friction_margin(x1q, xv, t, F_other, p_quad, p_veh, p_deck, p_gear)
+    # no device (F_hold = 0): nothing engages, whatever the lock's clock says
+    engaged = ca.if_else(LOCK.unpack(p_lock)["F_hold"] > 0, hs["engaged"], 0)
     s = ca.vertcat(-lowest, hs["lock_gap"], ca.sum1(fs["F_n"]), ca.sum1(fs["in_contact"]),
-                   hs["engaged"], hs["F_lock"], roll, pitch, tilt,
+                   engaged, hs["F_lock"], roll, pitch, tilt,
                    ca.fmax(ca.fabs(roll) / tip[0], ca.fabs(pitch) / tip[1]), margin,
                    -(n2.T @ v_rel))
-    return ca.Function("gear_signals", [x1q, xv, xg, t, p_quad, p_veh, p_deck, p_gear, p_lock],
-                       [s], ["x1q", "xv", "xg", "t", "p_quad", "p_veh", "p_deck", "p_gear",
-                             "p_lock"], ["s"])
+    return ca.Function("gear_signals",
+                       [x1q, xv, xg, t, p_quad, p_act, p_veh, p_deck, p_gear, p_lock],
+                       [s], ["x1q", "xv", "xg", "t", "p_quad", "p_act", "p_veh", "p_deck",
+                             "p_gear", "p_lock"], ["s"])

@@ -175,8 +175,8 @@ def landing_gear_signals_function() -> ca.Function:
     (:data:`quadland_symbolic.landing.gear.GEAR_SIGNALS`) of the plant's state."""
     xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     s, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
-    sig = gear_signals_function()(s["x1q"], s["xv"], s["gear"], t, p["p_quad"], p["p_veh"],
-                                  p["p_deck"], p["p_gear"], p["p_lock"])
+    sig = gear_signals_function()(s["x1q"], s["xv"], s["gear"], t, p["p_quad"], p["p_act"],
+                                  p["p_veh"], p["p_deck"], p["p_gear"], p["p_lock"])
     return ca.Function("landing_gear_signals", [xp, t, pp], [sig], ["xp", "t", "pp"], ["s"])
 
 
