@@ -374,6 +374,10 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "settle_time": _NONNEGATIVE,
     "marker_timeout": _NONNEGATIVE,
     "search_height": _POSITIVE,
+    "commit_height": _POSITIVE,
+    "commit_horizon": _POSITIVE,
+    "calm_speed": _POSITIVE,
+    "motion_time": _POSITIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:
