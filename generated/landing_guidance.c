@@ -379,10 +379,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a26=(a22?a26:0);
   a17=(!a22);
   a02=(a02-a07);
-  a18=(a25*a18);
-  a27=(-a18);
-  a02=casadi_fmax(a02,a27);
-  a02=casadi_fmin(a02,a18);
+  a27=(a25*a18);
+  a28=(-a27);
+  a02=casadi_fmax(a02,a28);
+  a02=casadi_fmin(a02,a27);
   a02=(a07+a02);
   a17=(a17?a02:0);
   a26=(a26+a17);
@@ -404,6 +404,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a14=(a14?a23:0);
   a27=(a27+a14);
   a27=(a27-a07);
+  a18=(a25*a18);
   a14=(-a18);
   a27=casadi_fmax(a27,a14);
   a27=casadi_fmin(a27,a18);

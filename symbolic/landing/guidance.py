@@ -150,6 +150,40 @@ def _descent_rate(h, p):
     return ca.fmin(ca.fmax(h / p["descent_time"], p["touchdown_speed"]), p["descent_speed"])
 
 
+def _glide(z, target, p, dt):
+    """The reference height one step of descent_speed toward ``target`` (there if nearer).
+
+    The descent's reference falls only while descending: to the wait height until
+    committed, then on at the crawl below the touchdown height until contact (a heaving
+    deck may have moved away, and the quadrotor must meet it). Uncommitted below the wait
+    height (a rising deck withdrew the commit) it glides back up to it; a limit's abort
+    resets it to the hover height, as does the start of a descent.
+    """
+    step = p["descent_speed"] * dt
+    return z + ca.fmin(ca.fmax(target - z, -step), step)
+
+
+def _calm(g, p, deck_rise, deck_rise_rate, dt):
+    """The quiescence averages after the step (held on the deck) and whether the deck's
+    vertical speed predicted over commit_horizon stays within calm_speed and max_deck_rise
+    (so that a commit is never its own abort)."""
+    xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
+    xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
+    speed = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
+                            p["commit_horizon"])
+    return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
+            speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
+
+
+def _reference(z_ref, h, rate, falling, p):
+    """:data:`POSITION_REFERENCE` at ``z_ref``: the profile's rate and its derivative while
+    falling (the rate is h / descent_time where it is not clamped), else at rest."""
+    unclamped = ca.logic_and(h / p["descent_time"] > p["touchdown_speed"],
+                             h / p["descent_time"] < p["descent_speed"])
+    az = ca.if_else(ca.logic_and(falling, unclamped), rate / p["descent_time"], 0)
+    return ca.vertcat(0, 0, z_ref, 0, 0, ca.if_else(falling, -rate, 0), 0, 0, az)
+
+
 def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     """One guidance step of length ``dt`` (s).
 
@@ -178,12 +212,11 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     c = GUIDANCE_CUES.unpack(cues)
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
     hover = p["hover_height"]
-    offset = ca.norm_2(p_e[0:2])
-    speed = ca.norm_2(v_e[0:2])
+    offset, speed = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2])
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
 
-    in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
-    in_touchdown = phase == TOUCHDOWN
+    in_approach, in_align, in_descend, in_touchdown = (
+        phase == k for k in (APPROACH, ALIGN, DESCEND, TOUCHDOWN))
     seen = c["marker_age"] <= p["marker_timeout"]
     aligned = ca.logic_and(ca.logic_and(offset <= p["max_offset"] / 2,
                                         speed <= p["max_relative_speed"] / 2), seen)
@@ -193,24 +226,17 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     contact = ca.logic_and(in_descend, c["touchdown"] >= 0.5)
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
-    xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
-    xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
-    xq_held = ca.if_else(phase >= TOUCHDOWN, xq, xq_next)    # on the deck: held
-    speed_ahead = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
-                                p["commit_horizon"])
+    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt)
     h = z_ref - p["touchdown_height"]
     rate = _descent_rate(h, p)
     z_fall = z_ref - rate * dt
     wait = p["touchdown_height"] + p["commit_height"]
-    committed = ca.logic_and(in_descend, ca.logic_or(
-        g["committed"] >= 0.5, ca.logic_and(
-            z_fall <= wait, speed_ahead <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))))
+    committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
+                                                     ca.logic_and(z_fall <= wait, calm)))
 
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
     off_limits = ca.logic_and(flying, ca.logic_or(offset > p["max_offset"],
                                                   speed > p["max_relative_speed"]))
-    # committed before this step (a commit and its abort in one step would be a prediction
-    # that contradicts itself when calm_speed is above max_deck_rise)
     rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5),
                           deck_rise > p["max_deck_rise"])
     abort = ca.logic_or(off_limits, rising)
@@ -225,34 +251,19 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
 
-    # the descent reference: it falls only while descending, to the wait height until
-    # committed (then on at the crawl below the touchdown height until contact: a heaving
-    # deck may have moved away, and the quadrotor must meet it); a rising deck sends it
-    # back up to the wait height at descent_speed; a limit's abort resets it to the
-    # hover height, as does the start of a descent
-    step = p["descent_speed"] * dt
-    to_wait = z_ref + ca.fmin(ca.fmax(wait - z_ref, -step), step)
     falling = ca.logic_and(ca.logic_and(flying, ca.logic_not(abort)),
                            ca.logic_or(committed, z_fall > wait))
-    z_descend = ca.if_else(falling, z_fall, to_wait)
     # before the descent the hover point's height glides at descent_speed: to
     # hover_height while the marker is seen; without it, it holds in the approach
     # and climbs to search_height in align (exactly hover_height once there:
     # hover + 0, and so always on perfect sensing)
     target = ca.if_else(seen, hover, ca.if_else(in_align, p["search_height"], z_ref))
-    z_glide = z_ref + ca.fmin(ca.fmax(target - z_ref, -step), step)
-    z_next = ca.if_else(ca.logic_and(flying, ca.logic_not(off_limits)), z_descend,
+    z_next = ca.if_else(ca.logic_and(flying, ca.logic_not(off_limits)),
+                        ca.if_else(falling, z_fall, _glide(z_ref, wait, p, dt)),
                         ca.if_else(phase_next >= TOUCHDOWN, z_ref,
-                                   ca.if_else(off_limits, hover, z_glide)))
-
-    vz = ca.if_else(falling, -rate, 0)
-    # d/dt of -rate: the rate is h / descent_time where it is not clamped
-    unclamped = ca.logic_and(h / p["descent_time"] > p["touchdown_speed"],
-                             h / p["descent_time"] < p["descent_speed"])
-    az = ca.if_else(ca.logic_and(falling, unclamped), rate / p["descent_time"], 0)
-    reference = ca.vertcat(0, 0, z_ref, 0, 0, vz, 0, 0, az)
+                                   ca.if_else(off_limits, hover, _glide(z_ref, target, p, dt))))
     return ca.vertcat(phase_next, timer_next, z_next, aborts + abort, committed_next,
-                      xq_held), reference
+                      xq_held), _reference(z_ref, h, rate, falling, p)
 
 
 def guidance_function() -> ca.Function:
