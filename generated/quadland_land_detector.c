@@ -225,8 +225,8 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
                                      const ql_quadrotor_params *quad,
                                      ql_land_detector_cues *cues)
 {
-    /* xg = [phase, timer, z_ref, aborts], CasADi's guidance state. */
-    ql_real xg[4];
+    /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state. */
+    ql_real xg[7];
     const ql_real *arg[ql_casadi_land_detector_cues_SZ_ARG];
     ql_real *res[ql_casadi_land_detector_cues_SZ_RES];
     casadi_int work_int[ql_casadi_land_detector_cues_SZ_IW + 1];
@@ -236,7 +236,7 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
         if (cues) memset(cues, 0, sizeof *cues);
         return QL_ERR_NULL;
     }
-    if (!(all_finite((const ql_real *)guidance_params, 19)
+    if (!(all_finite((const ql_real *)guidance_params, 23)
           & all_finite((const ql_real *)quad, 13))) {
         memset(cues, 0, sizeof *cues);
         return QL_ERR_NONFINITE_INPUT;
@@ -245,6 +245,9 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
     xg[1] = guidance->timer;
     xg[2] = guidance->z_ref;
     xg[3] = (ql_real)guidance->aborts;
+    xg[4] = guidance->committed;
+    xg[5] = guidance->ms_rise;
+    xg[6] = guidance->ms_rise_rate;
     arg[0] = (const ql_real *)y;
     arg[1] = (const ql_real *)range;
     arg[2] = (const ql_real *)imu;

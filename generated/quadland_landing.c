@@ -108,8 +108,11 @@ typedef char landing_output_is_its_layout[
 typedef char guidance_state_is_its_layout[
     AT(ql_guidance_state, timer, 0, 0) &&
     AT(ql_guidance_state, z_ref, 1, 0) &&
-    AT(ql_guidance_state, phase, 2, 0) &&
-    AT(ql_guidance_state, aborts, 2, 1) &&
+    AT(ql_guidance_state, committed, 2, 0) &&
+    AT(ql_guidance_state, ms_rise, 3, 0) &&
+    AT(ql_guidance_state, ms_rise_rate, 4, 0) &&
+    AT(ql_guidance_state, phase, 5, 0) &&
+    AT(ql_guidance_state, aborts, 5, 1) &&
     1 ? 1 : -1];
 typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, hover_height, 0, 0) &&
@@ -125,13 +128,17 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, settle_time, 10, 0) &&
     AT(ql_guidance_params, marker_timeout, 11, 0) &&
     AT(ql_guidance_params, search_height, 12, 0) &&
-    AT(ql_guidance_params, fly_on, 13, 0) &&
-    AT(ql_guidance_params, flare_height, 14, 0) &&
-    AT(ql_guidance_params, flare_tilt, 15, 0) &&
-    AT(ql_guidance_params, hold_time, 16, 0) &&
-    AT(ql_guidance_params, level_time, 17, 0) &&
-    AT(ql_guidance_params, cut_time, 18, 0) &&
-    sizeof(ql_guidance_params) == 19 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, commit_height, 13, 0) &&
+    AT(ql_guidance_params, commit_horizon, 14, 0) &&
+    AT(ql_guidance_params, calm_speed, 15, 0) &&
+    AT(ql_guidance_params, motion_time, 16, 0) &&
+    AT(ql_guidance_params, fly_on, 17, 0) &&
+    AT(ql_guidance_params, flare_height, 18, 0) &&
+    AT(ql_guidance_params, flare_tilt, 19, 0) &&
+    AT(ql_guidance_params, hold_time, 20, 0) &&
+    AT(ql_guidance_params, level_time, 21, 0) &&
+    AT(ql_guidance_params, cut_time, 22, 0) &&
+    sizeof(ql_guidance_params) == 23 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -163,11 +170,11 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[19] = {
+static const ql_real default_p_guid[23] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
-    10.0, 0.0, 0.15, 0.5934119456780721, 0.0, 0.35,
-    0.5,
+    10.0, 1.0, 2.5, 0.4, 20.0, 0.0,
+    0.15, 0.5934119456780721, 0.0, 0.35, 0.5,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -413,6 +420,10 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   settle_time              >= 0
  *   marker_timeout           >= 0
  *   search_height            > 0
+ *   commit_height            > 0
+ *   commit_horizon           > 0
+ *   calm_speed               > 0
+ *   motion_time              > 0
  *   fly_on                   0 or 1
  *   flare_height             >= 0
  *   flare_tilt               in (0, 1.5708)
@@ -470,22 +481,34 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[12]) && (p[12] > 0.0))) {
         bad = "search_height";
     }
-    if (!bad && !(isfinite(p[13]) && ((p[13] == 0.0) || (p[13] == 1.0)))) {
+    if (!bad && !(isfinite(p[13]) && (p[13] > 0.0))) {
+        bad = "commit_height";
+    }
+    if (!bad && !(isfinite(p[14]) && (p[14] > 0.0))) {
+        bad = "commit_horizon";
+    }
+    if (!bad && !(isfinite(p[15]) && (p[15] > 0.0))) {
+        bad = "calm_speed";
+    }
+    if (!bad && !(isfinite(p[16]) && (p[16] > 0.0))) {
+        bad = "motion_time";
+    }
+    if (!bad && !(isfinite(p[17]) && ((p[17] == 0.0) || (p[17] == 1.0)))) {
         bad = "fly_on";
     }
-    if (!bad && !(isfinite(p[14]) && (p[14] >= 0.0))) {
+    if (!bad && !(isfinite(p[18]) && (p[18] >= 0.0))) {
         bad = "flare_height";
     }
-    if (!bad && !(isfinite(p[15]) && ((p[15] > 0.0) && (p[15] < 1.5707963267948966)))) {
+    if (!bad && !(isfinite(p[19]) && ((p[19] > 0.0) && (p[19] < 1.5707963267948966)))) {
         bad = "flare_tilt";
     }
-    if (!bad && !(isfinite(p[16]) && (p[16] >= 0.0))) {
+    if (!bad && !(isfinite(p[20]) && (p[20] >= 0.0))) {
         bad = "hold_time";
     }
-    if (!bad && !(isfinite(p[17]) && (p[17] > 0.0))) {
+    if (!bad && !(isfinite(p[21]) && (p[21] > 0.0))) {
         bad = "level_time";
     }
-    if (!bad && !(isfinite(p[18]) && (p[18] >= 0.0))) {
+    if (!bad && !(isfinite(p[22]) && (p[22] >= 0.0))) {
         bad = "cut_time";
     }
     if (bad_field) {
@@ -560,7 +583,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 19 comparisons. The values are known to be finite; no names and no
+ * 23 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -578,12 +601,16 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[10] >= 0.0);
     ok &= (p[11] >= 0.0);
     ok &= (p[12] > 0.0);
-    ok &= ((p[13] == 0.0) | (p[13] == 1.0));
-    ok &= (p[14] >= 0.0);
-    ok &= ((p[15] > 0.0) & (p[15] < 1.5707963267948966));
-    ok &= (p[16] >= 0.0);
-    ok &= (p[17] > 0.0);
+    ok &= (p[13] > 0.0);
+    ok &= (p[14] > 0.0);
+    ok &= (p[15] > 0.0);
+    ok &= (p[16] > 0.0);
+    ok &= ((p[17] == 0.0) | (p[17] == 1.0));
     ok &= (p[18] >= 0.0);
+    ok &= ((p[19] > 0.0) & (p[19] < 1.5707963267948966));
+    ok &= (p[20] >= 0.0);
+    ok &= (p[21] > 0.0);
+    ok &= (p[22] >= 0.0);
     return ok;
 }
 
@@ -636,8 +663,8 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            const ql_guidance_params *params, ql_real dt,
                            ql_guidance_state *state, ql_position_reference *ref)
 {
-    /* xg = [phase, timer, z_ref, aborts], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[4], res_v[17];
+    /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
+    ql_real xg[7], res_v[20];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -652,9 +679,12 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[1] = state->timer;
     xg[2] = state->z_ref;
     xg[3] = (ql_real)state->aborts;
+    xg[4] = state->committed;
+    xg[5] = state->ms_rise;
+    xg[6] = state->ms_rise_rate;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
-          & all_finite((const ql_real *)params, 19)
-          & all_finite(xg, 4) & (isfinite(dt) != 0))) {
+          & all_finite((const ql_real *)params, 23)
+          & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
     if (!(dt > 0) || state->phase < QL_PHASE_APPROACH || state->phase > QL_PHASE_LANDED
@@ -670,16 +700,19 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     arg[3] = &dt;
     arg[4] = (const ql_real *)params;
     res[0] = res_v + 0;
-    res[1] = res_v + 4;
+    res[1] = res_v + 7;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 17)) {
+    if (!all_finite(res_v, 20)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
     state->timer = res_v[1];
     state->z_ref = res_v[2];
     state->aborts = (int)res_v[3];
-    memcpy(ref, res_v + 4, sizeof *ref);
+    state->committed = res_v[4];
+    state->ms_rise = res_v[5];
+    state->ms_rise_rate = res_v[6];
+    memcpy(ref, res_v + 7, sizeof *ref);
     return QL_OK;
 }
 

@@ -116,7 +116,8 @@ GUIDANCE_DOCUMENTED = {
     "descent_speed": _positive, "descent_time": _positive, "touchdown_speed": _positive,
     "touchdown_height": _nonnegative, "max_offset": _positive,
     "max_relative_speed": _positive, "max_deck_rise": _positive, "settle_time": _nonnegative,
-    "marker_timeout": _nonnegative, "search_height": _positive,
+    "marker_timeout": _nonnegative, "search_height": _positive, "commit_height": _positive,
+    "commit_horizon": _positive, "calm_speed": _positive, "motion_time": _positive,
     "fly_on": lambda v, p: (v == 0) | (v == 1), "flare_height": _nonnegative,
     "flare_tilt": lambda v, p: (v > 0) & (v < math.pi / 2), "hold_time": _nonnegative,
     "level_time": _positive, "cut_time": _nonnegative,
@@ -175,7 +176,8 @@ class _Harness:
         self.v_cues = _view(self.cues, d)
         self.v_y, self.v_ref, self.v_p = _view(self.y, d), _view(self.ref, d), _view(self.params, d)
         self.v_state, self.v_gp = _view(self.state, d), _view(self.gp, d)
-        self.v_g = _view(self.gs, d, 2)                  # timer, z_ref (the ints follow)
+        # timer, z_ref, committed, ms_rise, ms_rise_rate (the ints follow)
+        self.v_g = _view(self.gs, d, 5)
         self.v_out = _view(self.out, d, landing_output_layout(L).size)
         o = landing_output_layout(L).offsets()
         self.o = {n: slice(*o[n]) for n in ("F_cmd", "wrench", "tilt")}
@@ -256,7 +258,8 @@ class _Harness:
             int(rng.choice((-1, 5, 2 ** 31 - 1)))
         self.gs.aborts = int(rng.integers(4)) if rng.uniform() < 0.9 else \
             int(rng.choice((-1, MAX_ABORTS, MAX_ABORTS + 1)))
-        self.v_g[:] = [rng.uniform(0, 2), rng.uniform(-0.5, 4)]
+        self.v_g[:] = [rng.uniform(0, 2), rng.uniform(-0.5, 4), rng.integers(2),
+                       rng.uniform(0, 1), rng.uniform(0, 3)]
         # the touchdown verdict (0, 1 or a non-flag), the marker's age (seen or not)
         self.v_cues[:] = [rng.choice((0.0, 1.0, rng.normal())), rng.choice((0.0, 0.4, 3.0))]
         dt = rng.choice((0.004, 10 ** rng.uniform(-6, 1)))
@@ -385,7 +388,8 @@ def _check_guidance(h, rng, counts, oracle):
     assert h.check("guidance") == ((STATUS["QL_ERR_PARAM"], bad[0]) if bad
                                    else (STATUS["QL_OK"], None))
     phase, aborts = h.gs.phase, h.gs.aborts
-    xg = np.array([phase, h.gs.timer, h.gs.z_ref, aborts], dtype=float)
+    g = h.v_g.astype(float)
+    xg = np.r_[phase, g[0], g[1], aborts, g[2:]]
     y, cues = h.v_y.astype(float), h.v_cues.astype(float)
     before = bytes(h.gs)
     h.v_ref[:] = 7.0
@@ -409,14 +413,17 @@ def _check_guidance(h, rng, counts, oracle):
             assert not np.any(h.v_ref), "the reference is zero on error"
         return
     assert h.gs.phase in NEXT[phase]
-    assert h.gs.aborts == aborts + (phase == DESCEND and h.gs.phase == ALIGN)
+    # an abort: a limit's back to align, or a moving deck's within the descent (the commit
+    # withdrawn; it is withdrawn for nothing else while the descent goes on)
+    withdrawn = g[2] >= 0.5 and h.gs.committed < 0.5 and h.gs.phase == DESCEND
+    assert h.gs.aborts == aborts + (phase == DESCEND and (h.gs.phase == ALIGN or withdrawn))
     ref = h.v_ref.astype(float)
     assert np.all(np.isfinite(ref)) and math.isfinite(h.gs.timer) and math.isfinite(h.gs.z_ref)
     assert not np.any(ref[[0, 1, 3, 4, 6, 7]])          # over the pad, vertical only
     if oracle is not None:                              # the CasADi function, double only
         xg_next, r = (np.asarray(v, dtype=float).ravel() for v in oracle(xg, y, cues, dt, gp))
         np.testing.assert_array_equal([h.gs.phase, h.gs.aborts], xg_next[[0, 3]])
-        np.testing.assert_allclose([h.gs.timer, h.gs.z_ref], xg_next[1:3], rtol=1e-12)
+        np.testing.assert_allclose(h.v_g.astype(float), xg_next[[1, 2, 4, 5, 6]], rtol=1e-12)
         np.testing.assert_allclose(ref, r, rtol=1e-12, atol=1e-300)
     counts["moved"] += h.gs.phase != phase
 

@@ -20,10 +20,16 @@ from quadland_symbolic.landing.guidance import (
 P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
          descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2, max_offset=0.2,
          max_relative_speed=0.5, max_deck_rise=0.8, settle_time=0.1, marker_timeout=0.5,
-         search_height=6.0, fly_on=0.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
+         search_height=6.0, commit_height=1.0, commit_horizon=2.5, calm_speed=0.4,
+         motion_time=20.0, fly_on=0.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
          level_time=0.3, cut_time=0.5)
 DT = 0.002
 GUIDANCE = guidance_function()
+
+
+def _xg(committed=0, **state):
+    """A guidance state; the quiescence averages at zero (a deck at rest so far)."""
+    return GUIDANCE_STATE.pack(dict(state, committed=committed, ms_rise=0.0, ms_rise_rate=0.0))
 
 
 def _run(script, n, xg=None, p=P):
@@ -33,7 +39,7 @@ def _run(script, n, xg=None, p=P):
     Without a gear gap the gear is well above the deck (1 m); the touchdown cue is the
     gap at or below zero, as on perfect sensing. Without a marker age the marker is seen
     (0 s)."""
-    xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=p["hover_height"], aborts=0)) \
+    xg = _xg(phase=APPROACH, timer=0.0, z_ref=p["hover_height"], aborts=0) \
         if xg is None else xg
     pg = GUIDANCE_PARAMS.pack(p)
     rows = []
@@ -43,7 +49,7 @@ def _run(script, n, xg=None, p=P):
         gap, age = (more + [1.0, 0.0][len(more):])
         cues = GUIDANCE_CUES.pack(dict(touchdown=float(gap <= 0), marker_age=age))
         xg_next, ref = (np.asarray(v, dtype=float).ravel()
-                        for v in GUIDANCE(xg, p_e, v_e, rise, cues, DT, pg))
+                        for v in GUIDANCE(xg, p_e, v_e, rise, 0.0, cues, DT, pg))
         rows.append((xg, ref))
         xg = xg_next
     return rows, xg
@@ -68,7 +74,7 @@ def test_approach_ends_within_the_align_radius():
 
 
 def test_align_dwells_then_descends_and_a_break_restarts_the_dwell():
-    xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0))
+    xg = _xg(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0)
 
     def script(k, z_ref):              # drifts out of the half-limit band for 10 steps
         off = 0.15 if 200 <= k < 210 else 0.05
@@ -83,7 +89,7 @@ def test_align_dwells_then_descends_and_a_break_restarts_the_dwell():
 def test_descent_profile_against_its_closed_form():
     """Rate min(max(h / T, v_td), v_max): linear at 0.7 m/s down to h = 0.7 m, then
     exponential h = 0.7 exp(-(t - t1) / T) down to h = 0.3 m, then the 0.3 m/s crawl."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=3.0, aborts=0))
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=3.0, aborts=0)
     rows, _ = _run(_on_track, 3000, xg)
     t = DT * np.arange(len(rows))
     z = np.array([GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows])
@@ -110,7 +116,7 @@ def test_the_descent_pauses_out_of_the_align_band_and_goes_on_within_it(cause):
     out of the align band but within the abort's limits (offset 0.15 m, half the limit
     0.1; speed 0.3 m/s, half 0.25): the reference holds at its height with no climb, no
     abort, a zero rate; back in the band it falls at 0.7 m/s again."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0)
 
     def script(k, z_ref):
         out = 100 <= k < 200
@@ -132,7 +138,7 @@ def test_the_crawl_is_committed_out_of_the_align_band():
     """Below h = touchdown_speed x descent_time = 0.3 m the descent does not pause: from
     z_ref = 0.4 m (h = 0.2 m) with the offset at 0.15 m, out of the band, it crawls on at
     0.3 m/s (0.6 mm a step), never hovering over the deck."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.4, aborts=0))
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=0.4, aborts=0)
     rows, _ = _run(lambda k, z: ([0.15, 0.0, z], [0.0, 0.0, 0.0], 0.0), 50, xg)
     z = np.array([GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows])
     np.testing.assert_allclose(z, 0.4 - 0.3 * DT * np.arange(50), atol=1e-12)
@@ -143,7 +149,7 @@ def test_above_the_crawl_a_touchdown_limit_exceeded_pauses_and_does_not_abort(ca
     """At 2 m (h = 1.8 m, above the crawl's 0.3 m) an offset of 0.25 m or a speed of 0.6
     m/s, past the touchdown limits (0.2 m, 0.5 m/s), for one step: the reference holds its
     height for that step, no abort, and falls again after it."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0))
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0)
 
     def script(k, z_ref):
         bad = k == 100
@@ -157,30 +163,41 @@ def test_above_the_crawl_a_touchdown_limit_exceeded_pauses_and_does_not_abort(ca
     assert z[101] == z[100] and z[102] == pytest.approx(z[101] - 0.7 * DT, abs=1e-12)
 
 
-@pytest.mark.parametrize("cause", ["offset", "speed", "deck"])
+@pytest.mark.parametrize("cause", ["offset", "speed"])
 def test_abort_climbs_back_to_hover_and_counts(cause):
     """In the committed crawl (from z_ref = 0.4 m, h = 0.2 m) a touchdown limit exceeded
-    aborts; a deck rising too fast aborts anywhere (from 2 m)."""
-    z0 = 2.0 if cause == "deck" else 0.4
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z0, aborts=0))
+    aborts (a rising deck aborts only a committed final descent: tests/test_quiescence.py
+    and test_a_moving_deck_aborts_only_the_committed_descent below)."""
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=0.4, aborts=0)
 
     def script(k, z_ref):
         bad = k == 100
         p_e = [0.25 if bad and cause == "offset" else 0.0, 0.0, z_ref]
         v_e = [0.6 if bad and cause == "speed" else 0.0, 0.0, 0.0]
-        return p_e, v_e, 1.0 if bad and cause == "deck" else 0.0
+        return p_e, v_e, 0.0
     rows, _ = _run(script, 102, xg)
     after = GUIDANCE_STATE.unpack(rows[101][0])
     assert after["phase"][0] == ALIGN and after["aborts"][0] == 1
     assert after["z_ref"][0] == 3.0                       # back to the hover height
     before = GUIDANCE_STATE.unpack(rows[100][0])
-    assert before["phase"][0] == DESCEND and before["z_ref"][0] < z0
+    assert before["phase"][0] == DESCEND and before["z_ref"][0] < 0.4
+
+
+def test_a_moving_deck_aborts_only_the_committed_descent():
+    """Above the wait height (touchdown_height + commit_height = 1.2 m) the descent is not
+    committed: a deck rising at 1 m/s aborts nothing and the reference falls on (the
+    committed case is tests/test_quiescence.py's)."""
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=2.0, aborts=0)
+    rows, last = _run(lambda k, z_ref: ([0.0, 0.0, z_ref], [0.0, 0.0, 0.0], 1.0), 200, xg)
+    g = GUIDANCE_STATE.unpack(last)
+    assert g["phase"][0] == DESCEND and g["aborts"][0] == 0 and g["committed"][0] == 0
+    assert g["z_ref"][0] == pytest.approx(2.0 - 0.7 * 200 * DT, rel=1e-12)
 
 
 @pytest.mark.parametrize("cause", ["offset", "speed", "deck"])
 def test_contact_is_touchdown_not_abort(cause):
     """The gear meets the deck while an abort criterion holds: the contact wins."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.1, aborts=0))
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=0.1, aborts=0)
 
     def script(k, z_ref):
         bad = k == 3
@@ -198,7 +215,7 @@ def test_contact_is_touchdown_not_abort(cause):
 
 def test_descent_touches_down_when_the_gap_closes_then_lands_after_settling():
     """The gap closes at step 40; touchdown, then landed settle_time (50 steps) later."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0))
+    xg = _xg(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0)
     rows, last = _run(lambda k, z: ([0.0, 0.0, z], [0.0, 0.0, -0.3], 0.0,
                                     0.3 - k * DT * 0.3 if k < 40 else -1e-9), 120, xg)
     phases = np.array([GUIDANCE_STATE.unpack(x)["phase"][0] for x, _ in rows])
@@ -214,7 +231,7 @@ def test_descent_touches_down_when_the_gap_closes_then_lands_after_settling():
 
 
 def test_landed_is_held():
-    xg = GUIDANCE_STATE.pack(dict(phase=LANDED, timer=0.3, z_ref=0.1, aborts=2))
+    xg = _xg(phase=LANDED, timer=0.3, z_ref=0.1, aborts=2)
     rows, last = _run(lambda k, z: ([1.0, 1.0, 5.0], [3.0, 0, 0], 2.0, -1.0), 10, xg)
     np.testing.assert_array_equal(last, xg)
 
@@ -223,7 +240,7 @@ def test_align_waits_for_the_marker_and_climbs_to_search_for_it():
     """Unseen for 0.6 s > marker_timeout: no dwell, the hover point climbs at descent_speed
     (0.7 m/s: 1.4 mm per 2 ms step) to search_height; seen again from step 2000, it
     dwells 1 s and descends, the hover point gliding back down meanwhile."""
-    xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0))
+    xg = _xg(phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0)
     step = 0.7 * DT
     k_seen = 2000
 
@@ -248,7 +265,7 @@ def test_align_waits_for_the_marker_and_climbs_to_search_for_it():
 
 
 def test_the_climb_stops_at_the_search_height():
-    xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0, z_ref=5.99, aborts=0))
+    xg = _xg(phase=ALIGN, timer=0.0, z_ref=5.99, aborts=0)
     rows, last = _run(lambda k, z: ([0.0, 0.0, z], [0.0, 0.0, 0.0], 0.0, 1.0, 10.0), 20, xg)
     assert GUIDANCE_STATE.unpack(last)["z_ref"][0] == 6.0
     assert GUIDANCE_STATE.unpack(last)["phase"][0] == ALIGN
@@ -279,7 +296,7 @@ def test_the_approach_holds_its_height_until_the_marker_is_seen():
     """Started 2 m above the hover height without the marker, the approach flies level
     (z_ref held); seen from step 100, the hover point glides down at descent_speed, and the
     approach ends within align_radius of [0, 0, z_ref] (not of the hover height)."""
-    xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=5.0, aborts=0))
+    xg = _xg(phase=APPROACH, timer=0.0, z_ref=5.0, aborts=0)
 
     def script(k, z_ref):              # at the hover point's height, 1 m out
         return [-1.0 + k * 1e-3, 0.0, z_ref], [0.5, 0.0, 0.0], 0.0, 1.0, \

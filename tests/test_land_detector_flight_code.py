@@ -287,7 +287,10 @@ def test_cues_equal_their_casadi_function_and_refuse_bad_parameters():
         c.s["gs"].phase, c.s["gs"].aborts = int(rng.integers(5)), int(rng.integers(3))
         c.s["gs"].timer, c.s["gs"].z_ref = rng.normal(), rng.normal()
         xg = GUIDANCE_STATE.pack(dict(phase=c.s["gs"].phase, timer=c.s["gs"].timer,
-                                      z_ref=c.s["gs"].z_ref, aborts=c.s["gs"].aborts))
+                                      z_ref=c.s["gs"].z_ref, aborts=c.s["gs"].aborts,
+                                      committed=c.s["gs"].committed,
+                                      ms_rise=c.s["gs"].ms_rise,
+                                      ms_rise_rate=c.s["gs"].ms_rise_rate))
         assert c() == STATUS["QL_OK"]
         want = np.asarray(f(c.v["y"], c.v["range"], c.v["imu"], np.array(c.F[:]), xg,
                             c.v["gp"], c.v["quad"]), dtype=float).ravel()

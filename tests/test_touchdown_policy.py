@@ -40,7 +40,8 @@ DT = 0.002
 P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
          descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2, max_offset=0.2,
          max_relative_speed=0.5, max_deck_rise=0.8, settle_time=1.0, marker_timeout=0.5,
-         search_height=6.0, fly_on=1.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
+         search_height=6.0, commit_height=1.0, commit_horizon=2.5, calm_speed=0.4,
+         motion_time=20.0, fly_on=1.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
          level_time=0.3, cut_time=0.5)
 #: The step at which the scripted gap closes.
 CONTACT = 400
@@ -50,13 +51,14 @@ def _schedule(p=P, n=CONTACT + 700):
     """The guidance from the descent at z_ref = 0.5 m, tracking its reference exactly; the
     gear gap closes at step CONTACT. Rows of (xg before the step, xg after, reference)."""
     guidance, pg = guidance_function(), GUIDANCE_PARAMS.pack(p)
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0))
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0, committed=0,
+                                  ms_rise=0.0, ms_rise_rate=0.0))
     rows = []
     for k in range(n):
         z = GUIDANCE_STATE.unpack(xg)["z_ref"][0]
         cues = GUIDANCE_CUES.pack(dict(touchdown=float(k >= CONTACT), marker_age=0.0))
         nxt, ref = (np.asarray(v, dtype=float).ravel()
-                    for v in guidance(xg, [0, 0, z], [0, 0, -0.3], 0.0, cues, DT, pg))
+                    for v in guidance(xg, [0, 0, z], [0, 0, -0.3], 0.0, 0.0, cues, DT, pg))
         rows.append((xg, nxt, ref))
         xg = nxt
     return rows

@@ -57,7 +57,7 @@
 #define NXP QL_LANDING_PLANT_NX
 #define NXV QL_LANDING_VEHICLE_NX
 #define NY QL_LANDING_NY
-#define NG 4
+#define NG 7
 
 /* The clocks of the run (quadland.kinds.landing.values.landing_clocks): output rows and
  * disturbance samples close at the duration, control steps do not. */
@@ -134,13 +134,16 @@ static void judge_row(landed_t *l, const ql_real *xp, const ql_real *sig, double
     l->t_last = t;
 }
 
-/* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts]. */
+/* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate]. */
 static void guidance_vector(const ql_guidance_state *gs, ql_real *xg)
 {
     xg[0] = (ql_real)gs->phase;
     xg[1] = (ql_real)gs->timer;
     xg[2] = (ql_real)gs->z_ref;
     xg[3] = (ql_real)gs->aborts;
+    xg[4] = (ql_real)gs->committed;
+    xg[5] = (ql_real)gs->ms_rise;
+    xg[6] = (ql_real)gs->ms_rise_rate;
 }
 
 /* The signals at time t, the disturbance sample of time t_w held. */

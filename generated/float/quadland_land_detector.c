@@ -226,8 +226,8 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
                                        const qlf_quadrotor_params *quad,
                                        qlf_land_detector_cues *cues)
 {
-    /* xg = [phase, timer, z_ref, aborts], CasADi's guidance state. */
-    qlf_real xg[4];
+    /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state. */
+    qlf_real xg[7];
     const qlf_real *arg[qlf_casadi_land_detector_cues_SZ_ARG];
     qlf_real *res[qlf_casadi_land_detector_cues_SZ_RES];
     casadi_int work_int[qlf_casadi_land_detector_cues_SZ_IW + 1];
@@ -237,7 +237,7 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
         if (cues) memset(cues, 0, sizeof *cues);
         return QLF_ERR_NULL;
     }
-    if (!(all_finite((const qlf_real *)guidance_params, 19)
+    if (!(all_finite((const qlf_real *)guidance_params, 23)
           & all_finite((const qlf_real *)quad, 13))) {
         memset(cues, 0, sizeof *cues);
         return QLF_ERR_NONFINITE_INPUT;
@@ -246,6 +246,9 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
     xg[1] = guidance->timer;
     xg[2] = guidance->z_ref;
     xg[3] = (qlf_real)guidance->aborts;
+    xg[4] = guidance->committed;
+    xg[5] = guidance->ms_rise;
+    xg[6] = guidance->ms_rise_rate;
     arg[0] = (const qlf_real *)y;
     arg[1] = (const qlf_real *)range;
     arg[2] = (const qlf_real *)imu;

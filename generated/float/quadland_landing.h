@@ -22,7 +22,7 @@ extern "C" {
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QLF_LANDING_PARAMS_SIZE 128              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 82                /* reals in qlf_landing_state */
-#define QLF_GUIDANCE_PARAMS_SIZE 19              /* reals in qlf_guidance_params */
+#define QLF_GUIDANCE_PARAMS_SIZE 23              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
 #define QLF_LANDING_PLANT_NP 331                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
@@ -36,7 +36,7 @@ extern "C" {
 typedef enum {
     QLF_PHASE_APPROACH = 0,        /* fly to the hover point above the pad */
     QLF_PHASE_ALIGN = 1,           /* hold the hover point until offset and speed are within half their limits */
-    QLF_PHASE_DESCEND = 2,         /* descend along the profile; abort back to align when a limit is exceeded */
+    QLF_PHASE_DESCEND = 2,         /* descend along the profile, committing the last part in a calm window of the deck; abort back to align when a limit is exceeded */
     QLF_PHASE_TOUCHDOWN = 3,       /* the flight stack reports the gear on the deck: rotors idle (or, flying on, level out and cut once the lock holds), the reference holds */
     QLF_PHASE_LANDED = 4,          /* settle_time after touchdown */
 } qlf_phase;
@@ -152,6 +152,9 @@ typedef struct {
 typedef struct {
     qlf_real timer;                  /* s: time the align criteria have held without a break */
     qlf_real z_ref;                  /* m: descent reference height of the centre above the pad */
+    qlf_real committed;              /* 0/1: 1 once the final descent is committed (a calm window predicted at the wait height) */
+    qlf_real ms_rise;                /* m^2/s^2: exponential average of the deck's vertical velocity squared */
+    qlf_real ms_rise_rate;           /* m^2/s^4: exponential average of the deck's vertical acceleration squared */
     int phase;                       /* -: phase: QL_PHASE_APPROACH .. QL_PHASE_LANDED */
     int aborts;                      /* -: aborted descents so far */
 } qlf_guidance_state;
@@ -171,6 +174,10 @@ typedef struct {
     qlf_real settle_time;            /* s: time from touchdown to landed */
     qlf_real marker_timeout;         /* s: largest marker age at which the align criteria count */
     qlf_real search_height;          /* m: hover height while the marker is not seen (in align) */
+    qlf_real commit_height;          /* m: height above touchdown where the descent waits for a calm window */
+    qlf_real commit_horizon;         /* s: how far ahead the deck's rise must be predicted calm */
+    qlf_real calm_speed;             /* m/s: largest predicted vertical speed of the deck over the horizon at which the final descent commits */
+    qlf_real motion_time;            /* s: time constant of the deck motion's averages (quiescence) */
     qlf_real fly_on;                 /* 0/1: 1: the touchdown policy flies on until the lock holds (quadland_symbolic.landing.touchdown_policy); 0: its commands are inert */
     qlf_real flare_height;           /* m: reference height above touchdown below which the tilt is limited to flare_tilt */
     qlf_real flare_tilt;             /* rad: tilt limit of the thrust axis from the flare on */

@@ -191,8 +191,16 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                               hi=1e3, **_POS),
         "touchdown_speed": Field(F, "m/s", "descent rate of the final crawl", hi=100.0,
                                  **_POS),
-        "max_deck_rise": Field(F, "m/s", "a faster rising deck aborts the descent", hi=100.0,
-                               **_POS),
+        "max_deck_rise": Field(F, "m/s", "a faster rising deck aborts the committed final "
+                               "descent", hi=100.0, **_POS),
+        "commit_height": Field(F, "m", "height above touchdown where the descent waits for a "
+                               "calm window of the deck (quiescent periods)", hi=1e3, **_POS),
+        "commit_horizon": Field(F, "s", "how far ahead the deck's rise must be predicted "
+                                "calm to commit the final descent", hi=100.0, **_POS),
+        "calm_speed": Field(F, "m/s", "largest predicted vertical speed of the deck over the "
+                            "horizon at which the final descent commits", hi=100.0, **_POS),
+        "motion_time": Field(F, "s", "time constant of the deck motion's averages (the "
+                             "predictor's frequency)", hi=1e4, **_POS),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",

@@ -380,6 +380,10 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "hold_time": _NONNEGATIVE,
     "level_time": _POSITIVE,
     "cut_time": _NONNEGATIVE,
+    "commit_height": _POSITIVE,
+    "commit_horizon": _POSITIVE,
+    "calm_speed": _POSITIVE,
+    "motion_time": _POSITIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

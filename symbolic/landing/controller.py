@@ -471,13 +471,14 @@ def landing_guidance(xg, y, cues, dt, p_guid):
 
     The step is :func:`~quadland_symbolic.landing.guidance.guidance_step`: the
     relative position and velocity are the measurement's, the deck's rise is the
-    pad velocity's vertical component ``v2E[2]``, ``cues``
-    (:data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`) the touchdown
-    verdict and the marker's age (:func:`measured_cues` on perfect sensing).
+    pad velocity's vertical component ``v2E[2]`` and its rate the acceleration's
+    ``a2E[2]``, ``cues`` (:data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`)
+    the touchdown verdict and the marker's age (:func:`measured_cues` on perfect sensing).
     Returns ``(xg_next, reference)``.
     """
     ms = LANDING_MEASUREMENT.unpack(y)
-    return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], cues, dt, p_guid)
+    return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], ms["a2E"][2], cues, dt,
+                         p_guid)
 
 
 @functools.cache

@@ -3,8 +3,8 @@
 The guidance runs at the control rate on the relative state in the deck
 frame (position ``p_e``, velocity ``v_e``; z up, the pad's centre at the
 origin) and produces the reference the position loop tracks. Its state is
-:data:`GUIDANCE_STATE`: the phase, a dwell timer, the descent reference height and
-the abort count. Phases (:data:`PHASES`):
+:data:`GUIDANCE_STATE`: the phase, a dwell timer, the descent reference height,
+the abort count, the commit flag and the quiescence averages. Phases (:data:`PHASES`):
 
 0. **approach**: the reference is the hover point ``[0, 0, z_ref]``, ``z_ref``
    the hover height (see "The marker" for where it differs); it leaves when the
@@ -12,7 +12,8 @@ the abort count. Phases (:data:`PHASES`):
 1. **align**: hold the hover point until the horizontal offset is within
    half of ``max_offset`` and the horizontal relative speed within half of
    ``max_relative_speed`` for ``dwell_time`` without a break;
-2. **descend**: the reference height falls at ``clamp(h / descent_time,
+2. **descend**: the reference height falls (to the wait height, then, once
+   committed, on: see "The wait height and the commit") at ``clamp(h / descent_time,
    touchdown_speed, descent_speed)`` with ``h`` its height above touchdown
    (the gear on the deck), a rate that is large high up and the crawl
    ``touchdown_speed`` for the last part, which goes on below the touchdown
@@ -50,13 +51,30 @@ hover point's height holds until the marker is seen: the flight stack starts
 it at the handover height, when that is above ``hover_height``, so that no
 descent is flown on a height only GNSS knows.
 
+**The wait height and the commit** (quiescent-period prediction,
+:mod:`quadland_symbolic.landing.quiescence`). The descent's reference falls
+only to the wait height ``touchdown_height + commit_height`` until the final
+descent is *committed*; it holds there (the position loop keeps the quadrotor
+on the deck's motion, as at the hover point) until the deck's vertical speed,
+predicted ``commit_horizon`` ahead from the pad's velocity and acceleration
+the flight stack knows (the broadcast, or the filter's estimate of them), stays
+within ``calm_speed`` (and ``max_deck_rise``, so that a commit is never its own
+abort): a calm window. The step whose fall reaches the wait
+height commits when the window is calm then, so that a deck at rest (a car's
+roof) commits without a pause. The averages the prediction keeps are updated
+at every step before touchdown and held on the deck. (The commit to the final
+descent is not the committed crawl: the crawl is its last part.)
+
 **Abort.** In the committed crawl, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
-(the criteria of a good touchdown could no longer be met), and anywhere in
-the descent when the deck rises faster than ``max_deck_rise`` (a heaving
-ship deck), the phase goes back to align, the reference climbs back to the
-hover height, and the abort count grows by one. (Above the crawl an offset
-or a speed out of the align band pauses the descent instead.)
+(the criteria of a good touchdown could no longer be met), the phase goes
+back to align, the reference climbs back to the hover height, and the abort
+count grows by one. (Above the crawl an offset or a speed out of the align
+band pauses the descent instead.) When, once committed, the deck rises faster
+than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
+descent goes on uncommitted, its reference climbs back to the wait height at
+``descent_speed`` to wait for the next calm window, and the abort count grows
+by one. Above the wait height a moving deck aborts nothing.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -66,6 +84,12 @@ from __future__ import annotations
 
 import casadi as ca
 
+from quadland_symbolic.landing.quiescence import (
+    QUIESCENCE_STATE,
+    deck_frequency,
+    predicted_speed,
+    quiescence_update,
+)
 from quadland_symbolic.landing.touchdown_policy import (
     TOUCHDOWN_COMMANDS,
     touchdown_commands,
@@ -83,7 +107,8 @@ PHASES = ("approach", "align", "descend", "touchdown", "landed")
 #: What happens in each phase (the C API's comments).
 PHASE_DOCS = ("fly to the hover point above the pad",
               "hold the hover point until offset and speed are within half their limits",
-              "descend along the profile; abort back to align when a limit is exceeded",
+              "descend along the profile, committing the last part in a calm window of the "
+              "deck; abort back to align when a limit is exceeded",
               "the flight stack reports the gear on the deck: rotors idle (or, flying on, "
               "level out and cut once the lock holds), the reference holds",
               "settle_time after touchdown")
@@ -95,6 +120,9 @@ GUIDANCE_STATE = Layout("xg", (
     Field("timer", 1, "s", "time the align criteria have held without a break"),
     Field("z_ref", 1, "m", "descent reference height of the centre above the pad"),
     Field("aborts", 1, "-", "number of aborted descents"),
+    Field("committed", 1, "0/1", "1 once the final descent is committed (a calm window "
+          "predicted at the wait height)"),
+    *QUIESCENCE_STATE.fields,
 ), "landing guidance state")
 
 #: The guidance's parameters (the [landing] keys of a landing scenario).
@@ -112,6 +140,12 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("settle_time", 1, "s", "time from touchdown to landed"),
     Field("marker_timeout", 1, "s", "largest marker age at which the align criteria count"),
     Field("search_height", 1, "m", "hover height while the marker is not seen (in align)"),
+    Field("commit_height", 1, "m", "height above touchdown where the descent waits for a calm "
+          "window"),
+    Field("commit_horizon", 1, "s", "how far ahead the deck's rise must be predicted calm"),
+    Field("calm_speed", 1, "m/s", "largest predicted vertical speed of the deck over the "
+          "horizon at which the final descent commits"),
+    Field("motion_time", 1, "s", "time constant of the deck motion's averages (quiescence)"),
     Field("fly_on", 1, "0/1", "1: the touchdown policy flies on until the lock holds "
           "(quadland_symbolic.landing.touchdown_policy); 0: its commands are inert"),
     Field("flare_height", 1, "m", "reference height above touchdown below which the tilt "
@@ -145,62 +179,80 @@ def _descent_rate(h, p):
     return ca.fmin(ca.fmax(h / p["descent_time"], p["touchdown_speed"]), p["descent_speed"])
 
 
+def _glide(z, target, p, dt):
+    """The reference height one step of descent_speed toward ``target`` (there if nearer)."""
+    step = p["descent_speed"] * dt
+    return z + ca.fmin(ca.fmax(target - z, -step), step)
+
+
+def _calm(g, p, deck_rise, deck_rise_rate, dt):
+    """The quiescence averages after the step (held on the deck) and whether the deck's
+    vertical speed predicted over commit_horizon stays within calm_speed and max_deck_rise
+    (so that a commit is never its own abort)."""
+    xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
+    xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
+    speed = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
+                            p["commit_horizon"])
+    return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
+            speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
+
+
 def _reference_height(z_ref, p, f, dt):
     """The reference height's next value and the step's reference.
 
-    ``f`` holds the step's flags (CasADi 0/1): ``descend``, ``align`` (the phase),
-    ``abort``, ``contact``, ``band`` (in the align band, or in the committed crawl),
-    ``seen`` (the marker), ``landing`` (the next phase touchdown or landed),
-    ``touchdown`` and ``descending_next`` (the next phase touchdown, the descent), and
-    ``timer_next`` (the guidance's timer after the step), for the touchdown policy
+    ``f`` holds the step's flags (CasADi 0/1): ``flying`` (descending, no contact, no
+    abort back to align), ``falling`` (the profile's fall: in the align band or the
+    committed crawl, and committed or above the wait height), ``hold`` (where the
+    reference glides when flying and not falling: the wait height, or its own height
+    for a pause), ``align`` (the phase), ``abort`` (back to align), ``seen`` (the
+    marker), ``landing`` (the next phase touchdown or landed), ``touchdown`` and
+    ``descending_next`` (the next phase touchdown, the descent), and ``timer_next``
+    (the guidance's timer after the step), for the touchdown policy
     (:mod:`~quadland_symbolic.landing.touchdown_policy`).
     """
-    # the descent reference: it falls only while descending, and is reset to the
-    # hover height by an abort or before the descent starts
+    # the descent reference falls only while falling: to the wait height until committed,
+    # then on at the crawl below the touchdown height until contact (a heaving deck may
+    # have moved away, and the quadrotor must meet it); out of the align band, above the
+    # crawl, the descent pauses at its height (no climb); uncommitted below the wait
+    # height (a rising deck withdrew the commit) it glides back up to it; an abort
+    # resets it to the hover height, as does the start of a descent
     h = z_ref - p["touchdown_height"]
     rate = _descent_rate(h, p)
-    # below the touchdown height the reference goes on at the crawl until contact:
-    # a heaving deck may have moved away, and the quadrotor must meet it; out of the
-    # align band, above the crawl, the descent pauses at its height (no climb)
-    descending = ca.logic_and(ca.logic_and(f["descend"], ca.logic_not(
-        ca.logic_or(f["abort"], f["contact"]))), f["band"])
-    z_fall = z_ref - rate * dt
+    falling = f["falling"]
     # before the descent the hover point's height glides at descent_speed: to
     # hover_height while the marker is seen; without it, it holds in the approach
     # and climbs to search_height in align (exactly hover_height once there:
     # hover + 0, and so always on perfect sensing)
     hover = p["hover_height"]
     target = ca.if_else(f["seen"], hover, ca.if_else(f["align"], p["search_height"], z_ref))
-    step = p["descent_speed"] * dt
-    z_glide = z_ref + ca.fmin(ca.fmax(target - z_ref, -step), step)
     # after the touchdown the reference crawls on into the deck while the policy flies on
     crawl = touchdown_crawl(f["touchdown"], p)
-    z_next = ca.if_else(descending, z_fall,
+    z_next = ca.if_else(f["flying"],
+                        ca.if_else(falling, z_ref - rate * dt, _glide(z_ref, f["hold"], p, dt)),
                         ca.if_else(f["landing"], z_ref - crawl * dt,
-                                   ca.if_else(f["abort"], hover,
-                                              ca.if_else(f["descend"], z_ref, z_glide))))
+                                   ca.if_else(f["abort"], hover, _glide(z_ref, target, p, dt))))
 
-    vz = ca.if_else(descending, -rate, -crawl)
+    vz = ca.if_else(falling, -rate, -crawl)
     # d/dt of -rate: the rate is h / descent_time where it is not clamped
     unclamped = ca.logic_and(h / p["descent_time"] > p["touchdown_speed"],
                              h / p["descent_time"] < p["descent_speed"])
-    az = ca.if_else(ca.logic_and(descending, unclamped), rate / p["descent_time"], 0)
+    az = ca.if_else(ca.logic_and(falling, unclamped), rate / p["descent_time"], 0)
     reference = ca.vertcat(0, 0, z_ref, 0, 0, vz, 0, 0, az, touchdown_commands(
         f["landing"], f["descending_next"], f["timer_next"], z_next, p))
     return z_next, reference
 
 
-def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
+def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     """One guidance step of length ``dt`` (s).
 
     Parameters
     ----------
-    xg : casadi.SX, (4,)
+    xg : casadi.SX, (7,)
         :data:`GUIDANCE_STATE` at the start of the step.
     p_e, v_e : casadi.SX, (3,)
         Relative position and velocity in the deck frame, m, m/s.
-    deck_rise : casadi.SX
-        The deck's vertical velocity at the pad, m/s (up).
+    deck_rise, deck_rise_rate : casadi.SX
+        The deck's vertical velocity at the pad, m/s (up), and its rate, m/s^2.
     cues : casadi.SX, (2,)
         :data:`GUIDANCE_CUES`: the touchdown verdict and the marker's age.
     dt : casadi.SX
@@ -210,57 +262,75 @@ def guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid):
 
     Returns
     -------
-    xg_next : casadi.SX, (4,)
+    xg_next : casadi.SX, (7,)
     reference : casadi.SX, (13,)
         :data:`POSITION_REFERENCE` for the step, the touchdown policy's commands with it.
     """
     g, p = GUIDANCE_STATE.unpack(xg), GUIDANCE_PARAMS.unpack(p_guid)
     c = GUIDANCE_CUES.unpack(cues)
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
-    offset = ca.norm_2(p_e[0:2])
-    speed = ca.norm_2(v_e[0:2])
+    offset, speed = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2])
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
 
-    in_approach, in_align, in_descend = phase == APPROACH, phase == ALIGN, phase == DESCEND
-    in_touchdown = phase == TOUCHDOWN
+    in_approach, in_align, in_descend, in_touchdown = (
+        phase == k for k in (APPROACH, ALIGN, DESCEND, TOUCHDOWN))
     seen = c["marker_age"] <= p["marker_timeout"]
     in_band = ca.logic_and(offset <= p["max_offset"] / 2, speed <= p["max_relative_speed"] / 2)
-    aligned = ca.logic_and(in_band, seen)
     # the timer: the align criteria's dwell, then the time since touchdown; held once landed
-    timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, aligned), in_touchdown),
-                            timer + dt, ca.if_else(phase == LANDED, timer, 0))
+    timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)),
+                                        in_touchdown), timer + dt,
+                            ca.if_else(phase == LANDED, timer, 0))
     contact = ca.logic_and(in_descend, c["touchdown"] >= 0.5)
-    # the crawl (h / descent_time at or below touchdown_speed) is committed: it does not
-    # pause, and there a touchdown out of the limits is aborted; above it, out of the
-    # align band the descent pauses instead (_reference_height)
-    committed = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
-    off_limits = ca.logic_or(offset > p["max_offset"], speed > p["max_relative_speed"])
-    abort = ca.logic_and(ca.logic_and(in_descend, ca.logic_not(contact)), ca.logic_or(
-        ca.logic_and(committed, off_limits), deck_rise > p["max_deck_rise"]))
+    flying = ca.logic_and(in_descend, ca.logic_not(contact))
+
+    # the quiescent-period prediction (quiescence.py) and the commit at the wait height
+    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt)
+    z_fall = z_ref - _descent_rate(z_ref - p["touchdown_height"], p) * dt
+    wait = p["touchdown_height"] + p["commit_height"]
+    committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
+                                                     ca.logic_and(z_fall <= wait, calm)))
+    # the crawl (h / descent_time at or below touchdown_speed) does not pause, and there a
+    # touchdown out of the limits is aborted; above it, out of the align band the descent
+    # pauses instead; once committed, a rising deck withdraws the commit
+    crawl = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
+    off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
+        offset > p["max_offset"], speed > p["max_relative_speed"]))
+    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5),
+                          deck_rise > p["max_deck_rise"])
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
                    ca.if_else(contact, TOUCHDOWN,
-                              ca.if_else(abort, ALIGN,
+                              ca.if_else(off_limits, ALIGN,
                                          ca.if_else(ca.logic_and(
                                              in_touchdown, timer_next >= p["settle_time"]),
                                              LANDED, phase)))))
-
+    committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
+                                  ca.logic_not(rising))
+    band, hold = ca.logic_or(in_band, crawl), ca.if_else(committed_next, z_ref, wait)
+    falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
+        ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
+    # not falling: to the wait height (uncommitted, or withdrawn), else paused (never down)
     z_next, reference = _reference_height(
-        z_ref, p, dict(descend=in_descend, align=in_align, abort=abort, contact=contact,
-                       band=ca.logic_or(in_band, committed), seen=seen,
-                       landing=phase_next >= TOUCHDOWN, touchdown=phase_next == TOUCHDOWN,
+        z_ref, p, dict(flying=ca.logic_and(flying, ca.logic_not(off_limits)), falling=falling,
+                       hold=ca.if_else(band, hold, ca.fmax(hold, z_ref)), align=in_align,
+                       abort=off_limits, seen=seen, landing=phase_next >= TOUCHDOWN,
+                       touchdown=phase_next == TOUCHDOWN,
                        descending_next=phase_next == DESCEND, timer_next=timer_next), dt)
-    return ca.vertcat(phase_next, timer_next, z_next, aborts + abort), reference
+    return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
+                      committed_next, xq_held), reference
 
 
 def guidance_function() -> ca.Function:
-    """``guidance(xg, p_e, v_e, deck_rise, cues, dt, p_guid) -> (xg_next, reference)``."""
+    """``guidance(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid) -> (xg_next,
+    reference)``."""
     xg, p_e, v_e = GUIDANCE_STATE.sym(), ca.SX.sym("p_e", 3), ca.SX.sym("v_e", 3)
-    deck_rise, cues = ca.SX.sym("deck_rise"), GUIDANCE_CUES.sym()
-    dt, p_guid = ca.SX.sym("dt"), GUIDANCE_PARAMS.sym()
-    xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, cues, dt, p_guid)
-    return ca.Function("guidance", [xg, p_e, v_e, deck_rise, cues, dt, p_guid],
+    deck_rise, deck_rise_rate = ca.SX.sym("deck_rise"), ca.SX.sym("deck_rise_rate")
+    cues, dt, p_guid = GUIDANCE_CUES.sym(), ca.SX.sym("dt"), GUIDANCE_PARAMS.sym()
+    xg_next, reference = guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt,
+                                       p_guid)
+    return ca.Function("guidance", [xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid],
                        [xg_next, reference],
-                       ["xg", "p_e", "v_e", "deck_rise", "cues", "dt", "p_guid"],
+                       ["xg", "p_e", "v_e", "deck_rise", "deck_rise_rate", "cues", "dt",
+                        "p_guid"],
                        ["xg_next", "reference"])
