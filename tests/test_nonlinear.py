@@ -1,6 +1,7 @@
 """quadland.nlsys: the loop as a python-control NonlinearIOSystem, against quadland's own
 simulation and linearization (issue 21)."""
 
+import math
 import warnings
 
 import control
@@ -126,7 +127,8 @@ def test_a_landing_closed_loop_is_the_simulated_flight_up_to_first_contact():
     rows = np.flatnonzero(np.isclose(t * 50, np.rint(t * 50), rtol=0, atol=1e-6) & (t < T[-1]))
     k = np.rint(res["t"][rows] / sys.dt).astype(int)
     np.testing.assert_allclose(T[k], res["t"][rows], rtol=0, atol=1e-12)
-    assert len(rows) > 500
+    # every 20 ms instant before the last control instant (touchdown near 9 s: 455 of them)
+    assert len(rows) == len(np.arange(0.0, T[-1] - 1e-9, 0.02)) > 400
     for name in sys.output_labels:
         got, want = resp.outputs[sys.output_labels.index(name)][k], res[name][rows]
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12, err_msg=name)
@@ -145,9 +147,10 @@ def test_a_landing_closed_loop_is_the_simulated_flight_up_to_first_contact():
 def test_a_landing_on_sensors_warns_that_nlsys_reads_the_true_state():
     with pytest.warns(UserWarning, match=r"nlsys: highway flies on its sensors .* true state"):
         sys = quadland.nlsys("highway")
-    # the plant (25), the guidance (4), the step's memory (6 l + 22, l = 10 nodes), the
-    # four rotor commands of one period's delay: no filter, no sensor delay lines
-    assert sys.nstates == 25 + 4 + 6 * 10 + 22 + 4 and sys.dt == pytest.approx(0.004)
+    # the plant (25), the guidance (7: phase, timer, z_ref, aborts, the commit flag and the
+    # quiescent-period predictor's two averages), the step's memory (6 l + 22, l = 10
+    # nodes), the four rotor commands of one period's delay: no filter, no sensor delay lines
+    assert sys.nstates == 25 + 7 + 6 * 10 + 22 + 4 and sys.dt == pytest.approx(0.004)
 
 
 def _hover(rk_steps: int = 1):
@@ -184,7 +187,7 @@ def test_find_eqpt_finds_quadlands_hover_equilibrium():
     for name, value in zip(pt.state_names, pt.xr, strict=True):
         assert from_nlsys.get(name, x.get(name)) == pytest.approx(value, abs=1e-7), name
     assert pt.xr[pt.state_names.index("z_e")] == pytest.approx(3.0)    # hover_height
-    memory = sys.state_labels[29:29 + pt.xc.size]           # after the guidance's four
+    memory = sys.state_labels[32:32 + pt.xc.size]           # after the guidance's seven
     np.testing.assert_allclose([x[n] for n in memory], pt.xc, rtol=1e-7, atol=1e-7)
     # the command in the queue is the step's own at the hover: the equilibrium's forces
     for i in range(1, 5):
@@ -213,19 +216,22 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     """control.linearize of the discrete loop (finite differences through one period)
     against ``quadland margins``' sampled-data closed loop at the same hover (the
     plant's Jacobian under an exact zero-order hold, the step's Jacobians, one period of
-    delay): its 102 eigenvalues are among the 115, within RK4's error over a 4 ms step
+    delay): its 102 eigenvalues are among the 118, within RK4's error over a 4 ms step
     (the fastest plant mode's |lambda h|^5 / 120 is 2e-6), which falls sixteenfold as
-    the steps halve (RK4 is fourth order); the 13 others are the modes the margins'
+    the steps halve (RK4 is fourth order); the 16 others are the modes the margins'
     model leaves out, in closed form."""
     sc, sys, op, pt = _hover()
     gap, extra = _eigenvalue_gap(sys, op, sc, pt)
     assert gap < 5e-6
     # the parked car: its position and heading (1), its speeds' damping exp(-d/m dt); the
     # gear's memory and the guidance's phase, timer and aborts (1); z_ref, which glides
-    # back onto the hover height in one step (0)
+    # back onto the hover height in one step, and the commit flag, set anew each step (0);
+    # the quiescent-period predictor's two averages of the deck's motion, exp(-dt / T_m)
     v, dt = sc.data["vehicle"], sys.dt
-    expected = np.sort([0.0, *np.exp(-dt * np.array([v["d11"] / v["m11"], v["d22"] / v["m22"],
-                                                     v["d33"] / v["m33"]])), *[1.0] * 9])
+    fade = math.exp(-dt / sc.data["landing"]["motion_time"])
+    expected = np.sort([0.0, 0.0, fade, fade,
+                        *np.exp(-dt * np.array([v["d11"] / v["m11"], v["d22"] / v["m22"],
+                                                v["d33"] / v["m33"]])), *[1.0] * 9])
     np.testing.assert_allclose(extra, expected, rtol=0, atol=1e-7)
     sc2, sys2, op2, pt2 = _hover(rk_steps=2)
     gap2, _ = _eigenvalue_gap(sys2, op2, sc2, pt2)
