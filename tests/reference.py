@@ -9,6 +9,17 @@ import numpy as np
 #: and ground effect): a test of eq. (2)'s plant alone packs these.
 NO_AERO = dict(drag_quadratic=[0.0, 0.0, 0.0], rotor_radius=0.0, air_density=1.225)
 
+#: The landing guidance's parameters for the guidance, quiescence and touchdown-policy
+#: tests (each file overrides what it exercises): the shipped values, the touchdown
+#: policy off.
+GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
+                  descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2,
+                  max_offset=0.2, max_relative_speed=0.5, max_deck_rise=0.8,
+                  settle_time=0.1, marker_timeout=0.5, search_height=6.0,
+                  commit_height=1.0, commit_horizon=2.5, calm_speed=0.4, motion_time=20.0,
+                  fly_on=0.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
+                  level_time=0.3, cut_time=0.5)
+
 
 def euler_rate_matrix(phi, theta):
     """Rr of eq. (1), written out from the printed matrix."""

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from reference import GUIDANCE_P
 
 from quadland_symbolic.landing.guidance import (
     ALIGN,
@@ -17,12 +18,7 @@ from quadland_symbolic.landing.guidance import (
     guidance_function,
 )
 
-P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_speed=0.7,
-         descent_time=1.0, touchdown_speed=0.3, touchdown_height=0.2, max_offset=0.2,
-         max_relative_speed=0.5, max_deck_rise=0.8, settle_time=0.1, marker_timeout=0.5,
-         search_height=6.0, commit_height=1.0, commit_horizon=2.5, calm_speed=0.4,
-         motion_time=20.0, fly_on=0.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
-         level_time=0.3, cut_time=0.5)
+P = GUIDANCE_P
 DT = 0.002
 GUIDANCE = guidance_function()
 

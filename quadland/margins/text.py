@@ -60,6 +60,10 @@ def _table(section: LoopReport, title: str, req: Requirement) -> list[str]:
     return lines
 
 
+def _periods(k: int) -> str:
+    return f"{k} period{'' if k == 1 else 's'}"
+
+
 def format_report(report: MarginReport) -> str:
     """The margin review as a plain-text table.
 
@@ -86,8 +90,7 @@ def format_report(report: MarginReport) -> str:
         sd = report.sampled
         delay = sd.computation_delay_periods
         lines += [""] + _table(sd, f"sampled-data controller, zero-order hold at "
-                                   f"{sd.rate_hz:g} Hz, computation delay {delay} "
-                                   f"period{'' if delay == 1 else 's'} "
+                                   f"{sd.rate_hz:g} Hz, computation delay {_periods(delay)} "
                                    f"({1e3 * sd.computation_delay_s:.3g} ms)",
                                report.requirement)
     if report.filtered is not None:
@@ -95,8 +98,8 @@ def format_report(report: MarginReport) -> str:
         delay = fd.computation_delay_periods
         lines += [""] + _table(fd, f"sampled, filter in the loop: the navigation filter at its "
                                    f"steady state (rate-equivalent gain), its horizon and "
-                                   f"output predictor, computation delay {delay} "
-                                   f"period{'' if delay == 1 else 's'}; the flown loop, "
+                                   f"output predictor, computation delay "
+                                   f"{_periods(delay)}; the flown loop, "
                                    "the verdict's", report.requirement)
     judged = " and ".join(label for label, _ in report.judged)
     req = report.requirement
