@@ -73,6 +73,9 @@ def test_the_notebook_runs_and_shows_its_results_inline(tmp_path):
     assert results[0]["text/plain"] == "'module://matplotlib_inline.backend_inline'"
     assert results[1]["text/plain"] == ("<SimulationResult of 'paper': 301 rows over 0..3 s, "
                                         "57 columns (list(result)), 422 states; .to_pandas()>")
+    frame = results[2]                  # pd.DataFrame(res): a table, one column per signal
+    assert "text/html" in frame and frame["text/plain"].split("\n")[0].split() == [
+        "t", "z_e", "phi_e", "u_1"]
     figures = [r for r in results if r["text/plain"].startswith("<Figure size")]
     assert len(figures) == 4 and all(r["image/png"] for r in figures)    # shown inline
     paper = quadland.load_scenario("paper")

@@ -209,7 +209,7 @@ def _nyquist(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure
         a.set_ylabel("Im l")
         a.set_title(f"{name} loop (others closed): Nyquist, zoom on -1")
         a.grid(True, alpha=0.3)
-        redraw_legend(a, fontsize="x-small", loc="lower right")
+        redraw_legend(a, fontsize="x-small", loc="best")     # clear of the curves
     fig.tight_layout()
     return fig
 
