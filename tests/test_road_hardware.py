@@ -1,0 +1,63 @@
+"""The road hardware of highway over 30 to 100 km/h (benchmarks/highway_30_100.toml).
+
+Its choices against the statics of a body on its gear in the fastest car's airflow, and
+one 100 km/h landing it makes where highway's own gear and touchdown fail
+(docs/landing.md, "The road hardware over 30 to 100 km/h").
+"""
+
+import math
+from pathlib import Path
+
+import pytest
+
+import quadland
+from quadland.kinds.landing.report import touchdown_report
+from quadland.scenario import load_scenario
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+#: 100 km/h and the drive force d11 V that holds it (highway's d11 = 150 kg/s).
+FASTEST = ["initial.velocity2=[27.77777777777778, 0.0]",
+           "vehicle.tau=[4166.666666666667, 0.0, 0.0]"]
+
+
+def test_the_road_hardware_by_the_statics_of_the_fastest_car():
+    """At 100 km/h with the drag at the table's +30 %: D = 1.3 (0.3 x 27.78 + 0.01225 x
+    27.78^2) = 23.1 N, a steady lean of atan(23.1 / 19.6) = 49.7 deg at the nominal mass,
+    past PX4's 45 deg: the controller's 55 deg leaves 2 m g - m g / cos(55 deg) = 0.26
+    m g of thrust for control; the wider gear tips at atan(0.24 / 0.2) = 50.2 deg about y,
+    above that lean and the flare's 47 deg; resting level the drag cannot roll it over its rear feet
+    (23.1 x 0.2 = 4.6 N m < 19.6 x 0.24 = 4.7 N m) and the two magnets pull 200 (1 -
+    exp(-0.5 / 0.17)) = 189 N at the cut against 23.1 / 0.5 - 19.6 = 26.6 N to stop the
+    slide. The magnets' 0.25 s dead time runs from the flare, at least 0.15 / 0.2 = 0.75 s
+    before the reference reaches the deck."""
+    d = load_scenario(BENCH / "highway_30_100.toml").data
+    q, g, td, c = d["quadrotor"], d["gear"], d["touchdown"], d["controller"]
+    m, grav, h = q["mass"], q["gravity"], q["gear_height"]
+    V = 27.77777777777778
+    D = 1.3 * (q["drag_translational"][0] * V + q["drag_quadratic"][0] * V ** 2)
+    assert D == pytest.approx(23.13, abs=0.01)
+    assert math.degrees(math.atan(D / (m * grav))) == pytest.approx(49.7, abs=0.05)
+    assert q["thrust_to_weight"] - 1 / math.cos(math.radians(c["tilt_max_deg"])) == (
+        pytest.approx(0.257, abs=0.001))
+    tip_y = math.degrees(math.atan(g["feet_x"] / h))
+    tip_x = math.degrees(math.atan(g["feet_y"] / h))
+    assert tip_y == pytest.approx(50.19, abs=0.01) and tip_x == pytest.approx(41.50, abs=0.01)
+    assert tip_y > 49.7 > td["flare_tilt_deg"] == 47.0
+    assert D * h < m * grav * g["feet_x"]
+    F = td["lock_hold_force"] * (1 - math.exp(-(td["cut_time"] - td["lock_delay"])
+                                              / td["lock_rise_time"]))
+    assert F == pytest.approx(189.5, abs=0.1)
+    assert g["friction"] * (m * grav + F) > D
+    assert td["policy"] == "secure"
+    assert td["flare_height"] / d["landing"]["touchdown_speed"] == pytest.approx(0.75)
+
+
+def test_a_100_km_h_car_lands_on_the_road_hardware_where_highway_s_tips():
+    """The default seed on its sensors at 100 km/h: on highway's gear with the rotor cut
+    at the contact switch it tips over on the deck; on the road hardware it lands,
+    secured, touching down inside the wider gear's 50.2 deg."""
+    before = touchdown_report(quadland.simulate(load_scenario("highway", FASTEST)))
+    assert not before.success and before.tipped
+    rep = touchdown_report(quadland.simulate(load_scenario(BENCH / "highway_30_100.toml",
+                                                           FASTEST)))
+    assert rep.success and rep.secured and not rep.tipped and rep.tilt_deg < 50.19
