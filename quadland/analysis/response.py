@@ -9,17 +9,20 @@ from __future__ import annotations
 import collections
 import hashlib
 import math
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 import scipy.linalg
 import scipy.optimize
 
 from quadland.analysis.modal import MODAL_CHECK, Modal
 
-__all__ = ["FrequencyResponse", "response_of", "freqresp", "frequency_grid", "closed_loop_poles",
-           "closed_loop_stable", "loop_at_a_time", "square_loop", "is_discrete",
-           "POINTS_PER_DECADE"]
+if TYPE_CHECKING:
+    import control
+
+__all__ = ["FrequencyResponse", "state_space", "response_of", "freqresp", "frequency_grid",
+           "closed_loop_poles", "closed_loop_stable", "loop_at_a_time", "square_loop",
+           "is_discrete", "POINTS_PER_DECADE"]
 
 POINTS_PER_DECADE = 60
 #: Roundoffs of ||A|| assumed in a realization's entries (see FrequencyResponse).
@@ -29,6 +32,17 @@ _KEPT = 4
 _RECENT: collections.OrderedDict = collections.OrderedDict()
 #: Grids and single points whose response each FrequencyResponse keeps.
 _KEPT_GRIDS, _KEPT_POINTS = 4, 64
+
+
+def state_space(sys):
+    """``sys`` if it is a state space (its ``A``, ``B``, ``C``, ``D`` and ``dt``: a
+    ``control.StateSpace`` or a :class:`quadland.linear.Realization`), else
+    ``control.ss(sys)`` (python-control is imported only then)."""
+    if all(hasattr(sys, k) for k in ("A", "B", "C", "D", "dt")):
+        return sys
+    import control
+
+    return control.ss(sys)
 
 
 def is_discrete(sys) -> bool:
@@ -51,11 +65,11 @@ class FrequencyResponse:
 
     Parameters
     ----------
-    sys : control.StateSpace or control.TransferFunction
+    sys : control.StateSpace, Realization or control.TransferFunction
     """
 
     def __init__(self, sys):
-        sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+        sys = state_space(sys)
         if sys.dt is True:
             raise ValueError("freqresp: a discrete system needs a numeric sampling time")
         self.sys = sys
@@ -193,7 +207,7 @@ def _digest(sys: control.StateSpace) -> str:
 
 
 def _kept(sys, what: str, make):
-    sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+    sys = state_space(sys)
     key = (_digest(sys), what)
     if key not in _RECENT:
         _RECENT[key] = make(sys)
@@ -295,8 +309,8 @@ def loop_at_a_time(G: np.ndarray) -> np.ndarray:
 
 
 def square_loop(sys, name):
-    """``sys`` as a StateSpace, refused unless square (one channel per loop)."""
-    sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+    """``sys`` as a state space, refused unless square (one channel per loop)."""
+    sys = state_space(sys)
     if sys.ninputs != sys.noutputs:
         raise ValueError(f"{name}: the loop must be square, got {sys.noutputs} x {sys.ninputs}")
     return sys

@@ -70,14 +70,14 @@ def loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
 
 
 def _loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
-    resp = response_of(report.models.loop_input)
+    resp = response_of(report.models.realizations["loop_input"])
     omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
     omega = omega[omega >= figure_floor(report)]
     out = [LoopCurves("continuous", omega, loop_at_a_time(resp(omega)),
                       report.continuous.loops, "-", "C0")]
     if report.sampled_models is not None and report.sampled is not None:
         wd = omega[omega < math.pi / report.sampled_models.dt]
-        discrete = response_of(report.sampled_models.loop_input)
+        discrete = response_of(report.sampled_models.realizations["loop_input"])
         out.append(LoopCurves("sampled", wd, loop_at_a_time(discrete(wd)),
                               report.sampled.loops, "--", "C1"))
     return tuple(out)

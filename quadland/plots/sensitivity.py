@@ -39,13 +39,14 @@ SIGMA_FLOOR_DB = -40.0
 
 def _sigma_curves(report: MarginReport):
     """``(label, style, colour, omega, sigma_S, sigma_T)`` of each loop of the report."""
-    resp = response_of(report.models.loop_input)
+    loop = report.models.realizations["loop_input"]
+    resp = response_of(loop)
     omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
-    out = [("continuous", "-", "C0", omega, *sensitivity_sigma(report.models.loop_input, omega))]
+    out = [("continuous", "-", "C0", omega, *sensitivity_sigma(loop, omega))]
     if report.sampled_models is not None:
         wd = omega[omega < math.pi / report.sampled_models.dt]
         out.append(("sampled", "--", "C1", wd,
-                    *sensitivity_sigma(report.sampled_models.loop_input, wd)))
+                    *sensitivity_sigma(report.sampled_models.realizations["loop_input"], wd)))
     return out
 
 
@@ -145,7 +146,7 @@ def pole_plot(report: MarginReport, ax=None, label: str | None = None) -> Figure
     """
     p = report.poles
     z = None if report.sampled_models is None else closed_loop_poles(
-        report.sampled_models.loop_input)
+        report.sampled_models.realizations["loop_input"])
     tag = run_tag(report, label, ax is None)
     fig, ax = _axes(ax, 2 if z is None else 3, (12, 5) if z is None else (17, 5))
     shift = 2 * run_index(ax[0], RUN_GID) if tag else 0
