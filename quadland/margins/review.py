@@ -165,8 +165,9 @@ def check_request(scenario: Scenario, at: float | None = None,
 def loop_states(scenario: Scenario) -> tuple[int, int]:
     """States of the scenario's loop, and how many each period of delay adds.
 
-    The loop's state in the simulators (its kind's ``loop_model``: plant
-    and controller, at least as many as the linearization keeps), plus the
+    The loop's state in the simulators (its kind's ``loop_model``, sized by its
+    ``loop_sizes``: plant and controller, at least as many as the linearization
+    keeps), plus the
     held previous command with ``controller.hold_compensation > 0``; a
     period of computation delay adds one held command (4 inputs).
 
@@ -177,10 +178,9 @@ def loop_states(scenario: Scenario) -> tuple[int, int]:
     """
     from quadland.kinds import kind_of
 
-    loop = kind_of(scenario).loop_model(int(scenario.data["rbf"]["nodes"]))
-    m = loop.held.size
+    states, m = kind_of(scenario).loop_sizes(int(scenario.data["rbf"]["nodes"]))
     hold = float(scenario.data["controller"].get("hold_compensation", 0.0))
-    return loop.state.size + (m if hold else 0), m
+    return states + (m if hold else 0), m
 
 
 def margin_report(scenario: Scenario, at: float | None = None,
