@@ -47,6 +47,10 @@ def _sigma_curves(report: MarginReport):
         wd = omega[omega < math.pi / report.sampled_models.dt]
         out.append(("sampled", "--", "C1", wd,
                     *sensitivity_sigma(report.sampled_models.realizations["loop_input"], wd)))
+    if report.filtered_models is not None:
+        wf = omega[omega < math.pi / report.filtered_models.dt]
+        out.append(("filtered", ":", "C2", wf,
+                    *sensitivity_sigma(report.filtered_models.realizations["loop_input"], wf)))
     return out
 
 
@@ -75,7 +79,8 @@ def sigma_plot(report: MarginReport, ax=None, label: str | None = None) -> Figur
     matplotlib.figure.Figure
         Two axes: the singular values (dB) of ``S = (I + L)^-1`` and of
         ``T = I - S`` against frequency (rad/s), one line per singular value,
-        largest first, the continuous loop solid and the sampled loop dashed
+        largest first, the continuous loop solid, the sampled loop dashed and the
+        loop with the navigation filter in it dotted
         (up to its Nyquist frequency). Each loop's peak of the largest
         singular value (``Ms``, ``Mt`` on the grid) is marked and labelled;
         the axes run from :data:`SIGMA_FLOOR_DB` to 6 dB above the highest peak.
