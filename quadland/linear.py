@@ -16,17 +16,20 @@ feedback convention of :mod:`quadland.analysis` the loop transfer is
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import control
 import numpy as np
 import scipy.linalg
 
 from quadland.exceptions import MarginsError, OperatingPointError
 
-__all__ = ["OperatingPoint", "LinearModels", "newton", "assemble", "zoh", "delayed",
-           "check_delay_periods"]
+if TYPE_CHECKING:
+    import control
+
+__all__ = ["OperatingPoint", "Realization", "MODEL_NAMES", "LinearModels", "newton", "assemble",
+           "zoh", "delayed", "check_delay_periods"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -90,13 +93,94 @@ class OperatingPoint:
                     newton_iterations=self.iterations)
 
 
+@dataclasses.dataclass(frozen=True, eq=False)
+class Realization:
+    """A state-space system's matrices, period and signal names, without python-control.
+
+    What the margin review and its figures read: :mod:`quadland.analysis` takes
+    it as it takes a ``control.StateSpace`` (the attributes below), and a
+    review need not import python-control (about 0.7 s of CPU: it loads
+    ``scipy.signal`` and ``matplotlib.pyplot``). :meth:`to_control` makes the
+    python-control system.
+
+    Attributes
+    ----------
+    A, B, C, D : ndarray
+        ``x' = A x + B u``, ``y = C x + D u`` (or ``x[k+1] = ...``).
+    dt : float
+        0 for continuous time, else the sampling period (s).
+    inputs, outputs, states : tuple of str
+        The signals' names.
+    name : str
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    dt: float
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    states: tuple[str, ...]
+    name: str
+
+    @property
+    def ninputs(self) -> int:
+        """Inputs, as python-control names it."""
+        return self.B.shape[1]
+
+    @property
+    def noutputs(self) -> int:
+        """Outputs."""
+        return self.C.shape[0]
+
+    @property
+    def nstates(self) -> int:
+        """States."""
+        return self.A.shape[0]
+
+    @property
+    def input_labels(self) -> list[str]:
+        """The inputs' names, as python-control gives them."""
+        return list(self.inputs)
+
+    @property
+    def output_labels(self) -> list[str]:
+        """The outputs' names."""
+        return list(self.outputs)
+
+    @property
+    def state_labels(self) -> list[str]:
+        """The states' names."""
+        return list(self.states)
+
+    def to_control(self) -> control.StateSpace:
+        """The python-control system (``control.ss``, continuous when ``dt`` is 0)."""
+        import control
+
+        kw = dict(dt=self.dt) if self.dt else {}
+        return control.ss(self.A, self.B, self.C, self.D, inputs=list(self.inputs),
+                          outputs=list(self.outputs), states=list(self.states), name=self.name,
+                          **kw)
+
+
+#: The models of :class:`LinearModels`, in its attributes' order.
+MODEL_NAMES = ("plant", "controller", "loop_input", "loop_output", "closed_loop")
+
+
 @dataclasses.dataclass(frozen=True)
 class LinearModels:
     """State-space models of the loop at one operating point.
 
+    Each model is a ``control.StateSpace``, made from its :class:`Realization`
+    when first read (python-control is imported then); ``realizations`` holds
+    them without python-control, for the margin review.
+
     Attributes
     ----------
     point : OperatingPoint
+    realizations : mapping of str to Realization
+        Each of :data:`MODEL_NAMES`.
     plant : control.StateSpace
         P: u (4) -> y, states xr (the paper's loop: y = xr, 10; the landing
         loop: the quadrotor's measurements, 12).
@@ -121,14 +205,30 @@ class LinearModels:
     """
 
     point: OperatingPoint
-    plant: control.StateSpace
-    controller: control.StateSpace
-    loop_input: control.StateSpace
-    loop_output: control.StateSpace
-    closed_loop: control.StateSpace
+    realizations: Mapping[str, Realization]
     dt: float = 0.0
     delay_periods: int = 0
     loop_names: tuple[str, ...] = ()
+
+    @functools.cached_property
+    def plant(self) -> control.StateSpace:
+        return self.realizations["plant"].to_control()
+
+    @functools.cached_property
+    def controller(self) -> control.StateSpace:
+        return self.realizations["controller"].to_control()
+
+    @functools.cached_property
+    def loop_input(self) -> control.StateSpace:
+        return self.realizations["loop_input"].to_control()
+
+    @functools.cached_property
+    def loop_output(self) -> control.StateSpace:
+        return self.realizations["loop_output"].to_control()
+
+    @functools.cached_property
+    def closed_loop(self) -> control.StateSpace:
+        return self.realizations["closed_loop"].to_control()
 
 
 def newton(residual, xi, tol: float, max_iter: int):
@@ -161,32 +261,32 @@ def newton(residual, xi, tol: float, max_iter: int):
 def assemble(point, Ap, Bp, Cp, Ac, Bc, Cc, Dc, dt, names, delay_periods=0) -> LinearModels:
     n, nc = Ap.shape[0], Ac.shape[0]
     ny, m = Cp.shape[0], Bp.shape[1]
-    kw = dict(dt=dt) if dt else {}
+    dt = float(dt) if dt else 0.0
     x_names, y_names, u_names = names["x"], names["y"], names["u"]
     xc_names = names["c"] + [f"u_delay{j + 1}[{k}]" for j in range(delay_periods)
                              for k in range(m)]
-    plant = control.ss(Ap, Bp, Cp, np.zeros((ny, m)), inputs=u_names, outputs=y_names,
-                       states=x_names, name="plant", **kw)
-    controller = control.ss(Ac, Bc, Cc, Dc, inputs=y_names, outputs=u_names,
-                            states=xc_names, name="controller", **kw)
+
+    def model(name, A, B, C, D, inputs, outputs, states):
+        return Realization(*(np.array(M, dtype=float, ndmin=2) for M in (A, B, C, D)), dt,
+                           tuple(inputs), tuple(outputs), tuple(states), name)
+
     states = x_names + xc_names
     A_i = np.block([[Ap, np.zeros((n, nc))], [Bc @ Cp, Ac]])
-    loop_input = control.ss(A_i, np.vstack([Bp, np.zeros((nc, m))]), -np.hstack([Dc @ Cp, Cc]),
-                            np.zeros((m, m)), inputs=u_names,
-                            outputs=[f"{k}_return" for k in u_names], states=states,
-                            name="loop_input", **kw)
     A_o = np.block([[Ac, np.zeros((nc, n))], [Bp @ Cc, Ap]])
-    loop_output = control.ss(A_o, np.vstack([Bc, Bp @ Dc]),
-                             np.hstack([np.zeros((ny, nc)), -Cp]), np.zeros((ny, ny)),
-                             inputs=y_names, outputs=[f"{k}_return" for k in y_names],
-                             states=xc_names + x_names, name="loop_output", **kw)
     A_cl = np.block([[Ap + Bp @ Dc @ Cp, Bp @ Cc], [Bc @ Cp, Ac]])
-    closed = control.ss(A_cl, np.vstack([Bp, np.zeros((nc, m))]),
-                        np.hstack([Cp, np.zeros((ny, nc))]), np.zeros((ny, m)),
-                        inputs=u_names, outputs=y_names, states=states,
-                        name="closed_loop", **kw)
-    return LinearModels(point, plant, controller, loop_input, loop_output, closed, dt,
-                        delay_periods, tuple(names["loops"]))
+    returns = [f"{k}_return" for k in u_names]
+    realizations = dict(
+        plant=model("plant", Ap, Bp, Cp, np.zeros((ny, m)), u_names, y_names, x_names),
+        controller=model("controller", Ac, Bc, Cc, Dc, y_names, u_names, xc_names),
+        loop_input=model("loop_input", A_i, np.vstack([Bp, np.zeros((nc, m))]),
+                         -np.hstack([Dc @ Cp, Cc]), np.zeros((m, m)), u_names, returns, states),
+        loop_output=model("loop_output", A_o, np.vstack([Bc, Bp @ Dc]),
+                          np.hstack([np.zeros((ny, nc)), -Cp]), np.zeros((ny, ny)), y_names,
+                          [f"{k}_return" for k in y_names], xc_names + x_names),
+        closed_loop=model("closed_loop", A_cl, np.vstack([Bp, np.zeros((nc, m))]),
+                          np.hstack([Cp, np.zeros((ny, nc))]), np.zeros((ny, m)), u_names,
+                          y_names, states))
+    return LinearModels(point, realizations, dt, delay_periods, tuple(names["loops"]))
 
 
 def zoh(A, B, dt):

@@ -229,9 +229,13 @@ def joseph_update(P, k, h, r, pattern: CovariancePattern):
     u = P @ h
     s = h.T @ u + r
     sk = s * k
+    # the same scalar expressions as P[i, j] - k[i] u[j] - u[i] k[j] + sk[i] k[j] entry by
+    # entry, formed as outer products at once (Python's element access was most of the
+    # cost of building a filter), then kept on the pattern's entries only
+    E = P - k @ u.T - u @ k.T + sk @ k.T
     P_next = ca.SX(pattern.n, pattern.n)
     for i, j in pattern.entries:
-        e = P[i, j] - k[i] * u[j] - u[i] * k[j] + sk[i] * k[j]
+        e = E[i, j]
         P_next[i, j] = e
         if i != j:
             P_next[j, i] = e

@@ -379,3 +379,54 @@ def test_the_compact_loop_is_the_assembled_one(highway):
     p = [np.sort_complex(q[np.abs(q) > 0.9]) for q in (closed_loop_poles(full),
                                                        closed_loop_poles(compact))]
     np.testing.assert_allclose(p[1], p[0], rtol=0, atol=1e-8)
+
+
+def test_the_output_function_is_the_flight_steps_measurement(highway):
+    """filter_output (built from the step's output alone) against the flight step itself
+    run with no packet fresh, its FIFOs empty: the measurement to 1e-13 at a horizon state
+    and an input buffer off the hover, and the Jacobians in the horizon state and the
+    buffered accelerations against the step's central differences (``y`` is linear in
+    both)."""
+    from quadland_symbolic.landing.estimator import (
+        FLIGHT_DEPTH,
+        HIST_ROWS,
+        N_HIST,
+        estimator_memory,
+        estimator_step_function,
+    )
+    from quadland_symbolic.landing.filter_linearization import filter_output_function
+
+    _, _, h, _ = highway
+    dt, rng = 1 / RATE, np.random.default_rng(7)
+    lay = estimator_memory(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    x_h = h["x_nav"] + 0.05 * rng.standard_normal(NAV.size)
+    hist = np.zeros((len(HIST_ROWS), N_HIST))
+    hist[0:3] = h["a_in"][:, None] + 0.2 * rng.standard_normal((3, N_HIST))
+    hist[3] = dt
+    mem = lay.zeros()
+    for name, v in dict(deck_eta2=h["eta2"], deck_w2E=h["w2E"], deck_w2E_dot=h["w2E_dot"],
+                        deck_tau=[-0.03], t_h=[-N_HIST * dt]).items():
+        mem[lay.slice(name)] = v
+    step = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    none = [np.zeros(p.size) for p in NAV_PACKETS]
+
+    def y_step(x, acc):
+        m = mem.copy()
+        m[lay.slice("x_h")] = x
+        full = hist.copy()
+        full[0:3] = acc.reshape(3, N_HIST, order="F")
+        m[lay.slice("hist")] = full.ravel(order="F")
+        return np.asarray(step(m, h["imu"], *none, h["p_est"], dt, 0.0)[1], dtype=float).ravel()
+
+    y, _, Y_x, Y_hist, _, _ = (np.asarray(v, dtype=float) for v in filter_output_function(
+        N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)(x_h, hist, h["imu"], mem, h["p_est"], dt, 0.0))
+    acc = hist[0:3].ravel(order="F")
+    np.testing.assert_allclose(y.ravel(), y_step(x_h, acc), rtol=1e-13, atol=1e-13)
+    e = 1e-3
+    fd_x = np.column_stack([(y_step(x_h + e * d, acc) - y_step(x_h - e * d, acc)) / (2 * e)
+                            for d in np.eye(NAV.size)])
+    np.testing.assert_allclose(Y_x, fd_x, rtol=1e-7, atol=1e-9)
+    cols = rng.choice(acc.size, 12, replace=False)
+    fd_a = np.column_stack([(y_step(x_h, acc + e * d) - y_step(x_h, acc - e * d)) / (2 * e)
+                            for d in np.eye(acc.size)[cols]])
+    np.testing.assert_allclose(Y_hist[:, cols], fd_a, rtol=1e-7, atol=1e-9)

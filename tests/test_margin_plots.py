@@ -340,9 +340,41 @@ def test_bode_starts_two_decades_below_the_lowest_crossover_where_sampled_meets_
                        lm.gain_margin_down_frequency) if f is not None and math.isfinite(f)]
     floor = figure_floor(rep)
     assert floor == pytest.approx(min(freqs) * 10.0 ** -DECADES_BELOW, rel=1e-12)
-    continuous, sampled = loop_curves(rep)
+    continuous, sampled, filtered = loop_curves(rep)
+    assert filtered.label == "filtered" and filtered.omega[0] == continuous.omega[0]
     assert continuous.omega[0] >= floor and continuous.omega[0] < floor * 10 ** 0.1
     lo = sampled.omega[0]
     np.testing.assert_allclose(20 * np.log10(np.abs(sampled.loops[0])),
                                20 * np.log10(np.abs(continuous.loops[0])), atol=0.01)
     assert lo == continuous.omega[0]
+
+
+def test_the_filtered_loop_is_drawn_from_its_own_model():
+    """highway's figures draw the loop with the navigation filter in it (dotted): its
+    curves are the filtered model's loop at a time, against a dense solve of that model's
+    realization at a few of the drawn frequencies from 0.1 rad/s up (below, the
+    integrators' 1e11 gains leave S_ii to the solver's rounding), its markers the filtered
+    section's margins, and the singular value figure has its curves."""
+    from quadland.plots.frequency import loop_curves
+    from quadland.plots.sensitivity import sigma_plot
+
+    with threadpool_limits(1):
+        rep = margin_report(quadland.load_scenario("highway"))
+        curves = loop_curves(rep)
+    (flown,) = [c for c in curves if c.label == "filtered"]
+    assert flown.style == ":" and flown.margins == rep.filtered.loops
+    L = rep.filtered_models.realizations["loop_input"]
+    assert flown.omega[-1] < np.pi / L.dt
+    n = L.A.shape[0]
+    for k in np.flatnonzero(flown.omega > 0.1)[::40]:
+        z = np.exp(1j * flown.omega[k] * L.dt)
+        G = L.C @ np.linalg.solve(z * np.eye(n) - L.A, L.B) + L.D
+        S = np.linalg.inv(np.eye(4) + G)
+        np.testing.assert_allclose(flown.loops[k], 1 / np.diag(S) - 1, rtol=1e-8)
+    fig = bode_plot(rep)
+    for i, lm in enumerate(rep.filtered.loops):
+        (wc,), _ = _data(_by_gid(fig.axes[i], "filtered-crossover"))
+        assert wc == lm.crossover_frequency
+    fig = sigma_plot(rep)
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert any(t.startswith("filtered Ms ") for t in texts)

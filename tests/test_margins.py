@@ -466,3 +466,14 @@ def test_the_text_ends_with_one_verdict_naming_what_it_judged(report, landing):
         assert [v.endswith("PASS") for v in verdicts] == [s.passed for s in sections]
     failed = _report(requirement=Requirement(30.0, 80.0))
     assert format_report(failed).splitlines()[-1].startswith("verdict: FAIL against 30 dB")
+
+
+@pytest.mark.parametrize("name, nodes", [("paper", 3), ("highway", 3), ("highway", 10)])
+def test_loop_sizes_are_the_built_loop_s(name, nodes):
+    """A kind's loop_sizes (the landing's from its layouts, without building the loop)
+    are the sizes of the loop its loop_model builds."""
+    from quadland.kinds import kind_of
+
+    kind = kind_of(load_scenario(name, [f"rbf.nodes={nodes}"]))
+    loop = kind.loop_model(nodes)
+    assert kind.loop_sizes(nodes) == (loop.state.size, loop.held.size)

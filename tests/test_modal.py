@@ -78,3 +78,28 @@ def test_the_analyses_of_one_loop_share_its_response(rng):
     expected = np.linalg.eigvals(A - np.asarray(sys.B) @ np.asarray(sys.C))
     np.testing.assert_allclose(np.sort_complex(closed_loop_poles(other)),
                                np.sort_complex(expected), rtol=1e-9)
+
+
+def test_a_response_keeps_its_grids_and_points(monkeypatch):
+    """The defective sampled loop of the test above: a grid asked again and a point asked
+    again are not solved again (one solve per frequency in all), the values equal the
+    direct solves, and writing into an answer does not reach the kept one."""
+    A = np.diag(np.ones(5), -1)
+    sys = control.ss(A, np.eye(6)[:, :1], 0.5 * np.eye(6)[-1:] + 0.1, [[0.0]], 0.01)
+    resp = FrequencyResponse(sys)
+    assert not resp.modal
+    solves = []
+    solve = resp._solve
+    monkeypatch.setattr(resp, "_solve", lambda p: solves.append(p) or solve(p))
+    omega = np.linspace(0.1, 0.99 * np.pi / 0.01, 40)
+    G = resp(omega)
+    G[:] = 0.0
+    again = resp(omega)
+    assert len(solves) == omega.size
+    assert _relative(again, _direct(sys, omega)) < 1e-9
+    p = resp.point(1.7)
+    g = resp.at(p)
+    g[:] = 0.0
+    assert len(solves) == omega.size + 1
+    np.testing.assert_allclose(resp.at(p), _direct(sys, [1.7])[0], rtol=1e-9)
+    assert len(solves) == omega.size + 1

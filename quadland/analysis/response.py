@@ -9,17 +9,20 @@ from __future__ import annotations
 import collections
 import hashlib
 import math
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 import scipy.linalg
 import scipy.optimize
 
 from quadland.analysis.modal import MODAL_CHECK, Modal
 
-__all__ = ["FrequencyResponse", "response_of", "freqresp", "frequency_grid", "closed_loop_poles",
-           "closed_loop_stable", "loop_at_a_time", "square_loop", "is_discrete",
-           "POINTS_PER_DECADE"]
+if TYPE_CHECKING:
+    import control
+
+__all__ = ["FrequencyResponse", "state_space", "response_of", "freqresp", "frequency_grid",
+           "closed_loop_poles", "closed_loop_stable", "loop_at_a_time", "square_loop",
+           "is_discrete", "POINTS_PER_DECADE"]
 
 POINTS_PER_DECADE = 60
 #: Roundoffs of ||A|| assumed in a realization's entries (see FrequencyResponse).
@@ -27,6 +30,19 @@ _REALIZATION_ROUNDOFFS = 1e3
 #: Systems whose response and closed-loop poles :func:`response_of` keeps.
 _KEPT = 4
 _RECENT: collections.OrderedDict = collections.OrderedDict()
+#: Grids and single points whose response each FrequencyResponse keeps.
+_KEPT_GRIDS, _KEPT_POINTS = 4, 64
+
+
+def state_space(sys):
+    """``sys`` if it is a state space (its ``A``, ``B``, ``C``, ``D`` and ``dt``: a
+    ``control.StateSpace`` or a :class:`quadland.linear.Realization`), else
+    ``control.ss(sys)`` (python-control is imported only then)."""
+    if all(hasattr(sys, k) for k in ("A", "B", "C", "D", "dt")):
+        return sys
+    import control
+
+    return control.ss(sys)
 
 
 def is_discrete(sys) -> bool:
@@ -43,15 +59,17 @@ class FrequencyResponse:
     one product for the whole grid, where the eigenvectors are well
     conditioned and the two forms agree; otherwise with one triangular
     solve per frequency. :func:`response_of` keeps the latest few, so that
-    the analyses of one loop share one.
+    the analyses of one loop share one; each keeps its latest grids and
+    points (a loop's margins, disk margins and sensitivity peaks read the
+    same grid, and its crossings are read again where they are reported).
 
     Parameters
     ----------
-    sys : control.StateSpace or control.TransferFunction
+    sys : control.StateSpace, Realization or control.TransferFunction
     """
 
     def __init__(self, sys):
-        sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+        sys = state_space(sys)
         if sys.dt is True:
             raise ValueError("freqresp: a discrete system needs a numeric sampling time")
         self.sys = sys
@@ -64,6 +82,8 @@ class FrequencyResponse:
         self.a_uncertainty = (_REALIZATION_ROUNDOFFS * np.finfo(float).eps
                               * (np.linalg.norm(A, 2) if A.size else 0.0))
         self._modal = None
+        self._grids: collections.OrderedDict = collections.OrderedDict()
+        self._points: collections.OrderedDict = collections.OrderedDict()
         if A.shape[0]:
             T, Z = scipy.linalg.schur(A, output="complex")
             self._T, self._B, self._C = T, Z.conj().T @ B, C @ Z
@@ -120,7 +140,11 @@ class FrequencyResponse:
         """
         if self._T is None:
             return self._D.copy()
-        return self._solve(point)
+        key = complex(point)
+        if key not in self._points:
+            self._points[key] = self._solve(point)
+            _trim(self._points, _KEPT_POINTS)
+        return self._points[key].copy()
 
     def uncertainty(self, point: complex, left=None, right=None) -> float:
         """Bound on ``|left^T dG right|`` at ``point`` for ``||dA|| <= a_uncertainty``.
@@ -151,14 +175,27 @@ class FrequencyResponse:
     def __call__(self, omega) -> np.ndarray:
         """Response at each of ``omega`` (rad/s), shape ``(len(omega), p, m)``."""
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        key = omega.tobytes()
+        if key not in self._grids:
+            self._grids[key] = self._grid(omega)
+            _trim(self._grids, _KEPT_GRIDS)
+        return self._grids[key].copy()
+
+    def _grid(self, omega: np.ndarray) -> np.ndarray:
         if self._modal is None or not omega.size:
-            return np.stack([self.at(self.point(w)) for w in omega])
+            return np.stack([self._D.copy() if self._T is None else self._solve(self.point(w))
+                             for w in omega])
         points = np.array([self.point(w) for w in omega], dtype=complex)
         with np.errstate(all="ignore"):
             G = self._modal.response(points) + self._D
         for k in np.flatnonzero(~np.all(np.isfinite(G), axis=(1, 2))):
             G[k] = self._solve(points[k])                 # on a pole: as the solve says
         return G
+
+
+def _trim(kept: collections.OrderedDict, most: int) -> None:
+    while len(kept) > most:
+        kept.popitem(last=False)
 
 
 def _digest(sys: control.StateSpace) -> str:
@@ -170,7 +207,7 @@ def _digest(sys: control.StateSpace) -> str:
 
 
 def _kept(sys, what: str, make):
-    sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+    sys = state_space(sys)
     key = (_digest(sys), what)
     if key not in _RECENT:
         _RECENT[key] = make(sys)
@@ -272,8 +309,8 @@ def loop_at_a_time(G: np.ndarray) -> np.ndarray:
 
 
 def square_loop(sys, name):
-    """``sys`` as a StateSpace, refused unless square (one channel per loop)."""
-    sys = sys if isinstance(sys, control.StateSpace) else control.ss(sys)
+    """``sys`` as a state space, refused unless square (one channel per loop)."""
+    sys = state_space(sys)
     if sys.ninputs != sys.noutputs:
         raise ValueError(f"{name}: the loop must be square, got {sys.noutputs} x {sys.ninputs}")
     return sys

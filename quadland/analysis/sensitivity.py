@@ -43,6 +43,7 @@ from quadland.analysis.response import (
     closed_loop_poles,
     closed_loop_stable,
     frequency_grid,
+    response_of,
     square_loop,
 )
 
@@ -184,7 +185,7 @@ def _peak(fun, grid, values, continuous: bool) -> Peak:
 
 
 def _grid(L, omega):
-    resp = FrequencyResponse(L)
+    resp = response_of(L)
     poles = closed_loop_poles(L)
     stable = closed_loop_stable(L, poles)
     grid = (frequency_grid(resp, extra_poles=poles) if omega is None

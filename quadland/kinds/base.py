@@ -76,6 +76,12 @@ class LoopKind(abc.ABC):
     def loop_model(self, l: int) -> LoopModel:
         """Its symbolic loop for ``l`` RBF nodes."""
 
+    def loop_sizes(self, l: int) -> tuple[int, int]:
+        """``(states, held inputs)`` of :meth:`loop_model`'s loop (a kind may tell them
+        from its layouts without building the loop's functions)."""
+        loop = self.loop_model(l)
+        return loop.state.size, loop.held.size
+
     @abc.abstractmethod
     def plan(self, scenario: Scenario) -> SimulationPlan:
         """A run's size, estimated from the scenario alone."""

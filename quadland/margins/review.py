@@ -21,9 +21,8 @@ from quadland.margins.report import (
 )
 
 if TYPE_CHECKING:
-    import control
-
     from quadland.analysis import DiskMargin, Margins
+    from quadland.linear import Realization
     from quadland.scenario import Scenario
 
 __all__ = ["MAX_LOOP_STATES", "loop_states", "check_request", "margin_report"]
@@ -76,7 +75,7 @@ def _loop_margins(name: str, cm: Margins, dm: DiskMargin, req: Requirement) -> L
                        crossings=cm, disk=dm, stable=cm.stable, passed=bool(ok))
 
 
-def _loop_report(L: control.StateSpace, names, req: Requirement, rate_hz: float | None = None,
+def _loop_report(L: Realization, names, req: Requirement, rate_hz: float | None = None,
                  delay_periods: int | None = None) -> tuple[LoopReport, np.ndarray]:
     from quadland.analysis import allmargin, closed_loop_poles, diskmargin
 
@@ -118,9 +117,10 @@ def _filtered_section(kind, scenario: Scenario, point, rate: float, delay_period
     from quadland.analysis.sensitivity import sensitivity_peaks
     from quadland.margins.sensitivity import SensitivityReport
 
-    section, _ = _loop_report(models.loop_input, models.loop_names, requirement,
-                              rate_hz=rate, delay_periods=delay_periods)
-    per_loop, multi = sensitivity_peaks(models.loop_input)
+    loop = models.realizations["loop_input"]
+    section, _ = _loop_report(loop, models.loop_names, requirement, rate_hz=rate,
+                              delay_periods=delay_periods)
+    per_loop, multi = sensitivity_peaks(loop)
     return dataclasses.replace(section, sensitivity=SensitivityReport(
         tuple(zip(models.loop_names, per_loop, strict=True)), multi)), models
 
@@ -165,8 +165,9 @@ def check_request(scenario: Scenario, at: float | None = None,
 def loop_states(scenario: Scenario) -> tuple[int, int]:
     """States of the scenario's loop, and how many each period of delay adds.
 
-    The loop's state in the simulators (its kind's ``loop_model``: plant
-    and controller, at least as many as the linearization keeps), plus the
+    The loop's state in the simulators (its kind's ``loop_model``, sized by its
+    ``loop_sizes``: plant and controller, at least as many as the linearization
+    keeps), plus the
     held previous command with ``controller.hold_compensation > 0``; a
     period of computation delay adds one held command (4 inputs).
 
@@ -177,10 +178,9 @@ def loop_states(scenario: Scenario) -> tuple[int, int]:
     """
     from quadland.kinds import kind_of
 
-    loop = kind_of(scenario).loop_model(int(scenario.data["rbf"]["nodes"]))
-    m = loop.held.size
+    states, m = kind_of(scenario).loop_sizes(int(scenario.data["rbf"]["nodes"]))
     hold = float(scenario.data["controller"].get("hold_compensation", 0.0))
-    return loop.state.size + (m if hold else 0), m
+    return states + (m if hold else 0), m
 
 
 def margin_report(scenario: Scenario, at: float | None = None,
@@ -248,13 +248,15 @@ def margin_report(scenario: Scenario, at: float | None = None,
     check_request(scenario, at, delay_periods)
     point = kind.operating_point(scenario, at)
     models = kind.linear_models(scenario, point)
-    continuous, poles = _loop_report(models.loop_input, models.loop_names, requirement)
+    continuous, poles = _loop_report(models.realizations["loop_input"], models.loop_names,
+                                     requirement)
     continuous = _with_extras(continuous, models, scenario, requirement)
     rate = float(scenario.data["controller"]["rate_hz"])
     sampled = discrete = None
     if rate > 0:
         discrete = kind.sampled_models(scenario, point, rate, int(delay_periods))
-        sampled, _ = _loop_report(discrete.loop_input, discrete.loop_names, requirement,
+        sampled, _ = _loop_report(discrete.realizations["loop_input"], discrete.loop_names,
+                                  requirement,
                                   rate_hz=rate, delay_periods=int(delay_periods))
         sampled = _with_extras(sampled, discrete, scenario, requirement)
     flown, flown_models = _filtered_section(kind, scenario, point, rate, int(delay_periods),

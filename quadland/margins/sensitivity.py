@@ -113,15 +113,16 @@ def section_extras(models: LinearModels, scenario: Scenario, requirement: Requir
     from quadland.analysis.sensitivity import group_delay_margin, sensitivity_peaks
     from quadland.kinds import kind_of
 
-    per_loop, multi = sensitivity_peaks(models.loop_input)
+    loop_input, loop_output = models.realizations["loop_input"], models.realizations["loop_output"]
+    per_loop, multi = sensitivity_peaks(loop_input)
     sens = SensitivityReport(tuple(zip(models.loop_names, per_loop, strict=True)), multi)
-    outputs = list(models.loop_output.input_labels)
+    outputs = list(loop_output.input_labels)
     sensors = []
     for name, (feeds, latency) in kind_of(scenario).sensor_channels(scenario).items():
         if not feeds:
             sensors.append(SensorMargin(name, (), math.inf, None, math.inf, math.inf, latency))
             continue
-        dm = group_delay_margin(models.loop_output, [outputs.index(f) for f in feeds])
+        dm = group_delay_margin(loop_output, [outputs.index(f) for f in feeds])
         sensors.append(SensorMargin(name, tuple(feeds), dm.delay_margin, dm.frequency,
                                     dm.phase_margin,
                                     dm.delay_to(requirement.phase_margin_deg), latency))

@@ -2,8 +2,9 @@
 
 A margin figure draws each loop broken at its input with the others closed,
 ``l_i = 1 / [(I + L)^-1]_ii - 1`` (:func:`quadland.analysis.loop_at_a_time`),
-of the continuous loop and, when the report has one, of the sampled-data loop
-(zero-order hold and computation delay) up to its Nyquist frequency.
+of the continuous loop and, when the report has them, of the sampled-data loop
+(zero-order hold and computation delay) and of the sampled loop with the
+navigation filter in it, up to the Nyquist frequency.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ class LoopCurves:
     Attributes
     ----------
     label : str
-        ``"continuous"`` or ``"sampled"``.
+        ``"continuous"``, ``"sampled"`` or ``"filtered"`` (the filter in the loop).
     omega : ndarray
         rad/s (a sampled loop's stop below its Nyquist frequency).
     loops : ndarray, shape (len(omega), m)
@@ -43,7 +44,7 @@ class LoopCurves:
     margins : tuple of LoopMargins
         The report's margins of each loop, in the same order.
     style : str
-        Line style: ``"-"`` continuous, ``"--"`` sampled.
+        Line style: ``"-"`` continuous, ``"--"`` sampled, ``":"`` filtered.
     color : str
     """
 
@@ -60,7 +61,8 @@ class LoopCurves:
 
 
 def loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
-    """The continuous loop's curves, then the sampled loop's if the report has one.
+    """The continuous loop's curves, then the sampled loop's and the filtered loop's if
+    the report has them.
 
     Evaluated on one BLAS thread: on matrices of a few hundred rows more
     threads cost more than they bring (``quadland margins`` does the same).
@@ -70,16 +72,21 @@ def loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
 
 
 def _loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
-    resp = response_of(report.models.loop_input)
+    resp = response_of(report.models.realizations["loop_input"])
     omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
     omega = omega[omega >= figure_floor(report)]
     out = [LoopCurves("continuous", omega, loop_at_a_time(resp(omega)),
                       report.continuous.loops, "-", "C0")]
     if report.sampled_models is not None and report.sampled is not None:
         wd = omega[omega < math.pi / report.sampled_models.dt]
-        discrete = response_of(report.sampled_models.loop_input)
+        discrete = response_of(report.sampled_models.realizations["loop_input"])
         out.append(LoopCurves("sampled", wd, loop_at_a_time(discrete(wd)),
                               report.sampled.loops, "--", "C1"))
+    if report.filtered_models is not None and report.filtered is not None:
+        wf = omega[omega < math.pi / report.filtered_models.dt]
+        flown = response_of(report.filtered_models.realizations["loop_input"])
+        out.append(LoopCurves("filtered", wf, loop_at_a_time(flown(wf)),
+                              report.filtered.loops, ":", "C2"))
     return tuple(out)
 
 

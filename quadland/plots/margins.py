@@ -3,7 +3,8 @@
 Each loop is drawn broken at its input with the others closed,
 ``l_i = 1 / [(I + L)^-1]_ii - 1`` (:func:`quadland.analysis.loop_at_a_time`);
 a sampled-data loop (zero-order hold and computation delay) is drawn dashed
-beside the continuous one, up to its Nyquist frequency. Every phase is drawn
+beside the continuous one, up to its Nyquist frequency, and the sampled loop
+with the navigation filter in it, when the report has one, dotted. Every phase is drawn
 in one convention (:func:`quadland.plots.frequency.phase_deg`): unwrapped,
 and turned by whole turns so that the phase at the gain crossover lies in
 [-360, 0) deg, where the phase margin is read against -180 deg.

@@ -39,13 +39,18 @@ SIGMA_FLOOR_DB = -40.0
 
 def _sigma_curves(report: MarginReport):
     """``(label, style, colour, omega, sigma_S, sigma_T)`` of each loop of the report."""
-    resp = response_of(report.models.loop_input)
+    loop = report.models.realizations["loop_input"]
+    resp = response_of(loop)
     omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
-    out = [("continuous", "-", "C0", omega, *sensitivity_sigma(report.models.loop_input, omega))]
+    out = [("continuous", "-", "C0", omega, *sensitivity_sigma(loop, omega))]
     if report.sampled_models is not None:
         wd = omega[omega < math.pi / report.sampled_models.dt]
         out.append(("sampled", "--", "C1", wd,
-                    *sensitivity_sigma(report.sampled_models.loop_input, wd)))
+                    *sensitivity_sigma(report.sampled_models.realizations["loop_input"], wd)))
+    if report.filtered_models is not None:
+        wf = omega[omega < math.pi / report.filtered_models.dt]
+        out.append(("filtered", ":", "C2", wf,
+                    *sensitivity_sigma(report.filtered_models.realizations["loop_input"], wf)))
     return out
 
 
@@ -74,7 +79,8 @@ def sigma_plot(report: MarginReport, ax=None, label: str | None = None) -> Figur
     matplotlib.figure.Figure
         Two axes: the singular values (dB) of ``S = (I + L)^-1`` and of
         ``T = I - S`` against frequency (rad/s), one line per singular value,
-        largest first, the continuous loop solid and the sampled loop dashed
+        largest first, the continuous loop solid, the sampled loop dashed and the
+        loop with the navigation filter in it dotted
         (up to its Nyquist frequency). Each loop's peak of the largest
         singular value (``Ms``, ``Mt`` on the grid) is marked and labelled;
         the axes run from :data:`SIGMA_FLOOR_DB` to 6 dB above the highest peak.
@@ -145,7 +151,7 @@ def pole_plot(report: MarginReport, ax=None, label: str | None = None) -> Figure
     """
     p = report.poles
     z = None if report.sampled_models is None else closed_loop_poles(
-        report.sampled_models.loop_input)
+        report.sampled_models.realizations["loop_input"])
     tag = run_tag(report, label, ax is None)
     fig, ax = _axes(ax, 2 if z is None else 3, (12, 5) if z is None else (17, 5))
     shift = 2 * run_index(ax[0], RUN_GID) if tag else 0

@@ -60,6 +60,7 @@ __all__ = [
     "estimator_diagnostics",
     "output_predictor",
     "output_predictor_function",
+    "estimator_output",
     "estimator_step_function",
     "estimator_init_function",
 ]
@@ -299,6 +300,18 @@ def _output(x_now, deck, ims, t, p):
                       deck["w2E_dot"])
 
 
+def estimator_output(x_h, hist, deck, imu, p_est, t):
+    """The controller's measurement from the horizon after fusion (E17), (E7), (E15).
+
+    The step's ``y`` (:data:`LANDING_MEASUREMENT`): ``x_h`` carried to the present
+    through the buffered inputs ``hist`` (:func:`output_predictor`), the relative motion
+    in the deck frame of the latest broadcast ``deck`` (``eta2``, ``w2E``, ``w2E_dot``,
+    ``tau``) extrapolated to ``t``, the attitude and rates of the IMU.
+    """
+    return _output(output_predictor(x_h, hist), deck, IMU.unpack(imu), t,
+                   estimator_params().unpack(p_est))
+
+
 def _bias_turn(eta_hat, omega, dt):
     """The body's rotation over a period as a vector in E, from the gyro (E6a).
 
@@ -339,7 +352,7 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     for layout, pkt in zip(NAV_PACKETS, pkts, strict=True):
         _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t)
     x, P = state["x"], state["P"]
-    y = _output(output_predictor(x, m["hist"]), deck, ims, t, p)
+    y = estimator_output(x, m["hist"], deck, imu, p_est, t)
 
     a_in, turn, imu_ok = _input(ims, x, p, dt)
     hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn))          # oldest first

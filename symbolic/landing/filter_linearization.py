@@ -19,10 +19,9 @@ deck-frame state ``z``, the deck frozen, the vehicle heading along E's x):
   packets at a given covariance (the gain frozen there);
 * :func:`filter_prediction_function`: the covariance's prediction over one period
   (:func:`~quadland_symbolic.landing.navigation.nav_predict`);
-* :func:`filter_output_function`: the controller's measurement formed by the flight
-  step (:func:`~quadland_symbolic.landing.estimator.estimator_step_function`, no
-  packet fused) from the horizon state, the buffered inputs and the IMU, and its
-  Jacobians;
+* :func:`filter_output_function`: the controller's measurement as the flight step
+  forms it (:func:`~quadland_symbolic.landing.estimator.estimator_output`, no packet
+  fused) from the horizon state, the buffered inputs and the IMU, and its Jacobians;
 * :func:`hover_law_function`: the landing step's Jacobians in its whole
   measurement :data:`~quadland_symbolic.landing.controller.LANDING_MEASUREMENT`
   (the broadcast's pad velocity and acceleration are the filter's estimates).
@@ -46,7 +45,7 @@ from quadland_symbolic.landing.controller import (
 from quadland_symbolic.landing.estimator import (
     HIST_ROWS,
     estimator_memory,
-    estimator_step_function,
+    estimator_output,
 )
 from quadland_symbolic.landing.gear import GEAR_STATE
 from quadland_symbolic.landing.guidance import POSITION_REFERENCE
@@ -200,27 +199,25 @@ def filter_output_function(n_hist: int, depth, coupling: str) -> ca.Function:
     """The flight step's measurement for the controller, from its horizon and its inputs.
 
     ``filter_output(x_h, hist, imu, mem, p_est, dt, t) -> (y, a_in, Y_x, Y_hist, Y_imu,
-    A_imu)``: ``y`` (:data:`LANDING_MEASUREMENT`) of
-    :func:`~quadland_symbolic.landing.estimator.estimator_step_function` run with no
-    packet fresh on the memory ``mem`` whose horizon state and input buffer are
-    replaced by ``x_h`` and ``hist`` (:data:`~quadland_symbolic.landing.estimator.HIST_ROWS`
-    by ``n_hist``, oldest first); ``a_in`` this
-    period's acceleration input (E2) from the IMU; their Jacobians in ``x_h``, in
-    ``hist``'s acceleration rows (column-major: ``a_x, a_y, a_z`` of the oldest
-    first) and in the IMU.
+    A_imu)``: ``y`` (:data:`LANDING_MEASUREMENT`) as
+    :func:`~quadland_symbolic.landing.estimator.estimator_step_function` forms it
+    (:func:`~quadland_symbolic.landing.estimator.estimator_output`) when no packet is
+    fused: from the horizon state ``x_h``, the input buffer ``hist``
+    (:data:`~quadland_symbolic.landing.estimator.HIST_ROWS` by ``n_hist``, oldest first),
+    the IMU and the deck's broadcast kept in the memory ``mem``
+    (:func:`~quadland_symbolic.landing.estimator.estimator_memory`; ``dt`` is not read);
+    ``a_in`` this period's acceleration input (E2) from the IMU; their Jacobians in
+    ``x_h``, in ``hist``'s acceleration rows (column-major: ``a_x, a_y, a_z`` of the
+    oldest first) and in the IMU.
     """
     lay = estimator_memory(n_hist, depth, coupling)
     x_h, hist, imu = NAV.sym("x_h"), ca.SX.sym("hist", len(HIST_ROWS), n_hist), IMU.sym("imu")
     mem, p_est = lay.sym("mem"), estimator_params().sym("p_est")
     dt, t = ca.SX.sym("dt"), ca.SX.sym("t")
-    parts = []
-    for f in lay.fields:
-        s = lay.slice(f.name)
-        parts.append(x_h if f.name == "x_h" else ca.vec(hist) if f.name == "hist"
-                     else mem[s.start:s.stop])
-    pkts = [ca.DM.zeros(p.size) for p in NAV_PACKETS]          # nothing fresh
-    _, y, _ = estimator_step_function(n_hist, depth, coupling)(ca.vertcat(*parts), imu, *pkts,
-                                                               p_est, dt, t)
+    m = lay.unpack(mem)
+    deck = dict(eta2=m["deck_eta2"], w2E=m["deck_w2E"], w2E_dot=m["deck_w2E_dot"],
+                tau=m["deck_tau"])
+    y = estimator_output(x_h, hist, deck, imu, p_est, t)
     ims = IMU.unpack(imu)
     a_in = acceleration_input(ims["eta_hat"], ims["f_b"], estimator_params().unpack(p_est)["g"])
     acc = hist[0:3, :]

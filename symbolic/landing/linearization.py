@@ -186,16 +186,17 @@ def hover_linearization_function(l: int) -> ca.Function:
     mem_dot_y = _memory_rate(mem_next_y, dt)
     z_dot_u = hover_plant_rhs(z, u_in, v2, w, pp)
     u = ca.substitute(u_y, y_in, y)
-
-    def at_point(e):
-        return ca.substitute(ca.substitute(e, y_in, y), u_in, u)
-
-    outs = [u, at_point(z_dot_u), at_point(mem_dot_y),
-            at_point(ca.jacobian(z_dot_u, z)), at_point(ca.jacobian(z_dot_u, u_in)),
-            ca.jacobian(y, z),
-            at_point(ca.jacobian(mem_dot_y, mem)), at_point(ca.jacobian(mem_dot_y, y_in)),
-            at_point(ca.jacobian(mem_next_y, mem)), at_point(ca.jacobian(mem_next_y, y_in)),
-            at_point(ca.jacobian(u_y, mem)), at_point(ca.jacobian(u_y, y_in))]
+    # one Jacobian per variable for the plant and for the step's three results (the
+    # sweeps shared: half the cost of ten), then one substitution of the point for all
+    nz, nd, nm = z.shape[0], mem_dot_y.shape[0], mem_next_y.shape[0]
+    J_p = ca.jacobian(z_dot_u, ca.vertcat(z, u_in))
+    step = ca.vertcat(mem_dot_y, mem_next_y, u_y)
+    J_m, J_y = ca.jacobian(step, mem), ca.jacobian(step, y_in)
+    rows = [slice(0, nd), slice(nd, nd + nm), slice(nd + nm, step.shape[0])]
+    at_point = ca.substitute(ca.substitute(
+        [z_dot_u, mem_dot_y, J_p[:, :nz], J_p[:, nz:],
+         *[J[r, :] for r in rows for J in (J_m, J_y)]], [y_in], [y]), [u_in], [u])
+    outs = [u, *at_point[:4], ca.jacobian(y, z), *at_point[4:]]
     names = ["u", "z_dot", "mem_dot", "A_p", "B_p", "C_p", "A_c", "B_c", "Phi_c", "Gamma_c",
              "C_c", "D_c"]
     return ca.Function("hover_linearization", [z, mem, v2, w, pp, pm, p_ctrl, ref, dt], outs,

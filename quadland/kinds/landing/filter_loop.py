@@ -38,7 +38,6 @@ from __future__ import annotations
 import dataclasses
 import math
 
-import control
 import numpy as np
 
 from quadland.kinds.landing.linearize import (
@@ -53,6 +52,7 @@ from quadland.kinds.landing.sensor_settings import sensor_params
 from quadland.linear import (
     LinearModels,
     OperatingPoint,
+    Realization,
     assemble,
     check_delay_periods,
     delayed,
@@ -394,9 +394,10 @@ def hover_filter_models(scenario: Scenario, point: OperatingPoint, rate_hz: floa
                            [np.asarray(v, dtype=float) for v in fz[3:5]],
                            [np.asarray(v, dtype=float) for v in pr[2:4]],
                            (Y_x, Y_hist, Y_imu, A_imu), law[:4], delay_periods)
-    li = models.loop_input
-    return dataclasses.replace(models, loop_input=control.ss(
-        *L, dt, inputs=li.input_labels, outputs=li.output_labels, name="loop_input"))
+    li = models.realizations["loop_input"]
+    states = tuple(f"x[{i}]" for i in range(L[0].shape[0]))    # python-control's defaults
+    loop = Realization(*L, li.dt, li.inputs, li.outputs, states, "loop_input")
+    return dataclasses.replace(models, realizations={**models.realizations, "loop_input": loop})
 
 
 def truth_measurement(scenario: Scenario, point: OperatingPoint) -> np.ndarray:

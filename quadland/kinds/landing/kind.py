@@ -15,7 +15,8 @@ from quadland.kinds.landing import flight, report, simulate
 from quadland.scenario import Scenario
 from quadland.schema import LANDING_SCHEMA
 from quadland_symbolic.codegen import LandingDefaults
-from quadland_symbolic.landing.loop import landing_loop
+from quadland_symbolic.landing.loop import landing_loop, landing_loop_state
+from quadland_symbolic.landing.quadrotor import COMMAND
 from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
 from quadland_symbolic.loop import LoopModel
 
@@ -47,6 +48,10 @@ class LandingKind(LoopKind):
 
     def loop_model(self, l: int) -> LoopModel:
         return landing_loop(l)
+
+    def loop_sizes(self, l: int) -> tuple[int, int]:
+        # the layouts landing_loop(l) is built on, without building its functions (0.1 s)
+        return landing_loop_state(l).size, COMMAND.size
 
     def plan(self, scenario: Scenario) -> SimulationPlan:
         return simulate.landing_plan(scenario)

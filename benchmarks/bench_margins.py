@@ -1,0 +1,126 @@
+"""``quadland margins``: whole-process CPU per scenario, and where a review's time goes.
+
+Measured in one run, CPU time (user + system of each child process from
+``getrusage``; ``time.process_time`` in this process), medians (min to max):
+
+* ``quadland margins --scenario S --no-plots`` and with the figures, for
+  ``paper``, ``highway`` and ``ship``, the runs of every command interleaved;
+  with ``--against TREE`` each run paired with the same command of another
+  source tree (a ``git archive`` of an older commit: its ``quadland/`` and
+  ``symbolic/`` are put first on ``PYTHONPATH``);
+* in this process, one ``margin_report`` of ``highway`` cut into its stages:
+  the operating point, each section's linearization and analysis, the filter
+  in the loop's models (builders included: a process builds them once).
+
+Run from the repository root::
+
+    python benchmarks/bench_margins.py                       # about 2 minutes
+    python benchmarks/bench_margins.py --runs 5 --against /tmp/old
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ("paper", "highway", "ship")
+
+
+def _stats(v) -> str:
+    return f"{statistics.median(v):.2f} ({min(v):.2f} to {max(v):.2f})"
+
+
+def _tree_env(tree: Path, tmp: Path) -> dict:
+    """An environment that imports ``quadland`` and ``quadland_symbolic`` from ``tree``."""
+    path = tmp / "against"
+    path.mkdir()
+    (path / "quadland").symlink_to(tree / "quadland")
+    (path / "quadland_symbolic").symlink_to(tree / "symbolic")
+    return dict(os.environ, PYTHONPATH=str(path))
+
+
+def _cpu(args, env, cwd) -> float:
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run(args, cwd=cwd, env=env, check=True, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+
+
+def commands(runs: int, against: Path | None) -> dict:
+    """Whole-process CPU s of each command, by (scenario, figures, tree)."""
+    out: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        trees = {"this": dict(os.environ)}
+        if against is not None:
+            trees["against"] = _tree_env(against.resolve(), Path(tmp))
+        for k in range(runs):
+            for name in SCENARIOS:
+                for figures in (False, True):
+                    for tree, env in trees.items():
+                        folder = Path(tmp, f"{name}-{figures}-{tree}-{k}")
+                        args = [sys.executable, "-m", "quadland", "margins", "--scenario", name,
+                                "--out", str(folder), *(() if figures else ("--no-plots",))]
+                        out.setdefault((name, figures, tree), []).append(_cpu(args, env, tmp))
+    return out
+
+
+def stages(name: str = "highway") -> dict:
+    """CPU s of each stage of one ``margin_report`` in a fresh process's first call."""
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import threadpool_limits
+
+    import quadland
+    from quadland.kinds import kind_of
+    from quadland.margins.report import Requirement
+    from quadland.margins.review import _filtered_section, _loop_report, _with_extras
+
+    out = {}
+
+    def timed(label, f, *args):
+        t = time.process_time()
+        value = f(*args)
+        out[label] = time.process_time() - t
+        return value
+
+    with threadpool_limits(1):
+        sc, req = quadland.load_scenario(name), Requirement()
+        kind = kind_of(sc)
+        delay, rate = kind.computation_delay(sc), float(sc.data["controller"]["rate_hz"])
+        point = timed("operating point", kind.operating_point, sc, None)
+        for label, make in (("continuous", lambda: kind.linear_models(sc, point)),
+                            ("sampled", lambda: kind.sampled_models(sc, point, rate, delay))):
+            models = timed(f"{label}: models", make)
+            loop = models.realizations["loop_input"]
+            section, _ = timed(f"{label}: margins, disk margins, poles", _loop_report, loop,
+                               models.loop_names, req, rate, delay)
+            timed(f"{label}: sensitivity peaks, sensor delay margins", _with_extras, section,
+                  models, sc, req)
+        timed("filter in the loop: models and analysis", _filtered_section, kind, sc, point,
+              rate, delay, req)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=3, help="runs of each command")
+    ap.add_argument("--against", type=Path, help="another source tree, paired run by run")
+    args = ap.parse_args(argv)
+    print("## quadland margins, whole process, CPU s, median (min to max)")
+    for (name, figures, tree), cpu in commands(args.runs, args.against).items():
+        print(f"- {name}{' (figures)' if figures else ' --no-plots'}, {tree}: {_stats(cpu)}")
+    print("\n## margin_report of highway in this process, first call, CPU s")
+    for label, cpu in stages().items():
+        print(f"- {label}: {cpu:.3f}")
+
+
+if __name__ == "__main__":
+    main()
