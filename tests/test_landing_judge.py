@@ -11,6 +11,7 @@ import types
 
 import numpy as np
 import pytest
+from reference import rotation
 
 import quadland
 from quadland.kinds.landing.contact_report import contact_figures
@@ -126,3 +127,34 @@ def test_a_landing_s_rows_carry_the_held_wind_in_the_friction_margin():
     rep = summary["landing"]
     assert rep["secured"] and summary["phases"]["landed"] == t
     assert abs(t - (rep["time"] + sc["landing.settle_time"])) <= 0.01 + 1e-9
+
+
+def test_no_lock_in_a_headwind_is_judged_with_the_friction_the_wind_consumes():
+    """highway with no lock on the true state in a 6 m/s headwind (mean, -x; the car drives
+    +x at 50 km/h): the airspeed on the roof is about 20 m/s, whose drag (Kt V + Kq V^2,
+    about 10.8 N) passes mu m g = 9.8 N. The last row's margin is the closed form from the
+    plant's state and the wind sample held then, multiplied out here with numpy: the feet
+    must supply F = m g e_z - R1 (-Kt V_b - Kq V_b |V_b|), V_b = V1 - R1^T v_wind (the car
+    steady, the deck level and still, the rotors cut), margin |F_xy| / (mu F_z). It is
+    above 1: not secured. With the still air's drag, as before the review, it read 0.56
+    and the body that slid 2 m off the pad "secured"."""
+    sc = load_scenario("highway", ["sensors.enabled=false", 'touchdown.lock="none"',
+                                   "wind.mean=[-6.0, 0.0, 0.0]"])
+    res = quadland.simulate(sc)
+    t_w = landing_clocks(sc)[1].times()
+    t = res["t"][-1]
+    wind = landing_disturbance(sc, t_w)[:3, np.searchsorted(t_w, t + 1e-9, side="right") - 1]
+    x = res.states[-1]
+    R1 = rotation(x[3:6])
+    V_b = x[6:9] - R1.T @ wind
+    q = sc.data["quadrotor"]
+    drag = -np.asarray(q["drag_translational"]) * V_b \
+        - np.asarray(q["drag_quadratic"]) * V_b * np.abs(V_b)
+    assert res["F_total"][-1] < 1e-9                          # the rotors cut
+    F = q["mass"] * q["gravity"] * np.array([0.0, 0.0, 1.0]) - R1 @ drag
+    hand = np.hypot(F[0], F[1]) / (sc["gear.friction"] * F[2])
+    assert res["friction_margin"][-1] == pytest.approx(hand, rel=1e-9)
+    assert hand > 1
+    rep = touchdown_report(res)
+    assert not rep.secured and "not secured" in rep.failures
+    assert landing_summary(res)["phases"]["landed"] is None
