@@ -88,8 +88,7 @@ def contact_figures(result, limits: dict, mass: float) -> dict:
     gear's static tip-over angle in the direction of the tilt at the contact, deg),
     ``bounced``, ``tipped``, ``on_pad``, ``settled`` (the run reached ``settle_time``
     after the contact), ``lock`` (the last engagement), ``friction_margin`` (last),
-    ``secured``, ``landed_time`` (the last row's time when secured, else None),
-    ``failures`` (the reasons, from :data:`FAILURES`).
+    ``secured``, ``failures`` (the reasons, from :data:`FAILURES`).
     """
     t, touched = result["t"], result["touched"] > 0.5
     k0 = int(np.argmax(touched))
@@ -119,8 +118,7 @@ def contact_figures(result, limits: dict, mass: float) -> dict:
            "tipped": tipped,
            "on_pad": bool(settled and np.all(result["foot_offset"][after]
                                              <= limits["pad_radius"])),
-           "settled": settled, "lock": lock, "friction_margin": margin, "secured": secured,
-           "landed_time": float(t[last]) if secured else None}
+           "settled": settled, "lock": lock, "friction_margin": margin, "secured": secured}
     fig["failures"] = [name for name, bad in zip(FAILURES, (
         tip0 > 1, fig["bounced"], tipped, peak > limits["max_gear_load"], not fig["on_pad"],
         not secured), strict=True) if bad]
