@@ -268,8 +268,10 @@ void ql_landing_first_contact(const ql_real *xp, const ql_real *t, const ql_real
 
 /* The gear's signals (foot and centre gaps, load, feet down, lock, relative
  * roll, pitch and tilt, tip-over and friction margins, the lowest foot's
- * sink rate) of the plant's state. */
-void ql_landing_gear_signals(const ql_real *xp, const ql_real *t, const ql_real *pp, ql_real *s);
+ * sink rate, the farthest foot's offset) of the plant's state under the
+ * held disturbance w (its wind in the friction margin). */
+void ql_landing_gear_signals(const ql_real *xp, const ql_real *w, const ql_real *t,
+                             const ql_real *pp, ql_real *s);
 
 /* The pose at touchdown (p_e, R_deck^T R1) from the signals y there. */
 void ql_landing_anchor(const ql_real *y, ql_real *anchor);

@@ -109,15 +109,17 @@ void ql_landing_first_contact(const ql_real *xp, const ql_real *t, const ql_real
     ql_casadi_landing_first_contact(arg, res, work_int, work_real, 0);
 }
 
-void ql_landing_gear_signals(const ql_real *xp, const ql_real *t, const ql_real *pp, ql_real *s)
+void ql_landing_gear_signals(const ql_real *xp, const ql_real *w, const ql_real *t,
+                             const ql_real *pp, ql_real *s)
 {
     const ql_real *arg[ql_casadi_landing_gear_signals_SZ_ARG];
     ql_real *res[ql_casadi_landing_gear_signals_SZ_RES];
     casadi_int work_int[ql_casadi_landing_gear_signals_SZ_IW + 1];
     ql_real work_real[ql_casadi_landing_gear_signals_SZ_W + 1];
     arg[0] = xp;
-    arg[1] = t;
-    arg[2] = pp;
+    arg[1] = w;
+    arg[2] = t;
+    arg[3] = pp;
     res[0] = s;
     ql_casadi_landing_gear_signals(arg, res, work_int, work_real, 0);
 }

@@ -694,6 +694,8 @@ def test_simulate_prints_the_verdict_and_figures(tmp_path, capsys):
     assert lines[2].split() == ["sink", "rate", f"{land['sink_rate']:.3f}", "m/s", "limit",
                                 "0.5"]
     assert lines[5].split()[:2] == ["tilt", f"{land['tilt_deg']:.3f}"]
+    # the tilt is judged against the gear's tip-over angle in its direction too
+    assert lines[5].endswith(f"limit 32.6, tip-over {land['tip_over_deg']:.1f}")
     # landed and secured: the gear's figures (issue 18)
     assert lines[6].split() == ["peak", "gear", "load", f"{land['peak_gear_force']:.1f}", "N",
                                 "limit", "424"]

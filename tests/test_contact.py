@@ -655,11 +655,11 @@ def test_defaults_and_layouts():
 
 # --- the report's gear signals: what holds a body resting on a moving roof ------------
 
-def _resting_on_a_car(V, Kt, Kq, lock):
+def _resting_on_a_car(V, Kt, Kq, lock, wind=(0.0, 0.0, 0.0)):
     """``gear_signals`` (quadland_symbolic.landing.gear) of the body resting level, at
     its static deflection, on a level roof driving straight at a steady ``V`` m/s
-    (``d11 V`` holds it) through still air, rotors off, long after the contact switch
-    closed (lock fully engaged if there is one)."""
+    (``d11 V`` holds it) through the ``wind`` (E, m/s; still air by default), rotors
+    off, long after the contact switch closed (lock fully engaged if there is one)."""
     from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
     veh = dict(tau=[150.0 * V, 0.0, 0.0])
     p = params(gear=dict(mu=0.5), lock=lock, veh=veh)
@@ -673,7 +673,8 @@ def _resting_on_a_car(V, Kt, Kq, lock):
                rotor_efficiency=[1.0] * 4, cg_offset=[0.0] * 3)
     t = 100.0
     xg = GEAR_STATE.pack(dict(impulse=t, t_contact=t, F_peak=M * G))
-    s = gear_signals_function()(z[:QUAD6_STATE.size], xv, xg, t, QUADROTOR.pack(quad),
+    s = gear_signals_function()(z[:QUAD6_STATE.size], xv, xg, t, np.asarray(wind, dtype=float),
+                                QUADROTOR.pack(quad),
                                 ACTUATOR.pack(act), part(p, "p_veh"), part(p, "p_deck"),
                                 part(p, "p_gear"), part(p, "p_lock"))
     return GEAR_SIGNALS.unpack(np.array(s).ravel())
@@ -699,3 +700,54 @@ def test_the_friction_margin_of_a_body_on_a_car_roof_carries_the_drag():
     # in still air on a still roof the margin is 0
     assert _resting_on_a_car(0.0, Kt, Kq, dict(F_hold=0.0))["friction_margin"] == \
         pytest.approx(0.0, abs=1e-9)
+
+
+def test_the_friction_margin_carries_the_wind_s_force_on_the_resting_body():
+    # issue 18's review: the wind, a disturbance input, was left out of the margin. The
+    # plant's drag acts on the airspeed V1 - R1^T v_wind, per body axis -Kt V - Kq V |V|:
+    # resting level (R1 = I), the feet must hold Kt w + Kq w^2 per axis of wind w.
+    Kt, Kq, mu = 0.3, 0.01225, 0.5
+    none = dict(F_hold=0.0)
+
+    def force(v):                                   # one axis's drag magnitude, N
+        return Kt * abs(v) + Kq * v ** 2
+
+    # a still deck in a 10 m/s wind along x: 3 + 1.225 = 4.225 N of mu m g = 9.8 N
+    s = _resting_on_a_car(0.0, Kt, Kq, none, wind=(10.0, 0.0, 0.0))
+    assert s["friction_margin"] == pytest.approx(force(10.0) / (mu * M * G), rel=1e-12)
+    # 20 m/s: 6 + 4.9 = 10.9 N, more than mu m g: a body with no lock is not held (the
+    # still air's margin, before, was 0 and read it secured)
+    gale = _resting_on_a_car(0.0, Kt, Kq, none, wind=(20.0, 0.0, 0.0))
+    assert gale["friction_margin"] == pytest.approx(force(20.0) / (mu * M * G), rel=1e-12)
+    assert gale["friction_margin"] > 1
+    # on the roof at 100 km/h with a tailwind of the car's speed the airspeed is zero
+    V = 100 / 3.6
+    assert _resting_on_a_car(V, Kt, Kq, none, wind=(V, 0.0, 0.0))["friction_margin"] == \
+        pytest.approx(0.0, abs=1e-9)
+    # and in a 5 m/s crosswind (+y) the airspeed is (V, -5): the two axes' drags add as
+    # a vector, hypot(Kt V + Kq V^2, Kt 5 + Kq 25)
+    cross = _resting_on_a_car(V, Kt, Kq, none, wind=(0.0, 5.0, 0.0))
+    assert cross["friction_margin"] == pytest.approx(
+        np.hypot(force(V), force(5.0)) / (mu * M * G), rel=1e-12)
+
+
+def test_the_farthest_foot_s_offset_from_the_pad_centre():
+    # the body resting level with its centre at (0.3, 0.1) from the pad centre: the feet
+    # at (+-0.15, +-0.125) put the farthest at (0.45, 0.225), hypot 0.5031 m, past a
+    # 0.5 m pad that the centre (0.316 m) is well inside
+    from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
+    g = gear_defaults()
+    feet = np.asarray(g["r_feet"], dtype=float).reshape(-1, 3)
+    assert np.allclose(np.abs(feet[:, :2]), [0.15, 0.125])
+    p = params()
+    for centre, yaw, want in (((0.3, 0.1), 0.0, np.hypot(0.45, 0.225)),
+                              ((0.3, 0.1), np.pi / 2, np.hypot(0.425, 0.25)),
+                              ((0.0, 0.0), 0.3, np.hypot(0.15, 0.125))):
+        z = state_on_deck(np.zeros(3), 0.001, p2=(*centre, 0.0))
+        z[5] = yaw
+        s = gear_signals_function()(z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1],
+                                    GEAR_STATE.zeros(), 0.0, np.zeros(3), part(p, "p_quad"),
+                                    part(p, "p_act"), part(p, "p_veh"), part(p, "p_deck"),
+                                    part(p, "p_gear"), part(p, "p_lock"))
+        off = GEAR_SIGNALS.unpack(np.array(s).ravel())["foot_offset"]
+        assert off == pytest.approx(want, rel=1e-12), (centre, yaw)

@@ -97,8 +97,15 @@ def _first_rows(phase):
 
 # ---------------------------------------------------------------- the scenarios land
 
+#: highway_100 judged by its feet (issue 18's review): it slides back 0.3 m on the roof
+#: while it levels out before the magnet holds, and its rear feet leave the 0.5 m pad
+#: (0.559 m on its sensors, 0.587 m on the true state; the centre stays within 0.41 m).
+OFF_THE_PAD = pytest.mark.xfail(strict=True, reason="highway_100's feet leave the 0.5 m pad")
+
+
 @pytest.mark.parametrize("sensing", ["sensors", "perfect"])
-@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("name", [n if n != "highway_100" else pytest.param(n, marks=OFF_THE_PAD)
+                                  for n in SCENARIOS])
 def test_lands_within_the_limits_at_the_default_seed(name, sensing):
     """On its sensors and on the true state, each lands at the default seed after the
     measured number of aborted descents (:data:`ABORTS`: none on a car's roof; before the
@@ -151,7 +158,16 @@ def test_lands_within_the_limits_at_every_seed(name, seed):
     assert rep.touchdown and rep.success, rep
 
 
-@pytest.mark.parametrize("seed", range(20))
+#: highway at 80 km/h judged by its feet (issue 18's review): with the rotors cut at the
+#: contact switch after a 30 deg lean the body drops onto its rear feet and slides back,
+#: and at these seeds a rear foot leaves the 0.5 m pad (0.508 to 0.606 m; the centre stays
+#: within 0.342 to 0.443 m), which the centre's judge passed.
+FEET_OFF_AT_80 = (2, 5, 11, 13, 14, 15, 19)
+
+
+@pytest.mark.parametrize("seed", [s if s not in FEET_OFF_AT_80 else pytest.param(
+    s, marks=pytest.mark.xfail(strict=True, reason="a rear foot leaves the 0.5 m pad"))
+    for s in range(20)])
 def test_highway_lands_at_80_kmh(seed):
     rep = touchdown_report(_fly("highway", f"simulation.seed={seed}", *_speed(80), PERFECT))
     assert rep.touchdown and rep.success, rep
@@ -522,14 +538,24 @@ def test_simulate_writes_the_landing_columns_and_summary(tmp_path):
     assert set(summary["landing"]) == {"touchdown", "time", "sink_rate", "offset",
                                        "relative_speed", "tilt_deg", "aborts", "success",
                                        "limits", "secured", "bounced", "tipped",
-                                       "peak_gear_force", "impact_energy", "bounce", "on_pad",
-                                       "failures"}
+                                       "peak_gear_force", "impact_energy", "bounce",
+                                       "tip_over_deg", "on_pad", "failures"}
     assert summary["landing"]["limits"] == {"max_sink_rate": 0.5, "max_offset": 0.2,
                                             "max_tilt_deg": 32.6, "max_relative_speed": 0.5,
                                             "max_gear_load": 424.0, "max_bounce": 0.02,
                                             "max_friction_margin": 1.0, "pad_radius": 0.5}
     assert summary["landing"]["secured"] is True and summary["landing"]["failures"] == []
     assert summary["landing"]["success"] is True
+    # landed: judged landed and secured settle_time (2 s) after the first contact, on the
+    # last row (the 100 Hz rows' grid), not null (the guidance's touchdown verdict, on the
+    # land detector, lags the contact, so it never entered "landed" before the run ended)
+    phases, land = summary["phases"], summary["landing"]
+    assert abs(phases["landed"] - (land["time"] + 2.0)) <= 0.01
+    assert phases["touchdown"] < phases["landed"]
+    # the tilt at contact is judged against the gear's tip-over angle too: atan(0.15 / 0.2)
+    # = 36.87 deg for a pure pitch, larger for a tilt with some roll (the support rectangle's
+    # corner is farther than its edge)
+    assert land["tip_over_deg"] >= np.degrees(np.arctan(0.15 / 0.2)) - 1e-9
     blocks = summary["navigation"]["blocks"]
     assert all(set(b) == {"fused", "rejected", "held"} for b in blocks.values())
     # only a range is ever held back before its gate, and the first ones are: at the

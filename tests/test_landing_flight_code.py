@@ -432,7 +432,7 @@ def test_pure_c_landing_is_quadland_simulates(examples, tree):
     assert list(report) == list(want) and report["limits"] == want["limits"]
     assert report["touchdown"] and report["success"] == want["success"]
     for key in ("time", "sink_rate", "offset", "relative_speed", "tilt_deg",
-                "peak_gear_force", "impact_energy", "bounce"):
+                "peak_gear_force", "impact_energy", "bounce", "tip_over_deg"):
         assert report[key] == pytest.approx(want[key], rel=1e-9, abs=1e-9), key
     for key in ("aborts", "secured", "bounced", "tipped", "on_pad", "failures"):
         assert report[key] == want[key], key
@@ -443,7 +443,9 @@ def test_pure_c_landing_is_quadland_simulates(examples, tree):
     # both land and are secured (with issue 19's gains the quiet ship no longer brushes its
     # heaving deck with one foot too lightly to close the contact switch, flying on as a
     # touch and go, as it did before them)
-    assert want["success"]
+    # (highway_100, judged by its feet since issue 18's review, leaves its 0.5 m pad: the
+    # C judges it alike)
+    assert want["success"] or (tree == "highway_100" and want["failures"] == ["off the pad"])
     np.testing.assert_array_equal(c["t"], py["t"])
     np.testing.assert_array_equal(c["phase"], py["phase"])
     for column in header:

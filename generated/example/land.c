@@ -110,23 +110,25 @@ static ql_real gap(void *vctx, const ql_real *xp, double t)
 
 static void write_row(double t, const ql_real *y, const ql_real *est);
 
-/* What the rows from the first contact on tell (quadland.kinds.landing.contact_report). */
+/* What the rows from the first contact on tell (quadland.kinds.landing.contact_report):
+ * tipped, a row with a foot off the deck past the tip-over angle and the rotors cut. */
 typedef struct {
-    double t_td, t_last, bounce, tip, offset, engaged, margin, feet, peak, impact;
-    int aborts;                                 /* descents aborted before the contact */
+    double t_td, t_last, bounce, offset, engaged, margin, feet, peak, impact, tip0, tilt0;
+    int aborts, tipped;                         /* descents aborted before the contact */
     ql_real figures[QL_TOUCHDOWN_FIGURES];
 } landed_t;
 
-/* A row from the first contact on: the gear's signals judged. */
-static void judge_row(landed_t *l, const ql_real *xp, const ql_real *sig, double t,
-                      const ql_real *pp)
+/* A row from the first contact on, under the held disturbance w: the gear's signals
+ * judged (the farthest foot's offset from the pad centre, the tip-over on the gear). */
+static void judge_row(landed_t *l, const ql_real *xp, const ql_real *sig, const ql_real *w,
+                      double t, const ql_real *pp)
 {
-    ql_real s[12], tt = (ql_real)t;
-    double off = hypot((double)sig[13], (double)sig[13 + 1]);
-    ql_landing_gear_signals(xp, &tt, pp, s);
+    ql_real s[13], tt = (ql_real)t;
+    ql_landing_gear_signals(xp, w, &tt, pp, s);
     if (s[3] < 0.5 && s[0] > l->bounce) l->bounce = s[0];
-    if (s[9] > l->tip) l->tip = s[9];
-    if (!(off <= l->offset)) l->offset = off;
+    if (s[9] > 1 && s[3] < 4 - 0.5
+        && (double)sig[27] < 0.9800000000000001) l->tipped = 1;
+    if (!((double)s[12] <= l->offset)) l->offset = s[12];
     if (xp[24] > l->peak) l->peak = xp[24];
     l->engaged = s[4];
     l->margin = s[10];
@@ -225,8 +227,8 @@ static void json_bool(const char *key, int value)
 static void write_report(int touchdown, const landed_t *l, int aborts)
 {
     const double row = 1.0 / QL_LAND_OUTPUT_RATE_HZ;
-    const char *failures[9];
-    int n = 0, i, settled, stopped, tipped, bounced, on_pad, secured;
+    const char *failures[10];
+    int n = 0, i, settled, stopped, tipped, tilted, bounced, on_pad, secured;
     if (!touchdown) {
         fprintf(stderr, "{\"touchdown\": false, \"time\": null");
         fprintf(stderr, ", \"sink_rate\": null");
@@ -244,7 +246,7 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
         fprintf(stderr, ", \"pad_radius\": %.17g", QL_LAND_PAD_RADIUS);
         fprintf(stderr, "}, \"secured\": null, \"bounced\": null, \"tipped\": null, "
                 "\"peak_gear_force\": null, \"impact_energy\": null, \"bounce\": null, "
-                "\"on_pad\": null, \"failures\": [\"no touchdown\"]}\n");
+                "\"tip_over_deg\": null, \"on_pad\": null, \"failures\": [\"no touchdown\"]}\n");
         return;
     }
     if (!((double)l->figures[0] <= QL_LAND_MAX_SINK_RATE)) failures[n++] = "sink_rate";
@@ -253,11 +255,13 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     if (!((double)l->figures[3] <= QL_LAND_MAX_TILT_DEG)) failures[n++] = "tilt_deg";
     settled = l->t_last >= l->t_td + QL_LAND_SETTLE_TIME - row - 1e-9;
     stopped = l->t_last < fmin(l->t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION) - row - 1e-9;
-    tipped = l->tip > 1 || stopped;
+    tipped = l->tipped || stopped;
+    tilted = l->tip0 > 1;
     bounced = l->bounce > QL_LAND_MAX_BOUNCE;
     on_pad = settled && l->offset <= QL_LAND_PAD_RADIUS;
     secured = settled && l->feet >= 3.5
         && (l->engaged >= 0.95 || l->margin < QL_LAND_MAX_FRICTION_MARGIN);
+    if (tilted) failures[n++] = "tilted";
     if (bounced) failures[n++] = "bounced";
     if (tipped) failures[n++] = "tipped";
     if (l->peak > QL_LAND_MAX_GEAR_LOAD) failures[n++] = "gear load";
@@ -285,6 +289,8 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     json_bool("tipped", tipped);
     fprintf(stderr, ", \"peak_gear_force\": %.17g, \"impact_energy\": %.17g, \"bounce\": %.17g",
             l->peak, l->impact, l->bounce);
+    fprintf(stderr, ", \"tip_over_deg\": %.17g",
+            l->tip0 > 0 ? l->tilt0 / l->tip0 * 57.29577951308232 : 90.0);
     json_bool("on_pad", on_pad);
     fprintf(stderr, ", \"failures\": [");
     for (i = 0; i < n; ++i) fprintf(stderr, "%s\"%s\"", i ? ", " : "", failures[i]);
@@ -497,7 +503,7 @@ int main(int argc, char **argv)
     ql_real xp[NXP], xp_start[NXP], trial[NXP], work[5 * NXP], pp[QL_LANDING_PLANT_NP];
     ql_real w[QL_LANDING_NW], sig[NY], F_cmd[4] = {0, 0, 0, 0};
     ql_real queue[4 * (QL_LAND_DELAY_PERIODS + 1)];    /* commands, newest first */
-    ql_real gsig[12], tt;
+    ql_real gsig[13], tt;
     landed_t landed;
     static world_t world;                       /* the sensors' delay lines */
     static flight_t flight;                     /* the filter, the detector, ... */
@@ -585,7 +591,7 @@ int main(int argc, char **argv)
             memcpy(est_row, flight.est, sizeof est_row);   /* the last control step's */
             if (!quiet || touchdown) signals(xp, &gs, t_row, t_w, pp, sig);
             if (!quiet) write_row(t_row, sig, est_row);
-            if (touchdown) judge_row(&landed, xp, sig, t_row, pp);
+            if (touchdown) judge_row(&landed, xp, sig, w, t_row, pp);
         }
         /* the run ends at the first grid point QL_LAND_SETTLE_TIME after the contact */
         if (touchdown && t >= t_td + QL_LAND_SETTLE_TIME - tol) break;
@@ -624,16 +630,18 @@ int main(int argc, char **argv)
             ql_touchdown_figures(sig + 13, sig + 16, sig + 4,
                                  sig + 10, landed.figures);
             tt = (ql_real)t_td;
-            ql_landing_gear_signals(xp, &tt, pp, gsig);
+            ql_landing_gear_signals(xp, w, &tt, pp, gsig);
             landed.t_td = t_td;
             landed.bounce = 0;
-            landed.tip = -INFINITY;
+            landed.tipped = 0;
+            landed.tip0 = (double)gsig[9];
+            landed.tilt0 = (double)gsig[8];
             landed.offset = 0;
             landed.peak = -INFINITY;
             landed.impact = 0.5 * QL_LAND_MASS * (double)gsig[11]
                 * (double)gsig[11];
             landed.aborts = gs.aborts;
-            judge_row(&landed, xp, sig, t_td, pp);
+            judge_row(&landed, xp, sig, w, t_td, pp);
             if (t_next > t_td) {
                 m = (long)ceil((t_next - t_td) / QL_LAND_H_AFTER - 1e-9);
                 if (m < 1) m = 1;

@@ -269,9 +269,10 @@ void qlf_landing_first_contact(const qlf_real *xp, const qlf_real *t, const qlf_
 
 /* The gear's signals (foot and centre gaps, load, feet down, lock, relative
  * roll, pitch and tilt, tip-over and friction margins, the lowest foot's
- * sink rate) of the plant's state. */
-void qlf_landing_gear_signals(const qlf_real *xp, const qlf_real *t, const qlf_real *pp,
-                              qlf_real *s);
+ * sink rate, the farthest foot's offset) of the plant's state under the
+ * held disturbance w (its wind in the friction margin). */
+void qlf_landing_gear_signals(const qlf_real *xp, const qlf_real *w, const qlf_real *t,
+                              const qlf_real *pp, qlf_real *s);
 
 /* The pose at touchdown (p_e, R_deck^T R1) from the signals y there. */
 void qlf_landing_anchor(const qlf_real *y, qlf_real *anchor);

@@ -110,16 +110,17 @@ void qlf_landing_first_contact(const qlf_real *xp, const qlf_real *t, const qlf_
     qlf_casadi_landing_first_contact(arg, res, work_int, work_real, 0);
 }
 
-void qlf_landing_gear_signals(const qlf_real *xp, const qlf_real *t, const qlf_real *pp,
-                              qlf_real *s)
+void qlf_landing_gear_signals(const qlf_real *xp, const qlf_real *w, const qlf_real *t,
+                              const qlf_real *pp, qlf_real *s)
 {
     const qlf_real *arg[qlf_casadi_landing_gear_signals_SZ_ARG];
     qlf_real *res[qlf_casadi_landing_gear_signals_SZ_RES];
     casadi_int work_int[qlf_casadi_landing_gear_signals_SZ_IW + 1];
     qlf_real work_real[qlf_casadi_landing_gear_signals_SZ_W + 1];
     arg[0] = xp;
-    arg[1] = t;
-    arg[2] = pp;
+    arg[1] = w;
+    arg[2] = t;
+    arg[3] = pp;
     res[0] = s;
     qlf_casadi_landing_gear_signals(arg, res, work_int, work_real, 0);
 }

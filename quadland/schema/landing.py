@@ -215,7 +215,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                **_POS),
         "max_bounce": Field(F, "m", "limit: the lowest foot's rebound above the deck with "
                             "every foot off it", hi=100.0, **_POS),
-        "pad_radius": Field(F, "m", "limit: the landing area's radius, which the centre "
+        "pad_radius": Field(F, "m", "limit: the landing area's radius, which every foot "
                             "stays within from the first contact to the settle time", hi=100.0,
                             **_POS),
         "max_friction_margin": Field(F, "-", "secured without a lock: friction needed over "

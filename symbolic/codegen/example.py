@@ -15,7 +15,8 @@ from quadland_symbolic.codegen.simulator import loop_header
 from quadland_symbolic.codegen.structs import (
     output_layout,
 )
-from quadland_symbolic.landing.gear import FAILURES, GEAR_SIGNALS, GEAR_STATE
+from quadland_symbolic.landing.contact import N_FEET
+from quadland_symbolic.landing.gear import CUT_THRUST, FAILURES, GEAR_SIGNALS, GEAR_STATE
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_STATE,
 )
@@ -43,6 +44,7 @@ from quadland_symbolic.landing.sensed_loop import (
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES, SENSOR_PACKETS, SENSOR_PARAMS
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 from quadland_symbolic.layout import Layout
+from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.quadrotor import QUAD_STATE
 from quadland_symbolic.relative import E1
 from quadland_symbolic.vehicle import VEHICLE_MEASUREMENT, VEHICLE_STATE
@@ -214,7 +216,9 @@ def land_context(d: LandingDefaults) -> dict:
         gear={n: LANDING_PLANT_STATE.slice("gear").start + GEAR_STATE.slice(n).start
               for n in GEAR_STATE.names()},
         gs={n: GEAR_SIGNALS.slice(n).start for n in GEAR_SIGNALS.names()}, ngs=GEAR_SIGNALS.size,
-        failures=FAILURES,
+        failures=FAILURES, n_feet=N_FEET, ny_F_total=LANDING_SIGNALS.index("F_total"),
+        cut_thrust=repr(float(CUT_THRUST * d.mass * np.ravel(
+            QUADROTOR.unpack(np.asarray(d.p_quad, dtype=float))["g"])[0])),
     )
 
 

@@ -172,7 +172,8 @@ FUNCTIONS = (
         ("landing_gear_signals", landing_gear_signals_function,
          "The gear's signals (foot and centre gaps, load, feet down, lock, relative\n"
          " * roll, pitch and tilt, tip-over and friction margins, the lowest foot's\n"
-         " * sink rate) of the plant's state."),
+         " * sink rate, the farthest foot's offset) of the plant's state under the\n"
+         " * held disturbance w (its wind in the friction margin)."),
         ("landing_anchor", anchor_function,
          "The pose at touchdown (p_e, R_deck^T R1) from the signals y there."),
         ("landed_row", landed_row_function,

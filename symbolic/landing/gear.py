@@ -40,7 +40,7 @@ import functools
 import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
-from quadland_symbolic.landing.aero import quadratic_drag
+from quadland_symbolic.landing.aero import aero_force
 from quadland_symbolic.landing.contact import (
     FOOT,
     GEAR,
@@ -59,12 +59,18 @@ from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.quadrotor import WRENCH, wrench_from_rotors
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["GEAR_STATE", "TOUCHDOWN_POLICY", "GEAR_SIGNALS", "FAILURES", "PEAK_RATE", "CUT_RAMP",
+__all__ = ["GEAR_STATE", "TOUCHDOWN_POLICY", "GEAR_SIGNALS", "FAILURES", "CUT_THRUST",
+           "PEAK_RATE", "CUT_RAMP",
            "contact_params", "contact_switch", "gear_terms", "foot_gap",
            "foot_gap_function", "gear_signals_function"]
 
 #: Why a landing on the gear failed, in the order a verdict names them (the report's).
-FAILURES = ("bounced", "tipped", "gear load", "off the pad", "not secured")
+FAILURES = ("tilted", "bounced", "tipped", "gear load", "off the pad", "not secured")
+
+#: The rotors count as cut, for the tip-over judge, below this share of the weight in
+#: total thrust (a rotor cut passes it 60 ms after the cut with the shipped 20 ms
+#: motors, ``exp(-3)``): then nothing but the gear holds the body up.
+CUT_THRUST = 0.05
 
 #: 1/s: the rate at which ``F_peak`` follows a rising gear load.
 PEAK_RATE = 2000.0
@@ -101,6 +107,8 @@ GEAR_SIGNALS = Layout("gear_sig", (
     Field("tip_margin", 1, "-", "largest of |roll_rel|, |pitch_rel| over its tip-over angle"),
     Field("friction_margin", 1, "-", "friction needed over available at rest (< 1 holds)"),
     Field("foot_sink_rate", 1, "m/s", "the lowest foot's speed into the deck plane"),
+    Field("foot_offset", 1, "m", "the farthest foot's distance from the pad centre in the "
+          "deck plane (deck frame x, y)"),
 ), "gear signals for the report")
 
 
@@ -177,17 +185,22 @@ def foot_gap_function() -> ca.Function:
 
 @functools.cache
 def gear_signals_function() -> ca.Function:
-    """``gear_signals(x1q, xv, xg, t, p_quad, p_act, p_veh, p_deck, p_gear, p_lock) -> s``
-    (:data:`GEAR_SIGNALS`).
+    """``gear_signals(x1q, xv, xg, t, v_wind, p_quad, p_act, p_veh, p_deck, p_gear, p_lock) ->
+    s`` (:data:`GEAR_SIGNALS`); ``v_wind``: the wind velocity in E at ``t`` (m/s).
 
     The friction margin is :func:`~quadland_symbolic.landing.contact.friction_margin`
-    with the rotors' thrust (their forces now), the drag of the body's velocity through
-    still air (eq. 2's ``-Kt V1`` and the quadratic ``-Kq V1 |V1|``: on a car's roof
-    at 100 km/h, 17.8 N, more than friction alone holds) and the lock's pull as the
-    other forces (the wind, a disturbance input, is not part of it); the sink rate is
-    the lowest foot's ``-n2 . v_i`` relative to the deck's material point under it.
+    with the rotors' thrust (their forces now), the lock's pull and every
+    aerodynamic force the plant applies (:func:`~quadland_symbolic.landing.plant.
+    body_disturbance` without its ``d_F``) as the other forces: eq. (2)'s linear drag
+    and the quadratic drag of the airspeed ``V1 - R1^T v_wind`` (the body's velocity,
+    which on the deck is the deck's, against the wind's: on a car's roof at 100 km/h
+    in still air, 17.8 N, more than friction alone holds; a 10 m/s wind on a still
+    deck, 4.2 N) and the ground effect's lift. The sink rate is the lowest foot's
+    ``-n2 . v_i`` relative to the deck's material point under it; ``foot_offset`` the
+    farthest foot's ``hypot`` of its deck-frame ``x, y`` from the pad centre.
     """
     x1q, xv, xg, t = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), GEAR_STATE.sym(), ca.SX.sym("t")
+    v_wind = ca.SX.sym("v_wind", 3)
     p_quad, p_veh, p_deck = QUADROTOR.sym(), VEHICLE.sym(), DECK_PARAMS.sym()
     p_gear, p_lock, p_act = GEAR.sym(), LOCK.sym(), ACTUATOR.sym()
     q = QUAD6_STATE.unpack(x1q)
@@ -209,16 +222,21 @@ def gear_signals_function() -> ca.Function:
     roll, pitch, tilt = _relative_attitude(x1q, deck.R_deck)
     tip = tip_over_angles(p_gear)
     thrust = WRENCH.unpack(wrench_from_rotors(q["F"], p_quad))["F_total"]
-    drag = -QUADROTOR.unpack(p_quad)["Kt"] * q["V1"] + quadratic_drag(q["V1"], p_act)
-    F_other = R1 @ (ca.vertcat(0, 0, thrust) + drag) - hs["F_lock"] * n2
+    Kt = QUADROTOR.unpack(p_quad)["Kt"]
+    aero = (-Kt * q["V1"] + Kt * (R1.T @ v_wind)           # eq. (2)'s drag of the airspeed
+            + aero_force(x1q, xv, v_wind, t, p_act, p_veh, p_deck))
+    F_other = R1 @ (ca.vertcat(0, 0, thrust) + aero) - hs["F_lock"] * n2
     margin = friction_margin(x1q, xv, t, F_other, p_quad, p_veh, p_deck, p_gear)
     # no device (F_hold = 0): nothing engages, whatever the lock's clock says
     engaged = ca.if_else(LOCK.unpack(p_lock)["F_hold"] > 0, hs["engaged"], 0)
+    feet_deck = deck.R_deck.T @ (q["p1"] + R1 @ r_feet - deck.p2 @ ca.DM.ones(1, r_feet.shape[1]))
+    foot_offset = ca.sqrt(ca.mmax(feet_deck[0, :] ** 2 + feet_deck[1, :] ** 2))
     s = ca.vertcat(-lowest, hs["lock_gap"], ca.sum1(fs["F_n"]), ca.sum1(fs["in_contact"]),
                    engaged, hs["F_lock"], roll, pitch, tilt,
                    ca.fmax(ca.fabs(roll) / tip[0], ca.fabs(pitch) / tip[1]), margin,
-                   -(n2.T @ v_rel))
+                   -(n2.T @ v_rel), foot_offset)
+    names = ["x1q", "xv", "xg", "t", "v_wind", "p_quad", "p_act", "p_veh", "p_deck", "p_gear",
+             "p_lock"]
     return ca.Function("gear_signals",
-                       [x1q, xv, xg, t, p_quad, p_act, p_veh, p_deck, p_gear, p_lock],
-                       [s], ["x1q", "xv", "xg", "t", "p_quad", "p_act", "p_veh", "p_deck",
-                             "p_gear", "p_lock"], ["s"])
+                       [x1q, xv, xg, t, v_wind, p_quad, p_act, p_veh, p_deck, p_gear, p_lock],
+                       [s], names, ["s"])

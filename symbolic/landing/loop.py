@@ -171,13 +171,19 @@ def first_contact_function() -> ca.Function:
 
 @functools.cache
 def landing_gear_signals_function() -> ca.Function:
-    """``landing_gear_signals(xp, t, pp) -> s``: the gear's signals
-    (:data:`quadland_symbolic.landing.gear.GEAR_SIGNALS`) of the plant's state."""
+    """``landing_gear_signals(xp, w, t, pp) -> s``: the gear's signals
+    (:data:`quadland_symbolic.landing.gear.GEAR_SIGNALS`) of the plant's state under the
+    held disturbance ``w`` (:data:`LANDING_DISTURBANCE`: its wind enters the friction
+    margin as the plant's drag of the airspeed)."""
     xp, t, pp = LANDING_PLANT_STATE.sym(), ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    w = LANDING_DISTURBANCE.sym()
     s, p = LANDING_PLANT_STATE.unpack(xp), LANDING_PLANT_PARAMS.unpack(pp)
-    sig = gear_signals_function()(s["x1q"], s["xv"], s["gear"], t, p["p_quad"], p["p_act"],
-                                  p["p_veh"], p["p_deck"], p["p_gear"], p["p_lock"])
-    return ca.Function("landing_gear_signals", [xp, t, pp], [sig], ["xp", "t", "pp"], ["s"])
+    sig = gear_signals_function()(s["x1q"], s["xv"], s["gear"], t,
+                                  LANDING_DISTURBANCE.unpack(w)["v_wind"], p["p_quad"],
+                                  p["p_act"], p["p_veh"], p["p_deck"], p["p_gear"],
+                                  p["p_lock"])
+    return ca.Function("landing_gear_signals", [xp, w, t, pp], [sig],
+                       ["xp", "w", "t", "pp"], ["s"])
 
 
 @functools.cache

@@ -4,21 +4,35 @@ A landing on the gear's contact (``gear.welded = false``) is judged on its
 rows after the first contact (docs/landing.md, "Landed and secured"; each
 limit's source there):
 
+* **tilted**: the tilt at the first contact, relative to the deck, past the
+  gear's static tip-over angle in its direction (``tip_margin > 1`` there;
+  the angle is ``tilt_rel / tip_margin``, exact for a pure roll or pitch):
+  the gear meets the deck with the centre of mass outside its support, which
+  only the rotors can hold. ``landing.max_tilt_deg`` stays the old figure's
+  limit; the tilt is judged against the smaller of the two;
 * **peak gear load**: the plant's peak follower ``F_peak`` (every RK4
   substep), against ``landing.max_gear_load``; the impact energy
   ``m1 v_n^2 / 2`` of the sink rate at first contact is reported beside it;
 * **bounced**: after the first contact, every foot off the deck with the
   lowest foot above ``landing.max_bounce`` (the gear's rebound, not the
   tilt's: a body that meets the deck tilted lifts its centre by the tilt);
-* **tipped**: the relative roll or pitch past the gear's static tip-over
-  angle (``tip_margin > 1``), or the run stopped on the deck at the
-  singular attitude or outside its envelope;
-* **on the pad**: the centre within ``landing.pad_radius`` of the pad
-  centre (deck frame) from the first contact to ``settle_time`` after it,
-  the run reaching that instant;
-* **secured**: at the last row, the lock-down engaged (95 %) with every foot
-  on the deck, or, without one, resting on the deck with the friction
-  margin below ``landing.max_friction_margin``.
+* **tipped**: tipped over on the gear: at a row after the contact, a foot
+  off the deck with the relative roll or pitch past the static tip-over
+  angle (``tip_margin > 1``) while the rotors are cut (their thrust below
+  :data:`CUT_THRUST` of the weight: nothing but the gear holds the body, so
+  its centre of mass is outside the support polygon with no thrust); or the
+  run stopped on the deck at the singular attitude or outside its envelope.
+  A body the rotors still fly past that angle (the flare onto a windy roof)
+  has not tipped;
+* **on the pad**: every foot within ``landing.pad_radius`` of the pad centre
+  (deck frame, ``foot_offset``) from the first contact to ``settle_time``
+  after it, the run reaching that instant;
+* **secured**: at the last row (``settle_time`` after the first contact, the
+  instant summary.json's ``phases.landed`` gives for a secured landing), the
+  lock-down engaged (95 %) with every foot on the deck, or, without one,
+  resting on the deck with the friction margin (thrust, the drag of the
+  airspeed through the wind at that row, the lock's pull) below
+  ``landing.max_friction_margin``.
 """
 
 from __future__ import annotations
@@ -27,28 +41,31 @@ import functools
 
 import numpy as np
 
-from quadland_symbolic.landing.gear import FAILURES, GEAR_SIGNALS, GEAR_STATE
+from quadland_symbolic.landing.contact import N_FEET
+from quadland_symbolic.landing.gear import CUT_THRUST, FAILURES, GEAR_SIGNALS, GEAR_STATE
 from quadland_symbolic.landing.loop import landing_gear_signals_function
 from quadland_symbolic.landing.plant import LANDING_PLANT_STATE
 
-__all__ = ["gear_columns", "contact_figures", "ENGAGED", "FAILURES"]
+__all__ = ["gear_columns", "contact_figures", "ENGAGED", "FAILURES", "CUT_THRUST"]
 
 #: The lock counts as engaged at this engagement.
 ENGAGED = 0.95
 
 
-
-def gear_columns(pp, times, X, touched) -> dict[str, np.ndarray]:
+def gear_columns(pp, times, X, touched, W) -> dict[str, np.ndarray]:
     """The gear's signals at each row from the first contact on (:data:`GEAR_SIGNALS` by
     name, plus ``F_peak`` and ``t_contact`` of the plant's gear memory), from the rows'
-    loop states ``X``; NaN before the contact (``touched`` 0), where the gear is off."""
+    loop states ``X`` and held disturbances ``W`` (one row each, :data:`~quadland_symbolic.
+    landing.plant.LANDING_DISTURBANCE`: the wind in the friction margin); NaN before the
+    contact (``touched`` 0), where the gear is off."""
     names = (*GEAR_SIGNALS.names(), "F_peak", "t_contact")
     cols = {name: np.full(len(times), np.nan) for name in names}
     rows = np.flatnonzero(np.asarray(touched) > 0.5)
     if rows.size == 0:
         return cols
     xp = np.asarray(X, dtype=float)[rows, :LANDING_PLANT_STATE.size]
-    s = np.asarray(_mapped(rows.size)(xp.T, np.asarray(times, dtype=float)[None, rows],
+    w = np.asarray(W, dtype=float)[rows, :]
+    s = np.asarray(_mapped(rows.size)(xp.T, w.T, np.asarray(times, dtype=float)[None, rows],
                                       np.asarray(pp, dtype=float)), dtype=float)
     for name in GEAR_SIGNALS.names():
         cols[name][rows] = s[GEAR_SIGNALS.slice(name)][0]
@@ -67,10 +84,11 @@ def contact_figures(result, limits: dict, mass: float) -> dict:
     """The landed-and-secured figures of a landing on the gear (module docstring).
 
     Returns a dict: ``peak_gear_force`` (N), ``impact_energy`` (J), ``bounce`` (m, the
-    lowest foot's highest rebound with every foot off the deck), ``bounced``,
-    ``tipped``, ``on_pad``, ``settled`` (the run reached ``settle_time`` after the
-    contact), ``lock`` (the last engagement), ``friction_margin`` (last), ``secured``,
-    ``failures`` (the reasons, from :data:`FAILURES`).
+    lowest foot's highest rebound with every foot off the deck), ``tip_over_deg`` (the
+    gear's static tip-over angle in the direction of the tilt at the contact, deg),
+    ``bounced``, ``tipped``, ``on_pad``, ``settled`` (the run reached ``settle_time``
+    after the contact), ``lock`` (the last engagement), ``friction_margin`` (last),
+    ``secured``, ``failures`` (the reasons, from :data:`FAILURES`).
     """
     t, touched = result["t"], result["touched"] > 0.5
     k0 = int(np.argmax(touched))
@@ -83,20 +101,25 @@ def contact_figures(result, limits: dict, mass: float) -> dict:
     end = min(t[k0] + settle, d["simulation"]["duration"])
     settled = bool(t[last] >= t[k0] + settle - row - 1e-9)
     stopped = bool(t[last] < end - row - 1e-9)       # stopped on the deck: tipped over
-    offset = np.hypot(result["x_e"][after], result["y_e"][after])
-    tipped = bool(np.max(result["tip_margin"][after]) > 1 or stopped)
+    cut = result["F_total"][after] < CUT_THRUST * mass * d["quadrotor"]["gravity"]
+    lifted = result["feet_down"][after] < N_FEET - 0.5
+    tipped = bool(np.any((result["tip_margin"][after] > 1) & lifted & cut) or stopped)
+    tip0 = float(result["tip_margin"][k0])
+    tip_over = float(np.degrees(result["tilt_rel"][k0] / tip0)) if tip0 > 0 else 90.0
     lock = float(result["engaged"][last])
     margin = float(result["friction_margin"][last])
-    resting = bool(result["feet_down"][last] >= 3.5)
+    resting = bool(result["feet_down"][last] >= N_FEET - 0.5)
     secured = bool(settled and resting and (
         lock >= ENGAGED or margin < limits["max_friction_margin"]))
     peak = float(np.max(result["F_peak"][after]))
     v_n = float(result["foot_sink_rate"][k0])
     fig = {"peak_gear_force": peak, "impact_energy": 0.5 * mass * v_n ** 2,
-           "bounce": bounce, "bounced": bounce > limits["max_bounce"], "tipped": tipped,
-           "on_pad": bool(settled and np.all(offset <= limits["pad_radius"])),
+           "bounce": bounce, "tip_over_deg": tip_over, "bounced": bounce > limits["max_bounce"],
+           "tipped": tipped,
+           "on_pad": bool(settled and np.all(result["foot_offset"][after]
+                                             <= limits["pad_radius"])),
            "settled": settled, "lock": lock, "friction_margin": margin, "secured": secured}
     fig["failures"] = [name for name, bad in zip(FAILURES, (
-        fig["bounced"], tipped, peak > limits["max_gear_load"], not fig["on_pad"],
+        tip0 > 1, fig["bounced"], tipped, peak > limits["max_gear_load"], not fig["on_pad"],
         not secured), strict=True) if bad]
     return fig

@@ -78,8 +78,13 @@ class TouchdownReport:
         ``m1 v_n^2 / 2`` of the lowest foot's sink rate ``v_n`` at first contact, J.
     bounce : float or None
         The lowest foot's highest rebound above the deck with every foot off it, m.
+    tip_over_deg : float or None
+        The gear's static tip-over angle in the direction of the tilt at the first
+        contact, deg: the tilt there is judged against it beside ``max_tilt_deg``
+        (failure ``tilted``).
     on_pad : bool or None
-        Within ``pad_radius`` of the pad centre for ``settle_time`` after the contact.
+        Every foot within ``pad_radius`` of the pad centre for ``settle_time`` after
+        the contact.
     failures : list of str
         Why the landing failed: the first-contact figures over their limits, then
         :data:`~quadland.kinds.landing.contact_report.FAILURES`'s.
@@ -100,6 +105,7 @@ class TouchdownReport:
     peak_gear_force: float | None = None
     impact_energy: float | None = None
     bounce: float | None = None
+    tip_over_deg: float | None = None
     on_pad: bool | None = None
     failures: list = dataclasses.field(default_factory=list)
 
@@ -151,7 +157,7 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
         gear = contact_figures(result, limits, result.scenario.data["quadrotor"]["mass"])
         failures += gear.pop("failures")
         gear = {k: gear[k] for k in ("secured", "bounced", "tipped", "peak_gear_force",
-                                     "impact_energy", "bounce", "on_pad")}
+                                     "impact_energy", "bounce", "tip_over_deg", "on_pad")}
     return TouchdownReport(True, float(result["t"][k]), f["sink_rate"], f["offset"],
                            f["relative_speed"], f["tilt_deg"], int(result["aborts"][k]),
                            not failures, limits, **gear, failures=failures)
@@ -160,7 +166,11 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
 def landing_summary(result: SimulationResult) -> dict:
     """summary.json's figures of a landing: the ``landing`` object, phases and rotors.
 
-    ``phases``: the time each phase was first entered (s), by name;
+    ``phases``: the time each phase was first entered (s), by name; on the gear's
+    contact, ``landed`` is when the report judged the landing landed and secured
+    (``settle_time`` after the first contact, the last row; None when not secured),
+    whatever the flight code's guidance, whose touchdown verdict lags the contact,
+    had entered by then;
     ``rotors``: the extreme rotor forces and the limit ``F_max`` (N).
     """
     t = result["t"]
@@ -168,8 +178,11 @@ def landing_summary(result: SimulationResult) -> dict:
     for number, name in enumerate(PHASES):
         rows = np.flatnonzero(result["phase"] == number)
         phases[name] = float(t[rows[0]]) if rows.size else None
+    report = touchdown_report(result)
+    if report.secured is not None:
+        phases["landed"] = float(t[-1]) if report.secured else None
     rotors = np.vstack([result[f"F_{i}"] for i in range(1, 5)])
-    out = {"landing": touchdown_report(result).to_dict(), "phases": phases,
+    out = {"landing": report.to_dict(), "phases": phases,
            "rotors": {"min": float(rotors.min()) if rotors.size else None,
                       "max": float(rotors.max()) if rotors.size else None,
                       "F_max": rotor_force_max(result.scenario)}}
@@ -311,8 +324,12 @@ def landing_result_lines(summary: Mapping[str, Any]) -> list[str]:
     lines = [f"landing: {verdict} ({what} at {land['time']:.2f} s, {aborts})"]
     for name, key, unit, lim in _PRINTED:
         mark = "  over" if land[key] > land["limits"][lim] else ""
+        tip = ""
+        if gear and key == "tilt_deg":          # judged against the gear's tip-over angle too
+            tip = f", tip-over {land['tip_over_deg']:.1f}"
+            mark = "  over" if mark or "tilted" in land["failures"] else ""
         lines.append(f"  {name:<15}{land[key]:8.3f} {unit:<4} limit {land['limits'][lim]:g}"
-                     f"{mark}")
+                     f"{tip}{mark}")
     if gear:
         lines += _gear_lines(land)
     nav = summary.get("navigation")
@@ -327,11 +344,14 @@ def landing_result_lines(summary: Mapping[str, Any]) -> list[str]:
 def _gear_reason(land: Mapping[str, Any], failure: str) -> str:
     """One failure of the gear contact's, with its figure."""
     lim = land["limits"]
-    return {"bounced": f"bounced {100 * land['bounce']:.1f} cm > {100 * lim['max_bounce']:g} cm",
+    return {"tilted": f"tilt {land['tilt_deg']:.1f} deg at contact past the gear's tip-over "
+                      f"angle {land['tip_over_deg']:.1f} deg",
+            "bounced": f"bounced {100 * land['bounce']:.1f} cm > {100 * lim['max_bounce']:g} cm",
             "tipped": "tipped over on the deck",
             "gear load": f"gear load {land['peak_gear_force']:.0f} > "
                          f"{lim['max_gear_load']:g} N",
-            "off the pad": f"left the pad ({lim['pad_radius']:g} m) before the settle time",
+            "off the pad": f"a foot left the pad ({lim['pad_radius']:g} m) before the settle "
+                           "time",
             "not secured": "not secured (no lock engaged, friction margin not below "
                            f"{lim['max_friction_margin']:g})"}[failure]
 

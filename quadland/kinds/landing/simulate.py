@@ -241,7 +241,8 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
         what, t_fail = f"the output {name} became non-finite", times[k]
         times, X, R, Y = times[:k], X[:k], R[:k], Y[:k]
         touched = None if touched is None else touched[:k]
-    result = _result(scenario, times, X, R, Y, recorded, touched, lv.pp)
+    held = None if touched is None else _held_disturbance(clocks, w_dist, times)
+    result = _result(scenario, times, X, R, Y, recorded, touched, lv.pp, held)
     if what is not None:
         xp_last = X[-1, landing_loop_state(lv.l).slice("xp")] if len(X) else None
         raise SimulationError(f"flight failed at t = {t_fail:.4g} s: {what}"
@@ -348,17 +349,25 @@ def _ride(scenario, lv, loop, rows, t_td, x_td, y_td, R_td):
     return ride
 
 
+def _held_disturbance(clocks, w_dist, times) -> np.ndarray:
+    """The disturbance held at each row, ``(n, 9)``: the last sample at or before its time
+    (a row on a sample's instant holds that sample, as the simulator does)."""
+    i_w = np.searchsorted(clocks[1].times(), times + grid_tolerance(clocks), side="right") - 1
+    return w_dist[:, np.maximum(i_w, 0)].T
+
+
 def _result(scenario, times, X, R, Y, recorded=LANDING_RECORDED,
-            touched=None, pp=None) -> SimulationResult:
+            touched=None, pp=None, held=None) -> SimulationResult:
     """The result's columns: ``t``, every output and every recorded signal by name; on the
     gear's contact also ``touched`` (1 from the first contact's row on) and the gear's
-    signals (:func:`quadland.kinds.landing.contact_report.gear_columns`)."""
+    signals (:func:`quadland.kinds.landing.contact_report.gear_columns`, under the
+    disturbance ``held`` at each row)."""
     cols = {"t": times}
     cols.update(zip(LANDING_SIGNALS.element_names(), Y.T, strict=True))
     cols.update(zip(recorded.element_names(), R.T, strict=True))
     if touched is not None:
         cols["touched"] = touched
-        cols.update(gear_columns(pp, times, X, touched))
+        cols.update(gear_columns(pp, times, X, touched, held))
     layout = LANDING_TRAJECTORY if recorded is LANDING_RECORDED else SENSED_TRAJECTORY
     return SimulationResult(scenario, {k: np.ascontiguousarray(v, dtype=float)
                                        for k, v in cols.items()}, X, layout,
