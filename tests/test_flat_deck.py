@@ -16,6 +16,7 @@ import pytest
 
 import quadland
 from quadland.kinds.landing import simulate as landing_simulate
+from quadland.kinds.landing.contact_report import flat_gear_signals
 from quadland.kinds.landing.sensed import sensed_vectors
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import load_scenario
@@ -26,7 +27,11 @@ from quadland_symbolic.landing.flat_deck import (
     amplitude_indices,
     flat_deck_loop,
 )
-from quadland_symbolic.landing.loop import landing_loop, landing_loop_params
+from quadland_symbolic.landing.loop import (
+    landing_gear_signals_function,
+    landing_loop,
+    landing_loop_params,
+)
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
 from quadland_symbolic.landing.sensed_loop import landing_sensed_loop, sensed_loop_params
 
@@ -99,6 +104,21 @@ def test_each_rebuilt_function_computes_the_same_bits(build, welded):
             assert np.array_equal(u.view(np.int64)[~nan], v.view(np.int64)[~nan]), name
         checked += 1
     assert checked >= 5
+
+
+def test_the_gear_signals_on_a_flat_deck_are_the_same_bits():
+    """The gear's signals of a landing's rows (``contact_report``) on the flat deck, at
+    random inputs: the full function's bits; and no sinusoid read."""
+    full, flat = landing_gear_signals_function(), flat_gear_signals()
+    pp0 = np.asarray(landing_values(load_scenario("highway")).pp, dtype=float).ravel()
+    args = _random_inputs(full, {"pp": (LANDING_PLANT_PARAMS, "")}, {"pp": pp0}, 500,
+                          np.random.default_rng(21))
+    u, v = (np.asarray(f.map(500)(*args)) for f in (full, flat))
+    nan = np.isnan(u) & np.isnan(v)
+    assert nan.mean() < 0.5
+    assert np.array_equal(u.view(np.int64)[~nan], v.view(np.int64)[~nan])
+    assert not _reads(flat, 2)[_sines("", LANDING_PLANT_PARAMS)].any()
+    assert _reads(full, 2)[_sines("", LANDING_PLANT_PARAMS)].any()
 
 
 @pytest.mark.parametrize("build, welded", LOOPS)
