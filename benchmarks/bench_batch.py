@@ -6,16 +6,17 @@ reference:
 * the pure-C reference: ``generated/example/land -q`` (highway, no CSV, the
   report alone; built here with the example's Makefile), the child's CPU time;
 * a warm ``quadland.simulate`` of ``highway`` and ``ship`` in this process, as
-  before this work (the plant with the gear's contact throughout, ``near``
-  infinite, and the sensors' Gauss-Markov noise row by row) and now (the plant
-  without the contact until the lowest foot is within
-  ``quadland.kinds.landing.gear.free_flight_gap``, the noise column by column),
-  interleaved; and the same landings compared column by column (bit for bit);
+  before the session of 2026-11-26 that measured it (:func:`configure`: the deck's
+  sinusoid sums evaluated on a flat deck too, the noise recursions over Python
+  floats, the gear's columns from the full gear signals, the drive profile's planned
+  speed evaluated in every run) and now, interleaved; and the same landings
+  compared column by column, bit for bit (signs of zero included);
 * the campaign's wall time per landing with one worker: the slope between a
-  60-run and a 300-run ``highway`` campaign (fixed costs cancel), against
-  ``land -q``'s CPU (target: at most 1.5x);
+  60-run and a 300-run ``highway`` campaign (fixed costs cancel), before and now,
+  interleaved, against ``land -q``'s CPU (target: at most 1.5x); and per simulated
+  second (the campaign's landings fly longer than ``land -q``'s);
 * a 300-landing ``highway`` campaign on every core, each run alone per message
-  (``chunk = 1``, as before) and in chunks (``quadland.campaign.local.chunk_size``),
+  (``chunk = 1``) and in chunks (``quadland.campaign.local.chunk_size``),
   its ``runs.csv`` compared (the same rows bit for bit), and ``quadland campaign``
   as a command from process start to exit (target: 2 s of wall);
 * the 20 x 20 envelope of 30 runs per cell (12,000 landings, target 3 min),
@@ -25,13 +26,16 @@ The machine is shared: its load average is printed with the figures.
 
 Run from the repository root::
 
-    python benchmarks/bench_batch.py            # about four minutes on 2 quiet cores
+    python benchmarks/bench_batch.py            # about eight minutes on 2 quiet cores
     python benchmarks/bench_batch.py --quick    # smaller campaigns (30 and 90 runs)
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import io
+import json
 import os
 import statistics
 import subprocess
@@ -46,37 +50,30 @@ import quadland
 from quadland.campaign import execute, local
 from quadland.campaign.execute import run_campaign
 from quadland.campaign.fly import warm_up
-from quadland.engine import noise
-from quadland.kinds.landing import sensing
+from quadland.engine import noise, recursion, wind
+from quadland.kinds.landing import contact_report
 from quadland.kinds.landing import simulate as landing_simulate
-from quadland.kinds.landing.gear import free_flight_gap
 from quadland.scenario import load_scenario
+from quadland_symbolic.landing import drive
+from quadland_symbolic.landing.loop import landing_gear_signals_function
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "generated" / "example"
 
-
-def _gauss_markov_by_rows(times, sigma, tau, normals):
-    """The recursion as it was before issue 20: one NumPy row at a time."""
-    normals = np.asarray(normals, dtype=float)
-    n, m = normals.shape
-    sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (m,))
-    tau = np.broadcast_to(np.asarray(tau, dtype=float), (m,))
-    x = np.empty((n, m))
-    if n == 0:
-        return x
-    a = noise._decay(np.diff(np.asarray(times, dtype=float))[:, None], tau[None, :])
-    b = sigma * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
-    x[0] = sigma * normals[0]
-    for k in range(n - 1):
-        x[k + 1] = a[k] * x[k] + b[k] * normals[k + 1]
-    return x
+_NOW = {"flat_deck": landing_simulate.flat_deck, "recursion": recursion.recursion,
+        "gear": contact_report.flat_gear_signals, "planned": drive._planned_speed_change}
 
 
 def configure(before: bool) -> None:
-    """``before``: the plant with the contact throughout and the row-by-row noise."""
-    landing_simulate.free_flight_gap = (lambda sc: np.inf) if before else free_flight_gap
-    sensing.gauss_markov = _gauss_markov_by_rows if before else noise.gauss_markov
+    """``before``: the full loop on a flat deck, the recursions over Python floats, the
+    full gear signals and the planned speed evaluated each time (the code of bf429f3)."""
+    landing_simulate.flat_deck = (lambda *a: False) if before else _NOW["flat_deck"]
+    rec = (lambda *a: None) if before else _NOW["recursion"]
+    noise.recursion = wind.recursion = rec
+    contact_report.flat_gear_signals = landing_gear_signals_function if before else \
+        _NOW["gear"]
+    contact_report._mapped.cache_clear()
+    drive._planned_speed_change = _NOW["planned"].__wrapped__ if before else _NOW["planned"]
 
 
 def land_q(repeats: int) -> list[float]:
@@ -110,17 +107,22 @@ def warm(name: str, repeats: int) -> dict:
     configure(False)
     a, b = results[True], results[False]
     same = set(a.columns) == set(b.columns) and all(
-        np.array_equal(a[k], b[k], equal_nan=True) for k in a.columns) and np.array_equal(
-        a.states, b.states)
-    return {"before": times[True], "now": times[False], "same": same}
+        np.array_equal(np.asarray(a[k]).view(np.int64), np.asarray(b[k]).view(np.int64))
+        for k in a.columns) and np.array_equal(a.states.view(np.int64),
+                                               b.states.view(np.int64))
+    return {"before": times[True], "now": times[False], "same": same,
+            "span": float(b["t"][-1])}
 
 
-def campaign(runs: int, workers: int, chunk: int | None = None) -> tuple[float, str, float]:
+def campaign(runs: int, workers: int, chunk: int | None = None, before: bool = False
+             ) -> tuple[float, str, float]:
     """(wall s of flying, runs.csv's text, CPU s of this process) of a highway campaign
-    into a new folder (with one worker, the CPU is the runs')."""
+    into a new folder (with one worker, the CPU is the runs'); ``before``:
+    :func:`configure`'s."""
     saved = execute.chunk_size
     if chunk is not None:
         execute.chunk_size = lambda n, w: chunk
+    configure(before)
     try:
         with tempfile.TemporaryDirectory() as tmp:
             cpu = time.process_time()
@@ -131,6 +133,18 @@ def campaign(runs: int, workers: int, chunk: int | None = None) -> tuple[float, 
             return result.elapsed, (result.folder / "runs.csv").read_text(), cpu
     finally:
         execute.chunk_size = saved
+        configure(False)
+
+
+def flown_seconds(runs_csv: str) -> float:
+    """The mean simulated time of a campaign's landings: touchdown plus the settle time
+    (``t_touchdown`` or the failure's time; the last row of a run is not in runs.csv)."""
+    rows = list(csv.DictReader(io.StringIO(runs_csv)))
+    key = next((k for k in ("touchdown_time", "t_touchdown", "time") if k in rows[0]), None)
+    if key is None:
+        return float("nan")
+    settle = load_scenario("highway")["landing.settle_time"]
+    return statistics.mean(float(r[key]) + settle for r in rows if r[key] not in ("", "nan"))
 
 
 def command(runs: int) -> float:
@@ -153,29 +167,44 @@ def main() -> None:
     args = parser.parse_args()
     small, large = (30, 90) if args.quick else (60, 300)
     cores = len(os.sched_getaffinity(0))
-    warm_up(load_scenario("highway"))
-    warm_up(load_scenario("ship"))
+    for before in (True, False):
+        configure(before)
+        warm_up(load_scenario("highway"))
+        warm_up(load_scenario("ship"))
     print(f"load average before: {os.getloadavg()}, {cores} cores")
     ref = land_q(7)
     c_ms = statistics.median(ref)
+    done = subprocess.run([str(EXAMPLE / "build" / "land"), "-q"], check=True,
+                          capture_output=True, text=True)
+    report = json.loads((done.stdout + done.stderr).strip().splitlines()[-1])
+    c_span = report["time"] + load_scenario("highway")["landing.settle_time"]
     print("\n| what | CPU (ms), median (min to max) | / land -q |\n|---|---:|---:|")
-    print(f"| `generated/example/land -q` (highway, 7 runs) | {_med(ref)} | 1 |")
+    print(f"| `generated/example/land -q` (highway, 7 runs; {c_span:.1f} s flown) | {_med(ref)} "
+          f"| 1 |")
     for name in ("highway", "ship"):
-        w = warm(name, 5)
-        for key, label in (("before", "the contact plant throughout, noise by rows"),
-                           ("now", "free plant until 10 cm, noise by columns")):
-            print(f"| warm `simulate` {name}, {label} | {_med(w[key])} | "
+        w = warm(name, 7)
+        for key in ("before", "now"):
+            print(f"| warm `simulate` {name} ({w['span']:.1f} s flown), {key} | {_med(w[key])} | "
                   f"{statistics.median(w[key]) / c_ms:.2f} |")
         gain = statistics.median(w["before"]) / statistics.median(w["now"])
         print(f"| {name}: before / now | | {gain:.2f}x faster; bit for bit: {w['same']} |")
-    t_small, _, c_small = campaign(small, 1)
-    t_large, _, c_large = campaign(large, 1)
-    slope = (t_large - t_small) / (large - small)
-    cpu_slope = (c_large - c_small) / (large - small)
-    print(f"\n- one worker: {small} runs {t_small:.2f} s, {large} runs {t_large:.2f} s wall: "
-          f"**{1e3 * slope:.1f} ms per landing**, {slope / c_ms:.2f}x `land -q`'s CPU "
-          f"(target <= 1.5x); in CPU time {1e3 * cpu_slope:.1f} ms per landing, "
-          f"{cpu_slope / c_ms:.2f}x")
+    out = {}
+    for runs in (small, large):                 # interleaved: before, now, before, now
+        for before in (True, False):
+            out[runs, before] = campaign(runs, 1, before=before)
+    csv_same = out[large, True][1] == out[large, False][1]
+    span = flown_seconds(out[large, False][1])
+    for before in (True, False):
+        (t_s, _, c_s), (t_l, _, c_l) = out[small, before], out[large, before]
+        slope, cpu_slope = (t_l - t_s) / (large - small), (c_l - c_s) / (large - small)
+        print(f"- one worker, {'before' if before else 'now'}: {small} runs {t_s:.2f} s, "
+              f"{large} runs {t_l:.2f} s wall: **{1e3 * slope:.1f} ms per landing**, "
+              f"{slope / c_ms:.2f}x `land -q`'s CPU (target <= 1.5x); in CPU time "
+              f"{1e3 * cpu_slope:.1f} ms per landing, {cpu_slope / c_ms:.2f}x; per simulated "
+              f"second {slope / span / (c_ms / c_span):.2f}x `land -q`'s in wall, "
+              f"{cpu_slope / span / (c_ms / c_span):.2f}x in CPU")
+    print(f"- the campaign's landings fly {span:.1f} s on average (touchdown plus the settle "
+          f"time), `land -q`'s {c_span:.1f} s; runs.csv before and now identical: {csv_same}")
     per_run, runs_csv, _ = campaign(large, cores, chunk=1)
     chunked, chunk_csv, _ = campaign(large, cores)
     k = local.chunk_size(large, cores)

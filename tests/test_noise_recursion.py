@@ -1,12 +1,15 @@
-"""gauss_markov's recursion, column by column over Python floats (issue 20): the same
-numbers, bit for bit, as the recursion written out row by row on NumPy's arrays."""
+"""gauss_markov's recursion, in C (quadland.engine.recursion) or without a compiler
+column by column over Python floats (issue 20): the same numbers, bit for bit, as the
+recursion written out row by row on NumPy's arrays."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from quadland.engine import noise
 from quadland.engine.noise import gauss_markov
+from quadland.engine.recursion import compiled_recursion
 
 
 def _by_rows(times, sigma, tau, normals):
@@ -24,11 +27,18 @@ def _by_rows(times, sigma, tau, normals):
     return x
 
 
-@pytest.mark.parametrize("n", [1, 2, 500])
-def test_gauss_markov_is_its_row_recursion_bit_for_bit(n):
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("n", [1, 2, 500, 10_000])
+def test_gauss_markov_is_its_row_recursion_bit_for_bit(monkeypatch, n, compiled):
+    """In C and over Python floats: the row recursion's bits (signs of zero too)."""
+    if compiled:
+        assert compiled_recursion() is not None          # this machine has a compiler
+    else:
+        monkeypatch.setattr(noise, "recursion", lambda *args: None)
     rng = np.random.default_rng(20)
     times = np.cumsum(rng.uniform(1e-3, 1e-2, n))
     sigma, tau = np.array([0.5, 1.5, 2.0, 0.1]), np.array([0.0, np.inf, 0.3, 4.0])
     normals = rng.standard_normal((n, 4))
-    np.testing.assert_array_equal(gauss_markov(times, sigma, tau, normals),
-                                  _by_rows(times, sigma, tau, normals))
+    got, want = gauss_markov(times, sigma, tau, normals), _by_rows(times, sigma, tau, normals)
+    assert got.shape == want.shape == (n, 4)
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))

@@ -64,12 +64,21 @@ def test_one_cosine_gust():
     np.testing.assert_allclose(speed[inside], 3.0 * (1 - np.cos(np.pi * (t[inside] - 2.0) / 1.5)))
 
 
-def test_the_turbulence_recursion_is_scipys_lfilter_bit_for_bit():
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_turbulence_recursion_is_scipys_lfilter_bit_for_bit(monkeypatch, compiled):
     # issue 20: scipy.signal cost most of a second to import in every landing process;
-    # the recursion replacing its one call must give the same bits
+    # the recursion replacing its one call must give the same bits, in C
+    # (quadland.engine.recursion) and over Python floats without a compiler
     import scipy.signal
 
+    from quadland.engine import wind
+    from quadland.engine.recursion import compiled_recursion
     from quadland.engine.wind import first_order_recursion
+
+    if compiled:
+        assert compiled_recursion() is not None
+    else:
+        monkeypatch.setattr(wind, "recursion", lambda *args: None)
 
     rng = np.random.default_rng(7)
     for a, b, n in ((0.99935, 0.0366, 4000), (0.957, 0.29, 1000), (0.0, 1.3, 10),

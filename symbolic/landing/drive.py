@@ -29,6 +29,8 @@ amplitude zero the vehicle is eq. (4)'s alone.
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 import numpy as np
 
@@ -122,5 +124,14 @@ def pack_drive(start, duration, speed_change, heading_change, lane_offset, u0: f
 
 
 def planned_speed_change(t: float, p_drive) -> float:
-    """``du(t)``, the profile's planned surge speed change by time ``t`` (m/s), a number."""
-    return float(drive_reference(ca.DM(t), ca.DM(p_drive))[0])
+    """``du(t)``, the profile's planned surge speed change by time ``t`` (m/s), a number.
+
+    Remembered per ``t`` and profile: a campaign's every run validates the same
+    profile (CasADi's numeric evaluation costs about a millisecond a call)."""
+    return _planned_speed_change(float(t), tuple(np.asarray(p_drive, dtype=float).ravel()
+                                                 .tolist()))
+
+
+@functools.lru_cache(maxsize=256)
+def _planned_speed_change(t: float, p_drive: tuple[float, ...]) -> float:
+    return float(drive_reference(ca.DM(t), ca.DM(list(p_drive)))[0])

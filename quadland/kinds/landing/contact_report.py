@@ -42,11 +42,13 @@ import functools
 import numpy as np
 
 from quadland_symbolic.landing.contact import N_FEET
+from quadland_symbolic.landing.flat_deck import amplitude_indices, flat_function
 from quadland_symbolic.landing.gear import CUT_THRUST, FAILURES, GEAR_SIGNALS, GEAR_STATE
 from quadland_symbolic.landing.loop import landing_gear_signals_function
-from quadland_symbolic.landing.plant import LANDING_PLANT_STATE
+from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 
-__all__ = ["gear_columns", "contact_figures", "ENGAGED", "FAILURES", "CUT_THRUST"]
+__all__ = ["gear_columns", "flat_gear_signals", "contact_figures", "ENGAGED", "FAILURES",
+           "CUT_THRUST"]
 
 #: The lock counts as engaged at this engagement.
 ENGAGED = 0.95
@@ -65,8 +67,10 @@ def gear_columns(pp, times, X, touched, W) -> dict[str, np.ndarray]:
         return cols
     xp = np.asarray(X, dtype=float)[rows, :LANDING_PLANT_STATE.size]
     w = np.asarray(W, dtype=float)[rows, :]
-    s = np.asarray(_mapped(rows.size)(xp.T, w.T, np.asarray(times, dtype=float)[None, rows],
-                                      np.asarray(pp, dtype=float)), dtype=float)
+    pp = np.asarray(pp, dtype=float).ravel()
+    flat = not np.any(pp[list(amplitude_indices(LANDING_PLANT_PARAMS))])
+    s = np.asarray(_mapped(rows.size, flat)(xp.T, w.T, np.asarray(times, dtype=float)[None, rows],
+                                            pp), dtype=float)
     for name in GEAR_SIGNALS.names():
         cols[name][rows] = s[GEAR_SIGNALS.slice(name)][0]
     xg = xp[:, LANDING_PLANT_STATE.slice("gear")].T
@@ -76,8 +80,18 @@ def gear_columns(pp, times, X, touched, W) -> dict[str, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=8)
-def _mapped(n: int):
-    return landing_gear_signals_function().map(n)
+def _mapped(n: int, flat: bool):
+    """The gear's signals at ``n`` rows; ``flat``: on a deck whose sinusoids' amplitudes
+    are all zero, without their sums (the same bits, ``tests/test_flat_deck.py``)."""
+    return (flat_gear_signals() if flat else landing_gear_signals_function()).map(n)
+
+
+@functools.cache
+def flat_gear_signals():
+    """``landing_gear_signals`` on a flat deck
+    (:func:`quadland_symbolic.landing.flat_deck.flat_function`)."""
+    return flat_function(landing_gear_signals_function(),
+                         {"pp": amplitude_indices(LANDING_PLANT_PARAMS)})
 
 
 def contact_figures(result, limits: dict, mass: float) -> dict:

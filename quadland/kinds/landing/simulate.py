@@ -55,6 +55,7 @@ from quadland.kinds.landing.values import (
 )
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.deck import DECK_PARAMS
+from quadland_symbolic.landing.flat_deck import amplitude_indices, flat_deck_loop
 from quadland_symbolic.landing.guidance import TOUCHDOWN
 from quadland_symbolic.landing.loop import (
     LANDING_ENVELOPE,
@@ -71,11 +72,15 @@ from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
-from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY, landing_sensed_loop
+from quadland_symbolic.landing.sensed_loop import (
+    SENSED_TRAJECTORY,
+    landing_sensed_loop,
+    sensed_loop_params,
+)
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 
 __all__ = ["landing_envelope", "landing_plan", "check_landing_plan", "simulate_landing",
-           "landing_loop_part"]
+           "landing_loop_part", "flat_deck"]
 
 
 def landing_envelope(scenario: Scenario) -> Envelope:
@@ -175,15 +180,27 @@ def _check_motor_step(scenario: Scenario) -> None:
             f"simulation.rk_steps_per_interval to {need}")
 
 
-def landing_loop_part(l: int, part: str, sensed: bool = False, welded: bool = False):
+def landing_loop_part(l: int, part: str, sensed: bool = False, welded: bool = False,
+                      flat: bool = False):
     """The compiled (or VM) ``part`` of the landing loop's simulator for ``l`` nodes: the
     loop on the true state, or (``sensed``) on the sensors and the navigation filter;
-    ``welded``: the idealization pinned to the deck at touchdown (``gear.welded``)."""
+    ``welded``: the idealization pinned to the deck at touchdown (``gear.welded``);
+    ``flat``: on a deck whose sinusoids' amplitudes are all zero, without their sums
+    (:func:`quadland_symbolic.landing.flat_deck.flat_deck_loop`, the same results)."""
     from quadland.kinds.landing.flight import flight_code
 
     flight = flight_code(l, sensed) if part == "sampled_flight" else None
     model = landing_sensed_loop(l, welded) if sensed else landing_loop(l, welded)
-    return compiled_loop(model, part, flight)
+    return compiled_loop(flat_deck_loop(model) if flat else model, part, flight)
+
+
+def flat_deck(pp, pc, pc_layout) -> bool:
+    """True when every amplitude of the deck's sinusoids is zero, in the plant's
+    parameters ``pp`` and in the controller's model within ``pc`` (laid out as
+    ``pc_layout``): the loop on a flat deck then computes the same numbers."""
+    amps = (np.asarray(pp, dtype=float).ravel()[list(amplitude_indices(LANDING_PLANT_PARAMS))],
+            np.asarray(pc, dtype=float).ravel()[list(amplitude_indices(pc_layout, "pp."))])
+    return not any(np.any(a) for a in amps)
 
 
 def simulate_landing(scenario: Scenario) -> SimulationResult:
@@ -214,12 +231,14 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     flight = scenario.data["controller"]["backend"] == "c"
     sensed = sensors_enabled(scenario)
     welded = scenario.data["gear"]["welded"]
-    loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed, welded)
     hover = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])["F"]
     pc, xc0, N = lv.pc, lv.xc0, None
     if sensed:
         pc, xc0 = sensed_vectors(scenario, lv)
         N = tick_table(scenario, len(clocks[2].times()))
+    pc_layout = (sensed_loop_params if sensed else landing_loop_params)(lv.l)
+    loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed, welded,
+                             flat_deck(lv.pp, pc, pc_layout))
     p_quad = LANDING_PLANT_PARAMS.unpack(lv.pp)["p_quad"]
     run = loop.sampled(lv.xp0, xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
                        pc, TILT_MIN, envelope.bounds,
