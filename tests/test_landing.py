@@ -295,6 +295,10 @@ def test_the_welded_idealization_stays_a_switch():
     ("touchdown.switch_impulse=0.0", "touchdown.switch_impulse"),
     ("landing.max_friction_margin=1.5", "landing.max_friction_margin"),
     ("quadrotor.gear_height=0.0", "quadrotor.gear_height: must be positive for the gear's"),
+    # F_max = 2 x 2 kg x 9.8 / 4 = 9.8 N by hand: the plant clips a command above it, and
+    # 100 N "idle" flew the cut body 8.3 m off the roof (reported bounced and tipped)
+    ("touchdown.idle_thrust=9.81", "touchdown.idle_thrust: 9.81 N is more than a rotor's "
+     "F_max (quadrotor.thrust_to_weight x mass x gravity / 4 = 9.8 N)"),
 ])
 def test_a_bad_gear_or_touchdown_value_is_one_line(tmp_path, capsys, setting, message):
     out = tmp_path / "run"
