@@ -218,11 +218,11 @@ LOOSE = ["sensors.enabled=false", 'touchdown.lock="none"']
 
 
 def test_a_too_hard_landing_bounces_and_tips_and_the_report_says_why(tmp_path, capsys):
-    """A crawl forced to 3.5 m/s hits the deck at 4.5 m/s, past 14 CFR 27.725's 2.55 m/s
-    drop, tilted past the limit: the gear rebounds (restitution 0.45, no lock to hold it),
-    its load passes the default gear's 27.725 limit load (424 N) and the quadrotor rolls
-    over on the deck (a 2.5 m/s crawl, with issue 19's gains, meets the deck at 3.1 m/s
-    with 324 N and a 1.3 cm rebound: it tips but neither bounces nor overloads). The
+    """A crawl forced to 3.5 m/s hits the deck at 4.15 m/s, past 14 CFR 27.725's 2.55 m/s
+    drop, tilted past the limit (25.3 deg): the gear rebounds 12.4 cm (restitution 0.45,
+    no lock to hold it), its load (463 N) passes the default gear's 27.725 limit load
+    (424 N) and the quadrotor rolls over (a 2.5 m/s crawl meets the deck at 3.13 m/s
+    with 314 N and a 0.75 cm rebound: it tips but neither bounces nor overloads). The
     run stops there at the singular attitude: a landing that failed, judged and reported
     (exit 0, summary.json written), not a failed flight; the verdict says why."""
     out = tmp_path / "hard"
