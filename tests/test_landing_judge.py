@@ -7,6 +7,7 @@ quadland.kinds.landing.contact_report has the rules; docs/landing.md, "Landed an
 secured", their sources.
 """
 
+import json
 import types
 
 import numpy as np
@@ -158,3 +159,38 @@ def test_no_lock_in_a_headwind_is_judged_with_the_friction_the_wind_consumes():
     rep = touchdown_report(res)
     assert not rep.secured and "not secured" in rep.failures
     assert landing_summary(res)["phases"]["landed"] is None
+
+
+def test_off_the_pad_names_both_of_its_causes_when_no_foot_left_the_pad(tmp_path, capsys):
+    """The turning car's crawl forced to 2.5 m/s with no lock, on the true state: it meets
+    the roof at 3.1 m/s and tips over, the run stopping on the deck 0.35 s after the first
+    contact. Every foot stays within the 0.5 m pad (the farthest 0.29 m, multiplied out
+    here from the CSV's poses and the gear's corners), so it is not on the pad only because
+    the run ended before the settle time. The verdict read "a foot left the pad (0.5 m)
+    before the settle time" until this review; it names both causes now."""
+    from quadland.cli import main
+
+    out = tmp_path / "hard"
+    sets = ["sensors.enabled=false", 'touchdown.lock="none"', "landing.touchdown_speed=2.5",
+            "landing.descent_speed=2.5"]
+    assert main(["simulate", "--scenario", "turning", "--no-plots", "--out", str(out),
+                 *(a for s in sets for a in ("--set", s))]) == 0
+    line = capsys.readouterr().out.splitlines()[1]
+    land = json.loads((out / "summary.json").read_text())["landing"]
+    sc = load_scenario("turning", sets)
+    fx, fy, h = sc["gear.feet_x"], sc["gear.feet_y"], sc["quadrotor.gear_height"]
+    feet = np.array([[sx * fx, sy * fy, -h] for sx in (1, -1) for sy in (1, -1)]).T
+    rows = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)
+    rows = rows[rows["t"] >= land["time"] - 1e-9]
+    farthest = 0.0
+    for r in rows:
+        R1 = rotation([r["phi1"], r["theta1"], r["psi1"]])
+        R2 = rotation([r["phi2"], r["theta2"], r["psi2"]])
+        d = R2.T @ (np.array([r["x1"] - r["x2"], r["y1"] - r["y2"], r["z1"] - r["z2"]])[:, None]
+                    + R1 @ feet)
+        farthest = max(farthest, float(np.max(np.hypot(d[0], d[1]))))
+    assert rows["t"][-1] < land["time"] + sc["landing.settle_time"] - 1.0    # stopped early
+    assert land["tipped"] and not land["on_pad"] and farthest < 0.5
+    assert "off the pad" in land["failures"]
+    assert "off the pad (0.5 m): a foot left it or the run ended before the settle time" in line
+    assert "a foot left the pad" not in line
