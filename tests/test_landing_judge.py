@@ -194,3 +194,22 @@ def test_off_the_pad_names_both_of_its_causes_when_no_foot_left_the_pad(tmp_path
     assert "off the pad" in land["failures"]
     assert "off the pad (0.5 m): a foot left it or the run ended before the settle time" in line
     assert "a foot left the pad" not in line
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18 review (review18b): 'secured' takes an engaged "
+                   "lock alone, but the magnet pulls along the deck normal only (it holds "
+                   "through friction, its pull inside the margin): an engaged lock with a "
+                   "margin over 1 slides")
+def test_an_engaged_magnet_on_a_slippery_roof_that_slides_is_not_secured():
+    """highway with mu = 0.03 (its sensors on, its magnet): the magnet engages, but the
+    feet can hold mu (m g + F_lock) = 0.03 x 119.6 = 3.6 N against the 50 km/h airflow's
+    Kt V + Kq V^2 = 0.3 x 13.9 + 0.01225 x 13.9^2 = 6.5 N: at the last row the body
+    slides back across the roof at about 2 m/s, the margin (with the lock's pull) 1.46."""
+    sc = load_scenario("highway", ["gear.friction=0.03"])
+    res = quadland.simulate(sc)
+    V = sc["initial.velocity2"][0]
+    drag = 0.3 * V + 0.01225 * V ** 2
+    assert drag / (0.03 * (M * G + 100.0)) > 1.5
+    assert res["engaged"][-1] > 0.95 and res["friction_margin"][-1] > 1
+    assert np.hypot(res["dx_e"][-1], res["dy_e"][-1]) > 1.0          # sliding, m/s
+    assert not touchdown_report(res).secured
