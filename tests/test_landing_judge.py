@@ -213,3 +213,17 @@ def test_an_engaged_magnet_on_a_slippery_roof_that_slides_is_not_secured():
     assert res["engaged"][-1] > 0.95 and res["friction_margin"][-1] > 1
     assert np.hypot(res["dx_e"][-1], res["dy_e"][-1]) > 1.0          # sliding, m/s
     assert not touchdown_report(res).secured
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18 review (review18b): a run stopped after the "
+                   "first contact counts as tipped over on the deck wherever the body is; "
+                   "this one stopped at the singular attitude 6.6 m above the roof")
+def test_a_body_that_flies_off_the_deck_has_not_tipped_over_on_it():
+    """highway with the rotors cut to their F_max (touchdown.idle_thrust = 9.8 N: 2 m1 g in
+    all, a valid 'idle'): the body lifts off the roof at the contact, and the run stops
+    at the singular attitude (roll 89.6 deg) with its centre 6.6 m above the pad; the
+    verdict read 'bounced 645.6 cm > 2 cm; tipped over on the deck; ...'."""
+    res = quadland.simulate(load_scenario("highway", ["touchdown.idle_thrust=9.8"]))
+    assert res["z1"][-1] - res["z2"][-1] > 5.0                 # far above the deck
+    assert np.degrees(abs(res["phi1"][-1])) > 85.0
+    assert not touchdown_report(res).tipped
