@@ -751,3 +751,52 @@ def test_the_farthest_foot_s_offset_from_the_pad_centre():
                                     part(p, "p_gear"), part(p, "p_lock"))
         off = GEAR_SIGNALS.unpack(np.array(s).ravel())["foot_offset"]
         assert off == pytest.approx(want, rel=1e-12), (centre, yaw)
+
+
+@pytest.mark.parametrize("pitch_deg,tips", [(32.0, False), (33.5, True)])
+def test_a_body_on_its_corner_tips_where_its_centre_leaves_the_support_rectangle(pitch_deg,
+                                                                                 tips):
+    # At rest on its lowest foot on a still level deck, rotors off, roll 30 deg and pitch
+    # (ZYX) as given: the centre's projection along the deck normal onto the feet's plane
+    # is at x = h_cg tan(pitch) / cos(roll), y = h_cg tan(roll) = 0.115 m (within 0.125):
+    # 0.144 m at 32 deg, within the feet's 0.15 m, and it falls back onto its feet; 0.153 m
+    # at 33.5 deg, past them, and it goes over (the boundary, 33.0 deg, below the pure
+    # pitch's 36.87 deg). Friction enough not to slide, feet damped as in the tip test.
+    ph, th = np.radians(30.0), np.radians(pitch_deg)
+    x = GEAR_HEIGHT * np.tan(th) / np.cos(ph)
+    assert bool(x > 0.15) is tips and GEAR_HEIGHT * np.tan(ph) < 0.125
+    R = np.array(rotation(ca.DM([ph, th, 0.0])))
+    feet = np.asarray(gear_defaults()["r_feet"], dtype=float).reshape(-1, 3).T
+    z = np.zeros(NZ)
+    z[3:5] = ph, th
+    z[2] = -(R @ feet)[2].min() - 0.0005
+    Z = simulate(z, params(gear=dict(mu=1.5, c=200.0)), 5e-4, 1.5)
+    tilt = relative_tilt_deg(Z[:, ::20], np.eye(3))
+    assert bool(tilt[-1] > 90.0) is tips and bool(tilt[-1] < 1.0) is not tips
+
+
+@pytest.mark.xfail(strict=True, reason="issue 18 review (review18b): tip_margin takes the ZYX "
+                   "pitch, atan(-n_x / hypot(n_y, n_z)) of the deck normal n in body axes, where "
+                   "the centre of mass's projection leaves the feet's rectangle at "
+                   "|n_x / n_z| > half_x / h_cg: with a roll the margin reads low (at a "
+                   "30 deg roll the pitch bound is 33.0 deg, not 36.87), so a contact tilted "
+                   "past the support reads within it")
+def test_tip_margin_passes_1_where_the_centre_leaves_the_support_rectangle():
+    # The body on a still level deck at roll 30 deg, pitch 34 deg (ZYX): the deck normal in
+    # body axes is n = (-sin th, sin ph cos th, cos ph cos th), and the centre's projection
+    # along it onto the feet's plane, h_cg (-n_x, -n_y) / n_z, is at x = 0.2 tan 34 / cos 30
+    # = 0.1557 m, past the feet's 0.15 m (y = 0.2 tan 30 = 0.1155 m, within 0.125 m): with
+    # no thrust, lock or friction limit nothing holds it. By the edges' angles alone (30 of
+    # 32.0 deg, 34 of 36.87 deg) it would be within.
+    from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
+    ph, th = np.radians(30.0), np.radians(34.0)
+    x = GEAR_HEIGHT * np.tan(th) / np.cos(ph)
+    assert x > 0.15 and GEAR_HEIGHT * np.tan(ph) < 0.125
+    p = params()
+    z = state_on_deck(np.zeros(3), 0.001)
+    z[3:5] = ph, th
+    s = gear_signals_function()(z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1],
+                                GEAR_STATE.zeros(), 0.0, np.zeros(3), part(p, "p_quad"),
+                                part(p, "p_act"), part(p, "p_veh"), part(p, "p_deck"),
+                                part(p, "p_gear"), part(p, "p_lock"))
+    assert GEAR_SIGNALS.unpack(np.array(s).ravel())["tip_margin"] > 1

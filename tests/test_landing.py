@@ -218,11 +218,11 @@ LOOSE = ["sensors.enabled=false", 'touchdown.lock="none"']
 
 
 def test_a_too_hard_landing_bounces_and_tips_and_the_report_says_why(tmp_path, capsys):
-    """A crawl forced to 3.5 m/s hits the deck at 4.5 m/s, past 14 CFR 27.725's 2.55 m/s
-    drop, tilted past the limit: the gear rebounds (restitution 0.45, no lock to hold it),
-    its load passes the default gear's 27.725 limit load (424 N) and the quadrotor rolls
-    over on the deck (a 2.5 m/s crawl, with issue 19's gains, meets the deck at 3.1 m/s
-    with 324 N and a 1.3 cm rebound: it tips but neither bounces nor overloads). The
+    """A crawl forced to 3.5 m/s hits the deck at 4.15 m/s, past 14 CFR 27.725's 2.55 m/s
+    drop, tilted past the limit (25.3 deg): the gear rebounds 12.4 cm (restitution 0.45,
+    no lock to hold it), its load (463 N) passes the default gear's 27.725 limit load
+    (424 N) and the quadrotor rolls over (a 2.5 m/s crawl meets the deck at 3.13 m/s
+    with 314 N and a 0.75 cm rebound: it tips but neither bounces nor overloads). The
     run stops there at the singular attitude: a landing that failed, judged and reported
     (exit 0, summary.json written), not a failed flight; the verdict says why."""
     out = tmp_path / "hard"
@@ -295,6 +295,10 @@ def test_the_welded_idealization_stays_a_switch():
     ("touchdown.switch_impulse=0.0", "touchdown.switch_impulse"),
     ("landing.max_friction_margin=1.5", "landing.max_friction_margin"),
     ("quadrotor.gear_height=0.0", "quadrotor.gear_height: must be positive for the gear's"),
+    # F_max = 2 x 2 kg x 9.8 / 4 = 9.8 N by hand: the plant clips a command above it, and
+    # 100 N "idle" flew the cut body 8.3 m off the roof (reported bounced and tipped)
+    ("touchdown.idle_thrust=9.81", "touchdown.idle_thrust: 9.81 N is more than a rotor's "
+     "F_max (quadrotor.thrust_to_weight x mass x gravity / 4 = 9.8 N)"),
 ])
 def test_a_bad_gear_or_touchdown_value_is_one_line(tmp_path, capsys, setting, message):
     out = tmp_path / "run"

@@ -254,7 +254,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                         choices=("idle", "hold", "secure")),
         "cut_delay": Field(F, "s", "time from the contact switch closing to the rotor cut",
                            lo=0.0, hi=10.0),
-        "idle_thrust": Field(F, "N", "each rotor's command once cut", lo=0.0, hi=1e3),
+        "idle_thrust": Field(F, "N", "each rotor's command once cut, at most F_max "
+                             "(thrust_to_weight mass gravity / 4)", lo=0.0, hi=1e3),
         "switch_impulse": Field(F, "s", "load impulse over the weight that closes the contact "
                                 "switch", hi=1.0, **_POS),
         "flare_height": Field(F, "m", "secure: reference height above touchdown from which the "
@@ -372,7 +373,8 @@ def check_landing(data: dict) -> None:
 
 def _check_gear(data: dict) -> None:
     """The gear's contact needs a positive gear height; a friction of 0 is allowed; the
-    landing area holds the first contact's offset limit."""
+    landing area holds the first contact's offset limit; the rotors' idle command is
+    within their force ``F_max``."""
     g = data["landing"]
     if g["pad_radius"] < g["max_offset"]:
         raise ScenarioError(f"landing.pad_radius: {g['pad_radius']:g} m is smaller than "
@@ -381,6 +383,12 @@ def _check_gear(data: dict) -> None:
     if not data["gear"]["welded"] and data["quadrotor"]["gear_height"] <= 0:
         raise ScenarioError("quadrotor.gear_height: must be positive for the gear's contact "
                             "(the feet's depth below the centre; gear.welded = true takes none)")
+    q, idle = data["quadrotor"], data["touchdown"]["idle_thrust"]
+    f_max = q["thrust_to_weight"] * q["mass"] * q["gravity"] / 4
+    if idle > f_max:
+        raise ScenarioError(f"touchdown.idle_thrust: {idle:g} N is more than a rotor's F_max "
+                            f"(quadrotor.thrust_to_weight x mass x gravity / 4 = {f_max:g} N): "
+                            "the rotors could not give it")
 
 
 def _check_profile(data: dict) -> None:

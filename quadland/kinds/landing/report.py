@@ -350,8 +350,8 @@ def _gear_reason(land: Mapping[str, Any], failure: str) -> str:
             "tipped": "tipped over on the deck",
             "gear load": f"gear load {land['peak_gear_force']:.0f} > "
                          f"{lim['max_gear_load']:g} N",
-            "off the pad": f"a foot left the pad ({lim['pad_radius']:g} m) before the settle "
-                           "time",
+            "off the pad": f"off the pad ({lim['pad_radius']:g} m): a foot left it or the run "
+                           "ended before the settle time",
             "not secured": "not secured (no lock engaged, friction margin not below "
                            f"{lim['max_friction_margin']:g})"}[failure]
 
