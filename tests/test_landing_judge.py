@@ -68,12 +68,14 @@ def test_tipped_is_past_the_angle_on_a_lifted_foot_with_the_rotors_cut(tip, feet
 
 
 def test_the_tilt_at_contact_is_judged_against_the_tip_over_angle_in_its_direction():
-    # the first row's tilt 0.6 rad at a margin 0.95 (within): the gear's angle in that
-    # direction is 0.6 / 0.95 rad; at a margin 1.05 the contact is tilted past it
+    # the first row's tilt 0.6 rad at a margin 0.95 (within): the centre's projection
+    # scales with tan(tilt), so the gear's angle in that direction is atan(tan 0.6 / 0.95)
+    # rad; at a margin 1.05 the contact is tilted past it
     rows = _rows(0.1, 4.0, 0.0)
     rows["tilt_rel"][0], rows["tip_margin"][0] = 0.6, 0.95
     fig = contact_figures(rows, LIMITS, M)
-    assert fig["tip_over_deg"] == pytest.approx(np.degrees(0.6 / 0.95), rel=1e-12)
+    assert fig["tip_over_deg"] == pytest.approx(np.degrees(np.arctan(np.tan(0.6) / 0.95)),
+                                                rel=1e-12)
     assert "tilted" not in fig["failures"]
     rows["tip_margin"][0] = 1.05
     assert contact_figures(rows, LIMITS, M)["failures"] == ["tilted"]
@@ -196,10 +198,6 @@ def test_off_the_pad_names_both_of_its_causes_when_no_foot_left_the_pad(tmp_path
     assert "a foot left the pad" not in line
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18 review (review18b): 'secured' takes an engaged "
-                   "lock alone, but the magnet pulls along the deck normal only (it holds "
-                   "through friction, its pull inside the margin): an engaged lock with a "
-                   "margin over 1 slides")
 def test_an_engaged_magnet_on_a_slippery_roof_that_slides_is_not_secured():
     """highway with mu = 0.03 (its sensors on, its magnet): the magnet engages, but the
     feet can hold mu (m g + F_lock) = 0.03 x 119.6 = 3.6 N against the 50 km/h airflow's

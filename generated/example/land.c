@@ -259,8 +259,7 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     tilted = l->tip0 > 1;
     bounced = l->bounce > QL_LAND_MAX_BOUNCE;
     on_pad = settled && l->offset <= QL_LAND_PAD_RADIUS;
-    secured = settled && l->feet >= 3.5
-        && (l->engaged >= 0.95 || l->margin < QL_LAND_MAX_FRICTION_MARGIN);
+    secured = settled && l->feet >= 3.5 && l->margin < QL_LAND_MAX_FRICTION_MARGIN;
     if (tilted) failures[n++] = "tilted";
     if (bounced) failures[n++] = "bounced";
     if (tipped) failures[n++] = "tipped";
@@ -290,7 +289,7 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     fprintf(stderr, ", \"peak_gear_force\": %.17g, \"impact_energy\": %.17g, \"bounce\": %.17g",
             l->peak, l->impact, l->bounce);
     fprintf(stderr, ", \"tip_over_deg\": %.17g",
-            l->tip0 > 0 ? l->tilt0 / l->tip0 * 57.29577951308232 : 90.0);
+            l->tip0 > 0 ? atan(tan(l->tilt0) / l->tip0) * 57.29577951308232 : 90.0);
     json_bool("on_pad", on_pad);
     fprintf(stderr, ", \"failures\": [");
     for (i = 0; i < n; ++i) fprintf(stderr, "%s\"%s\"", i ? ", " : "", failures[i]);

@@ -104,7 +104,8 @@ GEAR_SIGNALS = Layout("gear_sig", (
     Field("roll_rel", 1, "rad", "body roll relative to the deck (about the body x axis)"),
     Field("pitch_rel", 1, "rad", "body pitch relative to the deck (about the body y axis)"),
     Field("tilt_rel", 1, "rad", "angle between the body z axis and the deck normal"),
-    Field("tip_margin", 1, "-", "largest of |roll_rel|, |pitch_rel| over its tip-over angle"),
+    Field("tip_margin", 1, "-", "the centre's projection along the deck normal onto the feet's "
+          "plane over the support rectangle's half-side, the larger of x and y (> 1: outside)"),
     Field("friction_margin", 1, "-", "friction needed over available at rest (< 1 holds)"),
     Field("foot_sink_rate", 1, "m/s", "the lowest foot's speed into the deck plane"),
     Field("foot_offset", 1, "m", "the farthest foot's distance from the pad centre in the "
@@ -166,10 +167,26 @@ def foot_gap(x1q, xv, t, p_veh, p_deck, p_gear):
 
 
 def _relative_attitude(x1q, R_deck):
+    """Roll, pitch and tilt of the body relative to the deck, and the deck normal in body
+    axes (the last row of ``R_deck^T R1``)."""
     R_rel = R_deck.T @ rotation(QUAD6_STATE.unpack(x1q)["eta1"])
     roll = ca.atan2(R_rel[2, 1], R_rel[2, 2])
     pitch = ca.atan2(-R_rel[2, 0], ca.sqrt(R_rel[2, 1] ** 2 + R_rel[2, 2] ** 2))
-    return roll, pitch, ca.acos(ca.fmin(ca.fmax(R_rel[2, 2], -1), 1))
+    return roll, pitch, ca.acos(ca.fmin(ca.fmax(R_rel[2, 2], -1), 1)), R_rel[2, :].T
+
+
+def tip_margin(n_body, tip):
+    """Where the centre's projection along the deck normal falls on the feet's plane, over
+    the support rectangle's half-sides: ``max(|n_x| / (n_z tan tip_y), |n_y| / (n_z tan
+    tip_x))`` with ``n_body`` the deck normal in body axes and ``tip`` the
+    :func:`~quadland_symbolic.landing.contact.tip_over_angles` (about x, about y);
+    above 1 the centre is outside the rectangle. ``tan(tilt) / margin`` is the tangent
+    of the tip-over angle in the tilt's direction (the projection scales with the
+    tilt's tangent). A body upside down (``n_z <= 0``) reads about 1e9.
+    """
+    nz = ca.fmax(n_body[2], 1e-9)
+    return ca.fmax(ca.fabs(n_body[0]) / (nz * ca.tan(tip[1])),
+                   ca.fabs(n_body[1]) / (nz * ca.tan(tip[0])))
 
 
 @functools.cache
@@ -219,7 +236,7 @@ def gear_signals_function() -> ca.Function:
     v1E, w1E = R1 @ q["V1"], R1 @ q["Omega1"]
     d = q["p1"] + arm - deck.p2
     v_rel = v1E + ca.cross(w1E, arm) - deck.v2E - ca.cross(deck.w2E, d)
-    roll, pitch, tilt = _relative_attitude(x1q, deck.R_deck)
+    roll, pitch, tilt, n_body = _relative_attitude(x1q, deck.R_deck)
     tip = tip_over_angles(p_gear)
     thrust = WRENCH.unpack(wrench_from_rotors(q["F"], p_quad))["F_total"]
     Kt = QUADROTOR.unpack(p_quad)["Kt"]
@@ -233,7 +250,7 @@ def gear_signals_function() -> ca.Function:
     foot_offset = ca.sqrt(ca.mmax(feet_deck[0, :] ** 2 + feet_deck[1, :] ** 2))
     s = ca.vertcat(-lowest, hs["lock_gap"], ca.sum1(fs["F_n"]), ca.sum1(fs["in_contact"]),
                    engaged, hs["F_lock"], roll, pitch, tilt,
-                   ca.fmax(ca.fabs(roll) / tip[0], ca.fabs(pitch) / tip[1]), margin,
+                   tip_margin(n_body, tip), margin,
                    -(n2.T @ v_rel), foot_offset)
     names = ["x1q", "xv", "xg", "t", "v_wind", "p_quad", "p_act", "p_veh", "p_deck", "p_gear",
              "p_lock"]

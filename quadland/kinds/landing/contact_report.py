@@ -5,8 +5,9 @@ rows after the first contact (docs/landing.md, "Landed and secured"; each
 limit's source there):
 
 * **tilted**: the tilt at the first contact, relative to the deck, past the
-  gear's static tip-over angle in its direction (``tip_margin > 1`` there;
-  the angle is ``tilt_rel / tip_margin``, exact for a pure roll or pitch):
+  gear's static tip-over angle in its direction (``tip_margin > 1`` there: the
+  centre's projection along the deck normal outside the feet's rectangle; the
+  angle is ``atan(tan(tilt_rel) / tip_margin)``, exact in every direction):
   the gear meets the deck with the centre of mass outside its support, which
   only the rotors can hold. ``landing.max_tilt_deg`` stays the old figure's
   limit; the tilt is judged against the smaller of the two;
@@ -28,11 +29,13 @@ limit's source there):
   (deck frame, ``foot_offset``) from the first contact to ``settle_time``
   after it, the run reaching that instant;
 * **secured**: at the last row (``settle_time`` after the first contact, the
-  instant summary.json's ``phases.landed`` gives for a secured landing), the
-  lock-down engaged (95 %) with every foot on the deck, or, without one,
-  resting on the deck with the friction margin (thrust, the drag of the
-  airspeed through the wind at that row, the lock's pull) below
-  ``landing.max_friction_margin``.
+  instant summary.json's ``phases.landed`` gives for a secured landing),
+  resting on the deck (every foot down) with the friction margin (thrust, the
+  drag of the airspeed through the wind at that row, the lock's pull) below
+  ``landing.max_friction_margin``. The lock-down's pull acts along the deck
+  normal, so it holds through friction alone: an engaged lock on a slippery
+  deck the body slides on is not secured (issue 18's second review; before,
+  the lock engaged at 95 % counted as secured on its own).
 """
 
 from __future__ import annotations
@@ -119,12 +122,12 @@ def contact_figures(result, limits: dict, mass: float) -> dict:
     lifted = result["feet_down"][after] < N_FEET - 0.5
     tipped = bool(np.any((result["tip_margin"][after] > 1) & lifted & cut) or stopped)
     tip0 = float(result["tip_margin"][k0])
-    tip_over = float(np.degrees(result["tilt_rel"][k0] / tip0)) if tip0 > 0 else 90.0
+    tip_over = (float(np.degrees(np.arctan(np.tan(result["tilt_rel"][k0]) / tip0)))
+                if tip0 > 0 else 90.0)
     lock = float(result["engaged"][last])
     margin = float(result["friction_margin"][last])
     resting = bool(result["feet_down"][last] >= N_FEET - 0.5)
-    secured = bool(settled and resting and (
-        lock >= ENGAGED or margin < limits["max_friction_margin"]))
+    secured = bool(settled and resting and margin < limits["max_friction_margin"])
     peak = float(np.max(result["F_peak"][after]))
     v_n = float(result["foot_sink_rate"][k0])
     fig = {"peak_gear_force": peak, "impact_energy": 0.5 * mass * v_n ** 2,
