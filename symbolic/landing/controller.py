@@ -51,7 +51,7 @@ import casadi as ca
 
 from quadland_symbolic.backstepping import virtual_control
 from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
-from quadland_symbolic.landing import touchdown_policy as policy
+from quadland_symbolic.landing import touchdown_policy as tdp
 from quadland_symbolic.landing.attitude import thrust_attitude
 from quadland_symbolic.landing.bias import bias_next
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
@@ -292,7 +292,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     mm, c = landing_memory(l).unpack(mem), landing_controller_params(l).unpack(p_ctrl)
     q, act = QUADROTOR.unpack(p_quad), ACTUATOR.unpack(p_act)
     p_e, v_e, Omega1, eta2 = ms["p_e"], ms["v_e"], ms["Omega1"], ms["eta2"]
-    td = policy.bounded_commands(rs, c["tilt_max"])              # the touchdown policy
+    td = tdp.bounded_commands(rs, c["tilt_max"])              # the touchdown policy
     # the yaw within half a turn of the deck's heading, its reference: a yaw
     # measured 2 pi k away is the same attitude, not k turns to unwind
     yaw_error = ms["eta1"][2] - eta2[2]
@@ -309,7 +309,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     Delta_hat = W_hat.T @ Psi                                                  # eq. 16
 
     # outer loop: the paper's backstepping per deck-frame axis (R = I)
-    ref = policy.aim_reference(ref, td["pivot"], eta1, eta2)   # ahead of the level-out's pivot
+    ref = tdp.aim_reference(ref, td["pivot"], eta1, eta2)   # ahead of the level-out's pivot
     z1p = p_e - ref[0:3]                                                       # eq. 9
     alpha_p, alpha_p_dot = _outer_virtual_control(p_e, v_e, ref, k1p)          # eq. 14, 18
     z2p = v_e - alpha_p                                                        # eq. 9
@@ -323,8 +323,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     th = thrust_attitude(t_E, eta2[2], td["tilt_limit"], 4 * act["F_max"])
 
     # command filter (its state is the inner loop's reference); the touchdown policy levels
-    eta_c = policy.apply_touchdown_commands(td["level"], ca.vertcat(th["phi"], th["theta"]),
-                                            eta2[0:2])
+    eta_c = tdp.apply_touchdown_commands(td["level"], ca.vertcat(th["phi"], th["theta"]), eta2[:2])
     eta_f, eta_f_dot = mm["eta_f"], mm["eta_f_dot"]
     eta_f_next, eta_f_dot_next, eta_f_ddot = command_filter(eta_f, eta_f_dot, eta_c, c["w_f"],
                                                             c["zeta_f"], dt)
