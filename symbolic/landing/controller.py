@@ -293,8 +293,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     q, act = QUADROTOR.unpack(p_quad), ACTUATOR.unpack(p_act)
     p_e, v_e, Omega1, eta2 = ms["p_e"], ms["v_e"], ms["Omega1"], ms["eta2"]
     td = tdp.bounded_commands(rs, c["tilt_max"])              # the touchdown policy
-    # the yaw within half a turn of the deck's heading, its reference: a yaw
-    # measured 2 pi k away is the same attitude, not k turns to unwind
+    # the yaw within half a turn of the deck's heading, its reference (2 pi k away: the same)
     yaw_error = ms["eta1"][2] - eta2[2]
     eta1 = ca.vertcat(ms["eta1"][0:2], eta2[2] + ca.atan2(ca.sin(yaw_error), ca.cos(yaw_error)))
     W_hat, zeta_hat = mm["W_hat"], mm["zeta_hat"]
