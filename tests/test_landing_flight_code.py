@@ -443,9 +443,9 @@ def test_pure_c_landing_is_quadland_simulates(examples, tree):
     # both land and are secured (with issue 19's gains the quiet ship no longer brushes its
     # heaving deck with one foot too lightly to close the contact switch, flying on as a
     # touch and go, as it did before them)
-    # (highway_100, judged by its feet since issue 18's review, leaves its 0.5 m pad: the
-    # C judges it alike)
-    assert want["success"] or (tree == "highway_100" and want["failures"] == ["off the pad"])
+    # (highway_100 too, judged by its feet since issue 18's review, its aim point ahead of
+    # the level-out's pivot)
+    assert want["success"]
     np.testing.assert_array_equal(c["t"], py["t"])
     np.testing.assert_array_equal(c["phase"], py["phase"])
     for column in header:

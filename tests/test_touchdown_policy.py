@@ -276,24 +276,30 @@ def test_highway_100_s_policy_by_the_statics_of_its_gear():
 def test_highway_100_lands_and_is_secured_where_the_rotor_cut_failed():
     """The default seed on the true state: with the rotor cut at the contact switch it
     touches down leaning 39.5 deg, past the tip-over angle, and the drag slams it onto
-    its rear feet and off the pad; flying on, it flares to 35.2 deg, levels out onto the
-    magnet (engaged at 95 % by the end, every foot down) with its centre within 0.5 m.
-    Judged by its feet (issue 18's review), it is off the 0.5 m pad: sliding back 0.3 m
-    while it levels out before the magnet holds, its rear feet reach 0.587 m from the pad
-    centre (the centre 0.412 m, a foot at most hypot(0.15, 0.125) = 0.195 m beyond it).
-    With the cut at the switch it also meets the deck past the tip-over angle (tilted)
-    and tips over on the gear, its rotors cut."""
+    its rear feet and off the pad; flying on, it flares to 35.1 deg, levels out onto the
+    magnet (engaged at 95 % by the end, every foot down). Judged by its feet (issue 18's
+    review), its rear feet left the 0.5 m pad (0.587 m) while it levelled out about its
+    front feet and slid back before the magnet held; with its aim point ahead by the
+    pivot (``pivot_aim = 1``: 0.137 m at 34 deg) it meets the deck 0.048 m ahead of the pad
+    centre (offset 0.111 m, within 0.2) and its farthest foot stays 0.433 m out. With the
+    cut at the switch it also meets the deck past the tip-over angle (tilted) and tips over
+    on the gear, its rotors cut."""
     idle = touchdown_report(quadland.simulate(load_scenario(
         "highway_100", ["sensors.enabled=false", 'touchdown.policy="idle"'])))
     assert not idle.success and idle.tipped and idle.tilt_deg > 36.9
     assert idle.failures == ["tilted", "tipped", "off the pad"]
+    unaimed = touchdown_report(quadland.simulate(load_scenario(
+        "highway_100", ["sensors.enabled=false", "touchdown.pivot_aim=0.0"])))
+    assert unaimed.secured and unaimed.failures == ["off the pad"]
     res = quadland.simulate(load_scenario("highway_100", ["sensors.enabled=false"]))
     rep = touchdown_report(res)
     assert rep.secured and not rep.tipped and rep.tilt_deg < 36.87
-    assert rep.failures == ["off the pad"] and not rep.success
+    assert rep.success and rep.failures == [] and rep.offset < 0.2
     touched = res["touched"] > 0.5
+    k = int(np.argmax(touched))
+    assert res["x_e"][k] > 0 > res["x_e"][-1]           # ahead at the contact, behind once level
     centre = np.hypot(res["x_e"][touched], res["y_e"][touched])
-    assert centre.max() < 0.5 < res["foot_offset"][touched].max()
+    assert res["foot_offset"][touched].max() < 0.5
     assert res["foot_offset"][touched].max() <= centre.max() + np.hypot(0.15, 0.125)
     touched = res["touched"] > 0.5
     assert np.max(np.abs(np.degrees(res["pitch_rel"][touched]))) < 36.87
