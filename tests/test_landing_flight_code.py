@@ -43,7 +43,7 @@ from quadland_symbolic.landing.loop import landing_loop_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
 from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY
 from quadland_symbolic.landing.signals import LANDING_TRAJECTORY
-from quadland_symbolic.landing.touchdown_policy import INERT_COMMANDS
+from quadland_symbolic.landing.touchdown_policy import INERT_COMMANDS, TOUCHDOWN_COMMANDS
 
 pytestmark = pytest.mark.skipif(not have_compiler(), reason="no C compiler")
 
@@ -215,7 +215,8 @@ def test_landing_step_errors_leave_the_state_and_zero_the_outputs(harness, rng, 
     h = harness
     h.api.lib.ql_landing_params_init(ctypes.byref(h.params))
     h.v_y[:] = _measurement(rng, 0.3)
-    h.v_ref[:] = [0, 0, 2, 0, 0, -0.3, 0, 0, 0, *INERT_COMMANDS.values()]
+    h.v_ref[:] = [0, 0, 2, 0, 0, -0.3, 0, 0, 0,
+                  *np.asarray(TOUCHDOWN_COMMANDS.pack(INERT_COMMANDS)).ravel()]
     h.v_state[:] = rng.normal(size=h.v_state.size) * 0.1
     p = landing_params_layout(L)
     dt = 0.004
