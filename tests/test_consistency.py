@@ -133,14 +133,14 @@ def test_a_range_beam_beside_the_roof_is_told_apart_by_hand(hover):
 
 # ---------------------------------------------------------------- the Monte Carlo
 
-# The Monte Carlo below, as docs/estimator.md ("Consistency", item 7) measured it with
+# The Monte Carlo below, as docs/estimator.md ("Consistency", item 8) measured it with
 # issue 18's drag (the quadrotor leaning 18 deg into the highway's airflow) and issue 19's
-# gains: every group and block within its criterion, the relative NEES inside at 97.5 %
-# of the times (average 6.30; 92.7 % and 6.40 before item 7: the accelerometer's bias
-# held fixed in E while the body turned, and q_acc measured on the hover of the gains
-# before); the range's NIS over the packets whose beam met the roof, those that read the
-# road beside it counted apart: outliers of the world, which its model (E12) does not
-# describe and the filter holds back (E12a).
+# gains: every group and block within its criterion, the relative NEES inside at 99.2 %
+# of the times (average 6.10; 97.5 % and 6.30 before item 8: the body's turn moved the
+# horizontal bias' error into the vertical, which the axes coupling drops, and q_ab's z
+# did not count it); the range's NIS over the packets whose beam met the roof, those that
+# read the road beside it counted apart: outliers of the world, which its model (E12)
+# does not describe and the filter holds back (E12a).
 
 
 @pytest.fixture(scope="module")
@@ -165,3 +165,25 @@ def test_average_nis_of_every_packet_lies_in_its_bounds(mc, block):
     # only a range beside the roof is an outlier, and it is one by far (NIS > 100)
     assert n_out == 0 or (block == "range" and n_out < due
                           and np.nanmin(mc.outliers[block][:, mc.settled]) > 100)
+
+
+# Other batches of seeds (docs/estimator.md, "Other batches of seeds"): the relative NEES
+# of 100 hovers from seed 5000 was inside at 89.6 % before item 8 and is at 96.5 %; from
+# seed 7000 79.6 % and 81.3 %, still short. A filter exactly as consistent as its
+# covariance says, its errors correlated over 1 to 2 s as the hover's vertical ones are,
+# meets the 95 % of the ticks in about 60 % of such batches and has at most 84 to 88 %
+# inside in one of ten (benchmarks/consistency_criterion_odds.py).
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [
+    5000,
+    pytest.param(7000, marks=pytest.mark.xfail(
+        strict=True, reason="81.3 % of the ticks inside (docs/estimator.md, "
+                            "'Other batches of seeds')")),
+])
+def test_relative_nees_of_another_batch_lies_in_its_bounds(seed):
+    other = consistency_monte_carlo(load_scenario("highway"), runs=100, duration=8.0,
+                                    seed=seed)
+    assert other.seeds[0] == seed and other.settled.sum() > 1000
+    assert other.nees_inside("relative") >= 0.95, other.summary()["nees"]["relative"]

