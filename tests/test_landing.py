@@ -108,7 +108,7 @@ def test_lands_within_the_limits_at_the_default_seed(name, sensing):
     over on the true state (a 39 deg lean past the gear's 36.9 deg) and bounced 2.2 cm on
     its sensors; judged by its feet (issue 18's review) its rear feet left the 0.5 m pad
     (0.559 m) until its aim point anticipated the level-out's pivot about its front feet
-    (``pivot_aim``, docs/landing.md, "The pivot at the level-out": 0.393 m)."""
+    (``pivot_aim``, docs/landing.md, "The pivot at the level-out": 0.377 m)."""
     res = _fly(name, *([PERFECT] if sensing == "perfect" else []))
     rep = touchdown_report(res)
     assert rep.touchdown and rep.success, rep

@@ -47,6 +47,14 @@ through :data:`TOUCHDOWN_COMMANDS`, appended to the position reference:
    highway_100: 77 N at 0.5 s against 16 N to stop the slide and 4 N to stop
    the roll-over).
 
+With ``pivot_x``, ``pivot_y``, ``pivot_h`` set (the gear's arm, times ``[touchdown]
+pivot_aim``), the policy also aims ahead of the level-out: the body meets the deck
+leaning into the airflow, lowest feet first, and levelling it about those feet moves its
+centre of mass back by ``(R1 - R_level) r`` (:func:`pivot_shift`; ``fx (1 - cos th) + hc
+sin th`` for a pitch ``th``); from ``aim_height`` above touchdown and on the deck the
+landing step tracks the reference minus that move (:func:`aim_reference`), so that the
+levelled body sits on the pad (docs/landing.md, "The pivot at the level-out").
+
 The commands come from the flight code's own touchdown verdict (the
 guidance's touchdown phase: the contact switch, or the land detector on
 sensors): a false verdict in the air would level out and cut there, as
