@@ -42,7 +42,8 @@ typedef char position_reference_is_its_layout[
     AT(ql_position_reference, level, 10, 0) &&
     AT(ql_position_reference, thrust_scale, 11, 0) &&
     AT(ql_position_reference, power, 12, 0) &&
-    sizeof(ql_position_reference) == 13 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_position_reference, pivot, 13, 0) &&
+    sizeof(ql_position_reference) == 16 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_state_is_its_layout[
     AT(ql_landing_state, W_hat, 0, 0) &&
     AT(ql_landing_state, zeta_hat, 60, 0) &&
@@ -138,7 +139,11 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, hold_time, 20, 0) &&
     AT(ql_guidance_params, level_time, 21, 0) &&
     AT(ql_guidance_params, cut_time, 22, 0) &&
-    sizeof(ql_guidance_params) == 23 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, aim_height, 23, 0) &&
+    AT(ql_guidance_params, pivot_x, 24, 0) &&
+    AT(ql_guidance_params, pivot_y, 25, 0) &&
+    AT(ql_guidance_params, pivot_h, 26, 0) &&
+    sizeof(ql_guidance_params) == 27 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -170,11 +175,12 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[23] = {
+static const ql_real default_p_guid[27] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 0.0,
-    0.15, 0.5934119456780721, 0.0, 0.35, 0.5,
+    0.15, 0.5934119456780721, 0.0, 0.35, 0.5, 0.3,
+    0.0, 0.0, 0.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -430,6 +436,10 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   hold_time                >= 0
  *   level_time               > 0
  *   cut_time                 >= 0
+ *   aim_height               >= 0
+ *   pivot_x                  >= 0
+ *   pivot_y                  >= 0
+ *   pivot_h                  >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -511,6 +521,18 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[22]) && (p[22] >= 0.0))) {
         bad = "cut_time";
     }
+    if (!bad && !(isfinite(p[23]) && (p[23] >= 0.0))) {
+        bad = "aim_height";
+    }
+    if (!bad && !(isfinite(p[24]) && (p[24] >= 0.0))) {
+        bad = "pivot_x";
+    }
+    if (!bad && !(isfinite(p[25]) && (p[25] >= 0.0))) {
+        bad = "pivot_y";
+    }
+    if (!bad && !(isfinite(p[26]) && (p[26] >= 0.0))) {
+        bad = "pivot_h";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -583,7 +605,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 23 comparisons. The values are known to be finite; no names and no
+ * 27 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -611,6 +633,10 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[20] >= 0.0);
     ok &= (p[21] > 0.0);
     ok &= (p[22] >= 0.0);
+    ok &= (p[23] >= 0.0);
+    ok &= (p[24] >= 0.0);
+    ok &= (p[25] >= 0.0);
+    ok &= (p[26] >= 0.0);
     return ok;
 }
 
@@ -664,7 +690,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            ql_guidance_state *state, ql_position_reference *ref)
 {
     /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[7], res_v[20];
+    ql_real xg[7], res_v[23];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -683,7 +709,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[5] = state->ms_rise;
     xg[6] = state->ms_rise_rate;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
-          & all_finite((const ql_real *)params, 23)
+          & all_finite((const ql_real *)params, 27)
           & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
@@ -702,7 +728,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     res[0] = res_v + 0;
     res[1] = res_v + 7;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 20)) {
+    if (!all_finite(res_v, 23)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -740,7 +766,7 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     /* The measurements, the reference, dt and every parameter. The state is
      * checked through the outputs: each of its values reaches mem_next (a NaN
      * or an infinity in W_hat through a_w W_hat, 0 * inf being NaN, and so on). */
-    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 13)
+    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 16)
           & all_finite((const ql_real *)params, QL_LANDING_PARAMS_SIZE) & (isfinite(dt) != 0))) {
         output_zero(out, 0);
         return QL_ERR_NONFINITE_INPUT;

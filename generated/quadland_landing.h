@@ -22,7 +22,7 @@ extern "C" {
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QL_LANDING_PARAMS_SIZE 128               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 82                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 23               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 27               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
 #define QL_LANDING_PLANT_NP 331                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
@@ -71,6 +71,7 @@ typedef struct {
     ql_real level;                   /* -: blend of the attitude command towards the deck's level, 0 to 1 */
     ql_real thrust_scale;            /* -: factor on the collective thrust before the mixer, 0 to 1 */
     ql_real power;                   /* -: factor on the rotor commands: 0 cuts them */
+    ql_real pivot[3];                /* m: the gear's pivot arm whose levelling the aim point anticipates (feet x, y half-spacings, height below the centre of mass; 0: no shift) (pivot_x, pivot_y, pivot_h) */
 } ql_position_reference;
 
 /* The landing step's memory: network, robust terms, command filter and
@@ -184,6 +185,10 @@ typedef struct {
     ql_real hold_time;               /* s: time from touchdown during which the flight code flies on */
     ql_real level_time;              /* s: time of the level-out and the thrust's ramp-down after it */
     ql_real cut_time;                /* s: time from touchdown to the cut (at least hold_time + level_time) */
+    ql_real aim_height;              /* m: reference height above touchdown below which the aim point anticipates the level-out's pivot */
+    ql_real pivot_x;                 /* m: the pivot's arm along x the aim anticipates (0: none) */
+    ql_real pivot_y;                 /* m: the pivot's arm along y the aim anticipates (0: none) */
+    ql_real pivot_h;                 /* m: the pivot's height below the centre of mass (0: none) */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */

@@ -120,7 +120,8 @@ GUIDANCE_DOCUMENTED = {
     "commit_horizon": _positive, "calm_speed": _positive, "motion_time": _positive,
     "fly_on": lambda v, p: (v == 0) | (v == 1), "flare_height": _nonnegative,
     "flare_tilt": lambda v, p: (v > 0) & (v < math.pi / 2), "hold_time": _nonnegative,
-    "level_time": _positive, "cut_time": _nonnegative,
+    "level_time": _positive, "cut_time": _nonnegative, "aim_height": _nonnegative,
+    "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -234,9 +235,10 @@ class _Harness:
         self.v_ref[:] = np.r_[np.r_[p_e, 0, 0, -rng.uniform(0, 0.7), 0, 0, rng.normal() * 0.3]
                               + scale * rng.normal(size=9),
                               # the touchdown policy's commands: a tilt limit, the level-out
-                              # and the collective's ramp, the cut
+                              # and the collective's ramp, the cut, the pivot's arm (or none)
                               rng.uniform(0.05, math.pi / 2), rng.uniform(0, 1),
-                              rng.uniform(0, 1), rng.choice((0.0, 1.0))]
+                              rng.uniform(0, 1), rng.choice((0.0, 1.0)),
+                              rng.choice((0.0, 1.0)) * rng.uniform(0, 0.3, size=3)]
         mem = landing_memory(L).unpack(np.zeros(landing_memory(L).size))
         st = {k: rng.normal(size=v.shape) * scale * 0.2 for k, v in mem.items()}
         st["W_hat"] *= rng.choice((0.0, 0.1, 1.0, 30.0))

@@ -42,7 +42,8 @@ typedef char position_reference_is_its_layout[
     AT(qlf_position_reference, level, 10, 0) &&
     AT(qlf_position_reference, thrust_scale, 11, 0) &&
     AT(qlf_position_reference, power, 12, 0) &&
-    sizeof(qlf_position_reference) == 13 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_position_reference, pivot, 13, 0) &&
+    sizeof(qlf_position_reference) == 16 * sizeof(qlf_real) ? 1 : -1];
 typedef char landing_state_is_its_layout[
     AT(qlf_landing_state, W_hat, 0, 0) &&
     AT(qlf_landing_state, zeta_hat, 60, 0) &&
@@ -138,7 +139,11 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, hold_time, 20, 0) &&
     AT(qlf_guidance_params, level_time, 21, 0) &&
     AT(qlf_guidance_params, cut_time, 22, 0) &&
-    sizeof(qlf_guidance_params) == 23 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, aim_height, 23, 0) &&
+    AT(qlf_guidance_params, pivot_x, 24, 0) &&
+    AT(qlf_guidance_params, pivot_y, 25, 0) &&
+    AT(qlf_guidance_params, pivot_h, 26, 0) &&
+    sizeof(qlf_guidance_params) == 27 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -170,11 +175,12 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[23] = {
+static const qlf_real default_p_guid[27] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 0.0f,
-    0.15f, 0.5934119456780721f, 0.0f, 0.35f, 0.5f,
+    0.15f, 0.5934119456780721f, 0.0f, 0.35f, 0.5f, 0.3f,
+    0.0f, 0.0f, 0.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -430,6 +436,10 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   hold_time                >= 0
  *   level_time               > 0
  *   cut_time                 >= 0
+ *   aim_height               >= 0
+ *   pivot_x                  >= 0
+ *   pivot_y                  >= 0
+ *   pivot_h                  >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -511,6 +521,18 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[22]) && (p[22] >= 0.0f))) {
         bad = "cut_time";
     }
+    if (!bad && !(isfinite(p[23]) && (p[23] >= 0.0f))) {
+        bad = "aim_height";
+    }
+    if (!bad && !(isfinite(p[24]) && (p[24] >= 0.0f))) {
+        bad = "pivot_x";
+    }
+    if (!bad && !(isfinite(p[25]) && (p[25] >= 0.0f))) {
+        bad = "pivot_y";
+    }
+    if (!bad && !(isfinite(p[26]) && (p[26] >= 0.0f))) {
+        bad = "pivot_h";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -583,7 +605,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 23 comparisons. The values are known to be finite; no names and no
+ * 27 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -611,6 +633,10 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[20] >= 0.0f);
     ok &= (p[21] > 0.0f);
     ok &= (p[22] >= 0.0f);
+    ok &= (p[23] >= 0.0f);
+    ok &= (p[24] >= 0.0f);
+    ok &= (p[25] >= 0.0f);
+    ok &= (p[26] >= 0.0f);
     return ok;
 }
 
@@ -664,7 +690,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
                              qlf_guidance_state *state, qlf_position_reference *ref)
 {
     /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
-    qlf_real xg[7], res_v[20];
+    qlf_real xg[7], res_v[23];
     const qlf_real *arg[qlf_casadi_landing_guidance_SZ_ARG];
     qlf_real *res[qlf_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[qlf_casadi_landing_guidance_SZ_IW + 1];
@@ -683,7 +709,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[5] = state->ms_rise;
     xg[6] = state->ms_rise_rate;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 2)
-          & all_finite((const qlf_real *)params, 23)
+          & all_finite((const qlf_real *)params, 27)
           & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }
@@ -702,7 +728,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     res[0] = res_v + 0;
     res[1] = res_v + 7;
     qlf_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 20)) {
+    if (!all_finite(res_v, 23)) {
         return QLF_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -740,7 +766,7 @@ qlf_status qlf_landing_step(const qlf_landing_measurement *y, const qlf_position
     /* The measurements, the reference, dt and every parameter. The state is
      * checked through the outputs: each of its values reaches mem_next (a NaN
      * or an infinity in W_hat through a_w W_hat, 0 * inf being NaN, and so on). */
-    if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)ref, 13)
+    if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)ref, 16)
           & all_finite((const qlf_real *)params, QLF_LANDING_PARAMS_SIZE) & (isfinite(dt) != 0))) {
         output_zero(out, 0);
         return QLF_ERR_NONFINITE_INPUT;

@@ -268,6 +268,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                             "the thrust's ramp-down, after hold_time", hi=10.0, **_POS),
         "cut_time": Field(F, "s", "secure: time from touchdown to the rotor cut (at least "
                           "hold_time + level_time)", lo=0.0, hi=10.0),
+        "pivot_aim": Field(F, "-", "secure: share of the level-out's pivot about the lowest "
+                           "feet the aim point anticipates (0: none, 1: all)", lo=0.0, hi=1.0),
+        "aim_height": Field(F, "m", "secure: reference height above touchdown from which the "
+                            "aim point anticipates the pivot", lo=0.0, hi=100.0),
         "lock": Field(S, "-", "lock-down device: none, or magnet (an electro-permanent magnet "
                       "under the gear's centre)", choices=("none", "magnet")),
         "lock_hold_force": Field(F, "N", "the lock's largest holding force", lo=0.0, hi=1e5),

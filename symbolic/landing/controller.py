@@ -51,15 +51,12 @@ import casadi as ca
 
 from quadland_symbolic.backstepping import virtual_control
 from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
+from quadland_symbolic.landing import touchdown_policy as tdp
 from quadland_symbolic.landing.attitude import thrust_attitude
 from quadland_symbolic.landing.bias import bias_next
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
-from quadland_symbolic.landing.desaturation import (
-    clip_forces,
-    clipped_count,
-    thrust_within_moments,
-)
+from quadland_symbolic.landing.desaturation import clip_forces, clipped_count, thrust_within_moments
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_CUES,
     GUIDANCE_PARAMS,
@@ -69,7 +66,6 @@ from quadland_symbolic.landing.guidance import (
 )
 from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from quadland_symbolic.landing.relative import RELATIVE6, deck_gear_gap
-from quadland_symbolic.landing.touchdown_policy import apply_touchdown_commands, bounded_commands
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.quadrotor import WRENCH, rotors_from_wrench
@@ -296,9 +292,8 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     mm, c = landing_memory(l).unpack(mem), landing_controller_params(l).unpack(p_ctrl)
     q, act = QUADROTOR.unpack(p_quad), ACTUATOR.unpack(p_act)
     p_e, v_e, Omega1, eta2 = ms["p_e"], ms["v_e"], ms["Omega1"], ms["eta2"]
-    td = bounded_commands(rs, c["tilt_max"])                     # the touchdown policy
-    # the yaw within half a turn of the deck's heading, its reference: a yaw
-    # measured 2 pi k away is the same attitude, not k turns to unwind
+    td = tdp.bounded_commands(rs, c["tilt_max"])              # the touchdown policy
+    # the yaw within half a turn of the deck's heading, its reference (2 pi k away: the same)
     yaw_error = ms["eta1"][2] - eta2[2]
     eta1 = ca.vertcat(ms["eta1"][0:2], eta2[2] + ca.atan2(ca.sin(yaw_error), ca.cos(yaw_error)))
     W_hat, zeta_hat = mm["W_hat"], mm["zeta_hat"]
@@ -313,7 +308,8 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     Delta_hat = W_hat.T @ Psi                                                  # eq. 16
 
     # outer loop: the paper's backstepping per deck-frame axis (R = I)
-    z1p = p_e - rs["p_ref"]                                                    # eq. 9
+    ref = tdp.aim_reference(ref, td["pivot"], eta1, eta2)   # ahead of the level-out's pivot
+    z1p = p_e - ref[0:3]                                                       # eq. 9
     alpha_p, alpha_p_dot = _outer_virtual_control(p_e, v_e, ref, k1p)          # eq. 14, 18
     z2p = v_e - alpha_p                                                        # eq. 9
     z2p_bar = z2p - mm["xi2"]                                                  # compensated
@@ -326,7 +322,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     th = thrust_attitude(t_E, eta2[2], td["tilt_limit"], 4 * act["F_max"])
 
     # command filter (its state is the inner loop's reference); the touchdown policy levels
-    eta_c = apply_touchdown_commands(td["level"], ca.vertcat(th["phi"], th["theta"]), eta2[0:2])
+    eta_c = tdp.apply_touchdown_commands(td["level"], ca.vertcat(th["phi"], th["theta"]), eta2[:2])
     eta_f, eta_f_dot = mm["eta_f"], mm["eta_f_dot"]
     eta_f_next, eta_f_dot_next, eta_f_ddot = command_filter(eta_f, eta_f_dot, eta_c, c["w_f"],
                                                             c["zeta_f"], dt)

@@ -154,6 +154,11 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("hold_time", 1, "s", "time from touchdown during which the flight code flies on"),
     Field("level_time", 1, "s", "time of the level-out and the thrust's ramp-down after it"),
     Field("cut_time", 1, "s", "time from touchdown to the cut (at least hold_time + level_time)"),
+    Field("aim_height", 1, "m", "reference height above touchdown below which the aim point "
+          "anticipates the level-out's pivot"),
+    Field("pivot_x", 1, "m", "the pivot's arm along x the aim anticipates (0: none)"),
+    Field("pivot_y", 1, "m", "the pivot's arm along y the aim anticipates (0: none)"),
+    Field("pivot_h", 1, "m", "the pivot's height below the centre of mass (0: none)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.

@@ -47,6 +47,14 @@ through :data:`TOUCHDOWN_COMMANDS`, appended to the position reference:
    highway_100: 77 N at 0.5 s against 16 N to stop the slide and 4 N to stop
    the roll-over).
 
+With ``pivot_x``, ``pivot_y``, ``pivot_h`` set (the gear's arm, times ``[touchdown]
+pivot_aim``), the policy also aims ahead of the level-out: the body meets the deck
+leaning into the airflow, lowest feet first, and levelling it about those feet moves its
+centre of mass back by ``(R1 - R_level) r`` (:func:`pivot_shift`; ``fx (1 - cos th) + hc
+sin th`` for a pitch ``th``); from ``aim_height`` above touchdown and on the deck the
+landing step tracks the reference minus that move (:func:`aim_reference`), so that the
+levelled body sits on the pad (docs/landing.md, "The pivot at the level-out").
+
 The commands come from the flight code's own touchdown verdict (the
 guidance's touchdown phase: the contact switch, or the land detector on
 sensors): a false verdict in the air would level out and cut there, as
@@ -61,10 +69,12 @@ from __future__ import annotations
 
 import casadi as ca
 
+from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["TOUCHDOWN_COMMANDS", "NO_TILT_LIMIT", "INERT_COMMANDS", "touchdown_commands",
-           "touchdown_crawl", "bounded_commands", "apply_touchdown_commands"]
+           "touchdown_crawl", "bounded_commands", "apply_touchdown_commands", "pivot_shift",
+           "aim_reference"]
 
 #: rad: the tilt limit of an inert policy, above any controller's (``tilt_max < pi/2``).
 NO_TILT_LIMIT = ca.pi / 2
@@ -75,10 +85,14 @@ TOUCHDOWN_COMMANDS = Layout("td_cmd", (
     Field("level", 1, "-", "blend of the attitude command towards the deck's level, 0 to 1"),
     Field("thrust_scale", 1, "-", "factor on the collective thrust before the mixer, 0 to 1"),
     Field("power", 1, "-", "factor on the rotor commands: 0 cuts them"),
+    Field("pivot", 3, "m", "the gear's pivot arm whose levelling the aim point anticipates "
+          "(feet x, y half-spacings, height below the centre of mass; 0: no shift)",
+          elements=("pivot_x", "pivot_y", "pivot_h")),
 ), "touchdown policy's commands to the landing step")
 
 #: :data:`TOUCHDOWN_COMMANDS` that change nothing (the policy off, or before its flare).
-INERT_COMMANDS = dict(tilt_limit=float(NO_TILT_LIMIT), level=0.0, thrust_scale=1.0, power=1.0)
+INERT_COMMANDS = dict(tilt_limit=float(NO_TILT_LIMIT), level=0.0, thrust_scale=1.0, power=1.0,
+                      pivot=[0.0, 0.0, 0.0])
 
 
 def touchdown_commands(down, descending, timer_next, z_next, p):
@@ -97,7 +111,10 @@ def touchdown_commands(down, descending, timer_next, z_next, p):
     ramp = ca.fmin(ca.fmax((timer_next - p["hold_time"]) / p["level_time"], 0), 1)
     level = on * down * ramp
     cut = on * down * (timer_next >= ca.fmax(p["cut_time"], p["hold_time"] + p["level_time"]))
-    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut)
+    aiming = on * ca.logic_or(down, ca.logic_and(descending, z_next - p["touchdown_height"]
+                                                 <= p["aim_height"]))
+    pivot = aiming * ca.vertcat(p["pivot_x"], p["pivot_y"], p["pivot_h"])
+    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, pivot)
 
 
 def touchdown_crawl(in_touchdown, p):
@@ -119,10 +136,40 @@ def bounded_commands(commands: dict, tilt_max) -> dict:
         return ca.fmin(ca.fmax(v, 0), 1)
     return dict(tilt_limit=ca.fmin(tilt_max, ca.fmax(commands["tilt_limit"], 0)),
                 level=unit(commands["level"]), thrust_scale=unit(commands["thrust_scale"]),
-                power=unit(commands["power"]))
+                power=unit(commands["power"]), pivot=ca.fmax(commands["pivot"], 0))
 
 
 def apply_touchdown_commands(level, eta_c, eta_level):
     """The attitude command ``eta_c`` blended towards ``eta_level`` by
     :data:`TOUCHDOWN_COMMANDS`' ``level``; ``level = 0`` returns ``eta_c`` exactly."""
     return eta_c + level * (eta_level - eta_c)
+
+
+def pivot_shift(pivot, eta1, eta2):
+    """The deck-frame move of the centre of mass that levelling the body about its lowest
+    feet would make, m (its third element 0): the aim point's correction.
+
+    A body leaning into the airflow meets the deck with its lowest feet first; the
+    lock-down pins them, and the level-out (:func:`apply_touchdown_commands`: roll and
+    pitch to the deck's, the yaw held) turns the body about them. A foot at ``r`` in
+    body axes stays at ``p + R1 r = p' + R_lvl r``, so the centre moves by ``(R1 - R_lvl)
+    r``: for a pitch ``th`` (nose down, feet at ``x = fx``, ``z = -hc``), by ``fx (1 - cos
+    th) + hc sin th`` backwards. The position loop tracks ``p_ref`` minus this move, so
+    that the body levelled about its feet sits on the reference.
+
+    ``pivot`` is the :data:`TOUCHDOWN_COMMANDS`' arm ``(fx, fy, hc)`` (zero: no shift), the
+    lowest feet taken at ``(+-fx, +-fy, -hc)`` on the side of the lean; ``eta1``, ``eta2``
+    the body's and the deck's Euler angles in E.
+    """
+    R1, R_deck = rotation(eta1), rotation(eta2)
+    R_level = rotation(ca.vertcat(eta2[0], eta2[1], eta1[2]))
+    n_body = R1.T @ R_deck[:, 2]                    # the deck normal in body axes
+    r = ca.vertcat(pivot[0] * ca.sign(-n_body[0]), pivot[1] * ca.sign(-n_body[1]), -pivot[2])
+    move = R_deck.T @ (R1 - R_level) @ r
+    return ca.vertcat(move[0], move[1], 0)
+
+
+def aim_reference(ref, pivot, eta1, eta2):
+    """The position reference ``ref`` (``p_ref`` first, then its rates and the rest) with
+    ``p_ref`` moved against :func:`pivot_shift`; ``pivot = 0`` returns it unchanged."""
+    return ca.vertcat(ref[0:3] - pivot_shift(pivot, eta1, eta2), ref[3:])

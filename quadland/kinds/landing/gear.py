@@ -61,11 +61,17 @@ def policy_params(scenario: Scenario) -> np.ndarray:
 def touchdown_guidance(scenario: Scenario) -> dict:
     """``[touchdown]``'s flight-code policy as the guidance's parameters
     (:mod:`quadland_symbolic.landing.touchdown_policy`): ``policy = "secure"`` turns it
-    on; otherwise it is inert (``fly_on = 0``) and the hardware cut (or none) acts."""
-    td = scenario.data["touchdown"]
+    on; otherwise it is inert (``fly_on = 0``) and the hardware cut (or none) acts. The
+    aim point's pivot arm is ``pivot_aim`` times the gear's (``[gear]`` feet_x, feet_y,
+    ``[quadrotor]`` gear_height)."""
+    td, gear = scenario.data["touchdown"], scenario.data["gear"]
+    aim = td["pivot_aim"]
     return dict(fly_on=float(td["policy"] == "secure"), flare_height=td["flare_height"],
                 flare_tilt=np.radians(td["flare_tilt_deg"]), hold_time=td["hold_time"],
-                level_time=td["level_time"], cut_time=td["cut_time"])
+                level_time=td["level_time"], cut_time=td["cut_time"],
+                aim_height=td["aim_height"], pivot_x=aim * gear["feet_x"],
+                pivot_y=aim * gear["feet_y"],
+                pivot_h=aim * scenario.data["quadrotor"]["gear_height"])
 
 
 def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
