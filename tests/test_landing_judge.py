@@ -215,9 +215,6 @@ def test_an_engaged_magnet_on_a_slippery_roof_that_slides_is_not_secured():
     assert not touchdown_report(res).secured
 
 
-@pytest.mark.xfail(strict=True, reason="issue 18 review (review18b): a run stopped after the "
-                   "first contact counts as tipped over on the deck wherever the body is; "
-                   "this one stopped at the singular attitude 6.6 m above the roof")
 def test_a_body_that_flies_off_the_deck_has_not_tipped_over_on_it():
     """highway with the rotors cut to their F_max (touchdown.idle_thrust = 9.8 N: 2 m1 g in
     all, a valid 'idle'): the body lifts off the roof at the contact, and the run stops

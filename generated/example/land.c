@@ -113,7 +113,7 @@ static void write_row(double t, const ql_real *y, const ql_real *est);
 /* What the rows from the first contact on tell (quadland.kinds.landing.contact_report):
  * tipped, a row with a foot off the deck past the tip-over angle and the rotors cut. */
 typedef struct {
-    double t_td, t_last, bounce, offset, engaged, margin, feet, peak, impact, tip0, tilt0;
+    double t_td, t_last, bounce, offset, engaged, margin, feet, peak, impact, tip0, tilt0, gap;
     int aborts, tipped;                         /* descents aborted before the contact */
     ql_real figures[QL_TOUCHDOWN_FIGURES];
 } landed_t;
@@ -133,6 +133,7 @@ static void judge_row(landed_t *l, const ql_real *xp, const ql_real *sig, const 
     l->engaged = s[4];
     l->margin = s[10];
     l->feet = s[3];
+    l->gap = s[0];
     l->t_last = t;
 }
 
@@ -255,7 +256,7 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     if (!((double)l->figures[3] <= QL_LAND_MAX_TILT_DEG)) failures[n++] = "tilt_deg";
     settled = l->t_last >= l->t_td + QL_LAND_SETTLE_TIME - row - 1e-9;
     stopped = l->t_last < fmin(l->t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION) - row - 1e-9;
-    tipped = l->tipped || stopped;
+    tipped = l->tipped || (stopped && l->gap <= QL_LAND_GEAR_SPAN);   /* not flown off */
     tilted = l->tip0 > 1;
     bounced = l->bounce > QL_LAND_MAX_BOUNCE;
     on_pad = settled && l->offset <= QL_LAND_PAD_RADIUS;
@@ -633,6 +634,7 @@ int main(int argc, char **argv)
             landed.t_td = t_td;
             landed.bounce = 0;
             landed.tipped = 0;
+            landed.gap = 0;                     /* on the deck at the contact */
             landed.tip0 = (double)gsig[9];
             landed.tilt0 = (double)gsig[8];
             landed.offset = 0;

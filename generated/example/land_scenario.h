@@ -27,6 +27,7 @@
 #define QL_LAND_SETTLE_TIME 2.0                /* s, the run ends this long after the first contact */
 #define QL_LAND_H_AFTER 0.0008842201788588194   /* s, the longest RK4 step from the first contact on */
 #define QL_LAND_FREE_GAP 0.1   /* m, above it the plant flies without the contact */
+#define QL_LAND_GEAR_SPAN 0.5590169943749475   /* m, a run stopped with its lowest foot within it tipped over */
 #define QL_LAND_MASS 2.0                       /* kg, the impact energy's */
 
 /* Disturbance bias [d_F (N), d_M (N m)], body frame; the random part is left out. */

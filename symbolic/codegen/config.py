@@ -231,6 +231,9 @@ class LandingDefaults(FlightDefaults):
         interval) the plant without the contact flies (``landing_free_plant``).
     mass : float
         kg, the quadrotor's (the impact energy's).
+    gear_span : float
+        m, twice the farthest foot's distance from the centre: a run that stops with
+        its lowest foot within it of the deck stopped on the deck (tipped over).
     sensors : SensorDefaults or None
         The example's sensors, filter and land detector (``sensors.enabled``);
         None: it flies on perfect sensing.
@@ -256,5 +259,6 @@ class LandingDefaults(FlightDefaults):
     h_after: float = 1e-3
     free_gap: float = 0.1
     mass: float = 2.0
+    gear_span: float = 0.56
     sensors: SensorDefaults | None = None
 

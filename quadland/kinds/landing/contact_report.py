@@ -22,7 +22,9 @@ limit's source there):
   angle (``tip_margin > 1``) while the rotors are cut (their thrust below
   :data:`CUT_THRUST` of the weight: nothing but the gear holds the body, so
   its centre of mass is outside the support polygon with no thrust); or the
-  run stopped on the deck at the singular attitude or outside its envelope.
+  run stopped on the deck (its lowest foot within :func:`gear_span` of it) at
+  the singular attitude or outside its envelope; a run that stops farther from
+  the deck has flown off it (bounced), not tipped over on it.
   A body the rotors still fly past that angle (the flare onto a windy roof)
   has not tipped;
 * **on the pad**: every foot within ``landing.pad_radius`` of the pad centre
@@ -50,8 +52,8 @@ from quadland_symbolic.landing.gear import CUT_THRUST, FAILURES, GEAR_SIGNALS, G
 from quadland_symbolic.landing.loop import landing_gear_signals_function
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 
-__all__ = ["gear_columns", "flat_gear_signals", "contact_figures", "ENGAGED", "FAILURES",
-           "CUT_THRUST"]
+__all__ = ["gear_columns", "flat_gear_signals", "contact_figures", "gear_span", "ENGAGED",
+           "FAILURES", "CUT_THRUST"]
 
 #: The lock counts as engaged at this engagement.
 ENGAGED = 0.95
@@ -97,6 +99,15 @@ def flat_gear_signals():
                          {"pp": amplitude_indices(LANDING_PLANT_PARAMS)})
 
 
+def gear_span(data: dict) -> float:
+    """Twice the farthest foot's distance from the centre, m (``[gear]`` feet_x, feet_y
+    and ``quadrotor.gear_height``): a body touching the deck anywhere has its lowest foot
+    within it of the deck."""
+    g = data["gear"]
+    return 2.0 * float(np.sqrt(g["feet_x"] ** 2 + g["feet_y"] ** 2
+                               + data["quadrotor"]["gear_height"] ** 2))
+
+
 def contact_figures(result, limits: dict, mass: float) -> dict:
     """The landed-and-secured figures of a landing on the gear (module docstring).
 
@@ -118,6 +129,7 @@ def contact_figures(result, limits: dict, mass: float) -> dict:
     end = min(t[k0] + settle, d["simulation"]["duration"])
     settled = bool(t[last] >= t[k0] + settle - row - 1e-9)
     stopped = bool(t[last] < end - row - 1e-9)       # stopped on the deck: tipped over
+    stopped = stopped and bool(result["foot_gap"][last] <= gear_span(d))
     cut = result["F_total"][after] < CUT_THRUST * mass * d["quadrotor"]["gravity"]
     lifted = result["feet_down"][after] < N_FEET - 0.5
     tipped = bool(np.any((result["tip_margin"][after] > 1) & lifted & cut) or stopped)

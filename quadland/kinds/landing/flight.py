@@ -21,6 +21,7 @@ from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
 from quadland.engine.recall import code_recipe
+from quadland.kinds.landing.contact_report import gear_span
 from quadland.kinds.landing.gear import contact_step, free_flight_gap
 from quadland.kinds.landing.report import GEAR_LIMITS, TOUCHDOWN_LIMITS
 from quadland.kinds.landing.sensed import (
@@ -81,7 +82,7 @@ def landing_defaults(sc: Scenario) -> LandingDefaults:
         h_after=contact_step(sc, np.asarray(LANDING_PLANT_PARAMS.unpack(lv.pp)["p_quad"],
                                             dtype=float).ravel()),
         free_gap=free_flight_gap(sc),
-        mass=float(sc.data["quadrotor"]["mass"]),
+        mass=float(sc.data["quadrotor"]["mass"]), gear_span=gear_span(sc.data),
         sensors=_sensor_defaults(sc, lv) if sensors_enabled(sc) else None)
 
 
