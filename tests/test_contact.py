@@ -796,3 +796,19 @@ def test_tip_margin_passes_1_where_the_centre_leaves_the_support_rectangle():
     margin = GEAR_SIGNALS.unpack(np.array(s).ravel())["tip_margin"]
     assert margin > 1
     assert margin == pytest.approx(max(x / 0.15, GEAR_HEIGHT * np.tan(ph) / 0.125), rel=1e-12)
+
+
+@pytest.mark.parametrize("roll_deg", [180.0, 100.0])
+def test_a_body_on_its_side_or_upside_down_is_outside_its_support(roll_deg):
+    # Upside down the deck normal in body axes is (0, ~1e-16, -1): the projection's ratio
+    # would divide rounding noise by the clamped n_z and read "inside" (1.96e-7 at 180 deg,
+    # issue 18's second review); past 90 deg the body has no support at all.
+    from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
+    p = params()
+    z = state_on_deck(np.zeros(3), 0.001)
+    z[3] = np.radians(roll_deg)
+    s = gear_signals_function()(z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1],
+                                GEAR_STATE.zeros(), 0.0, np.zeros(3), part(p, "p_quad"),
+                                part(p, "p_act"), part(p, "p_veh"), part(p, "p_deck"),
+                                part(p, "p_gear"), part(p, "p_lock"))
+    assert GEAR_SIGNALS.unpack(np.array(s).ravel())["tip_margin"] == 1e9

@@ -256,6 +256,9 @@ static void write_report(int touchdown, const landed_t *l, int aborts)
     if (!((double)l->figures[3] <= QL_LAND_MAX_TILT_DEG)) failures[n++] = "tilt_deg";
     settled = l->t_last >= l->t_td + QL_LAND_SETTLE_TIME - row - 1e-9;
     stopped = l->t_last < fmin(l->t_td + QL_LAND_SETTLE_TIME, QL_LAND_DURATION) - row - 1e-9;
+    /* The example has no attitude guard: where the simulator stops a tumbling body at
+     * its singular attitude, this loop flies on, and its report then differs from
+     * summary.json's (stopped is only the duration's end here). */
     tipped = l->tipped || (stopped && l->gap <= QL_LAND_GEAR_SPAN);   /* not flown off */
     tilted = l->tip0 > 1;
     bounced = l->bounce > QL_LAND_MAX_BOUNCE;

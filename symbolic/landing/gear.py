@@ -182,11 +182,12 @@ def tip_margin(n_body, tip):
     :func:`~quadland_symbolic.landing.contact.tip_over_angles` (about x, about y);
     above 1 the centre is outside the rectangle. ``tan(tilt) / margin`` is the tangent
     of the tip-over angle in the tilt's direction (the projection scales with the
-    tilt's tangent). A body upside down (``n_z <= 0``) reads about 1e9.
+    tilt's tangent). A body on its side or upside down (``n_z <= 1e-9``) reads 1e9.
     """
     nz = ca.fmax(n_body[2], 1e-9)
-    return ca.fmax(ca.fabs(n_body[0]) / (nz * ca.tan(tip[1])),
-                   ca.fabs(n_body[1]) / (nz * ca.tan(tip[0])))
+    inside = ca.fmax(ca.fabs(n_body[0]) / (nz * ca.tan(tip[1])),
+                     ca.fabs(n_body[1]) / (nz * ca.tan(tip[0])))
+    return ca.if_else(n_body[2] > 1e-9, inside, 1e9)
 
 
 @functools.cache

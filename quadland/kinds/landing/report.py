@@ -352,8 +352,9 @@ def _gear_reason(land: Mapping[str, Any], failure: str) -> str:
                          f"{lim['max_gear_load']:g} N",
             "off the pad": f"off the pad ({lim['pad_radius']:g} m): a foot left it or the run "
                            "ended before the settle time",
-            "not secured": "not secured (no lock engaged, friction margin not below "
-                           f"{lim['max_friction_margin']:g})"}[failure]
+            "not secured": "not secured (a foot off the deck or the friction margin, the "
+                           f"lock's pull included, not below {lim['max_friction_margin']:g})"
+            }[failure]
 
 
 def _gear_lines(land: Mapping[str, Any]) -> list[str]:
