@@ -774,6 +774,19 @@ def test_a_body_on_its_corner_tips_where_its_centre_leaves_the_support_rectangle
     tilt = relative_tilt_deg(Z[:, ::20], np.eye(3))
     assert bool(tilt[-1] > 90.0) is tips and bool(tilt[-1] < 1.0) is not tips
 
+def _tip_margin_on_a_still_deck(roll: float, pitch: float) -> float:
+    """The gear signals' ``tip_margin`` of the body 1 mm above a still level deck at
+    ``roll``, ``pitch`` (rad, ZYX), rotors and wind at zero."""
+    from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
+    p = params()
+    z = state_on_deck(np.zeros(3), 0.001)
+    z[3:5] = roll, pitch
+    s = gear_signals_function()(z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1],
+                                GEAR_STATE.zeros(), 0.0, np.zeros(3), part(p, "p_quad"),
+                                part(p, "p_act"), part(p, "p_veh"), part(p, "p_deck"),
+                                part(p, "p_gear"), part(p, "p_lock"))
+    return float(np.ravel(GEAR_SIGNALS.unpack(np.array(s).ravel())["tip_margin"])[0])
+
 
 def test_tip_margin_passes_1_where_the_centre_leaves_the_support_rectangle():
     # The body on a still level deck at roll 30 deg, pitch 34 deg (ZYX): the deck normal in
@@ -782,18 +795,10 @@ def test_tip_margin_passes_1_where_the_centre_leaves_the_support_rectangle():
     # = 0.1557 m, past the feet's 0.15 m (y = 0.2 tan 30 = 0.1155 m, within 0.125 m): with
     # no thrust, lock or friction limit nothing holds it. By the edges' angles alone (30 of
     # 32.0 deg, 34 of 36.87 deg) it would be within.
-    from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
     ph, th = np.radians(30.0), np.radians(34.0)
     x = GEAR_HEIGHT * np.tan(th) / np.cos(ph)
     assert x > 0.15 and GEAR_HEIGHT * np.tan(ph) < 0.125
-    p = params()
-    z = state_on_deck(np.zeros(3), 0.001)
-    z[3:5] = ph, th
-    s = gear_signals_function()(z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1],
-                                GEAR_STATE.zeros(), 0.0, np.zeros(3), part(p, "p_quad"),
-                                part(p, "p_act"), part(p, "p_veh"), part(p, "p_deck"),
-                                part(p, "p_gear"), part(p, "p_lock"))
-    margin = GEAR_SIGNALS.unpack(np.array(s).ravel())["tip_margin"]
+    margin = _tip_margin_on_a_still_deck(ph, th)
     assert margin > 1
     assert margin == pytest.approx(max(x / 0.15, GEAR_HEIGHT * np.tan(ph) / 0.125), rel=1e-12)
 
@@ -803,12 +808,4 @@ def test_a_body_on_its_side_or_upside_down_is_outside_its_support(roll_deg):
     # Upside down the deck normal in body axes is (0, ~1e-16, -1): the projection's ratio
     # would divide rounding noise by the clamped n_z and read "inside" (1.96e-7 at 180 deg,
     # issue 18's second review); past 90 deg the body has no support at all.
-    from quadland_symbolic.landing.gear import GEAR_SIGNALS, GEAR_STATE, gear_signals_function
-    p = params()
-    z = state_on_deck(np.zeros(3), 0.001)
-    z[3] = np.radians(roll_deg)
-    s = gear_signals_function()(z[:QUAD6_STATE.size], z[QUAD6_STATE.size:NZ - 1],
-                                GEAR_STATE.zeros(), 0.0, np.zeros(3), part(p, "p_quad"),
-                                part(p, "p_act"), part(p, "p_veh"), part(p, "p_deck"),
-                                part(p, "p_gear"), part(p, "p_lock"))
-    assert GEAR_SIGNALS.unpack(np.array(s).ravel())["tip_margin"] == 1e9
+    assert _tip_margin_on_a_still_deck(np.radians(roll_deg), 0.0) == 1e9

@@ -46,14 +46,15 @@ import functools
 
 import numpy as np
 
+from quadland.kinds.landing.gear import gear_span
 from quadland_symbolic.landing.contact import N_FEET
 from quadland_symbolic.landing.flat_deck import amplitude_indices, flat_function
 from quadland_symbolic.landing.gear import CUT_THRUST, FAILURES, GEAR_SIGNALS, GEAR_STATE
 from quadland_symbolic.landing.loop import landing_gear_signals_function
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 
-__all__ = ["gear_columns", "flat_gear_signals", "contact_figures", "gear_span", "ENGAGED",
-           "FAILURES", "CUT_THRUST"]
+__all__ = ["gear_columns", "flat_gear_signals", "contact_figures", "ENGAGED", "FAILURES",
+           "CUT_THRUST"]
 
 #: The lock counts as engaged at this engagement.
 ENGAGED = 0.95
@@ -97,15 +98,6 @@ def flat_gear_signals():
     (:func:`quadland_symbolic.landing.flat_deck.flat_function`)."""
     return flat_function(landing_gear_signals_function(),
                          {"pp": amplitude_indices(LANDING_PLANT_PARAMS)})
-
-
-def gear_span(data: dict) -> float:
-    """Twice the farthest foot's distance from the centre, m (``[gear]`` feet_x, feet_y
-    and ``quadrotor.gear_height``): a body touching the deck anywhere has its lowest foot
-    within it of the deck."""
-    g = data["gear"]
-    return 2.0 * float(np.sqrt(g["feet_x"] ** 2 + g["feet_y"] ** 2
-                               + data["quadrotor"]["gear_height"] ** 2))
 
 
 def contact_figures(result, limits: dict, mass: float) -> dict:

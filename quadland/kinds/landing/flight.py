@@ -21,8 +21,7 @@ from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, real_type
 from quadland.engine.recall import code_recipe
-from quadland.kinds.landing.contact_report import gear_span
-from quadland.kinds.landing.gear import contact_step, free_flight_gap
+from quadland.kinds.landing.gear import contact_step, free_flight_gap, gear_span
 from quadland.kinds.landing.report import GEAR_LIMITS, TOUCHDOWN_LIMITS
 from quadland.kinds.landing.sensed import (
     handover,

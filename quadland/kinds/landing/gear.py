@@ -15,7 +15,7 @@ from quadland_symbolic.landing.contact import (
 from quadland_symbolic.landing.gear import PEAK_RATE, TOUCHDOWN_POLICY
 
 __all__ = ["gear_params", "lock_params", "policy_params", "touchdown_guidance", "contact_step",
-           "STEP_MARGIN", "FREE_GAP_WIDTHS", "free_flight_gap"]
+           "STEP_MARGIN", "FREE_GAP_WIDTHS", "free_flight_gap", "gear_span"]
 
 #: RK4's step on the deck is this fraction of its stability edge on the stiffest mode
 #: (docs/contact.md: 5 steps per 4 ms for the default gear, ``h lambda = 2.0``).
@@ -24,6 +24,15 @@ STEP_MARGIN = 0.8
 #: The simulator flies the plant without the contact while the lowest foot is more than
 #: this many onset widths above the deck (:func:`free_flight_gap`).
 FREE_GAP_WIDTHS = 1000.0
+
+
+def gear_span(data: dict) -> float:
+    """Twice the farthest foot's distance from the centre, m (``[gear]`` feet_x, feet_y
+    and ``quadrotor.gear_height``): a body touching the deck anywhere has its lowest foot
+    within it of the deck."""
+    g = data["gear"]
+    return 2.0 * float(np.sqrt(g["feet_x"] ** 2 + g["feet_y"] ** 2
+                               + data["quadrotor"]["gear_height"] ** 2))
 
 
 def gear_params(scenario: Scenario) -> np.ndarray:
