@@ -294,6 +294,10 @@ def test_the_welded_idealization_stays_a_switch():
     # 100 N "idle" flew the cut body 8.3 m off the roof (reported bounced and tipped)
     ("touchdown.idle_thrust=9.81", "touchdown.idle_thrust: 9.81 N is more than a rotor's "
      "F_max (quadrotor.thrust_to_weight x mass x gravity / 4 = 9.8 N)"),
+    # highway's feet at (0.15, 0.125) m: the corner 0.1953 m from the centre by hand, so a
+    # contact 0.2 m off (the limit) can put a foot at 0.3953 m, outside a 0.35 m pad
+    ("landing.pad_radius=0.35", "landing.pad_radius: 0.35 m is smaller than landing.max_offset "
+     "plus the gear's corner (hypot(gear.feet_x, gear.feet_y) = 0.195256 m)"),
 ])
 def test_a_bad_gear_or_touchdown_value_is_one_line(tmp_path, capsys, setting, message):
     out = tmp_path / "run"

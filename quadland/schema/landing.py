@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from types import MappingProxyType
 
@@ -377,13 +378,20 @@ def check_landing(data: dict) -> None:
 
 def _check_gear(data: dict) -> None:
     """The gear's contact needs a positive gear height; a friction of 0 is allowed; the
-    landing area holds the first contact's offset limit; the rotors' idle command is
-    within their force ``F_max``."""
+    landing area holds the first contact's offset limit (by the centre, and by every foot
+    unless welded: "on the pad" is judged by the feet); the rotors' idle command is within
+    their force ``F_max``."""
     g = data["landing"]
     if g["pad_radius"] < g["max_offset"]:
         raise ScenarioError(f"landing.pad_radius: {g['pad_radius']:g} m is smaller than "
                             f"landing.max_offset ({g['max_offset']:g} m): a first contact "
                             "within the limit would already be off the pad")
+    feet = math.hypot(data["gear"]["feet_x"], data["gear"]["feet_y"])
+    if not data["gear"]["welded"] and g["pad_radius"] < g["max_offset"] + feet:
+        raise ScenarioError(f"landing.pad_radius: {g['pad_radius']:g} m is smaller than "
+                            f"landing.max_offset plus the gear's corner (hypot(gear.feet_x, "
+                            f"gear.feet_y) = {feet:g} m): a first contact within the limit "
+                            "could already put a foot off the pad")
     if not data["gear"]["welded"] and data["quadrotor"]["gear_height"] <= 0:
         raise ScenarioError("quadrotor.gear_height: must be positive for the gear's contact "
                             "(the feet's depth below the centre; gear.welded = true takes none)")
