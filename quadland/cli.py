@@ -327,12 +327,21 @@ def _run_campaign(args) -> int:
         lo, hi = summary["confidence"]["interval"]
         rate = (f": {summary['successes']} of {summary['flown']} runs within limits "
                 f"({100 * summary['success_rate']:.1f} %, 95 % interval {100 * lo:.1f} to "
-                f"{100 * hi:.1f} %)")
+                f"{100 * hi:.1f} %){_counts(summary)}")
     elif summary is not None:
         rate = (f": no run flown, the draws of all {summary['runs']} were invalid (runs.csv "
                 "says why)")
     print(f"quadland: wrote {result.folder}{rate}{_session(result)}")
     return 0
+
+
+def _counts(summary: dict) -> str:
+    """``"; false touchdowns 0, tipped over 2"``: the counted flags of a campaign's runs."""
+    from quadland.kinds import kind_of
+
+    counted = [(m.counted, summary["metrics"][m.name]["count"])
+               for m in kind_of(summary["model"]).metrics if m.counted]
+    return "; " + ", ".join(f"{label} {n}" for label, n in counted) if counted else ""
 
 
 def _run_envelope(args) -> int:

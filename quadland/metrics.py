@@ -25,12 +25,16 @@ class Metric:
     name, unit, doc : str
     limit : str or None
         The scenario key that holds its upper limit, if any.
+    counted : str or None
+        For a 0/1 flag, what its 1 is called in a count ("false touchdowns"): a
+        campaign's summary counts the runs where it is 1 and prints the count.
     """
 
     name: str
     unit: str
     doc: str
     limit: str | None = None
+    counted: str | None = None
 
 
 def violations(metrics: Mapping[str, float | None], limits: Mapping[str, float],

@@ -63,6 +63,11 @@ def test_cell_statistics_against_a_hand_count():
     # a cell without a run: no rate, no interval
     assert stats[2] == {"runs": 0, "invalid": 0, "successes": 0, "success_rate": None,
                         "interval": None, "failure_modes": {}}
+    # a 0/1 column counted per cell over the flown runs (the invalid run's 1 is not)
+    flags = ["1.0", "0.0", "1.0", "", "", "1.0", "1.0", "0.0"]
+    flagged = [r[:7] + [flag] + r[8:] for r, flag in zip(rows, flags, strict=True)]
+    counted = cell_statistics(HEADER, flagged, 3, counted=["m"])
+    assert [c["counts"] for c in counted] == [{"m": 2}, {"m": 1}, {"m": 0}]
 
 
 @pytest.mark.parametrize("n", [1, 2, 7, 30])

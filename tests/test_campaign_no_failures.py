@@ -8,6 +8,7 @@ import pytest
 import quadland.plots.campaign as campaign_plots
 from quadland.campaign import run_campaign
 from quadland.campaign.summary import campaign_figures, summarize_campaign
+from quadland.cli import _counts
 from quadland.scenario import load_scenario
 
 
@@ -24,6 +25,15 @@ def test_failures_figure_of_a_campaign_without_failures(tmp_path, monkeypatch):
     base = load_scenario(out / "scenario.toml")
     summary = summarize_campaign(base, header, rows)
     assert summary["success_rate"] == 1.0 and summary["separation"] is None
+    # the 0/1 flags are counted (review of issue 17: only their quantiles were, so one false
+    # touchdown and five read the same): mark the first run's by hand
+    ft, tip = header.index("false_touchdown"), header.index("tipped")
+    marked = [list(r) for r in rows]
+    marked[0][ft], marked[-1][tip] = "1.0", "1.0"
+    counts = summarize_campaign(base, header, marked)["metrics"]
+    assert counts["false_touchdown"]["count"] == 1 and counts["tipped"]["count"] == 1
+    assert summary["metrics"]["false_touchdown"]["count"] == 0
+    assert _counts(summary) == "; false touchdowns 0, tipped over 0"
     titles = []
     draw = campaign_plots.failures_figure
     monkeypatch.setattr(campaign_plots, "failures_figure",

@@ -391,6 +391,36 @@ def first_bad(p) -> str | None:
     return None
 
 
+def _edges(name, ok):
+    """Values just outside and at the inside edge of a documented range."""
+    if name == "range_min_cos":
+        return [0.0, 1.0 + 1e-9], [1e-9, 1.0]
+    if ok is _pos:
+        return [0.0, -1.0], [1e-9]
+    return [-1e-9], [0.0]
+
+
+@pytest.mark.parametrize("name", [n for n in DOCUMENTED if n not in ("g", "gate_lockout")])
+def test_the_scenario_refuses_what_the_flight_code_refuses(name):
+    """A scenario's [estimator] value outside the flight code's documented range is bad
+    input (one line naming the key), not a flight that runs on casadi and fails at t = 0 on
+    the C (review of issue 17: twelve keys, gates and sigmas at 0, range_min_cos 2, were
+    admitted). ``g`` is the plant's gravity, not a key of [estimator]; ``gate_lockout`` has
+    its own whole-number rule (test_scenario.py)."""
+    from quadland import load_scenario
+    from quadland.exceptions import ScenarioError
+
+    size = estimator_params().slice(name).stop - estimator_params().slice(name).start
+    text = (lambda v: f"[{v!r}, {v!r}, {v!r}]") if size == 3 else repr
+    bad, good = _edges(name, DOCUMENTED[name])
+    for v in bad:
+        with pytest.raises(ScenarioError, match=rf"estimator\.{name}\b"):
+            load_scenario("highway", [f"estimator.{name}={text(v)}"])
+    for v in good:
+        p = load_scenario("highway", [f"estimator.{name}={text(v)}"]).data["estimator"][name]
+        assert np.all(np.asarray(p, dtype=float) == v)
+
+
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_check_names_the_first_member_outside_its_range(precision):
     assert tuple(DOCUMENTED) == estimator_params().names()

@@ -315,6 +315,16 @@ def test_an_unknown_override_key_is_named_as_an_override():
                                  ">= 1, got 0"),
     ("estimator.gate_lockout=2.5", "estimator.gate_lockout: must be a whole number of refusals "
                                    ">= 1, got 2.5"),
+    # the horizon is 50 periods of 250 Hz = 0.2 s, a packet is fused up to 0.02 s after it
+    # (max_age): a GNSS 0.24 s old on arrival is past both (review of issue 17: flown, every
+    # packet discarded, exit 0)
+    ("sensors.gnss.latency=0.24", "sensors.gnss.latency: 0.24 s is past the navigation "
+     "filter's horizon (50 control periods, 0.2 s) plus estimator.max_age_gnss (0.22 s): "
+     "every packet would be discarded"),
+    # 250 Hz x (0.2 - 0.005) s + 1 = 49.75 packets in flight, ceil 50, against 26 slots
+    ("sensors.rangefinder.rate_hz=250.0", "sensors.rangefinder.rate_hz: 250 Hz with 0.005 s "
+     "of latency keeps 50 packets waiting for the filter's horizon (0.2 s); its queue holds "
+     "26: packets would be dropped"),
 ])
 def test_the_landing_cross_key_rules_name_the_key(override, message):
     """A value each key's own range admits but the others make meaningless: one line."""
@@ -322,7 +332,8 @@ def test_the_landing_cross_key_rules_name_the_key(override, message):
         load_scenario("highway", [override])
     assert str(err.value) == message
     load_scenario("highway", ["landing.search_height=3.0", "landing.marker_timeout=0.04",
-                              "estimator.gate_lockout=1"])     # the edges are admitted
+                              "estimator.gate_lockout=1",      # the edges are admitted
+                              "sensors.gnss.latency=0.22"])
 
 
 def test_no_key_description_points_to_docs_an_install_lacks():

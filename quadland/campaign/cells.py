@@ -53,7 +53,7 @@ def failure_modes(status: str, success: bool, message: str) -> list[str]:
 
 
 def cell_statistics(header: Sequence[str], rows: Sequence[Sequence[str]], cells: int,
-                    level: float = CONFIDENCE) -> list[dict]:
+                    level: float = CONFIDENCE, counted: Sequence[str] = ()) -> list[dict]:
     """Each cell's counts from an envelope's runs.csv rows.
 
     Returns
@@ -63,11 +63,12 @@ def cell_statistics(header: Sequence[str], rows: Sequence[Sequence[str]], cells:
         ``invalid``, ``successes``, ``success_rate`` (None without a run
         flown), ``interval`` (Clopper-Pearson at ``level``, None without a
         run flown) and ``failure_modes`` (mode -> runs; a run missing two
-        limits counts in both).
+        limits counts in both); with ``counted`` (0/1 metric columns, e.g.
+        ``false_touchdown``), ``counts``: column -> flown runs where it is 1.
     """
     col = {name: k for k, name in enumerate(header)}
-    counts = [{"runs": 0, "invalid": 0, "successes": 0, "modes": Counter()}
-              for _ in range(cells)]
+    counts = [{"runs": 0, "invalid": 0, "successes": 0, "modes": Counter(),
+               "flags": Counter()} for _ in range(cells)]
     for row in rows:
         c = counts[int(row[col["cell"]])]
         status, success = row[col["status"]], row[col["success"]] == "true"
@@ -76,6 +77,7 @@ def cell_statistics(header: Sequence[str], rows: Sequence[Sequence[str]], cells:
         else:
             c["runs"] += 1
             c["successes"] += success
+            c["flags"].update(name for name in counted if row[col[name]] in ("1", "1.0"))
         c["modes"].update(failure_modes(status, success, row[col["message"]]))
     out = []
     for c in counts:
@@ -84,7 +86,9 @@ def cell_statistics(header: Sequence[str], rows: Sequence[Sequence[str]], cells:
                     "success_rate": k / n if n else None,
                     "interval": list(clopper_pearson(k, n, level)) if n else None,
                     "failure_modes": dict(sorted(c["modes"].items(),
-                                                 key=lambda m: (-m[1], m[0])))})
+                                                 key=lambda m: (-m[1], m[0]))),
+                    **({"counts": {name: c["flags"][name] for name in counted}}
+                       if counted else {})})
     return out
 
 
@@ -101,11 +105,13 @@ def envelope_files(env, header: Sequence[str], rows: Sequence[Sequence[str]],
     plots : bool
         Draw envelope.png.
     """
+    from quadland.kinds import kind_of
     from quadland.output import figure_png, strict_json
     from quadland.run import provenance
 
     cells = env.cells
-    stats = cell_statistics(header, rows, len(cells))
+    counted = [m.name for m in kind_of(env.base).metrics if m.counted]
+    stats = cell_statistics(header, rows, len(cells), counted=counted)
     entries = []
     for c, (values, s) in enumerate(zip(cells, stats, strict=True)):
         entries.append({"cell": c, **{a.name: (int(v) if a.integer else v)

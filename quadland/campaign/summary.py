@@ -133,6 +133,8 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
                  "undefined": int(n - x.size)}
         if m.name in limits:
             entry["within_limit"] = int(np.sum(x <= limits[m.name]))
+        if m.counted:
+            entry["count"] = int(np.sum(x == 1.0))
         for label, q in QUANTILES.items():
             entry[label] = order_statistic(x, q) if x.size else None
         metrics[m.name] = entry

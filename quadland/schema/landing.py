@@ -14,8 +14,9 @@ from quadland.schema.sea_state import SEA_STATES
 from quadland.schema.sensors import check_ranges, sensor_fields
 from quadland_symbolic.landing.deck import N_SINES
 from quadland_symbolic.landing.drive import N_LEGS, pack_drive, planned_speed_change
+from quadland_symbolic.landing.estimator import FLIGHT_DEPTH, N_HIST
 from quadland_symbolic.landing.land_detector import LAND_DETECTOR_PARAMS
-from quadland_symbolic.landing.navigation import estimator_params
+from quadland_symbolic.landing.navigation import BLOCKS, SENSORS, estimator_params
 from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
 from quadland_symbolic.landing.sensors import SENSOR_NAMES
 from quadland_symbolic.loop import MAX_DELAY_PERIODS
@@ -23,8 +24,17 @@ from quadland_symbolic.loop import MAX_DELAY_PERIODS
 __all__ = ["LANDING_SCHEMA", "check_landing"]
 
 _POS = dict(lo=0.0, lo_open=True)
-#: [estimator] keys that must be positive: the tilt bias decays as exp(-dt / tilt_tau).
-_ESTIMATOR_POSITIVE = ("tilt_tau",)
+#: [estimator] keys that must be positive, as the flight code's parameter check has them
+#: (quadland_symbolic.codegen.estimator_api.ESTIMATOR_PARAM_RANGES; a test keeps the two
+#: equal): a zero density or sigma makes a covariance or an innovation variance singular,
+#: a zero gate refuses every measurement, the tilt bias decays as exp(-dt / tilt_tau).
+_ESTIMATOR_POSITIVE = ("q_acc", "q_at", "q_b", "q_ab", "vision_sigma0", "tilt_tau",
+                       "gnss_rel_sigma", "gnss_v1_sigma", "gnss_vt_sigma", "range_sigma",
+                       "range_min_cos", "range_deck_radius", "datalink_v_sigma", "datalink_a_sigma",
+                       *(f"gate_{b.name}" for b in BLOCKS))
+#: [estimator] keys with an upper bound of their own: the range model divides by
+#: ``n2 . b3_E`` once it is at least ``range_min_cos``, a cosine in (0, 1].
+_ESTIMATOR_HI = {"range_min_cos": 1.0}
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
@@ -295,7 +305,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     # sensors. A campaign's dispersions of [sensors.*] leave it at its nominal.
     "estimator": {
         **{f.name: Field(F, f.unit if isinstance(f.unit, str) else f.unit[0], f.doc,
-                         f.size if f.size > 1 else None, lo=0.0, hi=1e6,
+                         f.size if f.size > 1 else None, lo=0.0,
+                         hi=_ESTIMATOR_HI.get(f.name, 1e6),
                          lo_open=f.name in _ESTIMATOR_POSITIVE)
            for f in estimator_params().fields if f.name != "g"},
         **{f"p0_{name}": Field(F, unit, f"initial standard deviation of {what}, per axis",
@@ -455,3 +466,27 @@ def _check_sensors(data: dict) -> None:
                                 f"{DELIVERY_SLOTS - 1} control periods a packet can be held "
                                 f"({(DELIVERY_SLOTS - 1) / rate:g} s at {rate:g} Hz)")
         check_ranges(name, s)
+    _check_fusion(data)
+
+
+def _check_fusion(data: dict) -> None:
+    """What a sensor sends the filter can be fused: its packets reach the filter's horizon
+    (``N_HIST`` periods behind) before they are ``max_age`` past it, and a FIFO of the
+    depth flown holds those in flight (``rate x (D - latency) + 1``, docs/estimator.md)."""
+    rate = data["controller"]["rate_hz"]
+    horizon = N_HIST / rate
+    for sensor, depth in zip(SENSORS, FLIGHT_DEPTH, strict=True):
+        name = "rangefinder" if sensor == "range" else sensor
+        s = data[f"sensors.{name}"]
+        late = horizon + data["estimator"][f"max_age_{sensor}"]
+        if s["latency"] > late + 1e-9:
+            raise ScenarioError(f"sensors.{name}.latency: {s['latency']:g} s is past the "
+                                f"navigation filter's horizon ({N_HIST} control periods, "
+                                f"{horizon:g} s) plus estimator.max_age_{sensor} "
+                                f"({late:g} s): every packet would be discarded")
+        need = math.ceil(s["rate_hz"] * max(horizon - s["latency"], 0.0) + 1 - 1e-9)
+        if need > depth:
+            raise ScenarioError(f"sensors.{name}.rate_hz: {s['rate_hz']:g} Hz with "
+                                f"{s['latency']:g} s of latency keeps {need} packets waiting "
+                                f"for the filter's horizon ({horizon:g} s); its queue holds "
+                                f"{depth}: packets would be dropped")

@@ -259,14 +259,15 @@ LANDING_METRICS = (
     Metric("touchdown_time", "s", "when the gear met the deck"),
     Metric("aborts", "-", "descents aborted before the touchdown"),
     Metric("rotor_max", "N", "largest rotor force"),
-    Metric("false_touchdown", "-", "1 when the flight code declared touchdown above the deck"),
+    Metric("false_touchdown", "-", "1 when the flight code declared touchdown above the deck",
+           counted="false touchdowns"),
     Metric("peak_gear_force", "N", "the gear's peak total normal load (gear contact)",
            "landing.max_gear_load"),
     Metric("bounce", "m", "the lowest foot's highest rebound with every foot off the deck",
            "landing.max_bounce"),
     Metric("impact_energy", "J", "m1 v_n^2 / 2 of the lowest foot's sink rate at first contact"),
     Metric("secured", "-", "1 when held by the lock-down or by friction at the end"),
-    Metric("tipped", "-", "1 when the quadrotor tipped over on the deck"),
+    Metric("tipped", "-", "1 when the quadrotor tipped over on the deck", counted="tipped over"),
 )
 
 #: The gear contact's metrics: undefined (None) for the welded idealization, whose limits
