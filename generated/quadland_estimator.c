@@ -512,10 +512,14 @@ ql_status ql_estimator_step(const ql_imu *imu, const ql_vision_packet *vision,
         outputs_zero(y, diag);
         return QL_ERR_NULL;
     }
-    /* The IMU and the packets are not checked: the step drops a packet that is
-     * not finite and replaces a non-finite IMU sample, and counts both. */
+    /* The packets and the accelerometer are not checked: the step drops a packet
+     * that is not finite and replaces a non-finite specific force, and counts both.
+     * The IMU's values passed on to *y are checked: a NaN there would otherwise
+     * leave with QL_OK. */
     if (!(all_finite((const ql_real *)mem, QL_ESTIMATOR_MEMORY_SIZE)
           & all_finite((const ql_real *)params, QL_ESTIMATOR_PARAMS_SIZE)
+          & all_finite(imu->eta_hat, 3)
+          & all_finite(imu->omega, 3)
           & (isfinite(dt) != 0) & (isfinite(t) != 0))) {
         outputs_zero(y, diag);
         return QL_ERR_NONFINITE_INPUT;

@@ -214,15 +214,15 @@ ql_status ql_estimator_init(const ql_nav_state *x0, const ql_real *P0_diag,
  * writes the landing step's measurements *y; then predicts the horizon over
  * its oldest buffered period. A packet is read only when its fresh flag is 1;
  * one that is not finite or from after t is dropped and counted, as is a
- * non-finite IMU sample (the acceleration input then falls back on a_b): these
- * are not errors. y->eta1 and y->Omega1 are the IMU's eta_hat and omega as
+ * non-finite specific force (the acceleration input then falls back on a_b):
+ * these are not errors. y->eta1 and y->Omega1 are the IMU's eta_hat and omega as
  * passed (the filter does not estimate the attitude); every other output is
  * computed by the filter.
  *
- * On QL_OK the memory is advanced and *y (but for the IMU's values) and *diag
- * are finite. On any error the memory is left untouched and *y and *diag are
- * zero: QL_ERR_NULL for a NULL pointer; QL_ERR_NONFINITE_INPUT when the memory, a
- * parameter, dt or t is NaN or infinite; QL_ERR_INVALID for dt <= 0 or a FIFO
+ * On QL_OK the memory is advanced and *y and *diag are finite. On any error
+ * the memory is left untouched and *y and *diag are zero: QL_ERR_NULL for a
+ * NULL pointer; QL_ERR_NONFINITE_INPUT when the memory, a parameter, dt, t or
+ * the IMU's eta_hat or omega is NaN or infinite; QL_ERR_INVALID for dt <= 0 or a FIFO
  * count that is not a whole number in [0, depth]; QL_ERR_PARAM for a parameter
  * outside its range (ql_check_estimator_params names it); QL_ERR_NONFINITE_OUTPUT
  * when finite inputs overflowed. Branch-free: every call runs the same

@@ -145,8 +145,8 @@ def _imu(c, rng):
     c.v["imu"][0:3] = ETA_HAT
     c.v["imu"][3:6] = rotation(ETA_HAT).T @ [0.0, 0.0, G] + rng.normal(size=3) * 0.05
     c.v["imu"][6:9] = rng.normal(size=3) * 0.01
-    if rng.uniform() < 0.02:                  # a non-finite sample: counted, not an error
-        c.v["imu"][rng.integers(9)] = math.nan
+    if rng.uniform() < 0.02:       # a non-finite specific force: counted, not an error
+        c.v["imu"][3 + rng.integers(3)] = math.nan
 
 
 def _fly(c, rng, steps, t0, oracle=None):
@@ -316,11 +316,15 @@ def test_errors_leave_the_memory_untouched_and_the_outputs_zero(precision):
              ("count beyond depth", dict(mem=(count, FLIGHT_DEPTH[0] + 1)), "QL_ERR_INVALID"),
              ("count negative", dict(mem=(count, -1.0)), "QL_ERR_INVALID"),
              ("param NaN", dict(params=(0, math.nan)), "QL_ERR_NONFINITE_INPUT"),
+             # passed on to y.eta1 and y.Omega1: a NaN would leave with QL_OK (review of
+             # issue 17: "status codes and never NaN")
+             ("attitude estimate NaN", dict(imu=(0, math.nan)), "QL_ERR_NONFINITE_INPUT"),
+             ("gyro rate infinite", dict(imu=(8, -math.inf)), "QL_ERR_NONFINITE_INPUT"),
              ("param out of range", dict(params=(estimator_params().slice("range_sigma").start,
                                                  0.0)), "QL_ERR_PARAM")]
     for what, change, status in cases:
-        mem0, p0 = c.v["mem"].copy(), c.v["params"].copy()
-        for key in ("mem", "params"):
+        mem0, p0, imu0 = c.v["mem"].copy(), c.v["params"].copy(), c.v["imu"].copy()
+        for key in ("mem", "params", "imu"):
             if key in change:
                 c.v[key][change[key][0]] = change[key][1]
         before = bytes(c.s["mem"])
@@ -330,7 +334,7 @@ def test_errors_leave_the_memory_untouched_and_the_outputs_zero(precision):
         assert got == STATUS[status], what
         assert bytes(c.s["mem"]) == before, what
         assert not np.any(c.v["y"]) and not np.any(c.v["diag"]), what
-        c.v["mem"][:], c.v["params"][:] = mem0, p0
+        c.v["mem"][:], c.v["params"][:], c.v["imu"][:] = mem0, p0, imu0
     for name in Call.ARGS:
         before = bytes(c.s["mem"])
         assert c.step(DT, t, null=(name,)) == STATUS["QL_ERR_NULL"], name

@@ -514,10 +514,14 @@ qlf_status qlf_estimator_step(const qlf_imu *imu, const qlf_vision_packet *visio
         outputs_zero(y, diag);
         return QLF_ERR_NULL;
     }
-    /* The IMU and the packets are not checked: the step drops a packet that is
-     * not finite and replaces a non-finite IMU sample, and counts both. */
+    /* The packets and the accelerometer are not checked: the step drops a packet
+     * that is not finite and replaces a non-finite specific force, and counts both.
+     * The IMU's values passed on to *y are checked: a NaN there would otherwise
+     * leave with QLF_OK. */
     if (!(all_finite((const qlf_real *)mem, QLF_ESTIMATOR_MEMORY_SIZE)
           & all_finite((const qlf_real *)params, QLF_ESTIMATOR_PARAMS_SIZE)
+          & all_finite(imu->eta_hat, 3)
+          & all_finite(imu->omega, 3)
           & (isfinite(dt) != 0) & (isfinite(t) != 0))) {
         outputs_zero(y, diag);
         return QLF_ERR_NONFINITE_INPUT;

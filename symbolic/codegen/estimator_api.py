@@ -164,6 +164,24 @@ def estimator_sizes() -> list[dict]:
     ]
 
 
+def imu_passed_inputs() -> tuple[tuple[str, int], ...]:
+    """The IMU's fields that :func:`imu_outputs` pass on, with their sizes.
+
+    Read from the step's expression graph: the entries of ``imu`` that the
+    passed outputs depend on (the attitude estimate and the rates). The C step
+    refuses a non-finite value in them (``QL_ERR_NONFINITE_INPUT``), so ``y`` is
+    finite on ``QL_OK``.
+    """
+    fn = BY_NAME["estimator_step"].function(0)
+    imu = fn.sx_in("imu")
+    y = fn.call({n: fn.sx_in(n) for n in fn.name_in()})["y"]
+    offsets = LANDING_MEASUREMENT.offsets()
+    rows = [i for n in imu_outputs() for i in range(*offsets[n])]
+    cols = set(ca.jacobian(y[rows], imu).sparsity().get_triplet()[1])
+    return tuple((f.name, f.size) for f in IMU.fields
+                 if cols & set(range(*IMU.offsets()[f.name])))
+
+
 def _step_context(config: CodegenConfig) -> dict:
     """Where ``ql_estimator_step`` and ``ql_estimator_init`` put each argument and result."""
     step, init = (BY_NAME[n].function(0) for n in ("estimator_step", "estimator_init"))
@@ -188,6 +206,7 @@ def _step_context(config: CodegenConfig) -> dict:
         counts=[dict(name=f"count_{s}", depth=d)
                 for s, d in zip(SENSORS, dict(ESTIMATOR_SIZES)["depth"], strict=True)],
         y_checked=checked, y_passed=passed,
+        imu_checked=[dict(name=n, size=s) for n, s in imu_passed_inputs()],
         mem_size=mem.size, y_size=LANDING_MEASUREMENT.size,
         init=dict(c_name=BY_NAME["estimator_init"].c_name(config),
                   arg={n: i for i, n in enumerate(init.name_in())},
