@@ -38,7 +38,7 @@ from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
            "SENSORS", "Block", "BLOCKS", "COUPLINGS", "estimator_params", "ESTIMATOR_DEFAULTS",
-           "covariance_pattern", "acceleration_input", "nav_transition",
+           "covariance_pattern", "acceleration_input", "axis_dynamics", "nav_transition",
            "nav_transition_function", "nav_predict", "nav_predict_function",
            "measurement_model_function", "block_update", "nav_update_function", "deck_at",
            "relative_output"]
@@ -229,16 +229,30 @@ def covariance_pattern(coupling: str = "full") -> CovariancePattern:
 
 # ---------------------------------------------------------------- prediction
 
-#: One axis of (E2): [p_r, v1, v_t, a_t, b, a_b, a_tilt]' = A7 [...] + B7 a_in + w, with
-#: a_tilt held over the period (E2a).
-_A7 = np.array([[0, 1, -1, 0, 0, 0, 0],
-                [0, 0, 0, 0, 0, -1, -1],
-                [0, 0, 0, 1, 0, 0, 0],
-                [0, 0, 0, 0, 0, 0, 0],
-                [0, 0, 0, 0, 0, 0, 0],
-                [0, 0, 0, 0, 0, 0, 0],
-                [0, 0, 0, 0, 0, 0, 0]], dtype=float)
-_B7 = np.array([[0], [1], [0], [0], [0], [0], [0]], dtype=float)
+def axis_dynamics(x7, a_in):
+    """One axis of (E2) without its noise: ``d/dt [p_r, v1, v_t, a_t, b, a_b, a_tilt]``.
+
+    The relative position moves with the quadrotor's velocity less the target's, the
+    quadrotor's velocity with the acceleration input less its biases, the target's
+    velocity with its acceleration; the target's acceleration, the GNSS bias and the
+    input's biases are driven by noise alone (random walks; ``a_tilt`` is held over a
+    period and decays as its Gauss-Markov process in :func:`nav_transition`, (E2a)).
+    """
+    _, v1, v_t, a_t, _, a_b, a_tilt = ca.vertsplit(x7)
+    return ca.vertcat(v1 - v_t, a_in - a_b - a_tilt, a_t, 0, 0, 0, 0)
+
+
+def _axis_matrices() -> tuple[np.ndarray, np.ndarray]:
+    """``A7 = df/dx``, ``B7 = df/da_in`` of :func:`axis_dynamics` by ``ca.jacobian``
+    (constant: the model is linear), for the exact discretization (E3)-(E5)."""
+    x, a = ca.SX.sym("x", 7), ca.SX.sym("a_in")
+    f = axis_dynamics(x, a)
+    return (np.array(ca.evalf(ca.jacobian(f, x)), dtype=float),
+            np.array(ca.evalf(ca.jacobian(f, a)), dtype=float))
+
+
+#: One axis of (E2): [p_r, v1, v_t, a_t, b, a_b, a_tilt]' = A7 [...] + B7 a_in + w.
+_A7, _B7 = _axis_matrices()
 
 
 def acceleration_input(eta_hat, f_b, g):
