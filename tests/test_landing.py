@@ -206,6 +206,21 @@ def test_a_heaving_deck_holds_the_descent_until_a_calm_window():
     assert speed.max() <= 0.19
 
 
+@pytest.mark.parametrize("name", ["highway", "ship"])
+def test_on_the_true_state_the_sensed_world_changes_nothing(name):
+    """Issue 17's "sensors.enabled = false with controller.delay_periods = 0 flies the
+    loop of before, bit for bit": with the sensors off, nothing of the sensors', the
+    filter's or the land detector's tables, their random draws or the controller's backend
+    reaches the flight (review of issue 17: the promise stood only on a one-time check).
+    Each variant would change a sensed flight."""
+    base = [PERFECT, "controller.delay_periods=0", "simulation.duration=20"]
+    ref = _fly(name, *base).to_csv()
+    for extra in (["sensors.vision.rate_hz=5.0", "sensors.gnss.latency=0.2"],
+                  ["sensors.random=false"], ["estimator.q_acc=[0.3, 0.4, 0.05]"],
+                  ["land_detector.gap_max=0.5"], ['controller.backend="c"']):
+        assert _fly(name, *base, *extra).to_csv() == ref, extra
+
+
 # ---------------------------------------------------------------- landed and secured
 
 #: The turning car on the true state, with no lock-down: what the gear alone holds.
