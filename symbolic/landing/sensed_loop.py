@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import math
 
 import casadi as ca
@@ -72,8 +73,8 @@ from quadland_symbolic.landing.estimator import (
     N_HIST,
     estimator_diagnostics,
     estimator_memory,
-    estimator_step_function,
 )
+from quadland_symbolic.landing.estimator_switch import conditional_step_function
 from quadland_symbolic.landing.gear import contact_switch
 from quadland_symbolic.landing.guidance import (
     DESCEND,
@@ -122,6 +123,7 @@ from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTOR
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import LoopModel
 from quadland_symbolic.parameters import QUADROTOR
+from quadland_symbolic.stages import compose_stages
 
 __all__ = ["DELIVERY_SLOTS", "SENSED_TICK", "SENSED_RECORDED", "SENSED_TRAJECTORY", "NAV_PACKET_OF",
            "delivery_record", "delivery_delay", "sensed_loop_memory", "sensed_loop_params",
@@ -301,14 +303,11 @@ def detector_cues_function() -> ca.Function:
                        ["y", "range", "imu", "F_cmd", "xg", "p_guid", "p_quad"], ["cues"])
 
 
-@functools.cache
-def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
-    """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring);
-    ``welded`` as in :func:`~quadland_symbolic.landing.loop.landing_loop`."""
-    base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
+def _world_stage(xc_lay, pc_lay) -> ca.Function:
+    """``sensed_world``: steps 1 to 3 (the sensors, their delivery, the IMU's hold)."""
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
-    xc, pc, first, n = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first"), SENSED_TICK.sym()
+    xc, pc, n = xc_lay.sym(), pc_lay.sym(), SENSED_TICK.sym()
     cs, ps, tick = xc_lay.unpack(xc), pc_lay.unpack(pc), SENSED_TICK.unpack(n)
     delays = dict(zip(SENSOR_NAMES, ca.vertsplit(ps["delay"]), strict=True))
     read, lines = {}, []
@@ -320,12 +319,42 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
     imu_now = ca.if_else(imu_rec["fresh"], ca.vertcat(*(imu_rec[f.name] for f in IMU.fields)),
                          cs["imu_held"])
     packets = [read[name] for name in ("vision", "gnss", "rangefinder", "datalink")]
-    nav_next, y, diag = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)(
-        cs["nav"], imu_now, *packets, ps["p_est"], ps["dt"], t)
+    outs = dict(lines=ca.vertcat(*lines), imu_now=imu_now,
+                **dict(zip(_PACKETS, packets, strict=True)), nav=cs["nav"], p_est=ps["p_est"],
+                dt=ps["dt"])
+    return ca.Function("sensed_world", [xp, xc, pc, t, uh, w, pp, n],
+                       [ca.densify(v) for v in outs.values()],
+                       ["xp", "xc", "pc", "t", "uh_held", "w", "pp", "n"], list(outs),
+                       {"cse": True})
+
+
+#: The filter's packets as the sensed loop's stages name them.
+_PACKETS = ("vision", "gnss", "range", "datalink")
+
+
+def _filter_stage() -> ca.Function:
+    """``sensed_filter``: step 4, the filter's updates evaluated only when due
+    (:func:`~quadland_symbolic.landing.estimator_switch.conditional_step_function`)."""
+    f = conditional_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    ins = f.mx_in()
+    return ca.Function("sensed_filter", ins, f.call(ins),
+                       ["nav", "imu_now", *_PACKETS, "p_est", "dt", "t"],
+                       ["nav_next", "y", "diag"])
+
+
+def _flight_stage(l, xc_lay, pc_lay):
+    """``sensed_flight``: steps 5 and 6 on the filter's output, and the recorded signals."""
+    xp, uh, t, first = LANDING_PLANT_STATE.sym(), COMMAND.sym(), ca.SX.sym("t"), \
+        ca.SX.sym("first")
+    xc, pc, imu_now = xc_lay.sym(), pc_lay.sym(), IMU.sym("imu_now")
+    rng, lines = delivery_record("rangefinder").sym("range"), \
+        ca.SX.sym("lines", sum(xc_lay[f"line_{s}"].size for s in SENSOR_NAMES))
+    nav_next, y = _NAV_MEMORY.sym("nav_next"), LANDING_MEASUREMENT.sym("y")
+    diag = estimator_diagnostics().sym("diag")
+    cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
     m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
     xld_next, flags = land_detector_function()(
-        cs["xld"], detector_cues(y, read["rangefinder"], imu_now, uh, cs, ps), ps["p_ld"],
-        ps["dt"])
+        cs["xld"], detector_cues(y, rng, imu_now, uh, cs, ps), ps["p_ld"], ps["dt"])
     fl = LAND_DETECTOR_FLAGS.unpack(flags)
     seen = d["fused"][[b.name for b in BLOCKS].index("vision")]
     marker_age = ca.if_else(seen >= 0.5, 0, ca.fmin(cs["marker_age"] + ps["dt"], TIME_CAP))
@@ -338,24 +367,56 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
                      d["n_rejected"], d["n_discarded"], d["n_dropped"], d["n_held"],
                      marker_age, fl["ground_contact"], fl["maybe_landed"], fl["landed"],
                      nav["x_h"], nav["P_h"], nav["t_h"])
-    # the flight code's arguments, for the flight C behind the controller's signature
-    plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
-    args = dict(imu=imu_now, vision=packets[0], gnss=packets[1], range=packets[2],
-                datalink=packets[3], nav=cs["nav"], p_est=ps["p_est"], dt=ps["dt"], time=t,
-                F_cmd=uh, xld=cs["xld"], p_ld=ps["p_ld"], marker_age=cs["marker_age"],
-                xg=cs["xg"], mem=cs["mem"], p_guid=ps["p_guid"], p_ctrl=ps["p_ctrl"],
-                p_quad=plant_p["p_quad"], p_act=plant_p["p_act"], contact_switch=switch,
-                **{f"line_{name}": line for name, line in zip(SENSOR_NAMES, lines, strict=True)})
-    step_args = ca.Function("step_args", [xp, xc, pc, first, t, uh, w, pp, n],
-                            list(args.values()),
-                            ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
-                            list(args))
-    controller = ca.Function(
-        "controller", [xp, xc, pc, first, t, uh, w, pp, n],
-        [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],
+    return ca.Function(
+        "sensed_flight", [xp, xc, pc, first, t, uh, imu_now, rng, lines, nav_next, y, diag],
+        [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, lines), res["F_cmd"],
          rec, res["tilt"]],
-        ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
-        ["xc_next", "uh", "rec", "guard"], {"cse": True})      # the deck's pose, once
+        ["xp", "xc", "pc", "first", "t", "uh_held", "imu_now", "range", "lines", "nav_next",
+         "y", "diag"], ["xc_next", "uh", "rec", "guard"], {"cse": True})
+
+
+def _step_args(l, xc_lay, pc_lay) -> ca.Function:
+    """The flight code's arguments, for the flight C behind the controller's signature."""
+    xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
+    t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    xc, pc, first, n = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first"), SENSED_TICK.sym()
+    world = _world_stage(xc_lay, pc_lay).call(
+        dict(xp=xp, xc=xc, pc=pc, t=t, uh_held=uh, w=w, pp=pp, n=n))
+    cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
+    lines = ca.vertsplit(world["lines"], list(itertools.accumulate(
+        [0] + [xc_lay[f"line_{s}"].size for s in SENSOR_NAMES])))
+    plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
+    args = dict(imu=world["imu_now"], **{k: world[k] for k in _PACKETS}, nav=cs["nav"],
+                p_est=ps["p_est"], dt=ps["dt"], time=t, F_cmd=uh, xld=cs["xld"],
+                p_ld=ps["p_ld"], marker_age=cs["marker_age"], xg=cs["xg"], mem=cs["mem"],
+                p_guid=ps["p_guid"], p_ctrl=ps["p_ctrl"], p_quad=plant_p["p_quad"],
+                p_act=plant_p["p_act"],
+                contact_switch=contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"]),
+                **{f"line_{name}": line for name, line in zip(SENSOR_NAMES, lines,
+                                                               strict=True)})
+    return ca.Function("step_args", [xp, xc, pc, first, t, uh, w, pp, n], list(args.values()),
+                       ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"], list(args))
+
+
+@functools.cache
+def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
+    """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring);
+    ``welded`` as in :func:`~quadland_symbolic.landing.loop.landing_loop`.
+
+    Its controller is an MX Function of three stages (:func:`quadland_symbolic.stages.
+    compose_stages`): ``sensed_world`` (steps 1 to 3), ``sensed_filter`` (step 4, each
+    sensor's updates evaluated only when due) and ``sensed_flight`` (steps 5 and 6).
+    """
+    base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
+    stages = (_world_stage(xc_lay, pc_lay), _filter_stage(), _flight_stage(l, xc_lay, pc_lay))
+    controller = compose_stages(
+        "controller", stages,
+        dict(xp=LANDING_PLANT_STATE.size, xc=xc_lay.size, pc=pc_lay.size, first=1, t=1,
+             uh_held=COMMAND.size, w=LANDING_DISTURBANCE.size, pp=LANDING_PLANT_PARAMS.size,
+             n=SENSED_TICK.size),
+        ["xc_next", "uh", "rec", "guard"])
+    xp, xc = LANDING_PLANT_STATE.sym(), xc_lay.sym()
+    cs = xc_lay.unpack(xc)
     assemble = ca.Function("assemble", [xp, xc], [ca.vertcat(xp, cs["xg"], cs["mem"])],
                            ["xp", "xc"], ["x"])
     ride_rhs, ride_row = landing_ride_functions(l, SENSED_RECORDED) if welded else (None, None)
@@ -364,5 +425,7 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
         base, name="landing_sensed_welded" if welded else "landing_sensed",
         controller_state=xc_lay, controller_params=pc_lay,
         recorded=SENSED_RECORDED, controller=controller, assemble=assemble,
-        step_args=step_args, flight="landing_sensed_flight_controller.c.jinja",
-        ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)
+        step_args=_step_args(l, xc_lay, pc_lay),
+        flight="landing_sensed_flight_controller.c.jinja",
+        ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK,
+        controller_stages=stages)
