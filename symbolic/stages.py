@@ -2,61 +2,76 @@
 
 A loop's function whose work branches (the navigation filter's updates, evaluated only
 when due: :mod:`quadland_symbolic.landing.estimator_switch`) cannot be one SX Function,
-whose generated C computes every expression on every call. :func:`compose_stages`
-joins SX Functions and such branching MX Functions into one MX Function by their
-inputs' and outputs' names; a transformation of its SX stages (the flat deck's,
-:mod:`quadland_symbolic.landing.flat_deck`) composes them again the same way.
+whose generated C computes every expression on every call. :class:`Staged` joins SX
+Functions and such branching MX Functions into one MX Function by their inputs' and
+outputs' names; a transformation of its SX stages (the flat deck's,
+:mod:`quadland_symbolic.landing.flat_deck`) composes them again the same way, and
+:mod:`quadland_symbolic.codegen.staged_c` writes its C one stage a file, the values
+passed in place (a slice of an input read where it is, a piece of an output written
+where it goes).
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import casadi as ca
 
-__all__ = ["compose_stages", "recompose"]
+__all__ = ["Staged"]
 
 
-def compose_stages(name: str, stages, inputs: dict, names_out) -> ca.Function:
-    """One MX Function ``name(<inputs>) -> <names_out>`` from ``stages``.
+@dataclasses.dataclass(frozen=True, eq=False)
+class Staged:
+    """A Function ``name(<inputs>) -> <outputs>`` computed by ``stages`` in turn.
 
-    Parameters
+    Attributes
     ----------
     name : str
-    stages : sequence of casadi.Function
-        Called in order. Each input of a stage is the input of that name or an
-        output of that name of an earlier stage; its outputs are named values
-        of the later ones. No two stages output the same name.
-    inputs : dict of str to casadi.Sparsity or int
-        The composed Function's inputs in order, each one's sparsity (an int: a
-        dense column).
-    names_out : sequence of str
-        The named values it returns, in order.
-
-    Raises
-    ------
-    ValueError
-        A stage's input that is neither an input nor an earlier output; an output
-        named twice or not made; an output not dense where its stage's is.
+    stages : tuple of casadi.Function
+        Called in order. Each input of a stage is a named value: an input, a slice
+        or an output of an earlier stage. No two stages output the same name.
+    inputs : tuple of (str, int)
+        The Function's inputs in order, each a dense column of that size.
+    outputs : tuple of (str, tuple of str)
+        The Function's outputs in order, each the named values stacked.
+    slices : tuple of (str, str, int, int)
+        Named values that are the entries ``start:stop`` of an input:
+        ``(name, input, start, stop)``.
     """
-    values = {n: ca.MX.sym(n, s if isinstance(s, ca.Sparsity) else ca.Sparsity.dense(s, 1))
-              for n, s in inputs.items()}
-    for stage in stages:
-        missing = [n for n in stage.name_in() if n not in values]
-        if missing:
-            raise ValueError(f"stage {stage.name()} reads {', '.join(missing)}: not an input "
-                             "nor an earlier stage's output")
-        twice = [n for n in stage.name_out() if n in values]
-        if twice:
-            raise ValueError(f"stage {stage.name()} outputs {', '.join(twice)} again")
-        values.update(stage.call({n: values[n] for n in stage.name_in()}))
-    absent = [n for n in names_out if n not in values]
-    if absent:
-        raise ValueError(f"no stage outputs {', '.join(absent)}")
-    return ca.Function(name, list(values[n] for n in inputs), [values[n] for n in names_out],
-                       list(inputs), list(names_out))
 
+    name: str
+    stages: tuple
+    inputs: tuple
+    outputs: tuple
+    slices: tuple = ()
 
-def recompose(like: ca.Function, stages) -> ca.Function:
-    """:func:`compose_stages` with the name, inputs and outputs of ``like``."""
-    return compose_stages(like.name(), stages,
-                          {n: like.sparsity_in(i) for i, n in enumerate(like.name_in())},
-                          like.name_out())
+    def __post_init__(self):
+        known = {n for n, _ in self.inputs} | {s[0] for s in self.slices}
+        for stage in self.stages:
+            missing = [n for n in stage.name_in() if n not in known]
+            if missing:
+                raise ValueError(f"stage {stage.name()} reads {', '.join(missing)}: not an "
+                                 "input, a slice nor an earlier stage's output")
+            twice = [n for n in stage.name_out() if n in known]
+            if twice:
+                raise ValueError(f"stage {stage.name()} outputs {', '.join(twice)} again")
+            known.update(stage.name_out())
+        absent = [n for _, pieces in self.outputs for n in pieces if n not in known]
+        if absent:
+            raise ValueError(f"no stage outputs {', '.join(absent)}")
+
+    def function(self) -> ca.Function:
+        """The stages as one MX Function."""
+        values = {n: ca.MX.sym(n, size) for n, size in self.inputs}
+        for n, src, start, stop in self.slices:
+            values[n] = values[src][start:stop]
+        for stage in self.stages:
+            values.update(stage.call({n: values[n] for n in stage.name_in()}))
+        return ca.Function(self.name, [values[n] for n, _ in self.inputs],
+                           [ca.vertcat(*[values[p] for p in pieces])
+                            for _, pieces in self.outputs],
+                           [n for n, _ in self.inputs], [n for n, _ in self.outputs])
+
+    def with_stages(self, stages) -> Staged:
+        """The same composition of other stages (the same names in and out)."""
+        return dataclasses.replace(self, stages=tuple(stages))

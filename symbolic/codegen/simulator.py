@@ -89,7 +89,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     files, work = {}, []
     for name in names:
         if name == "controller" and model.controller_stages is not None:
-            staged, sz = staged_sources(prefix, model.controller, model.controller_stages,
+            staged, sz = staged_sources(prefix, model.controller_stages,
                                         lambda n, f: _emit(n, f)[0])
             files.update(staged)
             work.append(sz)

@@ -2,13 +2,14 @@
 
 CasADi writes an MX Function and every Function it calls into one file. A loop's
 controller composed of stages (:attr:`quadland_symbolic.loop.LoopModel.controller_stages`,
-:func:`quadland_symbolic.stages.compose_stages`) would be one file of over a megabyte
-(the sensed landing loop's), which gcc compiles at -O2 only beyond the build's memory
-and time budgets (``quadland.engine.build.COMPILE_FIT``). :func:`staged_sources` writes
-each stage as CasADi writes it, one file each, and the composed function's own C: the
-named values between the stages in its real work array, each stage called in turn
-with the caller's conventions (``arg``, ``res``, ``iw``, ``w``), as CasADi's MX code
-calls a Function.
+:class:`quadland_symbolic.stages.Staged`) would be one file of over a megabyte (the
+sensed landing loop's), which gcc compiles at -O2 only beyond the build's memory and
+time budgets (``quadland.engine.build.COMPILE_FIT``). :func:`staged_sources` writes
+each stage as CasADi writes it, one file each, and the composed function's own C: each
+stage called in turn with the caller's conventions (``arg``, ``res``, ``iw``, ``w``), as
+CasADi's MX code calls a Function, its inputs and outputs in place where they are
+slices of the composed function's (no copies), the other values between the stages in
+its real work array.
 """
 
 from __future__ import annotations
@@ -25,68 +26,79 @@ def _dense(f: ca.Function) -> None:
                 raise ValueError(f"stage {f.name()}: {kind} {i} is not a dense column")
 
 
-def staged_sources(prefix: str, like: ca.Function, stages, emit) -> tuple[dict, dict]:
-    """The C of ``like`` (named ``<prefix><like's name>``) from its ``stages``.
+def _places(staged, name: str) -> tuple[dict, int]:
+    """Where each named value is, as a C expression; and the reals of ``w`` they take.
+
+    An input's slice is read in place; a piece of an output is written in place
+    (in ``w`` if the caller passes no output there); any other value is in ``w``.
+    """
+    size = {n: k for n, k in staged.inputs}
+    for stage in staged.stages:
+        _dense(stage)
+        size.update((n, stage.nnz_out(i)) for i, n in enumerate(stage.name_out()))
+    index = {n: i for i, (n, _) in enumerate(staged.inputs)}
+    where = {n: f"arg[{i}]" for n, i in index.items()}
+    for n, src, start, _ in staged.slices:
+        where[n] = f"(arg[{index[src]}] ? arg[{index[src]}] + {start} : 0)"
+    total = 0
+    for k, (_, pieces) in enumerate(staged.outputs):
+        offset = 0
+        for n in pieces:
+            where[n] = f"(res[{k}] ? res[{k}] + {offset} : w + {total})"
+            offset += size[n]
+            total += size[n]
+    for stage in staged.stages:
+        for n in stage.name_out():
+            if n not in where:
+                where[n] = f"w + {total}"
+                total += size[n]
+    return where, total
+
+
+def staged_sources(prefix: str, staged, emit) -> tuple[dict, dict]:
+    """The C of ``staged`` (named ``<prefix><its name>``), one file a stage.
 
     Parameters
     ----------
     prefix : str
         The simulator's symbol prefix.
-    like : casadi.Function
-        The composed Function (its name, inputs and outputs).
-    stages : sequence of casadi.Function
-        Its stages, as :func:`quadland_symbolic.stages.compose_stages` takes them;
-        every input and output a dense column.
+    staged : quadland_symbolic.stages.Staged
+        Every input and output of its stages a dense column.
     emit : callable
         ``emit(name, f) -> {file: text}``: CasADi's C of ``f`` named ``name``.
 
     Returns
     -------
     files : dict of str to str
-        Each stage's files (``<prefix><like>_<stage>.c/.h``) and ``<prefix><like>.c/.h``.
+        Each stage's files (``<prefix><name>_<stage>.c/.h``) and ``<prefix><name>.c/.h``.
     sizes : dict of str to int
         ``sz_arg``, ``sz_res``, ``sz_iw``, ``sz_w`` of the composed function.
     """
-    name = prefix + like.name()
-    files, offsets, total = {}, {}, 0
-    where = {n: f"arg[{i}]" for i, n in enumerate(like.name_in())}
-    outs = {n: i for i, n in enumerate(like.name_out())}
-    read_later = {n for s in stages for n in s.name_in()}
-    body = [f"    const casadi_real **arg1 = arg + {like.n_in()};",
-            f"    casadi_real **res1 = res + {like.n_out()};"]
-    calls = []
+    name, stages = prefix + staged.name, staged.stages
+    where, total = _places(staged, name)
+    body = [f"    const casadi_real **arg1 = arg + {len(staged.inputs)};",
+            f"    casadi_real **res1 = res + {len(staged.outputs)};"]
+    files = {}
     for stage in stages:
-        _dense(stage)
         files.update(emit(f"{name}_{stage.name()}", stage))
-        lines = [f"    /* {stage.name()} */"]
-        lines += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(stage.name_in())]
-        for i, n in enumerate(stage.name_out()):
-            if n in outs and n not in read_later:
-                lines.append(f"    res1[{i}] = res[{outs[n]}];")
-                continue
-            if n in outs:
-                raise ValueError(f"{n} is an output of {like.name()} read by a later stage")
-            offsets[n] = total
-            total += stage.nnz_out(i)
-            where[n] = f"w + {offsets[n]}"
-            lines.append(f"    res1[{i}] = w + {offsets[n]};")
-        lines.append(f"    if ({name}_{stage.name()}(arg1, res1, iw, w + {{TOTAL}}, 0)) "
-                     "return 1;")
-        calls += lines
-    body += [c.replace("{TOTAL}", str(total)) for c in calls]
-    sizes = dict(sz_arg=like.n_in() + max(s.sz_arg() for s in stages),
-                 sz_res=like.n_out() + max(s.sz_res() for s in stages),
+        body.append(f"    /* {stage.name()} */")
+        body += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(stage.name_in())]
+        body += [f"    res1[{i}] = {where[n]};" for i, n in enumerate(stage.name_out())]
+        body.append(f"    if ({name}_{stage.name()}(arg1, res1, iw, w + {total}, 0)) return 1;")
+    sizes = dict(sz_arg=len(staged.inputs) + max(s.sz_arg() for s in stages),
+                 sz_res=len(staged.outputs) + max(s.sz_res() for s in stages),
                  sz_iw=max(s.sz_iw() for s in stages),
                  sz_w=total + max(s.sz_w() for s in stages))
     signature = (f"int {name}(const casadi_real** arg, casadi_real** res, casadi_int* iw, "
                  "casadi_real* w, int mem)")
     includes = "".join(f'#include "{name}_{s.name()}.h"\n' for s in stages)
-    files[f"{name}.h"] = (f"/* {name}: {like.name()} as its stages "
+    files[f"{name}.h"] = (f"/* {name}: {staged.name} as its stages "
                           f"({', '.join(s.name() for s in stages)}). */\n"
                           f"{includes}{signature};\n")
     files[f"{name}.c"] = (
-        f"/* {name}: {like.name()} as its stages, each in its own file; the values\n"
-        f" * between them in w[0..{total}). Generated by quadland_symbolic.codegen.staged_c. */\n"
+        f"/* {name}: {staged.name} as its stages, each in its own file; the values\n"
+        f" * between them in place or in w[0..{total}). Generated by\n"
+        " * quadland_symbolic.codegen.staged_c. */\n"
         f'#include "{name}.h"\n\n{signature}\n{{\n    (void)mem;\n' + "\n".join(body)
         + "\n    return 0;\n}\n")
     return files, sizes

@@ -35,7 +35,6 @@ import casadi as ca
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
 from quadland_symbolic.layout import Layout
 from quadland_symbolic.loop import LoopModel
-from quadland_symbolic.stages import recompose
 
 __all__ = ["AMPLITUDES", "FLATTENED", "amplitude_indices", "flat_function", "flat_deck_loop"]
 
@@ -122,7 +121,8 @@ def flat_deck_loop(model: LoopModel) -> LoopModel:
     changes = {name: flat_function(getattr(model, name), zeros) for name in FLATTENED
                if getattr(model, name) is not None and not (staged and name == "controller")}
     if staged:          # each SX stage flattened, composed again
-        stages = tuple(flat_function(f, zeros) for f in model.controller_stages)
-        changes.update(controller=recompose(model.controller, stages), controller_stages=stages)
+        stages = model.controller_stages.with_stages(
+            flat_function(f, zeros) for f in model.controller_stages.stages)
+        changes.update(controller=stages.function(), controller_stages=stages)
     return dataclasses.replace(model, name=f"{model.name}_flat", **changes)
 
