@@ -33,7 +33,7 @@ from quadland_symbolic.landing.navigation import (
     SENSORS,
     estimator_params,
 )
-from quadland_symbolic.stages import compose_stages
+from quadland_symbolic.stages import Staged
 
 ROOT = Path(__file__).resolve().parents[1]
 DT = 0.004
@@ -107,13 +107,33 @@ def test_the_generated_step_branches_once_per_sensor():
 
 def test_stages_compose_by_name_and_refuse_what_is_missing():
     a, b = ca.SX.sym("a"), ca.SX.sym("b")
-    double = ca.Function("double", [a], [2 * a], ["u"], ["v"])
-    add = ca.Function("add", [a, b], [a + b], ["v", "u"], ["y"])
-    f = compose_stages("f", (double, add), {"u": 1}, ["y", "v"])
-    assert [float(o) for o in f(3.0)] == [9.0, 6.0]
+    double = ca.Function("double", [a], [2 * a], ["u1"], ["v"])
+    add = ca.Function("add", [a, b], [a + b], ["v", "u0"], ["y"])
+    staged = Staged("f", (double, add), (("u", 2),), (("out", ("y", "v")), ("twice", ("v",))),
+                    slices=(("u0", "u", 0, 1), ("u1", "u", 1, 2)))
+    out, twice = staged.function()([5.0, 3.0])
+    assert np.asarray(out).ravel().tolist() == [11.0, 6.0] and float(twice) == 6.0
     with pytest.raises(ValueError, match="reads v"):
-        compose_stages("f", (add,), {"u": 1}, ["y"])
+        Staged("f", (add,), (("u0", 1),), (("y", ("y",)),))
     with pytest.raises(ValueError, match="outputs v again"):
-        compose_stages("f", (double, double), {"u": 1}, ["v"])
+        Staged("f", (double, double), (("u1", 1),), (("v", ("v",)),))
     with pytest.raises(ValueError, match="no stage outputs z"):
-        compose_stages("f", (double,), {"u": 1}, ["z"])
+        Staged("f", (double,), (("u1", 1),), (("z", ("z",)),))
+
+
+def test_the_staged_c_reads_and_writes_in_place():
+    """The sensed controller's C: the filter reads its memory in the loop's state and
+    writes the next one where the next state holds it; every stage its own file."""
+    from quadland_symbolic.codegen.simulator import simulator_sources
+    from quadland_symbolic.landing.sensed_loop import landing_sensed_loop, sensed_loop_memory
+
+    files = simulator_sources(landing_sensed_loop(10), "sampled")
+    c = files["qlsim_landing_sensed_controller.c"]
+    nav = sensed_loop_memory(10).slice("nav")
+    block = c[c.index("/* sensed_filter */"):c.index("/* sensed_flight */")]
+    assert f"arg1[0] = (arg[1] ? arg[1] + {nav.start} : 0);" in block
+    assert f"res1[0] = (res[0] ? res[0] + {nav.start} : w + {nav.start});" in block
+    stages = landing_sensed_loop(10).controller_stages.stages
+    for stage in stages:
+        assert f"qlsim_landing_sensed_controller_{stage.name()}.c" in files
+    assert all(len(text) < 700_000 for name, text in files.items() if "controller" in name)
