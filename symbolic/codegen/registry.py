@@ -24,8 +24,8 @@ from quadland_symbolic.landing.estimator import (
     FLIGHT_DEPTH,
     N_HIST,
     estimator_init_function,
+    estimator_step_function,
 )
-from quadland_symbolic.landing.estimator_switch import conditional_step_function
 from quadland_symbolic.landing.land_detector import land_detector_function
 from quadland_symbolic.landing.loop import (
     first_contact_function,
@@ -197,7 +197,7 @@ FUNCTIONS = (
                           "far above the deck."),
     *(GeneratedFunction(name, builder, per_node_count=False, part="estimator",
                         sizes=ESTIMATOR_SIZES)
-      for name, builder in (("estimator_step", conditional_step_function),
+      for name, builder in (("estimator_step", estimator_step_function),
                             ("estimator_init", estimator_init_function))),
     *(GeneratedFunction(name, builder, per_node_count=False, part="land_detector")
       for name, builder in (("land_detector", land_detector_function),

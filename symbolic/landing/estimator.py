@@ -24,7 +24,8 @@ Here everything is selected, never branched: a block that is not due, held back 
 rejected runs the same instructions with a zero gain.
 :mod:`quadland_symbolic.landing.estimator_switch` builds the same step from the same
 pieces with each sensor's updates evaluated only when its FIFO's head is due (the
-flight code's and the simulators'), to the same bits.
+compiled simulators'; the flight code's C stays branch-free, its worst period within
+the budget: docs/performance.md), to the same bits.
 """
 
 from __future__ import annotations

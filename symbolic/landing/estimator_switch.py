@@ -22,6 +22,12 @@ pieces (:mod:`quadland_symbolic.landing.estimator`'s :func:`step_queues`,
 3. ``estimator_finish``: the output predictor, the prediction, the memory and the
    diagnostics (steps 3 and 4).
 
+The sensed loop's compiled simulator flies it (:mod:`quadland_symbolic.landing.sensed_loop`).
+The flight code's C (``generated/estimator_step.c``) stays the branch-free step: there
+the stages' copies (the memory, state and covariance passed between CasADi's
+functions) cost more than the updates skipped save in a period where every sensor is
+due, over the filter's budget of 30,000 instructions (docs/performance.md).
+
 The bits are those of the branch-free step. Where a sensor is due, ``fuse_<sensor>``
 computes the same expressions with the same ``due`` (its value 1 passed in, not
 folded). Where it is not, the branch-free step's outcomes are the zeros of its
