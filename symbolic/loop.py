@@ -51,6 +51,7 @@ import dataclasses
 import casadi as ca
 
 from quadland_symbolic.layout import Layout
+from quadland_symbolic.stages import Staged
 
 __all__ = ["MAX_DELAY_PERIODS", "RIDE_TOL", "rk4_step", "LoopModel"]
 
@@ -133,6 +134,10 @@ class LoopModel:
     event_continues : bool
         The event does not end the run: its first crossing is located and
         recorded, and the integration goes on (see the module docstring).
+    controller_stages : quadland_symbolic.stages.Staged or None
+        The stages ``controller`` is composed of (its ``function()``), for a
+        controller that is an MX Function of SX stages and branching ones; None:
+        ``controller`` is one Function.
     free_plant : casadi.Function or None
         ``free_plant(xp, uh, w, t, pp) -> xp_dot``: the plant without what
         happens only near the event (the gear's contact, exactly zero while
@@ -168,6 +173,7 @@ class LoopModel:
     tick_inputs: Layout | None = None
     event_continues: bool = False
     free_plant: ca.Function | None = None
+    controller_stages: Staged | None = None
 
     def functions(self) -> tuple[ca.Function, ...]:
         """Every function a simulator calls, named ``rhs``, ``outputs``, ... ."""

@@ -32,7 +32,9 @@ def emit_casadi(entry: GeneratedFunction, l: int, config: CodegenConfig) -> dict
     c_name = entry.c_name(config)
     # The same expression graph under the build's symbol (CasADi names the C
     # function after the Function); "prefix" names its helpers c_name__*.
-    renamed = ca.Function(c_name, fn.sx_in(), fn.call(fn.sx_in()), fn.name_in(), fn.name_out())
+    # An MX Function (its branches kept: quadland_symbolic.landing.estimator_switch) by MX.
+    ins = fn.sx_in() if fn.is_a("SXFunction") else fn.mx_in()
+    renamed = ca.Function(c_name, ins, fn.call(ins), fn.name_in(), fn.name_out())
     opts = {"with_header": True, "casadi_real": config.precision, "casadi_int": config.casadi_int,
             "prefix": f"{c_name}_", "verbose": False, "with_export": False}
     cg = ca.CodeGenerator(f"{entry.name}.c", opts)

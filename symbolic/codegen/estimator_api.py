@@ -27,7 +27,11 @@ from quadland_symbolic.codegen.registry import BY_NAME, ESTIMATOR_SIZES
 from quadland_symbolic.codegen.render import common_context
 from quadland_symbolic.codegen.structs import CStruct, ParamRange, Range, member_ranges
 from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
-from quadland_symbolic.landing.estimator import estimator_diagnostics, estimator_memory
+from quadland_symbolic.landing.estimator import (
+    estimator_diagnostics,
+    estimator_memory,
+    estimator_step_function,
+)
 from quadland_symbolic.landing.navigation import (
     BLOCKS,
     DATALINK,
@@ -126,9 +130,11 @@ def imu_outputs() -> tuple[str, ...]:
     """The fields of ``y`` that are this period's IMU sample as passed.
 
     Read from the step's expression graph: the entries of ``y`` that depend on
-    ``imu`` at all (the attitude estimate and the rates, E15's table).
+    ``imu`` at all (the attitude estimate and the rates, E15's table); the graph of
+    the branch-free step, the same function as the one generated (whose updates are
+    evaluated only when due) as one SX expression.
     """
-    fn = BY_NAME["estimator_step"].function(0)
+    fn = estimator_step_function(**dict(ESTIMATOR_SIZES))
     imu = fn.sx_in("imu")
     y = fn.call({n: fn.sx_in(n) for n in fn.name_in()})["y"]
     rows = set(ca.jacobian(y, imu).sparsity().get_triplet()[0])

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from quadland_symbolic.codegen.staged_c import staged_sources
 from quadland_symbolic.loop import MAX_DELAY_PERIODS, RIDE_TOL, LoopModel
 
 __all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
@@ -85,20 +86,18 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         names = (*names, "ride_rhs", "ride_row")
     if model.envelope is None:
         names = tuple(n for n in names if n != "envelope")
-    files, fns = {}, []
+    files, work = {}, []
     for name in names:
-        f = by_name[name]
-        args = f.sx_in()
-        fn = ca.Function(prefix + name, args, f.call(args), f.name_in(), f.name_out())
-        fns.append(fn)
-        cg = ca.CodeGenerator(f"{prefix}{name}.c", {
-            "with_header": True, "with_export": False, "prefix": f"{prefix}{name}_",
-            "verbose": False})
-        cg.add(fn)
-        with tempfile.TemporaryDirectory() as tmp:
-            cg.generate(tmp + os.sep)
-            for ext in ("c", "h"):
-                files[f"{prefix}{name}.{ext}"] = Path(tmp, f"{prefix}{name}.{ext}").read_text()
+        if name == "controller" and model.controller_stages is not None:
+            staged, sz = staged_sources(prefix, model.controller_stages,
+                                        lambda n, f: _emit(n, f)[0])
+            files.update(staged)
+            work.append(sz)
+            continue
+        text, fn = _emit(prefix + name, by_name[name])
+        files.update(text)
+        work.append(dict(sz_arg=fn.sz_arg(), sz_res=fn.sz_res(), sz_iw=fn.sz_iw(),
+                         sz_w=fn.sz_w()))
     sizes = dict(NX=model.state.size, NW=model.disturbance.size, NP=model.params.size,
                  NY=model.outputs.size, NXP=model.plant_state.size, NUH=model.held.size,
                  NXC=model.controller_state.size, NPP=model.plant_params.size,
@@ -119,11 +118,24 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         has_ride=has_ride, has_free=has_free,
         has_tick=driver == "sampled" and model.tick_inputs is not None,
         casadi_version=ca.__version__, sizes=sizes,
-        sz_arg=max(f.sz_arg() for f in fns), sz_res=max(f.sz_res() for f in fns),
-        sz_iw=max(f.sz_iw() for f in fns), sz_w=max(f.sz_w() for f in fns))
+        **{k: max(w[k] for w in work) for k in ("sz_arg", "sz_res", "sz_iw", "sz_w")})
     if part == "sampled_flight":
         files.update(_flight_controller(model, prefix, by_name["step_args"]))
     return files
+
+
+def _emit(name: str, f: ca.Function) -> tuple[dict[str, str], ca.Function]:
+    """CasADi's ``<name>.c/.h`` of ``f`` renamed ``name`` (its helpers prefixed ``name_``),
+    and the renamed Function."""
+    args = f.sx_in() if f.is_a("SXFunction") else f.mx_in()     # MX: its branches kept
+    fn = ca.Function(name, args, f.call(args), f.name_in(), f.name_out())
+    cg = ca.CodeGenerator(f"{name}.c", {"with_header": True, "with_export": False,
+                                        "prefix": f"{name}_", "verbose": False})
+    cg.add(fn)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + os.sep)
+        return {f"{name}.{ext}": Path(tmp, f"{name}.{ext}").read_text()
+                for ext in ("c", "h")}, fn
 
 
 def _flight_controller(model: LoopModel, prefix: str, args: ca.Function) -> dict[str, str]:

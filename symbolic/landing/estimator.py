@@ -20,8 +20,12 @@ model (state, packets, parameters, prediction, measurement blocks) is
 4. ``x_h``, ``P_h`` are predicted over the oldest buffered input (E6); this
    period's input joins the buffer.
 
-Everything is selected, never branched: a block that is not due, held back or
+Here everything is selected, never branched: a block that is not due, held back or
 rejected runs the same instructions with a zero gain.
+:mod:`quadland_symbolic.landing.estimator_switch` builds the same step from the same
+pieces with each sensor's updates evaluated only when its FIFO's head is due (the
+compiled simulators'; the flight code's C stays branch-free, its worst period within
+the budget: docs/performance.md), to the same bits.
 """
 
 from __future__ import annotations
@@ -63,6 +67,11 @@ __all__ = [
     "estimator_output",
     "estimator_step_function",
     "estimator_init_function",
+    "sensor_blocks",
+    "step_queues",
+    "block_streaks",
+    "fuse_sensor",
+    "finish_step",
 ]
 
 #: Default horizon delay in periods: D = 0.2 s at 250 Hz.
@@ -248,14 +257,14 @@ def _latest_deck(m, dl, t):
     return dict(eta2=new[0:3], w2E=new[3:6], w2E_dot=new[6:9], tau=new[9])
 
 
-def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
-    """Queue a packet; fuse or discard its FIFO's head (E16).
+def _queue(layout, m, pkt, p, t_h, dt, t):
+    """Queue a packet; pop its FIFO's head if due or stale (E16).
 
-    Updates ``state`` in place.
+    Returns the head (the record after the push), ``due`` (popped and not older than
+    ``t_h - max_age``) and what the memory and the diagnostics keep: the FIFO, its
+    count, ``discarded`` and ``dropped``.
     """
-    p = estimator_params().unpack(p_est)
     pk = layout.unpack(pkt)
-    t_h = state["t_h"]
     push_ok = pk["tau"] <= t
     for i in range(1, pkt.shape[0]):                   # tau and the values
         push_ok = ca.logic_and(push_ok, is_finite(pkt[i]))
@@ -267,27 +276,39 @@ def _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t):
     name = layout.name
     f = fifo_push_pop(m[f"fifo_{name}"], m[f"count_{name}"], pkt[1:],
                       ca.logic_and(fresh, push_ok), pop_if)
-    head_tau = f["head"][0]
-    stale = ca.logic_and(f["pop"], head_tau < t_h - p[f"max_age_{name}"])
-    due = ca.logic_and(f["pop"], ca.logic_not(stale))
-    eta2_r, _ = deck_at(deck["eta2"], deck["w2E"], deck["w2E_dot"], head_tau - deck["tau"],
+    stale = ca.logic_and(f["pop"], f["head"][0] < t_h - p[f"max_age_{name}"])
+    return dict(head=f["head"], due=ca.logic_and(f["pop"], ca.logic_not(stale)),
+                fifo=ca.vec(f["slots"]), count=f["count"], discarded=stale,
+                dropped=ca.logic_or(f["dropped"], ca.logic_and(fresh, ca.logic_not(push_ok))))
+
+
+def sensor_blocks(name: str) -> tuple:
+    """The measurement blocks of sensor ``name``, in fusion order."""
+    return tuple(b for b in BLOCKS if b.sensor == name)
+
+
+def fuse_sensor(name, x, P, head, due, deck, streaks, p_est, pattern):
+    """Fuse the blocks of sensor ``name``'s FIFO head where ``due`` (E8)-(E14).
+
+    ``deck`` the latest broadcast (its normal at the head's sample time is the range's
+    model), ``streaks`` each block's gate refusals so far. Returns ``(x, P, blocks)``,
+    ``blocks`` by block name: ``nu``, ``nis``, ``fused``, ``held``, ``rejected``.
+    """
+    p = estimator_params().unpack(p_est)
+    eta2_r, _ = deck_at(deck["eta2"], deck["w2E"], deck["w2E_dot"], head[0] - deck["tau"],
                         p["deck_extrapolation_max"])
     n2 = rotation(eta2_r)[:, 2]
-    head_pkt = ca.vertcat(1, f["head"])
-    x, P = state["x"], state["P"]
-    for b in (b for b in BLOCKS if b.sensor == name):
-        streak = m["streak"][_BLOCK_NAMES.index(b.name)]
+    head_pkt = ca.vertcat(1, head)
+    blocks = {}
+    for b, streak in zip(sensor_blocks(name), streaks, strict=True):
         x, P, nu, nis, fused, held = block_update(b.name, x, P, head_pkt, n2, p_est, due,
-                                                  state["pattern"], streak)
+                                                  pattern, streak)
         nis_ok = is_finite(nis)
-        state["blocks"][b.name] = dict(
+        blocks[b.name] = dict(
             nu=select(ca.logic_and(due, nis_ok), nu, 0),
             nis=select(due, select(nis_ok, nis, -1), 0), fused=fused, held=held,
             rejected=ca.logic_and(due, ca.logic_not(ca.logic_or(fused, held))))
-    state.update(x=x, P=P)
-    state["sensors"][name] = dict(
-        fifo=ca.vec(f["slots"]), count=f["count"], discarded=stale,
-        dropped=ca.logic_or(f["dropped"], ca.logic_and(fresh, ca.logic_not(push_ok))))
+    return x, P, blocks
 
 
 def _output(x_now, deck, ims, t, p):
@@ -339,26 +360,28 @@ def _input(ims, x_h, p, dt):
     return select(ok, a_in, x["a_b"] + x["a_tilt"]), select(_finite3(turn), turn, 0), ok
 
 
-def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
-    """The step's expressions ``(mem_next, y, diag)``.
-
-    The module docstring's 1-4.
-    """
-    lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
-    m, p, ims = lay.unpack(mem), estimator_params().unpack(p_est), IMU.unpack(imu)
+def step_queues(m, pkts, p, dt, t):
+    """The latest broadcast and every sensor's queue (:func:`_queue`), by sensor."""
     deck = _latest_deck(m, DATALINK.unpack(pkts[-1]), t)
-    state = dict(x=m["x_h"], P=pattern.unpack(m["P_h"]), t_h=m["t_h"], pattern=pattern,
-                 blocks={}, sensors={})
-    for layout, pkt in zip(NAV_PACKETS, pkts, strict=True):
-        _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t)
-    x, P = state["x"], state["P"]
-    y = estimator_output(x, m["hist"], deck, imu, p_est, t)
+    return deck, {layout.name: _queue(layout, m, pkt, p, m["t_h"], dt, t)
+                  for layout, pkt in zip(NAV_PACKETS, pkts, strict=True)}
 
+
+def block_streaks(m, name):
+    """Each of sensor ``name``'s blocks' gate refusals so far, from the memory ``m``."""
+    return [m["streak"][_BLOCK_NAMES.index(b.name)] for b in sensor_blocks(name)]
+
+
+def finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk):
+    """``(mem_next, y, diag)`` from the state ``x``, ``P`` after fusion (steps 3 and 4).
+
+    ``sen`` each sensor's queue, ``blk`` each block's outcome.
+    """
+    p = estimator_params().unpack(p_est)
+    y = estimator_output(x, m["hist"], deck, imu, p_est, t)
     a_in, turn, imu_ok = _input(ims, x, p, dt)
     hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn))          # oldest first
     x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern, hist[4:7, 0])
-
-    blk, sen = state["blocks"], state["sensors"]
     flags = dict(
         fused=ca.vertcat(*[blk[b]["fused"] for b in _BLOCK_NAMES]),
         rejected=ca.vertcat(*[blk[b]["rejected"] for b in _BLOCK_NAMES]),
@@ -379,7 +402,7 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     for s in SENSORS:
         fifos += [sen[s]["fifo"], sen[s]["count"]]
     mem_next = ca.vertcat(
-        x_next, pattern.pack(P_next), state["t_h"] + hist[3, 0], ca.vec(hist[:, 1:]), *fifos,
+        x_next, pattern.pack(P_next), m["t_h"] + hist[3, 0], ca.vec(hist[:, 1:]), *fifos,
         deck["eta2"], deck["w2E"], deck["w2E_dot"], deck["tau"],
         *[counters[f.name] for f in _counters()])
     diag = ca.vertcat(
@@ -388,8 +411,25 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
         *[flags[k] for k in ("fused", "rejected", "held", "discarded", "dropped",
                              "imu_invalid")],
         *[counters[f.name] for f in _counters()],
-        x, ca.diag(P), state["t_h"])
+        x, ca.diag(P), m["t_h"])
+    assert y.shape[0] == LANDING_MEASUREMENT.size and diag.shape[0] == estimator_diagnostics().size
     return mem_next, y, diag
+
+
+def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
+    """The step's expressions ``(mem_next, y, diag)``, every block's update computed.
+
+    The module docstring's 1-4.
+    """
+    lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
+    m, p, ims = lay.unpack(mem), estimator_params().unpack(p_est), IMU.unpack(imu)
+    deck, sen = step_queues(m, pkts, p, dt, t)
+    x, P, blk = m["x_h"], pattern.unpack(m["P_h"]), {}
+    for s in SENSORS:
+        x, P, fused = fuse_sensor(s, x, P, sen[s]["head"], sen[s]["due"], deck, block_streaks(m, s),
+                            p_est, pattern)
+        blk.update(fused)
+    return finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk)
 
 
 _STEP_INPUTS = ["mem", "imu", *SENSORS, "p_est", "dt", "t"]
@@ -398,7 +438,7 @@ _STEP_INPUTS = ["mem", "imu", *SENSORS, "p_est", "dt", "t"]
 @functools.cache
 def estimator_step_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
                             coupling: str = "full") -> ca.Function:
-    """The navigation filter's step.
+    """The navigation filter's step, every update computed and selected (one SX Function).
 
     ``estimator_step(mem, imu, vision, gnss, range, datalink, p_est, dt, t)
     -> (mem_next, y, diag)``
@@ -429,7 +469,6 @@ def estimator_step_function(n_hist: int = N_HIST, depth=FIFO_DEPTH,
     pkts = [layout.sym(layout.name) for layout in NAV_PACKETS]
     dt, t = ca.SX.sym("dt"), ca.SX.sym("t")
     mem_next, y, diag = _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t)
-    assert y.shape[0] == LANDING_MEASUREMENT.size and diag.shape[0] == estimator_diagnostics().size
     return ca.Function("estimator_step", [mem, imu, *pkts, p_est, dt, t],
                        [mem_next, y, diag], _STEP_INPUTS, ["mem_next", "y", "diag"],
                        {"cse": True})

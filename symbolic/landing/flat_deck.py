@@ -72,6 +72,10 @@ def amplitude_indices(layout: Layout, prefix: str = "") -> tuple[int, ...]:
 def flat_function(f: ca.Function, zeros: dict[str, tuple[int, ...]]) -> ca.Function:
     """``f`` with the entries ``zeros[name]`` of its input ``name`` the constant zero.
 
+    ``f`` is an SX Function (an MX Function composed of stages,
+    :attr:`~quadland_symbolic.loop.LoopModel.controller_stages`, is flattened stage by
+    stage).
+
     The other inputs, the names and the outputs are ``f``'s; the inputs zeroed
     remain (unused where they were only amplitudes). Common subexpressions are
     merged, as in the loops' own functions. ``f`` itself when it has none of
@@ -79,6 +83,8 @@ def flat_function(f: ca.Function, zeros: dict[str, tuple[int, ...]]) -> ca.Funct
     """
     if not any(zeros.get(name) for name in f.name_in()):
         return f
+    if not f.is_a("SXFunction"):
+        raise ValueError(f"{f.name()} is not an SX Function: flatten its stages")
     ins = [f.sx_in(i) for i in range(f.n_in())]
     args = []
     for i, x in enumerate(ins):
@@ -111,7 +117,12 @@ def flat_deck_loop(model: LoopModel) -> LoopModel:
     zeros = {"pp": pp, "pc": amplitude_indices(model.controller_params, "pp.")}
     if model.params is LANDING_PLANT_PARAMS:
         zeros["p"] = pp
-    changes = {name: flat_function(getattr(model, name), zeros)
-               for name in FLATTENED if getattr(model, name) is not None}
+    staged = model.controller_stages is not None
+    changes = {name: flat_function(getattr(model, name), zeros) for name in FLATTENED
+               if getattr(model, name) is not None and not (staged and name == "controller")}
+    if staged:          # each SX stage flattened, composed again
+        stages = model.controller_stages.with_stages(
+            flat_function(f, zeros) for f in model.controller_stages.stages)
+        changes.update(controller=stages.function(), controller_stages=stages)
     return dataclasses.replace(model, name=f"{model.name}_flat", **changes)
 

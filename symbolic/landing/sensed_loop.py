@@ -72,8 +72,8 @@ from quadland_symbolic.landing.estimator import (
     N_HIST,
     estimator_diagnostics,
     estimator_memory,
-    estimator_step_function,
 )
+from quadland_symbolic.landing.estimator_switch import conditional_step_function
 from quadland_symbolic.landing.gear import contact_switch
 from quadland_symbolic.landing.guidance import (
     DESCEND,
@@ -122,6 +122,7 @@ from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTOR
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import LoopModel
 from quadland_symbolic.parameters import QUADROTOR
+from quadland_symbolic.stages import Staged
 
 __all__ = ["DELIVERY_SLOTS", "SENSED_TICK", "SENSED_RECORDED", "SENSED_TRAJECTORY", "NAV_PACKET_OF",
            "delivery_record", "delivery_delay", "sensed_loop_memory", "sensed_loop_params",
@@ -238,21 +239,55 @@ def sensed_loop_params(l: int) -> Layout:
     ), "sensed landing loop controller parameters")
 
 
-def _deliver(name, xp, uh, w, t, pp, p_sens, tick, line, delay):
-    """This tick's packet into ``name``'s line; the packet read now, and the line after."""
+def _line_next(name, xp, uh, w, t, pp, p_sens, tick, line):
+    """This tick's packet into ``name``'s line: the line after."""
     packet = SENSOR_PACKETS[name]
     y = packet.unpack(sensor_function(name)(xp, uh, w, t, pp, p_sens, tick[f"{name}_noise"]))
     fresh = tick[f"{name}_sampled"] * tick[f"{name}_kept"]
     if "valid" in packet.names():
         fresh = fresh * y["valid"]
-    record = delivery_record(name)
-    values = [y[f.name] for f in record.fields[2:]]
-    size = record.size
-    line_next = ca.vertcat(fresh, t, *values, line[:(DELIVERY_SLOTS - 1) * size])
+    values = [y[f.name] for f in delivery_record(name).fields[2:]]
+    return ca.vertcat(fresh, t, *values, line[:(DELIVERY_SLOTS - 1) * delivery_record(name).size])
+
+
+def _read(line_next, size, delay):
+    """The packet read now: slot ``delay`` of the line, every slot computed and selected
+    (``+0.0`` for a ``-0.0``, the sum of the other slots' zeros)."""
     read = ca.SX.zeros(size)
     for i in range(DELIVERY_SLOTS):
         read += ca.if_else(delay == i, line_next[i * size:(i + 1) * size], ca.SX.zeros(size))
-    return read, line_next
+    return read
+
+
+def _deliver(name, xp, uh, w, t, pp, p_sens, tick, line, delay):
+    """This tick's packet into ``name``'s line; the packet read now, and the line after."""
+    line_next = _line_next(name, xp, uh, w, t, pp, p_sens, tick, line)
+    return _read(line_next, delivery_record(name).size, delay), line_next
+
+
+@functools.cache
+def read_function(name: str) -> ca.Function:
+    """``read_<name>(delay, line, zero) -> packet``: slot ``delay`` of ``name``'s line, plus
+    ``zero``.
+
+    A CasADi ``Switch`` on ``delay`` (one case a slot, zeros beyond the line): its C reads
+    the one slot, where the branch-free read (:func:`_deliver`) selects from every slot
+    and adds the others' zeros. Given ``zero = +0.0`` it gives the same bits: the slot's
+    values, a ``-0.0`` turned to ``+0.0``.
+    """
+    size = delivery_record(name).size
+    line, zero = ca.SX.sym("line", DELIVERY_SLOTS * size), ca.SX.sym("zero")
+    cases = [ca.Function(f"slot_{name}_{i}", [line, zero],
+                         [line[i * size:(i + 1) * size] + zero], ["line", "zero"], ["packet"])
+             for i in range(DELIVERY_SLOTS)]
+    beyond = ca.Function(f"beyond_{name}", [line, zero], [ca.DM.zeros(size)], ["line", "zero"],
+                         ["packet"])
+    return ca.Function.conditional(f"read_{name}", cases, beyond)
+
+
+#: The name of each sensor's packet read now, as the sensed loop's stages name it.
+_READ = {"imu": "read_imu", "vision": "vision", "gnss": "gnss", "rangefinder": "range",
+         "datalink": "datalink"}
 
 
 def detector_cues(y, range_read, imu_now, uh_held, cs: dict, ps: dict):
@@ -301,11 +336,89 @@ def detector_cues_function() -> ca.Function:
                        ["y", "range", "imu", "F_cmd", "xg", "p_guid", "p_quad"], ["cues"])
 
 
-@functools.cache
-def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
-    """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring);
-    ``welded`` as in :func:`~quadland_symbolic.landing.loop.landing_loop`."""
-    base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
+def _world_stage(xc_lay, pc_lay) -> ca.Function:
+    """``sensed_world``: steps 1 and 2 up to the lines (the sensors, each packet into its
+    line)."""
+    xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
+    t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
+    xc, pc, n = xc_lay.sym(), pc_lay.sym(), SENSED_TICK.sym()
+    cs, ps, tick = xc_lay.unpack(xc), pc_lay.unpack(pc), SENSED_TICK.unpack(n)
+    lines = [ca.densify(_line_next(name, xp, uh, w, t, pp, ps["p_sens"], tick,
+                                   cs[f"line_{name}"])) for name in SENSOR_NAMES]
+    return ca.Function("sensed_world", [xp, xc, pc, t, uh, w, pp, n], lines,
+                       ["xp", "xc", "pc", "t", "uh_held", "w", "pp", "n"],
+                       [f"line_{name}" for name in SENSOR_NAMES], {"cse": True})
+
+
+def _read_stage(name) -> ca.Function:
+    """``sensed_read_<name>``: step 2's reading, the one slot of the delay
+    (:func:`read_function`)."""
+    line, delay = ca.MX.sym("line", DELIVERY_SLOTS * delivery_record(name).size), \
+        ca.MX.sym("delay")
+    return ca.Function(f"sensed_read_{name}", [line, delay],
+                       [read_function(name)(delay, line, ca.MX(0.0))],
+                       [f"line_{name}", f"delay_{name}"], [_READ[name]])
+
+
+def _imu_stage(xc_lay) -> ca.Function:
+    """``sensed_imu``: step 3, this tick's IMU packet or the last one delivered."""
+    xc, read = xc_lay.sym(), delivery_record("imu").sym("read_imu")
+    imu_rec = delivery_record("imu").unpack(read)
+    imu_now = ca.if_else(imu_rec["fresh"], ca.vertcat(*(imu_rec[f.name] for f in IMU.fields)),
+                         xc_lay.unpack(xc)["imu_held"])
+    return ca.Function("sensed_imu", [xc, read], [ca.densify(imu_now)], ["xc", "read_imu"],
+                       ["imu_now"])
+
+
+#: The filter's packets as the sensed loop's stages name them.
+_PACKETS = ("vision", "gnss", "range", "datalink")
+
+
+def _filter_stage() -> ca.Function:
+    """``sensed_filter``: step 4, the filter's updates evaluated only when due
+    (:func:`~quadland_symbolic.landing.estimator_switch.conditional_step_function`)."""
+    f = conditional_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    ins = f.mx_in()
+    return ca.Function("sensed_filter", ins, f.call(ins),
+                       ["nav", "imu_now", *_PACKETS, "p_est", "dt", "t"],
+                       ["nav_next", "y", "diag"])
+
+
+def _flight_stage(l, xc_lay, pc_lay):
+    """``sensed_flight``: steps 5 and 6 on the filter's output, and the recorded signals."""
+    xp, uh, t, first = LANDING_PLANT_STATE.sym(), COMMAND.sym(), ca.SX.sym("t"), \
+        ca.SX.sym("first")
+    xc, pc, imu_now = xc_lay.sym(), pc_lay.sym(), IMU.sym("imu_now")
+    rng = delivery_record("rangefinder").sym("range")
+    nav_next, y = _NAV_MEMORY.sym("nav_next"), LANDING_MEASUREMENT.sym("y")
+    diag = estimator_diagnostics().sym("diag")
+    cs, ps = xc_lay.unpack(xc), pc_lay.unpack(pc)
+    m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
+    xld_next, flags = land_detector_function()(
+        cs["xld"], detector_cues(y, rng, imu_now, uh, cs, ps), ps["p_ld"], ps["dt"])
+    fl = LAND_DETECTOR_FLAGS.unpack(flags)
+    seen = d["fused"][[b.name for b in BLOCKS].index("vision")]
+    marker_age = ca.if_else(seen >= 0.5, 0, ca.fmin(cs["marker_age"] + ps["dt"], TIME_CAP))
+    switch = contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"])
+    cues = ca.vertcat(ca.fmax(fl["ground_contact"], switch), marker_age)
+    _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
+    sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
+    nav = _NAV_MEMORY.unpack(nav_next)
+    rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
+                     d["n_rejected"], d["n_discarded"], d["n_dropped"], d["n_held"],
+                     marker_age, fl["ground_contact"], fl["maybe_landed"], fl["landed"],
+                     nav["x_h"], nav["P_h"], nav["t_h"])
+    return ca.Function(
+        "sensed_flight", [xp, xc, pc, first, t, uh, imu_now, rng, nav_next, y, diag],
+        [ca.densify(v) for v in (xgm_next, xld_next, marker_age, res["F_cmd"], rec,
+                                 res["tilt"])],
+        ["xp", "xc", "pc", "first", "t", "uh_held", "imu_now", "range", "nav_next", "y",
+         "diag"], ["xgm_next", "xld_next", "marker_age_next", "uh", "rec", "guard"],
+        {"cse": True})
+
+
+def _step_args(l, xc_lay, pc_lay) -> ca.Function:
+    """The flight code's arguments, for the flight C behind the controller's signature."""
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     xc, pc, first, n = xc_lay.sym(), pc_lay.sym(), ca.SX.sym("first"), SENSED_TICK.sym()
@@ -320,42 +433,52 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
     imu_now = ca.if_else(imu_rec["fresh"], ca.vertcat(*(imu_rec[f.name] for f in IMU.fields)),
                          cs["imu_held"])
     packets = [read[name] for name in ("vision", "gnss", "rangefinder", "datalink")]
-    nav_next, y, diag = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)(
-        cs["nav"], imu_now, *packets, ps["p_est"], ps["dt"], t)
-    m, d = LANDING_MEASUREMENT.unpack(y), estimator_diagnostics().unpack(diag)
-    xld_next, flags = land_detector_function()(
-        cs["xld"], detector_cues(y, read["rangefinder"], imu_now, uh, cs, ps), ps["p_ld"],
-        ps["dt"])
-    fl = LAND_DETECTOR_FLAGS.unpack(flags)
-    seen = d["fused"][[b.name for b in BLOCKS].index("vision")]
-    marker_age = ca.if_else(seen >= 0.5, 0, ca.fmin(cs["marker_age"] + ps["dt"], TIME_CAP))
-    switch = contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"])
-    cues = ca.vertcat(ca.fmax(fl["ground_contact"], switch), marker_age)
-    _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
-    sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
-    nav = _NAV_MEMORY.unpack(nav_next)
-    rec = ca.vertcat(rec, m["p_e"], m["v_e"], sigma, d["nis"], d["fused"], d["n_fused"],
-                     d["n_rejected"], d["n_discarded"], d["n_dropped"], d["n_held"],
-                     marker_age, fl["ground_contact"], fl["maybe_landed"], fl["landed"],
-                     nav["x_h"], nav["P_h"], nav["t_h"])
-    # the flight code's arguments, for the flight C behind the controller's signature
     plant_p = LANDING_PLANT_PARAMS.unpack(ps["pp"])
-    args = dict(imu=imu_now, vision=packets[0], gnss=packets[1], range=packets[2],
-                datalink=packets[3], nav=cs["nav"], p_est=ps["p_est"], dt=ps["dt"], time=t,
-                F_cmd=uh, xld=cs["xld"], p_ld=ps["p_ld"], marker_age=cs["marker_age"],
-                xg=cs["xg"], mem=cs["mem"], p_guid=ps["p_guid"], p_ctrl=ps["p_ctrl"],
-                p_quad=plant_p["p_quad"], p_act=plant_p["p_act"], contact_switch=switch,
-                **{f"line_{name}": line for name, line in zip(SENSOR_NAMES, lines, strict=True)})
-    step_args = ca.Function("step_args", [xp, xc, pc, first, t, uh, w, pp, n],
-                            list(args.values()),
-                            ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
-                            list(args))
-    controller = ca.Function(
-        "controller", [xp, xc, pc, first, t, uh, w, pp, n],
-        [ca.vertcat(xgm_next, nav_next, imu_now, xld_next, marker_age, *lines), res["F_cmd"],
-         rec, res["tilt"]],
-        ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"],
-        ["xc_next", "uh", "rec", "guard"], {"cse": True})      # the deck's pose, once
+    args = dict(imu=imu_now, **dict(zip(_PACKETS, packets, strict=True)), nav=cs["nav"],
+                p_est=ps["p_est"], dt=ps["dt"], time=t, F_cmd=uh, xld=cs["xld"],
+                p_ld=ps["p_ld"], marker_age=cs["marker_age"], xg=cs["xg"], mem=cs["mem"],
+                p_guid=ps["p_guid"], p_ctrl=ps["p_ctrl"], p_quad=plant_p["p_quad"],
+                p_act=plant_p["p_act"],
+                contact_switch=contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"]),
+                **{f"line_{name}": line for name, line in zip(SENSOR_NAMES, lines,
+                                                               strict=True)})
+    return ca.Function("step_args", [xp, xc, pc, first, t, uh, w, pp, n], list(args.values()),
+                       ["xp", "xc", "pc", "first", "t", "uh_held", "w", "pp", "n"], list(args))
+
+
+@functools.cache
+def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
+    """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring);
+    ``welded`` as in :func:`~quadland_symbolic.landing.loop.landing_loop`.
+
+    Its controller is an MX Function of three stages (:class:`quadland_symbolic.stages.
+    Staged`): ``sensed_world`` (steps 1 to 3), ``sensed_filter`` (step 4, each
+    sensor's updates evaluated only when due) and ``sensed_flight`` (steps 5 and 6).
+    """
+    base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
+    stages = Staged(
+        "controller",
+        (_world_stage(xc_lay, pc_lay), *(_read_stage(name) for name in SENSOR_NAMES),
+         _imu_stage(xc_lay), _filter_stage(), _flight_stage(l, xc_lay, pc_lay)),
+        inputs=(("xp", LANDING_PLANT_STATE.size), ("xc", xc_lay.size), ("pc", pc_lay.size),
+                ("first", 1), ("t", 1), ("uh_held", COMMAND.size),
+                ("w", LANDING_DISTURBANCE.size), ("pp", LANDING_PLANT_PARAMS.size),
+                ("n", SENSED_TICK.size)),
+        # the memory's fields in order (sensed_loop_memory): xg and mem, nav, imu_held,
+        # xld, marker_age, the lines
+        outputs=(("xc_next", ("xgm_next", "nav_next", "imu_now", "xld_next",
+                              "marker_age_next", *(f"line_{s}" for s in SENSOR_NAMES))),
+                 ("uh", ("uh",)), ("rec", ("rec",)), ("guard", ("guard",))),
+        slices=(*((n, src, lay.slice(f).start, lay.slice(f).stop)
+                  for n, src, lay, f in (("nav", "xc", xc_lay, "nav"),
+                                         ("p_est", "pc", pc_lay, "p_est"),
+                                         ("dt", "pc", pc_lay, "dt"))),
+                *((f"delay_{s}", "pc", pc_lay.slice("delay").start + i,
+                   pc_lay.slice("delay").start + i + 1)
+                  for i, s in enumerate(SENSOR_NAMES))))
+    controller = stages.function()
+    xp, xc = LANDING_PLANT_STATE.sym(), xc_lay.sym()
+    cs = xc_lay.unpack(xc)
     assemble = ca.Function("assemble", [xp, xc], [ca.vertcat(xp, cs["xg"], cs["mem"])],
                            ["xp", "xc"], ["x"])
     ride_rhs, ride_row = landing_ride_functions(l, SENSED_RECORDED) if welded else (None, None)
@@ -364,5 +487,7 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
         base, name="landing_sensed_welded" if welded else "landing_sensed",
         controller_state=xc_lay, controller_params=pc_lay,
         recorded=SENSED_RECORDED, controller=controller, assemble=assemble,
-        step_args=step_args, flight="landing_sensed_flight_controller.c.jinja",
-        ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK)
+        step_args=_step_args(l, xc_lay, pc_lay),
+        flight="landing_sensed_flight_controller.c.jinja",
+        ride_rhs=ride_rhs, ride_row=ride_row, tick_inputs=SENSED_TICK,
+        controller_stages=stages)

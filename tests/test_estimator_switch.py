@@ -1,0 +1,138 @@
+"""The filter's step with each sensor's updates evaluated only when due.
+
+:func:`~quadland_symbolic.landing.estimator_switch.conditional_step_function` against
+the branch-free step it must equal (:func:`~quadland_symbolic.landing.estimator.
+estimator_step_function`, every update computed and selected), bit for bit, over a
+flight with packets due, late, stale, from the future, not finite and outliers; the
+generated C's branches; and the stages' composition.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from quadland_symbolic.landing.estimator import (
+    FLIGHT_COUPLING,
+    FLIGHT_DEPTH,
+    N_HIST,
+    estimator_diagnostics,
+    estimator_init_function,
+    estimator_memory,
+    estimator_step_function,
+)
+from quadland_symbolic.landing.estimator_switch import conditional_step_function
+from quadland_symbolic.landing.navigation import (
+    ESTIMATOR_DEFAULTS,
+    NAV_PACKETS,
+    SENSORS,
+    estimator_params,
+)
+from quadland_symbolic.stages import Staged
+
+DT = 0.004
+
+
+def _bits(v):
+    return np.asarray(v, dtype=np.float64).ravel().view(np.uint64)
+
+
+def _packet(layout, rng, t, t_h):
+    """A packet: mostly not fresh (garbage the step must not read), else of some kind."""
+    v = np.zeros(layout.size)
+    if rng.uniform() > 0.3:
+        v[:] = rng.choice((math.nan, math.inf, 1e30, -3.0), size=v.size)
+        v[0] = 0.0
+        return v
+    kind = rng.choice(("due", "due", "due", "late", "old", "future", "nan", "outlier"))
+    v[:] = rng.normal(size=layout.size) * 0.3 + (100.0 if kind == "outlier" else 0.0)
+    v[0] = 1.0
+    v[1] = {"late": t_h - rng.uniform(0, 0.016), "old": t_h - rng.uniform(0.03, 0.1),
+            "future": t + rng.uniform(DT, 0.1)}.get(kind, t - rng.uniform(0, 0.19))
+    if layout.name == "range":
+        v[layout.slice("b3_E")] = [0.0, 0.0, 1.0] if rng.uniform() > 0.1 else [1.0, 0.0, 0.1]
+        v[layout.slice("s")] = 3.0 + rng.normal() * 0.05
+    if kind == "nan":
+        v[rng.integers(2, v.size)] = math.nan
+    return v
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed):
+    rng = np.random.default_rng(seed)
+    sizes = (N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    branch_free, conditional = estimator_step_function(*sizes), conditional_step_function(*sizes)
+    assert branch_free.is_a("SXFunction") and conditional.is_a("MXFunction")
+    lay, lp = estimator_memory(*sizes), estimator_params()
+    p = lp.pack(dict(ESTIMATOR_DEFAULTS))
+    p[lp.slice("range_deck_radius")], p[lp.slice("range_deck_sigmas")] = 1e30, 0.0
+    x0 = np.r_[0.3, -0.2, 3.0, 0.2, -0.1, -0.3, 0.5, 0.1, 0.0, np.zeros(12)]
+    x0[:18] += rng.normal(size=18) * 0.05
+    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3, [0.01] * 3]
+    mem = np.asarray(estimator_init_function(*sizes)(x0, P0, [0, 0, 0.3, 0, 0, 0.05, 0, 0, 0],
+                                                     7.0)).ravel()
+    t, quiet = 7.0, 0
+    for _ in range(300):
+        t += DT
+        pkts = [_packet(layout, rng, t, mem[lay.slice("t_h")][0]) for layout in NAV_PACKETS]
+        imu = np.r_[0.02, -0.01, 0.5, 0.0, 0.0, 9.8, rng.normal(size=3) * 0.01]
+        want = branch_free(mem, imu, *pkts, p, DT, t)
+        got = conditional(mem, imu, *pkts, p, DT, t)
+        for a, b in zip(want, got, strict=True):
+            np.testing.assert_array_equal(_bits(b), _bits(a))
+        d = estimator_diagnostics().unpack(np.asarray(want[2]).ravel())
+        quiet += not np.any(d["fused"] + d["rejected"] + d["held"])
+        mem = np.asarray(want[0]).ravel()
+    # every kind of outcome happened, and most steps fused nothing
+    assert np.all(d["n_fused"] > 0) and np.sum(d["n_rejected"]) > 0
+    assert np.all(d["n_discarded"] + d["n_dropped"] > 0)
+    assert quiet > 150
+
+
+def test_its_c_branches_once_per_sensor(tmp_path, monkeypatch):
+    """CasADi's C of the Switch: an ``if`` on the due flag around the sensor's updates."""
+    monkeypatch.chdir(tmp_path)
+    conditional_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING).generate("step.c")
+    text = (tmp_path / "step.c").read_text()
+    assert len(re.findall(r"if \(arg\[0\] \? casadi_to_int\(\*arg\[0\]\) : 0\) \{", text)) \
+        == len(SENSORS)
+    for s in SENSORS:
+        assert f"fuse_{s}:" in text and f"skip_{s}:" in text
+
+
+def test_stages_compose_by_name_and_refuse_what_is_missing():
+    a, b = ca.SX.sym("a"), ca.SX.sym("b")
+    double = ca.Function("double", [a], [2 * a], ["u1"], ["v"])
+    add = ca.Function("add", [a, b], [a + b], ["v", "u0"], ["y"])
+    staged = Staged("f", (double, add), (("u", 2),), (("out", ("y", "v")), ("twice", ("v",))),
+                    slices=(("u0", "u", 0, 1), ("u1", "u", 1, 2)))
+    out, twice = staged.function()([5.0, 3.0])
+    assert np.asarray(out).ravel().tolist() == [11.0, 6.0] and float(twice) == 6.0
+    with pytest.raises(ValueError, match="reads v"):
+        Staged("f", (add,), (("u0", 1),), (("y", ("y",)),))
+    with pytest.raises(ValueError, match="outputs v again"):
+        Staged("f", (double, double), (("u1", 1),), (("v", ("v",)),))
+    with pytest.raises(ValueError, match="no stage outputs z"):
+        Staged("f", (double,), (("u1", 1),), (("z", ("z",)),))
+
+
+def test_the_staged_c_reads_and_writes_in_place():
+    """The sensed controller's C: the filter reads its memory in the loop's state and
+    writes the next one where the next state holds it; every stage its own file."""
+    from quadland_symbolic.codegen.simulator import simulator_sources
+    from quadland_symbolic.landing.sensed_loop import landing_sensed_loop, sensed_loop_memory
+
+    files = simulator_sources(landing_sensed_loop(10), "sampled")
+    c = files["qlsim_landing_sensed_controller.c"]
+    nav = sensed_loop_memory(10).slice("nav")
+    block = c[c.index("/* sensed_filter */"):c.index("/* sensed_flight */")]
+    assert f"arg1[0] = (arg[1] ? arg[1] + {nav.start} : 0);" in block
+    assert f"res1[0] = (res[0] ? res[0] + {nav.start} : w + {nav.start});" in block
+    stages = landing_sensed_loop(10).controller_stages.stages
+    for stage in stages:
+        assert f"qlsim_landing_sensed_controller_{stage.name()}.c" in files
+    assert all(len(text) < 700_000 for name, text in files.items() if "controller" in name)
