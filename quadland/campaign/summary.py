@@ -125,20 +125,8 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
     else:
         summary["note"] = (f"no run was flown: the draws of all {n_all} were invalid (each "
                            "row's message says why); no success rate, no figures")
-    metrics = {}
-    for m in kind_of(model).metrics:
-        x = _floats(cols[m.name])
-        x = x[~np.isnan(x)]
-        entry = {"unit": m.unit, "doc": m.doc, "limit": limits.get(m.name), "n": int(x.size),
-                 "undefined": int(n - x.size)}
-        if m.name in limits:
-            entry["within_limit"] = int(np.sum(x <= limits[m.name]))
-        if m.counted:
-            entry["count"] = int(np.sum(x == 1.0))
-        for label, q in QUANTILES.items():
-            entry[label] = order_statistic(x, q) if x.size else None
-        metrics[m.name] = entry
-    summary["metrics"] = metrics
+    summary["metrics"] = {m.name: _metric_entry(m, cols[m.name], limits, n)
+                          for m in kind_of(model).metrics}
     severity = _severity(cols, limits, n_all)
     order = sorted((i for i in range(n_all) if flown[i]),
                    key=lambda i: (status[i] != "failed", -severity[i], i))
@@ -169,6 +157,22 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
     summary["campaign"] = {**spec.identity(), "runs": n_all}
     summary["severity_definition"] = "largest metric / limit of a run; > 1 misses a limit"
     return summary
+
+
+def _metric_entry(m, column: list[str], limits: Mapping[str, float], flown: int) -> dict:
+    """One metric's entry of summary.json: its order statistics over the runs that define
+    it, the runs within its limit, and for a 0/1 flag the runs where it is 1."""
+    x = _floats(column)
+    x = x[~np.isnan(x)]
+    entry = {"unit": m.unit, "doc": m.doc, "limit": limits.get(m.name), "n": int(x.size),
+             "undefined": int(flown - x.size)}
+    if m.name in limits:
+        entry["within_limit"] = int(np.sum(x <= limits[m.name]))
+    if m.counted:
+        entry["count"] = int(np.sum(x == 1.0))
+    for label, q in QUANTILES.items():
+        entry[label] = order_statistic(x, q) if x.size else None
+    return entry
 
 
 def _row_values(spec, cols: Mapping[str, list[str]], i: int) -> list[str]:

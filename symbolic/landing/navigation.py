@@ -230,29 +230,15 @@ def covariance_pattern(coupling: str = "full") -> CovariancePattern:
 # ---------------------------------------------------------------- prediction
 
 def axis_dynamics(x7, a_in):
-    """One axis of (E2) without its noise: ``d/dt [p_r, v1, v_t, a_t, b, a_b, a_tilt]``.
-
-    The relative position moves with the quadrotor's velocity less the target's, the
-    quadrotor's velocity with the acceleration input less its biases, the target's
-    velocity with its acceleration; the target's acceleration, the GNSS bias and the
-    input's biases are driven by noise alone (random walks; ``a_tilt`` is held over a
-    period and decays as its Gauss-Markov process in :func:`nav_transition`, (E2a)).
-    """
+    """One axis of (E2) without its noise, ``d/dt [p_r, v1, v_t, a_t, b, a_b, a_tilt]``: the
+    target's acceleration and the biases are random walks, ``a_tilt`` held (E2a)."""
     _, v1, v_t, a_t, _, a_b, a_tilt = ca.vertsplit(x7)
     return ca.vertcat(v1 - v_t, a_in - a_b - a_tilt, a_t, 0, 0, 0, 0)
 
 
-def _axis_matrices() -> tuple[np.ndarray, np.ndarray]:
-    """``A7 = df/dx``, ``B7 = df/da_in`` of :func:`axis_dynamics` by ``ca.jacobian``
-    (constant: the model is linear), for the exact discretization (E3)-(E5)."""
-    x, a = ca.SX.sym("x", 7), ca.SX.sym("a_in")
-    f = axis_dynamics(x, a)
-    return (np.array(ca.evalf(ca.jacobian(f, x)), dtype=float),
-            np.array(ca.evalf(ca.jacobian(f, a)), dtype=float))
-
-
-#: One axis of (E2): [p_r, v1, v_t, a_t, b, a_b, a_tilt]' = A7 [...] + B7 a_in + w.
-_A7, _B7 = _axis_matrices()
+#: One axis' ``A7 = df/dx``, ``B7 = df/da_in`` by ``ca.jacobian`` (constants: it is linear).
+_x7, _a_in = ca.SX.sym("x", 7), ca.SX.sym("a_in")
+_A7, _B7 = (np.array(ca.evalf(ca.jacobian(axis_dynamics(_x7, _a_in), v))) for v in (_x7, _a_in))
 
 
 def acceleration_input(eta_hat, f_b, g):
