@@ -9,7 +9,7 @@ beside it). :meth:`OutputFolder.write` then writes the whole set of files
 into a hidden folder beside the target and swaps it in, so that the set
 appears together or not at all and replaces any earlier set whole; a run
 interrupted at any point leaves either the old set or the new one.
-:func:`figure_png` turns a figure into the bytes written.
+:func:`figure_png` (:mod:`quadland.png`) turns a figure into the bytes written.
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ import datetime
 import errno
 import fcntl
 import glob
-import io
 import json
 import math
 import os
@@ -32,13 +31,13 @@ from pathlib import Path
 import numpy as np
 
 from quadland.exceptions import OutputError
+from quadland.png import PNG_COMPRESS_LEVEL, PNG_DPI, figure_png
 
-__all__ = ["PNG_DPI", "MARKER", "OutputFolder", "output_folder", "write_files", "figure_png",
-           "json_ready", "strict_json", "write_bytes_atomic", "write_text_atomic",
-           "lock_folder", "unlock_folder", "fsync_dir", "WorkFolder", "remove_abandoned"]
+__all__ = ["PNG_DPI", "PNG_COMPRESS_LEVEL", "MARKER", "OutputFolder", "output_folder",
+           "write_files", "figure_png", "json_ready", "strict_json", "write_bytes_atomic",
+           "write_text_atomic", "lock_folder", "unlock_folder", "fsync_dir", "WorkFolder",
+           "remove_abandoned"]
 
-#: Resolution of the figures written, dots per inch.
-PNG_DPI = 110
 #: File that marks a folder as a quadland output (so that it may be replaced).
 MARKER = ".quadland-output"
 
@@ -340,30 +339,6 @@ def json_ready(x):
 def strict_json(data) -> bytes:
     """``data`` as strict JSON (RFC 8259): no NaN or Infinity tokens (see :func:`json_ready`)."""
     return (json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n").encode("utf-8")
-
-
-def figure_png(fig) -> bytes:
-    """PNG bytes of a matplotlib figure, the same for the same figure.
-
-    Drawn at :data:`PNG_DPI` without the "Software" metadata entry (which
-    carries matplotlib's version). A figure that pyplot manages is closed
-    afterwards, so that a batch of figures does not accumulate.
-
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-
-    Returns
-    -------
-    bytes
-    """
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=PNG_DPI, metadata={"Software": None})
-    if getattr(fig.canvas, "manager", None) is not None:
-        import matplotlib.pyplot as plt
-
-        plt.close(fig)
-    return buf.getvalue()
 
 
 def write_bytes_atomic(path, data: bytes) -> None:

@@ -20,7 +20,8 @@ ROOT = Path(__file__).resolve().parent.parent
 #: holding the version: any module may read it.
 LAYERS = (
     ("quadland", "quadland.exceptions", "quadland.constants", "quadland.interrupt"),
-    ("quadland.schema", "quadland.scenario", "quadland.extends", "quadland.output"),
+    ("quadland.schema", "quadland.scenario", "quadland.extends", "quadland.output",
+     "quadland.png"),
     ("quadland.engine", "quadland.linear", "quadland.metrics", "quadland.analysis"),
     ("quadland.plots",),
     ("quadland.kinds",),

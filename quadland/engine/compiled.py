@@ -271,9 +271,9 @@ class FlightCode:
 
 
 @functools.cache
-def compiled_loop(loop: LoopModel, part: str,
-                  flight: FlightCode | None = None) -> CompiledLoop | VMLoop:
-    """The ``part`` of a loop's simulator: compiled, or on the VM.
+def compiled_loop(loop: LoopModel, part: str, flight: FlightCode | None = None,
+                  opt: str = "-O2") -> CompiledLoop | VMLoop:
+    """The ``part`` of a loop's simulator: compiled (at ``opt``), or on the VM.
 
     ``part`` is a key of ``quadland_symbolic.codegen.SIMULATOR_PARTS``;
     ``"sampled_flight"`` needs ``flight``, the flight code behind the loop's
@@ -314,7 +314,7 @@ def compiled_loop(loop: LoopModel, part: str,
         _warn_no_compiler(why if given else "no C compiler found (set CC or install gcc)")
         return VMLoop(loop, part)
     try:
-        return CompiledLoop(loop, part, flight=flight)
+        return CompiledLoop(loop, part, opt, flight=flight)
     except (CompileError, OSError, AttributeError) as exc:
         # A broken compiler or cache (the build checks the library loads; a library
         # without the driver's symbols is the last resort): CasADi's VM still works.

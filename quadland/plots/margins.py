@@ -33,6 +33,7 @@ from quadland.plots.frequency import (
     loop_curves,
     m_circle,
 )
+from quadland.plots.log_minor import cheap_minor_ticks
 from quadland.plots.overlay import redraw_legend, run_index, run_tag
 from quadland.plots.sensitivity import RUN_GID, pole_plot, sigma_plot
 
@@ -139,6 +140,7 @@ def _bode(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
         phase.set_xlabel("frequency [rad/s]")
         for a in (mag, phase):
             a.grid(True, which="both", alpha=0.3)
+            cheap_minor_ticks(a)
             redraw_legend(a, fontsize="x-small", loc="best")
     ax[0, 0].set_ylabel("|l| [dB]")
     ax[1, 0].set_ylabel("arg l [deg], crossover in [-360, 0)")

@@ -21,6 +21,7 @@ from quadland.analysis import (
     sensitivity_sigma,
 )
 from quadland.plots.frequency import POINTS_PER_DECADE
+from quadland.plots.log_minor import cheap_minor_ticks
 from quadland.plots.overlay import redraw_legend, run_index, run_tag
 
 if TYPE_CHECKING:       # a figure draws a report it is given; it never builds one
@@ -112,6 +113,7 @@ def sigma_plot(report: MarginReport, ax=None, label: str | None = None) -> Figur
         a.set_xlabel("frequency [rad/s]")
         a.set_ylabel("sigma [dB]")
         a.grid(True, which="both", alpha=0.3)
+        cheap_minor_ticks(a)
         redraw_legend(a, fontsize="small", loc="lower left" if a is a_T else "lower right")
     fig.tight_layout()
     return fig
