@@ -4,8 +4,10 @@ tests/test_consistency.py checks the criterion at the highway's own seeds (2024-
 every NEES group's batch average inside its two-sided 95 % chi-square bounds at 95 %
 of the settled times, every block's pooled NIS inside its bounds. This script prints
 the same figures for other batches (docs/estimator.md, "Other batches of seeds"), one
-line per batch: each group's average NEES and the share of the times inside, and the
-blocks whose pooled NIS lies outside its bounds (``--nis``: every block's).
+line per batch: each group's average NEES and the share of the times inside (the
+per-tick criterion), the correlation-aware bounds of its time average in brackets
+(``OUT`` when outside; quadland.kinds.landing.time_averaged_nees), and the blocks whose
+pooled NIS lies outside its bounds (``--nis``: every block's).
 
 Run from the repository root (about 1 s of CPU per hover)::
 
@@ -27,7 +29,9 @@ def line(scenario, seed: int, runs: int, duration: float, every_nis: bool = Fals
     s = mc.summary()
     parts = [f"{duration:g} s, seeds {seed}-"]
     for g in NEES_GROUPS:
-        parts.append(f"{g} {s['nees'][g]['mean']:.2f}, {100 * s['nees'][g]['inside']:.1f} %")
+        ta = s["nees"][g]["time_averaged"]
+        parts.append(f"{g} {s['nees'][g]['mean']:.2f}, {100 * s['nees'][g]['inside']:.1f} % "
+                     f"[{ta['lo']:.2f}, {ta['hi']:.2f}{'' if ta['inside'] else ' OUT'}]")
     out = [f"{b} {v['mean']:.3f} ({'<' if v['mean'] < v['lo'] else '>'} "
            f"{v['lo'] if v['mean'] < v['lo'] else v['hi']:.3f})"
            for b, v in s["nis"].items() if not v["lo"] <= v["mean"] <= v["hi"]]

@@ -118,7 +118,8 @@ def h_rows(name, n2=None, b3=None, z=None, g=None):
 def variances(name, z, q):
     """The diagonal of R of each block (E10)-(E13)."""
     if name == "vision":
-        return np.full(3, (q["vision_sigma0"] + q["vision_k_range"] * np.linalg.norm(z)) ** 2)
+        return (np.full(3, (q["vision_sigma0"] + q["vision_k_range"] * np.linalg.norm(z)) ** 2)
+                + q["vision_heading_sigma"] ** 2 * np.array([z[1] ** 2, z[0] ** 2, 0.0]))
     if name == "range":
         return np.array([(q["range_sigma"] + q["range_k_range"] * abs(z[0])) ** 2])
     key = {"gnss_rel": "gnss_rel_sigma", "gnss_v1": "gnss_v1_sigma", "gnss_vt": "gnss_vt_sigma",

@@ -156,6 +156,18 @@ def test_average_nees_lies_in_its_bounds_at_95_percent_of_the_times(mc, group):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("group", list(NEES_GROUPS))
+def test_time_averaged_nees_lies_in_its_correlation_aware_bounds(mc, group):
+    """The correlation-aware criterion beside the per-tick one (docs/estimator.md, item
+    9): the NEES averaged over the runs and the settled times, within the bounds of
+    ``n N K_eff`` chi-square draws, ``K_eff`` the independent times per run measured from
+    the batch's autocorrelation (between one and the settled times)."""
+    c = mc.nees_time_averaged(group)
+    assert c.runs == 100 and 1.0 <= c.effective_ticks <= c.ticks
+    assert c.inside, c
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("block", [b.name for b in BLOCKS])
 def test_average_nis_of_every_packet_lies_in_its_bounds(mc, block):
     mean, n, lo, hi = mc.nis_pooled(block)
@@ -167,23 +179,50 @@ def test_average_nis_of_every_packet_lies_in_its_bounds(mc, block):
                           and np.nanmin(mc.outliers[block][:, mc.settled]) > 100)
 
 
-# Other batches of seeds (docs/estimator.md, "Other batches of seeds"): the relative NEES
-# of 100 hovers from seed 5000 was inside at 89.6 % before item 8 and is at 96.5 %; from
-# seed 7000 79.6 % and 81.3 %, still short. A filter exactly as consistent as its
-# covariance says, its errors correlated over 1 to 2 s as the hover's vertical ones are,
-# meets the 95 % of the ticks in about 60 % of such batches and has at most 84 to 88 %
-# inside in one of ten (benchmarks/consistency_criterion_odds.py).
+# Other batches of seeds (docs/estimator.md, "Other batches of seeds" and item 9). The
+# per-tick criterion's own odds: a filter exactly as consistent as its covariance says,
+# its errors correlated over 1 to 2 s as the hover's are, meets 95 % of the ticks in only
+# about 60 % of such batches (benchmarks/consistency_criterion_odds.py). With (E10c) seeds
+# 5000- have 94.8 % of the ticks inside (96.5 % before: their average lies below its
+# expectation, and the heading's noise lowers every batch's a little), seeds 7000- 89.4 %
+# (81.3 %): strict xfails that record it. The correlation-aware criterion, which accepts
+# such a filter in 95 % of the batches and rejects one whose NEES is 1.5 or 0.67 times too
+# large in every batch, is checked at every batch and group: two misses of twenty, both
+# on the cautious side (docs/estimator.md, item 9).
+
+
+@pytest.fixture(scope="module")
+def batches():
+    return {}
+
+
+def _batch(batches, seed):
+    if seed not in batches:
+        batches[seed] = consistency_monte_carlo(load_scenario("highway"), runs=100,
+                                                duration=8.0, seed=seed)
+    return batches[seed]
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [
-    5000,
-    pytest.param(7000, marks=pytest.mark.xfail(
-        strict=True, reason="81.3 % of the ticks inside (docs/estimator.md, "
-                            "'Other batches of seeds')")),
-])
-def test_relative_nees_of_another_batch_lies_in_its_bounds(seed):
-    other = consistency_monte_carlo(load_scenario("highway"), runs=100, duration=8.0,
-                                    seed=seed)
+@pytest.mark.parametrize("seed,share", [(5000, "94.8"), (7000, "89.4")])
+@pytest.mark.xfail(strict=True, reason="the per-tick criterion's odds (docs/estimator.md, "
+                                       "item 9)")
+def test_relative_nees_of_another_batch_lies_in_its_bounds(batches, seed, share):
+    other = _batch(batches, seed)
     assert other.seeds[0] == seed and other.settled.sum() > 1000
-    assert other.nees_inside("relative") >= 0.95, other.summary()["nees"]["relative"]
+    assert other.nees_inside("relative") >= 0.95, (share, other.summary()["nees"]["relative"])
+
+
+_CAUTIOUS = {(5000, "tilt"): "the tilt bias 1.76 against 1.83-2.17",
+             (9000, "velocity"): "the relative velocity 2.73 against 2.82-3.18: item 8's "
+                                 "q_ab z measured on these seeds over-counts a bounded swing"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed,group", [
+    pytest.param(seed, group, marks=pytest.mark.xfail(strict=True, reason=_CAUTIOUS[seed, group]))
+    if (seed, group) in _CAUTIOUS else (seed, group)
+    for seed in (0, 5000, 7000, 9000) for group in NEES_GROUPS])
+def test_time_averaged_nees_of_another_batch_lies_in_its_bounds(batches, seed, group):
+    c = _batch(batches, seed).nees_time_averaged(group)
+    assert c.inside, c

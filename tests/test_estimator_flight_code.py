@@ -374,7 +374,8 @@ def _nonneg(v):
 DOCUMENTED = {
     "g": _pos, "q_acc": _pos, "q_at": _pos, "q_b": _pos, "q_ab": _pos,
     "tilt_sigma": _nonneg, "tilt_tau": _pos,
-    "vision_sigma0": _pos, "vision_k_range": _nonneg, "gnss_rel_sigma": _pos,
+    "vision_sigma0": _pos, "vision_k_range": _nonneg, "vision_heading_sigma": _nonneg,
+    "gnss_rel_sigma": _pos,
     "gnss_v1_sigma": _pos, "gnss_vt_sigma": _pos, "range_sigma": _pos,
     "range_k_range": _nonneg,
     "range_min_cos": lambda v: (v > 0) & (v <= 1), "range_deck_radius": _pos,

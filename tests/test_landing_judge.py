@@ -98,9 +98,12 @@ def test_highway_100_flared_to_40_deg_is_tilted_not_tipped():
     past the angle, rotors or not) and its tilt passed the 48.7 deg limit: now the
     contact is "tilted" and nothing tipped over. (Without the aim point's pivot shift,
     ``pivot_aim = 0``, as it was measured: aiming ahead, the body meets the roof at 36.75
-    deg and lands.)"""
+    deg and lands. And without the heading's share of the camera's noise,
+    ``estimator.vision_heading_sigma = 0``, as it was measured: with it, docs/estimator.md
+    (E10c), this one flight meets the roof at 36.70 deg, inside the angle, and lands.)"""
     rep = touchdown_report(quadland.simulate(load_scenario(
-        "highway_100", ["touchdown.flare_tilt_deg=40.0", "touchdown.pivot_aim=0.0"])))
+        "highway_100", ["touchdown.flare_tilt_deg=40.0", "touchdown.pivot_aim=0.0",
+                        "estimator.vision_heading_sigma=0.0"])))
     assert rep.tilt_deg > np.degrees(np.arctan(0.15 / 0.2)) and rep.tilt_deg < 48.7
     assert rep.tip_over_deg == pytest.approx(np.degrees(np.arctan(0.15 / 0.2)), rel=1e-3)
     assert rep.failures == ["tilted"] and not rep.tipped and rep.secured

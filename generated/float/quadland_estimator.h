@@ -27,7 +27,7 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 84         /* stored covariance entries (coupling axes) */
 #define QLF_ESTIMATOR_MEMORY_SIZE 773            /* reals in qlf_estimator_memory */
-#define QLF_ESTIMATOR_PARAMS_SIZE 52             /* reals in qlf_estimator_params */
+#define QLF_ESTIMATOR_PARAMS_SIZE 53             /* reals in qlf_estimator_params */
 #define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 136       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
@@ -105,6 +105,7 @@ typedef struct {
     qlf_real tilt_tau;               /* s: correlation time of the tilt bias (first-order Gauss-Markov) */
     qlf_real vision_sigma0;          /* m: vision noise at zero range (E10) */
     qlf_real vision_k_range;         /* -: vision noise growth per metre of range (E10) */
+    qlf_real vision_heading_sigma;   /* rad: standard deviation of the attitude estimate's heading error that rotates the vision's vector (E10c) */
     qlf_real gnss_rel_sigma[3];      /* m: relative GNSS position noise (gnss_rel_sigma_x, gnss_rel_sigma_y, gnss_rel_sigma_z) */
     qlf_real gnss_v1_sigma[3];       /* m/s: quadrotor GNSS velocity noise (gnss_v1_sigma_x, gnss_v1_sigma_y, gnss_v1_sigma_z) */
     qlf_real gnss_vt_sigma[3];       /* m/s: target GNSS velocity noise (gnss_vt_sigma_x, gnss_vt_sigma_y, gnss_vt_sigma_z) */

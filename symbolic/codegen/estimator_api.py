@@ -70,6 +70,7 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     "tilt_sigma": _NONNEGATIVE,
     "tilt_tau": _POSITIVE,
     "vision_k_range": _NONNEGATIVE,
+    "vision_heading_sigma": _NONNEGATIVE,
     "range_k_range": _NONNEGATIVE,
     **{k: _POSITIVE for k in ("gnss_rel_sigma", "gnss_v1_sigma", "gnss_vt_sigma",
                               "range_sigma")},

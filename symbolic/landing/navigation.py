@@ -34,6 +34,11 @@ from quadland_symbolic.kalman import (
 )
 from quadland_symbolic.kinematics import rotation, skew
 from quadland_symbolic.landing.controller import deck_rates
+from quadland_symbolic.landing.correlated_noise import (
+    heading_share,
+    memory_count,
+    project_row,
+)
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
@@ -162,7 +167,7 @@ BLOCKS = (
 ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     g=9.8, q_acc=[0.02] * 3, q_at=[0.1] * 3, q_b=[0.001] * 3, q_ab=[1e-3] * 3,
     tilt_sigma=[0.0855, 0.0855, 0.0], tilt_tau=5.0,
-    vision_sigma0=0.1, vision_k_range=0.02,
+    vision_sigma0=0.1, vision_k_range=0.02, vision_heading_sigma=0.0,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
     range_sigma=0.05, range_k_range=0.0, range_min_cos=0.7, range_deck_radius=0.5,
     range_deck_sigmas=2.0, datalink_v_sigma=[0.1] * 3, datalink_a_sigma=[0.3] * 3,
@@ -190,6 +195,8 @@ def estimator_params() -> Layout:
         Field("tilt_tau", 1, "s", "correlation time of the tilt bias (first-order Gauss-Markov)"),
         Field("vision_sigma0", 1, "m", "vision noise at zero range (E10)"),
         Field("vision_k_range", 1, "-", "vision noise growth per metre of range (E10)"),
+        Field("vision_heading_sigma", 1, "rad", "standard deviation of the attitude "
+              "estimate's heading error that rotates the vision's vector (E10c)"),
         _vec3("gnss_rel_sigma", "m", "relative GNSS position noise"),
         _vec3("gnss_v1_sigma", "m/s", "quadrotor GNSS velocity noise"),
         _vec3("gnss_vt_sigma", "m/s", "target GNSS velocity noise"),
@@ -323,7 +330,8 @@ def _model(block: Block, nav, pkt, n2, p):
         # the tilt rotates the vector: eps x r_E = (r_E_z / g) a_tilt for a pad below
         # (E10); a non-finite packet, never fused, must not make the row non-finite
         lever = select(is_finite(z[2]), z[2], 0) / p["g"]
-        return z, -nav["p_r"] + lever * nav["a_tilt"], sigma**2 * ones, 1
+        shared = heading_share(z, p["vision_heading_sigma"])             # (E10c)
+        return z, -nav["p_r"] + lever * nav["a_tilt"], sigma**2 * ones + shared, 1
     if block.name == "range":                                                # (E12)
         cos_b = n2.T @ pkt["b3_E"]
         steep = cos_b >= p["range_min_cos"]
@@ -377,20 +385,6 @@ def _packet(sensor: str) -> Layout:
     raise KeyError(f"no sensor {sensor!r}")
 
 
-def _project_row(h, P, pattern: CovariancePattern, home: int, r=None):
-    """A row across groups: keep ``home``'s group, its rest's variance ``h_d^T P h_d`` as
-    noise (E9a), given the update's ``r`` ``max(1, r / h_z^T P h_z)`` times (E9b)."""
-    groups = {pattern.group_of[i] for i in ca.sparsify(h).sparsity().row()}
-    if len(groups) <= 1:
-        return h, 0
-    keep = [i for i in range(pattern.n) if pattern.group_of[i] == pattern.group_of[home]]
-    mask = ca.DM.zeros(pattern.n)
-    mask[keep] = 1
-    kept, dropped = ca.sparsify(h * mask), h * (1 - mask)
-    memory = 1 if r is None else ca.fmax(r / ca.fmax(kept.T @ P @ kept, 1e-30), 1)
-    return kept, memory * (dropped.T @ P @ dropped)
-
-
 def _beam_on_deck(x, P, h, pkt, p):
     """1 when the range's beam surely meets the deck (E12a): its predicted deck point
     ``p_r - h b3_E`` lies within ``range_deck_radius`` of the pad centre by
@@ -429,11 +423,15 @@ def block_update(name: str, x, P, pkt, n2, p_est, due, pattern: CovariancePatter
         valid = ca.logic_and(valid, _beam_on_deck(x, P, h, pkt, p))
     home = NAV.slice("p_r").start + 2                  # the range's p_r_z (E9a)
 
-    def projected(P, update=False):                  # the update's noise: (E9b)
+    shared = heading_share(z, p["vision_heading_sigma"]) if name == "vision" else 0  # (E10c)
+
+    def projected(P, update=False):                  # the update's noise: (E9b), (E10c)
         rows, r_eff = [], []
         for i in range(block.dim):
-            row, extra = _project_row(H[i, :].T, P, pattern, home, r[i] if update else None)
+            row, extra = project_row(H[i, :].T, P, pattern, home, r[i] if update else None)
             rows.append(row)
+            if update and name == "vision":
+                extra += (memory_count(r[i] - shared[i], row, P) - 1) * shared[i]
             r_eff.append(r[i] + extra)
         return rows, r_eff
 

@@ -23,8 +23,12 @@ Averaged over the runs, a consistent filter's NEES of an ``n``-dimensional group
 within the two-sided chi-square bounds ``chi2.ppf(0.025, N n) / N`` ..
 ``chi2.ppf(0.975, N n) / N`` for ``N`` runs at about 95 % of the times; likewise each
 block's NIS with ``N`` the runs where it was due, and its average over every due packet
-after the settling time within the bounds of that count. docs/estimator.md
-("Consistency") gives the measured numbers.
+after the settling time within the bounds of that count. The share of the times inside
+is itself a noisy criterion when the errors are correlated over seconds; beside it,
+:meth:`ConsistencyResult.nees_time_averaged` tests the NEES averaged over the runs and
+the settled times against bounds that count the correlation
+(:mod:`quadland.kinds.landing.time_averaged_nees`). docs/estimator.md ("Consistency")
+gives the measured numbers.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ from quadland.exceptions import ScenarioError
 from quadland.kinds.landing.sensed import sensor_settings, sensors_enabled, tick_table
 from quadland.kinds.landing.sensor_settings import sensor_params
 from quadland.kinds.landing.simulate import simulate_landing
+from quadland.kinds.landing.time_averaged_nees import TimeAveragedNees, time_averaged_nees
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.deck import deck_pose
@@ -280,6 +285,14 @@ class ConsistencyResult:
         m = self.nees_mean(group)[self.settled]
         return float(np.mean((m >= lo) & (m <= hi)))
 
+    def nees_time_averaged(self, group: str, level: float = 0.95) -> TimeAveragedNees:
+        """The correlation-aware criterion: the NEES averaged over the runs and the
+        settled times, against bounds with the effective number of independent times
+        measured from the batch's own autocorrelation
+        (:func:`~quadland.kinds.landing.time_averaged_nees.time_averaged_nees`)."""
+        return time_averaged_nees(self.nees[group][:, self.settled], self.nees_dof(group),
+                                  level)
+
     def nis_count(self, block: str) -> np.ndarray:
         """The runs in which the block was due, at each time."""
         return np.sum(np.isfinite(self.nis[block]), axis=0)
@@ -323,7 +336,10 @@ class ConsistencyResult:
             "nees": {g: {"dof": self.nees_dof(g),
                          "mean": float(self.nees_mean(g)[self.settled].mean()),
                          "bounds": self.nees_bounds(g, level),
-                         "inside": self.nees_inside(g, level)} for g in self.nees},
+                         "inside": self.nees_inside(g, level),
+                         "time_averaged": dataclasses.asdict(self.nees_time_averaged(g, level))
+                         | {"inside": self.nees_time_averaged(g, level).inside}}
+                     for g in self.nees},
             "nis": {b: dict(zip(("mean", "n", "lo", "hi"), self.nis_pooled(b, level),
                                 strict=True))
                     | {"dof": _dim(b), "inside": self.nis_inside(b, level)}
