@@ -81,9 +81,11 @@ def test_a_constant_mismatch_leaves_no_hover_error_with_the_bias_estimates(case)
     quadrotor hovers exactly at its reference. Without them (ki_p = 0) the same mismatch
     leaves it off (a proportional loop needs an error to push back)."""
     ref = np.array([0.0, 0.0, 3.0])                          # landing.hover_height
-    with_bias = equilibrium(load_scenario("highway", [case]))
+    off = "controller.observer_frequency=[0.0, 0.0, 0.0]"   # the bias estimates alone
+    with_bias = equilibrium(load_scenario("highway", [case, off]))
     np.testing.assert_allclose(with_bias.xr[:3], ref, atol=1e-9)
-    without = equilibrium(load_scenario("highway", [case, "controller.ki_p=[0.0, 0.0, 0.0]"]))
+    without = equilibrium(load_scenario("highway", [case, off,
+                                                    "controller.ki_p=[0.0, 0.0, 0.0]"]))
     assert np.max(np.abs(without.xr[:3] - ref)) > 5e-3
 
 
@@ -104,7 +106,8 @@ def test_the_observer_learns_what_the_bias_estimates_learn(case):
     quadrotor on its reference too. Both on: the same hover, d_o = d and d_hat_p = 0."""
     ref = np.array([0.0, 0.0, 3.0])
     on = "controller.observer_frequency=[2.0, 2.0, 2.0]"
-    bias = equilibrium(load_scenario("highway", [case]))
+    bias = equilibrium(load_scenario("highway", [case, "controller.observer_frequency=[0.0, 0.0, "
+                                                       "0.0]"]))
     observer = equilibrium(load_scenario("highway", [case, on, "controller.ki_p=[0.0, 0.0, 0.0]"]))
     both = equilibrium(load_scenario("highway", [case, on]))
     d = _memory(bias)["d_hat"][:3]
