@@ -172,15 +172,17 @@ def test_average_nis_of_every_packet_lies_in_its_bounds(mc, block):
 # seed 7000 79.6 % and 81.3 %, still short. A filter exactly as consistent as its
 # covariance says, its errors correlated over 1 to 2 s as the hover's vertical ones are,
 # meets the 95 % of the ticks in about 60 % of such batches and has at most 84 to 88 %
-# inside in one of ten (benchmarks/consistency_criterion_odds.py).
+# inside in one of ten (benchmarks/consistency_criterion_odds.py). With the disturbance
+# observer on in highway (docs/landing.md, "The disturbance observer") the hovers fly
+# otherwise and the lottery draws again: seed 5000 86.4 %, seed 7000 98.9 %.
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [
-    5000,
-    pytest.param(7000, marks=pytest.mark.xfail(
-        strict=True, reason="81.3 % of the ticks inside (docs/estimator.md, "
-                            "'Other batches of seeds')")),
+    pytest.param(5000, marks=pytest.mark.xfail(
+        strict=True, reason="86.4 % of the ticks inside with the disturbance observer "
+                            "(96.5 % without; docs/landing.md, 'The disturbance observer')")),
+    7000,
 ])
 def test_relative_nees_of_another_batch_lies_in_its_bounds(seed):
     other = consistency_monte_carlo(load_scenario("highway"), runs=100, duration=8.0,
