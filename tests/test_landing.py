@@ -505,9 +505,10 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     runs = [loop.ride(z0, a, rows, t_td, t_td + 2.0, 0.004, lv.pp)
             for loop in (CompiledLoop(model, "sampled"), VMLoop(model, "sampled"))]
     times, _ = ride_grid(rows, t_td, t_td + 2.0, 0.004)
-    # touchdown between 17.26 and 17.27 s (16.40 and 16.41 s before the changes for issue
-    # 19's bar, docs/landing.md): the 100 Hz ticks 17.27 .. 19.26 s, then the end
-    assert len(times) == 201 and times[0] == 17.27 and times[-1] == t_td + 2.0
+    # touchdown between 10.93 and 10.94 s (17.26 and 17.27 s before the disturbance
+    # observer, 16.40 and 16.41 s before the changes for issue 19's bar, docs/landing.md):
+    # the 100 Hz ticks 10.94 .. 12.93 s, then the end
+    assert len(times) == 201 and times[0] == 10.94 and times[-1] == t_td + 2.0
     for ride in runs:
         assert ride.status == SIM_OK
         np.testing.assert_array_equal(ride.times, times)
