@@ -52,7 +52,10 @@ typedef char landing_state_is_its_layout[
     AT(ql_landing_state, xi1, 70, 0) &&
     AT(ql_landing_state, xi2, 73, 0) &&
     AT(ql_landing_state, d_hat, 76, 0) &&
-    sizeof(ql_landing_state) == 82 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_state, v_hat, 82, 0) &&
+    AT(ql_landing_state, d_o, 85, 0) &&
+    AT(ql_landing_state, T_o, 88, 0) &&
+    sizeof(ql_landing_state) == 89 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_controller_params_is_its_layout[
     AT(ql_landing_controller_params, k1p, 0, 0) &&
     AT(ql_landing_controller_params, k2p, 3, 0) &&
@@ -71,9 +74,10 @@ typedef char landing_controller_params_is_its_layout[
     AT(ql_landing_controller_params, ki, 24, 0) &&
     AT(ql_landing_controller_params, d_max_p, 27, 0) &&
     AT(ql_landing_controller_params, d_max, 28, 0) &&
-    AT(ql_landing_controller_params, centers, 29, 0) &&
-    AT(ql_landing_controller_params, widths, 89, 0) &&
-    sizeof(ql_landing_controller_params) == 99 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_controller_params, w_o, 29, 0) &&
+    AT(ql_landing_controller_params, centers, 32, 0) &&
+    AT(ql_landing_controller_params, widths, 92, 0) &&
+    sizeof(ql_landing_controller_params) == 102 * sizeof(ql_real) ? 1 : -1];
 typedef char actuator_params_is_its_layout[
     AT(ql_actuator_params, motor_time_constant, 0, 0) &&
     AT(ql_actuator_params, F_max, 1, 0) &&
@@ -87,9 +91,9 @@ typedef char actuator_params_is_its_layout[
 typedef char landing_params_is_its_layout[
     AT(ql_landing_params, quad, 0, 0) &&
     AT(ql_landing_params, ctrl, 13, 0) &&
-    AT(ql_landing_params, act, 112, 0) &&
-    AT(ql_landing_params, tilt_min, 127, 0) &&
-    sizeof(ql_landing_params) == 128 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_params, act, 115, 0) &&
+    AT(ql_landing_params, tilt_min, 130, 0) &&
+    sizeof(ql_landing_params) == 131 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_output_is_its_layout[
     AT(ql_landing_output, F_cmd, 0, 0) &&
     AT(ql_landing_output, wrench, 4, 0) &&
@@ -151,24 +155,24 @@ static const ql_real default_p_quad[13] = {
     0.3, 0.001, 0.001, 0.001, 9.8, 0.25,
     0.05,
 };
-static const ql_real default_p_land[99] = {
+static const ql_real default_p_land[102] = {
     1.5, 1.5, 1.5, 1.5, 1.5, 1.5,
     2.0, 2.0, 2.0, 14.0, 14.0, 14.0,
     0.05, 0.1, 5.0, 0.1, 0.1, 1.0,
     10.0, 1.0, 0.7853981633974483, 0.5, 0.5, 1.0,
-    2.0, 2.0, 2.0, 4.0, 40.0, -2.0,
-    -2.0, -2.0, -2.0, -2.0, -2.0, -1.5555555555555556,
-    -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.1111111111111112,
-    -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -0.6666666666666667,
-    -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.22222222222222232,
-    -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, 0.22222222222222232,
-    0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.6666666666666665,
-    0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 1.1111111111111107,
-    1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.5555555555555554,
-    1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 2.0,
+    2.0, 2.0, 2.0, 4.0, 40.0, 12.0,
+    12.0, 0.0, -2.0, -2.0, -2.0, -2.0,
+    -2.0, -2.0, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556,
+    -1.5555555555555556, -1.5555555555555556, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112,
+    -1.1111111111111112, -1.1111111111111112, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667,
+    -0.6666666666666667, -0.6666666666666667, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232,
+    -0.22222222222222232, -0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232,
+    0.22222222222222232, 0.22222222222222232, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665,
+    0.6666666666666665, 0.6666666666666665, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107,
+    1.1111111111111107, 1.1111111111111107, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554,
+    1.5555555555555554, 1.5555555555555554, 2.0, 2.0, 2.0, 2.0,
     2.0, 2.0, 2.0, 2.0, 2.0, 2.0,
     2.0, 2.0, 2.0, 2.0, 2.0, 2.0,
-    2.0, 2.0, 2.0,
 };
 static const ql_real default_p_act[15] = {
     0.02, 9.8, 0.2, 0.01225, 0.01225, 0.01225,
@@ -249,6 +253,7 @@ const char *ql_phase_name(int phase)
  *   ctrl.ki                  >= 0
  *   ctrl.d_max_p             >= 0
  *   ctrl.d_max               >= 0
+ *   ctrl.w_o                 >= 0
  *   ctrl.centers             finite
  *   ctrl.widths              > 0
  *   act.motor_time_constant  > 0
@@ -363,47 +368,52 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
     if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0))) {
         bad = "ctrl.d_max";
     }
-    for (i = 42; !bad && i < 102; ++i) {
+    for (i = 42; !bad && i < 45; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
+            bad = "ctrl.w_o";
+        }
+    }
+    for (i = 45; !bad && i < 105; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "ctrl.centers";
         }
     }
-    for (i = 102; !bad && i < 112; ++i) {
+    for (i = 105; !bad && i < 115; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "ctrl.widths";
         }
     }
-    if (!bad && !(isfinite(p[112]) && (p[112] > 0.0))) {
+    if (!bad && !(isfinite(p[115]) && (p[115] > 0.0))) {
         bad = "act.motor_time_constant";
     }
-    if (!bad && !(isfinite(p[113]) && (p[113] > 0.0))) {
+    if (!bad && !(isfinite(p[116]) && (p[116] > 0.0))) {
         bad = "act.F_max";
     }
-    if (!bad && !(isfinite(p[114]) && (p[114] >= 0.0))) {
+    if (!bad && !(isfinite(p[117]) && (p[117] >= 0.0))) {
         bad = "act.gear_height";
     }
-    for (i = 115; !bad && i < 118; ++i) {
+    for (i = 118; !bad && i < 121; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
             bad = "act.drag_quadratic";
         }
     }
-    if (!bad && !(isfinite(p[118]) && (p[118] >= 0.0))) {
+    if (!bad && !(isfinite(p[121]) && (p[121] >= 0.0))) {
         bad = "act.rotor_radius";
     }
-    if (!bad && !(isfinite(p[119]) && (p[119] > 0.0))) {
+    if (!bad && !(isfinite(p[122]) && (p[122] > 0.0))) {
         bad = "act.air_density";
     }
-    for (i = 120; !bad && i < 124; ++i) {
+    for (i = 123; !bad && i < 127; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
             bad = "act.rotor_efficiency";
         }
     }
-    for (i = 124; !bad && i < 127; ++i) {
+    for (i = 127; !bad && i < 130; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "act.cg_offset";
         }
     }
-    if (!bad && !(isfinite(p[127]) && ((p[127] >= 0.0) && (p[127] < 1.0)))) {
+    if (!bad && !(isfinite(p[130]) && ((p[130] >= 0.0) && (p[130] < 1.0)))) {
         bad = "tilt_min";
     }
     if (bad_field) {
@@ -541,7 +551,7 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
 
 /* 1 when every parameter lies in its range, the per-node arrays aside
  * (ctrl.widths: ql_check_landing_params only): the step's invariant,
- * 55 comparisons. The values are known to be finite; no names and no
+ * 58 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_landing_params finds the culprit. */
 static int landing_params_in_range(const ql_real *p)
 {
@@ -588,19 +598,22 @@ static int landing_params_in_range(const ql_real *p)
     ok &= (p[39] >= 0.0);
     ok &= (p[40] >= 0.0);
     ok &= (p[41] >= 0.0);
-    ok &= (p[112] > 0.0);
-    ok &= (p[113] > 0.0);
-    ok &= (p[114] >= 0.0);
-    ok &= (p[115] >= 0.0);
-    ok &= (p[116] >= 0.0);
+    ok &= (p[42] >= 0.0);
+    ok &= (p[43] >= 0.0);
+    ok &= (p[44] >= 0.0);
+    ok &= (p[115] > 0.0);
+    ok &= (p[116] > 0.0);
     ok &= (p[117] >= 0.0);
     ok &= (p[118] >= 0.0);
-    ok &= (p[119] > 0.0);
+    ok &= (p[119] >= 0.0);
     ok &= (p[120] >= 0.0);
     ok &= (p[121] >= 0.0);
-    ok &= (p[122] >= 0.0);
+    ok &= (p[122] > 0.0);
     ok &= (p[123] >= 0.0);
-    ok &= ((p[127] >= 0.0) & (p[127] < 1.0));
+    ok &= (p[124] >= 0.0);
+    ok &= (p[125] >= 0.0);
+    ok &= (p[126] >= 0.0);
+    ok &= ((p[130] >= 0.0) & (p[130] < 1.0));
     return ok;
 }
 
@@ -753,7 +766,7 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
                           ql_landing_output *out)
 {
     /* res_v = [F_cmd, wrench, eta_c, eta_d, eta_d_dot, eta_d_ddot, mem_next, Delta_hat, a_des, bs_z1, bs_z2], staged so that it is checked in one pass. */
-    ql_real res_v[123], tilt, limits[3];
+    ql_real res_v[130], tilt, limits[3];
     const ql_real *arg[ql_casadi_landing_step_SZ_ARG];
     ql_real *res[ql_casadi_landing_step_SZ_RES];
     casadi_int work_int[ql_casadi_landing_step_SZ_IW + 1];
@@ -794,10 +807,10 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     res[4] = res_v + 14;
     res[5] = res_v + 17;
     res[6] = res_v + 20;
-    res[7] = res_v + 102;
-    res[8] = res_v + 108;
-    res[9] = res_v + 111;
-    res[10] = res_v + 117;
+    res[7] = res_v + 109;
+    res[8] = res_v + 115;
+    res[9] = res_v + 118;
+    res[10] = res_v + 124;
     res[11] = &tilt;
     res[12] = limits;
     ql_casadi_landing_step(arg, res, work_int, work_real, 0);
@@ -806,9 +819,9 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
         output_zero(out, tilt);
         return QL_ERR_TILT;
     }
-    if (!all_finite(res_v, 123)) {
+    if (!all_finite(res_v, 130)) {
         output_zero(out, tilt);
-        return all_finite((const ql_real *)state, 82) ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
+        return all_finite((const ql_real *)state, 89) ? QL_ERR_NONFINITE_OUTPUT : QL_ERR_NONFINITE_INPUT;
     }
     memcpy(out->F_cmd, res_v + 0, sizeof out->F_cmd);
     memcpy(out->wrench, res_v + 4, sizeof out->wrench);
@@ -816,10 +829,10 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     memcpy(out->eta_d, res_v + 11, sizeof out->eta_d);
     memcpy(out->eta_d_dot, res_v + 14, sizeof out->eta_d_dot);
     memcpy(out->eta_d_ddot, res_v + 17, sizeof out->eta_d_ddot);
-    memcpy(out->Delta_hat, res_v + 102, sizeof out->Delta_hat);
-    memcpy(out->a_des, res_v + 108, sizeof out->a_des);
-    memcpy(out->bs_z1, res_v + 111, sizeof out->bs_z1);
-    memcpy(out->bs_z2, res_v + 117, sizeof out->bs_z2);
+    memcpy(out->Delta_hat, res_v + 109, sizeof out->Delta_hat);
+    memcpy(out->a_des, res_v + 115, sizeof out->a_des);
+    memcpy(out->bs_z1, res_v + 118, sizeof out->bs_z1);
+    memcpy(out->bs_z2, res_v + 124, sizeof out->bs_z2);
     out->tilt = tilt;
     out->thrust_limited = (int)limits[0];
     out->tilt_limited = (int)limits[1];

@@ -328,16 +328,18 @@ def test_the_state_space_is_the_loop_stepped_in_time(highway):
 
 @pytest.mark.slow
 def test_the_linear_loop_answers_a_small_gust_as_the_flown_loop(highway):
-    """A 3 cm/s crosswind 1-cosine gust at 600 s into the hover (the memory's slowest mode,
+    """A 3 cm/s crosswind 1-cosine gust at 900 s into the hover (the memory's slowest mode,
     the robust terms' leakage, has 100 s: at 60 s the flight is still off the hover point
     and even the perfect-sensing model is 69 % off), sensors without noise: the flown
     loop's deviation from the same flight without the gust (quadland.simulate, the
     filter's flight code on its multirate schedule) against the linear loop's response
-    with the filter's gains per phase of the schedule, deck-frame position. Measured:
-    0.37 % of the peak (the linearization's second order), the rate-equivalent gains
-    0.022 % from the periodic ones."""
+    with the filter's gains per phase of the schedule, deck-frame position. Measured with
+    the disturbance observer: 0.094 % of the peak (at 600 s, 0.50 %, as much with a 1 cm/s
+    gust: the flight's remaining way to the hover point, not the gust's second order;
+    0.37 % there without the observer), the rate-equivalent gains within 0.1 % of the
+    periodic ones (0.07 % at 600 s)."""
     sc0, point, h, sch = highway
-    dt, T0 = 1 / RATE, 600
+    dt, T0 = 1 / RATE, 900
     calm = ["landing.dwell_time=1000", f"simulation.duration={T0 + 6}", "sensors.random=false",
             "wind.turbulence_w20=0", "disturbance.noise=false", "disturbance.force_amplitude=0",
             "disturbance.moment_amplitude=0", f"disturbance.sample_rate_hz={RATE}",
@@ -362,23 +364,28 @@ def test_the_linear_loop_answers_a_small_gust_as_the_flown_loop(highway):
 
 
 def test_the_compact_loop_is_the_assembled_one(highway):
-    """The loop broken at the plant input realized with the plant's state delayed (323
+    """The loop broken at the plant input realized with the plant's state delayed (328
     states) has the frequency response of -K P assembled from the plant and the filter
-    controller (773), and the same closed-loop poles off the delay lines' zero."""
+    controller (778), and the same closed-loop poles off the delay lines' zero."""
+    from scipy.optimize import linear_sum_assignment
+
     from quadland.analysis import closed_loop_poles
 
     sc, point, _, _ = highway
     full = filter_loop.hover_filter_models(sc, point, RATE, 1, compact=False).loop_input
     compact = filter_loop.hover_filter_models(sc, point, RATE, 1).loop_input
-    assert (full.nstates, compact.nstates) == (773, 323)
+    assert (full.nstates, compact.nstates) == (778, 328)
     for w in (0.3, 3.0, 14.0, 100.0, 700.0):
         z = np.exp(1j * w / RATE)
         G = [L.C @ np.linalg.solve(z * np.eye(L.nstates) - L.A, L.B) + L.D
              for L in (full, compact)]
         np.testing.assert_allclose(G[1], G[0], rtol=0, atol=1e-11 * np.abs(G[0]).max())
-    p = [np.sort_complex(q[np.abs(q) > 0.9]) for q in (closed_loop_poles(full),
-                                                       closed_loop_poles(compact))]
-    np.testing.assert_allclose(p[1], p[0], rtol=0, atol=1e-8)
+    p = [q[np.abs(q) > 0.9] for q in (closed_loop_poles(full), closed_loop_poles(compact))]
+    # paired by nearest distance (a sort can swap a conjugate pair whose real parts differ
+    # by roundoff)
+    assert p[1].size == p[0].size
+    rows, cols = linear_sum_assignment(np.abs(p[1][:, None] - p[0][None, :]))
+    np.testing.assert_allclose(p[1][rows], p[0][cols], rtol=0, atol=1e-8)
 
 
 def test_the_output_function_is_the_flight_steps_measurement(highway):

@@ -156,8 +156,10 @@ def test_lands_within_the_limits_at_every_seed(name, seed):
 #: highway at 80 km/h judged by its feet (issue 18's review): with the rotors cut at the
 #: contact switch after a 30 deg lean the body drops onto its rear feet and slides back,
 #: and at these seeds a rear foot leaves the 0.5 m pad (0.508 to 0.606 m; the centre stays
-#: within 0.342 to 0.443 m), which the centre's judge passed.
-FEET_OFF_AT_80 = (2, 5, 11, 13, 14, 15, 19)
+#: within 0.342 to 0.443 m), which the centre's judge passed. With the disturbance
+#: observer (docs/landing.md) the flights differ: seeds 5, 11, 15 and 19 now land, 6 and 12
+#: now leave the pad the same way ('off the pad' alone): 5 of 20 instead of 7.
+FEET_OFF_AT_80 = (2, 6, 12, 13, 14)
 
 
 @pytest.mark.parametrize("seed", [s if s not in FEET_OFF_AT_80 else pytest.param(
@@ -236,7 +238,10 @@ def test_a_too_hard_landing_bounces_and_tips_and_the_report_says_why(tmp_path, c
     run stops there at the singular attitude: a landing that failed, judged and reported
     (exit 0, summary.json written), not a failed flight; the verdict says why."""
     out = tmp_path / "hard"
-    sets = [*LOOSE, "landing.touchdown_speed=3.5", "landing.descent_speed=3.5"]
+    # the law without the disturbance observer, whose flight these numbers are (with it the
+    # forced crawl aborts twice and meets the deck at 1.82 m/s, upright: a judge's test)
+    sets = [*LOOSE, "landing.touchdown_speed=3.5", "landing.descent_speed=3.5",
+            "controller.observer_frequency=[0.0, 0.0, 0.0]"]
     assert main(["simulate", "--scenario", "turning", "--no-plots", "--out", str(out),
                  *(a for s in sets for a in ("--set", s))]) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -523,9 +528,10 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     runs = [loop.ride(z0, a, rows, t_td, t_td + 2.0, 0.004, lv.pp)
             for loop in (CompiledLoop(model, "sampled"), VMLoop(model, "sampled"))]
     times, _ = ride_grid(rows, t_td, t_td + 2.0, 0.004)
-    # touchdown between 17.26 and 17.27 s (16.40 and 16.41 s before the changes for issue
-    # 19's bar, docs/landing.md): the 100 Hz ticks 17.27 .. 19.26 s, then the end
-    assert len(times) == 201 and times[0] == 17.27 and times[-1] == t_td + 2.0
+    # touchdown between 10.93 and 10.94 s (17.26 and 17.27 s before the disturbance
+    # observer, 16.40 and 16.41 s before the changes for issue 19's bar, docs/landing.md):
+    # the 100 Hz ticks 10.94 .. 12.93 s, then the end
+    assert len(times) == 201 and times[0] == 10.94 and times[-1] == t_td + 2.0
     for ride in runs:
         assert ride.status == SIM_OK
         np.testing.assert_array_equal(ride.times, times)

@@ -46,7 +46,8 @@ P_ACT = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=F_MAX, gear_height=0.
 #: The hover test's controller parameters (besides the network's centres and widths).
 GAINS = dict(k1p=[1.0] * 3, k2p=[1.0] * 3, k1=[3.0] * 3, k2=[3.0] * 3, gamma1=0.05,
              gamma2=0.1, k_w=5.0, k_zeta=0.1, rho=0.1, w_f=12.0, zeta_f=1.0, tilt_max=0.5,
-             ki_p=[0.5, 0.7, 0.9], ki=[1.0, 2.0, 3.0], d_max_p=0.4, d_max=5.0)
+             ki_p=[0.5, 0.7, 0.9], ki=[1.0, 2.0, 3.0], d_max_p=0.4, d_max=5.0,
+             w_o=[3.0, 4.0, 0.0])
 CENTERS = np.tile(np.linspace(-2.0, 2.0, L_NODES), (NETWORK_INPUT_DIM, 1))
 WIDTHS = np.full(L_NODES, 2.0)
 
@@ -112,7 +113,9 @@ def _random_case(rng, scale=1.0):
         W_hat=rng.normal(0, 0.05, (L_NODES, 6)), zeta_hat=rng.uniform(0, 0.2, 6),
         eta_f=rng.uniform(-0.1, 0.1, 2), eta_f_dot=rng.normal(0, 0.1, 2),
         xi1=rng.normal(0, 0.05, 3), xi2=rng.normal(0, 0.05, 3),
-        d_hat=np.concatenate([rng.uniform(-0.4, 0.4, 3), rng.uniform(-5, 5, 3)])))
+        d_hat=np.concatenate([rng.uniform(-0.4, 0.4, 3), rng.uniform(-5, 5, 3)]),
+        v_hat=rng.normal(0, 0.3, 3) * scale, d_o=rng.uniform(-0.4, 0.4, 3),
+        T_o=M1 * G + rng.normal(0, 2.0)))
     return y, ref, mem
 
 
@@ -257,7 +260,7 @@ def test_known_acceleration_is_the_plants_at_zero_thrust(rng):
 @pytest.mark.parametrize("nominal", [0.0, 1.0])
 def test_outer_law_by_hand(step, rng, nominal):
     """a_des = -k2p z2 - z1 - W_p^T Psi - tanh(z2_bar / rho) zeta_p + alpha_dot - f_g
-    - nominal f_r - d_hat_p, with alpha_dot = -k1p (v_e - v_ref) + a_ref; the thrust is
+    - nominal f_r - d_hat_p - d_o, with alpha_dot = -k1p (v_e - v_ref) + a_ref; the thrust is
     |m1 R a_des| along the commanded body z."""
     p_ctrl = _p_ctrl(nominal, k1p=[0.8, 1.0, 1.3], k2p=[1.1, 0.9, 1.6])
     for _ in range(5):
@@ -274,7 +277,7 @@ def test_outer_law_by_hand(step, rng, nominal):
         Delta = mm["W_hat"].T @ _rbf(np.concatenate([m["v_e"], Omega_e]))
         f_g, f_r = _known_acceleration(m, QUADROTOR.unpack(P_QUAD))
         a_des = (-k2p * z2 - z1 - Delta[:3] - np.tanh((z2 - mm["xi2"]) / rho) * mm["zeta_hat"][:3]
-                 + alpha_dot - f_g - nominal * f_r - mm["d_hat"][:3])
+                 + alpha_dot - f_g - nominal * f_r - mm["d_hat"][:3] - mm["d_o"])
         np.testing.assert_allclose(out["bs_z1"].ravel()[:3], z1, atol=1e-14)
         np.testing.assert_allclose(out["bs_z2"].ravel()[:3], z2, atol=1e-14)
         np.testing.assert_allclose(out["Delta_hat"].ravel(), Delta, atol=1e-14)
@@ -377,8 +380,9 @@ def test_the_moments_come_first_and_the_thrust_takes_what_they_leave(step):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_memory_update_is_the_exact_solution(step, seed):
-    """W_hat, zeta_hat (eq. 22) and the saturation compensator after dt, against solve_ivp
-    of their linear ODEs with Psi, z2_bar and the limits' shortfall held."""
+    """W_hat, zeta_hat (eq. 22), the saturation compensator and the disturbance observer
+    after dt, against solve_ivp of their linear ODEs with Psi, z2_bar, the limits'
+    shortfall and the observer's inputs held; the observer's thrust in closed form."""
     dt = 0.05
     p_ctrl = _p_ctrl(1.0, tilt_max=0.2)        # a small cone: the tilt limit acts
     lay = landing_memory(L_NODES)
@@ -428,6 +432,28 @@ def test_memory_update_is_the_exact_solution(step, seed):
     box = np.repeat([GAINS["d_max_p"], GAINS["d_max"]], 3)
     np.testing.assert_allclose(nxt["d_hat"], np.clip(mm["d_hat"] + dt * rate, -box, box),
                                atol=1e-14)
+
+    # disturbance observer, per axis with w > 0: v_hat' = a_k + d_o + 2 w (v_e - v_hat),
+    # d_o' = w^2 (v_e - v_hat), a_k = R_deck^T R1 e_z T_o / m1 + f_g + f_r (v_e, a_k held),
+    # then d_o clipped to the outer box; the thrust T_o' = (sum F_cmd - T_o) / tau_m
+    f_g, f_r = _known_acceleration(m, QUADROTOR.unpack(P_QUAD))
+    a_k = R.T @ rotation(m["eta1"])[:, 2] * mm["T_o"] / M1 + f_g + f_r
+    for i, w in enumerate(GAINS["w_o"]):
+        if w == 0:                                          # no observer: held
+            assert nxt["v_hat"][i] == mm["v_hat"][i] and nxt["d_o"][i] == mm["d_o"][i]
+            continue
+
+        def obs(_t, s, i=i, w=w):
+            return [a_k[i] + s[1] + 2 * w * (m["v_e"][i] - s[0]), w**2 * (m["v_e"][i] - s[0])]
+
+        sol = solve_ivp(obs, (0, dt), [mm["v_hat"][i], mm["d_o"][i]], method="DOP853",
+                        rtol=1e-13, atol=1e-15).y[:, -1]
+        np.testing.assert_allclose(nxt["v_hat"][i], sol[0], atol=1e-12)
+        np.testing.assert_allclose(nxt["d_o"][i], np.clip(sol[1], -GAINS["d_max_p"],
+                                                          GAINS["d_max_p"]), atol=1e-12)
+    T_cmd = out["F_cmd"].sum()
+    np.testing.assert_allclose(nxt["T_o"], T_cmd + (mm["T_o"] - T_cmd) * np.exp(-dt / 0.02),
+                               rtol=1e-14)
 
 
 # ---------------------------------------------------------------- closed loop

@@ -10,7 +10,7 @@ coordinates of ``quadland_symbolic.landing.linearization``.
 import numpy as np
 import pytest
 
-from quadland.kinds.landing.linearize import _hover_values
+from quadland.kinds.landing.linearize import _hover_values, _kept_memory
 from quadland.kinds.landing.values import landing_values
 from quadland.linearization import equilibrium, linear_models, sampled_models
 from quadland.scenario import load_scenario
@@ -173,6 +173,10 @@ def test_sampled_closed_loop_is_the_simulated_loop_over_one_period(case, rate_hz
     fd = np.column_stack([(step(x0 + h * e) - step(x0 - h * e)) / (2 * h)
                           for e in np.eye(x0.size)])
     A = sampled_models(sc, point, rate_hz, delay_periods=0).closed_loop.A
+    # the linear models leave out the held states (the z axis's absent observer)
+    kept = np.r_[np.arange(point.xr.size),
+                 point.xr.size + _kept_memory(landing_values(sc).l, _hover_values(sc).p_ctrl)]
+    fd = fd[np.ix_(kept, kept)]
     np.testing.assert_allclose(A, fd, rtol=1e-5, atol=2e-7 * np.abs(fd).max())
 
 
@@ -192,6 +196,9 @@ def test_continuous_limit_is_the_step_as_dt_goes_to_zero(case):
     np.testing.assert_allclose(out["Gamma_c"] / h, out["B_c"], rtol=1e-4,
                                atol=1e-4 * np.abs(out["B_c"]).max())
     models = linear_models(sc, point)
-    np.testing.assert_allclose(models.controller.A, out["A_c"])
+    keep = _kept_memory(lv.l, hv.p_ctrl)        # without the absent observers' held states
+    held = np.asarray(sc["controller.observer_frequency"]) == 0
+    assert point.xc.size - keep.size == 2 * np.sum(held)
+    np.testing.assert_allclose(models.controller.A, out["A_c"][np.ix_(keep, keep)])
     assert models.loop_names == ("thrust", "roll", "pitch", "yaw")
     assert models.plant.ninputs == 4 and models.plant.noutputs == 12

@@ -23,6 +23,7 @@ import quadland
 from quadland.kinds.landing.report import touchdown_report
 from quadland.linearization import equilibrium
 from quadland.scenario import load_scenario
+from quadland_symbolic.landing.controller import landing_memory
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE, quadrotor6_rhs
 from quadland_symbolic.parameters import QUADROTOR
 
@@ -80,10 +81,41 @@ def test_a_constant_mismatch_leaves_no_hover_error_with_the_bias_estimates(case)
     quadrotor hovers exactly at its reference. Without them (ki_p = 0) the same mismatch
     leaves it off (a proportional loop needs an error to push back)."""
     ref = np.array([0.0, 0.0, 3.0])                          # landing.hover_height
-    with_bias = equilibrium(load_scenario("highway", [case]))
+    off = "controller.observer_frequency=[0.0, 0.0, 0.0]"   # the bias estimates alone
+    with_bias = equilibrium(load_scenario("highway", [case, off]))
     np.testing.assert_allclose(with_bias.xr[:3], ref, atol=1e-9)
-    without = equilibrium(load_scenario("highway", [case, "controller.ki_p=[0.0, 0.0, 0.0]"]))
+    without = equilibrium(load_scenario("highway", [case, off,
+                                                    "controller.ki_p=[0.0, 0.0, 0.0]"]))
     assert np.max(np.abs(without.xr[:3] - ref)) > 5e-3
+
+
+def _memory(point):
+    """The equilibrium's landing memory, unpacked (its size is 6 l + a constant)."""
+    l = (point.xc.size - landing_memory(1).size) // 6 + 1
+    return landing_memory(l).unpack(point.xc)
+
+
+@pytest.mark.parametrize("case", ["controller_model.mass=2.4",
+                                  "quadrotor.drag_translational=[0.6, 0.6, 0.6]",
+                                  "disturbance.force_bias=[0.0, 4.0, 0.0]"])
+def test_the_observer_learns_what_the_bias_estimates_learn(case):
+    """Two mechanisms, one force balance. At rest the bias estimates settle where the
+    law's acceleration balances the mismatch with z1 = z2 = 0: d_hat_p = d. The
+    disturbance observer alone (ki_p = 0) settles where its velocity estimate is at rest
+    on the measured one: d_o = -(a_T + f_k) = d, and then the law's own balance puts the
+    quadrotor on its reference too. Both on: the same hover, d_o = d and d_hat_p = 0."""
+    ref = np.array([0.0, 0.0, 3.0])
+    on = "controller.observer_frequency=[2.0, 2.0, 2.0]"
+    bias = equilibrium(load_scenario("highway", [case, "controller.observer_frequency=[0.0, 0.0, "
+                                                       "0.0]"]))
+    observer = equilibrium(load_scenario("highway", [case, on, "controller.ki_p=[0.0, 0.0, 0.0]"]))
+    both = equilibrium(load_scenario("highway", [case, on]))
+    d = _memory(bias)["d_hat"][:3]
+    assert np.max(np.abs(d)) > 0.05
+    for point in (observer, both):
+        np.testing.assert_allclose(point.xr[:3], ref, atol=1e-9)
+        np.testing.assert_allclose(_memory(point)["d_o"], d, atol=1e-9)
+    np.testing.assert_allclose(_memory(both)["d_hat"][:3], 0.0, atol=1e-9)
 
 
 # ---------------------------------------------------------------- the issue's cases land

@@ -313,11 +313,12 @@ def test_landing_report_is_the_same_review(landing):
     assert landing.sampled.computation_delay_periods == 1
     assert landing.sampled.computation_delay_s == pytest.approx(0.004)
     # the plant has 16 states (deck frame, motors), the controller the step's memory
-    # (6 l + 22) and, sampled, the four held commands of the delay
+    # (6 l + 29, less the observer's two states of the z axis, which has none) and,
+    # sampled, the four held commands of the delay
     assert landing.models.plant.nstates == 16
-    assert landing.models.controller.nstates == 6 * 3 + 22
-    assert landing.sampled_models.controller.nstates == 6 * 3 + 22 + 4
-    assert landing.continuous.poles.count == 16 + 6 * 3 + 22
+    assert landing.models.controller.nstates == 6 * 3 + 27
+    assert landing.sampled_models.controller.nstates == 6 * 3 + 27 + 4
+    assert landing.continuous.poles.count == 16 + 6 * 3 + 27
     # sampling and the delay cost phase in every loop
     for m in landing.sampled.loops:
         assert m.phase_margin_deg < landing.continuous.loop(m.name).phase_margin_deg
@@ -345,7 +346,7 @@ def test_landing_report_is_the_same_review(landing):
     # verdict is the review's
     assert landing.filtered.stable and landing.filtered.rate_hz == 250.0
     assert [m.name for m in landing.filtered.loops] == LANDING_LOOPS
-    assert landing.filtered_models.controller.nstates == 6 * 3 + 22 + 21 + 13 * 50 + 4
+    assert landing.filtered_models.controller.nstates == 6 * 3 + 27 + 21 + 13 * 50 + 4
     assert landing.passed == landing.filtered.passed
     assert data["verdict_from"] == ["sampled, filter in the loop"]
     assert list(data["filtered"]["loops"]) == LANDING_LOOPS

@@ -97,9 +97,10 @@ LANDING_QUIET = ["sensors.enabled=false", "disturbance.noise=false",
 PARKED = [*LANDING_QUIET, "vehicle.tau=[0.0, 0.0, 0.0]", "initial.velocity2=[0.0, 0.0]",
           "landing.dwell_time=1000.0", "initial.position1=[0.4, -0.3]", "initial.z1=5.0"]
 #: States the hover leaves where they are: the parked car's, the gear's memory (no
-#: contact), the guidance's (held in align, its dwell timer a clock).
+#: contact), the guidance's (held in align, its dwell timer a clock), the disturbance
+#: observer's of the z axis, which has none (held at 0).
 HELD = ("x2", "y2", "psi2", "u2", "v2", "r2", "impulse", "t_contact", "F_peak", "phase",
-        "timer", "z_ref", "aborts")
+        "timer", "z_ref", "aborts", "v_hat_z", "d_o_z")
 
 
 def _constant_w(sc) -> np.ndarray:
@@ -148,9 +149,9 @@ def test_a_landing_on_sensors_warns_that_nlsys_reads_the_true_state():
     with pytest.warns(UserWarning, match=r"nlsys: highway flies on its sensors .* true state"):
         sys = quadland.nlsys("highway")
     # the plant (25), the guidance (7: phase, timer, z_ref, aborts, the commit flag and the
-    # quiescent-period predictor's two averages), the step's memory (6 l + 22, l = 10
+    # quiescent-period predictor's two averages), the step's memory (6 l + 29, l = 10
     # nodes), the four rotor commands of one period's delay: no filter, no sensor delay lines
-    assert sys.nstates == 25 + 7 + 6 * 10 + 22 + 4 and sys.dt == pytest.approx(0.004)
+    assert sys.nstates == 25 + 7 + 6 * 10 + 29 + 4 and sys.dt == pytest.approx(0.004)
 
 
 def _hover(rk_steps: int = 1):
@@ -216,9 +217,9 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     """control.linearize of the discrete loop (finite differences through one period)
     against ``quadland margins``' sampled-data closed loop at the same hover (the
     plant's Jacobian under an exact zero-order hold, the step's Jacobians, one period of
-    delay): its 102 eigenvalues are among the 118, within RK4's error over a 4 ms step
+    delay): its 107 eigenvalues are among the 125, within RK4's error over a 4 ms step
     (the fastest plant mode's |lambda h|^5 / 120 is 2e-6), which falls sixteenfold as
-    the steps halve (RK4 is fourth order); the 16 others are the modes the margins'
+    the steps halve (RK4 is fourth order); the 18 others are the modes the margins'
     model leaves out, in closed form."""
     sc, sys, op, pt = _hover()
     gap, extra = _eigenvalue_gap(sys, op, sc, pt)
@@ -226,12 +227,13 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     # the parked car: its position and heading (1), its speeds' damping exp(-d/m dt); the
     # gear's memory and the guidance's phase, timer and aborts (1); z_ref, which glides
     # back onto the hover height in one step, and the commit flag, set anew each step (0);
-    # the quiescent-period predictor's two averages of the deck's motion, exp(-dt / T_m)
+    # the quiescent-period predictor's two averages of the deck's motion, exp(-dt / T_m);
+    # the disturbance observer's held states of the z axis, which has none (1)
     v, dt = sc.data["vehicle"], sys.dt
     fade = math.exp(-dt / sc.data["landing"]["motion_time"])
     expected = np.sort([0.0, 0.0, fade, fade,
                         *np.exp(-dt * np.array([v["d11"] / v["m11"], v["d22"] / v["m22"],
-                                                v["d33"] / v["m33"]])), *[1.0] * 9])
+                                                v["d33"] / v["m33"]])), *[1.0] * 11])
     np.testing.assert_allclose(extra, expected, rtol=0, atol=1e-7)
     sc2, sys2, op2, pt2 = _hover(rk_steps=2)
     gap2, _ = _eigenvalue_gap(sys2, op2, sc2, pt2)

@@ -57,17 +57,20 @@ def test_a_100_km_h_car_meets_highway_s_gear_past_its_tip_over_angle():
     a tilt past the gear's static tip-over angle about y, atan(0.15 / 0.2) = 36.87 deg,
     which the judge reads as "tilted" (issue 18's review: the tilt at contact against
     the tip-over angle; "tipped" is kept for a gear rolled over with the rotors cut)."""
-    before = touchdown_report(quadland.simulate(load_scenario("highway", FASTEST)))
+    # the law without the disturbance observer, whose flight this is (with it the contact
+    # comes at 36.5 deg, just inside, and fails on tilt, a bounce and the pad instead)
+    before = touchdown_report(quadland.simulate(load_scenario(
+        "highway", [*FASTEST, "controller.observer_frequency=[0.0, 0.0, 0.0]"])))
     assert before.tilt_deg > math.degrees(math.atan2(0.15, 0.2))
     assert not before.success and "tilted" in before.failures
 
 
-@pytest.mark.xfail(strict=True, reason="the feet judge (issue 18's review): levelling after "
-                   "the nose-down contact pivots the body back about its front feet and a "
-                   "rear foot leaves the 0.5 m pad (docs/landing.md, the road hardware)")
 def test_a_100_km_h_car_lands_on_the_road_hardware():
     """The default seed on its sensors at 100 km/h on the road hardware: landed, secured,
-    touching down inside the wider gear's 50.2 deg."""
+    touching down inside the wider gear's 50.2 deg. (Without the disturbance observer,
+    since the feet judge of issue 18's review, levelling after the nose-down contact
+    pivoted the body back about its front feet and a rear foot left the 0.5 m pad; with
+    it, on by highway_30_100's base `highway`, this seed lands.)"""
     rep = touchdown_report(quadland.simulate(load_scenario(BENCH / "highway_30_100.toml",
                                                            FASTEST)))
     assert rep.tilt_deg < 50.19

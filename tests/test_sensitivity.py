@@ -207,7 +207,12 @@ def test_landing_sensor_margins_are_consistent(highway):
                                                         rel=2e-3)
 
 
-@pytest.mark.parametrize("sensor", ["imu", "gnss"])
+@pytest.mark.parametrize("sensor", ["imu", pytest.param("gnss", marks=pytest.mark.xfail(
+    strict=True, reason="with the disturbance observer the GNSS group's loop has an "
+    "eigenvalue of modulus 0.984 at 1.1e-5 rad/s (0.0093 without): the observer's "
+    "differentiate-and-integrate of the velocity is a unit gain at low frequency; the "
+    "premise below does not hold there, not analysed further (docs/landing.md, 'The "
+    "disturbance observer')"))])
 def test_no_sensor_crossing_where_the_return_difference_is_unresolved(highway, sensor):
     """Below 1e-2 rad/s the integral action makes ``I + L`` ill-conditioned (1e21 at
     3e-5 rad/s), and inverting it gave dozens of rounding-noise "crossings" (the IMU's

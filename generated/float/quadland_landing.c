@@ -52,7 +52,10 @@ typedef char landing_state_is_its_layout[
     AT(qlf_landing_state, xi1, 70, 0) &&
     AT(qlf_landing_state, xi2, 73, 0) &&
     AT(qlf_landing_state, d_hat, 76, 0) &&
-    sizeof(qlf_landing_state) == 82 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_landing_state, v_hat, 82, 0) &&
+    AT(qlf_landing_state, d_o, 85, 0) &&
+    AT(qlf_landing_state, T_o, 88, 0) &&
+    sizeof(qlf_landing_state) == 89 * sizeof(qlf_real) ? 1 : -1];
 typedef char landing_controller_params_is_its_layout[
     AT(qlf_landing_controller_params, k1p, 0, 0) &&
     AT(qlf_landing_controller_params, k2p, 3, 0) &&
@@ -71,9 +74,10 @@ typedef char landing_controller_params_is_its_layout[
     AT(qlf_landing_controller_params, ki, 24, 0) &&
     AT(qlf_landing_controller_params, d_max_p, 27, 0) &&
     AT(qlf_landing_controller_params, d_max, 28, 0) &&
-    AT(qlf_landing_controller_params, centers, 29, 0) &&
-    AT(qlf_landing_controller_params, widths, 89, 0) &&
-    sizeof(qlf_landing_controller_params) == 99 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_landing_controller_params, w_o, 29, 0) &&
+    AT(qlf_landing_controller_params, centers, 32, 0) &&
+    AT(qlf_landing_controller_params, widths, 92, 0) &&
+    sizeof(qlf_landing_controller_params) == 102 * sizeof(qlf_real) ? 1 : -1];
 typedef char actuator_params_is_its_layout[
     AT(qlf_actuator_params, motor_time_constant, 0, 0) &&
     AT(qlf_actuator_params, F_max, 1, 0) &&
@@ -87,9 +91,9 @@ typedef char actuator_params_is_its_layout[
 typedef char landing_params_is_its_layout[
     AT(qlf_landing_params, quad, 0, 0) &&
     AT(qlf_landing_params, ctrl, 13, 0) &&
-    AT(qlf_landing_params, act, 112, 0) &&
-    AT(qlf_landing_params, tilt_min, 127, 0) &&
-    sizeof(qlf_landing_params) == 128 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_landing_params, act, 115, 0) &&
+    AT(qlf_landing_params, tilt_min, 130, 0) &&
+    sizeof(qlf_landing_params) == 131 * sizeof(qlf_real) ? 1 : -1];
 typedef char landing_output_is_its_layout[
     AT(qlf_landing_output, F_cmd, 0, 0) &&
     AT(qlf_landing_output, wrench, 4, 0) &&
@@ -151,24 +155,24 @@ static const qlf_real default_p_quad[13] = {
     0.3f, 0.001f, 0.001f, 0.001f, 9.8f, 0.25f,
     0.05f,
 };
-static const qlf_real default_p_land[99] = {
+static const qlf_real default_p_land[102] = {
     1.5f, 1.5f, 1.5f, 1.5f, 1.5f, 1.5f,
     2.0f, 2.0f, 2.0f, 14.0f, 14.0f, 14.0f,
     0.05f, 0.1f, 5.0f, 0.1f, 0.1f, 1.0f,
     10.0f, 1.0f, 0.7853981633974483f, 0.5f, 0.5f, 1.0f,
-    2.0f, 2.0f, 2.0f, 4.0f, 40.0f, -2.0f,
-    -2.0f, -2.0f, -2.0f, -2.0f, -2.0f, -1.5555555555555556f,
-    -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f, -1.1111111111111112f,
-    -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f, -0.6666666666666667f,
-    -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f, -0.22222222222222232f,
-    -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f, 0.22222222222222232f,
-    0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.6666666666666665f,
-    0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f, 1.1111111111111107f,
-    1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f, 1.5555555555555554f,
-    1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f, 2.0f,
+    2.0f, 2.0f, 2.0f, 4.0f, 40.0f, 12.0f,
+    12.0f, 0.0f, -2.0f, -2.0f, -2.0f, -2.0f,
+    -2.0f, -2.0f, -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f,
+    -1.5555555555555556f, -1.5555555555555556f, -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f,
+    -1.1111111111111112f, -1.1111111111111112f, -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f,
+    -0.6666666666666667f, -0.6666666666666667f, -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f,
+    -0.22222222222222232f, -0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f,
+    0.22222222222222232f, 0.22222222222222232f, 0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f,
+    0.6666666666666665f, 0.6666666666666665f, 1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f,
+    1.1111111111111107f, 1.1111111111111107f, 1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f,
+    1.5555555555555554f, 1.5555555555555554f, 2.0f, 2.0f, 2.0f, 2.0f,
     2.0f, 2.0f, 2.0f, 2.0f, 2.0f, 2.0f,
     2.0f, 2.0f, 2.0f, 2.0f, 2.0f, 2.0f,
-    2.0f, 2.0f, 2.0f,
 };
 static const qlf_real default_p_act[15] = {
     0.02f, 9.8f, 0.2f, 0.01225f, 0.01225f, 0.01225f,
@@ -249,6 +253,7 @@ const char *qlf_phase_name(int phase)
  *   ctrl.ki                  >= 0
  *   ctrl.d_max_p             >= 0
  *   ctrl.d_max               >= 0
+ *   ctrl.w_o                 >= 0
  *   ctrl.centers             finite
  *   ctrl.widths              > 0
  *   act.motor_time_constant  > 0
@@ -363,47 +368,52 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
     if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0f))) {
         bad = "ctrl.d_max";
     }
-    for (i = 42; !bad && i < 102; ++i) {
+    for (i = 42; !bad && i < 45; ++i) {
+        if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
+            bad = "ctrl.w_o";
+        }
+    }
+    for (i = 45; !bad && i < 105; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "ctrl.centers";
         }
     }
-    for (i = 102; !bad && i < 112; ++i) {
+    for (i = 105; !bad && i < 115; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "ctrl.widths";
         }
     }
-    if (!bad && !(isfinite(p[112]) && (p[112] > 0.0f))) {
+    if (!bad && !(isfinite(p[115]) && (p[115] > 0.0f))) {
         bad = "act.motor_time_constant";
     }
-    if (!bad && !(isfinite(p[113]) && (p[113] > 0.0f))) {
+    if (!bad && !(isfinite(p[116]) && (p[116] > 0.0f))) {
         bad = "act.F_max";
     }
-    if (!bad && !(isfinite(p[114]) && (p[114] >= 0.0f))) {
+    if (!bad && !(isfinite(p[117]) && (p[117] >= 0.0f))) {
         bad = "act.gear_height";
     }
-    for (i = 115; !bad && i < 118; ++i) {
+    for (i = 118; !bad && i < 121; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
             bad = "act.drag_quadratic";
         }
     }
-    if (!bad && !(isfinite(p[118]) && (p[118] >= 0.0f))) {
+    if (!bad && !(isfinite(p[121]) && (p[121] >= 0.0f))) {
         bad = "act.rotor_radius";
     }
-    if (!bad && !(isfinite(p[119]) && (p[119] > 0.0f))) {
+    if (!bad && !(isfinite(p[122]) && (p[122] > 0.0f))) {
         bad = "act.air_density";
     }
-    for (i = 120; !bad && i < 124; ++i) {
+    for (i = 123; !bad && i < 127; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
             bad = "act.rotor_efficiency";
         }
     }
-    for (i = 124; !bad && i < 127; ++i) {
+    for (i = 127; !bad && i < 130; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "act.cg_offset";
         }
     }
-    if (!bad && !(isfinite(p[127]) && ((p[127] >= 0.0f) && (p[127] < 1.0f)))) {
+    if (!bad && !(isfinite(p[130]) && ((p[130] >= 0.0f) && (p[130] < 1.0f)))) {
         bad = "tilt_min";
     }
     if (bad_field) {
@@ -541,7 +551,7 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
 
 /* 1 when every parameter lies in its range, the per-node arrays aside
  * (ctrl.widths: qlf_check_landing_params only): the step's invariant,
- * 55 comparisons. The values are known to be finite; no names and no
+ * 58 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_landing_params finds the culprit. */
 static int landing_params_in_range(const qlf_real *p)
 {
@@ -588,19 +598,22 @@ static int landing_params_in_range(const qlf_real *p)
     ok &= (p[39] >= 0.0f);
     ok &= (p[40] >= 0.0f);
     ok &= (p[41] >= 0.0f);
-    ok &= (p[112] > 0.0f);
-    ok &= (p[113] > 0.0f);
-    ok &= (p[114] >= 0.0f);
-    ok &= (p[115] >= 0.0f);
-    ok &= (p[116] >= 0.0f);
+    ok &= (p[42] >= 0.0f);
+    ok &= (p[43] >= 0.0f);
+    ok &= (p[44] >= 0.0f);
+    ok &= (p[115] > 0.0f);
+    ok &= (p[116] > 0.0f);
     ok &= (p[117] >= 0.0f);
     ok &= (p[118] >= 0.0f);
-    ok &= (p[119] > 0.0f);
+    ok &= (p[119] >= 0.0f);
     ok &= (p[120] >= 0.0f);
     ok &= (p[121] >= 0.0f);
-    ok &= (p[122] >= 0.0f);
+    ok &= (p[122] > 0.0f);
     ok &= (p[123] >= 0.0f);
-    ok &= ((p[127] >= 0.0f) & (p[127] < 1.0f));
+    ok &= (p[124] >= 0.0f);
+    ok &= (p[125] >= 0.0f);
+    ok &= (p[126] >= 0.0f);
+    ok &= ((p[130] >= 0.0f) & (p[130] < 1.0f));
     return ok;
 }
 
@@ -753,7 +766,7 @@ qlf_status qlf_landing_step(const qlf_landing_measurement *y, const qlf_position
                             qlf_landing_state *state, qlf_landing_output *out)
 {
     /* res_v = [F_cmd, wrench, eta_c, eta_d, eta_d_dot, eta_d_ddot, mem_next, Delta_hat, a_des, bs_z1, bs_z2], staged so that it is checked in one pass. */
-    qlf_real res_v[123], tilt, limits[3];
+    qlf_real res_v[130], tilt, limits[3];
     const qlf_real *arg[qlf_casadi_landing_step_SZ_ARG];
     qlf_real *res[qlf_casadi_landing_step_SZ_RES];
     casadi_int work_int[qlf_casadi_landing_step_SZ_IW + 1];
@@ -794,10 +807,10 @@ qlf_status qlf_landing_step(const qlf_landing_measurement *y, const qlf_position
     res[4] = res_v + 14;
     res[5] = res_v + 17;
     res[6] = res_v + 20;
-    res[7] = res_v + 102;
-    res[8] = res_v + 108;
-    res[9] = res_v + 111;
-    res[10] = res_v + 117;
+    res[7] = res_v + 109;
+    res[8] = res_v + 115;
+    res[9] = res_v + 118;
+    res[10] = res_v + 124;
     res[11] = &tilt;
     res[12] = limits;
     qlf_casadi_landing_step(arg, res, work_int, work_real, 0);
@@ -806,9 +819,9 @@ qlf_status qlf_landing_step(const qlf_landing_measurement *y, const qlf_position
         output_zero(out, tilt);
         return QLF_ERR_TILT;
     }
-    if (!all_finite(res_v, 123)) {
+    if (!all_finite(res_v, 130)) {
         output_zero(out, tilt);
-        return all_finite((const qlf_real *)state, 82) ? QLF_ERR_NONFINITE_OUTPUT : QLF_ERR_NONFINITE_INPUT;
+        return all_finite((const qlf_real *)state, 89) ? QLF_ERR_NONFINITE_OUTPUT : QLF_ERR_NONFINITE_INPUT;
     }
     memcpy(out->F_cmd, res_v + 0, sizeof out->F_cmd);
     memcpy(out->wrench, res_v + 4, sizeof out->wrench);
@@ -816,10 +829,10 @@ qlf_status qlf_landing_step(const qlf_landing_measurement *y, const qlf_position
     memcpy(out->eta_d, res_v + 11, sizeof out->eta_d);
     memcpy(out->eta_d_dot, res_v + 14, sizeof out->eta_d_dot);
     memcpy(out->eta_d_ddot, res_v + 17, sizeof out->eta_d_ddot);
-    memcpy(out->Delta_hat, res_v + 102, sizeof out->Delta_hat);
-    memcpy(out->a_des, res_v + 108, sizeof out->a_des);
-    memcpy(out->bs_z1, res_v + 111, sizeof out->bs_z1);
-    memcpy(out->bs_z2, res_v + 117, sizeof out->bs_z2);
+    memcpy(out->Delta_hat, res_v + 109, sizeof out->Delta_hat);
+    memcpy(out->a_des, res_v + 115, sizeof out->a_des);
+    memcpy(out->bs_z1, res_v + 118, sizeof out->bs_z1);
+    memcpy(out->bs_z2, res_v + 124, sizeof out->bs_z2);
     out->tilt = tilt;
     out->thrust_limited = (int)limits[0];
     out->tilt_limited = (int)limits[1];

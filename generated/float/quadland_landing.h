@@ -20,8 +20,8 @@ extern "C" {
 #define QLF_LANDING_RBF_NODES 10                 /* l, RBF nodes of the landing step */
 #define QLF_LANDING_NETWORK_INPUT_DIM 6          /* dimension of the network's input [v_e, Omega_e] */
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
-#define QLF_LANDING_PARAMS_SIZE 128              /* reals in qlf_landing_params */
-#define QLF_LANDING_STATE_SIZE 82                /* reals in qlf_landing_state */
+#define QLF_LANDING_PARAMS_SIZE 131              /* reals in qlf_landing_params */
+#define QLF_LANDING_STATE_SIZE 89                /* reals in qlf_landing_state */
 #define QLF_GUIDANCE_PARAMS_SIZE 27              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
@@ -84,6 +84,9 @@ typedef struct {
     qlf_real xi1[3];                 /* m: saturation compensator, position (deck frame) (xi1_x, xi1_y, xi1_z) */
     qlf_real xi2[3];                 /* m/s: saturation compensator, velocity (deck frame) (xi2_x, xi2_y, xi2_z) */
     qlf_real d_hat[6];               /* m/s^2, m/s^2, m/s^2, rad/s^2, rad/s^2, rad/s^2: bias estimates (integral action): deck-frame x, y, z; body roll, pitch, yaw */
+    qlf_real v_hat[3];               /* m/s: disturbance observer: velocity estimate (deck frame) (v_hat_x, v_hat_y, v_hat_z) */
+    qlf_real d_o[3];                 /* m/s^2: disturbance observer: disturbance estimate (deck frame) (d_o_x, d_o_y, d_o_z) */
+    qlf_real T_o;                    /* N: disturbance observer: the thrust the rotors make (the model's motor lag) */
 } qlf_landing_state;
 
 /* Gains, adaptation, command filter, tilt limit and RBF network: layout
@@ -106,6 +109,7 @@ typedef struct {
     qlf_real ki[3];                  /* 1/s: inner bias adaptation gain: d_hat_a' = ki z2 (ki_phi, ki_theta, ki_psi) */
     qlf_real d_max_p;                /* m/s^2: projection bound of each outer bias estimate */
     qlf_real d_max;                  /* rad/s^2: projection bound of each inner bias estimate */
+    qlf_real w_o[3];                 /* rad/s: disturbance observer bandwidth, deck-frame x, y, z (0: none) (w_o_x, w_o_y, w_o_z) */
     qlf_real centers[10][6];         /* -: RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e]) */
     qlf_real widths[10];             /* -: RBF widths epsilon_i */
 } qlf_landing_controller_params;

@@ -345,7 +345,7 @@ LANDING_PARAM_RANGES = MappingProxyType({
     "ctrl.tilt_max": Range(lo=0.0, hi=math.pi / 2, lo_open=True, hi_open=True),
     "ctrl.centers": _FINITE,
     "ctrl.widths": _POSITIVE,
-    **{f"ctrl.{k}": _NONNEGATIVE for k in ("ki_p", "ki", "d_max_p", "d_max")},
+    **{f"ctrl.{k}": _NONNEGATIVE for k in ("ki_p", "ki", "d_max_p", "d_max", "w_o")},
     "act.motor_time_constant": _POSITIVE,
     "act.F_max": _POSITIVE,
     "act.gear_height": _NONNEGATIVE,

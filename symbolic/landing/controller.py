@@ -37,7 +37,8 @@ The design is docs/landing.md's "The controller"; its choices are in
    integrated exactly (the latter two by the 2x2 matrix exponential,
    :func:`linear2_zoh`); the bias estimates ``d_hat' = ki_p z2_bar`` (outer)
    and ``ki z2`` (inner, stopped while a rotor is clipped), projected onto
-   ``|d_hat_i| <= d_max``.
+   ``|d_hat_i| <= d_max``; the disturbance observer's ``v_hat, d_o, T_o``
+   (:mod:`quadland_symbolic.landing.observer`), whose ``d_o`` ``a_des`` subtracts.
 
 The network: ``W_hat`` is ``l x 6`` (deck-frame x, y, z; body roll, pitch,
 yaw), its input ``vartheta = [v_e, Omega_e]`` (:data:`NETWORK_INPUT_DIM`).
@@ -53,7 +54,6 @@ from quadland_symbolic.backstepping import virtual_control
 from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
 from quadland_symbolic.landing import touchdown_policy as tdp
 from quadland_symbolic.landing.attitude import thrust_attitude
-from quadland_symbolic.landing.bias import bias_next
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
 from quadland_symbolic.landing.desaturation import clip_forces, clipped_count, thrust_within_moments
@@ -64,6 +64,7 @@ from quadland_symbolic.landing.guidance import (
     POSITION_REFERENCE,
     guidance_step,
 )
+from quadland_symbolic.landing.observer import OBSERVER_MEMORY, OBSERVER_PARAMS, estimates_next
 from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from quadland_symbolic.landing.relative import RELATIVE6, deck_gear_gap
 from quadland_symbolic.layout import Field, Layout
@@ -148,6 +149,7 @@ def landing_controller_params(l: int) -> Layout:
               elements=tuple(f"ki_{a}" for a in att)),
         Field("d_max_p", 1, "m/s^2", "projection bound of each outer bias estimate"),
         Field("d_max", 1, "rad/s^2", "projection bound of each inner bias estimate"),
+        *OBSERVER_PARAMS.fields,
         Field("centers", NETWORK_INPUT_DIM * l, "-",
               "RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e])",
               shape=(NETWORK_INPUT_DIM, l)),
@@ -173,6 +175,7 @@ def landing_memory(l: int) -> Layout:
         Field("d_hat", N_CHANNELS, _CHANNEL_UNITS,
               "bias estimates (integral action): deck-frame x, y, z; body roll, pitch, yaw",
               elements=tuple(f"d_hat_{i + 1}" for i in range(N_CHANNELS))),
+        *OBSERVER_MEMORY.fields,
     ), "landing controller memory")
 
 
@@ -317,7 +320,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     f_g, f_r = known_acceleration(p_e, v_e, eta1, eta2, ms["v2E"], ms["a2E"], ms["w2E"],
                                   ms["w2E_dot"], p_quad, act["drag_quadratic"])
     a_des = (-k2p * z2p - z1p - Delta_hat[_POSITION] - squash_p * zeta_hat[_POSITION] + alpha_p_dot
-             - f_g - nominal * f_r - mm["d_hat"][_POSITION])                   # eq. 20, bias
+             - f_g - nominal * f_r - mm["d_hat"][_POSITION] - mm["d_o"])       # eq. 20, bias
     t_E = m1 * R_deck @ a_des                                                  # N, in E
     th = thrust_attitude(t_E, eta2[2], td["tilt_limit"], 4 * act["F_max"])
 
@@ -345,9 +348,9 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     # memory over dt, measurements held
     mem_next = _memory_next(mm, c, Psi, ca.vertcat(z2p_bar, z2a), ca.vertcat(squash_p, squash_a),
                             delta, eta_f_next, eta_f_dot_next, dt)
-    mem_next = ca.vertcat(mem_next, bias_next(mm["d_hat"], ca.vertcat(c["ki_p"], c["ki"]),
-                                              c["d_max_p"], c["d_max"],
-                                              ca.vertcat(z2p_bar, z2a), n_clipped, dt))
+    mem_next = ca.vertcat(mem_next, estimates_next(
+        mm, c, ca.vertcat(z2p_bar, z2a), n_clipped, v_e, (R_deck.T @ rotation(eta1)[:, 2], m1),
+        f_g + nominal * f_r, F_cmd, act, dt))
 
     return dict(
         F_cmd=F_cmd, wrench=wrench, eta_c=ca.vertcat(eta_c, eta2[2]),

@@ -204,13 +204,16 @@ def hover_linearization_function(l: int) -> ca.Function:
 
 
 def _bias_pinned(l, mem, mem_dot, p_ctrl):
-    """``mem_dot`` with each bias estimate whose gain is zero pinned at zero instead: its
-    rate is then identically zero, which would leave the estimate undetermined."""
+    """``mem_dot`` with each bias estimate whose gain is zero, and each axis's observer
+    states whose bandwidth is zero, pinned at zero instead: their rate is then
+    identically zero, which would leave them undetermined."""
     lay, c = landing_memory(l), landing_controller_params(l).unpack(p_ctrl)
-    rows = lay.slice("d_hat")
-    gains = ca.vertcat(c["ki_p"], c["ki"])
-    pinned = ca.if_else(gains == 0, mem[rows], mem_dot[rows])
-    return ca.vertcat(mem_dot[:rows.start], pinned, mem_dot[rows.stop:])
+    gains = dict(d_hat=ca.vertcat(c["ki_p"], c["ki"]), v_hat=c["w_o"], d_o=c["w_o"])
+    for name, gain in gains.items():
+        rows = lay.slice(name)
+        pinned = ca.if_else(gain == 0, mem[rows], mem_dot[rows])
+        mem_dot = ca.vertcat(mem_dot[:rows.start], pinned, mem_dot[rows.stop:])
+    return mem_dot
 
 
 @functools.cache
@@ -218,7 +221,7 @@ def hover_equilibrium_residual_function(l: int) -> ca.Function:
     """Residual and exact Jacobian of the landing loop's steady hover.
 
     ``hover_equilibrium_residual(xi, w, pp, pm, p_ctrl, ref) -> (F, dF)`` with
-    unknowns ``xi = [z (16), mem (6 l + 22), u2, v2, r2]`` and residual
+    unknowns ``xi = [z (16), mem (6 l + 29), u2, v2, r2]`` and residual
     ``F = [z_dot, mem_dot, (u2, v2, r2)_dot]``: the vehicle in its steady
     motion (eq. 4), the quadrotor at rest in the deck frame, the memory at
     rest. The step integrates its memory exactly with the measurement held,

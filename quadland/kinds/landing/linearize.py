@@ -218,10 +218,12 @@ def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
 
 
 def _kept_memory(l: int, p_ctrl: np.ndarray) -> np.ndarray:
-    """Indices of the memory the linear models keep: all but the zero-gain bias estimates."""
+    """Indices of the memory the linear models keep: all but the zero-gain bias estimates
+    and the observer states of the axes without one."""
     lay, c = landing_memory(l), landing_controller_params(l).unpack(p_ctrl)
-    rows = lay.slice("d_hat")
-    pinned = rows.start + np.flatnonzero(np.concatenate([c["ki_p"], c["ki"]]) == 0)
+    gains = dict(d_hat=np.concatenate([c["ki_p"], c["ki"]]), v_hat=c["w_o"], d_o=c["w_o"])
+    pinned = np.concatenate([lay.slice(name).start + np.flatnonzero(np.asarray(g) == 0)
+                             for name, g in gains.items()])
     return np.setdiff1d(np.arange(lay.size), pinned)
 
 
@@ -230,7 +232,7 @@ def _p_ctrl(scenario: Scenario) -> np.ndarray:
 
 
 def _landing_nodes(memory_size: int) -> int:
-    """The node count l of a landing step's memory of ``6 l + 22`` entries."""
+    """The node count l of a landing step's memory of ``6 l + 29`` entries."""
     return (memory_size - landing_memory(1).size) // N_CHANNELS + 1
 
 
