@@ -182,13 +182,13 @@ def test_average_nis_of_every_packet_lies_in_its_bounds(mc, block):
 # Other batches of seeds (docs/estimator.md, "Other batches of seeds" and item 9). The
 # per-tick criterion's own odds: a filter exactly as consistent as its covariance says,
 # its errors correlated over 1 to 2 s as the hover's are, meets 95 % of the ticks in only
-# about 60 % of such batches (benchmarks/consistency_criterion_odds.py). With (E10c) seeds
-# 5000- have 94.8 % of the ticks inside (96.5 % before: their average lies below its
-# expectation, and the heading's noise lowers every batch's a little), seeds 7000- 89.4 %
-# (81.3 %): strict xfails that record it. The correlation-aware criterion, which accepts
-# such a filter in 95 % of the batches and rejects one whose NEES is 1.5 or 0.67 times too
-# large in every batch, is checked at every batch and group: two misses of twenty, both
-# on the cautious side (docs/estimator.md, item 9).
+# about 60 % of such batches (benchmarks/consistency_criterion_odds.py). With (E10c) and
+# the disturbance observer (docs/landing.md) seeds 5000- have 84.9 % of the ticks inside,
+# seeds 7000- 99.9 % (each alone: 94.8 and 89.4 %; neither: 96.5 and 81.3 %): the
+# lottery draws again with every change of the hover's flight. The correlation-aware
+# criterion, which accepts such a filter in 95 % of the batches and rejects one whose
+# NEES is 1.5 or 0.67 times too large in every batch, is checked at every batch and
+# group: three misses of twenty-five, all on the cautious side (docs/estimator.md, item 9).
 
 
 @pytest.fixture(scope="module")
@@ -204,17 +204,18 @@ def _batch(batches, seed):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed,share", [(5000, "94.8"), (7000, "89.4")])
-@pytest.mark.xfail(strict=True, reason="the per-tick criterion's odds (docs/estimator.md, "
-                                       "item 9)")
-def test_relative_nees_of_another_batch_lies_in_its_bounds(batches, seed, share):
+@pytest.mark.parametrize("seed", [pytest.param(5000, marks=pytest.mark.xfail(
+    strict=True, reason="84.9 % of the ticks: the per-tick criterion's odds (docs/estimator.md, "
+                        "item 9)")), 7000])
+def test_relative_nees_of_another_batch_lies_in_its_bounds(batches, seed):
     other = _batch(batches, seed)
     assert other.seeds[0] == seed and other.settled.sum() > 1000
-    assert other.nees_inside("relative") >= 0.95, (share, other.summary()["nees"]["relative"])
+    assert other.nees_inside("relative") >= 0.95, other.summary()["nees"]["relative"]
 
 
-_CAUTIOUS = {(5000, "tilt"): "the tilt bias 1.76 against 1.83-2.17",
-             (9000, "velocity"): "the relative velocity 2.73 against 2.82-3.18: item 8's "
+_CAUTIOUS = {(5000, "tilt"): "the tilt bias 1.76 against 1.83-2.18",
+             (9000, "relative"): "5.61 against 5.65-6.36: its velocity's share (below)",
+             (9000, "velocity"): "the relative velocity 2.71 against 2.82-3.18: item 8's "
                                  "q_ab z measured on these seeds over-counts a bounded swing"}
 
 

@@ -252,8 +252,11 @@ def test_highway_100_s_policy_by_the_statics_of_its_gear():
     feet (17.8 x 0.2 = 3.56 N m > 19.6 x 0.15 = 2.94 N m) and slides (17.8 N > 0.5 x
     19.6 N) unless the magnet holds; the steady lean atan(17.8 / 19.6) ~ 38.7 deg (with
     the drag's cos terms) is past the gear's 36.9 deg. The shipped policy flares below
-    that angle and cuts when the magnet pulls 100 (1 - exp(-(0.5 - 0.25) / 0.17)) = 77 N,
-    past both the sliding (16 N) and the tipping (4.1 N) needs."""
+    that angle and cuts, 0.1 s after touchdown, when the magnet, switched on at the flare
+    and counted from the contact switch (``lock_delay`` 0), pulls 100 (1 - exp(-0.1 /
+    0.17)) = 44.5 N, past both the sliding (16 N) and the tipping (4.1 N) needs (before
+    issue 19's feet fix: a 0.35 s level-out, the cut at 0.5 s and the magnet counted from
+    0.25 s after the switch, 77 N)."""
     d = load_scenario("highway_100").data
     q, g, td = d["quadrotor"], d["gear"], d["touchdown"]
     m, grav, h = q["mass"], q["gravity"], q["gear_height"]
@@ -270,7 +273,7 @@ def test_highway_100_s_policy_by_the_statics_of_its_gear():
     assert td["hold_time"] + td["level_time"] <= td["cut_time"]
     F = td["lock_hold_force"] * (1 - math.exp(-(td["cut_time"] - td["lock_delay"])
                                               / td["lock_rise_time"]))
-    assert F == pytest.approx(77.0, abs=0.1)
+    assert F == pytest.approx(44.5, abs=0.05)
     assert g["friction"] * (m * grav + F) > D and (m * grav + F) * a_x > D * h
 
 
@@ -284,14 +287,20 @@ def test_highway_100_lands_and_is_secured_where_the_rotor_cut_failed():
     pivot (``pivot_aim = 1``: 0.137 m at 34 deg) it meets the deck 0.048 m ahead of the pad
     centre (offset 0.111 m, within 0.2) and its farthest foot stays 0.433 m out. With the
     cut at the switch it also meets the deck past the tip-over angle (tilted) and tips over
-    on the gear, its rotors cut."""
+    on the gear, its rotors cut (with the magnet counted from 0.25 s after the switch, as
+    before issue 19's feet fix, it also left the pad). The unaimed run's slide was the
+    0.35 s level-out's (the cut at 0.5 s): since issue 19's feet fix the level-out and the
+    cut take 0.1 s, and the default seed lands unaimed as well."""
     idle = touchdown_report(quadland.simulate(load_scenario(
         "highway_100", ["sensors.enabled=false", 'touchdown.policy="idle"'])))
     assert not idle.success and idle.tipped and idle.tilt_deg > 36.9
-    assert idle.failures == ["tilted", "tipped", "off the pad"]
+    assert idle.failures == ["tilted", "tipped"]
     unaimed = touchdown_report(quadland.simulate(load_scenario(
-        "highway_100", ["sensors.enabled=false", "touchdown.pivot_aim=0.0"])))
+        "highway_100", ["sensors.enabled=false", "touchdown.pivot_aim=0.0",
+                        "touchdown.level_time=0.35", "touchdown.cut_time=0.5"])))
     assert unaimed.secured and unaimed.failures == ["off the pad"]
+    assert touchdown_report(quadland.simulate(load_scenario(
+        "highway_100", ["sensors.enabled=false", "touchdown.pivot_aim=0.0"]))).success
     res = quadland.simulate(load_scenario("highway_100", ["sensors.enabled=false"]))
     rep = touchdown_report(res)
     assert rep.secured and not rep.tipped and rep.tilt_deg < 36.87
