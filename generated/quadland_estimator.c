@@ -98,7 +98,8 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, max_age_range, 49, 0) &&
     AT(ql_estimator_params, max_age_datalink, 50, 0) &&
     AT(ql_estimator_params, deck_extrapolation_max, 51, 0) &&
-    sizeof(ql_estimator_params) == 52 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_params, heave_omega, 52, 0) &&
+    sizeof(ql_estimator_params) == 53 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 21, 0) &&
@@ -152,7 +153,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(ql_estimator_diagnostics) == 136 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[52] = {
+static const ql_real default_p_est[53] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
     0.001, 0.0855, 0.0855, 0.0, 5.0, 0.1,
@@ -161,7 +162,7 @@ static const ql_real default_p_est[52] = {
     0.7, 0.5, 2.0, 0.1, 0.1, 0.1,
     0.3, 0.3, 0.3, 11.344867, 11.344867, 11.344867,
     11.344867, 6.634897, 11.344867, 11.344867, 10.0, 0.02,
-    0.02, 0.02, 0.02, 0.5,
+    0.02, 0.02, 0.02, 0.5, 0.0,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -202,6 +203,7 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   max_age_range            >= 0
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
+ *   heave_omega              >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_estimator_params(const ql_estimator_params *params, const char **bad_field)
 {
@@ -331,6 +333,9 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
     if (!bad && !(isfinite(p[51]) && (p[51] >= 0.0))) {
         bad = "deck_extrapolation_max";
     }
+    if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0))) {
+        bad = "heave_omega";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -338,7 +343,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 52 comparisons. The values are known to be finite; no names and no
+ * 53 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -395,6 +400,7 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[49] >= 0.0);
     ok &= (p[50] >= 0.0);
     ok &= (p[51] >= 0.0);
+    ok &= (p[52] >= 0.0);
     return ok;
 }
 

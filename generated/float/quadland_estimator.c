@@ -98,7 +98,8 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, max_age_range, 49, 0) &&
     AT(qlf_estimator_params, max_age_datalink, 50, 0) &&
     AT(qlf_estimator_params, deck_extrapolation_max, 51, 0) &&
-    sizeof(qlf_estimator_params) == 52 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_params, heave_omega, 52, 0) &&
+    sizeof(qlf_estimator_params) == 53 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
     AT(qlf_estimator_memory, P_h, 21, 0) &&
@@ -152,7 +153,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(qlf_estimator_diagnostics) == 136 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[52] = {
+static const qlf_real default_p_est[53] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
     0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.1f,
@@ -161,7 +162,7 @@ static const qlf_real default_p_est[52] = {
     0.7f, 0.5f, 2.0f, 0.1f, 0.1f, 0.1f,
     0.3f, 0.3f, 0.3f, 11.344867f, 11.344867f, 11.344867f,
     11.344867f, 6.634897f, 11.344867f, 11.344867f, 10.0f, 0.02f,
-    0.02f, 0.02f, 0.02f, 0.5f,
+    0.02f, 0.02f, 0.02f, 0.5f, 0.0f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -202,6 +203,7 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   max_age_range            >= 0
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
+ *   heave_omega              >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
                                       const char **bad_field)
@@ -332,6 +334,9 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
     if (!bad && !(isfinite(p[51]) && (p[51] >= 0.0f))) {
         bad = "deck_extrapolation_max";
     }
+    if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0f))) {
+        bad = "heave_omega";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -339,7 +344,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 52 comparisons. The values are known to be finite; no names and no
+ * 53 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -396,6 +401,7 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[49] >= 0.0f);
     ok &= (p[50] >= 0.0f);
     ok &= (p[51] >= 0.0f);
+    ok &= (p[52] >= 0.0f);
     return ok;
 }
 

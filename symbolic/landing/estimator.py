@@ -33,6 +33,7 @@ import casadi as ca
 from quadland_symbolic.kalman import fifo_push_pop, is_finite, select
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
+from quadland_symbolic.landing.heave import heave_factors
 from quadland_symbolic.landing.navigation import (
     BLOCKS,
     DATALINK,
@@ -195,8 +196,8 @@ def estimator_diagnostics() -> Layout:
 
 # ---------------------------------------------------------------- pieces
 
-def output_predictor(x_h, hist):
-    """The state carried through the buffered inputs (E17).
+def output_predictor(x_h, hist, omega=0):
+    """The state carried through the buffered inputs (E17), the pad's z by (E17a).
 
     The state ``sum(dt_k)`` after the horizon; ``hist`` has ``N`` columns, oldest first,
     whose first four rows are the inputs ``a_k`` (E) held over ``dt_k`` (the body's turns,
@@ -206,6 +207,12 @@ def output_predictor(x_h, hist):
     ``a_u = a_b + a_tilt`` the input's bias, ``p_r += T (v1 - v_t) + S2 - T^2 (a_u + a_t) / 2``,
     ``v_t += T a_t``;
     the rest is constant. The same map as (E6)'s ``Phi``, ``Gamma`` chained.
+
+    The pad's vertical motion (z of ``v_t``, ``a_t`` and the pad's share of ``p_r``) is
+    carried as the harmonic oscillator of frequency ``omega`` (rad/s,
+    :mod:`quadland_symbolic.landing.heave`): ``v_t_z`` by ``cos(omega T) v + sin(omega T)
+    a / omega``, ``a_t_z`` by ``cos(omega T) a - omega sin(omega T) v``. At ``omega = 0``
+    it is the constant acceleration above, to the bit.
     """
     x = NAV.unpack(x_h)
     n = hist.shape[1]
@@ -216,22 +223,31 @@ def output_predictor(x_h, hist):
         S2 = S2 + a_k * (dt_k * (dt_k / 2 + after))
         after = after + dt_k
     T = after
+    c, s, h = heave_factors(omega, T)                       # (E17a), each 1 at omega = 0
+    v_t, a_t = x["v_t"], x["a_t"]
     a_u = x["a_b"] + x["a_tilt"]                       # the acceleration input's bias
     v1 = x["v1"] + S1 - T * a_u
-    p_r = x["p_r"] + T * (x["v1"] - x["v_t"]) + S2 - (T**2 / 2) * (a_u + x["a_t"])
-    return ca.vertcat(p_r, v1, x["v_t"] + T * x["a_t"], x["a_t"], x["b"], x["a_b"],
-                      x["a_tilt"])
+    v_t_pad = ca.vertcat(v_t[0], v_t[1], v_t[2] * s)       # the pad's displacement over T
+    a_t_pad = ca.vertcat(a_t[0], a_t[1], a_t[2] * h)
+    p_r = x["p_r"] + T * (x["v1"] - v_t_pad) + S2 - (T**2 / 2) * (a_u + a_t_pad)
+    v_t_now = ca.vertcat(v_t[0] + T * a_t[0], v_t[1] + T * a_t[1],
+                         v_t[2] * c + (T * a_t[2]) * s)
+    # the jerk's share, a literal +0 at omega = 0 (so that a_t's -0 stays -0)
+    jerk = select(omega > 0, (omega**2 * T * s) * v_t[2], 0)
+    a_t_now = ca.vertcat(a_t[0], a_t[1], a_t[2] * c - jerk)
+    return ca.vertcat(p_r, v1, v_t_now, a_t_now, x["b"], x["a_b"], x["a_tilt"])
 
 
 @functools.cache
 def output_predictor_function(n_hist: int = N_HIST) -> ca.Function:
-    """``nav_output_predictor(x_h, hist) -> x_now`` (E17).
+    """``nav_output_predictor(x_h, hist, omega) -> x_now`` (E17), (E17a).
 
-    ``hist`` is ``4 x n_hist``.
+    ``hist`` is ``4 x n_hist``; ``omega`` the pad's vertical oscillation's frequency
+    (``heave_omega``, rad/s; 0: a constant acceleration).
     """
-    x, hist = NAV.sym("x_h"), ca.SX.sym("hist", 4, n_hist)
-    return ca.Function("nav_output_predictor", [x, hist], [output_predictor(x, hist)],
-                       ["x_h", "hist"], ["x_now"])
+    x, hist, omega = NAV.sym("x_h"), ca.SX.sym("hist", 4, n_hist), ca.SX.sym("omega")
+    return ca.Function("nav_output_predictor", [x, hist, omega],
+                       [output_predictor(x, hist, omega)], ["x_h", "hist", "omega"], ["x_now"])
 
 
 def _latest_deck(m, dl, t):
@@ -308,8 +324,8 @@ def estimator_output(x_h, hist, deck, imu, p_est, t):
     in the deck frame of the latest broadcast ``deck`` (``eta2``, ``w2E``, ``w2E_dot``,
     ``tau``) extrapolated to ``t``, the attitude and rates of the IMU.
     """
-    return _output(output_predictor(x_h, hist), deck, IMU.unpack(imu), t,
-                   estimator_params().unpack(p_est))
+    p = estimator_params().unpack(p_est)
+    return _output(output_predictor(x_h, hist, p["heave_omega"]), deck, IMU.unpack(imu), t, p)
 
 
 def _bias_turn(eta_hat, omega, dt):

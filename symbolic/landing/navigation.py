@@ -38,10 +38,9 @@ from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
            "SENSORS", "Block", "BLOCKS", "COUPLINGS", "estimator_params", "ESTIMATOR_DEFAULTS",
-           "covariance_pattern", "acceleration_input", "nav_transition",
-           "nav_transition_function", "nav_predict", "nav_predict_function",
-           "measurement_model_function", "block_update", "nav_update_function", "deck_at",
-           "relative_output"]
+           "covariance_pattern", "acceleration_input", "nav_transition", "nav_transition_function",
+           "nav_predict", "nav_predict_function", "measurement_model_function", "block_update",
+           "nav_update_function", "deck_at", "relative_output"]
 
 _XYZ = ("x", "y", "z")
 
@@ -169,7 +168,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     gate_lockout=10.0,
     **{f"max_age_{s}": 0.02 for s in SENSORS},
-    deck_extrapolation_max=0.5,
+    deck_extrapolation_max=0.5, heave_omega=0.0,
 ))
 
 
@@ -209,6 +208,7 @@ def estimator_params() -> Layout:
         *[Field(f"max_age_{s}", 1, "s", f"oldest {s} sample fused, before the horizon")
           for s in SENSORS],
         Field("deck_extrapolation_max", 1, "s", "longest extrapolation of the broadcast (E7)"),
+        Field("heave_omega", 1, "rad/s", "the pad's heave frequency, output predictor (E17a)"),
     ), "navigation filter parameters")
 
 
