@@ -98,7 +98,7 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, max_age_range, 49, 0) &&
     AT(ql_estimator_params, max_age_datalink, 50, 0) &&
     AT(ql_estimator_params, deck_extrapolation_max, 51, 0) &&
-    AT(ql_estimator_params, heave_omega, 52, 0) &&
+    AT(ql_estimator_params, heave_time, 52, 0) &&
     sizeof(ql_estimator_params) == 53 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
@@ -124,7 +124,8 @@ typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, n_dropped, 761, 0) &&
     AT(ql_estimator_memory, n_imu_invalid, 765, 0) &&
     AT(ql_estimator_memory, streak, 766, 0) &&
-    sizeof(ql_estimator_memory) == 773 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_memory, heave_ms, 773, 0) &&
+    sizeof(ql_estimator_memory) == 775 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(ql_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -203,7 +204,7 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   max_age_range            >= 0
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
- *   heave_omega              >= 0
+ *   heave_time               >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_estimator_params(const ql_estimator_params *params, const char **bad_field)
 {
@@ -334,7 +335,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
         bad = "deck_extrapolation_max";
     }
     if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0))) {
-        bad = "heave_omega";
+        bad = "heave_time";
     }
     if (bad_field) {
         *bad_field = bad;

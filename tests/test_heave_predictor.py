@@ -3,7 +3,8 @@
 Checked against the pad's closed-form harmonic motion (NumPy's sin and cos of the
 motion itself, not the predictor's factors), and at ``omega = 0`` against the
 constant-acceleration predictor as it was before (its expressions copied here), bit
-for bit, signs of zero included.
+for bit, signs of zero included; the filter's frequency (the ratio of its averages)
+against a sinusoid's own.
 """
 
 import casadi as ca
@@ -11,9 +12,9 @@ import numpy as np
 import pytest
 from nav_reference import N, col, sl
 
-from quadland_symbolic.landing.estimator import output_predictor_function
+from quadland_symbolic.landing.estimator import heave_frequency, output_predictor_function
 from quadland_symbolic.landing.heave import heave_factors, sinc
-from quadland_symbolic.landing.navigation import NAV
+from quadland_symbolic.landing.navigation import ESTIMATOR_DEFAULTS, NAV, estimator_params
 
 
 def _pad_motion(Z, w, phi, t):
@@ -118,3 +119,36 @@ def test_the_factors_are_the_closed_forms():
     assert [float(v) for v in f(0.0, 0.2)] == [1.0, 1.0, 1.0]
     assert [float(v) for v in f(1.5, 0.0)] == [1.0, 1.0, 1.0]
     assert float(ca.Function("g", [w], [sinc(w)])(0.0)) == 1.0
+
+
+def _frequency_after(heave_time, w, steps, dt=0.004):
+    """The filter's frequency after ``steps`` periods of a pad heaving at ``w``."""
+    ms_s, x_s, dt_s = ca.SX.sym("ms", 2), NAV.sym("x"), ca.SX.sym("dt")
+    p = estimator_params()
+    p_s = p.sym()
+    f = ca.Function("f", [ms_s, x_s, p_s, dt_s],
+                    list(heave_frequency(ms_s, x_s, p.unpack(p_s), dt_s)))
+    pv = p.pack({**ESTIMATOR_DEFAULTS, "heave_time": heave_time})
+    ms, x = np.zeros(2), np.zeros(N)
+    for k in range(steps):
+        _, v, a = _pad_motion(0.8, w, 0.3, k * dt)
+        x[sl("v_t")][2], x[sl("a_t")][2] = v, a
+        ms, omega = (np.asarray(r).ravel() for r in f(ms, x, pv, dt))
+    return float(omega[0])
+
+
+@pytest.mark.parametrize("w", [0.6, 1.5, 3.0])
+def test_the_frequency_of_a_sinusoid_is_its_own(w):
+    """``sqrt(<a^2> / <v^2>)`` of one sinusoid is its frequency (``|a| = w |v|`` on average
+    over whole periods). The averages (time constant ``tau`` = 20 s, after 120 s) ripple:
+    each square is its mean times ``1 +- cos(2 w t)``, which the average passes at
+    ``1 / sqrt(1 + (2 w tau)^2)``, ``v^2``'s and ``a^2``'s in opposite phase, so the
+    ratio's square root ripples by at most that, to first order."""
+    tau = 20.0
+    ripple = 1 / np.sqrt(1 + (2 * w * tau) ** 2)
+    assert _frequency_after(tau, w, 30_000) == pytest.approx(w, rel=ripple)
+
+
+def test_no_averaging_time_is_the_constant_acceleration():
+    """``heave_time = 0``: the frequency is exactly 0 whatever the pad does."""
+    assert _frequency_after(0.0, 1.5, 50) == 0.0

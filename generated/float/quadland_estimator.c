@@ -98,7 +98,7 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, max_age_range, 49, 0) &&
     AT(qlf_estimator_params, max_age_datalink, 50, 0) &&
     AT(qlf_estimator_params, deck_extrapolation_max, 51, 0) &&
-    AT(qlf_estimator_params, heave_omega, 52, 0) &&
+    AT(qlf_estimator_params, heave_time, 52, 0) &&
     sizeof(qlf_estimator_params) == 53 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
@@ -124,7 +124,8 @@ typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, n_dropped, 761, 0) &&
     AT(qlf_estimator_memory, n_imu_invalid, 765, 0) &&
     AT(qlf_estimator_memory, streak, 766, 0) &&
-    sizeof(qlf_estimator_memory) == 773 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_memory, heave_ms, 773, 0) &&
+    sizeof(qlf_estimator_memory) == 775 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(qlf_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(qlf_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -203,7 +204,7 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   max_age_range            >= 0
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
- *   heave_omega              >= 0
+ *   heave_time               >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
                                       const char **bad_field)
@@ -335,7 +336,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
         bad = "deck_extrapolation_max";
     }
     if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0f))) {
-        bad = "heave_omega";
+        bad = "heave_time";
     }
     if (bad_field) {
         *bad_field = bad;

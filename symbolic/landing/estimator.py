@@ -50,6 +50,7 @@ from quadland_symbolic.landing.navigation import (
     nav_predict,
     relative_output,
 )
+from quadland_symbolic.landing.quiescence import deck_frequency, quiescence_update
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = [
@@ -165,6 +166,9 @@ def estimator_memory(n_hist: int = N_HIST, depth=FIFO_DEPTH, coupling: str = "fu
         Field("deck_w2E_dot", 3, "rad/s^2", "deck angular acceleration of the latest broadcast"),
         Field("deck_tau", 1, "s", "sample time of the latest broadcast"),
         *_counters(),
+        Field("heave_ms", 2, ("m^2/s^2", "m^2/s^4"), "exponential averages of the horizon's "
+              "pad vertical velocity and acceleration squared (E17a)",
+              elements=("ms_v_t_z", "ms_a_t_z")),
     ), f"navigation filter memory (n_hist={n_hist}, depth={depths}, {coupling})")
 
 
@@ -243,7 +247,7 @@ def output_predictor_function(n_hist: int = N_HIST) -> ca.Function:
     """``nav_output_predictor(x_h, hist, omega) -> x_now`` (E17), (E17a).
 
     ``hist`` is ``4 x n_hist``; ``omega`` the pad's vertical oscillation's frequency
-    (``heave_omega``, rad/s; 0: a constant acceleration).
+    (rad/s; 0: a constant acceleration).
     """
     x, hist, omega = NAV.sym("x_h"), ca.SX.sym("hist", 4, n_hist), ca.SX.sym("omega")
     return ca.Function("nav_output_predictor", [x, hist, omega],
@@ -316,16 +320,31 @@ def _output(x_now, deck, ims, t, p):
                       deck["w2E_dot"])
 
 
-def estimator_output(x_h, hist, deck, imu, p_est, t):
+def estimator_output(x_h, hist, deck, imu, p_est, t, omega=0):
     """The controller's measurement from the horizon after fusion (E17), (E7), (E15).
 
     The step's ``y`` (:data:`LANDING_MEASUREMENT`): ``x_h`` carried to the present
-    through the buffered inputs ``hist`` (:func:`output_predictor`), the relative motion
+    through the buffered inputs ``hist`` (:func:`output_predictor`, the pad's vertical
+    motion as the oscillation of frequency ``omega``, (E17a)), the relative motion
     in the deck frame of the latest broadcast ``deck`` (``eta2``, ``w2E``, ``w2E_dot``,
     ``tau``) extrapolated to ``t``, the attitude and rates of the IMU.
     """
     p = estimator_params().unpack(p_est)
-    return _output(output_predictor(x_h, hist, p["heave_omega"]), deck, IMU.unpack(imu), t, p)
+    return _output(output_predictor(x_h, hist, omega), deck, IMU.unpack(imu), t, p)
+
+
+def heave_frequency(ms, x_h, p, dt):
+    """``(ms_next, omega)``: the averages updated with the horizon's pad (E17a).
+
+    ``omega = sqrt(<a_t_z^2> / <v_t_z^2>)`` on the updated averages
+    (:func:`~quadland_symbolic.landing.quiescence.deck_frequency`: the mean zero-crossing
+    frequency of the pad's vertical velocity, clamped), each average moving by
+    ``min(dt / heave_time, 1)`` of the way to the new square; ``omega`` is 0 (the constant
+    acceleration) when ``heave_time`` is 0.
+    """
+    x = NAV.unpack(x_h)
+    ms_next = quiescence_update(ms, x["v_t"][2], x["a_t"][2], dt, p["heave_time"])
+    return ms_next, select(p["heave_time"] > 0, deck_frequency(ms_next), 0)
 
 
 def _bias_turn(eta_hat, omega, dt):
@@ -368,7 +387,8 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     for layout, pkt in zip(NAV_PACKETS, pkts, strict=True):
         _fuse_sensor(layout, state, m, pkt, deck, p_est, dt, t)
     x, P = state["x"], state["P"]
-    y = estimator_output(x, m["hist"], deck, imu, p_est, t)
+    heave_ms, omega = heave_frequency(m["heave_ms"], x, p, dt)
+    y = estimator_output(x, m["hist"], deck, imu, p_est, t, omega)
 
     a_in, turn, imu_ok = _input(ims, x, p, dt)
     hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn))          # oldest first
@@ -397,7 +417,7 @@ def _step(n_hist, depth, coupling, mem, imu, pkts, p_est, dt, t):
     mem_next = ca.vertcat(
         x_next, pattern.pack(P_next), state["t_h"] + hist[3, 0], ca.vec(hist[:, 1:]), *fifos,
         deck["eta2"], deck["w2E"], deck["w2E_dot"], deck["tau"],
-        *[counters[f.name] for f in _counters()])
+        *[counters[f.name] for f in _counters()], heave_ms)
     diag = ca.vertcat(
         *[blk[b]["nu"] for b in _BLOCK_NAMES],
         ca.vertcat(*[blk[b]["nis"] for b in _BLOCK_NAMES]),

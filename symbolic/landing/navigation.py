@@ -168,7 +168,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     gate_lockout=10.0,
     **{f"max_age_{s}": 0.02 for s in SENSORS},
-    deck_extrapolation_max=0.5, heave_omega=0.0,
+    deck_extrapolation_max=0.5, heave_time=0.0,
 ))
 
 
@@ -208,7 +208,7 @@ def estimator_params() -> Layout:
         *[Field(f"max_age_{s}", 1, "s", f"oldest {s} sample fused, before the horizon")
           for s in SENSORS],
         Field("deck_extrapolation_max", 1, "s", "longest extrapolation of the broadcast (E7)"),
-        Field("heave_omega", 1, "rad/s", "the pad's heave frequency, output predictor (E17a)"),
+        Field("heave_time", 1, "s", "averaging time of the pad's heave frequency (E17a)"),
     ), "navigation filter parameters")
 
 
