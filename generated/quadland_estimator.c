@@ -99,7 +99,8 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, max_age_range, 50, 0) &&
     AT(ql_estimator_params, max_age_datalink, 51, 0) &&
     AT(ql_estimator_params, deck_extrapolation_max, 52, 0) &&
-    sizeof(ql_estimator_params) == 53 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_params, heave_time, 53, 0) &&
+    sizeof(ql_estimator_params) == 54 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 21, 0) &&
@@ -124,7 +125,8 @@ typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, n_dropped, 761, 0) &&
     AT(ql_estimator_memory, n_imu_invalid, 765, 0) &&
     AT(ql_estimator_memory, streak, 766, 0) &&
-    sizeof(ql_estimator_memory) == 773 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_memory, heave_ms, 773, 0) &&
+    sizeof(ql_estimator_memory) == 775 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(ql_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -153,7 +155,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(ql_estimator_diagnostics) == 136 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[53] = {
+static const ql_real default_p_est[54] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
     0.001, 0.0855, 0.0855, 0.0, 5.0, 0.1,
@@ -162,7 +164,7 @@ static const ql_real default_p_est[53] = {
     0.0, 0.7, 0.5, 2.0, 0.1, 0.1,
     0.1, 0.3, 0.3, 0.3, 11.344867, 11.344867,
     11.344867, 11.344867, 6.634897, 11.344867, 11.344867, 10.0,
-    0.02, 0.02, 0.02, 0.02, 0.5,
+    0.02, 0.02, 0.02, 0.02, 0.5, 0.0,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -204,6 +206,7 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   max_age_range            >= 0
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
+ *   heave_time               >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_estimator_params(const ql_estimator_params *params, const char **bad_field)
 {
@@ -336,6 +339,9 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
     if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0))) {
         bad = "deck_extrapolation_max";
     }
+    if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0))) {
+        bad = "heave_time";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -343,7 +349,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 53 comparisons. The values are known to be finite; no names and no
+ * 54 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -401,6 +407,7 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[50] >= 0.0);
     ok &= (p[51] >= 0.0);
     ok &= (p[52] >= 0.0);
+    ok &= (p[53] >= 0.0);
     return ok;
 }
 

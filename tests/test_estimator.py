@@ -180,8 +180,9 @@ def test_output_predictor_is_the_chained_prediction(rng):
     for k in range(n):
         Phi, Gamma, _ = discrete(hist[3, k], q, held=True)
         x_ref = Phi @ x_ref + Gamma @ hist[:3, k]
-    np.testing.assert_allclose(col(f(x, hist)), x_ref, rtol=1e-12, atol=1e-12)
-    np.testing.assert_array_equal(col(output_predictor_function(0)(x, np.zeros((4, 0)))), x)
+    np.testing.assert_allclose(col(f(x, hist, 0.0)), x_ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(col(output_predictor_function(0)(x, np.zeros((4, 0)), 0.0)),
+                                  x)
 
 # ---------------------------------------------------------------- consistency
 

@@ -382,6 +382,7 @@ DOCUMENTED = {
     "range_deck_sigmas": _nonneg, "datalink_v_sigma": _pos,
     "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS}, "gate_lockout": _nonneg,
     **{f"max_age_{s}": _nonneg for s in SENSORS}, "deck_extrapolation_max": _nonneg,
+    "heave_time": _nonneg,
 }
 
 

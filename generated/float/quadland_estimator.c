@@ -99,7 +99,8 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, max_age_range, 50, 0) &&
     AT(qlf_estimator_params, max_age_datalink, 51, 0) &&
     AT(qlf_estimator_params, deck_extrapolation_max, 52, 0) &&
-    sizeof(qlf_estimator_params) == 53 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_params, heave_time, 53, 0) &&
+    sizeof(qlf_estimator_params) == 54 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
     AT(qlf_estimator_memory, P_h, 21, 0) &&
@@ -124,7 +125,8 @@ typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, n_dropped, 761, 0) &&
     AT(qlf_estimator_memory, n_imu_invalid, 765, 0) &&
     AT(qlf_estimator_memory, streak, 766, 0) &&
-    sizeof(qlf_estimator_memory) == 773 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_memory, heave_ms, 773, 0) &&
+    sizeof(qlf_estimator_memory) == 775 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(qlf_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(qlf_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -153,7 +155,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(qlf_estimator_diagnostics) == 136 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[53] = {
+static const qlf_real default_p_est[54] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
     0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.1f,
@@ -162,7 +164,7 @@ static const qlf_real default_p_est[53] = {
     0.0f, 0.7f, 0.5f, 2.0f, 0.1f, 0.1f,
     0.1f, 0.3f, 0.3f, 0.3f, 11.344867f, 11.344867f,
     11.344867f, 11.344867f, 6.634897f, 11.344867f, 11.344867f, 10.0f,
-    0.02f, 0.02f, 0.02f, 0.02f, 0.5f,
+    0.02f, 0.02f, 0.02f, 0.02f, 0.5f, 0.0f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -204,6 +206,7 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   max_age_range            >= 0
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
+ *   heave_time               >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
                                       const char **bad_field)
@@ -337,6 +340,9 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
     if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0f))) {
         bad = "deck_extrapolation_max";
     }
+    if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0f))) {
+        bad = "heave_time";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -344,7 +350,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 53 comparisons. The values are known to be finite; no names and no
+ * 54 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -402,6 +408,7 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[50] >= 0.0f);
     ok &= (p[51] >= 0.0f);
     ok &= (p[52] >= 0.0f);
+    ok &= (p[53] >= 0.0f);
     return ok;
 }
 

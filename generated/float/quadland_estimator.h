@@ -26,8 +26,8 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_RANGE 26             /* FIFO depth of range packets */
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 84         /* stored covariance entries (coupling axes) */
-#define QLF_ESTIMATOR_MEMORY_SIZE 773            /* reals in qlf_estimator_memory */
-#define QLF_ESTIMATOR_PARAMS_SIZE 53             /* reals in qlf_estimator_params */
+#define QLF_ESTIMATOR_MEMORY_SIZE 775            /* reals in qlf_estimator_memory */
+#define QLF_ESTIMATOR_PARAMS_SIZE 54             /* reals in qlf_estimator_params */
 #define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 136       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
@@ -129,6 +129,7 @@ typedef struct {
     qlf_real max_age_range;          /* s: oldest range sample fused, before the horizon */
     qlf_real max_age_datalink;       /* s: oldest datalink sample fused, before the horizon */
     qlf_real deck_extrapolation_max; /* s: longest extrapolation of the broadcast (E7) */
+    qlf_real heave_time;             /* s: averaging time of the pad's heave frequency (E17a) */
 } qlf_estimator_params;
 
 /* The filter's memory: the state and covariance at the horizon, the input
@@ -158,6 +159,7 @@ typedef struct {
     qlf_real n_dropped[4];           /* -: packets not queued: FIFO full, not finite, future (n_dropped_vision, n_dropped_gnss, n_dropped_range, n_dropped_datalink) */
     qlf_real n_imu_invalid;          /* -: periods with a non-finite IMU sample */
     qlf_real streak[7];              /* -: consecutive gate refusals, per block (E8a) */
+    qlf_real heave_ms[2];            /* m^2/s^2, m^2/s^4: exponential averages of the horizon's pad vertical velocity and acceleration squared (E17a) (ms_v_t_z, ms_a_t_z) */
 } qlf_estimator_memory;
 
 /* What one step reports besides the landing step's measurements. */

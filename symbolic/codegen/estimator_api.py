@@ -82,6 +82,7 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     "gate_lockout": _NONNEGATIVE,
     **{f"max_age_{s}": _NONNEGATIVE for s in SENSORS},
     "deck_extrapolation_max": _NONNEGATIVE,
+    "heave_time": _NONNEGATIVE,           # 0: a flat deck, the constant acceleration (E17a)
 })
 
 

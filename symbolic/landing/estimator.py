@@ -37,6 +37,11 @@ import casadi as ca
 from quadland_symbolic.kalman import fifo_push_pop, is_finite, select
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
+from quadland_symbolic.landing.nav_output import (
+    estimator_output,
+    heave_frequency,
+    output_predictor,
+)
 from quadland_symbolic.landing.navigation import (
     BLOCKS,
     DATALINK,
@@ -51,7 +56,6 @@ from quadland_symbolic.landing.navigation import (
     deck_at,
     estimator_params,
     nav_predict,
-    relative_output,
 )
 from quadland_symbolic.layout import Field, Layout
 
@@ -173,6 +177,9 @@ def estimator_memory(n_hist: int = N_HIST, depth=FIFO_DEPTH, coupling: str = "fu
         Field("deck_w2E_dot", 3, "rad/s^2", "deck angular acceleration of the latest broadcast"),
         Field("deck_tau", 1, "s", "sample time of the latest broadcast"),
         *_counters(),
+        Field("heave_ms", 2, ("m^2/s^2", "m^2/s^4"), "exponential averages of the horizon's "
+              "pad vertical velocity and acceleration squared (E17a)",
+              elements=("ms_v_t_z", "ms_a_t_z")),
     ), f"navigation filter memory (n_hist={n_hist}, depth={depths}, {coupling})")
 
 
@@ -204,43 +211,16 @@ def estimator_diagnostics() -> Layout:
 
 # ---------------------------------------------------------------- pieces
 
-def output_predictor(x_h, hist):
-    """The state carried through the buffered inputs (E17).
-
-    The state ``sum(dt_k)`` after the horizon; ``hist`` has ``N`` columns, oldest first,
-    whose first four rows are the inputs ``a_k`` (E) held over ``dt_k`` (the body's turns,
-    rows 5-7, are not carried: the bias turns by a few milliradians over the horizon).
-    With ``T = sum dt_k``, ``S1 = sum a_k dt_k`` and
-    ``S2 = sum a_k dt_k (dt_k / 2 + sum_{j>k} dt_j)``: ``v1 += S1 - T a_u`` with
-    ``a_u = a_b + a_tilt`` the input's bias, ``p_r += T (v1 - v_t) + S2 - T^2 (a_u + a_t) / 2``,
-    ``v_t += T a_t``;
-    the rest is constant. The same map as (E6)'s ``Phi``, ``Gamma`` chained.
-    """
-    x = NAV.unpack(x_h)
-    n = hist.shape[1]
-    T, S1, S2, after = 0, ca.DM.zeros(3), ca.DM.zeros(3), 0
-    for k in reversed(range(n)):
-        a_k, dt_k = hist[0:3, k], hist[3, k]
-        S1 = S1 + a_k * dt_k
-        S2 = S2 + a_k * (dt_k * (dt_k / 2 + after))
-        after = after + dt_k
-    T = after
-    a_u = x["a_b"] + x["a_tilt"]                       # the acceleration input's bias
-    v1 = x["v1"] + S1 - T * a_u
-    p_r = x["p_r"] + T * (x["v1"] - x["v_t"]) + S2 - (T**2 / 2) * (a_u + x["a_t"])
-    return ca.vertcat(p_r, v1, x["v_t"] + T * x["a_t"], x["a_t"], x["b"], x["a_b"],
-                      x["a_tilt"])
-
-
 @functools.cache
 def output_predictor_function(n_hist: int = N_HIST) -> ca.Function:
-    """``nav_output_predictor(x_h, hist) -> x_now`` (E17).
+    """``nav_output_predictor(x_h, hist, omega) -> x_now`` (E17), (E17a).
 
-    ``hist`` is ``4 x n_hist``.
+    ``hist`` is ``4 x n_hist``; ``omega`` the pad's vertical oscillation's frequency
+    (rad/s; 0: a constant acceleration).
     """
-    x, hist = NAV.sym("x_h"), ca.SX.sym("hist", 4, n_hist)
-    return ca.Function("nav_output_predictor", [x, hist], [output_predictor(x, hist)],
-                       ["x_h", "hist"], ["x_now"])
+    x, hist, omega = NAV.sym("x_h"), ca.SX.sym("hist", 4, n_hist), ca.SX.sym("omega")
+    return ca.Function("nav_output_predictor", [x, hist, omega],
+                       [output_predictor(x, hist, omega)], ["x_h", "hist", "omega"], ["x_now"])
 
 
 def _latest_deck(m, dl, t):
@@ -311,28 +291,6 @@ def fuse_sensor(name, x, P, head, due, deck, streaks, p_est, pattern):
     return x, P, blocks
 
 
-def _output(x_now, deck, ims, t, p):
-    """The controller's :data:`LANDING_MEASUREMENT` at ``t`` (E7), (E15)."""
-    x = NAV.unpack(x_now)
-    eta2, w2E = deck_at(deck["eta2"], deck["w2E"], deck["w2E_dot"], t - deck["tau"],
-                        p["deck_extrapolation_max"])
-    p_e, v_e = relative_output(x["p_r"], x["v1"] - x["v_t"], eta2, w2E)
-    return ca.vertcat(p_e, v_e, ims["eta_hat"], ims["omega"], eta2, x["v_t"], x["a_t"], w2E,
-                      deck["w2E_dot"])
-
-
-def estimator_output(x_h, hist, deck, imu, p_est, t):
-    """The controller's measurement from the horizon after fusion (E17), (E7), (E15).
-
-    The step's ``y`` (:data:`LANDING_MEASUREMENT`): ``x_h`` carried to the present
-    through the buffered inputs ``hist`` (:func:`output_predictor`), the relative motion
-    in the deck frame of the latest broadcast ``deck`` (``eta2``, ``w2E``, ``w2E_dot``,
-    ``tau``) extrapolated to ``t``, the attitude and rates of the IMU.
-    """
-    return _output(output_predictor(x_h, hist), deck, IMU.unpack(imu), t,
-                   estimator_params().unpack(p_est))
-
-
 def _bias_turn(eta_hat, omega, dt):
     """The body's rotation over a period as a vector in E, from the gyro (E6a).
 
@@ -378,7 +336,8 @@ def finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk):
     ``sen`` each sensor's queue, ``blk`` each block's outcome.
     """
     p = estimator_params().unpack(p_est)
-    y = estimator_output(x, m["hist"], deck, imu, p_est, t)
+    heave_ms, omega = heave_frequency(m["heave_ms"], x, p, dt)
+    y = estimator_output(x, m["hist"], deck, imu, p_est, t, omega)
     a_in, turn, imu_ok = _input(ims, x, p, dt)
     hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn))          # oldest first
     x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern, hist[4:7, 0])
@@ -404,7 +363,7 @@ def finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk):
     mem_next = ca.vertcat(
         x_next, pattern.pack(P_next), m["t_h"] + hist[3, 0], ca.vec(hist[:, 1:]), *fifos,
         deck["eta2"], deck["w2E"], deck["w2E_dot"], deck["tau"],
-        *[counters[f.name] for f in _counters()])
+        *[counters[f.name] for f in _counters()], heave_ms)
     diag = ca.vertcat(
         *[blk[b]["nu"] for b in _BLOCK_NAMES],
         ca.vertcat(*[blk[b]["nis"] for b in _BLOCK_NAMES]),

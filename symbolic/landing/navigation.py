@@ -174,7 +174,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     gate_lockout=10.0,
     **{f"max_age_{s}": 0.02 for s in SENSORS},
-    deck_extrapolation_max=0.5,
+    deck_extrapolation_max=0.5, heave_time=0.0,
 ))
 
 
@@ -216,6 +216,7 @@ def estimator_params() -> Layout:
         *[Field(f"max_age_{s}", 1, "s", f"oldest {s} sample fused, before the horizon")
           for s in SENSORS],
         Field("deck_extrapolation_max", 1, "s", "longest extrapolation of the broadcast (E7)"),
+        Field("heave_time", 1, "s", "averaging time of the pad's heave frequency (E17a)"),
     ), "navigation filter parameters")
 
 
