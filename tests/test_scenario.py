@@ -315,12 +315,17 @@ def test_an_unknown_override_key_is_named_as_an_override():
                                  ">= 1, got 0"),
     ("estimator.gate_lockout=2.5", "estimator.gate_lockout: must be a whole number of refusals "
                                    ">= 1, got 2.5"),
-    # the horizon is 50 periods of 250 Hz = 0.2 s, a packet is fused up to 0.02 s after it
-    # (max_age): a GNSS 0.24 s old on arrival is past both (review of issue 17: flown, every
-    # packet discarded, exit 0)
-    ("sensors.gnss.latency=0.24", "sensors.gnss.latency: 0.24 s is past the navigation "
-     "filter's horizon (50 control periods, 0.2 s) plus estimator.max_age_gnss (0.22 s): "
-     "every packet would be discarded"),
+    # the horizon is 50 periods of 250 Hz = 0.2 s, a packet is fused less than 0.02 s (5
+    # periods) after it (max_age): a GNSS 0.24 s old on arrival, read 60 periods after its
+    # sample, is past both (review of issue 17: flown, every packet discarded, exit 0); one
+    # 0.2161 s old is read at the 55th period, exactly max_age late, where rounding decided
+    # (0.221 s with max_age 0.021: 56 periods against 55.25, every packet discarded)
+    ("sensors.gnss.latency=0.24", "sensors.gnss.latency: 0.24 s is read 60 control periods "
+     "after the sample, not within the navigation filter's horizon (50) plus "
+     "estimator.max_age_gnss (5): its packets would be discarded"),
+    ("sensors.gnss.latency=0.2161", "sensors.gnss.latency: 0.2161 s is read 55 control "
+     "periods after the sample, not within the navigation filter's horizon (50) plus "
+     "estimator.max_age_gnss (5): its packets would be discarded"),
     # 250 Hz x (0.2 - 0.005) s + 1 = 49.75 packets in flight, ceil 50, against 26 slots
     ("sensors.rangefinder.rate_hz=250.0", "sensors.rangefinder.rate_hz: 250 Hz with 0.005 s "
      "of latency keeps 50 packets waiting for the filter's horizon (0.2 s); its queue holds "
@@ -333,7 +338,7 @@ def test_the_landing_cross_key_rules_name_the_key(override, message):
     assert str(err.value) == message
     load_scenario("highway", ["landing.search_height=3.0", "landing.marker_timeout=0.04",
                               "estimator.gate_lockout=1",      # the edges are admitted
-                              "sensors.gnss.latency=0.22"])
+                              "sensors.gnss.latency=0.216"])
 
 
 def test_no_key_description_points_to_docs_an_install_lacks():

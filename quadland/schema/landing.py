@@ -472,20 +472,24 @@ def _check_sensors(data: dict) -> None:
 
 
 def _check_fusion(data: dict) -> None:
-    """What a sensor sends the filter can be fused: its packets reach the filter's horizon
-    (``N_HIST`` periods behind) before they are ``max_age`` past it, and a FIFO of the
-    depth flown holds those in flight (``rate x (D - latency) + 1``, docs/estimator.md)."""
+    """What a sensor sends the filter can be fused: its packets, read at the first control
+    tick at or after their latency, reach the filter's horizon (``N_HIST`` periods behind)
+    less than ``max_age`` past it (at exactly ``max_age`` the discard is decided by
+    rounding), and a FIFO of the depth flown holds those in flight (``rate x (D -
+    latency) + 1``, docs/estimator.md)."""
     rate = data["controller"]["rate_hz"]
     horizon = N_HIST / rate
     for sensor, depth in zip(SENSORS, FLIGHT_DEPTH, strict=True):
         name = "rangefinder" if sensor == "range" else sensor
         s = data[f"sensors.{name}"]
-        late = horizon + data["estimator"][f"max_age_{sensor}"]
-        if s["latency"] > late + 1e-9:
-            raise ScenarioError(f"sensors.{name}.latency: {s['latency']:g} s is past the "
-                                f"navigation filter's horizon ({N_HIST} control periods, "
-                                f"{horizon:g} s) plus estimator.max_age_{sensor} "
-                                f"({late:g} s): every packet would be discarded")
+        arrival = math.ceil(s["latency"] * rate - 1e-9)        # control periods
+        late = N_HIST + data["estimator"][f"max_age_{sensor}"] * rate
+        if arrival >= late - 1e-9:
+            raise ScenarioError(f"sensors.{name}.latency: {s['latency']:g} s is read "
+                                f"{arrival} control periods after the sample, not within the "
+                                f"navigation filter's horizon ({N_HIST}) plus "
+                                f"estimator.max_age_{sensor} ({late - N_HIST:g}): its packets "
+                                "would be discarded")
         need = math.ceil(s["rate_hz"] * max(horizon - s["latency"], 0.0) + 1 - 1e-9)
         if need > depth:
             raise ScenarioError(f"sensors.{name}.rate_hz: {s['rate_hz']:g} Hz with "
