@@ -337,11 +337,17 @@ def _run_campaign(args) -> int:
 
 def _counts(summary: dict) -> str:
     """``"; false touchdowns 0, tipped over 2"``: the counted flags of a campaign's runs."""
+    return _flag_counts(summary["model"], {name: e["count"] for name, e in
+                                           summary["metrics"].items() if "count" in e})
+
+
+def _flag_counts(model: str, counts: dict) -> str:
+    """The last line's counts of the 0/1 flags a model's metrics count, by their labels."""
     from quadland.kinds import kind_of
 
-    counted = [(m.counted, summary["metrics"][m.name]["count"])
-               for m in kind_of(summary["model"]).metrics if m.counted]
-    return "; " + ", ".join(f"{label} {n}" for label, n in counted) if counted else ""
+    labels = [(m.counted, counts[m.name]) for m in kind_of(model).metrics
+              if m.counted and m.name in counts]
+    return "; " + ", ".join(f"{label} {n}" for label, n in labels) if labels else ""
 
 
 def _run_envelope(args) -> int:
@@ -353,7 +359,8 @@ def _run_envelope(args) -> int:
                           progress=sys.stderr.isatty(), plots=not args.no_plots)
     env = result.envelope
     cells = "" if env is None else (f": {len(env['cells'])} cells, {env['successes']} of "
-                                    f"{env['flown']} runs within limits")
+                                    f"{env['flown']} runs within limits"
+                                    f"{_flag_counts(env['model'], env.get('counts', {}))}")
     print(f"quadland: wrote {result.folder}{cells}{_session(result)}")
     return 0
 

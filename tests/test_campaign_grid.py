@@ -408,3 +408,25 @@ def test_the_map_draws_each_cells_interval(polar):
     assert len(black) == 11                     # one interval bar per cell with runs
     assert sorted(t.get_text() for t in ax.texts if "/" in t.get_text()) == \
         sorted(f"{int(k.flat[i])}/10" for i in range(11))
+
+
+@pytest.mark.slow
+def test_a_landing_envelope_counts_false_touchdowns_and_tip_overs(tmp_path, capsys):
+    """A landing envelope's cells and totals count the flown runs with each 0/1 flag set,
+    as runs.csv has them, and its last line says so (review of issue 17: campaigns and
+    envelope cells had only the flags' quantiles)."""
+    out = tmp_path / "env"
+    assert main(["envelope", "--scenario", "highway", "--axis", "wind.turbulence_w20=0:1:2",
+                 "--axis", "quadrotor.mass=2:2:1", "--runs-per-cell", "1", "--workers",
+                 "1", "--no-plots", "--out", str(out)]) == 0
+    with open(out / "runs.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    env = json.loads((out / "envelope.json").read_text())
+    for name in ("false_touchdown", "tipped"):
+        by_hand = [sum(float(r[name] or 0) == 1.0 for r in rows if int(r["cell"]) == c)
+                   for c in range(2)]
+        assert [cell["counts"][name] for cell in env["cells"]] == by_hand
+        assert env["counts"][name] == sum(by_hand)
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    assert (f"; false touchdowns {env['counts']['false_touchdown']}, tipped over "
+            f"{env['counts']['tipped']}; flew 2 runs in ") in line

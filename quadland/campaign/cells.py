@@ -122,6 +122,8 @@ def envelope_files(env, header: Sequence[str], rows: Sequence[Sequence[str]],
             "hold": list(env.hold), "polar": env.polar,
             "runs": len(rows), "flown": flown,
             "successes": sum(s["successes"] for s in stats),
+            **({"counts": {name: sum(s["counts"][name] for s in stats) for name in counted}}
+               if counted else {}),
             "invalid": sum(s["invalid"] for s in stats),
             "confidence": {"level": CONFIDENCE, "method": "Clopper-Pearson (exact binomial)",
                            "contours": [0.5, 0.9, 0.99]},
