@@ -318,6 +318,7 @@ def _run_margins_campaign(args, requirement) -> int:
 
 def _run_campaign(args) -> int:
     from quadland.campaign.execute import run_campaign
+    from quadland.campaign.summary import counted_text, summary_counts
 
     result = run_campaign(args.scenario, args.overrides, args.runs, args.out, args.workers,
                           args.scheduler, progress=sys.stderr.isatty(), plots=not args.no_plots)
@@ -327,7 +328,7 @@ def _run_campaign(args) -> int:
         lo, hi = summary["confidence"]["interval"]
         rate = (f": {summary['successes']} of {summary['flown']} runs within limits "
                 f"({100 * summary['success_rate']:.1f} %, 95 % interval {100 * lo:.1f} to "
-                f"{100 * hi:.1f} %){_counts(summary)}")
+                f"{100 * hi:.1f} %){counted_text(summary['model'], summary_counts(summary))}")
     elif summary is not None:
         rate = (f": no run flown, the draws of all {summary['runs']} were invalid (runs.csv "
                 "says why)")
@@ -335,23 +336,9 @@ def _run_campaign(args) -> int:
     return 0
 
 
-def _counts(summary: dict) -> str:
-    """``"; false touchdowns 0, tipped over 2"``: the counted flags of a campaign's runs."""
-    return _flag_counts(summary["model"], {name: e["count"] for name, e in
-                                           summary["metrics"].items() if "count" in e})
-
-
-def _flag_counts(model: str, counts: dict) -> str:
-    """The last line's counts of the 0/1 flags a model's metrics count, by their labels."""
-    from quadland.kinds import kind_of
-
-    labels = [(m.counted, counts[m.name]) for m in kind_of(model).metrics
-              if m.counted and m.name in counts]
-    return "; " + ", ".join(f"{label} {n}" for label, n in labels) if labels else ""
-
-
 def _run_envelope(args) -> int:
     from quadland.campaign.grid import run_envelope
+    from quadland.campaign.summary import counted_text
 
     seed = [] if args.seed is None else [f"campaign.seed={args.seed}"]
     result = run_envelope(args.scenario, args.overrides + seed, args.axis, args.runs_per_cell,
@@ -360,7 +347,7 @@ def _run_envelope(args) -> int:
     env = result.envelope
     cells = "" if env is None else (f": {len(env['cells'])} cells, {env['successes']} of "
                                     f"{env['flown']} runs within limits"
-                                    f"{_flag_counts(env['model'], env.get('counts', {}))}")
+                                    f"{counted_text(env['model'], env.get('counts', {}))}")
     print(f"quadland: wrote {result.folder}{cells}{_session(result)}")
     return 0
 

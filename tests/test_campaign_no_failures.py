@@ -7,8 +7,12 @@ import pytest
 
 import quadland.plots.campaign as campaign_plots
 from quadland.campaign import run_campaign
-from quadland.campaign.summary import campaign_figures, summarize_campaign
-from quadland.cli import _counts
+from quadland.campaign.summary import (
+    campaign_figures,
+    counted_text,
+    summarize_campaign,
+    summary_counts,
+)
 from quadland.scenario import load_scenario
 
 
@@ -33,7 +37,7 @@ def test_failures_figure_of_a_campaign_without_failures(tmp_path, monkeypatch):
     counts = summarize_campaign(base, header, marked)["metrics"]
     assert counts["false_touchdown"]["count"] == 1 and counts["tipped"]["count"] == 1
     assert summary["metrics"]["false_touchdown"]["count"] == 0
-    assert _counts(summary) == "; false touchdowns 0, tipped over 0"
+    assert counted_text("landing", summary_counts(summary)) == "; false touchdowns 0, tipped over 0"
     titles = []
     draw = campaign_plots.failures_figure
     monkeypatch.setattr(campaign_plots, "failures_figure",

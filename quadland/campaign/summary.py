@@ -27,7 +27,7 @@ from quadland.kinds import kind_of
 from quadland.scenario import Scenario
 
 __all__ = ["CONFIDENCE", "QUANTILES", "WORST_RUNS", "CAMPAIGN_FIGURES", "summarize_campaign",
-           "campaign_figures", "replay_command"]
+           "campaign_figures", "replay_command", "summary_counts", "counted_text"]
 
 #: Confidence level of the success rate's interval and bound.
 CONFIDENCE = 0.95
@@ -157,6 +157,19 @@ def summarize_campaign(base: Scenario, header: Sequence[str], rows: Sequence[Seq
     summary["campaign"] = {**spec.identity(), "runs": n_all}
     summary["severity_definition"] = "largest metric / limit of a run; > 1 misses a limit"
     return summary
+
+
+def summary_counts(summary: Mapping) -> dict[str, int]:
+    """The ``count`` of every counted 0/1 flag in a campaign's summary.json, by metric."""
+    return {name: e["count"] for name, e in summary["metrics"].items() if "count" in e}
+
+
+def counted_text(model: str, counts: Mapping[str, int]) -> str:
+    """``"; false touchdowns 0, tipped over 2"``: counted flags by their labels (the last
+    line a campaign or an envelope prints), or ``""`` when the model counts none."""
+    labels = [(m.counted, counts[m.name]) for m in kind_of(model).metrics
+              if m.counted and m.name in counts]
+    return "; " + ", ".join(f"{label} {n}" for label, n in labels) if labels else ""
 
 
 def _metric_entry(m, column: list[str], limits: Mapping[str, float], flown: int) -> dict:
