@@ -136,10 +136,7 @@ def imu_outputs() -> tuple[str, ...]:
     the branch-free step, the same function as the one generated (whose updates are
     evaluated only when due) as one SX expression.
     """
-    fn = estimator_step_function(**dict(ESTIMATOR_SIZES))
-    imu = fn.sx_in("imu")
-    y = fn.call({n: fn.sx_in(n) for n in fn.name_in()})["y"]
-    rows = set(ca.jacobian(y, imu).sparsity().get_triplet()[0])
+    rows = set(_y_on_imu()[0])
     fields = tuple(f.name for f in LANDING_MEASUREMENT.fields
                    if rows & set(range(*LANDING_MEASUREMENT.offsets()[f.name])))
     covered = {i for n in fields for i in range(*LANDING_MEASUREMENT.offsets()[n])}
@@ -175,19 +172,23 @@ def estimator_sizes() -> list[dict]:
 def imu_passed_inputs() -> tuple[tuple[str, int], ...]:
     """The IMU's fields that :func:`imu_outputs` pass on, with their sizes.
 
-    Read from the step's expression graph: the entries of ``imu`` that the
-    passed outputs depend on (the attitude estimate and the rates). The C step
-    refuses a non-finite value in them (``QL_ERR_NONFINITE_INPUT``), so ``y`` is
-    finite on ``QL_OK``.
+    Read from the step's expression graph: the entries of ``imu`` that ``y`` depends
+    on at all (the attitude estimate and the rates; the specific force enters the
+    filter's memory, not ``y``). The C step refuses a non-finite value in them
+    (``QL_ERR_NONFINITE_INPUT``), so ``y`` is finite on ``QL_OK``.
     """
-    fn = BY_NAME["estimator_step"].function(0)
-    imu = fn.sx_in("imu")
-    y = fn.call({n: fn.sx_in(n) for n in fn.name_in()})["y"]
-    offsets = LANDING_MEASUREMENT.offsets()
-    rows = [i for n in imu_outputs() for i in range(*offsets[n])]
-    cols = set(ca.jacobian(y[rows], imu).sparsity().get_triplet()[1])
+    cols = set(_y_on_imu()[1])
     return tuple((f.name, f.size) for f in IMU.fields
                  if cols & set(range(*IMU.offsets()[f.name])))
+
+
+@functools.cache
+def _y_on_imu() -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """The (row, column) pairs of ``dy/dimu``'s sparsity in the generated step's graph."""
+    fn = estimator_step_function(**dict(ESTIMATOR_SIZES))
+    y = fn.call({n: fn.sx_in(n) for n in fn.name_in()})["y"]
+    rows, cols = ca.jacobian(y, fn.sx_in("imu")).sparsity().get_triplet()
+    return tuple(rows), tuple(cols)
 
 
 def _step_context(config: CodegenConfig) -> dict:

@@ -44,7 +44,7 @@ def output_predictor(x_h, hist, omega=0):
     """
     x = NAV.unpack(x_h)
     n = hist.shape[1]
-    T, S1, S2, after = 0, ca.DM.zeros(3), ca.DM.zeros(3), 0
+    S1, S2, after = ca.DM.zeros(3), ca.DM.zeros(3), 0
     for k in reversed(range(n)):
         a_k, dt_k = hist[0:3, k], hist[3, k]
         S1 = S1 + a_k * dt_k
