@@ -77,10 +77,10 @@ def _body_acceleration(xp, F, pp):
 
 def test_top_speed_at_the_tilt_limit_is_the_closed_form_and_realistic():
     """At the shipped drag (PX4's EKF2_MCOEF and EKF2_BCOEF_X defaults for 2 kg) the
-    quadrotor at the 30 deg tilt limit (turning's and the ships'; highway's is 45 deg since
+    quadrotor at the 30 deg tilt limit (the ships'; highway's and turning's is 45 deg since
     issue 19's bar, 33.3 m/s) stops accelerating at 21.45 m/s (15-25 m/s for a 2 kg
     quadrotor); it would fly 113 m/s on the old Kt = 0.1 N s/m alone."""
-    sc, p = _params("turning", "quadrotor.rotor_radius=0.0")
+    sc, p = _params("ship", "quadrotor.rotor_radius=0.0")
     pp = LANDING_PLANT_PARAMS.pack(p)
     q, a = QUADROTOR.unpack(p["p_quad"]), ACTUATOR.unpack(p["p_act"])
     m, g, Kt, Kq = q["m1"][0], q["g"][0], q["Kt"][0], a["drag_quadratic"][0]

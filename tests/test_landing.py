@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from reference import rotation
 from scipy.optimize import brentq
+from turning_before import BEFORE
 
 import quadland
 from quadland.cli import main
@@ -226,8 +227,10 @@ def test_on_the_true_state_the_sensed_world_changes_nothing(name):
 
 # ---------------------------------------------------------------- landed and secured
 
-#: The turning car on the true state, with no lock-down: what the gear alone holds.
-LOOSE = ["sensors.enabled=false", 'touchdown.lock="none"']
+#: The turning car on the true state, with no lock-down: what the gear alone holds (the
+#: rotors cut at the contact switch: turning's touchdown and gains of before its flare,
+#: whose flights these tests pin; docs/landing.md, "turning: the flare, and the observer alone").
+LOOSE = ["sensors.enabled=false", 'touchdown.lock="none"', *BEFORE]
 
 
 def test_a_too_hard_landing_bounces_and_tips_and_the_report_says_why(tmp_path, capsys):

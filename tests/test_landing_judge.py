@@ -13,6 +13,7 @@ import types
 import numpy as np
 import pytest
 from reference import rotation
+from turning_before import BEFORE
 
 import quadland
 from quadland.kinds.landing.contact_report import contact_figures
@@ -181,8 +182,9 @@ def test_off_the_pad_names_both_of_its_causes_when_no_foot_left_the_pad(tmp_path
     from quadland.cli import main
 
     out = tmp_path / "hard"
+    # the rotors cut at the contact switch: turning's touchdown of before its flare
     sets = ["sensors.enabled=false", 'touchdown.lock="none"', "landing.touchdown_speed=2.5",
-            "landing.descent_speed=2.5"]
+            "landing.descent_speed=2.5", *BEFORE]
     assert main(["simulate", "--scenario", "turning", "--no-plots", "--out", str(out),
                  *(a for s in sets for a in ("--set", s))]) == 0
     line = capsys.readouterr().out.splitlines()[1]
