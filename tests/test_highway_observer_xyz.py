@@ -3,8 +3,8 @@
 docs/landing.md, "The bias estimates' slow tail". With the disturbance observer on an
 axis its ``d_o`` is the integral action there; the bias estimate beside it only bleeds
 off, slowly, what it learnt in the approach, and holds the quadrotor off its reference
-through the descent: 3.4 cm ahead and 1.9 cm aside at the first contact of the calm
-default flight on perfect sensing, about that on average over the campaign. The checks
+through the descent: at x = +3.4 cm, y = -1.9 cm (deck frame) at the first contact of
+the calm default flight on perfect sensing, about that on average over the campaign. The checks
 here are the flights themselves: the calm flight's contact with and without the bias
 estimates, and two runs of the campaign replayed from their draws, whose outcomes the
 campaigns of before and after recorded (``runs.csv`` of `quadland campaign --scenario
