@@ -196,12 +196,12 @@ def test_continuous_limit_is_the_step_as_dt_goes_to_zero(case):
     np.testing.assert_allclose(out["Gamma_c"] / h, out["B_c"], rtol=1e-4,
                                atol=1e-4 * np.abs(out["B_c"]).max())
     models = linear_models(sc, point)
-    keep = _kept_memory(lv.l, hv.p_ctrl)        # without the absent observers' held states
-    # and the zero-gain bias estimates' (turning's x and y since its flare, issue 19)
-    held = (2 * np.sum(np.asarray(sc["controller.observer_frequency"]) == 0)
-            + np.sum(np.asarray(sc["controller.ki_p"]) == 0)
-            + np.sum(np.asarray(sc["controller.ki"]) == 0))
-    assert point.xc.size - keep.size == held
+    # without the absent observers' held states (v_hat, d_o per axis) and the zero-gain
+    # bias estimates (highway's and turning's ki_p on x, y beside their observers)
+    keep = _kept_memory(lv.l, hv.p_ctrl)
+    held = np.asarray(sc["controller.observer_frequency"]) == 0
+    still = np.r_[sc["controller.ki_p"], sc["controller.ki"]] == 0
+    assert point.xc.size - keep.size == 2 * np.sum(held) + np.sum(still)
     np.testing.assert_allclose(models.controller.A, out["A_c"][np.ix_(keep, keep)])
     assert models.loop_names == ("thrust", "roll", "pitch", "yaw")
     assert models.plant.ninputs == 4 and models.plant.noutputs == 12

@@ -72,6 +72,11 @@ def test_a_weak_rotor_and_an_offset_centre_of_gravity_by_hand():
 
 # ---------------------------------------------------------------- integral action, exactly
 
+#: The outer bias estimates on every axis, as highway shipped them before its observer
+#: took their place on x and y (docs/landing.md, "The bias estimates' slow tail").
+KI_P = "controller.ki_p=[0.5, 0.5, 1.0]"
+
+
 @pytest.mark.parametrize("case", ["controller_model.mass=2.4",
                                   "quadrotor.drag_translational=[0.6, 0.6, 0.6]",
                                   "disturbance.force_bias=[0.0, 4.0, 0.0]"])
@@ -82,7 +87,8 @@ def test_a_constant_mismatch_leaves_no_hover_error_with_the_bias_estimates(case)
     leaves it off (a proportional loop needs an error to push back)."""
     ref = np.array([0.0, 0.0, 3.0])                          # landing.hover_height
     off = "controller.observer_frequency=[0.0, 0.0, 0.0]"   # the bias estimates alone
-    with_bias = equilibrium(load_scenario("highway", [case, off]))
+    # (highway ships them on z only, beside its observer: docs/landing.md)
+    with_bias = equilibrium(load_scenario("highway", [case, off, KI_P]))
     np.testing.assert_allclose(with_bias.xr[:3], ref, atol=1e-9)
     without = equilibrium(load_scenario("highway", [case, off,
                                                     "controller.ki_p=[0.0, 0.0, 0.0]"]))
@@ -107,9 +113,9 @@ def test_the_observer_learns_what_the_bias_estimates_learn(case):
     ref = np.array([0.0, 0.0, 3.0])
     on = "controller.observer_frequency=[2.0, 2.0, 2.0]"
     bias = equilibrium(load_scenario("highway", [case, "controller.observer_frequency=[0.0, 0.0, "
-                                                       "0.0]"]))
+                                                       "0.0]", KI_P]))
     observer = equilibrium(load_scenario("highway", [case, on, "controller.ki_p=[0.0, 0.0, 0.0]"]))
-    both = equilibrium(load_scenario("highway", [case, on]))
+    both = equilibrium(load_scenario("highway", [case, on, KI_P]))
     d = _memory(bias)["d_hat"][:3]
     assert np.max(np.abs(d)) > 0.05
     for point in (observer, both):
