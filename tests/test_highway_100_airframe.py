@@ -86,7 +86,8 @@ def test_the_steady_lean_at_the_tables_corners_against_the_gear():
     assert tip_y == pytest.approx(63.43, abs=0.01)
     assert tip_x == pytest.approx(53.13, abs=0.01)
     assert worst < td["flare_tilt_deg"] < tip_y < c["tilt_max_deg"]
-    assert d["landing"]["max_tilt_deg"] == 63.4 <= tip_y            # rounded down
+    # the contact's limit stays every scenario's rule, 10 deg past the nominal steady lean
+    assert d["landing"]["max_tilt_deg"] == 48.7 < tip_y
     old_tip = math.degrees(math.atan(0.15 / 0.2))
     assert sum(v > old_tip for v in leans.values()) == 4
     assert sum(v > 45.0 for v in leans.values()) == 2
