@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from reference import GUIDANCE_P
+from reference import GUIDANCE_P, HIGHWAY_100_OLD
 
 import quadland
 from quadland.kinds.landing.report import touchdown_report
@@ -247,38 +247,44 @@ def test_the_landing_step_applies_each_command():
 # ---------------------------------------------------------------- highway_100's choice
 
 def test_highway_100_s_policy_by_the_statics_of_its_gear():
-    """At 100 km/h the drag Kt V + Kq V^2 = 0.3 x 27.78 + 0.01225 x 27.78^2 = 17.8 N acts
-    0.2 m above the feet: resting level with its rotors cut the body goes over its rear
-    feet (17.8 x 0.2 = 3.56 N m > 19.6 x 0.15 = 2.94 N m) and slides (17.8 N > 0.5 x
-    19.6 N) unless the magnet holds; the steady lean atan(17.8 / 19.6) ~ 38.7 deg (with
-    the drag's cos terms) is past the gear's 36.9 deg. The shipped policy flares below
-    that angle and cuts, 0.1 s after touchdown, when the magnet, switched on at the flare
-    and counted from the contact switch (``lock_delay`` 0), pulls 100 (1 - exp(-0.1 /
-    0.17)) = 44.5 N, past both the sliding (16 N) and the tipping (4.1 N) needs (before
-    issue 19's feet fix: a 0.35 s level-out, the cut at 0.5 s and the magnet counted from
-    0.25 s after the switch, 77 N)."""
+    """At 100 km/h the drag Kt V + Kq V^2 = 0.3 x 27.78 + 0.01225 x 27.78^2 = 17.8 N. On the old
+    gear (0.15 m, 0.2 m high) it acted 0.2 m above the feet: resting level with its rotors
+    cut the body went over its rear feet (17.8 x 0.2 = 3.56 N m > 19.6 x 0.15 = 2.94 N m),
+    and the steady lean atan(17.8 / 19.6) ~ 38.7 deg (with the drag's cos terms) was past
+    its 36.9 deg; the policy flared below that angle. On the gear made for the speed (0.30
+    m, 0.15 m high, issue 19) the same drag cannot roll it over (17.8 x 0.15 = 2.67 N m <
+    19.6 x 0.30 = 5.88 N m), the lean, 38.7 deg (42.2 deg without the cos terms), is inside
+    its 63.4 deg, and the flare's 58 deg sits between. It still slides (17.8 N > 0.5 x 19.6
+    N) unless the magnets hold: the policy cuts 0.1 s after touchdown, when the two magnets,
+    switched on at the flare and counted from the contact switch (``lock_delay`` 0), pull
+    200 (1 - exp(-0.1 / 0.17)) = 88.9 N, past the 17.8 / 0.5 - 19.6 = 16 N the slide needs
+    (one magnet of 100 N, 44.5 N, before)."""
     d = load_scenario("highway_100").data
     q, g, td = d["quadrotor"], d["gear"], d["touchdown"]
     m, grav, h = q["mass"], q["gravity"], q["gear_height"]
     V = d["initial"]["velocity2"][0]
     D = q["drag_translational"][0] * V + q["drag_quadratic"][0] * V ** 2
     assert D == pytest.approx(17.79, abs=0.01)
+    assert D * 0.2 > m * grav * 0.15                     # the old gear rolled over
+    assert math.degrees(math.atan(0.15 / 0.2)) == pytest.approx(36.87, abs=0.01)
     a_x = g["feet_x"]
     tip = math.degrees(math.atan(a_x / h))
-    assert tip == pytest.approx(36.87, abs=0.01)
-    assert D * h > m * grav * a_x and D > g["friction"] * m * grav
+    assert tip == pytest.approx(63.43, abs=0.01)
+    assert D * h < m * grav * a_x and D > g["friction"] * m * grav
     steady = math.degrees(math.atan(D / (m * grav)))
-    assert steady > tip > td["flare_tilt_deg"]
+    assert tip > td["flare_tilt_deg"] > steady
     assert td["policy"] == "secure"
     assert td["hold_time"] + td["level_time"] <= td["cut_time"]
     F = td["lock_hold_force"] * (1 - math.exp(-(td["cut_time"] - td["lock_delay"])
                                               / td["lock_rise_time"]))
-    assert F == pytest.approx(44.5, abs=0.05)
-    assert g["friction"] * (m * grav + F) > D and (m * grav + F) * a_x > D * h
+    assert F == pytest.approx(88.9, abs=0.05)
+    assert g["friction"] * (m * grav + F) > D
+    assert F > D / g["friction"] - m * grav == pytest.approx(16.0, abs=0.05)
 
 
 def test_highway_100_lands_and_is_secured_where_the_rotor_cut_failed():
-    """The default seed on the true state: with the rotor cut at the contact switch it
+    """The default seed on the true state, on highway_100's old airframe (``HIGHWAY_100_OLD``,
+    where this was measured): with the rotor cut at the contact switch it
     touches down leaning 39.5 deg, past the tip-over angle, and the drag slams it onto
     its rear feet and off the pad; flying on, it flares to 35.1 deg, levels out onto the
     magnet (engaged at 95 % by the end, every foot down). Judged by its feet (issue 18's
@@ -290,18 +296,27 @@ def test_highway_100_lands_and_is_secured_where_the_rotor_cut_failed():
     on the gear, its rotors cut (with the magnet counted from 0.25 s after the switch, as
     before issue 19's feet fix, it also left the pad). The unaimed run's slide was the
     0.35 s level-out's (the cut at 0.5 s): since issue 19's feet fix the level-out and the
-    cut take 0.1 s, and the default seed lands unaimed as well."""
+    cut take 0.1 s, and the default seed lands unaimed as well. On the airframe made for
+    the speed (issue 19, as shipped) it meets the deck 0.048 m behind the centre leaning
+    39.4 deg, inside its gear's 63.4 deg, and lands secured either way, flying on or with
+    the rotors cut at the switch: the gear no longer tips, and the two magnets hold it."""
+    for policy in ('"secure"', '"idle"'):
+        new = touchdown_report(quadland.simulate(load_scenario(
+            "highway_100", ["sensors.enabled=false", f"touchdown.policy={policy}"])))
+        assert new.success and new.secured and not new.tipped
+        assert new.tilt_deg == pytest.approx(39.44, abs=0.01)
+    old = ["sensors.enabled=false", *HIGHWAY_100_OLD]
     idle = touchdown_report(quadland.simulate(load_scenario(
-        "highway_100", ["sensors.enabled=false", 'touchdown.policy="idle"'])))
+        "highway_100", [*old, 'touchdown.policy="idle"'])))
     assert not idle.success and idle.tipped and idle.tilt_deg > 36.9
     assert idle.failures == ["tilted", "tipped"]
     unaimed = touchdown_report(quadland.simulate(load_scenario(
-        "highway_100", ["sensors.enabled=false", "touchdown.pivot_aim=0.0",
+        "highway_100", [*old, "touchdown.pivot_aim=0.0",
                         "touchdown.level_time=0.35", "touchdown.cut_time=0.5"])))
     assert unaimed.secured and unaimed.failures == ["off the pad"]
     assert touchdown_report(quadland.simulate(load_scenario(
-        "highway_100", ["sensors.enabled=false", "touchdown.pivot_aim=0.0"]))).success
-    res = quadland.simulate(load_scenario("highway_100", ["sensors.enabled=false"]))
+        "highway_100", [*old, "touchdown.pivot_aim=0.0"]))).success
+    res = quadland.simulate(load_scenario("highway_100", old))
     rep = touchdown_report(res)
     assert rep.secured and not rep.tipped and rep.tilt_deg < 36.87
     assert rep.success and rep.failures == [] and rep.offset < 0.2
