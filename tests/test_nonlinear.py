@@ -221,13 +221,14 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     against ``quadland margins``' sampled-data closed loop at the same hover (the
     plant's Jacobian under an exact zero-order hold, the step's Jacobians, one period of
     delay): its eigenvalues are among the 125, within RK4's error over a 4 ms step
-    (the fastest plant mode's |lambda h|^5 / 120 is 2e-6; the gap is 6.55e-6 with
-    highway's observer on z, under 5e-6 before it), which falls sixteenfold as the steps
-    halve (RK4 is fourth order: 17.5 measured); the 18 others are the modes the margins'
-    model leaves out, in closed form."""
+    (the fastest plant mode's |lambda h|^5 / 120 is 2e-6; the closed loop's eigenvalues
+    carry it amplified by their conditioning: 6.55e-6 with highway's observer on z, under
+    5e-6 before it). That the gap is RK4's error and nothing else is checked by its order,
+    not its size: it falls sixteenfold as the steps halve (RK4 is fourth order; 17.5
+    measured); the 18 others are the modes the margins' model leaves out, in closed form."""
     sc, sys, op, pt = _hover()
     gap, extra = _eigenvalue_gap(sys, op, sc, pt)
-    assert gap == pytest.approx(6.55e-6, rel=0.01)
+    assert gap < 1e-5
     # the parked car: its position and heading (1), its speeds' damping exp(-d/m dt); the
     # gear's memory and the guidance's phase, timer and aborts (1); z_ref, which glides
     # back onto the hover height in one step, and the commit flag, set anew each step (0);
@@ -241,4 +242,4 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     np.testing.assert_allclose(extra, expected, rtol=0, atol=1e-7)
     sc2, sys2, op2, pt2 = _hover(rk_steps=2)
     gap2, _ = _eigenvalue_gap(sys2, op2, sc2, pt2)
-    assert gap2 < gap / 10
+    assert 12 < gap / gap2 < 20   # 2^4 = 16
