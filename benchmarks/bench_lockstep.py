@@ -1,6 +1,7 @@
 """The navigation filter's step, one instance at a time against W in lockstep (issue 20).
 
-Run with ``nice -n 10 python benchmarks/bench_lockstep.py [--rounds N] [--widths W ...]
+Run with ``nice -n 10 python benchmarks/bench_lockstep.py [--function F] [--rounds N]
+[--widths W ...]
 [--opts O2 O3] [--isas base avx2 avx512]``. For each build (an optimization level and
 an instruction set: ``base`` is x86-64's baseline, SSE2; ``avx2`` adds ``-mavx2``;
 ``avx512`` ``-mavx512f -mavx512dq``) and each W, one program holds CasADi's scalar C
@@ -8,7 +9,15 @@ of the step as ``generated/estimator_step.c`` has it and the lockstep C of the s
 Function (:func:`quadland_symbolic.codegen.lockstep.lockstep_c`), both compiled with
 the same flags (``-std=c99 -ffp-contract=off``, no ``-ffast-math``), and flies a table of
 64 calls of 8 filters (tests/lockstep_c.py's ``filter_flight``: packets due, late,
-stale, from the future, not finite and outliers) in four modes:
+stale, from the future, not finite and outliers) in four modes. ``--function
+landing_loop_plant`` measures the landing's plant with the contact instead (its C in
+``generated/landing_loop_plant.c``, the plant ``land -q`` spends most in), at the states
+of ``generated/example/land_scenario.h``'s start perturbed, its parameters, hover
+commands and a light wind, at times 4 ms apart; ``--function landing_loop_plant_flat``
+the same plant on a flat deck as the runtime flies a car's landing
+(:func:`quadland_symbolic.landing.flat_deck.flat_function`: the deck's sinusoids folded
+away), its scalar C written by CasADi here, without the NULL tests as ``generated/``
+has them. The modes:
 
 * ``check``: every lane of every lockstep call against the scalar call, bit for bit
   (the program exits 1 on a difference; the benchmark stops);
@@ -36,6 +45,7 @@ import tempfile
 from pathlib import Path
 from statistics import median
 
+import casadi as ca
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -44,6 +54,9 @@ sys.path.insert(0, str(ROOT / "tests"))
 from lockstep_c import filter_flight, filter_step  # noqa: E402
 
 from quadland_symbolic.codegen.lockstep import lockstep_c  # noqa: E402
+from quadland_symbolic.codegen.registry import BY_NAME  # noqa: E402
+from quadland_symbolic.landing.flat_deck import amplitude_indices, flat_function  # noqa: E402
+from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS  # noqa: E402
 
 STEPS, LANES = 64, 8
 ISAS = {"base": (), "avx2": ("-mavx2",), "avx512": ("-mavx512f", "-mavx512dq")}
@@ -58,7 +71,7 @@ HARNESS = r"""
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include "estimator_step.h"
+#include "FUNC.h"
 void LOCK(const double* const* arg, double* const* res);
 static const int nin[NI] = {NIN_}, nout[NO] = {NOUT_};
 static int oin[NI], oout[NO];
@@ -70,7 +83,7 @@ __attribute__((noinline)) static void scalar_step(int s) {
   for (int j = 0; j < W; ++j) {
     for (int i = 0; i < NI; ++i) arg[i] = table[s][j] + oin[i];
     for (int i = 0; i < NO; ++i) res[i] = out_s[j] + oout[i];
-    ql_casadi_estimator_step(arg, res, 0, work, 0);
+    ql_casadi_FUNC(arg, res, 0, work, 0);
   }
 }
 __attribute__((noinline)) static void lockstep_step(int s) {
@@ -124,31 +137,75 @@ int main(int argc, char** argv) {
 """
 
 
-def _table(path: Path):
-    fn = filter_step()
-    flights = [filter_flight(seed, STEPS) for seed in range(LANES)]
+def _header_array(name: str) -> np.ndarray:
+    text = (ROOT / "generated" / "example" / "land_scenario.h").read_text()
+    body = re.search(rf"{name}\[\d+\] = \{{([^}}]*)\}}", text).group(1)
+    return np.array([float(v) for v in body.replace(",", " ").split()])
+
+
+def _plant_flight(seed: int, steps: int) -> list[list[np.ndarray]]:
+    rng = np.random.default_rng(seed)
+    xp0, pp = _header_array("ql_land_xp0"), _header_array("ql_land_pp")
+    return [[xp0 + rng.normal(size=xp0.size) * 0.05, 4.9 + rng.normal(size=4) * 0.1,
+             rng.normal(size=9) * 0.5, np.array([7.0 + 0.004 * k]), pp]
+            for k in range(steps)]
+
+
+def _function(function: str):
+    if function == "estimator_step":
+        return filter_step()
+    if function == "landing_loop_plant_flat":
+        plant = BY_NAME["landing_loop_plant"].function(0)
+        flat = flat_function(plant, {"pp": amplitude_indices(LANDING_PLANT_PARAMS)})
+        return ca.Function(function, [flat.sx_in(i) for i in range(flat.n_in())],
+                           flat.call([flat.sx_in(i) for i in range(flat.n_in())]),
+                           flat.name_in(), flat.name_out())
+    return BY_NAME[function].function(0)
+
+
+def _scalar_c(fn, function: str, folder: Path) -> None:
+    """The scalar C as ``generated/`` has it, or written by CasADi (the flat plant)."""
+    if function != "landing_loop_plant_flat":
+        for ext in ("c", "h"):
+            shutil.copy(ROOT / "generated" / f"{function}.{ext}", folder)
+        return
+    named = ca.Function(f"ql_casadi_{function}", [fn.sx_in(i) for i in range(fn.n_in())],
+                        fn.call([fn.sx_in(i) for i in range(fn.n_in())]))
+    cg = ca.CodeGenerator(f"{function}.c", {"with_header": True})
+    cg.add(named)
+    cg.generate(str(folder) + os.sep)
+    c = (folder / f"{function}.c").read_text()
+    c = re.sub(r"arg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0", r"arg[\1][\2]", c)
+    c = re.sub(r"if \(res\[(\d+)\]!=0\) res\[\1\]", r"res[\1]", c)
+    (folder / f"{function}.c").write_text(c)
+
+
+def _table(path: Path, function: str):
+    fn = _function(function)
+    fly = filter_flight if function == "estimator_step" else _plant_flight
+    flights = [fly(seed, STEPS) for seed in range(LANES)]
     rows = [np.concatenate(flights[j][s]) for s in range(STEPS) for j in range(LANES)]
     np.asarray(rows, dtype=np.float64).tofile(path)
     return fn
 
 
-def _build(fn, folder: Path, width: int, opt: str, isa: str) -> Path:
+def _build(fn, folder: Path, width: int, opt: str, isa: str, function: str) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     name = f"lock{width}"
     (folder / "lock.c").write_text(lockstep_c(fn, width, name=name))
-    for ext in ("c", "h"):
-        shutil.copy(ROOT / "generated" / f"estimator_step.{ext}", folder)
+    _scalar_c(fn, function, folder)
     defs = dict(LOCK=name, NI=fn.n_in(), NO=fn.n_out(), S=STEPS, LANES=LANES, W=width,
                 TIN=sum(fn.nnz_in(i) for i in range(fn.n_in())),
                 TOUT=sum(fn.nnz_out(i) for i in range(fn.n_out())), SZW=max(fn.sz_w(), 1),
                 NIN=", ".join(str(fn.nnz_in(i)) for i in range(fn.n_in())),
                 NOUT=", ".join(str(fn.nnz_out(i)) for i in range(fn.n_out())))
     text = HARNESS.replace("NIN_", defs.pop("NIN")).replace("NOUT_", defs.pop("NOUT"))
+    text = text.replace("FUNC", function)
     (folder / "main.c").write_text(text)
     exe = folder / "bench"
     subprocess.run(["cc", *FLAGS, "-" + opt, *ISAS[isa], *(f"-D{k}={v}" for k, v in defs.items()),
                     "-I", str(folder), "-o", str(exe), str(folder / "main.c"),
-                    str(folder / "lock.c"), str(folder / "estimator_step.c"), "-lm"],
+                    str(folder / "lock.c"), str(folder / f"{function}.c"), "-lm"],
                    check=True)
     return exe
 
@@ -181,6 +238,9 @@ def _avx512_runs() -> bool:
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--function", default="estimator_step",
+                    choices=("estimator_step", "landing_loop_plant",
+                             "landing_loop_plant_flat"))
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--widths", type=int, nargs="+", help="W of every build (default: PLAN)")
     ap.add_argument("--opts", nargs="+", default=["O2", "O3"])
@@ -191,14 +251,15 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         table = tmp / "table.bin"
-        fn = _table(table)
+        fn = _table(table, args.function)
         builds = {}
         for opt in args.opts:
             for isa in isas:
                 for w in args.widths or PLAN[isa]:
                     key = (opt, isa, w)
                     t0 = os.times()
-                    exe = builds[key] = _build(fn, tmp / f"{opt}{isa}{w}", w, opt, isa)
+                    exe = builds[key] = _build(fn, tmp / f"{opt}{isa}{w}", w, opt, isa,
+                                               args.function)
                     t1 = os.times()
                     subprocess.run([str(exe), str(table), "check", "1"], check=True,
                                    capture_output=True)

@@ -5,11 +5,13 @@ branch-free arithmetic on different values. :func:`lockstep_c` writes a Function
 algorithm (CasADi's SX instructions, :meth:`casadi.Function.instruction_id` and its
 operands) as C in which every work value is a GCC vector of ``width`` doubles, one lane
 per instance: the additions, products, comparisons and selections become vector
-instructions, and libm's functions (sines, square roots, ``fmin`` ...) are called lane
-by lane. Each lane computes exactly what CasADi's own C computes for one instance, the
+instructions, ``fmin`` and ``fmax`` are written with vector masks as glibc computes
+them, and libm's other functions (sines, square roots, ``pow`` ...) are called lane by
+lane. Each lane computes exactly what CasADi's own C computes for one instance, the
 same operations in the same order, so with the compiler's default floating-point
-semantics (no ``-ffast-math``; ``-ffp-contract=off`` so that no product and sum fuse) the
-results are the scalar function's bit for bit (``tests/test_lockstep.py``).
+semantics (no ``-ffast-math``; ``-ffp-contract=off`` so that no product and sum fuse)
+the results are the scalar function's bit for bit (``tests/test_lockstep.py``), but
+for the sign of ``fmin``/``fmax`` of +0.0 and -0.0, which C leaves unspecified.
 
 A prototype for issue 20 (item 2, "vectorizing across runs"), measured in
 ``benchmarks/bench_lockstep.py`` and ``docs/performance.md`` ("Lockstep across runs");
@@ -24,7 +26,7 @@ import casadi as ca
 
 from quadland_symbolic.codegen.render import common_context, render
 
-__all__ = ["LANE_OPS", "VECTOR_OPS", "lockstep_c", "lockstep_supported"]
+__all__ = ["LANE_OPS", "MINMAX_OPS", "VECTOR_OPS", "lockstep_c", "lockstep_supported"]
 
 #: Operations written as vector expressions of the operands ``{x}`` and ``{y}`` (work
 #: vectors): CasADi's C for one instance (``(a0<a1)``, ``(a0?a1:0)``, ``(!a0)``,
@@ -52,6 +54,19 @@ VECTOR_OPS: dict[int, str] = {
     ca.OP_FABS: "({v})(({m}){x} & abs_)",
 }
 
+#: ``fmin`` and ``fmax`` as vector statements (``{o}``: the result): what glibc's x86-64
+#: ``fmin``/``fmax`` return (``sysdeps/x86_64/fpu/s_fmax.S``: ``minsd``/``maxsd``, so
+#: ``x`` when it is below (above) ``y``, else ``y``, ties of zeros included; the number
+#: when one operand is NaN; ``x + y`` when both are). C leaves the tie of +0.0 and -0.0
+#: unspecified, and a compiler may swap the operands of the scalar call (gcc does).
+MINMAX_OPS: dict[int, str] = {
+    op: ("{{ const {m} c_ = ({m})({x} " + cmp + " {y}), ny_ = ({m})({y} != {y}), "
+         "nn_ = ny_ & ({m})({x} != {x}); "
+         "{m} r_ = (c_ & ({m}){x}) | (~c_ & ({m}){y}); "
+         "r_ = (ny_ & ({m}){x}) | (~ny_ & r_); "
+         "{o} = ({v})((nn_ & ({m})({x} + {y})) | (~nn_ & r_)); }}")
+    for op, cmp in ((ca.OP_FMIN, "<"), (ca.OP_FMAX, ">"))}
+
 #: Operations evaluated lane by lane (``{x}``, ``{y}``: one lane of the operands), as
 #: CasADi's C writes them for one instance (C99 libm; ``casadi_sign``'s expression).
 LANE_OPS: dict[int, str] = {
@@ -59,7 +74,7 @@ LANE_OPS: dict[int, str] = {
        for name in ("sqrt", "exp", "log", "sin", "cos", "tan", "asin", "acos", "atan",
                     "sinh", "cosh", "tanh", "floor", "ceil", "erf", "expm1", "log1p")},
     **{getattr(ca, f"OP_{name.upper()}"): f"{name}({{x}}, {{y}})"
-       for name in ("atan2", "pow", "fmin", "fmax", "fmod", "copysign", "hypot")},
+       for name in ("atan2", "pow", "fmod", "copysign", "hypot")},
     ca.OP_CONSTPOW: "pow({x}, {y})",
     ca.OP_SIGN: "{x} < 0 ? -1.0 : {x} > 0 ? 1.0 : {x}",
 }
@@ -84,7 +99,7 @@ def lockstep_supported(fn: ca.Function) -> list[str]:
     list of str
         Sorted names (``"OP_CALL"``, ...); empty when every instruction is written.
     """
-    known = {ca.OP_INPUT, ca.OP_OUTPUT, ca.OP_CONST, *VECTOR_OPS, *LANE_OPS}
+    known = {ca.OP_INPUT, ca.OP_OUTPUT, ca.OP_CONST, *VECTOR_OPS, *MINMAX_OPS, *LANE_OPS}
     return sorted({_OP_NAMES.get(op, str(op)) for op in map(fn.instruction_id,
                                                              range(fn.n_instructions()))
                    if op not in known})
@@ -112,6 +127,8 @@ def _statement(fn: ca.Function, k: int, width: int, vec: str, mask: str) -> str:
     x, y = f"w{ins[0]}", f"w{ins[1]}" if op in _BINARY else ""
     if op in VECTOR_OPS:
         return f"w{out[0]} = " + VECTOR_OPS[op].format(x=x, y=y, v=vec, m=mask) + ";"
+    if op in MINMAX_OPS:
+        return MINMAX_OPS[op].format(x=x, y=y, o=f"w{out[0]}", v=vec, m=mask)
     if op in LANE_OPS:
         lane = LANE_OPS[op].format(x=f"{x}[l_]", y=f"{y}[l_]")
         return f"for (l_ = 0; l_ < {width}; ++l_) w{out[0]}[l_] = {lane};"
@@ -162,7 +179,8 @@ def lockstep_c(fn: ca.Function, width: int, name: str | None = None,
     scalar operation on lane ``j``'s operands, which IEEE 754 defines bit for bit; the
     truth values are built from comparison masks and the bits of 1.0, and the
     selections from masks and the selected operand's bits, which is what the scalar
-    C's ``(c?x:0)`` and ``(a<b)`` give (``+0.0`` when false).
+    C's ``(c?x:0)`` and ``(a<b)`` give (``+0.0`` when false); ``fmin`` and ``fmax``
+    are :data:`MINMAX_OPS`, libm's other functions are called lane by lane.
 
     Examples
     --------
