@@ -45,6 +45,7 @@ SPECIAL = (0.0, -0.0, 1.0, -1.0, 0.5, -2.5, 3.0, math.inf, -math.inf, math.nan, 
 def _every_op() -> ca.Function:
     """A Function using every operation the writer knows, on two inputs."""
     x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    xy = x * y
     e = [x + y, x - y, x * y, x / y, -x, x ** 2, 2 * x, 1 / x, x < y, x <= y, x == y,
          x != y, ca.logic_not(x), ca.logic_and(x, y), ca.logic_or(x, y),
          ca.if_else(x, y, 0), ca.if_else(x < y, ca.sin(x), ca.cos(y)), ca.fabs(x),
@@ -52,7 +53,8 @@ def _every_op() -> ca.Function:
          ca.atan(x), ca.sinh(x), ca.cosh(x), ca.tanh(x), ca.floor(x), ca.ceil(x), ca.erf(x),
          ca.expm1(x), ca.log1p(x), ca.atan2(x, y), x ** y, x ** 3.5, ca.fmin(x, y),
          ca.fmax(x, y), ca.fmod(x, y), ca.copysign(x, y), ca.hypot(x, y),
-         -0.0 * x + ca.DM(-0.0), ca.inf + x, 0.1 * x - 1e-300]
+         -0.0 * x + ca.DM(-0.0), ca.inf + x, 0.1 * x - 1e-300,
+         ca.sin(xy) - ca.cos(xy)]                 # a sine and cosine paired in one loop
     assert str(e[FMIN_FMAX[0]]) == "fmin(x,y)" and str(e[FMIN_FMAX[1]]) == "fmax(x,y)"
     return ca.Function("every_op", [x, y], [ca.vertcat(*e)], ["x", "y"], ["r"])
 
@@ -92,6 +94,7 @@ def test_the_test_function_uses_every_operation_the_writer_knows():
     # CasADi's SX algorithms copy a value by OP_INPUT/OP_OUTPUT, never by OP_ASSIGN
     assert (set(VECTOR_OPS) | set(MINMAX_OPS) | set(LANE_OPS)) - used == {ca.OP_ASSIGN}
     assert lockstep_supported(fn) == []
+    assert lockstep_c(fn, 4).count("= cos(x_); }") == 1
 
 
 @pytest.mark.parametrize("width", WIDTHS)

@@ -136,6 +136,60 @@ def _statement(fn: ca.Function, k: int, width: int, vec: str, mask: str) -> str:
                      "cannot write")
 
 
+def _sincos_pairs(fn: ca.Function) -> dict[int, int]:
+    """Each sine (cosine) instruction whose argument's cosine (sine) follows, before the
+    argument is written again: ``{first: second}``."""
+    pending: dict[int, tuple[int, int]] = {}
+    pairs = {}
+    for k in range(fn.n_instructions()):
+        op = fn.instruction_id(k)
+        if op in (ca.OP_SIN, ca.OP_COS):
+            v = fn.instruction_input(k)[0]
+            first = pending.pop(v, None)
+            if first is not None and first[1] != op:
+                pairs[first[0]] = k
+            else:
+                pending[v] = (k, op)
+        if op != ca.OP_OUTPUT:
+            pending.pop(fn.instruction_output(k)[0], None)
+    return pairs
+
+
+def _paired(fn: ca.Function, k: int, partner: int, width: int) -> str:
+    """Instruction ``k``, a sine or cosine, and its partner's value into ``t<k>`` in one
+    lane loop, where the compiler calls ``sincos`` once as in the scalar C."""
+    names = {ca.OP_SIN: "sin", ca.OP_COS: "cos"}
+    x, out = fn.instruction_input(k)[0], fn.instruction_output(k)[0]
+    return (f"for (l_ = 0; l_ < {width}; ++l_) {{ const double x_ = w{x}[l_]; "
+            f"w{out}[l_] = {names[fn.instruction_id(k)]}(x_); "
+            f"t{k}[l_] = {names[fn.instruction_id(partner)]}(x_); }}")
+
+
+def _body(fn: ca.Function, width: int, vec: str, mask: str) -> tuple[list[str], list[str]]:
+    """The statements of ``fn``'s algorithm and the vectors they use."""
+    body, used, written = [], set(), set()
+    pairs = _sincos_pairs(fn)
+    second = {k2: k1 for k1, k2 in pairs.items()}
+    for k in range(fn.n_instructions()):
+        if k in pairs:
+            body.append(_paired(fn, k, pairs[k], width))
+        elif k in second:
+            body.append(f"w{fn.instruction_output(k)[0]} = t{second[k]};")
+        else:
+            body.append(_statement(fn, k, width, vec, mask))
+        op = fn.instruction_id(k)
+        if op == ca.OP_OUTPUT:
+            written.add(tuple(fn.instruction_output(k)))
+        else:
+            used.add(fn.instruction_output(k)[0])
+    missing = [(i, nz) for i in range(fn.n_out()) for nz in range(fn.nnz_out(i))
+               if (i, nz) not in written]
+    if missing:
+        raise ValueError(f"lockstep_c: {fn.name()} leaves output nonzeros unwritten "
+                         f"(first: output {missing[0][0]}, nonzero {missing[0][1]})")
+    return body, [f"w{i}" for i in sorted(used)] + [f"t{k}" for k in sorted(pairs)]
+
+
 def lockstep_c(fn: ca.Function, width: int, name: str | None = None,
                source: str | None = None) -> str:
     """C of ``fn`` evaluating ``width`` instances in lockstep, one per vector lane.
@@ -180,7 +234,10 @@ def lockstep_c(fn: ca.Function, width: int, name: str | None = None,
     truth values are built from comparison masks and the bits of 1.0, and the
     selections from masks and the selected operand's bits, which is what the scalar
     C's ``(c?x:0)`` and ``(a<b)`` give (``+0.0`` when false); ``fmin`` and ``fmax``
-    are :data:`MINMAX_OPS`, libm's other functions are called lane by lane.
+    are :data:`MINMAX_OPS`, libm's other functions are called lane by lane. A sine and
+    a cosine of one value are computed in one lane loop (the second kept in a vector
+    ``t<k>`` until its turn), where the compiler calls ``sincos`` once, as it does in
+    the scalar C (the same bits: glibc's ``sincos`` is its ``sin`` and ``cos``).
 
     Examples
     --------
@@ -197,20 +254,7 @@ def lockstep_c(fn: ca.Function, width: int, name: str | None = None,
     if not re.fullmatch(r"[A-Za-z_]\w*", name):
         raise ValueError(f"lockstep_c: {name!r} is not a C name")
     vec, mask = f"{name}_v", f"{name}_m"
-    body, used, written = [], set(), set()
-    for k in range(fn.n_instructions()):
-        body.append(_statement(fn, k, width, vec, mask))
-        op = fn.instruction_id(k)
-        if op == ca.OP_OUTPUT:
-            written.add(tuple(fn.instruction_output(k)))
-        else:
-            used.add(fn.instruction_output(k)[0])
-    missing = [(i, nz) for i in range(fn.n_out()) for nz in range(fn.nnz_out(i))
-               if (i, nz) not in written]
-    if missing:
-        raise ValueError(f"lockstep_c: {fn.name()} leaves output nonzeros unwritten "
-                         f"(first: output {missing[0][0]}, nonzero {missing[0][1]})")
-    names = [f"w{i}" for i in sorted(used)]
+    body, names = _body(fn, width, vec, mask)
     work = [", ".join(names[i:i + 12]) for i in range(0, len(names), 12)]
     what = re.sub(r"\s+", " ", str(fn)).removesuffix(" SXFunction")
     return render("lockstep.c.jinja", name=name, width=width, vec=vec, mask=mask,
