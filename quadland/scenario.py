@@ -28,11 +28,11 @@ from quadland.schema import (
     MODELS,
     SCHEMAS,
     check_value,
-    did_you_mean,
     nest_sections,
     show,
     split_dotted,
 )
+from quadland.schema.override import check_override_key, own_key, unknown_name
 
 __all__ = ["Scenario", "load_scenario", "scenario_names", "SCENARIO_DIR", "toml_value"]
 
@@ -216,14 +216,8 @@ def load_scenario(name_or_path: str | Path = "paper",
             _check_campaign_key(dotted, key)
             campaign[key] = value
             continue
-        if not any(section in schema for schema in SCHEMAS.values()):
-            raise ScenarioError(f"override {show(dotted)}: "
-                                f"{_unknown('section', section, _SECTIONS)}")
-        known = {k for schema in SCHEMAS.values() for k in schema.get(section, {})}
-        if key not in known:                        # a dot left in it: a sub-section's
-            raise ScenarioError(f"override {show(dotted)}: " + (
-                _unknown("section", f"{section}.{key.rpartition('.')[0]}", _SECTIONS)
-                if "." in key else _unknown("key", f"{section}.{key}", _dotted_all(section))))
+        if not own_key(raw, section, key):         # else: any model's, or an error
+            check_override_key(dotted, section, key)
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise ScenarioError(f"{path}: [{section}] must be a table")
@@ -405,11 +399,6 @@ def _parse_overrides(overrides) -> list[tuple[str, Any]]:
     return pairs
 
 
-def _unknown(what: str, name: str, known: Iterable[str]) -> str:
-    hint = did_you_mean(name, known)
-    return f"unknown {what} '{show(name)}'" + (f" (did you mean '{hint}'?)" if hint else "")
-
-
 def _model(raw: Mapping) -> str:
     """``scenario.model`` of a raw scenario, checked; "paper" when absent."""
     table = raw.get("scenario", {})
@@ -440,7 +429,7 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario",
         if section not in schema:
             given = [d for (s, _), d in overridden.items() if s == section]
             where = f"override {show(given[0])}" if given else source
-            raise ScenarioError(f"{where}: {_unknown('section', section, schema)}"
+            raise ScenarioError(f"{where}: {unknown_name('section', section, schema)}"
                                 + _other_model(section, model))
         if not isinstance(table, Mapping):
             raise ScenarioError(f"{source}: [{section}] must be a table")
@@ -450,8 +439,8 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario",
                     if (section, key) in overridden else source
                 name = f"{section}.{key}"
                 if isinstance(table[key], Mapping):     # [sensors.visoin]: a sub-table
-                    raise ScenarioError(f"{where}: {_unknown('section', name, schema)}")
-                raise ScenarioError(f"{where}: {_unknown('key', name, _dotted(section, model))}"
+                    raise ScenarioError(f"{where}: {unknown_name('section', name, schema)}")
+                raise ScenarioError(f"{where}: {unknown_name('key', name, _dotted(section, model))}"
                                     + _other_model(section, model, key))
     for section, fields in schema.items():
         table = raw.get(section, {})
@@ -468,10 +457,6 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario",
     return out
 
 
-#: Every section of every schema.
-_SECTIONS = tuple(dict.fromkeys(s for schema in SCHEMAS.values() for s in schema))
-
-
 def _other_model(section: str, model: str, key: str | None = None) -> str:
     """A hint when the section or key belongs to another model's schema."""
     for other, schema in SCHEMAS.items():
@@ -479,12 +464,6 @@ def _other_model(section: str, model: str, key: str | None = None) -> str:
             return f" (a key of scenario.model = \"{other}\")" if key else \
                 f" (a section of scenario.model = \"{other}\")"
     return ""
-
-
-def _dotted_all(section: str) -> list[str]:
-    """``section.key`` of every model's schema (for did-you-mean)."""
-    return sorted({f"{section}.{k}" for schema in SCHEMAS.values()
-                   for k in schema.get(section, {})})
 
 
 def _dotted(section: str, model: str = DEFAULT_MODEL) -> list[str]:

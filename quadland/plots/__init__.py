@@ -15,39 +15,15 @@ its display formatter only once pyplot is imported, so without it a notebook
 shows ``<Figure size 700x820 with 4 Axes>``. Nothing happens outside IPython,
 and the backend is never changed.
 
-The margin figures import python-control; they are loaded on first use so
-that drawing a simulation does not pay for it.
+Each figure's module is loaded on first use of one of its names, so that a
+command pays only for the figures it draws.
 """
 
+import importlib
 import io
 import sys
 
 from matplotlib.figure import Figure
-
-from quadland.plots.animation import landing_animation
-from quadland.plots.landing import (
-    LANDING_FIGURES,
-    landing_figures,
-    landing_ground_track_plot,
-    landing_limits,
-    relative_position_plot,
-    rotor_forces_plot,
-    trajectory_3d_plot,
-)
-from quadland.plots.navigation import (
-    NAVIGATION_FIGURES,
-    consistency_plot,
-    navigation_plot,
-)
-from quadland.plots.simulation import (
-    SIMULATION_FIGURES,
-    control_inputs_plot,
-    ground_track_plot,
-    relative_errors_plot,
-    simulation_figures,
-    uncertainty_plot,
-    velocity_errors_plot,
-)
 
 __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "velocity_errors_plot", "control_inputs_plot", "uncertainty_plot",
@@ -57,17 +33,35 @@ __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "relative_position_plot", "landing_ground_track_plot", "rotor_forces_plot",
            "landing_animation", "NAVIGATION_FIGURES", "navigation_plot", "consistency_plot"]
 
-_LAZY = {"MARGIN_FIGURES": "MARGIN_FIGURES", "margin_figures": "margin_figures",
-         "bode_plot": "bode_plot", "nyquist_plot": "nyquist_plot",
-         "nichols_plot": "nichols_plot", "sigma_plot": "sigma_plot", "pole_plot": "pole_plot"}
+#: Each name's module, loaded on first use: a command imports only the figures it
+#: draws (the margin figures do not pay for the landing's, its 3D axes and its
+#: navigation filter's symbolic modules).
+_LAZY = {
+    **dict.fromkeys(("SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
+                     "velocity_errors_plot", "control_inputs_plot", "uncertainty_plot",
+                     "ground_track_plot"), "quadland.plots.simulation"),
+    **dict.fromkeys(("MARGIN_FIGURES", "margin_figures", "bode_plot", "nyquist_plot",
+                     "nichols_plot", "sigma_plot", "pole_plot"), "quadland.plots.margins"),
+    **dict.fromkeys(("LANDING_FIGURES", "landing_figures", "landing_limits",
+                     "trajectory_3d_plot", "relative_position_plot",
+                     "landing_ground_track_plot", "rotor_forces_plot"),
+                    "quadland.plots.landing"),
+    "landing_animation": "quadland.plots.animation",
+    **dict.fromkeys(("NAVIGATION_FIGURES", "navigation_plot", "consistency_plot"),
+                    "quadland.plots.navigation"),
+}
 
 
 def __getattr__(name):
     if name in _LAZY:
-        from quadland.plots import margins
-
-        return getattr(margins, _LAZY[name])
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
     raise AttributeError(f"module 'quadland.plots' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
 
 
 def _figure_png(fig: Figure) -> bytes:

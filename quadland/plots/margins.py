@@ -26,6 +26,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
+from quadland.plots.canvas import new_figure
 from quadland.plots.frequency import (
     LoopCurves,
     crossing_phase,
@@ -33,6 +34,7 @@ from quadland.plots.frequency import (
     loop_curves,
     m_circle,
 )
+from quadland.plots.log_labels import plain_log_labels
 from quadland.plots.log_minor import cheap_minor_ticks
 from quadland.plots.overlay import redraw_legend, run_index, run_tag
 from quadland.plots.sensitivity import RUN_GID, pole_plot, sigma_plot
@@ -141,6 +143,7 @@ def _bode(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
         for a in (mag, phase):
             a.grid(True, which="both", alpha=0.3)
             cheap_minor_ticks(a)
+            plain_log_labels(a)
             redraw_legend(a, fontsize="x-small", loc="best")
     ax[0, 0].set_ylabel("|l| [dB]")
     ax[1, 0].set_ylabel("arg l [deg], crossover in [-360, 0)")
@@ -149,7 +152,7 @@ def _bode(report: MarginReport, curves: tuple[LoopCurves, ...], ax) -> Figure:
 
 
 def _new(rows: int, cols: int, size, **kw):
-    fig = Figure(figsize=size)
+    fig = new_figure(size)
     return fig, fig.subplots(rows, cols, squeeze=False, **kw)
 
 

@@ -20,7 +20,9 @@ from quadland.analysis import (
     response_of,
     sensitivity_sigma,
 )
+from quadland.plots.canvas import new_figure
 from quadland.plots.frequency import POINTS_PER_DECADE
+from quadland.plots.log_labels import plain_log_labels
 from quadland.plots.log_minor import cheap_minor_ticks
 from quadland.plots.overlay import redraw_legend, run_index, run_tag
 
@@ -57,7 +59,7 @@ def _sigma_curves(report: MarginReport):
 
 def _axes(ax, count: int, size) -> tuple[Figure, list]:
     if ax is None:
-        fig = Figure(figsize=size)
+        fig = new_figure(size)
         return fig, list(np.ravel(fig.subplots(1, count)))
     axes = list(np.ravel(np.asarray(ax, dtype=object)))
     return axes[0].figure, axes
@@ -114,6 +116,7 @@ def sigma_plot(report: MarginReport, ax=None, label: str | None = None) -> Figur
         a.set_ylabel("sigma [dB]")
         a.grid(True, which="both", alpha=0.3)
         cheap_minor_ticks(a)
+        plain_log_labels(a)
         redraw_legend(a, fontsize="small", loc="lower left" if a is a_T else "lower right")
     fig.tight_layout()
     return fig

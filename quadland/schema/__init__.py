@@ -9,9 +9,12 @@ and one line to :data:`SCHEMAS` and :data:`CROSS_CHECKS`.
 from __future__ import annotations
 
 import difflib
+import functools
+import importlib
 from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
 
+from quadland.schema.by_model import ByModel
 from quadland.schema.fields import (
     MAX_DURATION_S,
     MAX_RATE_HZ,
@@ -19,21 +22,27 @@ from quadland.schema.fields import (
     check_value,
     show,
 )
-from quadland.schema.landing import LANDING_SCHEMA, check_landing
-from quadland.schema.paper import PAPER_SCHEMA, check_paper
+from quadland.schema.paper import PAPER_SCHEMA
 
 __all__ = ["Field", "check_value", "show", "MAX_RATE_HZ", "MAX_DURATION_S", "PAPER_SCHEMA",
            "LANDING_SCHEMA", "SCHEMAS", "CROSS_CHECKS", "MODELS", "DEFAULT_MODEL",
-           "SHARED_KEYS", "CAMPAIGN_KEYS", "SECTIONS", "split_dotted", "nest_sections",
+           "SHARED_KEYS", "CAMPAIGN_KEYS", "SECTIONS", "sections", "split_dotted", "nest_sections",
            "did_you_mean"]
 
-#: The schema of each model (``scenario.model``; "paper" when absent).
-SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = MappingProxyType(
-    {"paper": PAPER_SCHEMA, "landing": LANDING_SCHEMA})
+#: Names this package loads on first use: the landing's schema imports the landing's
+#: symbolic modules, which a paper scenario does not need (:mod:`quadland.schema.by_model`).
+_LAZY = {"LANDING_SCHEMA": "quadland.schema.landing"}
+
+#: The schema of each model (``scenario.model``; "paper" when absent), each loaded
+#: when first read.
+SCHEMAS: Mapping[str, Mapping[str, Mapping[str, Field]]] = ByModel(
+    {"paper": ("quadland.schema.paper", "PAPER_SCHEMA"),
+     "landing": ("quadland.schema.landing", "LANDING_SCHEMA")})
 
 #: Each model's rules across keys, run after every key passed its own check.
-CROSS_CHECKS: Mapping[str, Callable[[dict], None]] = MappingProxyType(
-    {"paper": check_paper, "landing": check_landing})
+CROSS_CHECKS: Mapping[str, Callable[[dict], None]] = ByModel(
+    {"paper": ("quadland.schema.paper", "check_paper"),
+     "landing": ("quadland.schema.landing", "check_landing")})
 
 #: The models a scenario may select with ``scenario.model``.
 MODELS = tuple(SCHEMAS)
@@ -62,9 +71,25 @@ CAMPAIGN_KEYS: Mapping[str, str] = MappingProxyType({
     "runs": "number of runs", "seed": "campaign seed", "sampling": "random, sobol or lhs",
     "dispersions": "table of dispersed keys", "limits": "table of metric upper limits"})
 
-#: Every section of every schema; a section's name may hold a dot (``sensors.vision``,
-#: TOML's ``[sensors.vision]``, a table inside ``[sensors]``).
-SECTIONS = tuple(dict.fromkeys(s for schema in SCHEMAS.values() for s in schema))
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        value = globals()[name] = getattr(importlib.import_module(_LAZY[name]), name)
+        return value
+    if name == "SECTIONS":
+        return sections()
+    raise AttributeError(f"module 'quadland.schema' has no attribute {name!r}")
+
+
+@functools.cache
+def sections() -> tuple[str, ...]:
+    """Every section of every schema (:data:`SECTIONS`, every schema loaded).
+
+    A section's name may hold a dot (``sensors.vision``, TOML's
+    ``[sensors.vision]``, a table inside ``[sensors]``).
+    """
+    return tuple(dict.fromkeys(s for schema in SCHEMAS.values() for s in schema))
 
 
 def split_dotted(dotted: str) -> tuple[str, str]:
@@ -72,7 +97,7 @@ def split_dotted(dotted: str) -> tuple[str, str]:
     (``sensors.vision.latency`` is ``sensors.vision``'s ``latency``), else the part before
     the first dot."""
     head, dot, tail = dotted.rpartition(".")
-    if dot and head in SECTIONS and "." in head:
+    if dot and "." in head and head in sections():
         return head, tail
     section, _, key = dotted.partition(".")
     return section, key
@@ -82,7 +107,13 @@ def nest_sections(raw: dict) -> dict:
     """Parsed TOML with each dotted section's table (``raw["sensors"]["vision"]``) moved to
     its own name (``raw["sensors.vision"]``); other entries as they are."""
     out = dict(raw)
-    for section in SECTIONS:
+    # a table in a table is looked up in every schema's sections; [campaign]'s are the
+    # campaign's own (no schema has a campaign section): a paper scenario without one
+    # reads no other model's schema
+    if not any(isinstance(v, dict) for name, table in raw.items()
+               if name != "campaign" and isinstance(table, dict) for v in table.values()):
+        return out
+    for section in sections():
         parent, dot, child = section.rpartition(".")
         table = out.get(parent)
         if dot and isinstance(table, dict) and isinstance(table.get(child), dict):

@@ -23,8 +23,8 @@ from quadland.engine.flightcode import Library, ctypes_struct, label, pointer_ar
 from quadland.engine.recall import code_recipe
 from quadland.kinds.paper.values import model_values
 from quadland.scenario import Scenario, load_scenario
-from quadland_symbolic.codegen import FUNCTIONS, CodegenConfig, Defaults, c_sources
-from quadland_symbolic.codegen.structs import api_structs
+from quadland_symbolic import codegen
+from quadland_symbolic.codegen import CodegenConfig, Defaults
 from quadland_symbolic.control_step import step_inputs, step_outputs
 
 __all__ = ["PAPER_SCENARIO", "EXAMPLE_CONTROL_RATE_HZ", "paper_defaults", "default_paper",
@@ -38,7 +38,12 @@ PAPER_SCENARIO = "paper"
 #: Hz (a flight stack's typical rate); a sampled scenario's own rate otherwise.
 EXAMPLE_CONTROL_RATE_HZ = 500.0
 
-_MODEL = tuple(f.name for f in FUNCTIONS if f.part == "paper")
+
+
+def _model_functions() -> tuple[str, ...]:
+    """The paper model's registered functions (the registry is loaded when first needed:
+    it imports every kind's symbolic modules, which a cached simulator does not need)."""
+    return tuple(f.name for f in codegen.FUNCTIONS if f.part == "paper")
 
 
 def paper_defaults(sc: Scenario) -> Defaults:
@@ -92,7 +97,7 @@ def flight_files(l: int, precision: str = "double") -> dict[str, str]:
 
 def flight_code(l: int) -> FlightCode:
     """The control step the sampled simulator flies with ``controller.backend = "c"``."""
-    return FlightCode(c_sources(("control_step",)), code_recipe("paper flight", f"l={l}"),
+    return FlightCode(codegen.c_sources(("control_step",)), code_recipe("paper flight", f"l={l}"),
                       functools.partial(_flight_files, l, "double"))
 
 
@@ -111,11 +116,11 @@ class CControlStep:
     def __init__(self, l: int, precision: str = "double", opt: str = "-O2"):
         self.l, self.precision = l, precision
         files = flight_files(l, precision)
-        self.library = build_library(files, c_sources(), opt)
+        self.library = build_library(files, codegen.c_sources(), opt)
         self._lib = ctypes.CDLL(str(self.library))
         self._real = real_type(precision)
         self._dtype = np.float64 if precision == "double" else np.float32
-        entry = next(f for f in FUNCTIONS if f.name == "control_step")
+        entry = next(f for f in codegen.FUNCTIONS if f.name == "control_step")
         fn = getattr(self._lib, entry.c_name(CodegenConfig(precision)))
         ptr = ctypes.POINTER(self._real)
         fn.argtypes = [ctypes.POINTER(ptr), ctypes.POINTER(ptr), ctypes.POINTER(ctypes.c_int),
@@ -203,9 +208,11 @@ class CApi:
 def load_api(l: int, precision: str = "double", opt: str = "-O2", model: bool = True) -> CApi:
     """The generated library: the step's API and, with ``model``, the closed
     loop, its Jacobian and the plant (whose compilation takes most of the time)."""
+    from quadland_symbolic.codegen.structs import api_structs  # the landing's too: on use
+
     files = flight_files(l, precision)
     config = CodegenConfig(precision)
-    compiled = c_sources(_MODEL if model else ())
+    compiled = codegen.c_sources(_model_functions() if model else ())
     lib = Library(ctypes.CDLL(str(build_library(files, compiled, opt))), config.prefix)
     real = real_type(precision)
     api = CApi(lib=lib, real=real,
@@ -223,7 +230,7 @@ def load_api(l: int, precision: str = "double", opt: str = "-O2", model: bool = 
                                                P(api.Reference), P(real)]
     if not model:
         return api
-    for entry in FUNCTIONS:
+    for entry in codegen.FUNCTIONS:
         if entry.wrapper is None or entry.part != "paper":
             continue
         ins, outs = entry.arguments(l)
