@@ -43,7 +43,7 @@ SCENARIOS = ("highway", "turning", "ship", "ship_ss5", "highway_100")
 #: 1 and 6.) highway_100 on its sensors aborted once, above the crawl, until the descent
 #: paused out of the align band instead (touchdown 23.37 s).
 ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 0,
-          ("ship_ss5", "sensors"): 0, ("highway_100", "sensors"): 0,
+          ("ship_ss5", "sensors"): 1, ("highway_100", "sensors"): 0,
           ("highway", "perfect"): 0, ("turning", "perfect"): 0, ("ship", "perfect"): 0,
           ("ship_ss5", "perfect"): 0, ("highway_100", "perfect"): 0}
 #: trajectory.csv's columns, as the issue names them.
@@ -102,7 +102,9 @@ def _first_rows(phase):
 def test_lands_within_the_limits_at_the_default_seed(name, sensing):
     """On its sensors and on the true state, each lands at the default seed after the
     measured number of aborted descents (:data:`ABORTS`: none on a car's roof; before the
-    descent waited for the marker, the ship aborted once on its sensors). highway_100
+    descent waited for the marker, the ship aborted once on its sensors; ship_ss5 aborts
+    once on its sensors since the sensors' draws come in blocks, issue 20: its default
+    seed's noise is another realization, and it lands at 21.8 s). highway_100
     lands with the touchdown policy that flies on until the magnet holds (``[touchdown]
     policy = "secure"``, issue 18): with the rotors cut at the contact switch it tipped
     over on the true state (a 39 deg lean past the gear's 36.9 deg) and bounced 2.2 cm on
