@@ -475,12 +475,15 @@ def test_wind_acts_as_the_drag_of_the_air_velocity():
                f"wind.mean={wind.tolist()}", "disturbance.force_bias=[0.0, 0.0, 0.0]",
                "disturbance.force_amplitude=0.0", "disturbance.noise=false")
     c, Kt = _csv(res), np.asarray(res.scenario["quadrotor.drag_translational"])
-    # the last row before the touchdown phase is the touchdown event's own, logged at the
-    # instant the gear meets the deck (off the output grid): its force holds the contact's
-    k = np.flatnonzero(c["phase"] < TOUCHDOWN)
-    off_grid = abs(100 * c["t"][k[-1]] - round(100 * c["t"][k[-1]])) > 1e-6
-    assert off_grid and abs(c["d_Fz"][k[-1]]) > 1.0
-    for j in k[:-1][::50]:
+    # the first contact's row, logged at the instant the gear meets the deck (off the
+    # output grid), and the rows after it hold the contact's force too (the touchdown
+    # phase comes with the flight code's contact switch, a row later at this seed since
+    # the sensors' draws come in blocks, issue 20): the rows before it, the drag alone
+    first = int(np.argmax(res["touched"] > 0.5))
+    assert first > 0 and np.all(c["phase"][:first] < TOUCHDOWN)
+    off_grid = abs(100 * c["t"][first] - round(100 * c["t"][first])) > 1e-6
+    assert off_grid and abs(c["d_Fz"][first]) > 1.0
+    for j in range(0, first, 50):
         R = rotation((c["phi1"][j], c["theta1"][j], c["psi1"][j]))
         d_F = [c["d_Fx"][j], c["d_Fy"][j], c["d_Fz"][j]]
         np.testing.assert_allclose(d_F, Kt * (R.T @ wind), atol=1e-9)
