@@ -46,17 +46,20 @@ def test_the_ships_vertical_gains_are_faster_than_the_horizontal_ones():
 
 
 @pytest.mark.parametrize("name,index,before,after", [
-    # ship run 138 (Tp 9.1 s): the same calm window, contact at 36.71 s and at 36.87 s
-    ("ship", 138, (0.5268, -0.4959), (0.3001, -0.1931)),
-    # ship_ss5 run 228 (Tp 11.5 s): contact at 15.15 s and at 15.09 s
-    ("ship_ss5", 228, (0.5454, -0.4862), (0.3514, -0.2385)),
+    # ship run 84: contact at 19.22 s and at 19.40 s
+    ("ship", 84, (0.5183, -0.5226), (0.2569, -0.2628)),
+    # ship_ss5 run 36: contact at 17.13 s both times
+    ("ship_ss5", 36, (0.5437, -0.5664), (0.3813, -0.4047)),
 ])
 def test_a_campaign_sink_rate_failure_lands_with_the_faster_vertical_loop(
         name, index, before, after):
     """Before, the run met the deck over the 0.5 m/s sink-rate limit, and the filter's own
-    relative vertical velocity (what the controller tracks) was already 0.19-0.20 m/s past
-    the 0.3 m/s crawl: the loop's lag, most of the excess (the rest, 0.03-0.06 m/s, the
-    estimate's error). After, the same draws land, the estimate within the crawl."""
+    relative vertical velocity (what the controller tracks) was already 0.22-0.27 m/s past
+    the 0.3 m/s crawl: the loop's lag, most of the excess (the estimate's error under 0.02
+    m/s). After, the same draws land. (Replayed on the sensors' draws in blocks, issue 20;
+    on the draws of before the reproducers were ship run 138 and ship_ss5 run 228. On the
+    new draws not every sink-rate failure is the lag: ship_ss5's runs 24, 73 and 97 met the
+    deck 0.11-0.13 m/s faster than the filter's estimate.)"""
     rep, vz_hat, vz = _run(name, index, *OLD_Z)
     assert rep.sink_rate == pytest.approx(before[0], abs=5e-4)
     assert vz == pytest.approx(-rep.sink_rate, abs=0.01)  # the true relative speed, 10 ms before

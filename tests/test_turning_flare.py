@@ -3,9 +3,11 @@
 
 The turning car's 300-run campaign landed 295 on ``bf41d33``: four runs met the roof
 leaning 23.9 to 28.9 deg against the 23.3 deg limit (two of them then slid off the pad),
-one never touched down. The shipped settings fly on through a 21 deg flare over the
-committed crawl; the reproducers below are those runs, replayed from the campaign's draws
-with the settings of before (``BEFORE``, ``bf41d33``'s file to the bit) and as shipped.
+one never touched down. On the sensors' draws in blocks (issue 20) the settings of before
+land 293 (five tilt failures, two sink rate), as shipped 298 (two offsets, 0.209 and
+0.224 m). The shipped settings fly on through a 21 deg flare over the committed crawl;
+the reproducers below are the tilt failures, replayed from the campaign's draws with the
+settings of before (``BEFORE``, ``bf41d33``'s file to the bit) and as shipped.
 """
 
 import math
@@ -58,40 +60,28 @@ def test_calm_air_steady_tilt_is_the_hand_derived_one():
     assert r.success and r.tilt_deg == pytest.approx(13.3, abs=0.05)
 
 
-def test_campaign_run_11_met_the_roof_leaning_26_6_deg_and_now_inside_the_flare():
-    """Run 11 (turbulence_w20 10.7 m/s): a gust in the crawl leaned it from 9 to 26.6
-    deg in the last 0.3 s before contact (the tilt failure); flown through the flare it
-    meets the roof at 18.3 deg, on the pad and secured."""
-    before = _campaign_run(11, *BEFORE)
-    assert before.tilt_deg == pytest.approx(26.625, abs=5e-4)
-    assert before.failures == ["tilt_deg"]
-    now = _campaign_run(11)
+#: The tilt failures of turning's 300-run campaign (default campaign seed) flown with the
+#: settings of before, replayed: run, its tilt at contact before and as shipped (deg).
+#: (On the sensors' draws of before, issue 20's blocks, the campaign of before failed
+#: runs 11, 170, 200, 221 on the tilt, two of them then off the pad, and run 295 never
+#: touched down; bf41d33's figures in docs/landing.md are those.)
+TILTED = [(19, 25.491, 8.406), (32, 28.825, 19.557), (36, 25.313, 15.169),
+          (221, 25.056, 20.300), (294, 28.126, 21.244)]
+
+
+@pytest.mark.parametrize(("index", "before_deg", "now_deg"), TILTED)
+def test_the_campaigns_tilt_failures_of_before_land_inside_the_flare(index, before_deg,
+                                                                     now_deg):
+    """Each met the roof past turning's 23.3 deg limit (a gust in the committed crawl,
+    the rotors cut at the switch, the 30 deg tilt limit); flown through the 21 deg flare
+    it meets the roof under the limit (within the flare but for the attitude's overshoot,
+    at most 0.25 deg here), on the pad and secured."""
+    before = _campaign_run(index, *BEFORE)
+    assert before.failures == ["tilt_deg"] and before.tilt_deg > 23.3
+    assert before.tilt_deg == pytest.approx(before_deg, abs=5e-4)
+    now = _campaign_run(index)
     assert now.success and now.on_pad and now.secured
-    assert now.tilt_deg == pytest.approx(18.263, abs=5e-4)
-
-
-def test_campaign_run_221_tilted_and_slid_off_the_pad_and_now_lands():
-    """Run 221 (turbulence_w20 13.1 m/s) leaned 28.9 deg at the contact, held at the
-    controller's old 30 deg limit, drifted 0.16 m back and slid off the pad; as shipped it
-    lands at 20.4 deg, 0.116 m from the centre."""
-    before = _campaign_run(221, *BEFORE)
-    assert before.tilt_deg == pytest.approx(28.936, abs=5e-4)
-    assert before.failures == ["tilt_deg", "off the pad"]
-    now = _campaign_run(221)
-    assert now.success and now.on_pad
-    assert now.tilt_deg == pytest.approx(20.373, abs=5e-4)
-    assert now.offset == pytest.approx(0.1157, abs=5e-4)
-
-
-def test_campaign_run_295_never_touched_down_and_now_lands():
-    """Run 295 (turbulence_w20 15.05 m/s, the table's top): its GNSS bias put the pad out
-    of the camera's view at the hover point, it climbed to search for it and its
-    descent, paused out of the align band again and again, ran out of the 40 s; with the
-    45 deg tilt limit it touches down at 18.26 s."""
-    before = _campaign_run(295, *BEFORE)
-    assert not before.touchdown and before.failures == ["no touchdown"]
-    now = _campaign_run(295)
-    assert now.success and now.time == pytest.approx(18.259, abs=5e-4)
+    assert now.tilt_deg == pytest.approx(now_deg, abs=5e-4) and now.tilt_deg < 21.25
 
 
 def test_the_observer_alone_leaves_no_slow_tail_in_calm_air():
