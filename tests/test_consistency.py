@@ -113,9 +113,8 @@ def test_a_range_beam_beside_the_roof_is_told_apart_by_hand(hover):
     (z1 - z2) / b3_z``; on the deck where that point lies within the roof's half-length
     and half-width of the pad (the car drives along x). Handed over level, then leaning
     20-25 deg into the airflow from 3 m, the beam meets the plane over 1 m behind the
-    pad, on the road: both kinds occur. (With the observer on z and no outer bias
-    estimates on x, y, docs/landing.md, the beam leaves the roof after 1.09 s, row 272;
-    after 0.16 s, row 39, before.)"""
+    pad, on the road: both kinds occur, the beam on the roof first and then off it for
+    good (it leaves after about 0.2 to 1.1 s, with the law and the sensors' draws)."""
     from quadland.kinds.landing.consistency import _on_deck
     from quadland_symbolic.kinematics import rotation
 
@@ -130,7 +129,8 @@ def test_a_range_beam_beside_the_roof_is_told_apart_by_hand(hover):
             hover["y1"][k] - s * b3[1] - hover["y2"][k]
         want[k] = abs(dx) <= c["deck_half_length"] and abs(dy) <= c["deck_half_width"]
     np.testing.assert_array_equal(got, want)
-    assert want[0] and want[272] and not want[273:].any()
+    left = int(np.argmin(want))                     # the first row off the roof
+    assert want[0] and left > 0 and not want[left:].any()
 
 
 # ---------------------------------------------------------------- the Monte Carlo
