@@ -77,14 +77,16 @@ def _body_acceleration(xp, F, pp):
 
 def test_top_speed_at_the_tilt_limit_is_the_closed_form_and_realistic():
     """At the shipped drag (PX4's EKF2_MCOEF and EKF2_BCOEF_X defaults for 2 kg) the
-    quadrotor at the 30 deg tilt limit (the ships'; highway's and turning's is 45 deg since
-    issue 19's bar, 33.3 m/s) stops accelerating at 21.45 m/s (15-25 m/s for a 2 kg
-    quadrotor); it would fly 113 m/s on the old Kt = 0.1 N s/m alone."""
-    sc, p = _params("ship", "quadrotor.rotor_radius=0.0")
+    quadrotor at a 30 deg tilt limit (the ships' until their flare, docs/landing.md "The
+    ships' flare"; every landing scenario's is PX4's 45 deg since issue 19's bar, 33.3 m/s)
+    stops accelerating at 21.45 m/s (15-25 m/s for a 2 kg quadrotor); it would fly 113 m/s
+    on the old Kt = 0.1 N s/m alone."""
+    sc, p = _params("ship", "quadrotor.rotor_radius=0.0", "controller.tilt_max_deg=30.0")
     pp = LANDING_PLANT_PARAMS.pack(p)
     q, a = QUADROTOR.unpack(p["p_quad"]), ACTUATOR.unpack(p["p_act"])
     m, g, Kt, Kq = q["m1"][0], q["g"][0], q["Kt"][0], a["drag_quadratic"][0]
     theta = sc["controller.tilt_max_deg"] * DEG
+    assert theta == 30.0 * DEG
     V = _top_speed(m, g, Kt, Kq, theta)
     assert V == pytest.approx(21.45, abs=0.01) and 15 < V < 25
     assert m * g * math.tan(theta) / 0.1 == pytest.approx(113.2, abs=0.1)
