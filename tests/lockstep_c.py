@@ -12,12 +12,12 @@ at ``W * k + j``).
 from __future__ import annotations
 
 import ctypes
-import math
 import shutil
 import subprocess
 from pathlib import Path
 
 import numpy as np
+from filter_packets import packet
 
 from quadland_symbolic.codegen.registry import BY_NAME, ESTIMATOR_SIZES
 from quadland_symbolic.landing.estimator import estimator_init_function, estimator_memory
@@ -37,25 +37,6 @@ def filter_step():
     return BY_NAME["estimator_step"].function(0)
 
 
-def _packet(layout, rng, t, t_h):
-    v = np.zeros(layout.size)
-    if rng.uniform() > 0.3:                      # not fresh: garbage the step must not read
-        v[:] = rng.choice((math.nan, math.inf, 1e30, -3.0), size=v.size)
-        v[0] = 0.0
-        return v
-    kind = rng.choice(("due", "due", "due", "late", "old", "future", "nan", "outlier"))
-    v[:] = rng.normal(size=layout.size) * 0.3 + (100.0 if kind == "outlier" else 0.0)
-    v[0] = 1.0
-    v[1] = {"late": t_h - rng.uniform(0, 0.016), "old": t_h - rng.uniform(0.03, 0.1),
-            "future": t + rng.uniform(DT, 0.1)}.get(kind, t - rng.uniform(0, 0.19))
-    if layout.name == "range":
-        v[layout.slice("b3_E")] = [0.0, 0.0, 1.0] if rng.uniform() > 0.1 else [1.0, 0.0, 0.1]
-        v[layout.slice("s")] = 3.0 + rng.normal() * 0.05
-    if kind == "nan":
-        v[rng.integers(2, v.size)] = math.nan
-    return v
-
-
 def filter_flight(seed: int, steps: int) -> list[list[np.ndarray]]:
     """``steps`` calls' arguments of the filter's step, flown from a random start."""
     rng = np.random.default_rng(seed)
@@ -71,7 +52,7 @@ def filter_flight(seed: int, steps: int) -> list[list[np.ndarray]]:
     calls, t = [], 7.0
     for _ in range(steps):
         t += DT
-        pkts = [_packet(layout, rng, t, mem[h][0]) for layout in NAV_PACKETS]
+        pkts = [packet(layout, rng, t, mem[h][0]) for layout in NAV_PACKETS]
         imu = np.r_[0.02, -0.01, 0.5, 0.0, 0.0, 9.8, rng.normal(size=3) * 0.01]
         args = [mem, imu, *pkts, p, np.array([DT]), np.array([t])]
         calls.append([np.ascontiguousarray(a, dtype=np.float64) for a in args])

@@ -9,12 +9,12 @@ generated C's branches; and the stages' composition.
 
 from __future__ import annotations
 
-import math
 import re
 
 import casadi as ca
 import numpy as np
 import pytest
+from filter_packets import packet
 
 from quadland_symbolic.landing.estimator import (
     FLIGHT_COUPLING,
@@ -41,26 +41,6 @@ def _bits(v):
     return np.asarray(v, dtype=np.float64).ravel().view(np.uint64)
 
 
-def _packet(layout, rng, t, t_h):
-    """A packet: mostly not fresh (garbage the step must not read), else of some kind."""
-    v = np.zeros(layout.size)
-    if rng.uniform() > 0.3:
-        v[:] = rng.choice((math.nan, math.inf, 1e30, -3.0), size=v.size)
-        v[0] = 0.0
-        return v
-    kind = rng.choice(("due", "due", "due", "late", "old", "future", "nan", "outlier"))
-    v[:] = rng.normal(size=layout.size) * 0.3 + (100.0 if kind == "outlier" else 0.0)
-    v[0] = 1.0
-    v[1] = {"late": t_h - rng.uniform(0, 0.016), "old": t_h - rng.uniform(0.03, 0.1),
-            "future": t + rng.uniform(DT, 0.1)}.get(kind, t - rng.uniform(0, 0.19))
-    if layout.name == "range":
-        v[layout.slice("b3_E")] = [0.0, 0.0, 1.0] if rng.uniform() > 0.1 else [1.0, 0.0, 0.1]
-        v[layout.slice("s")] = 3.0 + rng.normal() * 0.05
-    if kind == "nan":
-        v[rng.integers(2, v.size)] = math.nan
-    return v
-
-
 @pytest.mark.parametrize("seed", [1, 2])
 def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed):
     rng = np.random.default_rng(seed)
@@ -78,7 +58,7 @@ def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed):
     t, quiet = 7.0, 0
     for _ in range(300):
         t += DT
-        pkts = [_packet(layout, rng, t, mem[lay.slice("t_h")][0]) for layout in NAV_PACKETS]
+        pkts = [packet(layout, rng, t, mem[lay.slice("t_h")][0]) for layout in NAV_PACKETS]
         imu = np.r_[0.02, -0.01, 0.5, 0.0, 0.0, 9.8, rng.normal(size=3) * 0.01]
         want = branch_free(mem, imu, *pkts, p, DT, t)
         got = conditional(mem, imu, *pkts, p, DT, t)
