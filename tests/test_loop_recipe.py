@@ -99,6 +99,25 @@ def test_the_key_of_a_recipe_builds_nothing_and_changes_with_each_input(monkeypa
     assert _key(two) == base and "model" not in vars(two)
 
 
+def test_the_library_versions_name_numpy_and_the_installed_jinja2():
+    """NumPy's version, and Jinja2's ``__init__.py`` (which holds its version) by its
+    SHA-256, found without importing Jinja2."""
+    import hashlib
+    import importlib.metadata
+
+    import jinja2
+    import numpy as np
+
+    from quadland.engine import recall
+
+    recall.library_versions.cache_clear()
+    text = recall.library_versions()
+    source = open(jinja2.__file__, "rb").read()
+    assert f'__version__ = "{importlib.metadata.version("jinja2")}"'.encode() in source
+    assert f"numpy={np.__version__} " in text and f"casadi={ca.__version__} " in text
+    assert text.endswith(f"jinja2={hashlib.sha256(source).hexdigest()}")
+
+
 def test_the_generator_digest_follows_each_source_and_template(tmp_path, monkeypatch):
     """A changed byte in one module or one template of a copy of ``quadland_symbolic``
     changes its digest; the same files give the same digest."""

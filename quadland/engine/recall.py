@@ -33,7 +33,7 @@ import ctypes
 import dataclasses
 import functools
 import hashlib
-import importlib.metadata
+import importlib.util
 import re
 import sys
 from pathlib import Path
@@ -85,11 +85,15 @@ def model_digest(model: LoopModel) -> str:
 @functools.cache
 def library_versions() -> str:
     """The versions of what a loop's builder and the C writers run on: Python, CasADi,
-    NumPy and Jinja2 (from its metadata: Jinja2 is not imported)."""
+    NumPy, and Jinja2 by the SHA-256 of its ``__init__.py`` (which holds its version),
+    found without importing it (nor ``importlib.metadata``: 7 ms a process)."""
     import numpy as np
 
+    spec = importlib.util.find_spec("jinja2")
+    jinja = "none" if spec is None or spec.origin is None else \
+        hashlib.sha256(Path(spec.origin).read_bytes()).hexdigest()
     return (f"python={sys.version_info[:3]!r} casadi={ca.__version__} numpy={np.__version__} "
-            f"jinja2={importlib.metadata.version('jinja2')}")
+            f"jinja2={jinja}")
 
 
 def recipe_digest(recipe: LoopRecipe) -> str:
