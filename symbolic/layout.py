@@ -246,8 +246,7 @@ class Layout:
             v = values[f.name]
             if f.layout is not None and isinstance(v, dict):
                 v = f.layout.pack(v)
-            v = np.asarray(v, dtype=float)
-            flat = v.reshape(-1, order="F") if v.ndim > 1 else np.atleast_1d(v)
+            flat = np.asarray(v, dtype=float).reshape(-1, order="F")   # column-major
             if flat.size != f.size:
                 raise ValueError(f"{self.name}.{f.name}: expected {f.size} values, "
                                  f"got {flat.size}")

@@ -106,7 +106,9 @@ def _first_rows(phase):
 def test_lands_within_the_limits_at_the_default_seed(name, sensing):
     """On its sensors and on the true state, each lands at the default seed after the
     measured number of aborted descents (:data:`ABORTS`: none on a car's roof; before the
-    descent waited for the marker, the ship aborted once on its sensors). highway_100
+    descent waited for the marker, the ship aborted once on its sensors; ship_ss5 aborts
+    once on its sensors since the sensors' draws come in blocks, issue 20: its default
+    seed's noise is another realization, and it lands at 21.8 s). highway_100
     lands with the touchdown policy that flies on until the magnet holds (``[touchdown]
     policy = "secure"``, issue 18): with the rotors cut at the contact switch it tipped
     over on the true state (a 39 deg lean past the gear's 36.9 deg) and bounced 2.2 cm on
@@ -487,14 +489,15 @@ def test_wind_acts_as_the_drag_of_the_air_velocity():
                f"wind.mean={wind.tolist()}", "disturbance.force_bias=[0.0, 0.0, 0.0]",
                "disturbance.force_amplitude=0.0", "disturbance.noise=false")
     c, Kt = _csv(res), np.asarray(res.scenario["quadrotor.drag_translational"])
-    # the touchdown event's own row is logged at the instant the gear meets the deck (off
-    # the output grid), before the touchdown phase (the verdict may come a row later): its
-    # force holds the contact's, and so do the rows after it
-    k = np.flatnonzero(c["phase"] < TOUCHDOWN)
-    off_grid = np.abs(100 * c["t"][k] - np.round(100 * c["t"][k])) > 1e-6
-    event = k[np.argmax(off_grid)]
-    assert off_grid.any() and abs(c["d_Fz"][event]) > 1.0
-    for j in k[k < event][::50]:
+    # the first contact's row, logged at the instant the gear meets the deck (off the
+    # output grid), and the rows after it hold the contact's force too (the touchdown
+    # phase comes with the flight code's contact switch, a row later at this seed since
+    # the sensors' draws come in blocks, issue 20): the rows before it, the drag alone
+    first = int(np.argmax(res["touched"] > 0.5))
+    assert first > 0 and np.all(c["phase"][:first] < TOUCHDOWN)
+    off_grid = abs(100 * c["t"][first] - round(100 * c["t"][first])) > 1e-6
+    assert off_grid and abs(c["d_Fz"][first]) > 1.0
+    for j in range(0, first, 50):
         R = rotation((c["phi1"][j], c["theta1"][j], c["psi1"][j]))
         d_F = [c["d_Fx"][j], c["d_Fy"][j], c["d_Fz"][j]]
         np.testing.assert_allclose(d_F, Kt * (R.T @ wind), atol=1e-9)

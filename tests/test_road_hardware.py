@@ -81,16 +81,23 @@ def test_a_100_km_h_car_lands_on_the_road_hardware():
     touching down inside the wider gear's 50.2 deg. Without the disturbance observer,
     with the 0.35 s level-out and the cut at 0.5 s of before (issue 19's feet fix), the
     body slid back under the drag while the rotors still carried it and a rear foot
-    reached 0.511 m on the 0.5 m pad (a strict xfail); with the 0.1 s level-out and cut it
-    drops onto its rear feet and the magnets, and its farthest foot stays 0.473 m out
-    (docs/landing.md, "The feet on the pad"). As shipped (the observer on) it lands too."""
+    reached 0.542 m on the 0.5 m pad (seed 6); with the 0.1 s level-out and cut it drops
+    onto its rear feet and the magnets, and its farthest foot stays 0.487 m out
+    (docs/landing.md, "The feet on the pad"). As shipped (the observer on) it lands too.
+    (The default seed was the reproducer, 0.5115 and 0.473 m, until the sensors' draws
+    came in blocks, issue 20: its new realization keeps the feet on the pad either way,
+    0.489 and 0.461 m. Of seeds 1 to 16, 12 went off the pad before the fix without the
+    observer, and the fix alone kept only 3 of them on it, seeds 2, 6 and 9: the observer
+    is what lands the others.)"""
     before = quadland.simulate(load_scenario(BENCH / "highway_30_100.toml", [
-        *FASTEST, *NO_OBSERVER, "touchdown.level_time=0.35", "touchdown.cut_time=0.5"]))
-    assert _farthest_foot(before) == pytest.approx(0.5115, abs=5e-4)
+        *FASTEST, *NO_OBSERVER, "touchdown.level_time=0.35", "touchdown.cut_time=0.5",
+        "simulation.seed=6"]))
+    assert _farthest_foot(before) == pytest.approx(0.5419, abs=5e-4)
     assert touchdown_report(before).failures == ["off the pad"]
     after = quadland.simulate(load_scenario(BENCH / "highway_30_100.toml",
-                                            [*FASTEST, *NO_OBSERVER]))
-    assert _farthest_foot(after) == pytest.approx(0.473, abs=5e-4)
+                                            [*FASTEST, *NO_OBSERVER, "simulation.seed=6"]))
+    assert _farthest_foot(after) == pytest.approx(0.4866, abs=5e-4)
+    assert touchdown_report(after).failures == []
     res = quadland.simulate(load_scenario(BENCH / "highway_30_100.toml", FASTEST))
     rep = touchdown_report(res)
     assert rep.tilt_deg < 50.19

@@ -114,6 +114,13 @@ def campaign_header(spec, model: str) -> list[str]:
             *(m.name for m in kind_of(model).metrics), "message"]
 
 
+def _recorded(durable, rows: dict, bar) -> None:
+    """Count the runs the journal made durable: in ``rows`` (by index) and the bar."""
+    rows.update((int(r[0]), r) for r in durable)
+    if bar is not None and durable:
+        bar.update(len(durable))
+
+
 def _row(outcome: RunOutcome, header: Sequence[str]) -> list[str]:
     texts = {"index": str(outcome.index), "seed": str(outcome.seed), "status": outcome.status,
              "success": "true" if outcome.success else "false", "message": outcome.message,
@@ -234,16 +241,13 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
                                     chunk_size(len(pending), workers))
             try:
                 for batch in batches:
-                    new = [_row(o, header) for o in batch]
-                    folder.append(new)
-                    rows.update((int(r[0]), r) for r in new)
+                    _recorded(folder.append([_row(o, header) for o in batch]), rows, bar)
                     invalid += sum(o.status == "invalid" for o in batch)
                     flown += sum(o.status != "invalid" for o in batch)
-                    if bar is not None:
-                        bar.update(len(new))
                     interrupt.check()           # one a library swallowed (the runs are kept)
             finally:
                 batches.close()                 # workers and tasks stopped before the folder
+                _recorded(folder.sync(), rows, bar)   # every run written: recorded
         except KeyboardInterrupt:
             raise CampaignInterrupted(folder.path, len(rows), n_runs) from None
         finally:

@@ -313,16 +313,13 @@ def _fly(env, header, manifest, path, connection, local, scheduler, progress, pl
             batches = _batches(env, cell_draws(env, pending), connection, local, pending)
             try:
                 for batch in batches:
-                    new = [_row(o, header) for o in batch]
-                    folder.append(new)
-                    rows.update((int(r[0]), r) for r in new)
+                    _recorded(folder.append([_row(o, header) for o in batch]), rows, bar)
                     invalid += sum(o.status == "invalid" for o in batch)
                     flown += sum(o.status != "invalid" for o in batch)
-                    if bar is not None:
-                        bar.update(len(new))
                     interrupt.check()
             finally:
                 batches.close()
+                _recorded(folder.sync(), rows, bar)   # every run written: recorded
         except KeyboardInterrupt:
             raise CampaignInterrupted(folder.path, len(rows), env.runs) from None
         finally:
@@ -338,6 +335,13 @@ def _fly(env, header, manifest, path, connection, local, scheduler, progress, pl
             data, files = envelope_files(env, header, ordered, session, plots)
             folder.finish(header, ordered, files)
         return EnvelopeResult(folder.path, env.runs, len(rows), flown, elapsed, data, invalid)
+
+
+def _recorded(durable, rows: dict, bar) -> None:
+    """Count the runs the journal made durable: in ``rows`` (by index) and the bar."""
+    rows.update((int(r[0]), r) for r in durable)
+    if bar is not None and durable:
+        bar.update(len(durable))
 
 
 def _row(outcome, header: Sequence[str]) -> list[str]:

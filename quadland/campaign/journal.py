@@ -9,8 +9,11 @@ runs, so that a stop loses only the runs in flight:
 - ``runs.csv`` is the journal: its header is written atomically with the
   manifest, then each finished run is one line appended with a single
   ``write`` on a file opened ``O_APPEND`` and made durable with ``fsync``
-  before the run counts as recorded (runs finishing together share one
-  ``fsync``). Lines are in the order the runs finished;
+  before the run counts as recorded (the runs written within
+  :data:`SYNC_INTERVAL` of the last ``fsync`` share the next one, and the
+  campaign's end or interruption makes every run written durable: a run is
+  reported recorded, in the progress and the counts, only once synced). Lines
+  are in the order the runs finished;
 - when every run is recorded, ``runs.csv`` is rewritten sorted by index and
   ``summary.json`` and the figures are written, each atomically (temporary
   file, ``fsync``, rename).
@@ -38,20 +41,26 @@ import io
 import json
 import os
 import stat
+import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.output import fsync_dir, lock_folder, strict_json, unlock_folder, write_bytes_atomic
 
-__all__ = ["CampaignFolder", "new_folder", "MANIFEST", "RUNS", "MAX_MANIFEST_BYTES",
-           "MAX_ROW_BYTES", "format_row", "damaged_manifest", "json_kind", "read_regular"]
+__all__ = ["CampaignFolder", "new_folder", "MANIFEST", "RUNS", "SYNC_INTERVAL",
+           "MAX_MANIFEST_BYTES", "MAX_ROW_BYTES", "format_row", "damaged_manifest",
+           "json_kind", "read_regular"]
 
 #: The manifest: the campaign's identity.
 MANIFEST = "campaign.json"
 #: The journal of finished runs, then the sorted table.
 RUNS = "runs.csv"
 
+#: Seconds from one ``fsync`` of the journal to the next: the runs written meanwhile are
+#: made durable together (a 55 ms landing's own ``fsync`` cost 7 to 20 ms on this
+#: machine's virtual disk).
+SYNC_INTERVAL = 0.5
 #: The files a campaign replaces whole (atomically) besides its journal.
 WRITTEN = ("scenario.toml", "summary.json")
 #: Largest manifest read, bytes (one holds a scenario, itself at most 1 MiB of TOML).
@@ -161,6 +170,8 @@ class CampaignFolder:
         self._lock_fd: int | None = None
         self._runs_fd: int | None = None
         self._journal_end: int | None = None    # bytes of whole lines read, when cut short
+        self._unsynced: list[Sequence[str]] = []   # rows written since the last fsync
+        self._synced_at = time.monotonic()
 
     def __enter__(self) -> CampaignFolder:
         return self if self._lock_fd is not None else self.claim()
@@ -290,20 +301,39 @@ class CampaignFolder:
                                 "new folder") from None
         return out
 
-    def append(self, rows: Iterable[Sequence[str]]) -> None:
-        """Record finished runs: one write, then ``fsync``."""
+    def append(self, rows: Iterable[Sequence[str]]) -> list[Sequence[str]]:
+        """Write finished runs (one write); ``fsync`` once :data:`SYNC_INTERVAL` has passed
+        since the last. Returns the rows this made durable (these and the ones written
+        before them since the last ``fsync``), or none."""
+        rows = list(rows)
         data = b"".join(format_row(r) for r in rows)
         if not data:
-            return
+            return []
         try:
             if self._runs_fd is None:
                 self._runs_fd = os.open(self.path / RUNS,
                                         os.O_WRONLY | os.O_APPEND | os.O_NOFOLLOW)
             _write_all(self._runs_fd, data)
+        except OSError as exc:
+            raise _stopped(self.path / RUNS, exc, "the runs recorded before are kept") \
+                from None
+        self._unsynced += rows
+        if time.monotonic() - self._synced_at < SYNC_INTERVAL:
+            return []
+        return self.sync()
+
+    def sync(self) -> list[Sequence[str]]:
+        """``fsync`` the runs written since the last; returns them (recorded now)."""
+        if not self._unsynced:
+            return []
+        try:
             os.fsync(self._runs_fd)
         except OSError as exc:
             raise _stopped(self.path / RUNS, exc, "the runs recorded before are kept") \
                 from None
+        done, self._unsynced = self._unsynced, []
+        self._synced_at = time.monotonic()
+        return done
 
     def finish(self, header: Sequence[str], rows: Iterable[Sequence[str]],
                files: dict[str, bytes]) -> None:

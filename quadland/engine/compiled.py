@@ -37,7 +37,7 @@ from quadland.engine.runs import (
     as_f64,
     envelope_bounds,
     row_buffer,
-    tick_rows,
+    tick_source,
 )
 from quadland.engine.vm import VMLoop
 from quadland.exceptions import CompileError, CompilerNotFoundError
@@ -53,6 +53,8 @@ __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK
 
 _REAL = ctypes.POINTER(ctypes.c_double)
 _LONG = ctypes.POINTER(ctypes.c_long)
+#: The driver's ``more(tick)``: rows of the per-tick table filled past ``tick``.
+_MORE = ctypes.CFUNCTYPE(ctypes.c_long, ctypes.c_long)
 
 
 class QuadlandWarning(UserWarning):
@@ -73,6 +75,22 @@ def _ptr(a: np.ndarray, kind=_REAL):
 
 
 
+
+
+def _more_callback(more) -> tuple[object, list]:
+    """``more`` as the driver's C callback (NULL for None), and the list that receives
+    what it raised (the driver then stops: no rows past the tick)."""
+    failed: list[BaseException] = []
+    if more is None:
+        return ctypes.cast(None, _MORE), failed
+
+    def call(tick: int) -> int:
+        try:
+            return int(more(int(tick)))
+        except BaseException as exc:            # noqa: BLE001 - re-raised after the call
+            failed.append(exc)
+            return -1
+    return _MORE(call), failed
 
 
 def _clock_table(clocks) -> np.ndarray:
@@ -121,7 +139,8 @@ class CompiledLoop:
                                         _LONG, L, _LONG, _REAL, ctypes.POINTER(D), _REAL]
         else:
             self._sampled = getattr(lib, f"{prefix}sampled")
-            self._sampled.argtypes = [_REAL, _REAL, _REAL, D, _REAL, _REAL, L, L, L, _REAL,
+            self._sampled.argtypes = [_REAL, _REAL, _REAL, D, _REAL, _REAL, L, _MORE, L, L,
+                                      _REAL,
                                       _REAL, _REAL,
                                       D, _REAL, _REAL, _REAL, _REAL, _LONG, L, _LONG, _REAL,
                                       _REAL, ctypes.POINTER(D), _REAL, D, D,
@@ -205,14 +224,18 @@ class CompiledLoop:
         env = np.full(max(bound.size, 1), np.nan)
         n_rows, t_stop = ctypes.c_long(0), ctypes.c_double(np.nan)
         t_event, x_event = ctypes.c_double(np.nan), np.full(m.state.size, np.nan)
-        N = tick_rows(m, N)
+        N, filled, more = tick_source(m, N)
+        more_c, failed = _more_callback(more)
         status = self._sampled(
             _ptr(xp0), _ptr(xc0), _ptr(_clock_table(clocks)), float(out.T), _ptr(W),
-            _ptr(N), N.shape[0], int(substeps), int(delay), _ptr(uh0), _ptr(pp), _ptr(pc),
+            _ptr(N), filled, more_c, int(substeps), int(delay), _ptr(uh0), _ptr(pp),
+            _ptr(pc),
             float(guard_min),
             _ptr(bound), _ptr(X), _ptr(R), _ptr(times), _ptr(w_index, _LONG), rows,
             ctypes.byref(n_rows), _ptr(xp_end), _ptr(xc_end), ctypes.byref(t_stop), _ptr(env),
             float(h_after), float(after), ctypes.byref(t_event), _ptr(x_event), float(near))
+        if failed:                                  # raised in more(): raised here
+            raise failed[0]
         n = n_rows.value
         hit = not np.isnan(t_event.value)
         return Run(status, X[:n], R[:n], times[:n], w_index[:n], np.concatenate([xp_end, xc_end]),

@@ -13,7 +13,8 @@ import numpy as np
 from quadland.engine.loop import Clock
 from quadland.engine.recursion import recursion
 
-__all__ = ["sample_times", "gauss_markov", "gauss_markov_fill", "random_walk"]
+__all__ = ["sample_times", "gauss_markov", "gauss_markov_fill", "random_walk",
+           "gauss_markov_after", "bridge"]
 
 
 def sample_times(rate_hz: float, duration: float, phase: float = 0.0) -> np.ndarray:
@@ -86,6 +87,62 @@ def gauss_markov(times, sigma, tau, normals) -> np.ndarray:
             col.append(u)
         x[:, j] = col
     return x
+
+
+def gauss_markov_after(times, sigma, tau, normals, t_prev=None, x_prev=None) -> np.ndarray:
+    """:func:`gauss_markov` at ``times``, continued from its value ``x_prev`` at ``t_prev``.
+
+    Without ``x_prev`` the process starts stationary at ``times[0]`` (as
+    :func:`gauss_markov`); with it, ``normals[0]`` drives the step from ``t_prev``.
+    The same products and sums per step: a process computed in pieces, each
+    continued from the last, is the one computed at once, bit for bit.
+    """
+    if x_prev is None:
+        return gauss_markov(times, sigma, tau, normals)
+    normals = np.asarray(normals, dtype=float)
+    n, m = normals.shape
+    sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (m,))
+    tau = np.broadcast_to(np.asarray(tau, dtype=float), (m,))
+    if n == 0:
+        return np.empty((0, m))
+    t = np.concatenate([[float(t_prev)], np.asarray(times, dtype=float)])
+    a = _decay(np.diff(t)[:, None], tau[None, :])
+    b = sigma * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
+    rows = np.vstack([np.zeros((1, m)), normals])
+    x = recursion(np.asarray(x_prev, dtype=float), a, b, rows)
+    if x is None:
+        x = np.empty((n + 1, m))
+        x[0] = x_prev
+        for k in range(n):
+            x[k + 1] = a[k] * x[k] + b[k] * rows[k + 1]
+    return x[1:]
+
+
+def bridge(t, left, right, sigma, tau, normal) -> np.ndarray:
+    """A Gauss-Markov process's value at ``t`` drawn given its nearest known values.
+
+    ``left`` is ``(t_a, x_a)`` before ``t`` (None: nothing before, the stationary law),
+    ``right`` ``(t_b, x_b)`` after it (None: nothing after); the exact conditional
+    distribution (the process is Markov), driven by the standard normal ``normal``.
+    """
+    sigma = np.asarray(sigma, dtype=float)
+    var = sigma ** 2
+    m = var.shape[0]
+    if left is None:
+        mean, P = np.zeros(m), var
+    else:
+        a1 = _decay(t - left[0], tau)
+        mean, P = a1 * left[1], var * (1.0 - a1 * a1)
+    cvar = P
+    if right is not None:
+        a2 = _decay(right[0] - t, tau)
+        R = var * (1.0 - a2 * a2)
+        den = a2 * a2 * P + R
+        ok = den > 0
+        K = np.where(ok, P * a2 / np.where(ok, den, 1.0), 0.0)
+        mean = mean + K * (right[1] - a2 * mean)
+        cvar = np.where(ok, P * R / np.where(ok, den, 1.0), 0.0)
+    return mean + np.sqrt(np.clip(cvar, 0.0, None)) * normal
 
 
 def gauss_markov_fill(known_t, known_x, new_t, sigma, tau, normals) -> np.ndarray:

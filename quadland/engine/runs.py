@@ -18,6 +18,7 @@ from quadland_symbolic.loop import LoopModel
 
 __all__ = ["SIM_OK", "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT",
            "SIM_ENVELOPE", "SIM_ROWS", "Run", "Ride", "as_f64", "make_run", "tick_rows",
+           "tick_source",
            "envelope_bounds", "row_buffer"]
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
@@ -145,6 +146,24 @@ def tick_rows(model: LoopModel, N) -> np.ndarray:
     if N.ndim != 2 or N.shape[1] != width:
         raise ValueError(f"N must have {width} columns, got shape {N.shape}")
     return np.ascontiguousarray(N)
+
+
+def tick_source(model: LoopModel, N) -> tuple[np.ndarray, int, object]:
+    """A per-tick table as the drivers take it: ``(rows, filled, more)``.
+
+    ``N`` is an array (every row filled; ``more`` None) or a table drawn as the
+    flight goes: an object with ``rows``, the whole ``(ticks, width)`` array (the
+    rows not yet drawn are zeros, never read), ``filled``, the rows drawn, and
+    ``more(tick)``, which fills rows of the same array at least past ``tick`` (when
+    the table reaches it) and returns how many are filled now.
+    """
+    if N is None or not hasattr(N, "more"):
+        rows = tick_rows(model, N)
+        return rows, rows.shape[0], None
+    rows = tick_rows(model, N.rows)
+    if rows is not N.rows:
+        raise ValueError("a drawn table's rows must be C-contiguous doubles")
+    return rows, int(N.filled), N.more
 
 
 def envelope_bounds(model: LoopModel, bound) -> np.ndarray:

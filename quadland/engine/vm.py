@@ -29,7 +29,7 @@ from quadland.engine.runs import (
     Run,
     envelope_bounds,
     make_run,
-    tick_rows,
+    tick_source,
 )
 from quadland_symbolic.loop import LoopModel, rk4_step
 
@@ -105,7 +105,7 @@ class VMLoop:
                 after: float = np.inf, near: float = np.inf) -> Run:
         """As :meth:`CompiledLoop.sampled`."""
         m = self.model
-        N = tick_rows(m, N)
+        N, filled, more = tick_source(m, N)
         bound = envelope_bounds(m, bound)
         grid, (out, dist, ctrl) = merged_grid(clocks)
         xp, xc = np.asarray(xp0, dtype=float), np.asarray(xc0, dtype=float)
@@ -120,7 +120,9 @@ class VMLoop:
             if dist[j] >= 0:
                 i_w = dist[j]
             if ctrl[j] >= 0:
-                if m.tick_inputs is not None and ctrl[j] >= N.shape[0]:
+                if m.tick_inputs is not None and ctrl[j] >= filled and more is not None:
+                    filled = more(int(ctrl[j]))
+                if m.tick_inputs is not None and ctrl[j] >= filled:
                     status, t_stop = SIM_ROWS, t
                     break
                 extra = () if m.tick_inputs is None else (uh, W[i_w], pp, N[ctrl[j]])

@@ -53,8 +53,8 @@ from quadland_symbolic.landing.gear import CUT_THRUST, FAILURES, GEAR_SIGNALS, G
 from quadland_symbolic.landing.loop import landing_gear_signals_function
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 
-__all__ = ["gear_columns", "flat_gear_signals", "contact_figures", "ENGAGED", "FAILURES",
-           "CUT_THRUST"]
+__all__ = ["MAP_BUCKET", "gear_columns", "flat_gear_signals", "contact_figures", "ENGAGED",
+           "FAILURES", "CUT_THRUST"]
 
 #: The lock counts as engaged at this engagement.
 ENGAGED = 0.95
@@ -75,8 +75,12 @@ def gear_columns(pp, times, X, touched, W) -> dict[str, np.ndarray]:
     w = np.asarray(W, dtype=float)[rows, :]
     pp = np.asarray(pp, dtype=float).ravel()
     flat = not np.any(pp[list(amplitude_indices(LANDING_PLANT_PARAMS))])
-    s = np.asarray(_mapped(rows.size, flat)(xp.T, w.T, np.asarray(times, dtype=float)[None, rows],
-                                            pp), dtype=float)
+    t = np.asarray(times, dtype=float)[rows]
+    n = -(-rows.size // MAP_BUCKET) * MAP_BUCKET     # a map of few sizes (each column its own)
+    pad = n - rows.size
+    xp, w, t = (np.concatenate([a, np.repeat(a[-1:], pad, axis=0)]) for a in (xp, w, t))
+    s = np.asarray(_mapped(n, flat)(xp.T, w.T, t[None, :], pp), dtype=float)[:, :rows.size]
+    xp = xp[:rows.size]
     for name in GEAR_SIGNALS.names():
         cols[name][rows] = s[GEAR_SIGNALS.slice(name)][0]
     xg = xp[:, LANDING_PLANT_STATE.slice("gear")].T
@@ -85,7 +89,12 @@ def gear_columns(pp, times, X, touched, W) -> dict[str, np.ndarray]:
     return cols
 
 
-@functools.lru_cache(maxsize=8)
+#: Rows of the gear's mapped signals are evaluated in multiples of this (the last row
+#: repeated): building a map costs about 1 ms, a landing's contact rows vary.
+MAP_BUCKET = 32
+
+
+@functools.lru_cache(maxsize=64)
 def _mapped(n: int, flat: bool):
     """The gear's signals at ``n`` rows; ``flat``: on a deck whose sinusoids' amplitudes
     are all zero, without their sums (the same bits, ``tests/test_flat_deck.py``)."""

@@ -12,7 +12,10 @@ loop needs beyond the unsensed one's vectors (:mod:`quadland.kinds.landing.value
 * the memory ``xc0``: the unsensed loop's, the filter at handover (its estimate the
   truth plus an error drawn from its initial covariance, seeded), empty delay lines;
 * the per-tick table ``N``: each control tick's sample and delivery flags and noise
-  (:func:`quadland.kinds.landing.sensing.draw_sensors`, seeded by ``simulation.seed``).
+  (:class:`quadland.kinds.landing.sensing.SensorDraws`, seeded by ``simulation.seed``),
+  drawn as far as the flight goes (:class:`TickTable`): a landing that ends at 14 s of
+  a 40 s ``simulation.duration`` draws 15 s of it, the same bits as the first 15 s of
+  the whole table.
 
 ``sensors.random = false`` zeroes every draw of the world: no noise, biases,
 dropouts or outliers (every sample taken is delivered, the exact truth), and the
@@ -23,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from quadland.kinds.landing.sensing import draw_sensors, sensor_seed
+from quadland.kinds.landing.sensing import SensorDraws, sensor_seed
 from quadland.kinds.landing.sensor_settings import sensor_params
 from quadland.kinds.landing.values import LandingValues
 from quadland.scenario import Scenario
@@ -53,11 +56,16 @@ from quadland_symbolic.landing.sensed_loop import (
 )
 from quadland_symbolic.landing.sensors import SENSOR_NAMES
 
-__all__ = ["INITIAL_ERROR_STREAM", "sensor_settings", "sensors_enabled", "handover",
-           "sensed_vectors", "tick_table", "estimator_p", "imu_at_rest"]
+__all__ = ["INITIAL_ERROR_STREAM", "TICK_CHUNK", "FIRST_CHUNK", "TickTable", "sensor_settings",
+           "sensors_enabled", "handover", "sensed_vectors", "tick_table", "estimator_p",
+           "imu_at_rest"]
 
 #: The random stream of the filter's initial error (beside the sensors').
 INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
+#: Control ticks the per-tick table is drawn ahead by, each time the flight needs more
+#: (2 s at 250 Hz), and the first time (10 s: the shipped landings touch down after 9 s).
+TICK_CHUNK = 500
+FIRST_CHUNK = 2500
 
 #: ``[estimator]`` keys of the initial standard deviations, in the order of NAV's fields.
 _P0_KEYS = ("p0_position", "p0_velocity", "p0_target_velocity", "p0_target_acceleration",
@@ -150,23 +158,62 @@ def imu_at_rest(xp0, g: float) -> np.ndarray:
     return IMU.pack(dict(eta_hat=q["eta1"], f_b=[0.0, 0.0, g], omega=q["Omega1"]))
 
 
+class TickTable:
+    """The per-tick table of :data:`SENSED_TICK`, drawn as the flight needs it.
+
+    ``rows`` is the whole ``(n_ticks, width)`` array, zeros past ``filled``; each
+    :meth:`more` draws the sensors' next samples (:class:`SensorDraws`) and fills
+    their ticks' rows, ``first`` ticks the first time and ``chunk`` ticks at a time
+    after (:data:`FIRST_CHUNK`, :data:`TICK_CHUNK`). Every row is the same bits
+    however far ahead it was drawn (the draws' blocks are seeded by their index): a
+    flight on it is the flight on the whole table (the simulators' ``more``,
+    :func:`quadland.engine.runs.tick_source`).
+    """
+
+    def __init__(self, scenario: Scenario, n_ticks: int, chunk: int = TICK_CHUNK,
+                 first: int = FIRST_CHUNK):
+        d = scenario.data
+        self.rate = float(d["controller"]["rate_hz"])
+        self.draws = SensorDraws(sensor_settings(scenario), d["simulation"]["seed"],
+                                 random=bool(d["sensors"]["random"]))
+        self.rows = np.zeros((n_ticks, SENSED_TICK.size))
+        self.filled, self.chunk, self.first = 0, max(int(chunk), 1), max(int(first), 1)
+        self.placed = {name: 0 for name in SENSOR_NAMES}
+
+    def more(self, tick: int) -> int:
+        """Fill the rows past ``tick`` (up to the next chunk's end, at most the table's);
+        returns the rows filled."""
+        n = self.rows.shape[0]
+        end = self.first
+        if tick >= self.first:
+            end += ((tick - self.first) // self.chunk + 1) * self.chunk
+        end = min(n, end)
+        if end <= self.filled:
+            return self.filled
+        counts = self.draws.extend((end + 1) / self.rate)
+        for name in SENSOR_NAMES:
+            k0 = self.placed[name]
+            t, delivered, noise = self.draws.window(name, k0, counts[name])
+            ticks = np.rint(t * self.rate).astype(np.int64)
+            keep = int(np.searchsorted(ticks, end))        # the samples before `end`
+            ticks = ticks[:keep]
+            N = self.rows
+            N[ticks, SENSED_TICK.slice(f"{name}_sampled")] = 1.0
+            N[ticks, SENSED_TICK.slice(f"{name}_kept")] = delivered[:keep, None]
+            N[ticks, SENSED_TICK.slice(f"{name}_noise")] = noise[:keep]
+            self.placed[name] = k0 + keep
+        self.filled = end
+        return end
+
+
 def tick_table(scenario: Scenario, n_ticks: int) -> np.ndarray:
     """Each control tick's row of :data:`SENSED_TICK`: sample flags, delivery, noise.
 
     A sensor's samples fall on control ticks (the schema checks that its rate divides
-    the control rate and its phase is a whole number of periods).
+    the control rate and its phase is a whole number of periods). The first rows of
+    a longer table, bit for bit (:class:`TickTable`).
     """
-    d = scenario.data
-    rate, duration = d["controller"]["rate_hz"], d["simulation"]["duration"]
-    samples = draw_sensors(sensor_settings(scenario), duration, d["simulation"]["seed"],
-                           random=bool(d["sensors"]["random"]))
-    N = np.zeros((n_ticks, SENSED_TICK.size))
-    for name in SENSOR_NAMES:
-        s = samples[name]
-        ticks = np.rint(s.times * rate).astype(np.int64)
-        keep = ticks < n_ticks
-        ticks = ticks[keep]
-        N[ticks, SENSED_TICK.slice(f"{name}_sampled")] = 1.0
-        N[ticks, SENSED_TICK.slice(f"{name}_kept")] = s.delivered[keep, None]
-        N[ticks, SENSED_TICK.slice(f"{name}_noise")] = s.noise[keep]
-    return N
+    table = TickTable(scenario, n_ticks, first=max(n_ticks, 1))
+    if n_ticks:
+        table.more(n_ticks - 1)
+    return table.rows

@@ -27,12 +27,20 @@ neighbouring values (the process is Markov), so a sample taken at the same
 instant as the IMU's reads the same ``e_att`` and all of them are one
 realization of the process.
 
-Each sensor draws from its own generator, derived from the run's seed by a
-fixed spawn key (:func:`sensor_seed`), with one sub-stream per part
-(delivery, noise, outliers), so the draws of one sensor do not change when
-another sensor's settings do (the vision's and rangefinder's ``e_att``
-between IMU samples are the exception: they are conditioned on the IMU's
-times, and the rangefinder's also on the vision's, as one process must be).
+The draws come in **blocks** of :data:`BLOCK` samples of a sensor (its samples
+``k`` with ``k // BLOCK == b``), each block from its own generator, derived from the
+run's seed, the sensor and the block's index by a fixed spawn key
+(:func:`sensor_seed`), drawn in a fixed order (the deliveries' uniforms, the outliers'
+uniforms, then every standard normal of the block). The processes run across the
+blocks, each continued from the last value of the one before. So the draws of a
+sample depend on the seed and its index alone: a table drawn to 12 s is the first
+12 s of one drawn to 40 s, bit for bit, and :class:`SensorDraws` draws a run's
+blocks only as far as its flight goes. The processes are defined on the sensors'
+unbounded clocks (``phase + k / rate_hz`` for every ``k``): a duration only cuts a
+window of them. The draws of one sensor do not change when another sensor's
+settings do (the vision's and rangefinder's ``e_att`` between IMU samples are the
+exception: they are conditioned on the IMU's values, and on each other's, in time
+order, as one process must be).
 
 ``random=False`` turns every random part off (no noise, biases, dropouts or
 outliers): the Functions then return the exact truth, at the same times.
@@ -51,20 +59,22 @@ from collections.abc import Mapping
 import numpy as np
 
 from quadland.engine.loop import GRID_TOL
-from quadland.engine.noise import gauss_markov, gauss_markov_fill, random_walk, sample_times
+from quadland.engine.noise import bridge, gauss_markov_after
 from quadland.exceptions import ScenarioError
 from quadland.kinds.landing.sensor_settings import GNSS_RTK, validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
 
-__all__ = ["SENSOR_STREAM", "SensorSamples", "sensor_seed", "draw_sensors"]
+__all__ = ["SENSOR_STREAM", "BLOCK", "SensorSamples", "SensorDraws", "sensor_seed",
+           "draw_sensors"]
 
 
 #: First spawn-key entry of every sensor stream: keeps the sensors' draws
 #: apart from the run's other children of the same seed.
 SENSOR_STREAM = 0x53454E53          # "SENS"
-_ATTITUDE = len(SENSOR_NAMES)        # the attitude estimator's stream index
-_DELIVERY, _NOISE, _OUTLIER = 0, 1, 2
+#: Samples of a sensor per block of its draws.
+BLOCK = 1024
+_BLOCKS = 3                          # the spawn key's part of the blocks' draws
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -99,121 +109,283 @@ class SensorSamples:
         return self.noise[:, self.layout.slice(field)]
 
 
-def sensor_seed(seed, stream: int, part: int) -> np.random.SeedSequence:
+def sensor_seed(seed, stream: int, *part: int) -> np.random.SeedSequence:
     """The seed of one part of one sensor's draws.
 
     ``seed`` is the run's seed (an int) or a :class:`numpy.random.SeedSequence`;
-    ``stream`` a sensor's index in ``SENSOR_NAMES`` (or ``len(SENSOR_NAMES)``
-    for the attitude estimator); ``part`` the kind of draw. The spawn key
-    ``(..., SENSOR_STREAM, stream, part)`` depends on nothing else.
+    ``stream`` a sensor's index in ``SENSOR_NAMES`` (or ``len(SENSOR_NAMES) + 1`` for
+    the filter's initial error); ``part`` the kind of draw (a block's: ``3, block``;
+    the attitude error's draws are in the IMU's blocks). The spawn key
+    ``(..., SENSOR_STREAM, stream, *part)`` depends on nothing else.
     """
     base = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
     return np.random.SeedSequence(base.entropy,
                                   spawn_key=tuple(base.spawn_key) + (SENSOR_STREAM, stream,
-                                                                     part))
+                                                                     *part))
 
 
-def _rng(seed, stream: int, part: int) -> np.random.Generator:
-    return np.random.default_rng(sensor_seed(seed, stream, part))
+def _block_rng(seed, stream: int, block: int) -> np.random.Generator:
+    return np.random.default_rng(sensor_seed(seed, stream, _BLOCKS, block))
 
 
-def _same_times(base, t):
-    """Index of each ``t`` in ``base`` where they coincide, else -1.
+class _Clock:
+    """A sensor's unbounded clock: ``phase + k / rate_hz`` (the loop's rule, to the bit)."""
 
-    Coinciding is the loop's grid rule (:data:`quadland.engine.loop.GRID_TOL`
-    of ``base``'s period): the instants one grid point would merge.
-    """
-    tol = GRID_TOL * (base[1] - base[0] if len(base) > 1 else 1.0)
-    j = np.clip(np.searchsorted(base, t), 0, max(len(base) - 1, 0))
-    out = np.full(len(t), -1)
-    if len(base) == 0:
-        return out
-    for shift in (0, -1):
-        k = np.clip(j + shift, 0, len(base) - 1)
-        hit = np.abs(base[k] - t) <= tol
-        out = np.where((out < 0) & hit, k, out)
-    return out
+    def __init__(self, rate_hz: float, phase: float):
+        self.rate, self.phase, self.h = rate_hz, phase, 1.0 / rate_hz
+
+    def times(self, k0: int, k1: int) -> np.ndarray:
+        return self.phase + self.h * np.arange(k0, k1)
+
+    def count(self, horizon: float) -> int:
+        """Samples before ``horizon`` (none at it): ``len(sample_times(...))``."""
+        span = horizon - self.phase
+        if span < 0:
+            return 0
+        regular = int(math.floor(span / self.h + 1e-9)) + 1
+        last = self.phase + self.h * (regular - 1)
+        return regular - 1 if abs(last - horizon) <= 1e-8 + 1e-5 * abs(horizon) else regular
+
+
+#: Standard normals per sample of a sensor's block: its noise's, then the IMU's six of
+#: the attitude error's (the vision's and rangefinder's six, for their samples between
+#: the IMU's, are drawn after them, in the blocks that hold such samples).
+_NORMALS = {"imu": 12 + 6, "vision": 6, "gnss": 12, "rangefinder": 2, "datalink": 15}
+
+
+def _on_clock(clock: _Clock, times: np.ndarray) -> np.ndarray:
+    """Each time's tick of ``clock`` where they coincide (within :data:`GRID_TOL` of its
+    period: the loop's grid rule), else -1."""
+    k = np.rint((times - clock.phase) * clock.rate).astype(np.int64)
+    hit = (k >= 0) & (np.abs(clock.phase + clock.h * k - times) <= GRID_TOL * clock.h)
+    return np.where(hit, k, -1)
+
+
+class _Sensor:
+    """One sensor's draws, block by block, and its noise computed as far as drawn."""
+
+    def __init__(self, name: str, stream: int, s: Mapping, seed, random: bool,
+                 imu: _Clock | None = None):
+        self.name, self.stream, self.s, self.seed, self.random = name, stream, s, seed, random
+        self.clock = _Clock(s["rate_hz"], s["phase"])
+        self.imu = imu                              # the IMU's clock (vision, rangefinder)
+        self.layout = NOISES[name]
+        self.n = 0                                  # samples drawn (whole blocks)
+        self.delivered = np.zeros(0, dtype=bool)
+        self.noise = np.zeros((0, self.layout.size))
+        self.att_normals = np.zeros((0, 6))         # the attitude error's normals
+        self.state: dict[str, np.ndarray] = {}
+
+    def ensure(self, count: int) -> None:
+        """Draw whole blocks until ``count`` samples are drawn."""
+        delivered, noise, att = [self.delivered], [self.noise], [self.att_normals]
+        while self.n < count:
+            d, z, a = self._block(self.n // BLOCK)
+            delivered.append(d)
+            noise.append(z)
+            att.append(a)
+            self.n += BLOCK
+        if len(delivered) > 1:
+            self.delivered = np.concatenate(delivered)
+            self.noise = np.concatenate(noise)
+            self.att_normals = np.concatenate(att)
+
+    def _block(self, b: int):
+        s, B = self.s, BLOCK
+        if not self.random:
+            return np.ones(B, dtype=bool), np.zeros((B, self.layout.size)), np.zeros((B, 6))
+        rng = _block_rng(self.seed, self.stream, b)
+        delivered = rng.random(B) >= s["dropout"]
+        hit = rng.random(B) < s["outlier_rate"] if "outlier_rate" in s else None
+        if self.name == "imu" and b == 0:
+            self.state["bias"] = np.concatenate([s["accel_bias_sigma"] * rng.standard_normal(3),
+                                                 s["gyro_bias_sigma"] * rng.standard_normal(3)])
+        z = rng.standard_normal((B, _NORMALS[self.name]))
+        times = self.clock.times(b * B, (b + 1) * B)
+        noise = getattr(self, f"_{self.name}")(times, z, hit)
+        att = z[:, -6:] if self.name == "imu" else np.zeros((B, 6))
+        if self.imu is not None and np.any(_on_clock(self.imu, times) < 0):
+            att = rng.standard_normal((B, 6))       # e_att between the IMU's samples
+        return delivered, noise, att
+
+    def _imu(self, times, z, hit):
+        """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g."""
+        s = self.s
+        t_prev = self.state.get("t")
+        dt = np.diff(times if t_prev is None else np.concatenate([[t_prev], times]))
+        walk = np.repeat([s["accel_bias_random_walk"], s["gyro_bias_random_walk"]], 3)
+        steps = np.zeros((len(times), 6))
+        if t_prev is None:                          # b_0 = start (its normals unused)
+            steps[1:] = walk * np.sqrt(dt)[:, None] * z[1:, :6]
+        else:
+            steps[:] = walk * np.sqrt(dt)[:, None] * z[:, :6]
+        bias = self.state.get("sum", self.state["bias"]) + np.cumsum(steps, axis=0)
+        self.state["sum"], self.state["t"] = bias[-1], times[-1]
+        white = np.repeat([s["accel_noise_density"], s["gyro_noise_density"]], 3) * \
+            math.sqrt(s["rate_hz"]) * z[:, 6:12]
+        return np.column_stack([np.zeros((len(times), 3)), bias[:, :3], white[:, :3],
+                                bias[:, 3:], white[:, 3:]])
+
+    def _outliers(self, z, hit, k):
+        """Columns e_att (zeros: set by :class:`SensorDraws`), the white noise, the
+        outliers."""
+        out = np.where(hit[:, None], self.s["outlier_sigma"] * z[:, k:2 * k], 0.0)
+        return np.column_stack([np.zeros((len(z), 3)), z[:, :k], out])
+
+    def _vision(self, times, z, hit):
+        return self._outliers(z, hit, 3)
+
+    def _rangefinder(self, times, z, hit):
+        return self._outliers(z, hit, 1)
+
+    def _gnss(self, times, z, hit):
+        """Columns e_q, e_t (Gauss-Markov), n_v1, n_vt."""
+        s = self.s
+        sigma = np.asarray(GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"])
+        e = gauss_markov_after(times, np.tile(sigma, 2), s["position_tau"], z[:, :6],
+                               self.state.get("t"), self.state.get("e"))
+        self.state["e"], self.state["t"] = e[-1], times[-1]
+        return np.column_stack([e, s["velocity_sigma"] * z[:, 6:12]])
+
+    def _datalink(self, times, z, hit):
+        sigma = np.concatenate([np.broadcast_to(np.asarray(
+            self.s[f"{f.name[2:]}_sigma"], dtype=float), (f.size,)) for f in self.layout.fields])
+        return sigma * z
 
 
 class _Attitude:
-    """The attitude estimator's error ``e_att``: one process, shared."""
+    """The attitude estimator's error ``e_att``: one process on the IMU's clock (driven by
+    the IMU's blocks), joined in time order by the vision's and rangefinder's samples
+    between the IMU's."""
 
-    def __init__(self, imu: Mapping, times: np.ndarray, seed, random: bool):
-        self.sigma = np.asarray(imu["attitude_sigma"], dtype=float)
-        self.tau = np.asarray(imu["attitude_tau"], dtype=float)
-        self.white = imu["attitude_white_sigma"]
-        self.seed, self.random = seed, random
-        self.t = times
-        if random:
-            rng = _rng(seed, _ATTITUDE, 0)
-            self.gm = gauss_markov(times, self.sigma, self.tau,
-                                   rng.standard_normal((len(times), 3)))
-            self.wn = self.white * rng.standard_normal((len(times), 3))
+    def __init__(self, imu: _Sensor):
+        s = imu.s
+        self.imu = imu
+        self.sigma = np.asarray(s["attitude_sigma"], dtype=float)
+        self.tau = np.asarray(s["attitude_tau"], dtype=float)
+        self.white = s["attitude_white_sigma"]
+        self.clock = imu.clock
+        self.tol = GRID_TOL * self.clock.h
+        self.n = 0
+        self.gm, self.wn = np.zeros((0, 3)), np.zeros((0, 3))
+        self.last = None                    # the last point filled in: (t, gm, wn)
+
+    def ensure(self, count: int) -> None:
+        """The process at the IMU's first ``count`` samples (or more: whole blocks)."""
+        self.imu.ensure(count)
+        if self.n >= self.imu.n:
+            return
+        k0, k1 = self.n, self.imu.n
+        z = self.imu.att_normals[k0:k1]
+        if self.imu.random:
+            prev = (None, None) if k0 == 0 else (self.clock.times(k0 - 1, k0)[0], self.gm[-1])
+            gm = gauss_markov_after(self.clock.times(k0, k1), self.sigma, self.tau, z[:, :3],
+                                    *prev)
         else:
-            self.gm = self.wn = np.zeros((len(times), 3))
+            gm = np.zeros((k1 - k0, 3))
+        self.gm = np.concatenate([self.gm, gm])
+        self.wn = np.concatenate([self.wn, self.white * z[:, 3:]])
+        self.n = k1
 
-    def at(self, times: np.ndarray, stream: int) -> np.ndarray:
-        """``e_att`` at a sensor's times; off-IMU times join the process."""
-        out = np.zeros((len(times), 3))
-        if not self.random:
-            return out
-        idx = _same_times(self.t, times)
-        on = idx >= 0
-        out[on] = self.gm[idx[on]] + self.wn[idx[on]]
-        off = np.flatnonzero(~on)
-        if off.size:
-            rng = _rng(self.seed, _ATTITUDE, 1 + stream)
-            gm = gauss_markov_fill(self.t, self.gm, times[off], self.sigma, self.tau,
-                                   rng.standard_normal((off.size, 3)))
-            wn = self.white * rng.standard_normal((off.size, 3))
-            out[off] = gm + wn
-            order = np.argsort(np.concatenate([self.t, times[off]]), kind="stable")
-            self.t = np.concatenate([self.t, times[off]])[order]
-            self.gm = np.concatenate([self.gm, gm])[order]
-            self.wn = np.concatenate([self.wn, wn])[order]
+    def on_imu(self, times: np.ndarray) -> np.ndarray:
+        """Each time's IMU sample where they coincide (the loop's grid rule), else -1."""
+        return _on_clock(self.clock, times)
+
+    def fill(self, points) -> dict:
+        """``e_att`` at the points between IMU samples, ``[(t, key, normals(6))]`` in time
+        order: each drawn given its nearest known neighbours; equal instants read one
+        value. Returns ``{key: e_att}``."""
+        out = {}
+        for t, key, z in points:
+            if self.last is not None and abs(t - self.last[0]) <= self.tol:
+                out[key] = self.last[1] + self.last[2]
+                continue
+            j = max(int(np.floor((t - self.clock.phase) * self.clock.rate)) + 1, 0)  # after t
+            self.ensure(j + 1)
+            t_right = self.clock.phase + self.clock.h * j
+            left = None
+            if j > 0:
+                left = (self.clock.phase + self.clock.h * (j - 1), self.gm[j - 1])
+            if self.last is not None and (left is None or self.last[0] > left[0]):
+                left = (self.last[0], self.last[1])
+            gm = bridge(t, left, (t_right, self.gm[j]), self.sigma, self.tau, z[:3])
+            self.last = (t, gm, self.white * z[3:])
+            out[key] = gm + self.last[2]
         return out
 
 
-def _outliers(rng, n, cols, rate, sigma):
-    hit = rng.random(n) < rate
-    return np.where(hit[:, None], sigma * rng.standard_normal((n, cols)), 0.0)
+class SensorDraws:
+    """Every sensor's draws of one run, drawn as far as asked (:func:`draw_sensors`'s).
 
+    :meth:`extend` draws the samples before a horizon; a window of any horizon is the
+    prefix of a longer one, bit for bit (the draws come in blocks seeded by their index).
+    """
 
-def _noise(name, s, times, seed, stream, attitude, random):
-    """The noise matrix of one sensor (columns: its noise layout)."""
-    n = len(times)
-    layout = NOISES[name]
-    if not random:
-        return np.zeros((n, layout.size))
-    rng = _rng(seed, stream, _NOISE)
-    blocks = {}
-    if name == "imu":
-        blocks["e_att"] = attitude.at(times, stream)
-        root_rate = math.sqrt(s["rate_hz"])
-        for key, b, w in (("accel", "b_a", "n_a"), ("gyro", "b_g", "n_g")):
-            start = s[f"{key}_bias_sigma"] * rng.standard_normal(3)
-            blocks[b] = random_walk(times, start, s[f"{key}_bias_random_walk"],
-                                    rng.standard_normal((n, 3)))
-            blocks[w] = s[f"{key}_noise_density"] * root_rate * rng.standard_normal((n, 3))
-    elif name in ("vision", "rangefinder"):
-        k = 3 if name == "vision" else 1
-        blocks["e_att"] = attitude.at(times, stream)
-        blocks["n_r" if k == 3 else "n_s"] = rng.standard_normal((n, k))
-        blocks["o_r" if k == 3 else "o_s"] = _outliers(_rng(seed, stream, _OUTLIER), n, k,
-                                                       s["outlier_rate"], s["outlier_sigma"])
-    elif name == "gnss":
-        sigma = np.asarray(GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"])
-        for e in ("e_q", "e_t"):
-            blocks[e] = gauss_markov(times, sigma, s["position_tau"],
-                                     rng.standard_normal((n, 3)))
-        for v in ("n_v1", "n_vt"):
-            blocks[v] = s["velocity_sigma"] * rng.standard_normal((n, 3))
-    else:
-        for f in layout.fields:
-            sigma = np.asarray(s[f"{f.name[2:]}_sigma"], dtype=float)
-            blocks[f.name] = sigma * rng.standard_normal((n, f.size))
-    return np.column_stack([blocks[f.name] for f in layout.fields]) if n else \
-        np.zeros((0, layout.size))
+    def __init__(self, settings: Mapping[str, Mapping] | None, seed, random: bool = True):
+        settings = settings or {}
+        unknown = sorted(set(settings) - set(SENSOR_NAMES))
+        if unknown:
+            raise ScenarioError(f"sensors.{unknown[0]}: unknown sensor; sensors are "
+                                f"{', '.join(SENSOR_NAMES)}")
+        self.settings = {name: validate_settings(name, settings.get(name))
+                         for name in SENSOR_NAMES}
+        self.random = random
+        imu = self.settings["imu"]
+        imu_clock = _Clock(imu["rate_hz"], imu["phase"])
+        self.sensors = {name: _Sensor(name, i, self.settings[name], seed, random,
+                                      imu_clock if name in ("vision", "rangefinder") else None)
+                        for i, name in enumerate(SENSOR_NAMES)}
+        self.attitude = _Attitude(self.sensors["imu"])
+        self.ready = {name: 0 for name in SENSOR_NAMES}   # samples with their e_att
+
+    def extend(self, horizon: float) -> dict[str, int]:
+        """Draw every sample before ``horizon``, s; returns each sensor's count."""
+        counts = {name: sen.clock.count(horizon) for name, sen in self.sensors.items()}
+        for name, sen in self.sensors.items():
+            sen.ensure(counts[name])
+        if self.random:
+            self._join(counts)
+            imu, att = self.sensors["imu"], self.attitude
+            att.ensure(imu.n)
+            imu.noise[:, imu.layout.slice("e_att")] = att.gm[:imu.n] + att.wn[:imu.n]
+        self.ready.update(counts)
+        return counts
+
+    def _join(self, counts) -> None:
+        """The vision's and rangefinder's ``e_att`` of the samples newly drawn."""
+        points = []
+        for rank, name in enumerate(("vision", "rangefinder")):
+            sen, k0, k1 = self.sensors[name], self.ready[name], counts[name]
+            if k1 <= k0:
+                continue
+            times = sen.clock.times(k0, k1)
+            idx = self.attitude.on_imu(times)
+            self.attitude.ensure(int(idx.max()) + 1)
+            cols = sen.layout.slice("e_att")
+            on = idx >= 0
+            block = sen.noise[k0:k1, cols]
+            block[on] = self.attitude.gm[idx[on]] + self.attitude.wn[idx[on]]
+            sen.noise[k0:k1, cols] = block
+            points += [(t, (rank, name, k0 + i), sen.att_normals[k0 + i])
+                       for i, t in zip(np.flatnonzero(~on), times[~on], strict=True)]
+        points.sort(key=lambda p: (p[0], p[1][0]))
+        for (_, name, k), e in self.attitude.fill(points).items():
+            self.sensors[name].noise[k, self.sensors[name].layout.slice("e_att")] = e
+
+    def window(self, name: str, k0: int, k1: int):
+        """Sensor ``name``'s samples ``k0`` to ``k1`` (drawn): times, delivered, noise."""
+        sen = self.sensors[name]
+        return sen.clock.times(k0, k1), sen.delivered[k0:k1], sen.noise[k0:k1]
+
+    def samples(self, duration: float) -> dict[str, SensorSamples]:
+        """Every sensor's samples before ``duration``, s."""
+        counts = self.extend(duration)
+        out = {}
+        for name in SENSOR_NAMES:
+            t, delivered, noise = self.window(name, 0, counts[name])
+            out[name] = SensorSamples(name, t, t + self.settings[name]["latency"],
+                                      delivered.copy(), noise.copy(), NOISES[name])
+        return out
 
 
 def draw_sensors(settings: Mapping[str, Mapping] | None, duration: float, seed,
@@ -226,7 +398,8 @@ def draw_sensors(settings: Mapping[str, Mapping] | None, duration: float, seed,
         ``{sensor: {key: value}}`` over :data:`SENSOR_DEFAULTS` (a missing
         sensor or key takes its default).
     duration : float
-        s; samples are taken on ``[0, duration]``.
+        s; samples are taken on ``[0, duration)``: the first ones of
+        :class:`SensorDraws`'s, the same bits for any duration.
     seed : int or numpy.random.SeedSequence
         The run's seed (:func:`sensor_seed`).
     random : bool
@@ -243,22 +416,4 @@ def draw_sensors(settings: Mapping[str, Mapping] | None, duration: float, seed,
     >>> len(s["vision"].times), s["vision"].noise.shape[1]
     (25, 9)
     """
-    settings = settings or {}
-    unknown = sorted(set(settings) - set(SENSOR_NAMES))
-    if unknown:
-        raise ScenarioError(f"sensors.{unknown[0]}: unknown sensor; sensors are "
-                            f"{', '.join(SENSOR_NAMES)}")
-    s = {name: validate_settings(name, settings.get(name)) for name in SENSOR_NAMES}
-    times = {name: sample_times(s[name]["rate_hz"], duration, s[name]["phase"])
-             for name in SENSOR_NAMES}
-    attitude = _Attitude(s["imu"], times["imu"], seed, random)
-    out = {}
-    for stream, name in enumerate(SENSOR_NAMES):
-        t = times[name]
-        delivered = np.ones(len(t), dtype=bool)
-        if random:
-            delivered = _rng(seed, stream, _DELIVERY).random(len(t)) >= s[name]["dropout"]
-        out[name] = SensorSamples(name, t, t + s[name]["latency"], delivered,
-                                  _noise(name, s[name], t, seed, stream, attitude, random),
-                                  NOISES[name])
-    return out
+    return SensorDraws(settings, seed, random).samples(duration)

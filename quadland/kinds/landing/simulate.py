@@ -44,7 +44,7 @@ from quadland.engine.result import SimulationResult
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.kinds.landing.contact_report import gear_columns
 from quadland.kinds.landing.gear import contact_step, free_flight_gap
-from quadland.kinds.landing.sensed import sensed_vectors, sensors_enabled, tick_table
+from quadland.kinds.landing.sensed import TickTable, sensed_vectors, sensors_enabled
 from quadland.kinds.landing.values import (
     LandingValues,
     deck_params,
@@ -235,7 +235,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     pc, xc0, N = lv.pc, lv.xc0, None
     if sensed:
         pc, xc0 = sensed_vectors(scenario, lv)
-        N = tick_table(scenario, len(clocks[2].times()))
+        N = TickTable(scenario, len(clocks[2].times()))
     pc_layout = (sensed_loop_params if sensed else landing_loop_params)(lv.l)
     loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed, welded,
                              flat_deck(lv.pp, pc, pc_layout))
