@@ -232,9 +232,12 @@ def paper_loop_part(l: int, part: str):
     loop's CasADi functions are built only if the simulator is not in the cache
     (:func:`quadland_symbolic.paper_loop.paper_loop_recipe`)."""
     from quadland.engine.compiled import compiled_loop
-    from quadland.kinds.paper.flight import flight_code
 
-    flight = flight_code(l) if part == "sampled_flight" else None
+    flight = None
+    if part == "sampled_flight":                 # (the flight code's module only for it)
+        from quadland.kinds.paper.flight import flight_code
+
+        flight = flight_code(l)
     return compiled_loop(paper_loop_recipe(l), part, flight,
                          CONTINUOUS_OPT if part == "continuous" else "-O2")
 
