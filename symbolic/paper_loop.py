@@ -31,11 +31,12 @@ from quadland_symbolic.closed_loop import (
 from quadland_symbolic.control_step import control_step_function, step_inputs, step_outputs
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.loop_recipe import LoopRecipe
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE, controller_layout
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE, WRENCH
 
 __all__ = ["PAPER_RECORDED", "paper_controller_state", "PAPER_PLANT_PARAMS",
-           "paper_controller_params", "paper_loop"]
+           "paper_controller_params", "paper_loop", "paper_loop_recipe"]
 
 #: What the sampled loop records of each control step: the held signals.
 PAPER_RECORDED = Layout("rec", tuple(step_outputs(1)[n] for n in ("u", "wrench", "rotor")),
@@ -118,3 +119,19 @@ def paper_loop(l: int) -> LoopModel:
                      PAPER_RECORDED, plant,
                      controller, assemble, step_args=step_args, envelope=envelope,
                      envelope_layout=PAPER_ENVELOPE, flight="flight_controller.c.jinja")
+
+
+@functools.cache
+def paper_loop_recipe(l: int) -> LoopRecipe:
+    """:func:`paper_loop` for ``l`` nodes, built when a function is first asked for: its
+    layouts, name and absent functions given here (a test checks them against the
+    built model's)."""
+    layouts = dict(state=closed_loop_state(l), disturbance=BODY_DISTURBANCE,
+                   params=closed_loop_params(l), outputs=PAPER_OUTPUTS,
+                   plant_state=PAPER_PLANT_STATE, held=WRENCH,
+                   controller_state=paper_controller_state(l), plant_params=PAPER_PLANT_PARAMS,
+                   controller_params=paper_controller_params(l), recorded=PAPER_RECORDED,
+                   envelope_layout=PAPER_ENVELOPE, tick_inputs=None)
+    absent = frozenset(("event", "ride_rhs", "ride_row", "free_plant", "controller_stages"))
+    return LoopRecipe(paper_loop, (l,), "paper", layouts, absent,
+                      dict(flight="flight_controller.c.jinja", event_continues=False))

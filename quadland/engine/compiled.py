@@ -43,6 +43,7 @@ from quadland.engine.vm import VMLoop
 from quadland.exceptions import CompileError, CompilerNotFoundError
 from quadland_symbolic.codegen.simulator import SIMULATOR_PARTS
 from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.loop_recipe import LoopRecipe
 
 __all__ = ["QuadlandWarning", "CompiledLoop", "VMLoop", "compiled_loop", "SIM_OK",
            "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT", "SIM_ENVELOPE",
@@ -103,13 +104,15 @@ class CompiledLoop:
 
     Parameters
     ----------
-    model : LoopModel
+    model : LoopModel or LoopRecipe
+        A recipe's CasADi functions are built only when the library is not in the
+        cache (its key is the recipe's: :func:`quadland.engine.recall.recall_key`).
     part : {"continuous", "sampled", "sampled_flight"}
     opt : str
         Optimization flag of the build.
     """
 
-    def __init__(self, model: LoopModel, part: str, opt: str = "-O2",
+    def __init__(self, model: LoopModel | LoopRecipe, part: str, opt: str = "-O2",
                  flight: FlightCode | None = None):
         self.model, self.part = model, part
         name = f"qlsim_{model.name}_{part}"
@@ -117,7 +120,7 @@ class CompiledLoop:
                          () if flight is None else flight.sources, name, opt, strict=False)
         self.library = recalled(key)                 # without generating the C
         if self.library is None:
-            files = simulator_sources(model, part)   # (the C writers load only here)
+            files = simulator_sources(built_model(model), part)   # (the C writers load here)
             sources = tuple(sorted(n for n in files if n.endswith(".c")))
             if flight is not None:                   # the flight code's own sources
                 files = {**dict(flight.files), **files}
@@ -293,8 +296,26 @@ class FlightCode:
         return self.make()
 
 
+def built_model(loop: LoopModel | LoopRecipe) -> LoopModel:
+    """The model of ``loop``: a recipe's built (once) and checked against the layouts,
+    name and absent functions the recipe gave without building it.
+
+    Raises
+    ------
+    ValueError
+        When the recipe's description differs from the model it builds.
+    """
+    if not isinstance(loop, LoopRecipe):
+        return loop
+    model = loop.model
+    wrong = [n for n, v in loop.known().items() if getattr(model, n) != v]
+    if wrong or model.name != loop.name:
+        raise ValueError(f"{loop!r} describes its model wrongly: {', '.join(wrong) or 'name'}")
+    return model
+
+
 @functools.cache
-def compiled_loop(loop: LoopModel, part: str, flight: FlightCode | None = None,
+def compiled_loop(loop: LoopModel | LoopRecipe, part: str, flight: FlightCode | None = None,
                   opt: str = "-O2") -> CompiledLoop | VMLoop:
     """The ``part`` of a loop's simulator: compiled (at ``opt``), or on the VM.
 
@@ -335,7 +356,7 @@ def compiled_loop(loop: LoopModel, part: str, flight: FlightCode | None = None,
                    "no C compiler was found (set CC or install gcc; or use")
                 + " controller.backend = \"casadi\")")
         _warn_no_compiler(why if given else "no C compiler found (set CC or install gcc)")
-        return VMLoop(loop, part)
+        return VMLoop(built_model(loop), part)
     try:
         return CompiledLoop(loop, part, opt, flight=flight)
     except (CompileError, OSError, AttributeError) as exc:
@@ -347,7 +368,7 @@ def compiled_loop(loop: LoopModel, part: str, flight: FlightCode | None = None,
         if part == "sampled_flight":
             raise CompileError(why) from None
         _warn_compile_failed(why)
-        return VMLoop(loop, part)
+        return VMLoop(built_model(loop), part)
 
 
 @functools.cache

@@ -5,9 +5,13 @@ text, so finding a cached simulator meant generating all of its C first
 (CasADi's code generation of every function a part calls: 35 to 40 ms a part).
 The text is a function of fewer things, each cheap to hash:
 
-* the loop model (:class:`quadland_symbolic.loop.LoopModel`): its CasADi
-  functions serialized (``Function.serialize``, the expression graph with
-  every constant, deterministic across processes) and its layouts;
+* the loop model: a :class:`quadland_symbolic.loop_recipe.LoopRecipe` by its
+  builder and the builder's inputs (:func:`recipe_digest`: nothing built, the
+  builder's code is in :func:`generator_digest`), with the versions of what
+  the builder and the C writers run on (CasADi, NumPy, Jinja2, Python); a
+  built :class:`quadland_symbolic.loop.LoopModel` by its CasADi functions
+  serialized (``Function.serialize``, the expression graph with every
+  constant, deterministic across processes) and its layouts;
 * the part, and the flight code's recipe (:func:`code_recipe`) of a
   ``"sampled_flight"`` part;
 * the code that writes the C: every module and template of
@@ -29,7 +33,9 @@ import ctypes
 import dataclasses
 import functools
 import hashlib
+import importlib.util
 import re
+import sys
 from pathlib import Path
 
 import casadi as ca
@@ -37,8 +43,10 @@ import casadi as ca
 from quadland.engine import build
 from quadland.output import write_text_atomic
 from quadland_symbolic.loop import LoopModel
+from quadland_symbolic.loop_recipe import LoopRecipe
 
-__all__ = ["generator_digest", "package_digest", "model_digest", "code_recipe", "recall_key",
+__all__ = ["generator_digest", "package_digest", "model_digest", "recipe_digest", "code_recipe",
+           "recall_key",
            "recalled", "remember"]
 
 #: Folder of the cache that maps recipe keys to libraries.
@@ -75,6 +83,28 @@ def model_digest(model: LoopModel) -> str:
 
 
 @functools.cache
+def library_versions() -> str:
+    """The versions of what a loop's builder and the C writers run on: Python, CasADi,
+    NumPy, and Jinja2 by the SHA-256 of its ``__init__.py`` (which holds its version),
+    found without importing it (nor ``importlib.metadata``: 7 ms a process)."""
+    import numpy as np
+
+    spec = importlib.util.find_spec("jinja2")
+    jinja = "none" if spec is None or spec.origin is None else \
+        hashlib.sha256(Path(spec.origin).read_bytes()).hexdigest()
+    return (f"python={sys.version_info[:3]!r} casadi={ca.__version__} numpy={np.__version__} "
+            f"jinja2={jinja}")
+
+
+def recipe_digest(recipe: LoopRecipe) -> str:
+    """SHA-256 of a loop recipe: its builder and inputs and :func:`library_versions`;
+    the builder's code is hashed with the rest of ``quadland_symbolic`` by
+    :func:`generator_digest`. Nothing is built."""
+    text = f"recipe-1\0{recipe.inputs}\0{library_versions()}"
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+@functools.cache
 def package_digest() -> str:
     """SHA-256 of every module, template and shipped scenario of ``quadland`` and
     ``quadland_symbolic``, read once per process."""
@@ -103,9 +133,10 @@ def code_recipe(*what: str) -> str:
     return digest.hexdigest()
 
 
-def recall_key(model: LoopModel, part: str, flight: str | None,
+def recall_key(model: LoopModel | LoopRecipe, part: str, flight: str | None,
                flight_sources: tuple[str, ...], name: str, opt: str, strict: bool) -> str:
-    """The recipe key of one simulator's library (see the module's docstring).
+    """The recipe key of one simulator's library (see the module's docstring): of a
+    :class:`LoopRecipe` without building its model.
 
     Raises
     ------
@@ -115,7 +146,8 @@ def recall_key(model: LoopModel, part: str, flight: str | None,
     cc = build.find_compiler()
     digest = hashlib.sha256()
     for part_ in ("recipe-1", build.compiler_identity(cc), ca.__version__, generator_digest(),
-                  model_digest(model), part, name, opt,
+                  recipe_digest(model) if isinstance(model, LoopRecipe) else
+                  "model:" + model_digest(model), part, name, opt,
                   repr(build.STRICT_CFLAGS if strict else build.RUNTIME_CFLAGS),
                   repr((build.SHARED_CFLAGS, build.COMPILE_MEMORY_BUDGET,
                         build.COMPILE_TIME_BUDGET, build.COMPILE_FIT)), *flight_sources):

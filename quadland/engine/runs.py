@@ -168,7 +168,7 @@ def tick_source(model: LoopModel, N) -> tuple[np.ndarray, int, object]:
 
 def envelope_bounds(model: LoopModel, bound) -> np.ndarray:
     """The envelope's bounds as the drivers take them (none without an envelope)."""
-    if model.envelope is None:
+    if model.envelope_layout is None:            # (a recipe's: without building it)
         return np.zeros(0)
     bound = as_f64(bound)
     if bound.shape != (model.envelope_layout.size,):

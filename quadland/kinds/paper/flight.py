@@ -21,6 +21,7 @@ from quadland.engine.build import build_library
 from quadland.engine.compiled import FlightCode
 from quadland.engine.flightcode import Library, ctypes_struct, label, pointer_array, real_type
 from quadland.engine.recall import code_recipe
+from quadland.kinds.paper import PAPER_SCENARIO
 from quadland.kinds.paper.values import model_values
 from quadland.scenario import Scenario, load_scenario
 from quadland_symbolic import codegen
@@ -31,8 +32,6 @@ __all__ = ["PAPER_SCENARIO", "EXAMPLE_CONTROL_RATE_HZ", "paper_defaults", "defau
            "flight_files", "flight_code", "CControlStep", "load_control_step", "CApi",
            "load_api"]
 
-#: The scenario whose values the paper's half of ``generated/`` carries.
-PAPER_SCENARIO = "paper"
 
 #: Control rate of the pure-C example flight for a continuous-time scenario,
 #: Hz (a flight stack's typical rate); a sampled scenario's own rate otherwise.

@@ -9,7 +9,7 @@ from quadland.engine.envelope import Envelope
 from quadland.engine.plan import SimulationPlan
 from quadland.engine.result import SimulationResult
 from quadland.kinds.base import LoopKind
-from quadland.kinds.paper import flight, report, simulate
+from quadland.kinds.paper import PAPER_SCENARIO, report, simulate
 from quadland.scenario import Scenario
 from quadland.schema import PAPER_SCHEMA
 from quadland_symbolic.codegen import Defaults
@@ -33,7 +33,7 @@ class PaperKind(LoopKind):
     name = "paper"
     summary_line = "the paper's 4-DOF relative altitude-attitude loop (Section 4)"
     schema = PAPER_SCHEMA
-    default_scenario = flight.PAPER_SCENARIO
+    default_scenario = PAPER_SCENARIO
     codegen_part = "paper"
     metrics = report.PAPER_METRICS
     trajectory = simulate.TRAJECTORY
@@ -115,7 +115,9 @@ class PaperKind(LoopKind):
         return lines, "continuous-time controller"
 
     def codegen_defaults(self, scenario: Scenario) -> Defaults:
-        return flight.paper_defaults(scenario)
+        from quadland.kinds.paper.flight import paper_defaults  # (its flight code: a build)
+
+        return paper_defaults(scenario)
 
 
 #: The paper's loop kind.

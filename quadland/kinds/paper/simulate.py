@@ -62,7 +62,7 @@ from quadland_symbolic.closed_loop import (
 )
 from quadland_symbolic.control_step import step_outputs
 from quadland_symbolic.layout import Field, Layout
-from quadland_symbolic.paper_loop import paper_loop
+from quadland_symbolic.paper_loop import paper_loop, paper_loop_recipe
 from quadland_symbolic.quadrotor import BODY_DISTURBANCE, QUAD_STATE, WRENCH
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
@@ -228,12 +228,17 @@ CONTINUOUS_OPT = "-Os"
 
 
 def paper_loop_part(l: int, part: str):
-    """The compiled (or VM) ``part`` of the paper loop's simulator for ``l`` nodes."""
+    """The compiled (or VM) ``part`` of the paper loop's simulator for ``l`` nodes: the
+    loop's CasADi functions are built only if the simulator is not in the cache
+    (:func:`quadland_symbolic.paper_loop.paper_loop_recipe`)."""
     from quadland.engine.compiled import compiled_loop
-    from quadland.kinds.paper.flight import flight_code
 
-    flight = flight_code(l) if part == "sampled_flight" else None
-    return compiled_loop(paper_loop(l), part, flight,
+    flight = None
+    if part == "sampled_flight":                 # (the flight code's module only for it)
+        from quadland.kinds.paper.flight import flight_code
+
+        flight = flight_code(l)
+    return compiled_loop(paper_loop_recipe(l), part, flight,
                          CONTINUOUS_OPT if part == "continuous" else "-O2")
 
 

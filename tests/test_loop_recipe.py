@@ -1,0 +1,224 @@
+"""A compiled simulator keyed by its loop's recipe: nothing built to find it in the cache."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+
+import casadi as ca
+import pytest
+
+from quadland.engine.build import have_compiler
+
+needs_cc = pytest.mark.skipif(not have_compiler(), reason="needs a C compiler")
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """A private build cache for the test."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    return tmp_path / "xdg" / "quadland"
+
+
+def _key(model, part="continuous", flight=None, sources=(), opt="-O2", strict=False,
+         name=None):
+    from quadland.engine.recall import recall_key
+
+    return recall_key(model, part, flight, sources, name or f"qlsim_{model.name}_{part}", opt,
+                      strict)
+
+
+@pytest.mark.parametrize("l", [2, 3])
+def test_the_recipe_describes_the_model_it_builds(l):
+    """Every layout, flag and absent function the paper's recipe gives without building
+    is the built model's (the model built by ``paper_loop`` itself)."""
+    from quadland.engine.compiled import built_model
+    from quadland.engine.recall import model_digest
+    from quadland_symbolic.paper_loop import paper_loop, paper_loop_recipe
+
+    recipe = paper_loop_recipe.__wrapped__(l)
+    model = paper_loop.__wrapped__(l)
+    for name, value in recipe.known().items():
+        assert getattr(model, name) == value, name
+    assert recipe.name == model.name == "paper"
+    assert {"state", "controller_params", "recorded", "envelope_layout"} <= set(recipe.known())
+    built = built_model(recipe)               # built, and checked against the description
+    assert built is recipe.model and model_digest(built) == model_digest(model)
+
+
+def test_a_recipe_that_describes_its_model_wrongly_is_refused():
+    from quadland.engine.compiled import built_model
+    from quadland_symbolic.loop_recipe import LoopRecipe
+    from quadland_symbolic.paper_loop import paper_loop, paper_loop_recipe
+
+    good = paper_loop_recipe.__wrapped__(2)
+    wrong = LoopRecipe(paper_loop, (2,), "paper",
+                       {**{k: v for k, v in good.known().items() if k != "flight"},
+                        "state": paper_loop_recipe(3).state}, frozenset())
+    with pytest.raises(ValueError, match="describes its model wrongly: state"):
+        built_model(wrong)
+
+
+def test_the_key_of_a_recipe_builds_nothing_and_changes_with_each_input(monkeypatch):
+    """The key of the paper's recipe differs for another ``l``, part, name, level,
+    strictness, flag, budget, flight code, compiler, generator, CasADi, NumPy or
+    Jinja2 version; equal recipes (built anew) give equal keys; no model is built."""
+    from quadland.engine import build, recall
+    from quadland_symbolic.paper_loop import paper_loop_recipe
+
+    two = paper_loop_recipe.__wrapped__(2)
+    base = _key(two)
+    assert "model" not in vars(two)              # nothing built for the key
+    assert base == _key(paper_loop_recipe.__wrapped__(2))
+    others = [_key(paper_loop_recipe.__wrapped__(3)), _key(two, "sampled"),
+              _key(two, name="qlsim_other"), _key(two, opt="-Os"), _key(two, strict=True),
+              _key(two, "sampled_flight", "one flight"),
+              _key(two, "sampled_flight", "one flight", ("a.c",))]
+    patches = [(build, "RUNTIME_CFLAGS", (*build.RUNTIME_CFLAGS, "-ffast-math")),
+               (build, "SHARED_CFLAGS", (*build.SHARED_CFLAGS, "-g")),
+               (build, "COMPILE_MEMORY_BUDGET", build.COMPILE_MEMORY_BUDGET + 1),
+               (build, "COMPILE_TIME_BUDGET", build.COMPILE_TIME_BUDGET + 1),
+               (build, "COMPILE_FIT", {}),
+               (build, "compiler_identity", lambda cc: "another compiler"),
+               (recall, "generator_digest", lambda: "another generator"),
+               (ca, "__version__", ca.__version__ + ".post1")]
+    for module, name, value in patches:
+        with monkeypatch.context() as m:
+            m.setattr(module, name, value)
+            recall.library_versions.cache_clear()
+            others.append(_key(two))
+        recall.library_versions.cache_clear()
+    for dist in ("numpy", "jinja2"):
+        with monkeypatch.context() as m:
+            real = recall.library_versions.__wrapped__
+            m.setattr(recall, "library_versions",
+                      lambda d=dist, r=real: r().replace(f"{d}=", f"{d}=9"))
+            others.append(_key(two))
+    assert len(set(others)) == len(others) and base not in others
+    assert _key(two) == base and "model" not in vars(two)
+
+
+def test_the_library_versions_name_numpy_and_the_installed_jinja2():
+    """NumPy's version, and Jinja2's ``__init__.py`` (which holds its version) by its
+    SHA-256, found without importing Jinja2."""
+    import hashlib
+    import importlib.metadata
+
+    import jinja2
+    import numpy as np
+
+    from quadland.engine import recall
+
+    recall.library_versions.cache_clear()
+    text = recall.library_versions()
+    source = open(jinja2.__file__, "rb").read()
+    assert f'__version__ = "{importlib.metadata.version("jinja2")}"'.encode() in source
+    assert f"numpy={np.__version__} " in text and f"casadi={ca.__version__} " in text
+    assert text.endswith(f"jinja2={hashlib.sha256(source).hexdigest()}")
+
+
+def test_the_generator_digest_follows_each_source_and_template(tmp_path, monkeypatch):
+    """A changed byte in one module or one template of a copy of ``quadland_symbolic``
+    changes its digest; the same files give the same digest."""
+    import quadland_symbolic
+    from quadland.engine import recall
+
+    root = tmp_path / "quadland_symbolic"
+    src = quadland_symbolic.__file__.rsplit("/", 1)[0]
+    shutil.copytree(src, root, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(quadland_symbolic, "__file__", str(root / "__init__.py"))
+
+    def digest():
+        recall.generator_digest.cache_clear()
+        return recall.generator_digest()
+
+    try:
+        first = digest()
+        assert digest() == first
+        seen = {first}
+        for rel in ("paper_loop.py", "codegen/simulator.py",
+                    next(p.relative_to(root).as_posix() for p in root.rglob("*.jinja"))):
+            path = root / rel
+            path.write_bytes(path.read_bytes() + b"\n")
+            seen.add(digest())
+        assert len(seen) == 4
+    finally:
+        monkeypatch.undo()
+        recall.generator_digest.cache_clear()
+
+
+_KEY = """
+from quadland.engine.recall import recall_key
+from quadland_symbolic.paper_loop import paper_loop_recipe
+print(recall_key(paper_loop_recipe(2), "continuous", None, (), "qlsim_paper_continuous",
+                 "-O2", False))
+"""
+
+
+@needs_cc
+def test_the_key_is_the_same_in_every_process():
+    keys = {subprocess.run([sys.executable, "-c", _KEY], check=True, capture_output=True,
+                           text=True).stdout.strip() for _ in range(2)}
+    from quadland_symbolic.paper_loop import paper_loop_recipe
+
+    assert keys == {_key(paper_loop_recipe(2), name="qlsim_paper_continuous")}
+
+
+_COLD = """
+import casadi as ca
+built = []
+init = ca.Function.__init__
+def counted(self, *args):
+    built.append(args[0] if args else None)
+    init(self, *args)
+ca.Function.__init__ = counted
+import quadland
+from quadland_symbolic.paper_loop import paper_loop
+res = quadland.simulate(quadland.load_scenario("paper", ["rbf.nodes=2",
+                        "simulation.duration=0.2"{extra}]))
+print(len(built), paper_loop.cache_info().misses, len(res["t"]))
+"""
+
+
+def _cold(extra: str, env) -> list[int]:
+    out = subprocess.run([sys.executable, "-c", _COLD.format(extra=extra)], check=True,
+                         capture_output=True, text=True, env=env)
+    return [int(v) for v in out.stdout.split()]
+
+
+@pytest.mark.slow
+@needs_cc
+@pytest.mark.parametrize("extra", ["", ', "controller.rate_hz=100"'])
+def test_a_run_with_its_simulator_cached_builds_no_casadi_function(cache, extra):
+    """A fresh process whose simulator is cached builds no CasADi function (every
+    ``casadi.Function`` made is counted); the first process, with an empty cache,
+    built the loop."""
+    import os
+
+    env = dict(os.environ)
+    first = _cold(extra, env)
+    assert first[0] > 0 and first[1] == 1 and first[2] == 21
+    assert _cold(extra, env) == [0, 0, 21]
+
+
+@pytest.mark.slow
+@needs_cc
+def test_a_changed_generator_rebuilds_the_model_and_its_c(cache, monkeypatch):
+    """A recipe's library is recalled without building the model; after the generator's
+    code changes (its digest) the model is built and its C generated again."""
+    from quadland.engine import compiled, recall
+    from quadland_symbolic.paper_loop import paper_loop_recipe
+
+    generate, calls = compiled.simulator_sources, []
+    monkeypatch.setattr(compiled, "simulator_sources",
+                        lambda *a: calls.append(a) or generate(*a))
+    first = compiled.CompiledLoop(paper_loop_recipe.__wrapped__(2), "continuous").library
+    assert len(calls) == 1
+    again = paper_loop_recipe.__wrapped__(2)
+    assert compiled.CompiledLoop(again, "continuous").library == first
+    assert len(calls) == 1 and "model" not in vars(again)
+    monkeypatch.setattr(recall, "generator_digest", lambda: "a changed generator")
+    changed = paper_loop_recipe.__wrapped__(2)
+    assert compiled.CompiledLoop(changed, "continuous").library == first   # the same C
+    assert len(calls) == 2 and "model" in vars(changed)
