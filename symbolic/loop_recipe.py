@@ -58,6 +58,11 @@ class LoopRecipe:
     def __init__(self, builder: Callable[..., LoopModel], args: tuple, name: str,
                  layouts: dict[str, Layout | None], absent: frozenset[str],
                  flags: dict | None = None):
+        if not builder.__module__.startswith("quadland_symbolic."):
+            raise ValueError(f"builder: {builder.__module__}.{builder.__qualname__} is not "
+                             "quadland_symbolic's, whose code alone the cache key covers")
+        if not all(isinstance(a, (bool, int, float, str)) for a in args):
+            raise ValueError(f"args: only numbers and strings, whose repr is the key: {args!r}")
         unknown = set(absent) - _FUNCTIONS
         if unknown:
             raise ValueError(f"absent: not function fields of LoopModel: {sorted(unknown)}")

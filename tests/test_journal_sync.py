@@ -1,8 +1,9 @@
 """The journal's fsync shared by the runs written within ``SYNC_INTERVAL`` (issue 20).
 
 Each finished run is still one ``write`` of its line; the ``fsync`` that makes it
-durable comes at most ``SYNC_INTERVAL`` later, shared with the runs written
-meanwhile, and at the campaign's end or interruption. A run is reported recorded
+durable comes with the first run written ``SYNC_INTERVAL`` or more after the last
+``fsync``, shared with the runs written meanwhile, or at the campaign's end or
+interruption. A run is reported recorded
 (the counts, the progress, the interrupted line) only once synced: nothing
 reported is lost, and the resume flies exactly the runs not recorded.
 """
@@ -95,3 +96,31 @@ def test_an_interrupted_campaign_syncs_and_reports_every_run_written(tmp_path, m
     result = run_campaign("paper", SHORT, runs=RUNS, out=out, workers=1, plots=False)
     assert result.flown == RUNS - 3 and result.complete
     assert (out / "runs.csv").read_bytes() == (reference / "runs.csv").read_bytes()
+
+
+def test_a_failed_fsync_stops_the_campaign_and_is_not_retried(tmp_path, monkeypatch):
+    """The journal's first fsync fails (EIO, as a disk's write-back error reports it): the
+    campaign stops with one line naming runs.csv and the error, and the journal's
+    descriptor is not synced again at the campaign's end (a second fsync can report
+    success with the failed pages dropped)."""
+    import errno
+
+    from quadland.exceptions import CampaignStopped
+
+    monkeypatch.setattr(journal, "SYNC_INTERVAL", 0.0)
+    out = tmp_path / "c"
+    calls: list[int] = []
+    real_fsync = os.fsync
+
+    def fsync(fd):
+        if os.readlink(f"/proc/self/fd/{fd}") == str(out / "runs.csv"):
+            calls.append(fd)
+            raise OSError(errno.EIO, os.strerror(errno.EIO))
+        real_fsync(fd)
+
+    monkeypatch.setattr(journal.os, "fsync", fsync)
+    with pytest.raises(CampaignStopped) as stopped:
+        run_campaign("paper", SHORT, runs=RUNS, out=out, workers=1, plots=False)
+    message = str(stopped.value)
+    assert "runs.csv" in message and "Input/output error" in message and "\n" not in message
+    assert len(calls) == 1                  # the end's sync did not try again

@@ -163,13 +163,15 @@ def test_three_times_the_drag_cannot_land_on_the_highway_car():
     assert tip == pytest.approx(36.87, abs=0.01) and lean > tip
 
 
-#: The ship with three times the modelled drag at its default seed (2026) and seeds 0-9,
-#: as measured: those that land, and what the others failed on.
-DRAG3_LANDS = (0, 1, 2, 3, 4, 5, 8, 9)
+#: The ship with three times the modelled drag at its default seed (2026) and seeds 0-9:
+#: the seeds that do not land, as measured, and what they fail on (strict xfails).
 DRAG3_FAILS = {2026: "relative_speed", 6: "no touchdown", 7: "relative_speed"}
 
 
-@pytest.mark.parametrize("seed", (2026, *range(10)))
+@pytest.mark.parametrize("seed", [
+    pytest.param(s, marks=pytest.mark.xfail(strict=True, reason=f"issue 19 item 1 unmet at "
+                                             f"this seed: {DRAG3_FAILS[s]}"))
+    if s in DRAG3_FAILS else s for s in (2026, *range(10))])
 def test_the_ship_with_three_times_the_modelled_drag(seed):
     """At the ship's 5 m/s three times the drag needs a 15 deg lean, inside its limits.
     (Until the descent waited for a calm window at the wait height, issue 19 item 4, it
@@ -185,13 +187,8 @@ def test_the_ship_with_three_times_the_modelled_drag(seed):
         "quadrotor.drag_translational=[0.9, 0.9, 0.9]",
         "quadrotor.drag_quadratic=[0.03675, 0.03675, 0.03675]",
         f"simulation.seed={seed}"])))
-    if seed in DRAG3_LANDS:
-        assert rep.touchdown and rep.success, rep
-        assert rep.tilt_deg < sc["touchdown.flare_tilt_deg"] + 2.9
-    else:
-        failure = DRAG3_FAILS[seed]
-        assert not rep.success
-        assert (not rep.touchdown) if failure == "no touchdown" else failure in rep.failures
+    assert rep.touchdown and rep.success, rep
+    assert rep.tilt_deg < sc["touchdown.flare_tilt_deg"] + 2.9
 
 
 def test_lands_with_a_4_newton_steady_side_force():

@@ -60,6 +60,25 @@ def test_a_recipe_that_describes_its_model_wrongly_is_refused():
         built_model(wrong)
 
 
+def test_a_recipe_of_code_the_key_does_not_cover_is_refused():
+    """The key hashes quadland_symbolic's code and the arguments' repr: a builder from
+    elsewhere (its code unhashed, so a change to it could be served a stale build) or an
+    argument whose repr is not its value is refused."""
+    from quadland_symbolic.loop_recipe import LoopRecipe
+    from quadland_symbolic.paper_loop import paper_loop, paper_loop_recipe
+
+    known = paper_loop_recipe.__wrapped__(2).known()
+    layouts = {k: v for k, v in known.items() if k != "flight"}
+
+    def elsewhere(l):
+        return paper_loop(l)
+
+    with pytest.raises(ValueError, match="is not quadland_symbolic's"):
+        LoopRecipe(elsewhere, (2,), "paper", layouts, frozenset())
+    with pytest.raises(ValueError, match="only numbers and strings"):
+        LoopRecipe(paper_loop, (object(),), "paper", layouts, frozenset())
+
+
 def test_the_key_of_a_recipe_builds_nothing_and_changes_with_each_input(monkeypatch):
     """The key of the paper's recipe differs for another ``l``, part, name, level,
     strictness, flag, budget, flight code, compiler, generator, CasADi, NumPy or

@@ -139,7 +139,7 @@ def test_the_driver_asks_at_the_first_tick_past_the_rows_and_stops_without_them(
         monkeypatch, raises):
     """With 10 rows drawn, the driver asks ``more(10)`` at the 11th control tick; what
     ``more`` raises is raised by the simulator's call; a table that gives no more rows
-    stops the run there (``SIM_ROWS``, after 10 control ticks: 36 ms at 250 Hz)."""
+    stops the run there (``SIM_ROWS``, after 10 control ticks: 40 ms at 250 Hz)."""
     sc = load_scenario("highway")
     source = _Failing(np.zeros((10_000, SENSED_TICK.size)), raises)
     runs = []

@@ -57,9 +57,9 @@ MANIFEST = "campaign.json"
 #: The journal of finished runs, then the sorted table.
 RUNS = "runs.csv"
 
-#: Seconds from one ``fsync`` of the journal to the next: the runs written meanwhile are
-#: made durable together (a 55 ms landing's own ``fsync`` cost 7 to 20 ms on this
-#: machine's virtual disk).
+#: Seconds from one ``fsync`` of the journal to the next at least: the runs written
+#: meanwhile are made durable together, with the first run written after it (a 55 ms
+#: landing's own ``fsync`` cost 7 to 20 ms on this machine's virtual disk).
 SYNC_INTERVAL = 0.5
 #: The files a campaign replaces whole (atomically) besides its journal.
 WRITTEN = ("scenario.toml", "summary.json")
@@ -329,6 +329,10 @@ class CampaignFolder:
         try:
             os.fsync(self._runs_fd)
         except OSError as exc:
+            # a failed fsync may have dropped the pages it reported: those runs are never
+            # counted, and the descriptor is not synced again (a second fsync can succeed
+            # with the data lost)
+            self._unsynced = []
             raise _stopped(self.path / RUNS, exc, "the runs recorded before are kept") \
                 from None
         done, self._unsynced = self._unsynced, []

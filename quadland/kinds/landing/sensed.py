@@ -14,8 +14,9 @@ loop needs beyond the unsensed one's vectors (:mod:`quadland.kinds.landing.value
 * the per-tick table ``N``: each control tick's sample and delivery flags and noise
   (:class:`quadland.kinds.landing.sensing.SensorDraws`, seeded by ``simulation.seed``),
   drawn as far as the flight goes (:class:`TickTable`): a landing that ends at 14 s of
-  a 40 s ``simulation.duration`` draws 15 s of it, the same bits as the first 15 s of
-  the whole table.
+  a 40 s ``simulation.duration`` fills the table's rows to 14 or 16 s (chunks of 2 s
+  after the first 10 s; each sensor's draws in blocks of 1,024 samples), the same bits
+  as the first rows of the whole table.
 
 ``sensors.random = false`` zeroes every draw of the world: no noise, biases,
 dropouts or outliers (every sample taken is delivered, the exact truth), and the
