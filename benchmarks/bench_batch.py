@@ -57,6 +57,9 @@ from quadland.scenario import load_scenario
 from quadland_symbolic.landing import drive
 from quadland_symbolic.landing.loop import landing_gear_signals_function
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from land_reference import land_q  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "generated" / "example"
 
@@ -74,20 +77,6 @@ def configure(before: bool) -> None:
         _NOW["gear"]
     contact_report._mapped.cache_clear()
     drive._planned_speed_change = _NOW["planned"].__wrapped__ if before else _NOW["planned"]
-
-
-def land_q(repeats: int) -> list[float]:
-    """CPU seconds of each ``land -q`` (the child's rusage)."""
-    subprocess.run(["make", "-s", "build/land"], cwd=EXAMPLE, check=True)
-    out = []
-    for _ in range(repeats):
-        proc = subprocess.Popen([str(EXAMPLE / "build" / "land"), "-q"],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        _, status, usage = os.wait4(proc.pid, 0)
-        proc.returncode = os.waitstatus_to_exitcode(status)
-        assert proc.returncode == 0
-        out.append(usage.ru_utime + usage.ru_stime)
-    return out
 
 
 def warm(name: str, repeats: int) -> dict:

@@ -35,6 +35,9 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from land_reference import land_q  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "generated" / "example"
 
@@ -107,19 +110,6 @@ def child(code: str, tree: Path | None, *args: str) -> dict:
     done = subprocess.run([sys.executable, "-c", code, *args], env=env,
                           cwd=tempfile.gettempdir(), capture_output=True, text=True, check=True)
     return json.loads(done.stdout.strip().splitlines()[-1])
-
-
-def land_q(repeats: int) -> list[float]:
-    """CPU seconds of each ``land -q`` (the child's rusage)."""
-    subprocess.run(["make", "-s", "build/land"], cwd=EXAMPLE, check=True)
-    out = []
-    for _ in range(repeats):
-        proc = subprocess.Popen([str(EXAMPLE / "build" / "land"), "-q"],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        _, status, usage = os.wait4(proc.pid, 0)
-        assert os.waitstatus_to_exitcode(status) == 0
-        out.append(usage.ru_utime + usage.ru_stime)
-    return out
 
 
 def fsync_wall(repeats: int = 20) -> float:
