@@ -7,8 +7,9 @@ box, its label's place, its offset text, the title's place, the draw itself.
 Nothing they depend on changes within the pass except the axes' place (an
 ``equal`` aspect moves it when applied), so the first answer is kept for the
 pass, by the axis's view limits and its axes' box and the figure's resolution,
-and every later call with the same ones returns it. Outside the context the
-axes are as matplotlib made them.
+and every later call with the same ones returns it (and sets the formatters,
+which axes sharing the axis share, back to this axis's ticks, as computing them
+again would). Outside the context the axes are as matplotlib made them.
 """
 
 from __future__ import annotations
@@ -26,14 +27,39 @@ def _pass_key(axis) -> tuple:
             axis.axes.get_figure(root=True).dpi)
 
 
+def _computed(axis, update) -> tuple[list, list]:
+    """``update()`` and each ``(formatter, locs)`` it set, in order."""
+    formatters = {id(t.formatter): t.formatter for t in (axis.major, axis.minor)}.values()
+    given: list = []
+    for formatter in formatters:
+        def set_locs(locs, formatter=formatter):
+            given.append((formatter, locs))
+            type(formatter).set_locs(formatter, locs)
+
+        formatter.set_locs = set_locs
+    try:
+        return update(), given
+    finally:
+        for formatter in formatters:
+            formatter.__dict__.pop("set_locs", None)
+
+
 def _memoize(axis) -> None:
     update, boxes = axis._update_ticks, axis._get_ticklabel_bboxes
+    siblings = axis.axes._shared_axes[axis.axis_name].get_siblings(axis.axes)
     kept: dict = {}
 
     def update_ticks():
         key = _pass_key(axis)
         if kept.get("ticks", (None,))[0] != key:
-            kept["ticks"] = (key, update())
+            ticks, given = _computed(axis, update)
+            kept["ticks"] = (key, ticks, given)
+            return ticks
+        if len(siblings) > 1:
+            # axes sharing this axis share its formatters: set them for this axis's
+            # ticks again, as computing them again would (its offset text reads them)
+            for formatter, locs in kept["ticks"][2]:
+                formatter.set_locs(locs)
         return kept["ticks"][1]
 
     def ticklabel_bboxes(ticks, renderer):
