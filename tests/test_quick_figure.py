@@ -91,3 +91,24 @@ def test_the_tick_memo_leaves_the_axes_as_matplotlib_made_them():
     assert "_update_ticks" not in vars(ax.xaxis)
     assert "_get_ticklabel_bboxes" not in vars(ax.yaxis)
     assert ax.xaxis._update_ticks() is not ax.xaxis._update_ticks()     # matplotlib's own
+
+
+def test_axes_sharing_a_formatter_keep_their_own_offset():
+    """Two axes of different widths share x (and its formatters): each keeps the offset
+    text and labels matplotlib gives it, though its ticks are computed once a pass."""
+    def content(fig):
+        grid = fig.add_gridspec(1, 2, width_ratios=[3, 1])
+        a = fig.add_subplot(grid[0])
+        b = fig.add_subplot(grid[1], sharex=a)
+        x = np.linspace(1e5, 1e5 + 3.7, 50)
+        a.plot(x, x * 1e-3)
+        b.plot(x, -x)
+        fig.tight_layout()
+
+    theirs = Figure(figsize=(8, 3), dpi=PNG_DPI)
+    FigureCanvasAgg(theirs)
+    content(theirs)
+    mine = new_figure((8, 3))
+    content(mine)
+    assert np.array_equal(_pixels(mine), _pixels(theirs))
+    assert [a.xaxis.offsetText.get_text() for a in mine.axes] == ["+1e5", "+1e5"]
