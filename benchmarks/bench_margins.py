@@ -16,6 +16,7 @@ Run from the repository root::
 
     python benchmarks/bench_margins.py                       # about 2 minutes
     python benchmarks/bench_margins.py --runs 5 --against /tmp/old
+    python benchmarks/bench_margins.py --scenarios paper highway --no-stages
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ def _cpu(args, env, cwd) -> float:
     return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
 
 
-def commands(runs: int, against: Path | None) -> dict:
+def commands(runs: int, against: Path | None, scenarios=SCENARIOS) -> dict:
     """Whole-process CPU s of each command, by (scenario, figures, tree)."""
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -63,7 +64,7 @@ def commands(runs: int, against: Path | None) -> dict:
         if against is not None:
             trees["against"] = _tree_env(against.resolve(), Path(tmp))
         for k in range(runs):
-            for name in SCENARIOS:
+            for name in scenarios:
                 for figures in (False, True):
                     for tree, env in trees.items():
                         folder = Path(tmp, f"{name}-{figures}-{tree}-{k}")
@@ -113,10 +114,14 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3, help="runs of each command")
     ap.add_argument("--against", type=Path, help="another source tree, paired run by run")
+    ap.add_argument("--scenarios", nargs="+", default=SCENARIOS, help="scenarios measured")
+    ap.add_argument("--no-stages", action="store_true", help="skip the stages of highway's review")
     args = ap.parse_args(argv)
     print("## quadland margins, whole process, CPU s, median (min to max)")
-    for (name, figures, tree), cpu in commands(args.runs, args.against).items():
+    for (name, figures, tree), cpu in commands(args.runs, args.against, args.scenarios).items():
         print(f"- {name}{' (figures)' if figures else ' --no-plots'}, {tree}: {_stats(cpu)}")
+    if args.no_stages:
+        return
     print("\n## margin_report of highway in this process, first call, CPU s")
     for label, cpu in stages().items():
         print(f"- {label}: {cpu:.3f}")

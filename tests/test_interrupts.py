@@ -4,6 +4,16 @@ A run into a folder that holds an earlier run's set is interrupted at seeded
 random moments, with SIGINT or SIGKILL. Afterwards the folder holds either
 the whole old set or the whole new one (every file from the same run), and
 nothing but hidden temporary entries appear beside it.
+
+The moments are counted from when the command is running: from when its
+process has loaded NumPy's core (:func:`_running`), which ``quadland``'s
+``main`` imports only after it installed its SIGINT handler. Before that the
+interpreter itself starts (``site``, the standard library's modules), where
+Python's own handler prints a ``KeyboardInterrupt`` traceback and no program
+can answer: a SIGINT 5 to 50 ms after the start gives one. Counted from the
+start of the process, on a loaded machine (seven jobs on two cores) a start
+slowed more than the timing run's let the earliest moments (0.2 run times)
+land there, and the test failed now and then.
 """
 
 import json
@@ -16,12 +26,31 @@ import time
 import pytest
 
 RUN = ["simulate", "--set", "simulation.duration=1", "--set", "disturbance.noise=true"]
+#: A library the command loads only once ``quadland.__main__.main`` runs, its handler set.
+RUNNING_MARK = "_multiarray_umath"
 
 
 def _start(out, seed):
     return subprocess.Popen([sys.executable, "-m", "quadland", *RUN, "--set",
                              f"simulation.seed={seed}", "--out", str(out)],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def _running(proc, timeout=120.0) -> float:
+    """``time.perf_counter()`` once ``proc`` runs quadland's ``main`` (its SIGINT handler
+    installed): :data:`RUNNING_MARK` is mapped in it, or it has ended."""
+    deadline = time.perf_counter() + timeout
+    while time.perf_counter() < deadline:
+        try:
+            with open(f"/proc/{proc.pid}/maps") as fh:
+                if RUNNING_MARK in fh.read():
+                    return time.perf_counter()
+        except (FileNotFoundError, ProcessLookupError):
+            pass
+        if proc.poll() is not None:
+            return time.perf_counter()
+        time.sleep(0.002)
+    raise AssertionError(f"the command did not load {RUNNING_MARK} in {timeout:g} s")
 
 
 def _run(out, seed):
@@ -43,9 +72,11 @@ def test_interrupted_runs_leave_the_old_set_or_the_new(tmp_path):
     out = tmp_path / "out"
     old = _run(out, 1)
     new = _run(tmp_path / "reference", 2)
-    start = time.perf_counter()
-    _run(tmp_path / "timing", 2)
-    duration = time.perf_counter() - start
+    timing = _start(tmp_path / "timing", 2)
+    start = _running(timing)
+    _, err = timing.communicate(timeout=300)
+    assert timing.returncode == 0, err
+    duration = time.perf_counter() - start          # from main's start to the end
     for p in (tmp_path / "reference", tmp_path / "timing"):
         for f in p.iterdir():
             f.unlink()
@@ -55,7 +86,8 @@ def test_interrupted_runs_leave_the_old_set_or_the_new(tmp_path):
     for trial in range(8):
         sig = signal.SIGKILL if trial % 2 else signal.SIGINT
         proc = _start(out, 2)
-        time.sleep(rng.uniform(0.2, 1.2) * duration)
+        started = _running(proc)
+        time.sleep(max(0.0, started + rng.uniform(0.2, 1.2) * duration - time.perf_counter()))
         proc.send_signal(sig)
         _, err = proc.communicate(timeout=300)
         assert "Traceback" not in err, err

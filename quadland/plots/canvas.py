@@ -7,16 +7,40 @@ measured twice, once per resolution, and every tick is laid out for both. A
 figure made by :func:`new_figure` has the PNG's resolution and an Agg canvas
 from the start, so the layout and the PNG share one renderer and its cache of
 text sizes, and the layout is the one the PNG is drawn with.
+
+Its canvas draws with :class:`quadland.plots.text_cache.TextCacheRenderer`
+(each distinct text laid out once per process), and each of its layouts and
+draws computes an axis's ticks once (:func:`quadland.plots.tick_memo.ticks_memoized`):
+the same pixels, in less time.
 """
 
 from __future__ import annotations
 
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from quadland.plots.text_cache import TextCacheCanvas
+from quadland.plots.tick_memo import ticks_memoized
 from quadland.png import PNG_DPI
 
-__all__ = ["new_figure"]
+__all__ = ["QuickFigure", "new_figure"]
+
+
+class QuickFigure(Figure):
+    """A matplotlib Figure whose ``tight_layout`` and draws compute each axis's ticks once
+    per pass (:func:`~quadland.plots.tick_memo.ticks_memoized`)."""
+
+    def draw(self, renderer):
+        """Draw as :meth:`matplotlib.figure.Figure.draw`, the ticks memoized."""
+        with ticks_memoized(self):
+            super().draw(renderer)
+
+    # Figure.draw already handles rasterization: do not wrap this one again
+    draw._supports_rasterization = True
+
+    def tight_layout(self, **kwargs):
+        """As :meth:`matplotlib.figure.Figure.tight_layout`, the ticks memoized."""
+        with ticks_memoized(self):
+            super().tight_layout(**kwargs)
 
 
 def new_figure(figsize: tuple[float, float]) -> Figure:
@@ -29,11 +53,11 @@ def new_figure(figsize: tuple[float, float]) -> Figure:
 
     Returns
     -------
-    matplotlib.figure.Figure
-        Not managed by pyplot (nothing is shown or kept); displayed in a
-        notebook and written by :func:`quadland.output.figure_png` as any
-        other figure.
+    QuickFigure
+        A :class:`matplotlib.figure.Figure`, not managed by pyplot (nothing is shown
+        or kept); displayed in a notebook and written by
+        :func:`quadland.output.figure_png` as any other figure.
     """
-    fig = Figure(figsize=figsize, dpi=PNG_DPI)
-    FigureCanvasAgg(fig)
+    fig = QuickFigure(figsize=figsize, dpi=PNG_DPI)
+    TextCacheCanvas(fig)
     return fig

@@ -1,0 +1,112 @@
+"""An Agg renderer that lays each distinct text out once (:class:`TextCacheRenderer`).
+
+matplotlib 3.11's Agg renderer lays a text out glyph by glyph on every draw
+(``FT2Font._layout``: every glyph loaded and hinted, about 40 us a glyph here,
+1 ms for a 25-letter title), and every text's size is measured against its
+font's height metrics, read from the font's tables again for each
+measurement (``Text._get_layout``). A margin review draws about 380 texts
+(five figures), most of them tick labels that repeat (``10⁰``, ``-180``), and
+measures them about 2,000 times.
+
+:class:`TextCacheRenderer` keeps both, by what they are computed from: the
+layout of a string by its fonts' files, size, resolution, hinting and
+features; the height metrics by the fonts' files, size and resolution. The
+glyphs are rendered as before, so the pixels are the same (checked in
+``tests/test_figure_costs.py``). Where matplotlib's Agg renderer has not the
+methods this one relies on (another version), it draws as matplotlib does.
+"""
+
+from __future__ import annotations
+
+import matplotlib as mpl
+from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
+from matplotlib.font_manager import fontManager, get_font
+from matplotlib.ft2font import FT2Font
+
+__all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE"]
+
+#: Most layouts (and height metrics) kept; the cache is emptied when full.
+CACHE_SIZE = 4096
+
+_LAYOUTS: dict = {}
+_HEIGHTS: dict = {}
+
+#: Whether this matplotlib draws text as the renderer below expects (3.11's Agg).
+_CACHEABLE = (hasattr(RendererAgg, "_draw_text_glyphs_and_boxes")
+              and hasattr(FT2Font, "_layout"))
+
+
+def _font_key(prop, dpi) -> tuple:
+    paths = tuple(fontManager._find_fonts_by_props(prop))
+    return (paths, prop.get_size_in_points(), dpi, mpl.rcParams["text.hinting_factor"],
+            mpl.rcParams["text.kerning_factor"])
+
+
+def _remember(cache: dict, key, value):
+    if len(cache) >= CACHE_SIZE:
+        cache.clear()
+    cache[key] = value
+    return value
+
+
+class TextCacheRenderer(RendererAgg):
+    """matplotlib's Agg renderer, each distinct text's layout and each font's height
+    metrics computed once per process (module docstring)."""
+
+    def _get_font_height_metrics(self, prop):
+        """A font's ascent, descent and line gap in pixels, as ``Text._get_layout`` reads
+        them from its ``OS/2`` or ``hhea`` table (None where it has neither)."""
+        key = _font_key(prop, self.dpi)
+        if key in _HEIGHTS:
+            return _HEIGHTS[key]
+        font = get_font(list(key[0]))
+        value = (None, None, None)
+        for table_name, linegap_key, ascent_key, descent_key in (
+                ('OS/2', 'sTypoLineGap', 'sTypoAscender', 'sTypoDescender'),
+                ('hhea', 'lineGap', 'ascent', 'descent')):
+            table = font.get_sfnt_table(table_name)
+            if table is None:
+                continue
+            # the same operations in the same order as matplotlib's Text._get_layout
+            fontsize = prop.get_size_in_points()
+            units_per_em = font.get_sfnt_table('head')['unitsPerEm']
+            scale = 1 / units_per_em * fontsize * self.dpi / 72
+            value = (table[ascent_key] * scale, -table[descent_key] * scale,
+                     table[linegap_key] * scale)
+            break
+        return _remember(_HEIGHTS, key, value)
+
+    def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
+        """Draw ``s`` as matplotlib's Agg renderer does, its glyphs' layout cached."""
+        if ismath or not _CACHEABLE:
+            return super().draw_text(gc, x, y, s, prop, angle, ismath=ismath, mtext=mtext)
+        flags = get_hinting_flag()
+        features = mtext.get_fontfeatures() if mtext is not None else None
+        language = mtext.get_language() if mtext is not None else None
+        key = (_font_key(prop, self.dpi), s, flags,
+               None if features is None else tuple(features),
+               language if language is None or isinstance(language, str) else tuple(language))
+        items = _LAYOUTS.get(key)
+        if items is None:
+            font = self._prepare_font(prop)
+            items = _remember(_LAYOUTS, key, tuple(font._layout(
+                s, flags=flags, features=features, language=language)))
+        size = prop.get_size_in_points()
+        self._draw_text_glyphs_and_boxes(
+            gc, x, y, angle,
+            ((item.ft_object, size, item.glyph_index, 0, 1, item.x, item.y) for item in items),
+            [])
+        return None
+
+
+class TextCacheCanvas(FigureCanvasAgg):
+    """An Agg canvas drawing with :class:`TextCacheRenderer`."""
+
+    def get_renderer(self):
+        """The canvas's renderer, made again when the figure's size or dpi changed."""
+        w, h = self.get_width_height(physical=True)
+        key = w, h, self.figure.dpi
+        if self._lastKey != key:
+            self.renderer = TextCacheRenderer(w, h, self.figure.dpi)
+            self._lastKey = key
+        return self.renderer
