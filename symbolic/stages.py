@@ -37,6 +37,15 @@ class Staged:
     slices : tuple of (str, str, int, int)
         Named values that are the entries ``start:stop`` of an input:
         ``(name, input, start, stop)``.
+    rings : tuple of (str, str, str)
+        Delay lines, ``(line, record, past)``: ``past`` is a slice of the first input
+        (the line of ``n`` slots of ``m`` values, newest first), ``record`` an
+        earlier stage's output of ``m`` values, and ``line`` the one output of an SX
+        stage of the inputs ``(record, past)`` computing ``past`` shifted by a slot,
+        ``record`` first (the oldest slot dropped), a piece of the first output at
+        ``past``'s place. :meth:`function` computes the shift; the C
+        (:mod:`quadland_symbolic.codegen.staged_c`) leaves that stage out and keeps the
+        line in a ring its caller holds (:meth:`ring_places`).
     """
 
     name: str
@@ -44,6 +53,7 @@ class Staged:
     inputs: tuple
     outputs: tuple
     slices: tuple = ()
+    rings: tuple = ()
 
     def __post_init__(self):
         known = {n for n, _ in self.inputs} | {s[0] for s in self.slices}
@@ -59,6 +69,59 @@ class Staged:
         absent = [n for _, pieces in self.outputs for n in pieces if n not in known]
         if absent:
             raise ValueError(f"no stage outputs {', '.join(absent)}")
+        self.ring_places()
+
+    def ring_places(self) -> tuple[tuple[int, int, int, int, int], ...]:
+        """Each ring's line: ``(input, output, start, m, n)``, the positions of the input
+        its ``past`` slices and of the output it is a piece of, its place in both, its
+        slots' size and its slots.
+
+        Raises
+        ------
+        ValueError
+            For a ring that is not as :attr:`rings` describes (a line's stage that
+            computes anything but the shift, a line elsewhere than ``past``).
+        """
+        slices = {n: (src, start, stop) for n, src, start, stop in self.slices}
+        ins = [n for n, _ in self.inputs]
+        offsets = {}
+        for k, (_, pieces) in enumerate(self.outputs):
+            at = 0
+            for piece in pieces:
+                offsets[piece] = (k, at)
+                at += self._size(piece)
+        places = []
+        for line, record, past in self.rings:
+            stage = next((f for f in self.stages if line in f.name_out()), None)
+            src, start, stop = slices.get(past, (None, 0, 0))
+            out, at = offsets.get(line, (None, None))
+            if (stage is None or src is None or at != start
+                    or stage.name_in() != [record, past] or stage.n_out() != 1
+                    or not stage.is_a("SXFunction")):
+                raise ValueError(f"ring {line}: not the shift of a slice {past} by {record}, "
+                                 "in place in an output")
+            m, n = stage.nnz_in(0), stage.nnz_in(1)
+            r, q = ca.SX.sym("r", m), ca.SX.sym("q", n)
+            shifted, got = ca.vertcat(r, q[:n - m]), stage(r, q)
+            if (n % m or stop - start != n or got.numel() != n
+                    or not all(ca.is_equal(got[i], shifted[i]) for i in range(n))):
+                raise ValueError(f"ring {line}: {stage.name()} is not the shift of {past} "
+                                 f"by {record}")
+            places.append((ins.index(src), out, start, m, n // m))
+        return tuple(places)
+
+    def _size(self, name: str) -> int:
+        """The number of values of a named value (an input, a slice, a stage's output)."""
+        for n, size in self.inputs:
+            if n == name:
+                return size
+        for n, _, start, stop in self.slices:
+            if n == name:
+                return stop - start
+        for f in self.stages:
+            if name in f.name_out():
+                return f.nnz_out(f.name_out().index(name))
+        raise KeyError(name)
 
     def function(self) -> ca.Function:
         """The stages as one MX Function."""

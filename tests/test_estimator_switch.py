@@ -102,7 +102,8 @@ def test_stages_compose_by_name_and_refuse_what_is_missing():
 
 def test_the_staged_c_reads_and_writes_in_place():
     """The sensed controller's C: the filter reads its memory in the loop's state and
-    writes the next one where the next state holds it; every stage its own file."""
+    writes the next one where the next state holds it; every stage its own file but the
+    delay lines' shifts (rings, tests/test_delivery_ring.py)."""
     from quadland_symbolic.codegen.simulator import simulator_sources
     from quadland_symbolic.landing.sensed_loop import landing_sensed_loop, sensed_loop_memory
 
@@ -112,7 +113,10 @@ def test_the_staged_c_reads_and_writes_in_place():
     block = c[c.index("/* sensed_filter */"):c.index("/* sensed_flight */")]
     assert f"arg1[0] = (arg[1] ? arg[1] + {nav.start} : 0);" in block
     assert f"res1[0] = (res[0] ? res[0] + {nav.start} : w + {nav.start});" in block
-    stages = landing_sensed_loop(10).controller_stages.stages
-    for stage in stages:
-        assert f"qlsim_landing_sensed_controller_{stage.name()}.c" in files
+    staged = landing_sensed_loop(10).controller_stages
+    shifts = {line for line, _, _ in staged.rings}        # the delay lines: rings, no C
+    for stage in staged.stages:
+        written = f"qlsim_landing_sensed_controller_{stage.name()}.c" in files
+        assert written is not bool(shifts & set(stage.name_out())), stage.name()
+    assert len(shifts) == 5 and "/* sensed_push" not in c
     assert all(len(text) < 700_000 for name, text in files.items() if "controller" in name)

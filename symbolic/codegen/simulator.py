@@ -86,13 +86,14 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         names = (*names, "ride_rhs", "ride_row")
     if model.envelope is None:
         names = tuple(n for n in names if n != "envelope")
-    files, work = {}, []
+    files, work, rings = {}, [], ()
     for name in names:
         if name == "controller" and model.controller_stages is not None:
             staged, sz = staged_sources(prefix, model.controller_stages,
                                         lambda n, f: _emit(n, f)[0])
             files.update(staged)
             work.append(sz)
+            rings = _rings(model.controller_stages)
             continue
         text, fn = _emit(prefix + name, by_name[name])
         files.update(text)
@@ -116,12 +117,44 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         and model.event_continues,
         has_envelope=model.envelope is not None, max_delay=MAX_DELAY_PERIODS,
         has_ride=has_ride, has_free=has_free,
-        has_tick=driver == "sampled" and model.tick_inputs is not None,
+        has_tick=driver == "sampled" and model.tick_inputs is not None, rings=rings,
+        ring_slots=max((r["n"] for r in rings), default=0) + 1,
+        core=_core(model.controller_state.size, rings),
         casadi_version=ca.__version__, sizes=sizes,
         **{k: max(w[k] for w in work) for k in ("sz_arg", "sz_res", "sz_iw", "sz_w")})
     if part == "sampled_flight":
         files.update(_flight_controller(model, prefix, by_name["step_args"]))
     return files
+
+
+def _rings(staged) -> tuple[dict, ...]:
+    """The controller's delay lines the driver keeps as rings
+    (:attr:`quadland_symbolic.stages.Staged.rings`): each one's ``res`` (the pointer
+    the controller's C takes it at), ``offset`` in the controller's memory (its input
+    ``xc`` and output ``xc_next``), slots of ``m`` values, ``n`` of them; ``at``:
+    where its slots begin in the driver's array of rings."""
+    places = staged.ring_places()
+    slots = max((n for *_, n in places), default=0) + 1     # the driver's RING_SLOTS
+    out, at = [], 0
+    for i, (src, dst, start, m, n) in enumerate(places):
+        if (staged.inputs[src][0], dst) != ("xc", 0):
+            raise ValueError(f"ring {staged.rings[i][0]}: not a line of the controller's "
+                             "memory (xc, xc_next)")
+        out.append(dict(res=len(staged.outputs) + i, offset=start, m=m, n=n, at=at))
+        at += 2 * slots * m
+    return tuple(out)
+
+
+def _core(nxc: int, rings) -> tuple[tuple[int, int], ...]:
+    """The ranges ``(start, stop)`` of the controller's memory outside its rings."""
+    out, at = [], 0
+    for r in sorted(rings, key=lambda r: r["offset"]):
+        if r["offset"] > at:
+            out.append((at, r["offset"]))
+        at = r["offset"] + r["m"] * r["n"]
+    if at < nxc:
+        out.append((at, nxc))
+    return tuple(out)
 
 
 def _emit(name: str, f: ca.Function) -> tuple[dict[str, str], ca.Function]:

@@ -56,7 +56,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 
 import casadi as ca
 
@@ -65,6 +64,16 @@ from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
     landing_memory,
+)
+from quadland_symbolic.landing.delivery import (
+    DELIVERY_SLOTS,
+    NAV_PACKET_OF,
+    deliver,
+    delivery_delay,
+    delivery_record,
+    push_stage,
+    read_stage,
+    sensor_record,
 )
 from quadland_symbolic.landing.estimator import (
     FLIGHT_COUPLING,
@@ -95,12 +104,8 @@ from quadland_symbolic.landing.loop import (
 )
 from quadland_symbolic.landing.navigation import (
     BLOCKS,
-    DATALINK,
-    GNSS,
     IMU,
     NAV,
-    RANGE,
-    VISION,
     covariance_pattern,
     estimator_params,
 )
@@ -114,9 +119,7 @@ from quadland_symbolic.landing.relative import deck_gear_gap
 from quadland_symbolic.landing.sensors import (
     NOISES,
     SENSOR_NAMES,
-    SENSOR_PACKETS,
     SENSOR_PARAMS,
-    sensor_function,
 )
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 from quadland_symbolic.layout import Field, Layout
@@ -127,14 +130,6 @@ from quadland_symbolic.stages import Staged
 __all__ = ["DELIVERY_SLOTS", "SENSED_TICK", "SENSED_RECORDED", "SENSED_TRAJECTORY", "NAV_PACKET_OF",
            "delivery_record", "delivery_delay", "sensed_loop_memory", "sensed_loop_params",
            "detector_cues", "detector_cues_function", "landing_sensed_loop"]
-
-#: The longest delivery delay a sensor's line holds, in control periods (0.256 s at
-#: 250 Hz: past the filter's 0.2 s horizon and its largest packet age).
-DELIVERY_SLOTS = 64
-
-#: The filter's packet layout each sensor delivers (the IMU's has no flag: it is held).
-NAV_PACKET_OF = {"imu": IMU, "vision": VISION, "gnss": GNSS, "rangefinder": RANGE,
-                 "datalink": DATALINK}
 
 #: One control tick's row of the world's random draws (``n``).
 SENSED_TICK = Layout("n_sensed", tuple(
@@ -187,24 +182,6 @@ SENSED_TRAJECTORY = Layout("sensed_trajectory", (
 ), "one row per output time of a sensed landing, and one at touchdown")
 
 
-def delivery_record(name: str) -> Layout:
-    """A packet in ``name``'s delay line: ``fresh``, ``tau``, the filter's packet values."""
-    nav = NAV_PACKET_OF[name]
-    values = nav.fields if name == "imu" else nav.fields[2:]
-    return Layout(f"line_{name}", (
-        Field("fresh", 1, "0/1", "1: a packet taken at tau, kept and valid"),
-        Field("tau", 1, "s", "capture time"), *values), f"a {name} packet in delivery")
-
-
-def delivery_delay(latency: float, period: float) -> int:
-    """Control ticks from a packet's capture to its reading: ``ceil(latency / period)``.
-
-    A packet arriving within ``1e-9`` of a tick is read at that tick (the ratio
-    of two decimals, such as 0.06 s over 0.004 s, is not exact in binary).
-    """
-    return max(0, math.ceil(latency / period - 1e-9))
-
-
 @functools.cache
 def sensed_loop_memory(l: int) -> Layout:
     """The sensed loop's memory: guidance, landing step, filter, held IMU, delay lines."""
@@ -237,57 +214,6 @@ def sensed_loop_params(l: int) -> Layout:
         Field("delay", len(SENSOR_NAMES), "ticks", "each sensor's delivery delay (world)",
               elements=tuple(f"delay_{n}" for n in SENSOR_NAMES)),
     ), "sensed landing loop controller parameters")
-
-
-def _line_next(name, xp, uh, w, t, pp, p_sens, tick, line):
-    """This tick's packet into ``name``'s line: the line after."""
-    packet = SENSOR_PACKETS[name]
-    y = packet.unpack(sensor_function(name)(xp, uh, w, t, pp, p_sens, tick[f"{name}_noise"]))
-    fresh = tick[f"{name}_sampled"] * tick[f"{name}_kept"]
-    if "valid" in packet.names():
-        fresh = fresh * y["valid"]
-    values = [y[f.name] for f in delivery_record(name).fields[2:]]
-    return ca.vertcat(fresh, t, *values, line[:(DELIVERY_SLOTS - 1) * delivery_record(name).size])
-
-
-def _read(line_next, size, delay):
-    """The packet read now: slot ``delay`` of the line, every slot computed and selected
-    (``+0.0`` for a ``-0.0``, the sum of the other slots' zeros)."""
-    read = ca.SX.zeros(size)
-    for i in range(DELIVERY_SLOTS):
-        read += ca.if_else(delay == i, line_next[i * size:(i + 1) * size], ca.SX.zeros(size))
-    return read
-
-
-def _deliver(name, xp, uh, w, t, pp, p_sens, tick, line, delay):
-    """This tick's packet into ``name``'s line; the packet read now, and the line after."""
-    line_next = _line_next(name, xp, uh, w, t, pp, p_sens, tick, line)
-    return _read(line_next, delivery_record(name).size, delay), line_next
-
-
-@functools.cache
-def read_function(name: str) -> ca.Function:
-    """``read_<name>(delay, line, zero) -> packet``: slot ``delay`` of ``name``'s line, plus
-    ``zero``.
-
-    A CasADi ``Switch`` on ``delay`` (one case a slot, zeros beyond the line): its C reads
-    the one slot, where the branch-free read (:func:`_deliver`) selects from every slot
-    and adds the others' zeros. Given ``zero = +0.0`` it gives the same bits: the slot's
-    values, a ``-0.0`` turned to ``+0.0``.
-    """
-    size = delivery_record(name).size
-    line, zero = ca.SX.sym("line", DELIVERY_SLOTS * size), ca.SX.sym("zero")
-    cases = [ca.Function(f"slot_{name}_{i}", [line, zero],
-                         [line[i * size:(i + 1) * size] + zero], ["line", "zero"], ["packet"])
-             for i in range(DELIVERY_SLOTS)]
-    beyond = ca.Function(f"beyond_{name}", [line, zero], [ca.DM.zeros(size)], ["line", "zero"],
-                         ["packet"])
-    return ca.Function.conditional(f"read_{name}", cases, beyond)
-
-
-#: The name of each sensor's packet read now, as the sensed loop's stages name it.
-_READ = {"imu": "read_imu", "vision": "vision", "gnss": "gnss", "rangefinder": "range",
-         "datalink": "datalink"}
 
 
 def detector_cues(y, range_read, imu_now, uh_held, cs: dict, ps: dict):
@@ -337,27 +263,17 @@ def detector_cues_function() -> ca.Function:
 
 
 def _world_stage(xc_lay, pc_lay) -> ca.Function:
-    """``sensed_world``: steps 1 and 2 up to the lines (the sensors, each packet into its
-    line)."""
+    """``sensed_world``: steps 1 and 2 up to the lines (the sensors: each one's record of
+    this tick, :func:`~quadland_symbolic.landing.delivery.sensor_record`)."""
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     xc, pc, n = xc_lay.sym(), pc_lay.sym(), SENSED_TICK.sym()
-    cs, ps, tick = xc_lay.unpack(xc), pc_lay.unpack(pc), SENSED_TICK.unpack(n)
-    lines = [ca.densify(_line_next(name, xp, uh, w, t, pp, ps["p_sens"], tick,
-                                   cs[f"line_{name}"])) for name in SENSOR_NAMES]
-    return ca.Function("sensed_world", [xp, xc, pc, t, uh, w, pp, n], lines,
+    ps, tick = pc_lay.unpack(pc), SENSED_TICK.unpack(n)
+    records = [ca.densify(sensor_record(name, xp, uh, w, t, pp, ps["p_sens"], tick))
+               for name in SENSOR_NAMES]
+    return ca.Function("sensed_world", [xp, xc, pc, t, uh, w, pp, n], records,
                        ["xp", "xc", "pc", "t", "uh_held", "w", "pp", "n"],
-                       [f"line_{name}" for name in SENSOR_NAMES], {"cse": True})
-
-
-def _read_stage(name) -> ca.Function:
-    """``sensed_read_<name>``: step 2's reading, the one slot of the delay
-    (:func:`read_function`)."""
-    line, delay = ca.MX.sym("line", DELIVERY_SLOTS * delivery_record(name).size), \
-        ca.MX.sym("delay")
-    return ca.Function(f"sensed_read_{name}", [line, delay],
-                       [read_function(name)(delay, line, ca.MX(0.0))],
-                       [f"line_{name}", f"delay_{name}"], [_READ[name]])
+                       [f"record_{name}" for name in SENSOR_NAMES], {"cse": True})
 
 
 def _imu_stage(xc_lay) -> ca.Function:
@@ -426,7 +342,7 @@ def _step_args(l, xc_lay, pc_lay) -> ca.Function:
     delays = dict(zip(SENSOR_NAMES, ca.vertsplit(ps["delay"]), strict=True))
     read, lines = {}, []
     for name in SENSOR_NAMES:
-        read[name], line_next = _deliver(name, xp, uh, w, t, pp, ps["p_sens"], tick,
+        read[name], line_next = deliver(name, xp, uh, w, t, pp, ps["p_sens"], tick,
                                          cs[f"line_{name}"], delays[name])
         lines.append(line_next)
     imu_rec = delivery_record("imu").unpack(read["imu"])
@@ -451,14 +367,19 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
     """The landing loop for ``l`` RBF nodes flying on sensors and the filter (module docstring);
     ``welded`` as in :func:`~quadland_symbolic.landing.loop.landing_loop`.
 
-    Its controller is an MX Function of three stages (:class:`quadland_symbolic.stages.
-    Staged`): ``sensed_world`` (steps 1 to 3), ``sensed_filter`` (step 4, each
-    sensor's updates evaluated only when due) and ``sensed_flight`` (steps 5 and 6).
+    Its controller is an MX Function of stages (:class:`quadland_symbolic.stages.
+    Staged`): ``sensed_world`` (step 1, each sensor's record of the tick),
+    ``sensed_push_<name>`` (step 2, the record into its delay line: a ring in the
+    compiled simulator, :attr:`~quadland_symbolic.stages.Staged.rings`),
+    ``sensed_read_<name>`` (step 2's reading), ``sensed_imu`` (step 3),
+    ``sensed_filter`` (step 4, each sensor's updates evaluated only when due) and
+    ``sensed_flight`` (steps 5 and 6).
     """
     base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
     stages = Staged(
         "controller",
-        (_world_stage(xc_lay, pc_lay), *(_read_stage(name) for name in SENSOR_NAMES),
+        (_world_stage(xc_lay, pc_lay), *(push_stage(name) for name in SENSOR_NAMES),
+         *(read_stage(name) for name in SENSOR_NAMES),
          _imu_stage(xc_lay), _filter_stage(), _flight_stage(l, xc_lay, pc_lay)),
         inputs=(("xp", LANDING_PLANT_STATE.size), ("xc", xc_lay.size), ("pc", pc_lay.size),
                 ("first", 1), ("t", 1), ("uh_held", COMMAND.size),
@@ -475,7 +396,11 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
                                          ("dt", "pc", pc_lay, "dt"))),
                 *((f"delay_{s}", "pc", pc_lay.slice("delay").start + i,
                    pc_lay.slice("delay").start + i + 1)
-                  for i, s in enumerate(SENSOR_NAMES))))
+                  for i, s in enumerate(SENSOR_NAMES)),
+                *((f"past_{s}", "xc", xc_lay.slice(f"line_{s}").start,
+                   xc_lay.slice(f"line_{s}").stop) for s in SENSOR_NAMES)),
+        # each line a ring in the compiled simulator: no shift of 3,200 values a tick
+        rings=tuple((f"line_{s}", f"record_{s}", f"past_{s}") for s in SENSOR_NAMES))
     controller = stages.function()
     xp, xc = LANDING_PLANT_STATE.sym(), xc_lay.sym()
     cs = xc_lay.unpack(xc)
