@@ -191,7 +191,7 @@ class TickTable:
         end = min(n, end)
         if end <= self.filled:
             return self.filled
-        counts = self.draws.extend((end + 1) / self.rate)
+        counts = self.draws.extend_ticks(end, self.rate)   # the samples before `end`
         for name in SENSOR_NAMES:
             k0 = self.placed[name]
             t, delivered, noise = self.draws.window(name, k0, counts[name])

@@ -138,13 +138,17 @@ class _Clock:
         return self.phase + self.h * np.arange(k0, k1)
 
     def count(self, horizon: float) -> int:
-        """Samples before ``horizon`` (none at it): ``len(sample_times(...))``."""
-        span = horizon - self.phase
-        if span < 0:
-            return 0
-        regular = int(math.floor(span / self.h + 1e-9)) + 1
-        last = self.phase + self.h * (regular - 1)
-        return regular - 1 if abs(last - horizon) <= 1e-8 + 1e-5 * abs(horizon) else regular
+        """Samples before ``horizon``, s; a sample within :data:`GRID_TOL` of a period of
+        it counts as at it (not before): a tolerance of the clock's period, whatever the
+        horizon (a tolerance growing with the horizon dropped samples of long flights)."""
+        return max(0, math.ceil((horizon - self.phase) * self.rate - GRID_TOL))
+
+    def before_tick(self, tick: int, rate: float) -> int:
+        """Samples on the ticks of a ``rate`` Hz clock before ``tick``, in integers: the
+        sensor's samples fall on its ticks (every ``rate / rate_hz``-th from the
+        ``phase * rate``-th, as the schema checks)."""
+        stride, first = round(rate / self.rate), round(self.phase * rate)
+        return max(0, -(-(int(tick) - first) // stride))
 
 
 #: Standard normals per sample of a sensor's block: its noise's, then the IMU's six of
@@ -340,7 +344,16 @@ class SensorDraws:
 
     def extend(self, horizon: float) -> dict[str, int]:
         """Draw every sample before ``horizon``, s; returns each sensor's count."""
-        counts = {name: sen.clock.count(horizon) for name, sen in self.sensors.items()}
+        return self._extend({name: sen.clock.count(horizon)
+                             for name, sen in self.sensors.items()})
+
+    def extend_ticks(self, tick: int, rate: float) -> dict[str, int]:
+        """Draw every sample on the ticks of a ``rate`` Hz clock (the control's) before
+        ``tick``, counted in integers; returns each sensor's count."""
+        return self._extend({name: sen.clock.before_tick(tick, rate)
+                             for name, sen in self.sensors.items()})
+
+    def _extend(self, counts: dict[str, int]) -> dict[str, int]:
         for name, sen in self.sensors.items():
             sen.ensure(counts[name])
         if self.random:
