@@ -341,6 +341,7 @@ class SensorDraws:
                         for i, name in enumerate(SENSOR_NAMES)}
         self.attitude = _Attitude(self.sensors["imu"])
         self.ready = {name: 0 for name in SENSOR_NAMES}   # samples with their e_att
+        self.att_rows = 0                                  # the IMU's rows with theirs
 
     def extend(self, horizon: float) -> dict[str, int]:
         """Draw every sample before ``horizon``, s; returns each sensor's count."""
@@ -360,7 +361,8 @@ class SensorDraws:
             self._join(counts)
             imu, att = self.sensors["imu"], self.attitude
             att.ensure(imu.n)
-            imu.noise[:, imu.layout.slice("e_att")] = att.gm[:imu.n] + att.wn[:imu.n]
+            k0, self.att_rows = self.att_rows, imu.n      # the IMU's rows drawn since
+            imu.noise[k0:imu.n, imu.layout.slice("e_att")] = att.gm[k0:imu.n] + att.wn[k0:imu.n]
         self.ready.update(counts)
         return counts
 
