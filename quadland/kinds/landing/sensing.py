@@ -118,9 +118,10 @@ def sensor_seed(seed, stream: int, *part: int) -> np.random.SeedSequence:
     the attitude error's draws are in the IMU's blocks). The spawn key
     ``(..., SENSOR_STREAM, stream, *part)`` depends on nothing else.
     """
-    base = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-    return np.random.SeedSequence(base.entropy,
-                                  spawn_key=tuple(base.spawn_key) + (SENSOR_STREAM, stream,
+    if not isinstance(seed, np.random.SeedSequence):    # an int's entropy is itself, its
+        return np.random.SeedSequence(seed, spawn_key=(SENSOR_STREAM, stream, *part))  # key ()
+    return np.random.SeedSequence(seed.entropy,
+                                  spawn_key=tuple(seed.spawn_key) + (SENSOR_STREAM, stream,
                                                                      *part))
 
 
