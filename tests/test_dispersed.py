@@ -3,7 +3,8 @@
 :func:`quadland.campaign.dispersed.dispersed` must give what
 :meth:`Scenario.replace` (every key validated again) gives: the same values, types and
 order for every run's draws of the shipped campaigns, and the same one-line refusal
-for a draw the schema refuses.
+for a draw the schema refuses. The draws themselves: a chunk's numeric dispersions go
+through their inverse CDFs at once, each run's values those of its own point alone.
 """
 
 from __future__ import annotations
