@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 
+from quadland.campaign.dispersed import dispersed
 from quadland.campaign.sampling import RunDraw
 from quadland.campaign.spec import campaign_spec_of
 from quadland.exceptions import ScenarioError, SimulationError
@@ -73,7 +74,7 @@ def fly(base: Scenario, draw: RunDraw, limits: Mapping[str, float] | None = None
 
     kind = kind_of(base)
     try:
-        scenario = base.replace(**draw.values)
+        scenario = dispersed(base, draw.values)
     except ScenarioError as exc:
         return outcome("invalid", message=str(exc))
     try:

@@ -96,7 +96,8 @@ def unit_samples(spec: CampaignSpec, indices: Iterable[int], runs: int | None = 
 
 
 def _numeric(disp: Dispersion, u: np.ndarray) -> np.ndarray:
-    """The draws ``X`` of a numeric dispersion at ``u`` (one per dimension)."""
+    """The draws ``X`` of a numeric dispersion at ``u`` (one per dimension; a row per run
+    for ``u`` of shape ``(runs, dims)``: each element as alone, the same bits)."""
     if disp.distribution == "uniform":
         lo, hi = np.array(disp.low), np.array(disp.high)
         return lo + u * (hi - lo)
@@ -110,14 +111,14 @@ def _numeric(disp: Dispersion, u: np.ndarray) -> np.ndarray:
     lo, hi = np.array(disp.low), np.array(disp.high)
     # std = 0, or a spread so small against the distance to [low, high] that
     # all the mass sits at the nearest bound (the standardized bounds overflow)
-    out = np.clip(mean, lo, hi)
+    out = np.broadcast_to(np.clip(mean, lo, hi), np.shape(u)).copy()
     spread = std > 0
     if spread.any():
         with np.errstate(all="ignore"):
             a = (lo[spread] - mean[spread]) / std[spread]
             b = (hi[spread] - mean[spread]) / std[spread]
-            x = mean[spread] + std[spread] * stats.truncnorm.ppf(u[spread], a, b)
-        out[spread] = np.where(np.isfinite(x), x, out[spread])
+            x = mean[spread] + std[spread] * stats.truncnorm.ppf(u[..., spread], a, b)
+        out[..., spread] = np.where(np.isfinite(x), x, out[..., spread])
     return np.clip(out, lo, hi)                 # never outside its bounds, even by rounding
 
 
@@ -163,14 +164,23 @@ def iter_draws(spec: CampaignSpec, indices: Iterable[int], runs: int | None = No
     for start in range(0, len(idx), chunk):
         part = idx[start:start + chunk]
         U = whole[part] if whole is not None else unit_samples(spec, part, runs)
+        # each numeric dispersion's inverse CDF once for the chunk's runs (per run, the
+        # truncated normal's was 1 ms of a landing's 46), element for element the same
+        X, col = [], 0
+        for disp in spec.dispersions:
+            numeric = disp.distribution not in ("seed", "choice")
+            X.append(_numeric(disp, U[:, col:col + disp.dims]) if numeric else None)
+            col += disp.dims
         for row, i in enumerate(part):
-            yield _draw(spec, i, U[row])
+            yield _draw(spec, i, U[row], [None if x is None else x[row] for x in X])
 
 
-def _draw(spec: CampaignSpec, i: int, u_row: np.ndarray) -> RunDraw:
+def _draw(spec: CampaignSpec, i: int, u_row: np.ndarray, xs: list) -> RunDraw:
+    """Run ``i``'s draw from its point ``u_row`` and its numeric dispersions' values
+    ``xs`` (None for the others)."""
     seed = run_seed(spec.seed, i)
     values, columns, col = {}, {}, 0
-    for disp in spec.dispersions:
+    for disp, x in zip(spec.dispersions, xs, strict=True):
         u = u_row[col:col + disp.dims]
         col += disp.dims
         if disp.distribution == "seed":
@@ -182,7 +192,6 @@ def _draw(spec: CampaignSpec, i: int, u_row: np.ndarray) -> RunDraw:
             values[disp.key] = list(value) if isinstance(value, tuple) else value
             columns[disp.key] = format_value(value)
             continue
-        x = _numeric(disp, u)
         for t, target in enumerate(disp.targets):
             per = [apply_mode(disp.mode, nom, float(x[0 if (t or len(x) == 1) else e]))
                    for e, nom in enumerate(target.nominal)]

@@ -118,9 +118,10 @@ def sensor_seed(seed, stream: int, *part: int) -> np.random.SeedSequence:
     the attitude error's draws are in the IMU's blocks). The spawn key
     ``(..., SENSOR_STREAM, stream, *part)`` depends on nothing else.
     """
-    base = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-    return np.random.SeedSequence(base.entropy,
-                                  spawn_key=tuple(base.spawn_key) + (SENSOR_STREAM, stream,
+    if not isinstance(seed, np.random.SeedSequence):    # an int's entropy is itself, its
+        return np.random.SeedSequence(seed, spawn_key=(SENSOR_STREAM, stream, *part))  # key ()
+    return np.random.SeedSequence(seed.entropy,
+                                  spawn_key=tuple(seed.spawn_key) + (SENSOR_STREAM, stream,
                                                                      *part))
 
 
@@ -138,13 +139,17 @@ class _Clock:
         return self.phase + self.h * np.arange(k0, k1)
 
     def count(self, horizon: float) -> int:
-        """Samples before ``horizon`` (none at it): ``len(sample_times(...))``."""
-        span = horizon - self.phase
-        if span < 0:
-            return 0
-        regular = int(math.floor(span / self.h + 1e-9)) + 1
-        last = self.phase + self.h * (regular - 1)
-        return regular - 1 if abs(last - horizon) <= 1e-8 + 1e-5 * abs(horizon) else regular
+        """Samples before ``horizon``, s; a sample within :data:`GRID_TOL` of a period of
+        it counts as at it (not before): a tolerance of the clock's period, whatever the
+        horizon (a tolerance growing with the horizon dropped samples of long flights)."""
+        return max(0, math.ceil((horizon - self.phase) * self.rate - GRID_TOL))
+
+    def before_tick(self, tick: int, rate: float) -> int:
+        """Samples on the ticks of a ``rate`` Hz clock before ``tick``, in integers: the
+        sensor's samples fall on its ticks (every ``rate / rate_hz``-th from the
+        ``phase * rate``-th, as the schema checks)."""
+        stride, first = round(rate / self.rate), round(self.phase * rate)
+        return max(0, -(-(int(tick) - first) // stride))
 
 
 #: Standard normals per sample of a sensor's block: its noise's, then the IMU's six of
@@ -337,17 +342,28 @@ class SensorDraws:
                         for i, name in enumerate(SENSOR_NAMES)}
         self.attitude = _Attitude(self.sensors["imu"])
         self.ready = {name: 0 for name in SENSOR_NAMES}   # samples with their e_att
+        self.att_rows = 0                                  # the IMU's rows with theirs
 
     def extend(self, horizon: float) -> dict[str, int]:
         """Draw every sample before ``horizon``, s; returns each sensor's count."""
-        counts = {name: sen.clock.count(horizon) for name, sen in self.sensors.items()}
+        return self._extend({name: sen.clock.count(horizon)
+                             for name, sen in self.sensors.items()})
+
+    def extend_ticks(self, tick: int, rate: float) -> dict[str, int]:
+        """Draw every sample on the ticks of a ``rate`` Hz clock (the control's) before
+        ``tick``, counted in integers; returns each sensor's count."""
+        return self._extend({name: sen.clock.before_tick(tick, rate)
+                             for name, sen in self.sensors.items()})
+
+    def _extend(self, counts: dict[str, int]) -> dict[str, int]:
         for name, sen in self.sensors.items():
             sen.ensure(counts[name])
         if self.random:
             self._join(counts)
             imu, att = self.sensors["imu"], self.attitude
             att.ensure(imu.n)
-            imu.noise[:, imu.layout.slice("e_att")] = att.gm[:imu.n] + att.wn[:imu.n]
+            k0, self.att_rows = self.att_rows, imu.n      # the IMU's rows drawn since
+            imu.noise[k0:imu.n, imu.layout.slice("e_att")] = att.gm[k0:imu.n] + att.wn[k0:imu.n]
         self.ready.update(counts)
         return counts
 

@@ -382,8 +382,12 @@ def _result(scenario, times, X, R, Y, recorded=LANDING_RECORDED,
     signals (:func:`quadland.kinds.landing.contact_report.gear_columns`, under the
     disturbance ``held`` at each row)."""
     cols = {"t": times}
-    cols.update(zip(LANDING_SIGNALS.element_names(), Y.T, strict=True))
-    cols.update(zip(recorded.element_names(), R.T, strict=True))
+    # one transposed copy each: its rows are the columns, contiguous (a copy per column
+    # was 280 small copies a landing)
+    cols.update(zip(LANDING_SIGNALS.element_names(), np.ascontiguousarray(Y.T, dtype=float),
+                    strict=True))
+    cols.update(zip(recorded.element_names(), np.ascontiguousarray(R.T, dtype=float),
+                    strict=True))
     if touched is not None:
         cols["touched"] = touched
         cols.update(gear_columns(pp, times, X, touched, held))
