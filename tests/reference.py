@@ -205,7 +205,9 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
 
 #: highway_100's airframe before issue 19's "An airframe made for highway_100"
 #: (docs/landing.md): the scenario as it was, bit for bit, for the reproducers that
-#: were measured on it (benchmarks/highway_100_road.toml pins the same keys).
+#: were measured on it (benchmarks/highway_100_road.toml pins the same keys), with its
+#: filter's target acceleration random walk, its friction's slope cap and its dwell of before
+#: ("highway_100: the lane change was the filter's").
 HIGHWAY_100_OLD = ["quadrotor.thrust_to_weight=2.0", "controller_model.thrust_to_weight=2.0",
                    "quadrotor.gear_height=0.2", "gear.feet_x=0.15", "gear.feet_y=0.125",
                    "controller.tilt_max_deg=45.0", "touchdown.flare_tilt_deg=34.0",
@@ -215,4 +217,5 @@ HIGHWAY_100_OLD = ["quadrotor.thrust_to_weight=2.0", "controller_model.thrust_to
                    "sensors.vision.half_angle=0.8901179185171081",
                    "sensors.vision.sigma0=0.02", "sensors.vision.sigma_per_m=0.01",
                    "sensors.vision.range_max=12.0", "estimator.vision_sigma0=0.02",
-                   "estimator.vision_k_range=0.01"]
+                   "estimator.vision_k_range=0.01", "estimator.q_at=[1e-06, 1e-06, 1e-06]",
+                   "gear.slip_damping_max=300.0", "landing.dwell_time=1.0"]
