@@ -20,7 +20,7 @@ extern "C" {
 #define QL_LANDING_RBF_NODES 10                  /* l, RBF nodes of the landing step */
 #define QL_LANDING_NETWORK_INPUT_DIM 6           /* dimension of the network's input [v_e, Omega_e] */
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
-#define QL_LANDING_PARAMS_SIZE 131               /* reals in ql_landing_params */
+#define QL_LANDING_PARAMS_SIZE 132               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 89                 /* reals in ql_landing_state */
 #define QL_GUIDANCE_PARAMS_SIZE 27               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
@@ -109,6 +109,7 @@ typedef struct {
     ql_real ki[3];                   /* 1/s: inner bias adaptation gain: d_hat_a' = ki z2 (ki_phi, ki_theta, ki_psi) */
     ql_real d_max_p;                 /* m/s^2: projection bound of each outer bias estimate */
     ql_real d_max;                   /* rad/s^2: projection bound of each inner bias estimate */
+    ql_real r_learn;                 /* m: x, y's outer bias estimates learn within it (0: always) */
     ql_real w_o[3];                  /* rad/s: disturbance observer bandwidth, deck-frame x, y, z (0: none) (w_o_x, w_o_y, w_o_z) */
     ql_real centers[10][6];          /* -: RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e]) */
     ql_real widths[10];              /* -: RBF widths epsilon_i */

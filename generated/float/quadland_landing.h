@@ -20,7 +20,7 @@ extern "C" {
 #define QLF_LANDING_RBF_NODES 10                 /* l, RBF nodes of the landing step */
 #define QLF_LANDING_NETWORK_INPUT_DIM 6          /* dimension of the network's input [v_e, Omega_e] */
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
-#define QLF_LANDING_PARAMS_SIZE 131              /* reals in qlf_landing_params */
+#define QLF_LANDING_PARAMS_SIZE 132              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 89                /* reals in qlf_landing_state */
 #define QLF_GUIDANCE_PARAMS_SIZE 27              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
@@ -109,6 +109,7 @@ typedef struct {
     qlf_real ki[3];                  /* 1/s: inner bias adaptation gain: d_hat_a' = ki z2 (ki_phi, ki_theta, ki_psi) */
     qlf_real d_max_p;                /* m/s^2: projection bound of each outer bias estimate */
     qlf_real d_max;                  /* rad/s^2: projection bound of each inner bias estimate */
+    qlf_real r_learn;                /* m: x, y's outer bias estimates learn within it (0: always) */
     qlf_real w_o[3];                 /* rad/s: disturbance observer bandwidth, deck-frame x, y, z (0: none) (w_o_x, w_o_y, w_o_z) */
     qlf_real centers[10][6];         /* -: RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e]) */
     qlf_real widths[10];             /* -: RBF widths epsilon_i */

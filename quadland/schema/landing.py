@@ -166,6 +166,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                             hi=1e3),
         "bias_max": Field(F, "rad/s^2", "projection bound of each inner bias estimate", lo=0.0,
                           hi=1e4),
+        "bias_radius": Field(F, "m", "x, y's outer bias estimates learn only within this "
+                             "horizontal error; 0: always", lo=0.0, hi=1e3, default=0.0),
         "observer_frequency": Field(F, "rad/s", "disturbance observer bandwidth (its double "
                                     "pole): deck-frame x, y, z; 0: none", 3, lo=0.0, hi=1e3),
         **{k: PAPER_SCHEMA["controller"][k] for k in ("gamma1", "gamma2", "k_w", "k_zeta", "rho",
