@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import quadland
 from quadland.scenario import load_scenario
 from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
@@ -115,3 +116,40 @@ def test_the_scenarios_that_leave_the_key_out_take_no_radius(name):
     sc = load_scenario(name)
     assert "bias_radius" not in Path(sc.source).read_text()
     assert sc["controller.bias_radius"] == 0.0
+
+
+#: the calm default flight: perfect sensing, no turbulence, gust or disturbance noise.
+CALM = ("sensors.enabled=false", "wind.turbulence_w20=0.0", "wind.gust_amplitude=0.0",
+        "disturbance.noise=false")
+#: the bias estimates of x and y on, at the gain of highway's law of before.
+KI_P_BEFORE = "controller.ki_p=[0.5, 0.5, 1.0]"
+
+
+def _calm(*overrides):
+    return quadland.simulate(load_scenario("highway", [*CALM, *overrides]))
+
+
+def test_held_through_the_approach_the_flight_is_the_observer_alones_until_the_radius():
+    """Within the radius the estimates learn; outside they are held at 0, so the flight
+    with ``ki_p = 0.5`` on x, y and a 0.1 m radius is the flight without them (highway's
+    shipped ``ki_p = [0, 0, 1]``) to the bit until the horizontal error first comes within
+    0.1 m, and differs after. Ungated, the same estimates learn the approach's transient
+    and carry it to the contact, 33.9 / -19.1 mm from the centre
+    (``tests/test_highway_observer_xyz.py``); held, 3.2 / -2.9 mm, touching down when the
+    flight without them does (8.20 s, not 8.96 s)."""
+    alone, held = _calm(), _calm(KI_P_BEFORE, "controller.bias_radius=0.1")
+    error = np.hypot(alone["x_e"] - alone["x_ref"], alone["y_e"] - alone["y_ref"])
+    first = int(np.flatnonzero(error <= 0.1)[0])
+    assert alone["t"][first] > 3.0                          # the approach lasts seconds
+    for name in ("x_e", "y_e", "z_e", "phi1", "theta1"):
+        np.testing.assert_array_equal(held[name][:first + 1], alone[name][:first + 1])
+        assert not np.array_equal(held[name], alone[name])
+    k = int(np.flatnonzero(held["touched"] > 0.5)[0])
+    np.testing.assert_allclose([held["x_e"][k], held["y_e"][k]], [0.00322, -0.00290],
+                               atol=5e-5)
+    k_alone = int(np.flatnonzero(alone["touched"] > 0.5)[0])
+    assert held["t"][k] == pytest.approx(alone["t"][k_alone], abs=0.011)
+    ungated = _calm(KI_P_BEFORE)
+    k_ungated = int(np.flatnonzero(ungated["touched"] > 0.5)[0])
+    np.testing.assert_allclose([ungated["x_e"][k_ungated], ungated["y_e"][k_ungated]],
+                               [0.0339, -0.0191], atol=5e-4)
