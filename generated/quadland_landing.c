@@ -148,7 +148,8 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, pivot_x, 24, 0) &&
     AT(ql_guidance_params, pivot_y, 25, 0) &&
     AT(ql_guidance_params, pivot_h, 26, 0) &&
-    sizeof(ql_guidance_params) == 27 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, descent_leash, 27, 0) &&
+    sizeof(ql_guidance_params) == 28 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -181,12 +182,12 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[27] = {
+static const ql_real default_p_guid[28] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 0.0,
     0.15, 0.5934119456780721, 0.0, 0.35, 0.5, 0.3,
-    0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -456,6 +457,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   pivot_x                  >= 0
  *   pivot_y                  >= 0
  *   pivot_h                  >= 0
+ *   descent_leash            >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -549,6 +551,9 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[26]) && (p[26] >= 0.0))) {
         bad = "pivot_h";
     }
+    if (!bad && !(isfinite(p[27]) && (p[27] >= 0.0))) {
+        bad = "descent_leash";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -625,7 +630,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 27 comparisons. The values are known to be finite; no names and no
+ * 28 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -657,6 +662,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[24] >= 0.0);
     ok &= (p[25] >= 0.0);
     ok &= (p[26] >= 0.0);
+    ok &= (p[27] >= 0.0);
     return ok;
 }
 
@@ -729,7 +735,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[5] = state->ms_rise;
     xg[6] = state->ms_rise_rate;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
-          & all_finite((const ql_real *)params, 27)
+          & all_finite((const ql_real *)params, 28)
           & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

@@ -389,6 +389,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "commit_horizon": _POSITIVE,
     "calm_speed": _POSITIVE,
     "motion_time": _POSITIVE,
+    "descent_leash": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

@@ -165,7 +165,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         settle_time=g["settle_time"], marker_timeout=g["marker_timeout"],
         search_height=g["search_height"], commit_height=g["commit_height"],
         commit_horizon=g["commit_horizon"], calm_speed=g["calm_speed"],
-        motion_time=g["motion_time"], **touchdown_guidance(scenario)))
+        motion_time=g["motion_time"], descent_leash=g["descent_leash"],
+        **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
