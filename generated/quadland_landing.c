@@ -74,10 +74,11 @@ typedef char landing_controller_params_is_its_layout[
     AT(ql_landing_controller_params, ki, 24, 0) &&
     AT(ql_landing_controller_params, d_max_p, 27, 0) &&
     AT(ql_landing_controller_params, d_max, 28, 0) &&
-    AT(ql_landing_controller_params, w_o, 29, 0) &&
-    AT(ql_landing_controller_params, centers, 32, 0) &&
-    AT(ql_landing_controller_params, widths, 92, 0) &&
-    sizeof(ql_landing_controller_params) == 102 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_controller_params, r_learn, 29, 0) &&
+    AT(ql_landing_controller_params, w_o, 30, 0) &&
+    AT(ql_landing_controller_params, centers, 33, 0) &&
+    AT(ql_landing_controller_params, widths, 93, 0) &&
+    sizeof(ql_landing_controller_params) == 103 * sizeof(ql_real) ? 1 : -1];
 typedef char actuator_params_is_its_layout[
     AT(ql_actuator_params, motor_time_constant, 0, 0) &&
     AT(ql_actuator_params, F_max, 1, 0) &&
@@ -91,9 +92,9 @@ typedef char actuator_params_is_its_layout[
 typedef char landing_params_is_its_layout[
     AT(ql_landing_params, quad, 0, 0) &&
     AT(ql_landing_params, ctrl, 13, 0) &&
-    AT(ql_landing_params, act, 115, 0) &&
-    AT(ql_landing_params, tilt_min, 130, 0) &&
-    sizeof(ql_landing_params) == 131 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_landing_params, act, 116, 0) &&
+    AT(ql_landing_params, tilt_min, 131, 0) &&
+    sizeof(ql_landing_params) == 132 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_output_is_its_layout[
     AT(ql_landing_output, F_cmd, 0, 0) &&
     AT(ql_landing_output, wrench, 4, 0) &&
@@ -147,7 +148,8 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, pivot_x, 24, 0) &&
     AT(ql_guidance_params, pivot_y, 25, 0) &&
     AT(ql_guidance_params, pivot_h, 26, 0) &&
-    sizeof(ql_guidance_params) == 27 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, descent_leash, 27, 0) &&
+    sizeof(ql_guidance_params) == 28 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -155,36 +157,37 @@ static const ql_real default_p_quad[13] = {
     0.3, 0.001, 0.001, 0.001, 9.8, 0.25,
     0.05,
 };
-static const ql_real default_p_land[102] = {
+static const ql_real default_p_land[103] = {
     1.5, 1.5, 1.5, 1.5, 1.5, 1.5,
     2.0, 2.0, 2.0, 14.0, 14.0, 14.0,
     0.05, 0.1, 5.0, 0.1, 0.1, 1.0,
     10.0, 1.0, 0.7853981633974483, 0.0, 0.0, 1.0,
-    2.0, 2.0, 2.0, 4.0, 40.0, 12.0,
-    12.0, 12.0, -2.0, -2.0, -2.0, -2.0,
-    -2.0, -2.0, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556,
-    -1.5555555555555556, -1.5555555555555556, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112,
-    -1.1111111111111112, -1.1111111111111112, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667,
-    -0.6666666666666667, -0.6666666666666667, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232,
-    -0.22222222222222232, -0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232,
-    0.22222222222222232, 0.22222222222222232, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665,
-    0.6666666666666665, 0.6666666666666665, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107,
-    1.1111111111111107, 1.1111111111111107, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554,
-    1.5555555555555554, 1.5555555555555554, 2.0, 2.0, 2.0, 2.0,
+    2.0, 2.0, 2.0, 4.0, 40.0, 0.0,
+    12.0, 12.0, 12.0, -2.0, -2.0, -2.0,
+    -2.0, -2.0, -2.0, -1.5555555555555556, -1.5555555555555556, -1.5555555555555556,
+    -1.5555555555555556, -1.5555555555555556, -1.5555555555555556, -1.1111111111111112, -1.1111111111111112, -1.1111111111111112,
+    -1.1111111111111112, -1.1111111111111112, -1.1111111111111112, -0.6666666666666667, -0.6666666666666667, -0.6666666666666667,
+    -0.6666666666666667, -0.6666666666666667, -0.6666666666666667, -0.22222222222222232, -0.22222222222222232, -0.22222222222222232,
+    -0.22222222222222232, -0.22222222222222232, -0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.22222222222222232,
+    0.22222222222222232, 0.22222222222222232, 0.22222222222222232, 0.6666666666666665, 0.6666666666666665, 0.6666666666666665,
+    0.6666666666666665, 0.6666666666666665, 0.6666666666666665, 1.1111111111111107, 1.1111111111111107, 1.1111111111111107,
+    1.1111111111111107, 1.1111111111111107, 1.1111111111111107, 1.5555555555555554, 1.5555555555555554, 1.5555555555555554,
+    1.5555555555555554, 1.5555555555555554, 1.5555555555555554, 2.0, 2.0, 2.0,
     2.0, 2.0, 2.0, 2.0, 2.0, 2.0,
     2.0, 2.0, 2.0, 2.0, 2.0, 2.0,
+    2.0,
 };
 static const ql_real default_p_act[15] = {
     0.02, 9.8, 0.2, 0.01225, 0.01225, 0.01225,
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[27] = {
+static const ql_real default_p_guid[28] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 0.0,
     0.15, 0.5934119456780721, 0.0, 0.35, 0.5, 0.3,
-    0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -253,6 +256,7 @@ const char *ql_phase_name(int phase)
  *   ctrl.ki                  >= 0
  *   ctrl.d_max_p             >= 0
  *   ctrl.d_max               >= 0
+ *   ctrl.r_learn             >= 0
  *   ctrl.w_o                 >= 0
  *   ctrl.centers             finite
  *   ctrl.widths              > 0
@@ -368,52 +372,55 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
     if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0))) {
         bad = "ctrl.d_max";
     }
-    for (i = 42; !bad && i < 45; ++i) {
+    if (!bad && !(isfinite(p[42]) && (p[42] >= 0.0))) {
+        bad = "ctrl.r_learn";
+    }
+    for (i = 43; !bad && i < 46; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
             bad = "ctrl.w_o";
         }
     }
-    for (i = 45; !bad && i < 105; ++i) {
+    for (i = 46; !bad && i < 106; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "ctrl.centers";
         }
     }
-    for (i = 105; !bad && i < 115; ++i) {
+    for (i = 106; !bad && i < 116; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "ctrl.widths";
         }
     }
-    if (!bad && !(isfinite(p[115]) && (p[115] > 0.0))) {
+    if (!bad && !(isfinite(p[116]) && (p[116] > 0.0))) {
         bad = "act.motor_time_constant";
     }
-    if (!bad && !(isfinite(p[116]) && (p[116] > 0.0))) {
+    if (!bad && !(isfinite(p[117]) && (p[117] > 0.0))) {
         bad = "act.F_max";
     }
-    if (!bad && !(isfinite(p[117]) && (p[117] >= 0.0))) {
+    if (!bad && !(isfinite(p[118]) && (p[118] >= 0.0))) {
         bad = "act.gear_height";
     }
-    for (i = 118; !bad && i < 121; ++i) {
+    for (i = 119; !bad && i < 122; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
             bad = "act.drag_quadratic";
         }
     }
-    if (!bad && !(isfinite(p[121]) && (p[121] >= 0.0))) {
+    if (!bad && !(isfinite(p[122]) && (p[122] >= 0.0))) {
         bad = "act.rotor_radius";
     }
-    if (!bad && !(isfinite(p[122]) && (p[122] > 0.0))) {
+    if (!bad && !(isfinite(p[123]) && (p[123] > 0.0))) {
         bad = "act.air_density";
     }
-    for (i = 123; !bad && i < 127; ++i) {
+    for (i = 124; !bad && i < 128; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0))) {
             bad = "act.rotor_efficiency";
         }
     }
-    for (i = 127; !bad && i < 130; ++i) {
+    for (i = 128; !bad && i < 131; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "act.cg_offset";
         }
     }
-    if (!bad && !(isfinite(p[130]) && ((p[130] >= 0.0) && (p[130] < 1.0)))) {
+    if (!bad && !(isfinite(p[131]) && ((p[131] >= 0.0) && (p[131] < 1.0)))) {
         bad = "tilt_min";
     }
     if (bad_field) {
@@ -450,6 +457,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   pivot_x                  >= 0
  *   pivot_y                  >= 0
  *   pivot_h                  >= 0
+ *   descent_leash            >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -543,6 +551,9 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[26]) && (p[26] >= 0.0))) {
         bad = "pivot_h";
     }
+    if (!bad && !(isfinite(p[27]) && (p[27] >= 0.0))) {
+        bad = "descent_leash";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -551,7 +562,7 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
 
 /* 1 when every parameter lies in its range, the per-node arrays aside
  * (ctrl.widths: ql_check_landing_params only): the step's invariant,
- * 58 comparisons. The values are known to be finite; no names and no
+ * 59 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_landing_params finds the culprit. */
 static int landing_params_in_range(const ql_real *p)
 {
@@ -601,24 +612,25 @@ static int landing_params_in_range(const ql_real *p)
     ok &= (p[42] >= 0.0);
     ok &= (p[43] >= 0.0);
     ok &= (p[44] >= 0.0);
-    ok &= (p[115] > 0.0);
+    ok &= (p[45] >= 0.0);
     ok &= (p[116] > 0.0);
-    ok &= (p[117] >= 0.0);
+    ok &= (p[117] > 0.0);
     ok &= (p[118] >= 0.0);
     ok &= (p[119] >= 0.0);
     ok &= (p[120] >= 0.0);
     ok &= (p[121] >= 0.0);
-    ok &= (p[122] > 0.0);
-    ok &= (p[123] >= 0.0);
+    ok &= (p[122] >= 0.0);
+    ok &= (p[123] > 0.0);
     ok &= (p[124] >= 0.0);
     ok &= (p[125] >= 0.0);
     ok &= (p[126] >= 0.0);
-    ok &= ((p[130] >= 0.0) & (p[130] < 1.0));
+    ok &= (p[127] >= 0.0);
+    ok &= ((p[131] >= 0.0) & (p[131] < 1.0));
     return ok;
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 27 comparisons. The values are known to be finite; no names and no
+ * 28 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -650,6 +662,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[24] >= 0.0);
     ok &= (p[25] >= 0.0);
     ok &= (p[26] >= 0.0);
+    ok &= (p[27] >= 0.0);
     return ok;
 }
 
@@ -722,7 +735,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[5] = state->ms_rise;
     xg[6] = state->ms_rise_rate;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
-          & all_finite((const ql_real *)params, 27)
+          & all_finite((const ql_real *)params, 28)
           & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

@@ -20,9 +20,9 @@ extern "C" {
 #define QL_LANDING_RBF_NODES 10                  /* l, RBF nodes of the landing step */
 #define QL_LANDING_NETWORK_INPUT_DIM 6           /* dimension of the network's input [v_e, Omega_e] */
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
-#define QL_LANDING_PARAMS_SIZE 131               /* reals in ql_landing_params */
+#define QL_LANDING_PARAMS_SIZE 132               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 89                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 27               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 28               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
 #define QL_LANDING_PLANT_NP 331                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
@@ -109,6 +109,7 @@ typedef struct {
     ql_real ki[3];                   /* 1/s: inner bias adaptation gain: d_hat_a' = ki z2 (ki_phi, ki_theta, ki_psi) */
     ql_real d_max_p;                 /* m/s^2: projection bound of each outer bias estimate */
     ql_real d_max;                   /* rad/s^2: projection bound of each inner bias estimate */
+    ql_real r_learn;                 /* m: x, y's outer bias estimates learn within it (0: always) */
     ql_real w_o[3];                  /* rad/s: disturbance observer bandwidth, deck-frame x, y, z (0: none) (w_o_x, w_o_y, w_o_z) */
     ql_real centers[10][6];          /* -: RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e]) */
     ql_real widths[10];              /* -: RBF widths epsilon_i */
@@ -193,6 +194,7 @@ typedef struct {
     ql_real pivot_x;                 /* m: the pivot's arm along x the aim anticipates (0: none) */
     ql_real pivot_y;                 /* m: the pivot's arm along y the aim anticipates (0: none) */
     ql_real pivot_h;                 /* m: the pivot's height below the centre of mass (0: none) */
+    ql_real descent_leash;           /* m: how far the falling reference may lead the quadrotor down (0: no limit) */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */

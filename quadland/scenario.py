@@ -451,7 +451,11 @@ def _validate(raw: Mapping, source: str, default_name: str = "scenario",
                 if section == "scenario":
                     out[section][key] = "" if key == "description" else default_name
                     continue
-                raise ScenarioError(f"{source}: missing key {dotted} ({field.doc}, {field.unit})")
+                if field.default is None:
+                    raise ScenarioError(f"{source}: missing key {dotted} ({field.doc}, "
+                                        f"{field.unit})")
+                out[section][key] = check_value(dotted, field.default, field)
+                continue
             out[section][key] = check_value(dotted, table[key], field)
     CROSS_CHECKS[model](out)
     return out

@@ -97,7 +97,7 @@ LANDING_DOCUMENTED = {
     "ctrl.w_f": _positive, "ctrl.zeta_f": _positive,
     "ctrl.tilt_max": lambda v, p: (v > 0) & (v < math.pi / 2),
     "ctrl.ki_p": _nonnegative, "ctrl.ki": _nonnegative, "ctrl.d_max_p": _nonnegative,
-    "ctrl.d_max": _nonnegative, "ctrl.w_o": _nonnegative,
+    "ctrl.d_max": _nonnegative, "ctrl.r_learn": _nonnegative, "ctrl.w_o": _nonnegative,
     "ctrl.centers": _finite, "ctrl.widths": _positive,
     "act.motor_time_constant": _positive, "act.F_max": _positive,
     "act.gear_height": _nonnegative,
@@ -122,6 +122,7 @@ GUIDANCE_DOCUMENTED = {
     "flare_tilt": lambda v, p: (v > 0) & (v < math.pi / 2), "hold_time": _nonnegative,
     "level_time": _positive, "cut_time": _nonnegative, "aim_height": _nonnegative,
     "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
+    "descent_leash": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

@@ -46,7 +46,7 @@ P_ACT = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=F_MAX, gear_height=0.
 #: The hover test's controller parameters (besides the network's centres and widths).
 GAINS = dict(k1p=[1.0] * 3, k2p=[1.0] * 3, k1=[3.0] * 3, k2=[3.0] * 3, gamma1=0.05,
              gamma2=0.1, k_w=5.0, k_zeta=0.1, rho=0.1, w_f=12.0, zeta_f=1.0, tilt_max=0.5,
-             ki_p=[0.5, 0.7, 0.9], ki=[1.0, 2.0, 3.0], d_max_p=0.4, d_max=5.0,
+             ki_p=[0.5, 0.7, 0.9], ki=[1.0, 2.0, 3.0], d_max_p=0.4, d_max=5.0, r_learn=0.0,
              w_o=[3.0, 4.0, 0.0])
 CENTERS = np.tile(np.linspace(-2.0, 2.0, L_NODES), (NETWORK_INPUT_DIM, 1))
 WIDTHS = np.full(L_NODES, 2.0)

@@ -198,7 +198,7 @@ def _step(commands, eta2=(0.05, -0.04, 0.3), p_e=(0.4, -0.3, 1.0)):
                            gamma1=0.05, gamma2=0.1, k_w=5.0, k_zeta=0.1, rho=0.1,
                            nominal_model=1.0, w_f=10.0, zeta_f=1.0, tilt_max=math.radians(45),
                            ki_p=[0.5, 0.5, 1.0], ki=[2.0] * 3, d_max_p=4.0, d_max=40.0,
-                           w_o=[0.0] * 3,
+                           r_learn=0.0, w_o=[0.0] * 3,
                            centers=np.zeros((6, L)), widths=np.full(L, 2.0)))
     p_quad = QUADROTOR.pack(Q)
     p_act = ACTUATOR.pack(dict(motor_time_constant=0.02, F_max=9.8, gear_height=0.2,

@@ -74,10 +74,11 @@ typedef char landing_controller_params_is_its_layout[
     AT(qlf_landing_controller_params, ki, 24, 0) &&
     AT(qlf_landing_controller_params, d_max_p, 27, 0) &&
     AT(qlf_landing_controller_params, d_max, 28, 0) &&
-    AT(qlf_landing_controller_params, w_o, 29, 0) &&
-    AT(qlf_landing_controller_params, centers, 32, 0) &&
-    AT(qlf_landing_controller_params, widths, 92, 0) &&
-    sizeof(qlf_landing_controller_params) == 102 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_landing_controller_params, r_learn, 29, 0) &&
+    AT(qlf_landing_controller_params, w_o, 30, 0) &&
+    AT(qlf_landing_controller_params, centers, 33, 0) &&
+    AT(qlf_landing_controller_params, widths, 93, 0) &&
+    sizeof(qlf_landing_controller_params) == 103 * sizeof(qlf_real) ? 1 : -1];
 typedef char actuator_params_is_its_layout[
     AT(qlf_actuator_params, motor_time_constant, 0, 0) &&
     AT(qlf_actuator_params, F_max, 1, 0) &&
@@ -91,9 +92,9 @@ typedef char actuator_params_is_its_layout[
 typedef char landing_params_is_its_layout[
     AT(qlf_landing_params, quad, 0, 0) &&
     AT(qlf_landing_params, ctrl, 13, 0) &&
-    AT(qlf_landing_params, act, 115, 0) &&
-    AT(qlf_landing_params, tilt_min, 130, 0) &&
-    sizeof(qlf_landing_params) == 131 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_landing_params, act, 116, 0) &&
+    AT(qlf_landing_params, tilt_min, 131, 0) &&
+    sizeof(qlf_landing_params) == 132 * sizeof(qlf_real) ? 1 : -1];
 typedef char landing_output_is_its_layout[
     AT(qlf_landing_output, F_cmd, 0, 0) &&
     AT(qlf_landing_output, wrench, 4, 0) &&
@@ -147,7 +148,8 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, pivot_x, 24, 0) &&
     AT(qlf_guidance_params, pivot_y, 25, 0) &&
     AT(qlf_guidance_params, pivot_h, 26, 0) &&
-    sizeof(qlf_guidance_params) == 27 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, descent_leash, 27, 0) &&
+    sizeof(qlf_guidance_params) == 28 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -155,36 +157,37 @@ static const qlf_real default_p_quad[13] = {
     0.3f, 0.001f, 0.001f, 0.001f, 9.8f, 0.25f,
     0.05f,
 };
-static const qlf_real default_p_land[102] = {
+static const qlf_real default_p_land[103] = {
     1.5f, 1.5f, 1.5f, 1.5f, 1.5f, 1.5f,
     2.0f, 2.0f, 2.0f, 14.0f, 14.0f, 14.0f,
     0.05f, 0.1f, 5.0f, 0.1f, 0.1f, 1.0f,
     10.0f, 1.0f, 0.7853981633974483f, 0.0f, 0.0f, 1.0f,
-    2.0f, 2.0f, 2.0f, 4.0f, 40.0f, 12.0f,
-    12.0f, 12.0f, -2.0f, -2.0f, -2.0f, -2.0f,
-    -2.0f, -2.0f, -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f,
-    -1.5555555555555556f, -1.5555555555555556f, -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f,
-    -1.1111111111111112f, -1.1111111111111112f, -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f,
-    -0.6666666666666667f, -0.6666666666666667f, -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f,
-    -0.22222222222222232f, -0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f,
-    0.22222222222222232f, 0.22222222222222232f, 0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f,
-    0.6666666666666665f, 0.6666666666666665f, 1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f,
-    1.1111111111111107f, 1.1111111111111107f, 1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f,
-    1.5555555555555554f, 1.5555555555555554f, 2.0f, 2.0f, 2.0f, 2.0f,
+    2.0f, 2.0f, 2.0f, 4.0f, 40.0f, 0.0f,
+    12.0f, 12.0f, 12.0f, -2.0f, -2.0f, -2.0f,
+    -2.0f, -2.0f, -2.0f, -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f,
+    -1.5555555555555556f, -1.5555555555555556f, -1.5555555555555556f, -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f,
+    -1.1111111111111112f, -1.1111111111111112f, -1.1111111111111112f, -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f,
+    -0.6666666666666667f, -0.6666666666666667f, -0.6666666666666667f, -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f,
+    -0.22222222222222232f, -0.22222222222222232f, -0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f,
+    0.22222222222222232f, 0.22222222222222232f, 0.22222222222222232f, 0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f,
+    0.6666666666666665f, 0.6666666666666665f, 0.6666666666666665f, 1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f,
+    1.1111111111111107f, 1.1111111111111107f, 1.1111111111111107f, 1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f,
+    1.5555555555555554f, 1.5555555555555554f, 1.5555555555555554f, 2.0f, 2.0f, 2.0f,
     2.0f, 2.0f, 2.0f, 2.0f, 2.0f, 2.0f,
     2.0f, 2.0f, 2.0f, 2.0f, 2.0f, 2.0f,
+    2.0f,
 };
 static const qlf_real default_p_act[15] = {
     0.02f, 9.8f, 0.2f, 0.01225f, 0.01225f, 0.01225f,
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[27] = {
+static const qlf_real default_p_guid[28] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 0.0f,
     0.15f, 0.5934119456780721f, 0.0f, 0.35f, 0.5f, 0.3f,
-    0.0f, 0.0f, 0.0f,
+    0.0f, 0.0f, 0.0f, 0.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -253,6 +256,7 @@ const char *qlf_phase_name(int phase)
  *   ctrl.ki                  >= 0
  *   ctrl.d_max_p             >= 0
  *   ctrl.d_max               >= 0
+ *   ctrl.r_learn             >= 0
  *   ctrl.w_o                 >= 0
  *   ctrl.centers             finite
  *   ctrl.widths              > 0
@@ -368,52 +372,55 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
     if (!bad && !(isfinite(p[41]) && (p[41] >= 0.0f))) {
         bad = "ctrl.d_max";
     }
-    for (i = 42; !bad && i < 45; ++i) {
+    if (!bad && !(isfinite(p[42]) && (p[42] >= 0.0f))) {
+        bad = "ctrl.r_learn";
+    }
+    for (i = 43; !bad && i < 46; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
             bad = "ctrl.w_o";
         }
     }
-    for (i = 45; !bad && i < 105; ++i) {
+    for (i = 46; !bad && i < 106; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "ctrl.centers";
         }
     }
-    for (i = 105; !bad && i < 115; ++i) {
+    for (i = 106; !bad && i < 116; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "ctrl.widths";
         }
     }
-    if (!bad && !(isfinite(p[115]) && (p[115] > 0.0f))) {
+    if (!bad && !(isfinite(p[116]) && (p[116] > 0.0f))) {
         bad = "act.motor_time_constant";
     }
-    if (!bad && !(isfinite(p[116]) && (p[116] > 0.0f))) {
+    if (!bad && !(isfinite(p[117]) && (p[117] > 0.0f))) {
         bad = "act.F_max";
     }
-    if (!bad && !(isfinite(p[117]) && (p[117] >= 0.0f))) {
+    if (!bad && !(isfinite(p[118]) && (p[118] >= 0.0f))) {
         bad = "act.gear_height";
     }
-    for (i = 118; !bad && i < 121; ++i) {
+    for (i = 119; !bad && i < 122; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
             bad = "act.drag_quadratic";
         }
     }
-    if (!bad && !(isfinite(p[121]) && (p[121] >= 0.0f))) {
+    if (!bad && !(isfinite(p[122]) && (p[122] >= 0.0f))) {
         bad = "act.rotor_radius";
     }
-    if (!bad && !(isfinite(p[122]) && (p[122] > 0.0f))) {
+    if (!bad && !(isfinite(p[123]) && (p[123] > 0.0f))) {
         bad = "act.air_density";
     }
-    for (i = 123; !bad && i < 127; ++i) {
+    for (i = 124; !bad && i < 128; ++i) {
         if (!(isfinite(p[i]) && (p[i] >= 0.0f))) {
             bad = "act.rotor_efficiency";
         }
     }
-    for (i = 127; !bad && i < 130; ++i) {
+    for (i = 128; !bad && i < 131; ++i) {
         if (!(isfinite(p[i]))) {
             bad = "act.cg_offset";
         }
     }
-    if (!bad && !(isfinite(p[130]) && ((p[130] >= 0.0f) && (p[130] < 1.0f)))) {
+    if (!bad && !(isfinite(p[131]) && ((p[131] >= 0.0f) && (p[131] < 1.0f)))) {
         bad = "tilt_min";
     }
     if (bad_field) {
@@ -450,6 +457,7 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   pivot_x                  >= 0
  *   pivot_y                  >= 0
  *   pivot_h                  >= 0
+ *   descent_leash            >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -543,6 +551,9 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[26]) && (p[26] >= 0.0f))) {
         bad = "pivot_h";
     }
+    if (!bad && !(isfinite(p[27]) && (p[27] >= 0.0f))) {
+        bad = "descent_leash";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -551,7 +562,7 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
 
 /* 1 when every parameter lies in its range, the per-node arrays aside
  * (ctrl.widths: qlf_check_landing_params only): the step's invariant,
- * 58 comparisons. The values are known to be finite; no names and no
+ * 59 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_landing_params finds the culprit. */
 static int landing_params_in_range(const qlf_real *p)
 {
@@ -601,24 +612,25 @@ static int landing_params_in_range(const qlf_real *p)
     ok &= (p[42] >= 0.0f);
     ok &= (p[43] >= 0.0f);
     ok &= (p[44] >= 0.0f);
-    ok &= (p[115] > 0.0f);
+    ok &= (p[45] >= 0.0f);
     ok &= (p[116] > 0.0f);
-    ok &= (p[117] >= 0.0f);
+    ok &= (p[117] > 0.0f);
     ok &= (p[118] >= 0.0f);
     ok &= (p[119] >= 0.0f);
     ok &= (p[120] >= 0.0f);
     ok &= (p[121] >= 0.0f);
-    ok &= (p[122] > 0.0f);
-    ok &= (p[123] >= 0.0f);
+    ok &= (p[122] >= 0.0f);
+    ok &= (p[123] > 0.0f);
     ok &= (p[124] >= 0.0f);
     ok &= (p[125] >= 0.0f);
     ok &= (p[126] >= 0.0f);
-    ok &= ((p[130] >= 0.0f) & (p[130] < 1.0f));
+    ok &= (p[127] >= 0.0f);
+    ok &= ((p[131] >= 0.0f) & (p[131] < 1.0f));
     return ok;
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 27 comparisons. The values are known to be finite; no names and no
+ * 28 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -650,6 +662,7 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[24] >= 0.0f);
     ok &= (p[25] >= 0.0f);
     ok &= (p[26] >= 0.0f);
+    ok &= (p[27] >= 0.0f);
     return ok;
 }
 
@@ -722,7 +735,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[5] = state->ms_rise;
     xg[6] = state->ms_rise_rate;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 2)
-          & all_finite((const qlf_real *)params, 27)
+          & all_finite((const qlf_real *)params, 28)
           & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }

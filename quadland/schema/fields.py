@@ -48,6 +48,10 @@ class Field:
     check : callable, optional
         Extra test of the whole value; returns a complaint or None.
     choices : tuple of str, optional
+    default : optional
+        The value a scenario that leaves the key out takes (None: the key is
+        required). A key added after the shipped scenarios, whose default is the
+        behaviour of before, so that they fly as they did.
     """
 
     kind: type
@@ -61,6 +65,7 @@ class Field:
     zero_ok: bool = False
     check: Callable[[Any], str | None] | None = None
     choices: tuple[str, ...] | None = None
+    default: Any = None
 
     def range_text(self) -> str:
         """The accepted range, e.g. ``(0, 1e+04] kg`` (empty without one)."""

@@ -166,16 +166,16 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                             hi=1e3),
         "bias_max": Field(F, "rad/s^2", "projection bound of each inner bias estimate", lo=0.0,
                           hi=1e4),
+        "bias_radius": Field(F, "m", "x, y's outer bias estimates learn only within this "
+                             "horizontal error; 0: always", lo=0.0, hi=1e3, default=0.0),
         "observer_frequency": Field(F, "rad/s", "disturbance observer bandwidth (its double "
                                     "pole): deck-frame x, y, z; 0: none", 3, lo=0.0, hi=1e3),
         **{k: PAPER_SCHEMA["controller"][k] for k in ("gamma1", "gamma2", "k_w", "k_zeta", "rho",
                                                 "nominal_model")},
         "filter_frequency": Field(F, "rad/s", "command filter w_f", hi=1e4, **_POS),
         "filter_damping": Field(F, "-", "command filter zeta_f", hi=10.0, **_POS),
-        "tilt_max_deg": Field(F, "deg", "largest tilt the outer loop commands", lo=1.0,
-                              hi=80.0),
-        "rate_hz": Field(F, "Hz", "control rate of the sampled step", lo=1.0,
-                         hi=MAX_RATE_HZ),
+        "tilt_max_deg": Field(F, "deg", "largest tilt the outer loop commands", lo=1.0, hi=80.0),
+        "rate_hz": Field(F, "Hz", "control rate of the sampled step", lo=1.0, hi=MAX_RATE_HZ),
         "backend": PAPER_SCHEMA["controller"]["backend"],
         "delay_periods": Field(I, "-", "computation delay: the rotor commands computed at one "
                                "step act from the delay_periods-th next step on",
@@ -202,8 +202,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "descent_speed": Field(F, "m/s", "largest descent rate", hi=100.0, **_POS),
         "descent_time": Field(F, "s", "descent rate = height above touchdown / descent_time",
                               hi=1e3, **_POS),
-        "touchdown_speed": Field(F, "m/s", "descent rate of the final crawl", hi=100.0,
-                                 **_POS),
+        "touchdown_speed": Field(F, "m/s", "descent rate of the final crawl", hi=100.0, **_POS),
         "max_deck_rise": Field(F, "m/s", "a faster rising deck aborts the committed final "
                                "descent", hi=100.0, **_POS),
         "commit_height": Field(F, "m", "height above touchdown where the descent waits for a "
@@ -214,6 +213,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                             "horizon at which the final descent commits", hi=100.0, **_POS),
         "motion_time": Field(F, "s", "time constant of the deck motion's averages (the "
                              "predictor's frequency)", hi=1e4, **_POS),
+        "descent_leash": Field(F, "m", "how far the falling descent reference may lead the "
+                               "quadrotor down (0: no limit)", lo=0.0, hi=1e3, default=0.0),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",

@@ -345,7 +345,8 @@ LANDING_PARAM_RANGES = MappingProxyType({
     "ctrl.tilt_max": Range(lo=0.0, hi=math.pi / 2, lo_open=True, hi_open=True),
     "ctrl.centers": _FINITE,
     "ctrl.widths": _POSITIVE,
-    **{f"ctrl.{k}": _NONNEGATIVE for k in ("ki_p", "ki", "d_max_p", "d_max", "w_o")},
+    **{f"ctrl.{k}": _NONNEGATIVE for k in ("ki_p", "ki", "d_max_p", "d_max", "r_learn",
+                                                      "w_o")},
     "act.motor_time_constant": _POSITIVE,
     "act.F_max": _POSITIVE,
     "act.gear_height": _NONNEGATIVE,
@@ -388,6 +389,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "commit_horizon": _POSITIVE,
     "calm_speed": _POSITIVE,
     "motion_time": _POSITIVE,
+    "descent_leash": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

@@ -36,7 +36,7 @@ The design is docs/landing.md's "The controller"; its choices are in
    eq. (22) for all six channels, the filter and the compensator, each
    integrated exactly (the latter two by the 2x2 matrix exponential,
    :func:`linear2_zoh`); the bias estimates ``d_hat' = ki_p z2_bar`` (outer)
-   and ``ki z2`` (inner, stopped while a rotor is clipped), projected onto
+   and ``ki z2`` (inner, not while a rotor clips; x, y within ``r_learn``), projected onto
    ``|d_hat_i| <= d_max``; the disturbance observer's ``v_hat, d_o, T_o``
    (:mod:`quadland_symbolic.landing.observer`), whose ``d_o`` ``a_des`` subtracts.
 
@@ -54,6 +54,7 @@ from quadland_symbolic.backstepping import virtual_control
 from quadland_symbolic.kinematics import euler_rate_matrix, euler_rate_matrix_inv, rotation
 from quadland_symbolic.landing import touchdown_policy as tdp
 from quadland_symbolic.landing.attitude import thrust_attitude
+from quadland_symbolic.landing.bias import learning_gate
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
 from quadland_symbolic.landing.desaturation import clip_forces, clipped_count, thrust_within_moments
@@ -78,8 +79,7 @@ __all__ = [
     "NETWORK_INPUT_DIM",
     "LANDING_MEASUREMENT",
     "landing_controller_params",
-    "landing_memory",
-    "landing_step_outputs",
+    "landing_memory", "landing_step_outputs",
     "deck_rates",
     "known_acceleration",
     "known_acceleration_function",
@@ -149,6 +149,7 @@ def landing_controller_params(l: int) -> Layout:
               elements=tuple(f"ki_{a}" for a in att)),
         Field("d_max_p", 1, "m/s^2", "projection bound of each outer bias estimate"),
         Field("d_max", 1, "rad/s^2", "projection bound of each inner bias estimate"),
+        Field("r_learn", 1, "m", "x, y's outer bias estimates learn within it (0: always)"),
         *OBSERVER_PARAMS.fields,
         Field("centers", NETWORK_INPUT_DIM * l, "-",
               "RBF centres mu_i as the columns of a 6 x l matrix (input [v_e, Omega_e])",
@@ -348,10 +349,10 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     # memory over dt, measurements held
     mem_next = _memory_next(mm, c, Psi, ca.vertcat(z2p_bar, z2a), ca.vertcat(squash_p, squash_a),
                             delta, eta_f_next, eta_f_dot_next, dt)
-    mem_next = ca.vertcat(mem_next, estimates_next(
-        mm, c, ca.vertcat(z2p_bar, z2a), n_clipped, v_e, (R_deck.T @ rotation(eta1)[:, 2], m1),
+    mem_next = ca.vertcat(mem_next, estimates_next(                 # x, y within r_learn
+        mm, c, ca.vertcat(learning_gate(z1p, c["r_learn"]) * z2p_bar, z2a), n_clipped, v_e,
+        (R_deck.T @ rotation(eta1)[:, 2], m1),
         f_g + nominal * f_r, F_cmd, act, dt))
-
     return dict(
         F_cmd=F_cmd, wrench=wrench, eta_c=ca.vertcat(eta_c, eta2[2]),
         eta_d=e1d, eta_d_dot=e1d_dot, eta_d_ddot=e1d_ddot, mem_next=mem_next,

@@ -159,6 +159,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("pivot_x", 1, "m", "the pivot's arm along x the aim anticipates (0: none)"),
     Field("pivot_y", 1, "m", "the pivot's arm along y the aim anticipates (0: none)"),
     Field("pivot_h", 1, "m", "the pivot's height below the centre of mass (0: none)"),
+    Field("descent_leash", 1, "m", "how far the falling reference may lead the quadrotor "
+          "down (0: no limit)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -213,7 +215,8 @@ def _reference_height(z_ref, p, f, dt):
     marker), ``landing`` (the next phase touchdown or landed), ``touchdown`` and
     ``descending_next`` (the next phase touchdown, the descent), and ``timer_next``
     (the guidance's timer after the step), for the touchdown policy
-    (:mod:`~quadland_symbolic.landing.touchdown_policy`).
+    (:mod:`~quadland_symbolic.landing.touchdown_policy`); ``z`` the quadrotor's height, for
+    ``descent_leash``.
     """
     # the descent reference falls only while falling: to the wait height until committed,
     # then on at the crawl below the touchdown height until contact (a heaving deck may
@@ -232,8 +235,12 @@ def _reference_height(z_ref, p, f, dt):
     target = ca.if_else(f["seen"], hover, ca.if_else(f["align"], p["search_height"], z_ref))
     # after the touchdown the reference crawls on into the deck while the policy flies on
     crawl = touchdown_crawl(f["touchdown"], p)
+    # the leash: the fall stops where it would lead the quadrotor down by more than it
+    leash = p["descent_leash"]
+    fall = ca.if_else(leash > 0, ca.fmax(z_ref - rate * dt, ca.fmin(z_ref, f["z"] - leash)),
+                      z_ref - rate * dt)
     z_next = ca.if_else(f["flying"],
-                        ca.if_else(falling, z_ref - rate * dt, _glide(z_ref, f["hold"], p, dt)),
+                        ca.if_else(falling, fall, _glide(z_ref, f["hold"], p, dt)),
                         ca.if_else(f["landing"], z_ref - crawl * dt,
                                    ca.if_else(f["abort"], hover, _glide(z_ref, target, p, dt))))
 
@@ -321,7 +328,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
                        hold=ca.if_else(band, hold, ca.fmax(hold, z_ref)), align=in_align,
                        abort=off_limits, seen=seen, landing=phase_next >= TOUCHDOWN,
                        touchdown=phase_next == TOUCHDOWN,
-                       descending_next=phase_next == DESCEND, timer_next=timer_next), dt)
+                       descending_next=phase_next == DESCEND, timer_next=timer_next,
+                       z=p_e[2]), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
                       committed_next, xq_held), reference
 

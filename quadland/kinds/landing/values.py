@@ -154,7 +154,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         nominal_model=float(c["nominal_model"]), w_f=c["filter_frequency"],
         zeta_f=c["filter_damping"], tilt_max=c["tilt_max_deg"] * deg,
         ki_p=c["ki_p"], ki=c["ki"], d_max_p=c["bias_max_p"], d_max=c["bias_max"],
-        w_o=c["observer_frequency"],
+        r_learn=c["bias_radius"], w_o=c["observer_frequency"],
         centers=np.tile(centers, (lay["centers"].shape[0], 1)), widths=np.full(l, r["width"])))
     p_guid = GUIDANCE_PARAMS.pack(dict(
         hover_height=g["hover_height"], align_radius=g["align_radius"],
@@ -165,7 +165,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         settle_time=g["settle_time"], marker_timeout=g["marker_timeout"],
         search_height=g["search_height"], commit_height=g["commit_height"],
         commit_horizon=g["commit_horizon"], calm_speed=g["calm_speed"],
-        motion_time=g["motion_time"], **touchdown_guidance(scenario)))
+        motion_time=g["motion_time"], descent_leash=g["descent_leash"],
+        **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
