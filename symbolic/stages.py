@@ -107,6 +107,14 @@ class Staged:
                     or not all(ca.is_equal(got[i], shifted[i]) for i in range(n))):
                 raise ValueError(f"ring {line}: {stage.name()} is not the shift of {past} "
                                  f"by {record}")
+            # the compiled ring never writes the memory's line (``past``) nor the record
+            # into an output: a stage reading the one, or an output holding the other,
+            # would see what the ring does not keep
+            readers = [f.name() for f in self.stages if f is not stage and past in f.name_in()]
+            if readers or record in offsets:
+                raise ValueError(f"ring {line}: {past} is read by {', '.join(readers)}"
+                                 if readers else f"ring {line}: its record {record} is an "
+                                 "output's piece")
             places.append((ins.index(src), out, start, m, n // m))
         return tuple(places)
 

@@ -187,6 +187,25 @@ def test_a_ring_must_be_the_shift_in_place():
                 staged(2)
 
 
+def test_a_ring_line_is_read_only_through_its_ring():
+    """:class:`Staged` refuses a ring whose memory line (``past``) another stage reads, or
+    whose record is also an output's piece: the compiled ring writes neither, so that stage
+    or output would see stale values."""
+    r, q = ca.SX.sym("r", 2), ca.SX.sym("q", 6)
+    world = ca.Function("world", [r], [2 * r], ["u"], ["record"])
+    push = ca.Function("push", [r, q], [ca.vertcat(r, q[:4])], ["record", "past"], ["line"])
+    peek = ca.Function("peek", [q], [q[:2]], ["past"], ["seen"])
+    slices = (("past", "x", 2, 8), ("head", "x", 0, 2))
+    with pytest.raises(ValueError, match="past is read by peek"):
+        Staged("f", (world, push, peek), (("x", 8), ("u", 2)),
+               (("x_next", ("head", "line")), ("y", ("seen",))), slices=slices,
+               rings=(("line", "record", "past"),))
+    with pytest.raises(ValueError, match="record record is an output's piece"):
+        Staged("f", (world, push), (("x", 8), ("u", 2)),
+               (("x_next", ("head", "line")), ("y", ("record",))), slices=slices,
+               rings=(("line", "record", "past"),))
+
+
 def test_the_sensed_loop_rings_its_five_lines():
     """Each sensor's line (and nothing else) is a ring, at its place in the memory."""
     stages = landing_sensed_loop(L).controller_stages

@@ -74,7 +74,9 @@ def test_the_campaigns_two_sink_rate_failures_land_on_a_5_cm_leash(index, sink_b
                                                                      sink_leash):
     """Runs 122 and 166 of highway's campaign (default seed), whose rows in `quadland
     campaign --scenario highway --runs 300` record sink rates of 0.549 and 0.537 m/s: with
-    no leash (the key left out) they replay those rows; on a 5 cm leash they land."""
+    no leash (the key left out) they replay those rows; on a 5 cm leash they land (the
+    leash's sink rates are the flights' own, pinned as reproducers; the independent check is
+    the outcome and the limit)."""
     before = _run(index)
     assert before.sink_rate == pytest.approx(sink_before, abs=1e-4)
     assert not before.success and before.failures == ["sink_rate"]

@@ -16,6 +16,23 @@ from quadland_symbolic.paper_loop import paper_loop_recipe
 pytestmark = pytest.mark.skipif(not build.have_compiler(), reason="no C compiler")
 
 
+GCC = build.have_compiler() and build.level_flags("-Os", build.find_compiler()) != ("-Os",)
+
+
+@pytest.mark.parametrize("identity,flags", [
+    ("/usr/bin/cc\ncc (Debian 12.2.0-14+deb12u1) 12.2.0\nCopyright (C) 2022 Free Software "
+     "Foundation, Inc.", build.LEVEL_FLAGS["-Os"]),
+    ("/usr/bin/cc\nDebian clang version 14.0.6\nTarget: x86_64-pc-linux-gnu", ("-Os",)),
+    ("/usr/bin/tcc\ntcc version 0.9.27 (x86_64 Linux)", ("-Os",))])
+def test_the_level_flags_are_gccs_alone(monkeypatch, identity, flags):
+    """GCC's passes are turned off on GCC only (its --version names the Free Software
+    Foundation; clang's and others' do not, and clang rejects -fno-code-hoisting)."""
+    monkeypatch.setattr(build, "compiler_identity", lambda cc: identity)
+    assert build.level_flags("-Os", "cc") == flags
+    assert build.level_flags("-O2", "cc") == ("-O2",)
+
+
+@pytest.mark.skipif(not GCC, reason="the level's own flags are GCC's")
 def test_os_compiles_with_its_flags_and_keys_them(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     commands: list[list[str]] = []

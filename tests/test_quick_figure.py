@@ -1,4 +1,4 @@
-"""The margin figures' eighth-session cuts draw the pixels matplotlib draws.
+"""The margin figures' cuts (issue 20) draw the pixels matplotlib draws.
 
 - :class:`quadland.plots.text_cache.TextCacheRenderer`: each distinct text laid
   out once per process, each font's height metrics read once;
@@ -112,3 +112,21 @@ def test_axes_sharing_a_formatter_keep_their_own_offset():
     content(mine)
     assert np.array_equal(_pixels(mine), _pixels(theirs))
     assert [a.xaxis.offsetText.get_text() for a in mine.axes] == ["+1e5", "+1e5"]
+
+
+def test_a_polar_axes_draws_matplotlibs_pixels():
+    """A polar axes (its axes called "theta" and "radius", shared under "x" and "y", as
+    ``quadland envelope --polar``'s map has) draws as matplotlib's own figure does."""
+    def content(fig):
+        ax = fig.add_subplot(projection="polar")
+        t = np.linspace(0, 2 * np.pi, 60)
+        ax.plot(t, 1 + 0.5 * np.cos(3 * t))
+        ax.set_title("wind over the deck")
+        fig.tight_layout()
+
+    theirs = Figure(figsize=(4, 4), dpi=PNG_DPI)
+    FigureCanvasAgg(theirs)
+    content(theirs)
+    mine = new_figure((4, 4))
+    content(mine)
+    assert np.array_equal(_pixels(mine), _pixels(theirs))

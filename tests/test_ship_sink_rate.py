@@ -52,7 +52,8 @@ def test_the_ships_fly_without_the_heave_predictor():
 
 
 @pytest.mark.parametrize("name,index,before,after", [
-    # sink rate, touchdown time, aborts, vz_e_hat, dz_e: as shipped, then with HEAVE
+    # sink rate, touchdown time, aborts, vz_e_hat, dz_e: as shipped (the campaign's rows),
+    # then with HEAVE (the flights' own, pinned as reproducers: no campaign row behind them)
     ("ship", 20, (0.5199, 22.94, 1, -0.4081, -0.5251), (0.4108, 23.03, 1, -0.3721, -0.4192)),
     ("ship_ss5", 266, (0.5245, 75.37, 3, -0.4138, -0.5243),
      (0.4070, 76.02, 3, -0.3827, -0.4095)),

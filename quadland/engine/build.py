@@ -65,7 +65,8 @@ from quadland.exceptions import CompileError
 from quadland.output import WorkFolder, remove_abandoned, write_text_atomic
 
 __all__ = ["STRICT_CFLAGS", "RUNTIME_CFLAGS", "SHARED_CFLAGS", "COMPILE_MEMORY_BUDGET",
-           "COMPILE_TIME_BUDGET", "OPT_LEVELS", "LEVEL_FLAGS", "COMPILE_FIT", "STALE_BUILD_AGE",
+           "COMPILE_TIME_BUDGET", "OPT_LEVELS", "LEVEL_FLAGS", "level_flags", "COMPILE_FIT",
+           "STALE_BUILD_AGE",
            "CompileBudgetError", "compile_cost", "BuildPlan", "plan_build", "find_compiler",
            "have_compiler", "compiler_problem", "compiler_version", "cache_dir",
            "build_library", "COMPILE_TIMEOUT", "VERSION_TIMEOUT", "TIMEOUT_ENV",
@@ -101,6 +102,16 @@ OPT_LEVELS = ("-O2", "-Os", "-O0")
 #: a floating-point operation; the simulator flies the same states, bit for bit.
 LEVEL_FLAGS = {"-Os": ("-Os", "-fno-gcse", "-fno-tree-pre", "-fno-code-hoisting",
                        "-fno-schedule-insns2")}
+
+
+def level_flags(level: str, cc: str) -> tuple[str, ...]:
+    """The flags ``level`` compiles with on compiler ``cc``: :data:`LEVEL_FLAGS`'s on GCC
+    (the passes they turn off are GCC's; clang rejects ``-fno-code-hoisting``), the level
+    alone on any other compiler."""
+    identity = compiler_identity(cc)
+    gcc = "Free Software Foundation" in identity and "clang" not in identity.lower()
+    return LEVEL_FLAGS.get(level, (level,)) if gcc else (level,)
+
 #: Fit of gcc 12's peak memory (bytes) and time (s) to compile one generated
 #: translation unit of ``S`` MB of C: ``a * S**b`` per optimization level.
 #: Fitted to gcc 12 on CasADi's output for the landing controller (l = 200 to
@@ -329,11 +340,11 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
     lang = STRICT_CFLAGS if strict else RUNTIME_CFLAGS
     digest = hashlib.sha256()
     for part in (_CACHE_FORMAT, compiler_identity(cc), ca.__version__, *lang,
-                 *LEVEL_FLAGS.get(opt, (opt,)), *SHARED_CFLAGS[:-1], *compile_):
+                 *level_flags(opt, cc), *SHARED_CFLAGS[:-1], *compile_):
         digest.update(part.encode() + b"\0")
     if plan.lowered:                         # the key of a build without them is unchanged
         for c, level in plan.opts:
-            digest.update(f"{c}={' '.join(LEVEL_FLAGS.get(level, (level,)))}".encode()
+            digest.update(f"{c}={' '.join(level_flags(level, cc))}".encode()
                           + b"\0")
     for fname, text in sorted(files.items()):
         digest.update(fname.encode() + b"\0" + text.encode() + b"\0")
@@ -423,7 +434,7 @@ def _build(cc: str, lang: tuple[str, ...], plan: BuildPlan, files: dict[str, str
                 Path(tmp, fname).write_text(text)
             objects = [str(Path(c).with_suffix(".o")) for c in compile_]
             opts = dict(plan.opts)
-            run_compilers([[cc, *lang, *LEVEL_FLAGS.get(opts[c], (opts[c],)), *SHARED_CFLAGS[:-1],
+            run_compilers([[cc, *lang, *level_flags(opts[c], cc), *SHARED_CFLAGS[:-1],
                             "-c", c, "-o", o]
                            for c, o in zip(compile_, objects, strict=True)], tmp, cc,
                           [plan.memory[c] for c in compile_], objects, timeout,

@@ -148,7 +148,7 @@ def recall_key(model: LoopModel | LoopRecipe, part: str, flight: str | None,
     for part_ in ("recipe-1", build.compiler_identity(cc), ca.__version__, generator_digest(),
                   recipe_digest(model) if isinstance(model, LoopRecipe) else
                   "model:" + model_digest(model), part, name,
-                  " ".join(build.LEVEL_FLAGS.get(opt, (opt,))),
+                  " ".join(build.level_flags(opt, cc)),
                   repr(build.STRICT_CFLAGS if strict else build.RUNTIME_CFLAGS),
                   repr((build.SHARED_CFLAGS, build.COMPILE_MEMORY_BUDGET,
                         build.COMPILE_TIME_BUDGET, build.COMPILE_FIT)), *flight_sources):

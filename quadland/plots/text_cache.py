@@ -12,7 +12,7 @@ measures them about 2,000 times.
 layout of a string by its fonts' files, size, resolution, hinting and
 features; the height metrics by the fonts' files, size and resolution. The
 glyphs are rendered as before, so the pixels are the same (checked in
-``tests/test_figure_costs.py``). Where matplotlib's Agg renderer has not the
+``tests/test_quick_figure.py``). Where matplotlib's Agg renderer has not the
 methods this one relies on (another version), it draws as matplotlib does.
 """
 

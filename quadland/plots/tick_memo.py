@@ -44,9 +44,12 @@ def _computed(axis, update) -> tuple[list, list]:
             formatter.__dict__.pop("set_locs", None)
 
 
-def _memoize(axis) -> None:
+def _memoize(axis, name: str) -> None:
     update, boxes = axis._update_ticks, axis._get_ticklabel_bboxes
-    siblings = axis.axes._shared_axes[axis.axis_name].get_siblings(axis.axes)
+    # the axes' own name of the axis ("x", "y", "z"): a polar axis calls itself "theta"
+    # or "radius", shared under "x" or "y"
+    shared = axis.axes._shared_axes.get(name)
+    siblings = shared.get_siblings(axis.axes) if shared is not None else [axis.axes]
     kept: dict = {}
 
     def update_ticks():
@@ -83,9 +86,10 @@ def ticks_memoized(fig):
         Its axes (not those of its subfigures) are memoized; nothing else may change
         their ticks, locators or formatters within the context.
     """
-    axes = [axis for ax in fig.axes for axis in getattr(ax, "_axis_map", {}).values()]
-    for axis in axes:
-        _memoize(axis)
+    named = [(name, axis) for ax in fig.axes for name, axis in getattr(ax, "_axis_map", {}).items()]
+    axes = [axis for _, axis in named]
+    for name, axis in named:
+        _memoize(axis, name)
     try:
         yield
     finally:
