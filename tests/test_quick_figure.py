@@ -63,6 +63,18 @@ def _theirs() -> np.ndarray:
     return _pixels(fig)
 
 
+def _drawn_alike(content, figsize) -> QuickFigure:
+    """``content`` drawn on matplotlib's own figure and on :func:`new_figure`'s: the same
+    pixels (returns the latter)."""
+    theirs = Figure(figsize=figsize, dpi=PNG_DPI)
+    FigureCanvasAgg(theirs)
+    content(theirs)
+    mine = new_figure(figsize)
+    content(mine)
+    assert np.array_equal(_pixels(mine), _pixels(theirs))
+    return mine
+
+
 def test_a_quick_figure_draws_matplotlibs_pixels():
     reference = _theirs()
     text_cache._LAYOUTS.clear()
@@ -105,12 +117,7 @@ def test_axes_sharing_a_formatter_keep_their_own_offset():
         b.plot(x, -x)
         fig.tight_layout()
 
-    theirs = Figure(figsize=(8, 3), dpi=PNG_DPI)
-    FigureCanvasAgg(theirs)
-    content(theirs)
-    mine = new_figure((8, 3))
-    content(mine)
-    assert np.array_equal(_pixels(mine), _pixels(theirs))
+    mine = _drawn_alike(content, (8, 3))
     assert [a.xaxis.offsetText.get_text() for a in mine.axes] == ["+1e5", "+1e5"]
 
 
@@ -124,9 +131,13 @@ def test_a_polar_axes_draws_matplotlibs_pixels():
         ax.set_title("wind over the deck")
         fig.tight_layout()
 
-    theirs = Figure(figsize=(4, 4), dpi=PNG_DPI)
-    FigureCanvasAgg(theirs)
-    content(theirs)
-    mine = new_figure((4, 4))
-    content(mine)
-    assert np.array_equal(_pixels(mine), _pixels(theirs))
+    _drawn_alike(content, (4, 4))
+
+
+def test_a_quick_figure_is_named_a_figure():
+    """Its repr is a matplotlib Figure's (a notebook shows it as a cell's result)."""
+    theirs = Figure(figsize=(7, 8.2), dpi=PNG_DPI)
+    theirs.subplots(2, 2)
+    mine = new_figure((7, 8.2))
+    mine.subplots(2, 2)
+    assert repr(mine) == repr(theirs) == "<Figure size 770x902 with 4 Axes>"

@@ -37,6 +37,11 @@ class QuickFigure(Figure):
     # Figure.draw already handles rasterization: do not wrap this one again
     draw._supports_rasterization = True
 
+    def __repr__(self):
+        """As a matplotlib Figure's (``<Figure size 700x820 with 4 Axes>``): what it shows
+        and does is a Figure's, and a notebook names it so."""
+        return f"<Figure{super().__repr__()[len('<' + type(self).__name__):]}"
+
     def tight_layout(self, **kwargs):
         """As :meth:`matplotlib.figure.Figure.tight_layout`, the ticks memoized."""
         with ticks_memoized(self):
