@@ -403,8 +403,8 @@ def main(argv: list[str] | None = None) -> int:
             status = _dispatch(args)
             if status != 130:                   # not one _dispatch already reported
                 interrupt.check()
-        if swallowed:
-            raise KeyboardInterrupt
+        if swallowed and status != 130:         # one SIGINT, swallowed then raised again by
+            raise KeyboardInterrupt             # interrupt.check, is reported once
         return status
     except KeyboardInterrupt:
         print("quadland: interrupted", file=sys.stderr)

@@ -215,6 +215,39 @@ def test_a_ctrl_c_that_breaks_a_module_s_import_is_one_line(capsys, monkeypatch)
         main(["simulate", "--no-plots"])
 
 
+def test_a_ctrl_c_swallowed_then_raised_again_is_one_line(capsys, monkeypatch):
+    """One SIGINT landing where Python cannot raise (a module lock while a lazy import
+    loads: printed as unraisable and dropped), then raised again by the command's
+    ``interrupt.check()`` and reported: one line, 130 (it printed the line twice, once
+    in CI under load)."""
+    import types
+
+    import quadland.cli as cli
+    from quadland import interrupt
+
+    def swallow():                             # what Python does with it there
+        sys.unraisablehook(types.SimpleNamespace(
+            exc_type=KeyboardInterrupt, exc_value=KeyboardInterrupt(), exc_traceback=None,
+            err_msg=None, object=None))
+
+    def handler(args):
+        swallow()
+        interrupt._noted = True                # as the SIGINT handler notes it
+        interrupt.check()
+
+    monkeypatch.setattr(cli, "_run_simulate", handler)
+    assert main(["simulate", "--no-plots"]) == 130
+    assert capsys.readouterr().err == "quadland: interrupted\n"
+
+    def swallowed_only(args):                  # the command never saw it: raised after
+        swallow()
+        return 0
+
+    monkeypatch.setattr(cli, "_run_simulate", swallowed_only)
+    assert main(["simulate", "--no-plots"]) == 130
+    assert capsys.readouterr().err == "quadland: interrupted\n"
+
+
 # margins, in process (its exit status is main's return value) on a small network
 
 SMALL = ["--set", "rbf.nodes=5"]
