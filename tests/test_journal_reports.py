@@ -18,8 +18,9 @@ import types
 from pathlib import Path
 
 import pytest
+from campaign_stubs import ctrl_c_at_run
 
-from quadland.campaign import execute, journal, local
+from quadland.campaign import execute, journal
 from quadland.campaign.execute import CampaignInterrupted, run_campaign
 from quadland.exceptions import CampaignStopped
 
@@ -101,14 +102,7 @@ def test_the_interrupted_line_counts_the_runs_synced(tmp_path, monkeypatch):
     interruption syncs it, then reports it, and the interrupted line says 3."""
     out = tmp_path / "c"
     log = _Log(monkeypatch, out)
-    real_fly = local.fly
-
-    def fly(base, draw, limits):
-        if draw.index == 3:
-            raise KeyboardInterrupt
-        return real_fly(base, draw, limits)
-
-    monkeypatch.setattr(local, "fly", fly)
+    ctrl_c_at_run(monkeypatch, 3)
     with pytest.raises(CampaignInterrupted) as stopped:
         run_campaign("paper", SHORT, runs=RUNS, out=out, workers=1, plots=False,
                      progress=True)

@@ -14,6 +14,7 @@ import os
 from pathlib import Path
 
 import pytest
+from campaign_stubs import ctrl_c_at_run
 
 from quadland.campaign import journal, local
 from quadland.campaign.execute import CampaignInterrupted, run_campaign
@@ -80,14 +81,7 @@ def test_an_interrupted_campaign_syncs_and_reports_every_run_written(tmp_path, m
     run_campaign("paper", SHORT, runs=RUNS, out=reference, workers=1, plots=False)
     out = tmp_path / "c"
     disk = _Disk(monkeypatch, out)
-    real_fly = local.fly
-
-    def fly(base, draw, limits):
-        if draw.index == 3:
-            raise KeyboardInterrupt
-        return real_fly(base, draw, limits)
-
-    monkeypatch.setattr(local, "fly", fly)
+    real_fly = ctrl_c_at_run(monkeypatch, 3)
     with pytest.raises(CampaignInterrupted) as stopped:
         run_campaign("paper", SHORT, runs=RUNS, out=out, workers=1, plots=False)
     assert stopped.value.recorded == 3 == len(_lines(out)) - 1
