@@ -10,8 +10,9 @@ text sizes, and the layout is the one the PNG is drawn with.
 
 Its canvas draws with :class:`quadland.plots.text_cache.TextCacheRenderer`
 (each distinct text laid out once per process), and each of its layouts and
-draws computes an axis's ticks once (:func:`quadland.plots.tick_memo.ticks_memoized`):
-the same pixels, in less time.
+draws computes an axis's ticks once (:func:`quadland.plots.tick_memo.ticks_memoized`)
+and makes an axis's new ticks as copies of its first
+(:func:`quadland.plots.tick_clone.ticks_cloned`): the same pixels, in less time.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from quadland.plots.text_cache import TextCacheCanvas
+from quadland.plots.tick_clone import ticks_cloned
 from quadland.plots.tick_memo import ticks_memoized
 from quadland.png import PNG_DPI
 
@@ -27,11 +29,12 @@ __all__ = ["QuickFigure", "new_figure"]
 
 class QuickFigure(Figure):
     """A matplotlib Figure whose ``tight_layout`` and draws compute each axis's ticks once
-    per pass (:func:`~quadland.plots.tick_memo.ticks_memoized`)."""
+    per pass (:func:`~quadland.plots.tick_memo.ticks_memoized`) and copy its new ticks
+    from its first (:func:`~quadland.plots.tick_clone.ticks_cloned`)."""
 
     def draw(self, renderer):
         """Draw as :meth:`matplotlib.figure.Figure.draw`, the ticks memoized."""
-        with ticks_memoized(self):
+        with ticks_memoized(self), ticks_cloned(self):
             super().draw(renderer)
 
     # Figure.draw already handles rasterization: do not wrap this one again
@@ -44,7 +47,7 @@ class QuickFigure(Figure):
 
     def tight_layout(self, **kwargs):
         """As :meth:`matplotlib.figure.Figure.tight_layout`, the ticks memoized."""
-        with ticks_memoized(self):
+        with ticks_memoized(self), ticks_cloned(self):
             super().tight_layout(**kwargs)
 
 
