@@ -40,6 +40,7 @@ import math
 
 import numpy as np
 
+from quadland.engine.function_store import stored_function
 from quadland.kinds.landing.linearize import (
     LANDING_INPUT_NAMES,
     LANDING_LOOP_NAMES,
@@ -224,8 +225,8 @@ def _hover_filter(scenario: Scenario, point: OperatingPoint, dt: float) -> dict:
     hv = hover_values(scenario)
     g = float(scenario.data["quadrotor"]["gravity"])
     p_est = estimator_p(scenario, g)
-    out = hover_sensing_function()(point.xr, point.u, point.vehicle, point.w, hv.pp,
-                                   sensor_params(sensor_settings(scenario)))
+    out = stored_function(hover_sensing_function)(point.xr, point.u, point.vehicle, point.w,
+                                                  hv.pp, sensor_params(sensor_settings(scenario)))
     out = [np.asarray(v, dtype=float) for v in out]
     imu, packets = out[0].ravel(), [v.ravel() for v in out[1:5]]
     valid, S_z, S_u, x_nav = out[5].ravel(), out[6], out[7], out[8].ravel()
@@ -261,7 +262,7 @@ def _output_jacobians(h: dict, x_plus: np.ndarray):
 def _law(scenario: Scenario, point: OperatingPoint, y0: np.ndarray, dt: float):
     """The landing step's Jacobians in its whole measurement, the zero-gain biases dropped."""
     hv = hover_values(scenario)
-    out = hover_law_function(hv.l)(y0, point.xc, hv.p_ctrl, hv.pm, hv.ref, dt)
+    out = stored_function(hover_law_function, hv.l)(y0, point.xc, hv.p_ctrl, hv.pm, hv.ref, dt)
     Phi, Gam, C, D = (np.asarray(v, dtype=float) for v in out[2:])
     keep = kept_memory(hv.l, hv.p_ctrl)
     return Phi[np.ix_(keep, keep)], Gam[keep, :], C[:, keep], D, keep

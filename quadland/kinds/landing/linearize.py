@@ -15,6 +15,7 @@ import dataclasses
 import numpy as np
 
 from quadland.constants import TILT_MIN
+from quadland.engine.function_store import stored_function
 from quadland.exceptions import OperatingPointError, SingularAttitudeError
 from quadland.kinds.landing.values import landing_values
 from quadland.linear import (
@@ -115,7 +116,7 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
     found by Newton's method (:func:`quadland.linear.newton`).
     """
     hv = _hover_values(scenario)
-    F = hover_equilibrium_residual_function(hv.l)
+    F = stored_function(hover_equilibrium_residual_function, hv.l)
     z0 = HOVER_PLANT.zeros()
     z0[HOVER_PLANT.slice("p_e")] = hv.ref[:3]
     z0[HOVER_PLANT.slice("V1")] = hv.speeds[:2].tolist() + [0.0]    # moving with the vehicle
@@ -127,7 +128,7 @@ def hover_equilibrium(scenario: Scenario, tol: float = 1e-9, max_iter: int = 50)
     # a filter far from its input commands moments that clip the rotors, where
     # Newton's method sees no slope. The filter's rate row gives its input,
     # c = eta_f + (eta_f_dot' + 2 zeta_f w_f eta_f_dot) / w_f^2, with eta_f_dot = 0.
-    lin = hover_linearization_function(hv.l)
+    lin = stored_function(hover_linearization_function, hv.l)
     ctrl = landing_controller_params(hv.l).unpack(hv.p_ctrl)
     for _ in range(3):
         rates = lin(z0, mem0, hv.speeds, hv.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref, 0.0)[2]
@@ -204,8 +205,8 @@ def _hover_jacobians(scenario: Scenario, point: OperatingPoint, dt: float):
     """The Jacobians at the point, without the memory's bias estimates whose gain is zero:
     constant, they are modes at rest that no measurement moves."""
     hv = _hover_values(scenario)
-    out = hover_linearization_function(hv.l)(point.xr, point.xc, point.vehicle, point.w, hv.pp,
-                                             hv.pm, hv.p_ctrl, hv.ref, dt)
+    lin = stored_function(hover_linearization_function, hv.l)
+    out = lin(point.xr, point.xc, point.vehicle, point.w, hv.pp, hv.pm, hv.p_ctrl, hv.ref, dt)
     J = dict(zip(("A_p", "B_p", "C_p", "A_c", "B_c", "Phi_c", "Gamma_c", "C_c", "D_c"),
                  (np.asarray(v, dtype=float) for v in out[3:]), strict=True))
     keep = _kept_memory(hv.l, hv.p_ctrl)
