@@ -1,10 +1,13 @@
 """The ships' touchdown and horizontal integral action before their flare (docs/landing.md,
-"The ships' flare"): main at c6b13f9, the keys that change moved, to the bit."""
+"The ships' flare"): main at c6b13f9, the keys that change moved, to the bit (and the
+descent's leash, which ``ship`` took in its crawl after them: docs/landing.md, "The ships on
+a leash in the crawl")."""
 
-#: The eleven keys, as they were.
+#: The thirteen keys, as they were.
 NO_FLARE = ['touchdown.policy="idle"', "touchdown.flare_height=0.15",
             "touchdown.flare_tilt_deg=34.0", "touchdown.level_time=0.35",
             "touchdown.cut_time=0.5", "touchdown.lock_delay=0.25",
             "controller.tilt_max_deg=30.0", "controller.ki_p=[0.5, 0.5, 1.0]",
             "controller.observer_frequency=[0.0, 0.0, 0.0]",
-            "controller.k1p=[1.5, 1.5, 3.0]", "controller.k2p=[1.5, 1.5, 3.0]"]
+            "controller.k1p=[1.5, 1.5, 3.0]", "controller.k2p=[1.5, 1.5, 3.0]",
+            "landing.descent_leash=0.0", "landing.leash_height=1000.0"]

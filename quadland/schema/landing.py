@@ -215,6 +215,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                              "predictor's frequency)", hi=1e4, **_POS),
         "descent_leash": Field(F, "m", "how far the falling descent reference may lead the "
                                "quadrotor down (0: no limit)", lo=0.0, hi=1e3, default=0.0),
+        "leash_height": Field(F, "m", "height above touchdown below which descent_leash holds",
+                              lo=0.0, hi=1e3, default=1e3),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
@@ -223,10 +225,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                               **_POS),
         "max_relative_speed": Field(F, "m/s", "limit: horizontal relative speed at contact",
                                     hi=100.0, **_POS),
-        "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0,
-                             hi=1e3),
-        "max_gear_load": Field(F, "N", "limit: the gear's peak total normal load", hi=1e6,
-                               **_POS),
+        "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0, hi=1e3),
+        "max_gear_load": Field(F, "N", "limit: the gear's peak total normal load", hi=1e6, **_POS),
         "max_bounce": Field(F, "m", "limit: the lowest foot's rebound above the deck with "
                             "every foot off it", hi=100.0, **_POS),
         "pad_radius": Field(F, "m", "limit: the landing area's radius, which every foot "

@@ -390,6 +390,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "calm_speed": _POSITIVE,
     "motion_time": _POSITIVE,
     "descent_leash": _NONNEGATIVE,
+    "leash_height": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

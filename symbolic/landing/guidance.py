@@ -161,6 +161,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("pivot_h", 1, "m", "the pivot's height below the centre of mass (0: none)"),
     Field("descent_leash", 1, "m", "how far the falling reference may lead the quadrotor "
           "down (0: no limit)"),
+    Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
+          "holds (above it the reference falls free)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -216,7 +218,7 @@ def _reference_height(z_ref, p, f, dt):
     ``descending_next`` (the next phase touchdown, the descent), and ``timer_next``
     (the guidance's timer after the step), for the touchdown policy
     (:mod:`~quadland_symbolic.landing.touchdown_policy`); ``z`` the quadrotor's height, for
-    ``descent_leash``.
+    ``descent_leash`` (below ``leash_height`` above touchdown).
     """
     # the descent reference falls only while falling: to the wait height until committed,
     # then on at the crawl below the touchdown height until contact (a heaving deck may
@@ -235,9 +237,11 @@ def _reference_height(z_ref, p, f, dt):
     target = ca.if_else(f["seen"], hover, ca.if_else(f["align"], p["search_height"], z_ref))
     # after the touchdown the reference crawls on into the deck while the policy flies on
     crawl = touchdown_crawl(f["touchdown"], p)
-    # the leash: the fall stops where it would lead the quadrotor down by more than it
+    # the leash: below leash_height, the fall stops where it would lead the quadrotor down
+    # by more than it
     leash = p["descent_leash"]
-    fall = ca.if_else(leash > 0, ca.fmax(z_ref - rate * dt, ca.fmin(z_ref, f["z"] - leash)),
+    fall = ca.if_else(ca.logic_and(leash > 0, h <= p["leash_height"]),
+                      ca.fmax(z_ref - rate * dt, ca.fmin(z_ref, f["z"] - leash)),
                       z_ref - rate * dt)
     z_next = ca.if_else(f["flying"],
                         ca.if_else(falling, fall, _glide(z_ref, f["hold"], p, dt)),
