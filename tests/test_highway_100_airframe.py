@@ -122,7 +122,9 @@ def test_the_front_rotor_clears_the_roof_and_the_pad_holds_the_pivot():
     0.268 m at 58 deg: from a contact on the pad centre the farthest rear foot ends at
     hypot(0.268 + 0.30, 0.20) = 0.602 m, inside the 0.7 m pad, whose 1.4 m span is the
     roof's width (the rangefinder's deck_half_width 0.7 m). The judge's rule holds:
-    the pad is at least max_offset plus the gear's corner, 0.2 + 0.361 m."""
+    the pad is at least max_offset plus the gear's corner, 0.2 + 0.361 m. The aim point
+    anticipates 0.3 of the pivot (docs/landing.md, "highway_100: the level-out's slide is
+    the drag's"): 0.080 m at 58 deg, inside the 0.2 m offset limit."""
     d = load_scenario("highway_100").data
     gear, h = d["gear"], d["quadrotor"]["gear_height"]
     fx, fy = gear["feet_x"], gear["feet_y"]
@@ -140,7 +142,9 @@ def test_the_front_rotor_clears_the_roof_and_the_pad_holds_the_pivot():
     assert rear == pytest.approx(0.602, abs=0.001) and rear < pad
     assert pad == d["sensors.rangefinder"]["deck_half_width"] == 0.7
     assert pad >= d["landing"]["max_offset"] + math.hypot(fx, fy)
-    assert d["touchdown"]["pivot_aim"] == 0.0
+    aim = d["touchdown"]["pivot_aim"] * pivot
+    assert d["touchdown"]["pivot_aim"] == 0.3 and aim == pytest.approx(0.0804, abs=0.0001)
+    assert aim < d["landing"]["max_offset"]
 
 
 def test_the_magnets_hold_the_worst_corner_at_the_cut():
