@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from highway_before import BEFORE
 
 import quadland
 from quadland.scenario import load_scenario
@@ -126,7 +127,7 @@ KI_P_BEFORE = "controller.ki_p=[0.5, 0.5, 1.0]"
 
 
 def _calm(*overrides):
-    return quadland.simulate(load_scenario("highway", [*CALM, *overrides]))
+    return quadland.simulate(load_scenario("highway", [*CALM, *BEFORE, *overrides]))
 
 
 def test_held_through_the_approach_the_flight_is_the_observer_alones_until_the_radius():

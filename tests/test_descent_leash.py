@@ -14,6 +14,7 @@ draws, whose rows the campaign recorded.
 
 import numpy as np
 import pytest
+from highway_before import BEFORE
 from reference import GUIDANCE_P
 
 import quadland
@@ -65,7 +66,7 @@ def _run(index, *overrides):
     sc = load_scenario("highway")
     d = draws(campaign_spec_of(sc), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("highway", [
-        *d.overrides(), *overrides])))
+        *d.overrides(), *BEFORE, *overrides])))
 
 
 @pytest.mark.parametrize(("index", "sink_before", "sink_leash"),
@@ -74,7 +75,8 @@ def test_the_campaigns_two_sink_rate_failures_land_on_a_5_cm_leash(index, sink_b
                                                                      sink_leash):
     """Runs 122 and 166 of highway's campaign (default seed), whose rows in `quadland
     campaign --scenario highway --runs 300` record sink rates of 0.549 and 0.537 m/s: with
-    no leash (the key left out) they replay those rows; on a 5 cm leash they land (the
+    highway's touchdown of before (`highway_before.BEFORE`: no leash, the rotors cut at the
+    contact switch) they replay those rows; on a 5 cm leash they land (the
     leash's sink rates are the flights' own, pinned as reproducers; the independent check is
     the outcome and the limit)."""
     before = _run(index)

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from highway_before import BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -53,12 +54,13 @@ def test_friction_alone_cannot_stop_the_slide_at_the_fastest_car():
 def _run(index, *overrides):
     """Run ``index`` of highway's 300-run campaign (default campaign seed), flown by the
     law without the disturbance observer and with the outer bias estimates on every axis
-    (docs/landing.md), whose campaign found the slide."""
+    (docs/landing.md), whose campaign found the slide, and highway's touchdown of before
+    its flare (``highway_before.BEFORE``: the rotors cut at the contact switch)."""
     sc = load_scenario("highway")
     d = draws(campaign_spec_of(sc), [index])[0]
     res = quadland.simulate(load_scenario("highway", [
         *d.overrides(), "controller.observer_frequency=[0.0, 0.0, 0.0]",
-        "controller.ki_p=[0.5, 0.5, 1.0]", *overrides]))
+        "controller.ki_p=[0.5, 0.5, 1.0]", *BEFORE, *overrides]))
     k = np.flatnonzero(res["touched"] > 0.5)
     return touchdown_report(res), float(np.max(res["foot_offset"][k]))
 

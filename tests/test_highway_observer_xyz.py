@@ -9,12 +9,16 @@ here are the flights themselves: the calm flight's contact with and without the 
 estimates, and two runs of the campaign replayed from their draws, whose outcomes the
 campaigns of before and after recorded (``runs.csv`` of `quadland campaign --scenario
 highway --runs 300`, default campaign seed; a replay equals its row to the bit).
+Every flight here has highway's touchdown and descent of before its flare and leash
+(``highway_before.BEFORE``, the rotors cut at the contact switch, no leash), the law these
+rows were recorded with; the flare and the leash are tests/test_highway_flare_leash.py's.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from highway_before import BEFORE as TOUCHDOWN_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -36,7 +40,7 @@ def test_the_shipped_law_has_the_observer_on_every_axis_and_no_outer_bias_estima
 
 
 def _contact(*overrides):
-    res = quadland.simulate(load_scenario("highway", [*CALM, *overrides]))
+    res = quadland.simulate(load_scenario("highway", [*CALM, *TOUCHDOWN_BEFORE, *overrides]))
     k = int(np.flatnonzero(res["touched"] > 0.5)[0])
     return np.array([res["x_e"][k], res["y_e"][k]]), float(res["t"][k])
 
@@ -60,7 +64,7 @@ def _run(index, *overrides):
     sc = load_scenario("highway")
     d = draws(campaign_spec_of(sc), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("highway", [
-        *d.overrides(), *overrides])))
+        *d.overrides(), *TOUCHDOWN_BEFORE, *overrides])))
 
 
 def test_campaign_run_237_no_longer_meets_the_deck_past_the_tilt_limit():

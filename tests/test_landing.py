@@ -19,6 +19,7 @@ import warnings
 
 import numpy as np
 import pytest
+from highway_before import BEFORE as HIGHWAY_BEFORE
 from reference import rotation
 from scipy.optimize import brentq
 from turning_before import BEFORE
@@ -173,8 +174,11 @@ FEET_OFF_AT_80 = ()
 #: estimates' slow tail") seed 15 touches down 2.7 s sooner (8.99 s against 11.66 s),
 #: in another moment of its turbulence, leaning 37.2 deg (35.0 before): past the gear's
 #: static tip-over angle, 36.87 deg, and it tips. 80 km/h is past highway's table, whose
-#: campaign the change was measured on.
-TIPPED_AT_80 = (15,)
+#: campaign the change was measured on. With highway's flare (30 deg of the thrust axis from
+#: 0.15 m, docs/landing.md, "highway: the flare and the leash") it lands, leaning 31.6 deg
+#: and 6.9 cm off: the flare is under the gear's tip-over angle, and under the 31.1 deg
+#: steady lean at 80 km/h, so it drifts back in the last half second rather than tips.
+TIPPED_AT_80 = ()
 
 
 @pytest.mark.parametrize("seed", [pytest.param(
@@ -538,7 +542,10 @@ def test_the_ride_is_one_algorithm_compiled_and_on_the_virtual_machine():
     )
     from quadland_symbolic.landing.signals import LANDING_SIGNALS
 
-    sc = load_scenario("highway", ["simulation.duration=22", PERFECT, "gear.welded=true"])
+    # highway's touchdown of before its flare and leash (tests/highway_before.py), whose
+    # touchdown time is pinned below
+    sc = load_scenario("highway", ["simulation.duration=22", PERFECT, "gear.welded=true",
+                                   *HIGHWAY_BEFORE])
     res, lv = quadland.simulate(sc), landing_values(sc)
     k = int(np.argmax(res["phase"] == TOUCHDOWN))
     x_td, t_td = res.states[k], float(res["t"][k])

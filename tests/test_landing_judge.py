@@ -12,6 +12,7 @@ import types
 
 import numpy as np
 import pytest
+from highway_before import BEFORE as HIGHWAY_BEFORE
 from reference import HIGHWAY_100_OLD, rotation
 from turning_before import BEFORE
 
@@ -165,7 +166,7 @@ def test_no_lock_in_a_headwind_is_judged_with_the_friction_the_wind_consumes():
     sc = load_scenario("highway", ["sensors.enabled=false", 'touchdown.lock="none"',
                                    "wind.mean=[-6.0, 0.0, 0.0]",
                                    "controller.observer_frequency=[0.0, 0.0, 0.0]",
-                                   "controller.ki_p=[0.5, 0.5, 1.0]"])
+                                   "controller.ki_p=[0.5, 0.5, 1.0]", *HIGHWAY_BEFORE])
     res = quadland.simulate(sc)
     t_w = landing_clocks(sc)[1].times()
     t = res["t"][-1]
@@ -229,7 +230,7 @@ def test_an_engaged_magnet_on_a_slippery_roof_that_slides_is_not_secured():
     slides back across the roof at 1.07 m/s (0.92 m/s on the sensors' draws before they
     came in blocks, issue 20; about 2 m/s with highway's law before the observer on z and
     no outer bias estimates on x, y), the margin (with the lock's pull) over 1."""
-    sc = load_scenario("highway", ["gear.friction=0.03"])
+    sc = load_scenario("highway", ["gear.friction=0.03", *HIGHWAY_BEFORE])
     res = quadland.simulate(sc)
     V = sc["initial.velocity2"][0]
     drag = 0.3 * V + 0.01225 * V ** 2
@@ -247,7 +248,8 @@ def test_a_body_that_flies_off_the_deck_has_not_tipped_over_on_it():
     before the observer on z and no outer bias estimates on x, y it stopped at the
     singular attitude, roll 89.6 deg, 6.6 m above); the verdict once read 'bounced 645.6
     cm > 2 cm; tipped over on the deck; ...'."""
-    res = quadland.simulate(load_scenario("highway", ["touchdown.idle_thrust=9.8"]))
+    res = quadland.simulate(load_scenario("highway", ["touchdown.idle_thrust=9.8",
+                                                       *HIGHWAY_BEFORE]))
     assert res["z1"][-1] - res["z2"][-1] > 5.0                 # far above the deck
     assert np.degrees(abs(res["phi1"][-1])) == pytest.approx(43.97, abs=0.05)
     rep = touchdown_report(res)

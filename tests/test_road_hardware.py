@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from highway_before import BEFORE as HIGHWAY_BEFORE
 
 import quadland
 from quadland.kinds.landing.report import touchdown_report
@@ -59,9 +60,12 @@ def test_a_100_km_h_car_meets_highway_s_gear_past_its_tip_over_angle():
     which the judge reads as "tilted" (issue 18's review: the tilt at contact against
     the tip-over angle; "tipped" is kept for a gear rolled over with the rotors cut)."""
     # the law without the disturbance observer, whose flight this is (with it the contact
-    # comes at 36.5 deg, just inside, and fails on tilt, a bounce and the pad instead)
+    # comes at 36.5 deg, just inside, and fails on tilt, a bounce and the pad instead), and
+    # highway's touchdown of before its flare (tests/highway_before.py: with the 30 deg
+    # flare this flight lands, leaning 31.4 deg)
     before = touchdown_report(quadland.simulate(load_scenario(
-        "highway", [*FASTEST, "controller.observer_frequency=[0.0, 0.0, 0.0]"])))
+        "highway", [*FASTEST, "controller.observer_frequency=[0.0, 0.0, 0.0]",
+                    *HIGHWAY_BEFORE])))
     assert before.tilt_deg > math.degrees(math.atan2(0.15, 0.2))
     assert not before.success and "tilted" in before.failures
 

@@ -186,9 +186,9 @@ static const qlf_real default_p_act[15] = {
 static const qlf_real default_p_guid[29] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
-    10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 0.0f,
-    0.15f, 0.5934119456780721f, 0.0f, 0.35f, 0.5f, 0.3f,
-    0.0f, 0.0f, 0.0f, 0.0f, 1000.0f,
+    10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
+    0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
+    0.0f, 0.0f, 0.0f, 0.05f, 1000.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
