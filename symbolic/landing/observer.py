@@ -18,7 +18,7 @@ with ``a_T`` from the measured attitude and the thrust the rotors are making now
 (``T_o``: the commanded rotor forces through the model's motor lag), ``f_k`` the part
 of ``f_p`` the law feeds forward. Its error ``e = [v_e - v_hat, d - d_o]`` obeys
 ``e' = A e + [0, d']`` with ``A`` of the double pole ``-w_o``, whatever the law does:
-``d_o`` is ``d`` through ``(2 w_o s + w_o^2) / (s + w_o)^2``. The law subtracts
+``d_o`` is ``d`` through ``w_o^2 / (s + w_o)^2``. The law subtracts
 ``d_o`` from its acceleration command (docs/landing.md, "The disturbance observer").
 
 Over a period the inputs are held, so the step integrates it exactly
