@@ -182,14 +182,14 @@ def main() -> None:
     cc = build.find_compiler()
     print(f"compiler: {build.compiler_identity(cc).splitlines()[1]}; machine flags: "
           f"{' '.join(build.machine_flags(cc)) or '(none)'}; load average {os.getloadavg()}")
-    if a.before is not None:
+    if a.before is not None and a.scenarios:
         scenarios = a.scenarios.split(",")
         was, now = child(DIGESTS, a.before.resolve(), *scenarios), child(DIGESTS, None,
                                                                            *scenarios)
         for s in scenarios:
             print(f"- {s}: every column and state, before and now: "
                   f"{'the same bits' if was[s] == now[s] else 'DIFFERENT'}")
-    for s in a.flights.split(","):
+    for s in filter(None, a.flights.split(",")):
         loops, args, kwargs = builds(s, extra)
         out = timed_flights(loops, args, kwargs, a.rounds)
         base = statistics.median(out["cpu"]["baseline, libm"])

@@ -18,6 +18,7 @@ import collections
 import statistics
 import time
 
+from quadland.campaign.cells import failure_modes
 from quadland.campaign.dispersed import dispersed
 from quadland.campaign.fly import fly
 from quadland.campaign.grid import cell_draws, plan_envelope
@@ -32,7 +33,8 @@ def outcome(out) -> str:
         return "no touchdown"
     if out.metrics.get("tipped"):
         return "tipped over"
-    return "landed" if out.success else "missed " + out.message.split()[0]
+    return "landed" if out.success else "missed: " + ", ".join(
+        failure_modes(out.status, out.success, out.message))
 
 
 def main() -> None:

@@ -5,8 +5,8 @@ The runtime builds its simulators on the user's machine (:mod:`quadland.engine.b
 so it may use the machine's vector instructions. :func:`machine_flags` adds AVX2
 (:data:`AVX2_FLAGS`) on an x86-64 CPU that has it, with GCC or clang: the scalar C then
 uses the VEX encodings (three-operand arithmetic, no false dependencies on a
-register's upper half) and 256-bit moves, about 4 % less CPU a flight (measured in
-``docs/performance.md``, "Compiler flags on the user's machine"). Every operation stays
+register's upper half) and 256-bit moves: 2.5 to 6 % less CPU a flight (measured in
+``docs/performance.md``, "The compiled flight's instructions"). Every operation stays
 the IEEE operation it was: no fused multiply-add (``-mno-fma``; GCC 12 vectorizes an
 add-and-subtract pair into ``vfmsubadd`` with FMA enabled even under
 ``-ffp-contract=off``, which changed a highway landing's bits, so ``-march=x86-64-v3``

@@ -174,7 +174,9 @@ def _emit(name: str, f: ca.Function) -> tuple[dict[str, str], ca.Function]:
 
 
 #: Whether the simulators' ``casadi_fmin``/``casadi_fmax`` compare inline
-#: (:func:`inline_min_max`) rather than call libm.
+#: (:func:`inline_min_max`) rather than call libm. The cache's keys hash this module's
+#: text, not the value: a build with it turned off at run time (the benchmark's) needs a
+#: model of another name.
 INLINE_MIN_MAX = True
 #: CasADi's calls of C99's ``fmax``/``fmin`` in its ``casadi_fmax``/``casadi_fmin``, and
 #: the same value computed inline on x86-64 with glibc.
