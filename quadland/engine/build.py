@@ -61,6 +61,7 @@ from quadland.engine.compiler import (
     have_compiler,
     run_compilers,
 )
+from quadland.engine.machine import machine_flags, machine_rejected
 from quadland.exceptions import CompileError
 from quadland.output import WorkFolder, remove_abandoned, write_text_atomic
 
@@ -70,7 +71,7 @@ __all__ = ["STRICT_CFLAGS", "RUNTIME_CFLAGS", "SHARED_CFLAGS", "COMPILE_MEMORY_B
            "CompileBudgetError", "compile_cost", "BuildPlan", "plan_build", "find_compiler",
            "have_compiler", "compiler_problem", "compiler_version", "cache_dir",
            "build_library", "COMPILE_TIMEOUT", "VERSION_TIMEOUT", "TIMEOUT_ENV",
-           "compile_timeout", "compiler_identity", "verified_library"]
+           "compile_timeout", "compiler_identity", "verified_library", "language_flags"]
 
 #: Flags every generated flight file compiles under, alone.
 STRICT_CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror")
@@ -102,6 +103,13 @@ OPT_LEVELS = ("-O2", "-Os", "-O0")
 #: a floating-point operation; the simulator flies the same states, bit for bit.
 LEVEL_FLAGS = {"-Os": ("-Os", "-fno-gcse", "-fno-tree-pre", "-fno-code-hoisting",
                        "-fno-schedule-insns2")}
+
+
+def language_flags(strict: bool, cc: str) -> tuple[str, ...]:
+    """The flags of a library's language: :data:`STRICT_CFLAGS` (flight code), or
+    :data:`RUNTIME_CFLAGS` and the machine's own instructions
+    (:func:`quadland.engine.machine.machine_flags`, the same bits)."""
+    return STRICT_CFLAGS if strict else (*RUNTIME_CFLAGS, *machine_flags(cc))
 
 
 def level_flags(level: str, cc: str) -> tuple[str, ...]:
@@ -337,7 +345,7 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
     timeout = compile_timeout()
     cc = find_compiler()
     plan = plan_build(files, compile_, opt)
-    lang = STRICT_CFLAGS if strict else RUNTIME_CFLAGS
+    lang = language_flags(strict, cc)
     digest = hashlib.sha256()
     for part in (_CACHE_FORMAT, compiler_identity(cc), ca.__version__, *lang,
                  *level_flags(opt, cc), *SHARED_CFLAGS[:-1], *compile_):
@@ -360,7 +368,7 @@ def build_library(files: dict[str, str], compile_: tuple[str, ...], opt: str = "
     target = cache / digest.hexdigest()[:24] / f"{name}.so"
     for attempt in range(2):
         if not verified_library(target):
-            _build(cc, lang, plan, files, compile_, target, cache, timeout)
+            _build_or_baseline(cc, lang, plan, files, compile_, target, cache, timeout)
         try:
             ctypes.CDLL(str(target))
             return target
@@ -414,6 +422,19 @@ def _discard(target: Path) -> None:
             path.unlink(missing_ok=True)
         except OSError:
             pass
+
+
+def _build_or_baseline(cc: str, lang: tuple[str, ...], *args) -> None:
+    """:func:`_build`; again without the machine's flags where the compiler refused them
+    (a compiler for another target: :func:`quadland.engine.machine.machine_rejected`)."""
+    try:
+        _build(cc, lang, *args)
+    except CompileError as exc:
+        n = len(RUNTIME_CFLAGS)
+        extra = lang[n:] if lang[:n] == RUNTIME_CFLAGS else ()
+        if not machine_rejected(str(exc), extra):
+            raise
+        _build(cc, RUNTIME_CFLAGS, *args)
 
 
 def _build(cc: str, lang: tuple[str, ...], plan: BuildPlan, files: dict[str, str],

@@ -149,7 +149,7 @@ def recall_key(model: LoopModel | LoopRecipe, part: str, flight: str | None,
                   recipe_digest(model) if isinstance(model, LoopRecipe) else
                   "model:" + model_digest(model), part, name,
                   " ".join(build.level_flags(opt, cc)),
-                  repr(build.STRICT_CFLAGS if strict else build.RUNTIME_CFLAGS),
+                  repr(build.language_flags(strict, cc)),
                   repr((build.SHARED_CFLAGS, build.COMPILE_MEMORY_BUDGET,
                         build.COMPILE_TIME_BUDGET, build.COMPILE_FIT)), *flight_sources):
         digest.update(part_.encode() + b"\0")

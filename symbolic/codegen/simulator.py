@@ -167,8 +167,36 @@ def _emit(name: str, f: ca.Function) -> tuple[dict[str, str], ca.Function]:
     cg.add(fn)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        return {f"{name}.{ext}": Path(tmp, f"{name}.{ext}").read_text()
-                for ext in ("c", "h")}, fn
+        text = {f"{name}.{ext}": Path(tmp, f"{name}.{ext}").read_text() for ext in ("c", "h")}
+    if INLINE_MIN_MAX:
+        text[f"{name}.c"] = inline_min_max(text[f"{name}.c"])
+    return text, fn
+
+
+#: Whether the simulators' ``casadi_fmin``/``casadi_fmax`` compare inline
+#: (:func:`inline_min_max`) rather than call libm. The cache's keys hash this module's
+#: text, not the value: a build with it turned off at run time (the benchmark's) needs a
+#: model of another name.
+INLINE_MIN_MAX = True
+#: CasADi's calls of C99's ``fmax``/``fmin`` in its ``casadi_fmax``/``casadi_fmin``, and
+#: the same value computed inline on x86-64 with glibc.
+_MIN_MAX = {
+    "  return fmax(x, y);\n":
+        "#if defined(__x86_64__) && defined(__GLIBC__)\n"
+        "  if (!isnan(x) && !isnan(y)) return x > y ? x : y;\n#endif\n  return fmax(x, y);\n",
+    "  return fmin(x, y);\n":
+        "#if defined(__x86_64__) && defined(__GLIBC__)\n"
+        "  if (!isnan(x) && !isnan(y)) return x < y ? x : y;\n#endif\n  return fmin(x, y);\n"}
+
+
+def inline_min_max(c: str) -> str:
+    """CasADi's C with its ``casadi_fmax(x, y)`` and ``casadi_fmin(x, y)`` computed inline
+    where libm is glibc's on x86-64, whose ``fmax`` is ``maxsd`` (``x > y ? x : y``: ``y``
+    for equal operands, ``+0.0`` and ``-0.0`` included) and ``fmin`` ``minsd`` (``x < y ?
+    x : y``) when neither is a NaN; with a NaN, and elsewhere, libm's call as before."""
+    for call, inline in _MIN_MAX.items():
+        c = c.replace(call, inline)
+    return c
 
 
 def _flight_controller(model: LoopModel, prefix: str, args: ca.Function) -> dict[str, str]:

@@ -1,0 +1,67 @@
+"""The instructions the runtime's simulators compile for: the machine's own where they
+give the baseline's bits.
+
+The runtime builds its simulators on the user's machine (:mod:`quadland.engine.build`),
+so it may use the machine's vector instructions. :func:`machine_flags` adds AVX2
+(:data:`AVX2_FLAGS`) on an x86-64 CPU that has it, with GCC or clang: the scalar C then
+uses the VEX encodings (three-operand arithmetic, no false dependencies on a
+register's upper half) and 256-bit moves: 2.5 to 6 % less CPU a flight (measured in
+``docs/performance.md``, "The compiled flight's instructions"). Every operation stays
+the IEEE operation it was: no fused multiply-add (``-mno-fma``; GCC 12 vectorizes an
+add-and-subtract pair into ``vfmsubadd`` with FMA enabled even under
+``-ffp-contract=off``, which changed a highway landing's bits, so ``-march=x86-64-v3``
+and ``-march=native`` are not used), no contraction, no fast math. The flags are in the
+libraries' keys (:func:`quadland.engine.build.build_library`,
+:func:`quadland.engine.recall.recall_key`): a cache shared by machines of different
+CPUs keeps a library for each. A compiler that rejects them (one for another target)
+builds at the baseline (:func:`machine_rejected`).
+"""
+
+from __future__ import annotations
+
+import functools
+import platform
+from pathlib import Path
+
+from quadland.engine.compiler import compiler_identity
+
+__all__ = ["AVX2_FLAGS", "CPUINFO", "cpu_flags", "machine_flags", "machine_rejected"]
+
+#: The flags of an x86-64 CPU with AVX2: its instructions, without FMA, and no
+#: contraction of a product and a sum (``-std=c99`` implies it; said explicitly).
+AVX2_FLAGS = ("-mavx2", "-mno-fma", "-ffp-contract=off")
+#: Where Linux lists the CPU's features.
+CPUINFO = Path("/proc/cpuinfo")
+
+
+@functools.cache
+def cpu_flags(path: Path = CPUINFO) -> frozenset[str]:
+    """The CPU's features as the kernel lists them (the first ``flags`` line of
+    ``/proc/cpuinfo``; the kernel leaves out AVX where the system does not save its
+    registers); empty where there is no such file (not Linux)."""
+    try:
+        with open(path, encoding="ascii", errors="replace") as fh:
+            for line in fh:
+                name, _, value = line.partition(":")
+                if name.strip() == "flags":
+                    return frozenset(value.split())
+    except OSError:
+        pass
+    return frozenset()
+
+
+def machine_flags(cc: str) -> tuple[str, ...]:
+    """The machine's own flags for compiler ``cc``: :data:`AVX2_FLAGS` on an x86-64 CPU
+    with AVX2 and a GCC or clang (by its ``--version``), none otherwise."""
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return ()
+    identity = compiler_identity(cc)
+    if "Free Software Foundation" not in identity and "clang" not in identity.lower():
+        return ()
+    return AVX2_FLAGS if {"avx", "avx2"} <= cpu_flags() else ()
+
+
+def machine_rejected(message: str, flags: tuple[str, ...]) -> bool:
+    """Whether a compiler's error ``message`` is about one of the machine's ``flags``
+    (a compiler for another target): the build is then made at the baseline."""
+    return any(flag in message for flag in flags)
