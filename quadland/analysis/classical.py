@@ -6,8 +6,9 @@ import dataclasses
 import math
 
 import numpy as np
+import scipy.linalg
+import scipy.optimize
 
-from quadland.analysis.optimize import brentq
 from quadland.analysis.response import (
     FrequencyResponse,
     closed_loop_poles,
@@ -119,7 +120,8 @@ def _roots(fun, grid, values, keep=None):
         if keep is not None and not keep(grid[k], grid[k + 1]):
             continue
         try:
-            out.append(brentq(fun, grid[k], grid[k + 1], xtol=1e-14, rtol=1e-12))
+            out.append(scipy.optimize.brentq(fun, grid[k], grid[k + 1], xtol=1e-14,
+                                             rtol=1e-12))
         except (ValueError, RuntimeError):
             continue
     out += [grid[k] for k in np.flatnonzero(values == 0)

@@ -6,8 +6,9 @@ import dataclasses
 import math
 
 import numpy as np
+import scipy.linalg
+import scipy.optimize
 
-from quadland.analysis.optimize import bounded_minimum, nelder_mead
 from quadland.analysis.response import (
     closed_loop_poles,
     closed_loop_stable,
@@ -102,8 +103,9 @@ def _mu_upper(M: np.ndarray) -> float:
         S = d[:, None] * M / d[None, :]
         return math.sqrt(max(float(np.linalg.eigvalsh(S.conj().T @ S)[-1]), 0.0))
 
-    fun = nelder_mead(f, x0, xatol=1e-8, fatol=1e-12, maxiter=4000)[1]
-    return min(fun, f(x0))
+    res = scipy.optimize.minimize(f, x0, method="Nelder-Mead",
+                                  options=dict(xatol=1e-8, fatol=1e-12, maxiter=4000))
+    return min(float(res.fun), f(x0))
 
 
 def _peak(fun, grid, values):
@@ -112,10 +114,11 @@ def _peak(fun, grid, values):
     best_w, best = grid[k], values[k]
     a, b = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     if b > a:
-        x, low, _ = bounded_minimum(lambda lw: -fun(math.exp(lw)), math.log(a), math.log(b),
-                                    xatol=1e-10)
-        if -low > best:
-            best_w, best = math.exp(x), -low
+        res = scipy.optimize.minimize_scalar(lambda lw: -fun(math.exp(lw)),
+                                             bounds=(math.log(a), math.log(b)),
+                                             method="bounded", options=dict(xatol=1e-10))
+        if -res.fun > best:
+            best_w, best = math.exp(res.x), -res.fun
     return float(best), float(best_w)
 
 
@@ -209,10 +212,11 @@ def _multiloop_disk(M_at, grid, M) -> DiskMargin:
     a, b = grid[max(best_k - 1, 0)], grid[min(best_k + 1, len(grid) - 1)]
     w_best = grid[best_k]
     if b > a:
-        x, low, _ = bounded_minimum(lambda lw: -_mu_upper(M_at(math.exp(lw))), math.log(a),
-                                    math.log(b), xatol=1e-8)
-        if -low > best:
-            best, w_best = -low, math.exp(x)
+        res = scipy.optimize.minimize_scalar(lambda lw: -_mu_upper(M_at(math.exp(lw))),
+                                             bounds=(math.log(a), math.log(b)),
+                                             method="bounded", options=dict(xatol=1e-8))
+        if -res.fun > best:
+            best, w_best = -res.fun, math.exp(res.x)
     M0 = _at_zero(M_at)
     if M0 is not None:
         mu0 = _mu_upper(M0)

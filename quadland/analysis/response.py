@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
+import scipy.optimize
 
 from quadland.analysis.modal import MODAL_CHECK, Modal
 

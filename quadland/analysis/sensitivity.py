@@ -36,8 +36,8 @@ import dataclasses
 import math
 
 import numpy as np
+import scipy.optimize
 
-from quadland.analysis.optimize import bounded_minimum, brentq
 from quadland.analysis.response import (
     FrequencyResponse,
     closed_loop_poles,
@@ -152,10 +152,11 @@ def _refined_max(fun, grid, values) -> tuple[float, float]:
     best_w, best = float(grid[k]), float(values[k])
     a, b = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     if b > a > 0:
-        x, low, _ = bounded_minimum(lambda lw: -fun(math.exp(lw)), math.log(a), math.log(b),
-                                    xatol=1e-10)
-        if -low > best:
-            best_w, best = float(math.exp(x)), float(-low)
+        res = scipy.optimize.minimize_scalar(lambda lw: -fun(math.exp(lw)),
+                                             bounds=(math.log(a), math.log(b)),
+                                             method="bounded", options=dict(xatol=1e-10))
+        if -res.fun > best:
+            best_w, best = float(math.exp(res.x)), float(-res.fun)
     return best, best_w
 
 
@@ -294,8 +295,8 @@ def _unit_crossings(resp: FrequencyResponse, grid: np.ndarray, g: list[int], n: 
                 unresolved += 1
                 continue
             try:
-                w = brentq(lambda w, k=k: log_moduli(w)[k], grid[j], grid[j + 1], xtol=1e-14,
-                           rtol=1e-12)
+                w = scipy.optimize.brentq(lambda w, k=k: log_moduli(w)[k], grid[j], grid[j + 1],
+                                          xtol=1e-14, rtol=1e-12)
                 lam = eigs(resp.at(resp.point(w)))
             except (ValueError, RuntimeError, np.linalg.LinAlgError):
                 continue
