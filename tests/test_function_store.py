@@ -8,6 +8,7 @@ the same from a filled store as from built functions.
 
 from __future__ import annotations
 
+import hashlib
 import json
 
 import casadi as ca
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 from quadland.engine import function_store
-from quadland.engine.function_store import FUNCTIONS, function_key, stored_function
+from quadland.engine.function_store import FUNCTIONS, HEADER, function_key, stored_function
 
 CALLS: list = []
 
@@ -70,18 +71,44 @@ def test_the_key_changes_with_what_the_function_is_built_from(store, monkeypatch
     assert function_key(square_builder, (3, 0.7)) != key
 
 
+def _stored(function: ca.Function) -> str:
+    """The file the store writes for ``function``: its header line, then its text."""
+    text = function.serialize()
+    return f"{HEADER} {hashlib.sha256(text.encode()).hexdigest()}\n{text}"
+
+
 def test_a_damaged_file_is_built_again_and_replaced(store):
     built = stored_function(square_builder, 2, 1.5)
     (path,) = store.iterdir()
+    assert path.read_text() == _stored(built)
     path.write_text(path.read_text()[:1000])                      # cut short
     stored_function.cache_clear()
     again = stored_function(square_builder, 2, 1.5)
     assert CALLS == [(2, 1.5), (2, 1.5)]
-    assert again.serialize() == built.serialize() == path.read_text()
+    assert again.serialize() == built.serialize() and path.read_text() == _stored(built)
     path.write_bytes(b"\xff\xfe not a function")
     stored_function.cache_clear()
     assert stored_function(square_builder, 2, 1.5).serialize() == built.serialize()
     assert len(CALLS) == 3
+
+
+@pytest.mark.parametrize("damage", ["empty", "one character", "no header", "foreign header"])
+def test_a_file_casadi_would_read_is_built_again_unless_intact(store, damage):
+    """Damage CasADi's reader may take without an error (an empty text reads as a null
+    function; a changed operation code crashes the call later) is caught by the digest."""
+    built = stored_function(square_builder, 2, 1.5)
+    (path,) = store.iterdir()
+    head, _, text = path.read_text().partition("\n")
+    i = len(text) * 3 // 4
+    damaged = {"empty": "",
+               "one character": f"{head}\n{text[:i]}{'b' if text[i] == 'a' else 'a'}{text[i + 1:]}",
+               "no header": text,
+               "foreign header": f"{HEADER} {'0' * 64}\n{text}"}[damage]
+    path.write_text(damaged)
+    stored_function.cache_clear()
+    again = stored_function(square_builder, 2, 1.5)
+    assert len(CALLS) == 2                                         # built again
+    assert again.serialize() == built.serialize() and path.read_text() == _stored(built)
 
 
 def test_an_unwritable_store_only_costs_the_build(store):

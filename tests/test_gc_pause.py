@@ -77,3 +77,19 @@ def test_a_disabled_collector_stays_disabled():
     with collection_paused():
         pass
     assert gc.isenabled()
+
+
+def test_a_hosts_frozen_objects_stay_frozen():
+    """A host that froze its objects (``gc.freeze`` before a fork) keeps them frozen: the
+    context does not ``gc.unfreeze`` the process."""
+    gc.collect()
+    gc.freeze()
+    try:
+        frozen = gc.get_freeze_count()
+        assert frozen > 0
+        with collection_paused():
+            _cycles(10)
+        assert gc.get_freeze_count() == frozen
+        assert gc.isenabled()
+    finally:
+        gc.unfreeze()

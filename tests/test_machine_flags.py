@@ -93,6 +93,8 @@ def _probe_library(strict: bool = False):
     return build.build_library({"probe.c": PROBE}, ("probe.c",), name="libprobe", strict=strict)
 
 
+@pytest.mark.skipif(not (build.have_compiler() and machine.machine_flags(build.find_compiler())),
+                    reason="the machine has no AVX2 (or no GCC or clang on x86-64)")
 def test_the_simulators_compile_for_the_machine_and_are_keyed_apart(cache, monkeypatch):
     monkeypatch.setattr(build, "machine_flags", lambda cc: machine.AVX2_FLAGS)
     mine = _probe_library()

@@ -15,8 +15,11 @@ builder's name, its arguments' ``repr``, every module and template of
 ``quadland_symbolic`` (:func:`quadland.engine.recall.generator_digest`: the builder's
 code and what it calls) and the versions of Python, CasADi, NumPy and Jinja2
 (:func:`quadland.engine.recall.library_versions`). A function that cannot be read (none
-yet, a partial or foreign file) is built and written (atomically; a folder that cannot be
-written is not an error). Builders whose functions are as slow to read as to build (the
+yet, a partial, damaged or foreign file) is built and written (atomically; a folder that
+cannot be written is not an error). Each file starts with a line holding the SHA-256 of the
+serialized text after it, checked before CasADi reads it: CasADi's reader takes some damaged
+texts without an error and fails later, inside the call (a crash), where no exception can be
+caught. Builders whose functions are as slow to read as to build (the
 filter's fusion: 12.6 MB serialized) are called directly.
 """
 
@@ -31,7 +34,7 @@ from quadland.engine.build import cache_dir
 from quadland.engine.recall import generator_digest, library_versions
 from quadland.output import write_text_atomic
 
-__all__ = ["FUNCTIONS", "stored_function", "function_key"]
+__all__ = ["FUNCTIONS", "HEADER", "stored_function", "function_key"]
 
 #: Folder of the cache that holds the serialized functions.
 FUNCTIONS = "functions"
@@ -63,14 +66,37 @@ def stored_function(builder, *args) -> ca.Function:
         one object per process for the same arguments.
     """
     path = cache_dir() / FUNCTIONS / f"{function_key(builder, args)[:32]}.casadi"
-    try:
-        return ca.Function.deserialize(path.read_text(encoding="ascii"))
-    except (OSError, UnicodeDecodeError, RuntimeError):
-        pass                    # none yet, or unreadable: build it
+    function = _read(path)
+    if function is not None:
+        return function
     function = builder(*args)
+    text = function.serialize()
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(path, function.serialize())
+        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        write_text_atomic(path, f"{HEADER} {_digest(text)}\n{text}")
     except OSError:
         pass                    # a cache that cannot be written only costs the build
     return function
+
+
+#: First word of a stored file's first line; its second is the SHA-256 of the rest.
+HEADER = "quadland-function-1"
+
+
+def _digest(text: str) -> str:
+    return hashlib.sha256(text.encode("ascii")).hexdigest()
+
+
+def _read(path) -> ca.Function | None:
+    """The function stored at ``path``, or None when there is none or it is not intact."""
+    try:
+        head, _, text = path.read_text(encoding="ascii").partition("\n")
+    except (OSError, UnicodeDecodeError):
+        return None             # none yet, or unreadable: build it
+    if head != f"{HEADER} {_digest(text)}":
+        return None             # partial, damaged, or of an older format
+    try:
+        function = ca.Function.deserialize(text)
+    except RuntimeError:
+        return None
+    return None if function.is_null() else function

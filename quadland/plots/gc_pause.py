@@ -29,13 +29,17 @@ __all__ = ["collection_paused"]
 def collection_paused():
     """No automatic garbage collection within the context; at its end every object alive
     moves to the oldest generation unscanned, and the collector is as it was (enabled
-    again only if it was enabled)."""
+    again only if it was enabled). In a process that has frozen objects itself (a host
+    application's ``gc.freeze`` before a fork) the move is skipped: ``gc.unfreeze`` would
+    release its objects too."""
     was_enabled = gc.isenabled()
+    host_frozen = gc.get_freeze_count() > 0
     gc.disable()
     try:
         yield
     finally:
-        gc.freeze()         # everything alive to the permanent generation...
-        gc.unfreeze()       # ...and back into the oldest one, unscanned
+        if not host_frozen:
+            gc.freeze()     # everything alive to the permanent generation...
+            gc.unfreeze()   # ...and back into the oldest one, unscanned
         if was_enabled:
             gc.enable()

@@ -193,7 +193,13 @@ def inline_min_max(c: str) -> str:
     """CasADi's C with its ``casadi_fmax(x, y)`` and ``casadi_fmin(x, y)`` computed inline
     where libm is glibc's on x86-64, whose ``fmax`` is ``maxsd`` (``x > y ? x : y``: ``y``
     for equal operands, ``+0.0`` and ``-0.0`` included) and ``fmin`` ``minsd`` (``x < y ?
-    x : y``) when neither is a NaN; with a NaN, and elsewhere, libm's call as before."""
+    x : y``) when neither is a NaN; with a NaN, and elsewhere, libm's call as before.
+
+    This is glibc's x86-64 assembly (``sysdeps/x86_64/fpu/s_fmax.S``, ``s_fmin.S``), not
+    its generic C, which returns ``x`` for equal operands: a glibc that moved to the
+    generic form would give the other zero of ``fmax(+0.0, -0.0)``.
+    ``tests/test_inline_min_max.py`` compares the inline form with the machine's own
+    ``fmax`` and ``fmin`` on every pair of special values, so such a libm fails it."""
     for call, inline in _MIN_MAX.items():
         c = c.replace(call, inline)
     return c
