@@ -34,12 +34,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import os
 import statistics
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -47,6 +44,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_delivery_ring import captured  # noqa: E402
+from bench_landing_costs import child  # noqa: E402
 from land_reference import land_q  # noqa: E402
 
 from quadland.engine import build  # noqa: E402
@@ -88,19 +86,6 @@ with tempfile.TemporaryDirectory() as tmp:
 print(json.dumps({"cpu": cpu, "wall": wall, "csv": csv, "successes": s["successes"],
                   "runs": s["runs"]}))
 """
-
-
-def child(code: str, tree: Path | None, *args: str) -> dict:
-    """Run ``code`` in a fresh process on ``tree``'s code (None: the installed one)."""
-    env = dict(os.environ)
-    if tree is not None:
-        path = Path(tempfile.mkdtemp(prefix="quadland-before-"))
-        (path / "quadland").symlink_to(tree / "quadland")
-        (path / "quadland_symbolic").symlink_to(tree / "symbolic")
-        env["PYTHONPATH"] = str(path)
-    done = subprocess.run([sys.executable, "-c", code, *args], env=env,
-                          cwd=tempfile.gettempdir(), capture_output=True, text=True, check=True)
-    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def builds(scenario: str, extra: dict):

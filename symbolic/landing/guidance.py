@@ -237,8 +237,8 @@ def _reference_height(z_ref, p, f, dt):
     target = ca.if_else(f["seen"], hover, ca.if_else(f["align"], p["search_height"], z_ref))
     # after the touchdown the reference crawls on into the deck while the policy flies on
     crawl = touchdown_crawl(f["touchdown"], p)
-    # the leash: below leash_height, the fall stops where it would lead the quadrotor down
-    # by more than it
+    # the leash: below leash_height the fall stops where the reference would lead the
+    # quadrotor down by more than the leash
     leash = p["descent_leash"]
     fall = ca.if_else(ca.logic_and(leash > 0, h <= p["leash_height"]),
                       ca.fmax(z_ref - rate * dt, ca.fmin(z_ref, f["z"] - leash)),
