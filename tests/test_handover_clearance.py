@@ -48,13 +48,13 @@ def _gap_by_hand(sc, xp0):
 
 
 def test_without_the_key_the_handover_is_as_drawn():
-    """A scenario without the key takes 0, and 0 leaves the drawn state to the bit (run 162,
-    whose gear starts 0.17 m inside the deck plane, by hand); ``ship`` does not set it."""
-    sc = _draw(162)
-    assert sc["initial.handover_clearance"] == 0.0
+    """A scenario without the key (``ship``) takes 0; ``ship_ss5`` ships 1 m. 0 leaves the
+    drawn state as it is (run 162, whose gear starts 0.17 m inside the deck plane, by
+    hand)."""
     assert load_scenario("ship")["initial.handover_clearance"] == 0.0
+    assert load_scenario("ship_ss5")["initial.handover_clearance"] == 1.0
+    sc = _draw(162, "initial.handover_clearance=0")
     xp0 = landing_values(sc).xp0
-    assert np.array_equal(xp0, landing_values(_draw(162, "initial.handover_clearance=0")).xp0)
     q = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(xp0)["x1q"])
     assert float(np.asarray(q["p1"]).ravel()[2]) == sc["initial.z1"]
     gap, _ = _gap_by_hand(sc, xp0)
@@ -63,9 +63,9 @@ def test_without_the_key_the_handover_is_as_drawn():
 
 @pytest.mark.parametrize("index", [162, 200, 86])
 def test_a_handover_in_the_deck_is_raised_to_the_clearance(index):
-    """With a 1 m clearance the gear starts 1 m above the deck plane (by hand), the
-    quadrotor raised along E's z by ``(1 - gap) / n2_z`` and nothing else changed."""
-    sc0, sc1 = _draw(index), _draw(index, "initial.handover_clearance=1.0")
+    """With ``ship_ss5``'s 1 m clearance the gear starts 1 m above the deck plane (by hand),
+    the quadrotor raised along E's z by ``(1 - gap) / n2_z`` and nothing else changed."""
+    sc0, sc1 = _draw(index, "initial.handover_clearance=0"), _draw(index)
     x0, x1 = landing_values(sc0).xp0, landing_values(sc1).xp0
     gap0, n2_z = _gap_by_hand(sc0, x0)
     gap1, _ = _gap_by_hand(sc1, x1)
@@ -78,18 +78,19 @@ def test_a_handover_in_the_deck_is_raised_to_the_clearance(index):
 
 def test_a_handover_above_the_clearance_is_as_drawn():
     """Run 23 starts 1.17 m above the deck plane: a 1 m clearance leaves it to the bit."""
-    x0 = landing_values(_draw(23)).xp0
-    gap, _ = _gap_by_hand(_draw(23), x0)
+    sc0 = _draw(23, "initial.handover_clearance=0")
+    x0 = landing_values(sc0).xp0
+    gap, _ = _gap_by_hand(sc0, x0)
     assert gap == pytest.approx(1.169, abs=1e-3)
-    assert np.array_equal(x0, landing_values(_draw(23, "initial.handover_clearance=1.0")).xp0)
+    assert np.array_equal(x0, landing_values(_draw(23)).xp0)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("index", [162, 200])
 def test_the_struck_handovers_land_above_the_deck(index):
     """Runs 162 and 200 (seed 7) as drawn fail on everything (the gear in or on the deck at
-    t = 0); handed over 1 m above it they land and secure."""
+    t = 0); handed over 1 m above it (as shipped) they land and secure."""
     rep0 = touchdown_report(quadland.simulate(_draw(index, "initial.handover_clearance=0")))
     assert not rep0.success and "sink_rate" in rep0.failures and rep0.time < 8.0
-    rep1 = touchdown_report(quadland.simulate(_draw(index, "initial.handover_clearance=1.0")))
+    rep1 = touchdown_report(quadland.simulate(_draw(index)))
     assert rep1.success and rep1.secured
