@@ -152,9 +152,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "psi2_deg": PAPER_SCHEMA["initial"]["psi2_deg"],
         "r2_deg_s": PAPER_SCHEMA["initial"]["r2_deg_s"],
         "velocity2": PAPER_SCHEMA["initial"]["velocity2"],
-        "handover_clearance": Field(F, "m", "least height of the gear above the deck plane "
-                                    "at t = 0: a handover drawn lower is raised to it "
-                                    "(0: as drawn)", lo=0.0, hi=1e3, default=0.0),
+        "handover_clearance": Field(F, "m", "least gear height over the deck plane at t = 0, "
+                                    "raised to (0: as drawn)", lo=0.0, hi=1e3, default=0.0),
     },
     "controller": {
         "k1p": Field(F, "1/s", "outer k1: deck-frame x, y, z", 3, hi=1e3, **_POS),
@@ -224,8 +223,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
                             hi=100.0, **_POS),
-        "max_tilt_deg": Field(F, "deg", "limit: body z axis from the deck normal", hi=90.0,
-                              **_POS),
+        "max_tilt_deg": Field(F, "deg", "limit: body z axis from the deck normal", hi=90.0, **_POS),
         "max_relative_speed": Field(F, "m/s", "limit: horizontal relative speed at contact",
                                     hi=100.0, **_POS),
         "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0, hi=1e3),
@@ -279,6 +277,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                               "tilt is limited to flare_tilt_deg", lo=0.0, hi=100.0),
         "flare_tilt_deg": Field(F, "deg", "secure: tilt limit of the thrust axis from the flare "
                                 "on", hi=89.0, **_POS),
+        "flare_axis": Field(S, "-", "secure: flare_tilt_deg from E's z or the deck's normal",
+                            choices=("vertical", "deck"), default="vertical"),
         "hold_time": Field(F, "s", "secure: time from touchdown during which the flight code "
                            "flies on as in the descent", lo=0.0, hi=10.0),
         "level_time": Field(F, "s", "secure: time of the level-out to the deck's attitude and "
@@ -344,12 +344,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "mean": Field(F, "m/s", "steady wind in E", 3, lo=-100.0, hi=100.0),
         "turbulence_w20": Field(F, "m/s", "Dryden turbulence: wind speed at 20 ft (0: none)",
                                 lo=0.0, hi=50.0),
-        "gust_amplitude": Field(F, "m/s", "1-cosine gust peak v_m (0: none)", lo=0.0,
-                                hi=100.0),
+        "gust_amplitude": Field(F, "m/s", "1-cosine gust peak v_m (0: none)", lo=0.0, hi=100.0),
         "gust_start": Field(F, "s", "gust start t0", lo=0.0, hi=MAX_DURATION_S),
         "gust_half_length": Field(F, "s", "gust build-up time d", hi=1e3, **_POS),
-        "gust_direction": Field(F, "-", "gust direction in E (normalized)", 3, lo=-1.0,
-                                hi=1.0),
+        "gust_direction": Field(F, "-", "gust direction in E (normalized)", 3, lo=-1.0, hi=1.0),
         "air_density": Field(F, "kg/m^3", "air density rho (the ground effect's induced "
                              "velocity)", lo=0.1, hi=2.0),
     },
