@@ -67,7 +67,7 @@ def body_z_to_attitude(b3, psi):
     return phi, theta
 
 
-def thrust_attitude(t_E, psi, tilt_max, T_max, axes=None):
+def thrust_attitude(t_E, psi, tilt_max, T_max):
     """Collective thrust and attitude of a desired thrust vector.
 
     Parameters
@@ -80,10 +80,6 @@ def thrust_attitude(t_E, psi, tilt_max, T_max, axes=None):
         Largest angle between the body z axis and E's z, rad, in (0, pi/2).
     T_max : casadi.SX
         Largest collective thrust, N.
-    axes : casadi.SX, (3, 3), optional
-        A rotation whose third column is the axis the tilt is measured from (the limit's
-        cone is about it: the deck's ``R_deck`` for the deck's normal); None: E's z.
-        Rows of the identity give ``b3`` as with None (``x 1 + 0`` is exact).
 
     Returns
     -------
@@ -91,11 +87,7 @@ def thrust_attitude(t_E, psi, tilt_max, T_max, axes=None):
         ``T`` (N, in ``[0, T_max]``), ``b3`` (unit body z axis), ``phi``,
         ``theta`` (rad), ``tilt_limited`` and ``thrust_limited`` (0 or 1).
     """
-    if axes is None:
-        b3, tilt_limited = limit_tilt(t_E, tilt_max)
-    else:
-        b_axes, tilt_limited = limit_tilt(axes.T @ t_E, tilt_max)
-        b3 = axes @ b_axes
+    b3, tilt_limited = limit_tilt(t_E, tilt_max)
     T_raw = t_E[2] / b3[2]                                   # vertical priority
     T = ca.fmin(ca.fmax(T_raw, 0), T_max)
     phi, theta = body_z_to_attitude(b3, psi)
