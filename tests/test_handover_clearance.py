@@ -1,5 +1,5 @@
 """The handover above the deck: ``initial.handover_clearance`` (issue 19; docs/landing.md,
-"The ships' handover above the deck").
+"The ships' handover above the deck, and the flare about the deck's normal").
 
 A campaign draws the handover point in E (``initial.position1``, ``initial.z1``) while a
 sea state 5 deck heaves and pitches by metres under it: on ``ship_ss5``'s seed 7 two draws
