@@ -43,8 +43,7 @@ typedef char position_reference_is_its_layout[
     AT(ql_position_reference, thrust_scale, 11, 0) &&
     AT(ql_position_reference, power, 12, 0) &&
     AT(ql_position_reference, pivot, 13, 0) &&
-    AT(ql_position_reference, tilt_axis, 16, 0) &&
-    sizeof(ql_position_reference) == 17 * sizeof(ql_real) ? 1 : -1];
+    sizeof(ql_position_reference) == 16 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_state_is_its_layout[
     AT(ql_landing_state, W_hat, 0, 0) &&
     AT(ql_landing_state, zeta_hat, 60, 0) &&
@@ -151,8 +150,7 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, pivot_h, 26, 0) &&
     AT(ql_guidance_params, descent_leash, 27, 0) &&
     AT(ql_guidance_params, leash_height, 28, 0) &&
-    AT(ql_guidance_params, flare_axis, 29, 0) &&
-    sizeof(ql_guidance_params) == 30 * sizeof(ql_real) ? 1 : -1];
+    sizeof(ql_guidance_params) == 29 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -185,12 +183,12 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[30] = {
+static const ql_real default_p_guid[29] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
-    0.0, 0.0, 0.0, 0.05, 1000.0, 0.0,
+    0.0, 0.0, 0.0, 0.05, 1000.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -462,7 +460,6 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   pivot_h                  >= 0
  *   descent_leash            >= 0
  *   leash_height             >= 0
- *   flare_axis               0 or 1
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -562,9 +559,6 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[28]) && (p[28] >= 0.0))) {
         bad = "leash_height";
     }
-    if (!bad && !(isfinite(p[29]) && ((p[29] == 0.0) || (p[29] == 1.0)))) {
-        bad = "flare_axis";
-    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -641,7 +635,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 30 comparisons. The values are known to be finite; no names and no
+ * 29 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -675,7 +669,6 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[26] >= 0.0);
     ok &= (p[27] >= 0.0);
     ok &= (p[28] >= 0.0);
-    ok &= ((p[29] == 0.0) | (p[29] == 1.0));
     return ok;
 }
 
@@ -729,7 +722,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            ql_guidance_state *state, ql_position_reference *ref)
 {
     /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[7], res_v[24];
+    ql_real xg[7], res_v[23];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -748,7 +741,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[5] = state->ms_rise;
     xg[6] = state->ms_rise_rate;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
-          & all_finite((const ql_real *)params, 30)
+          & all_finite((const ql_real *)params, 29)
           & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
@@ -767,7 +760,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     res[0] = res_v + 0;
     res[1] = res_v + 7;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 24)) {
+    if (!all_finite(res_v, 23)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -805,7 +798,7 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     /* The measurements, the reference, dt and every parameter. The state is
      * checked through the outputs: each of its values reaches mem_next (a NaN
      * or an infinity in W_hat through a_w W_hat, 0 * inf being NaN, and so on). */
-    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 17)
+    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 16)
           & all_finite((const ql_real *)params, QL_LANDING_PARAMS_SIZE) & (isfinite(dt) != 0))) {
         output_zero(out, 0);
         return QL_ERR_NONFINITE_INPUT;

@@ -43,8 +43,7 @@ typedef char position_reference_is_its_layout[
     AT(qlf_position_reference, thrust_scale, 11, 0) &&
     AT(qlf_position_reference, power, 12, 0) &&
     AT(qlf_position_reference, pivot, 13, 0) &&
-    AT(qlf_position_reference, tilt_axis, 16, 0) &&
-    sizeof(qlf_position_reference) == 17 * sizeof(qlf_real) ? 1 : -1];
+    sizeof(qlf_position_reference) == 16 * sizeof(qlf_real) ? 1 : -1];
 typedef char landing_state_is_its_layout[
     AT(qlf_landing_state, W_hat, 0, 0) &&
     AT(qlf_landing_state, zeta_hat, 60, 0) &&
@@ -151,8 +150,7 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, pivot_h, 26, 0) &&
     AT(qlf_guidance_params, descent_leash, 27, 0) &&
     AT(qlf_guidance_params, leash_height, 28, 0) &&
-    AT(qlf_guidance_params, flare_axis, 29, 0) &&
-    sizeof(qlf_guidance_params) == 30 * sizeof(qlf_real) ? 1 : -1];
+    sizeof(qlf_guidance_params) == 29 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -185,12 +183,12 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[30] = {
+static const qlf_real default_p_guid[29] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
     0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
-    0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, 0.0f,
+    0.0f, 0.0f, 0.0f, 0.05f, 1000.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -462,7 +460,6 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   pivot_h                  >= 0
  *   descent_leash            >= 0
  *   leash_height             >= 0
- *   flare_axis               0 or 1
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -562,9 +559,6 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[28]) && (p[28] >= 0.0f))) {
         bad = "leash_height";
     }
-    if (!bad && !(isfinite(p[29]) && ((p[29] == 0.0f) || (p[29] == 1.0f)))) {
-        bad = "flare_axis";
-    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -641,7 +635,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 30 comparisons. The values are known to be finite; no names and no
+ * 29 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -675,7 +669,6 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[26] >= 0.0f);
     ok &= (p[27] >= 0.0f);
     ok &= (p[28] >= 0.0f);
-    ok &= ((p[29] == 0.0f) | (p[29] == 1.0f));
     return ok;
 }
 
@@ -729,7 +722,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
                              qlf_guidance_state *state, qlf_position_reference *ref)
 {
     /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
-    qlf_real xg[7], res_v[24];
+    qlf_real xg[7], res_v[23];
     const qlf_real *arg[qlf_casadi_landing_guidance_SZ_ARG];
     qlf_real *res[qlf_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[qlf_casadi_landing_guidance_SZ_IW + 1];
@@ -748,7 +741,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[5] = state->ms_rise;
     xg[6] = state->ms_rise_rate;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 2)
-          & all_finite((const qlf_real *)params, 30)
+          & all_finite((const qlf_real *)params, 29)
           & all_finite(xg, 7) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }
@@ -767,7 +760,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     res[0] = res_v + 0;
     res[1] = res_v + 7;
     qlf_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 24)) {
+    if (!all_finite(res_v, 23)) {
         return QLF_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -805,7 +798,7 @@ qlf_status qlf_landing_step(const qlf_landing_measurement *y, const qlf_position
     /* The measurements, the reference, dt and every parameter. The state is
      * checked through the outputs: each of its values reaches mem_next (a NaN
      * or an infinity in W_hat through a_w W_hat, 0 * inf being NaN, and so on). */
-    if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)ref, 17)
+    if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)ref, 16)
           & all_finite((const qlf_real *)params, QLF_LANDING_PARAMS_SIZE) & (isfinite(dt) != 0))) {
         output_zero(out, 0);
         return QLF_ERR_NONFINITE_INPUT;

@@ -22,7 +22,7 @@ extern "C" {
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QLF_LANDING_PARAMS_SIZE 132              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 89                /* reals in qlf_landing_state */
-#define QLF_GUIDANCE_PARAMS_SIZE 30              /* reals in qlf_guidance_params */
+#define QLF_GUIDANCE_PARAMS_SIZE 29              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
 #define QLF_LANDING_PLANT_NP 331                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (4), p_td (4)] */
@@ -72,7 +72,6 @@ typedef struct {
     qlf_real thrust_scale;           /* -: factor on the collective thrust before the mixer, 0 to 1 */
     qlf_real power;                  /* -: factor on the rotor commands: 0 cuts them */
     qlf_real pivot[3];               /* m: the gear's pivot arm whose levelling the aim point anticipates (feet x, y half-spacings, height below the centre of mass; 0: no shift) (pivot_x, pivot_y, pivot_h) */
-    qlf_real tilt_axis;              /* 0/1: the tilt limit's cones: 0 about E's vertical, 1 also about the deck's normal (the flare's, with flare_axis) */
 } qlf_position_reference;
 
 /* The landing step's memory: network, robust terms, command filter and
@@ -197,7 +196,6 @@ typedef struct {
     qlf_real pivot_h;                /* m: the pivot's height below the centre of mass (0: none) */
     qlf_real descent_leash;          /* m: how far the falling reference may lead the quadrotor down (0: no limit) */
     qlf_real leash_height;           /* m: reference height above touchdown below which the leash holds (above it the reference falls free) */
-    qlf_real flare_axis;             /* 0/1: the flare's tilt cones: 0 about E's vertical, 1 also about the deck's normal */
 } qlf_guidance_params;
 
 /* Fill the defaults (scenario highway). */

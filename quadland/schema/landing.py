@@ -277,8 +277,6 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                               "tilt is limited to flare_tilt_deg", lo=0.0, hi=100.0),
         "flare_tilt_deg": Field(F, "deg", "secure: tilt limit of the thrust axis from the flare "
                                 "on", hi=89.0, **_POS),
-        "flare_axis": Field(S, "-", "secure: flare_tilt_deg from E's z, or both it and the deck's "
-                            "normal", choices=("vertical", "both"), default="vertical"),
         "hold_time": Field(F, "s", "secure: time from touchdown during which the flight code "
                            "flies on as in the descent", lo=0.0, hi=10.0),
         "level_time": Field(F, "s", "secure: time of the level-out to the deck's attitude and "
@@ -344,10 +342,12 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "mean": Field(F, "m/s", "steady wind in E", 3, lo=-100.0, hi=100.0),
         "turbulence_w20": Field(F, "m/s", "Dryden turbulence: wind speed at 20 ft (0: none)",
                                 lo=0.0, hi=50.0),
-        "gust_amplitude": Field(F, "m/s", "1-cosine gust peak v_m (0: none)", lo=0.0, hi=100.0),
+        "gust_amplitude": Field(F, "m/s", "1-cosine gust peak v_m (0: none)", lo=0.0,
+                                hi=100.0),
         "gust_start": Field(F, "s", "gust start t0", lo=0.0, hi=MAX_DURATION_S),
         "gust_half_length": Field(F, "s", "gust build-up time d", hi=1e3, **_POS),
-        "gust_direction": Field(F, "-", "gust direction in E (normalized)", 3, lo=-1.0, hi=1.0),
+        "gust_direction": Field(F, "-", "gust direction in E (normalized)", 3, lo=-1.0,
+                                hi=1.0),
         "air_density": Field(F, "kg/m^3", "air density rho (the ground effect's induced "
                              "velocity)", lo=0.1, hi=2.0),
     },

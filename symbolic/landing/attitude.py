@@ -67,7 +67,7 @@ def body_z_to_attitude(b3, psi):
     return phi, theta
 
 
-def thrust_attitude(t_E, psi, tilt_max, T_max, deck=None):
+def thrust_attitude(t_E, psi, tilt_max, T_max):
     """Collective thrust and attitude of a desired thrust vector.
 
     Parameters
@@ -80,11 +80,6 @@ def thrust_attitude(t_E, psi, tilt_max, T_max, deck=None):
         Largest angle between the body z axis and E's z, rad, in (0, pi/2).
     T_max : casadi.SX
         Largest collective thrust, N.
-    deck : tuple, optional
-        ``(on, R_deck)``: where ``on`` is 1, ``b3`` once within ``tilt_max`` of E's z is
-        also held within it of the deck's normal ``R_deck e_z`` (clipped towards it on
-        the cone about it); where ``on`` is 0, or where it is within, ``b3`` passes
-        unchanged (bit for bit). None: E's z alone.
 
     Returns
     -------
@@ -93,11 +88,6 @@ def thrust_attitude(t_E, psi, tilt_max, T_max, deck=None):
         ``theta`` (rad), ``tilt_limited`` and ``thrust_limited`` (0 or 1).
     """
     b3, tilt_limited = limit_tilt(t_E, tilt_max)
-    if deck is not None:
-        on, R_deck = deck
-        outside = ca.logic_and(on, R_deck[:, 2].T @ b3 < ca.cos(tilt_max))
-        b3 = ca.if_else(outside, R_deck @ limit_tilt(R_deck.T @ b3, tilt_max)[0], b3)
-        tilt_limited = ca.logic_or(tilt_limited, outside)
     T_raw = t_E[2] / b3[2]                                   # vertical priority
     T = ca.fmin(ca.fmax(T_raw, 0), T_max)
     phi, theta = body_z_to_attitude(b3, psi)

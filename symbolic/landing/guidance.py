@@ -163,8 +163,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "down (0: no limit)"),
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
-    Field("flare_axis", 1, "0/1", "the flare's tilt cones: 0 about E's vertical, 1 also about "
-          "the deck's normal"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.

@@ -27,9 +27,7 @@ through :data:`TOUCHDOWN_COMMANDS`, appended to the position reference:
 
 1. **flare** (descend, the reference within ``flare_height`` of touchdown,
    and after): the tilt of the thrust axis is limited to ``flare_tilt``
-   (below the static tip-over angle), so the gear meets the deck inside it;
-   the limit's cone is about E's vertical, and with ``flare_axis = 1`` also about
-   the deck's normal, from which the contact's tilt is judged.
+   (below the static tip-over angle), so the gear meets the deck inside it.
    The horizontal thrust it gives up is a small backward drift relative to
    the deck over the last few centimetres;
 2. **hold** (touchdown, the first ``hold_time``): the flight code keeps
@@ -76,7 +74,7 @@ from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["TOUCHDOWN_COMMANDS", "NO_TILT_LIMIT", "INERT_COMMANDS", "touchdown_commands",
            "touchdown_crawl", "bounded_commands", "apply_touchdown_commands", "pivot_shift",
-           "aim_reference", "cone"]
+           "aim_reference"]
 
 #: rad: the tilt limit of an inert policy, above any controller's (``tilt_max < pi/2``).
 NO_TILT_LIMIT = ca.pi / 2
@@ -90,13 +88,11 @@ TOUCHDOWN_COMMANDS = Layout("td_cmd", (
     Field("pivot", 3, "m", "the gear's pivot arm whose levelling the aim point anticipates "
           "(feet x, y half-spacings, height below the centre of mass; 0: no shift)",
           elements=("pivot_x", "pivot_y", "pivot_h")),
-    Field("tilt_axis", 1, "0/1", "the tilt limit's cones: 0 about E's vertical, 1 also about "
-          "the deck's normal (the flare's, with flare_axis)"),
 ), "touchdown policy's commands to the landing step")
 
 #: :data:`TOUCHDOWN_COMMANDS` that change nothing (the policy off, or before its flare).
 INERT_COMMANDS = dict(tilt_limit=float(NO_TILT_LIMIT), level=0.0, thrust_scale=1.0, power=1.0,
-                      pivot=[0.0, 0.0, 0.0], tilt_axis=0.0)
+                      pivot=[0.0, 0.0, 0.0])
 
 
 def touchdown_commands(down, descending, timer_next, z_next, p):
@@ -118,8 +114,7 @@ def touchdown_commands(down, descending, timer_next, z_next, p):
     aiming = on * ca.logic_or(down, ca.logic_and(descending, z_next - p["touchdown_height"]
                                                  <= p["aim_height"]))
     pivot = aiming * ca.vertcat(p["pivot_x"], p["pivot_y"], p["pivot_h"])
-    axis = ca.if_else(ca.logic_and(on, flaring), p["flare_axis"], 0)
-    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, pivot, axis)
+    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, pivot)
 
 
 def touchdown_crawl(in_touchdown, p):
@@ -141,8 +136,7 @@ def bounded_commands(commands: dict, tilt_max) -> dict:
         return ca.fmin(ca.fmax(v, 0), 1)
     return dict(tilt_limit=ca.fmin(tilt_max, ca.fmax(commands["tilt_limit"], 0)),
                 level=unit(commands["level"]), thrust_scale=unit(commands["thrust_scale"]),
-                power=unit(commands["power"]), pivot=ca.fmax(commands["pivot"], 0),
-                tilt_axis=commands["tilt_axis"] > 0.5)
+                power=unit(commands["power"]), pivot=ca.fmax(commands["pivot"], 0))
 
 
 def apply_touchdown_commands(level, eta_c, eta_level):
@@ -179,10 +173,3 @@ def aim_reference(ref, pivot, eta1, eta2):
     """The position reference ``ref`` (``p_ref`` first, then its rates and the rest) with
     ``p_ref`` moved against :func:`pivot_shift`; ``pivot = 0`` returns it unchanged."""
     return ca.vertcat(ref[0:3] - pivot_shift(pivot, eta1, eta2), ref[3:])
-
-
-
-def cone(commands: dict, R_deck):
-    """``(on, R_deck)``, :func:`~quadland_symbolic.landing.attitude.thrust_attitude`'s
-    ``deck``: the deck's cone held where :func:`bounded_commands`' ``tilt_axis`` is 1."""
-    return commands["tilt_axis"], R_deck

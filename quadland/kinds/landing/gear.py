@@ -80,8 +80,7 @@ def touchdown_guidance(scenario: Scenario) -> dict:
                 level_time=td["level_time"], cut_time=td["cut_time"],
                 aim_height=td["aim_height"], pivot_x=aim * gear["feet_x"],
                 pivot_y=aim * gear["feet_y"],
-                pivot_h=aim * scenario.data["quadrotor"]["gear_height"],
-                flare_axis=float(td["flare_axis"] == "both"))
+                pivot_h=aim * scenario.data["quadrotor"]["gear_height"])
 
 
 def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
