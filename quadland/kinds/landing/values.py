@@ -22,7 +22,11 @@ from quadland_symbolic.landing.controller import landing_controller_params, land
 from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, N_SEA, deck_pose
 from quadland_symbolic.landing.drive import pack_drive
 from quadland_symbolic.landing.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE
-from quadland_symbolic.landing.loop import landing_loop_memory, landing_loop_params
+from quadland_symbolic.landing.loop import (
+    gear_gap_function,
+    landing_loop_memory,
+    landing_loop_params,
+)
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
@@ -183,13 +187,34 @@ def landing_values(scenario: Scenario) -> LandingValues:
         p1=[*init["position1"], init["z1"]], eta1=eta1, V1=V1,
         Omega1=np.multiply(init["omega1_deg_s"], deg),
         F=np.full(4, q["mass"] * q["gravity"] / 4)))
-    xp0 = LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(3)))
+    xp0 = _cleared(LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(3))), pp,
+                   init["handover_clearance"])
     mem = landing_memory(l).zeros()
     mem[landing_memory(l).slice("eta_f")] = eta1[:2]
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
                                   aborts=0.0, committed=0.0, ms_rise=0.0, ms_rise_rate=0.0))
     xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
+
+
+def _cleared(xp0: np.ndarray, pp: np.ndarray, clearance: float) -> np.ndarray:
+    """The plant's initial state ``xp0`` with the quadrotor raised along E's z until its
+    gear is ``clearance`` above the deck plane at t = 0, where it is lower (a clearance of
+    0 returns ``xp0`` itself). The gear's gap is linear in the altitude, ``n2 . (p1 - ...)``,
+    so one step of ``(clearance - gap) / n2_z`` lands on it (``n2_z`` the deck normal's
+    vertical component, ``cos`` of the deck's tilt)."""
+    if clearance <= 0:
+        return xp0
+    gap = float(gear_gap_function()(xp0, 0.0, pp))
+    if gap >= clearance:
+        return xp0
+    p = LANDING_PLANT_PARAMS.unpack(pp)
+    xv = LANDING_PLANT_STATE.unpack(xp0)["xv"]
+    n2_z = float(np.asarray(deck_pose(xv, 0.0, p["p_veh"], p["p_deck"]).R_deck, dtype=float)[2, 2])
+    z1 = LANDING_PLANT_STATE.slice("x1q").start + QUAD6_STATE.slice("p1").start + 2
+    out = np.array(xp0, dtype=float, copy=True)
+    out[z1] += (clearance - gap) / n2_z
+    return out
 
 
 def landing_clocks(scenario: Scenario) -> tuple[Clock, Clock, Clock]:
