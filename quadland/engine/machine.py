@@ -33,9 +33,10 @@ __all__ = ["AVX2_FLAGS", "CPUINFO", "ERRNO_FLAGS", "cpu_flags", "machine_flags",
 #: contraction of a product and a sum (``-std=c99`` implies it; said explicitly).
 AVX2_FLAGS = ("-mavx2", "-mno-fma", "-ffp-contract=off")
 #: libm's functions as pure functions of their arguments: no ``errno`` (the simulators never
-#: read it), so gcc computes a call CasADi wrote twice with the same argument once and
-#: ``sqrt`` inline without its error branch; a value is what the call returns, the same
-#: bits (1.9 % fewer instructions a ``highway`` flight, docs/performance.md, "eleventh").
+#: read it), so gcc merges, moves and drops their calls as it does arithmetic, and computes
+#: ``sqrt`` inline without its error branch; a value is what the call returns for its
+#: argument either way, the same bits (1.9 % fewer instructions a ``highway`` flight,
+#: docs/performance.md, "eleventh").
 #: It is not fast math: ``__FAST_MATH__`` stays undefined, so glibc declares no vector
 #: variants of libm's functions (``bits/math-vector.h``), whose bits differ.
 ERRNO_FLAGS = ("-fno-math-errno",)
