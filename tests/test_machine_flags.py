@@ -43,12 +43,23 @@ PROBE = textwrap.dedent("""\
         return 0;
     #endif
     }
+    int probe_math(void)
+    {
+    #if defined(__FAST_MATH__)
+        return 2;
+    #elif defined(__NO_MATH_ERRNO__)
+        return 1;
+    #else
+        return 0;
+    #endif
+    }
     """)
 
 GCC = ("/usr/bin/cc\ncc (Debian 12.2.0-14+deb12u1) 12.2.0\nCopyright (C) 2022 Free Software "
        "Foundation, Inc.")
 CLANG = "/usr/bin/clang\nDebian clang version 14.0.6\nTarget: x86_64-pc-linux-gnu"
 TCC = "/usr/bin/tcc\ntcc version 0.9.27 (x86_64 Linux)"
+MACHINE = (*machine.AVX2_FLAGS, *machine.ERRNO_FLAGS)
 AVX2_CPU = frozenset("fpu sse sse2 ssse3 sse4_1 sse4_2 avx fma avx2".split())
 OLD_CPU = frozenset("fpu sse sse2 ssse3 sse4_1 sse4_2 avx".split())
 
@@ -61,9 +72,9 @@ def cache(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("arch,identity,cpu,flags", [
-    ("x86_64", GCC, AVX2_CPU, machine.AVX2_FLAGS),
-    ("x86_64", CLANG, AVX2_CPU, machine.AVX2_FLAGS),
-    ("AMD64", GCC, AVX2_CPU, machine.AVX2_FLAGS),
+    ("x86_64", GCC, AVX2_CPU, MACHINE),
+    ("x86_64", CLANG, AVX2_CPU, MACHINE),
+    ("AMD64", GCC, AVX2_CPU, MACHINE),
     ("x86_64", GCC, OLD_CPU, ()),                  # AVX without AVX2
     ("x86_64", GCC, frozenset(), ()),              # no /proc/cpuinfo
     ("x86_64", TCC, AVX2_CPU, ()),                 # neither GCC nor clang
@@ -79,6 +90,7 @@ def test_the_machine_flags_follow_the_cpu_and_the_compiler(monkeypatch, arch, id
 
 def test_the_flags_are_avx2_without_fma_nor_contraction():
     assert machine.AVX2_FLAGS == ("-mavx2", "-mno-fma", "-ffp-contract=off")
+    assert machine.ERRNO_FLAGS == ("-fno-math-errno",)
 
 
 def test_the_cpu_flags_are_the_first_flags_line(tmp_path):
@@ -96,10 +108,11 @@ def _probe_library(strict: bool = False):
 @pytest.mark.skipif(not (build.have_compiler() and machine.machine_flags(build.find_compiler())),
                     reason="the machine has no AVX2 (or no GCC or clang on x86-64)")
 def test_the_simulators_compile_for_the_machine_and_are_keyed_apart(cache, monkeypatch):
-    monkeypatch.setattr(build, "machine_flags", lambda cc: machine.AVX2_FLAGS)
+    monkeypatch.setattr(build, "machine_flags", lambda cc: MACHINE)
     mine = _probe_library()
     lib = ctypes.CDLL(str(mine))
-    assert (lib.probe_avx2(), lib.probe_fma()) == (1, 0)
+    # AVX2, no FMA; libm without errno but not fast math (no libmvec declarations)
+    assert (lib.probe_avx2(), lib.probe_fma(), lib.probe_math()) == (1, 0, 1)
     strict = ctypes.CDLL(str(_probe_library(strict=True)))  # flight code: the baseline
     assert strict.probe_avx2() == 0
     monkeypatch.setattr(build, "machine_flags", lambda cc: ())
