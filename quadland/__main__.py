@@ -18,8 +18,10 @@ workers inherit the setting. ``threadpoolctl`` limits only the libraries
 already loaded, which SciPy's is not until ``scipy.linalg`` is imported.
 
 The process itself (the console script, ``python -m quadland``) runs :func:`run`:
-:func:`main`, then, once the command is done, its heap left to the operating system
-(:func:`leave_heap`) rather than collected object by object at exit.
+matplotlib's figure module, if a command draws, imported without the artists' ``set``
+docstrings (:mod:`quadland.mpl_import`), :func:`main`, then, once the command is done,
+its heap left to the operating system (:func:`leave_heap`) rather than collected object
+by object at exit.
 """
 
 import gc
@@ -80,8 +82,12 @@ def leave_heap() -> None:
 
 
 def run() -> None:
-    """The process's entry (console script and ``python -m quadland``): :func:`main`, then
+    """The process's entry (console script and ``python -m quadland``): marked as the
+    command line's (:func:`quadland.mpl_import.for_the_command_line`), :func:`main`, then
     :func:`leave_heap`, and exit with the command's status."""
+    from quadland.mpl_import import for_the_command_line
+
+    for_the_command_line()
     status = main()
     leave_heap()
     sys.exit(status)
