@@ -1,6 +1,6 @@
 """quadland.plots.legend_place: a quick figure's legends placed as matplotlib places them,
-each best place searched once per draw, and legends that fit inside their axes left out of
-``tight_layout`` only when that cannot move anything.
+each best place searched and each legend packed once per draw, and legends that fit
+inside their axes left out of ``tight_layout`` only when that cannot move anything.
 
 Each figure is drawn by matplotlib's own ``Figure`` on its own Agg canvas and by
 :func:`quadland.plots.canvas.new_figure`'s, with the same content laid out by
@@ -111,3 +111,29 @@ def test_the_best_place_is_searched_once_per_draw(monkeypatch):
     mine.axes[0].set_xlim(0.5, 1.0)             # another view: searched again
     _pixels(mine)
     assert len(calls) == 2
+
+
+def test_each_legend_is_packed_once_per_draw(monkeypatch):
+    """matplotlib packs a legend's rows again for its box, its frame and each level of its
+    drawing; a quick figure packs each once per draw, and afresh at the next."""
+    from matplotlib.offsetbox import VPacker
+
+    packed = []
+    pack = VPacker._get_bbox_and_child_offsets
+
+    def counted(self, renderer):
+        packed.append(id(self))
+        return pack(self, renderer)
+
+    monkeypatch.setattr(VPacker, "_get_bbox_and_child_offsets", counted)
+    fig = new_figure((8, 3))
+    for a in fig.subplots(1, 2):
+        _curves(a, 3)
+        a.legend(fontsize="x-small", loc="best")
+    fig.tight_layout()
+    boxes = [a.get_legend()._legend_box for a in fig.axes]
+    for _ in range(2):
+        packed.clear()
+        _pixels(fig)
+        assert len(packed) == len(set(packed))          # each packer (rows, columns) once
+        assert {id(b) for b in boxes} <= set(packed)     # and afresh at each draw

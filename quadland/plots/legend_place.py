@@ -8,7 +8,10 @@ margin figures, each search a few thousand vertex counts.
 
 Within :func:`legends_placed`, a legend keeps its place for the pass, by its size,
 the renderer, its axes' box and view limits (what the search reads besides the
-artists, which do not change within a pass). With ``layout=True`` (a
+artists, which do not change within a pass), and each packer of its entries (the rows
+and columns of handles and texts, ``VPacker`` and ``HPacker``) keeps its box and its
+children's offsets for the renderer: matplotlib packs a legend again for its box, for
+its frame and for each level of its entries' drawing, five times per draw. With ``layout=True`` (a
 ``tight_layout``) a legend placed inside its axes whose box fits within them (less
 the border pad on each side, where every inside place puts it) is left out of the
 layout: its box is within the axes' box, which the layout counts anyway, so the
@@ -19,6 +22,8 @@ are as matplotlib made them.
 from __future__ import annotations
 
 import contextlib
+
+from matplotlib.offsetbox import HPacker, VPacker
 
 __all__ = ["legends_placed"]
 
@@ -39,6 +44,28 @@ def _memoize(legend) -> None:
         return kept["place"]
 
     legend._find_best_position = best_position
+
+
+def _packers(box) -> list:
+    """The ``VPacker`` and ``HPacker`` boxes of a legend's box, itself included."""
+    found = [box] if type(box) in (VPacker, HPacker) else []
+    for child in box.get_children():
+        found += _packers(child)
+    return found
+
+
+def _memoize_packing(packer) -> None:
+    pack = packer._get_bbox_and_child_offsets
+    kept: dict = {}
+
+    def packed(renderer):
+        key = (id(renderer), renderer.dpi)
+        if kept.get("key") != key:
+            kept["key"], kept["packed"] = key, pack(renderer)
+        bbox, offsets = kept["packed"]
+        return bbox.frozen(), list(offsets)
+
+    packer._get_bbox_and_child_offsets = packed
 
 
 def _inside(legend, renderer) -> bool:
@@ -66,8 +93,11 @@ def legends_placed(fig, layout: bool = False):
         The context is a ``tight_layout``.
     """
     legends = _legends(fig)
+    packers = [p for legend in legends for p in _packers(legend._legend_box)]
     for legend in legends:
         _memoize(legend)
+    for packer in packers:
+        _memoize_packing(packer)
     left_out = []
     try:
         if layout and legends:
@@ -81,3 +111,5 @@ def legends_placed(fig, layout: bool = False):
             legend.set_in_layout(True)
         for legend in legends:
             legend.__dict__.pop("_find_best_position", None)
+        for packer in packers:
+            packer.__dict__.pop("_get_bbox_and_child_offsets", None)
