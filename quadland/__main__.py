@@ -40,13 +40,20 @@ def _interrupted(signum, frame) -> None:
     os._exit(INTERRUPTED)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``quadland`` console script and of ``python -m quadland``."""
+def main(argv: list[str] | None = None, process: bool = False) -> int:
+    """The command line: run the command of ``argv`` (``sys.argv[1:]`` if None) and return
+    its exit status; ``process``: this is the command line's own process (:func:`run`), whose
+    matplotlib is imported without the artists' ``set`` docstrings
+    (:func:`quadland.mpl_import.for_the_command_line`)."""
     previous = signal.getsignal(signal.SIGINT)
     if previous is signal.default_int_handler:              # not where SIGINT is ignored
         signal.signal(signal.SIGINT, _interrupted)          # before any heavy import
     for name in BLAS_THREADS:                               # before NumPy is imported
         os.environ.setdefault(name, "1")
+    if process:
+        from quadland.mpl_import import for_the_command_line
+
+        for_the_command_line()
     try:
         from quadland.cli import main as cli_main
 
@@ -73,10 +80,11 @@ def leave_heap() -> None:
     thousands of objects of its matplotlib figures, unreachable cycles until then)
     and frees the unreachable ones one by one: 0.4 s of CPU after ``quadland margins
     --scenario highway`` with its figures, 0.17 s without (a loaded machine). The
-    process is ending and the operating system takes its memory back whole, so the
-    objects alive at this point move to the permanent generation (``gc.freeze``),
-    which no collection walks. The exit handlers (``atexit``, ``weakref.finalize``)
-    still run, and every file the commands write is closed before they return.
+    process is ending and the operating system takes its memory back whole, so every
+    object the collector tracks at this point (garbage cycles included) moves to the
+    permanent generation (``gc.freeze``), which no collection walks. The exit handlers
+    (``atexit``, ``weakref.finalize``) still run; the commands write through raw
+    descriptors or files closed before they return, so no buffer is left unflushed.
     """
     gc.freeze()
 
@@ -85,10 +93,7 @@ def run() -> None:
     """The process's entry (console script and ``python -m quadland``): marked as the
     command line's (:func:`quadland.mpl_import.for_the_command_line`), :func:`main`, then
     :func:`leave_heap`, and exit with the command's status."""
-    from quadland.mpl_import import for_the_command_line
-
-    for_the_command_line()
-    status = main()
+    status = main(process=True)
     leave_heap()
     sys.exit(status)
 

@@ -23,7 +23,7 @@ a, b = Node(), Node()
 a.other, b.other = b, a                     # alive in a cycle at exit
 weakref.finalize(a, print, "finalized")     # run at exit (atexit=True)
 atexit.register(lambda: print("frozen", gc.get_freeze_count() > 0))
-entry.main = lambda argv=None: 3
+entry.main = lambda argv=None, process=False: 3 if process else 4   # 3: as the process
 entry.run()
 """
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
