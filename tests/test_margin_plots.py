@@ -387,3 +387,39 @@ def test_the_filtered_loop_is_drawn_from_its_own_model():
     fig = sigma_plot(rep)
     texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert any(t.startswith("filtered Ms ") for t in texts)
+
+
+def test_the_figures_evaluate_each_loops_response_once_and_draw_its_own_values(report):
+    """The loop figures and the singular value figure read one grid per loop: each
+    response is evaluated once for the five figures, and each drawn loop is still the
+    loop at a time of a dense solve of its realization at the drawn frequencies."""
+    from quadland.analysis import response_of
+    from quadland.analysis.response import FrequencyResponse
+    from quadland.plots.frequency import loop_curves
+
+    loops = [report.models.realizations["loop_input"],
+             report.sampled_models.realizations["loop_input"]]
+    for L in loops:
+        response_of(L)._grids.clear()           # nothing kept from the review or other tests
+    evaluated = []
+    grid = FrequencyResponse._grid
+
+    def counted(self, omega):
+        if omega.size > 1:                      # not the grid's probes of its top end
+            evaluated.append(id(self))
+        return grid(self, omega)
+
+    FrequencyResponse._grid = counted
+    try:
+        margin_figures(report)
+    finally:
+        FrequencyResponse._grid = grid
+    assert sorted(evaluated) == sorted(id(response_of(L)) for L in loops)
+    for curves, L in zip(loop_curves(report), loops, strict=True):
+        n = L.A.shape[0]
+        for k in range(0, curves.omega.size, 25):
+            w = curves.omega[k]
+            x = np.exp(1j * w * L.dt) if L.dt else 1j * w
+            G = L.C @ np.linalg.solve(x * np.eye(n) - L.A, L.B) + L.D
+            S = np.linalg.inv(np.eye(L.B.shape[1]) + G)
+            np.testing.assert_allclose(curves.loops[k], 1 / np.diag(S) - 1, rtol=1e-8)

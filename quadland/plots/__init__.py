@@ -23,7 +23,9 @@ import importlib
 import io
 import sys
 
-from matplotlib.figure import Figure
+from quadland.mpl_import import figure_class
+
+Figure = figure_class()     # the command line's process imports it without set's docs
 
 __all__ = ["SIMULATION_FIGURES", "simulation_figures", "relative_errors_plot",
            "velocity_errors_plot", "control_inputs_plot", "uncertainty_plot",

@@ -12,13 +12,15 @@ Its canvas draws with :class:`quadland.plots.text_cache.TextCacheRenderer`
 (each distinct text laid out once per process), and each of its layouts and
 draws computes an axis's ticks once (:func:`quadland.plots.tick_memo.ticks_memoized`)
 and makes an axis's new ticks as copies of its first
-(:func:`quadland.plots.tick_clone.ticks_cloned`): the same pixels, in less time.
+(:func:`quadland.plots.tick_clone.ticks_cloned`), and places each legend once
+(:func:`quadland.plots.legend_place.legends_placed`): the same pixels, in less time.
 """
 
 from __future__ import annotations
 
 from matplotlib.figure import Figure
 
+from quadland.plots.legend_place import legends_placed
 from quadland.plots.text_cache import TextCacheCanvas
 from quadland.plots.tick_clone import ticks_cloned
 from quadland.plots.tick_memo import ticks_memoized
@@ -29,12 +31,13 @@ __all__ = ["QuickFigure", "new_figure"]
 
 class QuickFigure(Figure):
     """A matplotlib Figure whose ``tight_layout`` and draws compute each axis's ticks once
-    per pass (:func:`~quadland.plots.tick_memo.ticks_memoized`) and copy its new ticks
-    from its first (:func:`~quadland.plots.tick_clone.ticks_cloned`)."""
+    per pass (:func:`~quadland.plots.tick_memo.ticks_memoized`), copy its new ticks
+    from its first (:func:`~quadland.plots.tick_clone.ticks_cloned`) and place each
+    legend once (:func:`~quadland.plots.legend_place.legends_placed`)."""
 
     def draw(self, renderer):
-        """Draw as :meth:`matplotlib.figure.Figure.draw`, the ticks memoized."""
-        with ticks_memoized(self), ticks_cloned(self):
+        """Draw as :meth:`matplotlib.figure.Figure.draw`, the ticks and legends memoized."""
+        with ticks_memoized(self), ticks_cloned(self), legends_placed(self):
             super().draw(renderer)
 
     # Figure.draw already handles rasterization: do not wrap this one again
@@ -46,8 +49,8 @@ class QuickFigure(Figure):
         return f"<Figure{super().__repr__()[len('<' + type(self).__name__):]}"
 
     def tight_layout(self, **kwargs):
-        """As :meth:`matplotlib.figure.Figure.tight_layout`, the ticks memoized."""
-        with ticks_memoized(self), ticks_cloned(self):
+        """As :meth:`matplotlib.figure.Figure.tight_layout`, the ticks and legends memoized."""
+        with ticks_memoized(self), ticks_cloned(self), legends_placed(self, layout=True):
             super().tight_layout(**kwargs)
 
 

@@ -74,20 +74,35 @@ def loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
 def _loop_curves(report: MarginReport) -> tuple[LoopCurves, ...]:
     resp = response_of(report.models.realizations["loop_input"])
     omega = frequency_grid(resp, points_per_decade=POINTS_PER_DECADE, extra_poles=report.poles)
-    omega = omega[omega >= figure_floor(report)]
-    out = [LoopCurves("continuous", omega, loop_at_a_time(resp(omega)),
+    floor = figure_floor(report)
+    out = [LoopCurves("continuous", *_above(resp, omega, floor, math.inf),
                       report.continuous.loops, "-", "C0")]
     if report.sampled_models is not None and report.sampled is not None:
-        wd = omega[omega < math.pi / report.sampled_models.dt]
         discrete = response_of(report.sampled_models.realizations["loop_input"])
-        out.append(LoopCurves("sampled", wd, loop_at_a_time(discrete(wd)),
+        out.append(LoopCurves("sampled", *_above(discrete, omega, floor,
+                                                   math.pi / report.sampled_models.dt),
                               report.sampled.loops, "--", "C1"))
     if report.filtered_models is not None and report.filtered is not None:
-        wf = omega[omega < math.pi / report.filtered_models.dt]
         flown = response_of(report.filtered_models.realizations["loop_input"])
-        out.append(LoopCurves("filtered", wf, loop_at_a_time(flown(wf)),
+        out.append(LoopCurves("filtered", *_above(flown, omega, floor,
+                                                    math.pi / report.filtered_models.dt),
                               report.filtered.loops, ":", "C2"))
     return tuple(out)
+
+
+def _above(resp, omega: np.ndarray, floor: float, nyquist: float
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """``(w, l(j w))``: ``w`` the grid's frequencies from ``floor`` up to under ``nyquist``
+    (rad/s; ``inf`` for a continuous loop), ``l`` the loop-at-a-time responses there.
+
+    The response is evaluated on the whole grid up to the Nyquist frequency, which the
+    singular value figure reads too (:func:`quadland.plots.sensitivity.sigma_plot`): the
+    response keeps its grids (:class:`~quadland.analysis.FrequencyResponse`), so the
+    two figures evaluate it once (each frequency's value is its own, whatever the grid).
+    """
+    below = omega[omega < nyquist]
+    keep = below >= floor
+    return below[keep], loop_at_a_time(resp(below)[keep])
 
 
 #: The figures start this many decades below the lowest frequency a margin is read at.

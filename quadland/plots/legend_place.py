@@ -1,0 +1,115 @@
+"""Each legend of a figure placed once per layout or draw (:func:`legends_placed`).
+
+A legend at ``loc="best"`` tries each of its nine places against every line, patch
+and text of its axes (``Legend._find_best_position``). matplotlib asks for the place
+once in a ``tight_layout`` (the legend's box, for the axes' tight box) and twice in a
+draw (the frame's box, then the entries' offset): twelve such legends in highway's
+margin figures, each search a few thousand vertex counts.
+
+Within :func:`legends_placed`, a legend keeps its place for the pass, by its size,
+the renderer, its axes' box and view limits (what the search reads besides the
+artists, which do not change within a pass), and each packer of its entries (the rows
+and columns of handles and texts, ``VPacker`` and ``HPacker``) keeps its box and its
+children's offsets for the renderer: matplotlib packs a legend again for its box, for
+its frame and for each level of its entries' drawing, five times per draw. With ``layout=True`` (a
+``tight_layout``) a legend placed inside its axes whose box fits within them (less
+the border pad on each side, where every inside place puts it) is left out of the
+layout: its box is within the axes' box, which the layout counts anyway, so the
+layout is the same without searching its place. Outside the context the legends
+are as matplotlib made them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+from matplotlib.offsetbox import HPacker, VPacker
+
+__all__ = ["legends_placed"]
+
+
+def _legends(fig) -> list:
+    return [ax.legend_ for ax in fig.axes if getattr(ax, "legend_", None) is not None]
+
+
+def _memoize(legend) -> None:
+    search = legend._find_best_position
+    kept: dict = {}
+
+    def best_position(width, height, renderer):
+        ax = legend.axes
+        key = (width, height, id(renderer), tuple(ax.bbox.bounds), tuple(ax.viewLim.bounds))
+        if kept.get("key") != key:
+            kept["key"], kept["place"] = key, search(width, height, renderer)
+        return kept["place"]
+
+    legend._find_best_position = best_position
+
+
+def _packers(box) -> list:
+    """The ``VPacker`` and ``HPacker`` boxes of a legend's box, itself included."""
+    found = [box] if type(box) in (VPacker, HPacker) else []
+    for child in box.get_children():
+        found += _packers(child)
+    return found
+
+
+def _memoize_packing(packer) -> None:
+    pack = packer._get_bbox_and_child_offsets
+    kept: dict = {}
+
+    def packed(renderer):
+        key = (id(renderer), renderer.dpi)
+        if kept.get("key") != key:
+            kept["key"], kept["packed"] = key, pack(renderer)
+        bbox, offsets = kept["packed"]
+        return bbox.frozen(), list(offsets)
+
+    packer._get_bbox_and_child_offsets = packed
+
+
+def _inside(legend, renderer) -> bool:
+    """Whether the legend is placed at one of its axes' inside places and fits there."""
+    ax = legend.axes
+    if (ax is None or not isinstance(legend._loc, int) or legend._mode is not None
+            or legend.get_bbox_to_anchor() is not ax.bbox):
+        return False
+    pad = 2 * legend.borderaxespad * renderer.points_to_pixels(legend._fontsize)
+    box = legend._legend_box.get_bbox(renderer)
+    return box.width <= ax.bbox.width - pad and box.height <= ax.bbox.height - pad
+
+
+@contextlib.contextmanager
+def legends_placed(fig, layout: bool = False):
+    """Within the context, each legend of ``fig``'s axes searches its best place once per
+    size and view, and with ``layout`` those that fit inside their axes are left out of
+    the layout (module docstring).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        Its axes' legends (not those of its subfigures, nor figure legends).
+    layout : bool
+        The context is a ``tight_layout``.
+    """
+    legends = _legends(fig)
+    packers = [p for legend in legends for p in _packers(legend._legend_box)]
+    for legend in legends:
+        _memoize(legend)
+    for packer in packers:
+        _memoize_packing(packer)
+    left_out = []
+    try:
+        if layout and legends:
+            renderer = fig.canvas.get_renderer()
+            left_out = [lg for lg in legends if lg.get_in_layout() and _inside(lg, renderer)]
+            for legend in left_out:
+                legend.set_in_layout(False)
+        yield
+    finally:
+        for legend in left_out:
+            legend.set_in_layout(True)
+        for legend in legends:
+            legend.__dict__.pop("_find_best_position", None)
+        for packer in packers:
+            packer.__dict__.pop("_get_bbox_and_child_offsets", None)
