@@ -38,7 +38,9 @@ def figure_class():
         return importlib.import_module("matplotlib.figure").Figure
     from matplotlib.artist import Artist
 
-    generate = Artist.__dict__["_update_set_signature_and_docstring"]
+    generate = Artist.__dict__.get("_update_set_signature_and_docstring")
+    if generate is None:  # a matplotlib without the hook: imported as it is
+        return importlib.import_module("matplotlib.figure").Figure
 
     def flag_only(cls):
         # what matplotlib's subclasses of these classes look for; no text generated
