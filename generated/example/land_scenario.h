@@ -141,7 +141,7 @@ static const double ql_land_xp0[25] = {
 /* The sensors' constants p_sens (vision_sigma0 (1), vision_sigma_per_m (1), vision_half_angle (1), vision_range_min (1), vision_range_max (1), vision_small_range_min (1), vision_small_range_max (1), rangefinder_sigma0 (1), rangefinder_sigma_per_m (1), rangefinder_range_min (1), rangefinder_range_max (1), deck_half_length (1), deck_half_width (1)). */
 static const double ql_land_p_sens[13] = {
     0.02, 0.01, 0.8901179185171081, 0.45, 12.0, 0.08,
-    0.0, 0.03, 0.005, 0.1, 7.0, 1.0,
+    0.6, 0.03, 0.005, 0.1, 7.0, 1.0,
     0.7,
 };
 

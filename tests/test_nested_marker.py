@@ -1,0 +1,62 @@
+"""The nested landing marker on highway and turning (issue 19, eleventh session).
+
+The pads of the two scenarios carry a second, 0.1 m marker in the centre of the 0.6 m
+one (nested fiducials: Romero-Ramirez et al., "Fractal Markers", IEEE Access 7, 2019;
+Wubben et al., Electronics 8(12):1532, 2019, select the smallest marker seen), detected
+from ``small_range_min`` to ``small_range_max`` = 0.6 m. docs/landing.md, "The nested
+marker". Checked here: the interval against the pinhole model by hand (the marker fills
+the image no farther than ``small_range_min``; over the interval the camera's noise model
+is never finer than one pixel of the small marker's depth; the interval overlaps the large
+marker's, so no range is blind), and the default flight of ``highway``: the filter fuses
+a detection in the last tenth of a second before the contact, where without the small
+marker its last one is about half a second old.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+import quadland
+from quadland.kinds.landing.report import touchdown_report
+from quadland.scenario import load_scenario
+
+#: Raspberry Pi Camera Module 3 Wide, docs/sensors.md: 1536 px across 102 deg.
+FOCAL_PX = 768 / math.tan(math.radians(51.0))
+SMALL_SIDE = 0.1                                  # m, the nested marker
+SCENARIOS = ("highway", "turning")
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_the_small_markers_interval_is_the_pinholes(name):
+    v = load_scenario(name).data["sensors.vision"]
+    assert v["small_range_max"] == 0.6 and v["small_range_min"] == 0.08
+    # the 0.1 m marker fills the 67 deg image height (half-angle 33.5 deg) at 0.0755 m
+    fills = (SMALL_SIDE / 2) / math.tan(math.radians(33.5))
+    assert fills == pytest.approx(0.0755, abs=1e-4) and fills < v["small_range_min"]
+    # spans at least 30 px (a reliable detection, as the large marker at 12 m) out to max
+    assert SMALL_SIDE * FOCAL_PX / v["small_range_max"] > 30
+    # one pixel of its depth, r^2 / (f s), never finer than the model's sigma0 + k r
+    for r in np.linspace(v["small_range_min"], v["small_range_max"], 50):
+        pinhole = r ** 2 / (FOCAL_PX * SMALL_SIDE)
+        assert pinhole < v["sigma0"] + 0.5 * v["sigma_per_m"] * r   # the campaign's lowest k
+    # the two intervals overlap: no range between them is blind
+    assert v["small_range_min"] < v["range_min"] < v["small_range_max"] < v["range_max"]
+
+
+def _marker_age_at_contact(*overrides):
+    result = quadland.simulate(load_scenario("highway", list(overrides)))
+    report = touchdown_report(result)
+    k = int(np.flatnonzero(result["touched"] > 0.5)[0])
+    return report, float(result["marker_age"][k])
+
+
+def test_highway_sees_the_pad_to_the_contact():
+    """The default flight: the last fused detection at the contact is at most a frame
+    period (0.04 s) and a dropout old with the small marker, and about half a second old
+    without it (the large marker is lost at 0.45 m, the last 0.25 m of the gear)."""
+    now, age_now = _marker_age_at_contact()
+    before, age_before = _marker_age_at_contact("sensors.vision.small_range_max=0.0")
+    assert now.success and before.success
+    assert age_now <= 0.1
+    assert 0.3 <= age_before <= 1.0
