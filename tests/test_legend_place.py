@@ -137,3 +137,19 @@ def test_each_legend_is_packed_once_per_draw(monkeypatch):
         _pixels(fig)
         assert len(packed) == len(set(packed))          # each packer (rows, columns) once
         assert {id(b) for b in boxes} <= set(packed)     # and afresh at each draw
+
+
+def test_an_expanded_legend_under_a_layout_engine_draws_matplotlibs_pixels():
+    """A legend in mode "expand" across the top of its axes, in a figure whose layout
+    engine (constrained, tight) runs inside the first draw: the engine packs the legend at
+    its old width, then the legend's draw sets the width of the axes it moved, so the
+    packing kept from the engine's pass must not be the one drawn."""
+    for engine in ("constrained", "tight"):
+        def content(fig, engine=engine):
+            fig.set_layout_engine(engine)
+            for a in fig.subplots(1, 2):
+                _curves(a, 3)
+                a.legend(loc="lower left", mode="expand", bbox_to_anchor=(0, 1.02, 1, 0.2),
+                         ncols=2)
+
+        _drawn_alike(content, (8, 5))

@@ -10,8 +10,9 @@ Within :func:`legends_placed`, a legend keeps its place for the pass, by its siz
 the renderer, its axes' box and view limits (what the search reads besides the
 artists, which do not change within a pass), and each packer of its entries (the rows
 and columns of handles and texts, ``VPacker`` and ``HPacker``) keeps its box and its
-children's offsets for the renderer: matplotlib packs a legend again for its box, for
-its frame and for each level of its entries' drawing, five times per draw. With ``layout=True`` (a
+children's offsets for the renderer and its own width and height (which a legend in
+mode "expand" sets in its draw): matplotlib packs a legend again for its box, for its
+frame and for each level of its entries' drawing, five times per draw. With ``layout=True`` (a
 ``tight_layout``) a legend placed inside its axes whose box fits within them (less
 the border pad on each side, where every inside place puts it) is left out of the
 layout: its box is within the axes' box, which the layout counts anyway, so the
@@ -59,7 +60,9 @@ def _memoize_packing(packer) -> None:
     kept: dict = {}
 
     def packed(renderer):
-        key = (id(renderer), renderer.dpi)
+        # the box's own width and height too: a legend in mode "expand" sets them in its
+        # draw, after a layout engine (constrained, tight) packed it within the same draw
+        key = (id(renderer), renderer.dpi, packer.width, packer.height)
         if kept.get("key") != key:
             kept["key"], kept["packed"] = key, pack(renderer)
         bbox, offsets = kept["packed"]
