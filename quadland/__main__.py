@@ -21,7 +21,8 @@ The process itself (the console script, ``python -m quadland``) runs :func:`run`
 matplotlib's figure module, if a command draws, imported without the artists' ``set``
 docstrings (:mod:`quadland.mpl_import`), :func:`main`, then, once the command is done,
 its heap left to the operating system (:func:`leave_heap`) rather than collected object
-by object at exit.
+by object at exit. A reader that closes the pipe early (``| head -1``) ends the command
+quietly with status 141, as SIGPIPE ends a Unix tool.
 """
 
 import gc
@@ -31,6 +32,8 @@ import sys
 
 #: Exit status of an interrupted command (128 + SIGINT).
 INTERRUPTED = 130
+#: Exit status when the reader of the standard output went away (128 + SIGPIPE).
+BROKEN_PIPE = 141
 #: The BLAS libraries' thread counts set to one unless given (OpenBLAS, MKL, OpenMP builds).
 BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS")
 
@@ -93,7 +96,14 @@ def run() -> None:
     """The process's entry (console script and ``python -m quadland``): marked as the
     command line's (:func:`quadland.mpl_import.for_the_command_line`), :func:`main`, then
     :func:`leave_heap`, and exit with the command's status."""
-    status = main(process=True)
+    try:
+        status = main(process=True)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # the reader stopped reading (``quadland ... | head -1``): end quietly, as a Unix
+        # tool killed by SIGPIPE would, the rest of the output sent nowhere
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        status = BROKEN_PIPE
     leave_heap()
     sys.exit(status)
 

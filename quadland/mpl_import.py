@@ -3,8 +3,8 @@
 On import, matplotlib writes the docstring and the signature of each artist class's
 ``set`` method: every property of the class, each setter's docstring read and
 cleaned (``Artist.__init_subclass__``). The hundred artist classes that
-``matplotlib.figure`` brings spend 0.08 to 0.1 s of CPU on it (a quiet machine; 0.1 to 0.25
-s at a load of 10), a quarter to a third of the import. Those texts are there for
+``matplotlib.figure`` brings spend about a quarter of the import's CPU on it
+(0.1 to 0.25 s at a load of 6 to 12, docs/performance.md). Those texts are there for
 ``help()`` and for the documentation; nothing calls or reads them when drawing.
 
 In the command line's process (:func:`quadland.__main__.run` calls

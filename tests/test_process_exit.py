@@ -41,3 +41,17 @@ def test_margins_writes_everything_through_the_process_entry(tmp_path):
     for name in ("bode.png", "nyquist.png", "nichols.png", "sigma.png", "poles.png"):
         data = (out / name).read_bytes()
         assert data[:8] == PNG and data.endswith(b"IEND\xaeB`\x82")
+
+
+def test_a_reader_that_stops_early_ends_the_command_quietly(tmp_path):
+    """``quadland margins ... | head -1``: the review prints a line per stage, flushed; the
+    pipe closed after the first, the next write fails. The process ends with 128 + SIGPIPE
+    and no traceback, as a Unix tool would."""
+    proc = subprocess.Popen([sys.executable, "-m", "quadland", "margins", "--scenario", "paper",
+                             "--no-plots", "--out", str(tmp_path / "m")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    first = proc.stdout.readline()
+    proc.stdout.close()                     # the reader goes away after one line
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 141, err
+    assert first and "Traceback" not in err and "BrokenPipe" not in err, err

@@ -152,8 +152,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "psi2_deg": PAPER_SCHEMA["initial"]["psi2_deg"],
         "r2_deg_s": PAPER_SCHEMA["initial"]["r2_deg_s"],
         "velocity2": PAPER_SCHEMA["initial"]["velocity2"],
-        "handover_clearance": Field(F, "m", "least gear height over the deck plane at t = 0, "
-                                    "raised to (0: as drawn)", lo=0.0, hi=1e3, default=0.0),
+        "handover_clearance": Field(F, "m", "gear point's least height over the deck plane "
+                                    "at t = 0 (0: as drawn)", lo=0.0, hi=1e3, default=0.0),
     },
     "controller": {
         "k1p": Field(F, "1/s", "outer k1: deck-frame x, y, z", 3, hi=1e3, **_POS),
