@@ -10,6 +10,7 @@ Each figure is drawn by matplotlib's own ``Figure`` on its own Agg canvas and by
 from __future__ import annotations
 
 import numpy as np
+from figure_pixels import drawn_alike, pixels
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.legend import Legend
@@ -19,28 +20,13 @@ from quadland.plots.legend_place import legends_placed
 from quadland.png import PNG_DPI
 
 
-def _pixels(fig) -> np.ndarray:
-    fig.canvas.draw()
-    return np.asarray(fig.canvas.buffer_rgba()).copy()
-
-
-def _drawn_alike(content, figsize):
-    theirs = Figure(figsize=figsize, dpi=PNG_DPI)
-    FigureCanvasAgg(theirs)
-    content(theirs)
-    mine = new_figure(figsize)
-    content(mine)
-    assert np.array_equal(_pixels(mine), _pixels(theirs))
-    return mine
-
-
 def _curves(ax, n: int, label: str = "curve") -> None:
     t = np.linspace(0, 1, 300)
     for k in range(n):
         ax.plot(t, np.sin(6 * t + k), label=f"{label} {k}: a label of some length")
 
 
-def test_legends_inside_outside_and_too_big_draw_matplotlibs_pixels():
+def test_legends_inside_outside_and_too_big_draw_matplotlibspixels():
     """Best and fixed places inside the axes; a legend anchored outside its axes (which
     the layout must make room for); one too big for its small axes (it spills out, and
     the layout counts it as matplotlib's does)."""
@@ -56,7 +42,7 @@ def test_legends_inside_outside_and_too_big_draw_matplotlibs_pixels():
         ax[1, 1].legend(loc="best", fontsize="large")
         fig.tight_layout()
 
-    mine = _drawn_alike(content, (9, 7))
+    mine = drawn_alike(content, (9, 7))
     assert all(lg.get_in_layout() for lg in (a.get_legend() for a in mine.axes))
     assert all("_find_best_position" not in vars(a.get_legend()) for a in mine.axes)
 
@@ -99,17 +85,17 @@ def test_the_best_place_is_searched_once_per_draw(monkeypatch):
     FigureCanvasAgg(theirs)
     content(theirs)
     calls.clear()
-    _pixels(theirs)
+    pixels(theirs)
     assert len(calls) == 4                      # matplotlib: twice per legend per draw
     mine = new_figure((8, 3))
     calls.clear()
     content(mine)
     assert calls == []                          # both fit: left out of the layout
-    _pixels(mine)
+    pixels(mine)
     assert sorted(map(id, calls)) == sorted(id(a.get_legend()) for a in mine.axes)
     calls.clear()
     mine.axes[0].set_xlim(0.5, 1.0)             # another view: searched again
-    _pixels(mine)
+    pixels(mine)
     assert len(calls) == 2
 
 
@@ -134,12 +120,12 @@ def test_each_legend_is_packed_once_per_draw(monkeypatch):
     boxes = [a.get_legend()._legend_box for a in fig.axes]
     for _ in range(2):
         packed.clear()
-        _pixels(fig)
+        pixels(fig)
         assert len(packed) == len(set(packed))          # each packer (rows, columns) once
         assert {id(b) for b in boxes} <= set(packed)     # and afresh at each draw
 
 
-def test_an_expanded_legend_under_a_layout_engine_draws_matplotlibs_pixels():
+def test_an_expanded_legend_under_a_layout_engine_draws_matplotlibspixels():
     """A legend in mode "expand" across the top of its axes, in a figure whose layout
     engine (constrained, tight) runs inside the first draw: the engine packs the legend at
     its old width, then the legend's draw sets the width of the axes it moved, so the
@@ -152,4 +138,4 @@ def test_an_expanded_legend_under_a_layout_engine_draws_matplotlibs_pixels():
                 a.legend(loc="lower left", mode="expand", bbox_to_anchor=(0, 1.02, 1, 0.2),
                          ncols=2)
 
-        _drawn_alike(content, (8, 5))
+        drawn_alike(content, (8, 5))

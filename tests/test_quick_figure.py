@@ -14,6 +14,7 @@ again (every layout then from the cache).
 from __future__ import annotations
 
 import numpy as np
+from figure_pixels import drawn_alike, pixels
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -51,31 +52,14 @@ def _content(fig):
     fig.tight_layout()
 
 
-def _pixels(fig) -> np.ndarray:
-    fig.canvas.draw()
-    return np.asarray(fig.canvas.buffer_rgba()).copy()
-
-
 def _theirs() -> np.ndarray:
     fig = Figure(figsize=(8, 6), dpi=PNG_DPI)
     FigureCanvasAgg(fig)
     _content(fig)
-    return _pixels(fig)
+    return pixels(fig)
 
 
-def _drawn_alike(content, figsize) -> QuickFigure:
-    """``content`` drawn on matplotlib's own figure and on :func:`new_figure`'s: the same
-    pixels (returns the latter)."""
-    theirs = Figure(figsize=figsize, dpi=PNG_DPI)
-    FigureCanvasAgg(theirs)
-    content(theirs)
-    mine = new_figure(figsize)
-    content(mine)
-    assert np.array_equal(_pixels(mine), _pixels(theirs))
-    return mine
-
-
-def test_a_quick_figure_draws_matplotlibs_pixels():
+def test_a_quick_figure_draws_matplotlibspixels():
     reference = _theirs()
     text_cache._LAYOUTS.clear()
     text_cache._HEIGHTS.clear()
@@ -84,10 +68,10 @@ def test_a_quick_figure_draws_matplotlibs_pixels():
         assert isinstance(fig, QuickFigure)
         assert isinstance(fig.canvas.get_renderer(), text_cache.TextCacheRenderer)
         _content(fig)
-        mine = _pixels(fig)
+        mine = pixels(fig)
         assert mine.shape == reference.shape
         assert np.array_equal(mine, reference)
-        assert np.array_equal(_pixels(fig), reference)      # drawn again
+        assert np.array_equal(pixels(fig), reference)      # drawn again
     assert text_cache._LAYOUTS and text_cache._HEIGHTS       # the caches were used
 
 
@@ -117,11 +101,11 @@ def test_axes_sharing_a_formatter_keep_their_own_offset():
         b.plot(x, -x)
         fig.tight_layout()
 
-    mine = _drawn_alike(content, (8, 3))
+    mine = drawn_alike(content, (8, 3))
     assert [a.xaxis.offsetText.get_text() for a in mine.axes] == ["+1e5", "+1e5"]
 
 
-def test_a_polar_axes_draws_matplotlibs_pixels():
+def test_a_polar_axes_draws_matplotlibspixels():
     """A polar axes (its axes called "theta" and "radius", shared under "x" and "y", as
     ``quadland envelope --polar``'s map has) draws as matplotlib's own figure does."""
     def content(fig):
@@ -131,7 +115,7 @@ def test_a_polar_axes_draws_matplotlibs_pixels():
         ax.set_title("wind over the deck")
         fig.tight_layout()
 
-    _drawn_alike(content, (4, 4))
+    drawn_alike(content, (4, 4))
 
 
 def test_a_quick_figure_is_named_a_figure():
