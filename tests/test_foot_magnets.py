@@ -157,7 +157,8 @@ def test_campaign_run_3_held_on_its_front_feet_lands():
     slide) and its farthest foot ends past the 0.7 m pad. With a magnet in each foot and
     the 0.8 s level-out the flight up to the contact is the same; the front feet are held
     and the centre goes back by the geometric pivot to within a centimetre by every foot
-    down (0.191 m flown: the gear's spring and the body's roll) and 2 cm at rest, and the run lands and is secured."""
+    down (0.191 m flown: the gear's spring and the body's roll) and 2 cm at rest, and the
+    run lands and is secured."""
     before = _run(3)
     assert before["report"].failures == ["off the pad"] and before["foot"] > 0.7
     now = _run(3, *FEET)
