@@ -13,11 +13,12 @@ a magnet in each foot"). Checked here against hand results:
   moment of each about the centre its pull times the foot's horizontal distance from the
   centre (``fx cos th - h sin th`` ahead for the front feet, ``fx cos th + h sin th``
   behind for the rear ones), where the centre magnet pulls nearly nothing;
-* ``lock = "magnet"`` (every shipped scenario's default) packs ``at_feet = 0``: the law of
-  before, which ``tests/test_contact.py`` checks;
-* flown, highway_100's campaign run 3 (contact 0.10 m behind the centre at 43.6 deg,
-  off the pad as shipped): with a magnet in each foot and a 0.8 s level-out its centre
-  goes back by the geometric pivot about the front feet and no more, and it lands.
+* ``lock = "magnet"`` (every other scenario's) packs ``at_feet = 0``: the law of before,
+  which ``tests/test_contact.py`` checks; highway_100 ships ``"foot_magnets"``;
+* flown, highway_100's campaign run 3 (contact 0.10 m behind the centre at 43.6 deg, off
+  the pad with the tenth session's touchdown): with a magnet in each foot and a 1 s
+  level-out its centre goes back by the geometric pivot about the front feet and no
+  more, and it lands.
 """
 
 import math
@@ -83,12 +84,16 @@ def _pull(eta, z, t=0.5, at_feet=1):
 def test_the_devices_pack_where_they_pull():
     assert lock_defaults("magnet")["at_feet"] == 0.0
     assert lock_defaults("foot_magnets")["at_feet"] == 1.0
+    for name in ("highway", "turning", "ship", "ship_ss5"):
+        sc = load_scenario(name)
+        assert sc.data["touchdown"]["lock"] == "magnet"
+        assert LOCK.unpack(lock_params(sc))["at_feet"] == 0.0
     shipped = load_scenario("highway_100")
-    assert shipped.data["touchdown"]["lock"] == "magnet"
-    assert LOCK.unpack(lock_params(shipped))["at_feet"] == 0.0
-    feet = load_scenario("highway_100", ["touchdown.lock=foot_magnets"])
-    lk = LOCK.unpack(lock_params(feet))
+    assert shipped.data["touchdown"]["lock"] == "foot_magnets"
+    lk = LOCK.unpack(lock_params(shipped))
     assert lk["at_feet"] == 1.0 and lk["F_hold"] == 200.0
+    old = load_scenario("highway_100", ["touchdown.lock=magnet"])
+    assert LOCK.unpack(lock_params(old))["at_feet"] == 0.0
 
 
 @pytest.mark.parametrize("gap", [0.0, 0.002, 0.02])
@@ -147,19 +152,24 @@ def _run(index, *overrides):
                 foot=float(res["foot_offset"][-1]), report=touchdown_report(res))
 
 
-FEET = ["touchdown.lock=foot_magnets", "touchdown.level_time=0.8", "touchdown.cut_time=0.8"]
+#: The tenth session's touchdown (two magnets under the gear, the 0.1 s level-out, the aim
+#: 0.3 of the pivot ahead), and the same aim with the shipped magnets and level-out.
+TENTH = ["touchdown.lock=magnet", "touchdown.level_time=0.1", "touchdown.cut_time=0.1",
+         "touchdown.pivot_aim=0.3"]
+FEET = ["touchdown.lock=foot_magnets", "touchdown.level_time=1.0", "touchdown.cut_time=1.0",
+        "touchdown.pivot_aim=0.3"]
 
 
 def test_campaign_run_3_held_on_its_front_feet_lands():
     """Run 3 of the campaign (default campaign seed, sensors on) meets the roof 0.10 m
-    behind the centre at 43.6 deg. As shipped the centre goes back 0.317 m (the pivot
-    about the front feet, 0.3 (1 - cos th) + 0.15 sin th = 0.186 m, and the drag's
-    slide) and its farthest foot ends past the 0.7 m pad. With a magnet in each foot and
-    the 0.8 s level-out the flight up to the contact is the same; the front feet are held
-    and the centre goes back by the geometric pivot to within a centimetre by every foot
-    down (0.191 m flown: the gear's spring and the body's roll) and 2 cm at rest, and the
-    run lands and is secured."""
-    before = _run(3)
+    behind the centre at 43.6 deg. With the tenth session's touchdown the centre goes
+    back 0.317 m (the pivot about the front feet, 0.3 (1 - cos th) + 0.15 sin th = 0.186
+    m, and the drag's slide) and its farthest foot ends past the 0.7 m pad. With a magnet
+    in each foot and the 1 s level-out (the aim kept) the flight up to the contact is the
+    same; the front feet are held and the centre goes back by the geometric pivot to
+    within a centimetre by every foot down (the gear's spring and the body's roll) and 2
+    cm at rest, and the run lands and is secured."""
+    before = _run(3, *TENTH)
     assert before["report"].failures == ["off the pad"] and before["foot"] > 0.7
     now = _run(3, *FEET)
     assert now["x0"] == before["x0"] and now["th"] == before["th"]
