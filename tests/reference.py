@@ -218,4 +218,6 @@ HIGHWAY_100_OLD = ["quadrotor.thrust_to_weight=2.0", "controller_model.thrust_to
                    "sensors.vision.sigma0=0.02", "sensors.vision.sigma_per_m=0.01",
                    "sensors.vision.range_max=12.0", "estimator.vision_sigma0=0.02",
                    "estimator.vision_k_range=0.01", "estimator.q_at=[1e-06, 1e-06, 1e-06]",
-                   "gear.slip_damping_max=300.0", "landing.dwell_time=1.0"]
+                   "gear.slip_damping_max=300.0", "landing.dwell_time=1.0",
+                   "touchdown.lock=magnet", "touchdown.level_time=0.1",
+                   "touchdown.cut_time=0.1"]

@@ -287,8 +287,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                            "feet the aim point anticipates (0: none, 1: all)", lo=0.0, hi=1.0),
         "aim_height": Field(F, "m", "secure: reference height above touchdown from which the "
                             "aim point anticipates the pivot", lo=0.0, hi=100.0),
-        "lock": Field(S, "-", "lock-down device: none, or magnet (an electro-permanent magnet "
-                      "under the gear's centre)", choices=("none", "magnet")),
+        "lock": Field(S, "-", "lock-down device: none, magnet (an EPM under the gear's centre) or "
+                      "foot_magnets (one per foot)", choices=("none", "magnet", "foot_magnets")),
         "lock_hold_force": Field(F, "N", "the lock's largest holding force", lo=0.0, hi=1e5),
         "lock_delay": Field(F, "s", "dead time from the contact switch to the lock's pull",
                             lo=0.0, hi=10.0),

@@ -26,7 +26,8 @@ the body as the disturbance of eq. (2): ``d_F`` and the moment ``d_M`` about
 the centre, both in the body frame (:func:`contact_wrench`).
 
 A lock-down device (an electro-permanent magnet, or a harpoon in a deck
-grid) pulls the gear's centre point along ``-n2`` once engaged: a dead time
+grid) pulls the gear's centre point (or, ``at_feet``, each foot by its own
+gap) along ``-n2`` once engaged: a dead time
 ``lock_delay`` after a contact signal whose rise time ``t_signal`` is an
 input, then a first-order rise (:func:`lock_wrench`).
 
@@ -101,7 +102,10 @@ LOCK = Layout("p_lock", (
     Field("lock_rise_time", 1, "s", "time constant of the pull's first-order rise (> 0)"),
     Field("lock_gap_scale", 1, "m",
           "gap at which the pull falls to a quarter (a magnet); large for a harpoon"),
-), "lock-down device: holding force, delay and rise, fall-off with the gap")
+    Field("at_feet", 1, "-",
+          "0: one device at the gear's centre; 1: F_hold shared by a device in each foot, "
+          "each pulled by its own gap"),
+), "lock-down device: holding force, delay and rise, fall-off with the gap, where it pulls")
 
 #: Per-foot signals of :func:`contact_wrench`, for reports.
 FOOT = Layout("foot", (
@@ -123,7 +127,7 @@ HOLD = Layout("hold", (
 SURFACES = ("ship_deck", "car_roof")
 
 #: Lock-down devices with default parameters (:func:`lock_defaults`).
-DEVICES = ("magnet",)
+DEVICES = ("magnet", "foot_magnets")
 
 
 def smooth_penetration(delta, delta_eps):
@@ -212,6 +216,15 @@ def _gear_centre(r_feet):
     return ca.sum2(r_feet) / r_feet.shape[1]
 
 
+def _pulls(R1, p1, p2, n2, r, engaged, lk, share):
+    """The pull ``F_hold share s / (1 + gap+ / g0)^2`` at each column of ``r`` (body
+    frame) along ``-n2``: the body-frame force and moment sums, and the gaps."""
+    gap = n2.T @ (p1 @ ca.DM.ones(1, r.shape[1]) + R1 @ r - p2 @ ca.DM.ones(1, r.shape[1]))
+    pull = lk["F_hold"] * share * engaged / (1 + ca.fmax(gap, 0) / lk["lock_gap_scale"]) ** 2
+    F_B = R1.T @ (-n2 @ pull)                                           # N per point
+    return ca.sum2(F_B), ca.sum2(ca.cross(r, F_B)), ca.sum2(pull), gap
+
+
 def lock_wrench(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock):
     """The lock-down device's pull as a body-frame wrench.
 
@@ -219,7 +232,9 @@ def lock_wrench(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock):
     along ``-n2`` with ``F_lock = F_hold s(t) / (1 + gap+ / g0)^2``: the
     engagement ``s = 1 - exp(-max(0, t - t_signal - lock_delay) / lock_rise_time)``
     (continuous in time, no state), ``gap+`` the centre's height above the
-    deck plane (0 when below it) and ``g0 = lock_gap_scale``.
+    deck plane (0 when below it) and ``g0 = lock_gap_scale``. With ``at_feet = 1``
+    a device in each foot pulls that foot with ``F_hold / N_FEET`` by the same law on
+    its own gap (between 0 and 1, that share of the force is the feet's).
 
     Parameters
     ----------
@@ -236,20 +251,22 @@ def lock_wrench(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock):
     d_F, d_M : casadi.SX
         Body-frame force (N) and moment about the centre (N m).
     hold : casadi.SX
-        Signals laid out as :data:`HOLD`.
+        Signals laid out as :data:`HOLD` (``F_lock`` the devices' total pull,
+        ``lock_gap`` the gear centre's gap).
     """
     lk = LOCK.unpack(p_lock)
-    r_c = _gear_centre(GEAR.unpack(p_gear)["r_feet"])
+    r_feet = GEAR.unpack(p_gear)["r_feet"]
+    r_c = _gear_centre(r_feet)
     deck = deck_pose(xv, t, p_veh, p_deck)
     q = QUAD6_STATE.unpack(x1q)
     R1 = rotation(q["eta1"])
     n2 = deck.R_deck[:, 2]
-    gap = n2.T @ (q["p1"] + R1 @ r_c - deck.p2)                         # m
     age = ca.fmax(t - t_signal - lk["lock_delay"], 0)                   # s; NaN, inf -> 0
     engaged = 1 - ca.exp(-age / lk["lock_rise_time"])
-    F_lock = lk["F_hold"] * engaged / (1 + ca.fmax(gap, 0) / lk["lock_gap_scale"]) ** 2
-    d_F = R1.T @ (-F_lock * n2)
-    return d_F, ca.cross(r_c, d_F), ca.vertcat(engaged, F_lock, gap)
+    a = lk["at_feet"]
+    F_c, M_c, P_c, gap = _pulls(R1, q["p1"], deck.p2, n2, r_c, engaged, lk, 1 - a)
+    F_f, M_f, P_f, _ = _pulls(R1, q["p1"], deck.p2, n2, r_feet, engaged, lk, a / N_FEET)
+    return F_c + F_f, M_c + M_f, ca.vertcat(engaged, P_c + P_f, gap)
 
 
 @functools.cache
@@ -444,8 +461,9 @@ def lock_defaults(device: str = "magnet") -> dict:
 
     Parameters
     ----------
-    device : {"magnet"}
-        An electro-permanent magnet under the gear's centre (docs/contact.md).
+    device : {"magnet", "foot_magnets"}
+        An electro-permanent magnet under the gear's centre, or the same holding
+        force shared by one in each foot (docs/contact.md).
 
     Returns
     -------
@@ -454,6 +472,7 @@ def lock_defaults(device: str = "magnet") -> dict:
     """
     if device not in DEVICES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
-    return dict(F_hold=100.0, lock_delay=0.25, lock_rise_time=0.17, lock_gap_scale=1e-3)
+    return dict(F_hold=100.0, lock_delay=0.25, lock_rise_time=0.17, lock_gap_scale=1e-3,
+                at_feet=float(device == "foot_magnets"))
 
 

@@ -50,13 +50,15 @@ def gear_params(scenario: Scenario) -> np.ndarray:
 
 def lock_params(scenario: Scenario) -> np.ndarray:
     """``[touchdown]``'s lock-down device as :data:`~quadland_symbolic.landing.contact.LOCK`
-    (``lock = "none"``: no holding force)."""
+    (``lock = "none"``: no holding force; ``"foot_magnets"``: the holding force shared by a
+    magnet in each foot)."""
     td = scenario.data["touchdown"]
     if td["lock"] == "none" or scenario.data["gear"]["welded"]:
         return LOCK.pack(dict(lock_defaults(), F_hold=0.0))
     return LOCK.pack(dict(F_hold=td["lock_hold_force"], lock_delay=td["lock_delay"],
                           lock_rise_time=td["lock_rise_time"],
-                          lock_gap_scale=td["lock_gap_scale"]))
+                          lock_gap_scale=td["lock_gap_scale"],
+                          at_feet=float(td["lock"] == "foot_magnets")))
 
 
 def policy_params(scenario: Scenario) -> np.ndarray:
