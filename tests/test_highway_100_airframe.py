@@ -123,9 +123,8 @@ def test_the_front_rotor_clears_the_roof_and_the_pad_holds_the_pivot():
     hypot(0.268 + 0.30, 0.20) = 0.602 m, inside the 0.7 m pad, whose 1.4 m span is the
     roof's width (the rangefinder's deck_half_width 0.7 m). The judge's rule holds:
     the pad is at least max_offset plus the gear's corner, 0.2 + 0.361 m. The aim point
-    stays on the pad centre: with the front feet held by their magnets the pivot is all
-    that moves the centre back (docs/landing.md, "highway_100: a magnet in each foot"; the
-    tenth session's 0.3 of the pivot ahead, 0.080 m at 58 deg, answered the drag's slide)."""
+    anticipates 0.3 of the pivot (docs/landing.md, "highway_100: the level-out's slide is
+    the drag's"): 0.080 m at 58 deg, inside the 0.2 m offset limit."""
     d = load_scenario("highway_100").data
     gear, h = d["gear"], d["quadrotor"]["gear_height"]
     fx, fy = gear["feet_x"], gear["feet_y"]
@@ -144,21 +143,16 @@ def test_the_front_rotor_clears_the_roof_and_the_pad_holds_the_pivot():
     assert pad == d["sensors.rangefinder"]["deck_half_width"] == 0.7
     assert pad >= d["landing"]["max_offset"] + math.hypot(fx, fy)
     aim = d["touchdown"]["pivot_aim"] * pivot
-    assert d["touchdown"]["pivot_aim"] == 0.0 and aim == 0.0
-    aim = 0.3 * pivot
-    assert aim == pytest.approx(0.0804, abs=0.0001)
+    assert d["touchdown"]["pivot_aim"] == 0.3 and aim == pytest.approx(0.0804, abs=0.0001)
     assert aim < d["landing"]["max_offset"]
 
 
 def test_the_magnets_hold_the_worst_corner_at_the_cut():
     """Level on the roof at 110 km/h with the drag at +30 % the drag is 1.3 (0.3 x 30.56
     + 0.01225 x 30.56^2) = 26.8 N; stopping the slide takes 26.8 / 0.5 - 1.8 x 9.8 =
-    36.0 N of pull, and the four magnets give 200 (1 - exp(-1 / 0.17)) = 199.4 N at the
-    1 s cut (the tenth session's two at its 0.1 s cut: 88.9 N). On its front feet alone,
-    the rotors' thrust left out, the front pair's 100 N s(t) holds that drag once 0.5 x
-    100 s >= 26.8 N: s >= 0.536, 0.17 ln(1 / 0.464) = 0.131 s after the contact switch.
-    Resting level with nothing holding it the drag cannot roll it over its rear feet:
-    26.8 x 0.15 = 4.0 N m < 1.8 x 9.8 x 0.30 = 5.3 N m."""
+    36.0 N of pull, and the two magnets give 200 (1 - exp(-0.1 / 0.17)) = 88.9 N at the
+    0.1 s cut. Resting level with nothing holding it the drag cannot roll it over its
+    rear feet: 26.8 x 0.15 = 4.0 N m < 1.8 x 9.8 x 0.30 = 5.3 N m."""
     d = load_scenario("highway_100").data
     q, gear, td = d["quadrotor"], d["gear"], d["touchdown"]
     V = 30.5556
@@ -169,12 +163,7 @@ def test_the_magnets_hold_the_worst_corner_at_the_cut():
     assert need == pytest.approx(36.0, abs=0.1)
     F = td["lock_hold_force"] * (1 - math.exp(-(td["cut_time"] - td["lock_delay"])
                                               / td["lock_rise_time"]))
-    assert F == pytest.approx(199.4, abs=0.05) and F > need
-    assert td["lock"] == "foot_magnets"
-    front = td["lock_hold_force"] / 2                       # two of the four feet
-    t_hold = -td["lock_rise_time"] * math.log(1 - D / (gear["friction"] * front))
-    assert t_hold == pytest.approx(0.131, abs=0.001) and t_hold < td["cut_time"]
-    assert 200.0 * (1 - math.exp(-0.1 / 0.17)) == pytest.approx(88.9, abs=0.05)
+    assert F == pytest.approx(88.9, abs=0.05) and F > need
     assert D * q["gear_height"] < m * g * gear["feet_x"]
 
 
