@@ -1,4 +1,4 @@
-"""The nested landing marker on highway and turning (issue 19, eleventh session).
+"""The nested landing marker on highway, turning and ship_ss5 (issue 19, eleventh session).
 
 The pads of the two scenarios carry a second, 0.1 m marker in the centre of the 0.6 m
 one (nested fiducials: Romero-Ramirez et al., "Fractal Markers", IEEE Access 7, 2019;
@@ -24,13 +24,15 @@ from quadland.scenario import load_scenario
 #: Raspberry Pi Camera Module 3 Wide, docs/sensors.md: 1536 px across 102 deg.
 FOCAL_PX = 768 / math.tan(math.radians(51.0))
 SMALL_SIDE = 0.1                                  # m, the nested marker
-SCENARIOS = ("highway", "turning")
+SCENARIOS = ("highway", "turning", "ship_ss5")   # the same camera (102 deg lens)
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
 def test_the_small_markers_interval_is_the_pinholes(name):
     v = load_scenario(name).data["sensors.vision"]
     assert v["small_range_max"] == 0.6 and v["small_range_min"] == 0.08
+    # the lens FOCAL_PX is for: its cone is half of the 67 deg height or of the 102 deg width
+    assert round(math.degrees(v["half_angle"]), 6) in (33.5, 51.0)
     # the 0.1 m marker fills the 67 deg image height (half-angle 33.5 deg) at 0.0755 m
     fills = (SMALL_SIDE / 2) / math.tan(math.radians(33.5))
     assert fills == pytest.approx(0.0755, abs=1e-4) and fills < v["small_range_min"]
