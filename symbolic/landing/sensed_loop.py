@@ -316,7 +316,7 @@ def _flight_stage(l, xc_lay, pc_lay):
     seen = d["fused"][[b.name for b in BLOCKS].index("vision")]
     marker_age = ca.if_else(seen >= 0.5, 0, ca.fmin(cs["marker_age"] + ps["dt"], TIME_CAP))
     switch = contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"])
-    cues = ca.vertcat(ca.fmax(fl["ground_contact"], switch), marker_age)
+    cues = ca.vertcat(fl["ground_contact"], marker_age, switch)
     _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
     nav = _NAV_MEMORY.unpack(nav_next)
