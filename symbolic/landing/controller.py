@@ -449,8 +449,7 @@ def measured_cues(y, p_guid):
 
     ``touchdown`` is 1 when the gear gap from ``p_e``, ``eta1`` and ``eta2``
     (:func:`~quadland_symbolic.landing.relative.deck_gear_gap`, the gear
-    ``touchdown_height`` below the centre) is zero or below; ``marker_age`` is 0;
-    ``contact_switch`` 0 (the loop gives the gear's switch, the plant's).
+    ``touchdown_height`` below the centre) is zero or below; the others 0 (the loop's switch).
     Returns :data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`.
     """
     ms = LANDING_MEASUREMENT.unpack(y)

@@ -215,6 +215,21 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt):
             speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
 
 
+def _touchdown_cue(c, g):
+    """The touchdown's cue in the descent: the flight stack's verdict, or the contact switch
+    once armed (it has read open in this descent: one closed before the descent, the gear
+    grazing the deck at the handover or a deck rising into it, is no touchdown)."""
+    return ca.logic_or(c["touchdown"] >= 0.5,
+                       ca.logic_and(c["contact_switch"] >= 0.5, g["armed"] >= 0.5))
+
+
+def _armed_next(c, g, in_descend, phase_next):
+    """The state's ``armed`` after the step: the next phase is the descent, and the switch
+    reads open now or was armed earlier in this descent."""
+    return ca.logic_and(phase_next == DESCEND, ca.logic_or(
+        ca.logic_and(in_descend, g["armed"] >= 0.5), c["contact_switch"] < 0.5))
+
+
 def _reference_height(z_ref, p, f, dt):
     """The reference height's next value and the step's reference.
 
@@ -305,11 +320,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)),
                                         in_touchdown), timer + dt,
                             ca.if_else(phase == LANDED, timer, 0))
-    # the switch counts only once it has read open in this descent: one closed before the
-    # descent (the gear grazing the deck at the handover, a deck rising into it) does not
-    switch = c["contact_switch"] >= 0.5
-    contact = ca.logic_and(in_descend, ca.logic_or(
-        c["touchdown"] >= 0.5, ca.logic_and(switch, g["armed"] >= 0.5)))
+    contact = ca.logic_and(in_descend, _touchdown_cue(c, g))
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
@@ -336,8 +347,6 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
                                              LANDED, phase)))))
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
-    armed_next = ca.logic_and(phase_next == DESCEND, ca.logic_or(
-        ca.logic_and(in_descend, g["armed"] >= 0.5), ca.logic_not(switch)))
     band, hold = ca.logic_or(in_band, crawl), ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
@@ -350,7 +359,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
                        descending_next=phase_next == DESCEND, timer_next=timer_next,
                        z=p_e[2]), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
-                      committed_next, armed_next, xq_held), reference
+                      committed_next, _armed_next(c, g, in_descend, phase_next), xq_held), \
+        reference
 
 
 def guidance_function() -> ca.Function:
