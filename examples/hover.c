@@ -18,7 +18,7 @@ int main(void)
     static ql_landing_state state;
     ql_guidance_params guidance;
     ql_guidance_state gs;
-    ql_guidance_cues cues = {0, 0};          /* gear above the deck, the marker seen */
+    ql_guidance_cues cues = {0, 0, 0};       /* gear above the deck, the marker seen */
     ql_landing_measurement y;
     ql_position_reference ref;
     ql_landing_output out;

@@ -225,8 +225,8 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
                                      const ql_quadrotor_params *quad,
                                      ql_land_detector_cues *cues)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state. */
-    ql_real xg[7];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate], CasADi's guidance state. */
+    ql_real xg[8];
     const ql_real *arg[ql_casadi_land_detector_cues_SZ_ARG];
     ql_real *res[ql_casadi_land_detector_cues_SZ_RES];
     casadi_int work_int[ql_casadi_land_detector_cues_SZ_IW + 1];
@@ -246,8 +246,9 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
     xg[2] = guidance->z_ref;
     xg[3] = (ql_real)guidance->aborts;
     xg[4] = guidance->committed;
-    xg[5] = guidance->ms_rise;
-    xg[6] = guidance->ms_rise_rate;
+    xg[5] = guidance->armed;
+    xg[6] = guidance->ms_rise;
+    xg[7] = guidance->ms_rise_rate;
     arg[0] = (const ql_real *)y;
     arg[1] = (const ql_real *)range;
     arg[2] = (const ql_real *)imu;

@@ -33,7 +33,8 @@ typedef char landing_measurement_is_its_layout[
 typedef char guidance_cues_is_its_layout[
     AT(ql_guidance_cues, touchdown, 0, 0) &&
     AT(ql_guidance_cues, marker_age, 1, 0) &&
-    sizeof(ql_guidance_cues) == 2 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_cues, contact_switch, 2, 0) &&
+    sizeof(ql_guidance_cues) == 3 * sizeof(ql_real) ? 1 : -1];
 typedef char position_reference_is_its_layout[
     AT(ql_position_reference, p_ref, 0, 0) &&
     AT(ql_position_reference, v_ref, 3, 0) &&
@@ -115,10 +116,11 @@ typedef char guidance_state_is_its_layout[
     AT(ql_guidance_state, timer, 0, 0) &&
     AT(ql_guidance_state, z_ref, 1, 0) &&
     AT(ql_guidance_state, committed, 2, 0) &&
-    AT(ql_guidance_state, ms_rise, 3, 0) &&
-    AT(ql_guidance_state, ms_rise_rate, 4, 0) &&
-    AT(ql_guidance_state, phase, 5, 0) &&
-    AT(ql_guidance_state, aborts, 5, 1) &&
+    AT(ql_guidance_state, armed, 3, 0) &&
+    AT(ql_guidance_state, ms_rise, 4, 0) &&
+    AT(ql_guidance_state, ms_rise_rate, 5, 0) &&
+    AT(ql_guidance_state, phase, 6, 0) &&
+    AT(ql_guidance_state, aborts, 6, 1) &&
     1 ? 1 : -1];
 typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, hover_height, 0, 0) &&
@@ -721,8 +723,8 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            const ql_guidance_params *params, ql_real dt,
                            ql_guidance_state *state, ql_position_reference *ref)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[7], res_v[23];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
+    ql_real xg[8], res_v[24];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -738,11 +740,12 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[2] = state->z_ref;
     xg[3] = (ql_real)state->aborts;
     xg[4] = state->committed;
-    xg[5] = state->ms_rise;
-    xg[6] = state->ms_rise_rate;
-    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 2)
+    xg[5] = state->armed;
+    xg[6] = state->ms_rise;
+    xg[7] = state->ms_rise_rate;
+    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
           & all_finite((const ql_real *)params, 29)
-          & all_finite(xg, 7) & (isfinite(dt) != 0))) {
+          & all_finite(xg, 8) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
     if (!(dt > 0) || state->phase < QL_PHASE_APPROACH || state->phase > QL_PHASE_LANDED
@@ -758,9 +761,9 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     arg[3] = &dt;
     arg[4] = (const ql_real *)params;
     res[0] = res_v + 0;
-    res[1] = res_v + 7;
+    res[1] = res_v + 8;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 23)) {
+    if (!all_finite(res_v, 24)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -768,9 +771,10 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     state->z_ref = res_v[2];
     state->aborts = (int)res_v[3];
     state->committed = res_v[4];
-    state->ms_rise = res_v[5];
-    state->ms_rise_rate = res_v[6];
-    memcpy(ref, res_v + 7, sizeof *ref);
+    state->armed = res_v[5];
+    state->ms_rise = res_v[6];
+    state->ms_rise_rate = res_v[7];
+    memcpy(ref, res_v + 8, sizeof *ref);
     return QL_OK;
 }
 

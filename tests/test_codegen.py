@@ -341,8 +341,8 @@ int main(void)
     qlf_landing_measurement yf;
     ql_guidance_params gp;
     qlf_guidance_params gpf;
-    ql_guidance_cues gc = {0.0, 0.0};
-    qlf_guidance_cues gcf = {0.0f, 0.0f};
+    ql_guidance_cues gc = {0.0, 0.0, 0.0};
+    qlf_guidance_cues gcf = {0.0f, 0.0f, 0.0f};
     ql_guidance_state gs;
     qlf_guidance_state gsf;
     ql_position_reference pr;

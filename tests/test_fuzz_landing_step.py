@@ -178,8 +178,8 @@ class _Harness:
         self.v_cues = _view(self.cues, d)
         self.v_y, self.v_ref, self.v_p = _view(self.y, d), _view(self.ref, d), _view(self.params, d)
         self.v_state, self.v_gp = _view(self.state, d), _view(self.gp, d)
-        # timer, z_ref, committed, ms_rise, ms_rise_rate (the ints follow)
-        self.v_g = _view(self.gs, d, 5)
+        # timer, z_ref, committed, armed, ms_rise, ms_rise_rate (the ints follow)
+        self.v_g = _view(self.gs, d, 6)
         self.v_out = _view(self.out, d, landing_output_layout(L).size)
         o = landing_output_layout(L).offsets()
         self.o = {n: slice(*o[n]) for n in ("F_cmd", "wrench", "tilt")}
@@ -262,9 +262,11 @@ class _Harness:
         self.gs.aborts = int(rng.integers(4)) if rng.uniform() < 0.9 else \
             int(rng.choice((-1, MAX_ABORTS, MAX_ABORTS + 1)))
         self.v_g[:] = [rng.uniform(0, 2), rng.uniform(-0.5, 4), rng.integers(2),
-                       rng.uniform(0, 1), rng.uniform(0, 3)]
-        # the touchdown verdict (0, 1 or a non-flag), the marker's age (seen or not)
-        self.v_cues[:] = [rng.choice((0.0, 1.0, rng.normal())), rng.choice((0.0, 0.4, 3.0))]
+                       rng.integers(2), rng.uniform(0, 1), rng.uniform(0, 3)]
+        # the touchdown verdict (0, 1 or a non-flag), the marker's age (seen or not), the
+        # contact switch (0, 1 or a non-flag)
+        self.v_cues[:] = [rng.choice((0.0, 1.0, rng.normal())), rng.choice((0.0, 0.4, 3.0)),
+                          rng.choice((0.0, 1.0, rng.normal()))]
         dt = rng.choice((0.004, 10 ** rng.uniform(-6, 1)))
         if rng.uniform() < 0.03:       # the settling timer overflows
             self.gs.phase = TOUCHDOWN
@@ -426,7 +428,7 @@ def _check_guidance(h, rng, counts, oracle):
     if oracle is not None:                              # the CasADi function, double only
         xg_next, r = (np.asarray(v, dtype=float).ravel() for v in oracle(xg, y, cues, dt, gp))
         np.testing.assert_array_equal([h.gs.phase, h.gs.aborts], xg_next[[0, 3]])
-        np.testing.assert_allclose(h.v_g.astype(float), xg_next[[1, 2, 4, 5, 6]], rtol=1e-12)
+        np.testing.assert_allclose(h.v_g.astype(float), xg_next[[1, 2, 4, 5, 6, 7]], rtol=1e-12)
         np.testing.assert_allclose(ref, r, rtol=1e-12, atol=1e-300)
     counts["moved"] += h.gs.phase != phase
 

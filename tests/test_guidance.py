@@ -25,7 +25,8 @@ GUIDANCE = guidance_function()
 
 def _xg(committed=0, **state):
     """A guidance state; the quiescence averages at zero (a deck at rest so far)."""
-    return GUIDANCE_STATE.pack(dict(state, committed=committed, ms_rise=0.0, ms_rise_rate=0.0))
+    return GUIDANCE_STATE.pack(dict(state, committed=committed, armed=0.0, ms_rise=0.0,
+                                    ms_rise_rate=0.0))
 
 
 def _run(script, n, xg=None, p=P):
@@ -43,7 +44,8 @@ def _run(script, n, xg=None, p=P):
         z_ref = GUIDANCE_STATE.unpack(xg)["z_ref"][0]
         p_e, v_e, rise, *more = script(k, z_ref)
         gap, age = (more + [1.0, 0.0][len(more):])
-        cues = GUIDANCE_CUES.pack(dict(touchdown=float(gap <= 0), marker_age=age))
+        cues = GUIDANCE_CUES.pack(dict(touchdown=float(gap <= 0), marker_age=age,
+                                       contact_switch=0.0))
         xg_next, ref = (np.asarray(v, dtype=float).ravel()
                         for v in GUIDANCE(xg, p_e, v_e, rise, 0.0, cues, DT, pg))
         rows.append((xg, ref))

@@ -4,7 +4,8 @@
 A campaign draws the handover point in E (``initial.position1``, ``initial.z1``) while a
 sea state 5 deck heaves and pitches by metres under it: on ``ship_ss5``'s seed 7 two draws
 start with the gear in the deck plane or on it (runs 162 and 200), and the flight is
-decided before the landing law acts (struck, or a contact switch closed at t = 0). The key
+decided before the landing law acts (struck; run 200's contact switch, closed at t = 0,
+decided it too until the switch counted only once read open in the descent). The key
 raises such a handover along E's z until the gear is the clearance above the deck plane;
 0 (a scenario without the key) leaves every state as drawn. Checked here against the
 geometry by hand (the deck plane through the pad centre with the deck's normal, the gear
@@ -88,9 +89,12 @@ def test_a_handover_above_the_clearance_is_as_drawn():
 @pytest.mark.slow
 @pytest.mark.parametrize("index", [162, 200])
 def test_the_struck_handovers_land_above_the_deck(index):
-    """Runs 162 and 200 (seed 7) as drawn fail on everything (the gear in or on the deck at
-    t = 0); handed over 1 m above it (as shipped) they land and secure."""
-    rep0 = touchdown_report(quadland.simulate(_draw(index, "initial.handover_clearance=0")))
-    assert not rep0.success and "sink_rate" in rep0.failures and rep0.time < 8.0
+    """Run 162 (seed 7) as drawn fails on everything (the gear in the deck at t = 0; run
+    200's graze, which closed the contact switch at t = 0, no longer decides its flight:
+    tests/test_contact_switch_arming.py); handed over 1 m above the deck (as shipped) both
+    land and secure."""
+    if index == 162:
+        rep0 = touchdown_report(quadland.simulate(_draw(index, "initial.handover_clearance=0")))
+        assert not rep0.success and "sink_rate" in rep0.failures and rep0.time < 8.0
     rep1 = touchdown_report(quadland.simulate(_draw(index)))
     assert rep1.success and rep1.secured

@@ -288,7 +288,7 @@ def test_cues_equal_their_casadi_function_and_refuse_bad_parameters():
         c.s["gs"].timer, c.s["gs"].z_ref = rng.normal(), rng.normal()
         xg = GUIDANCE_STATE.pack(dict(phase=c.s["gs"].phase, timer=c.s["gs"].timer,
                                       z_ref=c.s["gs"].z_ref, aborts=c.s["gs"].aborts,
-                                      committed=c.s["gs"].committed,
+                                      committed=c.s["gs"].committed, armed=c.s["gs"].armed,
                                       ms_rise=c.s["gs"].ms_rise,
                                       ms_rise_rate=c.s["gs"].ms_rise_rate))
         assert c() == STATUS["QL_OK"]

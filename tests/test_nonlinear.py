@@ -151,10 +151,10 @@ def test_a_landing_closed_loop_is_the_simulated_flight_up_to_first_contact():
 def test_a_landing_on_sensors_warns_that_nlsys_reads_the_true_state():
     with pytest.warns(UserWarning, match=r"nlsys: highway flies on its sensors .* true state"):
         sys = quadland.nlsys("highway")
-    # the plant (25), the guidance (7: phase, timer, z_ref, aborts, the commit flag and the
+    # the plant (25), the guidance (8: phase, timer, z_ref, aborts, the commit and arming flags, the
     # quiescent-period predictor's two averages), the step's memory (6 l + 29, l = 10
     # nodes), the four rotor commands of one period's delay: no filter, no sensor delay lines
-    assert sys.nstates == 25 + 7 + 6 * 10 + 29 + 4 and sys.dt == pytest.approx(0.004)
+    assert sys.nstates == 25 + 8 + 6 * 10 + 29 + 4 and sys.dt == pytest.approx(0.004)
 
 
 def _hover(rk_steps: int = 1):

@@ -53,11 +53,12 @@ def _schedule(p=P, n=CONTACT + 700):
     gear gap closes at step CONTACT. Rows of (xg before the step, xg after, reference)."""
     guidance, pg = guidance_function(), GUIDANCE_PARAMS.pack(p)
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0, committed=0,
-                                  ms_rise=0.0, ms_rise_rate=0.0))
+                                  armed=0.0, ms_rise=0.0, ms_rise_rate=0.0))
     rows = []
     for k in range(n):
         z = GUIDANCE_STATE.unpack(xg)["z_ref"][0]
-        cues = GUIDANCE_CUES.pack(dict(touchdown=float(k >= CONTACT), marker_age=0.0))
+        cues = GUIDANCE_CUES.pack(dict(touchdown=float(k >= CONTACT), marker_age=0.0,
+                                       contact_switch=0.0))
         nxt, ref = (np.asarray(v, dtype=float).ravel()
                     for v in guidance(xg, [0, 0, z], [0, 0, -0.3], 0.0, 0.0, cues, DT, pg))
         rows.append((xg, nxt, ref))

@@ -57,7 +57,7 @@
 #define NXP QL_LANDING_PLANT_NX
 #define NXV QL_LANDING_VEHICLE_NX
 #define NY QL_LANDING_NY
-#define NG 7
+#define NG 8
 
 /* The clocks of the run (quadland.kinds.landing.values.landing_clocks): output rows and
  * disturbance samples close at the duration, control steps do not. */
@@ -137,7 +137,7 @@ static void judge_row(landed_t *l, const ql_real *xp, const ql_real *sig, const 
     l->t_last = t;
 }
 
-/* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate]. */
+/* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate]. */
 static void guidance_vector(const ql_guidance_state *gs, ql_real *xg)
 {
     xg[0] = (ql_real)gs->phase;
@@ -145,8 +145,9 @@ static void guidance_vector(const ql_guidance_state *gs, ql_real *xg)
     xg[2] = (ql_real)gs->z_ref;
     xg[3] = (ql_real)gs->aborts;
     xg[4] = (ql_real)gs->committed;
-    xg[5] = (ql_real)gs->ms_rise;
-    xg[6] = (ql_real)gs->ms_rise_rate;
+    xg[5] = (ql_real)gs->armed;
+    xg[6] = (ql_real)gs->ms_rise;
+    xg[7] = (ql_real)gs->ms_rise_rate;
 }
 
 /* The signals at time t, the disturbance sample of time t_w held. */
@@ -479,7 +480,8 @@ static ql_status fly(flight_t *f, const world_t *world, const ql_real *F_cmd, in
     f->marker_age = diag.fused[0] >= 0.5 ? (ql_real)0
         : (ql_real)fmin(f->marker_age + dt, QL_LAND_DETECTOR_TIME_CAP);
     /* the detector's verdict, or the gear's contact switch */
-    gcues.touchdown = (flags.ground_contact > 0.5 || contact) ? 1 : 0;
+    gcues.touchdown = flags.ground_contact > 0.5 ? 1 : 0;
+    gcues.contact_switch = contact ? 1 : 0;
     gcues.marker_age = f->marker_age;
     *what = "ql_guidance_step";
     status = ql_guidance_step(&y, &gcues, guidance, dt, gs, &ref);

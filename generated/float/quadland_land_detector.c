@@ -226,8 +226,8 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
                                        const qlf_quadrotor_params *quad,
                                        qlf_land_detector_cues *cues)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, ms_rise, ms_rise_rate], CasADi's guidance state. */
-    qlf_real xg[7];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate], CasADi's guidance state. */
+    qlf_real xg[8];
     const qlf_real *arg[qlf_casadi_land_detector_cues_SZ_ARG];
     qlf_real *res[qlf_casadi_land_detector_cues_SZ_RES];
     casadi_int work_int[qlf_casadi_land_detector_cues_SZ_IW + 1];
@@ -247,8 +247,9 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
     xg[2] = guidance->z_ref;
     xg[3] = (qlf_real)guidance->aborts;
     xg[4] = guidance->committed;
-    xg[5] = guidance->ms_rise;
-    xg[6] = guidance->ms_rise_rate;
+    xg[5] = guidance->armed;
+    xg[6] = guidance->ms_rise;
+    xg[7] = guidance->ms_rise_rate;
     arg[0] = (const qlf_real *)y;
     arg[1] = (const qlf_real *)range;
     arg[2] = (const qlf_real *)imu;

@@ -60,6 +60,7 @@ typedef struct {
 typedef struct {
     qlf_real touchdown;              /* 0/1: 1 when the gear is on the deck (perfect sensing: the measured gear gap at or below zero; sensors: the land detector's verdict) */
     qlf_real marker_age;             /* s: time since the navigation last fused the landing marker (0 on perfect sensing) */
+    qlf_real contact_switch;         /* 0/1: 1 while the gear's contact switch reads closed; it counts only once it has read open in the descent (the state's armed) */
 } qlf_guidance_cues;
 
 /* The guidance's reference of the relative position, deck frame. */
@@ -159,6 +160,7 @@ typedef struct {
     qlf_real timer;                  /* s: time the align criteria have held without a break */
     qlf_real z_ref;                  /* m: descent reference height of the centre above the pad */
     qlf_real committed;              /* 0/1: 1 once the final descent is committed (a calm window predicted at the wait height) */
+    qlf_real armed;                  /* 0/1: 1 once the gear's contact switch has read open in this descent (only then does its closing count as the touchdown) */
     qlf_real ms_rise;                /* m^2/s^2: exponential average of the deck's vertical velocity squared */
     qlf_real ms_rise_rate;           /* m^2/s^4: exponential average of the deck's vertical acceleration squared */
     int phase;                       /* -: phase: QL_PHASE_APPROACH .. QL_PHASE_LANDED */

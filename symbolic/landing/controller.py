@@ -449,13 +449,13 @@ def measured_cues(y, p_guid):
 
     ``touchdown`` is 1 when the gear gap from ``p_e``, ``eta1`` and ``eta2``
     (:func:`~quadland_symbolic.landing.relative.deck_gear_gap`, the gear
-    ``touchdown_height`` below the centre) is zero or below; ``marker_age`` is 0.
+    ``touchdown_height`` below the centre) is zero or below; the others 0 (the loop's switch).
     Returns :data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`.
     """
     ms = LANDING_MEASUREMENT.unpack(y)
     h = GUIDANCE_PARAMS.unpack(p_guid)["touchdown_height"]
     gap = deck_gear_gap(ms["p_e"], rotation(ms["eta2"]), rotation(ms["eta1"]), h)
-    return ca.vertcat(gap <= 0, 0)
+    return ca.vertcat(gap <= 0, 0, 0)
 
 
 @functools.cache

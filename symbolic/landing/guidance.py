@@ -4,7 +4,8 @@ The guidance runs at the control rate on the relative state in the deck
 frame (position ``p_e``, velocity ``v_e``; z up, the pad's centre at the
 origin) and produces the reference the position loop tracks. Its state is
 :data:`GUIDANCE_STATE`: the phase, a dwell timer, the descent reference height,
-the abort count, the commit flag and the quiescence averages. Phases (:data:`PHASES`):
+the abort count, the commit flag, the contact switch's arming and the quiescence
+averages. Phases (:data:`PHASES`):
 
 0. **approach**: the reference is the hover point ``[0, 0, z_ref]``, ``z_ref``
    the hover height (see "The marker" for where it differs); it leaves when the
@@ -31,7 +32,11 @@ the abort count, the commit flag and the quiescence averages. Phases (:data:`PHA
 3. **touchdown**: entered from the descent when the flight stack reports
    the gear on the deck (:data:`GUIDANCE_CUES`' ``touchdown``: on perfect
    sensing the measured gear gap at or below zero, on sensors the land
-   detector's verdict, :mod:`quadland_symbolic.landing.land_detector`). The
+   detector's verdict, :mod:`quadland_symbolic.landing.land_detector`), or
+   its ``contact_switch`` (the gear's switch) closes: the switch counts only once
+   it has read open in this descent (the state's ``armed``), so that a switch
+   closed before the descent (the gear grazing the deck at the handover, a deck
+   rising into it; the plant's switch stays closed) is not a touchdown. The
    reference holds; the flight stack idles the rotors. With the touchdown
    policy that flies on until the lock-down holds (``fly_on``,
    :mod:`quadland_symbolic.landing.touchdown_policy`) the reference crawls on
@@ -122,6 +127,8 @@ GUIDANCE_STATE = Layout("xg", (
     Field("aborts", 1, "-", "number of aborted descents"),
     Field("committed", 1, "0/1", "1 once the final descent is committed (a calm window "
           "predicted at the wait height)"),
+    Field("armed", 1, "0/1", "1 once the gear's contact switch has read open in this descent "
+          "(only then does its closing count as the touchdown)"),
     *QUIESCENCE_STATE.fields,
 ), "landing guidance state")
 
@@ -171,6 +178,8 @@ GUIDANCE_CUES = Layout("c_guid", (
           "gear gap at or below zero; sensors: the land detector's verdict)"),
     Field("marker_age", 1, "s", "time since the navigation last fused the landing marker "
           "(0 on perfect sensing)"),
+    Field("contact_switch", 1, "0/1", "1 while the gear's contact switch reads closed; it "
+          "counts only once it has read open in the descent (the state's armed)"),
 ), "landing guidance cues")
 
 #: What the position loop tracks: the reference and its first two derivatives
@@ -204,6 +213,21 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt):
                             p["commit_horizon"])
     return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
             speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
+
+
+def _touchdown_cue(c, g):
+    """The touchdown's cue in the descent: the flight stack's verdict, or the contact switch
+    once armed (it has read open in this descent: one closed before the descent, the gear
+    grazing the deck at the handover or a deck rising into it, is no touchdown)."""
+    return ca.logic_or(c["touchdown"] >= 0.5,
+                       ca.logic_and(c["contact_switch"] >= 0.5, g["armed"] >= 0.5))
+
+
+def _armed_next(c, g, in_descend, phase_next):
+    """The state's ``armed`` after the step: the next phase is the descent, and the switch
+    reads open now or was armed earlier in this descent."""
+    return ca.logic_and(phase_next == DESCEND, ca.logic_or(
+        ca.logic_and(in_descend, g["armed"] >= 0.5), c["contact_switch"] < 0.5))
 
 
 def _reference_height(z_ref, p, f, dt):
@@ -296,7 +320,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)),
                                         in_touchdown), timer + dt,
                             ca.if_else(phase == LANDED, timer, 0))
-    contact = ca.logic_and(in_descend, c["touchdown"] >= 0.5)
+    contact = ca.logic_and(in_descend, _touchdown_cue(c, g))
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
@@ -335,7 +359,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
                        descending_next=phase_next == DESCEND, timer_next=timer_next,
                        z=p_e[2]), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
-                      committed_next, xq_held), reference
+                      committed_next, _armed_next(c, g, in_descend, phase_next), xq_held), \
+        reference
 
 
 def guidance_function() -> ca.Function:

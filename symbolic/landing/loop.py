@@ -306,7 +306,7 @@ def landing_loop(l: int, welded: bool = False) -> LoopModel:
     y = measurement_function()(xp, t, ps["pp"])
     cues = measured_cues(y, ps["p_guid"])
     switch = contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"])
-    cues = ca.vertcat(ca.fmax(cues[0], switch), cues[1])         # the gear's switch, too
+    cues = ca.vertcat(cues[0], cues[1], switch)             # the gear's switch, too
     args, xc_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     step_args = _named("step_args", [xp, xc, pc, first, t], list(args.values()),
                        ["xp", "xc", "pc", "first", "t"], list(args))

@@ -31,9 +31,9 @@ tick ``t_k`` (period ``T``), does, in this order:
    on its cues (:func:`detector_cues`): the delivered range, the estimated gear gap
    and vertical speed, the thrust acting now over the model's hover thrust, the
    IMU's specific force along body z and the guidance's phase. Its ground-contact
-   stage, or the gear's contact switch
+   stage is the guidance's ``touchdown`` cue, the gear's contact switch
    (:func:`~quadland_symbolic.landing.gear.contact_switch`, the touchdown
-   policy's), is the guidance's ``touchdown`` cue; the time since the filter last fused
+   policy's) its ``contact_switch`` cue; the time since the filter last fused
    a marker detection (the memory's ``marker_age``) is its ``marker_age``.
 6. **Flight code: guidance and landing step** on the estimate and those cues, with
    the controller's own model ``pc.pp``
@@ -316,7 +316,7 @@ def _flight_stage(l, xc_lay, pc_lay):
     seen = d["fused"][[b.name for b in BLOCKS].index("vision")]
     marker_age = ca.if_else(seen >= 0.5, 0, ca.fmin(cs["marker_age"] + ps["dt"], TIME_CAP))
     switch = contact_switch(LANDING_PLANT_STATE.unpack(xp)["gear"])
-    cues = ca.vertcat(ca.fmax(fl["ground_contact"], switch), marker_age)
+    cues = ca.vertcat(fl["ground_contact"], marker_age, switch)
     _, xgm_next, rec, res = landing_flight_step(l, y, cues, cs, ps)
     sigma = ca.sqrt(ca.fmax(d["P_diag"][0:3], 0))
     nav = _NAV_MEMORY.unpack(nav_next)
