@@ -191,7 +191,7 @@ def test_find_eqpt_finds_quadlands_hover_equilibrium():
     for name, value in zip(pt.state_names, pt.xr, strict=True):
         assert from_nlsys.get(name, x.get(name)) == pytest.approx(value, abs=1e-7), name
     assert pt.xr[pt.state_names.index("z_e")] == pytest.approx(3.0)    # hover_height
-    memory = sys.state_labels[32:32 + pt.xc.size]           # after the guidance's seven
+    memory = sys.state_labels[33:33 + pt.xc.size]           # after the plant's 25, the guidance's 8
     np.testing.assert_allclose([x[n] for n in memory], pt.xc, rtol=1e-7, atol=1e-7)
     # the command in the queue is the step's own at the hover: the equilibrium's forces
     for i in range(1, 5):
@@ -225,18 +225,19 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     carry it amplified by their conditioning: 6.55e-6 with highway's observer on z, under
     5e-6 before it). That the gap is RK4's error and nothing else is checked by its order,
     not its size: it falls sixteenfold as the steps halve (RK4 is fourth order; 17.5
-    measured); the 18 others are the modes the margins' model leaves out, in closed form."""
+    measured); the 19 others are the modes the margins' model leaves out, in closed form."""
     sc, sys, op, pt = _hover()
     gap, extra = _eigenvalue_gap(sys, op, sc, pt)
     assert gap < 1e-5
     # the parked car: its position and heading (1), its speeds' damping exp(-d/m dt); the
     # gear's memory and the guidance's phase, timer and aborts (1); z_ref, which glides
-    # back onto the hover height in one step, and the commit flag, set anew each step (0);
+    # back onto the hover height in one step, the commit flag, set anew each step, and the
+    # contact switch's arming, cleared outside the descent (0);
     # the quiescent-period predictor's two averages of the deck's motion, exp(-dt / T_m);
     # the outer bias estimates of x and y, of zero gain, held (1)
     v, dt = sc.data["vehicle"], sys.dt
     fade = math.exp(-dt / sc.data["landing"]["motion_time"])
-    expected = np.sort([0.0, 0.0, fade, fade,
+    expected = np.sort([0.0, 0.0, 0.0, fade, fade,
                         *np.exp(-dt * np.array([v["d11"] / v["m11"], v["d22"] / v["m22"],
                                                 v["d33"] / v["m33"]])), *[1.0] * 11])
     np.testing.assert_allclose(extra, expected, rtol=0, atol=1e-7)
