@@ -712,7 +712,8 @@ def test_the_console_script_is_the_early_entry_point():
     from pathlib import Path
 
     project = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
-    assert project["project"]["scripts"]["quadland"] == "quadland.__main__:main"
+    # run: main (its SIGINT handler before any heavy import), then the heap left at exit
+    assert project["project"]["scripts"]["quadland"] == "quadland.__main__:run"
 
 
 def test_simulate_prints_the_verdict_and_figures(tmp_path, capsys):
