@@ -127,6 +127,18 @@ def timed_flights(loops, args, kwargs, rounds: int) -> dict:
     return {"cpu": cpu, "same": same, "flown": float(ref.times[-1])}
 
 
+def report_flights(scenario: str, out: dict, rounds: int, of: str) -> None:
+    """Print :func:`timed_flights`' medians per build, each over the "baseline, libm"
+    build's (``of`` names that ratio), and whether its bits are the baseline's."""
+    base = statistics.median(out["cpu"]["baseline, libm"])
+    for k, v in out["cpu"].items():
+        m = statistics.median(v)
+        print(f"- {scenario} flight alone ({out['flown']:.1f} s flown), {k}: {1e3 * m:.2f} ms "
+              f"CPU (median of {rounds}, {1e3 * min(v):.2f} to {1e3 * max(v):.2f}), "
+              f"{m / base:.3f} {of}; "
+              f"{'the same bits' if out['same'][k] else 'DIFFERENT BITS'}")
+
+
 def campaigns(before: Path, small: int, large: int, rounds: int) -> None:
     """The one-worker campaign's CPU per landing, before and now, interleaved."""
     trees = {"before": before, "now": None}
@@ -176,14 +188,8 @@ def main() -> None:
                   f"{'the same bits' if was[s] == now[s] else 'DIFFERENT'}")
     for s in filter(None, a.flights.split(",")):
         loops, args, kwargs = builds(s, extra)
-        out = timed_flights(loops, args, kwargs, a.rounds)
-        base = statistics.median(out["cpu"]["baseline, libm"])
-        for k, v in out["cpu"].items():
-            m = statistics.median(v)
-            print(f"- {s} flight alone ({out['flown']:.1f} s flown), {k}: {1e3 * m:.2f} ms CPU "
-                  f"(median of {a.rounds}, {1e3 * min(v):.2f} to {1e3 * max(v):.2f}), "
-                  f"{m / base:.3f} of baseline, libm; "
-                  f"{'the same bits' if out['same'][k] else 'DIFFERENT BITS'}")
+        report_flights(s, timed_flights(loops, args, kwargs, a.rounds), a.rounds,
+                       "of baseline, libm")
     ref = land_q(7)
     print(f"- `land -q`: {1e3 * statistics.median(ref):.1f} ms CPU (median of 7)")
     if a.before is not None and a.campaign_rounds:

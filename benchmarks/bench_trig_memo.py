@@ -38,14 +38,13 @@ import argparse
 import dataclasses
 import os
 import re
-import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_compiled_flight import timed_flights  # noqa: E402
+from bench_compiled_flight import report_flights, timed_flights  # noqa: E402
 from bench_delivery_ring import captured  # noqa: E402
 
 from quadland.engine import build  # noqa: E402
@@ -230,14 +229,8 @@ def main() -> None:
         if a.callgrind:
             loops[a.callgrind].sampled(*args, **kwargs)
             continue
-        out = timed_flights(loops, args, kwargs, a.rounds)
-        base = statistics.median(out["cpu"]["baseline, libm"])
-        for k, v in out["cpu"].items():
-            m = statistics.median(v)
-            print(f"- {s} flight alone ({out['flown']:.1f} s flown), {k}: {1e3 * m:.2f} ms CPU "
-                  f"(median of {a.rounds}, {1e3 * min(v):.2f} to {1e3 * max(v):.2f}), "
-                  f"{m / base:.3f} of the shipped C's; "
-                  f"{'the same bits' if out['same'][k] else 'DIFFERENT BITS'}")
+        report_flights(s, timed_flights(loops, args, kwargs, a.rounds), a.rounds,
+                       "of the shipped C's")
     print(f"load average after: {os.getloadavg()}")
 
 
