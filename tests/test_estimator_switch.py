@@ -41,8 +41,10 @@ def _bits(v):
     return np.asarray(v, dtype=np.float64).ravel().view(np.uint64)
 
 
-@pytest.mark.parametrize("seed", [1, 2])
-def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed):
+@pytest.mark.parametrize(("seed", "every"), [(1, 1), (2, 1), (1, 2), (2, 3)])
+def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed, every):
+    """Also with the horizon predicted every 2 and 3 periods (E6b): the prediction's
+    ``Switch`` too."""
     rng = np.random.default_rng(seed)
     sizes = (N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
     branch_free, conditional = estimator_step_function(*sizes), conditional_step_function(*sizes)
@@ -50,6 +52,7 @@ def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed):
     lay, lp = estimator_memory(*sizes), estimator_params()
     p = lp.pack(dict(ESTIMATOR_DEFAULTS))
     p[lp.slice("range_deck_radius")], p[lp.slice("range_deck_sigmas")] = 1e30, 0.0
+    p[lp.slice("predict_every")] = every
     x0 = np.r_[0.3, -0.2, 3.0, 0.2, -0.1, -0.3, 0.5, 0.1, 0.0, np.zeros(12)]
     x0[:18] += rng.normal(size=18) * 0.05
     P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3, [0.01] * 3]

@@ -34,7 +34,9 @@ _ESTIMATOR_POSITIVE = ("q_acc", "q_at", "q_b", "q_ab", "vision_sigma0", "tilt_ta
                        *(f"gate_{b.name}" for b in BLOCKS))
 #: [estimator] keys with an upper bound of their own: the range model divides by
 #: ``n2 . b3_E`` once it is at least ``range_min_cos``, a cosine in (0, 1].
-_ESTIMATOR_HI = {"range_min_cos": 1.0}
+_ESTIMATOR_HI = {"range_min_cos": 1.0, "predict_every": 25.0}
+#: [estimator] keys with a lower bound of their own: a prediction at least every period.
+_ESTIMATOR_LO = {"predict_every": 1.0}
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
@@ -309,7 +311,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     # sensors. A campaign's dispersions of [sensors.*] leave it at its nominal.
     "estimator": {
         **{f.name: Field(F, f.unit if isinstance(f.unit, str) else f.unit[0], f.doc,
-                         f.size if f.size > 1 else None, lo=0.0,
+                         f.size if f.size > 1 else None, lo=_ESTIMATOR_LO.get(f.name, 0.0),
                          hi=_ESTIMATOR_HI.get(f.name, 1e6),
                          lo_open=f.name in _ESTIMATOR_POSITIVE)
            for f in estimator_params().fields if f.name != "g"},
