@@ -77,14 +77,16 @@ def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed, ever
 
 
 def test_its_c_branches_once_per_sensor(tmp_path, monkeypatch):
-    """CasADi's C of the Switch: an ``if`` on the due flag around the sensor's updates."""
+    """CasADi's C of the Switches: an ``if`` on the due flag around the sensor's updates,
+    one on the prediction's flag around the horizon's prediction (E6b)."""
     monkeypatch.chdir(tmp_path)
     conditional_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING).generate("step.c")
     text = (tmp_path / "step.c").read_text()
     assert len(re.findall(r"if \(arg\[0\] \? casadi_to_int\(\*arg\[0\]\) : 0\) \{", text)) \
-        == len(SENSORS)
+        == len(SENSORS) + 1
     for s in SENSORS:
         assert f"fuse_{s}:" in text and f"skip_{s}:" in text
+    assert "predict:" in text and "hold:" in text
 
 
 def test_stages_compose_by_name_and_refuse_what_is_missing():

@@ -11,9 +11,9 @@ model (state, packets, parameters, prediction, measurement blocks) is
 2. The filter's state ``x_h`` and covariance ``P_h`` live at the horizon
    ``t_h``, ``n_hist`` periods behind ``t``. Each sensor's fresh packet goes
    into its FIFO; the FIFO's head is fused when its sample time is within half
-   a horizon's step (``predict_every`` periods) of ``t_h`` or before it (gated per block, scalar Joseph updates),
-   or discarded when older than ``t_h - max_age``; at most one packet per
-   sensor per step (E16).
+   a horizon's step (``predict_every`` periods) of ``t_h`` or before it (gated per
+   block, scalar Joseph updates), or discarded when older than ``t_h - max_age``;
+   at most one packet per sensor per step (E16).
 3. The output predictor carries ``x_h`` through the ``n_hist`` buffered
    acceleration inputs to ``t`` (state only, closed form (E17)) and forms the
    controller's :data:`~quadland_symbolic.landing.controller.LANDING_MEASUREMENT` (E7), (E15).
@@ -40,13 +40,13 @@ import casadi as ca
 
 from quadland_symbolic.kalman import fifo_push_pop, is_finite, select
 from quadland_symbolic.kinematics import rotation
+from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
 from quadland_symbolic.landing.nav_accumulate import (
+    acc_field,
     accumulate,
     accumulated_prediction,
-    acc_field,
     carry_accumulated,
 )
-from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
 from quadland_symbolic.landing.nav_output import (
     estimator_output,
     heave_frequency,
