@@ -100,35 +100,33 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, max_age_datalink, 51, 0) &&
     AT(ql_estimator_params, deck_extrapolation_max, 52, 0) &&
     AT(ql_estimator_params, heave_time, 53, 0) &&
-    AT(ql_estimator_params, predict_every, 54, 0) &&
-    sizeof(ql_estimator_params) == 55 * sizeof(ql_real) ? 1 : -1];
+    sizeof(ql_estimator_params) == 54 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 21, 0) &&
     AT(ql_estimator_memory, t_h, 105, 0) &&
     AT(ql_estimator_memory, hist, 106, 0) &&
-    AT(ql_estimator_memory, acc, 456, 0) &&
-    AT(ql_estimator_memory, fifo_vision, 464, 0) &&
-    AT(ql_estimator_memory, count_vision, 496, 0) &&
-    AT(ql_estimator_memory, fifo_gnss, 497, 0) &&
-    AT(ql_estimator_memory, count_gnss, 537, 0) &&
-    AT(ql_estimator_memory, fifo_range, 538, 0) &&
-    AT(ql_estimator_memory, count_range, 668, 0) &&
-    AT(ql_estimator_memory, fifo_datalink, 669, 0) &&
-    AT(ql_estimator_memory, count_datalink, 733, 0) &&
-    AT(ql_estimator_memory, deck_eta2, 734, 0) &&
-    AT(ql_estimator_memory, deck_w2E, 737, 0) &&
-    AT(ql_estimator_memory, deck_w2E_dot, 740, 0) &&
-    AT(ql_estimator_memory, deck_tau, 743, 0) &&
-    AT(ql_estimator_memory, n_fused, 744, 0) &&
-    AT(ql_estimator_memory, n_rejected, 751, 0) &&
-    AT(ql_estimator_memory, n_held, 758, 0) &&
-    AT(ql_estimator_memory, n_discarded, 765, 0) &&
-    AT(ql_estimator_memory, n_dropped, 769, 0) &&
-    AT(ql_estimator_memory, n_imu_invalid, 773, 0) &&
-    AT(ql_estimator_memory, streak, 774, 0) &&
-    AT(ql_estimator_memory, heave_ms, 781, 0) &&
-    sizeof(ql_estimator_memory) == 783 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_memory, fifo_vision, 456, 0) &&
+    AT(ql_estimator_memory, count_vision, 488, 0) &&
+    AT(ql_estimator_memory, fifo_gnss, 489, 0) &&
+    AT(ql_estimator_memory, count_gnss, 529, 0) &&
+    AT(ql_estimator_memory, fifo_range, 530, 0) &&
+    AT(ql_estimator_memory, count_range, 660, 0) &&
+    AT(ql_estimator_memory, fifo_datalink, 661, 0) &&
+    AT(ql_estimator_memory, count_datalink, 725, 0) &&
+    AT(ql_estimator_memory, deck_eta2, 726, 0) &&
+    AT(ql_estimator_memory, deck_w2E, 729, 0) &&
+    AT(ql_estimator_memory, deck_w2E_dot, 732, 0) &&
+    AT(ql_estimator_memory, deck_tau, 735, 0) &&
+    AT(ql_estimator_memory, n_fused, 736, 0) &&
+    AT(ql_estimator_memory, n_rejected, 743, 0) &&
+    AT(ql_estimator_memory, n_held, 750, 0) &&
+    AT(ql_estimator_memory, n_discarded, 757, 0) &&
+    AT(ql_estimator_memory, n_dropped, 761, 0) &&
+    AT(ql_estimator_memory, n_imu_invalid, 765, 0) &&
+    AT(ql_estimator_memory, streak, 766, 0) &&
+    AT(ql_estimator_memory, heave_ms, 773, 0) &&
+    sizeof(ql_estimator_memory) == 775 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(ql_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(ql_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -157,7 +155,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(ql_estimator_diagnostics) == 136 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[55] = {
+static const ql_real default_p_est[54] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
     0.001, 0.0855, 0.0855, 0.0, 5.0, 0.1,
@@ -167,7 +165,6 @@ static const ql_real default_p_est[55] = {
     0.1, 0.3, 0.3, 0.3, 11.344867, 11.344867,
     11.344867, 11.344867, 6.634897, 11.344867, 11.344867, 10.0,
     0.02, 0.02, 0.02, 0.02, 0.5, 0.0,
-    1.0,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -210,7 +207,6 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
  *   heave_time               >= 0
- *   predict_every            in [1, 25]
  * NaN and infinities are outside every range. */
 ql_status ql_check_estimator_params(const ql_estimator_params *params, const char **bad_field)
 {
@@ -346,9 +342,6 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
     if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0))) {
         bad = "heave_time";
     }
-    if (!bad && !(isfinite(p[54]) && ((p[54] >= 1.0) && (p[54] <= 25.0)))) {
-        bad = "predict_every";
-    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -356,7 +349,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 55 comparisons. The values are known to be finite; no names and no
+ * 54 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -415,7 +408,6 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[51] >= 0.0);
     ok &= (p[52] >= 0.0);
     ok &= (p[53] >= 0.0);
-    ok &= ((p[54] >= 1.0) & (p[54] <= 25.0));
     return ok;
 }
 

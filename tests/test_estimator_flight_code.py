@@ -382,7 +382,7 @@ DOCUMENTED = {
     "range_deck_sigmas": _nonneg, "datalink_v_sigma": _pos,
     "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS}, "gate_lockout": _nonneg,
     **{f"max_age_{s}": _nonneg for s in SENSORS}, "deck_extrapolation_max": _nonneg,
-    "heave_time": _nonneg, "predict_every": lambda v: (v >= 1) & (v <= 25),
+    "heave_time": _nonneg,
 }
 
 
@@ -401,8 +401,6 @@ def _edges(name, ok):
     """Values just outside and at the inside edge of a documented range."""
     if name == "range_min_cos":
         return [0.0, 1.0 + 1e-9], [1e-9, 1.0]
-    if name == "predict_every":
-        return [1.0 - 1e-9, 25.0 + 1e-9], [1.0, 25.0]
     if ok is _pos:
         return [0.0, -1.0], [1e-9]
     return [-1e-9], [0.0]

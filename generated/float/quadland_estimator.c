@@ -100,35 +100,33 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, max_age_datalink, 51, 0) &&
     AT(qlf_estimator_params, deck_extrapolation_max, 52, 0) &&
     AT(qlf_estimator_params, heave_time, 53, 0) &&
-    AT(qlf_estimator_params, predict_every, 54, 0) &&
-    sizeof(qlf_estimator_params) == 55 * sizeof(qlf_real) ? 1 : -1];
+    sizeof(qlf_estimator_params) == 54 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
     AT(qlf_estimator_memory, P_h, 21, 0) &&
     AT(qlf_estimator_memory, t_h, 105, 0) &&
     AT(qlf_estimator_memory, hist, 106, 0) &&
-    AT(qlf_estimator_memory, acc, 456, 0) &&
-    AT(qlf_estimator_memory, fifo_vision, 464, 0) &&
-    AT(qlf_estimator_memory, count_vision, 496, 0) &&
-    AT(qlf_estimator_memory, fifo_gnss, 497, 0) &&
-    AT(qlf_estimator_memory, count_gnss, 537, 0) &&
-    AT(qlf_estimator_memory, fifo_range, 538, 0) &&
-    AT(qlf_estimator_memory, count_range, 668, 0) &&
-    AT(qlf_estimator_memory, fifo_datalink, 669, 0) &&
-    AT(qlf_estimator_memory, count_datalink, 733, 0) &&
-    AT(qlf_estimator_memory, deck_eta2, 734, 0) &&
-    AT(qlf_estimator_memory, deck_w2E, 737, 0) &&
-    AT(qlf_estimator_memory, deck_w2E_dot, 740, 0) &&
-    AT(qlf_estimator_memory, deck_tau, 743, 0) &&
-    AT(qlf_estimator_memory, n_fused, 744, 0) &&
-    AT(qlf_estimator_memory, n_rejected, 751, 0) &&
-    AT(qlf_estimator_memory, n_held, 758, 0) &&
-    AT(qlf_estimator_memory, n_discarded, 765, 0) &&
-    AT(qlf_estimator_memory, n_dropped, 769, 0) &&
-    AT(qlf_estimator_memory, n_imu_invalid, 773, 0) &&
-    AT(qlf_estimator_memory, streak, 774, 0) &&
-    AT(qlf_estimator_memory, heave_ms, 781, 0) &&
-    sizeof(qlf_estimator_memory) == 783 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_memory, fifo_vision, 456, 0) &&
+    AT(qlf_estimator_memory, count_vision, 488, 0) &&
+    AT(qlf_estimator_memory, fifo_gnss, 489, 0) &&
+    AT(qlf_estimator_memory, count_gnss, 529, 0) &&
+    AT(qlf_estimator_memory, fifo_range, 530, 0) &&
+    AT(qlf_estimator_memory, count_range, 660, 0) &&
+    AT(qlf_estimator_memory, fifo_datalink, 661, 0) &&
+    AT(qlf_estimator_memory, count_datalink, 725, 0) &&
+    AT(qlf_estimator_memory, deck_eta2, 726, 0) &&
+    AT(qlf_estimator_memory, deck_w2E, 729, 0) &&
+    AT(qlf_estimator_memory, deck_w2E_dot, 732, 0) &&
+    AT(qlf_estimator_memory, deck_tau, 735, 0) &&
+    AT(qlf_estimator_memory, n_fused, 736, 0) &&
+    AT(qlf_estimator_memory, n_rejected, 743, 0) &&
+    AT(qlf_estimator_memory, n_held, 750, 0) &&
+    AT(qlf_estimator_memory, n_discarded, 757, 0) &&
+    AT(qlf_estimator_memory, n_dropped, 761, 0) &&
+    AT(qlf_estimator_memory, n_imu_invalid, 765, 0) &&
+    AT(qlf_estimator_memory, streak, 766, 0) &&
+    AT(qlf_estimator_memory, heave_ms, 773, 0) &&
+    sizeof(qlf_estimator_memory) == 775 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_diagnostics_is_its_layout[
     AT(qlf_estimator_diagnostics, nu_vision, 0, 0) &&
     AT(qlf_estimator_diagnostics, nu_gnss_rel, 3, 0) &&
@@ -157,7 +155,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(qlf_estimator_diagnostics) == 136 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[55] = {
+static const qlf_real default_p_est[54] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
     0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.1f,
@@ -167,7 +165,6 @@ static const qlf_real default_p_est[55] = {
     0.1f, 0.3f, 0.3f, 0.3f, 11.344867f, 11.344867f,
     11.344867f, 11.344867f, 6.634897f, 11.344867f, 11.344867f, 10.0f,
     0.02f, 0.02f, 0.02f, 0.02f, 0.5f, 0.0f,
-    1.0f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -210,7 +207,6 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
  *   heave_time               >= 0
- *   predict_every            in [1, 25]
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
                                       const char **bad_field)
@@ -347,9 +343,6 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
     if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0f))) {
         bad = "heave_time";
     }
-    if (!bad && !(isfinite(p[54]) && ((p[54] >= 1.0f) && (p[54] <= 25.0f)))) {
-        bad = "predict_every";
-    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -357,7 +350,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 55 comparisons. The values are known to be finite; no names and no
+ * 54 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -416,7 +409,6 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[51] >= 0.0f);
     ok &= (p[52] >= 0.0f);
     ok &= (p[53] >= 0.0f);
-    ok &= ((p[54] >= 1.0f) & (p[54] <= 25.0f));
     return ok;
 }
 

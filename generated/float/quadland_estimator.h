@@ -26,8 +26,8 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_RANGE 26             /* FIFO depth of range packets */
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 84         /* stored covariance entries (coupling axes) */
-#define QLF_ESTIMATOR_MEMORY_SIZE 783            /* reals in qlf_estimator_memory */
-#define QLF_ESTIMATOR_PARAMS_SIZE 55             /* reals in qlf_estimator_params */
+#define QLF_ESTIMATOR_MEMORY_SIZE 775            /* reals in qlf_estimator_memory */
+#define QLF_ESTIMATOR_PARAMS_SIZE 54             /* reals in qlf_estimator_params */
 #define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 136       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
@@ -130,7 +130,6 @@ typedef struct {
     qlf_real max_age_datalink;       /* s: oldest datalink sample fused, before the horizon */
     qlf_real deck_extrapolation_max; /* s: longest extrapolation of the broadcast (E7) */
     qlf_real heave_time;             /* s: averaging time of the pad's heave frequency (E17a) */
-    qlf_real predict_every;          /* -: control periods per prediction of the horizon (E6b) */
 } qlf_estimator_params;
 
 /* The filter's memory: the state and covariance at the horizon, the input
@@ -141,7 +140,6 @@ typedef struct {
     qlf_real P_h[84];                /* per entry (see its layout): covariance at the horizon: stored upper-triangle entries, row by row */
     qlf_real t_h;                    /* s: time of the horizon */
     qlf_real hist[50][7];            /* m/s^2, s, rad: acceleration inputs (E), their periods and the body's turns (E, E6a) from t_h to now, oldest first */
-    qlf_real acc[8];                 /* m/s^2, s, rad, -: the periods left the buffer since the horizon's last prediction (E6b): their mean acceleration input, total time, summed turn and count */
     qlf_real fifo_vision[8][4];      /* s, m: vision packets waiting for the horizon, oldest first */
     qlf_real count_vision;           /* -: vision packets in the FIFO */
     qlf_real fifo_gnss[4][10];       /* s, m, m/s: gnss packets waiting for the horizon, oldest first */

@@ -32,9 +32,9 @@ _ESTIMATOR_POSITIVE = ("q_acc", "q_at", "q_b", "q_ab", "vision_sigma0", "tilt_ta
                        "gnss_rel_sigma", "gnss_v1_sigma", "gnss_vt_sigma", "range_sigma",
                        "range_min_cos", "range_deck_radius", "datalink_v_sigma", "datalink_a_sigma",
                        *(f"gate_{b.name}" for b in BLOCKS))
-#: [estimator] keys with bounds of their own: the range model divides by ``n2 . b3_E``
-#: once it is at least ``range_min_cos`` (0, 1]; the horizon's step ``predict_every`` (E6b).
-_ESTIMATOR_HI, _ESTIMATOR_LO = {"range_min_cos": 1.0, "predict_every": 25.0}, {"predict_every": 1.0}
+#: [estimator] keys with an upper bound of their own: the range model divides by
+#: ``n2 . b3_E`` once it is at least ``range_min_cos``, a cosine in (0, 1].
+_ESTIMATOR_HI = {"range_min_cos": 1.0}
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
@@ -309,7 +309,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     # sensors. A campaign's dispersions of [sensors.*] leave it at its nominal.
     "estimator": {
         **{f.name: Field(F, f.unit if isinstance(f.unit, str) else f.unit[0], f.doc,
-                         f.size if f.size > 1 else None, lo=_ESTIMATOR_LO.get(f.name, 0.0),
+                         f.size if f.size > 1 else None, lo=0.0,
                          hi=_ESTIMATOR_HI.get(f.name, 1e6),
                          lo_open=f.name in _ESTIMATOR_POSITIVE)
            for f in estimator_params().fields if f.name != "g"},

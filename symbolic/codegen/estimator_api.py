@@ -83,7 +83,6 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     **{f"max_age_{s}": _NONNEGATIVE for s in SENSORS},
     "deck_extrapolation_max": _NONNEGATIVE,
     "heave_time": _NONNEGATIVE,           # 0: a flat deck, the constant acceleration (E17a)
-    "predict_every": Range(lo=1.0, hi=25.0),  # periods per prediction of the horizon (E6b)
 })
 
 

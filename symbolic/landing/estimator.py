@@ -11,18 +11,14 @@ model (state, packets, parameters, prediction, measurement blocks) is
 2. The filter's state ``x_h`` and covariance ``P_h`` live at the horizon
    ``t_h``, ``n_hist`` periods behind ``t``. Each sensor's fresh packet goes
    into its FIFO; the FIFO's head is fused when its sample time is within half
-   a horizon's step (``predict_every`` periods) of ``t_h`` or before it (gated per
-   block, scalar Joseph updates), or discarded when older than ``t_h - max_age``;
-   at most one packet per sensor per step (E16).
+   a period of ``t_h`` or before it (gated per block, scalar Joseph updates),
+   or discarded when older than ``t_h - max_age``; at most one packet per
+   sensor per step (E16).
 3. The output predictor carries ``x_h`` through the ``n_hist`` buffered
    acceleration inputs to ``t`` (state only, closed form (E17)) and forms the
    controller's :data:`~quadland_symbolic.landing.controller.LANDING_MEASUREMENT` (E7), (E15).
 4. ``x_h``, ``P_h`` are predicted over the oldest buffered input (E6); this
-   period's input joins the buffer. With ``predict_every = N`` (E6b) the oldest input
-   joins the accumulated ones (``acc``) instead, and ``x_h``, ``P_h`` are predicted
-   over the ``N`` accumulated every ``N``-th period
-   (:mod:`quadland_symbolic.landing.nav_accumulate`); the output predictor carries
-   ``x_h`` through them first.
+   period's input joins the buffer.
 
 Here everything is selected, never branched: a block that is not due, held back or
 rejected runs the same instructions with a zero gain.
@@ -41,12 +37,6 @@ import casadi as ca
 from quadland_symbolic.kalman import fifo_push_pop, is_finite, select
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import LANDING_MEASUREMENT
-from quadland_symbolic.landing.nav_accumulate import (
-    acc_field,
-    accumulate,
-    accumulated_prediction,
-    carry_accumulated,
-)
 from quadland_symbolic.landing.nav_output import (
     estimator_output,
     heave_frequency,
@@ -65,6 +55,7 @@ from quadland_symbolic.landing.navigation import (
     covariance_pattern,
     deck_at,
     estimator_params,
+    nav_predict,
 )
 from quadland_symbolic.layout import Field, Layout
 
@@ -85,7 +76,6 @@ __all__ = [
     "block_streaks",
     "fuse_sensor",
     "finish_step",
-    "step_accumulation",
 ]
 
 #: Default horizon delay in periods: D = 0.2 s at 250 Hz.
@@ -181,7 +171,6 @@ def estimator_memory(n_hist: int = N_HIST, depth=FIFO_DEPTH, coupling: str = "fu
               "t_h to now, oldest first",
               shape=(len(HIST_ROWS), n_hist),
               elements=tuple(f"{r}_{k + 1}" for k in range(n_hist) for r in HIST_ROWS)),
-        acc_field(),
         *fifos,
         Field("deck_eta2", 3, "rad", "deck attitude of the latest broadcast"),
         Field("deck_w2E", 3, "rad/s", "deck angular velocity of the latest broadcast"),
@@ -261,8 +250,8 @@ def _queue(layout, m, pkt, p, t_h, dt, t):
         push_ok = ca.logic_and(push_ok, is_finite(pkt[i]))
     fresh = pk["fresh"] > 0.5
 
-    def pop_if(head, nonempty):     # within half the horizon's step of it (E6b)
-        return ca.logic_and(nonempty, head[0] <= t_h + p["predict_every"] * dt / 2)
+    def pop_if(head, nonempty):
+        return ca.logic_and(nonempty, head[0] <= t_h + dt / 2)
 
     name = layout.name
     f = fifo_push_pop(m[f"fifo_{name}"], m[f"count_{name}"], pkt[1:],
@@ -329,19 +318,6 @@ def _input(ims, x_h, p, dt):
     return select(ok, a_in, x["a_b"] + x["a_tilt"]), select(_finite3(turn), turn, 0), ok
 
 
-def _history(m, ims, x_h, p, dt):
-    """The input buffer with this period's input (E2), (E6a) last, and whether the IMU's
-    input was finite."""
-    a_in, turn, imu_ok = _input(ims, x_h, p, dt)
-    return ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn)), imu_ok      # oldest first
-
-
-def step_accumulation(m, ims, x_h, p, dt):
-    """``acc`` with the period leaving the buffer this step (E6b), from the memory ``m``
-    and the horizon after fusion ``x_h``."""
-    return accumulate(m["acc"], _history(m, ims, x_h, p, dt)[0][:, 0])
-
-
 def step_queues(m, pkts, p, dt, t):
     """The latest broadcast and every sensor's queue (:func:`_queue`), by sensor."""
     deck = _latest_deck(m, DATALINK.unpack(pkts[-1]), t)
@@ -354,23 +330,17 @@ def block_streaks(m, name):
     return [m["streak"][_BLOCK_NAMES.index(b.name)] for b in sensor_blocks(name)]
 
 
-def finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk,
-                predicted=None):
+def finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk):
     """``(mem_next, y, diag)`` from the state ``x``, ``P`` after fusion (steps 3 and 4).
 
-    ``sen`` each sensor's queue, ``blk`` each block's outcome; ``predicted`` the
-    horizon after step 4, ``(x_h, P_h, t_h, acc)`` as
-    :func:`~quadland_symbolic.landing.nav_accumulate.accumulated_prediction` gives it on
-    :func:`step_accumulation`'s ``acc``, computed here when None.
+    ``sen`` each sensor's queue, ``blk`` each block's outcome.
     """
     p = estimator_params().unpack(p_est)
     heave_ms, omega = heave_frequency(m["heave_ms"], x, p, dt)
-    y = estimator_output(carry_accumulated(x, m["acc"], omega), m["hist"], deck, imu, p_est,
-                         t, omega)
-    hist, imu_ok = _history(m, ims, x, p, dt)
-    x_next, P_next, t_next, acc_next = predicted if predicted is not None else \
-        accumulated_prediction(x, P, m["t_h"], accumulate(m["acc"], hist[:, 0]), p_est,
-                               pattern, p["predict_every"])
+    y = estimator_output(x, m["hist"], deck, imu, p_est, t, omega)
+    a_in, turn, imu_ok = _input(ims, x, p, dt)
+    hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn))          # oldest first
+    x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern, hist[4:7, 0])
     flags = dict(
         fused=ca.vertcat(*[blk[b]["fused"] for b in _BLOCK_NAMES]),
         rejected=ca.vertcat(*[blk[b]["rejected"] for b in _BLOCK_NAMES]),
@@ -391,7 +361,7 @@ def finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk,
     for s in SENSORS:
         fifos += [sen[s]["fifo"], sen[s]["count"]]
     mem_next = ca.vertcat(
-        x_next, P_next, t_next, ca.vec(hist[:, 1:]), acc_next, *fifos,
+        x_next, pattern.pack(P_next), m["t_h"] + hist[3, 0], ca.vec(hist[:, 1:]), *fifos,
         deck["eta2"], deck["w2E"], deck["w2E_dot"], deck["tau"],
         *[counters[f.name] for f in _counters()], heave_ms)
     diag = ca.vertcat(

@@ -19,12 +19,8 @@ pieces (:mod:`quadland_symbolic.landing.estimator`'s :func:`step_queues`,
    branch-free step) and ``skip_<sensor>`` (the state and covariance passed through,
    every outcome zero). CasADi's generated C evaluates only the chosen case (an
    ``if`` on the flag around the case's call);
-3. ``estimator_accumulate``: the period leaving the input buffer added to the
-   accumulated ones, and whether the horizon is predicted this step (E6b);
-   ``estimator_predict``: a ``Switch`` on that between ``predict`` (the horizon
-   predicted over the accumulated periods) and ``hold`` (passed through);
-4. ``estimator_finish``: the output predictor, the memory and the diagnostics
-   (steps 3 and 4).
+3. ``estimator_finish``: the output predictor, the prediction, the memory and the
+   diagnostics (steps 3 and 4).
 
 The sensed loop's compiled simulator flies it (:mod:`quadland_symbolic.landing.sensed_loop`).
 The flight code's C (``generated/estimator_step.c``) stays the branch-free step: there
@@ -54,10 +50,8 @@ from quadland_symbolic.landing.estimator import (
     finish_step,
     fuse_sensor,
     sensor_blocks,
-    step_accumulation,
     step_queues,
 )
-from quadland_symbolic.landing.nav_accumulate import ACC_ROWS, prediction_due, prediction_over
 from quadland_symbolic.landing.navigation import (
     IMU,
     NAV,
@@ -67,7 +61,7 @@ from quadland_symbolic.landing.navigation import (
     estimator_params,
 )
 
-__all__ = ["OUTCOME", "fusion_switch", "prediction_switch", "conditional_step_function"]
+__all__ = ["OUTCOME", "fusion_switch", "conditional_step_function"]
 
 #: The outcome of a block after its measurement's ``dim`` innovations, in order.
 OUTCOME = ("nis", "fused", "held", "rejected")
@@ -130,8 +124,7 @@ def _queues_function(lay):
     dt, t = ca.SX.sym("dt"), ca.SX.sym("t")
     m = lay.unpack(mem)
     deck, sen = step_queues(m, pkts, estimator_params().unpack(p_est), dt, t)
-    outs, names = [m["x_h"], m["P_h"], m["t_h"], ca.vertcat(*_deck_values(deck))], \
-        ["x_h", "P_h", "t_h", "deck"]
+    outs, names = [m["x_h"], m["P_h"], ca.vertcat(*_deck_values(deck))], ["x_h", "P_h", "deck"]
     for s in SENSORS:
         q = sen[s]
         for k, v in (("head", q["head"]), ("due", q["due"]),
@@ -148,43 +141,9 @@ def _deck_values(deck: dict) -> list:
     return [deck["eta2"], deck["w2E"], deck["w2E_dot"], deck["tau"]]
 
 
-@functools.cache
-def prediction_switch(coupling: str = "full") -> ca.Function:
-    """``estimator_predict(due, x, P, t_h, acc, p_est) -> (x_next, P_next, t_next, acc_next)``.
-
-    A ``Switch`` on its first input: ``predict``
-    (:func:`~quadland_symbolic.landing.nav_accumulate.prediction_over`) where it is not 0,
-    ``hold`` (the inputs passed through) where it is. ``P`` the covariance's stored
-    entries.
-    """
-    pattern = covariance_pattern(coupling)
-    x, P, t_h = NAV.sym("x"), ca.SX.sym("P", pattern.size), ca.SX.sym("t_h")
-    acc, p_est = ca.SX.sym("acc", len(ACC_ROWS)), estimator_params().sym("p_est")
-    ins, names = [x, P, t_h, acc, p_est], ["x", "P", "t_h", "acc", "p_est"]
-    outs = ["x_next", "P_next", "t_next", "acc_next"]
-    predicted = prediction_over(x, pattern.unpack(P), t_h, acc, p_est, pattern)
-    predict = ca.Function("predict", ins, [ca.densify(v) for v in predicted], names, outs,
-                          {"cse": True})
-    hold = ca.Function("hold", ins, [x, P, t_h, acc], names, outs)
-    return ca.Function.conditional("estimator_predict", [hold], predict)
-
-
-def _accumulate_function(lay):
-    """``estimator_accumulate(mem, imu, x, p_est, dt) -> (acc, due)``
-    (:func:`~quadland_symbolic.landing.estimator.step_accumulation`)."""
-    mem, imu, p_est = lay.sym("mem"), IMU.sym("imu"), estimator_params().sym("p_est")
-    x, dt = NAV.sym("x"), ca.SX.sym("dt")
-    p = estimator_params().unpack(p_est)
-    acc = step_accumulation(lay.unpack(mem), IMU.unpack(imu), x, p, dt)
-    return ca.Function("estimator_accumulate", [mem, imu, x, p_est, dt],
-                       [ca.densify(acc), ca.densify(prediction_due(acc, p["predict_every"]))],
-                       ["mem", "imu", "x", "p_est", "dt"], ["acc", "due"], {"cse": True})
-
-
 def _finish_function(lay, pattern):
-    """``estimator_finish(mem, imu, p_est, dt, t, deck, <queues>, x, P, <outcomes>,
-    x_next, P_next, t_next, acc_next) -> (mem_next, y, diag)``
-    (:func:`~quadland_symbolic.landing.estimator.finish_step`)."""
+    """``estimator_finish(mem, imu, p_est, dt, t, deck, <queues>, x, P, <outcomes>)
+    -> (mem_next, y, diag)`` (:func:`~quadland_symbolic.landing.estimator.finish_step`)."""
     mem, imu, p_est = lay.sym("mem"), IMU.sym("imu"), estimator_params().sym("p_est")
     dt, t, deck = ca.SX.sym("dt"), ca.SX.sym("t"), ca.SX.sym("deck", _DECK)
     x, P = NAV.sym("x"), ca.SX.sym("P", pattern.size)
@@ -208,12 +167,8 @@ def _finish_function(lay, pattern):
             blk[b.name] = dict(nu=v[k:k + b.dim],
                                **{o: v[k + b.dim + i] for i, o in enumerate(OUTCOME)})
             k += b.dim + len(OUTCOME)
-    predicted = (NAV.sym("x_next"), ca.SX.sym("P_next", pattern.size), ca.SX.sym("t_next"),
-                 ca.SX.sym("acc_next", len(ACC_ROWS)))
-    ins += list(predicted)
-    names += ["x_next", "P_next", "t_next", "acc_next"]
     mem_next, y, diag = finish_step(lay, pattern, m, IMU.unpack(imu), imu, p_est, dt, t,
-                                    _deck(deck), sen, x, pattern.unpack(P), blk, predicted)
+                                    _deck(deck), sen, x, pattern.unpack(P), blk)
     return ca.Function("estimator_finish", ins, [mem_next, y, diag], names,
                        ["mem_next", "y", "diag"], {"cse": True})
 
@@ -241,10 +196,7 @@ def conditional_step_function(n_hist: int, depth, coupling: str = "full") -> ca.
         due = q[f"due_{s}"]
         x, P, done[f"outcome_{s}"] = fusion_switch(s, coupling)(
             due, x, P, q[f"head_{s}"], due, q["deck"], q[f"streak_{s}"], p_est)
-    acc, due = _accumulate_function(lay)(mem, imu, x, p_est, dt)
-    x_n, P_n, t_n, acc_n = prediction_switch(coupling)(due, x, P, q["t_h"], acc, p_est)
-    args = dict(mem=mem, imu=imu, p_est=p_est, dt=dt, t=t, deck=q["deck"], x=x, P=P, **done,
-                x_next=x_n, P_next=P_n, t_next=t_n, acc_next=acc_n)
+    args = dict(mem=mem, imu=imu, p_est=p_est, dt=dt, t=t, deck=q["deck"], x=x, P=P, **done)
     for s in SENSORS:
         args.update({f"{k}_{s}": q[f"{k}_{s}"] for k in ("fifo", "count", "discarded",
                                                          "dropped")})

@@ -2,8 +2,8 @@
 
 State, packets, parameters, prediction, measurement blocks, outputs.
 
-docs/estimator.md gives the design and the equations (E1)-(E14) cited here, E z up.
-The filter's state :data:`NAV` is PX4's moving-target vision target
+docs/estimator.md gives the design and the equations (E1)-(E14) cited here. Frame E
+has z up. The filter's state :data:`NAV` is PX4's moving-target vision target
 estimator's (relative position, the vehicle's and the pad's velocities, the pad's
 acceleration, the relative GNSS bias) plus the two biases of the acceleration input,
 which quadland forms from the raw accelerometer through an attitude estimate: ``a_b``
@@ -174,7 +174,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     gate_lockout=10.0,
     **{f"max_age_{s}": 0.02 for s in SENSORS},
-    deck_extrapolation_max=0.5, heave_time=0.0, predict_every=1.0,
+    deck_extrapolation_max=0.5, heave_time=0.0,
 ))
 
 
@@ -217,7 +217,6 @@ def estimator_params() -> Layout:
           for s in SENSORS],
         Field("deck_extrapolation_max", 1, "s", "longest extrapolation of the broadcast (E7)"),
         Field("heave_time", 1, "s", "averaging time of the pad's heave frequency (E17a)"),
-        Field("predict_every", 1, "-", "control periods per prediction of the horizon (E6b)"),
     ), "navigation filter parameters")
 
 

@@ -363,9 +363,6 @@ def hover_filter_models(scenario: Scenario, point: OperatingPoint, rate_hz: floa
     773); the plant, the controller and the other loops are the full ones.
     """
     delay_periods = check_delay_periods(delay_periods)
-    if float(scenario.data["estimator"]["predict_every"]) != 1.0:
-        raise ValueError("hover_filter_models: the linear filter predicts its horizon every "
-                         "period; estimator.predict_every != 1 (E6b) is not modelled")
     dt = 1.0 / rate_hz
     h = _hover_filter(scenario, point, dt)
     if np.max(np.abs(h["S_u"]), initial=0.0) > 0:
