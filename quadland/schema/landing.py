@@ -219,6 +219,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                "quadrotor down (0: no limit)", lo=0.0, hi=1e3, default=0.0),
         "leash_height": Field(F, "m", "height above touchdown below which descent_leash holds",
                               lo=0.0, hi=1e3, default=1e3),
+        "max_deck_fall": Field(F, "m/s", "a faster falling deck withdraws the committed final "
+                               "descent (1000: never)", lo=0.0, hi=1e3, lo_open=True,
+                               default=1e3),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",

@@ -79,7 +79,11 @@ band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
-by one. Above the wait height a moving deck aborts nothing.
+by one. So does, once committed, a deck falling faster than ``max_deck_fall``
+(the wave-off on a deck that drops away: the navigation's error in the relative
+vertical speed grows with the deck's jerk, about ``omega^2`` times its heave rate;
+a large value, the default, never withdraws). Above the wait height a moving deck
+aborts nothing.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -170,6 +174,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "down (0: no limit)"),
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
+    Field("max_deck_fall", 1, "m/s", "largest deck fall rate at which a committed descent goes "
+          "on (a faster fall withdraws the commit, as max_deck_rise does)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -335,8 +341,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     crawl = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5),
-                          deck_rise > p["max_deck_rise"])
+    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_or(
+        deck_rise > p["max_deck_rise"], deck_rise < -p["max_deck_fall"]))
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
