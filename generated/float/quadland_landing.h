@@ -198,7 +198,7 @@ typedef struct {
     qlf_real pivot_h;                /* m: the pivot's height below the centre of mass (0: none) */
     qlf_real descent_leash;          /* m: how far the falling reference may lead the quadrotor down (0: no limit) */
     qlf_real leash_height;           /* m: reference height above touchdown below which the leash holds (above it the reference falls free) */
-    qlf_real max_deck_fall;          /* m/s: largest deck fall rate at which a committed descent goes on (a faster fall withdraws the commit, as max_deck_rise does) */
+    qlf_real max_deck_fall;          /* m/s: largest deck fall rate at which the committed descent goes on above the crawl (a faster fall pauses it at its height) */
 } qlf_guidance_params;
 
 /* Fill the defaults (scenario highway). */

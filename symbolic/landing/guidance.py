@@ -79,11 +79,12 @@ band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
-by one. So does, once committed, a deck falling faster than ``max_deck_fall``
-(the wave-off on a deck that drops away: the navigation's error in the relative
-vertical speed grows with the deck's jerk, about ``omega^2`` times its heave rate;
-a large value, the default, never withdraws). Above the wait height a moving deck
-aborts nothing.
+by one. Above the wait height a moving deck aborts nothing. Above the crawl, the
+committed descent pauses at its height (as out of the align band) while the deck
+falls faster than ``max_deck_fall``, so that the crawl does not begin on a deck
+dropping away (the navigation's error in the relative vertical speed grows with the
+deck's jerk, about ``omega^2`` times its heave rate); a large value, the default,
+never pauses.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -174,8 +175,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "down (0: no limit)"),
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
-    Field("max_deck_fall", 1, "m/s", "largest deck fall rate at which a committed descent goes "
-          "on (a faster fall withdraws the commit, as max_deck_rise does)"),
+    Field("max_deck_fall", 1, "m/s", "largest deck fall rate at which the committed descent "
+          "goes on above the crawl (a faster fall pauses it at its height)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -219,6 +220,13 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt):
                             p["commit_horizon"])
     return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
             speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
+
+
+def _band(in_band, crawl, g, p, deck_rise):
+    """Where the descent may fall: in the align band (above the crawl, not once committed
+    over a deck falling faster than ``max_deck_fall``), or in the crawl."""
+    dropping = ca.logic_and(g["committed"] >= 0.5, deck_rise < -p["max_deck_fall"])
+    return ca.logic_or(ca.logic_and(in_band, ca.logic_not(dropping)), crawl)
 
 
 def _touchdown_cue(c, g):
@@ -341,8 +349,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     crawl = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_or(
-        deck_rise > p["max_deck_rise"], deck_rise < -p["max_deck_fall"]))
+    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5),
+                          deck_rise > p["max_deck_rise"])
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
@@ -353,7 +361,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
                                              LANDED, phase)))))
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
-    band, hold = ca.logic_or(in_band, crawl), ca.if_else(committed_next, z_ref, wait)
+    band, hold = _band(in_band, crawl, g, p, deck_rise), ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
     # not falling: to the wait height (uncommitted, or withdrawn), else paused (never down)
