@@ -122,7 +122,7 @@ GUIDANCE_DOCUMENTED = {
     "flare_tilt": lambda v, p: (v > 0) & (v < math.pi / 2), "hold_time": _nonnegative,
     "level_time": _positive, "cut_time": _nonnegative, "aim_height": _nonnegative,
     "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
-    "descent_leash": _nonnegative, "leash_height": _nonnegative, "max_deck_fall": _positive,
+    "descent_leash": _nonnegative, "leash_height": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

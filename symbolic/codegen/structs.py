@@ -391,7 +391,6 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "motion_time": _POSITIVE,
     "descent_leash": _NONNEGATIVE,
     "leash_height": _NONNEGATIVE,
-    "max_deck_fall": _POSITIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

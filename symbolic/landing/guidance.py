@@ -79,12 +79,7 @@ band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
-by one. Above the wait height a moving deck aborts nothing. Above the crawl, the
-committed descent pauses at its height (as out of the align band) while the deck
-falls faster than ``max_deck_fall``, so that the crawl does not begin on a deck
-dropping away (the navigation's error in the relative vertical speed grows with the
-deck's jerk, about ``omega^2`` times its heave rate); a large value, the default,
-never pauses.
+by one. Above the wait height a moving deck aborts nothing.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -175,8 +170,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "down (0: no limit)"),
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
-    Field("max_deck_fall", 1, "m/s", "largest deck fall rate at which the committed descent "
-          "goes on above the crawl (a faster fall pauses it at its height)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -220,13 +213,6 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt):
                             p["commit_horizon"])
     return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
             speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
-
-
-def _band(in_band, crawl, g, p, deck_rise):
-    """Where the descent may fall: in the align band (above the crawl, not once committed
-    over a deck falling faster than ``max_deck_fall``), or in the crawl."""
-    dropping = ca.logic_and(g["committed"] >= 0.5, deck_rise < -p["max_deck_fall"])
-    return ca.logic_or(ca.logic_and(in_band, ca.logic_not(dropping)), crawl)
 
 
 def _touchdown_cue(c, g):
@@ -361,7 +347,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
                                              LANDED, phase)))))
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
-    band, hold = _band(in_band, crawl, g, p, deck_rise), ca.if_else(committed_next, z_ref, wait)
+    band, hold = ca.logic_or(in_band, crawl), ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
     # not falling: to the wait height (uncommitted, or withdrawn), else paused (never down)
