@@ -22,6 +22,7 @@ from matplotlib.figure import Figure
 
 from quadland.plots.legend_place import legends_placed
 from quadland.plots.text_cache import TextCacheCanvas
+from quadland.plots.tick_batch import ticks_batched
 from quadland.plots.tick_clone import ticks_cloned
 from quadland.plots.tick_memo import ticks_memoized
 from quadland.png import PNG_DPI
@@ -37,7 +38,7 @@ class QuickFigure(Figure):
 
     def draw(self, renderer):
         """Draw as :meth:`matplotlib.figure.Figure.draw`, the ticks and legends memoized."""
-        with ticks_memoized(self), ticks_cloned(self), legends_placed(self):
+        with ticks_memoized(self), ticks_cloned(self), legends_placed(self), ticks_batched(self):
             super().draw(renderer)
 
     # Figure.draw already handles rasterization: do not wrap this one again
