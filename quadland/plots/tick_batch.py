@@ -73,9 +73,13 @@ def _marker_style(line) -> tuple:
 def _alike(a, b) -> bool:
     """Whether two lines differ in nothing but their data."""
     da, db = a.__dict__, b.__dict__
-    return (da.keys() == db.keys()
-            and all(_same(da[k], db[k]) for k in da if k not in _DATA)
-            and _marker_style(a) == _marker_style(b))
+    if da.keys() != db.keys():
+        return False
+    for key, value in da.items():
+        other = db[key]
+        if value is not other and key not in _DATA and not _same(value, other):
+            return False
+    return _marker_style(a) == _marker_style(b)
 
 
 def _batchable(line) -> bool:
@@ -84,36 +88,114 @@ def _batchable(line) -> bool:
             and line.get_agg_filter() is None)
 
 
-def _groups(lines: list) -> list[list] | None:
-    """Runs of alike lines, each at most :data:`MAX_VERTICES` vertices with its NaNs."""
-    groups: list[list] = []
+def _runs(lines: list) -> list[list[int]] | None:
+    """Runs of alike lines' indices, each at most :data:`MAX_VERTICES` vertices with the
+    NaNs between them (None if a line cannot be batched)."""
+    runs: list[list[int]] = []
     size = 0
-    for line in lines:
+    for i, line in enumerate(lines):
         if not _batchable(line):
             return None
         n = len(line.get_xydata())
-        if groups and _alike(groups[-1][0], line) and size + 1 + n <= MAX_VERTICES:
-            groups[-1].append(line)
+        if runs and _alike(lines[runs[-1][0]], line) and size + 1 + n <= MAX_VERTICES:
+            runs[-1].append(i)
             size += 1 + n
         else:
-            groups.append([line])
+            runs.append([i])
             size = n
-    return groups
+    return runs
 
 
-def _draw_group(lines: list, renderer) -> None:
-    if not lines[0].get_visible():
-        return
-    gap = np.full((1, 2), np.nan)
-    xy = np.concatenate([part for line in lines for part in (gap, line.get_xydata())][1:])
-    batch = clone_artist(lines[0])
-    batch.stale_callback = None
-    batch.set_data(xy[:, 0], xy[:, 1])
-    batch.draw(renderer)
+def _drawn(style: str) -> bool:
+    return style not in ("None", "none", "", " ")
+
+
+def _margin(line, renderer) -> float:
+    """Pixels around a line's vertices that its drawing may touch: a marker's size and
+    edge, half the line's width, a pixel of antialiasing and one of snapping."""
+    margin = 0.0
+    if line.get_marker() is not None and _drawn(str(line.get_marker())):
+        margin = renderer.points_to_pixels(line.get_markersize() + line.get_markeredgewidth())
+    if _drawn(line.get_linestyle()):
+        margin = max(margin, renderer.points_to_pixels(line.get_linewidth()) / 2)
+    return margin + 2.0
+
+
+class _Batch:
+    """One run of alike lines of one kind (0 grid, 1 first marks, 2 second marks): their
+    vertices with a NaN between lines, and each line's box in pixels."""
+
+    def __init__(self, lines: list, run: list[int], kind: int, renderer):
+        self.first, self.kind, self.ticks = lines[run[0]], kind, run
+        parts = [lines[i].get_xydata() for i in run]
+        gap = np.full((1, 2), np.nan)
+        self.xy = np.concatenate([p for part in parts for p in (gap, part)][1:])
+        pixels = self.first.get_transform().transform(self.xy)
+        margin = _margin(self.first, renderer)
+        ends = np.cumsum([len(part) + 1 for part in parts])
+        self.boxes = np.array([[*np.nanmin(pixels[e - len(p) - 1:e - 1], axis=0) - margin,
+                                *np.nanmax(pixels[e - len(p) - 1:e - 1], axis=0) + margin]
+                               for p, e in zip(parts, ends, strict=True)])
+
+    def draw(self, renderer) -> None:
+        batch = clone_artist(self.first)
+        batch.stale_callback = None
+        batch.set_data(self.xy[:, 0], self.xy[:, 1])
+        batch.draw(renderer)
+
+
+def _label_boxes(axis, ticks: list, drawn: list, renderer) -> tuple[np.ndarray, list]:
+    """The drawn ticks' visible labels' boxes (pixels, 3 around) and their ticks' indices."""
+    boxes, owners = [], []
+    for side, extents in zip(("label1", "label2"),
+                             axis._get_ticklabel_bboxes(ticks, renderer), strict=True):
+        shown = [t for t in ticks if getattr(t, side).get_visible()]
+        for tick, box in zip(shown, extents, strict=True):
+            if id(tick) in drawn:
+                boxes.append([box.x0 - 3, box.y0 - 3, box.x1 + 3, box.y1 + 3])
+                owners.append(drawn[id(tick)])
+    return np.array(boxes).reshape(-1, 4), owners
+
+
+def _apart(batches: list, labels: np.ndarray, label_owners: list) -> bool:
+    """Whether no two ticks' lines, nor a tick's line and another's label, may touch a
+    common pixel (the order of their drawing then does not matter); two ticks' marks of
+    one kind and two labels may: they are drawn one after the other as before."""
+    visible = [b for b in batches if b.first.get_visible()]
+    boxes = np.concatenate([b.boxes for b in visible] + [labels])
+    owner = np.concatenate([np.asarray(b.ticks) for b in visible] + [np.asarray(label_owners,
+                                                                                dtype=int)])
+    kind = np.concatenate([np.full(len(b.ticks), b.kind) for b in visible]
+                          + [np.full(len(labels), 3)])
+    x0, y0, x1, y1 = (boxes[:, k] for k in range(4))
+    touch = ((x0[:, None] < x1[None, :]) & (x0[None, :] < x1[:, None])
+             & (y0[:, None] < y1[None, :]) & (y0[None, :] < y1[:, None]))
+    alike_kind = (kind[:, None] == kind[None, :]) & (kind[:, None] > 0)
+    return not (touch & (owner[:, None] != owner[None, :]) & ~alike_kind).any()
 
 
 def _skip(renderer) -> None:
     """A tick line's draw while its axis's batch has drawn it."""
+
+
+def _batches(axis, renderer) -> list | None:
+    """The batches of the axis's drawn ticks' lines, or None where they cannot be drawn
+    so (module docstring)."""
+    ticks = axis._update_ticks()
+    shown = [t for t in ticks if t.get_visible()]
+    if not all(type(t) in (XTick, YTick) and not t.get_rasterized()
+               and t.get_agg_filter() is None for t in shown):
+        return None
+    batches = []
+    for kind, name in enumerate(_LINES):
+        lines = [getattr(t, name) for t in shown]
+        runs = _runs(lines)
+        if runs is None:
+            return None
+        batches += [_Batch(lines, run, kind, renderer) for run in runs]
+    labels, owners = _label_boxes(axis, ticks, {id(t): i for i, t in enumerate(shown)},
+                                  renderer)
+    return batches if _apart(batches, labels, owners) else None
 
 
 def _batch_on(axis) -> None:
@@ -122,17 +204,14 @@ def _batch_on(axis) -> None:
     def draw_axis(renderer):
         if not axis.get_visible() or not isinstance(renderer, RendererAgg):
             return draw(renderer)
-        ticks = [t for t in axis._update_ticks() if t.get_visible()]
-        if not all(type(t) in (XTick, YTick) and not t.get_rasterized()
-                   and t.get_agg_filter() is None for t in ticks):
+        batches = _batches(axis, renderer)
+        if batches is None:
             return draw(renderer)
-        batches = [_groups([getattr(t, name) for t in ticks]) for name in _LINES]
-        if any(groups is None for groups in batches):
-            return draw(renderer)
-        for groups in batches:
-            for group in groups:
-                _draw_group(group, renderer)
-        lines = [getattr(t, name) for t in ticks for name in _LINES]
+        for batch in batches:
+            if batch.first.get_visible():
+                batch.draw(renderer)
+        lines = [getattr(t, name) for t in axis._update_ticks() if t.get_visible()
+                 for name in _LINES]
         for line in lines:
             line.draw = _skip
         try:
