@@ -63,6 +63,7 @@ def _same_glyphs(a: list, b: list) -> bool:
         x[:5] == y[:5] and np.array_equal(x[5], y[5]) for x, y in zip(a, b, strict=True))
 
 
+@pytest.mark.filterwarnings("ignore:Glyph .* missing from font")
 @pytest.mark.parametrize("kw", [{}, {"weight": "bold"}, {"family": "serif", "style": "italic"}])
 def test_a_font_from_memory_lays_out_measures_and_renders_as_matplotlibs(kw):
     paths = _paths(**kw)
