@@ -13,7 +13,9 @@ Its canvas draws with :class:`quadland.plots.text_cache.TextCacheRenderer`
 draws computes an axis's ticks once (:func:`quadland.plots.tick_memo.ticks_memoized`)
 and makes an axis's new ticks as copies of its first
 (:func:`quadland.plots.tick_clone.ticks_cloned`), and places each legend once
-(:func:`quadland.plots.legend_place.legends_placed`): the same pixels, in less time.
+(:func:`quadland.plots.legend_place.legends_placed`); its draws on Agg draw an axis's
+tick lines in batches (:func:`quadland.plots.tick_batch.ticks_batched`): the same
+pixels, in less time.
 """
 
 from __future__ import annotations
