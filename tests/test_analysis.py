@@ -538,3 +538,42 @@ def test_disk_margin_matches_python_control_landing_loop(landing_loops, which):
     mu_low = _mu_lower(_sensitivity_at(L, multi.frequency))
     assert multi.disk_margin <= 1 / mu_low * (1 + 1e-9)                # guaranteed
     assert multi.disk_margin == pytest.approx(1 / mu_low, rel=1e-6)    # tight here
+
+
+def test_the_triangular_solves_reuse_a_copy_of_the_schur_factor_per_thread():
+    """Each point's solve rewrites only the diagonal of one kept copy of ``-T``: the same
+    bits as a new ``-T`` per point with ``point`` added to its diagonal, the resolvent of
+    a dense solve, and a copy of its own for each thread."""
+    import threading
+
+    import scipy.linalg
+
+    from quadland.analysis import FrequencyResponse
+
+    rng = np.random.default_rng(3)
+    n = 40
+    A = rng.normal(size=(n, n)) - 6 * np.eye(n)
+    B, C, D = rng.normal(size=(n, 3)), rng.normal(size=(2, n)), rng.normal(size=(2, 3))
+    resp = FrequencyResponse(control.ss(A, B, C, D))
+    points = [1j * w for w in (0.01, 0.7, 3.0, 250.0)] + [0.3 + 2j]
+    for p in points:
+        fresh = -resp._T
+        fresh.flat[::n + 1] += p
+        old_way = resp._C @ scipy.linalg.solve_triangular(fresh, resp._B,
+                                                          check_finite=False) + resp._D
+        got = resp._solve(p)
+        assert np.array_equal(got, old_way)
+        dense = C @ np.linalg.solve(p * np.eye(n) - A, B) + D
+        assert np.allclose(got, dense, rtol=1e-10, atol=1e-12)
+    assert len(resp._negated) == 1
+    results = {}
+
+    def other():
+        results["other"] = [resp._solve(p) for p in points]
+
+    worker = threading.Thread(target=other)
+    worker.start()
+    worker.join()
+    assert len(resp._negated) == 2
+    again = [resp._solve(p) for p in points]
+    assert all(np.array_equal(a, b) for a, b in zip(results["other"], again, strict=True))

@@ -52,3 +52,12 @@ def test_a_transparent_figure_keeps_its_alpha():
     assert mode == "RGBA"
     assert got[..., 3].min() == 0
     assert np.array_equal(got, _pixels(_savefig(fig))[1])
+
+
+def test_an_alpha_of_254_is_not_opaque():
+    """Every pixel's alpha 254 (one short of opaque): written RGBA, as savefig's pixels."""
+    fig = _laid_out_figure(facecolor=(1.0, 1.0, 1.0, 254 / 255))
+    mode, got = _pixels(figure_png(fig))
+    assert mode == "RGBA"
+    assert got[..., 3].min() == 254
+    assert np.array_equal(got, _pixels(_savefig(fig))[1])

@@ -13,7 +13,9 @@ Its canvas draws with :class:`quadland.plots.text_cache.TextCacheRenderer`
 draws computes an axis's ticks once (:func:`quadland.plots.tick_memo.ticks_memoized`)
 and makes an axis's new ticks as copies of its first
 (:func:`quadland.plots.tick_clone.ticks_cloned`), and places each legend once
-(:func:`quadland.plots.legend_place.legends_placed`): the same pixels, in less time.
+(:func:`quadland.plots.legend_place.legends_placed`); its draws on Agg draw an axis's
+tick lines in batches (:func:`quadland.plots.tick_batch.ticks_batched`): the same
+pixels, in less time.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from matplotlib.figure import Figure
 
 from quadland.plots.legend_place import legends_placed
 from quadland.plots.text_cache import TextCacheCanvas
+from quadland.plots.tick_batch import ticks_batched
 from quadland.plots.tick_clone import ticks_cloned
 from quadland.plots.tick_memo import ticks_memoized
 from quadland.png import PNG_DPI
@@ -37,7 +40,7 @@ class QuickFigure(Figure):
 
     def draw(self, renderer):
         """Draw as :meth:`matplotlib.figure.Figure.draw`, the ticks and legends memoized."""
-        with ticks_memoized(self), ticks_cloned(self), legends_placed(self):
+        with ticks_memoized(self), ticks_cloned(self), legends_placed(self), ticks_batched(self):
             super().draw(renderer)
 
     # Figure.draw already handles rasterization: do not wrap this one again

@@ -23,6 +23,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hi
 from matplotlib.font_manager import fontManager, get_font
 from matplotlib.ft2font import FT2Font
 
+from quadland.plots.font_memory import memory_font
+
 __all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE"]
 
 #: Most layouts (and height metrics) kept; the cache is emptied when full.
@@ -75,6 +77,17 @@ class TextCacheRenderer(RendererAgg):
                      table[linegap_key] * scale)
             break
         return _remember(_HEIGHTS, key, value)
+
+    def _prepare_font(self, font_prop):
+        """The font of ``font_prop`` cleared and sized, as matplotlib's Agg renderer
+        prepares it, read from memory (:func:`~quadland.plots.font_memory.memory_font`)
+        where this matplotlib allows."""
+        font = memory_font(fontManager._find_fonts_by_props(font_prop)) if _CACHEABLE else None
+        if font is None:
+            return super()._prepare_font(font_prop)
+        font.clear()
+        font.set_size(font_prop.get_size_in_points(), self.dpi)
+        return font
 
     def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
         """Draw ``s`` as matplotlib's Agg renderer does, its glyphs' layout cached."""

@@ -28,7 +28,7 @@ from matplotlib.axis import XTick, YTick
 from matplotlib.lines import Line2D
 from matplotlib.text import Text
 
-__all__ = ["ticks_cloned"]
+__all__ = ["ticks_cloned", "clone_artist"]
 
 #: The instance attributes set on each axis for the context (removed after it).
 _CLONING = ("_get_tick", "_copy_tick_props")
@@ -45,7 +45,10 @@ def _copy_marker(marker):
     return new
 
 
-def _clone_artist(artist):
+def clone_artist(artist):
+    """A new artist of ``artist``'s type holding its attributes (its parent's stale callback
+    too), with its own callbacks, path effects, sticky edges, font properties (a text)
+    and marker (a line)."""
     new = object.__new__(type(artist))
     new.__dict__.update(artist.__dict__)
     new._callbacks = cbook.CallbackRegistry(signals=["pchanged"])
@@ -70,9 +73,9 @@ def _cloneable(tick) -> bool:
 
 
 def _clone_tick(tick):
-    new = _clone_artist(tick)
+    new = clone_artist(tick)
     for name in _PARTS:
-        setattr(new, name, _clone_artist(getattr(tick, name)))
+        setattr(new, name, clone_artist(getattr(tick, name)))
     return new
 
 
