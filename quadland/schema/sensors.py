@@ -73,6 +73,11 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
                                   "(roll, pitch, yaw)", 0.0, 1.0, 3),
         "attitude_tau": Setting("s", "its time constants (roll, pitch, yaw)", 1e-3, 1e9, 3),
         "attitude_white_sigma": Setting("rad", "std of its white part per axis", 0.0, 1.0),
+        "attitude_gnss_aided": Setting("bool", "true: a GNSS-aided estimator's attitude, its "
+                                       "roll and pitch levelling the biased accelerometer "
+                                       "(b_a_y / g, -b_a_x / g) plus the Gauss-Markov "
+                                       "residual of attitude_sigma; false: an AHRS's, the "
+                                       "Gauss-Markov error alone", 0.0, 1.0),
     }),
     "vision": MappingProxyType({
         **_common(1e3), **_OUTLIERS,
