@@ -13,7 +13,7 @@ settings of before (``BEFORE``, ``bf41d33``'s file to the bit) and as shipped.
 import math
 
 import pytest
-from turning_before import BEFORE
+from turning_before import ATTITUDE_BEFORE, BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -90,10 +90,10 @@ def test_the_campaigns_tilt_failures_of_before_land_inside_the_flare(index, befo
     before = _campaign_run(index, *BEFORE)
     assert before.failures == ["tilt_deg"] and before.tilt_deg > 23.3
     assert before.tilt_deg == pytest.approx(before_deg, abs=5e-4)
-    now = _campaign_run(index, PAD_BEFORE)                 # the campaign's pad
+    now = _campaign_run(index, PAD_BEFORE, *ATTITUDE_BEFORE)   # the campaign's pad, AHRS
     assert now.success and now.on_pad and now.secured
     assert now.tilt_deg == pytest.approx(now_deg, abs=5e-4) and now.tilt_deg < 21.25
-    nested = _campaign_run(index)                          # as shipped: the nested marker
+    nested = _campaign_run(index)              # as shipped: the nested marker, GNSS-aided
     assert nested.success and nested.on_pad and nested.secured and nested.tilt_deg < 21.25
 
 
