@@ -29,6 +29,9 @@ class Setting(NamedTuple):
         Physical range of every value, ``lo <= v <= hi``.
     length : int or None
         None for a scalar, 3 for a list of three (x, y, z or roll, pitch, yaw).
+    default : optional
+        The value a scenario that leaves the key out takes (None: the key is required):
+        a key added after the shipped scenarios, its default the behaviour of before.
     """
 
     unit: str
@@ -36,6 +39,7 @@ class Setting(NamedTuple):
     lo: float
     hi: float
     length: int | None = None
+    default: bool | None = None
 
 
 def _common(rate_hi: float) -> dict[str, Setting]:
@@ -73,6 +77,12 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
                                   "(roll, pitch, yaw)", 0.0, 1.0, 3),
         "attitude_tau": Setting("s", "its time constants (roll, pitch, yaw)", 1e-3, 1e9, 3),
         "attitude_white_sigma": Setting("rad", "std of its white part per axis", 0.0, 1.0),
+        "attitude_gnss_aided": Setting("bool", "true: a GNSS-aided estimator's attitude, its "
+                                       "roll and pitch levelling the biased accelerometer "
+                                       "(b_a_y / g, -b_a_x / g) plus the Gauss-Markov "
+                                       "residual of attitude_sigma; false: an AHRS's, the "
+                                       "Gauss-Markov error alone", 0.0, 1.0,
+                                       default=False),
     }),
     "vision": MappingProxyType({
         **_common(1e3), **_OUTLIERS,
@@ -123,7 +133,7 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
 
 def sensor_fields(name: str) -> dict[str, Field]:
     """The schema's fields of ``[sensors.<name>]``, from :data:`SETTINGS`."""
-    return {key: (Field(bool, "-", s.doc) if s.unit == "bool"
+    return {key: (Field(bool, "-", s.doc, default=s.default) if s.unit == "bool"
                   else Field(float, s.unit, s.doc, s.length, lo=s.lo, hi=s.hi))
             for key, s in SETTINGS[name].items()}
 

@@ -61,7 +61,7 @@ import numpy as np
 from quadland.engine.loop import GRID_TOL
 from quadland.engine.noise import bridge, gauss_markov_after
 from quadland.exceptions import ScenarioError
-from quadland.kinds.landing.sensor_settings import GNSS_RTK, validate_settings
+from quadland.kinds.landing.sensor_settings import GNSS_RTK, STANDARD_GRAVITY, validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
 
@@ -269,6 +269,7 @@ class _Attitude:
         self.sigma = np.asarray(s["attitude_sigma"], dtype=float)
         self.tau = np.asarray(s["attitude_tau"], dtype=float)
         self.white = s["attitude_white_sigma"]
+        self.aided = bool(s["attitude_gnss_aided"]) and imu.random
         self.clock = imu.clock
         self.tol = GRID_TOL * self.clock.h
         self.n = 0
@@ -292,6 +293,16 @@ class _Attitude:
         self.wn = np.concatenate([self.wn, self.white * z[:, 3:]])
         self.n = k1
 
+    def coupling(self, rows: np.ndarray) -> np.ndarray:
+        """The GNSS-aided estimator's tilt at the IMU's ``rows`` (drawn): the roll and
+        pitch that level the biased accelerometer, ``[b_a_y, -b_a_x, 0] / g`` (the body's
+        horizontal bias over gravity, docs/sensors.md), zeros for the AHRS model."""
+        out = np.zeros((len(rows), 3))
+        if self.aided:
+            b_a = self.imu.noise[rows][:, self.imu.layout.slice("b_a")]
+            out[:, 0], out[:, 1] = b_a[:, 1] / STANDARD_GRAVITY, -b_a[:, 0] / STANDARD_GRAVITY
+        return out
+
     def on_imu(self, times: np.ndarray) -> np.ndarray:
         """Each time's IMU sample where they coincide (the loop's grid rule), else -1."""
         return _on_clock(self.clock, times)
@@ -303,7 +314,7 @@ class _Attitude:
         out = {}
         for t, key, z in points:
             if self.last is not None and abs(t - self.last[0]) <= self.tol:
-                out[key] = self.last[1] + self.last[2]
+                out[key] = self.last[1] + self.last[2] + self.last[3]
                 continue
             j = max(int(np.floor((t - self.clock.phase) * self.clock.rate)) + 1, 0)  # after t
             self.ensure(j + 1)
@@ -314,8 +325,8 @@ class _Attitude:
             if self.last is not None and (left is None or self.last[0] > left[0]):
                 left = (self.last[0], self.last[1])
             gm = bridge(t, left, (t_right, self.gm[j]), self.sigma, self.tau, z[:3])
-            self.last = (t, gm, self.white * z[3:])
-            out[key] = gm + self.last[2]
+            self.last = (t, gm, self.white * z[3:], self.coupling(np.array([j]))[0])
+            out[key] = gm + self.last[2] + self.last[3]
         return out
 
 
@@ -363,7 +374,8 @@ class SensorDraws:
             imu, att = self.sensors["imu"], self.attitude
             att.ensure(imu.n)
             k0, self.att_rows = self.att_rows, imu.n      # the IMU's rows drawn since
-            imu.noise[k0:imu.n, imu.layout.slice("e_att")] = att.gm[k0:imu.n] + att.wn[k0:imu.n]
+            imu.noise[k0:imu.n, imu.layout.slice("e_att")] = (
+                att.gm[k0:imu.n] + att.wn[k0:imu.n] + att.coupling(np.arange(k0, imu.n)))
         self.ready.update(counts)
         return counts
 
@@ -380,7 +392,8 @@ class SensorDraws:
             cols = sen.layout.slice("e_att")
             on = idx >= 0
             block = sen.noise[k0:k1, cols]
-            block[on] = self.attitude.gm[idx[on]] + self.attitude.wn[idx[on]]
+            block[on] = (self.attitude.gm[idx[on]] + self.attitude.wn[idx[on]]
+                         + self.attitude.coupling(idx[on]))
             sen.noise[k0:k1, cols] = block
             points += [(t, (rank, name, k0 + i), sen.att_normals[k0 + i])
                        for i, t in zip(np.flatnonzero(~on), times[~on], strict=True)]

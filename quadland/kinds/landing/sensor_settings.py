@@ -19,11 +19,14 @@ from quadland.exceptions import ScenarioError
 from quadland.schema.sensors import SETTINGS, Setting, check_ranges
 from quadland_symbolic.landing.sensors import SENSOR_NAMES, SENSOR_PARAMS
 
-__all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "validate_settings",
-           "sensor_params"]
+__all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "STANDARD_GRAVITY",
+           "validate_settings", "sensor_params"]
 
 _DEG = math.pi / 180.0
 _G0 = 9.80665                       # m/s^2, standard gravity: datasheets' "g"
+#: m/s^2, standard gravity: the data sheets' "g", and the specific force a GNSS-aided
+#: attitude levels the accelerometer against (``attitude_gnss_aided``, docs/sensors.md).
+STANDARD_GRAVITY = _G0
 
 
 #: Default settings of each sensor; docs/sensors.md gives every value's source.
@@ -41,6 +44,7 @@ SENSOR_DEFAULTS: Mapping[str, Mapping] = MappingProxyType({
         "attitude_sigma": (0.5 * _DEG, 0.5 * _DEG, 2.0 * _DEG),
         "attitude_tau": (5.0, 5.0, 10.0),                 # 1 / ATT_W_ACC, 1 / ATT_W_MAG
         "attitude_white_sigma": 0.01 * _DEG,
+        "attitude_gnss_aided": False,                     # the AHRS's error, not the bias'
     }),
     # docs/sensors.md, "Vision": issue 17's minimums, a pinhole model of a
     # Raspberry Pi Camera Module 3 Wide and a 0.6 m marker.
