@@ -296,6 +296,16 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                 hi=10.0, **_POS),
         "lock_gap_scale": Field(F, "m", "gap at which the lock's pull falls to a quarter",
                                 hi=1e6, **_POS),
+        "lock_swivel_deg": Field(F, "deg", "foot_magnets: each magnet's face swivels flush "
+                                 "within this of its neutral axis (a DIN 71802 ball joint's "
+                                 "18 deg; 90: flush at any lean, an idealization)",
+                                 lo=0.0, hi=90.0, default=18.0),
+        "lock_swivel_pitch_deg": Field(F, "deg", "foot_magnets: the neutral axis pitched nose "
+                                       "down from the body's z axis", lo=-90.0, hi=90.0,
+                                       default=0.0),
+        "lock_face_width": Field(F, "m", "foot_magnets: a magnet's face across, which past its "
+                                 "swivel meets the deck on its edge", lo=0.0, hi=1.0,
+                                 default=0.03),
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.
     "sensors": {
