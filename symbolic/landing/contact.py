@@ -46,6 +46,7 @@ import casadi as ca
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.swivel_foot import swivel_edge
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE
@@ -235,25 +236,6 @@ def _pulls(R1, p1, p2, n2, r, engaged, lk, share, edge=0):
                                              / lk["lock_gap_scale"]) ** 2
     F_B = R1.T @ (-n2 @ pull)                                           # N per point
     return ca.sum2(F_B), ca.sum2(ca.cross(r, F_B)), pull, gap
-
-
-def swivel_edge(R1, n2, lk):
-    """How far a foot device's face centre stands off the deck past its swivel (m).
-
-    The face swivels flush with the deck while the angle ``A`` between the deck's normal
-    and the device's neutral axis ``a = (-sin b, 0, cos b)`` (body axes, ``b`` =
-    ``swivel_pitch``: the deck's normal as seen from a body pitched ``b`` nose down) is
-    within ``swivel`` (0 to 90 deg); past it by ``e = A - swivel`` the face rests on its
-    edge, and its centre stands ``face_width / 2 sin e`` off (``e`` capped at 90 deg).
-    ``sin e`` comes from ``cos A = a . n`` and ``sin A = |a x n|`` without an inverse
-    cosine, whose slope is infinite where the two align (the linearizations)."""
-    n_b = R1.T @ n2
-    b, al = lk["swivel_pitch"], lk["swivel"]
-    cos_a = -ca.sin(b) * n_b[0] + ca.cos(b) * n_b[2]
-    sin_a = ca.sqrt(ca.fmax(1 - cos_a ** 2, 0) + 1e-12)
-    sin_e = sin_a * ca.cos(al) - cos_a * ca.sin(al)
-    cos_e = cos_a * ca.cos(al) + sin_a * ca.sin(al)
-    return lk["face_width"] / 2 * ca.if_else(cos_e < 0, 1, ca.fmax(sin_e, 0))
 
 
 def lock_wrench(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock):
