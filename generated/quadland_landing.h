@@ -25,7 +25,7 @@ extern "C" {
 #define QL_GUIDANCE_PARAMS_SIZE 29               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
-#define QL_LANDING_PLANT_NP 332                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (5), p_td (4)] */
+#define QL_LANDING_PLANT_NP 335                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
 #define QL_LANDING_NW 9                          /* w = [v_wind (3), d_F (3), d_M (3)] */
 #define QL_LANDING_NY 42                         /* signals y of a landing */
 #define QL_LANDING_ANCHOR_SIZE 12                /* anchor = [p_e (3), R_rel (9)] */

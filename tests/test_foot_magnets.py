@@ -13,10 +13,11 @@ a magnet in each foot"). Checked here against hand results:
   moment of each about the centre its pull times the foot's horizontal distance from the
   centre (``fx cos th - h sin th`` ahead for the front feet, ``fx cos th + h sin th``
   behind for the rear ones), where the centre magnet pulls nearly nothing;
-* ``lock = "magnet"`` (every shipped scenario's) packs ``at_feet = 0``: the law of
+* ``lock = "magnet"`` (every other shipped scenario's) packs ``at_feet = 0``: the law of
   before, which ``tests/test_contact.py`` checks; no shipped scenario takes
-  ``"foot_magnets"``: its pull holds a foot's face flush at any lean, which no source
-  here supports;
+  ``"foot_magnets"``; these checks take its faces flush at any lean
+  (``lock_swivel_deg = 90``, an idealization; the sourced swivel's law is
+  ``tests/test_swivel_feet.py``'s);
 * flown, highway_100's campaign run 3 (contact 0.10 m behind the centre at 43.6 deg, off
   the pad with the tenth session's touchdown): with a magnet in each foot and a 1 s
   level-out its centre goes back by the geometric pivot about the front feet and no
@@ -70,7 +71,7 @@ def _params(at_feet):
     g["r_feet"] = [v for f in ((FX, FY, -H), (-FX, FY, -H), (-FX, -FY, -H), (FX, -FY, -H))
                    for v in f]
     lk = dict(lock_defaults("foot_magnets" if at_feet else "magnet"), F_hold=F_HOLD,
-              lock_delay=0.0, lock_gap_scale=G0)
+              lock_delay=0.0, lock_gap_scale=G0, swivel=math.pi / 2)   # flush: the ideal
     return VEHICLE.pack(veh), pack_deck(d), GEAR.pack(g), LOCK.pack(lk)
 
 
@@ -86,13 +87,15 @@ def _pull(eta, z, t=0.5, at_feet=1):
 def test_the_devices_pack_where_they_pull():
     assert lock_defaults("magnet")["at_feet"] == 0.0
     assert lock_defaults("foot_magnets")["at_feet"] == 1.0
-    for name in ("highway", "turning", "ship", "ship_ss5", "highway_100"):
+    for name in ("highway", "turning", "ship", "ship_ss5"):
         sc = load_scenario(name)
         assert sc.data["touchdown"]["lock"] == "magnet"
         assert LOCK.unpack(lock_params(sc))["at_feet"] == 0.0
-    feet = load_scenario("highway_100", ["touchdown.lock=foot_magnets"])
+    # highway_100 ships them on swivelling feet since the twelfth session
+    feet = load_scenario("highway_100")
     lk = LOCK.unpack(lock_params(feet))
     assert lk["at_feet"] == 1.0 and lk["F_hold"] == 200.0
+    assert lk["swivel"] == pytest.approx(math.radians(18.0))
 
 
 @pytest.mark.parametrize("gap", [0.0, 0.002, 0.02])
@@ -160,7 +163,7 @@ def _run(index, *overrides):
 TENTH = ["touchdown.lock=magnet", "touchdown.level_time=0.1", "touchdown.cut_time=0.1",
          "touchdown.pivot_aim=0.3"]
 FEET = ["touchdown.lock=foot_magnets", "touchdown.level_time=1.0", "touchdown.cut_time=1.0",
-        "touchdown.pivot_aim=0.3"]
+        "touchdown.pivot_aim=0.3", "touchdown.lock_swivel_deg=90"]   # the flush idealization
 
 
 def test_campaign_run_3_held_on_its_front_feet_lands():

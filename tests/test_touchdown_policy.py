@@ -256,10 +256,11 @@ def test_highway_100_s_policy_by_the_statics_of_its_gear():
     m, 0.15 m high, issue 19) the same drag cannot roll it over (17.8 x 0.15 = 2.67 N m <
     19.6 x 0.30 = 5.88 N m), the lean, 38.7 deg (42.2 deg without the cos terms), is inside
     its 63.4 deg, and the flare's 58 deg sits between. It still slides (17.8 N > 0.5 x 19.6
-    N) unless the magnets hold: the policy cuts 0.1 s after touchdown, when the two magnets,
-    switched on at the flare and counted from the contact switch (``lock_delay`` 0), pull
-    200 (1 - exp(-0.1 / 0.17)) = 88.9 N, past the 17.8 / 0.5 - 19.6 = 16 N the slide needs
-    (one magnet of 100 N, 44.5 N, before)."""
+    N) unless the magnets hold: the policy cuts 0.6 s after touchdown, when the four foot
+    magnets, switched on at the flare and counted from the contact switch (``lock_delay``
+    0), pull 200 (1 - exp(-0.6 / 0.17)) = 194.1 N level, past the 17.8 / 0.5 - 19.6 = 16 N
+    the slide needs (the two under the gear, 88.9 N at the 0.1 s cut, before; one magnet of
+    100 N, 44.5 N, before that)."""
     d = load_scenario("highway_100").data
     q, g, td = d["quadrotor"], d["gear"], d["touchdown"]
     m, grav, h = q["mass"], q["gravity"], q["gear_height"]
@@ -278,7 +279,7 @@ def test_highway_100_s_policy_by_the_statics_of_its_gear():
     assert td["hold_time"] + td["level_time"] <= td["cut_time"]
     F = td["lock_hold_force"] * (1 - math.exp(-(td["cut_time"] - td["lock_delay"])
                                               / td["lock_rise_time"]))
-    assert F == pytest.approx(88.9, abs=0.05)
+    assert F == pytest.approx(194.1, abs=0.05)
     assert g["friction"] * (m * grav + F) > D
     assert F > D / g["friction"] - m * grav == pytest.approx(16.0, abs=0.05)
 
@@ -306,10 +307,15 @@ def test_highway_100_lands_and_is_secured_where_the_rotor_cut_failed():
     tips, and the two magnets hold it. Flying on, its aim point anticipates 0.3 of the
     pivot (as shipped since docs/landing.md's "highway_100: the level-out's slide is the
     drag's"; the aim is the flying-on policy's alone): it meets the deck 0.065 m behind
-    the centre leaning 42.1 deg, its farthest foot 0.633 m out (0.649 m unaimed)."""
-    for policy, tilt in (('"secure"', 42.11), ('"idle"', 41.68)):
+    the centre leaning 42.1 deg, its farthest foot 0.633 m out (0.649 m unaimed). With the
+    magnets on swivelling feet (docs/landing.md, "highway_100: magnets on swivelling feet")
+    the aim is back on the centre and both policies meet the deck at 41.7 deg and land."""
+    tenth = ["touchdown.lock=magnet", "touchdown.level_time=0.1", "touchdown.cut_time=0.1",
+             "touchdown.pivot_aim=0.3"]
+    for policy, keys, tilt in (('"secure"', tenth, 42.11), ('"idle"', tenth, 41.68),
+                               ('"secure"', [], 41.68), ('"idle"', [], 41.68)):
         new = touchdown_report(quadland.simulate(load_scenario(
-            "highway_100", ["sensors.enabled=false", f"touchdown.policy={policy}"])))
+            "highway_100", ["sensors.enabled=false", f"touchdown.policy={policy}", *keys])))
         assert new.success and new.secured and not new.tipped
         assert new.tilt_deg == pytest.approx(tilt, abs=0.01)
     old = ["sensors.enabled=false", *HIGHWAY_100_OLD]

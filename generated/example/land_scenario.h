@@ -49,8 +49,8 @@ static const double ql_land_gust_direction[3] = { 0.0, 1.0, 0.0 };
 #define QL_LAND_MAX_FRICTION_MARGIN 1.0
 #define QL_LAND_PAD_RADIUS 0.5
 
-/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (5), p_td (4)). */
-static const double ql_land_pp[332] = {
+/* The plant's parameters pp (QL_LANDING_PLANT_NP: p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)). */
+static const double ql_land_pp[335] = {
     2.0, 0.025, 0.025, 0.045, 0.3, 0.3,
     0.3, 0.001, 0.001, 0.001, 9.8, 0.25,
     0.05, 0.02, 9.8, 0.2, 0.01225, 0.01225,
@@ -105,8 +105,8 @@ static const double ql_land_pp[332] = {
     0.125, -0.2, -0.15, 0.125, -0.2, -0.15,
     -0.125, -0.2, 0.15, -0.125, -0.2, 5000.0,
     30.0, 0.5, 0.01, 300.0, 0.0001, 100.0,
-    0.0, 0.17, 0.001, 0.0, 0.0, 0.0,
-    0.0, 0.002,
+    0.0, 0.17, 0.001, 0.0, 0.3141592653589793, 0.0,
+    0.03, 0.0, 0.0, 0.0, 0.002,
 };
 
 /* The initial plant state xp (QL_LANDING_PLANT_NX: x1q (16), xv (6), gear (3)). */

@@ -25,7 +25,7 @@ extern "C" {
 #define QLF_GUIDANCE_PARAMS_SIZE 29              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
-#define QLF_LANDING_PLANT_NP 332                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (5), p_td (4)] */
+#define QLF_LANDING_PLANT_NP 335                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
 #define QLF_LANDING_NW 9                         /* w = [v_wind (3), d_F (3), d_M (3)] */
 #define QLF_LANDING_NY 42                        /* signals y of a landing */
 #define QLF_LANDING_ANCHOR_SIZE 12               /* anchor = [p_e (3), R_rel (9)] */

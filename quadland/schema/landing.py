@@ -9,6 +9,7 @@ from types import MappingProxyType
 
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
+from quadland.schema.lock import LOCK_FIELDS
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
 from quadland.schema.sea_state import SEA_STATES
 from quadland.schema.sensors import check_ranges, sensor_fields
@@ -287,15 +288,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                            "feet the aim point anticipates (0: none, 1: all)", lo=0.0, hi=1.0),
         "aim_height": Field(F, "m", "secure: reference height above touchdown from which the "
                             "aim point anticipates the pivot", lo=0.0, hi=100.0),
-        "lock": Field(S, "-", "lock-down device: none, magnet (an EPM under the gear's centre) or "
-                      "foot_magnets (one per foot)", choices=("none", "magnet", "foot_magnets")),
-        "lock_hold_force": Field(F, "N", "the lock's largest holding force", lo=0.0, hi=1e5),
-        "lock_delay": Field(F, "s", "dead time from the contact switch to the lock's pull",
-                            lo=0.0, hi=10.0),
-        "lock_rise_time": Field(F, "s", "time constant of the lock's first-order rise",
-                                hi=10.0, **_POS),
-        "lock_gap_scale": Field(F, "m", "gap at which the lock's pull falls to a quarter",
-                                hi=1e6, **_POS),
+        **LOCK_FIELDS,
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.
     "sensors": {

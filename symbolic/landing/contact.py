@@ -39,12 +39,14 @@ sources (:func:`gear_defaults`, :func:`lock_defaults`).
 from __future__ import annotations
 
 import functools
+import math
 
 import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.deck import DECK_PARAMS, deck_pose
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
+from quadland_symbolic.landing.swivel_foot import swivel_edge
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE
@@ -105,6 +107,14 @@ LOCK = Layout("p_lock", (
     Field("at_feet", 1, "-",
           "0: one device at the gear's centre; 1: F_hold shared by a device in each foot, "
           "each pulled by its own gap"),
+    Field("swivel", 1, "rad",
+          "a foot device's swivel: the largest angle between its face's normal and its "
+          "neutral axis (pi: flush at any attitude, an idealization)"),
+    Field("swivel_pitch", 1, "rad",
+          "the foot devices' neutral axis, pitched nose down from the body's z axis"),
+    Field("face_width", 1, "m",
+          "a foot device's face across: past its swivel it meets the deck on its edge, "
+          "its centre half this times the sine of the excess up"),
 ), "lock-down device: holding force, delay and rise, fall-off with the gap, where it pulls")
 
 #: Per-foot signals of :func:`contact_wrench`, for reports.
@@ -121,6 +131,7 @@ HOLD = Layout("hold", (
     Field("engaged", 1, "-", "engagement of the lock-down, 0 (off) to 1 (fully on)"),
     Field("F_lock", 1, "N", "holding force pulling the gear centre along -n2"),
     Field("lock_gap", 1, "m", "gear centre's height above the deck plane"),
+    _per_foot("foot_pull", "N", "the pull of the device in each foot (0 at the centre's)"),
 ), "lock-down signals")
 
 #: Deck surfaces with default gear parameters (:func:`gear_defaults`).
@@ -216,13 +227,15 @@ def _gear_centre(r_feet):
     return ca.sum2(r_feet) / r_feet.shape[1]
 
 
-def _pulls(R1, p1, p2, n2, r, engaged, lk, share):
-    """The pull ``F_hold share s / (1 + gap+ / g0)^2`` at each column of ``r`` (body
-    frame) along ``-n2``: the body-frame force and moment sums, and the gaps."""
+def _pulls(R1, p1, p2, n2, r, engaged, lk, share, edge=0):
+    """The pull ``F_hold share s / (1 + (gap+ + edge) / g0)^2`` at each column of ``r``
+    (body frame) along ``-n2``: the body-frame force and moment sums, the pulls (a row)
+    and the gaps."""
     gap = n2.T @ (p1 @ ca.DM.ones(1, r.shape[1]) + R1 @ r - p2 @ ca.DM.ones(1, r.shape[1]))
-    pull = lk["F_hold"] * share * engaged / (1 + ca.fmax(gap, 0) / lk["lock_gap_scale"]) ** 2
+    pull = lk["F_hold"] * share * engaged / (1 + (ca.fmax(gap, 0) + edge)
+                                             / lk["lock_gap_scale"]) ** 2
     F_B = R1.T @ (-n2 @ pull)                                           # N per point
-    return ca.sum2(F_B), ca.sum2(ca.cross(r, F_B)), ca.sum2(pull), gap
+    return ca.sum2(F_B), ca.sum2(ca.cross(r, F_B)), pull, gap
 
 
 def lock_wrench(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock):
@@ -265,8 +278,9 @@ def lock_wrench(x1q, xv, t, t_signal, p_veh, p_deck, p_gear, p_lock):
     engaged = 1 - ca.exp(-age / lk["lock_rise_time"])
     a = lk["at_feet"]
     F_c, M_c, P_c, gap = _pulls(R1, q["p1"], deck.p2, n2, r_c, engaged, lk, 1 - a)
-    F_f, M_f, P_f, _ = _pulls(R1, q["p1"], deck.p2, n2, r_feet, engaged, lk, a / N_FEET)
-    return F_c + F_f, M_c + M_f, ca.vertcat(engaged, P_c + P_f, gap)
+    F_f, M_f, P_f, _ = _pulls(R1, q["p1"], deck.p2, n2, r_feet, engaged, lk, a / N_FEET,
+                              swivel_edge(R1, n2, lk))
+    return F_c + F_f, M_c + M_f, ca.vertcat(engaged, P_c + ca.sum2(P_f), gap, P_f.T)
 
 
 @functools.cache
@@ -473,6 +487,8 @@ def lock_defaults(device: str = "magnet") -> dict:
     if device not in DEVICES:
         raise ValueError(f"device must be one of {DEVICES}, got {device!r}")
     return dict(F_hold=100.0, lock_delay=0.25, lock_rise_time=0.17, lock_gap_scale=1e-3,
-                at_feet=float(device == "foot_magnets"))
+                at_feet=float(device == "foot_magnets"),
+                swivel=math.radians(18.0),      # a DIN 71802 angled ball joint's swivel
+                swivel_pitch=0.0, face_width=0.03)   # m: a face a few centimetres across
 
 

@@ -14,8 +14,10 @@ remembers, each an ODE so that the fixed-step RK4 stays well posed:
   the impulse reaches ``s_switch`` (the load a foot switch needs, a few
   milliseconds into the touch) and the clock then runs at full rate by
   ``2 s_switch``; it latches (a bounce does not reset it);
-* ``F_peak``: the peak gear load, followed by ``F_peak' = PEAK_RATE
-  max(sum_i F_n_i - F_peak, 0)``: it never falls, and it reads a load pulse
+* ``F_peak``: the peak load on the legs, followed by ``F_peak' = PEAK_RATE
+  max(sum_i max(F_n_i - P_i, 0) - F_peak, 0)`` (``P_i`` the pull of a device in foot
+  ``i``, which closes through the foot's sole, not its leg; 0 for a device at the
+  gear's centre, whose pull the legs carry): it never falls, and it reads a load pulse
   of angular frequency ``w`` low by about ``(w / PEAK_RATE)^2 / 2`` (0.13 %
   for the default gear's 100 rad/s); RK4 integrates it at every substep.
 
@@ -151,11 +153,14 @@ def gear_terms(x1q, xv, xg, F_cmd, t, p_quad, p_veh, p_deck, p_gear, p_lock, p_t
     """
     g, pol = GEAR_STATE.unpack(xg), TOUCHDOWN_POLICY.unpack(p_td)
     q = QUADROTOR.unpack(p_quad)
-    d_F, d_M, foot, _ = _contact(x1q, xv, t, g["t_contact"], p_veh, p_deck, p_gear, p_lock)
-    load = ca.sum1(FOOT.unpack(foot)["F_n"])                              # N
+    d_F, d_M, foot, hold = _contact(x1q, xv, t, g["t_contact"], p_veh, p_deck, p_gear,
+                                    p_lock)
+    F_n = FOOT.unpack(foot)["F_n"]
+    load = ca.sum1(F_n)                                                   # N
+    legs = ca.sum1(ca.fmax(F_n - HOLD.unpack(hold)["foot_pull"], 0))      # N, on the legs
     clock = ca.fmin(ca.fmax(g["impulse"] / pol["s_switch"] - 1, 0), 1)
     xg_dot = ca.vertcat(load / (q["m1"] * q["g"]), clock,
-                        PEAK_RATE * ca.fmax(load - g["F_peak"], 0))
+                        PEAK_RATE * ca.fmax(legs - g["F_peak"], 0))
     gate = pol["cut"] * ca.fmin(ca.fmax((g["t_contact"] - pol["cut_delay"]) / CUT_RAMP, 0), 1)
     return d_F, d_M, xg_dot, F_cmd + gate * (pol["F_idle"] - F_cmd)
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from quadland.scenario import Scenario
@@ -58,7 +60,10 @@ def lock_params(scenario: Scenario) -> np.ndarray:
     return LOCK.pack(dict(F_hold=td["lock_hold_force"], lock_delay=td["lock_delay"],
                           lock_rise_time=td["lock_rise_time"],
                           lock_gap_scale=td["lock_gap_scale"],
-                          at_feet=float(td["lock"] == "foot_magnets")))
+                          at_feet=float(td["lock"] == "foot_magnets"),
+                          swivel=math.radians(td["lock_swivel_deg"]),
+                          swivel_pitch=math.radians(td["lock_swivel_pitch_deg"]),
+                          face_width=td["lock_face_width"]))
 
 
 def policy_params(scenario: Scenario) -> np.ndarray:
