@@ -19,6 +19,7 @@ import pytest
 from quadland.exceptions import ScenarioError
 from quadland.kinds.landing.sensing import draw_sensors
 from quadland.kinds.landing.sensor_settings import STANDARD_GRAVITY, validate_settings
+from quadland_symbolic.landing.navigation import acceleration_input
 
 G = STANDARD_GRAVITY
 AIDED = {"attitude_gnss_aided": True}
@@ -155,3 +156,21 @@ def test_the_switch_is_a_boolean():
     assert validate_settings("imu")["attitude_gnss_aided"] is False
     with pytest.raises(ScenarioError, match="attitude_gnss_aided"):
         validate_settings("imu", {"attitude_gnss_aided": 1})
+
+
+def test_the_filter_s_own_input_sees_the_bias_cancelled():
+    """The same cancellation through the project's own code rather than this file's
+    rotations: the navigation filter's input ``acceleration_input(eta_hat, f_b, g)``
+    (``quadland_symbolic``'s ``rotation``, the convention ``sense_imu`` applies ``e_att``
+    in) with ``eta_hat = eta1 + e_att`` and the level hover's ``f_b = g e_z + b_a``: its
+    horizontal part is second order in the bias; the opposite sign would double it."""
+    draw = draw_sensors({"imu": NO_RESIDUAL}, 0.1, seed=4)
+    b, e = draw["imu"].noise_of("b_a")[0], draw["imu"].noise_of("e_att")[0]
+    f_b = G * np.array([0.0, 0.0, 1.0]) + b
+    for psi in (0.0, 0.8, -2.6):
+        eta1 = np.array([0.0, 0.0, psi])
+        a_in = np.array(acceleration_input(eta1 + e, f_b, G)).ravel()
+        flipped = np.array(acceleration_input(eta1 - e, f_b, G)).ravel()
+        assert np.linalg.norm(a_in[:2]) < 2 * np.dot(b, b) / G
+        assert np.linalg.norm(flipped[:2]) == pytest.approx(2 * np.linalg.norm(b[:2]),
+                                                             rel=2 * np.linalg.norm(b) / G)
