@@ -17,7 +17,6 @@ import tomllib
 from importlib.resources import files
 
 import pytest
-from turning_before import ATTITUDE_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -37,14 +36,12 @@ def _toml(name):
     return tomllib.loads(files("quadland.scenarios").joinpath(f"{name}.toml").read_text())
 
 
-def _campaign_run(seed, index, *overrides, attitude=()):
-    """Run ``index`` of turning's campaign drawn with campaign seed ``seed``, replayed; the
-    campaign drawn from the scenario with ``attitude`` (``ATTITUDE_BEFORE``: the rows of
-    before the GNSS-aided attitude)."""
-    spec = campaign_spec_of(load_scenario("turning", [f"campaign.seed={seed}", *attitude]))
+def _campaign_run(seed, index, *overrides):
+    """Run ``index`` of turning's campaign drawn with campaign seed ``seed``, replayed."""
+    spec = campaign_spec_of(load_scenario("turning", [f"campaign.seed={seed}"]))
     d = draws(spec, [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *attitude, *d.overrides(), *overrides])))
+        *d.overrides(), *overrides])))
 
 
 def test_q_at_is_the_turning_cars_jerk_squared_over_a_second():
@@ -68,13 +65,9 @@ def test_q_acc_is_highways_measured_one_for_the_same_imu_and_gains():
     """``q_acc`` is the accelerometer's noise and the attitude estimate's error times the
     accelerations the law flies, measured on highway (docs/estimator.md, "Consistency",
     item 7): turning flies the same IMU, the same outer and inner gains and observer, so
-    it takes the same numbers (PX4's 0.02 m^2/s^3 is 500 to 3,600 times them). Its
-    attitude estimate is the GNSS-aided one (docs/landing.md, "A GNSS-aided attitude"),
-    whose tilt error is smaller than highway's AHRS's: the numbers err on the large side."""
+    it takes the same numbers (PX4's 0.02 m^2/s^3 is 500 to 3,600 times them)."""
     t, h = _toml("turning"), _toml("highway")
-    attitude = ("attitude_sigma", "attitude_gnss_aided")    # turning's GNSS-aided estimate
-    assert {k: v for k, v in t["sensors"]["imu"].items() if k not in attitude} == \
-        {k: v for k, v in h["sensors"]["imu"].items() if k not in attitude}
+    assert t["sensors"]["imu"] == h["sensors"]["imu"]
     for key in ("k1p", "k2p", "k1", "k2", "observer_frequency", "ki_p", "rate_hz"):
         assert t["controller"][key] == h["controller"][key], key
     assert t["estimator"]["q_acc"] == h["estimator"]["q_acc"]
@@ -98,10 +91,10 @@ def test_the_campaigns_offset_failures_land_with_the_filter_tuned_for_the_turn(
     camera lost the marker). With the filter as shipped each lands on the pad and is
     secured, at its campaign's offset (on the pad of that campaign, the large marker
     alone), and with the file as shipped (the nested marker) too."""
-    before = _campaign_run(seed, index, *FILTER_BEFORE, attitude=ATTITUDE_BEFORE)
+    before = _campaign_run(seed, index, *FILTER_BEFORE)
     assert "offset" in before.failures and before.offset > 0.2
     assert before.offset == pytest.approx(before_m, abs=5e-6)
-    now = _campaign_run(seed, index, PAD_BEFORE, attitude=ATTITUDE_BEFORE)
+    now = _campaign_run(seed, index, PAD_BEFORE)
     assert now.success and now.on_pad and now.secured
     assert now.offset == pytest.approx(now_m, abs=5e-6)
     nested = _campaign_run(seed, index)

@@ -13,7 +13,7 @@ settings of before (``BEFORE``, ``bf41d33``'s file to the bit) and as shipped.
 import math
 
 import pytest
-from turning_before import ATTITUDE_BEFORE, BEFORE
+from turning_before import BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -29,13 +29,11 @@ CALM = ["sensors.enabled=false", "wind.turbulence_w20=0.0", "disturbance.noise=f
 DEG = math.pi / 180
 
 
-def _campaign_run(index, *overrides, attitude=()):
-    """Run ``index`` of turning's campaign (default campaign seed), its draw replayed; the
-    campaign drawn from the scenario with ``attitude`` (``ATTITUDE_BEFORE``: the rows of
-    before the GNSS-aided attitude)."""
-    d = draws(campaign_spec_of(load_scenario("turning", list(attitude))), [index])[0]
+def _campaign_run(index, *overrides):
+    """Run ``index`` of turning's campaign (default campaign seed), its draw replayed."""
+    d = draws(campaign_spec_of(load_scenario("turning")), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *attitude, *d.overrides(), *overrides])))
+        *d.overrides(), *overrides])))
 
 
 def test_the_flare_leaves_authority_over_the_steady_tilt_and_stays_under_the_limit():
@@ -89,13 +87,13 @@ def test_the_campaigns_tilt_failures_of_before_land_inside_the_flare(index, befo
     the rotors cut at the switch, the 30 deg tilt limit); flown through the 21 deg flare
     it meets the roof under the limit (within the flare but for the attitude's overshoot,
     at most 0.25 deg here), on the pad and secured."""
-    before = _campaign_run(index, *BEFORE, attitude=ATTITUDE_BEFORE)
+    before = _campaign_run(index, *BEFORE)
     assert before.failures == ["tilt_deg"] and before.tilt_deg > 23.3
     assert before.tilt_deg == pytest.approx(before_deg, abs=5e-4)
-    now = _campaign_run(index, PAD_BEFORE, attitude=ATTITUDE_BEFORE)  # its campaign's
+    now = _campaign_run(index, PAD_BEFORE)                 # the campaign's pad
     assert now.success and now.on_pad and now.secured
     assert now.tilt_deg == pytest.approx(now_deg, abs=5e-4) and now.tilt_deg < 21.25
-    nested = _campaign_run(index)              # as shipped: the nested marker, GNSS-aided
+    nested = _campaign_run(index)                          # as shipped: the nested marker
     assert nested.success and nested.on_pad and nested.secured and nested.tilt_deg < 21.25
 
 

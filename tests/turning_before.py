@@ -5,17 +5,7 @@ the observer alone"), and the navigation filter's PX4 defaults for the accelerat
 noise (``q_acc``, ``q_at``; docs/landing.md, "turning: what the offset at contact is made
 of"). The judge's tests that force turning's crawl into the roof pin
 flights with the rotor cut at the switch; they fly these, on the pad of before: the large
-marker alone (docs/landing.md, "The nested marker"). The replayed campaign rows of before
-also draw with the attitude of before (``ATTITUDE_BEFORE``: an AHRS's error, apart from the
-accelerometer's bias; docs/landing.md, "A GNSS-aided attitude")."""
-
-#: turning's attitude estimate before it took the GNSS-aided model: the VN-100's 0.5 deg
-#: roll and pitch, drawn apart from the accelerometer's bias. A campaign row of before is
-#: drawn from the scenario with these (the campaign disperses ``attitude_sigma`` about
-#: the file's value), not set over the draw.
-ATTITUDE_BEFORE = ["sensors.imu.attitude_gnss_aided=false",
-                   "sensors.imu.attitude_sigma=[0.008726646259971648, 0.008726646259971648, "
-                   "0.03490658503988659]"]
+marker alone (docs/landing.md, "The nested marker")."""
 
 BEFORE = ['touchdown.policy="idle"', "touchdown.flare_height=0.15",
           "touchdown.flare_tilt_deg=34.0", "touchdown.level_time=0.35",
