@@ -6,12 +6,13 @@ same model whose filter stage computes the slots by selection every period
 (``selected``: ``conditional_step_function(..., held=False)``, before; the model renamed,
 a build of its own). Each build's flight is checked the same bits first (every recorded
 row, state and the end state), then both are flown alternately in one process (CPU ms,
-median of ``--rounds``). ``--count`` prints how often each FIFO is pushed or popped in
-the flight (from the filter's counters). ``--callgrind NAME`` flies one build once, for::
+median of ``--rounds``; the "baseline" of the lines printed is ``selected``).
+``--callgrind NAME`` flies one build once, for (``<model>``: ``landing_sensed_flat`` for
+``highway``, ``landing_sensed`` for ``ship``, ``_selected`` appended for that build)::
 
-    valgrind --tool=callgrind --toggle-collect='qlsim_*_controller' \\
-        --toggle-collect='qlsim_*_plant' --toggle-collect='qlsim_*_free_plant' \\
-        --toggle-collect='qlsim_*_event' python benchmarks/bench_fifo_switch.py \\
+    valgrind --tool=callgrind --toggle-collect=qlsim_<model>_controller \\
+        --toggle-collect=qlsim_<model>_plant --toggle-collect=qlsim_<model>_free_plant \\
+        --toggle-collect=qlsim_<model>_event python benchmarks/bench_fifo_switch.py \\
         --flights highway --callgrind held
 
 Run from the repository root: ``nice -n 10 python benchmarks/bench_fifo_switch.py``.

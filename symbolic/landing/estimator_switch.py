@@ -16,9 +16,9 @@ pieces (:mod:`quadland_symbolic.landing.estimator`'s :func:`step_queues`,
    each sensor ``estimator_fifo_<sensor>`` (:func:`fifo_switch`): a ``Switch`` on
    ``push`` or ``pop`` between the FIFO's slots pushed and popped by selection, as in
    the branch-free step, and the slots held (plus ``+0.0``, what the selections give
-   when neither flag is set). A FIFO is pushed or popped in a few periods in ten but
-   the range finder's; the slots were two selections a value every period
-   (docs/performance.md);
+   when neither flag is set). A FIFO is pushed or popped in a few periods in ten, the
+   range finder's in about half; by selection alone its slots cost two selections a
+   value every period (docs/performance.md);
 2. for each sensor in fusion order, ``estimator_<sensor>``: a CasADi ``Switch``
    (``Function.conditional``) on the sensor's ``due`` flag between ``fuse_<sensor>``
    (the deck's normal at the head's time and the sensor's gated updates, as in the
