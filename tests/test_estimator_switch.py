@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from filter_packets import packet
 
+from quadland_symbolic.kalman import fifo_push_pop
 from quadland_symbolic.landing.estimator import (
     FLIGHT_COUPLING,
     FLIGHT_DEPTH,
@@ -25,7 +26,7 @@ from quadland_symbolic.landing.estimator import (
     estimator_memory,
     estimator_step_function,
 )
-from quadland_symbolic.landing.estimator_switch import conditional_step_function
+from quadland_symbolic.landing.estimator_switch import conditional_step_function, fifo_switch
 from quadland_symbolic.landing.navigation import (
     ESTIMATOR_DEFAULTS,
     NAV_PACKETS,
@@ -41,11 +42,13 @@ def _bits(v):
     return np.asarray(v, dtype=np.float64).ravel().view(np.uint64)
 
 
-@pytest.mark.parametrize("seed", [1, 2])
-def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed):
+@pytest.mark.parametrize(("seed", "held"), [(1, True), (2, True), (1, False)])
+def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed, held):
+    """``held``: the FIFOs' slots in a Switch (the default); else selected every step."""
     rng = np.random.default_rng(seed)
     sizes = (N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
-    branch_free, conditional = estimator_step_function(*sizes), conditional_step_function(*sizes)
+    branch_free = estimator_step_function(*sizes)
+    conditional = conditional_step_function(*sizes, held=held)
     assert branch_free.is_a("SXFunction") and conditional.is_a("MXFunction")
     lay, lp = estimator_memory(*sizes), estimator_params()
     p = lp.pack(dict(ESTIMATOR_DEFAULTS))
@@ -78,10 +81,43 @@ def test_its_c_branches_once_per_sensor(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     conditional_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING).generate("step.c")
     text = (tmp_path / "step.c").read_text()
+    # one on the due flag around the sensor's updates, one on its FIFO's flags
     assert len(re.findall(r"if \(arg\[0\] \? casadi_to_int\(\*arg\[0\]\) : 0\) \{", text)) \
-        == len(SENSORS)
+        == 2 * len(SENSORS)
     for s in SENSORS:
         assert f"fuse_{s}:" in text and f"skip_{s}:" in text
+        assert f"move_{s}:" in text and f"hold_{s}:" in text
+
+
+@pytest.mark.parametrize("sensor", SENSORS)
+def test_the_fifo_switch_equals_the_selections_bit_for_bit(sensor):
+    """Every push and pop flag, slots holding -0.0, NaN and numbers: the Switch's FIFO is
+    ``fifo_push_pop``'s selected slots (the branch-free step's), read from the memory."""
+    rng = np.random.default_rng(3)
+    sizes = (N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    lay = estimator_memory(*sizes)
+    f = fifo_switch(sensor, *sizes)
+    mem_s, pkt_s = lay.sym("mem"), ca.SX.sym("pkt", f.size1_in(2))
+    push_s, pop_s = ca.SX.sym("push"), ca.SX.sym("pop")
+    m = lay.unpack(mem_s)
+    ref = ca.Function("ref", [mem_s, pkt_s, push_s, pop_s], [ca.vec(fifo_push_pop(
+        m[f"fifo_{sensor}"], m[f"count_{sensor}"], pkt_s[1:], push_s,
+        lambda h, n: pop_s)["slots"])])
+    depth = lay[f"fifo_{sensor}"].shape[1]
+    for trial in range(40):
+        mem = rng.normal(size=lay.size)
+        fifo = mem[lay.slice(f"fifo_{sensor}")]
+        fifo[rng.random(fifo.size) < 0.3] = -0.0
+        fifo[rng.random(fifo.size) < 0.05] = np.nan
+        mem[lay.slice(f"fifo_{sensor}")] = fifo
+        mem[lay.slice(f"count_{sensor}")] = rng.integers(0, depth + 1)
+        pkt = rng.normal(size=f.size1_in(2))
+        push, pop = trial % 2, (trial // 2) % 2
+        want = ref(mem, pkt, push, pop)
+        got = f(float(push or pop), mem, pkt, push, pop, float(push or pop))
+        np.testing.assert_array_equal(_bits(got), _bits(want))
+        if not (push or pop):       # -0.0 turned to +0.0, as 0 + x does
+            assert not np.any(np.signbit(np.asarray(got))[np.asarray(got) == 0])
 
 
 def test_stages_compose_by_name_and_refuse_what_is_missing():

@@ -241,8 +241,8 @@ def _queue(layout, m, pkt, p, t_h, dt, t):
     """Queue a packet; pop its FIFO's head if due or stale (E16).
 
     Returns the head (the record after the push), ``due`` (popped and not older than
-    ``t_h - max_age``) and what the memory and the diagnostics keep: the FIFO, its
-    count, ``discarded`` and ``dropped``.
+    ``t_h - max_age``), ``push`` and ``pop`` (the FIFO's two flags) and what the memory
+    and the diagnostics keep: the FIFO, its count, ``discarded`` and ``dropped``.
     """
     pk = layout.unpack(pkt)
     push_ok = pk["tau"] <= t
@@ -258,6 +258,7 @@ def _queue(layout, m, pkt, p, t_h, dt, t):
                       ca.logic_and(fresh, push_ok), pop_if)
     stale = ca.logic_and(f["pop"], f["head"][0] < t_h - p[f"max_age_{name}"])
     return dict(head=f["head"], due=ca.logic_and(f["pop"], ca.logic_not(stale)),
+                push=ca.logic_and(fresh, push_ok), pop=f["pop"],
                 fifo=ca.vec(f["slots"]), count=f["count"], discarded=stale,
                 dropped=ca.logic_or(f["dropped"], ca.logic_and(fresh, ca.logic_not(push_ok))))
 

@@ -11,8 +11,14 @@ those instructions give back the state and covariance they were given.
 pieces (:mod:`quadland_symbolic.landing.estimator`'s :func:`step_queues`,
 :func:`fuse_sensor`, :func:`finish_step`), one SX Function each:
 
-1. ``estimator_queues``: the latest broadcast and every sensor's FIFO, its head and
-   ``due`` flag (steps 1 and 2's queueing);
+1. ``estimator_queues``: the latest broadcast and every sensor's FIFO's head, count,
+   ``due`` flag and its ``push`` and ``pop`` flags (steps 1 and 2's queueing); then for
+   each sensor ``estimator_fifo_<sensor>`` (:func:`fifo_switch`): a ``Switch`` on
+   ``push`` or ``pop`` between the FIFO's slots pushed and popped by selection, as in
+   the branch-free step, and the slots held (plus ``+0.0``, what the selections give
+   when neither flag is set). A FIFO is pushed or popped in a few periods in ten, the
+   range finder's in about half; by selection alone its slots cost two selections a
+   value every period (docs/performance.md);
 2. for each sensor in fusion order, ``estimator_<sensor>``: a CasADi ``Switch``
    (``Function.conditional``) on the sensor's ``due`` flag between ``fuse_<sensor>``
    (the deck's normal at the head's time and the sensor's gated updates, as in the
@@ -44,6 +50,7 @@ import functools
 
 import casadi as ca
 
+from quadland_symbolic.kalman import fifo_push_pop
 from quadland_symbolic.landing.estimator import (
     block_streaks,
     estimator_memory,
@@ -61,7 +68,7 @@ from quadland_symbolic.landing.navigation import (
     estimator_params,
 )
 
-__all__ = ["OUTCOME", "fusion_switch", "conditional_step_function"]
+__all__ = ["OUTCOME", "fusion_switch", "fifo_switch", "conditional_step_function"]
 
 #: The outcome of a block after its measurement's ``dim`` innovations, in order.
 OUTCOME = ("nis", "fused", "held", "rejected")
@@ -113,11 +120,41 @@ def fusion_switch(sensor: str, coupling: str = "full") -> ca.Function:
     return ca.Function.conditional(f"estimator_{sensor}", [skip], fuse)
 
 
-def _queues_function(lay):
+@functools.cache
+def fifo_switch(sensor: str, n_hist: int, depth, coupling: str = "full") -> ca.Function:
+    """``estimator_fifo_<sensor>(active, mem, packet, push, pop, active) -> fifo_next``.
+
+    ``mem`` the filter's memory before the step
+    (:func:`~quadland_symbolic.landing.estimator.estimator_memory` at these sizes), of
+    which the FIFO and its count are read. A ``Switch`` on its first input (``push`` or
+    ``pop``): ``move_<sensor>``, the FIFO's slots pushed and popped by selection as in
+    the branch-free step (:func:`~quadland_symbolic.kalman.fifo_push_pop`, the same
+    expressions of the same flags), where it is not 0; ``hold_<sensor>`` where it is:
+    the slots plus ``active``, ``+0.0`` there. That is what the selections give when
+    neither flag is set (``0 + x``: every slot itself, ``-0.0`` turned to ``+0.0``),
+    without computing them.
+    """
+    lay = estimator_memory(n_hist, depth, coupling)
+    mem, pkt = lay.sym("mem"), ca.SX.sym("packet", _record_size(sensor) + 1)
+    push, pop, active = (ca.SX.sym(n) for n in ("push", "pop", "active"))
+    m = lay.unpack(mem)
+    ins, names = [mem, pkt, push, pop, active], ["mem", "packet", "push", "pop", "active"]
+    moved = fifo_push_pop(m[f"fifo_{sensor}"], m[f"count_{sensor}"], pkt[1:], push,
+                          lambda head, nonempty: pop)["slots"]
+    move = ca.Function(f"move_{sensor}", ins, [ca.densify(ca.vec(moved))], names,
+                       ["fifo_next"], {"cse": True})
+    hold = ca.Function(f"hold_{sensor}", ins, [mem[lay.slice(f"fifo_{sensor}")] + active],
+                       names, ["fifo_next"])
+    return ca.Function.conditional(f"estimator_fifo_{sensor}", [hold], move)
+
+
+def _queues_function(lay, held: bool):
     """``estimator_queues(mem, <packets>, p_est, dt, t) -> (x_h, P_h, deck, <per sensor>)``.
 
-    Per sensor: ``head``, ``due``, ``streak``, ``fifo``, ``count``, ``discarded``,
-    ``dropped`` (:func:`~quadland_symbolic.landing.estimator.step_queues`).
+    Per sensor: ``head``, ``due``, ``streak``, ``push``, ``pop``, ``active`` (either),
+    ``count``, ``discarded``, ``dropped``
+    (:func:`~quadland_symbolic.landing.estimator.step_queues`); the FIFO's slots
+    ``fifo`` too where not ``held`` (else :func:`fifo_switch`'s).
     """
     mem, p_est = lay.sym("mem"), estimator_params().sym("p_est")
     pkts = [layout.sym(layout.name) for layout in NAV_PACKETS]
@@ -127,8 +164,10 @@ def _queues_function(lay):
     outs, names = [m["x_h"], m["P_h"], ca.vertcat(*_deck_values(deck))], ["x_h", "P_h", "deck"]
     for s in SENSORS:
         q = sen[s]
+        fifo = (("push", q["push"]), ("pop", q["pop"]),
+                ("active", ca.logic_or(q["push"], q["pop"]))) if held else (("fifo", q["fifo"]),)
         for k, v in (("head", q["head"]), ("due", q["due"]),
-                     ("streak", ca.vertcat(*block_streaks(m, s))), ("fifo", q["fifo"]),
+                     ("streak", ca.vertcat(*block_streaks(m, s))), *fifo,
                      ("count", q["count"]), ("discarded", q["discarded"]),
                      ("dropped", q["dropped"])):
             outs.append(ca.densify(v))
@@ -174,16 +213,19 @@ def _finish_function(lay, pattern):
 
 
 @functools.cache
-def conditional_step_function(n_hist: int, depth, coupling: str = "full") -> ca.Function:
+def conditional_step_function(n_hist: int, depth, coupling: str = "full",
+                              held: bool = True) -> ca.Function:
     """The navigation filter's step, each sensor's updates evaluated only when due.
 
     ``estimator_step(mem, imu, vision, gnss, range, datalink, p_est, dt, t)
     -> (mem_next, y, diag)``: the inputs, outputs and bits of
     :func:`~quadland_symbolic.landing.estimator.estimator_step_function` at the same
-    sizes, as an MX Function (the module docstring).
+    sizes, as an MX Function (the module docstring). ``held``: each FIFO's slots by
+    :func:`fifo_switch`, computed only where pushed or popped (the default); else by
+    selection in ``estimator_queues`` every step (before; the same bits).
     """
     lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
-    queues = _queues_function(lay)
+    queues = _queues_function(lay, held)
     finish = _finish_function(lay, pattern)
     mem, imu, p_est = ca.MX.sym("mem", lay.size), ca.MX.sym("imu", IMU.size), \
         ca.MX.sym("p_est", estimator_params().size)
@@ -192,14 +234,17 @@ def conditional_step_function(n_hist: int, depth, coupling: str = "full") -> ca.
     q = queues.call(dict(mem=mem, **dict(zip(SENSORS, pkts, strict=True)), p_est=p_est,
                          dt=dt, t=t))
     x, P, done = q["x_h"], q["P_h"], {}
+    fifo = {s: fifo_switch(s, n_hist, depth, coupling)(
+        q[f"active_{s}"], mem, pkt, q[f"push_{s}"], q[f"pop_{s}"], q[f"active_{s}"])
+        if held else q[f"fifo_{s}"] for s, pkt in zip(SENSORS, pkts, strict=True)}
     for s in SENSORS:
         due = q[f"due_{s}"]
         x, P, done[f"outcome_{s}"] = fusion_switch(s, coupling)(
             due, x, P, q[f"head_{s}"], due, q["deck"], q[f"streak_{s}"], p_est)
     args = dict(mem=mem, imu=imu, p_est=p_est, dt=dt, t=t, deck=q["deck"], x=x, P=P, **done)
     for s in SENSORS:
-        args.update({f"{k}_{s}": q[f"{k}_{s}"] for k in ("fifo", "count", "discarded",
-                                                         "dropped")})
+        args.update({f"{k}_{s}": q[f"{k}_{s}"] for k in ("count", "discarded", "dropped")})
+        args[f"fifo_{s}"] = fifo[s]
     out = finish.call(args)
     return ca.Function("estimator_step", [mem, imu, *pkts, p_est, dt, t],
                        [out["mem_next"], out["y"], out["diag"]],
