@@ -14,8 +14,8 @@ a magnet in each foot"). Checked here against hand results:
   centre (``fx cos th - h sin th`` ahead for the front feet, ``fx cos th + h sin th``
   behind for the rear ones), where the centre magnet pulls nearly nothing;
 * ``lock = "magnet"`` (every other shipped scenario's) packs ``at_feet = 0``: the law of
-  before, which ``tests/test_contact.py`` checks; no shipped scenario takes
-  ``"foot_magnets"``; these checks take its faces flush at any lean
+  before, which ``tests/test_contact.py`` checks; ``highway_100`` ships
+  ``"foot_magnets"`` on swivelling feet; these checks take its faces flush at any lean
   (``lock_swivel_deg = 90``, an idealization; the sourced swivel's law is
   ``tests/test_swivel_feet.py``'s);
 * flown, highway_100's campaign run 3 (contact 0.10 m behind the centre at 43.6 deg, off

@@ -239,3 +239,49 @@ def test_campaign_run_54_held_by_its_front_feet_lands():
     assert now["foot"] < 0.7
     assert now["report"].success and now["report"].secured
     assert now["report"].peak_gear_force < 424.0
+
+
+def _resting(eta, **lock):
+    """The foot pulls with the body at ``eta`` (roll, pitch, yaw), its lowest feet on the
+    deck."""
+    R = np.array(rotation(ca.DM(np.asarray(eta, dtype=float))))
+    feet = np.array([[FX, FY, -H], [-FX, FY, -H], [-FX, -FY, -H], [FX, -FY, -H]])
+    return _hold(np.asarray(eta, dtype=float), -(feet @ R.T[:, 2]).min(),
+                 **lock)["foot_pull"].ravel()
+
+
+@pytest.mark.parametrize(("nose_up", "roll", "share"), [
+    (0.0, 0.0, 1.0),           # level: flush, but on the cone's very edge
+    (1.0, 0.0, 0.628),         # nose up 1 deg: e = 1 deg, (w/2) sin e = 0.26 mm
+    (5.0, 0.0, 0.188),         # nose up 5 deg: 1.31 mm, under a fifth of the pull
+    (0.0, 5.0, 0.727),         # level, rolled 5 deg: acos(cos 18 cos 5) = 18.68 deg
+    (0.0, 10.0, 0.364),        # level, rolled 10 deg: 20.49 deg
+])
+def test_with_the_axis_pitched_by_the_swivel_level_is_the_edge_of_flush(nose_up, roll, share):
+    """highway_100's joints, 18 deg of swivel about an axis pitched 18 deg nose down, put
+    level exactly on the edge of the swivel's cone: any nose-up pitch or any roll of the
+    body against the deck edges every face at once (review of the twelfth session). By
+    hand, the deck's normal in body axes ``(sin th cos phi, -sin phi, cos th cos phi)``
+    (nose up ``th``, roll ``phi``) against the axis ``(-sin b, 0, cos b)``: ``cos A =
+    cos(b + th) cos phi``, ``e = A - 18 deg``."""
+    th = math.radians(nose_up)
+    sign = _nose_down(math.radians(5.0))[0][1] > 0                 # which pitch is nose down
+    eta = [math.radians(roll), (-th if sign else th), 0.0]
+    pulls = _resting(eta, swivel=math.radians(18.0), swivel_pitch=math.radians(18.0))
+    b = math.radians(18.0)
+    e = math.degrees(math.acos(math.cos(b + th) * math.cos(math.radians(roll)))) - 18.0
+    assert pulls.max() == pytest.approx(_edge_pull(e), rel=1e-6)
+    assert pulls.max() / (F_HOLD * S / 4) == pytest.approx(share, abs=0.001)
+
+
+def test_a_swivel_past_90_deg_is_outside_the_law():
+    """``swivel_edge`` caps the excess at 90 deg by ``cos e < 0``, which also holds for
+    ``e < -90 deg``: a swivel past 90 deg (LOCK's ``pi`` was once documented as "flush at
+    any attitude") edges every face by the full ``w / 2`` instead. The schema stops at 90
+    deg, and 90 deg is the flush idealization."""
+    eta, z = _nose_down(math.radians(10.0))
+    flush = F_HOLD * S / 4
+    assert _hold(eta, z, swivel=math.pi / 2)["foot_pull"].ravel()[0] == pytest.approx(flush)
+    assert _hold(eta, z, swivel=math.pi)["foot_pull"].ravel()[0] < 0.01 * flush
+    from quadland.schema.lock import LOCK_FIELDS
+    assert LOCK_FIELDS["lock_swivel_deg"].hi == 90.0

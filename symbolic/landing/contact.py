@@ -109,7 +109,8 @@ LOCK = Layout("p_lock", (
           "each pulled by its own gap"),
     Field("swivel", 1, "rad",
           "a foot device's swivel: the largest angle between its face's normal and its "
-          "neutral axis (pi: flush at any attitude, an idealization)"),
+          "neutral axis (0 to pi/2; pi/2: flush up to 90 deg off the axis, an "
+          "idealization; past pi/2 the law edges every face, swivel_foot.swivel_edge)"),
     Field("swivel_pitch", 1, "rad",
           "the foot devices' neutral axis, pitched nose down from the body's z axis"),
     Field("face_width", 1, "m",
