@@ -202,3 +202,31 @@ def test_the_batch_limit_keeps_matplotlibs_paths_unsimplified():
     assert sum(n for _, n, _ in drawn) == 2 * 61 + 2 * len(shown)
     assert len([n for kind, n, _ in drawn if kind == 0 and n > len(shown)]) == 2
     assert max(v for _, _, v in drawn) <= tick_batch.MAX_VERTICES
+
+
+def _three_d(fig):
+    ax = fig.add_subplot(projection="3d")
+    t = np.linspace(0, 10, 100)
+    ax.plot(np.cos(t), np.sin(t), t)
+
+
+def _sketched(fig):
+    with matplotlib.rc_context({"path.sketch": (1, 100, 2)}):
+        ax = fig.subplots()
+        ax.plot([0, 1], [0, 1])
+        ax.grid(True)
+
+
+def _axis_filtered(fig):
+    ax = fig.subplots()
+    ax.plot([0, 10], [0, 10])
+    ax.grid(True)
+    ax.xaxis.set_agg_filter(lambda image, dpi: (1 - image, 0, 0))
+
+
+@pytest.mark.parametrize("content", [_three_d, _sketched, _axis_filtered],
+                         ids=["3d", "sketch", "axis-filter"])
+def test_axes_the_batches_cannot_draw_are_drawn_as_matplotlib_draws_them(content):
+    """mplot3d's axes (whose ticks are XTicks placed in its own draw), sketched tick lines
+    (their wiggles seeded per path) and an axis with its own filter: matplotlib's pixels."""
+    drawn_alike(content, (5, 4))

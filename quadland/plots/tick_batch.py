@@ -17,9 +17,11 @@ snapped to pixels as each is when drawn alone (vertical or horizontal segments, 
 than 128 vertices a line, under which matplotlib does not simplify a path); and the
 segments of different ticks cover different pixels, so that the order in which they are
 blended does not matter. Ticks whose lines differ in any attribute but their data are
-drawn in groups of alike ones; an axis whose ticks are not matplotlib's ``XTick`` and
-``YTick``, or are rasterized or filtered, and every renderer but Agg's, draw as matplotlib
-draws them.
+drawn in groups of alike ones; an axis that is not matplotlib's ``XAxis`` or ``YAxis``
+(mplot3d's place their ticks' lines in their own draw), or is rasterized or filtered, an
+axis whose ticks are not matplotlib's ``XTick`` and ``YTick``, or are rasterized or
+filtered, or whose lines are sketched or have path effects, and every renderer but Agg's,
+draw as matplotlib draws them.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from __future__ import annotations
 import contextlib
 
 import numpy as np
-from matplotlib.axis import XTick, YTick
+from matplotlib.axis import XAxis, XTick, YAxis, YTick
 from matplotlib.backends.backend_agg import RendererAgg
 from matplotlib.lines import Line2D
 
@@ -83,9 +85,11 @@ def _alike(a, b) -> bool:
 
 
 def _batchable(line) -> bool:
+    # a sketch's wiggles are seeded per path and a path effect strokes the whole batch
     return (type(line) is Line2D and line.get_drawstyle() == "default"
             and line.get_markevery() is None and not line.get_rasterized()
-            and line.get_agg_filter() is None)
+            and line.get_agg_filter() is None and line.get_sketch_params() is None
+            and not line.get_path_effects())
 
 
 def _runs(lines: list) -> list[list[int]] | None:
@@ -202,7 +206,11 @@ def _batch_on(axis) -> None:
     draw = axis.draw
 
     def draw_axis(renderer):
-        if not axis.get_visible() or not isinstance(renderer, RendererAgg):
+        # another axis class (mplot3d's) places its ticks' lines in its own draw; an
+        # axis's own filter or rasterization wraps matplotlib's draw only
+        if (not axis.get_visible() or not isinstance(renderer, RendererAgg)
+                or type(axis) not in (XAxis, YAxis) or axis.get_agg_filter() is not None
+                or axis.get_rasterized()):
             return draw(renderer)
         batches = _batches(axis, renderer)
         if batches is None:
