@@ -134,3 +134,26 @@ def test_the_last_resort_font_and_another_recipe_leave_it_to_matplotlib(monkeypa
 
     text_cache._LAYOUTS.clear()
     drawn_alike(content, (4, 3))
+
+
+def test_a_recipe_of_the_same_signature_that_takes_no_file_object_leaves_it_to_matplotlib(
+        monkeypatch):
+    """A matplotlib whose ``_get_font`` has the expected parameters but opens each entry as
+    a path: matplotlib's fonts, the figure drawn as matplotlib draws it."""
+    recipe = font_memory._RECIPE
+
+    def paths_only(font_filepaths, *, _kerning_factor, thread_id, enable_last_resort):
+        return recipe(tuple((os.fspath(p), i) for p, i in font_filepaths),
+                      _kerning_factor=_kerning_factor, thread_id=thread_id,
+                      enable_last_resort=enable_last_resort)
+
+    monkeypatch.setattr(font_memory, "_RECIPE", paths_only)
+    monkeypatch.setattr(font_memory, "_FONTS", {})
+    assert font_memory.memory_font(_paths(family="serif")) is None
+
+    def content(fig):
+        ax = fig.subplots()
+        ax.set_title("a recipe for paths only")
+
+    text_cache._LAYOUTS.clear()
+    drawn_alike(content, (4, 3))

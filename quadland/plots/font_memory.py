@@ -105,12 +105,17 @@ def memory_font(font_paths):
     last_resort = mpl.rcParams["font.enable_last_resort"]
     key = (entries, kerning, last_resort, threading.get_ident())
     font = _FONTS.get(key)
-    if font is None:
-        font = _RECIPE(tuple((_in_memory(path), index) for path, index in entries),
-                       _kerning_factor=kerning, thread_id=key[-1],
-                       enable_last_resort=last_resort)
-        _FONTS[key] = font
-    font._set_transform([[0x10000, 0], [0, 0x10000]], [0, 0])
+    try:
+        if font is None:
+            font = _RECIPE(tuple((_in_memory(path), index) for path, index in entries),
+                           _kerning_factor=kerning, thread_id=key[-1],
+                           enable_last_resort=last_resort)
+            _FONTS[key] = font
+        font._set_transform([[0x10000, 0], [0, 0x10000]], [0, 0])
+    except (TypeError, AttributeError, ValueError):
+        # a recipe of the expected signature that takes no file object (another
+        # matplotlib): matplotlib's own get_font, as where the signature differs
+        return None
     return font
 
 
