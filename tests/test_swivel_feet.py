@@ -95,7 +95,7 @@ def test_the_keys_pack_and_default_to_the_sourced_swivel():
     assert lk["swivel_pitch"] == 0.0 and lk["face_width"] == 0.03
     lk = LOCK.unpack(lock_params(load_scenario("highway_100")))           # as shipped
     assert lk["at_feet"] == 1.0 and lk["swivel"] == pytest.approx(math.radians(18.0))
-    assert lk["swivel_pitch"] == pytest.approx(math.radians(18.0))
+    assert lk["swivel_pitch"] == pytest.approx(math.radians(15.0))
     lk = LOCK.unpack(lock_params(load_scenario("highway_100", [
         "touchdown.lock=foot_magnets", "touchdown.lock_swivel_pitch_deg=18",
         "touchdown.lock_swivel_deg=10", "touchdown.lock_face_width=0.05"])))
@@ -285,3 +285,18 @@ def test_a_swivel_past_90_deg_is_outside_the_law():
     assert _hold(eta, z, swivel=math.pi)["foot_pull"].ravel()[0] < 0.01 * flush
     from quadland.schema.lock import LOCK_FIELDS
     assert LOCK_FIELDS["lock_swivel_deg"].hi == 90.0
+
+
+@pytest.mark.parametrize("nose_up, roll", [(0.0, 0.0), (2.9, 0.0), (0.0, 9.5), (-32.9, 0.0)])
+def test_the_shipped_15_deg_pitch_keeps_level_inside_the_swivel(nose_up, roll):
+    """highway_100 ships the axis pitched 15 deg nose down: at rest level, up to 3 deg nose
+    up, up to 10 deg of roll (``acos(cos 15 cos phi) <= 18``) and up to 33 deg nose down,
+    every face lies flush and pulls its full share, by the same hand geometry as above."""
+    lk = LOCK.unpack(lock_params(load_scenario("highway_100")))
+    th = math.radians(nose_up)
+    sign = _nose_down(math.radians(5.0))[0][1] > 0
+    eta = [math.radians(roll), (-th if sign else th), 0.0]
+    b = float(np.ravel(lk["swivel_pitch"])[0])
+    assert math.degrees(math.acos(math.cos(b + th) * math.cos(math.radians(roll)))) < 18.0
+    pulls = _resting(eta, swivel=float(np.ravel(lk["swivel"])[0]), swivel_pitch=b)
+    assert pulls.max() == pytest.approx(F_HOLD * S / 4, rel=1e-9)
