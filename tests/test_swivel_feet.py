@@ -258,8 +258,8 @@ def _resting(eta, **lock):
     (0.0, 10.0, 0.364),        # level, rolled 10 deg: 20.49 deg
 ])
 def test_with_the_axis_pitched_by_the_swivel_level_is_the_edge_of_flush(nose_up, roll, share):
-    """highway_100's joints, 18 deg of swivel about an axis pitched 18 deg nose down, put
-    level exactly on the edge of the swivel's cone: any nose-up pitch or any roll of the
+    """18 deg of swivel about an axis pitched 18 deg nose down (highway_100's first merge;
+    it ships 15 deg) puts level exactly on the edge of the swivel's cone: any nose-up pitch or any roll of the
     body against the deck edges every face at once (review of the twelfth session). By
     hand, the deck's normal in body axes ``(sin th cos phi, -sin phi, cos th cos phi)``
     (nose up ``th``, roll ``phi``) against the axis ``(-sin b, 0, cos b)``: ``cos A =
