@@ -260,8 +260,8 @@ def _resting(eta, **lock):
 def test_with_the_axis_pitched_by_the_swivel_level_is_the_edge_of_flush(nose_up, roll, share):
     """18 deg of swivel about an axis pitched 18 deg nose down (highway_100's first merge;
     it ships 15 deg) puts level exactly on the edge of the swivel's cone: any nose-up
-    pitch or any roll of the body against the deck edges every face at once (review of the twelfth session). By
-    hand, the deck's normal in body axes ``(sin th cos phi, -sin phi, cos th cos phi)``
+    pitch or any roll of the body against the deck edges every face at once (review of
+    the twelfth session). By hand, the deck's normal in body axes ``(sin th cos phi, -sin phi, cos th cos phi)``
     (nose up ``th``, roll ``phi``) against the axis ``(-sin b, 0, cos b)``: ``cos A =
     cos(b + th) cos phi``, ``e = A - 18 deg``."""
     th = math.radians(nose_up)
