@@ -258,12 +258,12 @@ def _resting(eta, **lock):
     (0.0, 10.0, 0.364),        # level, rolled 10 deg: 20.49 deg
 ])
 def test_with_the_axis_pitched_by_the_swivel_level_is_the_edge_of_flush(nose_up, roll, share):
-    """18 deg of swivel about an axis pitched 18 deg nose down (highway_100's first merge;
-    it ships 15 deg) puts level exactly on the edge of the swivel's cone: any nose-up
-    pitch or any roll of the body against the deck edges every face at once (review of
-    the twelfth session). By hand, the deck's normal in body axes ``(sin th cos phi, -sin phi, cos th cos phi)``
-    (nose up ``th``, roll ``phi``) against the axis ``(-sin b, 0, cos b)``: ``cos A =
-    cos(b + th) cos phi``, ``e = A - 18 deg``."""
+    """18 deg of swivel about an axis pitched 18 deg nose down (highway_100's first
+    merge; it ships 15 deg) puts level exactly on the edge of the swivel's cone: any
+    nose-up pitch or any roll of the body against the deck edges every face at once
+    (review of the twelfth session). By hand, the deck's normal in body axes
+    ``(sin th cos phi, -sin phi, cos th cos phi)`` (nose up ``th``, roll ``phi``) against
+    the axis ``(-sin b, 0, cos b)``: ``cos A = cos(b + th) cos phi``, ``e = A - 18 deg``."""
     th = math.radians(nose_up)
     sign = _nose_down(math.radians(5.0))[0][1] > 0                 # which pitch is nose down
     eta = [math.radians(roll), (-th if sign else th), 0.0]
