@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+from hand_rotations import Rx, Ry, Rz
 
 from quadland.exceptions import ScenarioError
 from quadland.kinds.landing.sensing import draw_sensors
@@ -27,19 +28,7 @@ NO_RESIDUAL = {"attitude_gnss_aided": True, "attitude_sigma": [0.0, 0.0, 0.0],
                "attitude_white_sigma": 0.0}
 
 
-def Rx(a):
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
 
-
-def Ry(a):
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-
-
-def Rz(a):
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
 def skew(w):

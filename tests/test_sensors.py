@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+from hand_rotations import R_zyx, Rx, Rz
 from reference import NO_AERO
 from scipy import stats
 
@@ -50,23 +51,8 @@ M1, G, KT = 2.0, 9.8, np.array([0.1, 0.2, 0.3])
 DEG = math.pi / 180
 
 
-def Rx(a):
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
 
 
-def Ry(a):
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-
-
-def Rz(a):
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
-
-
-def R_zyx(eta):
-    return Rz(eta[2]) @ Ry(eta[1]) @ Rx(eta[0])
 
 
 def params(deck_height=1.5, pad_offset=(0.0, 0.0, 0.0), roll=0.0, u2_hold=0.0):
