@@ -28,7 +28,10 @@ pieces (:mod:`quadland_symbolic.landing.estimator`'s :func:`step_queues`,
 3. ``estimator_finish``: the output predictor, the prediction, the memory and the
    diagnostics (steps 3 and 4).
 
-The sensed loop's compiled simulator flies it (:mod:`quadland_symbolic.landing.sensed_loop`).
+The sensed loop's compiled simulator flies it (:mod:`quadland_symbolic.landing.sensed_loop`)
+as two of its controller's stages (:func:`conditional_step_stages`), the finish its own:
+there it writes the memory, the measurements and the diagnostics where they go, not
+into a work vector they are copied out of.
 The flight code's C (``generated/estimator_step.c``) stays the branch-free step: there
 the stages' copies (the memory, state and covariance passed between CasADi's
 functions) cost more than the updates skipped save in a period where every sensor is

@@ -376,8 +376,9 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
     ``sensed_push_<name>`` (step 2, the record into its delay line: a ring in the
     compiled simulator, :attr:`~quadland_symbolic.stages.Staged.rings`),
     ``sensed_read_<name>`` (step 2's reading), ``sensed_imu`` (step 3),
-    ``sensed_filter`` (step 4, each sensor's updates evaluated only when due) and
-    ``sensed_flight`` (steps 5 and 6).
+    ``sensed_filter`` (step 4, each sensor's updates evaluated only when due),
+    ``sensed_finish`` (its memory, measurements and diagnostics, written where they go)
+    and ``sensed_flight`` (steps 5 and 6).
     """
     base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
     stages = Staged(
