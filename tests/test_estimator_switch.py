@@ -26,7 +26,11 @@ from quadland_symbolic.landing.estimator import (
     estimator_memory,
     estimator_step_function,
 )
-from quadland_symbolic.landing.estimator_switch import conditional_step_function, fifo_switch
+from quadland_symbolic.landing.estimator_switch import (
+    conditional_step_function,
+    conditional_step_stages,
+    fifo_switch,
+)
 from quadland_symbolic.landing.navigation import (
     ESTIMATOR_DEFAULTS,
     NAV_PACKETS,
@@ -74,6 +78,44 @@ def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed, held
     assert np.all(d["n_fused"] > 0) and np.sum(d["n_rejected"]) > 0
     assert np.all(d["n_discarded"] + d["n_dropped"] > 0)
     assert quiet > 150
+
+
+def _split_step(sizes, held):
+    """:func:`conditional_step_stages` composed by name, as the sensed loop composes them."""
+    fused, finish = conditional_step_stages(*sizes, held=held)
+    ins = (("mem", estimator_memory(*sizes).size), ("imu", 9),
+           *((p.name, p.size) for p in NAV_PACKETS), ("p_est", estimator_params().size),
+           ("dt", 1), ("t", 1))
+    return Staged("split", (fused, finish), ins,
+                  tuple((n, (n,)) for n in ("mem_next", "y", "diag"))).function()
+
+
+@pytest.mark.parametrize(("seed", "held"), [(4, True), (5, False)])
+def test_the_finish_as_a_stage_equals_the_joined_step_bit_for_bit(seed, held):
+    """The step as two stages (the finish writing its outputs where they go) against the
+    joined step over 300 periods of packets due, late, stale, from the future, not finite
+    and outliers: every output the same bits, fed back as the next memory."""
+    rng = np.random.default_rng(seed)
+    sizes = (N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    joined, split = conditional_step_function(*sizes, held=held), _split_step(sizes, held)
+    lay, lp = estimator_memory(*sizes), estimator_params()
+    p = lp.pack(dict(ESTIMATOR_DEFAULTS))
+    x0 = np.r_[0.3, -0.2, 3.0, 0.2, -0.1, -0.3, 0.5, 0.1, 0.0, np.zeros(12)]
+    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3, [0.01] * 3]
+    mem = np.asarray(estimator_init_function(*sizes)(x0, P0, [0, 0, 0.3, 0, 0, 0.05, 0, 0, 0],
+                                                     7.0)).ravel()
+    t, fused = 7.0, 0.0
+    for _ in range(300):
+        t += DT
+        pkts = [packet(layout, rng, t, mem[lay.slice("t_h")][0]) for layout in NAV_PACKETS]
+        imu = np.r_[0.02, -0.01, 0.5, 0.0, 0.0, 9.8, rng.normal(size=3) * 0.01]
+        want = joined(mem, imu, *pkts, p, DT, t)
+        got = split(mem, imu, *pkts, p, DT, t)
+        for a, b in zip(want, got, strict=True):
+            np.testing.assert_array_equal(_bits(b), _bits(a))
+        fused += np.sum(estimator_diagnostics().unpack(np.asarray(want[2]).ravel())["fused"])
+        mem = np.asarray(want[0]).ravel()
+    assert fused > 0
 
 
 def test_its_c_branches_once_per_sensor(tmp_path, monkeypatch):
@@ -149,6 +191,10 @@ def test_the_staged_c_reads_and_writes_in_place():
     block = c[c.index("/* sensed_filter */"):c.index("/* sensed_flight */")]
     assert f"arg1[0] = (arg[1] ? arg[1] + {nav.start} : 0);" in block
     assert f"res1[0] = (res[0] ? res[0] + {nav.start} : w + {nav.start});" in block
+    # the finish is a stage: the filter's C copies none of the 775-real memory out
+    assert block.count("/* sensed_finish */") == 1
+    filt = files["qlsim_landing_sensed_controller_sensed_filter.c"]
+    assert re.search(r"casadi_copy\([^;]*, 775,", filt) is None
     staged = landing_sensed_loop(10).controller_stages
     shifts = {line for line, _, _ in staged.rings}        # the delay lines: rings, no C
     for stage in staged.stages:

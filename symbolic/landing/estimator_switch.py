@@ -28,7 +28,10 @@ pieces (:mod:`quadland_symbolic.landing.estimator`'s :func:`step_queues`,
 3. ``estimator_finish``: the output predictor, the prediction, the memory and the
    diagnostics (steps 3 and 4).
 
-The sensed loop's compiled simulator flies it (:mod:`quadland_symbolic.landing.sensed_loop`).
+The sensed loop's compiled simulator flies it (:mod:`quadland_symbolic.landing.sensed_loop`)
+as two of its controller's stages (:func:`conditional_step_stages`), the finish its own:
+there it writes the memory, the measurements and the diagnostics where they go, not
+into a work vector they are copied out of.
 The flight code's C (``generated/estimator_step.c``) stays the branch-free step: there
 the stages' copies (the memory, state and covariance passed between CasADi's
 functions) cost more than the updates skipped save in a period where every sensor is
@@ -68,7 +71,8 @@ from quadland_symbolic.landing.navigation import (
     estimator_params,
 )
 
-__all__ = ["OUTCOME", "fusion_switch", "fifo_switch", "conditional_step_function"]
+__all__ = ["OUTCOME", "fusion_switch", "fifo_switch", "conditional_step_function",
+           "conditional_step_stages"]
 
 #: The outcome of a block after its measurement's ``dim`` innovations, in order.
 OUTCOME = ("nis", "fused", "held", "rejected")
@@ -180,9 +184,10 @@ def _deck_values(deck: dict) -> list:
     return [deck["eta2"], deck["w2E"], deck["w2E_dot"], deck["tau"]]
 
 
-def _finish_function(lay, pattern):
+def _finish_function(lay, pattern, name="estimator_finish", rename=lambda n: n):
     """``estimator_finish(mem, imu, p_est, dt, t, deck, <queues>, x, P, <outcomes>)
-    -> (mem_next, y, diag)`` (:func:`~quadland_symbolic.landing.estimator.finish_step`)."""
+    -> (mem_next, y, diag)`` (:func:`~quadland_symbolic.landing.estimator.finish_step`);
+    ``name`` and its inputs and outputs named ``rename(<those names>)``."""
     mem, imu, p_est = lay.sym("mem"), IMU.sym("imu"), estimator_params().sym("p_est")
     dt, t, deck = ca.SX.sym("dt"), ca.SX.sym("t"), ca.SX.sym("deck", _DECK)
     x, P = NAV.sym("x"), ca.SX.sym("P", pattern.size)
@@ -208,25 +213,13 @@ def _finish_function(lay, pattern):
             k += b.dim + len(OUTCOME)
     mem_next, y, diag = finish_step(lay, pattern, m, IMU.unpack(imu), imu, p_est, dt, t,
                                     _deck(deck), sen, x, pattern.unpack(P), blk)
-    return ca.Function("estimator_finish", ins, [mem_next, y, diag], names,
-                       ["mem_next", "y", "diag"], {"cse": True})
+    return ca.Function(name, ins, [mem_next, y, diag], [rename(n) for n in names],
+                       [rename(n) for n in ("mem_next", "y", "diag")], {"cse": True})
 
 
-@functools.cache
-def conditional_step_function(n_hist: int, depth, coupling: str = "full",
-                              held: bool = True) -> ca.Function:
-    """The navigation filter's step, each sensor's updates evaluated only when due.
-
-    ``estimator_step(mem, imu, vision, gnss, range, datalink, p_est, dt, t)
-    -> (mem_next, y, diag)``: the inputs, outputs and bits of
-    :func:`~quadland_symbolic.landing.estimator.estimator_step_function` at the same
-    sizes, as an MX Function (the module docstring). ``held``: each FIFO's slots by
-    :func:`fifo_switch`, computed only where pushed or popped (the default); else by
-    selection in ``estimator_queues`` every step (before; the same bits).
-    """
-    lay, pattern = estimator_memory(n_hist, depth, coupling), covariance_pattern(coupling)
+def _fused_args(lay, n_hist, depth, coupling, held):
+    """The MX inputs of the step and the finish's arguments (queues, FIFOs, fusions)."""
     queues = _queues_function(lay, held)
-    finish = _finish_function(lay, pattern)
     mem, imu, p_est = ca.MX.sym("mem", lay.size), ca.MX.sym("imu", IMU.size), \
         ca.MX.sym("p_est", estimator_params().size)
     pkts = [ca.MX.sym(p.name, p.size) for p in NAV_PACKETS]
@@ -241,12 +234,57 @@ def conditional_step_function(n_hist: int, depth, coupling: str = "full",
         due = q[f"due_{s}"]
         x, P, done[f"outcome_{s}"] = fusion_switch(s, coupling)(
             due, x, P, q[f"head_{s}"], due, q["deck"], q[f"streak_{s}"], p_est)
-    args = dict(mem=mem, imu=imu, p_est=p_est, dt=dt, t=t, deck=q["deck"], x=x, P=P, **done)
+    args = dict(mem=mem, imu=imu, p_est=p_est, dt=dt, t=t, deck=q["deck"])
     for s in SENSORS:
-        args.update({f"{k}_{s}": q[f"{k}_{s}"] for k in ("count", "discarded", "dropped")})
         args[f"fifo_{s}"] = fifo[s]
+        args.update({f"{k}_{s}": q[f"{k}_{s}"] for k in ("count", "discarded", "dropped")})
+    args.update(x=x, P=P, **done)
+    return [mem, imu, *pkts, p_est, dt, t], args
+
+
+@functools.cache
+def conditional_step_function(n_hist: int, depth, coupling: str = "full",
+                              held: bool = True) -> ca.Function:
+    """The navigation filter's step, each sensor's updates evaluated only when due.
+
+    ``estimator_step(mem, imu, vision, gnss, range, datalink, p_est, dt, t)
+    -> (mem_next, y, diag)``: the inputs, outputs and bits of
+    :func:`~quadland_symbolic.landing.estimator.estimator_step_function` at the same
+    sizes, as an MX Function (the module docstring). ``held``: each FIFO's slots by
+    :func:`fifo_switch`, computed only where pushed or popped (the default); else by
+    selection in ``estimator_queues`` every step (before; the same bits).
+    """
+    lay = estimator_memory(n_hist, depth, coupling)
+    finish = _finish_function(lay, covariance_pattern(coupling))
+    ins, args = _fused_args(lay, n_hist, depth, coupling, held)
     out = finish.call(args)
-    return ca.Function("estimator_step", [mem, imu, *pkts, p_est, dt, t],
+    return ca.Function("estimator_step", ins,
                        [out["mem_next"], out["y"], out["diag"]],
                        ["mem", "imu", *SENSORS, "p_est", "dt", "t"],
                        ["mem_next", "y", "diag"])
+
+
+def conditional_step_stages(n_hist: int, depth, coupling: str = "full", held: bool = True,
+                            names=("estimator_fused", "estimator_finish"),
+                            rename=lambda n: n) -> tuple[ca.Function, ca.Function]:
+    """:func:`conditional_step_function` as two Functions called in turn, the same bits.
+
+    ``estimator_fused(mem, imu, vision, gnss, range, datalink, p_est, dt, t) -> (deck,
+    <per sensor: fifo, count, discarded, dropped>, x, P, <outcome per sensor>)``, an MX
+    Function (the queues, the FIFOs' and the fusions' ``Switch`` Functions), and
+    ``estimator_finish(mem, imu, p_est, dt, t, <those>) -> (mem_next, y, diag)``, the SX
+    Function of step 3 and 4. Composed as stages
+    (:class:`quadland_symbolic.stages.Staged`), the finish writes the memory, the
+    measurements and the diagnostics where they are read: an MX Function copies each
+    output out of its work vector (938 reals a step here, against the 440 the first
+    Function outputs). ``names`` the two Functions' names, ``rename(n)`` the name of
+    each of their inputs and outputs ``n``.
+    """
+    lay = estimator_memory(n_hist, depth, coupling)
+    finish = _finish_function(lay, covariance_pattern(coupling))
+    ins, args = _fused_args(lay, n_hist, depth, coupling, held)
+    between = finish.name_in()[5:]
+    fused = ca.Function(names[0], ins, [args[n] for n in between],
+                        [rename(n) for n in ("mem", "imu", *SENSORS, "p_est", "dt", "t")],
+                        [rename(n) for n in between])
+    return fused, _finish_function(lay, covariance_pattern(coupling), names[1], rename)

@@ -82,7 +82,7 @@ from quadland_symbolic.landing.estimator import (
     estimator_diagnostics,
     estimator_memory,
 )
-from quadland_symbolic.landing.estimator_switch import conditional_step_function
+from quadland_symbolic.landing.estimator_switch import conditional_step_stages
 from quadland_symbolic.landing.gear import contact_switch
 from quadland_symbolic.landing.guidance import (
     DESCEND,
@@ -290,14 +290,18 @@ def _imu_stage(xc_lay) -> ca.Function:
 _PACKETS = ("vision", "gnss", "range", "datalink")
 
 
-def _filter_stage() -> ca.Function:
-    """``sensed_filter``: step 4, the filter's updates evaluated only when due
-    (:func:`~quadland_symbolic.landing.estimator_switch.conditional_step_function`)."""
-    f = conditional_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
-    ins = f.mx_in()
-    return ca.Function("sensed_filter", ins, f.call(ins),
-                       ["nav", "imu_now", *_PACKETS, "p_est", "dt", "t"],
-                       ["nav_next", "y", "diag"])
+#: The filter's values as the sensed loop's stages name them (the rest ``nav_<name>``).
+_FILTER_NAMES = dict(mem="nav", imu="imu_now", range="range", p_est="p_est", dt="dt", t="t",
+                     mem_next="nav_next", y="y", diag="diag")
+
+
+def _filter_stages() -> tuple[ca.Function, ca.Function]:
+    """``sensed_filter`` and ``sensed_finish``: step 4, the filter's updates evaluated
+    only when due, then its memory, measurements and diagnostics written where they go
+    (:func:`~quadland_symbolic.landing.estimator_switch.conditional_step_stages`)."""
+    return conditional_step_stages(
+        N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING, names=("sensed_filter", "sensed_finish"),
+        rename=lambda n: n if n in _PACKETS else _FILTER_NAMES.get(n, f"nav_{n}"))
 
 
 def _flight_stage(l, xc_lay, pc_lay):
@@ -372,15 +376,16 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
     ``sensed_push_<name>`` (step 2, the record into its delay line: a ring in the
     compiled simulator, :attr:`~quadland_symbolic.stages.Staged.rings`),
     ``sensed_read_<name>`` (step 2's reading), ``sensed_imu`` (step 3),
-    ``sensed_filter`` (step 4, each sensor's updates evaluated only when due) and
-    ``sensed_flight`` (steps 5 and 6).
+    ``sensed_filter`` (step 4, each sensor's updates evaluated only when due),
+    ``sensed_finish`` (its memory, measurements and diagnostics, written where they go)
+    and ``sensed_flight`` (steps 5 and 6).
     """
     base, xc_lay, pc_lay = landing_loop(l, welded), sensed_loop_memory(l), sensed_loop_params(l)
     stages = Staged(
         "controller",
         (_world_stage(xc_lay, pc_lay), *(push_stage(name) for name in SENSOR_NAMES),
          *(read_stage(name) for name in SENSOR_NAMES),
-         _imu_stage(xc_lay), _filter_stage(), _flight_stage(l, xc_lay, pc_lay)),
+         _imu_stage(xc_lay), *_filter_stages(), _flight_stage(l, xc_lay, pc_lay)),
         inputs=(("xp", LANDING_PLANT_STATE.size), ("xc", xc_lay.size), ("pc", pc_lay.size),
                 ("first", 1), ("t", 1), ("uh_held", COMMAND.size),
                 ("w", LANDING_DISTURBANCE.size), ("pp", LANDING_PLANT_PARAMS.size),
