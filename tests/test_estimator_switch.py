@@ -57,11 +57,7 @@ def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed, held
     lay, lp = estimator_memory(*sizes), estimator_params()
     p = lp.pack(dict(ESTIMATOR_DEFAULTS))
     p[lp.slice("range_deck_radius")], p[lp.slice("range_deck_sigmas")] = 1e30, 0.0
-    x0 = np.r_[0.3, -0.2, 3.0, 0.2, -0.1, -0.3, 0.5, 0.1, 0.0, np.zeros(12)]
-    x0[:18] += rng.normal(size=18) * 0.05
-    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3, [0.01] * 3]
-    mem = np.asarray(estimator_init_function(*sizes)(x0, P0, [0, 0, 0.3, 0, 0, 0.05, 0, 0, 0],
-                                                     7.0)).ravel()
+    mem = _first_memory(sizes, rng.normal(size=18) * 0.05)
     t, quiet = 7.0, 0
     for _ in range(300):
         t += DT
@@ -78,6 +74,17 @@ def test_the_conditional_step_equals_the_branch_free_step_bit_for_bit(seed, held
     assert np.all(d["n_fused"] > 0) and np.sum(d["n_rejected"]) > 0
     assert np.all(d["n_discarded"] + d["n_dropped"] > 0)
     assert quiet > 150
+
+
+def _first_memory(sizes, x_noise=None):
+    """The filter's memory at t = 7 s from a hover 3 m up (``x_noise`` added to the first
+    18 states)."""
+    x0 = np.r_[0.3, -0.2, 3.0, 0.2, -0.1, -0.3, 0.5, 0.1, 0.0, np.zeros(12)]
+    if x_noise is not None:
+        x0[:18] += x_noise
+    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3, [0.01] * 3]
+    return np.asarray(estimator_init_function(*sizes)(x0, P0, [0, 0, 0.3, 0, 0, 0.05, 0, 0, 0],
+                                                      7.0)).ravel()
 
 
 def _split_step(sizes, held):
@@ -100,10 +107,7 @@ def test_the_finish_as_a_stage_equals_the_joined_step_bit_for_bit(seed, held):
     joined, split = conditional_step_function(*sizes, held=held), _split_step(sizes, held)
     lay, lp = estimator_memory(*sizes), estimator_params()
     p = lp.pack(dict(ESTIMATOR_DEFAULTS))
-    x0 = np.r_[0.3, -0.2, 3.0, 0.2, -0.1, -0.3, 0.5, 0.1, 0.0, np.zeros(12)]
-    P0 = np.r_[[0.5] * 3, [0.25] * 6, [0.1] * 3, [1.0] * 3, [0.04] * 3, [0.01] * 3]
-    mem = np.asarray(estimator_init_function(*sizes)(x0, P0, [0, 0, 0.3, 0, 0, 0.05, 0, 0, 0],
-                                                     7.0)).ravel()
+    mem = _first_memory(sizes)
     t, fused = 7.0, 0.0
     for _ in range(300):
         t += DT
