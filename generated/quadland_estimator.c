@@ -73,34 +73,35 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, q_ab, 10, 0) &&
     AT(ql_estimator_params, tilt_sigma, 13, 0) &&
     AT(ql_estimator_params, tilt_tau, 16, 0) &&
-    AT(ql_estimator_params, vision_sigma0, 17, 0) &&
-    AT(ql_estimator_params, vision_k_range, 18, 0) &&
-    AT(ql_estimator_params, vision_heading_sigma, 19, 0) &&
-    AT(ql_estimator_params, gnss_rel_sigma, 20, 0) &&
-    AT(ql_estimator_params, gnss_v1_sigma, 23, 0) &&
-    AT(ql_estimator_params, gnss_vt_sigma, 26, 0) &&
-    AT(ql_estimator_params, range_sigma, 29, 0) &&
-    AT(ql_estimator_params, range_k_range, 30, 0) &&
-    AT(ql_estimator_params, range_min_cos, 31, 0) &&
-    AT(ql_estimator_params, range_deck_radius, 32, 0) &&
-    AT(ql_estimator_params, range_deck_sigmas, 33, 0) &&
-    AT(ql_estimator_params, datalink_v_sigma, 34, 0) &&
-    AT(ql_estimator_params, datalink_a_sigma, 37, 0) &&
-    AT(ql_estimator_params, gate_vision, 40, 0) &&
-    AT(ql_estimator_params, gate_gnss_rel, 41, 0) &&
-    AT(ql_estimator_params, gate_gnss_v1, 42, 0) &&
-    AT(ql_estimator_params, gate_gnss_vt, 43, 0) &&
-    AT(ql_estimator_params, gate_range, 44, 0) &&
-    AT(ql_estimator_params, gate_datalink_v, 45, 0) &&
-    AT(ql_estimator_params, gate_datalink_a, 46, 0) &&
-    AT(ql_estimator_params, gate_lockout, 47, 0) &&
-    AT(ql_estimator_params, max_age_vision, 48, 0) &&
-    AT(ql_estimator_params, max_age_gnss, 49, 0) &&
-    AT(ql_estimator_params, max_age_range, 50, 0) &&
-    AT(ql_estimator_params, max_age_datalink, 51, 0) &&
-    AT(ql_estimator_params, deck_extrapolation_max, 52, 0) &&
-    AT(ql_estimator_params, heave_time, 53, 0) &&
-    sizeof(ql_estimator_params) == 54 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_params, tilt_levels_bias, 17, 0) &&
+    AT(ql_estimator_params, vision_sigma0, 20, 0) &&
+    AT(ql_estimator_params, vision_k_range, 21, 0) &&
+    AT(ql_estimator_params, vision_heading_sigma, 22, 0) &&
+    AT(ql_estimator_params, gnss_rel_sigma, 23, 0) &&
+    AT(ql_estimator_params, gnss_v1_sigma, 26, 0) &&
+    AT(ql_estimator_params, gnss_vt_sigma, 29, 0) &&
+    AT(ql_estimator_params, range_sigma, 32, 0) &&
+    AT(ql_estimator_params, range_k_range, 33, 0) &&
+    AT(ql_estimator_params, range_min_cos, 34, 0) &&
+    AT(ql_estimator_params, range_deck_radius, 35, 0) &&
+    AT(ql_estimator_params, range_deck_sigmas, 36, 0) &&
+    AT(ql_estimator_params, datalink_v_sigma, 37, 0) &&
+    AT(ql_estimator_params, datalink_a_sigma, 40, 0) &&
+    AT(ql_estimator_params, gate_vision, 43, 0) &&
+    AT(ql_estimator_params, gate_gnss_rel, 44, 0) &&
+    AT(ql_estimator_params, gate_gnss_v1, 45, 0) &&
+    AT(ql_estimator_params, gate_gnss_vt, 46, 0) &&
+    AT(ql_estimator_params, gate_range, 47, 0) &&
+    AT(ql_estimator_params, gate_datalink_v, 48, 0) &&
+    AT(ql_estimator_params, gate_datalink_a, 49, 0) &&
+    AT(ql_estimator_params, gate_lockout, 50, 0) &&
+    AT(ql_estimator_params, max_age_vision, 51, 0) &&
+    AT(ql_estimator_params, max_age_gnss, 52, 0) &&
+    AT(ql_estimator_params, max_age_range, 53, 0) &&
+    AT(ql_estimator_params, max_age_datalink, 54, 0) &&
+    AT(ql_estimator_params, deck_extrapolation_max, 55, 0) &&
+    AT(ql_estimator_params, heave_time, 56, 0) &&
+    sizeof(ql_estimator_params) == 57 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 21, 0) &&
@@ -155,16 +156,17 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(ql_estimator_diagnostics) == 136 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[54] = {
+static const ql_real default_p_est[57] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
-    0.001, 0.0855, 0.0855, 0.0, 5.0, 0.1,
-    0.02, 0.0, 0.5, 0.5, 0.5, 0.3,
-    0.3, 0.3, 0.3, 0.3, 0.3, 0.05,
-    0.0, 0.7, 0.5, 2.0, 0.1, 0.1,
-    0.1, 0.3, 0.3, 0.3, 11.344867, 11.344867,
-    11.344867, 11.344867, 6.634897, 11.344867, 11.344867, 10.0,
-    0.02, 0.02, 0.02, 0.02, 0.5, 0.0,
+    0.001, 0.0855, 0.0855, 0.0, 5.0, 0.0,
+    0.0, 0.0, 0.1, 0.02, 0.0, 0.5,
+    0.5, 0.5, 0.3, 0.3, 0.3, 0.3,
+    0.3, 0.3, 0.05, 0.0, 0.7, 0.5,
+    2.0, 0.1, 0.1, 0.1, 0.3, 0.3,
+    0.3, 11.344867, 11.344867, 11.344867, 11.344867, 6.634897,
+    11.344867, 11.344867, 10.0, 0.02, 0.02, 0.02,
+    0.02, 0.5, 0.0,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -180,6 +182,7 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   q_ab                     > 0
  *   tilt_sigma               >= 0
  *   tilt_tau                 > 0
+ *   tilt_levels_bias         in [0, 1]
  *   vision_sigma0            > 0
  *   vision_k_range           >= 0
  *   vision_heading_sigma     >= 0
@@ -251,95 +254,100 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
     if (!bad && !(isfinite(p[16]) && (p[16] > 0.0))) {
         bad = "tilt_tau";
     }
-    if (!bad && !(isfinite(p[17]) && (p[17] > 0.0))) {
+    for (i = 17; !bad && i < 20; ++i) {
+        if (!(isfinite(p[i]) && ((p[i] >= 0.0) && (p[i] <= 1.0)))) {
+            bad = "tilt_levels_bias";
+        }
+    }
+    if (!bad && !(isfinite(p[20]) && (p[20] > 0.0))) {
         bad = "vision_sigma0";
     }
-    if (!bad && !(isfinite(p[18]) && (p[18] >= 0.0))) {
+    if (!bad && !(isfinite(p[21]) && (p[21] >= 0.0))) {
         bad = "vision_k_range";
     }
-    if (!bad && !(isfinite(p[19]) && (p[19] >= 0.0))) {
+    if (!bad && !(isfinite(p[22]) && (p[22] >= 0.0))) {
         bad = "vision_heading_sigma";
     }
-    for (i = 20; !bad && i < 23; ++i) {
+    for (i = 23; !bad && i < 26; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "gnss_rel_sigma";
         }
     }
-    for (i = 23; !bad && i < 26; ++i) {
+    for (i = 26; !bad && i < 29; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "gnss_v1_sigma";
         }
     }
-    for (i = 26; !bad && i < 29; ++i) {
+    for (i = 29; !bad && i < 32; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "gnss_vt_sigma";
         }
     }
-    if (!bad && !(isfinite(p[29]) && (p[29] > 0.0))) {
+    if (!bad && !(isfinite(p[32]) && (p[32] > 0.0))) {
         bad = "range_sigma";
     }
-    if (!bad && !(isfinite(p[30]) && (p[30] >= 0.0))) {
+    if (!bad && !(isfinite(p[33]) && (p[33] >= 0.0))) {
         bad = "range_k_range";
     }
-    if (!bad && !(isfinite(p[31]) && ((p[31] > 0.0) && (p[31] <= 1.0)))) {
+    if (!bad && !(isfinite(p[34]) && ((p[34] > 0.0) && (p[34] <= 1.0)))) {
         bad = "range_min_cos";
     }
-    if (!bad && !(isfinite(p[32]) && (p[32] > 0.0))) {
+    if (!bad && !(isfinite(p[35]) && (p[35] > 0.0))) {
         bad = "range_deck_radius";
     }
-    if (!bad && !(isfinite(p[33]) && (p[33] >= 0.0))) {
+    if (!bad && !(isfinite(p[36]) && (p[36] >= 0.0))) {
         bad = "range_deck_sigmas";
     }
-    for (i = 34; !bad && i < 37; ++i) {
+    for (i = 37; !bad && i < 40; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "datalink_v_sigma";
         }
     }
-    for (i = 37; !bad && i < 40; ++i) {
+    for (i = 40; !bad && i < 43; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0))) {
             bad = "datalink_a_sigma";
         }
     }
-    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0))) {
+    if (!bad && !(isfinite(p[43]) && (p[43] > 0.0))) {
         bad = "gate_vision";
     }
-    if (!bad && !(isfinite(p[41]) && (p[41] > 0.0))) {
+    if (!bad && !(isfinite(p[44]) && (p[44] > 0.0))) {
         bad = "gate_gnss_rel";
     }
-    if (!bad && !(isfinite(p[42]) && (p[42] > 0.0))) {
+    if (!bad && !(isfinite(p[45]) && (p[45] > 0.0))) {
         bad = "gate_gnss_v1";
     }
-    if (!bad && !(isfinite(p[43]) && (p[43] > 0.0))) {
+    if (!bad && !(isfinite(p[46]) && (p[46] > 0.0))) {
         bad = "gate_gnss_vt";
     }
-    if (!bad && !(isfinite(p[44]) && (p[44] > 0.0))) {
+    if (!bad && !(isfinite(p[47]) && (p[47] > 0.0))) {
         bad = "gate_range";
     }
-    if (!bad && !(isfinite(p[45]) && (p[45] > 0.0))) {
+    if (!bad && !(isfinite(p[48]) && (p[48] > 0.0))) {
         bad = "gate_datalink_v";
     }
-    if (!bad && !(isfinite(p[46]) && (p[46] > 0.0))) {
+    if (!bad && !(isfinite(p[49]) && (p[49] > 0.0))) {
         bad = "gate_datalink_a";
     }
-    if (!bad && !(isfinite(p[47]) && (p[47] >= 0.0))) {
+    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0))) {
         bad = "gate_lockout";
     }
-    if (!bad && !(isfinite(p[48]) && (p[48] >= 0.0))) {
+    if (!bad && !(isfinite(p[51]) && (p[51] >= 0.0))) {
         bad = "max_age_vision";
     }
-    if (!bad && !(isfinite(p[49]) && (p[49] >= 0.0))) {
+    if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0))) {
         bad = "max_age_gnss";
     }
-    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0))) {
+    if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0))) {
         bad = "max_age_range";
     }
-    if (!bad && !(isfinite(p[51]) && (p[51] >= 0.0))) {
+    if (!bad && !(isfinite(p[54]) && (p[54] >= 0.0))) {
         bad = "max_age_datalink";
     }
-    if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0))) {
+    if (!bad && !(isfinite(p[55]) && (p[55] >= 0.0))) {
         bad = "deck_extrapolation_max";
     }
-    if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0))) {
+    if (!bad && !(isfinite(p[56]) && (p[56] >= 0.0))) {
         bad = "heave_time";
     }
     if (bad_field) {
@@ -349,7 +357,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 54 comparisons. The values are known to be finite; no names and no
+ * 57 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -371,12 +379,12 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[14] >= 0.0);
     ok &= (p[15] >= 0.0);
     ok &= (p[16] > 0.0);
-    ok &= (p[17] > 0.0);
-    ok &= (p[18] >= 0.0);
-    ok &= (p[19] >= 0.0);
+    ok &= ((p[17] >= 0.0) & (p[17] <= 1.0));
+    ok &= ((p[18] >= 0.0) & (p[18] <= 1.0));
+    ok &= ((p[19] >= 0.0) & (p[19] <= 1.0));
     ok &= (p[20] > 0.0);
-    ok &= (p[21] > 0.0);
-    ok &= (p[22] > 0.0);
+    ok &= (p[21] >= 0.0);
+    ok &= (p[22] >= 0.0);
     ok &= (p[23] > 0.0);
     ok &= (p[24] > 0.0);
     ok &= (p[25] > 0.0);
@@ -384,13 +392,13 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[27] > 0.0);
     ok &= (p[28] > 0.0);
     ok &= (p[29] > 0.0);
-    ok &= (p[30] >= 0.0);
-    ok &= ((p[31] > 0.0) & (p[31] <= 1.0));
+    ok &= (p[30] > 0.0);
+    ok &= (p[31] > 0.0);
     ok &= (p[32] > 0.0);
     ok &= (p[33] >= 0.0);
-    ok &= (p[34] > 0.0);
+    ok &= ((p[34] > 0.0) & (p[34] <= 1.0));
     ok &= (p[35] > 0.0);
-    ok &= (p[36] > 0.0);
+    ok &= (p[36] >= 0.0);
     ok &= (p[37] > 0.0);
     ok &= (p[38] > 0.0);
     ok &= (p[39] > 0.0);
@@ -401,13 +409,16 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[44] > 0.0);
     ok &= (p[45] > 0.0);
     ok &= (p[46] > 0.0);
-    ok &= (p[47] >= 0.0);
-    ok &= (p[48] >= 0.0);
-    ok &= (p[49] >= 0.0);
+    ok &= (p[47] > 0.0);
+    ok &= (p[48] > 0.0);
+    ok &= (p[49] > 0.0);
     ok &= (p[50] >= 0.0);
     ok &= (p[51] >= 0.0);
     ok &= (p[52] >= 0.0);
     ok &= (p[53] >= 0.0);
+    ok &= (p[54] >= 0.0);
+    ok &= (p[55] >= 0.0);
+    ok &= (p[56] >= 0.0);
     return ok;
 }
 

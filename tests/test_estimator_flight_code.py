@@ -373,7 +373,7 @@ def _nonneg(v):
 #: written out here, not read from quadland_symbolic.codegen.estimator_api.
 DOCUMENTED = {
     "g": _pos, "q_acc": _pos, "q_at": _pos, "q_b": _pos, "q_ab": _pos,
-    "tilt_sigma": _nonneg, "tilt_tau": _pos,
+    "tilt_sigma": _nonneg, "tilt_tau": _pos, "tilt_levels_bias": lambda v: (v >= 0) & (v <= 1),
     "vision_sigma0": _pos, "vision_k_range": _nonneg, "vision_heading_sigma": _nonneg,
     "gnss_rel_sigma": _pos,
     "gnss_v1_sigma": _pos, "gnss_vt_sigma": _pos, "range_sigma": _pos,

@@ -73,34 +73,35 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, q_ab, 10, 0) &&
     AT(qlf_estimator_params, tilt_sigma, 13, 0) &&
     AT(qlf_estimator_params, tilt_tau, 16, 0) &&
-    AT(qlf_estimator_params, vision_sigma0, 17, 0) &&
-    AT(qlf_estimator_params, vision_k_range, 18, 0) &&
-    AT(qlf_estimator_params, vision_heading_sigma, 19, 0) &&
-    AT(qlf_estimator_params, gnss_rel_sigma, 20, 0) &&
-    AT(qlf_estimator_params, gnss_v1_sigma, 23, 0) &&
-    AT(qlf_estimator_params, gnss_vt_sigma, 26, 0) &&
-    AT(qlf_estimator_params, range_sigma, 29, 0) &&
-    AT(qlf_estimator_params, range_k_range, 30, 0) &&
-    AT(qlf_estimator_params, range_min_cos, 31, 0) &&
-    AT(qlf_estimator_params, range_deck_radius, 32, 0) &&
-    AT(qlf_estimator_params, range_deck_sigmas, 33, 0) &&
-    AT(qlf_estimator_params, datalink_v_sigma, 34, 0) &&
-    AT(qlf_estimator_params, datalink_a_sigma, 37, 0) &&
-    AT(qlf_estimator_params, gate_vision, 40, 0) &&
-    AT(qlf_estimator_params, gate_gnss_rel, 41, 0) &&
-    AT(qlf_estimator_params, gate_gnss_v1, 42, 0) &&
-    AT(qlf_estimator_params, gate_gnss_vt, 43, 0) &&
-    AT(qlf_estimator_params, gate_range, 44, 0) &&
-    AT(qlf_estimator_params, gate_datalink_v, 45, 0) &&
-    AT(qlf_estimator_params, gate_datalink_a, 46, 0) &&
-    AT(qlf_estimator_params, gate_lockout, 47, 0) &&
-    AT(qlf_estimator_params, max_age_vision, 48, 0) &&
-    AT(qlf_estimator_params, max_age_gnss, 49, 0) &&
-    AT(qlf_estimator_params, max_age_range, 50, 0) &&
-    AT(qlf_estimator_params, max_age_datalink, 51, 0) &&
-    AT(qlf_estimator_params, deck_extrapolation_max, 52, 0) &&
-    AT(qlf_estimator_params, heave_time, 53, 0) &&
-    sizeof(qlf_estimator_params) == 54 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_params, tilt_levels_bias, 17, 0) &&
+    AT(qlf_estimator_params, vision_sigma0, 20, 0) &&
+    AT(qlf_estimator_params, vision_k_range, 21, 0) &&
+    AT(qlf_estimator_params, vision_heading_sigma, 22, 0) &&
+    AT(qlf_estimator_params, gnss_rel_sigma, 23, 0) &&
+    AT(qlf_estimator_params, gnss_v1_sigma, 26, 0) &&
+    AT(qlf_estimator_params, gnss_vt_sigma, 29, 0) &&
+    AT(qlf_estimator_params, range_sigma, 32, 0) &&
+    AT(qlf_estimator_params, range_k_range, 33, 0) &&
+    AT(qlf_estimator_params, range_min_cos, 34, 0) &&
+    AT(qlf_estimator_params, range_deck_radius, 35, 0) &&
+    AT(qlf_estimator_params, range_deck_sigmas, 36, 0) &&
+    AT(qlf_estimator_params, datalink_v_sigma, 37, 0) &&
+    AT(qlf_estimator_params, datalink_a_sigma, 40, 0) &&
+    AT(qlf_estimator_params, gate_vision, 43, 0) &&
+    AT(qlf_estimator_params, gate_gnss_rel, 44, 0) &&
+    AT(qlf_estimator_params, gate_gnss_v1, 45, 0) &&
+    AT(qlf_estimator_params, gate_gnss_vt, 46, 0) &&
+    AT(qlf_estimator_params, gate_range, 47, 0) &&
+    AT(qlf_estimator_params, gate_datalink_v, 48, 0) &&
+    AT(qlf_estimator_params, gate_datalink_a, 49, 0) &&
+    AT(qlf_estimator_params, gate_lockout, 50, 0) &&
+    AT(qlf_estimator_params, max_age_vision, 51, 0) &&
+    AT(qlf_estimator_params, max_age_gnss, 52, 0) &&
+    AT(qlf_estimator_params, max_age_range, 53, 0) &&
+    AT(qlf_estimator_params, max_age_datalink, 54, 0) &&
+    AT(qlf_estimator_params, deck_extrapolation_max, 55, 0) &&
+    AT(qlf_estimator_params, heave_time, 56, 0) &&
+    sizeof(qlf_estimator_params) == 57 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
     AT(qlf_estimator_memory, P_h, 21, 0) &&
@@ -155,16 +156,17 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(qlf_estimator_diagnostics) == 136 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[54] = {
+static const qlf_real default_p_est[57] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
-    0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.1f,
-    0.02f, 0.0f, 0.5f, 0.5f, 0.5f, 0.3f,
-    0.3f, 0.3f, 0.3f, 0.3f, 0.3f, 0.05f,
-    0.0f, 0.7f, 0.5f, 2.0f, 0.1f, 0.1f,
-    0.1f, 0.3f, 0.3f, 0.3f, 11.344867f, 11.344867f,
-    11.344867f, 11.344867f, 6.634897f, 11.344867f, 11.344867f, 10.0f,
-    0.02f, 0.02f, 0.02f, 0.02f, 0.5f, 0.0f,
+    0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.0f,
+    0.0f, 0.0f, 0.1f, 0.02f, 0.0f, 0.5f,
+    0.5f, 0.5f, 0.3f, 0.3f, 0.3f, 0.3f,
+    0.3f, 0.3f, 0.05f, 0.0f, 0.7f, 0.5f,
+    2.0f, 0.1f, 0.1f, 0.1f, 0.3f, 0.3f,
+    0.3f, 11.344867f, 11.344867f, 11.344867f, 11.344867f, 6.634897f,
+    11.344867f, 11.344867f, 10.0f, 0.02f, 0.02f, 0.02f,
+    0.02f, 0.5f, 0.0f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -180,6 +182,7 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   q_ab                     > 0
  *   tilt_sigma               >= 0
  *   tilt_tau                 > 0
+ *   tilt_levels_bias         in [0, 1]
  *   vision_sigma0            > 0
  *   vision_k_range           >= 0
  *   vision_heading_sigma     >= 0
@@ -252,95 +255,100 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
     if (!bad && !(isfinite(p[16]) && (p[16] > 0.0f))) {
         bad = "tilt_tau";
     }
-    if (!bad && !(isfinite(p[17]) && (p[17] > 0.0f))) {
+    for (i = 17; !bad && i < 20; ++i) {
+        if (!(isfinite(p[i]) && ((p[i] >= 0.0f) && (p[i] <= 1.0f)))) {
+            bad = "tilt_levels_bias";
+        }
+    }
+    if (!bad && !(isfinite(p[20]) && (p[20] > 0.0f))) {
         bad = "vision_sigma0";
     }
-    if (!bad && !(isfinite(p[18]) && (p[18] >= 0.0f))) {
+    if (!bad && !(isfinite(p[21]) && (p[21] >= 0.0f))) {
         bad = "vision_k_range";
     }
-    if (!bad && !(isfinite(p[19]) && (p[19] >= 0.0f))) {
+    if (!bad && !(isfinite(p[22]) && (p[22] >= 0.0f))) {
         bad = "vision_heading_sigma";
     }
-    for (i = 20; !bad && i < 23; ++i) {
+    for (i = 23; !bad && i < 26; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "gnss_rel_sigma";
         }
     }
-    for (i = 23; !bad && i < 26; ++i) {
+    for (i = 26; !bad && i < 29; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "gnss_v1_sigma";
         }
     }
-    for (i = 26; !bad && i < 29; ++i) {
+    for (i = 29; !bad && i < 32; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "gnss_vt_sigma";
         }
     }
-    if (!bad && !(isfinite(p[29]) && (p[29] > 0.0f))) {
+    if (!bad && !(isfinite(p[32]) && (p[32] > 0.0f))) {
         bad = "range_sigma";
     }
-    if (!bad && !(isfinite(p[30]) && (p[30] >= 0.0f))) {
+    if (!bad && !(isfinite(p[33]) && (p[33] >= 0.0f))) {
         bad = "range_k_range";
     }
-    if (!bad && !(isfinite(p[31]) && ((p[31] > 0.0f) && (p[31] <= 1.0f)))) {
+    if (!bad && !(isfinite(p[34]) && ((p[34] > 0.0f) && (p[34] <= 1.0f)))) {
         bad = "range_min_cos";
     }
-    if (!bad && !(isfinite(p[32]) && (p[32] > 0.0f))) {
+    if (!bad && !(isfinite(p[35]) && (p[35] > 0.0f))) {
         bad = "range_deck_radius";
     }
-    if (!bad && !(isfinite(p[33]) && (p[33] >= 0.0f))) {
+    if (!bad && !(isfinite(p[36]) && (p[36] >= 0.0f))) {
         bad = "range_deck_sigmas";
     }
-    for (i = 34; !bad && i < 37; ++i) {
+    for (i = 37; !bad && i < 40; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "datalink_v_sigma";
         }
     }
-    for (i = 37; !bad && i < 40; ++i) {
+    for (i = 40; !bad && i < 43; ++i) {
         if (!(isfinite(p[i]) && (p[i] > 0.0f))) {
             bad = "datalink_a_sigma";
         }
     }
-    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0f))) {
+    if (!bad && !(isfinite(p[43]) && (p[43] > 0.0f))) {
         bad = "gate_vision";
     }
-    if (!bad && !(isfinite(p[41]) && (p[41] > 0.0f))) {
+    if (!bad && !(isfinite(p[44]) && (p[44] > 0.0f))) {
         bad = "gate_gnss_rel";
     }
-    if (!bad && !(isfinite(p[42]) && (p[42] > 0.0f))) {
+    if (!bad && !(isfinite(p[45]) && (p[45] > 0.0f))) {
         bad = "gate_gnss_v1";
     }
-    if (!bad && !(isfinite(p[43]) && (p[43] > 0.0f))) {
+    if (!bad && !(isfinite(p[46]) && (p[46] > 0.0f))) {
         bad = "gate_gnss_vt";
     }
-    if (!bad && !(isfinite(p[44]) && (p[44] > 0.0f))) {
+    if (!bad && !(isfinite(p[47]) && (p[47] > 0.0f))) {
         bad = "gate_range";
     }
-    if (!bad && !(isfinite(p[45]) && (p[45] > 0.0f))) {
+    if (!bad && !(isfinite(p[48]) && (p[48] > 0.0f))) {
         bad = "gate_datalink_v";
     }
-    if (!bad && !(isfinite(p[46]) && (p[46] > 0.0f))) {
+    if (!bad && !(isfinite(p[49]) && (p[49] > 0.0f))) {
         bad = "gate_datalink_a";
     }
-    if (!bad && !(isfinite(p[47]) && (p[47] >= 0.0f))) {
+    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0f))) {
         bad = "gate_lockout";
     }
-    if (!bad && !(isfinite(p[48]) && (p[48] >= 0.0f))) {
+    if (!bad && !(isfinite(p[51]) && (p[51] >= 0.0f))) {
         bad = "max_age_vision";
     }
-    if (!bad && !(isfinite(p[49]) && (p[49] >= 0.0f))) {
+    if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0f))) {
         bad = "max_age_gnss";
     }
-    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0f))) {
+    if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0f))) {
         bad = "max_age_range";
     }
-    if (!bad && !(isfinite(p[51]) && (p[51] >= 0.0f))) {
+    if (!bad && !(isfinite(p[54]) && (p[54] >= 0.0f))) {
         bad = "max_age_datalink";
     }
-    if (!bad && !(isfinite(p[52]) && (p[52] >= 0.0f))) {
+    if (!bad && !(isfinite(p[55]) && (p[55] >= 0.0f))) {
         bad = "deck_extrapolation_max";
     }
-    if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0f))) {
+    if (!bad && !(isfinite(p[56]) && (p[56] >= 0.0f))) {
         bad = "heave_time";
     }
     if (bad_field) {
@@ -350,7 +358,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 54 comparisons. The values are known to be finite; no names and no
+ * 57 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -372,12 +380,12 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[14] >= 0.0f);
     ok &= (p[15] >= 0.0f);
     ok &= (p[16] > 0.0f);
-    ok &= (p[17] > 0.0f);
-    ok &= (p[18] >= 0.0f);
-    ok &= (p[19] >= 0.0f);
+    ok &= ((p[17] >= 0.0f) & (p[17] <= 1.0f));
+    ok &= ((p[18] >= 0.0f) & (p[18] <= 1.0f));
+    ok &= ((p[19] >= 0.0f) & (p[19] <= 1.0f));
     ok &= (p[20] > 0.0f);
-    ok &= (p[21] > 0.0f);
-    ok &= (p[22] > 0.0f);
+    ok &= (p[21] >= 0.0f);
+    ok &= (p[22] >= 0.0f);
     ok &= (p[23] > 0.0f);
     ok &= (p[24] > 0.0f);
     ok &= (p[25] > 0.0f);
@@ -385,13 +393,13 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[27] > 0.0f);
     ok &= (p[28] > 0.0f);
     ok &= (p[29] > 0.0f);
-    ok &= (p[30] >= 0.0f);
-    ok &= ((p[31] > 0.0f) & (p[31] <= 1.0f));
+    ok &= (p[30] > 0.0f);
+    ok &= (p[31] > 0.0f);
     ok &= (p[32] > 0.0f);
     ok &= (p[33] >= 0.0f);
-    ok &= (p[34] > 0.0f);
+    ok &= ((p[34] > 0.0f) & (p[34] <= 1.0f));
     ok &= (p[35] > 0.0f);
-    ok &= (p[36] > 0.0f);
+    ok &= (p[36] >= 0.0f);
     ok &= (p[37] > 0.0f);
     ok &= (p[38] > 0.0f);
     ok &= (p[39] > 0.0f);
@@ -402,13 +410,16 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[44] > 0.0f);
     ok &= (p[45] > 0.0f);
     ok &= (p[46] > 0.0f);
-    ok &= (p[47] >= 0.0f);
-    ok &= (p[48] >= 0.0f);
-    ok &= (p[49] >= 0.0f);
+    ok &= (p[47] > 0.0f);
+    ok &= (p[48] > 0.0f);
+    ok &= (p[49] > 0.0f);
     ok &= (p[50] >= 0.0f);
     ok &= (p[51] >= 0.0f);
     ok &= (p[52] >= 0.0f);
     ok &= (p[53] >= 0.0f);
+    ok &= (p[54] >= 0.0f);
+    ok &= (p[55] >= 0.0f);
+    ok &= (p[56] >= 0.0f);
     return ok;
 }
 

@@ -69,6 +69,8 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     # horizontally only), its correlation time must be positive (exp(-dt / tilt_tau))
     "tilt_sigma": _NONNEGATIVE,
     "tilt_tau": _POSITIVE,
+    # the share of the input bias the tilt levels (E2b): 0 (apart) to 1 (all of it)
+    "tilt_levels_bias": Range(lo=0.0, hi=1.0),
     "vision_k_range": _NONNEGATIVE,
     "vision_heading_sigma": _NONNEGATIVE,
     "range_k_range": _NONNEGATIVE,

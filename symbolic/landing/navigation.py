@@ -166,7 +166,7 @@ BLOCKS = (
 #: Default parameter values; docs/estimator.md cites each one's source.
 ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     g=9.8, q_acc=[0.02] * 3, q_at=[0.1] * 3, q_b=[0.001] * 3, q_ab=[1e-3] * 3,
-    tilt_sigma=[0.0855, 0.0855, 0.0], tilt_tau=5.0,
+    tilt_sigma=[0.0855, 0.0855, 0.0], tilt_tau=5.0, tilt_levels_bias=[0.0, 0.0, 0.0],
     vision_sigma0=0.1, vision_k_range=0.02, vision_heading_sigma=0.0,
     gnss_rel_sigma=[0.5] * 3, gnss_v1_sigma=[0.3] * 3, gnss_vt_sigma=[0.3] * 3,
     range_sigma=0.05, range_k_range=0.0, range_min_cos=0.7, range_deck_radius=0.5,
@@ -193,6 +193,9 @@ def estimator_params() -> Layout:
         _vec3("tilt_sigma", "m/s^2", "stationary standard deviation of the tilt bias, per "
               "axis (z: 0)"),
         Field("tilt_tau", 1, "s", "correlation time of the tilt bias (first-order Gauss-Markov)"),
+        _vec3("tilt_levels_bias", "-", "share of the input bias a_b that the attitude's tilt "
+              "levels, per axis (E2b): a_tilt = -l a_b + a Gauss-Markov residual of "
+              "tilt_sigma, tilt_tau; 0: a_tilt apart from a_b"),
         Field("vision_sigma0", 1, "m", "vision noise at zero range (E10)"),
         Field("vision_k_range", 1, "-", "vision noise growth per metre of range (E10)"),
         Field("vision_heading_sigma", 1, "rad", "standard deviation of the attitude "
@@ -258,29 +261,42 @@ def acceleration_input(eta_hat, f_b, g):
 
 
 def nav_transition(dt, p_est):
-    """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E2a), (E3)-(E5).
+    """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E2a), (E2b), (E3)-(E5).
 
     Sizes 21 x 21, 21 x 3, 21 x 21: one axis' 7 x 7 discretization
     (:func:`~quadland_symbolic.kalman.nilpotent_discretization`, ``a_tilt`` held) on
     x, y and z, each with its own noise densities; the state is field-major, so the
     21-state matrices are ``kron(M7, I3)``, and ``Q = sum_a kron(Q7_a, e_a e_a^T)``.
-    Then ``a_tilt`` decays as the sampled Gauss-Markov process it is (E2a):
-    ``Phi[a_tilt, a_tilt] = e^(-dt / tilt_tau)`` and ``Q[a_tilt, a_tilt] = tilt_sigma^2
-    (1 - e^(-2 dt / tilt_tau))``.
+    With ``l = tilt_levels_bias`` the tilt levels that share of the input bias
+    (E2b), ``a_tilt = r - l a_b``: over the period ``a_tilt`` takes ``-l`` times
+    ``a_b``'s random walk (``W``'s ``a_b, a_tilt`` block ``q_ab [[1, -l], [-l, l^2]]``),
+    then the residual ``r = a_tilt + l a_b`` decays as the sampled Gauss-Markov
+    process it is (E2a): ``x+ = D x_held``, ``D[a_tilt, a_tilt] = e^(-dt / tilt_tau)``,
+    ``D[a_tilt, a_b] = (e^(-dt / tilt_tau) - 1) l``, ``Phi = D Phi_held``, ``Q = D
+    Q_held D^T`` plus ``tilt_sigma^2 (1 - e^(-2 dt / tilt_tau))`` on ``a_tilt``. With
+    ``l = 0``: ``Phi[a_tilt, a_tilt] = e^(-dt / tilt_tau)``, ``Q[a_tilt, a_tilt] =
+    tilt_sigma^2 (1 - e^(-2 dt / tilt_tau))``, as (E2a) alone.
     """
     p = estimator_params().unpack(p_est)
     I3 = ca.DM.eye(3)
     Q = ca.SX(NAV.size, NAV.size)
+    ib, it = 5, 6                                              # a_b, a_tilt in one axis
     for a in range(3):
-        W7 = ca.diag(ca.vertcat(0, p["q_acc"][a], 0, p["q_at"][a], p["q_b"][a], p["q_ab"][a], 0))
+        l, q_ab = p["tilt_levels_bias"][a], p["q_ab"][a]
+        W7 = ca.SX(ca.diag(ca.vertcat(0, p["q_acc"][a], 0, p["q_at"][a], p["q_b"][a], q_ab, 0)))
+        W7[ib, it] = W7[it, ib] = -l * q_ab                                  # (E2b)
+        W7[it, it] = l * l * q_ab
         Phi7, Gamma7, Q7 = nilpotent_discretization(_A7, _B7, W7, dt)
         Q += ca.kron(Q7, I3[:, a] @ I3[a, :])
     decay = ca.exp(-dt / p["tilt_tau"])                                      # (E2a)
-    i = NAV.slice("a_tilt").start
-    Phi = ca.kron(Phi7, I3)
+    i, j = NAV.slice("a_tilt").start, NAV.slice("a_b").start
+    D = ca.SX.eye(NAV.size)
     for a in range(3):
-        Phi[i + a, i + a] = decay
-        Q[i + a, i + a] = p["tilt_sigma"][a] ** 2 * (1 - decay**2)
+        D[i + a, i + a] = decay
+        D[i + a, j + a] = (decay - 1) * p["tilt_levels_bias"][a]
+    Phi, Q = D @ ca.kron(Phi7, I3), D @ Q @ D.T
+    for a in range(3):
+        Q[i + a, i + a] += p["tilt_sigma"][a] ** 2 * (1 - decay**2)
     return Phi, ca.kron(Gamma7, I3), Q
 
 
@@ -298,8 +314,11 @@ def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern, turn=None):
     ``Phi[a_b, a_b] = I + S(turn)`` (E6a)."""
     Phi, Gamma, Q = nav_transition(dt, p_est)
     if turn is not None:                                                    # (E6a)
-        i = NAV.slice("a_b")
+        i, k = NAV.slice("a_b"), NAV.slice("a_tilt")
         Phi[i, i] = ca.DM.eye(3) + skew(turn)
+        # the levelled share turns with a_b (E2b): a_tilt+ = r+ - l (I + S) a_b
+        levels = estimator_params().unpack(p_est)["tilt_levels_bias"]
+        Phi[k, i] = Phi[k, i] - ca.diag(levels) @ skew(turn)
     return Phi @ x + Gamma @ a_in, pattern.unpack(pattern.pack(Phi @ P @ Phi.T + Q))
 
 
