@@ -103,7 +103,7 @@ typedef struct {
     ql_real q_ab[3];                 /* m^2/s^5: PSD of the accelerometer bias' random walk, per axis (q_ab_x, q_ab_y, q_ab_z) */
     ql_real tilt_sigma[3];           /* m/s^2: stationary standard deviation of the tilt bias, per axis (z: 0) (tilt_sigma_x, tilt_sigma_y, tilt_sigma_z) */
     ql_real tilt_tau;                /* s: correlation time of the tilt bias (first-order Gauss-Markov) */
-    ql_real tilt_levels_bias[3];     /* -: share of the input bias a_b that the attitude's tilt levels, per axis (E2b): a_tilt = -l a_b + a Gauss-Markov residual of tilt_sigma, tilt_tau; 0: a_tilt apart from a_b (tilt_levels_bias_x, tilt_levels_bias_y, tilt_levels_bias_z) */
+    ql_real tilt_levels_bias[3];     /* -: share of the input bias a_b that the attitude's tilt levels, per axis (E2b): a_tilt = -l a_b + the residual of tilt_sigma, tilt_tau (tilt_levels_bias_x, tilt_levels_bias_y, tilt_levels_bias_z) */
     ql_real vision_sigma0;           /* m: vision noise at zero range (E10) */
     ql_real vision_k_range;          /* -: vision noise growth per metre of range (E10) */
     ql_real vision_heading_sigma;    /* rad: standard deviation of the attitude estimate's heading error that rotates the vision's vector (E10c) */

@@ -194,8 +194,7 @@ def estimator_params() -> Layout:
               "axis (z: 0)"),
         Field("tilt_tau", 1, "s", "correlation time of the tilt bias (first-order Gauss-Markov)"),
         _vec3("tilt_levels_bias", "-", "share of the input bias a_b that the attitude's tilt "
-              "levels, per axis (E2b): a_tilt = -l a_b + a Gauss-Markov residual of "
-              "tilt_sigma, tilt_tau; 0: a_tilt apart from a_b"),
+              "levels, per axis (E2b): a_tilt = -l a_b + the residual of tilt_sigma, tilt_tau"),
         Field("vision_sigma0", 1, "m", "vision noise at zero range (E10)"),
         Field("vision_k_range", 1, "-", "vision noise growth per metre of range (E10)"),
         Field("vision_heading_sigma", 1, "rad", "standard deviation of the attitude "
@@ -264,40 +263,26 @@ def nav_transition(dt, p_est):
     """``(Phi, Gamma, Q)`` of (E2) over ``dt`` (E2a), (E2b), (E3)-(E5).
 
     Sizes 21 x 21, 21 x 3, 21 x 21: one axis' 7 x 7 discretization
-    (:func:`~quadland_symbolic.kalman.nilpotent_discretization`, ``a_tilt`` held) on
-    x, y and z, each with its own noise densities; the state is field-major, so the
-    21-state matrices are ``kron(M7, I3)``, and ``Q = sum_a kron(Q7_a, e_a e_a^T)``.
-    With ``l = tilt_levels_bias`` the tilt levels that share of the input bias
-    (E2b), ``a_tilt = r - l a_b``: over the period ``a_tilt`` takes ``-l`` times
-    ``a_b``'s random walk (``W``'s ``a_b, a_tilt`` block ``q_ab [[1, -l], [-l, l^2]]``),
-    then the residual ``r = a_tilt + l a_b`` decays as the sampled Gauss-Markov
-    process it is (E2a): ``x+ = D x_held``, ``D[a_tilt, a_tilt] = e^(-dt / tilt_tau)``,
-    ``D[a_tilt, a_b] = (e^(-dt / tilt_tau) - 1) l``, ``Phi = D Phi_held``, ``Q = D
-    Q_held D^T`` plus ``tilt_sigma^2 (1 - e^(-2 dt / tilt_tau))`` on ``a_tilt``. With
-    ``l = 0``: ``Phi[a_tilt, a_tilt] = e^(-dt / tilt_tau)``, ``Q[a_tilt, a_tilt] =
-    tilt_sigma^2 (1 - e^(-2 dt / tilt_tau))``, as (E2a) alone.
-    """
+    (:func:`~quadland_symbolic.kalman.nilpotent_discretization`, ``a_tilt`` held, taking
+    ``-l`` times ``a_b``'s random walk, ``l = tilt_levels_bias``) on x, y and z, as
+    ``kron(M7, I3)`` and ``sum_a kron(Q7_a, e_a e_a^T)``; then the residual ``a_tilt + l
+    a_b`` decays as a sampled Gauss-Markov process (E2a): ``Phi = D Phi_held``, ``Q = D
+    Q_held D^T + tilt_sigma^2 (1 - e^(-2 dt / tilt_tau))`` on ``a_tilt``, ``D[a_tilt,
+    a_tilt] = e^(-dt / tilt_tau)``, ``D[a_tilt, a_b] = (e^(-dt / tilt_tau) - 1) l``."""
     p = estimator_params().unpack(p_est)
-    I3 = ca.DM.eye(3)
-    Q = ca.SX(NAV.size, NAV.size)
-    ib, it = 5, 6                                              # a_b, a_tilt in one axis
+    I3, Q, Qr, D = ca.DM.eye(3), ca.SX(NAV.size, NAV.size), ca.SX(NAV.size, NAV.size), \
+        ca.SX.eye(NAV.size)
+    decay = ca.exp(-dt / p["tilt_tau"])                                      # (E2a)
+    i, j = NAV.slice("a_tilt").start, NAV.slice("a_b").start
     for a in range(3):
         l, q_ab = p["tilt_levels_bias"][a], p["q_ab"][a]
         W7 = ca.SX(ca.diag(ca.vertcat(0, p["q_acc"][a], 0, p["q_at"][a], p["q_b"][a], q_ab, 0)))
-        W7[ib, it] = W7[it, ib] = -l * q_ab                                  # (E2b)
-        W7[it, it] = l * l * q_ab
+        W7[5, 6], W7[6, 5], W7[6, 6] = -l * q_ab, -l * q_ab, l * l * q_ab   # a_b, a_tilt (E2b)
         Phi7, Gamma7, Q7 = nilpotent_discretization(_A7, _B7, W7, dt)
         Q += ca.kron(Q7, I3[:, a] @ I3[a, :])
-    decay = ca.exp(-dt / p["tilt_tau"])                                      # (E2a)
-    i, j = NAV.slice("a_tilt").start, NAV.slice("a_b").start
-    D = ca.SX.eye(NAV.size)
-    for a in range(3):
-        D[i + a, i + a] = decay
-        D[i + a, j + a] = (decay - 1) * p["tilt_levels_bias"][a]
-    Phi, Q = D @ ca.kron(Phi7, I3), D @ Q @ D.T
-    for a in range(3):
-        Q[i + a, i + a] += p["tilt_sigma"][a] ** 2 * (1 - decay**2)
-    return Phi, ca.kron(Gamma7, I3), Q
+        D[i + a, i + a], D[i + a, j + a] = decay, (decay - 1) * l
+        Qr[i + a, i + a] = p["tilt_sigma"][a] ** 2 * (1 - decay**2)
+    return D @ ca.kron(Phi7, I3), ca.kron(Gamma7, I3), D @ Q @ D.T + Qr
 
 
 @functools.cache
@@ -310,15 +295,12 @@ def nav_transition_function() -> ca.Function:
 
 def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern, turn=None):
     """One prediction over ``dt`` (E6): ``x+ = Phi x + Gamma a_in``, ``P+ = Phi P Phi^T + Q``
-    on ``pattern``'s entries; the body's ``turn`` (E, rad) turns ``a_b``:
-    ``Phi[a_b, a_b] = I + S(turn)`` (E6a)."""
+    on ``pattern``'s entries; the body's ``turn`` (E, rad) turns ``a_b`` by ``I + S(turn)``."""
     Phi, Gamma, Q = nav_transition(dt, p_est)
     if turn is not None:                                                    # (E6a)
         i, k = NAV.slice("a_b"), NAV.slice("a_tilt")
-        Phi[i, i] = ca.DM.eye(3) + skew(turn)
-        # the levelled share turns with a_b (E2b): a_tilt+ = r+ - l (I + S) a_b
-        levels = estimator_params().unpack(p_est)["tilt_levels_bias"]
-        Phi[k, i] = Phi[k, i] - ca.diag(levels) @ skew(turn)
+        Phi[i, i] = ca.DM.eye(3) + skew(turn)       # the levelled share turns with it (E2b)
+        Phi[k, i] -= ca.diag(estimator_params().unpack(p_est)["tilt_levels_bias"]) @ skew(turn)
     return Phi @ x + Gamma @ a_in, pattern.unpack(pattern.pack(Phi @ P @ Phi.T + Q))
 
 
