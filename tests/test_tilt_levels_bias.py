@@ -145,3 +145,55 @@ def test_the_levelled_share_shrinks_the_velocity_noise_of_the_bias_walk():
         for a in range(3):
             want = q["q_acc"][a] * dt + (1 - levels[a]) ** 2 * q["q_ab"][a] * dt**3 / 3
             assert Q[i + a, i + a] == pytest.approx(want, rel=1e-12)
+
+
+# --- the NEES on the hovers (docs/landing.md, issue 19, thirteenth) ----------------------
+
+#: The VN-300 as the attitude source and the IMU (docs/sensors.md, "A dedicated GNSS/INS").
+VN300 = {"sensors.imu.attitude_gnss_aided": True,
+         "sensors.imu.attitude_sigma": [0.0005235987755982988, 0.0005235987755982988,
+                                        0.03490658503988659],
+         "sensors.imu.accel_noise_density": 0.001372931,
+         "sensors.imu.gyro_noise_density": 6.108652381980153e-05,
+         "sensors.imu.accel_bias_sigma": 0.08558,
+         "estimator.p0_input_bias": [0.08558] * 3}
+#: (E2b) with the residual and the levelling's pitch term (0.0269 m/s^2).
+LEVELLED = {"estimator.tilt_levels_bias": [1.0, 1.0, 0.0],
+            "estimator.tilt_sigma": [0.02694, 0.02694, 0.0],
+            "estimator.p0_tilt_bias": [0.08972, 0.08972, 0.0]}
+#: the same residual in a filter whose tilt is apart from the bias (l = 0)
+UNCOUPLED = {"estimator.tilt_sigma": [0.005131, 0.005131, 0.0],
+             "estimator.p0_tilt_bias": [0.005131, 0.005131, 0.0]}
+_MEASURED = {"position": "3.50 against 2.66-3.36 (over-confident by 4 %)",
+             "velocity": "2.20 against 2.77-3.24 (cautious)",
+             "tilt": "3.01 against 1.63-2.41 (over-confident by 25 %)"}
+
+
+@pytest.fixture(scope="module")
+def hovers():
+    from quadland.kinds.landing.consistency import consistency_monte_carlo
+    from quadland.scenario import load_scenario
+    base = load_scenario("highway")
+    return {name: consistency_monte_carlo(base.replace(**VN300, **over), runs=100, duration=8.0)
+            for name, over in (("levelled", LEVELLED), ("uncoupled", UNCOUPLED))}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("group", [pytest.param(g, marks=pytest.mark.xfail(
+    strict=True, reason=_MEASURED[g])) if g in _MEASURED else g
+    for g in ("relative", "position", "velocity", "pad", "tilt")])
+def test_the_levelled_filter_on_the_vn300_hovers_is_within_its_nees_bounds(hovers, group):
+    """100 hovers of 8 s over highway's pad on the VN-300: the time-averaged NEES of each
+    group within its correlation-aware 95 % bounds (issue 17's criterion); the groups it
+    misses are marked with the measured values."""
+    assert hovers["levelled"].nees_time_averaged(group).inside
+
+
+@pytest.mark.slow
+def test_carrying_the_levelled_bias_is_what_makes_the_tilt_credible(hovers):
+    """The uncoupled filter takes the constant levelled tilt for a 5 s process the velocity
+    tells apart from the bias: its tilt NEES is two orders of magnitude above its bound
+    (measured 475), the levelled filter's within a factor 1.3 of it."""
+    lo, hi = hovers["levelled"].nees_bounds("tilt")
+    assert hovers["uncoupled"].nees_time_averaged("tilt").mean > 50 * hi
+    assert hovers["levelled"].nees_time_averaged("tilt").mean < 1.3 * hi
