@@ -4,8 +4,12 @@
 :data:`SIMULATOR_PARTS`): each function of the :class:`quadland_symbolic.loop.LoopModel`
 as CasADi writes it, one translation unit each, and the driver
 (``symbolic/templates/simulator.c.jinja``), which knows nothing of the model
-but its functions' sizes; :func:`loop_header` the loop algorithm the drivers
-and the pure-C examples share (``quadland_loop.h``).
+but its functions' sizes. The sampled driver's plant, free plant and event are each
+cut in two where their terms of the time and the parameters alone are worth it
+(:data:`HOISTING`, :func:`~quadland_symbolic.codegen.time_split.time_split`): those
+terms in ``<function>_time``, which the driver calls once an instant, the same bits.
+:func:`loop_header` writes the loop algorithm the drivers and the pure-C examples share
+(``quadland_loop.h``).
 """
 
 from __future__ import annotations
