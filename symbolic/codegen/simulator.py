@@ -101,12 +101,8 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
             rings = _rings(model.controller_stages)
             continue
         split = _split(by_name[name]) if driver == "sampled" and name in HOISTING else None
-        parts = (by_name[name],) if split is None else split
-        for f in parts:
-            text, fn = _emit(prefix + f.name(), f)
-            files.update(text)
-            work.append(dict(sz_arg=fn.sz_arg(), sz_res=fn.sz_res(), sz_iw=fn.sz_iw(),
-                             sz_w=fn.sz_w()))
+        for f in (by_name[name],) if split is None else split:
+            work.append(_emit_sized(prefix, f, files))
         if split is not None:
             hoisted[name] = split[1].nnz_out(0)
     sizes = dict(NX=model.state.size, NW=model.disturbance.size, NP=model.params.size,
@@ -183,6 +179,14 @@ def _core(nxc: int, rings) -> tuple[tuple[int, int], ...]:
     if at < nxc:
         out.append((at, nxc))
     return tuple(out)
+
+
+def _emit_sized(prefix: str, f: ca.Function, files: dict) -> dict:
+    """``f``'s C (:func:`_emit`, named ``<prefix><its name>``) added to ``files``; its
+    work sizes."""
+    text, fn = _emit(prefix + f.name(), f)
+    files.update(text)
+    return dict(sz_arg=fn.sz_arg(), sz_res=fn.sz_res(), sz_iw=fn.sz_iw(), sz_w=fn.sz_w())
 
 
 def _emit(name: str, f: ca.Function) -> tuple[dict[str, str], ca.Function]:
