@@ -11,7 +11,8 @@ layouts), :mod:`~quadland_symbolic.codegen.paper_api`,
 :mod:`~quadland_symbolic.codegen.land_detector_api` (the readable APIs),
 :mod:`~quadland_symbolic.codegen.example` (the pure-C example),
 :mod:`~quadland_symbolic.codegen.tree` (all of ``generated/``) and
-:mod:`~quadland_symbolic.codegen.simulator` (the compiled simulators' C).
+:mod:`~quadland_symbolic.codegen.simulator` (the compiled simulators' C;
+:mod:`~quadland_symbolic.codegen.time_split` their plants' terms of time alone).
 
 One entry point per tree, :func:`generate` (one precision) and
 :func:`generate_tree` (everything under ``generated/``), turns the symbolic

@@ -4,8 +4,12 @@
 :data:`SIMULATOR_PARTS`): each function of the :class:`quadland_symbolic.loop.LoopModel`
 as CasADi writes it, one translation unit each, and the driver
 (``symbolic/templates/simulator.c.jinja``), which knows nothing of the model
-but its functions' sizes; :func:`loop_header` the loop algorithm the drivers
-and the pure-C examples share (``quadland_loop.h``).
+but its functions' sizes. The sampled driver's plant, free plant and event are each
+cut in two where their terms of the time and the parameters alone are worth it
+(:data:`HOISTING`, :func:`~quadland_symbolic.codegen.time_split.time_split`): those
+terms in ``<function>_time``, which the driver calls once an instant, the same bits.
+:func:`loop_header` writes the loop algorithm the drivers and the pure-C examples share
+(``quadland_loop.h``).
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from pathlib import Path
 import casadi as ca
 
 from quadland_symbolic.codegen.staged_c import staged_sources
+from quadland_symbolic.codegen.time_split import time_split
 from quadland_symbolic.loop import MAX_DELAY_PERIODS, RIDE_TOL, LoopModel
 
 __all__ = ["SIMULATOR_PARTS", "loop_header", "simulator_sources"]
@@ -86,7 +91,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         names = (*names, "ride_rhs", "ride_row")
     if model.envelope is None:
         names = tuple(n for n in names if n != "envelope")
-    files, work, rings = {}, [], ()
+    files, work, rings, hoisted = {}, [], (), {}
     for name in names:
         if name == "controller" and model.controller_stages is not None:
             staged, sz = staged_sources(prefix, model.controller_stages,
@@ -95,10 +100,11 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
             work.append(sz)
             rings = _rings(model.controller_stages)
             continue
-        text, fn = _emit(prefix + name, by_name[name])
-        files.update(text)
-        work.append(dict(sz_arg=fn.sz_arg(), sz_res=fn.sz_res(), sz_iw=fn.sz_iw(),
-                         sz_w=fn.sz_w()))
+        split = _split(by_name[name]) if driver == "sampled" and name in HOISTING else None
+        for f in (by_name[name],) if split is None else split:
+            work.append(_emit_sized(prefix, f, files))
+        if split is not None:
+            hoisted[name] = split[1].nnz_out(0)
     sizes = dict(NX=model.state.size, NW=model.disturbance.size, NP=model.params.size,
                  NY=model.outputs.size, NXP=model.plant_state.size, NUH=model.held.size,
                  NXC=model.controller_state.size, NPP=model.plant_params.size,
@@ -108,7 +114,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
                  NA=model.ride_row.nnz_in(1) if has_ride else 0,
                  NN=model.tick_inputs.size if model.tick_inputs is not None else 0)
     headers = [n for n in names if n != "step_args"] + (
-        ["controller"] if part == "sampled_flight" else [])
+        ["controller"] if part == "sampled_flight" else []) + [f"{n}_time" for n in hoisted]
     files["quadland_loop.h"] = loop_header()
     files[f"{prefix}{part}.c"] = render("simulator.c.jinja",
         prefix=prefix, model=model.name, part=driver, name=part, functions=headers,
@@ -118,6 +124,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         has_envelope=model.envelope is not None, max_delay=MAX_DELAY_PERIODS,
         has_ride=has_ride, has_free=has_free,
         has_tick=driver == "sampled" and model.tick_inputs is not None, rings=rings,
+        hoisted=hoisted,
         ring_slots=max((r["n"] for r in rings), default=0) + 1,
         core=_core(model.controller_state.size, rings),
         casadi_version=ca.__version__, sizes=sizes,
@@ -125,6 +132,23 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     if part == "sampled_flight":
         files.update(_flight_controller(model, prefix, by_name["step_args"]))
     return files
+
+
+#: The sampled driver's functions of the plant's state at an instant whose terms of the
+#: time and the parameters alone are computed once an instant (:func:`time_split`).
+HOISTING = ("plant", "free_plant", "event")
+#: The fewest instructions of those terms worth a function of their own: below, the
+#: driver's check of the instant and the call cost about what they save.
+MIN_HOISTED = 32
+
+
+def _split(f: ca.Function):
+    """``(core, <name>_time)`` of ``f`` by :func:`time_split`, or ``None`` where its terms
+    of time alone are fewer than :data:`MIN_HOISTED` instructions."""
+    split = time_split(f, ("t", "pp"))
+    if split is None or split[1].n_instructions() < MIN_HOISTED:
+        return None
+    return split
 
 
 def _rings(staged) -> tuple[dict, ...]:
@@ -155,6 +179,14 @@ def _core(nxc: int, rings) -> tuple[tuple[int, int], ...]:
     if at < nxc:
         out.append((at, nxc))
     return tuple(out)
+
+
+def _emit_sized(prefix: str, f: ca.Function, files: dict) -> dict:
+    """``f``'s C (:func:`_emit`, named ``<prefix><its name>``) added to ``files``; its
+    work sizes."""
+    text, fn = _emit(prefix + f.name(), f)
+    files.update(text)
+    return dict(sz_arg=fn.sz_arg(), sz_res=fn.sz_res(), sz_iw=fn.sz_iw(), sz_w=fn.sz_w())
 
 
 def _emit(name: str, f: ca.Function) -> tuple[dict[str, str], ca.Function]:
