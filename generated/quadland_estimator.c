@@ -100,7 +100,9 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, max_age_datalink, 51, 0) &&
     AT(ql_estimator_params, deck_extrapolation_max, 52, 0) &&
     AT(ql_estimator_params, heave_time, 53, 0) &&
-    sizeof(ql_estimator_params) == 54 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_params, heave_frequency, 54, 0) &&
+    AT(ql_estimator_params, heave_in_filter, 55, 0) &&
+    sizeof(ql_estimator_params) == 56 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 21, 0) &&
@@ -155,7 +157,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(ql_estimator_diagnostics) == 136 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[54] = {
+static const ql_real default_p_est[56] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
     0.001, 0.0855, 0.0855, 0.0, 5.0, 0.1,
@@ -165,6 +167,7 @@ static const ql_real default_p_est[54] = {
     0.1, 0.3, 0.3, 0.3, 11.344867, 11.344867,
     11.344867, 11.344867, 6.634897, 11.344867, 11.344867, 10.0,
     0.02, 0.02, 0.02, 0.02, 0.5, 0.0,
+    0.0, 0.0,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -207,6 +210,8 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
  *   heave_time               >= 0
+ *   heave_frequency          >= 0
+ *   heave_in_filter          in [0, 1]
  * NaN and infinities are outside every range. */
 ql_status ql_check_estimator_params(const ql_estimator_params *params, const char **bad_field)
 {
@@ -342,6 +347,12 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
     if (!bad && !(isfinite(p[53]) && (p[53] >= 0.0))) {
         bad = "heave_time";
     }
+    if (!bad && !(isfinite(p[54]) && (p[54] >= 0.0))) {
+        bad = "heave_frequency";
+    }
+    if (!bad && !(isfinite(p[55]) && ((p[55] >= 0.0) && (p[55] <= 1.0)))) {
+        bad = "heave_in_filter";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -349,7 +360,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 54 comparisons. The values are known to be finite; no names and no
+ * 56 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -408,6 +419,8 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[51] >= 0.0);
     ok &= (p[52] >= 0.0);
     ok &= (p[53] >= 0.0);
+    ok &= (p[54] >= 0.0);
+    ok &= ((p[55] >= 0.0) & (p[55] <= 1.0));
     return ok;
 }
 

@@ -35,7 +35,9 @@ _ESTIMATOR_POSITIVE = ("q_acc", "q_at", "q_b", "q_ab", "vision_sigma0", "tilt_ta
                        *(f"gate_{b.name}" for b in BLOCKS))
 #: [estimator] keys with an upper bound of their own: the range model divides by
 #: ``n2 . b3_E`` once it is at least ``range_min_cos``, a cosine in (0, 1].
-_ESTIMATOR_HI = {"range_min_cos": 1.0}
+_ESTIMATOR_HI = {"range_min_cos": 1.0, "heave_in_filter": 1.0}
+#: [estimator] keys added after the shipped scenarios, with the defaults that fly as before.
+_ESTIMATOR_ADDED = {"heave_frequency": 0.0, "heave_in_filter": 0.0}
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
@@ -304,7 +306,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         **{f.name: Field(F, f.unit if isinstance(f.unit, str) else f.unit[0], f.doc,
                          f.size if f.size > 1 else None, lo=0.0,
                          hi=_ESTIMATOR_HI.get(f.name, 1e6),
-                         lo_open=f.name in _ESTIMATOR_POSITIVE)
+                         lo_open=f.name in _ESTIMATOR_POSITIVE,
+                         default=_ESTIMATOR_ADDED.get(f.name))
            for f in estimator_params().fields if f.name != "g"},
         **{f"p0_{name}": Field(F, unit, f"initial standard deviation of {what}, per axis",
                                3, lo=0.0, hi=1e4)
