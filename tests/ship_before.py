@@ -16,3 +16,8 @@ NO_FLARE = ['touchdown.policy="idle"', "touchdown.flare_height=0.15",
 #: eleventh session (docs/landing.md, "The nested marker on highway_100 and ship_ss5");
 #: ``ship`` has none, so the key leaves its flights as they are.
 PAD_BEFORE = "sensors.vision.small_range_max=0.0"
+
+#: The datalink's gates of before: the 99 % of three degrees of freedom. ``ship_ss5`` gates its
+#: broadcast at 30 since the thirteenth session (docs/landing.md, "ship_ss5: the datalink
+#: refused at the deck's turn"); ``ship`` keeps these, so they leave its flights as they are.
+GATES_BEFORE = ("estimator.gate_datalink_v=11.344867", "estimator.gate_datalink_a=11.344867")

@@ -173,10 +173,15 @@ def _fly(c, rng, steps, t0, oracle=None):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [1, 2])
-def test_step_equals_its_casadi_function_bit_for_bit(seed):
+@pytest.mark.parametrize("seed, heave", [(1, False), (2, False), (3, True)])
+def test_step_equals_its_casadi_function_bit_for_bit(seed, heave):
+    """The C step against CasADi's; with ``heave`` the pad's z oscillates at a given
+    1.3 rad/s in the prediction and the output (E17b: a still pad stays still)."""
     c = Call(load("double"))
     lay = estimator_params()
+    if heave:
+        c.v["params"][lay.slice("heave_frequency")] = 1.3
+        c.v["params"][lay.slice("heave_in_filter")] = 1.0
     # the range fused wherever its beam points (E12a off): the random states are metres
     # from the pad, and every block must be fused at least once
     c.v["params"][lay.slice("range_deck_radius")] = 1e30
@@ -382,7 +387,8 @@ DOCUMENTED = {
     "range_deck_sigmas": _nonneg, "datalink_v_sigma": _pos,
     "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS}, "gate_lockout": _nonneg,
     **{f"max_age_{s}": _nonneg for s in SENSORS}, "deck_extrapolation_max": _nonneg,
-    "heave_time": _nonneg,
+    "heave_time": _nonneg, "heave_frequency": _nonneg,
+    "heave_in_filter": lambda v: (v >= 0) & (v <= 1),
 }
 
 

@@ -720,7 +720,8 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
     it: docs/landing.md, "The ships on a leash in the crawl"), and in ship_ss5's handover
     above the deck (docs/landing.md, "The ships' handover above the deck, and the flare
     about the deck's normal"), and in ship_ss5's nested marker (docs/landing.md, "The nested
-    marker on highway_100 and ship_ss5")."""
+    marker on highway_100 and ship_ss5"), and in ship_ss5's datalink gates (docs/landing.md,
+    "ship_ss5: the datalink refused at the deck's turn")."""
     ship, ss5 = load_scenario("ship"), load_scenario("ship_ss5")
     assert ship["deck.sea_state"] == 4 and ss5["deck.sea_state"] == 5
     for d in (ship.data["deck"], ss5.data["deck"]):
@@ -730,7 +731,8 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
               if ship.data[section][key] != ss5.data[section][key]}
     assert differ == {"scenario.name", "scenario.description", "deck.sea_state",
                       "simulation.duration", "landing.descent_leash", "landing.leash_height",
-                      "initial.handover_clearance", "sensors.vision.small_range_max"}
+                      "initial.handover_clearance", "sensors.vision.small_range_max",
+                      "estimator.gate_datalink_v", "estimator.gate_datalink_a"}
     assert set(ship.campaign_table["dispersions"]) == set(ss5.campaign_table["dispersions"])
 
 

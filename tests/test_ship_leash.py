@@ -18,7 +18,7 @@ wherever the filter's height is more than the leash above it.
 import numpy as np
 import pytest
 from reference import GUIDANCE_P
-from ship_before import PAD_BEFORE
+from ship_before import GATES_BEFORE, PAD_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -80,11 +80,13 @@ def test_the_leash_holds_only_below_its_height(z_ref, z, leash_height, expected)
 
 def _fly(name, seed, index, *overrides):
     """Run ``index`` of ``name``'s campaign on campaign seed ``seed`` (None: the default),
-    its draw replayed on the pad of before (:data:`PAD_BEFORE`): the flight and its
+    its draw replayed on the pad and the gates of before (:data:`PAD_BEFORE`,
+    :data:`GATES_BEFORE`): the flight and its
     touchdown report."""
     base = [] if seed is None else [f"campaign.seed={seed}"]
     d = draws(campaign_spec_of(load_scenario(name, base)), [index])[0]
-    res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), PAD_BEFORE, *overrides]))
+    res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), PAD_BEFORE, *GATES_BEFORE,
+                                                   *overrides]))
     return res, touchdown_report(res)
 
 

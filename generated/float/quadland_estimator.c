@@ -101,7 +101,9 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, max_age_datalink, 54, 0) &&
     AT(qlf_estimator_params, deck_extrapolation_max, 55, 0) &&
     AT(qlf_estimator_params, heave_time, 56, 0) &&
-    sizeof(qlf_estimator_params) == 57 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_params, heave_frequency, 57, 0) &&
+    AT(qlf_estimator_params, heave_in_filter, 58, 0) &&
+    sizeof(qlf_estimator_params) == 59 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
     AT(qlf_estimator_memory, P_h, 21, 0) &&
@@ -156,7 +158,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(qlf_estimator_diagnostics) == 136 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[57] = {
+static const qlf_real default_p_est[59] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
     0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.0f,
@@ -166,7 +168,7 @@ static const qlf_real default_p_est[57] = {
     2.0f, 0.1f, 0.1f, 0.1f, 0.3f, 0.3f,
     0.3f, 11.344867f, 11.344867f, 11.344867f, 11.344867f, 6.634897f,
     11.344867f, 11.344867f, 10.0f, 0.02f, 0.02f, 0.02f,
-    0.02f, 0.5f, 0.0f,
+    0.02f, 0.5f, 0.0f, 0.0f, 0.0f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -210,6 +212,8 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   max_age_datalink         >= 0
  *   deck_extrapolation_max   >= 0
  *   heave_time               >= 0
+ *   heave_frequency          >= 0
+ *   heave_in_filter          in [0, 1]
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
                                       const char **bad_field)
@@ -351,6 +355,12 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
     if (!bad && !(isfinite(p[56]) && (p[56] >= 0.0f))) {
         bad = "heave_time";
     }
+    if (!bad && !(isfinite(p[57]) && (p[57] >= 0.0f))) {
+        bad = "heave_frequency";
+    }
+    if (!bad && !(isfinite(p[58]) && ((p[58] >= 0.0f) && (p[58] <= 1.0f)))) {
+        bad = "heave_in_filter";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -358,7 +368,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 57 comparisons. The values are known to be finite; no names and no
+ * 59 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -420,6 +430,8 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[54] >= 0.0f);
     ok &= (p[55] >= 0.0f);
     ok &= (p[56] >= 0.0f);
+    ok &= (p[57] >= 0.0f);
+    ok &= ((p[58] >= 0.0f) & (p[58] <= 1.0f));
     return ok;
 }
 

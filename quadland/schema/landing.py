@@ -35,10 +35,12 @@ _ESTIMATOR_POSITIVE = ("q_acc", "q_at", "q_b", "q_ab", "vision_sigma0", "tilt_ta
                        *(f"gate_{b.name}" for b in BLOCKS))
 #: [estimator] keys with an upper bound of their own: the range model divides by
 #: ``n2 . b3_E`` once it is at least ``range_min_cos``, a cosine in (0, 1].
-_ESTIMATOR_HI = {"range_min_cos": 1.0, "tilt_levels_bias": 1.0}
-#: [estimator] keys added after the shipped scenarios, with the behaviour of before as
-#: their default: the tilt apart from the accelerometer's bias (E2b).
-_ESTIMATOR_DEFAULT = {"tilt_levels_bias": [0.0, 0.0, 0.0]}
+_ESTIMATOR_HI = {"range_min_cos": 1.0, "tilt_levels_bias": 1.0, "heave_in_filter": 1.0}
+#: [estimator] keys added after the shipped scenarios, with the defaults that fly as before:
+#: the tilt apart from the accelerometer's bias (E2b), the pad's heave not in the prediction
+#: (E17b).
+_ESTIMATOR_ADDED = {"tilt_levels_bias": [0.0, 0.0, 0.0], "heave_frequency": 0.0,
+                    "heave_in_filter": 0.0}
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:
@@ -308,7 +310,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                          f.size if f.size > 1 else None, lo=0.0,
                          hi=_ESTIMATOR_HI.get(f.name, 1e6),
                          lo_open=f.name in _ESTIMATOR_POSITIVE,
-                         default=_ESTIMATOR_DEFAULT.get(f.name))
+                         default=_ESTIMATOR_ADDED.get(f.name))
            for f in estimator_params().fields if f.name != "g"},
         **{f"p0_{name}": Field(F, unit, f"initial standard deviation of {what}, per axis",
                                3, lo=0.0, hi=1e4)

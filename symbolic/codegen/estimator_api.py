@@ -85,6 +85,8 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     **{f"max_age_{s}": _NONNEGATIVE for s in SENSORS},
     "deck_extrapolation_max": _NONNEGATIVE,
     "heave_time": _NONNEGATIVE,           # 0: a flat deck, the constant acceleration (E17a)
+    "heave_frequency": _NONNEGATIVE,      # 0: the filter's own frequency (E17a), (E17b)
+    "heave_in_filter": Range(lo=0.0, hi=1.0),  # a switch: the oscillator in Phi too (E17b)
 })
 
 

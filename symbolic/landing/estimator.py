@@ -341,7 +341,8 @@ def finish_step(lay, pattern, m, ims, imu, p_est, dt, t, deck, sen, x, P, blk):
     y = estimator_output(x, m["hist"], deck, imu, p_est, t, omega)
     a_in, turn, imu_ok = _input(ims, x, p, dt)
     hist = ca.horzcat(m["hist"], ca.vertcat(a_in, dt, turn))          # oldest first
-    x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern, hist[4:7, 0])
+    x_next, P_next = nav_predict(x, P, hist[0:3, 0], hist[3, 0], p_est, pattern, hist[4:7, 0],
+                                 select(p["heave_in_filter"] > 0.5, omega, 0))    # (E17b)
     flags = dict(
         fused=ca.vertcat(*[blk[b]["fused"] for b in _BLOCK_NAMES]),
         rejected=ca.vertcat(*[blk[b]["rejected"] for b in _BLOCK_NAMES]),

@@ -36,6 +36,7 @@ import functools
 
 import casadi as ca
 
+from quadland_symbolic.kalman import select
 from quadland_symbolic.landing.controller import (
     LANDING_MEASUREMENT,
     landing_controller_params,
@@ -188,7 +189,9 @@ def filter_prediction_function(coupling: str) -> ca.Function:
     pattern = covariance_pattern(coupling)
     x, Pv, a_in = NAV.sym("x"), ca.SX.sym("P", pattern.size), ca.SX.sym("a_in", 3)
     dt, p_est = ca.SX.sym("dt"), estimator_params().sym("p_est")
-    xn, Pn = nav_predict(x, pattern.unpack(Pv), a_in, dt, p_est, pattern)
+    p = estimator_params().unpack(p_est)                    # a given heave frequency (E17b)
+    omega = select(p["heave_in_filter"] > 0.5, p["heave_frequency"], 0)
+    xn, Pn = nav_predict(x, pattern.unpack(Pv), a_in, dt, p_est, pattern, None, omega)
     return ca.Function("filter_prediction", [x, Pv, a_in, dt, p_est],
                        [xn, pattern.pack(Pn), ca.jacobian(xn, x), ca.jacobian(xn, a_in)],
                        ["x", "P", "a_in", "dt", "p_est"], ["x_next", "P_next", "Phi", "Gamma"])
@@ -217,7 +220,8 @@ def filter_output_function(n_hist: int, depth, coupling: str) -> ca.Function:
     m = lay.unpack(mem)
     deck = dict(eta2=m["deck_eta2"], w2E=m["deck_w2E"], w2E_dot=m["deck_w2E_dot"],
                 tau=m["deck_tau"])
-    y = estimator_output(x_h, hist, deck, imu, p_est, t)
+    y = estimator_output(x_h, hist, deck, imu, p_est, t,
+                         estimator_params().unpack(p_est)["heave_frequency"])   # (E17b)
     ims = IMU.unpack(imu)
     a_in = acceleration_input(ims["eta_hat"], ims["f_b"], estimator_params().unpack(p_est)["g"])
     acc = hist[0:3, :]

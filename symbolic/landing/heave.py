@@ -15,6 +15,13 @@ Written with ``x = omega T``, ``s = sin(x) / x`` and ``h = (sin(x / 2) / (x / 2)
 ``a(T) = a cos x - (omega^2 T s) v``, ``v(T) = v cos x + (T a) s``,
 ``z(T) - z(0) = (T v) s + (T^2 / 2) a h``. At ``omega = 0`` the factors ``cos x``, ``s``
 and ``h`` are exactly 1 and the three are the constant acceleration's to the bit.
+
+The same oscillator can replace the random-walk acceleration in the filter's own
+prediction over a period (:func:`heave_transition`, (E17b)): the z rows of the pad's
+velocity and acceleration and the pad's share of the relative height in ``Phi``. Its
+frequency is the filter's own (E17a) or one given by the scenario
+(``heave_frequency``, from the sea's spectrum); :data:`HEAVE_FIELDS` are the two
+parameters.
 """
 
 from __future__ import annotations
@@ -22,8 +29,20 @@ from __future__ import annotations
 import casadi as ca
 
 from quadland_symbolic.kalman import select
+from quadland_symbolic.layout import Field
 
-__all__ = ["sinc", "heave_factors"]
+__all__ = ["sinc", "heave_factors", "heave_transition", "HEAVE_FIELDS", "HEAVE_DEFAULTS"]
+
+#: The heave's parameters in ``p_est`` (docs/estimator.md (E17a), (E17b)).
+HEAVE_FIELDS = (
+    Field("heave_time", 1, "s", "averaging time of the pad's heave frequency (E17a)"),
+    Field("heave_frequency", 1, "rad/s", "the pad's heave frequency given (E17b); 0: the "
+          "filter's own (E17a)"),
+    Field("heave_in_filter", 1, "-", "1: the pad's z is the oscillator in the filter's "
+          "prediction too (E17b); 0: in the output predictor only"),
+)
+#: Their defaults: the constant acceleration (a flat deck), as before (E17a).
+HEAVE_DEFAULTS = {"heave_time": 0.0, "heave_frequency": 0.0, "heave_in_filter": 0.0}
 
 
 def sinc(x):
@@ -41,3 +60,23 @@ def heave_factors(omega, T):
     x = omega * T
     half = sinc(x / 2)
     return ca.cos(x), sinc(x), half * half
+
+
+def heave_transition(Phi, omega, dt, i_p, i_v, i_a):
+    """``Phi`` with the pad's z over ``dt`` as the oscillator of frequency ``omega`` (E17b).
+
+    ``i_p``, ``i_v``, ``i_a`` are the z entries of ``p_r``, ``v_t`` and ``a_t``. With
+    ``(c, s, h)`` of :func:`heave_factors`: ``v+ = c v + (dt s) a``, ``a+ = c a - (omega^2
+    dt s) v`` and ``p_r+`` loses the pad's rise ``(dt s) v + (dt^2 / 2) h a``, the rows'
+    other entries as they were. At ``omega = 0`` every entry is the random walk's
+    (``1``, ``dt``, ``dt^2 / 2``) and the new one ``-0``: the same prediction.
+    """
+    c, s, h = heave_factors(omega, dt)
+    Phi = ca.SX(Phi)
+    Phi[i_p, i_v] = -(dt * s)
+    Phi[i_p, i_a] = -((dt * dt / 2) * h)
+    Phi[i_v, i_v] = c
+    Phi[i_v, i_a] = dt * s
+    Phi[i_a, i_v] = -((omega * omega) * (dt * s))
+    Phi[i_a, i_a] = c
+    return Phi

@@ -96,8 +96,10 @@ def heave_frequency(ms, x_h, p, dt):
     (:func:`~quadland_symbolic.landing.quiescence.deck_frequency`: the mean zero-crossing
     frequency of the pad's vertical velocity, clamped), each average moving by
     ``min(dt / heave_time, 1)`` of the way to the new square; ``omega`` is 0 (the constant
-    acceleration) when ``heave_time`` is 0.
+    acceleration) when ``heave_time`` is 0. A ``heave_frequency`` above 0 (given, from the
+    sea's spectrum, (E17b)) is ``omega`` instead.
     """
     x = NAV.unpack(x_h)
     ms_next = quiescence_update(ms, x["v_t"][2], x["a_t"][2], dt, p["heave_time"])
-    return ms_next, select(p["heave_time"] > 0, deck_frequency(ms_next), 0)
+    own = select(p["heave_time"] > 0, deck_frequency(ms_next), 0)
+    return ms_next, select(p["heave_frequency"] > 0, p["heave_frequency"], own)

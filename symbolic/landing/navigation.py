@@ -34,11 +34,8 @@ from quadland_symbolic.kalman import (
 )
 from quadland_symbolic.kinematics import rotation, skew
 from quadland_symbolic.landing.controller import deck_rates
-from quadland_symbolic.landing.correlated_noise import (
-    heading_share,
-    memory_count,
-    project_row,
-)
+from quadland_symbolic.landing.correlated_noise import heading_share, memory_count, project_row
+from quadland_symbolic.landing.heave import HEAVE_DEFAULTS, HEAVE_FIELDS, heave_transition
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["NAV", "IMU", "VISION", "GNSS", "RANGE", "DATALINK", "DECK_INIT", "NAV_PACKETS",
@@ -174,7 +171,7 @@ ESTIMATOR_DEFAULTS = types.MappingProxyType(dict(
     **{f"gate_{b.name}": b.gate for b in BLOCKS},
     gate_lockout=10.0,
     **{f"max_age_{s}": 0.02 for s in SENSORS},
-    deck_extrapolation_max=0.5, heave_time=0.0,
+    deck_extrapolation_max=0.5, **HEAVE_DEFAULTS,
 ))
 
 
@@ -218,7 +215,7 @@ def estimator_params() -> Layout:
         *[Field(f"max_age_{s}", 1, "s", f"oldest {s} sample fused, before the horizon")
           for s in SENSORS],
         Field("deck_extrapolation_max", 1, "s", "longest extrapolation of the broadcast (E7)"),
-        Field("heave_time", 1, "s", "averaging time of the pad's heave frequency (E17a)"),
+        *HEAVE_FIELDS,
     ), "navigation filter parameters")
 
 
@@ -293,14 +290,17 @@ def nav_transition_function() -> ca.Function:
                        ["dt", "p_est"], ["Phi", "Gamma", "Q"])
 
 
-def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern, turn=None):
+def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern, turn=None, omega=None):
     """One prediction over ``dt`` (E6): ``x+ = Phi x + Gamma a_in``, ``P+ = Phi P Phi^T + Q``
-    on ``pattern``'s entries; the body's ``turn`` (E, rad) turns ``a_b`` by ``I + S(turn)``."""
+    on ``pattern``'s entries; ``turn`` (E, rad) turns ``a_b`` (E6a), ``omega`` the pad's z (E17b)."""
     Phi, Gamma, Q = nav_transition(dt, p_est)
     if turn is not None:                                                    # (E6a)
         i, k = NAV.slice("a_b"), NAV.slice("a_tilt")
         Phi[i, i] = ca.DM.eye(3) + skew(turn)       # the levelled share turns with it (E2b)
         Phi[k, i] -= ca.diag(estimator_params().unpack(p_est)["tilt_levels_bias"]) @ skew(turn)
+    if omega is not None:                                                   # (E17b)
+        Phi = heave_transition(Phi, omega, dt, *(NAV.slice(f).start + 2
+                                                         for f in ("p_r", "v_t", "a_t")))
     return Phi @ x + Gamma @ a_in, pattern.unpack(pattern.pack(Phi @ P @ Phi.T + Q))
 
 
