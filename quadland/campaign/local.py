@@ -260,13 +260,14 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
     context.set_forkserver_preload(["quadland.campaign.local",
                                     "quadland.campaign.forkserver_hook"])
     _start_forkserver()
-    queue = RunQueue(todo)
     lifeline, keep = context.Pipe(duplex=False)
     pool: list[_Worker] = []
     try:
         for _ in range(workers):
             pool.append(_Worker(context, lifeline, base, limits))
         lifeline.close()
+        # the first draws (SciPy's import, 0.5 s) while the workers start, not before
+        queue = RunQueue(todo)
         for worker in pool:
             while queue and worker.busy < AHEAD:
                 worker.send(queue, chunk)
