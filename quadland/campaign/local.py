@@ -21,6 +21,7 @@ from collections.abc import Iterable, Iterator, Mapping
 
 from quadland.campaign.fly import RunOutcome, fly
 from quadland.campaign.sampling import RunDraw
+from quadland.engine.runs import keep_freed_memory
 from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.kinds import kind_of
 from quadland.scenario import Scenario
@@ -140,6 +141,7 @@ def chunk_size(runs: int, workers: int) -> int:
 
 def serial_runs(base: Scenario, todo: Iterable[RunDraw], limits: Mapping[str, float]
                  ) -> Iterator[list[RunOutcome]]:
+    keep_freed_memory()                         # each run's arrays in the last one's pages
     for draw in todo:
         yield [fly(base, draw, limits)]
 
@@ -169,6 +171,7 @@ def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) ->
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)                        # one BLAS thread per process
+    keep_freed_memory()                         # each run's arrays in the last one's pages
 
     def watch():
         try:
@@ -260,13 +263,14 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
     context.set_forkserver_preload(["quadland.campaign.local",
                                     "quadland.campaign.forkserver_hook"])
     _start_forkserver()
-    queue = RunQueue(todo)
     lifeline, keep = context.Pipe(duplex=False)
     pool: list[_Worker] = []
     try:
         for _ in range(workers):
             pool.append(_Worker(context, lifeline, base, limits))
         lifeline.close()
+        # the first draws (SciPy's import, 0.5 s) while the workers start, not before
+        queue = RunQueue(todo)
         for worker in pool:
             while queue and worker.busy < AHEAD:
                 worker.send(queue, chunk)

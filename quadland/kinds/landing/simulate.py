@@ -55,16 +55,16 @@ from quadland.kinds.landing.values import (
 )
 from quadland.scenario import Scenario
 from quadland_symbolic.landing.deck import DECK_PARAMS
-from quadland_symbolic.landing.flat_deck import amplitude_indices, flat_deck_loop
+from quadland_symbolic.landing.flat_deck import amplitude_indices
 from quadland_symbolic.landing.guidance import TOUCHDOWN
 from quadland_symbolic.landing.loop import (
     LANDING_ENVELOPE,
     LANDING_RECORDED,
-    landing_loop,
     landing_loop_params,
     landing_loop_state,
     landing_ride_start,
 )
+from quadland_symbolic.landing.loop_recipe import landing_loop_recipe
 from quadland_symbolic.landing.plant import (
     LANDING_DISTURBANCE,
     LANDING_PLANT_PARAMS,
@@ -72,11 +72,7 @@ from quadland_symbolic.landing.plant import (
     loop_plant_function,
 )
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
-from quadland_symbolic.landing.sensed_loop import (
-    SENSED_TRAJECTORY,
-    landing_sensed_loop,
-    sensed_loop_params,
-)
+from quadland_symbolic.landing.sensed_loop import SENSED_TRAJECTORY, sensed_loop_params
 from quadland_symbolic.landing.signals import LANDING_SIGNALS, LANDING_TRAJECTORY
 
 __all__ = ["landing_envelope", "landing_plan", "check_landing_plan", "simulate_landing",
@@ -190,8 +186,8 @@ def landing_loop_part(l: int, part: str, sensed: bool = False, welded: bool = Fa
     from quadland.kinds.landing.flight import flight_code
 
     flight = flight_code(l, sensed) if part == "sampled_flight" else None
-    model = landing_sensed_loop(l, welded) if sensed else landing_loop(l, welded)
-    return compiled_loop(flat_deck_loop(model) if flat else model, part, flight)
+    # a recipe: the model's CasADi functions are built only for a build (0.7 s a process)
+    return compiled_loop(landing_loop_recipe(l, sensed, welded, flat), part, flight)
 
 
 def flat_deck(pp, pc, pc_layout) -> bool:
