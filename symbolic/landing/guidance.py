@@ -89,6 +89,15 @@ from __future__ import annotations
 
 import casadi as ca
 
+from quadland_symbolic.landing.deck_tilt import (
+    DECK_TILT_STATE,
+    TILT_CUES,
+    descent_duration,
+    relative_tilt_cos,
+    tilt_ahead,
+    tilt_frequency,
+    tilt_update,
+)
 from quadland_symbolic.landing.quiescence import (
     QUIESCENCE_STATE,
     deck_frequency,
@@ -130,6 +139,7 @@ GUIDANCE_STATE = Layout("xg", (
     Field("armed", 1, "0/1", "1 once the gear's contact switch has read open in this descent "
           "(only then does its closing count as the touchdown)"),
     *QUIESCENCE_STATE.fields,
+    *DECK_TILT_STATE.fields,
 ), "landing guidance state")
 
 #: The guidance's parameters (the [landing] keys of a landing scenario).
@@ -170,6 +180,9 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "down (0: no limit)"),
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
+    Field("calm_tilt", 1, "rad", "largest angle, predicted at the contact, between the deck's "
+          "normal and the flare's worst lean at which the final descent commits (pi: no "
+          "limit)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -213,6 +226,23 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt):
                             p["commit_horizon"])
     return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
             speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
+
+
+def _tilt_calm(g, p, tilt, dt):
+    """The deck tilt averages after the step (held on the deck) and whether the deck's
+    normal predicted at the contact (the profile's time from the wait height) lies within
+    calm_tilt of the flare's worst lean (:mod:`~quadland_symbolic.landing.deck_tilt`);
+    without ``tilt`` the averages hold and the condition is true."""
+    xt = ca.vertcat(g["ms_tilt_rate"], g["ms_tilt_acc"])
+    if tilt is None:
+        return xt, ca.SX(1)
+    c = TILT_CUES.unpack(tilt)
+    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], dt, p["motion_time"])
+    duration = descent_duration(p["commit_height"], p["descent_time"], p["touchdown_speed"],
+                                p["descent_speed"])
+    d_h = tilt_ahead(c["n_h"], c["n_h_dot"], tilt_frequency(xt_next), duration)
+    return (ca.if_else(g["phase"] >= TOUCHDOWN, xt, xt_next),
+            relative_tilt_cos(c["b_h"], d_h, p["flare_tilt"]) >= ca.cos(p["calm_tilt"]))
 
 
 def _touchdown_cue(c, g):
@@ -282,7 +312,7 @@ def _reference_height(z_ref, p, f, dt):
     return z_next, reference
 
 
-def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
+def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, tilt=None):
     """One guidance step of length ``dt`` (s).
 
     Parameters
@@ -299,6 +329,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
         Step length, s.
     p_guid : casadi.SX
         :data:`GUIDANCE_PARAMS`.
+    tilt : casadi.SX, (8,), optional
+        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` for the commit's deck tilt
+        condition (``calm_tilt``); without it the condition holds and its averages stay.
 
     Returns
     -------
@@ -325,6 +358,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
     xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt)
+    xt_held, tilt_calm = _tilt_calm(g, p, tilt, dt)
+    calm = ca.logic_and(calm, tilt_calm)
     z_fall = z_ref - _descent_rate(z_ref - p["touchdown_height"], p) * dt
     wait = p["touchdown_height"] + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
@@ -359,7 +394,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
                        descending_next=phase_next == DESCEND, timer_next=timer_next,
                        z=p_e[2]), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
-                      committed_next, _armed_next(c, g, in_descend, phase_next), xq_held), \
+                      committed_next, _armed_next(c, g, in_descend, phase_next), xq_held,
+                      xt_held), \
         reference
 
 
