@@ -121,8 +121,10 @@ typedef char guidance_state_is_its_layout[
     AT(ql_guidance_state, ms_rise_rate, 5, 0) &&
     AT(ql_guidance_state, ms_tilt_rate, 6, 0) &&
     AT(ql_guidance_state, ms_tilt_acc, 7, 0) &&
-    AT(ql_guidance_state, phase, 8, 0) &&
-    AT(ql_guidance_state, aborts, 8, 1) &&
+    AT(ql_guidance_state, lean_x, 8, 0) &&
+    AT(ql_guidance_state, lean_y, 9, 0) &&
+    AT(ql_guidance_state, phase, 10, 0) &&
+    AT(ql_guidance_state, aborts, 10, 1) &&
     1 ? 1 : -1];
 typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, hover_height, 0, 0) &&
@@ -731,8 +733,8 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            const ql_guidance_params *params, ql_real dt,
                            ql_guidance_state *state, ql_position_reference *ref)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[10], res_v[26];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y], CasADi's guidance state; res_v = [xg_next, ref]. */
+    ql_real xg[12], res_v[28];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -753,9 +755,11 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[7] = state->ms_rise_rate;
     xg[8] = state->ms_tilt_rate;
     xg[9] = state->ms_tilt_acc;
+    xg[10] = state->lean_x;
+    xg[11] = state->lean_y;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
           & all_finite((const ql_real *)params, 30)
-          & all_finite(xg, 10) & (isfinite(dt) != 0))) {
+          & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
     if (!(dt > 0) || state->phase < QL_PHASE_APPROACH || state->phase > QL_PHASE_LANDED
@@ -771,9 +775,9 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     arg[3] = &dt;
     arg[4] = (const ql_real *)params;
     res[0] = res_v + 0;
-    res[1] = res_v + 10;
+    res[1] = res_v + 12;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 26)) {
+    if (!all_finite(res_v, 28)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -786,7 +790,9 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     state->ms_rise_rate = res_v[7];
     state->ms_tilt_rate = res_v[8];
     state->ms_tilt_acc = res_v[9];
-    memcpy(ref, res_v + 10, sizeof *ref);
+    state->lean_x = res_v[10];
+    state->lean_y = res_v[11];
+    memcpy(ref, res_v + 12, sizeof *ref);
     return QL_OK;
 }
 

@@ -292,7 +292,8 @@ def test_cues_equal_their_casadi_function_and_refuse_bad_parameters():
                                       ms_rise=c.s["gs"].ms_rise,
                                       ms_rise_rate=c.s["gs"].ms_rise_rate,
                                       ms_tilt_rate=c.s["gs"].ms_tilt_rate,
-                                      ms_tilt_acc=c.s["gs"].ms_tilt_acc))
+                                      ms_tilt_acc=c.s["gs"].ms_tilt_acc,
+                                      lean_x=c.s["gs"].lean_x, lean_y=c.s["gs"].lean_y))
         assert c() == STATUS["QL_OK"]
         want = np.asarray(f(c.v["y"], c.v["range"], c.v["imu"], np.array(c.F[:]), xg,
                             c.v["gp"], c.v["quad"]), dtype=float).ravel()

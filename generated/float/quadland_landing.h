@@ -165,6 +165,8 @@ typedef struct {
     qlf_real ms_rise_rate;           /* m^2/s^4: exponential average of the deck's vertical acceleration squared */
     qlf_real ms_tilt_rate;           /* 1/s^2: exponential average of the squared rate of the deck normal's horizontal part */
     qlf_real ms_tilt_acc;            /* 1/s^4: exponential average of the squared acceleration of the deck normal's horizontal part */
+    qlf_real lean_x;                 /* -: exponential average of the body z axis's x component in E */
+    qlf_real lean_y;                 /* -: exponential average of the body z axis's y component in E */
     int phase;                       /* -: phase: QL_PHASE_APPROACH .. QL_PHASE_LANDED */
     int aborts;                      /* -: aborted descents so far */
 } qlf_guidance_state;

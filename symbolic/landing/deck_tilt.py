@@ -22,8 +22,9 @@ exact for one sinusoid per component, ``T`` the profile's time from the wait hei
 the touchdown height.
 
 **The lean.** The worst lean the flare allows at the contact: ``flare_tilt`` from the
-vertical, toward where the body's z axis leans now (``R1 e_z``'s horizontal part; a
-quadrotor holding the pad in an airflow leans into it). The predicted relative tilt is
+vertical, toward where the body's z axis leans on average (an exponential average of
+``R1 e_z``'s horizontal part over ``motion_time``: a quadrotor holding the pad in an
+airflow leans into it; the gusts' lean averages out). The predicted relative tilt is
 the angle between that axis and the predicted normal; the descent commits only while its
 cosine is at least ``cos(calm_tilt)`` (``calm_tilt = pi``: always, the guidance of before).
 
@@ -48,6 +49,8 @@ DECK_TILT_STATE = Layout("x_tilt", (
     Field("ms_tilt_acc", 1, "1/s^4",
           "exponential average of the squared acceleration of the deck normal's horizontal "
           "part"),
+    Field("lean_x", 1, "-", "exponential average of the body z axis's x component in E"),
+    Field("lean_y", 1, "-", "exponential average of the body z axis's y component in E"),
 ), "deck tilt predictor state")
 
 #: What the predictor reads each step (horizontal parts in E).
@@ -85,13 +88,16 @@ def descent_duration(h0, descent_time, touchdown_speed, descent_speed):
     return fast + mid + ca.fmin(h0, h_crawl) / touchdown_speed
 
 
-def tilt_update(xt, n_h_dot, n_h_ddot, dt, motion_time):
+def tilt_update(xt, n_h_dot, n_h_ddot, b_h, dt, motion_time):
     """The averages after one step of length ``dt``, as the heave's
-    (:func:`quadland_symbolic.landing.quiescence.quiescence_update`)."""
+    (:func:`quadland_symbolic.landing.quiescence.quiescence_update`): the tilt's rates
+    squared and the lean ``b_h``."""
     q = DECK_TILT_STATE.unpack(xt)
     k = ca.fmin(dt / motion_time, 1)
     return ca.vertcat(q["ms_tilt_rate"] + k * (ca.dot(n_h_dot, n_h_dot) - q["ms_tilt_rate"]),
-                      q["ms_tilt_acc"] + k * (ca.dot(n_h_ddot, n_h_ddot) - q["ms_tilt_acc"]))
+                      q["ms_tilt_acc"] + k * (ca.dot(n_h_ddot, n_h_ddot) - q["ms_tilt_acc"]),
+                      q["lean_x"] + k * (b_h[0] - q["lean_x"]),
+                      q["lean_y"] + k * (b_h[1] - q["lean_y"]))
 
 
 def tilt_frequency(xt):

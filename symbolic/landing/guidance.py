@@ -231,18 +231,21 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt):
 def _tilt_calm(g, p, tilt, dt):
     """The deck tilt averages after the step (held on the deck) and whether the deck's
     normal predicted at the contact (the profile's time from the wait height) lies within
-    calm_tilt of the flare's worst lean (:mod:`~quadland_symbolic.landing.deck_tilt`);
-    without ``tilt`` the averages hold and the condition is true."""
-    xt = ca.vertcat(g["ms_tilt_rate"], g["ms_tilt_acc"])
+    calm_tilt of the flare's worst lean, toward the average lean
+    (:mod:`~quadland_symbolic.landing.deck_tilt`); without ``tilt`` the averages hold and
+    the condition is true."""
+    xt = ca.vertcat(*(g[n] for n in DECK_TILT_STATE.names()))
     if tilt is None:
         return xt, ca.SX(1)
     c = TILT_CUES.unpack(tilt)
-    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], dt, p["motion_time"])
+    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], c["b_h"], dt, p["motion_time"])
+    lean = DECK_TILT_STATE.unpack(xt_next)
     duration = descent_duration(p["commit_height"], p["descent_time"], p["touchdown_speed"],
                                 p["descent_speed"])
     d_h = tilt_ahead(c["n_h"], c["n_h_dot"], tilt_frequency(xt_next), duration)
     return (ca.if_else(g["phase"] >= TOUCHDOWN, xt, xt_next),
-            relative_tilt_cos(c["b_h"], d_h, p["flare_tilt"]) >= ca.cos(p["calm_tilt"]))
+            relative_tilt_cos(ca.vertcat(lean["lean_x"], lean["lean_y"]), d_h, p["flare_tilt"])
+            >= ca.cos(p["calm_tilt"]))
 
 
 def _touchdown_cue(c, g):

@@ -193,7 +193,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
     mem[landing_memory(l).slice("eta_f")] = eta1[:2]
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
                                   aborts=0.0, committed=0.0, armed=0.0, ms_rise=0.0,
-                                  ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0))
+                                  ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
+                                  lean_x=0.0, lean_y=0.0))
     xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
 
