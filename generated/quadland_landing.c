@@ -156,8 +156,9 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, pivot_h, 26, 0) &&
     AT(ql_guidance_params, descent_leash, 27, 0) &&
     AT(ql_guidance_params, leash_height, 28, 0) &&
-    AT(ql_guidance_params, calm_tilt, 29, 0) &&
-    sizeof(ql_guidance_params) == 30 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, withdraw_height, 29, 0) &&
+    AT(ql_guidance_params, calm_tilt, 30, 0) &&
+    sizeof(ql_guidance_params) == 31 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -190,12 +191,13 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[30] = {
+static const ql_real default_p_guid[31] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
-    0.0, 0.0, 0.0, 0.05, 1000.0, 3.141592653589793,
+    0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
+    3.141592653589793,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -467,6 +469,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   pivot_h                  >= 0
  *   descent_leash            >= 0
  *   leash_height             >= 0
+ *   withdraw_height          finite
  *   calm_tilt                >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
@@ -567,7 +570,10 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[28]) && (p[28] >= 0.0))) {
         bad = "leash_height";
     }
-    if (!bad && !(isfinite(p[29]) && (p[29] >= 0.0))) {
+    if (!bad && !(isfinite(p[29]))) {
+        bad = "withdraw_height";
+    }
+    if (!bad && !(isfinite(p[30]) && (p[30] >= 0.0))) {
         bad = "calm_tilt";
     }
     if (bad_field) {
@@ -680,7 +686,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[26] >= 0.0);
     ok &= (p[27] >= 0.0);
     ok &= (p[28] >= 0.0);
-    ok &= (p[29] >= 0.0);
+    ok &= (p[30] >= 0.0);
     return ok;
 }
 
@@ -758,7 +764,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 30)
+          & all_finite((const ql_real *)params, 31)
           & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

@@ -123,6 +123,7 @@ GUIDANCE_DOCUMENTED = {
     "level_time": _positive, "cut_time": _nonnegative, "aim_height": _nonnegative,
     "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
     "descent_leash": _nonnegative, "leash_height": _nonnegative, "calm_tilt": _nonnegative,
+    "withdraw_height": _finite,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

@@ -156,8 +156,9 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, pivot_h, 26, 0) &&
     AT(qlf_guidance_params, descent_leash, 27, 0) &&
     AT(qlf_guidance_params, leash_height, 28, 0) &&
-    AT(qlf_guidance_params, calm_tilt, 29, 0) &&
-    sizeof(qlf_guidance_params) == 30 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, withdraw_height, 29, 0) &&
+    AT(qlf_guidance_params, calm_tilt, 30, 0) &&
+    sizeof(qlf_guidance_params) == 31 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -190,12 +191,13 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[30] = {
+static const qlf_real default_p_guid[31] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
     0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
-    0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, 3.141592653589793f,
+    0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, -1000.0f,
+    3.141592653589793f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -467,6 +469,7 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   pivot_h                  >= 0
  *   descent_leash            >= 0
  *   leash_height             >= 0
+ *   withdraw_height          finite
  *   calm_tilt                >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
@@ -567,7 +570,10 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[28]) && (p[28] >= 0.0f))) {
         bad = "leash_height";
     }
-    if (!bad && !(isfinite(p[29]) && (p[29] >= 0.0f))) {
+    if (!bad && !(isfinite(p[29]))) {
+        bad = "withdraw_height";
+    }
+    if (!bad && !(isfinite(p[30]) && (p[30] >= 0.0f))) {
         bad = "calm_tilt";
     }
     if (bad_field) {
@@ -680,7 +686,7 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[26] >= 0.0f);
     ok &= (p[27] >= 0.0f);
     ok &= (p[28] >= 0.0f);
-    ok &= (p[29] >= 0.0f);
+    ok &= (p[30] >= 0.0f);
     return ok;
 }
 
@@ -758,7 +764,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 30)
+          & all_finite((const qlf_real *)params, 31)
           & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }

@@ -220,6 +220,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                "quadrotor down (0: no limit)", lo=0.0, hi=1e3, default=0.0),
         "leash_height": Field(F, "m", "height above touchdown below which descent_leash holds",
                               lo=0.0, hi=1e3, default=1e3),
+        "withdraw_height": Field(F, "m", "reference height above touchdown at or below which "
+                                 "a rising deck no longer withdraws the committed descent "
+                                 "(-1000: it does everywhere)", lo=-1e3, hi=1e3,
+                                 default=-1e3),
         "calm_tilt_deg": Field(F, "deg", "largest angle between the deck's normal predicted at "
                                "the contact and the flare's worst lean at which the final "
                                "descent commits (180: no limit)", lo=0.0, hi=180.0,

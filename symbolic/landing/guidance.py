@@ -79,7 +79,9 @@ band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
-by one. Above the wait height a moving deck aborts nothing.
+by one, unless the reference is at or below ``withdraw_height`` above
+touchdown (the default, -1000 m, never is: the withdrawal holds down to the
+contact). Above the wait height a moving deck aborts nothing.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -180,6 +182,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "down (0: no limit)"),
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
+    Field("withdraw_height", 1, "m", "reference height above touchdown at or below which a "
+          "rising deck no longer withdraws the committed descent (-1000: it does everywhere)"),
     Field("calm_tilt", 1, "rad", "largest angle, predicted at the contact, between the deck's "
           "normal and the flare's worst lean at which the final descent commits (pi: no "
           "limit)"),
@@ -373,8 +377,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     crawl = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5),
-                          deck_rise > p["max_deck_rise"])
+    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
+        deck_rise > p["max_deck_rise"], z_ref - p["touchdown_height"] > p["withdraw_height"]))
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
