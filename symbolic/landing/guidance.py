@@ -68,7 +68,11 @@ abort): a calm window. The step whose fall reaches the wait
 height commits when the window is calm then, so that a deck at rest (a car's
 roof) commits without a pause. The averages the prediction keeps are updated
 at every step before touchdown and held on the deck. (The commit to the final
-descent is not the committed crawl: the crawl is its last part.)
+descent is not the committed crawl: the crawl is its last part.) With the deck
+tilt's cues (the flight code's step passes them) the window must also be calm
+in tilt: the deck's normal, predicted at the contact, within ``calm_tilt`` of
+the flare's worst lean (:mod:`quadland_symbolic.landing.deck_tilt`; ``pi``,
+the default, always is).
 
 **Abort.** In the committed crawl, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
