@@ -224,16 +224,18 @@ def _glide(z, target, p, dt):
     return z + ca.fmin(ca.fmax(target - z, -step), step)
 
 
-def _calm(g, p, deck_rise, deck_rise_rate, dt):
-    """The quiescence averages after the step (held on the deck) and whether the deck's
-    vertical speed predicted over commit_horizon stays within calm_speed and max_deck_rise
-    (so that a commit is never its own abort)."""
+def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt):
+    """The quiescence and deck tilt averages after the step (held on the deck) and whether
+    the deck's vertical speed predicted over commit_horizon stays within calm_speed and
+    max_deck_rise (so that a commit is never its own abort) and its tilt within
+    calm_tilt (:func:`_tilt_calm`)."""
     xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
     xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
     speed = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
                             p["commit_horizon"])
-    return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
-            speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
+    xt_held, tilt_calm = _tilt_calm(g, p, tilt, dt)
+    return (ca.vertcat(ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next), xt_held),
+            ca.logic_and(speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]), tilt_calm))
 
 
 def _tilt_calm(g, p, tilt, dt):
@@ -328,30 +330,28 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
 
     Parameters
     ----------
-    xg : casadi.SX, (7,)
+    xg : casadi.SX
         :data:`GUIDANCE_STATE` at the start of the step.
     p_e, v_e : casadi.SX, (3,)
         Relative position and velocity in the deck frame, m, m/s.
     deck_rise, deck_rise_rate : casadi.SX
         The deck's vertical velocity at the pad, m/s (up), and its rate, m/s^2.
-    cues : casadi.SX, (2,)
-        :data:`GUIDANCE_CUES`: the touchdown verdict and the marker's age.
-    dt : casadi.SX
-        Step length, s.
-    p_guid : casadi.SX
-        :data:`GUIDANCE_PARAMS`.
+    cues : casadi.SX, (3,)
+        :data:`GUIDANCE_CUES`: the touchdown verdict, the marker's age, the contact switch.
+    dt, p_guid : casadi.SX
+        Step length, s; :data:`GUIDANCE_PARAMS`.
     tilt : casadi.SX, (8,), optional
-        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` for the commit's deck tilt
-        condition (``calm_tilt``); without it the condition holds and its averages stay.
+        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``); without it
+        the commit's tilt condition holds and its averages stay.
 
     Returns
     -------
-    xg_next : casadi.SX, (7,)
-    reference : casadi.SX, (13,)
+    xg_next : casadi.SX
+    reference : casadi.SX
         :data:`POSITION_REFERENCE` for the step, the touchdown policy's commands with it.
     """
-    g, p = GUIDANCE_STATE.unpack(xg), GUIDANCE_PARAMS.unpack(p_guid)
-    c = GUIDANCE_CUES.unpack(cues)
+    g, p, c = (L.unpack(v) for L, v in ((GUIDANCE_STATE, xg), (GUIDANCE_PARAMS, p_guid),
+                                        (GUIDANCE_CUES, cues)))
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
     offset, speed = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2])
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
@@ -368,9 +368,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
-    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt)
-    xt_held, tilt_calm = _tilt_calm(g, p, tilt, dt)
-    calm = ca.logic_and(calm, tilt_calm)
+    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt)
     z_fall = z_ref - _descent_rate(z_ref - p["touchdown_height"], p) * dt
     wait = p["touchdown_height"] + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
@@ -405,8 +403,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                        descending_next=phase_next == DESCEND, timer_next=timer_next,
                        z=p_e[2]), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
-                      committed_next, _armed_next(c, g, in_descend, phase_next), xq_held,
-                      xt_held), \
+                      committed_next, _armed_next(c, g, in_descend, phase_next), xq_held), \
         reference
 
 
