@@ -38,6 +38,10 @@ LEASH, CRAWL = 0.02, 0.3
 #: The guidance before the ships' leash, and the leash in the crawl (``ship``'s TOML; on
 #: ``ship_ss5`` measured, not shipped: docs/landing.md).
 NO_LEASH = ["landing.descent_leash=0.0", "landing.leash_height=1000.0"]
+#: The commit of before the thirteenth session (``ship_ss5`` since withdraws nothing in the
+#: crawl and waits for the deck's tilt: docs/landing.md, "ship_ss5: the deck's roll at the
+#: contact and the withdrawals in the crawl"); the rows below are flown on it.
+COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0"]
 CRAWL_LEASH = [f"landing.descent_leash={LEASH}", "landing.leash_height=0.3"]
 #: The touchdown height (the gear, m) and one step, s, of the by-hand steps below.
 TOUCHDOWN, DT = 0.2, 0.1
@@ -82,11 +86,12 @@ def test_the_leash_holds_only_below_its_height(z_ref, z, leash_height, expected)
 
 def _fly(name, seed, index, *overrides):
     """Run ``index`` of ``name``'s campaign on campaign seed ``seed`` (None: the default),
-    its draw replayed on the pad of before (:data:`PAD_BEFORE`): the flight and its
-    touchdown report."""
+    its draw replayed on the pad of before (:data:`PAD_BEFORE`) and the commit of before
+    (:data:`COMMIT_BEFORE`): the flight and its touchdown report."""
     base = [] if seed is None else [f"campaign.seed={seed}"]
     d = draws(campaign_spec_of(load_scenario(name, base)), [index])[0]
-    res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), PAD_BEFORE, *overrides]))
+    res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), PAD_BEFORE,
+                                                 *COMMIT_BEFORE, *overrides]))
     return res, touchdown_report(res)
 
 
