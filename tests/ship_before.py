@@ -16,3 +16,9 @@ NO_FLARE = ['touchdown.policy="idle"', "touchdown.flare_height=0.15",
 #: eleventh session (docs/landing.md, "The nested marker on highway_100 and ship_ss5");
 #: ``ship`` has none, so the key leaves its flights as they are.
 PAD_BEFORE = "sensors.vision.small_range_max=0.0"
+
+#: The commit of before the thirteenth session: ``ship_ss5`` since withdraws nothing in the
+#: crawl and waits for the deck's tilt at the contact (docs/landing.md, "ship_ss5: the
+#: deck's roll at the contact and the withdrawals in the crawl"); ``ship`` takes the
+#: defaults, so the keys leave its flights as they are.
+COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0"]

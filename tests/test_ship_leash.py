@@ -18,7 +18,7 @@ wherever the filter's height is more than the leash above it.
 import numpy as np
 import pytest
 from reference import GUIDANCE_P
-from ship_before import PAD_BEFORE
+from ship_before import COMMIT_BEFORE, PAD_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -38,10 +38,6 @@ LEASH, CRAWL = 0.02, 0.3
 #: The guidance before the ships' leash, and the leash in the crawl (``ship``'s TOML; on
 #: ``ship_ss5`` measured, not shipped: docs/landing.md).
 NO_LEASH = ["landing.descent_leash=0.0", "landing.leash_height=1000.0"]
-#: The commit of before the thirteenth session (``ship_ss5`` since withdraws nothing in the
-#: crawl and waits for the deck's tilt: docs/landing.md, "ship_ss5: the deck's roll at the
-#: contact and the withdrawals in the crawl"); the rows below are flown on it.
-COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0"]
 CRAWL_LEASH = [f"landing.descent_leash={LEASH}", "landing.leash_height=0.3"]
 #: The touchdown height (the gear, m) and one step, s, of the by-hand steps below.
 TOUCHDOWN, DT = 0.2, 0.1
