@@ -122,8 +122,8 @@ GUIDANCE_DOCUMENTED = {
     "flare_tilt": lambda v, p: (v > 0) & (v < math.pi / 2), "hold_time": _nonnegative,
     "level_time": _positive, "cut_time": _nonnegative, "aim_height": _nonnegative,
     "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
-    "descent_leash": _nonnegative, "leash_height": _nonnegative, "calm_tilt": _nonnegative,
-    "withdraw_height": _finite,
+    "descent_leash": _nonnegative, "leash_height": _nonnegative, "withdraw_height": _finite,
+    "calm_tilt": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -500,7 +500,7 @@ int main(int argc, char **argv)
     static ql_landing_params defaults, params;
     static ql_landing_state state, before;
     ql_guidance_params gdefaults, gp;
-    ql_guidance_state gs, gbefore;
+    static ql_guidance_state gs, gbefore;   /* the averages and flags the driver sets not: 0 */
     ql_guidance_cues cues;
     ql_landing_measurement y;
     ql_position_reference ref;
