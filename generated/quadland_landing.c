@@ -119,8 +119,12 @@ typedef char guidance_state_is_its_layout[
     AT(ql_guidance_state, armed, 3, 0) &&
     AT(ql_guidance_state, ms_rise, 4, 0) &&
     AT(ql_guidance_state, ms_rise_rate, 5, 0) &&
-    AT(ql_guidance_state, phase, 6, 0) &&
-    AT(ql_guidance_state, aborts, 6, 1) &&
+    AT(ql_guidance_state, ms_tilt_rate, 6, 0) &&
+    AT(ql_guidance_state, ms_tilt_acc, 7, 0) &&
+    AT(ql_guidance_state, lean_x, 8, 0) &&
+    AT(ql_guidance_state, lean_y, 9, 0) &&
+    AT(ql_guidance_state, phase, 10, 0) &&
+    AT(ql_guidance_state, aborts, 10, 1) &&
     1 ? 1 : -1];
 typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, hover_height, 0, 0) &&
@@ -152,7 +156,9 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, pivot_h, 26, 0) &&
     AT(ql_guidance_params, descent_leash, 27, 0) &&
     AT(ql_guidance_params, leash_height, 28, 0) &&
-    sizeof(ql_guidance_params) == 29 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, withdraw_height, 29, 0) &&
+    AT(ql_guidance_params, calm_tilt, 30, 0) &&
+    sizeof(ql_guidance_params) == 31 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -185,12 +191,13 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[29] = {
+static const ql_real default_p_guid[31] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
-    0.0, 0.0, 0.0, 0.05, 1000.0,
+    0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
+    3.141592653589793,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -462,6 +469,8 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   pivot_h                  >= 0
  *   descent_leash            >= 0
  *   leash_height             >= 0
+ *   withdraw_height          finite
+ *   calm_tilt                >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -561,6 +570,12 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[28]) && (p[28] >= 0.0))) {
         bad = "leash_height";
     }
+    if (!bad && !(isfinite(p[29]))) {
+        bad = "withdraw_height";
+    }
+    if (!bad && !(isfinite(p[30]) && (p[30] >= 0.0))) {
+        bad = "calm_tilt";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -637,7 +652,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 29 comparisons. The values are known to be finite; no names and no
+ * 30 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -671,6 +686,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[26] >= 0.0);
     ok &= (p[27] >= 0.0);
     ok &= (p[28] >= 0.0);
+    ok &= (p[30] >= 0.0);
     return ok;
 }
 
@@ -723,8 +739,8 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            const ql_guidance_params *params, ql_real dt,
                            ql_guidance_state *state, ql_position_reference *ref)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[8], res_v[24];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y], CasADi's guidance state; res_v = [xg_next, ref]. */
+    ql_real xg[12], res_v[28];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -743,9 +759,13 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[5] = state->armed;
     xg[6] = state->ms_rise;
     xg[7] = state->ms_rise_rate;
+    xg[8] = state->ms_tilt_rate;
+    xg[9] = state->ms_tilt_acc;
+    xg[10] = state->lean_x;
+    xg[11] = state->lean_y;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 29)
-          & all_finite(xg, 8) & (isfinite(dt) != 0))) {
+          & all_finite((const ql_real *)params, 31)
+          & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
     if (!(dt > 0) || state->phase < QL_PHASE_APPROACH || state->phase > QL_PHASE_LANDED
@@ -761,9 +781,9 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     arg[3] = &dt;
     arg[4] = (const ql_real *)params;
     res[0] = res_v + 0;
-    res[1] = res_v + 8;
+    res[1] = res_v + 12;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 24)) {
+    if (!all_finite(res_v, 28)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -774,7 +794,11 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     state->armed = res_v[5];
     state->ms_rise = res_v[6];
     state->ms_rise_rate = res_v[7];
-    memcpy(ref, res_v + 8, sizeof *ref);
+    state->ms_tilt_rate = res_v[8];
+    state->ms_tilt_acc = res_v[9];
+    state->lean_x = res_v[10];
+    state->lean_y = res_v[11];
+    memcpy(ref, res_v + 12, sizeof *ref);
     return QL_OK;
 }
 

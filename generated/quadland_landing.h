@@ -22,7 +22,7 @@ extern "C" {
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QL_LANDING_PARAMS_SIZE 132               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 89                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 29               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 31               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
 #define QL_LANDING_PLANT_NP 335                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -163,6 +163,10 @@ typedef struct {
     ql_real armed;                   /* 0/1: 1 once the gear's contact switch has read open in this descent (only then does its closing count as the touchdown) */
     ql_real ms_rise;                 /* m^2/s^2: exponential average of the deck's vertical velocity squared */
     ql_real ms_rise_rate;            /* m^2/s^4: exponential average of the deck's vertical acceleration squared */
+    ql_real ms_tilt_rate;            /* 1/s^2: exponential average of the squared rate of the deck normal's horizontal part */
+    ql_real ms_tilt_acc;             /* 1/s^4: exponential average of the squared acceleration of the deck normal's horizontal part */
+    ql_real lean_x;                  /* -: exponential average of the body z axis's x component in E */
+    ql_real lean_y;                  /* -: exponential average of the body z axis's y component in E */
     int phase;                       /* -: phase: QL_PHASE_APPROACH .. QL_PHASE_LANDED */
     int aborts;                      /* -: aborted descents so far */
 } ql_guidance_state;
@@ -198,6 +202,8 @@ typedef struct {
     ql_real pivot_h;                 /* m: the pivot's height below the centre of mass (0: none) */
     ql_real descent_leash;           /* m: how far the falling reference may lead the quadrotor down (0: no limit) */
     ql_real leash_height;            /* m: reference height above touchdown below which the leash holds (above it the reference falls free) */
+    ql_real withdraw_height;         /* m: reference height above touchdown at or below which a rising deck no longer withdraws the committed descent (-1000: it does everywhere) */
+    ql_real calm_tilt;               /* rad: largest angle, predicted at the contact, between the deck's normal and the flare's worst lean at which the final descent commits (pi: no limit) */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */

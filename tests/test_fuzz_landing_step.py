@@ -122,7 +122,8 @@ GUIDANCE_DOCUMENTED = {
     "flare_tilt": lambda v, p: (v > 0) & (v < math.pi / 2), "hold_time": _nonnegative,
     "level_time": _positive, "cut_time": _nonnegative, "aim_height": _nonnegative,
     "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
-    "descent_leash": _nonnegative, "leash_height": _nonnegative,
+    "descent_leash": _nonnegative, "leash_height": _nonnegative, "withdraw_height": _finite,
+    "calm_tilt": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -178,8 +179,9 @@ class _Harness:
         self.v_cues = _view(self.cues, d)
         self.v_y, self.v_ref, self.v_p = _view(self.y, d), _view(self.ref, d), _view(self.params, d)
         self.v_state, self.v_gp = _view(self.state, d), _view(self.gp, d)
-        # timer, z_ref, committed, armed, ms_rise, ms_rise_rate (the ints follow)
-        self.v_g = _view(self.gs, d, 6)
+        # timer, z_ref, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc,
+        # lean_x, lean_y (the ints follow)
+        self.v_g = _view(self.gs, d, 10)
         self.v_out = _view(self.out, d, landing_output_layout(L).size)
         o = landing_output_layout(L).offsets()
         self.o = {n: slice(*o[n]) for n in ("F_cmd", "wrench", "tilt")}
@@ -262,7 +264,9 @@ class _Harness:
         self.gs.aborts = int(rng.integers(4)) if rng.uniform() < 0.9 else \
             int(rng.choice((-1, MAX_ABORTS, MAX_ABORTS + 1)))
         self.v_g[:] = [rng.uniform(0, 2), rng.uniform(-0.5, 4), rng.integers(2),
-                       rng.integers(2), rng.uniform(0, 1), rng.uniform(0, 3)]
+                       rng.integers(2), rng.uniform(0, 1), rng.uniform(0, 3),
+                       rng.uniform(0, 0.01), rng.uniform(0, 0.03), rng.uniform(-0.3, 0.3),
+                       rng.uniform(-0.3, 0.3)]
         # the touchdown verdict (0, 1 or a non-flag), the marker's age (seen or not), the
         # contact switch (0, 1 or a non-flag)
         self.v_cues[:] = [rng.choice((0.0, 1.0, rng.normal())), rng.choice((0.0, 0.4, 3.0)),
@@ -428,7 +432,8 @@ def _check_guidance(h, rng, counts, oracle):
     if oracle is not None:                              # the CasADi function, double only
         xg_next, r = (np.asarray(v, dtype=float).ravel() for v in oracle(xg, y, cues, dt, gp))
         np.testing.assert_array_equal([h.gs.phase, h.gs.aborts], xg_next[[0, 3]])
-        np.testing.assert_allclose(h.v_g.astype(float), xg_next[[1, 2, 4, 5, 6, 7]], rtol=1e-12)
+        np.testing.assert_allclose(h.v_g.astype(float), xg_next[[1, 2, 4, 5, 6, 7, 8, 9, 10, 11]],
+                                   rtol=1e-12)
         np.testing.assert_allclose(ref, r, rtol=1e-12, atol=1e-300)
     counts["moved"] += h.gs.phase != phase
 
@@ -495,7 +500,7 @@ int main(int argc, char **argv)
     static ql_landing_params defaults, params;
     static ql_landing_state state, before;
     ql_guidance_params gdefaults, gp;
-    ql_guidance_state gs, gbefore;
+    static ql_guidance_state gs, gbefore;   /* the averages and flags the driver sets not: 0 */
     ql_guidance_cues cues;
     ql_landing_measurement y;
     ql_position_reference ref;

@@ -290,7 +290,10 @@ def test_cues_equal_their_casadi_function_and_refuse_bad_parameters():
                                       z_ref=c.s["gs"].z_ref, aborts=c.s["gs"].aborts,
                                       committed=c.s["gs"].committed, armed=c.s["gs"].armed,
                                       ms_rise=c.s["gs"].ms_rise,
-                                      ms_rise_rate=c.s["gs"].ms_rise_rate))
+                                      ms_rise_rate=c.s["gs"].ms_rise_rate,
+                                      ms_tilt_rate=c.s["gs"].ms_tilt_rate,
+                                      ms_tilt_acc=c.s["gs"].ms_tilt_acc,
+                                      lean_x=c.s["gs"].lean_x, lean_y=c.s["gs"].lean_y))
         assert c() == STATUS["QL_OK"]
         want = np.asarray(f(c.v["y"], c.v["range"], c.v["imu"], np.array(c.F[:]), xg,
                             c.v["gp"], c.v["quad"]), dtype=float).ravel()

@@ -72,7 +72,9 @@ def _full_state(sc, point, z, mem, psi2, t=0.0):
     x1q = QUAD6_STATE.pack(dict(p1=p1, eta1=eta1, V1=zs["V1"], Omega1=zs["Omega1"], F=zs["F"]))
     xg = GUIDANCE_STATE.pack(dict(phase=ALIGN, timer=0.0,
                                   z_ref=sc.data["landing"]["hover_height"], aborts=0.0,
-                                  committed=0.0, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0))
+                                  committed=0.0, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0,
+                                  lean_x=0.0, lean_y=0.0))
     xc = landing_loop_memory(lv.l).pack(dict(xg=xg, mem=mem))
     return LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(3))), xc
 

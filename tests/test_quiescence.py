@@ -130,7 +130,9 @@ def _descend(deck, n, z_ref=1.5):
     """A quadrotor on the reference over the pad from a descent at z_ref; deck(k) -> (v, a)
     the deck's rise and its rate. Returns z_ref, committed and aborts per step."""
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
-                                  committed=0, armed=0.0, ms_rise=0, ms_rise_rate=0))
+                                  committed=0, armed=0.0, ms_rise=0, ms_rise_rate=0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0,
+                                  lean_x=0.0, lean_y=0.0))
     pg, cues = GUIDANCE_PARAMS.pack(P), GUIDANCE_CUES.pack(
         dict(touchdown=0, marker_age=0, contact_switch=0.0))
     out = []
@@ -179,7 +181,9 @@ def test_a_rising_deck_after_the_commit_aborts_back_to_the_wait_height():
     descent goes on uncommitted, its reference climbs at descent_speed back to the wait
     height, and commits again when calm."""
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.6, aborts=0, committed=1,
-                                  armed=0.0, ms_rise=0, ms_rise_rate=0))
+                                  armed=0.0, ms_rise=0, ms_rise_rate=0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0,
+                                  lean_x=0.0, lean_y=0.0))
     pg, cues = GUIDANCE_PARAMS.pack(P), GUIDANCE_CUES.pack(
         dict(touchdown=0, marker_age=0, contact_switch=0.0))
     zs = []

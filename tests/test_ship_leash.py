@@ -18,7 +18,7 @@ wherever the filter's height is more than the leash above it.
 import numpy as np
 import pytest
 from reference import GUIDANCE_P
-from ship_before import GATES_BEFORE, PAD_BEFORE
+from ship_before import COMMIT_BEFORE, GATES_BEFORE, PAD_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -48,7 +48,9 @@ def _z_next(z_ref, z, leash_height):
     ``z_ref``, the quadrotor at height ``z`` and at rest horizontally, on a 2 cm leash that
     holds below ``leash_height`` above touchdown."""
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
-                                  committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0))
+                                  committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0,
+                                  lean_x=0.0, lean_y=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=TOUCHDOWN, descent_leash=LEASH,
                                    leash_height=leash_height))
@@ -80,13 +82,12 @@ def test_the_leash_holds_only_below_its_height(z_ref, z, leash_height, expected)
 
 def _fly(name, seed, index, *overrides):
     """Run ``index`` of ``name``'s campaign on campaign seed ``seed`` (None: the default),
-    its draw replayed on the pad and the gates of before (:data:`PAD_BEFORE`,
-    :data:`GATES_BEFORE`): the flight and its
-    touchdown report."""
+    its draw replayed on the pad, the gates and the commit of before (:data:`PAD_BEFORE`,
+    :data:`GATES_BEFORE`, :data:`COMMIT_BEFORE`): the flight and its touchdown report."""
     base = [] if seed is None else [f"campaign.seed={seed}"]
     d = draws(campaign_spec_of(load_scenario(name, base)), [index])[0]
     res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), PAD_BEFORE, *GATES_BEFORE,
-                                                   *overrides]))
+                                                 *COMMIT_BEFORE, *overrides]))
     return res, touchdown_report(res)
 
 

@@ -119,8 +119,12 @@ typedef char guidance_state_is_its_layout[
     AT(qlf_guidance_state, armed, 3, 0) &&
     AT(qlf_guidance_state, ms_rise, 4, 0) &&
     AT(qlf_guidance_state, ms_rise_rate, 5, 0) &&
-    AT(qlf_guidance_state, phase, 6, 0) &&
-    AT(qlf_guidance_state, aborts, 6, 1) &&
+    AT(qlf_guidance_state, ms_tilt_rate, 6, 0) &&
+    AT(qlf_guidance_state, ms_tilt_acc, 7, 0) &&
+    AT(qlf_guidance_state, lean_x, 8, 0) &&
+    AT(qlf_guidance_state, lean_y, 9, 0) &&
+    AT(qlf_guidance_state, phase, 10, 0) &&
+    AT(qlf_guidance_state, aborts, 10, 1) &&
     1 ? 1 : -1];
 typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, hover_height, 0, 0) &&
@@ -152,7 +156,9 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, pivot_h, 26, 0) &&
     AT(qlf_guidance_params, descent_leash, 27, 0) &&
     AT(qlf_guidance_params, leash_height, 28, 0) &&
-    sizeof(qlf_guidance_params) == 29 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, withdraw_height, 29, 0) &&
+    AT(qlf_guidance_params, calm_tilt, 30, 0) &&
+    sizeof(qlf_guidance_params) == 31 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -185,12 +191,13 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[29] = {
+static const qlf_real default_p_guid[31] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
     0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
-    0.0f, 0.0f, 0.0f, 0.05f, 1000.0f,
+    0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, -1000.0f,
+    3.141592653589793f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -462,6 +469,8 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   pivot_h                  >= 0
  *   descent_leash            >= 0
  *   leash_height             >= 0
+ *   withdraw_height          finite
+ *   calm_tilt                >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -561,6 +570,12 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[28]) && (p[28] >= 0.0f))) {
         bad = "leash_height";
     }
+    if (!bad && !(isfinite(p[29]))) {
+        bad = "withdraw_height";
+    }
+    if (!bad && !(isfinite(p[30]) && (p[30] >= 0.0f))) {
+        bad = "calm_tilt";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -637,7 +652,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 29 comparisons. The values are known to be finite; no names and no
+ * 30 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -671,6 +686,7 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[26] >= 0.0f);
     ok &= (p[27] >= 0.0f);
     ok &= (p[28] >= 0.0f);
+    ok &= (p[30] >= 0.0f);
     return ok;
 }
 
@@ -723,8 +739,8 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
                              const qlf_guidance_params *params, qlf_real dt,
                              qlf_guidance_state *state, qlf_position_reference *ref)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate], CasADi's guidance state; res_v = [xg_next, ref]. */
-    qlf_real xg[8], res_v[24];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y], CasADi's guidance state; res_v = [xg_next, ref]. */
+    qlf_real xg[12], res_v[28];
     const qlf_real *arg[qlf_casadi_landing_guidance_SZ_ARG];
     qlf_real *res[qlf_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[qlf_casadi_landing_guidance_SZ_IW + 1];
@@ -743,9 +759,13 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[5] = state->armed;
     xg[6] = state->ms_rise;
     xg[7] = state->ms_rise_rate;
+    xg[8] = state->ms_tilt_rate;
+    xg[9] = state->ms_tilt_acc;
+    xg[10] = state->lean_x;
+    xg[11] = state->lean_y;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 29)
-          & all_finite(xg, 8) & (isfinite(dt) != 0))) {
+          & all_finite((const qlf_real *)params, 31)
+          & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }
     if (!(dt > 0) || state->phase < QLF_PHASE_APPROACH || state->phase > QLF_PHASE_LANDED
@@ -761,9 +781,9 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     arg[3] = &dt;
     arg[4] = (const qlf_real *)params;
     res[0] = res_v + 0;
-    res[1] = res_v + 8;
+    res[1] = res_v + 12;
     qlf_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 24)) {
+    if (!all_finite(res_v, 28)) {
         return QLF_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -774,7 +794,11 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     state->armed = res_v[5];
     state->ms_rise = res_v[6];
     state->ms_rise_rate = res_v[7];
-    memcpy(ref, res_v + 8, sizeof *ref);
+    state->ms_tilt_rate = res_v[8];
+    state->ms_tilt_acc = res_v[9];
+    state->lean_x = res_v[10];
+    state->lean_y = res_v[11];
+    memcpy(ref, res_v + 12, sizeof *ref);
     return QLF_OK;
 }
 

@@ -57,6 +57,7 @@ from quadland_symbolic.landing.attitude import thrust_attitude
 from quadland_symbolic.landing.bias import learning_gate
 from quadland_symbolic.landing.command_filter import command_filter, linear2_zoh
 from quadland_symbolic.landing.deck import DECK_POSE, time_derivative
+from quadland_symbolic.landing.deck_tilt import tilt_cues
 from quadland_symbolic.landing.desaturation import clip_forces, clipped_count, thrust_within_moments
 from quadland_symbolic.landing.guidance import (
     GUIDANCE_CUES,
@@ -79,8 +80,7 @@ __all__ = [
     "NETWORK_INPUT_DIM",
     "LANDING_MEASUREMENT",
     "landing_controller_params",
-    "landing_memory", "landing_step_outputs",
-    "deck_rates",
+    "landing_memory", "landing_step_outputs", "deck_rates",
     "known_acceleration",
     "known_acceleration_function",
     "landing_law",
@@ -472,13 +472,13 @@ def landing_guidance(xg, y, cues, dt, p_guid):
     The step is :func:`~quadland_symbolic.landing.guidance.guidance_step`: the
     relative position and velocity are the measurement's, the deck's rise is the
     pad velocity's vertical component ``v2E[2]`` and its rate the acceleration's
-    ``a2E[2]``, ``cues`` (:data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`)
-    the touchdown verdict and the marker's age (:func:`measured_cues` on perfect sensing).
-    Returns ``(xg_next, reference)``.
-    """
+    ``a2E[2]``, ``cues`` (:data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`) the
+    touchdown verdict and the marker's age (:func:`measured_cues` on perfect sensing), the
+    deck tilt's cues the measurement's (:func:`~.deck_tilt.tilt_cues`). Returns ``(xg_next,
+    reference)``."""
     ms = LANDING_MEASUREMENT.unpack(y)
     return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], ms["a2E"][2], cues, dt,
-                         p_guid)
+                         p_guid, tilt_cues(ms["eta1"], ms["eta2"], ms["w2E"], ms["w2E_dot"]))
 
 
 @functools.cache

@@ -68,7 +68,11 @@ abort): a calm window. The step whose fall reaches the wait
 height commits when the window is calm then, so that a deck at rest (a car's
 roof) commits without a pause. The averages the prediction keeps are updated
 at every step before touchdown and held on the deck. (The commit to the final
-descent is not the committed crawl: the crawl is its last part.)
+descent is not the committed crawl: the crawl is its last part.) With the deck
+tilt's cues (the flight code's step passes them) the window must also be calm
+in tilt: the deck's normal, predicted at the contact, within ``calm_tilt`` of
+the flare's worst lean (:mod:`quadland_symbolic.landing.deck_tilt`; ``pi``,
+the default, always is).
 
 **Abort.** In the committed crawl, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
@@ -79,7 +83,9 @@ band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
-by one. Above the wait height a moving deck aborts nothing.
+by one, unless the reference is at or below ``withdraw_height`` above
+touchdown (the default, -1000 m, never is: the withdrawal holds down to the
+contact). Above the wait height a moving deck aborts nothing.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -89,6 +95,15 @@ from __future__ import annotations
 
 import casadi as ca
 
+from quadland_symbolic.landing.deck_tilt import (
+    DECK_TILT_STATE,
+    TILT_CUES,
+    descent_duration,
+    relative_tilt_cos,
+    tilt_ahead,
+    tilt_frequency,
+    tilt_update,
+)
 from quadland_symbolic.landing.quiescence import (
     QUIESCENCE_STATE,
     deck_frequency,
@@ -130,6 +145,7 @@ GUIDANCE_STATE = Layout("xg", (
     Field("armed", 1, "0/1", "1 once the gear's contact switch has read open in this descent "
           "(only then does its closing count as the touchdown)"),
     *QUIESCENCE_STATE.fields,
+    *DECK_TILT_STATE.fields,
 ), "landing guidance state")
 
 #: The guidance's parameters (the [landing] keys of a landing scenario).
@@ -170,6 +186,11 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "down (0: no limit)"),
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
+    Field("withdraw_height", 1, "m", "reference height above touchdown at or below which a "
+          "rising deck no longer withdraws the committed descent (-1000: it does everywhere)"),
+    Field("calm_tilt", 1, "rad", "largest angle, predicted at the contact, between the deck's "
+          "normal and the flare's worst lean at which the final descent commits (pi: no "
+          "limit)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -203,16 +224,38 @@ def _glide(z, target, p, dt):
     return z + ca.fmin(ca.fmax(target - z, -step), step)
 
 
-def _calm(g, p, deck_rise, deck_rise_rate, dt):
-    """The quiescence averages after the step (held on the deck) and whether the deck's
-    vertical speed predicted over commit_horizon stays within calm_speed and max_deck_rise
-    (so that a commit is never its own abort)."""
+def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt):
+    """The quiescence and deck tilt averages after the step (held on the deck) and whether
+    the deck's vertical speed predicted over commit_horizon stays within calm_speed and
+    max_deck_rise (so that a commit is never its own abort) and its tilt within
+    calm_tilt (:func:`_tilt_calm`)."""
     xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
     xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
     speed = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
                             p["commit_horizon"])
-    return (ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next),
-            speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]))
+    xt_held, tilt_calm = _tilt_calm(g, p, tilt, dt)
+    return (ca.vertcat(ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next), xt_held),
+            ca.logic_and(speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]), tilt_calm))
+
+
+def _tilt_calm(g, p, tilt, dt):
+    """The deck tilt averages after the step (held on the deck) and whether the deck's
+    normal predicted at the contact (the profile's time from the wait height) lies within
+    calm_tilt of the flare's worst lean, toward the average lean
+    (:mod:`~quadland_symbolic.landing.deck_tilt`); without ``tilt`` the averages hold and
+    the condition is true."""
+    xt = ca.vertcat(*(g[n] for n in DECK_TILT_STATE.names()))
+    if tilt is None:
+        return xt, ca.SX(1)
+    c = TILT_CUES.unpack(tilt)
+    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], c["b_h"], dt, p["motion_time"])
+    lean = DECK_TILT_STATE.unpack(xt_next)
+    duration = descent_duration(p["commit_height"], p["descent_time"], p["touchdown_speed"],
+                                p["descent_speed"])
+    d_h = tilt_ahead(c["n_h"], c["n_h_dot"], tilt_frequency(xt_next), duration)
+    return (ca.if_else(g["phase"] >= TOUCHDOWN, xt, xt_next),
+            relative_tilt_cos(ca.vertcat(lean["lean_x"], lean["lean_y"]), d_h, p["flare_tilt"])
+            >= ca.cos(p["calm_tilt"]))
 
 
 def _touchdown_cue(c, g):
@@ -282,32 +325,33 @@ def _reference_height(z_ref, p, f, dt):
     return z_next, reference
 
 
-def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
+def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, tilt=None):
     """One guidance step of length ``dt`` (s).
 
     Parameters
     ----------
-    xg : casadi.SX, (7,)
+    xg : casadi.SX
         :data:`GUIDANCE_STATE` at the start of the step.
     p_e, v_e : casadi.SX, (3,)
         Relative position and velocity in the deck frame, m, m/s.
     deck_rise, deck_rise_rate : casadi.SX
         The deck's vertical velocity at the pad, m/s (up), and its rate, m/s^2.
-    cues : casadi.SX, (2,)
-        :data:`GUIDANCE_CUES`: the touchdown verdict and the marker's age.
-    dt : casadi.SX
-        Step length, s.
-    p_guid : casadi.SX
-        :data:`GUIDANCE_PARAMS`.
+    cues : casadi.SX, (3,)
+        :data:`GUIDANCE_CUES`: the touchdown verdict, the marker's age, the contact switch.
+    dt, p_guid : casadi.SX
+        Step length, s; :data:`GUIDANCE_PARAMS`.
+    tilt : casadi.SX, (8,), optional
+        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``); without it
+        the commit's tilt condition holds and its averages stay.
 
     Returns
     -------
-    xg_next : casadi.SX, (7,)
-    reference : casadi.SX, (13,)
+    xg_next : casadi.SX
+    reference : casadi.SX
         :data:`POSITION_REFERENCE` for the step, the touchdown policy's commands with it.
     """
-    g, p = GUIDANCE_STATE.unpack(xg), GUIDANCE_PARAMS.unpack(p_guid)
-    c = GUIDANCE_CUES.unpack(cues)
+    g, p, c = (L.unpack(v) for L, v in ((GUIDANCE_STATE, xg), (GUIDANCE_PARAMS, p_guid),
+                                        (GUIDANCE_CUES, cues)))
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
     offset, speed = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2])
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
@@ -324,7 +368,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
-    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt)
+    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt)
     z_fall = z_ref - _descent_rate(z_ref - p["touchdown_height"], p) * dt
     wait = p["touchdown_height"] + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
@@ -335,8 +379,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid):
     crawl = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5),
-                          deck_rise > p["max_deck_rise"])
+    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
+        deck_rise > p["max_deck_rise"], z_ref - p["touchdown_height"] > p["withdraw_height"]))
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,

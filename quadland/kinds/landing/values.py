@@ -170,7 +170,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         search_height=g["search_height"], commit_height=g["commit_height"],
         commit_horizon=g["commit_horizon"], calm_speed=g["calm_speed"],
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
-        leash_height=g["leash_height"],
+        leash_height=g["leash_height"], calm_tilt=np.radians(g["calm_tilt_deg"]),
+        withdraw_height=g["withdraw_height"],
         **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
@@ -193,7 +194,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
     mem[landing_memory(l).slice("eta_f")] = eta1[:2]
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
                                   aborts=0.0, committed=0.0, armed=0.0, ms_rise=0.0,
-                                  ms_rise_rate=0.0))
+                                  ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
+                                  lean_x=0.0, lean_y=0.0))
     xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
 

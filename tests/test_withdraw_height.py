@@ -1,0 +1,54 @@
+"""``withdraw_height``: where a rising deck no longer withdraws the committed descent
+(symbolic/landing/guidance.py), by hand on one guidance step."""
+
+import numpy as np
+import pytest
+from reference import GUIDANCE_P
+
+from quadland_symbolic.landing.guidance import (
+    DESCEND,
+    GUIDANCE_CUES,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    guidance_function,
+)
+
+DT = 0.004
+TOUCHDOWN = GUIDANCE_P["touchdown_height"]
+
+
+def _step(h, rise, withdraw_height):
+    """One step committed with the reference ``h`` above touchdown, the quadrotor on it,
+    at rest, the deck rising at ``rise``. Returns z_ref, committed and aborts after it."""
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=TOUCHDOWN + h, aborts=0,
+                                  committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
+    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, withdraw_height=withdraw_height))
+    xg_next, _ = guidance_function()(xg, [0.0, 0.0, TOUCHDOWN + h], [0.0, 0.0, 0.0], rise,
+                                     0.0, cues, DT, pg)
+    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
+    return g["z_ref"][0], g["committed"][0], g["aborts"][0]
+
+
+@pytest.mark.parametrize("rise", [GUIDANCE_P["max_deck_rise"] + 0.1, 1.5])
+def test_the_default_withdraws_down_to_the_contact(rise):
+    """-1000 m: a deck rising past max_deck_rise withdraws the commit in the crawl (0.1 m)
+    and below touchdown (-0.05 m): one abort, the reference glides up at descent_speed."""
+    for h in (0.1, -0.05, 0.6):
+        z, committed, aborts = _step(h, rise, -1e3)
+        assert (committed, aborts) == (0.0, 1.0)
+        assert z == pytest.approx(TOUCHDOWN + h + GUIDANCE_P["descent_speed"] * DT, rel=1e-12)
+
+
+def test_the_crawl_goes_on_below_the_withdraw_height():
+    """withdraw_height 0.3 m (the crawl, touchdown_speed x descent_time): at 0.1 m the
+    committed crawl goes on at touchdown_speed, no abort; at 0.6 m the commit is withdrawn
+    as before; a deck within max_deck_rise withdraws nothing anywhere."""
+    rise = GUIDANCE_P["max_deck_rise"] + 0.1
+    z, committed, aborts = _step(0.1, rise, 0.3)
+    assert (committed, aborts) == (1.0, 0.0)
+    assert z == pytest.approx(TOUCHDOWN + 0.1 - GUIDANCE_P["touchdown_speed"] * DT, rel=1e-12)
+    assert _step(0.3, rise, 0.3)[1:] == (1.0, 0.0)          # at the height: no withdrawal
+    assert _step(0.6, rise, 0.3)[1:] == (0.0, 1.0)
+    assert _step(0.6, GUIDANCE_P["max_deck_rise"] - 0.1, 0.3)[1:] == (1.0, 0.0)
