@@ -19,7 +19,8 @@ GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_sp
                   commit_height=1.0, commit_horizon=2.5, calm_speed=0.4, motion_time=20.0,
                   fly_on=0.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
                   level_time=0.3, cut_time=0.5, aim_height=0.3, pivot_x=0.0, pivot_y=0.0,
-                  pivot_h=0.0, descent_leash=0.0, leash_height=1e3)
+                  pivot_h=0.0, descent_leash=0.0, leash_height=1e3,
+                  contact_drop=0.0, crawl_pause=0.0)
 
 
 def euler_rate_matrix(phi, theta):

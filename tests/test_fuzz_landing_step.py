@@ -123,6 +123,7 @@ GUIDANCE_DOCUMENTED = {
     "level_time": _positive, "cut_time": _nonnegative, "aim_height": _nonnegative,
     "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
     "descent_leash": _nonnegative, "leash_height": _nonnegative,
+    "contact_drop": _nonnegative, "crawl_pause": lambda v, p: (v == 0) | (v == 1),
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

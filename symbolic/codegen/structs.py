@@ -391,6 +391,8 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "motion_time": _POSITIVE,
     "descent_leash": _NONNEGATIVE,
     "leash_height": _NONNEGATIVE,
+    "contact_drop": _NONNEGATIVE,
+    "crawl_pause": Range(choices=(0.0, 1.0)),
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

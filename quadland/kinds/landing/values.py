@@ -170,7 +170,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         search_height=g["search_height"], commit_height=g["commit_height"],
         commit_horizon=g["commit_horizon"], calm_speed=g["calm_speed"],
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
-        leash_height=g["leash_height"],
+        leash_height=g["leash_height"], crawl_pause=float(g["crawl_pause"]),
         **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
