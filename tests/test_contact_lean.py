@@ -1,6 +1,6 @@
 """The descent profile's contact height for a gear that meets the deck leaning
-(``touchdown.contact_lean_deg``; docs/landing.md, "highway_100: the crawl where the leaning
-gear meets the roof").
+(``touchdown.contact_lean_deg``; docs/landing.md, "highway_100: the observer and the
+leash").
 
 A body pitched ``th`` nose down meets a flat deck on its front feet, ``fx sin th + hc cos
 th`` below its centre, not ``hc``: on highway_100's gear (``fx`` 0.30 m, ``hc`` 0.15 m) at

@@ -202,8 +202,8 @@ def contact_height(p):
     """The centre's height above the pad at which the profile expects the contact, m:
     ``touchdown_height`` (the level gear below the centre) plus ``contact_drop`` (a body
     leaning ``th`` into the airflow meets the deck on its front feet, ``fx sin th + hc cos
-    th`` below its centre; docs/landing.md, "highway_100: the crawl where the leaning gear
-    meets the roof"). ``p`` the unpacked :data:`GUIDANCE_PARAMS`."""
+    th`` below its centre; docs/landing.md, "highway_100: the observer and the leash").
+    ``p`` the unpacked :data:`GUIDANCE_PARAMS`."""
     return p["touchdown_height"] + p["contact_drop"]
 
 
