@@ -158,7 +158,9 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, leash_height, 28, 0) &&
     AT(ql_guidance_params, withdraw_height, 29, 0) &&
     AT(ql_guidance_params, calm_tilt, 30, 0) &&
-    sizeof(ql_guidance_params) == 31 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, contact_drop, 31, 0) &&
+    AT(ql_guidance_params, crawl_pause, 32, 0) &&
+    sizeof(ql_guidance_params) == 33 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -191,13 +193,13 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[31] = {
+static const ql_real default_p_guid[33] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
-    3.141592653589793,
+    3.141592653589793, 0.0, 0.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -471,6 +473,8 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   leash_height             >= 0
  *   withdraw_height          finite
  *   calm_tilt                >= 0
+ *   contact_drop             >= 0
+ *   crawl_pause              0 or 1
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -576,6 +580,12 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[30]) && (p[30] >= 0.0))) {
         bad = "calm_tilt";
     }
+    if (!bad && !(isfinite(p[31]) && (p[31] >= 0.0))) {
+        bad = "contact_drop";
+    }
+    if (!bad && !(isfinite(p[32]) && ((p[32] == 0.0) || (p[32] == 1.0)))) {
+        bad = "crawl_pause";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -652,7 +662,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 30 comparisons. The values are known to be finite; no names and no
+ * 32 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -687,6 +697,8 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[27] >= 0.0);
     ok &= (p[28] >= 0.0);
     ok &= (p[30] >= 0.0);
+    ok &= (p[31] >= 0.0);
+    ok &= ((p[32] == 0.0) | (p[32] == 1.0));
     return ok;
 }
 
@@ -764,7 +776,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 31)
+          & all_finite((const ql_real *)params, 33)
           & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

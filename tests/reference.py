@@ -20,7 +20,8 @@ GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_sp
                   fly_on=0.0, flare_height=0.15, flare_tilt=0.6, hold_time=0.05,
                   level_time=0.3, cut_time=0.5, aim_height=0.3, pivot_x=0.0, pivot_y=0.0,
                   pivot_h=0.0, descent_leash=0.0, leash_height=1e3,
-                  withdraw_height=-1e3, calm_tilt=3.141592653589793)
+                  withdraw_height=-1e3, calm_tilt=3.141592653589793,
+                  contact_drop=0.0, crawl_pause=0.0)
 
 
 def euler_rate_matrix(phi, theta):
@@ -204,6 +205,12 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
     return exes
 
 
+#: highway_100's controller and descent before "highway_100: the observer and the leash"
+#: (docs/landing.md, thirteenth session): no disturbance observer, integral action on x and
+#: y, no leash; the replays measured on the twelfth's file pin it.
+HIGHWAY_100_TWELFTH = ["controller.observer_frequency=[0.0, 0.0, 0.0]",
+                       "controller.ki_p=[0.5, 0.5, 1.0]", "landing.descent_leash=0.0"]
+
 #: highway_100's airframe before issue 19's "An airframe made for highway_100"
 #: (docs/landing.md): the scenario as it was, bit for bit, for the reproducers that
 #: were measured on it (benchmarks/highway_100_road.toml pins the same keys), with its
@@ -221,4 +228,4 @@ HIGHWAY_100_OLD = ["quadrotor.thrust_to_weight=2.0", "controller_model.thrust_to
                    "estimator.vision_k_range=0.01", "estimator.q_at=[1e-06, 1e-06, 1e-06]",
                    "gear.slip_damping_max=300.0", "landing.dwell_time=1.0",
                    "touchdown.lock=magnet", "touchdown.level_time=0.1",
-                   "touchdown.cut_time=0.1"]
+                   "touchdown.cut_time=0.1", *HIGHWAY_100_TWELFTH]

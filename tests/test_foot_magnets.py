@@ -29,6 +29,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from reference import HIGHWAY_100_TWELFTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -149,7 +150,8 @@ def test_on_its_front_feet_only_the_front_magnets_pull(deg):
 def _run(index, *overrides):
     sc = load_scenario("highway_100")
     d = draws(campaign_spec_of(sc), [index])[0]
-    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *overrides]))
+    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HIGHWAY_100_TWELFTH,
+                                                          *overrides]))
     k0 = int(np.argmax(res["touched"] > 0.5))
     k4 = k0 + int(np.argmax(res["feet_down"][k0:] > 3.5))
     return dict(x0=float(res["x_e"][k0]), th=math.degrees(abs(float(res["theta1"][k0]))),

@@ -124,6 +124,7 @@ GUIDANCE_DOCUMENTED = {
     "pivot_x": _nonnegative, "pivot_y": _nonnegative, "pivot_h": _nonnegative,
     "descent_leash": _nonnegative, "leash_height": _nonnegative, "withdraw_height": _finite,
     "calm_tilt": _nonnegative,
+    "contact_drop": _nonnegative, "crawl_pause": lambda v, p: (v == 0) | (v == 1),
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+from reference import HIGHWAY_100_TWELFTH
 
 import quadland
 from quadland.scenario import load_scenario
@@ -81,7 +82,7 @@ def test_the_filter_follows_the_lane_change_on_the_default_seed():
     estimate is 0.72 m off and the quadrotor is flung 1.36 m (docs/landing.md,
     "highway_100: the lane change was the filter's")."""
     def flown(overrides):
-        r = quadland.simulate(load_scenario("highway_100", overrides))
+        r = quadland.simulate(load_scenario("highway_100", [*HIGHWAY_100_TWELFTH, *overrides]))
         t = r["t"]
         k12, k17 = np.searchsorted(t, 12.0), np.searchsorted(t, 17.0)
         w = slice(k12, k17 + 1)

@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 import pytest
+from reference import HIGHWAY_100_TWELFTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -137,7 +138,8 @@ def test_every_rotor_turns_the_body_against_the_pivot():
 def _flown(*overrides):
     """The quiet default seed: the contact's lean, the centre's speed along the road then,
     the time to every foot down, the centre's move by then and its slowest speed."""
-    sc = load_scenario("highway_100", [*QUIET, *TENTH, "touchdown.pivot_aim=0.0", *overrides])
+    sc = load_scenario("highway_100", [*QUIET, *HIGHWAY_100_TWELFTH, *TENTH,
+                                       "touchdown.pivot_aim=0.0", *overrides])
     res = quadland.simulate(sc)
     t = res["t"]
     k0 = int(np.argmax(res["touched"] > 0.5))
@@ -187,7 +189,8 @@ def _run(index, *overrides):
     its contact (x, lean), its rest (x) and its farthest foot at the end, its verdict."""
     sc = load_scenario("highway_100")
     d = draws(campaign_spec_of(sc), [index])[0]
-    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *TENTH, *overrides]))
+    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HIGHWAY_100_TWELFTH,
+                                                          *TENTH, *overrides]))
     k0 = int(np.argmax(res["touched"] > 0.5))
     return dict(x0=float(res["x_e"][k0]), th=math.degrees(abs(float(res["theta1"][k0]))),
                 rest=float(res["x_e"][-1]), foot=float(res["foot_offset"][-1]),

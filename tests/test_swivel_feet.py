@@ -26,6 +26,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from reference import HIGHWAY_100_TWELFTH
 
 from quadland.kinds.landing.gear import lock_params
 from quadland.scenario import load_scenario
@@ -208,7 +209,8 @@ def _replay(index, *overrides):
     from quadland.campaign.spec import campaign_spec_of
     from quadland.kinds.landing.report import touchdown_report
     d = draws(campaign_spec_of(load_scenario("highway_100")), [index])[0]
-    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *overrides]))
+    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HIGHWAY_100_TWELFTH,
+                                                          *overrides]))
     k0 = int(np.argmax(res["touched"] > 0.5))
     th = np.abs(res["theta1"])
     front = res["x_e"] + FX * np.cos(th) - H * np.sin(th)

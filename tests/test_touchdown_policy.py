@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from reference import GUIDANCE_P, HIGHWAY_100_OLD
+from reference import GUIDANCE_P, HIGHWAY_100_OLD, HIGHWAY_100_TWELFTH
 
 import quadland
 from quadland.kinds.landing.report import touchdown_report
@@ -311,13 +311,16 @@ def test_highway_100_lands_and_is_secured_where_the_rotor_cut_failed():
     drag's"; the aim is the flying-on policy's alone): it meets the deck 0.065 m behind
     the centre leaning 42.1 deg, its farthest foot 0.633 m out (0.649 m unaimed). With the
     magnets on swivelling feet (docs/landing.md, "highway_100: magnets on swivelling feet")
-    the aim is back on the centre and both policies meet the deck at 41.7 deg and land."""
+    the aim is back on the centre and both policies meet the deck at 41.7 deg and land
+    (these on the twelfth session's controller, ``HIGHWAY_100_TWELFTH``: without the
+    observer and the leash of docs/landing.md's "highway_100: the observer and the leash")."""
     tenth = ["touchdown.lock=magnet", "touchdown.level_time=0.1", "touchdown.cut_time=0.1",
              "touchdown.pivot_aim=0.3"]
     for policy, keys, tilt in (('"secure"', tenth, 42.11), ('"idle"', tenth, 41.68),
                                ('"secure"', [], 41.68), ('"idle"', [], 41.68)):
         new = touchdown_report(quadland.simulate(load_scenario(
-            "highway_100", ["sensors.enabled=false", f"touchdown.policy={policy}", *keys])))
+            "highway_100", ["sensors.enabled=false", f"touchdown.policy={policy}",
+                            *HIGHWAY_100_TWELFTH, *keys])))
         assert new.success and new.secured and not new.tipped
         assert new.tilt_deg == pytest.approx(tilt, abs=0.01)
     old = ["sensors.enabled=false", *HIGHWAY_100_OLD]

@@ -231,6 +231,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "calm_tilt_deg": Field(F, "deg", "the deck's normal predicted at the contact within "
                                "this of the flare's worst lean, or the final descent does "
                                "not commit (180: no limit)", lo=0.0, hi=180.0, default=180.0),
+        "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
+                             "descent above it does; false: the crawl is committed",
+                             default=False),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
@@ -299,6 +302,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                            "feet the aim point anticipates (0: none, 1: all)", lo=0.0, hi=1.0),
         "aim_height": Field(F, "m", "secure: reference height above touchdown from which the "
                             "aim point anticipates the pivot", lo=0.0, hi=100.0),
+        "contact_lean_deg": Field(F, "deg", "the pitch at which the descent profile expects "
+                                  "the gear to meet the deck: its crawl ends where the lowest "
+                                  "foot of a body pitched this much does (0: level)", lo=0.0,
+                                  hi=80.0, default=0.0),
         **LOCK_FIELDS,
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.

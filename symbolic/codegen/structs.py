@@ -393,6 +393,8 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "leash_height": _NONNEGATIVE,
     "withdraw_height": _FINITE,
     "calm_tilt": _NONNEGATIVE,
+    "contact_drop": _NONNEGATIVE,
+    "crawl_pause": Range(choices=(0.0, 1.0)),
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

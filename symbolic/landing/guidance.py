@@ -28,7 +28,9 @@ averages. Phases (:data:`PHASES`):
    descent_time``) is committed: it does not pause, so that the quadrotor
    never hovers within centimetres of the deck, where the land detector
    would read a hover as a touchdown; there a touchdown out of the limits is
-   aborted (below);
+   aborted (below). With ``crawl_pause`` the align band pauses the crawl too.
+   The heights above touchdown count from ``touchdown_height + contact_drop``
+   (:func:`contact_height`: where a body leaning into the airflow meets the deck);
 3. **touchdown**: entered from the descent when the flight stack reports
    the gear on the deck (:data:`GUIDANCE_CUES`' ``touchdown``: on perfect
    sensing the measured gear gap at or below zero, on sensors the land
@@ -119,7 +121,7 @@ from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["PHASES", "PHASE_DOCS", "APPROACH", "ALIGN", "DESCEND", "TOUCHDOWN", "LANDED",
            "GUIDANCE_STATE", "GUIDANCE_PARAMS", "GUIDANCE_CUES", "POSITION_REFERENCE",
-           "guidance_step",
+           "guidance_step", "contact_height",
            "guidance_function"]
 
 #: Phase numbers, as written to trajectory.csv's ``phase`` column.
@@ -191,6 +193,10 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("calm_tilt", 1, "rad", "largest angle, predicted at the contact, between the deck's "
           "normal and the flare's worst lean at which the final descent commits (pi: no "
           "limit)"),
+    Field("contact_drop", 1, "m", "how much lower the centre meets the deck leaning than "
+          "level: the profile descends to touchdown_height + contact_drop (0: the level gear)"),
+    Field("crawl_pause", 1, "0/1", "1: out of the align band the crawl pauses too, as the "
+          "descent above it does; 0: the crawl is committed"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -211,6 +217,15 @@ POSITION_REFERENCE = Layout("r_pos", (
     Field("a_ref", 3, "m/s^2", "its acceleration", elements=("ax_ref", "ay_ref", "az_ref")),
     *TOUCHDOWN_COMMANDS.fields,
 ), "position reference in the deck frame and the touchdown policy's commands")
+
+
+def contact_height(p):
+    """The centre's height above the pad at which the profile expects the contact, m:
+    ``touchdown_height`` (the level gear below the centre) plus ``contact_drop`` (a body
+    leaning ``th`` into the airflow meets the deck on its front feet, ``fx sin th + hc cos
+    th`` below its centre; docs/landing.md, "highway_100: the observer and the leash").
+    ``p`` the unpacked :data:`GUIDANCE_PARAMS`."""
+    return p["touchdown_height"] + p["contact_drop"]
 
 
 def _descent_rate(h, p):
@@ -293,7 +308,7 @@ def _reference_height(z_ref, p, f, dt):
     # crawl, the descent pauses at its height (no climb); uncommitted below the wait
     # height (a rising deck withdrew the commit) it glides back up to it; an abort
     # resets it to the hover height, as does the start of a descent
-    h = z_ref - p["touchdown_height"]
+    h = z_ref - contact_height(p)
     rate = _descent_rate(h, p)
     falling = f["falling"]
     # before the descent the hover point's height glides at descent_speed: to
@@ -369,18 +384,18 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
     xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt)
-    z_fall = z_ref - _descent_rate(z_ref - p["touchdown_height"], p) * dt
-    wait = p["touchdown_height"] + p["commit_height"]
+    z_fall = z_ref - _descent_rate(z_ref - contact_height(p), p) * dt
+    wait = contact_height(p) + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
                                                      ca.logic_and(z_fall <= wait, calm)))
-    # the crawl (h / descent_time at or below touchdown_speed) does not pause, and there a
-    # touchdown out of the limits is aborted; above it, out of the align band the descent
-    # pauses instead; once committed, a rising deck withdraws the commit
-    crawl = z_ref - p["touchdown_height"] <= p["touchdown_speed"] * p["descent_time"]
+    # the crawl (h / descent_time at or below touchdown_speed) does not pause (crawl_pause:
+    # it does too), and there a touchdown out of the limits is aborted; above it, out of the
+    # align band the descent pauses instead; once committed, a rising deck withdraws the commit
+    crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
     rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
-        deck_rise > p["max_deck_rise"], z_ref - p["touchdown_height"] > p["withdraw_height"]))
+        deck_rise > p["max_deck_rise"], z_ref - contact_height(p) > p["withdraw_height"]))
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
@@ -391,7 +406,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                                              LANDED, phase)))))
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
-    band, hold = ca.logic_or(in_band, crawl), ca.if_else(committed_next, z_ref, wait)
+    band = ca.logic_or(in_band, ca.logic_and(crawl, p["crawl_pause"] < 0.5))
+    hold = ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
     # not falling: to the wait height (uncommitted, or withdrawn), else paused (never down)

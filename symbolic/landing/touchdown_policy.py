@@ -105,14 +105,14 @@ def touchdown_commands(down, descending, timer_next, z_next, p):
     :data:`~quadland_symbolic.landing.guidance.GUIDANCE_PARAMS`.
     """
     on = p["fly_on"] > 0.5
-    low = z_next - p["touchdown_height"] <= p["flare_height"]
+    low = z_next - p["touchdown_height"] - p["contact_drop"] <= p["flare_height"]
     flaring = ca.logic_or(down, ca.logic_and(descending, low))
     tilt_limit = ca.if_else(ca.logic_and(on, flaring), p["flare_tilt"], NO_TILT_LIMIT)
     ramp = ca.fmin(ca.fmax((timer_next - p["hold_time"]) / p["level_time"], 0), 1)
     level = on * down * ramp
     cut = on * down * (timer_next >= ca.fmax(p["cut_time"], p["hold_time"] + p["level_time"]))
     aiming = on * ca.logic_or(down, ca.logic_and(descending, z_next - p["touchdown_height"]
-                                                 <= p["aim_height"]))
+                                                 - p["contact_drop"] <= p["aim_height"]))
     pivot = aiming * ca.vertcat(p["pivot_x"], p["pivot_y"], p["pivot_h"])
     return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, pivot)
 

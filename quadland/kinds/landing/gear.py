@@ -79,15 +79,20 @@ def touchdown_guidance(scenario: Scenario) -> dict:
     (:mod:`quadland_symbolic.landing.touchdown_policy`): ``policy = "secure"`` turns it
     on; otherwise it is inert (``fly_on = 0``) and the hardware cut (or none) acts. The
     aim point's pivot arm is ``pivot_aim`` times the gear's (``[gear]`` feet_x, feet_y,
-    ``[quadrotor]`` gear_height)."""
+    ``[quadrotor]`` gear_height). The profile's ``contact_drop`` is how much lower the
+    lowest foot of the gear pitched ``contact_lean_deg`` reaches than the level gear's,
+    ``fx sin th + hc cos th - hc`` (0 at 0 deg; at least 0: a lean that keeps a short gear's
+    feet above the level gear's leaves the level profile)."""
     td, gear = scenario.data["touchdown"], scenario.data["gear"]
-    aim = td["pivot_aim"]
-    return dict(fly_on=float(td["policy"] == "secure"), flare_height=td["flare_height"],
+    aim, hc = td["pivot_aim"], scenario.data["quadrotor"]["gear_height"]
+    lean = np.radians(td["contact_lean_deg"])
+    return dict(contact_drop=max(gear["feet_x"] * np.sin(lean) + hc * np.cos(lean) - hc, 0.0),
+                fly_on=float(td["policy"] == "secure"), flare_height=td["flare_height"],
                 flare_tilt=np.radians(td["flare_tilt_deg"]), hold_time=td["hold_time"],
                 level_time=td["level_time"], cut_time=td["cut_time"],
                 aim_height=td["aim_height"], pivot_x=aim * gear["feet_x"],
                 pivot_y=aim * gear["feet_y"],
-                pivot_h=aim * scenario.data["quadrotor"]["gear_height"])
+                pivot_h=aim * hc)
 
 
 def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
