@@ -147,6 +147,44 @@ def test_the_levelled_share_shrinks_the_velocity_noise_of_the_bias_walk():
             assert Q[i + a, i + a] == pytest.approx(want, rel=1e-12)
 
 
+def _e2a_transition(dt, q):
+    """(E2a) as the filter computed it before (E2b), written out here: one axis held,
+    ``kron`` over x, y, z, then ``a_tilt``'s decay and noise set in place."""
+    import casadi as ca
+
+    from quadland_symbolic.kalman import nilpotent_discretization
+    from quadland_symbolic.landing.navigation import axis_dynamics
+    x7, a_in = ca.SX.sym("x", 7), ca.SX.sym("a_in")
+    A7, B7 = (np.array(ca.evalf(ca.jacobian(axis_dynamics(x7, a_in), v))) for v in (x7, a_in))
+    I3 = ca.DM.eye(3)
+    Q = ca.SX(N, N)
+    for a in range(3):
+        W7 = ca.diag(ca.vertcat(0, q["q_acc"][a], 0, q["q_at"][a], q["q_b"][a], q["q_ab"][a], 0))
+        Phi7, Gamma7, Q7 = nilpotent_discretization(A7, B7, W7, dt)
+        Q += ca.kron(Q7, I3[:, a] @ I3[a, :])
+    decay = ca.exp(-dt / q["tilt_tau"])
+    i = _sl("a_tilt").start
+    Phi = ca.kron(Phi7, I3)
+    for a in range(3):
+        Phi[i + a, i + a] = decay
+        Q[i + a, i + a] = q["tilt_sigma"][a] ** 2 * (1 - decay**2)
+    return tuple(np.array(ca.evalf(m)) for m in (Phi, ca.kron(Gamma7, I3), Q))
+
+
+@pytest.mark.parametrize("dt", [0.004, 0.1, 0.37])
+def test_the_default_is_e2a_to_the_bit(dt):
+    """``l = 0`` (the default) gives (E2a)'s transition exactly, every entry the same
+    double: the levelling's terms are multiplied by an exact zero (docs/estimator.md,
+    (E2b)). ``Phi[a_tilt, a_b]`` is ``(e^(-dt/tau) - 1) 0 = -0.0`` where (E2a) had
+    ``+0.0``, equal as numbers (a signed zero adds nothing to a product's sum)."""
+    p, q = _params((0.0, 0.0, 0.0), tilt_sigma=[0.0855, 0.0855, 0.0])
+    got = [np.array(m) for m in nav_transition_function()(dt, p)]
+    for g, w in zip(got, _e2a_transition(dt, q), strict=True):
+        assert np.all(np.isfinite(g)) and np.array_equal(g, w)
+    Phi = got[0]
+    assert np.count_nonzero(np.signbit(Phi) != np.signbit(_e2a_transition(dt, q)[0])) == 3
+
+
 # --- the NEES on the hovers (docs/landing.md, issue 19, thirteenth) ----------------------
 
 #: The VN-300 as the attitude source and the IMU (docs/sensors.md, "A dedicated GNSS/INS").
