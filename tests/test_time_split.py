@@ -154,3 +154,42 @@ def test_the_compiled_flight_is_the_whole_plant_s_to_the_bit(scenario, monkeypat
     files = simulator.simulator_sources(model, "sampled")
     assert f"qlsim_{model.name}_plant_time.c" in files          # the split was flown
     assert f"qlsim_{model.name}_free_plant_time.c" in files
+
+
+def test_a_call_of_another_function_is_refused():
+    # SX.unary/SX.binary cannot rebuild a call (OP_CALL, one of several outputs): refused
+    # rather than rebuilt as something else
+    x, t, pp = ca.SX.sym("x"), ca.SX.sym("t"), ca.SX.sym("pp", 2)
+    g = ca.Function("g", [x], [ca.sin(x), ca.cos(x)], {"never_inline": True})
+    s, c = g(pp[0] * t + pp[1])
+    f = ca.Function("f", [x, t, pp], [x * c + s], ["x", "t", "pp"], ["y"])
+    assert ca.OP_CALL in _ops(f)
+    with pytest.raises(ValueError, match="OP_CALL|operation"):
+        time_split(f)
+
+
+@pytest.mark.slow
+def test_a_second_flight_with_another_deck_reads_its_own_deck():
+    # one simulator flies the default deck, then another deck (its phases moved) from the
+    # same instants: the second flight against the whole build's on the second deck, bit
+    # for bit (a deck kept from the first flight at an instant of the same bits would
+    # differ), and the two decks' flights differ
+    split, args, kwargs = _captured("ship")
+    model = built_model(split.model)
+    lay = model.plant_params
+    pp_a = np.asarray(args[5], dtype=float)
+    pp_b = pp_a.copy()
+    for name in ("heave_phase", "roll_phase", "pitch_phase"):
+        pp_b[lay.slice(f"p_deck.{name}")] += 1.0
+    args_b = (*args[:5], pp_b, *args[6:])
+    first = split.sampled(*args, **kwargs)
+    second = split.sampled(*args_b, **kwargs)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(simulator, "HOISTING", ())
+        whole = CompiledLoop(dataclasses.replace(model, name=f"{model.name}_whole"), "sampled")
+    ref = whole.sampled(*args_b, **kwargs)
+    assert second.status == ref.status
+    for field in ("X", "R", "times", "x_end"):
+        assert np.array_equal(_bits(getattr(second, field)), _bits(getattr(ref, field))), field
+    n = min(len(first.times), len(second.times))
+    assert not np.array_equal(_bits(first.X[:n]), _bits(second.X[:n]))

@@ -15,7 +15,8 @@ algorithm (the instructions CasADi generates C from):
 * ``<name>(..., hoisted) -> ...``: ``f`` with those values read from its last input.
 
 Each instruction is rebuilt by CasADi's own operations (``SX.unary``, ``SX.binary``) on
-the rebuilt operands, constants as they are, so the two compute the values ``f`` does,
+the rebuilt operands, constants as they are (a call of another Function, ``OP_CALL``, is
+refused: :class:`ValueError`), so the two compute the values ``f`` does,
 by the same IEEE operations: the same bits, ``hoisted`` given what ``<name>_time``
 returns. The driver keeps ``hoisted`` of the last instant (by its bits) and calls
 ``<name>_time`` only at a new one.
@@ -47,7 +48,7 @@ def _deps(f: ca.Function, timed: set) -> list:
         elif op == ca.OP_CONST:
             alone[res[0]] = True
         else:
-            alone[res[0]] = all(alone[j] for j in ins if j >= 0)
+            alone.update(dict.fromkeys(res, all(alone[j] for j in ins if j >= 0)))
         out.append(None if op in _LEAF else alone[res[0]])
     return out
 
@@ -68,6 +69,9 @@ def _rebuild(f: ca.Function, symbols: list, hoist: dict) -> tuple[list, list]:
             continue
         elif k in hoist:
             v = hoist[k]
+        elif op == ca.OP_CALL or len(ins) > 2 or len(res) != 1:
+            raise ValueError(f"time_split: {f.name()}'s instruction {k} (CasADi operation "
+                             f"{op}) is not one SX.unary or SX.binary rebuilds")
         elif len(ins) == 1 or ins[1] < 0:
             v = ca.SX.unary(op, work[ins[0]])
         else:
