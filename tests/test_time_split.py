@@ -156,7 +156,7 @@ def test_the_compiled_flight_is_the_whole_plant_s_to_the_bit(scenario, monkeypat
     assert f"qlsim_{model.name}_free_plant_time.c" in files
 
 
-def test_a_call_of_another_function_is_refused():
+def test_a_call_or_a_free_variable_is_refused():
     # SX.unary/SX.binary cannot rebuild a call (OP_CALL, one of several outputs): refused
     # rather than rebuilt as something else
     x, t, pp = ca.SX.sym("x"), ca.SX.sym("t"), ca.SX.sym("pp", 2)
@@ -164,7 +164,12 @@ def test_a_call_of_another_function_is_refused():
     s, c = g(pp[0] * t + pp[1])
     f = ca.Function("f", [x, t, pp], [x * c + s], ["x", "t", "pp"], ["y"])
     assert ca.OP_CALL in _ops(f)
-    with pytest.raises(ValueError, match="OP_CALL|operation"):
+    with pytest.raises(ValueError, match=f"operation {ca.OP_CALL}\\)"):
+        time_split(f)
+    q = ca.SX.sym("q")                                    # a free variable: refused too
+    f = ca.Function("f", [x, t, pp], [x * q * ca.sin(pp[0] * t)], ["x", "t", "pp"], ["y"],
+                    {"allow_free": True})
+    with pytest.raises(ValueError, match="free variables"):
         time_split(f)
 
 

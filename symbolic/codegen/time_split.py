@@ -15,8 +15,8 @@ algorithm (the instructions CasADi generates C from):
 * ``<name>(..., hoisted) -> ...``: ``f`` with those values read from its last input.
 
 Each instruction is rebuilt by CasADi's own operations (``SX.unary``, ``SX.binary``) on
-the rebuilt operands, constants as they are (a call of another Function, ``OP_CALL``, is
-refused: :class:`ValueError`), so the two compute the values ``f`` does,
+the rebuilt operands, constants as they are (a call of another Function, ``OP_CALL``, and
+free variables are refused: :class:`ValueError`), so the two compute the values ``f`` does,
 by the same IEEE operations: the same bits, ``hoisted`` given what ``<name>_time``
 returns. The driver keeps ``hoisted`` of the last instant (by its bits) and calls
 ``<name>_time`` only at a new one.
@@ -112,6 +112,8 @@ def time_split(f: ca.Function, time_inputs=("t", "pp")):
     hoisted : casadi.Function
         ``<name>_time(<time_inputs>) -> hoisted``.
     """
+    if f.has_free():
+        raise ValueError(f"time_split: {f.name()} has free variables {f.get_free()}")
     names = f.name_in()
     timed = {names.index(n) for n in time_inputs}
     alone = _deps(f, timed)
