@@ -292,7 +292,7 @@ def nav_transition_function() -> ca.Function:
 
 def nav_predict(x, P, a_in, dt, p_est, pattern: CovariancePattern, turn=None, omega=None):
     """One prediction over ``dt`` (E6): ``x+ = Phi x + Gamma a_in``, ``P+ = Phi P Phi^T + Q``
-    on ``pattern``'s entries; ``turn`` (E, rad) turns ``a_b`` (E6a), ``omega`` the pad's z (E17b)."""
+    on ``pattern``'s entries; ``turn`` (E, rad) turns ``a_b`` (E6a), ``omega`` the pad (E17b)."""
     Phi, Gamma, Q = nav_transition(dt, p_est)
     if turn is not None:                                                    # (E6a)
         i, k = NAV.slice("a_b"), NAV.slice("a_tilt")
