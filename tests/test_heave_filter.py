@@ -160,3 +160,37 @@ def test_a_given_frequency_replaces_the_filters_own():
     assert _omega({"heave_time": 20.0, "heave_frequency": 0.9}) == 0.9
     assert _omega({"heave_time": 0.0, "heave_frequency": 0.9}) == 0.9
     assert _omega({"heave_time": 0.0}) == 0.0
+
+
+def test_the_levelled_bias_turned_and_the_heave_each_keep_their_own_entries():
+    """(E2b)'s turn and (E17b)'s oscillator in one prediction (the hand-merged
+    ``nav_predict``): its ``Phi`` is the turned prediction's (tests/test_tilt_levels_bias.py
+    checks that one) except the pad's six z entries, which are the closed-form motion's
+    (NumPy's sine and cosine), whatever the levelled share; ``P+`` is that ``Phi``'s."""
+    w, dt = 1.3, 0.004
+    turn = np.array([0.003, -0.002, 0.004])
+    p = estimator_params().pack({**ESTIMATOR_DEFAULTS, "tilt_levels_bias": [0.5, 0.25, 0.75]})
+    pattern = covariance_pattern("full")
+    x, P, a_in = NAV.sym("x"), ca.SX.sym("P", N, N), ca.SX.sym("a", 3)
+    Ps = pattern.unpack(pattern.pack(P))
+
+    def jac(omega):
+        xn, Pn = nav_predict(x, Ps, a_in, dt, p, pattern, turn, omega)
+        return ca.Function("f", [x, P, a_in], [ca.jacobian(xn, x), ca.densify(Pn)])
+
+    rng = np.random.default_rng(5)
+    x0, a0 = rng.normal(size=N), rng.normal(size=3)
+    A = rng.normal(size=(N, N))
+    P0 = A @ A.T + N * np.eye(N)
+    J_turn = np.asarray(jac(None)(x0, np.zeros((N, N)), a0)[0])
+    J, Pn = (np.asarray(v) for v in jac(w)(x0, P0, a0))
+    Q = np.asarray(jac(w)(x0, np.zeros((N, N)), a0)[1])
+    want = J_turn.copy()
+    ip, iv, ia = _Z
+    c, s = np.cos(w * dt), np.sin(w * dt)
+    want[iv, iv], want[iv, ia] = c, s / w
+    want[ia, iv], want[ia, ia] = -w * s, c
+    want[ip, iv], want[ip, ia] = -s / w, -(1 - c) / w**2
+    assert np.abs(J_turn[sl("a_tilt"), sl("a_b")]).max() > 1e-3     # the share turns: on
+    np.testing.assert_allclose(J, want, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(Pn, J @ P0 @ J.T + Q, rtol=1e-10)
