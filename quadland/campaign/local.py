@@ -141,7 +141,6 @@ def chunk_size(runs: int, workers: int) -> int:
 
 def serial_runs(base: Scenario, todo: Iterable[RunDraw], limits: Mapping[str, float]
                  ) -> Iterator[list[RunOutcome]]:
-    keep_freed_memory()                         # each run's arrays in the last one's pages
     for draw in todo:
         yield [fly(base, draw, limits)]
 

@@ -82,13 +82,18 @@ def keep_freed_memory() -> bool:
     process had not grown its heap first (building a loop model did). Blocks under
     :data:`MMAP_THRESHOLD` come from the heap and up to :data:`TRIM_THRESHOLD` of free
     memory at its top is kept: the process holds the memory of its largest run, as it
-    did at that run's peak. For the processes that fly many runs (a campaign's); no
-    result changes. Returns whether the C library took both settings (False without
-    glibc's ``mallopt``).
+    did at that run's peak. For the processes quadland owns that fly many runs: a local
+    worker, and the process of the ``campaign`` and ``envelope`` commands (not a
+    caller's of :func:`quadland.run_campaign`, whose heap stays as it set it); no result
+    changes. Returns whether the C library took both settings (False without glibc:
+    its parameters' numbers are glibc's own; on macOS, musl or Windows nothing is set).
     """
     try:
-        mallopt = ctypes.CDLL(None).mallopt
-    except (OSError, AttributeError):
+        libc = ctypes.CDLL(None)                # Windows: CDLL(None) is a TypeError
+        mallopt = libc.mallopt
+    except (OSError, AttributeError, TypeError):
+        return False
+    if not hasattr(libc, "gnu_get_libc_version"):   # glibc's alone: not macOS's, musl's
         return False
     mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
     return bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)) and \
