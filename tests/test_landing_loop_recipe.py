@@ -69,3 +69,24 @@ def test_a_landing_with_its_simulator_cached_builds_no_loop_model():
 
     misses()
     assert misses() == [0, 0, 0]
+
+
+@needs_cc
+def test_each_landing_loop_and_each_generator_has_its_own_key(monkeypatch):
+    """The eight landing loops (sensed or not, welded or not, flat deck or not) and two
+    sizes never share a simulator's cache key, and every key changes with the code of
+    ``quadland_symbolic`` (its digest): a library built for one loop, or before a change
+    of the symbolic code, is never found for another."""
+    from quadland.engine import recall
+    from quadland_symbolic.landing.loop_recipe import landing_loop_recipe
+
+    def keys():
+        return {(l, *flags): recall.recall_key(landing_loop_recipe(l, *flags), "sampled", None,
+                                               (), "qlsim_x", "-O2", False)
+                for l in (2, 10) for flags in itertools.product((False, True), repeat=3)}
+
+    before = keys()
+    assert len(set(before.values())) == 16
+    monkeypatch.setattr(recall, "generator_digest", lambda: "a changed symbolic source")
+    after = keys()
+    assert all(after[k] != before[k] for k in before)
