@@ -12,13 +12,11 @@ from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_with
 from quadland.schema.lock import LOCK_FIELDS
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
 from quadland.schema.sea_state import SEA_STATES
-from quadland.schema.sensors import check_ranges, sensor_fields
+from quadland.schema.sensors import check_sensor_timing, sensor_fields
 from quadland_symbolic.landing.deck import N_SINES
 from quadland_symbolic.landing.drive import N_LEGS, pack_drive, planned_speed_change
-from quadland_symbolic.landing.estimator import FLIGHT_DEPTH, N_HIST
 from quadland_symbolic.landing.land_detector import LAND_DETECTOR_PARAMS
-from quadland_symbolic.landing.navigation import BLOCKS, SENSORS, estimator_params
-from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
+from quadland_symbolic.landing.navigation import BLOCKS, estimator_params
 from quadland_symbolic.landing.sensors import SENSOR_NAMES
 from quadland_symbolic.loop import MAX_DELAY_PERIODS
 
@@ -382,7 +380,7 @@ def check_landing(data: dict) -> None:
     if wind["gust_amplitude"] > 0 and not any(wind["gust_direction"]):
         raise ScenarioError("wind.gust_direction: must not be all zero when "
                             "wind.gust_amplitude > 0")
-    _check_sensors(data)
+    check_sensor_timing(data)
     guidance = data["landing"]
     if guidance["touchdown_speed"] > guidance["descent_speed"]:
         raise ScenarioError("landing.touchdown_speed: must be <= landing.descent_speed")
@@ -461,52 +459,3 @@ def _check_sea(deck: dict) -> None:
         raise ScenarioError(f"deck.significant_wave_height: {hs:g} m is outside sea state "
                             f"{code}'s band, {lo:g} to {hi:g} m (WMO; 0 takes its most probable "
                             f"{SEA_STATES[code].hs:g} m)")
-
-
-def _check_sensors(data: dict) -> None:
-    """A sensor samples on the control clock, and its latency fits the delivery line."""
-    rate = data["controller"]["rate_hz"]
-    for name in SENSOR_NAMES:
-        s, where = data[f"sensors.{name}"], f"sensors.{name}"
-        ticks = rate / s["rate_hz"]
-        if abs(ticks - round(ticks)) > 1e-9 * ticks or round(ticks) < 1:
-            raise ScenarioError(f"{where}.rate_hz: {s['rate_hz']:g} Hz must divide "
-                                f"controller.rate_hz ({rate:g} Hz): a sensor samples on the "
-                                "control clock")
-        phase = s["phase"] * rate
-        if abs(phase - round(phase)) > 1e-6:
-            raise ScenarioError(f"{where}.phase: {s['phase']:g} s must be a whole number of "
-                                f"control periods (1/{rate:g} s)")
-        if s["latency"] * rate > DELIVERY_SLOTS - 1 + 1e-9:
-            raise ScenarioError(f"{where}.latency: {s['latency']:g} s is more than the "
-                                f"{DELIVERY_SLOTS - 1} control periods a packet can be held "
-                                f"({(DELIVERY_SLOTS - 1) / rate:g} s at {rate:g} Hz)")
-        check_ranges(name, s)
-    _check_fusion(data)
-
-
-def _check_fusion(data: dict) -> None:
-    """What a sensor sends the filter can be fused: its packets, read at the first control
-    tick at or after their latency, reach the filter's horizon (``N_HIST`` periods behind)
-    less than ``max_age`` past it (at exactly ``max_age`` the discard is decided by
-    rounding), and a FIFO of the depth flown holds those in flight (``rate x (D -
-    latency) + 1``, docs/estimator.md)."""
-    rate = data["controller"]["rate_hz"]
-    horizon = N_HIST / rate
-    for sensor, depth in zip(SENSORS, FLIGHT_DEPTH, strict=True):
-        name = "rangefinder" if sensor == "range" else sensor
-        s = data[f"sensors.{name}"]
-        arrival = math.ceil(s["latency"] * rate - 1e-9)        # control periods
-        late = N_HIST + data["estimator"][f"max_age_{sensor}"] * rate
-        if arrival >= late - 1e-9:
-            raise ScenarioError(f"sensors.{name}.latency: {s['latency']:g} s is read "
-                                f"{arrival} control periods after the sample, not within the "
-                                f"navigation filter's horizon ({N_HIST}) plus "
-                                f"estimator.max_age_{sensor} ({late - N_HIST:g}): its packets "
-                                "would be discarded")
-        need = math.ceil(s["rate_hz"] * max(horizon - s["latency"], 0.0) + 1 - 1e-9)
-        if need > depth:
-            raise ScenarioError(f"sensors.{name}.rate_hz: {s['rate_hz']:g} Hz with "
-                                f"{s['latency']:g} s of latency keeps {need} packets waiting "
-                                f"for the filter's horizon ({horizon:g} s); its queue holds "
-                                f"{depth}: packets would be dropped")

@@ -15,8 +15,12 @@ from typing import NamedTuple
 
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import Field
+from quadland_symbolic.landing.estimator import FLIGHT_DEPTH, N_HIST
+from quadland_symbolic.landing.navigation import SENSORS
+from quadland_symbolic.landing.sensed_loop import DELIVERY_SLOTS
+from quadland_symbolic.landing.sensors import SENSOR_NAMES
 
-__all__ = ["Setting", "SETTINGS", "sensor_fields", "check_ranges"]
+__all__ = ["Setting", "SETTINGS", "sensor_fields", "check_ranges", "check_sensor_timing"]
 
 
 class Setting(NamedTuple):
@@ -145,3 +149,52 @@ def check_ranges(name: str, values: Mapping) -> None:
         if lo in values and values[hi] > 0 and values[lo] > values[hi]:
             raise ScenarioError(f"{where}.{lo}: must not exceed {where}.{hi} "
                                 f"({values[hi]:g} m)")
+
+
+def check_sensor_timing(data: dict) -> None:
+    """A sensor samples on the control clock, and its latency fits the delivery line."""
+    rate = data["controller"]["rate_hz"]
+    for name in SENSOR_NAMES:
+        s, where = data[f"sensors.{name}"], f"sensors.{name}"
+        ticks = rate / s["rate_hz"]
+        if abs(ticks - round(ticks)) > 1e-9 * ticks or round(ticks) < 1:
+            raise ScenarioError(f"{where}.rate_hz: {s['rate_hz']:g} Hz must divide "
+                                f"controller.rate_hz ({rate:g} Hz): a sensor samples on the "
+                                "control clock")
+        phase = s["phase"] * rate
+        if abs(phase - round(phase)) > 1e-6:
+            raise ScenarioError(f"{where}.phase: {s['phase']:g} s must be a whole number of "
+                                f"control periods (1/{rate:g} s)")
+        if s["latency"] * rate > DELIVERY_SLOTS - 1 + 1e-9:
+            raise ScenarioError(f"{where}.latency: {s['latency']:g} s is more than the "
+                                f"{DELIVERY_SLOTS - 1} control periods a packet can be held "
+                                f"({(DELIVERY_SLOTS - 1) / rate:g} s at {rate:g} Hz)")
+        check_ranges(name, s)
+    _check_fusion(data)
+
+
+def _check_fusion(data: dict) -> None:
+    """What a sensor sends the filter can be fused: its packets, read at the first control
+    tick at or after their latency, reach the filter's horizon (``N_HIST`` periods behind)
+    less than ``max_age`` past it (at exactly ``max_age`` the discard is decided by
+    rounding), and a FIFO of the depth flown holds those in flight (``rate x (D -
+    latency) + 1``, docs/estimator.md)."""
+    rate = data["controller"]["rate_hz"]
+    horizon = N_HIST / rate
+    for sensor, depth in zip(SENSORS, FLIGHT_DEPTH, strict=True):
+        name = "rangefinder" if sensor == "range" else sensor
+        s = data[f"sensors.{name}"]
+        arrival = math.ceil(s["latency"] * rate - 1e-9)        # control periods
+        late = N_HIST + data["estimator"][f"max_age_{sensor}"] * rate
+        if arrival >= late - 1e-9:
+            raise ScenarioError(f"sensors.{name}.latency: {s['latency']:g} s is read "
+                                f"{arrival} control periods after the sample, not within the "
+                                f"navigation filter's horizon ({N_HIST}) plus "
+                                f"estimator.max_age_{sensor} ({late - N_HIST:g}): its packets "
+                                "would be discarded")
+        need = math.ceil(s["rate_hz"] * max(horizon - s["latency"], 0.0) + 1 - 1e-9)
+        if need > depth:
+            raise ScenarioError(f"sensors.{name}.rate_hz: {s['rate_hz']:g} Hz with "
+                                f"{s['latency']:g} s of latency keeps {need} packets waiting "
+                                f"for the filter's horizon ({horizon:g} s); its queue holds "
+                                f"{depth}: packets would be dropped")

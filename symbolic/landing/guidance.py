@@ -388,9 +388,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     wait = contact_height(p) + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
                                                      ca.logic_and(z_fall <= wait, calm)))
-    # the crawl (h / descent_time at or below touchdown_speed) does not pause (crawl_pause:
-    # it does too), and there a touchdown out of the limits is aborted; above it, out of the
-    # align band the descent pauses instead; once committed, a rising deck withdraws the commit
+    # the crawl (h / descent_time <= touchdown_speed) pauses only with crawl_pause and aborts
+    # out of the limits; above it the descent pauses out of the band; a rising deck withdraws
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
