@@ -7,7 +7,8 @@ th`` below its centre, not ``hc``: on highway_100's gear (``fx`` 0.30 m, ``hc`` 
 the 38.7 deg of the steady lean at 100 km/h, 0.305 m. The guidance's profile (its crawl, the
 align band's pause above it, the wait height, the flare and the aim) counts its heights above
 ``touchdown_height + contact_drop``. Checked here: the drop against the four feet rotated by
-hand, the crawl's start moved up by it in one guidance step, and the key's default leaving
+hand, the crawl's start moved up by it in one guidance step, the flare's and the aim's heights
+too (one step each), and the key's default leaving
 every shipped scenario's profile on the level gear. ``landing.crawl_pause`` lets the align
 band pause the crawl as it pauses the descent above it; checked in one guidance step.
 Both keys are off in every shipped scenario (measured on highway_100 and not shipped).
@@ -28,8 +29,10 @@ from quadland_symbolic.landing.guidance import (
     GUIDANCE_CUES,
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
+    POSITION_REFERENCE,
     guidance_function,
 )
+from quadland_symbolic.landing.touchdown_policy import TOUCHDOWN_COMMANDS
 
 #: highway_100's gear: the feet's half spacings and their depth below the centre, m.
 FX, FY, HC = 0.30, 0.20, 0.15
@@ -88,6 +91,36 @@ def test_the_profile_counts_from_the_contact_height():
     assert _rate(start + 0.05, drop) == pytest.approx((start + 0.05 - HC - drop) / time,
                                                       abs=1e-9)
     assert _rate(start - 0.05, drop) == pytest.approx(speed, abs=1e-9)
+
+
+def _policy_after(h, drop):
+    """The touchdown policy's tilt limit and aim (the pivot's x arm) after one committed
+    descent step from ``h`` m above the contact height, the policy on (GUIDANCE_P's flare
+    0.15 m at 0.6 rad, aim 0.3 m), the quadrotor on the reference at rest over the pad."""
+    z_ref = HC + drop + h
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
+                                  committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
+    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, contact_drop=drop,
+                                   fly_on=1.0, pivot_x=0.15))
+    _, ref = (np.asarray(v, dtype=float).ravel() for v in guidance_function()(
+        xg, [0.0, 0.0, z_ref], [0.0, 0.0, 0.0], 0.0, 0.0, cues, DT, pg))
+    c = TOUCHDOWN_COMMANDS.unpack(ref[POSITION_REFERENCE.slice("tilt_limit").start:])
+    return float(c["tilt_limit"][0]), float(c["pivot"][0])
+
+
+def test_the_flare_and_the_aim_count_from_the_contact_height():
+    """The flare (0.15 m) and the aim (0.3 m) start that far above ``touchdown_height +
+    contact_drop``: 0.1 m above the leaning gear's contact height (0.255 m above the level
+    gear's, one crawl step of 3 mm lower) the leaning profile flares and aims, the level one
+    only aims; 0.25 m above it the leaning one aims and the level one (0.405 m) does not."""
+    drop, flare_tilt = _lowest_foot(38.7) - HC, GUIDANCE_P["flare_tilt"]
+    assert _policy_after(0.1, drop) == (pytest.approx(flare_tilt, abs=1e-12), 0.15)
+    level = _policy_after(0.1 + drop, 0.0)
+    assert level[0] == pytest.approx(math.pi / 2, abs=1e-12) and level[1] == 0.15
+    assert _policy_after(0.25, drop)[1] == 0.15
+    assert _policy_after(0.25 + drop, 0.0)[1] == 0.0
 
 
 def _crawl_step(x, crawl_pause):
