@@ -193,8 +193,9 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("calm_tilt", 1, "rad", "largest angle, predicted at the contact, between the deck's "
           "normal and the flare's worst lean at which the final descent commits (pi: no "
           "limit)"),
-    Field("contact_drop", 1, "m", "how much lower the centre meets the deck leaning than "
-          "level: the profile descends to touchdown_height + contact_drop (0: the level gear)"),
+    Field("contact_drop", 1, "m", "how much higher the centre meets the deck leaning than "
+          "level (its lowest foot that much lower): the profile descends to "
+          "touchdown_height + contact_drop (0: the level gear)"),
     Field("crawl_pause", 1, "0/1", "1: out of the align band the crawl pauses too, as the "
           "descent above it does; 0: the crawl is committed"),
 ), "landing guidance parameters")
