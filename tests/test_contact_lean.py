@@ -58,7 +58,7 @@ def test_the_drop_is_the_lowest_foot_of_the_pitched_gear(lean):
         assert drop == pytest.approx(0.1547, abs=1e-4)
 
 
-@pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5"])
+@pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5", "highway_100"])
 def test_other_scenarios_keep_the_level_profile(name):
     """Without the key the drop is exactly 0: the profile of before."""
     assert touchdown_guidance(load_scenario(name))["contact_drop"] == 0.0
