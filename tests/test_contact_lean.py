@@ -60,8 +60,10 @@ def test_the_drop_is_the_lowest_foot_of_the_pitched_gear(lean):
 
 @pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5", "highway_100"])
 def test_other_scenarios_keep_the_level_profile(name):
-    """Without the key the drop is exactly 0: the profile of before."""
-    assert touchdown_guidance(load_scenario(name))["contact_drop"] == 0.0
+    """Without the key the drop is exactly 0: the profile of before; the crawl is committed
+    (``crawl_pause`` false)."""
+    sc = load_scenario(name)
+    assert touchdown_guidance(sc)["contact_drop"] == 0.0 and sc["landing.crawl_pause"] is False
 
 
 def _rate(z_ref, drop):
