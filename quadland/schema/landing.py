@@ -11,7 +11,7 @@ from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
 from quadland.schema.lock import LOCK_FIELDS
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
-from quadland.schema.sea_fields import check_sea, sea_fields
+from quadland.schema.sea_state import SEA_STATES
 from quadland.schema.sensors import check_ranges, sensor_fields
 from quadland_symbolic.landing.deck import N_SINES
 from quadland_symbolic.landing.drive import N_LEGS, pack_drive, planned_speed_change
@@ -73,6 +73,28 @@ def _profile() -> dict[str, Field]:
     }
 
 
+def _sea() -> dict[str, Field]:
+    """The sea state's keys of [deck] (docs/sea.md): the waves and the vessel's response."""
+    return {
+        "sea_state": Field(int, "-", "WMO sea state code: 1 to 6 add that sea's wave components "
+                           "to the sinusoids; 0: the sinusoids alone", lo=0, hi=max(SEA_STATES)),
+        "significant_wave_height": Field(float, "m", "Hs (0: the sea state's most probable); "
+                                         "within the sea state's WMO band", lo=0.0, hi=20.0),
+        "peak_period": Field(float, "s", "Tp, the spectrum's peak period (0: the sea state's most "
+                             "probable)", lo=1.0, hi=30.0, zero_ok=True),
+        "peak_enhancement": Field(float, "-", "JONSWAP's gamma: 1 is Pierson-Moskowitz, 3.3 "
+                                  "JONSWAP's mean", lo=1.0, hi=10.0),
+        "wave_heading_deg": Field(float, "deg", "the waves' direction of travel from the bow "
+                                  "toward port: 180 head seas, 0 following, 90 from starboard",
+                                  lo=-360.0, hi=360.0),
+        "vessel_length": Field(float, "m", "waterline length: the hull averages the waves over it",
+                               hi=1e3, **_POS),
+        "vessel_beam": Field(float, "m", "waterline breadth", hi=1e3, **_POS),
+        "roll_period": Field(float, "s", "natural roll period", hi=100.0, **_POS),
+        "roll_damping": Field(float, "-", "roll damping ratio (linearized)", hi=2.0, **_POS),
+    }
+
+
 F, I, B, S = float, int, bool, str
 #: The landing scenario schema (``scenario.model = "landing"``): the 6-DOF
 #: loop of ``quadland_symbolic.landing`` with guidance, motor lag, rotor limits, the
@@ -122,7 +144,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         **_sines("heave", "m", "heave", 100.0),
         **_sines("roll", "deg", "roll", 45.0),
         **_sines("pitch", "deg", "pitch", 45.0),
-        **sea_fields(),
+        **_sea(),
     },
     "initial": {
         "position1": Field(F, "m", "quadrotor x1, y1 in E", 2, lo=-1e7, hi=1e7),
@@ -354,7 +376,7 @@ def check_landing(data: dict) -> None:
                 k.endswith(("_amplitude", "_amplitude_deg", "_frequency", "_phase_deg"))]
         if len({len(deck[k]) for k in keys}) != 1:
             raise ScenarioError(f"deck.{keys[1]}: must have as many values as deck.{keys[0]}")
-    check_sea(deck)
+    _check_sea(deck)
     _check_profile(data)
     wind = data["wind"]
     if wind["gust_amplitude"] > 0 and not any(wind["gust_direction"]):
@@ -427,6 +449,18 @@ def _check_profile(data: dict) -> None:
             raise ScenarioError(f"vehicle.profile_speed_change: the planned speed falls to "
                                 f"{u:g} m/s by t = {start + T:g} s: the profile drives forward "
                                 f"(initial.velocity2 = {u0:g} m/s)")
+
+
+def _check_sea(deck: dict) -> None:
+    """A significant wave height given lies in its sea state's WMO band."""
+    hs, code = deck["significant_wave_height"], deck["sea_state"]
+    if code == 0 or hs == 0:
+        return
+    lo, hi = SEA_STATES[code].hs_band
+    if not lo <= hs <= hi:
+        raise ScenarioError(f"deck.significant_wave_height: {hs:g} m is outside sea state "
+                            f"{code}'s band, {lo:g} to {hi:g} m (WMO; 0 takes its most probable "
+                            f"{SEA_STATES[code].hs:g} m)")
 
 
 def _check_sensors(data: dict) -> None:

@@ -415,8 +415,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
         z_ref, p, dict(flying=ca.logic_and(flying, ca.logic_not(off_limits)), falling=falling,
                        hold=ca.if_else(band, hold, ca.fmax(hold, z_ref)), align=in_align,
                        abort=off_limits, seen=seen, landing=phase_next >= TOUCHDOWN,
-                       touchdown=phase_next == TOUCHDOWN, descending_next=phase_next == DESCEND,
-                       timer_next=timer_next, z=p_e[2]), dt)
+                       touchdown=phase_next == TOUCHDOWN,
+                       descending_next=phase_next == DESCEND, timer_next=timer_next,
+                       z=p_e[2]), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
                       committed_next, _armed_next(c, g, in_descend, phase_next), xq_held), \
         reference
