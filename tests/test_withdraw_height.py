@@ -52,3 +52,26 @@ def test_the_crawl_goes_on_below_the_withdraw_height():
     assert _step(0.3, rise, 0.3)[1:] == (1.0, 0.0)          # at the height: no withdrawal
     assert _step(0.6, rise, 0.3)[1:] == (0.0, 1.0)
     assert _step(0.6, GUIDANCE_P["max_deck_rise"] - 0.1, 0.3)[1:] == (1.0, 0.0)
+
+
+def test_the_withdraw_height_is_above_the_expected_contact():
+    """With contact_drop 0.1 m the contact is expected 0.1 m lower (contact_height), and the
+    crawl (0.3 m above it) and withdraw_height count from there: a reference 0.35 m above
+    touchdown_height is 0.25 m above the contact, in the crawl, and goes on at
+    touchdown_speed; 0.45 m (0.35 m above it) is withdrawn. Counted from touchdown_height
+    (the merge's other side) the first would have been withdrawn inside the crawl."""
+    rise, drop = GUIDANCE_P["max_deck_rise"] + 0.1, 0.1
+    for h, expected in ((0.35, (1.0, 0.0)), (0.45, (0.0, 1.0))):
+        xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=TOUCHDOWN + h, aborts=0,
+                                      committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                      ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0,
+                                      lean_y=0.0))
+        cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
+        pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, withdraw_height=0.3, contact_drop=drop))
+        xg_next, _ = guidance_function()(xg, [0.0, 0.0, TOUCHDOWN + h], [0.0, 0.0, 0.0], rise,
+                                         0.0, cues, DT, pg)
+        g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
+        assert (g["committed"][0], g["aborts"][0]) == expected
+        if expected[0]:
+            assert g["z_ref"][0] == pytest.approx(
+                TOUCHDOWN + h - GUIDANCE_P["touchdown_speed"] * DT, rel=1e-12)
