@@ -36,7 +36,7 @@ from __future__ import annotations
 import casadi as ca
 
 from quadland_symbolic.kinematics import rotation
-from quadland_symbolic.landing.quiescence import MS_FLOOR, OMEGA_MAX, OMEGA_MIN
+from quadland_symbolic.landing.quiescence import sine_ahead, sine_frequency
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["DECK_TILT_STATE", "TILT_CUES", "LEAN_FLOOR", "tilt_cues", "descent_duration",
@@ -103,13 +103,12 @@ def tilt_update(xt, n_h_dot, n_h_ddot, b_h, dt, motion_time):
 def tilt_frequency(xt):
     """``sqrt(<|n_h''|^2> / <|n_h'|^2>)`` clamped to the heave's bounds, rad/s."""
     q = DECK_TILT_STATE.unpack(xt)
-    ratio = q["ms_tilt_acc"] / ca.fmax(q["ms_tilt_rate"], MS_FLOOR)
-    return ca.fmin(ca.fmax(ca.sqrt(ca.fmax(ratio, 0)), OMEGA_MIN), OMEGA_MAX)
+    return sine_frequency(q["ms_tilt_rate"], q["ms_tilt_acc"])
 
 
 def tilt_ahead(n_h, n_h_dot, omega, tau):
     """The normal's horizontal part ``tau`` ahead: ``n_h cos(w tau) + (n_h' / w) sin(w tau)``."""
-    return n_h * ca.cos(omega * tau) + n_h_dot / omega * ca.sin(omega * tau)
+    return sine_ahead(n_h, n_h_dot, omega, tau)
 
 
 def lean_axis(b_h, flare_tilt):

@@ -42,8 +42,8 @@ import casadi as ca
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["QUIESCENCE_STATE", "OMEGA_MIN", "OMEGA_MAX", "MS_FLOOR", "N_HORIZON",
-           "quiescence_update", "deck_frequency", "heave_rate_ahead", "predicted_speed",
-           "quiescence_function"]
+           "quiescence_update", "sine_frequency", "sine_ahead", "deck_frequency",
+           "heave_rate_ahead", "predicted_speed", "quiescence_function"]
 
 #: The predictor's memory: the two exponential averages.
 QUIESCENCE_STATE = Layout("x_quiet", (
@@ -74,16 +74,27 @@ def quiescence_update(xq, v, a, dt, motion_time):
                       q["ms_rise_rate"] + k * (a ** 2 - q["ms_rise_rate"]))
 
 
+def sine_frequency(ms_x, ms_rate):
+    """``sqrt(<x'^2> / <x^2>)`` from the two mean squares, clamped to [:data:`OMEGA_MIN`,
+    :data:`OMEGA_MAX`], rad/s: exact for one sinusoid (the deck's heave, its tilt)."""
+    ratio = ms_rate / ca.fmax(ms_x, MS_FLOOR)
+    return ca.fmin(ca.fmax(ca.sqrt(ca.fmax(ratio, 0)), OMEGA_MIN), OMEGA_MAX)
+
+
+def sine_ahead(x, x_dot, omega, tau):
+    """One sinusoid's value ``tau`` ahead: ``x cos(omega tau) + (x' / omega) sin(omega tau)``."""
+    return x * ca.cos(omega * tau) + x_dot / omega * ca.sin(omega * tau)
+
+
 def deck_frequency(xq):
     """``sqrt(<a^2> / <v^2>)`` clamped to [:data:`OMEGA_MIN`, :data:`OMEGA_MAX`], rad/s."""
     q = QUIESCENCE_STATE.unpack(xq)
-    ratio = q["ms_rise_rate"] / ca.fmax(q["ms_rise"], MS_FLOOR)
-    return ca.fmin(ca.fmax(ca.sqrt(ca.fmax(ratio, 0)), OMEGA_MIN), OMEGA_MAX)
+    return sine_frequency(q["ms_rise"], q["ms_rise_rate"])
 
 
 def heave_rate_ahead(v, a, omega, tau):
     """The deck's rise ``tau`` ahead: ``v cos(omega tau) + (a / omega) sin(omega tau)``, m/s."""
-    return v * ca.cos(omega * tau) + a / omega * ca.sin(omega * tau)
+    return sine_ahead(v, a, omega, tau)
 
 
 def predicted_speed(v, a, omega, horizon):
