@@ -29,6 +29,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from lock_rig import F_HOLD, FX, FY, G0, H, lock_function, lock_packs
 from reference import HIGHWAY_100_TWELFTH
 
 import quadland
@@ -39,47 +40,22 @@ from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
 from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.contact import (
-    GEAR,
     HOLD,
     LOCK,
-    gear_defaults,
     lock_defaults,
-    lock_wrench,
 )
-from quadland_symbolic.landing.deck import DECK_PARAMS, pack_deck
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
-from quadland_symbolic.parameters import VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE
-
-FX, FY, H = 0.30, 0.20, 0.15                      # m: highway_100's gear
-F_HOLD, G0 = 200.0, 1e-3                          # N, m: its two magnets' force, the gap scale
-
-
-def _lock_function():
-    x1q, xv, t, ts = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), ca.SX.sym("t"), ca.SX.sym("ts")
-    pv, pd, pg, pl = VEHICLE.sym(), DECK_PARAMS.sym(), GEAR.sym(), LOCK.sym()
-    return ca.Function("lock", [x1q, xv, t, ts, pv, pd, pg, pl],
-                       list(lock_wrench(x1q, xv, t, ts, pv, pd, pg, pl)))
 
 
 def _params(at_feet):
-    veh = dict(m11=1500.0, m22=1500.0, m33=2500.0, d11=150.0, d22=1500.0, d33=2500.0,
-               tau=[0.0, 0.0, 0.0], z2=0.0)
-    d = {f"{n}_{w}": np.zeros(3) for n in ("heave", "roll", "pitch")
-         for w in ("amp", "freq", "phase")}
-    d.update(pad_offset=[0.0, 0.0, 0.0], deck_height=0.0)
-    g = gear_defaults("car_roof")
-    g["r_feet"] = [v for f in ((FX, FY, -H), (-FX, FY, -H), (-FX, -FY, -H), (FX, -FY, -H))
-                   for v in f]
-    lk = dict(lock_defaults("foot_magnets" if at_feet else "magnet"), F_hold=F_HOLD,
-              lock_delay=0.0, lock_gap_scale=G0, swivel=math.pi / 2)   # flush: the ideal
-    return VEHICLE.pack(veh), pack_deck(d), GEAR.pack(g), LOCK.pack(lk)
+    return lock_packs(at_feet, swivel=math.pi / 2)                 # flush: the ideal
 
 
 def _pull(eta, z, t=0.5, at_feet=1):
     x1q = np.zeros(QUAD6_STATE.size)
     x1q[2], x1q[3:6] = z, eta
-    out = _lock_function()(x1q, np.zeros(VEHICLE_STATE.size), t, 0.0, *_params(at_feet))
+    out = lock_function()(x1q, np.zeros(VEHICLE_STATE.size), t, 0.0, *_params(at_feet))
     R = np.array(rotation(ca.DM(eta)))
     return R @ np.array(out[0]).ravel(), np.array(out[1]).ravel(), \
         HOLD.unpack(np.array(out[2]).ravel())

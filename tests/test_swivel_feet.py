@@ -26,6 +26,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from lock_rig import F_HOLD, FX, FY, G0, H, lock_function, lock_packs
 from reference import HIGHWAY_100_TWELFTH
 
 from quadland.kinds.landing.gear import lock_params
@@ -36,43 +37,25 @@ from quadland_symbolic.landing.contact import (
     HOLD,
     LOCK,
     gear_defaults,
-    lock_defaults,
-    lock_wrench,
 )
-from quadland_symbolic.landing.deck import DECK_PARAMS, pack_deck
+from quadland_symbolic.landing.deck import DECK_PARAMS
 from quadland_symbolic.landing.gear import GEAR_STATE, PEAK_RATE, TOUCHDOWN_POLICY, gear_terms
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-FX, FY, H = 0.30, 0.20, 0.15                      # m: highway_100's gear
-F_HOLD, G0, W = 200.0, 1e-3, 0.03                 # N, m, m
+W = 0.03                                          # m: the magnet's face width
 S = 1 - math.exp(-0.5 / 0.17)                     # the rise at t = 0.5 s
 
 
 def _packs(at_feet=1, **lock):
-    veh = dict(m11=1500.0, m22=1500.0, m33=2500.0, d11=150.0, d22=1500.0, d33=2500.0,
-               tau=[0.0, 0.0, 0.0], z2=0.0)
-    d = {f"{n}_{w}": np.zeros(3) for n in ("heave", "roll", "pitch")
-         for w in ("amp", "freq", "phase")}
-    d.update(pad_offset=[0.0, 0.0, 0.0], deck_height=0.0)
-    g = gear_defaults("car_roof")
-    g["r_feet"] = [v for f in ((FX, FY, -H), (-FX, FY, -H), (-FX, -FY, -H), (FX, -FY, -H))
-                   for v in f]
-    lk = dict(lock_defaults("foot_magnets" if at_feet else "magnet"), F_hold=F_HOLD,
-              lock_delay=0.0, lock_rise_time=0.17, lock_gap_scale=G0, face_width=W)
-    lk.update(lock)
-    return VEHICLE.pack(veh), pack_deck(d), GEAR.pack(g), LOCK.pack(lk)
+    return lock_packs(at_feet, lock_rise_time=0.17, face_width=W, **lock)
 
 
 def _hold(eta, z, **lock):
-    x1q, xv, t, ts = QUAD6_STATE.sym(), VEHICLE_STATE.sym(), ca.SX.sym("t"), ca.SX.sym("ts")
-    pv, pd, pg, pl = VEHICLE.sym(), DECK_PARAMS.sym(), GEAR.sym(), LOCK.sym()
-    f = ca.Function("lock", [x1q, xv, t, ts, pv, pd, pg, pl],
-                    list(lock_wrench(x1q, xv, t, ts, pv, pd, pg, pl)))
     x = np.zeros(QUAD6_STATE.size)
     x[2], x[3:6] = z, eta
-    out = f(x, np.zeros(VEHICLE_STATE.size), 0.5, 0.0, *_packs(**lock))
+    out = lock_function()(x, np.zeros(VEHICLE_STATE.size), 0.5, 0.0, *_packs(**lock))
     return HOLD.unpack(np.array(out[2]).ravel())
 
 
