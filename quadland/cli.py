@@ -319,7 +319,7 @@ def _run_margins_campaign(args, requirement) -> int:
 def _run_campaign(args) -> int:
     from quadland.campaign.execute import run_campaign
     from quadland.campaign.summary import counted_text, summary_counts
-    from quadland.engine.runs import keep_freed_memory
+    from quadland.engine.heap import keep_freed_memory
 
     keep_freed_memory()     # quadland's own process, which may fly the runs itself
     result = run_campaign(args.scenario, args.overrides, args.runs, args.out, args.workers,
@@ -341,7 +341,7 @@ def _run_campaign(args) -> int:
 def _run_envelope(args) -> int:
     from quadland.campaign.grid import run_envelope
     from quadland.campaign.summary import counted_text
-    from quadland.engine.runs import keep_freed_memory
+    from quadland.engine.heap import keep_freed_memory
 
     keep_freed_memory()     # quadland's own process, which may fly the runs itself
     seed = [] if args.seed is None else [f"campaign.seed={args.seed}"]

@@ -13,7 +13,7 @@ import pytest
 _FAULTS = """
 import resource, sys
 import numpy as np
-from quadland.engine.runs import keep_freed_memory
+from quadland.engine.heap import keep_freed_memory
 kept = keep_freed_memory() if sys.argv[1] == "keep" else None
 if sys.argv[1] == "serial":                     # a caller's process: no run, no setting
     from quadland.campaign.local import serial_runs
@@ -92,7 +92,7 @@ def _refused(name):
 def test_without_glibc_nothing_is_set_and_nothing_raised(monkeypatch, cdll):
     """Without glibc (``mallopt``'s parameter numbers are glibc's own) or where
     ``ctypes.CDLL(None)`` is refused (Windows), the setting is left alone: False."""
-    from quadland.engine import runs
+    from quadland.engine import heap
 
-    monkeypatch.setattr(runs.ctypes, "CDLL", cdll)
-    assert runs.keep_freed_memory() is False
+    monkeypatch.setattr(heap.ctypes, "CDLL", cdll)
+    assert heap.keep_freed_memory() is False

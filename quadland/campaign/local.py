@@ -21,7 +21,7 @@ from collections.abc import Iterable, Iterator, Mapping
 
 from quadland.campaign.fly import RunOutcome, fly
 from quadland.campaign.sampling import RunDraw
-from quadland.engine.runs import keep_freed_memory
+from quadland.engine.heap import keep_freed_memory
 from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.kinds import kind_of
 from quadland.scenario import Scenario

@@ -8,7 +8,6 @@ rows (:class:`Run`) and a ride's (:class:`Ride`), shared by the compiled simulat
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import importlib
 import threading
@@ -20,7 +19,7 @@ from quadland_symbolic.loop import LoopModel
 __all__ = ["SIM_OK", "SIM_NONFINITE", "SIM_GUARD", "SIM_CONTROLLER", "SIM_EVENT",
            "SIM_ENVELOPE", "SIM_ROWS", "Run", "Ride", "as_f64", "make_run", "tick_rows",
            "tick_source",
-           "envelope_bounds", "row_buffer", "keep_freed_memory"]
+           "envelope_bounds", "row_buffer"]
 
 #: Status codes of the drivers (``symbolic/templates/simulator.c.jinja``).
 SIM_OK, SIM_NONFINITE, SIM_GUARD, SIM_CONTROLLER, SIM_EVENT, SIM_ENVELOPE, SIM_ROWS = range(7)
@@ -62,42 +61,6 @@ def row_buffer(rows: int, width: int) -> np.ndarray:
         finally:
             _HUGEPAGE_SWITCH(before)
 
-
-
-#: glibc's ``mallopt`` parameters (``malloc.h``) and the values a campaign sets.
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
-#: Blocks below this come from the heap, not a mapping of their own (glibc's largest).
-MMAP_THRESHOLD = 32 * 2**20
-#: Free memory at the heap's top kept, not given back to the kernel.
-TRIM_THRESHOLD = 256 * 2**20
-
-
-def keep_freed_memory() -> bool:
-    """Let this process reuse the memory its runs free instead of faulting in fresh pages.
-
-    A landing allocates and frees some 10 MiB of arrays (rows, columns, copies). glibc
-    gives a large block its own mapping, or trims the heap's free top, and the next
-    run's arrays then fault in fresh pages, each zeroed by the kernel: measured in a
-    one-worker ``highway`` campaign, about 4 ms of a 38 ms landing, and more where the
-    process had not grown its heap first (building a loop model did). Blocks under
-    :data:`MMAP_THRESHOLD` come from the heap and up to :data:`TRIM_THRESHOLD` of free
-    memory at its top is kept: the process holds the memory of its largest run, as it
-    did at that run's peak. For the processes quadland owns that fly many runs: a local
-    worker, and the process of the ``campaign`` and ``envelope`` commands (not a
-    caller's of :func:`quadland.run_campaign`, whose heap stays as it set it); no result
-    changes. Returns whether the C library took both settings (False without glibc:
-    its parameters' numbers are glibc's own; on macOS, musl or Windows nothing is set).
-    """
-    try:
-        libc = ctypes.CDLL(None)                # Windows: CDLL(None) is a TypeError
-        mallopt = libc.mallopt
-    except (OSError, AttributeError, TypeError):
-        return False
-    if not hasattr(libc, "gnu_get_libc_version"):   # glibc's alone: not macOS's, musl's
-        return False
-    mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
-    return bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)) and \
-        bool(mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD))
 
 
 def as_f64(a) -> np.ndarray:
