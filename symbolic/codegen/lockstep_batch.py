@@ -1,0 +1,74 @@
+"""A batch entry over :func:`~quadland_symbolic.codegen.lockstep.lockstep_c`: W runs'
+calls of one Function in one call, each run's arguments where the run keeps them.
+
+A campaign's driver that flies W runs period by period holds each run's memory apart,
+and calls the scalar Function once per run with that run's ``arg`` and ``res`` pointers
+(CasADi's calling convention). :func:`lockstep_batch_c` writes the entry such a driver
+calls instead: the W runs' pointers in, each run's inputs gathered into the lockstep
+layout (nonzero ``k`` of run ``j`` at ``W k + j``), the lockstep C evaluated once, and
+each active run's outputs scattered back where its scalar call would have written them;
+a run that has finished (``active[j] == 0``) is neither read nor written (its lane
+computes a copy of the first active run's, whose result is dropped). Every active
+run's outputs are the scalar Function's bit for bit (the lanes are independent:
+:mod:`quadland_symbolic.codegen.lockstep`).
+
+A piece of issue 20's item 2 ("vectorizing across runs"), measured in
+``benchmarks/bench_lockstep.py --function flight_filter`` and ``docs/performance.md``
+("A batch entry for the filter in lockstep"); the simulators do not call it yet.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from quadland_symbolic.codegen.lockstep import lockstep_c
+from quadland_symbolic.codegen.render import common_context, render
+
+__all__ = ["lockstep_batch_c"]
+
+
+def lockstep_batch_c(fn: ca.Function, width: int, name: str | None = None) -> str:
+    """C of a batch entry evaluating ``fn`` for up to ``width`` runs in lockstep.
+
+    Parameters
+    ----------
+    fn : casadi.Function
+        An SX Function (as :func:`~quadland_symbolic.codegen.lockstep.lockstep_c`).
+    width : int
+        Runs per call, W (1, 2, 4, 8 or 16).
+    name : str, optional
+        The entry's C name; ``<fn.name()>_batch<W>`` by default. The lockstep kernel it
+        calls is ``<name>_lanes`` (static, in the same translation unit).
+
+    Returns
+    -------
+    str
+        One translation unit defining ``void name(const double* const* arg,
+        double* const* res, const int* active)``: ``arg[n_in * j + i]`` is run ``j``'s
+        input ``i`` as its scalar call takes it (NULL: zeros), ``res[n_out * j + i]`` its
+        output ``i`` (NULL: not wanted), ``active[j]`` nonzero for a run to evaluate.
+        Inactive runs' pointers are not read. Compile as the lockstep C (no
+        ``-ffast-math``, ``-ffp-contract=off``).
+
+    Raises
+    ------
+    ValueError
+        As :func:`~quadland_symbolic.codegen.lockstep.lockstep_c`.
+    """
+    name = name or f"{fn.name()}_batch{width}"
+    kernel = lockstep_c(fn, width, name=f"{name}_lanes")
+    kernel = kernel.replace(f"\nvoid {name}_lanes(", f"\nstatic void {name}_lanes(", 1)
+    n_in = [fn.nnz_in(i) for i in range(fn.n_in())]
+    n_out = [fn.nnz_out(i) for i in range(fn.n_out())]
+    return kernel + render("lockstep_batch.c.jinja", name=name, width=width, n_in=n_in,
+                           n_out=n_out, off_in=_offsets(n_in), off_out=_offsets(n_out),
+                           **common_context(None))
+
+
+def _offsets(sizes: list[int]) -> list[int]:
+    """Where each of ``sizes``' pieces starts when they lie end to end."""
+    out, at = [], 0
+    for n in sizes:
+        out.append(at)
+        at += n
+    return out
