@@ -94,36 +94,36 @@ def test_the_filter_run_by_run_bit_for_bit_with_runs_finished(filter_batch):
         assert not np.array_equal(got[1][0], got[3][0])     # the lanes are their own
 
 
-@pytest.mark.parametrize("width", [1, 2, 8])
+@pytest.mark.parametrize("width", [1, 2, 4, 8])
 def test_pointers_masks_and_nulls_worked_by_hand(tmp_path, width):
-    """``f(a, b) = (a[1] b, a[0] - b)`` for runs j with a = (j + 1, 10 (j + 1)) and b = 3,
+    """``f(a, b) = (a[1] b, a[0] - b, 2 a)`` (``a`` of 11 values: whole blocks of W values
+    and a remainder moved) for runs j with a = (j + 1) (1, 10, 3, 4, ..., 11) and b = 3,
     run 0's b NULL (zero), the last run inactive (its pointers NULL: never read), run
     1's second result NULL (not wanted)."""
-    a, b = ca.SX.sym("a", 2), ca.SX.sym("b")
-    fn = ca.Function("f", [a, b], [a[1] * b, a[0] - b])
+    a, b = ca.SX.sym("a", 11), ca.SX.sym("b")
+    fn = ca.Function("f", [a, b], [a[1] * b, a[0] - b, 2 * a])
     lib = compile_shared({"f.c": lockstep_batch_c(fn, width)}, tmp_path / "libf.so",
                          ("-O2", *STRICT))
-    runs = [[np.array([j + 1.0, 10.0 * (j + 1)]), None if j == 0 else np.array([3.0])]
-            for j in range(width)]
+    base = np.r_[1.0, 10.0, 3.0:12.0]
+    runs = [[(j + 1) * base, None if j == 0 else np.array([3.0])] for j in range(width)]
     active = [1] * width
     if width > 1:
         runs[-1], active[-1] = [None, None], 0
-    outs = [[np.full(1, NAN), np.full(1, NAN)] for _ in range(width)]
+    outs = [[np.full(1, NAN), np.full(1, NAN), np.full(11, NAN)] for _ in range(width)]
     res = [o.ctypes.data_as(PD) for run in outs for o in run]
     if width > 1:
-        res[3] = None
+        res[4] = None
     arg = [None if x is None else x.ctypes.data_as(PD) for r in runs for x in r]
     getattr(lib, f"f_batch{width}")((PD * len(arg))(*arg), (PD * len(res))(*res),
                                     (ctypes.c_int * width)(*active))
     for j in range(width):
         bj = 0.0 if j == 0 else 3.0
-        want = [[10.0 * (j + 1) * bj], [j + 1.0 - bj]]
+        want = [[10.0 * (j + 1) * bj], [j + 1.0 - bj], 2 * (j + 1) * base]
         if width > 1 and j == 1:
             want[1] = [NAN]
         if width > 1 and j == width - 1:
-            want = [[NAN], [NAN]]
-        assert np.array_equal(np.r_[outs[j][0], outs[j][1]], np.r_[want[0], want[1]],
-                              equal_nan=True)
+            want = [[NAN], [NAN], np.full(11, NAN)]
+        assert np.array_equal(np.concatenate(outs[j]), np.concatenate(want), equal_nan=True)
 
 
 def test_no_run_active_writes_nothing(tmp_path):

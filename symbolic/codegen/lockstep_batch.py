@@ -16,11 +16,11 @@ A piece of issue 20's item 2 ("vectorizing across runs"), measured against the
 runtime's compiled filter in ``benchmarks/bench_filter_batch.py`` (docs/performance.md,
 "The filter's batch entry in lockstep"); the simulators do not call it yet.
 
-Gathering and scattering cost: each run's inputs and outputs (the filter's 879 and 938
-values) are copied once each way, a value per lane per run; with AVX2 (W = 4) that is
-about as many instructions as the lockstep kernel itself. A driver that keeps its runs'
-memories interleaved calls the kernel directly (:func:`lockstep_c`) and pays none of
-it.
+Gathering and scattering: each run's inputs and outputs (the filter's 879 and 938 values)
+are moved once each way, W values of W runs at a time as a W x W block transposed in
+vector registers (interleaving shuffles, moves only, so the bits are the values'). A driver
+that keeps its runs' memories interleaved calls the kernel directly (:func:`lockstep_c`)
+and pays none of it.
 """
 
 from __future__ import annotations
@@ -68,7 +68,31 @@ def lockstep_batch_c(fn: ca.Function, width: int, name: str | None = None) -> st
     n_out = [fn.nnz_out(i) for i in range(fn.n_out())]
     return kernel + render("lockstep_batch.c.jinja", name=name, width=width, n_in=n_in,
                            n_out=n_out, off_in=_offsets(n_in), off_out=_offsets(n_out),
-                           **common_context(None))
+                           vec=f"{name}_lanes_v", transpose=_transpose(width),
+                           halves=_halves(width), **common_context(None))
+
+
+def _halves(width: int) -> tuple[str, str]:
+    """The lanes of ``interleave_low(a, b)`` and ``interleave_high(a, b)`` of two
+    ``width``-lane vectors (lanes of ``b`` numbered from ``width``)."""
+    half = width // 2
+    low = [x for i in range(half) for x in (i, width + i)]
+    high = [x for i in range(half, width) for x in (i, width + i)]
+    return ", ".join(map(str, low)), ", ".join(map(str, high))
+
+
+def _transpose(width: int) -> list[str]:
+    """Statements turning the vectors ``r0 .. r<W-1>`` (lane ``j``'s W values in a row)
+    into ``r0 .. r<W-1>`` transposed (value ``m`` of every lane), by log2(W) rounds of
+    interleaving row ``p`` with row ``p + W/2``; moves only, no arithmetic."""
+    lines, rows, half = [], [f"r{j}" for j in range(width)], width // 2
+    for _ in range(width.bit_length() - 1):
+        new = [f"t{j}" for j in range(width)]
+        for p in range(half):
+            a, b = rows[p], rows[p + half]
+            lines.append(f"{new[2 * p]} = LO_({a}, {b}); {new[2 * p + 1]} = HI_({a}, {b});")
+        lines.append(" ".join(f"{rows[j]} = {new[j]};" for j in range(width)))
+    return lines
 
 
 def _offsets(sizes: list[int]) -> list[int]:
