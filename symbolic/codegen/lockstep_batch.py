@@ -18,9 +18,9 @@ runtime's compiled filter in ``benchmarks/bench_filter_batch.py`` (docs/performa
 
 Gathering and scattering: each run's inputs and outputs (the filter's 879 and 938 values)
 are moved once each way, W values of W runs at a time as a W x W block transposed in
-vector registers (interleaving shuffles, moves only, so the bits are the values'). A driver
-that keeps its runs' memories interleaved calls the kernel directly (:func:`lockstep_c`)
-and pays none of it.
+vector registers (log2 W rounds of shuffles swapping blocks: moves only, so the bits are
+the values'). A driver that keeps its runs' memories interleaved calls the kernel
+directly (:func:`lockstep_c`) and pays none of it.
 """
 
 from __future__ import annotations
@@ -69,29 +69,32 @@ def lockstep_batch_c(fn: ca.Function, width: int, name: str | None = None) -> st
     return kernel + render("lockstep_batch.c.jinja", name=name, width=width, n_in=n_in,
                            n_out=n_out, off_in=_offsets(n_in), off_out=_offsets(n_out),
                            vec=f"{name}_lanes_v", transpose=_transpose(width),
-                           halves=_halves(width), **common_context(None))
+                           swaps=_swaps(width), **common_context(None))
 
 
-def _halves(width: int) -> tuple[str, str]:
-    """The lanes of ``interleave_low(a, b)`` and ``interleave_high(a, b)`` of two
-    ``width``-lane vectors (lanes of ``b`` numbered from ``width``)."""
-    half = width // 2
-    low = [x for i in range(half) for x in (i, width + i)]
-    high = [x for i in range(half, width) for x in (i, width + i)]
-    return ", ".join(map(str, low)), ", ".join(map(str, high))
+def _swaps(width: int) -> list[tuple[int, str, str]]:
+    """Each round of the block transpose: ``(d, low, high)``, the lanes of the two
+    shuffles of rows ``a`` and ``b`` ``d`` apart (``b``'s lanes numbered from ``width``):
+    ``low`` keeps ``a``'s blocks of ``d`` at even block places and takes ``b``'s before
+    them at the odd; ``high`` the rest (each one instruction with SSE2, AVX2, AVX-512)."""
+    out, d = [], 1
+    while d < width:
+        low = [m if not m & d else width + m - d for m in range(width)]
+        high = [m + d if not m & d else width + m for m in range(width)]
+        out.append((d, ", ".join(map(str, low)), ", ".join(map(str, high))))
+        d *= 2
+    return out
 
 
 def _transpose(width: int) -> list[str]:
     """Statements turning the vectors ``r0 .. r<W-1>`` (lane ``j``'s W values in a row)
-    into ``r0 .. r<W-1>`` transposed (value ``m`` of every lane), by log2(W) rounds of
-    interleaving row ``p`` with row ``p + W/2``; moves only, no arithmetic."""
-    lines, rows, half = [], [f"r{j}" for j in range(width)], width // 2
-    for _ in range(width.bit_length() - 1):
-        new = [f"t{j}" for j in range(width)]
-        for p in range(half):
-            a, b = rows[p], rows[p + half]
-            lines.append(f"{new[2 * p]} = LO_({a}, {b}); {new[2 * p + 1]} = HI_({a}, {b});")
-        lines.append(" ".join(f"{rows[j]} = {new[j]};" for j in range(width)))
+    into ``r0 .. r<W-1>`` transposed (value ``m`` of every lane): in rounds ``d = 1, 2,
+    ...``, rows ``i`` and ``i + d`` swap their off-diagonal blocks of ``d``; moves only."""
+    lines = []
+    for d, _, _ in _swaps(width):
+        pairs = [(i, i + d) for i in range(width) if not i & d]
+        lines += [f"t{i} = LO{d}_(r{i}, r{k}); t{k} = HI{d}_(r{i}, r{k});" for i, k in pairs]
+        lines.append(" ".join(f"r{i} = t{i};" for i in range(width)))
     return lines
 
 
