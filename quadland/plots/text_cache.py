@@ -24,6 +24,7 @@ from matplotlib.font_manager import fontManager, get_font
 from matplotlib.ft2font import FT2Font
 
 from quadland.plots.font_memory import memory_font
+from quadland.plots.glyph_cache import draw_glyphs
 
 __all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE"]
 
@@ -104,11 +105,7 @@ class TextCacheRenderer(RendererAgg):
             font = self._prepare_font(prop)
             items = _remember(_LAYOUTS, key, tuple(font._layout(
                 s, flags=flags, features=features, language=language)))
-        size = prop.get_size_in_points()
-        self._draw_text_glyphs_and_boxes(
-            gc, x, y, angle,
-            ((item.ft_object, size, item.glyph_index, 0, 1, item.x, item.y) for item in items),
-            [])
+        draw_glyphs(self, gc, x, y, angle, items, prop.get_size_in_points(), flags)
         return None
 
 
