@@ -18,6 +18,8 @@ methods this one relies on (another version), it draws as matplotlib does.
 
 from __future__ import annotations
 
+import os
+
 import matplotlib as mpl
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
 from matplotlib.font_manager import fontManager, get_font
@@ -26,21 +28,49 @@ from matplotlib.ft2font import FT2Font
 from quadland.plots.font_memory import memory_font
 from quadland.plots.glyph_cache import draw_glyphs
 
-__all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE"]
+__all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE", "font_paths"]
 
 #: Most layouts (and height metrics) kept; the cache is emptied when full.
 CACHE_SIZE = 4096
 
 _LAYOUTS: dict = {}
 _HEIGHTS: dict = {}
+_PATHS: dict = {}
 
 #: Whether this matplotlib draws text as the renderer below expects (3.11's Agg).
 _CACHEABLE = (hasattr(RendererAgg, "_draw_text_glyphs_and_boxes")
               and hasattr(FT2Font, "_layout"))
 
 
+#: The font properties' own values and the rc parameters matplotlib's ``findfont`` reads.
+_RC_FONT_KEYS = tuple(f"font.{key}" for key in (
+    "family", "style", "variant", "weight", "stretch", "size",
+    "serif", "sans-serif", "cursive", "fantasy", "monospace"))
+
+
+def font_paths(prop) -> tuple:
+    """``fontManager._find_fonts_by_props(prop)`` as a tuple, found once per process for
+    what it is found from: the properties' values, the rc parameters matplotlib's
+    ``findfont`` reads, its ``MPL_IGNORE_SYSTEM_FONTS`` and the font lists' lengths (a font
+    added with ``addfont`` starts a new entry). matplotlib's own search copies the
+    properties once per family and hashes them again for its cache on every call."""
+    rc = mpl.rcParams
+    try:
+        key = (tuple(vars(prop).items()),
+               tuple(tuple(v) if isinstance(v, list) else v for v in map(rc.__getitem__,
+                                                                          _RC_FONT_KEYS)),
+               os.getenv("MPL_IGNORE_SYSTEM_FONTS"), len(fontManager.ttflist),
+               len(fontManager.afmlist))
+        paths = _PATHS.get(key)
+    except TypeError:                   # a property not hashable: found each time
+        return tuple(fontManager._find_fonts_by_props(prop))
+    if paths is None:
+        paths = _remember(_PATHS, key, tuple(fontManager._find_fonts_by_props(prop)))
+    return paths
+
+
 def _font_key(prop, dpi) -> tuple:
-    paths = tuple(fontManager._find_fonts_by_props(prop))
+    paths = font_paths(prop)
     return (paths, prop.get_size_in_points(), dpi, mpl.rcParams["text.hinting_factor"],
             mpl.rcParams["text.kerning_factor"])
 
@@ -83,7 +113,7 @@ class TextCacheRenderer(RendererAgg):
         """The font of ``font_prop`` cleared and sized, as matplotlib's Agg renderer
         prepares it, read from memory (:func:`~quadland.plots.font_memory.memory_font`)
         where this matplotlib allows."""
-        font = memory_font(fontManager._find_fonts_by_props(font_prop)) if _CACHEABLE else None
+        font = memory_font(font_paths(font_prop)) if _CACHEABLE else None
         if font is None:
             return super()._prepare_font(font_prop)
         font.clear()
