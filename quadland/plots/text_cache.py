@@ -54,11 +54,12 @@ def font_paths(prop) -> tuple:
     ``findfont`` reads, its ``MPL_IGNORE_SYSTEM_FONTS`` and the font lists' lengths (a font
     added with ``addfont`` starts a new entry). matplotlib's own search copies the
     properties once per family and hashes them again for its cache on every call."""
-    rc = mpl.rcParams
+    # rcParams._get: the stored value without the backend's resolution, which no font
+    # parameter has (matplotlib keeps its name stable)
+    read = getattr(mpl.rcParams, "_get", mpl.rcParams.__getitem__)
     try:
         key = (tuple(vars(prop).items()),
-               tuple(tuple(v) if isinstance(v, list) else v for v in map(rc.__getitem__,
-                                                                          _RC_FONT_KEYS)),
+               tuple(tuple(v) if isinstance(v, list) else v for v in map(read, _RC_FONT_KEYS)),
                os.getenv("MPL_IGNORE_SYSTEM_FONTS"), len(fontManager.ttflist),
                len(fontManager.afmlist))
         paths = _PATHS.get(key)
