@@ -10,9 +10,11 @@ measures them about 2,000 times.
 
 :class:`TextCacheRenderer` keeps both, by what they are computed from: the
 layout of a string by its fonts' files, size, resolution, hinting and
-features; the height metrics by the fonts' files, size and resolution. The
-glyphs are rendered as before, so the pixels are the same (checked in
-``tests/test_quick_figure.py``). Where matplotlib's Agg renderer has not the
+features; the height metrics by the fonts' files, size and resolution; a text's font
+files by its font properties and the rc parameters (:func:`font_paths`). Its glyphs are
+drawn by :func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per
+sub-pixel place. The pixels are the same (checked in ``tests/test_quick_figure.py`` and
+``tests/test_glyph_cache.py``). Where matplotlib's Agg renderer has not the
 methods this one relies on (another version), it draws as matplotlib does.
 """
 
