@@ -21,6 +21,7 @@ matplotlib's arithmetic: the same pixels (``tests/test_glyph_cache.py``).
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 from matplotlib.ft2font import RenderMode
@@ -99,3 +100,9 @@ def draw_glyphs(renderer, gc, x: float, y: float, angle: float, items, size: flo
         buffer, left, top = kept
         # draw_text_image's y is downwards, at the bitmap's bottom side
         draw(buffer, left + whole_x, bottom - (top + whole_y) + buffer.shape[0], 0, gc)
+
+
+if hasattr(os, "register_at_fork"):
+    # a forked child makes its fonts anew (quadland.plots.font_memory, matplotlib's own):
+    # the parent's, kept here as keys, would only hold memory
+    os.register_at_fork(after_in_child=_BITMAPS.clear)
