@@ -110,6 +110,12 @@ def stages(name: str = "highway") -> dict:
     return out
 
 
+def _costs(measured: dict, name: str, tree: str) -> list[float]:
+    """The figures' CPU s in each run: the command with them less without them."""
+    return [a - b for a, b in zip(measured[name, True, tree], measured[name, False, tree],
+                                  strict=True)]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3, help="runs of each command")
@@ -118,8 +124,17 @@ def main(argv=None):
     ap.add_argument("--no-stages", action="store_true", help="skip the stages of highway's review")
     args = ap.parse_args(argv)
     print("## quadland margins, whole process, CPU s, median (min to max)")
-    for (name, figures, tree), cpu in commands(args.runs, args.against, args.scenarios).items():
+    measured = commands(args.runs, args.against, args.scenarios)
+    for (name, figures, tree), cpu in measured.items():
         print(f"- {name}{' (figures)' if figures else ' --no-plots'}, {tree}: {_stats(cpu)}")
+    print("\n## the figures' cost, run by run (figures less --no-plots of the same run), CPU s")
+    for name, tree in dict.fromkeys((n, t) for n, _, t in measured):
+        print(f"- {name}, {tree}: {_stats(_costs(measured, name, tree))}")
+    if args.against is not None:
+        for name in args.scenarios:
+            ratios = [a / b for a, b in zip(_costs(measured, name, "this"),
+                                            _costs(measured, name, "against"), strict=True)]
+            print(f"- {name}, this / against, run by run: {_stats(ratios)}")
     if args.no_stages:
         return
     print("\n## margin_report of highway in this process, first call, CPU s")

@@ -36,6 +36,8 @@ __all__ = ["memory_font", "available"]
 _FONTS: dict = {}
 #: Each font file's bytes, by its real path.
 _BYTES: dict = {}
+#: Each font file's real path, by the path matplotlib gives.
+_REAL_PATHS: dict = {}
 
 _RECIPE_PARAMETERS = ("font_filepaths", "_kerning_factor", "thread_id", "enable_last_resort")
 
@@ -66,9 +68,15 @@ def available() -> bool:
 
 
 def _file_entry(font_path) -> tuple[str, int]:
-    """A ``FontPath`` (matplotlib 3.11) or a path: its real path and face index."""
-    return (os.path.realpath(getattr(font_path, "path", font_path)),
-            int(getattr(font_path, "face_index", 0)))
+    """A ``FontPath`` (matplotlib 3.11) or a path: its real path and face index.
+
+    The real path is resolved once per path and process (a font's text is drawn many
+    times; its bytes are read once anyway, :func:`_in_memory`)."""
+    path = os.fspath(getattr(font_path, "path", font_path))
+    real = _REAL_PATHS.get(path)
+    if real is None:
+        real = _REAL_PATHS[path] = os.path.realpath(path)
+    return real, int(getattr(font_path, "face_index", 0))
 
 
 def _in_memory(path: str) -> io.BytesIO:

@@ -6,7 +6,9 @@ once in a ``tight_layout`` (the legend's box, for the axes' tight box) and twice
 draw (the frame's box, then the entries' offset): twelve such legends in highway's
 margin figures, each search a few thousand vertex counts.
 
-Within :func:`legends_placed`, a legend keeps its place for the pass, by its size,
+Within :func:`legends_placed`, a legend searches its place with its vertices counted at
+once (:func:`quadland.plots.legend_search.best_place`: the same place) and keeps it for
+the pass, by its size,
 the renderer, its axes' box and view limits (what the search reads besides the
 artists, which do not change within a pass), and each packer of its entries (the rows
 and columns of handles and texts, ``VPacker`` and ``HPacker``) keeps its box and its
@@ -24,17 +26,32 @@ from __future__ import annotations
 
 import contextlib
 
+from matplotlib.legend import Legend
 from matplotlib.offsetbox import HPacker, VPacker
 
+from quadland.plots.legend_search import available, best_place
+
 __all__ = ["legends_placed"]
+
+_OWN_SEARCH = available()
+#: matplotlib's search, as imported: a legend class (or a test) with its own keeps it.
+_MATPLOTLIBS_SEARCH = getattr(Legend, "_find_best_position", None)
 
 
 def _legends(fig) -> list:
     return [ax.legend_ for ax in fig.axes if getattr(ax, "legend_", None) is not None]
 
 
+def _search(legend):
+    """The legend's search for its best place: :func:`~quadland.plots.legend_search.best_place`
+    where matplotlib's own search is the legend's, else the legend's."""
+    if _OWN_SEARCH and type(legend)._find_best_position is _MATPLOTLIBS_SEARCH:
+        return lambda width, height, renderer: best_place(legend, width, height, renderer)
+    return legend._find_best_position
+
+
 def _memoize(legend) -> None:
-    search = legend._find_best_position
+    search = _search(legend)
     kept: dict = {}
 
     def best_position(width, height, renderer):

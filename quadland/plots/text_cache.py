@@ -10,13 +10,17 @@ measures them about 2,000 times.
 
 :class:`TextCacheRenderer` keeps both, by what they are computed from: the
 layout of a string by its fonts' files, size, resolution, hinting and
-features; the height metrics by the fonts' files, size and resolution. The
-glyphs are rendered as before, so the pixels are the same (checked in
-``tests/test_quick_figure.py``). Where matplotlib's Agg renderer has not the
+features; the height metrics by the fonts' files, size and resolution; a text's font
+files by its font properties and the rc parameters (:func:`font_paths`). Its glyphs are
+drawn by :func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per
+sub-pixel place. The pixels are the same (checked in ``tests/test_quick_figure.py`` and
+``tests/test_glyph_cache.py``). Where matplotlib's Agg renderer has not the
 methods this one relies on (another version), it draws as matplotlib does.
 """
 
 from __future__ import annotations
+
+import os
 
 import matplotlib as mpl
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
@@ -24,22 +28,52 @@ from matplotlib.font_manager import fontManager, get_font
 from matplotlib.ft2font import FT2Font
 
 from quadland.plots.font_memory import memory_font
+from quadland.plots.glyph_cache import draw_glyphs
 
-__all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE"]
+__all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE", "font_paths"]
 
 #: Most layouts (and height metrics) kept; the cache is emptied when full.
 CACHE_SIZE = 4096
 
 _LAYOUTS: dict = {}
 _HEIGHTS: dict = {}
+_PATHS: dict = {}
 
 #: Whether this matplotlib draws text as the renderer below expects (3.11's Agg).
 _CACHEABLE = (hasattr(RendererAgg, "_draw_text_glyphs_and_boxes")
               and hasattr(FT2Font, "_layout"))
 
 
+#: The font properties' own values and the rc parameters matplotlib's ``findfont`` reads.
+_RC_FONT_KEYS = tuple(f"font.{key}" for key in (
+    "family", "style", "variant", "weight", "stretch", "size",
+    "serif", "sans-serif", "cursive", "fantasy", "monospace"))
+
+
+def font_paths(prop) -> tuple:
+    """``fontManager._find_fonts_by_props(prop)`` as a tuple, found once per process for
+    what it is found from: the properties' values, the rc parameters matplotlib's
+    ``findfont`` reads, its ``MPL_IGNORE_SYSTEM_FONTS`` and the font lists' lengths (a font
+    added with ``addfont`` starts a new entry). matplotlib's own search copies the
+    properties once per family and hashes them again for its cache on every call."""
+    # rcParams._get: the stored value without the backend's resolution, which no font
+    # parameter has (matplotlib keeps its name stable)
+    read = getattr(mpl.rcParams, "_get", mpl.rcParams.__getitem__)
+    try:
+        key = (tuple(vars(prop).items()),
+               tuple(tuple(v) if isinstance(v, list) else v for v in map(read, _RC_FONT_KEYS)),
+               os.getenv("MPL_IGNORE_SYSTEM_FONTS"), len(fontManager.ttflist),
+               len(fontManager.afmlist))
+        paths = _PATHS.get(key)
+    except TypeError:                   # a property not hashable: found each time
+        return tuple(fontManager._find_fonts_by_props(prop))
+    if paths is None:
+        paths = _remember(_PATHS, key, tuple(fontManager._find_fonts_by_props(prop)))
+    return paths
+
+
 def _font_key(prop, dpi) -> tuple:
-    paths = tuple(fontManager._find_fonts_by_props(prop))
+    paths = font_paths(prop)
     return (paths, prop.get_size_in_points(), dpi, mpl.rcParams["text.hinting_factor"],
             mpl.rcParams["text.kerning_factor"])
 
@@ -82,7 +116,7 @@ class TextCacheRenderer(RendererAgg):
         """The font of ``font_prop`` cleared and sized, as matplotlib's Agg renderer
         prepares it, read from memory (:func:`~quadland.plots.font_memory.memory_font`)
         where this matplotlib allows."""
-        font = memory_font(fontManager._find_fonts_by_props(font_prop)) if _CACHEABLE else None
+        font = memory_font(font_paths(font_prop)) if _CACHEABLE else None
         if font is None:
             return super()._prepare_font(font_prop)
         font.clear()
@@ -104,11 +138,7 @@ class TextCacheRenderer(RendererAgg):
             font = self._prepare_font(prop)
             items = _remember(_LAYOUTS, key, tuple(font._layout(
                 s, flags=flags, features=features, language=language)))
-        size = prop.get_size_in_points()
-        self._draw_text_glyphs_and_boxes(
-            gc, x, y, angle,
-            ((item.ft_object, size, item.glyph_index, 0, 1, item.x, item.y) for item in items),
-            [])
+        draw_glyphs(self, gc, x, y, angle, items, prop.get_size_in_points(), flags)
         return None
 
 

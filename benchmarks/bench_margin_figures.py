@@ -1,0 +1,108 @@
+"""The margin figures alone: CPU of drawing and encoding them in a fresh process, paired.
+
+Each scenario's review is computed once here and pickled; then, run by run and tree by
+tree (alternating which goes first), a fresh process unpickles it, imports the figures as
+the command line does (:func:`quadland.mpl_import.for_the_command_line`) and draws and
+encodes the five figures (``margin_figures``, ``figure_png``, the collector paused as
+``quadland margins`` pauses it), less the same process without the figures. Without the
+review in the measured processes (1.3 to 2.5 s each), the load's scatter is smaller than
+in ``bench_margins.py``'s whole commands. CPU time of the children (``getrusage``),
+medians (min to max), and the run-by-run ratio of ``this`` to ``against``.
+
+Run from the repository root::
+
+    python benchmarks/bench_margin_figures.py --runs 9 --against /tmp/old
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import pickle
+import resource
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from bench_margins import _stats, _tree_env
+
+#: What each measured process runs: argv[1] the pickled review, argv[2] "figures" or not.
+CHILD = """
+import os, pickle, sys
+from quadland import mpl_import
+mpl_import.for_the_command_line()
+import scipy.linalg
+from threadpoolctl import threadpool_limits
+with open(sys.argv[1], "rb") as f:
+    report = pickle.load(f)
+if sys.argv[2] == "figures":
+    with threadpool_limits(1):
+        from quadland.output import figure_png
+        from quadland.plots import margin_figures
+        from quadland.plots.gc_pause import collection_paused
+        with collection_paused():
+            pngs = {k: figure_png(v) for k, v in margin_figures(report).items()}
+os._exit(0)
+"""
+
+
+def _review(name: str, path: Path) -> None:
+    import scipy.linalg  # noqa: F401  (threadpoolctl limits the BLAS loaded)
+    from threadpoolctl import threadpool_limits
+
+    from quadland import load_scenario
+    from quadland.margins import margin_report
+
+    with threadpool_limits(1):
+        report = margin_report(load_scenario(name))
+    path.write_bytes(pickle.dumps(report))
+
+
+def _cpu(args, env) -> float:
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run(args, env=env, check=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+
+
+def figures(runs: int, against: Path | None, scenarios) -> dict:
+    """CPU s of the five figures in each run, by (scenario, tree)."""
+    out: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        child = Path(tmp, "child.py")
+        child.write_text(CHILD)
+        trees = {"this": dict(os.environ)}
+        if against is not None:
+            trees["against"] = _tree_env(against.resolve(), Path(tmp))
+        for name in scenarios:
+            _review(name, Path(tmp, f"{name}.pkl"))
+        for k in range(runs):
+            for name in scenarios:
+                order = list(trees.items())
+                for tree, env in order if k % 2 == 0 else order[::-1]:
+                    args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
+                    base = _cpu([*args, "none"], env)
+                    out.setdefault((name, tree), []).append(_cpu([*args, "figures"], env) - base)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=5, help="runs of each")
+    ap.add_argument("--against", type=Path, help="another source tree, paired run by run")
+    ap.add_argument("--scenarios", nargs="+", default=("paper", "highway"))
+    args = ap.parse_args(argv)
+    measured = figures(args.runs, args.against, args.scenarios)
+    print("## the five margin figures in a fresh process, CPU s, median (min to max)")
+    for (name, tree), cpu in measured.items():
+        print(f"- {name}, {tree}: {_stats(cpu)}")
+    if args.against is not None:
+        for name in args.scenarios:
+            ratios = [a / b for a, b in zip(measured[name, "this"], measured[name, "against"],
+                                            strict=True)]
+            print(f"- {name}, this / against, run by run: {_stats(ratios)}")
+
+
+if __name__ == "__main__":
+    main()
