@@ -107,6 +107,7 @@ def _env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
 def callgrind(tree: Path | None, tmp: Path, tables: int) -> int:
     """Callgrind's instruction count of a process that draws ``tables`` 40 s tables."""
     env, cwd = _env(tree, tmp)
+    env["PYTHONHASHSEED"] = "0"                # the same dictionaries' and sets' order
     out = tmp / "callgrind.out"
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
                     sys.executable, "-c", _CALLGRIND, str(tables)], check=True, cwd=cwd,

@@ -176,7 +176,7 @@ class _Rows:
         room = max(rows, 2 * room)
         grown = []
         for a, (dt, shape) in zip(self.arrays, self.columns.values(), strict=True):
-            b = np.zeros((room, *shape), dtype=dt)
+            b = np.empty((room, *shape), dtype=dt)     # rows past those put are never read
             b[:a.shape[0]] = a
             grown.append(b)
         self.arrays = grown
