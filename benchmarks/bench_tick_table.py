@@ -16,9 +16,10 @@ tree, e.g. ``git archive 0221e14 | tar -x -C /tmp/old``) alternately:
 
     nice -n 10 python benchmarks/bench_tick_table.py --against /tmp/old --rounds 3 --runs 60
 
-``--callgrind`` instead counts the instructions of a 40 s table (10,000 ticks) under
-``valgrind --tool=callgrind``, on each tree: half the difference between a process that
-draws three tables and one that draws one.
+``--callgrind`` instead counts the instructions of a table (to 10,000 and to 4,096
+ticks) under ``valgrind --tool=callgrind``, on each tree: half the difference between a
+process that draws three tables and one that draws one (``PYTHONHASHSEED=0``, one BLAS
+thread).
 """
 
 from __future__ import annotations
@@ -86,7 +87,7 @@ sc = load_scenario("highway")
 for _ in range(int(sys.argv[1])):
     t = TickTable(sc, 10001)
     tick = 0
-    while tick < 10000:
+    while tick < int(sys.argv[2]):
         tick = t.more(tick)
 '''
 
@@ -104,13 +105,15 @@ def _env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
     return env, tmp
 
 
-def callgrind(tree: Path | None, tmp: Path, tables: int) -> int:
-    """Callgrind's instruction count of a process that draws ``tables`` 40 s tables."""
+def callgrind(tree: Path | None, tmp: Path, tables: int, ticks: int) -> int:
+    """Callgrind's instruction count of a process that draws ``tables`` tables to
+    ``ticks``."""
     env, cwd = _env(tree, tmp)
     env["PYTHONHASHSEED"] = "0"                # the same dictionaries' and sets' order
+    env["OPENBLAS_NUM_THREADS"] = "1"          # no BLAS threads spinning
     out = tmp / "callgrind.out"
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-                    sys.executable, "-c", _CALLGRIND, str(tables)], check=True, cwd=cwd,
+                    sys.executable, "-c", _CALLGRIND, str(tables), str(ticks)], check=True, cwd=cwd,
                    env=env, capture_output=True)
     for line in out.read_text().splitlines():
         if line.startswith("summary:") or line.startswith("totals:"):
@@ -132,14 +135,16 @@ def main() -> None:
     ap.add_argument("--tables", type=int, default=15)
     ap.add_argument("--runs", type=int, default=0)
     ap.add_argument("--callgrind", action="store_true",
-                    help="instructions a 40 s table: processes of 1 and 3 tables, each tree")
+                    help="instructions a table: processes of 1 and 3 tables, each tree")
     a = ap.parse_args()
     if a.callgrind:
         with tempfile.TemporaryDirectory() as tmp:
-            for name, tree in (("before", a.against.resolve()), ("now", None)):
-                one, three = (callgrind(tree, Path(tmp), n) for n in (1, 3))
-                print(f"{name}: {(three - one) / 2 / 1e6:.2f} M instructions a 40 s table "
-                      f"(processes of 1 and 3 tables: {one:,} and {three:,})", flush=True)
+            for ticks in (10000, 4096):
+                for name, tree in (("before", a.against.resolve()), ("now", None)):
+                    one, three = (callgrind(tree, Path(tmp), n, ticks) for n in (1, 3))
+                    print(f"{name}: {(three - one) / 2 / 1e6:.2f} M instructions a table to "
+                          f"{ticks} ticks (processes of 1 and 3 tables: {one:,} and "
+                          f"{three:,})", flush=True)
         return
     res: dict[str, dict[str, list]] = {"before": {}, "now": {}}
     with tempfile.TemporaryDirectory() as tmp:
