@@ -170,6 +170,7 @@ class _Rows:
         self.arrays = [np.zeros((0, *shape), dtype=dt) for dt, shape in self.columns.values()]
 
     def reserve(self, rows: int) -> None:
+        """Room for ``rows`` rows at least."""
         room = self.arrays[0].shape[0]
         if rows <= room:
             return
@@ -182,10 +183,12 @@ class _Rows:
         self.arrays = grown
 
     def put(self, k0: int, values) -> None:
+        """Write each array's ``values`` (in the order of ``columns``) from row ``k0``."""
         for a, v in zip(self.arrays, values, strict=True):
             a[k0:k0 + len(v)] = v
 
     def views(self, rows: int) -> tuple[np.ndarray, ...]:
+        """Each array's first ``rows`` rows, views in the order of ``columns``."""
         return tuple(a[:rows] for a in self.arrays)
 
 
