@@ -76,6 +76,35 @@ def test_the_highway_table_to_12_s_is_the_first_12_s_of_the_whole_table():
     assert not np.any(lazy.rows[3_000:])              # nothing drawn past the chunk
 
 
+@pytest.mark.parametrize("overrides", [[], ["sensors.imu.rate_hz=125.0",
+                                             "sensors.vision.phase=0.012"]])
+def test_each_sample_is_on_its_own_tick_s_row(overrides):
+    """The table against each sensor's samples (``draw_sensors``, the same draws) placed
+    one by one on the row of its tick, ``round(t rate)``: its sample flag, delivery and
+    noise there, zeros on every other row of its columns; to 12.3 s drawn as a flight
+    draws it (chunk by chunk, each sensor's samples written through a strided view
+    where its ticks are evenly spaced), and to a tick off the chunks. With the IMU at
+    125 Hz (every other row) and the vision 3 ticks late."""
+    sc = load_scenario("highway", overrides)
+    rate = sc["controller.rate_hz"]
+    settings = {n: dict(sc.data[f"sensors.{n}"]) for n in SENSOR_NAMES}
+    for ticks, chunk in ((3_072, None), (1_237, 100)):
+        table = TickTable(sc, 10_000, chunk=chunk, first=chunk)
+        tick = 0
+        while tick < ticks:
+            tick = table.more(tick)
+        draws = draw_sensors(settings, table.filled / rate, seed=sc["simulation.seed"])
+        expect = np.zeros_like(table.rows)
+        for name in SENSOR_NAMES:
+            s = draws[name]
+            for t, kept, noise in zip(s.times, s.delivered, s.noise, strict=True):
+                row = expect[round(t * rate)]
+                row[SENSED_TICK.slice(f"{name}_sampled")] = 1.0
+                row[SENSED_TICK.slice(f"{name}_kept")] = float(kept)
+                row[SENSED_TICK.slice(f"{name}_noise")] = noise
+        assert _same_bits(table.rows, expect), (overrides, ticks)
+
+
 def test_a_block_is_drawn_from_its_own_seed():
     """The vision's deliveries re-derived from the documented spawn key: block ``b``'s
     generator, ``(seed, SENSOR_STREAM, stream, 3, b)``, draws the block's uniforms first;

@@ -158,6 +158,40 @@ class _Clock:
 _NORMALS = {"imu": 12 + 6, "vision": 6, "gnss": 12, "rangefinder": 2, "datalink": 15}
 
 
+class _Rows:
+    """Arrays of rows filled in order, with room to grow: ``{name: (dtype, row shape)}``.
+
+    :meth:`reserve` makes room for a row count (at least doubling the room when it
+    grows, the rows so far copied once), :meth:`put` writes rows from an offset,
+    :meth:`views` gives each array's first rows (views: a write into one is kept)."""
+
+    def __init__(self, columns: Mapping[str, tuple]):
+        self.columns = dict(columns)
+        self.arrays = [np.zeros((0, *shape), dtype=dt) for dt, shape in self.columns.values()]
+
+    def reserve(self, rows: int) -> None:
+        """Room for ``rows`` rows at least."""
+        room = self.arrays[0].shape[0]
+        if rows <= room:
+            return
+        room = max(rows, 2 * room)
+        grown = []
+        for a, (dt, shape) in zip(self.arrays, self.columns.values(), strict=True):
+            b = np.empty((room, *shape), dtype=dt)     # rows past those put are never read
+            b[:a.shape[0]] = a
+            grown.append(b)
+        self.arrays = grown
+
+    def put(self, k0: int, values) -> None:
+        """Write each array's ``values`` (in the order of ``columns``) from row ``k0``."""
+        for a, v in zip(self.arrays, values, strict=True):
+            a[k0:k0 + len(v)] = v
+
+    def views(self, rows: int) -> tuple[np.ndarray, ...]:
+        """Each array's first ``rows`` rows, views in the order of ``columns``."""
+        return tuple(a[:rows] for a in self.arrays)
+
+
 def _on_clock(clock: _Clock, times: np.ndarray) -> np.ndarray:
     """Each time's tick of ``clock`` where they coincide (within :data:`GRID_TOL` of its
     period: the loop's grid rule), else -1."""
@@ -176,24 +210,24 @@ class _Sensor:
         self.imu = imu                              # the IMU's clock (vision, rangefinder)
         self.layout = NOISES[name]
         self.n = 0                                  # samples drawn (whole blocks)
-        self.delivered = np.zeros(0, dtype=bool)
-        self.noise = np.zeros((0, self.layout.size))
-        self.att_normals = np.zeros((0, 6))         # the attitude error's normals
+        # the draws' rows, with room to grow (a row count doubled when full: each block
+        # copied into place once, not the whole history at each extension); `delivered`,
+        # `noise` and `att_normals` (the attitude error's normals) are views of their
+        # first `n` rows
+        self._rows = _Rows({"delivered": (bool, ()), "noise": (float, (self.layout.size,)),
+                            "att_normals": (float, (6,))})
+        self.delivered, self.noise, self.att_normals = self._rows.views(0)
         self.state: dict[str, np.ndarray] = {}
 
     def ensure(self, count: int) -> None:
         """Draw whole blocks until ``count`` samples are drawn."""
-        delivered, noise, att = [self.delivered], [self.noise], [self.att_normals]
+        if self.n >= count:
+            return
+        self._rows.reserve(-(-count // BLOCK) * BLOCK)
         while self.n < count:
-            d, z, a = self._block(self.n // BLOCK)
-            delivered.append(d)
-            noise.append(z)
-            att.append(a)
+            self._rows.put(self.n, self._block(self.n // BLOCK))
             self.n += BLOCK
-        if len(delivered) > 1:
-            self.delivered = np.concatenate(delivered)
-            self.noise = np.concatenate(noise)
-            self.att_normals = np.concatenate(att)
+        self.delivered, self.noise, self.att_normals = self._rows.views(self.n)
 
     def _block(self, b: int):
         s, B = self.s, BLOCK
@@ -273,7 +307,8 @@ class _Attitude:
         self.clock = imu.clock
         self.tol = GRID_TOL * self.clock.h
         self.n = 0
-        self.gm, self.wn = np.zeros((0, 3)), np.zeros((0, 3))
+        self._rows = _Rows({"gm": (float, (3,)), "wn": (float, (3,))})
+        self.gm, self.wn = self._rows.views(0)
         self.last = None                    # the last point filled in: (t, gm, wn)
 
     def ensure(self, count: int) -> None:
@@ -289,8 +324,9 @@ class _Attitude:
                                     *prev)
         else:
             gm = np.zeros((k1 - k0, 3))
-        self.gm = np.concatenate([self.gm, gm])
-        self.wn = np.concatenate([self.wn, self.white * z[:, 3:]])
+        self._rows.reserve(k1)
+        self._rows.put(k0, (gm, self.white * z[:, 3:]))
+        self.gm, self.wn = self._rows.views(k1)
         self.n = k1
 
     def coupling(self, rows: np.ndarray) -> np.ndarray:
