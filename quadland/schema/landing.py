@@ -232,6 +232,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
                              "descent above it does; false: the crawl is committed",
                              default=False),
+        "swerve_accel": Field(F, "m/s^2", "the pad's horizontal acceleration (as the "
+                              "aircraft knows it) above which the final descent does not "
+                              "commit and a committed one is withdrawn (0: no hold)",
+                              lo=0.0, hi=100.0, default=0.0),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
