@@ -472,12 +472,12 @@ def landing_guidance(xg, y, cues, dt, p_guid):
     ``a2E[2]``, ``cues`` (:data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`) the
     touchdown verdict and the marker's age (:func:`measured_cues` on perfect sensing), the
     deck tilt's cues the measurement's (:func:`~.deck_tilt.tilt_cues`), the pad's swerve
-    its ``v2E``, ``a2E`` and ``w2E``'s (:func:`~.swerve.pad_swerve`). Returns ``(xg_next,
+    its ``a2E``'s horizontal magnitude (:func:`~.swerve.pad_swerve`). Returns ``(xg_next,
     reference)``."""
     ms = LANDING_MEASUREMENT.unpack(y)
     return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], ms["a2E"][2], cues, dt,
                          p_guid, tilt_cues(ms["eta1"], ms["eta2"], ms["w2E"], ms["w2E_dot"]),
-                         pad_swerve(ms["v2E"], ms["a2E"], ms["w2E"]))
+                         pad_swerve(ms["a2E"]))
 
 
 @functools.cache
