@@ -202,7 +202,7 @@ typedef struct {
     qlf_real pivot_h;                /* m: the pivot's height below the centre of mass (0: none) */
     qlf_real descent_leash;          /* m: how far the falling reference may lead the quadrotor down (0: no limit) */
     qlf_real leash_height;           /* m: reference height above touchdown below which the leash holds (above it the reference falls free) */
-    qlf_real withdraw_height;        /* m: reference height above touchdown at or below which a rising deck no longer withdraws the committed descent (-1000: it does everywhere) */
+    qlf_real withdraw_height;        /* m: reference height above touchdown at or below which a rising deck (or a swerve) no longer withdraws the committed descent (-1000: it does everywhere) */
     qlf_real calm_tilt;              /* rad: largest angle, predicted at the contact, between the deck's normal and the flare's worst lean at which the final descent commits (pi: no limit) */
     qlf_real contact_drop;           /* m: how much higher the centre meets the deck leaning than level (its lowest foot that much lower): the profile descends to touchdown_height + contact_drop (0: the level gear) */
     qlf_real crawl_pause;            /* 0/1: 1: out of the align band the crawl pauses too, as the descent above it does; 0: the crawl is committed */

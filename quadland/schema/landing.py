@@ -224,8 +224,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "leash_height": Field(F, "m", "height above touchdown below which descent_leash holds",
                               lo=0.0, hi=1e3, default=1e3),
         "withdraw_height": Field(F, "m", "reference height above touchdown at or below which "
-                                 "a rising deck no longer withdraws the committed descent "
-                                 "(-1000: everywhere)", lo=-1e3, hi=1e3, default=-1e3),
+                                 "a rising deck (or a swerve) no longer withdraws the committed "
+                                 "descent (-1000: everywhere)", lo=-1e3, hi=1e3, default=-1e3),
         "calm_tilt_deg": Field(F, "deg", "the deck's normal predicted at the contact within "
                                "this of the flare's worst lean, or the final descent does "
                                "not commit (180: no limit)", lo=0.0, hi=180.0, default=180.0),

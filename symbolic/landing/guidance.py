@@ -195,7 +195,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
     Field("withdraw_height", 1, "m", "reference height above touchdown at or below which a "
-          "rising deck no longer withdraws the committed descent (-1000: it does everywhere)"),
+          "rising deck (or a swerve) no longer withdraws the committed descent (-1000: it "
+          "does everywhere)"),
     Field("calm_tilt", 1, "rad", "largest angle, predicted at the contact, between the deck's "
           "normal and the flare's worst lean at which the final descent commits (pi: no "
           "limit)"),
