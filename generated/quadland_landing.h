@@ -22,7 +22,7 @@ extern "C" {
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QL_LANDING_PARAMS_SIZE 132               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 89                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 33               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 34               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
 #define QL_LANDING_PLANT_NP 335                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -202,10 +202,11 @@ typedef struct {
     ql_real pivot_h;                 /* m: the pivot's height below the centre of mass (0: none) */
     ql_real descent_leash;           /* m: how far the falling reference may lead the quadrotor down (0: no limit) */
     ql_real leash_height;            /* m: reference height above touchdown below which the leash holds (above it the reference falls free) */
-    ql_real withdraw_height;         /* m: reference height above touchdown at or below which a rising deck no longer withdraws the committed descent (-1000: it does everywhere) */
+    ql_real withdraw_height;         /* m: reference height above touchdown at or below which a rising deck (or a swerve) no longer withdraws the committed descent (-1000: it does everywhere) */
     ql_real calm_tilt;               /* rad: largest angle, predicted at the contact, between the deck's normal and the flare's worst lean at which the final descent commits (pi: no limit) */
     ql_real contact_drop;            /* m: how much higher the centre meets the deck leaning than level (its lowest foot that much lower): the profile descends to touchdown_height + contact_drop (0: the level gear) */
     ql_real crawl_pause;             /* 0/1: 1: out of the align band the crawl pauses too, as the descent above it does; 0: the crawl is committed */
+    ql_real swerve_accel;            /* m/s^2: the pad's horizontal acceleration above which the final descent does not commit and a committed one is withdrawn (0: no hold) */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */

@@ -21,7 +21,7 @@ GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_sp
                   level_time=0.3, cut_time=0.5, aim_height=0.3, pivot_x=0.0, pivot_y=0.0,
                   pivot_h=0.0, descent_leash=0.0, leash_height=1e3,
                   withdraw_height=-1e3, calm_tilt=3.141592653589793,
-                  contact_drop=0.0, crawl_pause=0.0)
+                  contact_drop=0.0, crawl_pause=0.0, swerve_accel=0.0)
 
 
 def euler_rate_matrix(phi, theta):
@@ -205,11 +205,17 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
     return exes
 
 
+#: highway_100's guidance before "highway_100: the guidance holds through the lane change"
+#: (docs/landing.md, fourteenth session): no hold while the pad swerves, a rising deck's
+#: withdrawal down to the contact; the replays measured on the thirteenth's file pin it.
+HIGHWAY_100_THIRTEENTH = ["landing.swerve_accel=0.0", "landing.withdraw_height=-1000.0"]
+
 #: highway_100's controller and descent before "highway_100: the observer and the leash"
 #: (docs/landing.md, thirteenth session): no disturbance observer, integral action on x and
 #: y, no leash; the replays measured on the twelfth's file pin it.
 HIGHWAY_100_TWELFTH = ["controller.observer_frequency=[0.0, 0.0, 0.0]",
-                       "controller.ki_p=[0.5, 0.5, 1.0]", "landing.descent_leash=0.0"]
+                       "controller.ki_p=[0.5, 0.5, 1.0]", "landing.descent_leash=0.0",
+                       *HIGHWAY_100_THIRTEENTH]
 
 #: highway_100's airframe before issue 19's "An airframe made for highway_100"
 #: (docs/landing.md): the scenario as it was, bit for bit, for the reproducers that

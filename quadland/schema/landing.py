@@ -224,14 +224,18 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "leash_height": Field(F, "m", "height above touchdown below which descent_leash holds",
                               lo=0.0, hi=1e3, default=1e3),
         "withdraw_height": Field(F, "m", "reference height above touchdown at or below which "
-                                 "a rising deck no longer withdraws the committed descent "
-                                 "(-1000: everywhere)", lo=-1e3, hi=1e3, default=-1e3),
+                                 "a rising deck (or a swerve) no longer withdraws the committed "
+                                 "descent (-1000: everywhere)", lo=-1e3, hi=1e3, default=-1e3),
         "calm_tilt_deg": Field(F, "deg", "the deck's normal predicted at the contact within "
                                "this of the flare's worst lean, or the final descent does "
                                "not commit (180: no limit)", lo=0.0, hi=180.0, default=180.0),
         "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
                              "descent above it does; false: the crawl is committed",
                              default=False),
+        "swerve_accel": Field(F, "m/s^2", "the pad's horizontal acceleration (as the "
+                              "aircraft knows it) above which the final descent does not "
+                              "commit and a committed one is withdrawn (0: no hold)",
+                              lo=0.0, hi=100.0, default=0.0),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",

@@ -395,6 +395,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "calm_tilt": _NONNEGATIVE,
     "contact_drop": _NONNEGATIVE,
     "crawl_pause": Range(choices=(0.0, 1.0)),
+    "swerve_accel": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

@@ -69,6 +69,7 @@ from quadland_symbolic.landing.guidance import (
 from quadland_symbolic.landing.observer import OBSERVER_MEMORY, OBSERVER_PARAMS, estimates_next
 from quadland_symbolic.landing.quadrotor import ACTUATOR, COMMAND, QUAD6_STATE
 from quadland_symbolic.landing.relative import RELATIVE6, deck_gear_gap
+from quadland_symbolic.landing.swerve import pad_swerve
 from quadland_symbolic.layout import Field, Layout
 from quadland_symbolic.parameters import QUADROTOR
 from quadland_symbolic.quadrotor import WRENCH, rotors_from_wrench
@@ -83,12 +84,8 @@ __all__ = [
     "landing_memory", "landing_step_outputs", "deck_rates",
     "known_acceleration",
     "known_acceleration_function",
-    "landing_law",
-    "landing_step_function",
-    "landing_guidance",
-    "landing_guidance_function",
-    "measured_cues",
-    "measured_cues_function",
+    "landing_law", "landing_step_function",
+    "landing_guidance", "landing_guidance_function", "measured_cues", "measured_cues_function",
 ]
 
 #: Channels of the network: deck-frame x, y, z and body roll, pitch, yaw.
@@ -474,11 +471,13 @@ def landing_guidance(xg, y, cues, dt, p_guid):
     pad velocity's vertical component ``v2E[2]`` and its rate the acceleration's
     ``a2E[2]``, ``cues`` (:data:`quadland_symbolic.landing.guidance.GUIDANCE_CUES`) the
     touchdown verdict and the marker's age (:func:`measured_cues` on perfect sensing), the
-    deck tilt's cues the measurement's (:func:`~.deck_tilt.tilt_cues`). Returns ``(xg_next,
+    deck tilt's cues the measurement's (:func:`~.deck_tilt.tilt_cues`), the pad's swerve
+    its ``a2E``'s horizontal magnitude (:func:`~.swerve.pad_swerve`). Returns ``(xg_next,
     reference)``."""
     ms = LANDING_MEASUREMENT.unpack(y)
     return guidance_step(xg, ms["p_e"], ms["v_e"], ms["v2E"][2], ms["a2E"][2], cues, dt,
-                         p_guid, tilt_cues(ms["eta1"], ms["eta2"], ms["w2E"], ms["w2E_dot"]))
+                         p_guid, tilt_cues(ms["eta1"], ms["eta2"], ms["w2E"], ms["w2E_dot"]),
+                         pad_swerve(ms["a2E"]))
 
 
 @functools.cache

@@ -74,7 +74,12 @@ descent is not the committed crawl: the crawl is its last part.) With the deck
 tilt's cues (the flight code's step passes them) the window must also be calm
 in tilt: the deck's normal, predicted at the contact, within ``calm_tilt`` of
 the flare's worst lean (:mod:`quadland_symbolic.landing.deck_tilt`; ``pi``,
-the default, always is).
+the default, always is). With ``swerve_accel`` > 0 the window must also be calm
+sideways: the pad's horizontal acceleration as the aircraft knows it
+(:func:`quadland_symbolic.landing.swerve.pad_swerve`, the flight code's step passes it)
+within ``swerve_accel``; a committed descent is withdrawn while it is not, as for a
+rising deck (below), so that no contact is made while the vehicle manoeuvres (a car
+changing lane). 0, the default, holds nothing.
 
 **Abort.** In the committed crawl, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
@@ -85,9 +90,9 @@ band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
-by one, unless the reference is at or below ``withdraw_height`` above
-touchdown (the default, -1000 m, never is: the withdrawal holds down to the
-contact). Above the wait height a moving deck aborts nothing.
+by one (so does a swerve past ``swerve_accel``), unless the reference is at
+or below ``withdraw_height`` above touchdown (the default, -1000 m, never is: the
+withdrawal holds down to the contact). Above the wait height a moving deck aborts nothing.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -112,6 +117,7 @@ from quadland_symbolic.landing.quiescence import (
     predicted_speed,
     quiescence_update,
 )
+from quadland_symbolic.landing.swerve import swerving
 from quadland_symbolic.landing.touchdown_policy import (
     TOUCHDOWN_COMMANDS,
     touchdown_commands,
@@ -189,7 +195,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("leash_height", 1, "m", "reference height above touchdown below which the leash "
           "holds (above it the reference falls free)"),
     Field("withdraw_height", 1, "m", "reference height above touchdown at or below which a "
-          "rising deck no longer withdraws the committed descent (-1000: it does everywhere)"),
+          "rising deck (or a swerve) no longer withdraws the committed descent (-1000: it "
+          "does everywhere)"),
     Field("calm_tilt", 1, "rad", "largest angle, predicted at the contact, between the deck's "
           "normal and the flare's worst lean at which the final descent commits (pi: no "
           "limit)"),
@@ -198,6 +205,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "touchdown_height + contact_drop (0: the level gear)"),
     Field("crawl_pause", 1, "0/1", "1: out of the align band the crawl pauses too, as the "
           "descent above it does; 0: the crawl is committed"),
+    Field("swerve_accel", 1, "m/s^2", "the pad's horizontal acceleration above which the final "
+          "descent does not commit and a committed one is withdrawn (0: no hold)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -240,18 +249,29 @@ def _glide(z, target, p, dt):
     return z + ca.fmin(ca.fmax(target - z, -step), step)
 
 
-def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt):
-    """The quiescence and deck tilt averages after the step (held on the deck) and whether
+def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt, swerve):
+    """The quiescence and deck tilt averages after the step (held on the deck), whether
     the deck's vertical speed predicted over commit_horizon stays within calm_speed and
     max_deck_rise (so that a commit is never its own abort) and its tilt within
-    calm_tilt (:func:`_tilt_calm`)."""
+    calm_tilt (:func:`_tilt_calm`) with the pad not swerving, and whether it swerves
+    (:func:`~quadland_symbolic.landing.swerve.swerving`; never without ``swerve``)."""
+    held = ca.SX(0) if swerve is None else swerving(swerve, p["swerve_accel"])
     xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
     xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
     speed = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
                             p["commit_horizon"])
     xt_held, tilt_calm = _tilt_calm(g, p, tilt, dt)
     return (ca.vertcat(ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next), xt_held),
-            ca.logic_and(speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]), tilt_calm))
+            ca.logic_and(ca.logic_and(speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]),
+                                      tilt_calm), ca.logic_not(held)), held)
+
+
+def _withdrawn(flying, g, p, deck_rise, held):
+    """1 (CasADi) when the committed descent is withdrawn: the deck rises past
+    max_deck_rise or the pad swerves (``held``), above withdraw_height."""
+    return ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
+        ca.logic_or(deck_rise > p["max_deck_rise"], held),
+        g["z_ref"] - contact_height(p) > p["withdraw_height"]))
 
 
 def _tilt_calm(g, p, tilt, dt):
@@ -341,7 +361,8 @@ def _reference_height(z_ref, p, f, dt):
     return z_next, reference
 
 
-def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, tilt=None):
+def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, tilt=None,
+                  swerve=None):
     """One guidance step of length ``dt`` (s).
 
     Parameters
@@ -356,14 +377,14 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
         :data:`GUIDANCE_CUES`: the touchdown verdict, the marker's age, the contact switch.
     dt, p_guid : casadi.SX
         Step length, s; :data:`GUIDANCE_PARAMS`.
-    tilt : casadi.SX, (8,), optional
-        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``); without it
-        the commit's tilt condition holds and its averages stay.
+    tilt, swerve : casadi.SX, optional
+        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``; without it
+        the commit's tilt condition holds and its averages stay); the pad's horizontal
+        acceleration, m/s^2 (``swerve_accel``, :mod:`~.swerve`; without it no hold).
 
     Returns
     -------
-    xg_next : casadi.SX
-    reference : casadi.SX
+    xg_next, reference : casadi.SX
         :data:`POSITION_REFERENCE` for the step, the touchdown policy's commands with it.
     """
     g, p, c = (L.unpack(v) for L, v in ((GUIDANCE_STATE, xg), (GUIDANCE_PARAMS, p_guid),
@@ -384,7 +405,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
-    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt)
+    xq_held, calm, held = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt, swerve)
     z_fall = z_ref - _descent_rate(z_ref - contact_height(p), p) * dt
     wait = contact_height(p) + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
@@ -394,8 +415,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
-        deck_rise > p["max_deck_rise"], z_ref - contact_height(p) > p["withdraw_height"]))
+    rising = _withdrawn(flying, g, p, deck_rise, held)      # a rising deck, or a swerve
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
