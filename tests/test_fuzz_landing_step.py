@@ -125,6 +125,8 @@ GUIDANCE_DOCUMENTED = {
     "descent_leash": _nonnegative, "leash_height": _nonnegative, "withdraw_height": _finite,
     "calm_tilt": _nonnegative,
     "contact_drop": _nonnegative, "crawl_pause": lambda v, p: (v == 0) | (v == 1),
+    "crawl_gate": _nonnegative, "crawl_gate_time": _nonnegative,
+    "crawl_gate_floor": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

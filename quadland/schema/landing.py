@@ -232,6 +232,16 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
                              "descent above it does; false: the crawl is committed",
                              default=False),
+        "crawl_gate": Field(F, "m", "the crawl pauses while the horizontal offset predicted "
+                            "at the contact (estimate + velocity x time to contact) lies "
+                            "farther than this from the pad (0: no gate)", lo=0.0, hi=100.0,
+                            default=0.0),
+        "crawl_gate_time": Field(F, "s", "the longest time to contact over which crawl_gate's "
+                                 "prediction carries the estimated velocity", lo=0.0, hi=1e3,
+                                 default=1e3),
+        "crawl_gate_floor": Field(F, "m", "reference height above touchdown at or below which "
+                                  "crawl_gate no longer pauses the crawl", lo=0.0, hi=1e3,
+                                  default=0.0),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",

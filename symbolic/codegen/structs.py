@@ -395,6 +395,9 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "calm_tilt": _NONNEGATIVE,
     "contact_drop": _NONNEGATIVE,
     "crawl_pause": Range(choices=(0.0, 1.0)),
+    "crawl_gate": _NONNEGATIVE,
+    "crawl_gate_time": _NONNEGATIVE,
+    "crawl_gate_floor": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

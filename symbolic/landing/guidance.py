@@ -28,7 +28,11 @@ averages. Phases (:data:`PHASES`):
    descent_time``) is committed: it does not pause, so that the quadrotor
    never hovers within centimetres of the deck, where the land detector
    would read a hover as a touchdown; there a touchdown out of the limits is
-   aborted (below). With ``crawl_pause`` the align band pauses the crawl too.
+   aborted (below). With ``crawl_pause`` the align band pauses the crawl too. With
+   ``crawl_gate`` the crawl also pauses while the horizontal offset predicted at the
+   contact, ``p_e + v_e min(h / touchdown_speed, crawl_gate_time)`` (``h`` the reference's
+   height above touchdown, 0 below it), lies farther than ``crawl_gate`` from the pad
+   (:func:`_gate_holds`).
    The heights above touchdown count from ``touchdown_height + contact_drop``
    (:func:`contact_height`: where a body leaning into the airflow meets the deck);
 3. **touchdown**: entered from the descent when the flight stack reports
@@ -198,6 +202,13 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "touchdown_height + contact_drop (0: the level gear)"),
     Field("crawl_pause", 1, "0/1", "1: out of the align band the crawl pauses too, as the "
           "descent above it does; 0: the crawl is committed"),
+    Field("crawl_gate", 1, "m", "the crawl pauses while the horizontal offset predicted at "
+          "the contact (estimate + velocity x time to contact) is farther than this from the "
+          "pad (0: no gate)"),
+    Field("crawl_gate_time", 1, "s", "the longest time to contact crawl_gate's prediction "
+          "carries the velocity over"),
+    Field("crawl_gate_floor", 1, "m", "reference height above touchdown at or below which "
+          "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -287,6 +298,29 @@ def _armed_next(c, g, in_descend, phase_next):
     reads open now or was armed earlier in this descent."""
     return ca.logic_and(phase_next == DESCEND, ca.logic_or(
         ca.logic_and(in_descend, g["armed"] >= 0.5), c["contact_switch"] < 0.5))
+
+
+def _gate_holds(p_e, v_e, h, p):
+    """Whether the crawl may fall on under ``crawl_gate``: the horizontal offset predicted at
+    the contact, ``p_e + v_e t_go`` with ``t_go = max(h, 0) / touchdown_speed`` the crawl's
+    time left (``h`` the reference's height above touchdown) but at most ``crawl_gate_time``
+    (the wander decorrelates within a few tenths of a second: a longer extrapolation adds
+    the velocity's noise, docs/landing.md), within ``crawl_gate`` of the pad; always with
+    ``crawl_gate`` 0 and at or below ``crawl_gate_floor`` (a pause within centimetres of the
+    deck reads as a touchdown to the land detector)."""
+    t_go = ca.fmin(ca.fmax(h, 0) / p["touchdown_speed"], p["crawl_gate_time"])
+    predicted = ca.norm_2(p_e[0:2] + v_e[0:2] * t_go)
+    return ca.logic_or(ca.logic_or(p["crawl_gate"] <= 0, h <= p["crawl_gate_floor"]),
+                       predicted <= p["crawl_gate"])
+
+
+def _band(in_band, crawl, p_e, v_e, z_ref, p):
+    """Whether the reference may fall as far as the horizontal criteria go: in the align
+    band, or in the crawl unless ``crawl_pause``; and in the crawl only while
+    :func:`_gate_holds`."""
+    return ca.logic_and(ca.logic_or(in_band, ca.logic_and(crawl, p["crawl_pause"] < 0.5)),
+                        ca.logic_or(ca.logic_not(crawl),
+                                    _gate_holds(p_e, v_e, z_ref - contact_height(p), p)))
 
 
 def _reference_height(z_ref, p, f, dt):
@@ -406,7 +440,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                                              LANDED, phase)))))
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
-    band = ca.logic_or(in_band, ca.logic_and(crawl, p["crawl_pause"] < 0.5))
+    band = _band(in_band, crawl, p_e, v_e, z_ref, p)
     hold = ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
