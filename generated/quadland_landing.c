@@ -163,7 +163,8 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, crawl_gate, 33, 0) &&
     AT(ql_guidance_params, crawl_gate_time, 34, 0) &&
     AT(ql_guidance_params, crawl_gate_floor, 35, 0) &&
-    sizeof(ql_guidance_params) == 36 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, crawl_gate_wait, 36, 0) &&
+    sizeof(ql_guidance_params) == 37 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -196,13 +197,14 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[36] = {
+static const ql_real default_p_guid[37] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
     3.141592653589793, 0.0, 0.0, 0.0, 1000.0, 0.0,
+    1000.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -481,6 +483,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   crawl_gate               >= 0
  *   crawl_gate_time          >= 0
  *   crawl_gate_floor         >= 0
+ *   crawl_gate_wait          >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -601,6 +604,9 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[35]) && (p[35] >= 0.0))) {
         bad = "crawl_gate_floor";
     }
+    if (!bad && !(isfinite(p[36]) && (p[36] >= 0.0))) {
+        bad = "crawl_gate_wait";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -677,7 +683,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 35 comparisons. The values are known to be finite; no names and no
+ * 36 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -717,6 +723,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[33] >= 0.0);
     ok &= (p[34] >= 0.0);
     ok &= (p[35] >= 0.0);
+    ok &= (p[36] >= 0.0);
     return ok;
 }
 
@@ -794,7 +801,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 36)
+          & all_finite((const ql_real *)params, 37)
           & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

@@ -143,7 +143,8 @@ APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED = range(len(PHASES))
 #: The guidance's memory.
 GUIDANCE_STATE = Layout("xg", (
     Field("phase", 1, "-", "phase number (PHASES)"),
-    Field("timer", 1, "s", "time the align criteria have held without a break"),
+    Field("timer", 1, "s", "time the align criteria have held without a break; in the crawl "
+          "with crawl_gate, the time the gate has held it; after touchdown, the time since"),
     Field("z_ref", 1, "m", "descent reference height of the centre above the pad"),
     Field("aborts", 1, "-", "number of aborted descents"),
     Field("committed", 1, "0/1", "1 once the final descent is committed (a calm window "
@@ -209,6 +210,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "carries the velocity over"),
     Field("crawl_gate_floor", 1, "m", "reference height above touchdown at or below which "
           "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
+    Field("crawl_gate_wait", 1, "s", "the longest time crawl_gate holds a crawl: after it the "
+          "crawl falls on"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -300,27 +303,40 @@ def _armed_next(c, g, in_descend, phase_next):
         ca.logic_and(in_descend, g["armed"] >= 0.5), c["contact_switch"] < 0.5))
 
 
-def _gate_holds(p_e, v_e, h, p):
+def _gate_holds(p_e, v_e, h, timer, p):
     """Whether the crawl may fall on under ``crawl_gate``: the horizontal offset predicted at
     the contact, ``p_e + v_e t_go`` with ``t_go = max(h, 0) / touchdown_speed`` the crawl's
     time left (``h`` the reference's height above touchdown) but at most ``crawl_gate_time``
     (the wander decorrelates within a few tenths of a second: a longer extrapolation adds
     the velocity's noise, docs/landing.md), within ``crawl_gate`` of the pad; always with
-    ``crawl_gate`` 0 and at or below ``crawl_gate_floor`` (a pause within centimetres of the
-    deck reads as a touchdown to the land detector)."""
+    ``crawl_gate`` 0, at or below ``crawl_gate_floor`` (a pause within centimetres of the
+    deck reads as a touchdown to the land detector) and once the gate has held this crawl for
+    ``crawl_gate_wait`` (``timer``, :func:`_timer_next`: a quadrotor that wanders on near the
+    deck in strong turbulence would otherwise pause until it aborts)."""
     t_go = ca.fmin(ca.fmax(h, 0) / p["touchdown_speed"], p["crawl_gate_time"])
     predicted = ca.norm_2(p_e[0:2] + v_e[0:2] * t_go)
-    return ca.logic_or(ca.logic_or(p["crawl_gate"] <= 0, h <= p["crawl_gate_floor"]),
+    return ca.logic_or(ca.logic_or(ca.logic_or(p["crawl_gate"] <= 0, h <= p["crawl_gate_floor"]),
+                                   timer >= p["crawl_gate_wait"]),
                        predicted <= p["crawl_gate"])
 
 
-def _band(in_band, crawl, p_e, v_e, z_ref, p):
+def _band(in_band, crawl, gate, p):
     """Whether the reference may fall as far as the horizontal criteria go: in the align
-    band, or in the crawl unless ``crawl_pause``; and in the crawl only while
-    :func:`_gate_holds`."""
+    band, or in the crawl unless ``crawl_pause``; and in the crawl only while ``gate``
+    (:func:`_gate_holds`)."""
     return ca.logic_and(ca.logic_or(in_band, ca.logic_and(crawl, p["crawl_pause"] < 0.5)),
-                        ca.logic_or(ca.logic_not(crawl),
-                                    _gate_holds(p_e, v_e, z_ref - contact_height(p), p)))
+                        ca.logic_or(ca.logic_not(crawl), gate))
+
+
+def _timer_next(g, f, p, dt):
+    """The guidance's timer after the step: the align criteria's dwell, then the time since
+    touchdown (``f["counting"]``), held once landed; with ``crawl_gate`` on, in the crawl
+    (``f["gating"]``: flying, no abort) the time the gate has held it (``f["gate"]`` false),
+    which :func:`_gate_holds` bounds by ``crawl_gate_wait``; else 0 (as without the gate)."""
+    gating = ca.logic_and(f["gating"], p["crawl_gate"] > 0)
+    return ca.if_else(f["counting"], g["timer"] + dt, ca.if_else(
+        g["phase"] == LANDED, g["timer"],
+        ca.if_else(gating, g["timer"] + dt * ca.logic_not(f["gate"]), 0)))
 
 
 def _reference_height(z_ref, p, f, dt):
@@ -410,10 +426,6 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
         phase == k for k in (APPROACH, ALIGN, DESCEND, TOUCHDOWN))
     seen = c["marker_age"] <= p["marker_timeout"]
     in_band = ca.logic_and(offset <= p["max_offset"] / 2, speed <= p["max_relative_speed"] / 2)
-    # the timer: the align criteria's dwell, then the time since touchdown; held once landed
-    timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)),
-                                        in_touchdown), timer + dt,
-                            ca.if_else(phase == LANDED, timer, 0))
     contact = ca.logic_and(in_descend, _touchdown_cue(c, g))
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
@@ -428,6 +440,11 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
+    gate = _gate_holds(p_e, v_e, z_ref - contact_height(p), timer, p)
+    timer_next = _timer_next(g, dict(
+        counting=ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown),
+        gating=ca.logic_and(ca.logic_and(flying, crawl), ca.logic_not(off_limits)),
+        gate=gate), p, dt)
     rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
         deck_rise > p["max_deck_rise"], z_ref - contact_height(p) > p["withdraw_height"]))
     phase_next = ca.if_else(
@@ -440,7 +457,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                                              LANDED, phase)))))
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
-    band = _band(in_band, crawl, p_e, v_e, z_ref, p)
+    band = _band(in_band, crawl, gate, p)
     hold = ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))

@@ -172,7 +172,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
         leash_height=g["leash_height"], calm_tilt=np.radians(g["calm_tilt_deg"]),
         withdraw_height=g["withdraw_height"], crawl_pause=float(g["crawl_pause"]),
-        **{k: g[k] for k in ("crawl_gate", "crawl_gate_time", "crawl_gate_floor")},
+        **{k: g[k] for k in ("crawl_gate", "crawl_gate_time", "crawl_gate_floor",
+                              "crawl_gate_wait")},
         **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
