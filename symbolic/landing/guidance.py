@@ -441,10 +441,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
     gate = _gate_holds(p_e, v_e, z_ref - contact_height(p), timer, p)
-    timer_next = _timer_next(g, dict(
-        counting=ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown),
-        gating=ca.logic_and(ca.logic_and(flying, crawl), ca.logic_not(off_limits)),
-        gate=gate), p, dt)
+    timer_next = _timer_next(g, dict(gate=gate, counting=ca.logic_or(ca.logic_and(
+        in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
+        ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
     rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
         deck_rise > p["max_deck_rise"], z_ref - contact_height(p) > p["withdraw_height"]))
     phase_next = ca.if_else(
