@@ -161,7 +161,11 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, contact_drop, 31, 0) &&
     AT(ql_guidance_params, crawl_pause, 32, 0) &&
     AT(ql_guidance_params, swerve_accel, 33, 0) &&
-    sizeof(ql_guidance_params) == 34 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, crawl_gate, 34, 0) &&
+    AT(ql_guidance_params, crawl_gate_time, 35, 0) &&
+    AT(ql_guidance_params, crawl_gate_floor, 36, 0) &&
+    AT(ql_guidance_params, crawl_gate_wait, 37, 0) &&
+    sizeof(ql_guidance_params) == 38 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -194,13 +198,14 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[34] = {
+static const ql_real default_p_guid[38] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
-    3.141592653589793, 0.0, 0.0, 0.0,
+    3.141592653589793, 0.0, 0.0, 0.0, 0.0, 1000.0,
+    0.0, 1000.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -477,6 +482,10 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   contact_drop             >= 0
  *   crawl_pause              0 or 1
  *   swerve_accel             >= 0
+ *   crawl_gate               >= 0
+ *   crawl_gate_time          >= 0
+ *   crawl_gate_floor         >= 0
+ *   crawl_gate_wait          >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -591,6 +600,18 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[33]) && (p[33] >= 0.0))) {
         bad = "swerve_accel";
     }
+    if (!bad && !(isfinite(p[34]) && (p[34] >= 0.0))) {
+        bad = "crawl_gate";
+    }
+    if (!bad && !(isfinite(p[35]) && (p[35] >= 0.0))) {
+        bad = "crawl_gate_time";
+    }
+    if (!bad && !(isfinite(p[36]) && (p[36] >= 0.0))) {
+        bad = "crawl_gate_floor";
+    }
+    if (!bad && !(isfinite(p[37]) && (p[37] >= 0.0))) {
+        bad = "crawl_gate_wait";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -667,7 +688,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 33 comparisons. The values are known to be finite; no names and no
+ * 37 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -705,6 +726,10 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[31] >= 0.0);
     ok &= ((p[32] == 0.0) | (p[32] == 1.0));
     ok &= (p[33] >= 0.0);
+    ok &= (p[34] >= 0.0);
+    ok &= (p[35] >= 0.0);
+    ok &= (p[36] >= 0.0);
+    ok &= (p[37] >= 0.0);
     return ok;
 }
 
@@ -782,7 +807,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 34)
+          & all_finite((const ql_real *)params, 38)
           & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

@@ -22,7 +22,7 @@ extern "C" {
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QL_LANDING_PARAMS_SIZE 132               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 89                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 34               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 38               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
 #define QL_LANDING_PLANT_NP 335                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -157,7 +157,7 @@ typedef struct {
 
 /* The guidance's memory. Start with ql_guidance_state_init. */
 typedef struct {
-    ql_real timer;                   /* s: time the align criteria have held without a break */
+    ql_real timer;                   /* s: time the align criteria have held without a break; in the crawl with crawl_gate, the time the gate has held it; after touchdown, the time since */
     ql_real z_ref;                   /* m: descent reference height of the centre above the pad */
     ql_real committed;               /* 0/1: 1 once the final descent is committed (a calm window predicted at the wait height) */
     ql_real armed;                   /* 0/1: 1 once the gear's contact switch has read open in this descent (only then does its closing count as the touchdown) */
@@ -207,6 +207,10 @@ typedef struct {
     ql_real contact_drop;            /* m: how much higher the centre meets the deck leaning than level (its lowest foot that much lower): the profile descends to touchdown_height + contact_drop (0: the level gear) */
     ql_real crawl_pause;             /* 0/1: 1: out of the align band the crawl pauses too, as the descent above it does; 0: the crawl is committed */
     ql_real swerve_accel;            /* m/s^2: the pad's horizontal acceleration above which the final descent does not commit and a committed one is withdrawn (0: no hold) */
+    ql_real crawl_gate;              /* m: the crawl pauses while the horizontal offset predicted at the contact (estimate + velocity x time to contact) is farther than this from the pad (0: no gate) */
+    ql_real crawl_gate_time;         /* s: the longest time to contact crawl_gate's prediction carries the velocity over */
+    ql_real crawl_gate_floor;        /* m: reference height above touchdown at or below which crawl_gate no longer pauses the crawl (0: down to the touchdown height) */
+    ql_real crawl_gate_wait;         /* s: the longest time crawl_gate holds a crawl: after it the crawl falls on */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */

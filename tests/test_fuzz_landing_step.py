@@ -126,6 +126,8 @@ GUIDANCE_DOCUMENTED = {
     "calm_tilt": _nonnegative,
     "contact_drop": _nonnegative, "crawl_pause": lambda v, p: (v == 0) | (v == 1),
     "swerve_accel": _nonnegative,
+    "crawl_gate": _nonnegative, "crawl_gate_time": _nonnegative,
+    "crawl_gate_floor": _nonnegative, "crawl_gate_wait": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

@@ -161,7 +161,11 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, contact_drop, 31, 0) &&
     AT(qlf_guidance_params, crawl_pause, 32, 0) &&
     AT(qlf_guidance_params, swerve_accel, 33, 0) &&
-    sizeof(qlf_guidance_params) == 34 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, crawl_gate, 34, 0) &&
+    AT(qlf_guidance_params, crawl_gate_time, 35, 0) &&
+    AT(qlf_guidance_params, crawl_gate_floor, 36, 0) &&
+    AT(qlf_guidance_params, crawl_gate_wait, 37, 0) &&
+    sizeof(qlf_guidance_params) == 38 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -194,13 +198,14 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[34] = {
+static const qlf_real default_p_guid[38] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
     0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
     0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, -1000.0f,
-    3.141592653589793f, 0.0f, 0.0f, 0.0f,
+    3.141592653589793f, 0.0f, 0.0f, 0.0f, 0.0f, 1000.0f,
+    0.0f, 1000.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -477,6 +482,10 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   contact_drop             >= 0
  *   crawl_pause              0 or 1
  *   swerve_accel             >= 0
+ *   crawl_gate               >= 0
+ *   crawl_gate_time          >= 0
+ *   crawl_gate_floor         >= 0
+ *   crawl_gate_wait          >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -591,6 +600,18 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[33]) && (p[33] >= 0.0f))) {
         bad = "swerve_accel";
     }
+    if (!bad && !(isfinite(p[34]) && (p[34] >= 0.0f))) {
+        bad = "crawl_gate";
+    }
+    if (!bad && !(isfinite(p[35]) && (p[35] >= 0.0f))) {
+        bad = "crawl_gate_time";
+    }
+    if (!bad && !(isfinite(p[36]) && (p[36] >= 0.0f))) {
+        bad = "crawl_gate_floor";
+    }
+    if (!bad && !(isfinite(p[37]) && (p[37] >= 0.0f))) {
+        bad = "crawl_gate_wait";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -667,7 +688,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 33 comparisons. The values are known to be finite; no names and no
+ * 37 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -705,6 +726,10 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[31] >= 0.0f);
     ok &= ((p[32] == 0.0f) | (p[32] == 1.0f));
     ok &= (p[33] >= 0.0f);
+    ok &= (p[34] >= 0.0f);
+    ok &= (p[35] >= 0.0f);
+    ok &= (p[36] >= 0.0f);
+    ok &= (p[37] >= 0.0f);
     return ok;
 }
 
@@ -782,7 +807,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 34)
+          & all_finite((const qlf_real *)params, 38)
           & all_finite(xg, 12) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }

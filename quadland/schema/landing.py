@@ -236,6 +236,18 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                               "aircraft knows it) above which the final descent does not "
                               "commit and a committed one is withdrawn (0: no hold)",
                               lo=0.0, hi=100.0, default=0.0),
+        "crawl_gate": Field(F, "m", "the crawl pauses while the horizontal offset predicted "
+                            "at the contact (estimate + velocity x time to contact) lies "
+                            "farther than this from the pad (0: no gate)", lo=0.0, hi=100.0,
+                            default=0.0),
+        "crawl_gate_time": Field(F, "s", "the longest time to contact over which crawl_gate's "
+                                 "prediction carries the estimated velocity", lo=0.0, hi=1e3,
+                                 default=1e3),
+        "crawl_gate_floor": Field(F, "m", "reference height above touchdown at or below which "
+                                  "crawl_gate no longer pauses the crawl", lo=0.0, hi=1e3,
+                                  default=0.0),
+        "crawl_gate_wait": Field(F, "s", "the longest time crawl_gate holds a crawl (then it "
+                                 "falls on)", lo=0.0, hi=1e3, default=1e3),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",

@@ -396,6 +396,10 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "contact_drop": _NONNEGATIVE,
     "crawl_pause": Range(choices=(0.0, 1.0)),
     "swerve_accel": _NONNEGATIVE,
+    "crawl_gate": _NONNEGATIVE,
+    "crawl_gate_time": _NONNEGATIVE,
+    "crawl_gate_floor": _NONNEGATIVE,
+    "crawl_gate_wait": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

@@ -28,7 +28,11 @@ averages. Phases (:data:`PHASES`):
    descent_time``) is committed: it does not pause, so that the quadrotor
    never hovers within centimetres of the deck, where the land detector
    would read a hover as a touchdown; there a touchdown out of the limits is
-   aborted (below). With ``crawl_pause`` the align band pauses the crawl too.
+   aborted (below). With ``crawl_pause`` the align band pauses the crawl too. With
+   ``crawl_gate`` the crawl also pauses while the horizontal offset predicted at the
+   contact, ``p_e + v_e min(h / touchdown_speed, crawl_gate_time)`` (``h`` the reference's
+   height above touchdown, 0 below it), lies farther than ``crawl_gate`` from the pad
+   (:func:`~quadland_symbolic.landing.crawl_gate.gate_holds`).
    The heights above touchdown count from ``touchdown_height + contact_drop``
    (:func:`contact_height`: where a body leaning into the airflow meets the deck);
 3. **touchdown**: entered from the descent when the flight stack reports
@@ -102,6 +106,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_holds
 from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
@@ -145,7 +150,8 @@ APPROACH, ALIGN, DESCEND, TOUCHDOWN, LANDED = range(len(PHASES))
 #: The guidance's memory.
 GUIDANCE_STATE = Layout("xg", (
     Field("phase", 1, "-", "phase number (PHASES)"),
-    Field("timer", 1, "s", "time the align criteria have held without a break"),
+    Field("timer", 1, "s", "time the align criteria have held without a break; in the crawl "
+          "with crawl_gate, the time the gate has held it; after touchdown, the time since"),
     Field("z_ref", 1, "m", "descent reference height of the centre above the pad"),
     Field("aborts", 1, "-", "number of aborted descents"),
     Field("committed", 1, "0/1", "1 once the final descent is committed (a calm window "
@@ -207,6 +213,15 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "descent above it does; 0: the crawl is committed"),
     Field("swerve_accel", 1, "m/s^2", "the pad's horizontal acceleration above which the final "
           "descent does not commit and a committed one is withdrawn (0: no hold)"),
+    Field("crawl_gate", 1, "m", "the crawl pauses while the horizontal offset predicted at "
+          "the contact (estimate + velocity x time to contact) is farther than this from the "
+          "pad (0: no gate)"),
+    Field("crawl_gate_time", 1, "s", "the longest time to contact crawl_gate's prediction "
+          "carries the velocity over"),
+    Field("crawl_gate_floor", 1, "m", "reference height above touchdown at or below which "
+          "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
+    Field("crawl_gate_wait", 1, "s", "the longest time crawl_gate holds a crawl: after it the "
+          "crawl falls on"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -397,10 +412,6 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
         phase == k for k in (APPROACH, ALIGN, DESCEND, TOUCHDOWN))
     seen = c["marker_age"] <= p["marker_timeout"]
     in_band = ca.logic_and(offset <= p["max_offset"] / 2, speed <= p["max_relative_speed"] / 2)
-    # the timer: the align criteria's dwell, then the time since touchdown; held once landed
-    timer_next = ca.if_else(ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)),
-                                        in_touchdown), timer + dt,
-                            ca.if_else(phase == LANDED, timer, 0))
     contact = ca.logic_and(in_descend, _touchdown_cue(c, g))
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
@@ -415,6 +426,10 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
+    gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, p)
+    timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
+        ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
+        ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
     rising = _withdrawn(flying, g, p, deck_rise, held)      # a rising deck, or a swerve
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
@@ -426,7 +441,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                                              LANDED, phase)))))
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
-    band = ca.logic_or(in_band, ca.logic_and(crawl, p["crawl_pause"] < 0.5))
+    band = fall_band(in_band, crawl, gate, p)
     hold = ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))

@@ -119,6 +119,12 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict
         p_veh=p_veh, p_deck=p_deck, **gear))
 
 
+#: The [landing] keys passed to the guidance's parameters as they are: the swerve's hold and
+#: the crawl's gate.
+_PASSED_KEYS = ("swerve_accel", "crawl_gate", "crawl_gate_time", "crawl_gate_floor",
+                "crawl_gate_wait")
+
+
 def landing_values(scenario: Scenario) -> LandingValues:
     """Translate a validated landing scenario into the landing loop's vectors.
 
@@ -172,7 +178,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
         leash_height=g["leash_height"], calm_tilt=np.radians(g["calm_tilt_deg"]),
         withdraw_height=g["withdraw_height"], crawl_pause=float(g["crawl_pause"]),
-        swerve_accel=g["swerve_accel"],
+        **{k: g[k] for k in _PASSED_KEYS},
         **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))

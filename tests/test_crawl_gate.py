@@ -1,0 +1,114 @@
+"""The crawl's gate on the offset predicted at the contact (issue 19, ``landing.crawl_gate``).
+
+docs/landing.md, "The offset at contact: the estimate's wander and a gate on its
+prediction". In the committed crawl the reference's fall pauses while ``|p_h + v_h t_go|``
+lies farther than ``crawl_gate`` from the pad, ``t_go = min(h / touchdown_speed,
+crawl_gate_time)`` and ``h`` the reference's height above touchdown, above
+``crawl_gate_floor``, for at most ``crawl_gate_wait`` in a crawl; 0 (the default) is no
+gate. Checked here against predictions worked by hand on one guidance step, and that every
+shipped scenario leaves the gate off.
+"""
+
+import numpy as np
+import pytest
+from reference import GUIDANCE_P
+
+from quadland.kinds.landing.values import landing_values
+from quadland.scenario import load_scenario
+from quadland_symbolic.landing.guidance import (
+    ALIGN,
+    DESCEND,
+    GUIDANCE_CUES,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    guidance_function,
+)
+from quadland_symbolic.landing.loop import landing_loop_params
+
+DT = 0.01
+HC = 0.2          # m: the gear below the centre, the contact height on the level gear
+H = 0.1           # m above the contact height: in the crawl (0.3 m/s x 1 s = 0.3 m)
+
+
+def _step(x, vx, timer=0.0, **keys):
+    """The reference height and phase after one committed crawl step from ``H`` above the
+    contact height, the quadrotor on the reference ``x`` m ahead of the pad moving at ``vx``
+    m/s along x (the horizontal speed within the align band's 0.25 m/s), the guidance's
+    timer at ``timer``; with ``full``, the timer after the step too."""
+    full = keys.pop("full", False)
+    z_ref = HC + H
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=timer, z_ref=z_ref, aborts=0,
+                                  committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
+    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, **keys))
+    xg_next, _ = (np.asarray(v, dtype=float).ravel() for v in guidance_function()(
+        xg, [x, 0.0, z_ref], [vx, 0.0, 0.0], 0.0, 0.0, cues, DT, pg))
+    g = GUIDANCE_STATE.unpack(xg_next)
+    return (g["z_ref"][0], g["phase"][0]) + ((g["timer"][0],) if full else ())
+
+
+FELL = (pytest.approx(HC + H - GUIDANCE_P["touchdown_speed"] * DT, abs=1e-12), DESCEND)
+HELD = (pytest.approx(HC + H, abs=1e-12), DESCEND)
+
+
+def test_the_gate_pauses_the_crawl_on_the_predicted_offset():
+    """``t_go = 0.1 / 0.3 = 1/3`` s. 3 cm ahead moving away at 0.09 m/s: predicted 0.03 +
+    0.03 = 0.06 m, past a 0.05 m gate: the crawl holds its height; moving back at 0.09 m/s:
+    predicted 0, it falls one step of 0.3 m/s; at rest: 0.03 m, it falls. A 0.07 m gate
+    passes the 0.06 m prediction."""
+    assert _step(0.03, 0.09, crawl_gate=0.05) == HELD
+    assert _step(0.03, -0.09, crawl_gate=0.05) == FELL
+    assert _step(0.03, 0.0, crawl_gate=0.05) == FELL
+    assert _step(0.03, 0.09, crawl_gate=0.07) == FELL
+    # the estimate alone would pass (0.03 < 0.05): it is the prediction that holds
+    assert _step(0.06, 0.0, crawl_gate=0.05) == HELD
+
+
+def test_the_prediction_s_horizon_and_the_floor():
+    """``crawl_gate_time`` 0.1 s caps the extrapolation: 0.03 + 0.09 x 0.1 = 0.039 m, inside
+    0.05 m: it falls. At or below ``crawl_gate_floor`` (0.11 m at H = 0.1 m) the gate no
+    longer holds: it falls on a 0.06 m prediction; a floor of 0.09 m holds it again."""
+    assert _step(0.03, 0.09, crawl_gate=0.05, crawl_gate_time=0.1) == FELL
+    assert _step(0.03, 0.09, crawl_gate=0.05, crawl_gate_time=0.5) == HELD
+    assert _step(0.03, 0.09, crawl_gate=0.05, crawl_gate_floor=0.11) == FELL
+    assert _step(0.03, 0.09, crawl_gate=0.05, crawl_gate_floor=0.09) == HELD
+
+
+def test_the_gate_s_wait_counts_its_pauses_and_then_opens():
+    """With ``crawl_gate_wait`` 0.5 s the timer counts the steps the gate holds the crawl
+    (0.2 -> 0.21 s) and holds while it falls (0.2 s); at 0.5 s the gate opens and the crawl
+    falls on the 0.06 m prediction. Without the gate the timer is 0 in the descent, as it
+    was before the key."""
+    keys = dict(crawl_gate=0.05, crawl_gate_wait=0.5, full=True)
+    z, phase, timer = _step(0.03, 0.09, timer=0.2, **keys)
+    assert (z, phase) == HELD and timer == pytest.approx(0.2 + DT, abs=1e-12)
+    z, phase, timer = _step(0.03, 0.0, timer=0.2, **keys)
+    assert (z, phase) == FELL and timer == pytest.approx(0.2, abs=1e-12)
+    z, phase, timer = _step(0.03, 0.09, timer=0.5, **keys)
+    assert (z, phase) == FELL
+    assert _step(0.03, 0.09, timer=0.2, full=True)[2] == 0.0
+
+
+def test_no_gate_is_the_committed_crawl_and_the_limits_still_abort():
+    """``crawl_gate`` 0 falls whatever the prediction (0.06 m, and 0.15 m out of the align
+    band: the committed crawl of before); past ``max_offset`` (0.25 > 0.2 m) the crawl aborts
+    back to align with or without the gate."""
+    assert _step(0.03, 0.09) == FELL
+    assert _step(0.15, 0.0) == FELL
+    for gate in (0.0, 0.05):
+        assert _step(0.25, 0.0, crawl_gate=gate)[1] == ALIGN
+
+
+@pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5", "highway_100"])
+def test_the_shipped_scenarios_fly_without_the_gate(name):
+    """No shipped file sets the keys: each takes the schema's defaults, which the flight's
+    parameters carry (no gate, the whole time to contact, no floor)."""
+    sc = load_scenario(name)
+    assert (sc["landing.crawl_gate"], sc["landing.crawl_gate_time"],
+            sc["landing.crawl_gate_floor"], sc["landing.crawl_gate_wait"]) == (0.0, 1e3, 0.0, 1e3)
+    v = landing_values(sc)
+    p_guid = landing_loop_params(v.l).unpack(np.asarray(v.pc, dtype=float).ravel())["p_guid"]
+    p = GUIDANCE_PARAMS.unpack(np.asarray(p_guid, dtype=float).ravel())
+    assert (p["crawl_gate"][0], p["crawl_gate_time"][0], p["crawl_gate_floor"][0],
+            p["crawl_gate_wait"][0]) == (0.0, 1e3, 0.0, 1e3)
