@@ -21,7 +21,9 @@ GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_sp
                   level_time=0.3, cut_time=0.5, aim_height=0.3, pivot_x=0.0, pivot_y=0.0,
                   pivot_h=0.0, descent_leash=0.0, leash_height=1e3,
                   withdraw_height=-1e3, calm_tilt=3.141592653589793,
-                  contact_drop=0.0, crawl_pause=0.0)
+                  contact_drop=0.0, crawl_pause=0.0,
+                  calm_lean=1.5707963267948966, lean_time=1.0,
+                  lean_withdraw=0.0)
 
 
 def euler_rate_matrix(phi, theta):

@@ -393,6 +393,9 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "leash_height": _NONNEGATIVE,
     "withdraw_height": _FINITE,
     "calm_tilt": _NONNEGATIVE,
+    "calm_lean": _NONNEGATIVE,
+    "lean_time": _POSITIVE,
+    "lean_withdraw": Range(choices=(0.0, 1.0)),
     "contact_drop": _NONNEGATIVE,
     "crawl_pause": Range(choices=(0.0, 1.0)),
 })

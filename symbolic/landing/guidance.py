@@ -74,7 +74,9 @@ descent is not the committed crawl: the crawl is its last part.) With the deck
 tilt's cues (the flight code's step passes them) the window must also be calm
 in tilt: the deck's normal, predicted at the contact, within ``calm_tilt`` of
 the flare's worst lean (:mod:`quadland_symbolic.landing.deck_tilt`; ``pi``,
-the default, always is).
+the default, always is), and the quadrotor's lean averaged over ``lean_time`` within
+``calm_lean`` (a gust the flare's tilt limit cannot hold; ``pi / 2``, the default, no limit;
+with ``lean_withdraw`` such a gust also withdraws the committed descent, as a rising deck).
 
 **Abort.** In the committed crawl, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
@@ -101,6 +103,7 @@ from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
     descent_duration,
+    lean_calm,
     relative_tilt_cos,
     tilt_ahead,
     tilt_frequency,
@@ -198,6 +201,12 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "touchdown_height + contact_drop (0: the level gear)"),
     Field("crawl_pause", 1, "0/1", "1: out of the align band the crawl pauses too, as the "
           "descent above it does; 0: the crawl is committed"),
+    Field("calm_lean", 1, "rad", "largest lean of the body z axis from the vertical, "
+          "averaged over lean_time, at which the final descent commits (pi/2: no limit)"),
+    Field("lean_time", 1, "s", "time constant of the lean's average for calm_lean"),
+    Field("lean_withdraw", 1, "0/1", "1: once committed, the lean's average past calm_lean "
+          "withdraws the descent above withdraw_height, as a rising deck does; 0: it "
+          "only holds the commit"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -244,34 +253,48 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt):
     """The quiescence and deck tilt averages after the step (held on the deck) and whether
     the deck's vertical speed predicted over commit_horizon stays within calm_speed and
     max_deck_rise (so that a commit is never its own abort) and its tilt within
-    calm_tilt (:func:`_tilt_calm`)."""
+    calm_tilt and the gust's lean within calm_lean (:func:`_tilt_calm`); and the lean's
+    condition alone (for ``lean_withdraw``)."""
     xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
     xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
     speed = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
                             p["commit_horizon"])
-    xt_held, tilt_calm = _tilt_calm(g, p, tilt, dt)
+    xt_held, tilt_calm, lean_ok = _tilt_calm(g, p, tilt, dt)
     return (ca.vertcat(ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next), xt_held),
-            ca.logic_and(speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]), tilt_calm))
+            ca.logic_and(speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]), tilt_calm),
+            lean_ok)
 
 
 def _tilt_calm(g, p, tilt, dt):
     """The deck tilt averages after the step (held on the deck) and whether the deck's
     normal predicted at the contact (the profile's time from the wait height) lies within
     calm_tilt of the flare's worst lean, toward the average lean
-    (:mod:`~quadland_symbolic.landing.deck_tilt`); without ``tilt`` the averages hold and
-    the condition is true."""
+    (:mod:`~quadland_symbolic.landing.deck_tilt`), and the gust's lean within calm_lean
+    (both, then the lean's alone); without ``tilt`` the averages hold and both are true."""
     xt = ca.vertcat(*(g[n] for n in DECK_TILT_STATE.names()))
     if tilt is None:
-        return xt, ca.SX(1)
+        return xt, ca.SX(1), ca.SX(1)
     c = TILT_CUES.unpack(tilt)
-    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], c["b_h"], dt, p["motion_time"])
+    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], c["b_h"], dt, p["motion_time"],
+                          p["lean_time"])
     lean = DECK_TILT_STATE.unpack(xt_next)
     duration = descent_duration(p["commit_height"], p["descent_time"], p["touchdown_speed"],
                                 p["descent_speed"])
     d_h = tilt_ahead(c["n_h"], c["n_h_dot"], tilt_frequency(xt_next), duration)
-    return (ca.if_else(g["phase"] >= TOUCHDOWN, xt, xt_next),
-            relative_tilt_cos(ca.vertcat(lean["lean_x"], lean["lean_y"]), d_h, p["flare_tilt"])
-            >= ca.cos(p["calm_tilt"]))
+    deck = relative_tilt_cos(ca.vertcat(lean["lean_x"], lean["lean_y"]), d_h,
+                             p["flare_tilt"]) >= ca.cos(p["calm_tilt"])
+    lean_ok = lean_calm(lean["lean_gust"], p["calm_lean"])
+    return ca.if_else(g["phase"] >= TOUCHDOWN, xt, xt_next), ca.logic_and(deck, lean_ok), lean_ok
+
+
+def _withdrawn(g, p, flying, deck_rise, lean_ok):
+    """Whether the committed descent is withdrawn: flying, committed, above withdraw_height,
+    and the deck rising past max_deck_rise or (with ``lean_withdraw``) the gust's lean past
+    calm_lean (``lean_ok`` false)."""
+    cause = ca.logic_or(deck_rise > p["max_deck_rise"],
+                        ca.logic_and(p["lean_withdraw"] >= 0.5, ca.logic_not(lean_ok)))
+    return ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
+        cause, g["z_ref"] - contact_height(p) > p["withdraw_height"]))
 
 
 def _touchdown_cue(c, g):
@@ -384,7 +407,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
-    xq_held, calm = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt)
+    xq_held, calm, lean_ok = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt)
     z_fall = z_ref - _descent_rate(z_ref - contact_height(p), p) * dt
     wait = contact_height(p) + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
@@ -394,8 +417,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    rising = ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
-        deck_rise > p["max_deck_rise"], z_ref - contact_height(p) > p["withdraw_height"]))
+    rising = _withdrawn(g, p, flying, deck_rise, lean_ok)
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,

@@ -172,6 +172,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
         leash_height=g["leash_height"], calm_tilt=np.radians(g["calm_tilt_deg"]),
         withdraw_height=g["withdraw_height"], crawl_pause=float(g["crawl_pause"]),
+        calm_lean=np.radians(g["calm_lean_deg"]), lean_time=g["lean_time"],
+        lean_withdraw=float(g["lean_withdraw"]),
         **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
@@ -195,7 +197,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
                                   aborts=0.0, committed=0.0, armed=0.0, ms_rise=0.0,
                                   ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
 
