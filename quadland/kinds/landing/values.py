@@ -119,6 +119,14 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict
         p_veh=p_veh, p_deck=p_deck, **gear))
 
 
+def _commit_keys(g) -> dict:
+    """The commit's and the crawl's guidance parameters from the ``[landing]`` table ``g``
+    (angles in radians, flags as 0/1)."""
+    return dict(calm_tilt=np.radians(g["calm_tilt_deg"]), withdraw_height=g["withdraw_height"],
+                crawl_pause=float(g["crawl_pause"]), calm_lean=np.radians(g["calm_lean_deg"]),
+                lean_time=g["lean_time"], lean_withdraw=float(g["lean_withdraw"]))
+
+
 def landing_values(scenario: Scenario) -> LandingValues:
     """Translate a validated landing scenario into the landing loop's vectors.
 
@@ -170,11 +178,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         search_height=g["search_height"], commit_height=g["commit_height"],
         commit_horizon=g["commit_horizon"], calm_speed=g["calm_speed"],
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
-        leash_height=g["leash_height"], calm_tilt=np.radians(g["calm_tilt_deg"]),
-        withdraw_height=g["withdraw_height"], crawl_pause=float(g["crawl_pause"]),
-        calm_lean=np.radians(g["calm_lean_deg"]), lean_time=g["lean_time"],
-        lean_withdraw=float(g["lean_withdraw"]),
-        **touchdown_guidance(scenario)))
+        leash_height=g["leash_height"], **_commit_keys(g), **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
