@@ -225,8 +225,8 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
                                      const ql_quadrotor_params *quad,
                                      ql_land_detector_cues *cues)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y], CasADi's guidance state. */
-    ql_real xg[12];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y, lean_gust], CasADi's guidance state. */
+    ql_real xg[13];
     const ql_real *arg[ql_casadi_land_detector_cues_SZ_ARG];
     ql_real *res[ql_casadi_land_detector_cues_SZ_RES];
     casadi_int work_int[ql_casadi_land_detector_cues_SZ_IW + 1];
@@ -236,7 +236,7 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
         if (cues) memset(cues, 0, sizeof *cues);
         return QL_ERR_NULL;
     }
-    if (!(all_finite((const ql_real *)guidance_params, 38)
+    if (!(all_finite((const ql_real *)guidance_params, 41)
           & all_finite((const ql_real *)quad, 13))) {
         memset(cues, 0, sizeof *cues);
         return QL_ERR_NONFINITE_INPUT;
@@ -253,6 +253,7 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
     xg[9] = guidance->ms_tilt_acc;
     xg[10] = guidance->lean_x;
     xg[11] = guidance->lean_y;
+    xg[12] = guidance->lean_gust;
     arg[0] = (const ql_real *)y;
     arg[1] = (const ql_real *)range;
     arg[2] = (const ql_real *)imu;

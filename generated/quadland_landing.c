@@ -123,8 +123,9 @@ typedef char guidance_state_is_its_layout[
     AT(ql_guidance_state, ms_tilt_acc, 7, 0) &&
     AT(ql_guidance_state, lean_x, 8, 0) &&
     AT(ql_guidance_state, lean_y, 9, 0) &&
-    AT(ql_guidance_state, phase, 10, 0) &&
-    AT(ql_guidance_state, aborts, 10, 1) &&
+    AT(ql_guidance_state, lean_gust, 10, 0) &&
+    AT(ql_guidance_state, phase, 11, 0) &&
+    AT(ql_guidance_state, aborts, 11, 1) &&
     1 ? 1 : -1];
 typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, hover_height, 0, 0) &&
@@ -165,7 +166,10 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, crawl_gate_time, 35, 0) &&
     AT(ql_guidance_params, crawl_gate_floor, 36, 0) &&
     AT(ql_guidance_params, crawl_gate_wait, 37, 0) &&
-    sizeof(ql_guidance_params) == 38 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, calm_lean, 38, 0) &&
+    AT(ql_guidance_params, lean_time, 39, 0) &&
+    AT(ql_guidance_params, lean_withdraw, 40, 0) &&
+    sizeof(ql_guidance_params) == 41 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -198,14 +202,14 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[38] = {
+static const ql_real default_p_guid[41] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
     3.141592653589793, 0.0, 0.0, 0.0, 0.0, 1000.0,
-    0.0, 1000.0,
+    0.0, 1000.0, 1.5707963267948966, 1.0, 0.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -486,6 +490,9 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   crawl_gate_time          >= 0
  *   crawl_gate_floor         >= 0
  *   crawl_gate_wait          >= 0
+ *   calm_lean                >= 0
+ *   lean_time                > 0
+ *   lean_withdraw            0 or 1
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -612,6 +619,15 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[37]) && (p[37] >= 0.0))) {
         bad = "crawl_gate_wait";
     }
+    if (!bad && !(isfinite(p[38]) && (p[38] >= 0.0))) {
+        bad = "calm_lean";
+    }
+    if (!bad && !(isfinite(p[39]) && (p[39] > 0.0))) {
+        bad = "lean_time";
+    }
+    if (!bad && !(isfinite(p[40]) && ((p[40] == 0.0) || (p[40] == 1.0)))) {
+        bad = "lean_withdraw";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -688,7 +704,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 37 comparisons. The values are known to be finite; no names and no
+ * 40 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -730,6 +746,9 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[35] >= 0.0);
     ok &= (p[36] >= 0.0);
     ok &= (p[37] >= 0.0);
+    ok &= (p[38] >= 0.0);
+    ok &= (p[39] > 0.0);
+    ok &= ((p[40] == 0.0) | (p[40] == 1.0));
     return ok;
 }
 
@@ -782,8 +801,8 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            const ql_guidance_params *params, ql_real dt,
                            ql_guidance_state *state, ql_position_reference *ref)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[12], res_v[28];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y, lean_gust], CasADi's guidance state; res_v = [xg_next, ref]. */
+    ql_real xg[13], res_v[29];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -806,9 +825,10 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[9] = state->ms_tilt_acc;
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
+    xg[12] = state->lean_gust;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 38)
-          & all_finite(xg, 12) & (isfinite(dt) != 0))) {
+          & all_finite((const ql_real *)params, 41)
+          & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
     if (!(dt > 0) || state->phase < QL_PHASE_APPROACH || state->phase > QL_PHASE_LANDED
@@ -824,9 +844,9 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     arg[3] = &dt;
     arg[4] = (const ql_real *)params;
     res[0] = res_v + 0;
-    res[1] = res_v + 12;
+    res[1] = res_v + 13;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 28)) {
+    if (!all_finite(res_v, 29)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -841,7 +861,8 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     state->ms_tilt_acc = res_v[9];
     state->lean_x = res_v[10];
     state->lean_y = res_v[11];
-    memcpy(ref, res_v + 12, sizeof *ref);
+    state->lean_gust = res_v[12];
+    memcpy(ref, res_v + 13, sizeof *ref);
     return QL_OK;
 }
 

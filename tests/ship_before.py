@@ -22,8 +22,9 @@ PAD_BEFORE = "sensors.vision.small_range_max=0.0"
 #: refused at the deck's turn"); ``ship`` keeps these, so they leave its flights as they are.
 GATES_BEFORE = ("estimator.gate_datalink_v=11.344867", "estimator.gate_datalink_a=11.344867")
 
-#: The commit of before the thirteenth session: ``ship_ss5`` since withdraws nothing in the
-#: crawl and waits for the deck's tilt at the contact (docs/landing.md, "ship_ss5: the
-#: deck's roll at the contact and the withdrawals in the crawl"); ``ship`` takes the
-#: defaults, so the keys leave its flights as they are.
-COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0"]
+#: The commit of before the thirteenth session, and the fourteenth's lean keys off:
+#: ``ship_ss5`` since withdraws nothing in the crawl and waits for the deck's tilt at the
+#: contact (docs/landing.md, "ship_ss5: the deck's roll at the contact and the withdrawals
+#: in the crawl"); ``ship`` takes the defaults, so the keys leave its flights as they are.
+COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0",
+                 "landing.calm_lean_deg=90.0", "landing.lean_withdraw=false"]

@@ -71,7 +71,8 @@ def _rate(z_ref, drop):
     the pad, the quadrotor on the reference at rest, the level gear 0.15 m down."""
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
                                   committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, contact_drop=drop))
     xg_next, _ = (np.asarray(v, dtype=float).ravel() for v in guidance_function()(
@@ -102,7 +103,8 @@ def _policy_after(h, drop):
     z_ref = HC + drop + h
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
                                   committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, contact_drop=drop,
                                    fly_on=1.0, pivot_x=0.15))
@@ -132,7 +134,8 @@ def _crawl_step(x, crawl_pause):
     z_ref = HC + 0.1
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
                                   committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, crawl_pause=crawl_pause))
     xg_next, _ = (np.asarray(v, dtype=float).ravel() for v in guidance_function()(

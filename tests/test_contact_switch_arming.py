@@ -37,7 +37,7 @@ def _step(phase, armed, switch, detector=0.0, timer=0.0):
     xg = GUIDANCE_STATE.pack(dict(phase=phase, timer=timer, z_ref=p["touchdown_height"],
                                   aborts=0, committed=1.0, armed=armed, ms_rise=0.0,
                                   ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=detector, marker_age=0.0,
                                    contact_switch=switch))
     xg_next, _ = guidance_function()(xg, [0.0, 0.0, p["touchdown_height"]], [0.0, 0.0, 0.0],

@@ -39,7 +39,8 @@ def _step(x, vx, timer=0.0, **keys):
     z_ref = HC + H
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=timer, z_ref=z_ref, aborts=0,
                                   committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, **keys))
     xg_next, _ = (np.asarray(v, dtype=float).ravel() for v in guidance_function()(

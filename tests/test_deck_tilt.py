@@ -101,8 +101,8 @@ def test_the_frequency_of_a_rolling_deck_from_its_averages():
     average tends to the steady lean."""
     A, w, dt = 0.01, 0.9, 0.01
     xs, nd, ndd, b, dts, tm = (ca.SX.sym(n, k) for n, k in (
-        ("x", 4), ("nd", 2), ("ndd", 2), ("b", 2), ("dt", 1), ("tm", 1)))
-    x = tilt_update(xs, nd, ndd, b, dts, tm)
+        ("x", 5), ("nd", 2), ("ndd", 2), ("b", 2), ("dt", 1), ("tm", 1)))
+    x = tilt_update(xs, nd, ndd, b, dts, tm, 1.0)
     step = ca.Function("s", [xs, nd, ndd, b, dts, tm], [x, tilt_frequency(x)])
     xv = DECK_TILT_STATE.zeros()
     for k in range(int(200 / dt)):
@@ -159,7 +159,8 @@ def test_the_default_is_the_guidance_of_before():
             aborts=rng.integers(3), committed=rng.integers(2), armed=rng.integers(2),
             ms_rise=rng.uniform(0, 1), ms_rise_rate=rng.uniform(0, 2),
             ms_tilt_rate=rng.uniform(0, 0.01), ms_tilt_acc=rng.uniform(0, 0.02),
-            lean_x=rng.uniform(-0.3, 0.3), lean_y=rng.uniform(-0.3, 0.3)))
+            lean_x=rng.uniform(-0.3, 0.3), lean_y=rng.uniform(-0.3, 0.3),
+            lean_gust=rng.uniform(0, 0.5)))
         out = [np.asarray(o, float).ravel() for o in G(
             xg, rng.normal(size=3) * [0.1, 0.1, 1] + [0, 0, 1.2], rng.normal(size=3) * 0.2,
             rng.normal() * 0.3, rng.normal(), [rng.integers(2), 0, rng.integers(2)], 0.004, pg,
@@ -184,7 +185,7 @@ def test_the_descent_commits_where_the_deck_will_lean_with_the_quadrotor():
     xg = GUIDANCE_STATE.pack(dict(
         phase=DESCEND, timer=0.0, z_ref=wait, aborts=0, committed=0, armed=0.0, ms_rise=0.0,
         ms_rise_rate=0.0, ms_tilt_rate=(A * w) ** 2 / 2, ms_tilt_acc=A ** 2 * w ** 4 / 2,
-        lean_x=0.0, lean_y=lean))
+        lean_x=0.0, lean_y=lean, lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0, marker_age=0, contact_switch=0.0))
     f = ca.Function("c", [e2 := ca.SX.sym("e2", 3), wv := ca.SX.sym("w", 3),
                           wd := ca.SX.sym("wd", 3)],
@@ -210,11 +211,12 @@ def test_the_flight_codes_align_phase_keeps_the_averages_moving():
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, calm_tilt=17.9 * DEG))
     xg = GUIDANCE_STATE.pack(dict(
         phase=ALIGN, timer=0.0, z_ref=3.0, aborts=0, committed=0, armed=0.0, ms_rise=0.0,
-        ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+        ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     tilt = TILT_CUES.pack(dict(n_h=[0, 0], n_h_dot=[0.1, 0], n_h_ddot=[0, 0.2], b_h=[0, 0.1]))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0, marker_age=0, contact_switch=0.0))
     xg_next = GUIDANCE_STATE.unpack(np.asarray(G(xg, [0, 0, 3], [0, 0, 0], 0.0, 0.0, cues,
                                                  0.02, pg, tilt)[0], float).ravel())
     k = 0.02 / GUIDANCE_P["motion_time"]
     np.testing.assert_allclose([xg_next[n][0] for n in DECK_TILT_STATE.names()],
-                               [k * 0.01, k * 0.04, 0.0, k * 0.1], rtol=1e-12)
+                               [k * 0.01, k * 0.04, 0.0, k * 0.1,
+                                0.02 / GUIDANCE_P["lean_time"] * 0.1], rtol=1e-12)

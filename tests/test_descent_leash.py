@@ -41,7 +41,7 @@ def _z_next(leash, z):
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=Z_REF, aborts=0,
                                   committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
                                   ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, descent_leash=leash))
     xg_next, ref = (np.asarray(v, dtype=float).ravel() for v in guidance_function()(

@@ -128,6 +128,8 @@ GUIDANCE_DOCUMENTED = {
     "swerve_accel": _nonnegative,
     "crawl_gate": _nonnegative, "crawl_gate_time": _nonnegative,
     "crawl_gate_floor": _nonnegative, "crawl_gate_wait": _nonnegative,
+    "calm_lean": _nonnegative, "lean_time": _positive,
+    "lean_withdraw": lambda v, p: (v == 0) | (v == 1),
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -184,8 +186,8 @@ class _Harness:
         self.v_y, self.v_ref, self.v_p = _view(self.y, d), _view(self.ref, d), _view(self.params, d)
         self.v_state, self.v_gp = _view(self.state, d), _view(self.gp, d)
         # timer, z_ref, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc,
-        # lean_x, lean_y (the ints follow)
-        self.v_g = _view(self.gs, d, 10)
+        # lean_x, lean_y, lean_gust (the ints follow)
+        self.v_g = _view(self.gs, d, 11)
         self.v_out = _view(self.out, d, landing_output_layout(L).size)
         o = landing_output_layout(L).offsets()
         self.o = {n: slice(*o[n]) for n in ("F_cmd", "wrench", "tilt")}
@@ -270,7 +272,7 @@ class _Harness:
         self.v_g[:] = [rng.uniform(0, 2), rng.uniform(-0.5, 4), rng.integers(2),
                        rng.integers(2), rng.uniform(0, 1), rng.uniform(0, 3),
                        rng.uniform(0, 0.01), rng.uniform(0, 0.03), rng.uniform(-0.3, 0.3),
-                       rng.uniform(-0.3, 0.3)]
+                       rng.uniform(-0.3, 0.3), rng.uniform(0, 0.5)]
         # the touchdown verdict (0, 1 or a non-flag), the marker's age (seen or not), the
         # contact switch (0, 1 or a non-flag)
         self.v_cues[:] = [rng.choice((0.0, 1.0, rng.normal())), rng.choice((0.0, 0.4, 3.0)),
@@ -436,7 +438,8 @@ def _check_guidance(h, rng, counts, oracle):
     if oracle is not None:                              # the CasADi function, double only
         xg_next, r = (np.asarray(v, dtype=float).ravel() for v in oracle(xg, y, cues, dt, gp))
         np.testing.assert_array_equal([h.gs.phase, h.gs.aborts], xg_next[[0, 3]])
-        np.testing.assert_allclose(h.v_g.astype(float), xg_next[[1, 2, 4, 5, 6, 7, 8, 9, 10, 11]],
+        np.testing.assert_allclose(h.v_g.astype(float), xg_next[[1, 2, 4, 5, 6, 7, 8, 9, 10, 11,
+                                                                     12]],
                                    rtol=1e-12)
         np.testing.assert_allclose(ref, r, rtol=1e-12, atol=1e-300)
     counts["moved"] += h.gs.phase != phase

@@ -27,7 +27,7 @@ def _xg(committed=0, **state):
     """A guidance state; the quiescence averages at zero (a deck at rest so far)."""
     return GUIDANCE_STATE.pack(dict(state, committed=committed, armed=0.0, ms_rise=0.0,
                                     ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                    lean_x=0.0, lean_y=0.0))
+                                    lean_x=0.0, lean_y=0.0, lean_gust=0.0))
 
 
 def _run(script, n, xg=None, p=P):

@@ -293,7 +293,8 @@ def test_cues_equal_their_casadi_function_and_refuse_bad_parameters():
                                       ms_rise_rate=c.s["gs"].ms_rise_rate,
                                       ms_tilt_rate=c.s["gs"].ms_tilt_rate,
                                       ms_tilt_acc=c.s["gs"].ms_tilt_acc,
-                                      lean_x=c.s["gs"].lean_x, lean_y=c.s["gs"].lean_y))
+                                      lean_x=c.s["gs"].lean_x, lean_y=c.s["gs"].lean_y,
+                                      lean_gust=c.s["gs"].lean_gust))
         assert c() == STATUS["QL_OK"]
         want = np.asarray(f(c.v["y"], c.v["range"], c.v["imu"], np.array(c.F[:]), xg,
                             c.v["gp"], c.v["quad"]), dtype=float).ravel()

@@ -739,7 +739,8 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
                       "simulation.duration", "landing.descent_leash", "landing.leash_height",
                       "initial.handover_clearance", "sensors.vision.small_range_max",
                       "estimator.gate_datalink_v", "estimator.gate_datalink_a",
-                      "landing.withdraw_height", "landing.calm_tilt_deg"}
+                      "landing.withdraw_height", "landing.calm_tilt_deg",
+                      "landing.calm_lean_deg", "landing.lean_withdraw"}
     assert set(ship.campaign_table["dispersions"]) == set(ss5.campaign_table["dispersions"])
 
 

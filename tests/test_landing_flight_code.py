@@ -140,14 +140,15 @@ def test_steps_match_the_casadi_functions(harness, rng):
         xg = GUIDANCE_STATE.pack(dict(phase=k % 3, timer=0.3, z_ref=2.0, aborts=k % 2,
                                       committed=(k // 2) % 2, armed=(k // 4) % 2, ms_rise=0.3,
                                       ms_rise_rate=0.5, ms_tilt_rate=0.02, ms_tilt_acc=0.04,
-                                      lean_x=0.1, lean_y=-0.05))
+                                      lean_x=0.1, lean_y=-0.05, lean_gust=0.2))
         dt = 0.004
         h.v_y[:] = y
         h.v_state[:] = mem
         h.gs.phase, h.gs.timer, h.gs.z_ref, h.gs.aborts = int(xg[0]), xg[1], xg[2], int(xg[3])
         h.gs.committed, h.gs.armed, h.gs.ms_rise, h.gs.ms_rise_rate = xg[4], xg[5], xg[6], \
             xg[7]
-        h.gs.ms_tilt_rate, h.gs.ms_tilt_acc, h.gs.lean_x, h.gs.lean_y = xg[8:12]
+        h.gs.ms_tilt_rate, h.gs.ms_tilt_acc, h.gs.lean_x, h.gs.lean_y, h.gs.lean_gust = \
+            xg[8:13]
         h.cues.touchdown, h.cues.marker_age = k % 2, rng.uniform(0.0, 1.0)
         h.cues.contact_switch = (k // 8) % 2
         assert h.guide(dt) == STATUS["QL_OK"]
@@ -156,7 +157,7 @@ def test_steps_match_the_casadi_functions(harness, rng):
             xg, h.v_y.astype(float), cues, dt, h.pc["p_guid"]))
         got = [h.gs.phase, h.gs.timer, h.gs.z_ref, h.gs.aborts, h.gs.committed, h.gs.armed,
                h.gs.ms_rise, h.gs.ms_rise_rate, h.gs.ms_tilt_rate, h.gs.ms_tilt_acc,
-               h.gs.lean_x, h.gs.lean_y]
+               h.gs.lean_x, h.gs.lean_y, h.gs.lean_gust]
         np.testing.assert_allclose(got, xg_next, rtol=rtol, atol=1e-6)
         np.testing.assert_allclose(h.v_ref, ref, rtol=rtol, atol=1e-6)
         args = (h.v_y.astype(float), h.v_ref.astype(float), h.v_state.astype(float),

@@ -74,7 +74,7 @@ def _full_state(sc, point, z, mem, psi2, t=0.0):
                                   z_ref=sc.data["landing"]["hover_height"], aborts=0.0,
                                   committed=0.0, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
                                   ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     xc = landing_loop_memory(lv.l).pack(dict(xg=xg, mem=mem))
     return LANDING_PLANT_STATE.pack(dict(x1q=x1q, xv=xv, gear=np.zeros(3))), xc
 

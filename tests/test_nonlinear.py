@@ -151,11 +151,11 @@ def test_a_landing_closed_loop_is_the_simulated_flight_up_to_first_contact():
 def test_a_landing_on_sensors_warns_that_nlsys_reads_the_true_state():
     with pytest.warns(UserWarning, match=r"nlsys: highway flies on its sensors .* true state"):
         sys = quadland.nlsys("highway")
-    # the plant (25), the guidance (12: phase, timer, z_ref, aborts, the commit and arming flags,
-    # the quiescent-period predictor's two averages, the deck tilt predictor's two averages and
-    # the lean's two), the step's memory (6 l + 29, l = 10 nodes), the four rotor commands of
-    # one period's delay: no filter, no sensor delay lines
-    assert sys.nstates == 25 + 12 + 6 * 10 + 29 + 4 and sys.dt == pytest.approx(0.004)
+    # the plant (25), the guidance (13: phase, timer, z_ref, aborts, the commit and arming
+    # flags, the quiescent-period predictor's two averages, the deck tilt predictor's two
+    # averages, the lean's two and the gust's lean), the step's memory (6 l + 29, l = 10
+    # nodes), the four rotor commands of one period's delay: no filter, no sensor delay lines
+    assert sys.nstates == 25 + 13 + 6 * 10 + 29 + 4 and sys.dt == pytest.approx(0.004)
 
 
 def _hover(rk_steps: int = 1):
@@ -192,7 +192,7 @@ def test_find_eqpt_finds_quadlands_hover_equilibrium():
     for name, value in zip(pt.state_names, pt.xr, strict=True):
         assert from_nlsys.get(name, x.get(name)) == pytest.approx(value, abs=1e-7), name
     assert pt.xr[pt.state_names.index("z_e")] == pytest.approx(3.0)    # hover_height
-    memory = sys.state_labels[37:37 + pt.xc.size]          # after the plant's 25, the guidance's 12
+    memory = sys.state_labels[38:38 + pt.xc.size]          # after the plant's 25, the guidance's 13
     np.testing.assert_allclose([x[n] for n in memory], pt.xc, rtol=1e-7, atol=1e-7)
     # the command in the queue is the step's own at the hover: the equilibrium's forces
     for i in range(1, 5):
@@ -226,7 +226,7 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     carry it amplified by their conditioning: 6.55e-6 with highway's observer on z, under
     5e-6 before it). That the gap is RK4's error and nothing else is checked by its order,
     not its size: it falls sixteenfold as the steps halve (RK4 is fourth order; 17.5
-    measured); the 23 others are the modes the margins' model leaves out, in closed form."""
+    measured); the 24 others are the modes the margins' model leaves out, in closed form."""
     sc, sys, op, pt = _hover()
     gap, extra = _eigenvalue_gap(sys, op, sc, pt)
     assert gap < 1e-5
@@ -236,10 +236,13 @@ def test_linearize_at_the_hover_is_quadlands_sampled_loop():
     # contact switch's arming, cleared outside the descent (0);
     # the quiescent-period predictor's two averages of the deck's motion and the deck tilt
     # predictor's four (its rates squared, the lean), 1 - dt / T_m = exp(-dt / T_m) within
-    # (dt / T_m)^2 / 2 = 2e-8; the outer bias estimates of x and y, of zero gain, held (1)
+    # (dt / T_m)^2 / 2 = 2e-8; the gust's lean averaged over lean_time, 1 - dt / T_l (its
+    # update is that first-order step, exactly); the outer bias estimates of x and y, of zero
+    # gain, held (1)
     v, dt = sc.data["vehicle"], sys.dt
     fade = math.exp(-dt / sc.data["landing"]["motion_time"])
-    expected = np.sort([0.0, 0.0, 0.0, *[fade] * 6,
+    gust = 1 - dt / sc.data["landing"]["lean_time"]
+    expected = np.sort([0.0, 0.0, 0.0, *[fade] * 6, gust,
                         *np.exp(-dt * np.array([v["d11"] / v["m11"], v["d22"] / v["m22"],
                                                 v["d33"] / v["m33"]])), *[1.0] * 11])
     np.testing.assert_allclose(extra, expected, rtol=0, atol=1e-7)

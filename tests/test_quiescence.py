@@ -132,7 +132,7 @@ def _descend(deck, n, z_ref=1.5):
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
                                   committed=0, armed=0.0, ms_rise=0, ms_rise_rate=0,
                                   ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     pg, cues = GUIDANCE_PARAMS.pack(P), GUIDANCE_CUES.pack(
         dict(touchdown=0, marker_age=0, contact_switch=0.0))
     out = []
@@ -183,7 +183,7 @@ def test_a_rising_deck_after_the_commit_aborts_back_to_the_wait_height():
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.6, aborts=0, committed=1,
                                   armed=0.0, ms_rise=0, ms_rise_rate=0,
                                   ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     pg, cues = GUIDANCE_PARAMS.pack(P), GUIDANCE_CUES.pack(
         dict(touchdown=0, marker_age=0, contact_switch=0.0))
     zs = []

@@ -52,7 +52,7 @@ def _state(z_ref, committed):
     return GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=z_ref, aborts=0,
                                     committed=committed, armed=0.0, ms_rise=0.0,
                                     ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                    lean_x=0.0, lean_y=0.0))
+                                    lean_x=0.0, lean_y=0.0, lean_gust=0.0))
 
 
 def _after(z_ref, committed, a_lat, swerve_accel, withdraw_height=-1e3):

@@ -55,7 +55,7 @@ def _schedule(p=P, n=CONTACT + 700):
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=0.5, aborts=0, committed=0,
                                   armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
                                   ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     rows = []
     for k in range(n):
         z = GUIDANCE_STATE.unpack(xg)["z_ref"][0]

@@ -22,7 +22,8 @@ def _step(h, rise, withdraw_height):
     at rest, the deck rising at ``rise``. Returns z_ref, committed and aborts after it."""
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=TOUCHDOWN + h, aborts=0,
                                   committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0))
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, withdraw_height=withdraw_height))
     xg_next, _ = guidance_function()(xg, [0.0, 0.0, TOUCHDOWN + h], [0.0, 0.0, 0.0], rise,
@@ -65,7 +66,7 @@ def test_the_withdraw_height_is_above_the_expected_contact():
         xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=TOUCHDOWN + h, aborts=0,
                                       committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
                                       ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0,
-                                      lean_y=0.0))
+                                      lean_y=0.0, lean_gust=0.0))
         cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
         pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, withdraw_height=0.3, contact_drop=drop))
         xg_next, _ = guidance_function()(xg, [0.0, 0.0, TOUCHDOWN + h], [0.0, 0.0, 0.0], rise,

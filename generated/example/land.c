@@ -57,7 +57,7 @@
 #define NXP QL_LANDING_PLANT_NX
 #define NXV QL_LANDING_VEHICLE_NX
 #define NY QL_LANDING_NY
-#define NG 12
+#define NG 13
 
 /* The clocks of the run (quadland.kinds.landing.values.landing_clocks): output rows and
  * disturbance samples close at the duration, control steps do not. */
@@ -137,7 +137,7 @@ static void judge_row(landed_t *l, const ql_real *xp, const ql_real *sig, const 
     l->t_last = t;
 }
 
-/* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y]. */
+/* The guidance's state as the vector the signals read: [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y, lean_gust]. */
 static void guidance_vector(const ql_guidance_state *gs, ql_real *xg)
 {
     xg[0] = (ql_real)gs->phase;
@@ -152,6 +152,7 @@ static void guidance_vector(const ql_guidance_state *gs, ql_real *xg)
     xg[9] = (ql_real)gs->ms_tilt_acc;
     xg[10] = (ql_real)gs->lean_x;
     xg[11] = (ql_real)gs->lean_y;
+    xg[12] = (ql_real)gs->lean_gust;
 }
 
 /* The signals at time t, the disturbance sample of time t_w held. */

@@ -226,8 +226,8 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
                                        const qlf_quadrotor_params *quad,
                                        qlf_land_detector_cues *cues)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y], CasADi's guidance state. */
-    qlf_real xg[12];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y, lean_gust], CasADi's guidance state. */
+    qlf_real xg[13];
     const qlf_real *arg[qlf_casadi_land_detector_cues_SZ_ARG];
     qlf_real *res[qlf_casadi_land_detector_cues_SZ_RES];
     casadi_int work_int[qlf_casadi_land_detector_cues_SZ_IW + 1];
@@ -237,7 +237,7 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
         if (cues) memset(cues, 0, sizeof *cues);
         return QLF_ERR_NULL;
     }
-    if (!(all_finite((const qlf_real *)guidance_params, 38)
+    if (!(all_finite((const qlf_real *)guidance_params, 41)
           & all_finite((const qlf_real *)quad, 13))) {
         memset(cues, 0, sizeof *cues);
         return QLF_ERR_NONFINITE_INPUT;
@@ -254,6 +254,7 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
     xg[9] = guidance->ms_tilt_acc;
     xg[10] = guidance->lean_x;
     xg[11] = guidance->lean_y;
+    xg[12] = guidance->lean_gust;
     arg[0] = (const qlf_real *)y;
     arg[1] = (const qlf_real *)range;
     arg[2] = (const qlf_real *)imu;

@@ -123,8 +123,9 @@ typedef char guidance_state_is_its_layout[
     AT(qlf_guidance_state, ms_tilt_acc, 7, 0) &&
     AT(qlf_guidance_state, lean_x, 8, 0) &&
     AT(qlf_guidance_state, lean_y, 9, 0) &&
-    AT(qlf_guidance_state, phase, 10, 0) &&
-    AT(qlf_guidance_state, aborts, 10, 1) &&
+    AT(qlf_guidance_state, lean_gust, 10, 0) &&
+    AT(qlf_guidance_state, phase, 11, 0) &&
+    AT(qlf_guidance_state, aborts, 11, 1) &&
     1 ? 1 : -1];
 typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, hover_height, 0, 0) &&
@@ -165,7 +166,10 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, crawl_gate_time, 35, 0) &&
     AT(qlf_guidance_params, crawl_gate_floor, 36, 0) &&
     AT(qlf_guidance_params, crawl_gate_wait, 37, 0) &&
-    sizeof(qlf_guidance_params) == 38 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, calm_lean, 38, 0) &&
+    AT(qlf_guidance_params, lean_time, 39, 0) &&
+    AT(qlf_guidance_params, lean_withdraw, 40, 0) &&
+    sizeof(qlf_guidance_params) == 41 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -198,14 +202,14 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[38] = {
+static const qlf_real default_p_guid[41] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
     0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
     0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, -1000.0f,
     3.141592653589793f, 0.0f, 0.0f, 0.0f, 0.0f, 1000.0f,
-    0.0f, 1000.0f,
+    0.0f, 1000.0f, 1.5707963267948966f, 1.0f, 0.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -486,6 +490,9 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   crawl_gate_time          >= 0
  *   crawl_gate_floor         >= 0
  *   crawl_gate_wait          >= 0
+ *   calm_lean                >= 0
+ *   lean_time                > 0
+ *   lean_withdraw            0 or 1
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -612,6 +619,15 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[37]) && (p[37] >= 0.0f))) {
         bad = "crawl_gate_wait";
     }
+    if (!bad && !(isfinite(p[38]) && (p[38] >= 0.0f))) {
+        bad = "calm_lean";
+    }
+    if (!bad && !(isfinite(p[39]) && (p[39] > 0.0f))) {
+        bad = "lean_time";
+    }
+    if (!bad && !(isfinite(p[40]) && ((p[40] == 0.0f) || (p[40] == 1.0f)))) {
+        bad = "lean_withdraw";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -688,7 +704,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 37 comparisons. The values are known to be finite; no names and no
+ * 40 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -730,6 +746,9 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[35] >= 0.0f);
     ok &= (p[36] >= 0.0f);
     ok &= (p[37] >= 0.0f);
+    ok &= (p[38] >= 0.0f);
+    ok &= (p[39] > 0.0f);
+    ok &= ((p[40] == 0.0f) | (p[40] == 1.0f));
     return ok;
 }
 
@@ -782,8 +801,8 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
                              const qlf_guidance_params *params, qlf_real dt,
                              qlf_guidance_state *state, qlf_position_reference *ref)
 {
-    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y], CasADi's guidance state; res_v = [xg_next, ref]. */
-    qlf_real xg[12], res_v[28];
+    /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y, lean_gust], CasADi's guidance state; res_v = [xg_next, ref]. */
+    qlf_real xg[13], res_v[29];
     const qlf_real *arg[qlf_casadi_landing_guidance_SZ_ARG];
     qlf_real *res[qlf_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[qlf_casadi_landing_guidance_SZ_IW + 1];
@@ -806,9 +825,10 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[9] = state->ms_tilt_acc;
     xg[10] = state->lean_x;
     xg[11] = state->lean_y;
+    xg[12] = state->lean_gust;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 38)
-          & all_finite(xg, 12) & (isfinite(dt) != 0))) {
+          & all_finite((const qlf_real *)params, 41)
+          & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }
     if (!(dt > 0) || state->phase < QLF_PHASE_APPROACH || state->phase > QLF_PHASE_LANDED
@@ -824,9 +844,9 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     arg[3] = &dt;
     arg[4] = (const qlf_real *)params;
     res[0] = res_v + 0;
-    res[1] = res_v + 12;
+    res[1] = res_v + 13;
     qlf_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 28)) {
+    if (!all_finite(res_v, 29)) {
         return QLF_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -841,7 +861,8 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     state->ms_tilt_acc = res_v[9];
     state->lean_x = res_v[10];
     state->lean_y = res_v[11];
-    memcpy(ref, res_v + 12, sizeof *ref);
+    state->lean_gust = res_v[12];
+    memcpy(ref, res_v + 13, sizeof *ref);
     return QLF_OK;
 }
 

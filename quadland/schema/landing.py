@@ -229,6 +229,14 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "calm_tilt_deg": Field(F, "deg", "the deck's normal predicted at the contact within "
                                "this of the flare's worst lean, or the final descent does "
                                "not commit (180: no limit)", lo=0.0, hi=180.0, default=180.0),
+        "calm_lean_deg": Field(F, "deg", "the quadrotor's lean from the vertical, averaged "
+                               "over lean_time, within this, or the final descent does not "
+                               "commit (90: no limit)", lo=0.0, hi=90.0, default=90.0),
+        "lean_time": Field(F, "s", "time constant of the lean's average for calm_lean_deg",
+                           hi=1e4, default=1.0, **_POS),
+        "lean_withdraw": Field(B, "-", "true: once committed, the lean past calm_lean_deg "
+                               "withdraws the descent above withdraw_height, as a rising deck "
+                               "does; false: it only holds the commit", default=False),
         "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
                              "descent above it does; false: the crawl is committed",
                              default=False),

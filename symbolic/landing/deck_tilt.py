@@ -28,6 +28,13 @@ airflow leans into it; the gusts' lean averages out). The predicted relative til
 the angle between that axis and the predicted normal; the descent commits only while its
 cosine is at least ``cos(calm_tilt)`` (``calm_tilt = pi``: always, the guidance of before).
 
+**The gust's lean.** The flare holds the thrust axis within ``flare_tilt`` of the vertical;
+a quadrotor that needs more to hold the pad against a gust drifts off it in the flare, or
+meets the deck at more than the flare's lean. A third average, of the lean's size ``|b_h|``
+(the sine of the body z axis's angle from the vertical) over the short ``lean_time``, is
+the lean the gust asks for now; the descent commits only while it is at most
+``sin(calm_lean)`` (``calm_lean >= pi / 2``: always, the guidance of before).
+
 Branch-free CasADi, generated into C with the guidance step.
 """
 
@@ -40,7 +47,8 @@ from quadland_symbolic.landing.quiescence import sine_ahead, sine_frequency
 from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["DECK_TILT_STATE", "TILT_CUES", "LEAN_FLOOR", "tilt_cues", "descent_duration",
-           "tilt_update", "tilt_frequency", "tilt_ahead", "lean_axis", "relative_tilt_cos"]
+           "tilt_update", "tilt_frequency", "tilt_ahead", "lean_axis", "relative_tilt_cos",
+           "lean_calm"]
 
 #: The predictor's memory: the two exponential averages of the tilt's rates.
 DECK_TILT_STATE = Layout("x_tilt", (
@@ -51,6 +59,8 @@ DECK_TILT_STATE = Layout("x_tilt", (
           "part"),
     Field("lean_x", 1, "-", "exponential average of the body z axis's x component in E"),
     Field("lean_y", 1, "-", "exponential average of the body z axis's y component in E"),
+    Field("lean_gust", 1, "-", "exponential average over lean_time of the body z axis's "
+          "horizontal part's length (the sine of its tilt)"),
 ), "deck tilt predictor state")
 
 #: What the predictor reads each step (horizontal parts in E).
@@ -88,16 +98,25 @@ def descent_duration(h0, descent_time, touchdown_speed, descent_speed):
     return fast + mid + ca.fmin(h0, h_crawl) / touchdown_speed
 
 
-def tilt_update(xt, n_h_dot, n_h_ddot, b_h, dt, motion_time):
+def tilt_update(xt, n_h_dot, n_h_ddot, b_h, dt, motion_time, lean_time):
     """The averages after one step of length ``dt``, as the heave's
     (:func:`quadland_symbolic.landing.quiescence.quiescence_update`): the tilt's rates
-    squared and the lean ``b_h``."""
+    squared and the lean ``b_h`` over ``motion_time``, the lean's size ``|b_h|`` over
+    ``lean_time``."""
     q = DECK_TILT_STATE.unpack(xt)
     k = ca.fmin(dt / motion_time, 1)
+    k_gust = ca.fmin(dt / lean_time, 1)
     return ca.vertcat(q["ms_tilt_rate"] + k * (ca.dot(n_h_dot, n_h_dot) - q["ms_tilt_rate"]),
                       q["ms_tilt_acc"] + k * (ca.dot(n_h_ddot, n_h_ddot) - q["ms_tilt_acc"]),
                       q["lean_x"] + k * (b_h[0] - q["lean_x"]),
-                      q["lean_y"] + k * (b_h[1] - q["lean_y"]))
+                      q["lean_y"] + k * (b_h[1] - q["lean_y"]),
+                      q["lean_gust"] + k_gust * (ca.norm_2(b_h) - q["lean_gust"]))
+
+
+def lean_calm(lean_gust, calm_lean):
+    """Whether the gust's lean lets the descent commit: ``calm_lean >= pi / 2`` (no limit)
+    or ``lean_gust <= sin(calm_lean)`` (CasADi 0/1)."""
+    return ca.logic_or(calm_lean >= ca.pi / 2, lean_gust <= ca.sin(ca.fmin(calm_lean, ca.pi / 2)))
 
 
 def tilt_frequency(xt):

@@ -83,7 +83,10 @@ sideways: the pad's horizontal acceleration as the aircraft knows it
 (:func:`quadland_symbolic.landing.swerve.pad_swerve`, the flight code's step passes it)
 within ``swerve_accel``; a committed descent is withdrawn while it is not, as for a
 rising deck (below), so that no contact is made while the vehicle manoeuvres (a car
-changing lane). 0, the default, holds nothing.
+changing lane). 0, the default, holds nothing. The commit also needs the quadrotor's
+lean averaged over ``lean_time`` within ``calm_lean`` (a gust the flare's tilt limit
+cannot hold; ``pi / 2``, the default, no limit; with ``lean_withdraw`` such a gust also
+withdraws the committed descent, as a rising deck).
 
 **Abort.** In the committed crawl, when the horizontal offset exceeds
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
@@ -111,6 +114,7 @@ from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
     descent_duration,
+    lean_calm,
     relative_tilt_cos,
     tilt_ahead,
     tilt_frequency,
@@ -222,6 +226,12 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
     Field("crawl_gate_wait", 1, "s", "the longest time crawl_gate holds a crawl: after it the "
           "crawl falls on"),
+    Field("calm_lean", 1, "rad", "largest lean of the body z axis from the vertical, "
+          "averaged over lean_time, at which the final descent commits (pi/2: no limit)"),
+    Field("lean_time", 1, "s", "time constant of the lean's average for calm_lean"),
+    Field("lean_withdraw", 1, "0/1", "1: once committed, the lean's average past calm_lean "
+          "withdraws the descent above withdraw_height, as a rising deck does; 0: it "
+          "only holds the commit"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -268,24 +278,28 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt, swerve):
     """The quiescence and deck tilt averages after the step (held on the deck), whether
     the deck's vertical speed predicted over commit_horizon stays within calm_speed and
     max_deck_rise (so that a commit is never its own abort) and its tilt within
-    calm_tilt (:func:`_tilt_calm`) with the pad not swerving, and whether it swerves
-    (:func:`~quadland_symbolic.landing.swerve.swerving`; never without ``swerve``)."""
+    calm_tilt and the gust's lean within calm_lean (:func:`_tilt_calm`) with the pad not
+    swerving; and what withdraws a committed descent besides a rising deck: a swerve
+    (:func:`~quadland_symbolic.landing.swerve.swerving`; never without ``swerve``) or, with
+    ``lean_withdraw``, the gust's lean past calm_lean."""
     held = ca.SX(0) if swerve is None else swerving(swerve, p["swerve_accel"])
     xq = ca.vertcat(g["ms_rise"], g["ms_rise_rate"])
     xq_next = quiescence_update(xq, deck_rise, deck_rise_rate, dt, p["motion_time"])
     speed = predicted_speed(deck_rise, deck_rise_rate, deck_frequency(xq_next),
                             p["commit_horizon"])
-    xt_held, tilt_calm = _tilt_calm(g, p, tilt, dt)
+    xt_held, tilt_calm, lean_ok = _tilt_calm(g, p, tilt, dt)
     return (ca.vertcat(ca.if_else(g["phase"] >= TOUCHDOWN, xq, xq_next), xt_held),
             ca.logic_and(ca.logic_and(speed <= ca.fmin(p["calm_speed"], p["max_deck_rise"]),
-                                      tilt_calm), ca.logic_not(held)), held)
+                                      tilt_calm), ca.logic_not(held)),
+            ca.logic_or(held, ca.logic_and(p["lean_withdraw"] >= 0.5, ca.logic_not(lean_ok))))
 
 
-def _withdrawn(flying, g, p, deck_rise, held):
+def _withdrawn(flying, g, p, deck_rise, cause):
     """1 (CasADi) when the committed descent is withdrawn: the deck rises past
-    max_deck_rise or the pad swerves (``held``), above withdraw_height."""
+    max_deck_rise or ``cause`` (a swerve, a gust's lean: :func:`_calm`), above
+    withdraw_height."""
     return ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
-        ca.logic_or(deck_rise > p["max_deck_rise"], held),
+        ca.logic_or(deck_rise > p["max_deck_rise"], cause),
         g["z_ref"] - contact_height(p) > p["withdraw_height"]))
 
 
@@ -293,20 +307,22 @@ def _tilt_calm(g, p, tilt, dt):
     """The deck tilt averages after the step (held on the deck) and whether the deck's
     normal predicted at the contact (the profile's time from the wait height) lies within
     calm_tilt of the flare's worst lean, toward the average lean
-    (:mod:`~quadland_symbolic.landing.deck_tilt`); without ``tilt`` the averages hold and
-    the condition is true."""
+    (:mod:`~quadland_symbolic.landing.deck_tilt`), and the gust's lean within calm_lean
+    (both, then the lean's alone); without ``tilt`` the averages hold and both are true."""
     xt = ca.vertcat(*(g[n] for n in DECK_TILT_STATE.names()))
     if tilt is None:
-        return xt, ca.SX(1)
+        return xt, ca.SX(1), ca.SX(1)
     c = TILT_CUES.unpack(tilt)
-    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], c["b_h"], dt, p["motion_time"])
+    xt_next = tilt_update(xt, c["n_h_dot"], c["n_h_ddot"], c["b_h"], dt, p["motion_time"],
+                          p["lean_time"])
     lean = DECK_TILT_STATE.unpack(xt_next)
     duration = descent_duration(p["commit_height"], p["descent_time"], p["touchdown_speed"],
                                 p["descent_speed"])
     d_h = tilt_ahead(c["n_h"], c["n_h_dot"], tilt_frequency(xt_next), duration)
-    return (ca.if_else(g["phase"] >= TOUCHDOWN, xt, xt_next),
-            relative_tilt_cos(ca.vertcat(lean["lean_x"], lean["lean_y"]), d_h, p["flare_tilt"])
-            >= ca.cos(p["calm_tilt"]))
+    deck = relative_tilt_cos(ca.vertcat(lean["lean_x"], lean["lean_y"]), d_h,
+                             p["flare_tilt"]) >= ca.cos(p["calm_tilt"])
+    lean_ok = lean_calm(lean["lean_gust"], p["calm_lean"])
+    return ca.if_else(g["phase"] >= TOUCHDOWN, xt, xt_next), ca.logic_and(deck, lean_ok), lean_ok
 
 
 def _touchdown_cue(c, g):
@@ -416,7 +432,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     flying = ca.logic_and(in_descend, ca.logic_not(contact))
 
     # the quiescent-period prediction (quiescence.py) and the commit at the wait height
-    xq_held, calm, held = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt, swerve)
+    xq_held, calm, cause = _calm(g, p, deck_rise, deck_rise_rate, dt, tilt, swerve)
     z_fall = z_ref - _descent_rate(z_ref - contact_height(p), p) * dt
     wait = contact_height(p) + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
@@ -430,7 +446,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
         ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
         ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
-    rising = _withdrawn(flying, g, p, deck_rise, held)      # a rising deck, or a swerve
+    rising = _withdrawn(flying, g, p, deck_rise, cause)   # a rising deck, a swerve, a gust
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,

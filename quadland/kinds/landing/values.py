@@ -125,6 +125,14 @@ _PASSED_KEYS = ("swerve_accel", "crawl_gate", "crawl_gate_time", "crawl_gate_flo
                 "crawl_gate_wait")
 
 
+def _commit_keys(g) -> dict:
+    """The commit's and the crawl's guidance parameters from the ``[landing]`` table ``g``
+    (angles in radians, flags as 0/1)."""
+    return dict(calm_tilt=np.radians(g["calm_tilt_deg"]), withdraw_height=g["withdraw_height"],
+                crawl_pause=float(g["crawl_pause"]), calm_lean=np.radians(g["calm_lean_deg"]),
+                lean_time=g["lean_time"], lean_withdraw=float(g["lean_withdraw"]))
+
+
 def landing_values(scenario: Scenario) -> LandingValues:
     """Translate a validated landing scenario into the landing loop's vectors.
 
@@ -176,10 +184,8 @@ def landing_values(scenario: Scenario) -> LandingValues:
         search_height=g["search_height"], commit_height=g["commit_height"],
         commit_horizon=g["commit_horizon"], calm_speed=g["calm_speed"],
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
-        leash_height=g["leash_height"], calm_tilt=np.radians(g["calm_tilt_deg"]),
-        withdraw_height=g["withdraw_height"], crawl_pause=float(g["crawl_pause"]),
-        **{k: g[k] for k in _PASSED_KEYS},
-        **touchdown_guidance(scenario)))
+        leash_height=g["leash_height"], **_commit_keys(g),
+        **{k: g[k] for k in _PASSED_KEYS}, **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
@@ -202,7 +208,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
     xg = GUIDANCE_STATE.pack(dict(phase=APPROACH, timer=0.0, z_ref=g["hover_height"],
                                   aborts=0.0, committed=0.0, armed=0.0, ms_rise=0.0,
                                   ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0))
+                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
     xc0 = landing_loop_memory(l).pack(dict(xg=xg, mem=mem))
     return LandingValues(l, pp, pc, xp0, xc0, F_max)
 
