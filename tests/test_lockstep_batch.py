@@ -208,3 +208,21 @@ def test_an_inactive_runs_pointers_are_never_dereferenced(tmp_path):
     for y, j in zip(np.load(tmp_path / "y.npy"), (0, 2, 3), strict=True):
         want = fn(np.arange(37.0) + j, 2.0, ca.DM(ca.Sparsity.lower(2), np.ones(3)))[0]
         assert np.array_equal(bits(y), bits(np.asarray(want).ravel()))
+
+
+@pytest.mark.parametrize("case", ["no input", "empty inputs and outputs"])
+def test_functions_without_values_compile_as_iso_c(tmp_path, case):
+    """A Function without inputs, and one whose inputs and outputs are all empty: the
+    entry compiles with ``-pedantic-errors`` (no zero-length arrays) and gives CasADi's
+    values."""
+    e = ca.SX.sym("e", 0)
+    fn = (ca.Function("k", [], [ca.SX(3.0)]) if case == "no input"
+          else ca.Function("k", [e, e[:0]], [ca.SX(0, 1)]))
+    lib = compile_shared({"k.c": lockstep_batch_c(fn, 2)}, tmp_path / "libk.so",
+                         ("-O2", "-pedantic-errors"))
+    args = [[np.zeros(0)] * fn.n_in() for _ in range(2)]
+    got = _call_batch(lib.k_batch2, fn, args, [1, 1])
+    for j in range(2):
+        want = fn.call([ca.DM(a) for a in args[j]])
+        for g, w in zip(got[j], want, strict=True):
+            assert np.array_equal(bits(g), bits(np.asarray(w.nonzeros())))
