@@ -34,7 +34,7 @@ __all__ = ["lockstep_batch_c"]
 
 
 def lockstep_batch_c(fn: ca.Function, width: int, name: str | None = None) -> str:
-    """C of a batch entry evaluating ``fn`` for up to ``width`` runs in lockstep.
+    """C of a batch entry: ``fn`` for up to ``width`` runs at once.
 
     Parameters
     ----------
@@ -61,6 +61,13 @@ def lockstep_batch_c(fn: ca.Function, width: int, name: str | None = None) -> st
     ------
     ValueError
         As :func:`~quadland_symbolic.codegen.lockstep.lockstep_c`.
+
+    Examples
+    --------
+    >>> x = ca.SX.sym("x", 2)
+    >>> text = lockstep_batch_c(ca.Function("f", [x], [x[0] * x[1]]), 4)
+    >>> "void f_batch4(const double* const* arg, double* const* res, const int* active)" in text
+    True
     """
     name = name or f"{fn.name()}_batch{width}"
     kernel = lockstep_c(fn, width, name=f"{name}_lanes")
