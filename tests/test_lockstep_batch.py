@@ -12,6 +12,9 @@ results not wanted, as in CasADi's calling convention.
 from __future__ import annotations
 
 import ctypes
+import subprocess
+import sys
+import textwrap
 
 import casadi as ca
 import numpy as np
@@ -136,3 +139,90 @@ def test_no_run_active_writes_nothing(tmp_path):
                  (ctypes.c_int * 2)(0, 0))
     assert np.isnan(out).all()
 
+
+
+def _mixing(n: int = 37) -> ca.Function:
+    """``y[k] = a[k] b - (k + 1) a[k + 1 mod n]`` and ``z = b c`` (``c`` lower triangular,
+    3 nonzeros): every output value mixes two of ``a``'s, so a permutation of a block
+    made when gathering and undone when scattering still shows."""
+    a, b, c = ca.SX.sym("a", n), ca.SX.sym("b"), ca.SX.sym("c", ca.Sparsity.lower(2))
+    y = ca.vertcat(*[a[k] * b - (k + 1) * a[(k + 1) % n] for k in range(n)])
+    return ca.Function("mix", [a, b, c], [y, b * c])
+
+
+@pytest.mark.parametrize("width", [1, 2, 4, 8, 16])
+def test_every_width_against_casadi_with_non_finite_lanes_shared_and_in_place(tmp_path, width):
+    """W runs of :func:`_mixing` (37 values: whole blocks and a remainder at every W)
+    against CasADi's own evaluation, bit for bit: run 1 with a NaN, infinities and
+    ``b = -0.0`` (the other lanes' bits untouched), every run's ``c`` one shared buffer,
+    run 0's ``y`` written over its own ``a`` (every input is read before any output is
+    written), the last of four or more inactive (its buffers neither read into a result
+    nor written)."""
+    fn, rng = _mixing(), np.random.default_rng(width)
+    lib = compile_shared({"m.c": lockstep_batch_c(fn, width)}, tmp_path / "libm.so",
+                         ("-O2", *STRICT))
+    c = np.array([0.5, -1.25, 3.0])
+    runs = [[rng.normal(size=37), rng.normal(size=1), c] for _ in range(width)]
+    if width > 1:
+        runs[1][0][[5, 20, 30]], runs[1][1][0] = [NAN, np.inf, -np.inf], -0.0
+    active = [int(not (width >= 4 and j == width - 1)) for j in range(width)]
+    want = [[np.asarray(v.nonzeros()) for v in fn.call([ca.DM(a), ca.DM(b),
+                                                         ca.DM(ca.Sparsity.lower(2), cc)])]
+            for a, b, cc in runs]
+    before = [[x.copy() for x in r] for r in runs]
+    outs = [[np.full(37, NAN), np.full(3, NAN)] for _ in range(width)]
+    outs[0][0] = runs[0][0]                                  # y over run 0's a
+    arg = [x.ctypes.data_as(PD) for r in runs for x in r]
+    res = [o.ctypes.data_as(PD) for r in outs for o in r]
+    getattr(lib, f"mix_batch{width}")((PD * len(arg))(*arg), (PD * len(res))(*res),
+                                      (ctypes.c_int * width)(*active))
+    for j in range(width):
+        if not active[j]:
+            assert all(np.isnan(o).all() for o in outs[j])
+            assert all(np.array_equal(bits(x), bits(y))
+                       for x, y in zip(runs[j], before[j], strict=True))
+            continue
+        for g, w in zip(outs[j], want[j], strict=True):
+            assert np.array_equal(bits(g), bits(w)), (j, g, w)
+    assert np.array_equal(bits(c), bits(before[0][2]))       # the shared input kept
+
+
+def test_an_inactive_runs_pointers_are_never_dereferenced(tmp_path):
+    """Run 1 of 4 inactive with every pointer invalid (address 8): the call, in a child
+    process, neither reads nor writes through them (it would fault) and the active runs'
+    results are CasADi's."""
+    fn = _mixing()
+    compile_shared({"m.c": lockstep_batch_c(fn, 4)}, tmp_path / "libm.so", ("-O2", *STRICT))
+    child = textwrap.dedent(f"""
+        import ctypes, numpy as np
+        PD = ctypes.POINTER(ctypes.c_double)
+        lib, bad = ctypes.CDLL({str(tmp_path / "libm.so")!r}), ctypes.cast(8, PD)
+        runs = [[np.arange(37.0) + j, np.array([2.0]), np.ones(3)] for j in range(4)]
+        outs = [[np.zeros(37), np.zeros(3)] for j in range(4)]
+        arg = [bad if j == 1 else x.ctypes.data_as(PD) for j, r in enumerate(runs) for x in r]
+        res = [bad if j == 1 else o.ctypes.data_as(PD) for j, r in enumerate(outs) for o in r]
+        lib.mix_batch4((PD * 12)(*arg), (PD * 8)(*res), (ctypes.c_int * 4)(1, 0, 1, 1))
+        np.save({str(tmp_path / "y.npy")!r}, np.array([outs[j][0] for j in (0, 2, 3)]))
+        """)
+    subprocess.run([sys.executable, "-c", child], check=True, timeout=60)
+    for y, j in zip(np.load(tmp_path / "y.npy"), (0, 2, 3), strict=True):
+        want = fn(np.arange(37.0) + j, 2.0, ca.DM(ca.Sparsity.lower(2), np.ones(3)))[0]
+        assert np.array_equal(bits(y), bits(np.asarray(want).ravel()))
+
+
+@pytest.mark.parametrize("case", ["no input", "empty inputs and outputs"])
+def test_functions_without_values_compile_as_iso_c(tmp_path, case):
+    """A Function without inputs, and one whose inputs and outputs are all empty: the
+    entry compiles with ``-pedantic-errors`` (no zero-length arrays) and gives CasADi's
+    values."""
+    e = ca.SX.sym("e", 0)
+    fn = (ca.Function("k", [], [ca.SX(3.0)]) if case == "no input"
+          else ca.Function("k", [e, e[:0]], [ca.SX(0, 1)]))
+    lib = compile_shared({"k.c": lockstep_batch_c(fn, 2)}, tmp_path / "libk.so",
+                         ("-O2", "-pedantic-errors"))
+    args = [[np.zeros(0)] * fn.n_in() for _ in range(2)]
+    got = _call_batch(lib.k_batch2, fn, args, [1, 1])
+    for j in range(2):
+        want = fn.call([ca.DM(a) for a in args[j]])
+        for g, w in zip(got[j], want, strict=True):
+            assert np.array_equal(bits(g), bits(np.asarray(w.nonzeros())))

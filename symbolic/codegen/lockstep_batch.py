@@ -16,7 +16,7 @@ A piece of issue 20's item 2 ("vectorizing across runs"), measured against the
 runtime's compiled filter in ``benchmarks/bench_filter_batch.py`` (docs/performance.md,
 "The filter's batch entry in lockstep"); the simulators do not call it yet.
 
-Gathering and scattering: each run's inputs and outputs (the filter's 879 and 938 values)
+Gathering and scattering: each run's inputs and outputs (the filter's 884 and 938 values)
 are moved once each way, W values of W runs at a time as a W x W block transposed in
 vector registers (log2 W rounds of shuffles swapping blocks: moves only, so the bits are
 the values'). A driver that keeps its runs' memories interleaved calls the kernel
@@ -34,7 +34,7 @@ __all__ = ["lockstep_batch_c"]
 
 
 def lockstep_batch_c(fn: ca.Function, width: int, name: str | None = None) -> str:
-    """C of a batch entry evaluating ``fn`` for up to ``width`` runs in lockstep.
+    """C of a batch entry: ``fn`` for up to ``width`` runs at once.
 
     Parameters
     ----------
@@ -53,13 +53,21 @@ def lockstep_batch_c(fn: ca.Function, width: int, name: str | None = None) -> st
         double* const* res, const int* active)``: ``arg[n_in * j + i]`` is run ``j``'s
         input ``i`` as its scalar call takes it (NULL: zeros), ``res[n_out * j + i]`` its
         output ``i`` (NULL: not wanted), ``active[j]`` nonzero for a run to evaluate.
-        Inactive runs' pointers are not read. Compile as the lockstep C (no
+        Inactive runs' pointers are not dereferenced. Every input is read before any
+        output is written, so an output may overwrite any run's input. Compile as the lockstep C (no
         ``-ffast-math``, ``-ffp-contract=off``).
 
     Raises
     ------
     ValueError
         As :func:`~quadland_symbolic.codegen.lockstep.lockstep_c`.
+
+    Examples
+    --------
+    >>> x = ca.SX.sym("x", 2)
+    >>> text = lockstep_batch_c(ca.Function("f", [x], [x[0] * x[1]]), 4)
+    >>> "void f_batch4(const double* const* arg, double* const* res, const int* active)" in text
+    True
     """
     name = name or f"{fn.name()}_batch{width}"
     kernel = lockstep_c(fn, width, name=f"{name}_lanes")
