@@ -9,13 +9,15 @@ measurement (``Text._get_layout``). A margin review draws about 380 texts
 measures them about 2,000 times.
 
 :class:`TextCacheRenderer` keeps both, by what they are computed from: the
-layout of a string by its fonts' files, size, resolution, hinting and
-features; the height metrics by the fonts' files, size and resolution; a text's font
-files by its font properties and the rc parameters (:func:`font_paths`). Its glyphs are
-drawn by :func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per
-sub-pixel place. The pixels are the same (checked in ``tests/test_quick_figure.py`` and
-``tests/test_glyph_cache.py``). Where matplotlib's Agg renderer has not the
-methods this one relies on (another version), it draws as matplotlib does.
+layout of a string by its fonts' files, size, resolution, hinting, features and
+whether the last-resort font is a fallback; the height metrics by the fonts' files,
+size and resolution; a text's font files by its font properties and the rc parameters
+(:func:`font_paths`). Its glyphs are drawn by
+:func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per sub-pixel
+place. The pixels are the same (checked in ``tests/test_quick_figure.py``,
+``tests/test_glyph_cache.py`` and ``tests/test_text_cache_rc.py``). Where matplotlib's
+Agg renderer has not the methods this one relies on (another version), it draws as
+matplotlib does.
 """
 
 from __future__ import annotations
@@ -73,9 +75,11 @@ def font_paths(prop) -> tuple:
 
 
 def _font_key(prop, dpi) -> tuple:
+    # font.enable_last_resort: whether a glyph no file has is the last-resort font's or
+    # the first font's .notdef (a different glyph, advance and layout)
     paths = font_paths(prop)
     return (paths, prop.get_size_in_points(), dpi, mpl.rcParams["text.hinting_factor"],
-            mpl.rcParams["text.kerning_factor"])
+            mpl.rcParams["text.kerning_factor"], mpl.rcParams["font.enable_last_resort"])
 
 
 def _remember(cache: dict, key, value):
