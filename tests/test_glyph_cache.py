@@ -144,3 +144,21 @@ def test_a_glyph_varied_in_one_thing_at_one_remainder_is_rendered_for_it(rc, dpi
             _one_glyph_each(fig)
             drawn.append(pixels(fig))
     assert np.array_equal(*drawn)
+
+
+def test_a_matplotlib_without_render_modes_imports_the_module(monkeypatch):
+    """matplotlib before 3.10 has no ``ft2font.RenderMode`` (pyproject allows 3.8): the
+    module imports, says it cannot draw, and text_cache then draws as matplotlib does
+    (checked by hand on 3.8.4: a quick figure drawn, ``_CACHEABLE`` False)."""
+    import importlib
+
+    from matplotlib import ft2font
+
+    monkeypatch.delattr(ft2font, "RenderMode")
+    try:
+        importlib.reload(glyph_cache)
+        assert not glyph_cache.available()
+    finally:
+        monkeypatch.undo()
+        importlib.reload(glyph_cache)
+    assert glyph_cache.available()

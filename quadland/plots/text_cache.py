@@ -30,6 +30,7 @@ from matplotlib.font_manager import fontManager, get_font
 from matplotlib.ft2font import FT2Font
 
 from quadland.plots.font_memory import memory_font
+from quadland.plots.glyph_cache import available as glyphs_drawable
 from quadland.plots.glyph_cache import draw_glyphs
 
 __all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE", "font_paths"]
@@ -43,7 +44,7 @@ _PATHS: dict = {}
 
 #: Whether this matplotlib draws text as the renderer below expects (3.11's Agg).
 _CACHEABLE = (hasattr(RendererAgg, "_draw_text_glyphs_and_boxes")
-              and hasattr(FT2Font, "_layout"))
+              and hasattr(FT2Font, "_layout") and glyphs_drawable())
 
 
 #: The font properties' own values and the rc parameters matplotlib's ``findfont`` reads.
