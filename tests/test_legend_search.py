@@ -114,3 +114,15 @@ def test_a_search_set_on_the_legend_is_its_own_at_every_draw():
     first = pixels(mine)
     assert np.array_equal(pixels(mine), first)              # drawn again: the same search
     assert len([c for c in calls if c is mine]) > drawn
+
+
+def test_a_legend_data_without_the_renderer_is_not_searched(monkeypatch):
+    """matplotlib 3.8's ``Legend._auto_legend_data`` takes no renderer (pyproject allows
+    3.8): there the legend searches as matplotlib does rather than failing in the draw."""
+    from matplotlib.legend import Legend
+
+    def data_of_38(self):
+        return [], [], []
+
+    monkeypatch.setattr(Legend, "_auto_legend_data", data_of_38)
+    assert not legend_search.available()
