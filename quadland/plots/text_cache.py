@@ -56,8 +56,9 @@ _RC_FONT_KEYS = tuple(f"font.{key}" for key in (
 def font_paths(prop) -> tuple:
     """``fontManager._find_fonts_by_props(prop)`` as a tuple, found once per process for
     what it is found from: the properties' values, the rc parameters matplotlib's
-    ``findfont`` reads, its ``MPL_IGNORE_SYSTEM_FONTS`` and the font lists' lengths (a font
-    added with ``addfont`` starts a new entry). matplotlib's own search copies the
+    ``findfont`` reads, its ``MPL_IGNORE_SYSTEM_FONTS``, the font lists' lengths (a font
+    added with ``addfont`` starts a new entry) and the default family (taken where none of
+    the properties' families is found). matplotlib's own search copies the
     properties once per family and hashes them again for its cache on every call."""
     # rcParams._get: the stored value without the backend's resolution, which no font
     # parameter has (matplotlib keeps its name stable)
@@ -66,7 +67,7 @@ def font_paths(prop) -> tuple:
         key = (tuple(vars(prop).items()),
                tuple(tuple(v) if isinstance(v, list) else v for v in map(read, _RC_FONT_KEYS)),
                os.getenv("MPL_IGNORE_SYSTEM_FONTS"), len(fontManager.ttflist),
-               len(fontManager.afmlist))
+               len(fontManager.afmlist), fontManager.defaultFamily.get("ttf"))
         paths = _PATHS.get(key)
     except TypeError:                   # a property not hashable: found each time
         return tuple(fontManager._find_fonts_by_props(prop))
