@@ -9,9 +9,15 @@ review in the measured processes (1.3 to 2.5 s each), the load's scatter is smal
 in ``bench_margins.py``'s whole commands. CPU time of the children (``getrusage``),
 medians (min to max), and the run-by-run ratio of ``this`` to ``against``.
 
+With ``--glyph-cache``, in this process instead: the five figures of highway drawn and
+encoded with the kept glyph bitmaps (``quadland.plots.glyph_cache``, emptied before each
+draw) and with matplotlib's own glyph loop, the two alternating pair by pair; CPU s
+(``time.process_time``), medians (min to max) and the pair by pair ratio.
+
 Run from the repository root::
 
     python benchmarks/bench_margin_figures.py --runs 9 --against /tmp/old
+    python benchmarks/bench_margin_figures.py --glyph-cache --runs 15
 """
 
 from __future__ import annotations
@@ -87,12 +93,63 @@ def figures(runs: int, against: Path | None, scenarios) -> dict:
     return out
 
 
+def _matplotlibs_glyphs(renderer, gc, x, y, angle, items, size, flags):
+    """A text's glyphs drawn by matplotlib's Agg loop (what ``draw_glyphs`` replaces)."""
+    renderer._draw_text_glyphs_and_boxes(
+        gc, x, y, angle,
+        ((item.ft_object, size, item.glyph_index, 0, 1, item.x, item.y) for item in items), [])
+
+
+def glyph_cache_pairs(runs: int, name: str = "highway") -> dict:
+    """CPU s of drawing and encoding ``name``'s five figures in this process, with the kept
+    glyph bitmaps (emptied before each draw) and with matplotlib's glyph loop, by which."""
+    import time
+
+    from threadpoolctl import threadpool_limits
+
+    from quadland import load_scenario
+    from quadland.margins import margin_report
+    from quadland.output import figure_png
+    from quadland.plots import glyph_cache, margin_figures, text_cache
+    from quadland.plots.gc_pause import collection_paused
+
+    with threadpool_limits(1):
+        report = margin_report(load_scenario(name))
+    kept = text_cache.draw_glyphs
+    out: dict = {"kept": [], "matplotlib": []}
+    order = [("kept", kept), ("matplotlib", _matplotlibs_glyphs)]
+    try:
+        for k in range(runs + 1):                       # the first pair warms both up
+            for which, draw in order if k % 2 == 0 else order[::-1]:
+                text_cache.draw_glyphs = draw
+                glyph_cache._BITMAPS.clear()
+                start = time.process_time()
+                with threadpool_limits(1), collection_paused():
+                    pngs = {key: figure_png(fig) for key, fig in margin_figures(report).items()}
+                if k:
+                    out[which].append(time.process_time() - start)
+                del pngs
+    finally:
+        text_cache.draw_glyphs = kept
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=5, help="runs of each")
     ap.add_argument("--against", type=Path, help="another source tree, paired run by run")
     ap.add_argument("--scenarios", nargs="+", default=("paper", "highway"))
+    ap.add_argument("--glyph-cache", action="store_true",
+                    help="in this process: highway's figures with and without the kept glyphs")
     args = ap.parse_args(argv)
+    if args.glyph_cache:
+        pairs = glyph_cache_pairs(args.runs)
+        print("## highway's five figures in this process, CPU s, median (min to max)")
+        for which, cpu in pairs.items():
+            print(f"- glyphs {which}: {_stats(cpu)}")
+        ratios = [a / b for a, b in zip(pairs["kept"], pairs["matplotlib"], strict=True)]
+        print(f"- kept / matplotlib's, pair by pair: {_stats(ratios)}")
+        return
     measured = figures(args.runs, args.against, args.scenarios)
     print("## the five margin figures in a fresh process, CPU s, median (min to max)")
     for (name, tree), cpu in measured.items():

@@ -53,3 +53,16 @@ def test_a_font_list_grown_starts_a_new_entry(monkeypatch):
     monkeypatch.setattr(fontManager, "ttflist", [*fontManager.ttflist, fontManager.ttflist[0]])
     text_cache.font_paths(prop)
     assert len(calls) == 2
+
+
+def test_a_changed_default_family_is_found_again(monkeypatch, caplog):
+    """A family not installed falls back to the font manager's default family, read by
+    ``_find_fonts_by_props`` on every call: changed, the files are matplotlib's new ones."""
+    import logging
+
+    caplog.set_level(logging.ERROR)
+    prop = FontProperties(family="No Such Family Anywhere")
+    first = text_cache.font_paths(prop)
+    assert first == _theirs(prop)
+    monkeypatch.setitem(fontManager.defaultFamily, "ttf", "DejaVu Serif")
+    assert text_cache.font_paths(prop) == _theirs(prop) != first

@@ -109,3 +109,56 @@ def test_a_full_cache_is_emptied(monkeypatch):
     assert len(glyph_cache._BITMAPS) <= 3
     with mpl.rc_context({"text.antialiased": False}):
         drawn_alike(_texts, (6.0, 5.0))
+
+
+#: What a glyph's bitmap depends on besides its place, one varied per text (the others as
+#: the first text's), each at the same place within its pixel as the first.
+VARIED = ({}, {"rotation": 90}, {"rotation": 33}, {"antialiased": False}, {"weight": "bold"},
+          {"family": "DejaVu Serif"}, {"fontsize": 13})
+
+
+def _one_glyph_each(fig):
+    """A "g" per entry of VARIED, anchored at its baseline's left end, places whole pixels
+    apart (figure pixels): its first glyph at the first's sub-pixel remainder."""
+    from matplotlib.transforms import IdentityTransform
+
+    for k, varied in enumerate(VARIED):
+        kw = {"fontsize": 11, "rotation": 0, "antialiased": True, **varied}
+        fig.text(20.3 + 40 * k, 60.6 + 3 * k, "g", transform=IdentityTransform(),
+                 ha="left", va="baseline", rotation_mode="anchor", **kw)
+
+
+@pytest.mark.parametrize("rc", [{}, {"text.hinting": "no_hinting"}, {"text.hinting": "auto"}])
+@pytest.mark.parametrize("dpi", [110.0, 72.0, 137.5])
+def test_a_glyph_varied_in_one_thing_at_one_remainder_is_rendered_for_it(rc, dpi):
+    """The cache kept from the cases before (other resolutions and hinting, not emptied):
+    each text's pixels are matplotlib's all the same."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with mpl.rc_context(rc):
+        drawn = []
+        for canvas in (text_cache.TextCacheCanvas, FigureCanvasAgg):
+            fig = Figure(figsize=(3.0, 1.0), dpi=dpi)
+            canvas(fig)
+            _one_glyph_each(fig)
+            drawn.append(pixels(fig))
+    assert np.array_equal(*drawn)
+
+
+def test_a_matplotlib_without_render_modes_imports_the_module(monkeypatch):
+    """matplotlib before 3.10 has no ``ft2font.RenderMode`` (pyproject allows 3.8): the
+    module imports, says it cannot draw, and text_cache then draws as matplotlib does
+    (checked by hand on 3.8.4: a quick figure drawn, ``_CACHEABLE`` False)."""
+    import importlib
+
+    from matplotlib import ft2font
+
+    monkeypatch.delattr(ft2font, "RenderMode")
+    try:
+        importlib.reload(glyph_cache)
+        assert not glyph_cache.available()
+    finally:
+        monkeypatch.undo()
+        importlib.reload(glyph_cache)
+    assert glyph_cache.available()

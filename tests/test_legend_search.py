@@ -88,3 +88,41 @@ def test_a_quick_figures_legends_search_with_it(monkeypatch):
 
     drawn_alike(content, (8.0, 3.0))            # the same pixels as matplotlib's figure
     assert len(calls) >= 2
+
+
+def test_a_search_set_on_the_legend_is_its_own_at_every_draw():
+    """A legend given a search of its own (on the instance) is placed by it, at the first
+    draw and the later ones, as on matplotlib's own figure."""
+    from figure_pixels import drawn_alike, pixels
+
+    calls = []
+
+    def content(fig):
+        ax = fig.add_subplot()
+        ax.plot(np.arange(10.0), label="rising")
+        legend = ax.legend(loc="best")
+
+        def lower_left(width, height, renderer):
+            calls.append(fig)
+            return ax.bbox.x0 + 3.0, ax.bbox.y0 + 3.0
+
+        legend._find_best_position = lower_left
+
+    mine = drawn_alike(content, (3.0, 2.0))
+    drawn = len([c for c in calls if c is mine])
+    assert drawn >= 1
+    first = pixels(mine)
+    assert np.array_equal(pixels(mine), first)              # drawn again: the same search
+    assert len([c for c in calls if c is mine]) > drawn
+
+
+def test_a_legend_data_without_the_renderer_is_not_searched(monkeypatch):
+    """matplotlib 3.8's ``Legend._auto_legend_data`` takes no renderer (pyproject allows
+    3.8): there the legend searches as matplotlib does rather than failing in the draw."""
+    from matplotlib.legend import Legend
+
+    def data_of_38(self):
+        return [], [], []
+
+    monkeypatch.setattr(Legend, "_auto_legend_data", data_of_38)
+    assert not legend_search.available()

@@ -24,14 +24,23 @@ import math
 import os
 
 import numpy as np
-from matplotlib.ft2font import RenderMode
+from matplotlib import ft2font
 
-__all__ = ["draw_glyphs", "CACHE_SIZE"]
+__all__ = ["draw_glyphs", "available", "CACHE_SIZE"]
+
+#: FreeType's render modes as matplotlib names them (3.10 on; None before, where
+#: ``quadland.plots.text_cache`` draws as matplotlib does and this module is not called).
+RenderMode = getattr(ft2font, "RenderMode", None)
 
 #: Most bitmaps kept; the cache is emptied when full.
 CACHE_SIZE = 16384
 
 _BITMAPS: dict = {}
+
+
+def available() -> bool:
+    """Whether this matplotlib has what :func:`draw_glyphs` calls (its render modes)."""
+    return RenderMode is not None
 
 
 def rotation(angle: float) -> tuple[np.ndarray, float, float]:

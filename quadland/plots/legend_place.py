@@ -45,7 +45,9 @@ def _legends(fig) -> list:
 def _search(legend):
     """The legend's search for its best place: :func:`~quadland.plots.legend_search.best_place`
     where matplotlib's own search is the legend's, else the legend's."""
-    if _OWN_SEARCH and type(legend)._find_best_position is _MATPLOTLIBS_SEARCH:
+    # the bound method's function: a legend's own (its class's, or one set on it) is kept
+    own = getattr(legend._find_best_position, "__func__", None)
+    if _OWN_SEARCH and own is not None and own is _MATPLOTLIBS_SEARCH:
         return lambda width, height, renderer: best_place(legend, width, height, renderer)
     return legend._find_best_position
 
@@ -114,6 +116,11 @@ def legends_placed(fig, layout: bool = False):
     """
     legends = _legends(fig)
     packers = [p for legend in legends for p in _packers(legend._legend_box)]
+    # what a legend or packer had set on itself, restored after the context
+    set_before = [(obj, name, obj.__dict__[name])
+                  for objs, name in ((legends, "_find_best_position"),
+                                     (packers, "_get_bbox_and_child_offsets"))
+                  for obj in objs if name in obj.__dict__]
     for legend in legends:
         _memoize(legend)
     for packer in packers:
@@ -133,3 +140,5 @@ def legends_placed(fig, layout: bool = False):
             legend.__dict__.pop("_find_best_position", None)
         for packer in packers:
             packer.__dict__.pop("_get_bbox_and_child_offsets", None)
+        for obj, name, value in set_before:
+            setattr(obj, name, value)

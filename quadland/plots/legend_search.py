@@ -18,6 +18,8 @@ matplotlib's own calls. Where this matplotlib's legend lacks these methods,
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 from matplotlib.legend import Legend
 from matplotlib.transforms import Bbox
@@ -25,10 +27,22 @@ from matplotlib.transforms import Bbox
 __all__ = ["best_place", "available"]
 
 
+def _parameters(function) -> tuple:
+    try:
+        return tuple(inspect.signature(function).parameters)
+    except (TypeError, ValueError):
+        return ()
+
+
 def available() -> bool:
-    """Whether this matplotlib's legend has what :func:`best_place` reads."""
-    return all(hasattr(Legend, name) for name in
-               ("_auto_legend_data", "_get_anchored_bbox", "codes", "get_bbox_to_anchor"))
+    """Whether this matplotlib's legend has what :func:`best_place` reads, as it is called
+    here (``_auto_legend_data`` takes the renderer from matplotlib 3.9 on: 3.8's takes
+    none, and its texts are not among the data)."""
+    return (all(hasattr(Legend, name) for name in
+                ("_auto_legend_data", "_get_anchored_bbox", "codes", "get_bbox_to_anchor"))
+            and _parameters(Legend._auto_legend_data) == ("self", "renderer")
+            and _parameters(Legend._get_anchored_bbox) == (
+                "self", "loc", "bbox", "parentbbox", "renderer"))
 
 
 def _points(lines, offsets) -> np.ndarray:

@@ -9,13 +9,15 @@ measurement (``Text._get_layout``). A margin review draws about 380 texts
 measures them about 2,000 times.
 
 :class:`TextCacheRenderer` keeps both, by what they are computed from: the
-layout of a string by its fonts' files, size, resolution, hinting and
-features; the height metrics by the fonts' files, size and resolution; a text's font
-files by its font properties and the rc parameters (:func:`font_paths`). Its glyphs are
-drawn by :func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per
-sub-pixel place. The pixels are the same (checked in ``tests/test_quick_figure.py`` and
-``tests/test_glyph_cache.py``). Where matplotlib's Agg renderer has not the
-methods this one relies on (another version), it draws as matplotlib does.
+layout of a string by its fonts' files, size, resolution, hinting, features and
+whether the last-resort font is a fallback; the height metrics by the fonts' files,
+size and resolution; a text's font files by its font properties and the rc parameters
+(:func:`font_paths`). Its glyphs are drawn by
+:func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per sub-pixel
+place. The pixels are the same (checked in ``tests/test_quick_figure.py``,
+``tests/test_glyph_cache.py`` and ``tests/test_text_cache_rc.py``). Where matplotlib's
+Agg renderer has not the methods this one relies on (another version), it draws as
+matplotlib does.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from matplotlib.font_manager import fontManager, get_font
 from matplotlib.ft2font import FT2Font
 
 from quadland.plots.font_memory import memory_font
+from quadland.plots.glyph_cache import available as glyphs_drawable
 from quadland.plots.glyph_cache import draw_glyphs
 
 __all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE", "font_paths"]
@@ -41,7 +44,7 @@ _PATHS: dict = {}
 
 #: Whether this matplotlib draws text as the renderer below expects (3.11's Agg).
 _CACHEABLE = (hasattr(RendererAgg, "_draw_text_glyphs_and_boxes")
-              and hasattr(FT2Font, "_layout"))
+              and hasattr(FT2Font, "_layout") and glyphs_drawable())
 
 
 #: The font properties' own values and the rc parameters matplotlib's ``findfont`` reads.
@@ -53,8 +56,9 @@ _RC_FONT_KEYS = tuple(f"font.{key}" for key in (
 def font_paths(prop) -> tuple:
     """``fontManager._find_fonts_by_props(prop)`` as a tuple, found once per process for
     what it is found from: the properties' values, the rc parameters matplotlib's
-    ``findfont`` reads, its ``MPL_IGNORE_SYSTEM_FONTS`` and the font lists' lengths (a font
-    added with ``addfont`` starts a new entry). matplotlib's own search copies the
+    ``findfont`` reads, its ``MPL_IGNORE_SYSTEM_FONTS``, the font lists' lengths (a font
+    added with ``addfont`` starts a new entry) and the default family (taken where none of
+    the properties' families is found). matplotlib's own search copies the
     properties once per family and hashes them again for its cache on every call."""
     # rcParams._get: the stored value without the backend's resolution, which no font
     # parameter has (matplotlib keeps its name stable)
@@ -63,7 +67,7 @@ def font_paths(prop) -> tuple:
         key = (tuple(vars(prop).items()),
                tuple(tuple(v) if isinstance(v, list) else v for v in map(read, _RC_FONT_KEYS)),
                os.getenv("MPL_IGNORE_SYSTEM_FONTS"), len(fontManager.ttflist),
-               len(fontManager.afmlist))
+               len(fontManager.afmlist), fontManager.defaultFamily.get("ttf"))
         paths = _PATHS.get(key)
     except TypeError:                   # a property not hashable: found each time
         return tuple(fontManager._find_fonts_by_props(prop))
@@ -73,9 +77,11 @@ def font_paths(prop) -> tuple:
 
 
 def _font_key(prop, dpi) -> tuple:
+    # font.enable_last_resort: whether a glyph no file has is the last-resort font's or
+    # the first font's .notdef (a different glyph, advance and layout)
     paths = font_paths(prop)
     return (paths, prop.get_size_in_points(), dpi, mpl.rcParams["text.hinting_factor"],
-            mpl.rcParams["text.kerning_factor"])
+            mpl.rcParams["text.kerning_factor"], mpl.rcParams["font.enable_last_resort"])
 
 
 def _remember(cache: dict, key, value):
