@@ -16,6 +16,7 @@ from reference import GUIDANCE_P
 
 from quadland.exceptions import ScenarioError
 from quadland.scenario import load_scenario
+from quadland_symbolic.landing.controller import LANDING_MEASUREMENT, landing_guidance_function
 from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
@@ -148,3 +149,52 @@ def test_the_keys_are_validated():
                 "landing.lean_time=0.0", 'landing.lean_withdraw="yes"'):
         with pytest.raises(ScenarioError):
             load_scenario("ship", [bad])
+
+
+def _flight_step(eta1_deg, eta2_deg, a_lat, committed, h, **keys):
+    """The flight code's guidance step (``landing_guidance`` on the measurement ``y``: the
+    IMU's attitude estimate ``eta1`` on sensors), the reference ``h`` above touchdown, the
+    quadrotor on it over the pad, the pad accelerating ``a_lat`` sideways; lean_time 1 step
+    (the average is the step's lean). Returns (committed, aborts, lean_gust) after it."""
+    y = LANDING_MEASUREMENT.pack(dict(
+        p_e=[0.0, 0.0, TOUCHDOWN + h], v_e=[0.0] * 3, eta1=np.multiply(eta1_deg, DEG),
+        Omega1=[0.0] * 3, eta2=np.multiply(eta2_deg, DEG), v2E=[0.0] * 3,
+        a2E=[0.0, a_lat, 0.0], w2E=[0.0] * 3, w2E_dot=[0.0] * 3))
+    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, calm_lean=18 * DEG, lean_time=DT, **keys))
+    xg_next, _ = landing_guidance_function()(_state(TOUCHDOWN + h, committed, 0.0), y, CUES,
+                                             DT, pg)
+    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, float).ravel())
+    return g["committed"][0], g["aborts"][0], g["lean_gust"][0]
+
+
+def test_the_flight_code_s_guidance_reads_the_quadrotor_s_measured_lean():
+    """The lean is the measurement's body attitude ``eta1`` (the IMU's estimate on sensors),
+    not the deck's ``eta2``: rolled 25 deg (|b_h| = sin 25 deg, past sin 18 deg) it holds the
+    commit at the wait height; level over a deck rolled 25 deg it commits (calm_tilt off);
+    pitched 10 and rolled 10 deg, the body z axis's tilt is acos(cos 10 cos 10) deg."""
+    wait = GUIDANCE_P["commit_height"]
+    committed, _, lean = _flight_step([25.0, 0.0, 0.0], [0.0] * 3, 0.0, 0.0, wait)
+    assert committed == 0.0 and lean == pytest.approx(math.sin(25 * DEG), rel=1e-12)
+    committed, _, lean = _flight_step([0.0] * 3, [25.0, 0.0, 0.0], 0.0, 0.0, wait)
+    assert committed == 1.0 and lean == 0.0
+    tilt = math.acos(math.cos(10 * DEG) ** 2)
+    assert _flight_step([10.0, 10.0, 30.0], [0.0] * 3, 0.0, 0.0, wait)[2] == \
+        pytest.approx(math.sin(tilt), rel=1e-12)
+
+
+@pytest.mark.parametrize(("lean", "a_lat", "withdraw", "expected"), [
+    (20.0, 0.0, 0.0, (1.0, 0.0)),      # the lean alone, lean_withdraw off: goes on
+    (20.0, 0.0, 1.0, (0.0, 1.0)),      # the lean alone with lean_withdraw: withdrawn
+    (0.0, 0.31, 0.0, (0.0, 1.0)),      # the swerve alone withdraws, lean_withdraw or not
+    (0.0, 0.31, 1.0, (0.0, 1.0)),
+    (20.0, 0.31, 0.0, (0.0, 1.0)),     # both: one withdrawal, one abort
+    (20.0, 0.31, 1.0, (0.0, 1.0)),
+    (0.0, 0.29, 1.0, (1.0, 0.0)),      # neither
+])
+def test_the_swerve_and_the_lean_withdraw_as_one_cause(lean, a_lat, withdraw, expected):
+    """Both keys on (swerve_accel 0.3 m/s^2, calm_lean 18 deg) through the flight code's
+    step, committed 0.6 m above touchdown: a swerve withdraws whatever lean_withdraw says,
+    the lean only with it; both together make one abort, not two."""
+    got = _flight_step([lean, 0.0, 0.0], [0.0] * 3, a_lat, 1.0, 0.6, swerve_accel=0.3,
+                       lean_withdraw=withdraw)
+    assert got[:2] == expected

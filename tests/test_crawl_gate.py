@@ -21,6 +21,8 @@ from quadland_symbolic.landing.guidance import (
     GUIDANCE_CUES,
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
+    POSITION_REFERENCE,
+    TOUCHDOWN,
     guidance_function,
 )
 from quadland_symbolic.landing.loop import landing_loop_params
@@ -89,6 +91,42 @@ def test_the_gate_s_wait_counts_its_pauses_and_then_opens():
     z, phase, timer = _step(0.03, 0.09, timer=0.5, **keys)
     assert (z, phase) == FELL
     assert _step(0.03, 0.09, timer=0.2, full=True)[2] == 0.0
+
+
+def _touchdown_after_pauses(timer, n, **keys):
+    """From a committed crawl whose timer holds ``timer`` (the gate's pauses so far) with
+    the quadrotor 3 cm ahead at rest, the contact switch closing (armed): the phase, the
+    timer and the touchdown policy's ``level`` after the contact's step and ``n`` more."""
+    f, z_ref = guidance_function(), HC + H
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=timer, z_ref=z_ref, aborts=0,
+                                  committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
+    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=1.0))
+    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, fly_on=1.0, settle_time=1.0,
+                                   **keys))
+    for _ in range(n + 1):
+        xg, ref = (np.asarray(v, dtype=float).ravel() for v in f(
+            xg, [0.03, 0.0, z_ref], [0.0, 0.0, 0.0], 0.0, 0.0, cues, DT, pg))
+    g = GUIDANCE_STATE.unpack(xg)
+    return g["phase"][0], g["timer"][0], POSITION_REFERENCE.unpack(ref)["level"][0]
+
+
+@pytest.mark.parametrize("n", [0, 1, 10, 20, 40])
+def test_the_time_since_touchdown_starts_at_the_contact_after_the_gate_s_pauses(n):
+    """The gate's pauses are counted on the guidance's timer (0.4 s here, under a 0.5 s
+    wait), and the timer is then the touchdown policy's time since touchdown: it must start
+    at 0 at the contact, whatever the crawl's pauses. After the contact's step and n more
+    the time since touchdown is n dt and the level-out's blend (touchdown_policy:
+    (t - hold_time) / level_time within [0, 1], hold 0.05 s, level 0.3 s) is worked from it
+    by hand (settle_time 1 s: still in touchdown); the same without the gate's pauses."""
+    t = n * DT
+    level = min(max((t - GUIDANCE_P["hold_time"]) / GUIDANCE_P["level_time"], 0.0), 1.0)
+    for timer, keys in ((0.4, dict(crawl_gate=0.05, crawl_gate_wait=0.5)), (0.0, {})):
+        phase, timer_next, blend = _touchdown_after_pauses(timer, n, **keys)
+        assert phase == TOUCHDOWN
+        assert timer_next == pytest.approx(t, abs=1e-12)
+        assert blend == pytest.approx(level, abs=1e-9)
 
 
 def test_no_gate_is_the_committed_crawl_and_the_limits_still_abort():

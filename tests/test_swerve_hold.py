@@ -17,6 +17,7 @@ import pytest
 from reference import GUIDANCE_P
 
 from quadland.scenario import ScenarioError, load_scenario
+from quadland_symbolic.landing.controller import LANDING_MEASUREMENT, landing_guidance_function
 from quadland_symbolic.landing.guidance import (
     DESCEND,
     GUIDANCE_CUES,
@@ -149,3 +150,28 @@ def test_a_bad_value_is_one_clear_error_line():
 def test_the_other_landing_scenarios_hold_nothing(name):
     """Every other shipped landing scenario takes 0, no hold."""
     assert load_scenario(name)["landing.swerve_accel"] == 0.0
+
+
+def _flight_guidance(a2E, v2E, swerve_accel):
+    """The flight code's guidance step (``landing_guidance``: the measurement ``y`` as the
+    flight code holds it, the filter's estimate on sensors) at the wait height, uncommitted,
+    the quadrotor level over the pad: whether it commits."""
+    y = LANDING_MEASUREMENT.pack(dict(p_e=[0.0, 0.0, WAIT], v_e=[0.0] * 3, eta1=[0.0] * 3,
+                                      Omega1=[0.0] * 3, eta2=[0.0] * 3, v2E=v2E, a2E=a2E,
+                                      w2E=[0.0] * 3, w2E_dot=[0.0] * 3))
+    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
+    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, swerve_accel=swerve_accel))
+    xg_next, _ = landing_guidance_function()(_state(WAIT, 0.0), y, cues, DT, pg)
+    return GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())["committed"][0]
+
+
+def test_the_flight_code_s_guidance_reads_the_measured_pad_acceleration():
+    """The flight code's step passes the measurement's pad acceleration ``a2E`` (the
+    filter's ``a_t`` on sensors, the broadcast on perfect sensing), its horizontal part:
+    0.31 m/s^2 across holds the commit at 0.3, 0.29 does not, nor at 0 (no hold); the pad's
+    100 km/h velocity holds nothing."""
+    road = [27.8, 0.0, 0.0]
+    assert _flight_guidance([0.0, 0.31, 0.0], road, 0.3) == 0.0
+    assert _flight_guidance([0.0, 0.29, 0.0], road, 0.3) == 1.0
+    assert _flight_guidance([0.0, 0.0, 0.0], road, 0.3) == 1.0
+    assert _flight_guidance([0.0, 0.31, 0.0], road, 0.0) == 1.0
