@@ -15,6 +15,7 @@ import pytest
 
 import quadland
 from quadland.engine.runs import SIM_ROWS
+from quadland.kinds.landing import sensing
 from quadland.kinds.landing import simulate as landing_simulate
 from quadland.kinds.landing.sensed import TickTable, tick_table
 from quadland.kinds.landing.sensing import BLOCK, SensorDraws, draw_sensors, sensor_seed
@@ -76,15 +77,27 @@ def test_the_highway_table_to_12_s_is_the_first_12_s_of_the_whole_table():
     assert not np.any(lazy.rows[3_000:])              # nothing drawn past the chunk
 
 
+#: Sensors off one another's clocks: the IMU at half the control rate, the GNSS every
+#: 9th tick, the rangefinder every 7th and the vision every 11th from its 3rd (odd
+#: periods, so blocks of draws end and the table's chunks cut mid-period), the datalink
+#: 1 tick late.
+ODD_RATES = ["sensors.imu.rate_hz=125.0", "sensors.gnss.rate_hz=27.77777777777778",
+             "sensors.rangefinder.rate_hz=35.714285714285715",
+             "sensors.vision.rate_hz=22.727272727272727", "sensors.vision.phase=0.012",
+             "sensors.datalink.phase=0.004"]
+
+
 @pytest.mark.parametrize("overrides", [[], ["sensors.imu.rate_hz=125.0",
-                                             "sensors.vision.phase=0.012"]])
+                                             "sensors.vision.phase=0.012"], ODD_RATES])
 def test_each_sample_is_on_its_own_tick_s_row(overrides):
     """The table against each sensor's samples (``draw_sensors``, the same draws) placed
     one by one on the row of its tick, ``round(t rate)``: its sample flag, delivery and
     noise there, zeros on every other row of its columns; to 12.3 s drawn as a flight
     draws it (chunk by chunk, each sensor's samples written through a strided view
     where its ticks are evenly spaced), and to a tick off the chunks. With the IMU at
-    125 Hz (every other row) and the vision 3 ticks late."""
+    125 Hz (every other row) and the vision 3 ticks late; and at periods of 7, 9 and 11
+    ticks (``ODD_RATES``: the chunks of 100 ticks and the blocks of draws end
+    mid-period)."""
     sc = load_scenario("highway", overrides)
     rate = sc["controller.rate_hz"]
     settings = {n: dict(sc.data[f"sensors.{n}"]) for n in SENSOR_NAMES}
@@ -103,6 +116,27 @@ def test_each_sample_is_on_its_own_tick_s_row(overrides):
                 row[SENSED_TICK.slice(f"{name}_kept")] = float(kept)
                 row[SENSED_TICK.slice(f"{name}_noise")] = noise
         assert _same_bits(table.rows, expect), (overrides, ticks)
+
+
+def test_samples_off_an_even_spacing_are_written_row_by_row():
+    """``TickTable._place`` given ticks that are not evenly spaced (uneven, or evenly
+    spaced but for one) writes each sample on its own tick's row, as it does evenly
+    spaced ones (the strided view): placed one by one against the same table."""
+    sc = load_scenario("highway")
+    width = SENSED_TICK.slice("vision_noise").stop - SENSED_TICK.slice("vision_noise").start
+    rng = np.random.default_rng(3)
+    for ticks in ([3, 5, 9, 10], [0, 4, 8, 13, 16], [7], [2, 9, 16, 23], [0, 11, 22, 33, 45]):
+        ticks = np.array(ticks)
+        delivered = rng.random(len(ticks)) < 0.7
+        noise = rng.standard_normal((len(ticks), width))
+        table = TickTable(sc, 64)
+        table._place("vision", ticks, delivered, noise)
+        expect = np.zeros_like(table.rows)
+        for k, kept, z in zip(ticks, delivered, noise, strict=True):
+            expect[k, SENSED_TICK.slice("vision_sampled")] = 1.0
+            expect[k, SENSED_TICK.slice("vision_kept")] = float(kept)
+            expect[k, SENSED_TICK.slice("vision_noise")] = z
+        assert _same_bits(table.rows, expect), ticks
 
 
 def test_a_block_is_drawn_from_its_own_seed():
@@ -229,3 +263,48 @@ def test_the_gear_columns_padded_to_a_bucket_are_the_columns_of_the_exact_map():
     for name in contact_report.GEAR_SIGNALS.names():
         assert _same_bits(cols[name][rows], exact[contact_report.GEAR_SIGNALS.slice(name)][0])
         assert np.all(np.isnan(cols[name][touched < 0.5]))
+
+
+def _poisoned(monkeypatch, fill: tuple[float, bool]) -> None:
+    """Every row the draws' arrays make room for (``_Rows.reserve``) and no draw has
+    written yet holds ``fill`` (float, bool) instead of what ``np.empty`` left there."""
+    real = sensing._Rows.reserve
+
+    def reserve(self, rows):
+        room = self.arrays[0].shape[0]
+        real(self, rows)
+        for a in self.arrays:
+            a[room:] = fill[1] if a.dtype == bool else fill[0]
+    monkeypatch.setattr(sensing._Rows, "reserve", reserve)
+
+
+@pytest.mark.parametrize("scenario, overrides", [("highway", []), ("ship_ss5", []),
+                                                 ("highway", ODD_RATES)])
+def test_no_row_past_those_drawn_is_read(monkeypatch, scenario, overrides):
+    """The draws' arrays grow without zeroing (``np.empty``): rows past those drawn must
+    never reach the table. With those rows holding NaN and True, then +inf and False,
+    the 40 s table (a run without a touchdown), drawn chunk by chunk at uneven ticks, and
+    every sensor's samples are the same bits, without a NaN: an unwritten row read
+    anywhere would make one of the two differ (or carry the NaN)."""
+    sc = load_scenario(scenario, overrides)
+    n = round(40.0 * sc["controller.rate_hz"])
+    out = []
+    for fill in ((np.nan, True), (np.inf, False)):
+        _poisoned(monkeypatch, fill)
+        lazy = TickTable(sc, n, chunk=333, first=97)
+        tick = 0
+        while tick < n:                          # asked at, and past, the rows drawn
+            tick = lazy.more(min(tick + 17 * (tick % 2), n - 1))
+        draws = SensorDraws({k: dict(sc.data[f"sensors.{k}"]) for k in SENSOR_NAMES},
+                            seed=sc["simulation.seed"])
+        for horizon in (0.5, 4.1, 4.1, 17.3, 40.0):
+            draws.extend(horizon)
+        samples = draws.samples(40.0)
+        out.append((lazy.rows, tick_table(sc, n), samples))
+    (a, whole_a, sa), (b, whole_b, sb) = out
+    assert not np.any(np.isnan(a)) and not np.any(np.isinf(b))
+    assert _same_bits(a, b) and _same_bits(a, whole_a) and _same_bits(b, whole_b)
+    for name in SENSOR_NAMES:
+        for field in ("delivered", "noise"):
+            x, y = getattr(sa[name], field), getattr(sb[name], field)
+            assert _same_bits(x, y) and not np.any(np.isnan(x)), (name, field)
