@@ -220,16 +220,12 @@ class TickTable:
         cols = [SENSED_TICK.slice(f"{name}_{c}") for c in ("sampled", "kept", "noise")]
         first, last = int(ticks[0]), int(ticks[-1])
         stride = (last - first) // (len(ticks) - 1) if len(ticks) > 1 else 1
-        if stride > 0 and np.array_equal(ticks, np.arange(first, last + 1, stride)):
-            rows = self.rows[first:last + 1:stride]
-            rows[:, cols[0]] = 1.0
-            rows[:, cols[1]] = delivered[:, None]
-            rows[:, cols[2]] = noise
-            return
+        even = stride > 0 and np.array_equal(ticks, np.arange(first, last + 1, stride))
+        at = slice(first, last + 1, stride) if even else ticks
         N = self.rows
-        N[ticks, cols[0]] = 1.0
-        N[ticks, cols[1]] = delivered[:, None]
-        N[ticks, cols[2]] = noise
+        N[at, cols[0]] = 1.0
+        N[at, cols[1]] = delivered[:, None]
+        N[at, cols[2]] = noise
 
 
 def tick_table(scenario: Scenario, n_ticks: int) -> np.ndarray:

@@ -119,18 +119,18 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict
         p_veh=p_veh, p_deck=p_deck, **gear))
 
 
-#: The [landing] keys passed to the guidance's parameters as they are: the swerve's hold and
-#: the crawl's gate.
-_PASSED_KEYS = ("swerve_accel", "crawl_gate", "crawl_gate_time", "crawl_gate_floor",
-                "crawl_gate_wait")
+#: The [landing] keys passed to the guidance's parameters as they are (the commit's
+#: withdrawal and lean average, the swerve's hold, the crawl's gate).
+_PASSED_KEYS = ("withdraw_height", "lean_time", "swerve_accel", "crawl_gate",
+                "crawl_gate_time", "crawl_gate_floor", "crawl_gate_wait")
 
 
 def _commit_keys(g) -> dict:
-    """The commit's and the crawl's guidance parameters from the ``[landing]`` table ``g``
-    (angles in radians, flags as 0/1)."""
-    return dict(calm_tilt=np.radians(g["calm_tilt_deg"]), withdraw_height=g["withdraw_height"],
-                crawl_pause=float(g["crawl_pause"]), calm_lean=np.radians(g["calm_lean_deg"]),
-                lean_time=g["lean_time"], lean_withdraw=float(g["lean_withdraw"]))
+    """The commit's and the crawl's guidance parameters from the ``[landing]`` table ``g``:
+    angles in radians, flags as 0/1, the others (:data:`_PASSED_KEYS`) as they are."""
+    return dict(calm_tilt=np.radians(g["calm_tilt_deg"]), calm_lean=np.radians(g["calm_lean_deg"]),
+                crawl_pause=float(g["crawl_pause"]), lean_withdraw=float(g["lean_withdraw"]),
+                **{k: g[k] for k in _PASSED_KEYS})
 
 
 def landing_values(scenario: Scenario) -> LandingValues:
@@ -184,8 +184,7 @@ def landing_values(scenario: Scenario) -> LandingValues:
         search_height=g["search_height"], commit_height=g["commit_height"],
         commit_horizon=g["commit_horizon"], calm_speed=g["calm_speed"],
         motion_time=g["motion_time"], descent_leash=g["descent_leash"],
-        leash_height=g["leash_height"], **_commit_keys(g),
-        **{k: g[k] for k in _PASSED_KEYS}, **touchdown_guidance(scenario)))
+        leash_height=g["leash_height"], **_commit_keys(g), **touchdown_guidance(scenario)))
     rate = c["rate_hz"]
     pc = landing_loop_params(l).pack(dict(pp=model, p_ctrl=p_ctrl, p_guid=p_guid, dt=1.0 / rate))
 
