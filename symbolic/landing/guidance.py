@@ -32,7 +32,9 @@ averages. Phases (:data:`PHASES`):
    ``crawl_gate`` the crawl also pauses while the horizontal offset predicted at the
    contact, ``p_e + v_e min(h / touchdown_speed, crawl_gate_time)`` (``h`` the reference's
    height above touchdown, 0 below it), lies farther than ``crawl_gate`` from the pad
-   (:func:`~quadland_symbolic.landing.crawl_gate.gate_holds`).
+   (:func:`~quadland_symbolic.landing.crawl_gate.gate_holds`); with ``crawl_gate_climb``
+   the reference climbs back toward the crawl's top while the gate holds it
+   (:func:`~quadland_symbolic.landing.crawl_gate.gate_climb`).
    The heights above touchdown count from ``touchdown_height + contact_drop``
    (:func:`contact_height`: where a body leaning into the airflow meets the deck);
 3. **touchdown**: entered from the descent when the flight stack reports
@@ -109,7 +111,12 @@ from __future__ import annotations
 
 import casadi as ca
 
-from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_holds
+from quadland_symbolic.landing.crawl_gate import (
+    crawl_timer_next,
+    fall_band,
+    gate_climb,
+    gate_holds,
+)
 from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
@@ -226,6 +233,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
     Field("crawl_gate_wait", 1, "s", "the longest time crawl_gate holds a crawl: after it the "
           "crawl falls on"),
+    Field("crawl_gate_climb", 1, "m/s", "while crawl_gate holds the crawl, the reference climbs "
+          "at this rate up to the crawl's top (0: it holds its height)"),
     Field("calm_lean", 1, "rad", "largest lean of the body z axis from the vertical, "
           "averaged over lean_time, at which the final descent commits (pi/2: no limit)"),
     Field("lean_time", 1, "s", "time constant of the lean's average for calm_lean"),
@@ -458,7 +467,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
     band = fall_band(in_band, crawl, gate, p)
-    hold = ca.if_else(committed_next, z_ref, wait)
+    hold = ca.if_else(committed_next, gate_climb(
+        z_ref, contact_height(p) + p["touchdown_speed"] * p["descent_time"], crawl, gate, p,
+        dt), wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
     # not falling: to the wait height (uncommitted, or withdrawn), else paused (never down)
