@@ -36,13 +36,16 @@ def gate_holds(p_e, v_e, h, timer, p):
                        predicted <= p["crawl_gate"])
 
 
-def gate_climb(z_ref, top, crawl, gate, p, dt):
+def gate_climb(z_ref, h, gate, p, dt):
     """The height a committed descent's reference holds at for the step (m): in the crawl
-    while the gate holds it (``gate`` false, :func:`gate_holds`), ``crawl_gate_climb`` (m/s)
-    up from ``z_ref``, at most to the crawl's top ``top`` (the height the crawl starts at) and
-    never down; else ``z_ref`` (a pause at its height, as with ``crawl_gate_climb`` 0)."""
-    up = ca.fmax(z_ref, ca.fmin(z_ref + p["crawl_gate_climb"] * dt, top))
-    return ca.if_else(ca.logic_and(crawl, ca.logic_not(gate)), up, z_ref)
+    (``h``, the reference's height above touchdown, within ``touchdown_speed x
+    descent_time``) while the gate holds it (``gate`` false, :func:`gate_holds`),
+    ``crawl_gate_climb`` (m/s) up from ``z_ref``, at most to the crawl's top (``h`` at
+    ``touchdown_speed x descent_time``) and never down; else ``z_ref`` (a pause at its
+    height, as with ``crawl_gate_climb`` 0)."""
+    span = p["touchdown_speed"] * p["descent_time"]
+    up = ca.fmax(z_ref, ca.fmin(z_ref + p["crawl_gate_climb"] * dt, z_ref - h + span))
+    return ca.if_else(ca.logic_and(h <= span, ca.logic_not(gate)), up, z_ref)
 
 
 def fall_band(in_band, crawl, gate, p):

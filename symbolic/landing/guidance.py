@@ -111,12 +111,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from quadland_symbolic.landing.crawl_gate import (
-    crawl_timer_next,
-    fall_band,
-    gate_climb,
-    gate_holds,
-)
+from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_climb, gate_holds
 from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
@@ -418,9 +413,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     dt, p_guid : casadi.SX
         Step length, s; :data:`GUIDANCE_PARAMS`.
     tilt, swerve : casadi.SX, optional
-        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``; without it
-        the commit's tilt condition holds and its averages stay); the pad's horizontal
-        acceleration, m/s^2 (``swerve_accel``, :mod:`~.swerve`; without it no hold).
+        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``; without it the
+        commit's tilt condition holds and its averages stay); the pad's horizontal acceleration,
+        m/s^2 (``swerve_accel``, :mod:`~.swerve`; without it no hold).
 
     Returns
     -------
@@ -448,10 +443,11 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                                                      ca.logic_and(z_fall <= wait, calm)))
     # the crawl (h / descent_time <= touchdown_speed) pauses only with crawl_pause and aborts
     # out of the limits; above it the descent pauses out of the band; a rising deck withdraws
-    crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
+    h = z_ref - contact_height(p)
+    crawl = h <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, p)
+    gate = gate_holds(p_e, v_e, h, timer, p)
     timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
         ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
         ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
@@ -467,9 +463,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
     band = fall_band(in_band, crawl, gate, p)
-    hold = ca.if_else(committed_next, gate_climb(
-        z_ref, contact_height(p) + p["touchdown_speed"] * p["descent_time"], crawl, gate, p,
-        dt), wait)
+    hold = ca.if_else(committed_next, gate_climb(z_ref, h, gate, p, dt), wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
     # not falling: to the wait height (uncommitted, or withdrawn), else paused (never down)
