@@ -441,9 +441,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     wait = contact_height(p) + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
                                                      ca.logic_and(z_fall <= wait, calm)))
-    # the crawl (h / descent_time <= touchdown_speed) pauses only with crawl_pause and aborts
-    # out of the limits; above it the descent pauses out of the band; a rising deck withdraws
-    h = z_ref - contact_height(p)
+    h = z_ref - contact_height(p)  # the crawl (below): aborts out of the limits; see the docs
     crawl = h <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
