@@ -4,9 +4,8 @@ docs/landing.md, "The offset at contact: the estimate's wander and a gate on its
 prediction". In the committed crawl the reference's fall pauses while ``|p_h + v_h t_go|``
 lies farther than ``crawl_gate`` from the pad, ``t_go = min(h / touchdown_speed,
 crawl_gate_time)`` and ``h`` the reference's height above touchdown, above
-``crawl_gate_floor``, for at most ``crawl_gate_wait`` in a crawl, the reference climbing at
-``crawl_gate_climb`` toward the crawl's top while it holds; 0 (the default) is no gate, and no
-climb. Checked here against predictions worked by hand on one guidance step, and that every
+``crawl_gate_floor``, for at most ``crawl_gate_wait`` in a crawl; 0 (the default) is no
+gate. Checked here against predictions worked by hand on one guidance step, and that every
 shipped scenario leaves the gate off.
 """
 
@@ -33,13 +32,13 @@ HC = 0.2          # m: the gear below the centre, the contact height on the leve
 H = 0.1           # m above the contact height: in the crawl (0.3 m/s x 1 s = 0.3 m)
 
 
-def _step(x, vx, timer=0.0, h=H, **keys):
-    """The reference height and phase after one committed crawl step from ``h`` above the
+def _step(x, vx, timer=0.0, **keys):
+    """The reference height and phase after one committed crawl step from ``H`` above the
     contact height, the quadrotor on the reference ``x`` m ahead of the pad moving at ``vx``
     m/s along x (the horizontal speed within the align band's 0.25 m/s), the guidance's
     timer at ``timer``; with ``full``, the timer after the step too."""
     full = keys.pop("full", False)
-    z_ref = HC + h
+    z_ref = HC + H
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=timer, z_ref=z_ref, aborts=0,
                                   committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
                                   ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
@@ -94,33 +93,6 @@ def test_the_gate_s_wait_counts_its_pauses_and_then_opens():
     assert _step(0.03, 0.09, timer=0.2, full=True)[2] == 0.0
 
 
-def test_the_gate_s_climb_lifts_the_held_reference_to_the_crawl_s_top():
-    """With ``crawl_gate_climb`` 0.2 m/s the reference the gate holds (the 0.06 m prediction
-    past 0.05 m) rises 0.2 x 0.01 = 2 mm in the step instead of holding; 1 mm under the
-    crawl's top (0.3 m/s x 1 s = 0.3 m above touchdown) it stops there, and at the top it
-    holds. A prediction inside the gate falls one step of 0.3 m/s as without the climb; so
-    does one at or below the floor, after the wait, and without the gate (the climb alone
-    is nothing)."""
-    climb = dict(crawl_gate=0.05, crawl_gate_climb=0.2)
-    top = GUIDANCE_P["touchdown_speed"] * GUIDANCE_P["descent_time"]
-    assert _step(0.03, 0.09, **climb) == (pytest.approx(HC + H + 0.2 * DT, abs=1e-12), DESCEND)
-    assert _step(0.03, 0.09, h=top - 0.001, **climb) == (pytest.approx(HC + top, abs=1e-12),
-                                                         DESCEND)
-    assert _step(0.03, 0.09, h=top, **climb) == (pytest.approx(HC + top, abs=1e-12), DESCEND)
-    assert _step(0.03, -0.09, **climb) == FELL
-    assert _step(0.03, 0.09, crawl_gate_floor=0.11, **climb) == FELL
-    assert _step(0.03, 0.09, timer=0.5, crawl_gate_wait=0.5, **climb) == FELL
-    assert _step(0.03, 0.09, crawl_gate_climb=0.2) == FELL
-
-
-def test_no_climb_holds_the_reference_as_before():
-    """``crawl_gate_climb`` 0 (the default) holds the gated reference at its height to the
-    bit, at the crawl's middle and at its top."""
-    top = GUIDANCE_P["touchdown_speed"] * GUIDANCE_P["descent_time"]
-    assert _step(0.03, 0.09, crawl_gate=0.05)[0] == HC + H
-    assert _step(0.03, 0.09, h=top, crawl_gate=0.05)[0] == HC + top
-
-
 def _touchdown_after_pauses(timer, n, **keys):
     """From a committed crawl whose timer holds ``timer`` (the gate's pauses so far) with
     the quadrotor 3 cm ahead at rest, the contact switch closing (armed): the phase, the
@@ -173,10 +145,9 @@ def test_the_shipped_scenarios_fly_without_the_gate(name):
     parameters carry (no gate, the whole time to contact, no floor)."""
     sc = load_scenario(name)
     assert (sc["landing.crawl_gate"], sc["landing.crawl_gate_time"],
-            sc["landing.crawl_gate_floor"], sc["landing.crawl_gate_wait"],
-            sc["landing.crawl_gate_climb"]) == (0.0, 1e3, 0.0, 1e3, 0.0)
+            sc["landing.crawl_gate_floor"], sc["landing.crawl_gate_wait"]) == (0.0, 1e3, 0.0, 1e3)
     v = landing_values(sc)
     p_guid = landing_loop_params(v.l).unpack(np.asarray(v.pc, dtype=float).ravel())["p_guid"]
     p = GUIDANCE_PARAMS.unpack(np.asarray(p_guid, dtype=float).ravel())
     assert (p["crawl_gate"][0], p["crawl_gate_time"][0], p["crawl_gate_floor"][0],
-            p["crawl_gate_wait"][0], p["crawl_gate_climb"][0]) == (0.0, 1e3, 0.0, 1e3, 0.0)
+            p["crawl_gate_wait"][0]) == (0.0, 1e3, 0.0, 1e3)

@@ -256,9 +256,6 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                   default=0.0),
         "crawl_gate_wait": Field(F, "s", "the longest time crawl_gate holds a crawl (then it "
                                  "falls on)", lo=0.0, hi=1e3, default=1e3),
-        "crawl_gate_climb": Field(F, "m/s", "while crawl_gate holds the crawl, the reference "
-                                  "climbs at this rate up to the crawl's top (0: it holds "
-                                  "its height)", lo=0.0, hi=10.0, default=0.0),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",

@@ -5,9 +5,7 @@ at contact: the estimate's wander and a gate on its prediction").
 The guidance's offset at the contact is mostly the estimate's own wander about the pad, which
 decorrelates within a few tenths of a second; the gate lets the crawl fall only while the
 estimate, carried over the crawl's time left by the estimated velocity, is inside the gate.
-Its pauses are counted on the guidance's timer and bounded by ``crawl_gate_wait``; with
-``crawl_gate_climb`` the reference climbs back toward the crawl's top while the gate holds it,
-so that a pause does not hover the gear within centimetres of the deck.
+Its pauses are counted on the guidance's timer and bounded by ``crawl_gate_wait``.
 
 Branch-free CasADi, generated into C with the guidance step.
 """
@@ -16,7 +14,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-__all__ = ["crawl_timer_next", "fall_band", "gate_climb", "gate_holds"]
+__all__ = ["crawl_timer_next", "fall_band", "gate_holds"]
 
 
 def gate_holds(p_e, v_e, h, timer, p):
@@ -34,18 +32,6 @@ def gate_holds(p_e, v_e, h, timer, p):
     return ca.logic_or(ca.logic_or(ca.logic_or(p["crawl_gate"] <= 0, h <= p["crawl_gate_floor"]),
                                    timer >= p["crawl_gate_wait"]),
                        predicted <= p["crawl_gate"])
-
-
-def gate_climb(z_ref, h, gate, p, dt):
-    """The height a committed descent's reference holds at for the step (m): in the crawl
-    (``h``, the reference's height above touchdown, within ``touchdown_speed x
-    descent_time``) while the gate holds it (``gate`` false, :func:`gate_holds`),
-    ``crawl_gate_climb`` (m/s) up from ``z_ref``, at most to the crawl's top (``h`` at
-    ``touchdown_speed x descent_time``) and never down; else ``z_ref`` (a pause at its
-    height, as with ``crawl_gate_climb`` 0)."""
-    span = p["touchdown_speed"] * p["descent_time"]
-    up = ca.fmax(z_ref, ca.fmin(z_ref + p["crawl_gate_climb"] * dt, z_ref - h + span))
-    return ca.if_else(ca.logic_and(h <= span, ca.logic_not(gate)), up, z_ref)
 
 
 def fall_band(in_band, crawl, gate, p):

@@ -32,9 +32,7 @@ averages. Phases (:data:`PHASES`):
    ``crawl_gate`` the crawl also pauses while the horizontal offset predicted at the
    contact, ``p_e + v_e min(h / touchdown_speed, crawl_gate_time)`` (``h`` the reference's
    height above touchdown, 0 below it), lies farther than ``crawl_gate`` from the pad
-   (:func:`~quadland_symbolic.landing.crawl_gate.gate_holds`); with ``crawl_gate_climb``
-   the reference climbs back toward the crawl's top while the gate holds it
-   (:func:`~quadland_symbolic.landing.crawl_gate.gate_climb`).
+   (:func:`~quadland_symbolic.landing.crawl_gate.gate_holds`).
    The heights above touchdown count from ``touchdown_height + contact_drop``
    (:func:`contact_height`: where a body leaning into the airflow meets the deck);
 3. **touchdown**: entered from the descent when the flight stack reports
@@ -111,7 +109,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_climb, gate_holds
+from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_holds
 from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
@@ -228,8 +226,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
     Field("crawl_gate_wait", 1, "s", "the longest time crawl_gate holds a crawl: after it the "
           "crawl falls on"),
-    Field("crawl_gate_climb", 1, "m/s", "while crawl_gate holds the crawl, the reference climbs "
-          "at this rate up to the crawl's top (0: it holds its height)"),
     Field("calm_lean", 1, "rad", "largest lean of the body z axis from the vertical, "
           "averaged over lean_time, at which the final descent commits (pi/2: no limit)"),
     Field("lean_time", 1, "s", "time constant of the lean's average for calm_lean"),
@@ -413,9 +409,9 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     dt, p_guid : casadi.SX
         Step length, s; :data:`GUIDANCE_PARAMS`.
     tilt, swerve : casadi.SX, optional
-        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``; without it the
-        commit's tilt condition holds and its averages stay); the pad's horizontal acceleration,
-        m/s^2 (``swerve_accel``, :mod:`~.swerve`; without it no hold).
+        :data:`~quadland_symbolic.landing.deck_tilt.TILT_CUES` (``calm_tilt``; without it
+        the commit's tilt condition holds and its averages stay); the pad's horizontal
+        acceleration, m/s^2 (``swerve_accel``, :mod:`~.swerve`; without it no hold).
 
     Returns
     -------
@@ -441,11 +437,12 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     wait = contact_height(p) + p["commit_height"]
     committed = ca.logic_and(in_descend, ca.logic_or(g["committed"] >= 0.5,
                                                      ca.logic_and(z_fall <= wait, calm)))
-    h = z_ref - contact_height(p)  # the crawl (below): aborts out of the limits; see the docs
-    crawl = h <= p["touchdown_speed"] * p["descent_time"]
+    # the crawl (h / descent_time <= touchdown_speed) pauses only with crawl_pause and aborts
+    # out of the limits; above it the descent pauses out of the band; a rising deck withdraws
+    crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
         offset > p["max_offset"], speed > p["max_relative_speed"]))
-    gate = gate_holds(p_e, v_e, h, timer, p)
+    gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, p)
     timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
         ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
         ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
@@ -461,7 +458,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     committed_next = ca.logic_and(ca.logic_and(phase_next == DESCEND, committed),
                                   ca.logic_not(rising))
     band = fall_band(in_band, crawl, gate, p)
-    hold = ca.if_else(committed_next, gate_climb(z_ref, h, gate, p, dt), wait)
+    hold = ca.if_else(committed_next, z_ref, wait)
     falling = ca.logic_and(ca.logic_and(ca.logic_and(flying, ca.logic_not(
         ca.logic_or(off_limits, rising))), band), ca.logic_or(committed, z_fall > wait))
     # not falling: to the wait height (uncommitted, or withdrawn), else paused (never down)
