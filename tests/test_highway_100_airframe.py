@@ -198,3 +198,4 @@ def test_the_road_benchmark_keeps_highway_100_s_old_airframe():
     assert d["quadrotor"]["thrust_to_weight"] == 2.0 and d["quadrotor"]["gear_height"] == 0.2
     assert math.degrees(d["sensors.vision"]["half_angle"]) == pytest.approx(51.0)
     assert d["landing"]["pad_radius"] == 0.5 and d["landing"]["max_tilt_deg"] == 48.7
+    assert d["touchdown"]["flare_height"] == 0.15 and d["touchdown"]["flare_tilt_deg"] == 47.0
