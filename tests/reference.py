@@ -208,10 +208,16 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
     return exes
 
 
+#: highway_100's flare before "highway_100: the flare under the contact limit" (docs/landing.md,
+#: fifteenth session): the tilt limit 58 deg from 0.15 m above touchdown; the replays measured
+#: on the fourteenth's file pin it.
+HIGHWAY_100_FOURTEENTH = ["touchdown.flare_tilt_deg=58.0", "touchdown.flare_height=0.15"]
+
 #: highway_100's guidance before "highway_100: the guidance holds through the lane change"
 #: (docs/landing.md, fourteenth session): no hold while the pad swerves, a rising deck's
 #: withdrawal down to the contact; the replays measured on the thirteenth's file pin it.
-HIGHWAY_100_THIRTEENTH = ["landing.swerve_accel=0.0", "landing.withdraw_height=-1000.0"]
+HIGHWAY_100_THIRTEENTH = [*HIGHWAY_100_FOURTEENTH, "landing.swerve_accel=0.0",
+                          "landing.withdraw_height=-1000.0"]
 
 #: highway_100's controller and descent before "highway_100: the observer and the leash"
 #: (docs/landing.md, thirteenth session): no disturbance observer, integral action on x and
@@ -224,8 +230,10 @@ HIGHWAY_100_TWELFTH = ["controller.observer_frequency=[0.0, 0.0, 0.0]",
 #: (docs/landing.md): the scenario as it was, bit for bit, for the reproducers that
 #: were measured on it (benchmarks/highway_100_road.toml pins the same keys), with its
 #: filter's target acceleration random walk, its friction's slope cap and its dwell of before
-#: ("highway_100: the lane change was the filter's").
-HIGHWAY_100_OLD = ["quadrotor.thrust_to_weight=2.0", "controller_model.thrust_to_weight=2.0",
+#: ("highway_100: the lane change was the filter's"); the later sessions' "before" first, so
+#: that its own flare (34 deg) is the one flown.
+HIGHWAY_100_OLD = [*HIGHWAY_100_TWELFTH,
+                   "quadrotor.thrust_to_weight=2.0", "controller_model.thrust_to_weight=2.0",
                    "quadrotor.gear_height=0.2", "gear.feet_x=0.15", "gear.feet_y=0.125",
                    "controller.tilt_max_deg=45.0", "touchdown.flare_tilt_deg=34.0",
                    "touchdown.pivot_aim=1.0", "touchdown.lock_hold_force=100.0",
@@ -237,4 +245,4 @@ HIGHWAY_100_OLD = ["quadrotor.thrust_to_weight=2.0", "controller_model.thrust_to
                    "estimator.vision_k_range=0.01", "estimator.q_at=[1e-06, 1e-06, 1e-06]",
                    "gear.slip_damping_max=300.0", "landing.dwell_time=1.0",
                    "touchdown.lock=magnet", "touchdown.level_time=0.1",
-                   "touchdown.cut_time=0.1", *HIGHWAY_100_TWELFTH]
+                   "touchdown.cut_time=0.1"]
