@@ -13,6 +13,10 @@ __all__ = ["__version__", "QuadlandError", "ScenarioError", "SimulationError", "
            "Requirement", "MarginReport", "margin_report", "format_report",
            "simulation_figures", "margin_figures", "run_campaign", "run_envelope", "nlsys"]
 
+#: When this package was first imported (``time.time_ns``): a source file written after it
+#: may differ from the code this process runs (``quadland.engine.recall.remember``).
+IMPORTED_NS = __import__("time").time_ns()
+
 _LAZY = {"QuadlandError": "quadland.exceptions", "ScenarioError": "quadland.exceptions",
          "SimulationError": "quadland.exceptions", "Scenario": "quadland.scenario",
          "load_scenario": "quadland.scenario", "SimulationResult": "quadland.engine.result",

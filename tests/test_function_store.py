@@ -71,6 +71,22 @@ def test_the_key_changes_with_what_the_function_is_built_from(store, monkeypatch
     assert function_key(square_builder, (3, 0.7)) != key
 
 
+def test_nothing_is_stored_by_a_process_whose_sources_changed_under_it(store, monkeypatch):
+    """With a source written after the process imported the packages, the function is
+    built and returned (the same graph) but not written under a key that hashes the new
+    text; once no source is newer, the next process stores it."""
+    monkeypatch.setattr(function_store, "sources_edited_since_import",
+                        lambda: ["quadland_symbolic/paper_loop.py"])
+    built = stored_function(square_builder, 2, 0.3)
+    assert built.serialize() == square_builder(2, 0.3).serialize()
+    assert not store.exists() or not list(store.iterdir())
+    monkeypatch.setattr(function_store, "sources_edited_since_import", lambda: [])
+    stored_function.cache_clear()
+    stored_function(square_builder, 2, 0.3)
+    assert [p.name for p in store.iterdir()] == [
+        function_key(square_builder, (2, 0.3))[:32] + ".casadi"]
+
+
 def _stored(function: ca.Function) -> str:
     """The file the store writes for ``function``: its header line, then its text."""
     text = function.serialize()

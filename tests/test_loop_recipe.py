@@ -5,6 +5,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import casadi as ca
 import pytest
@@ -241,3 +242,41 @@ def test_a_changed_generator_rebuilds_the_model_and_its_c(cache, monkeypatch):
     changed = paper_loop_recipe.__wrapped__(2)
     assert compiled.CompiledLoop(changed, "continuous").library == first   # the same C
     assert len(calls) == 2 and "model" in vars(changed)
+
+
+def test_no_recipe_is_remembered_once_a_source_changed_under_the_process(tmp_path,
+                                                                         monkeypatch):
+    """A copy of ``quadland_symbolic`` whose one module is written after the process
+    imported the packages: that module is named, and :func:`remember` records no recipe
+    (the code the process runs may be the module of before, its key the text of after);
+    with every file older than the import the recipe is recorded and recalled."""
+    import os
+
+    import quadland
+    import quadland_symbolic
+    from quadland.engine import build, recall
+
+    root = tmp_path / "quadland_symbolic"
+    src = quadland_symbolic.__file__.rsplit("/", 1)[0]
+    shutil.copytree(src, root, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(quadland_symbolic, "__file__", str(root / "__init__.py"))
+    since = max(p.stat().st_mtime_ns for tree in (root, Path(quadland.__file__).parent)
+                for p in tree.rglob("*")) + 10**9
+    monkeypatch.setattr(quadland_symbolic, "IMPORTED_NS", since)
+    monkeypatch.setattr(quadland, "IMPORTED_NS", since)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    cache = build.cache_dir()
+    library = cache / ("ab" * 12) / "qlsim_x.so"
+    library.parent.mkdir(parents=True)
+    library.write_bytes(b"")
+    assert recall.sources_edited_since_import() == []
+
+    edited = root / "paper_loop.py"
+    os.utime(edited, ns=(since + 1, since + 1))
+    assert recall.sources_edited_since_import() == ["quadland_symbolic/paper_loop.py"]
+    recall.remember("cd" * 32, library)
+    assert not (cache / recall.RECIPES).exists()
+
+    os.utime(edited, ns=(since - 1, since - 1))
+    recall.remember("cd" * 32, library)
+    assert (cache / recall.RECIPES / ("cd" * 16)).read_text() == f"{'ab' * 12}/qlsim_x.so\n"

@@ -31,7 +31,7 @@ import hashlib
 import casadi as ca
 
 from quadland.engine.build import cache_dir
-from quadland.engine.recall import generator_digest, library_versions
+from quadland.engine.recall import generator_digest, library_versions, sources_edited_since_import
 from quadland.output import write_text_atomic
 
 __all__ = ["FUNCTIONS", "HEADER", "stored_function", "function_key"]
@@ -70,6 +70,8 @@ def stored_function(builder, *args) -> ca.Function:
     if function is not None:
         return function
     function = builder(*args)
+    if sources_edited_since_import():
+        return function         # the key may name other code than the process ran
     text = function.serialize()
     try:
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)

@@ -46,8 +46,7 @@ from quadland_symbolic.loop import LoopModel
 from quadland_symbolic.loop_recipe import LoopRecipe
 
 __all__ = ["generator_digest", "package_digest", "model_digest", "recipe_digest", "code_recipe",
-           "recall_key",
-           "recalled", "remember"]
+           "recall_key", "recalled", "remember", "sources_edited_since_import"]
 
 #: Folder of the cache that maps recipe keys to libraries.
 RECIPES = "recipes"
@@ -180,9 +179,35 @@ def recalled(key: str) -> Path | None:
     return target
 
 
+def sources_edited_since_import() -> list[str]:
+    """The sources a key hashes (:func:`package_digest`'s files) written after this process
+    first imported ``quadland`` or ``quadland_symbolic``, whichever came first.
+
+    Such a file may not be the code this process runs: a module imported before the edit
+    generated the C, while a digest read after it hashes the new text (a digest read
+    before it, and a module imported after, the other way round). A key from such a
+    process could name a library of other code."""
+    import quadland
+    import quadland_symbolic
+
+    since = min(quadland.IMPORTED_NS, quadland_symbolic.IMPORTED_NS)
+    edited = []
+    for package in (quadland, quadland_symbolic):
+        root = Path(package.__file__).parent
+        for path in root.rglob("*"):
+            if path.suffix in (".py", ".jinja", ".toml") and path.is_file() \
+                    and path.stat().st_mtime_ns > since:
+                edited.append(f"{package.__name__}/{path.relative_to(root).as_posix()}")
+    return sorted(edited)
+
+
 def remember(key: str, library: Path) -> None:
     """Record that ``key``'s library is ``library`` (a file of the cache); a cache that
-    cannot be written is only a missed shortcut."""
+    cannot be written is only a missed shortcut. Nothing is recorded when a source was
+    edited while this process ran (:func:`sources_edited_since_import`): the library
+    itself stays in the cache under its generated text's key, correct for that text."""
+    if sources_edited_since_import():
+        return
     cache = build.cache_dir()
     try:
         rel = library.relative_to(cache).as_posix()
