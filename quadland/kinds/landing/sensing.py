@@ -220,35 +220,46 @@ class _Sensor:
         self.state: dict[str, np.ndarray] = {}
 
     def ensure(self, count: int) -> None:
-        """Draw whole blocks until ``count`` samples are drawn."""
+        """Draw whole blocks until ``count`` samples are drawn (all of them at once: each
+        block from its generator, the noise of the blocks computed together)."""
         if self.n >= count:
             return
-        self._rows.reserve(-(-count // BLOCK) * BLOCK)
-        while self.n < count:
-            self._rows.put(self.n, self._block(self.n // BLOCK))
-            self.n += BLOCK
+        blocks = -(-count // BLOCK) - self.n // BLOCK
+        self._rows.reserve(self.n + blocks * BLOCK)
+        self._rows.put(self.n, self._blocks(self.n // BLOCK, blocks))
+        self.n += blocks * BLOCK
         self.delivered, self.noise, self.att_normals = self._rows.views(self.n)
 
-    def _block(self, b: int):
-        s, B = self.s, BLOCK
+    def _blocks(self, b0: int, blocks: int):
+        """Blocks ``b0`` to ``b0 + blocks``: each generator's draws in their order, into
+        rows of one array; the noise's products and sums are those of each block alone."""
+        s, B, rows = self.s, BLOCK, blocks * BLOCK
         if not self.random:
-            return np.ones(B, dtype=bool), np.zeros((B, self.layout.size)), np.zeros((B, 6))
-        rng = _block_rng(self.seed, self.stream, b)
-        delivered = rng.random(B) >= s["dropout"]
-        hit = rng.random(B) < s["outlier_rate"] if "outlier_rate" in s else None
-        if self.name == "imu" and b == 0:
-            self.state["bias"] = np.concatenate([s["accel_bias_sigma"] * rng.standard_normal(3),
-                                                 s["gyro_bias_sigma"] * rng.standard_normal(3)])
-        z = rng.standard_normal((B, _NORMALS[self.name]))
-        times = self.clock.times(b * B, (b + 1) * B)
+            return np.ones(rows, dtype=bool), np.zeros((rows, self.layout.size)), \
+                np.zeros((rows, 6))
+        delivered = np.empty(rows, dtype=bool)
+        hit = np.empty(rows, dtype=bool) if "outlier_rate" in s else None
+        z, att = np.empty((rows, _NORMALS[self.name])), np.zeros((rows, 6))
+        times = self.clock.times(b0 * B, b0 * B + rows)
+        for i in range(blocks):
+            rng, at = _block_rng(self.seed, self.stream, b0 + i), slice(i * B, (i + 1) * B)
+            delivered[at] = rng.random(B) >= s["dropout"]
+            if hit is not None:
+                hit[at] = rng.random(B) < s["outlier_rate"]
+            if self.name == "imu" and b0 + i == 0:
+                self.state["bias"] = np.concatenate([
+                    s["accel_bias_sigma"] * rng.standard_normal(3),
+                    s["gyro_bias_sigma"] * rng.standard_normal(3)])
+            rng.standard_normal(out=z[at])
+            if self.imu is not None and np.any(_on_clock(self.imu, times[at]) < 0):
+                att[at] = rng.standard_normal((B, 6))   # e_att between the IMU's samples
         noise = getattr(self, f"_{self.name}")(times, z, hit)
-        att = z[:, -6:] if self.name == "imu" else np.zeros((B, 6))
-        if self.imu is not None and np.any(_on_clock(self.imu, times) < 0):
-            att = rng.standard_normal((B, 6))       # e_att between the IMU's samples
-        return delivered, noise, att
+        return delivered, noise, (z[:, -6:] if self.name == "imu" else att)
 
     def _imu(self, times, z, hit):
-        """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g."""
+        """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g; the biases' random
+        walk summed within each block from its start (the last value of the block
+        before)."""
         s = self.s
         t_prev = self.state.get("t")
         dt = np.diff(times if t_prev is None else np.concatenate([[t_prev], times]))
@@ -258,12 +269,19 @@ class _Sensor:
             steps[1:] = walk * np.sqrt(dt)[:, None] * z[1:, :6]
         else:
             steps[:] = walk * np.sqrt(dt)[:, None] * z[:, :6]
-        bias = self.state.get("sum", self.state["bias"]) + np.cumsum(steps, axis=0)
-        self.state["sum"], self.state["t"] = bias[-1], times[-1]
+        bias = np.cumsum(steps.reshape(-1, BLOCK, 6), axis=1)
+        start = self.state.get("sum", self.state["bias"])
+        for block in bias:                          # start + the block's sums, in order
+            block += start
+            start = block[-1]
+        self.state["sum"], self.state["t"] = start.copy(), times[-1]
         white = np.repeat([s["accel_noise_density"], s["gyro_noise_density"]], 3) * \
             math.sqrt(s["rate_hz"]) * z[:, 6:12]
-        return np.column_stack([np.zeros((len(times), 3)), bias[:, :3], white[:, :3],
-                                bias[:, 3:], white[:, 3:]])
+        out, bias = np.zeros((len(times), self.layout.size)), bias.reshape(-1, 6)
+        for name, v in (("b_a", bias[:, :3]), ("n_a", white[:, :3]), ("b_g", bias[:, 3:]),
+                        ("n_g", white[:, 3:])):
+            out[:, self.layout.slice(name)] = v
+        return out
 
     def _outliers(self, z, hit, k):
         """Columns e_att (zeros: set by :class:`SensorDraws`), the white noise, the
