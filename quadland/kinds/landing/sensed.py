@@ -176,24 +176,28 @@ class TickTable:
     ``chunk`` ticks at a time after (by default :data:`FIRST_CHUNK` and
     :data:`TICK_CHUNK` rounded up to whole blocks of the IMU's draws,
     :data:`~quadland.kinds.landing.sensing.BLOCK` of its samples), the table's rest after
-    ``rest`` such chunks (:data:`CHUNKS_BEFORE_REST`). Every row is the same bits
+    ``rest`` such chunks (by default :data:`CHUNKS_BEFORE_REST` with the default chunk,
+    none with a given one). Every row is the same bits
     however far ahead it was drawn (the draws' blocks are seeded by their index): a
     flight on it is the flight on the whole table (the simulators' ``more``,
     :func:`quadland.engine.runs.tick_source`).
     """
 
     def __init__(self, scenario: Scenario, n_ticks: int, chunk: int | None = None,
-                 first: int | None = None, rest: int = CHUNKS_BEFORE_REST):
+                 first: int | None = None, rest: int | None = None):
         d = scenario.data
         self.rate = float(d["controller"]["rate_hz"])
         self.draws = SensorDraws(sensor_settings(scenario), d["simulation"]["seed"],
                                  random=bool(d["sensors"]["random"]))
         self.rows = np.empty((n_ticks, SENSED_TICK.size))   # zeroed as it is drawn
         block = BLOCK * max(1, round(self.rate / self.draws.settings["imu"]["rate_hz"]))
+        chunk_default = chunk is None
         chunk = -(-TICK_CHUNK // block) * block if chunk is None else chunk
         first = -(-FIRST_CHUNK // block) * block if first is None else first
         self.filled, self.chunk, self.first = 0, max(int(chunk), 1), max(int(first), 1)
         self.placed = {name: 0 for name in SENSOR_NAMES}
+        if rest is None:                    # the default chunks' rest; none with a chunk
+            rest = CHUNKS_BEFORE_REST if chunk_default else n_ticks
         self.rest = self.first + max(int(rest), 0) * self.chunk   # then to the end
 
     def more(self, tick: int) -> int:

@@ -209,7 +209,8 @@ class _Sensor:
         self.clock = _Clock(s["rate_hz"], s["phase"])
         self.imu = imu                              # the IMU's clock (vision, rangefinder)
         self.layout = NOISES[name]
-        self.n = 0                                  # samples drawn (whole blocks)
+        self.n = 0                                  # samples drawn
+        self._open: dict = {}                       # the last block begun: its generator
         # the draws' rows, with room to grow (a row count doubled when full: each block
         # copied into place once, not the whole history at each extension); `delivered`,
         # `noise` and `att_normals` (the attitude error's normals) are views of their
@@ -220,46 +221,67 @@ class _Sensor:
         self.state: dict[str, np.ndarray] = {}
 
     def ensure(self, count: int) -> None:
-        """Draw whole blocks until ``count`` samples are drawn (all of them at once: each
-        block from its generator, the noise of the blocks computed together)."""
+        """Draw the samples until ``count`` are drawn, all at once: each block's draws from
+        its generator, in their order, as far as the samples go (the block's generator
+        kept for its rest), the noise of the new samples computed together."""
         if self.n >= count:
             return
-        blocks = -(-count // BLOCK) - self.n // BLOCK
-        self._rows.reserve(self.n + blocks * BLOCK)
-        self._rows.put(self.n, self._blocks(self.n // BLOCK, blocks))
-        self.n += blocks * BLOCK
+        self._rows.reserve(count)
+        self._rows.put(self.n, self._draw(self.n, count))
+        self.n = count
         self.delivered, self.noise, self.att_normals = self._rows.views(self.n)
 
-    def _blocks(self, b0: int, blocks: int):
-        """Blocks ``b0`` to ``b0 + blocks``: each generator's draws in their order, into
-        rows of one array; the noise's products and sums are those of each block alone."""
-        s, B, rows = self.s, BLOCK, blocks * BLOCK
+    def _draw(self, k0: int, k1: int):
+        """Samples ``k0`` to ``k1``: deliveries, noise, the attitude error's normals."""
+        rows = k1 - k0
         if not self.random:
             return np.ones(rows, dtype=bool), np.zeros((rows, self.layout.size)), \
                 np.zeros((rows, 6))
         delivered = np.empty(rows, dtype=bool)
-        hit = np.empty(rows, dtype=bool) if "outlier_rate" in s else None
+        hit = np.empty(rows, dtype=bool) if "outlier_rate" in self.s else None
         z, att = np.empty((rows, _NORMALS[self.name])), np.zeros((rows, 6))
-        times = self.clock.times(b0 * B, b0 * B + rows)
-        for i in range(blocks):
-            rng, at = _block_rng(self.seed, self.stream, b0 + i), slice(i * B, (i + 1) * B)
-            delivered[at] = rng.random(B) >= s["dropout"]
+        times = self.clock.times(k0, k1)
+        k = k0
+        while k < k1:                               # block by block
+            b, r0 = divmod(k, BLOCK)
+            r1 = min(BLOCK, k1 - b * BLOCK)
+            at, rb = slice(k - k0, k - k0 + r1 - r0), slice(r0, r1)
+            block = self._open if r0 else self._start(b)
+            delivered[at] = block["delivered"][rb]
             if hit is not None:
-                hit[at] = rng.random(B) < s["outlier_rate"]
-            if self.name == "imu" and b0 + i == 0:
-                self.state["bias"] = np.concatenate([
-                    s["accel_bias_sigma"] * rng.standard_normal(3),
-                    s["gyro_bias_sigma"] * rng.standard_normal(3)])
-            rng.standard_normal(out=z[at])
-            if self.imu is not None and np.any(_on_clock(self.imu, times[at]) < 0):
-                att[at] = rng.standard_normal((B, 6))   # e_att between the IMU's samples
-        noise = getattr(self, f"_{self.name}")(times, z, hit)
+                hit[at] = block["hit"][rb]
+            if block["z"] is None:                  # the block's normals as far as needed
+                block["rng"].standard_normal(out=z[at])
+            else:
+                z[at], att[at] = block["z"][rb], block["att"][rb]
+            k = b * BLOCK + r1
+        noise = getattr(self, f"_{self.name}")(times, z, hit, k0)
         return delivered, noise, (z[:, -6:] if self.name == "imu" else att)
 
-    def _imu(self, times, z, hit):
+    def _start(self, b: int) -> dict:
+        """Block ``b``'s generator and its draws before the noise's normals (the
+        deliveries' and outliers' uniforms, the IMU's turn-on biases); the whole block's
+        normals when it holds a sample between the IMU's (the attitude error's normals
+        come after the noise's)."""
+        s, B = self.s, BLOCK
+        rng = _block_rng(self.seed, self.stream, b)
+        block = {"rng": rng, "delivered": rng.random(B) >= s["dropout"], "z": None}
+        if "outlier_rate" in s:
+            block["hit"] = rng.random(B) < s["outlier_rate"]
+        if self.name == "imu" and b == 0:
+            self.state["bias"] = np.concatenate([s["accel_bias_sigma"] * rng.standard_normal(3),
+                                                 s["gyro_bias_sigma"] * rng.standard_normal(3)])
+        if self.imu is not None and np.any(_on_clock(self.imu,
+                                                     self.clock.times(b * B, (b + 1) * B)) < 0):
+            block["z"] = rng.standard_normal((B, _NORMALS[self.name]))
+            block["att"] = rng.standard_normal((B, 6))   # e_att between the IMU's samples
+        self._open = block
+        return block
+
+    def _imu(self, times, z, hit, k0):
         """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g; the biases' random
-        walk summed within each block from its start (the last value of the block
-        before)."""
+        walk: the block's start (the last value of the block before) plus the sum of the
+        block's steps so far."""
         s = self.s
         t_prev = self.state.get("t")
         dt = np.diff(times if t_prev is None else np.concatenate([[t_prev], times]))
@@ -269,15 +291,22 @@ class _Sensor:
             steps[1:] = walk * np.sqrt(dt)[:, None] * z[1:, :6]
         else:
             steps[:] = walk * np.sqrt(dt)[:, None] * z[:, :6]
-        bias = np.cumsum(steps.reshape(-1, BLOCK, 6), axis=1)
-        start = self.state.get("sum", self.state["bias"])
-        for block in bias:                          # start + the block's sums, in order
-            block += start
-            start = block[-1]
-        self.state["sum"], self.state["t"] = start.copy(), times[-1]
+        bias, k, k1 = np.empty_like(steps), k0, k0 + len(times)
+        while k < k1:
+            r0 = k % BLOCK
+            at = slice(k - k0, min(k1, k - r0 + BLOCK) - k0)
+            if r0 == 0:                             # a block's first sample
+                self.state["start"] = self.state.get("sum", self.state["bias"])
+                c = np.cumsum(steps[at], axis=0)
+            else:                                   # the sums so far, continued
+                c = np.cumsum(np.concatenate([self.state["c"][None], steps[at]]), axis=0)[1:]
+            bias[at] = self.state["start"] + c
+            self.state["c"], self.state["sum"] = c[-1], bias[at][-1]
+            k = k - r0 + BLOCK
+        self.state["t"] = times[-1]
         white = np.repeat([s["accel_noise_density"], s["gyro_noise_density"]], 3) * \
             math.sqrt(s["rate_hz"]) * z[:, 6:12]
-        out, bias = np.zeros((len(times), self.layout.size)), bias.reshape(-1, 6)
+        out = np.zeros((len(times), self.layout.size))
         for name, v in (("b_a", bias[:, :3]), ("n_a", white[:, :3]), ("b_g", bias[:, 3:]),
                         ("n_g", white[:, 3:])):
             out[:, self.layout.slice(name)] = v
@@ -289,13 +318,13 @@ class _Sensor:
         out = np.where(hit[:, None], self.s["outlier_sigma"] * z[:, k:2 * k], 0.0)
         return np.column_stack([np.zeros((len(z), 3)), z[:, :k], out])
 
-    def _vision(self, times, z, hit):
+    def _vision(self, times, z, hit, k0):
         return self._outliers(z, hit, 3)
 
-    def _rangefinder(self, times, z, hit):
+    def _rangefinder(self, times, z, hit, k0):
         return self._outliers(z, hit, 1)
 
-    def _gnss(self, times, z, hit):
+    def _gnss(self, times, z, hit, k0):
         """Columns e_q, e_t (Gauss-Markov), n_v1, n_vt."""
         s = self.s
         sigma = np.asarray(GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"])
@@ -304,7 +333,7 @@ class _Sensor:
         self.state["e"], self.state["t"] = e[-1], times[-1]
         return np.column_stack([e, s["velocity_sigma"] * z[:, 6:12]])
 
-    def _datalink(self, times, z, hit):
+    def _datalink(self, times, z, hit, k0):
         sigma = np.concatenate([np.broadcast_to(np.asarray(
             self.s[f"{f.name[2:]}_sigma"], dtype=float), (f.size,)) for f in self.layout.fields])
         return sigma * z
@@ -347,13 +376,15 @@ class _Attitude:
         self.gm, self.wn = self._rows.views(k1)
         self.n = k1
 
-    def coupling(self, rows: np.ndarray) -> np.ndarray:
-        """The GNSS-aided estimator's tilt at the IMU's ``rows`` (drawn): the roll and
-        pitch that level the biased accelerometer, ``[b_a_y, -b_a_x, 0] / g`` (the body's
-        horizontal bias over gravity, docs/sensors.md), zeros for the AHRS model."""
-        out = np.zeros((len(rows), 3))
+    def coupling(self, rows) -> np.ndarray:
+        """The GNSS-aided estimator's tilt at the IMU's ``rows`` (drawn; indices or a
+        slice): the roll and pitch that level the biased accelerometer, ``[b_a_y, -b_a_x,
+        0] / g`` (the body's horizontal bias over gravity, docs/sensors.md), zeros for the
+        AHRS model."""
+        out = np.zeros((len(range(self.imu.n)[rows]) if isinstance(rows, slice) else len(rows),
+                        3))
         if self.aided:
-            b_a = self.imu.noise[rows][:, self.imu.layout.slice("b_a")]
+            b_a = self.imu.noise[rows, self.imu.layout.slice("b_a")]
             out[:, 0], out[:, 1] = b_a[:, 1] / STANDARD_GRAVITY, -b_a[:, 0] / STANDARD_GRAVITY
         return out
 
@@ -429,7 +460,7 @@ class SensorDraws:
             att.ensure(imu.n)
             k0, self.att_rows = self.att_rows, imu.n      # the IMU's rows drawn since
             imu.noise[k0:imu.n, imu.layout.slice("e_att")] = (
-                att.gm[k0:imu.n] + att.wn[k0:imu.n] + att.coupling(np.arange(k0, imu.n)))
+                att.gm[k0:imu.n] + att.wn[k0:imu.n] + att.coupling(slice(k0, imu.n)))
         self.ready.update(counts)
         return counts
 
