@@ -227,19 +227,20 @@ class _Sensor:
         if self.n >= count:
             return
         self._rows.reserve(count)
-        self._rows.put(self.n, self._draw(self.n, count))
+        self._draw(self.n, count, *(a[self.n:count] for a in self._rows.arrays))
         self.n = count
         self.delivered, self.noise, self.att_normals = self._rows.views(self.n)
 
-    def _draw(self, k0: int, k1: int):
-        """Samples ``k0`` to ``k1``: deliveries, noise, the attitude error's normals."""
+    def _draw(self, k0: int, k1: int, delivered, noise, att) -> None:
+        """Samples ``k0`` to ``k1`` into their rows: deliveries, noise, the attitude
+        error's normals."""
         rows = k1 - k0
         if not self.random:
-            return np.ones(rows, dtype=bool), np.zeros((rows, self.layout.size)), \
-                np.zeros((rows, 6))
-        delivered = np.empty(rows, dtype=bool)
+            delivered[:], noise[:], att[:] = True, 0.0, 0.0
+            return
         hit = np.empty(rows, dtype=bool) if "outlier_rate" in self.s else None
-        z, att = np.empty((rows, _NORMALS[self.name])), np.zeros((rows, 6))
+        z = np.empty((rows, _NORMALS[self.name]))
+        att[:] = 0.0
         times = self.clock.times(k0, k1)
         k = k0
         while k < k1:                               # block by block
@@ -255,8 +256,9 @@ class _Sensor:
             else:
                 z[at], att[at] = block["z"][rb], block["att"][rb]
             k = b * BLOCK + r1
-        noise = getattr(self, f"_{self.name}")(times, z, hit, k0)
-        return delivered, noise, (z[:, -6:] if self.name == "imu" else att)
+        getattr(self, f"_{self.name}")(times, z, hit, k0, noise)
+        if self.name == "imu":
+            att[:] = z[:, -6:]
 
     def _start(self, b: int) -> dict:
         """Block ``b``'s generator and its draws before the noise's normals (the
@@ -278,7 +280,7 @@ class _Sensor:
         self._open = block
         return block
 
-    def _imu(self, times, z, hit, k0):
+    def _imu(self, times, z, hit, k0, out):
         """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g; the biases' random
         walk: the block's start (the last value of the block before) plus the sum of the
         block's steps so far."""
@@ -286,57 +288,59 @@ class _Sensor:
         t_prev = self.state.get("t")
         dt = np.diff(times if t_prev is None else np.concatenate([[t_prev], times]))
         walk = np.repeat([s["accel_bias_random_walk"], s["gyro_bias_random_walk"]], 3)
-        steps = np.zeros((len(times), 6))
-        if t_prev is None:                          # b_0 = start (its normals unused)
-            steps[1:] = walk * np.sqrt(dt)[:, None] * z[1:, :6]
-        else:
-            steps[:] = walk * np.sqrt(dt)[:, None] * z[:, :6]
-        bias, k, k1 = np.empty_like(steps), k0, k0 + len(times)
-        while k < k1:
+        steps, first = np.zeros((len(times), 6)), int(t_prev is None)   # b_0 = start
+        np.multiply(walk * np.sqrt(dt)[:, None], z[first:, :6], out=steps[first:])
+        lay, k, k1 = self.layout, k0, k0 + len(times)
+        out[:, lay.slice("e_att")] = 0.0
+        bias = (out[:, lay.slice("b_a")], out[:, lay.slice("b_g")])
+        while k < k1:                               # the walk, block by block
             r0 = k % BLOCK
             at = slice(k - k0, min(k1, k - r0 + BLOCK) - k0)
             if r0 == 0:                             # a block's first sample
                 self.state["start"] = self.state.get("sum", self.state["bias"])
-                c = np.cumsum(steps[at], axis=0)
-            else:                                   # the sums so far, continued
-                c = np.cumsum(np.concatenate([self.state["c"][None], steps[at]]), axis=0)[1:]
-            bias[at] = self.state["start"] + c
-            self.state["c"], self.state["sum"] = c[-1], bias[at][-1]
+            for j, b in enumerate(bias):
+                if r0 == 0:
+                    np.cumsum(steps[at, 3 * j:3 * j + 3], axis=0, out=b[at])
+                else:                               # the sums so far, continued
+                    b[at] = np.cumsum(np.concatenate([self.state["c"][None, 3 * j:3 * j + 3],
+                                                      steps[at, 3 * j:3 * j + 3]]), axis=0)[1:]
+            self.state["c"] = np.concatenate([b[at][-1] for b in bias])
+            for j, b in enumerate(bias):            # the block's start plus its sums
+                np.add(self.state["start"][3 * j:3 * j + 3], b[at], out=b[at])
+            self.state["sum"] = np.concatenate([b[at][-1] for b in bias])
             k = k - r0 + BLOCK
         self.state["t"] = times[-1]
         white = np.repeat([s["accel_noise_density"], s["gyro_noise_density"]], 3) * \
-            math.sqrt(s["rate_hz"]) * z[:, 6:12]
-        out = np.zeros((len(times), self.layout.size))
-        for name, v in (("b_a", bias[:, :3]), ("n_a", white[:, :3]), ("b_g", bias[:, 3:]),
-                        ("n_g", white[:, 3:])):
-            out[:, self.layout.slice(name)] = v
-        return out
+            math.sqrt(s["rate_hz"])
+        np.multiply(white[:3], z[:, 6:9], out=out[:, lay.slice("n_a")])
+        np.multiply(white[3:], z[:, 9:12], out=out[:, lay.slice("n_g")])
 
-    def _outliers(self, z, hit, k):
+    def _outliers(self, z, hit, k, out):
         """Columns e_att (zeros: set by :class:`SensorDraws`), the white noise, the
         outliers."""
-        out = np.where(hit[:, None], self.s["outlier_sigma"] * z[:, k:2 * k], 0.0)
-        return np.column_stack([np.zeros((len(z), 3)), z[:, :k], out])
+        out[:, :3], out[:, 3:3 + k] = 0.0, z[:, :k]
+        out[:, 3 + k:] = np.where(hit[:, None], self.s["outlier_sigma"] * z[:, k:2 * k], 0.0)
 
-    def _vision(self, times, z, hit, k0):
-        return self._outliers(z, hit, 3)
+    def _vision(self, times, z, hit, k0, out):
+        self._outliers(z, hit, 3, out)
 
-    def _rangefinder(self, times, z, hit, k0):
-        return self._outliers(z, hit, 1)
+    def _rangefinder(self, times, z, hit, k0, out):
+        self._outliers(z, hit, 1, out)
 
-    def _gnss(self, times, z, hit, k0):
+    def _gnss(self, times, z, hit, k0, out):
         """Columns e_q, e_t (Gauss-Markov), n_v1, n_vt."""
         s = self.s
         sigma = np.asarray(GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"])
         e = gauss_markov_after(times, np.tile(sigma, 2), s["position_tau"], z[:, :6],
                                self.state.get("t"), self.state.get("e"))
         self.state["e"], self.state["t"] = e[-1], times[-1]
-        return np.column_stack([e, s["velocity_sigma"] * z[:, 6:12]])
+        out[:, :6] = e
+        np.multiply(s["velocity_sigma"], z[:, 6:12], out=out[:, 6:12])
 
-    def _datalink(self, times, z, hit, k0):
+    def _datalink(self, times, z, hit, k0, out):
         sigma = np.concatenate([np.broadcast_to(np.asarray(
             self.s[f"{f.name[2:]}_sigma"], dtype=float), (f.size,)) for f in self.layout.fields])
-        return sigma * z
+        np.multiply(sigma, z, out=out)
 
 
 class _Attitude:
