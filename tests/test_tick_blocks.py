@@ -269,16 +269,16 @@ def test_the_gear_columns_padded_to_a_bucket_are_the_columns_of_the_exact_map():
 
 
 def _poisoned(monkeypatch, fill: tuple[float, bool]) -> None:
-    """Every row the draws' arrays make room for (``_Rows.reserve``) and no draw has
+    """Every row the draws' arrays make room for (``GrowingRows.reserve``) and no draw has
     written yet holds ``fill`` (float, bool) instead of what ``np.empty`` left there."""
-    real = sensing._Rows.reserve
+    real = sensing.GrowingRows.reserve
 
     def reserve(self, rows):
         room = self.arrays[0].shape[0]
         real(self, rows)
         for a in self.arrays:
             a[room:] = fill[1] if a.dtype == bool else fill[0]
-    monkeypatch.setattr(sensing._Rows, "reserve", reserve)
+    monkeypatch.setattr(sensing.GrowingRows, "reserve", reserve)
 
 
 @pytest.mark.parametrize("scenario, overrides", [("highway", []), ("ship_ss5", []),

@@ -61,6 +61,7 @@ import numpy as np
 from quadland.engine.loop import GRID_TOL
 from quadland.engine.noise import bridge, gauss_markov_after
 from quadland.exceptions import ScenarioError
+from quadland.kinds.landing.growing_rows import GrowingRows
 from quadland.kinds.landing.sensor_settings import GNSS_RTK, STANDARD_GRAVITY, validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
@@ -158,40 +159,6 @@ class _Clock:
 _NORMALS = {"imu": 12 + 6, "vision": 6, "gnss": 12, "rangefinder": 2, "datalink": 15}
 
 
-class _Rows:
-    """Arrays of rows filled in order, with room to grow: ``{name: (dtype, row shape)}``.
-
-    :meth:`reserve` makes room for a row count (at least doubling the room when it
-    grows, the rows so far copied once), :meth:`put` writes rows from an offset,
-    :meth:`views` gives each array's first rows (views: a write into one is kept)."""
-
-    def __init__(self, columns: Mapping[str, tuple]):
-        self.columns = dict(columns)
-        self.arrays = [np.zeros((0, *shape), dtype=dt) for dt, shape in self.columns.values()]
-
-    def reserve(self, rows: int) -> None:
-        """Room for ``rows`` rows at least."""
-        room = self.arrays[0].shape[0]
-        if rows <= room:
-            return
-        room = max(rows, 2 * room)
-        grown = []
-        for a, (dt, shape) in zip(self.arrays, self.columns.values(), strict=True):
-            b = np.empty((room, *shape), dtype=dt)     # rows past those put are never read
-            b[:a.shape[0]] = a
-            grown.append(b)
-        self.arrays = grown
-
-    def put(self, k0: int, values) -> None:
-        """Write each array's ``values`` (in the order of ``columns``) from row ``k0``."""
-        for a, v in zip(self.arrays, values, strict=True):
-            a[k0:k0 + len(v)] = v
-
-    def views(self, rows: int) -> tuple[np.ndarray, ...]:
-        """Each array's first ``rows`` rows, views in the order of ``columns``."""
-        return tuple(a[:rows] for a in self.arrays)
-
-
 def _on_clock(clock: _Clock, times: np.ndarray) -> np.ndarray:
     """Each time's tick of ``clock`` where they coincide (within :data:`GRID_TOL` of its
     period: the loop's grid rule), else -1."""
@@ -211,11 +178,9 @@ class _Sensor:
         self.layout = NOISES[name]
         self.n = 0                                  # samples drawn
         self._open: dict = {}                       # the last block begun: its generator
-        # the draws' rows, with room to grow (a row count doubled when full: each block
-        # copied into place once, not the whole history at each extension); `delivered`,
-        # `noise` and `att_normals` (the attitude error's normals) are views of their
-        # first `n` rows
-        self._rows = _Rows({"delivered": (bool, ()), "noise": (float, (self.layout.size,)),
+        # the draws' rows, room to grow; `delivered`, `noise`, `att_normals` (the attitude
+        # error's normals) are views of their first `n` rows
+        self._rows = GrowingRows({"delivered": (bool, ()), "noise": (float, (self.layout.size,)),
                             "att_normals": (float, (6,))})
         self.delivered, self.noise, self.att_normals = self._rows.views(0)
         self.state: dict[str, np.ndarray] = {}
@@ -232,8 +197,7 @@ class _Sensor:
         self.delivered, self.noise, self.att_normals = self._rows.views(self.n)
 
     def _draw(self, k0: int, k1: int, delivered, noise, att) -> None:
-        """Samples ``k0`` to ``k1`` into their rows: deliveries, noise, the attitude
-        error's normals."""
+        """Samples ``k0`` to ``k1`` into their rows: deliveries, noise, e_att's normals."""
         rows = k1 - k0
         if not self.random:
             delivered[:], noise[:], att[:] = True, 0.0, 0.0
@@ -273,8 +237,8 @@ class _Sensor:
         if self.name == "imu" and b == 0:
             self.state["bias"] = np.concatenate([s["accel_bias_sigma"] * rng.standard_normal(3),
                                                  s["gyro_bias_sigma"] * rng.standard_normal(3)])
-        if self.imu is not None and np.any(_on_clock(self.imu,
-                                                     self.clock.times(b * B, (b + 1) * B)) < 0):
+        times = self.clock.times(b * B, (b + 1) * B)
+        if self.imu is not None and np.any(_on_clock(self.imu, times) < 0):
             block["z"] = rng.standard_normal((B, _NORMALS[self.name]))
             block["att"] = rng.standard_normal((B, 6))   # e_att between the IMU's samples
         self._open = block
@@ -316,8 +280,7 @@ class _Sensor:
         np.multiply(white[3:], z[:, 9:12], out=out[:, lay.slice("n_g")])
 
     def _outliers(self, z, hit, k, out):
-        """Columns e_att (zeros: set by :class:`SensorDraws`), the white noise, the
-        outliers."""
+        """Columns e_att (zeros: set by :class:`SensorDraws`), white noise, outliers."""
         out[:, :3], out[:, 3:3 + k] = 0.0, z[:, :k]
         out[:, 3 + k:] = np.where(hit[:, None], self.s["outlier_sigma"] * z[:, k:2 * k], 0.0)
 
@@ -358,7 +321,7 @@ class _Attitude:
         self.clock = imu.clock
         self.tol = GRID_TOL * self.clock.h
         self.n = 0
-        self._rows = _Rows({"gm": (float, (3,)), "wn": (float, (3,))})
+        self._rows = GrowingRows({"gm": (float, (3,)), "wn": (float, (3,))})
         self.gm, self.wn = self._rows.views(0)
         self.last = None                    # the last point filled in: (t, gm, wn)
 
