@@ -7,8 +7,8 @@ runs, in a fresh child process for this checkout and for ``--against TREE`` (an 
 tree, e.g. ``git archive 0221e14 | tar -x -C /tmp/old``) alternately:
 
 * the table drawn as a flight draws it, to 40 s (10,000 ticks: a run without a touchdown)
-  and to 16.4 s (4,096 ticks: a landing at about 14 s), CPU ms a table (median of
-  ``--tables``), with the SHA-256 of its rows;
+  and to 16.4 s (4,096 ticks: a landing at about 14 s), or to the ``--ticks`` given, CPU
+  ms a table (median of ``--tables``), with the SHA-256 of its rows drawn;
 * with ``--runs N`` (0: none), N runs spread over the cells of issue 20's map (the car
   at 5 to 35 m/s against the crosswind 0 to 20 m/s, 20 x 20 cells of 30 runs), flown as
   a campaign's worker flies them (``quadland.campaign.fly.fly``, freed memory kept):
@@ -42,6 +42,7 @@ from quadland.scenario import load_scenario
 from quadland.kinds.landing.sensed import TickTable
 keep_freed_memory()
 tables, runs = int(sys.argv[1]), int(sys.argv[2])
+sizes = [int(v) for v in sys.argv[3].split(",")]
 sc = load_scenario("highway")
 
 def table(ticks):
@@ -52,8 +53,9 @@ def table(ticks):
     return t.rows
 
 out = {}
-for ticks in (10000, 4096):
-    digest = hashlib.sha256(table(ticks).tobytes()).hexdigest()
+for ticks in sizes:
+    rows = table(ticks)
+    digest = hashlib.sha256(rows[:ticks].tobytes()).hexdigest()   # (past them: unwritten)
     cpu = []
     for _ in range(tables):
         t0 = time.process_time()
@@ -121,9 +123,9 @@ def callgrind(tree: Path | None, tmp: Path, tables: int, ticks: int) -> int:
     raise RuntimeError("no totals in callgrind's output")
 
 
-def child(tree: Path | None, tmp: Path, tables: int, runs: int) -> dict:
+def child(tree: Path | None, tmp: Path, tables: int, runs: int, ticks: str) -> dict:
     env, cwd = _env(tree, tmp)
-    out = subprocess.run([sys.executable, "-c", CHILD, str(tables), str(runs)], check=True,
+    out = subprocess.run([sys.executable, "-c", CHILD, str(tables), str(runs), ticks], check=True,
                          cwd=cwd, env=env, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -134,12 +136,14 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--tables", type=int, default=15)
     ap.add_argument("--runs", type=int, default=0)
+    ap.add_argument("--ticks", default="10000,4096",
+                    help="the tables' sizes, ticks (e.g. 10000,4096,6144: a run to 24.6 s)")
     ap.add_argument("--callgrind", action="store_true",
                     help="instructions a table: processes of 1 and 3 tables, each tree")
     a = ap.parse_args()
     if a.callgrind:
         with tempfile.TemporaryDirectory() as tmp:
-            for ticks in (10000, 4096):
+            for ticks in (int(v) for v in a.ticks.split(",")):
                 for name, tree in (("before", a.against.resolve()), ("now", None)):
                     one, three = (callgrind(tree, Path(tmp), n, ticks) for n in (1, 3))
                     print(f"{name}: {(three - one) / 2 / 1e6:.2f} M instructions a table to "
@@ -150,7 +154,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for r in range(a.rounds):
             for name, tree in (("before", a.against.resolve()), ("now", None)):
-                for k, v in child(tree, Path(tmp), a.tables, a.runs).items():
+                for k, v in child(tree, Path(tmp), a.tables, a.runs, a.ticks).items():
                     res[name].setdefault(k, []).append(v)
             print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 2) for k, v in d.items()}
                                                   for n, d in res.items()}), flush=True)

@@ -69,12 +69,13 @@ def test_the_highway_table_to_12_s_is_the_first_12_s_of_the_whole_table():
     whole, short = tick_table(sc, 10_000), tick_table(sc, 3_000)
     assert _same_bits(short, whole[:3_000])
     lazy = TickTable(sc, 10_000, chunk=500, first=1_000)
+    lazy.rows[:] = np.nan                             # rows past those drawn: unwritten
     for tick, filled in ((0, 1_000), (1, 1_000), (999, 1_000), (1_000, 1_500),
                          (1_234, 1_500), (2_999, 3_000)):
         assert lazy.more(tick) == filled
     assert lazy.filled == 3_000
     assert _same_bits(lazy.rows[:3_000], whole[:3_000])
-    assert not np.any(lazy.rows[3_000:])              # nothing drawn past the chunk
+    assert np.all(np.isnan(lazy.rows[3_000:]))        # nothing written past the chunk
 
 
 #: Sensors off one another's clocks: the IMU at half the control rate, the GNSS every
@@ -115,7 +116,8 @@ def test_each_sample_is_on_its_own_tick_s_row(overrides):
                 row[SENSED_TICK.slice(f"{name}_sampled")] = 1.0
                 row[SENSED_TICK.slice(f"{name}_kept")] = float(kept)
                 row[SENSED_TICK.slice(f"{name}_noise")] = noise
-        assert _same_bits(table.rows, expect), (overrides, ticks)
+        n = table.filled                              # (the rows past it are unwritten)
+        assert _same_bits(table.rows[:n], expect[:n]), (overrides, ticks)
 
 
 def test_samples_off_an_even_spacing_are_written_row_by_row():
@@ -130,6 +132,7 @@ def test_samples_off_an_even_spacing_are_written_row_by_row():
         delivered = rng.random(len(ticks)) < 0.7
         noise = rng.standard_normal((len(ticks), width))
         table = TickTable(sc, 64)
+        table.rows[:] = 0.0                           # as `more` zeroes a chunk's rows
         table._place("vision", ticks, delivered, noise)
         expect = np.zeros_like(table.rows)
         for k, kept, z in zip(ticks, delivered, noise, strict=True):
@@ -266,16 +269,16 @@ def test_the_gear_columns_padded_to_a_bucket_are_the_columns_of_the_exact_map():
 
 
 def _poisoned(monkeypatch, fill: tuple[float, bool]) -> None:
-    """Every row the draws' arrays make room for (``_Rows.reserve``) and no draw has
+    """Every row the draws' arrays make room for (``GrowingRows.reserve``) and no draw has
     written yet holds ``fill`` (float, bool) instead of what ``np.empty`` left there."""
-    real = sensing._Rows.reserve
+    real = sensing.GrowingRows.reserve
 
     def reserve(self, rows):
         room = self.arrays[0].shape[0]
         real(self, rows)
         for a in self.arrays:
             a[room:] = fill[1] if a.dtype == bool else fill[0]
-    monkeypatch.setattr(sensing._Rows, "reserve", reserve)
+    monkeypatch.setattr(sensing.GrowingRows, "reserve", reserve)
 
 
 @pytest.mark.parametrize("scenario, overrides", [("highway", []), ("ship_ss5", []),

@@ -36,11 +36,13 @@ def sample_times(rate_hz: float, duration: float, phase: float = 0.0) -> np.ndar
 
 def _decay(dt, tau):
     """``exp(-dt / tau)``: 1 for ``tau = inf``, 0 for ``tau = 0``."""
-    tau = np.asarray(tau, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.where(tau > 0, np.asarray(dt, dtype=float) / np.where(tau > 0, tau, 1.0),
-                     np.inf)
-    return np.exp(-np.where(np.asarray(dt) > 0, r, 0.0))
+    tau, dt = np.asarray(tau, dtype=float), np.asarray(dt, dtype=float)
+    positive = tau > 0
+    if np.all(positive):                 # (NumPy's `where` broadcast is slow: only if needed)
+        r = dt / tau
+    else:
+        r = np.where(positive, dt / np.where(positive, tau, 1.0), np.inf)
+    return np.exp(-(r if np.all(dt > 0) else np.where(dt > 0, r, 0.0)))
 
 
 def gauss_markov(times, sigma, tau, normals) -> np.ndarray:

@@ -153,7 +153,7 @@ def tick_source(model: LoopModel, N) -> tuple[np.ndarray, int, object]:
 
     ``N`` is an array (every row filled; ``more`` None) or a table drawn as the
     flight goes: an object with ``rows``, the whole ``(ticks, width)`` array (the
-    rows not yet drawn are zeros, never read), ``filled``, the rows drawn, and
+    rows not yet drawn are never read), ``filled``, the rows drawn, and
     ``more(tick)``, which fills rows of the same array at least past ``tick`` (when
     the table reaches it) and returns how many are filled now.
     """

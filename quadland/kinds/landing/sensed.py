@@ -70,6 +70,11 @@ INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
 #: 250 Hz; a one-worker campaign's table 4.7 to 3.4 ms, issue 20).
 TICK_CHUNK = 500
 FIRST_CHUNK = 2500
+#: Chunks of :data:`TICK_CHUNK` after the first; a flight that needs more draws the
+#: table's rest at once (past 20.5 s at 250 Hz: a landing touches down by about 12 s and
+#: settles 2 s later, and most flights that pass 20 s never touch down and fly the
+#: whole ``simulation.duration``; each extension costs its calls, issue 20).
+CHUNKS_BEFORE_REST = 2
 
 #: ``[estimator]`` keys of the initial standard deviations, in the order of NAV's fields.
 _P0_KEYS = ("p0_position", "p0_velocity", "p0_target_velocity", "p0_target_acceleration",
@@ -165,40 +170,49 @@ def imu_at_rest(xp0, g: float) -> np.ndarray:
 class TickTable:
     """The per-tick table of :data:`SENSED_TICK`, drawn as the flight needs it.
 
-    ``rows`` is the whole ``(n_ticks, width)`` array, zeros past ``filled``; each
-    :meth:`more` draws the sensors' next samples (:class:`SensorDraws`) and fills
-    their ticks' rows, ``first`` ticks the first time and ``chunk`` ticks at a time
-    after (by default :data:`FIRST_CHUNK` and :data:`TICK_CHUNK` rounded up to whole
-    blocks of the IMU's draws, :data:`~quadland.kinds.landing.sensing.BLOCK` of its
-    samples). Every row is the same bits
+    ``rows`` is the whole ``(n_ticks, width)`` array, unwritten (and never read) past
+    ``filled``; each :meth:`more` zeroes the next rows, draws the sensors' next samples
+    (:class:`SensorDraws`) and fills their ticks' rows, ``first`` ticks the first time and
+    ``chunk`` ticks at a time after (by default :data:`FIRST_CHUNK` and
+    :data:`TICK_CHUNK` rounded up to whole blocks of the IMU's draws,
+    :data:`~quadland.kinds.landing.sensing.BLOCK` of its samples), the table's rest after
+    ``rest`` such chunks (by default :data:`CHUNKS_BEFORE_REST` with the default chunk,
+    none with a given one). Every row is the same bits
     however far ahead it was drawn (the draws' blocks are seeded by their index): a
     flight on it is the flight on the whole table (the simulators' ``more``,
     :func:`quadland.engine.runs.tick_source`).
     """
 
     def __init__(self, scenario: Scenario, n_ticks: int, chunk: int | None = None,
-                 first: int | None = None):
+                 first: int | None = None, rest: int | None = None):
         d = scenario.data
         self.rate = float(d["controller"]["rate_hz"])
         self.draws = SensorDraws(sensor_settings(scenario), d["simulation"]["seed"],
                                  random=bool(d["sensors"]["random"]))
-        self.rows = np.zeros((n_ticks, SENSED_TICK.size))
+        self.rows = np.empty((n_ticks, SENSED_TICK.size))   # zeroed as it is drawn
         block = BLOCK * max(1, round(self.rate / self.draws.settings["imu"]["rate_hz"]))
+        chunk_default = chunk is None
         chunk = -(-TICK_CHUNK // block) * block if chunk is None else chunk
         first = -(-FIRST_CHUNK // block) * block if first is None else first
         self.filled, self.chunk, self.first = 0, max(int(chunk), 1), max(int(first), 1)
         self.placed = {name: 0 for name in SENSOR_NAMES}
+        if rest is None:                    # the default chunks' rest; none with a chunk
+            rest = CHUNKS_BEFORE_REST if chunk_default else n_ticks
+        self.rest = self.first + max(int(rest), 0) * self.chunk   # then to the end
 
     def more(self, tick: int) -> int:
         """Fill the rows past ``tick`` (up to the next chunk's end, at most the table's);
         returns the rows filled."""
         n = self.rows.shape[0]
         end = self.first
-        if tick >= self.first:
+        if tick >= self.rest:
+            end = n
+        elif tick >= self.first:
             end += ((tick - self.first) // self.chunk + 1) * self.chunk
         end = min(n, end)
         if end <= self.filled:
             return self.filled
+        self.rows[self.filled:end] = 0.0                    # a row without a sample: zeros
         counts = self.draws.extend_ticks(end, self.rate)   # the samples before `end`
         for name in SENSOR_NAMES:
             k0 = self.placed[name]

@@ -61,6 +61,7 @@ import numpy as np
 from quadland.engine.loop import GRID_TOL
 from quadland.engine.noise import bridge, gauss_markov_after
 from quadland.exceptions import ScenarioError
+from quadland.kinds.landing.growing_rows import GrowingRows
 from quadland.kinds.landing.sensor_settings import GNSS_RTK, STANDARD_GRAVITY, validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
@@ -158,40 +159,6 @@ class _Clock:
 _NORMALS = {"imu": 12 + 6, "vision": 6, "gnss": 12, "rangefinder": 2, "datalink": 15}
 
 
-class _Rows:
-    """Arrays of rows filled in order, with room to grow: ``{name: (dtype, row shape)}``.
-
-    :meth:`reserve` makes room for a row count (at least doubling the room when it
-    grows, the rows so far copied once), :meth:`put` writes rows from an offset,
-    :meth:`views` gives each array's first rows (views: a write into one is kept)."""
-
-    def __init__(self, columns: Mapping[str, tuple]):
-        self.columns = dict(columns)
-        self.arrays = [np.zeros((0, *shape), dtype=dt) for dt, shape in self.columns.values()]
-
-    def reserve(self, rows: int) -> None:
-        """Room for ``rows`` rows at least."""
-        room = self.arrays[0].shape[0]
-        if rows <= room:
-            return
-        room = max(rows, 2 * room)
-        grown = []
-        for a, (dt, shape) in zip(self.arrays, self.columns.values(), strict=True):
-            b = np.empty((room, *shape), dtype=dt)     # rows past those put are never read
-            b[:a.shape[0]] = a
-            grown.append(b)
-        self.arrays = grown
-
-    def put(self, k0: int, values) -> None:
-        """Write each array's ``values`` (in the order of ``columns``) from row ``k0``."""
-        for a, v in zip(self.arrays, values, strict=True):
-            a[k0:k0 + len(v)] = v
-
-    def views(self, rows: int) -> tuple[np.ndarray, ...]:
-        """Each array's first ``rows`` rows, views in the order of ``columns``."""
-        return tuple(a[:rows] for a in self.arrays)
-
-
 def _on_clock(clock: _Clock, times: np.ndarray) -> np.ndarray:
     """Each time's tick of ``clock`` where they coincide (within :data:`GRID_TOL` of its
     period: the loop's grid rule), else -1."""
@@ -209,87 +176,134 @@ class _Sensor:
         self.clock = _Clock(s["rate_hz"], s["phase"])
         self.imu = imu                              # the IMU's clock (vision, rangefinder)
         self.layout = NOISES[name]
-        self.n = 0                                  # samples drawn (whole blocks)
-        # the draws' rows, with room to grow (a row count doubled when full: each block
-        # copied into place once, not the whole history at each extension); `delivered`,
-        # `noise` and `att_normals` (the attitude error's normals) are views of their
-        # first `n` rows
-        self._rows = _Rows({"delivered": (bool, ()), "noise": (float, (self.layout.size,)),
+        self.n = 0                                  # samples drawn
+        self._open: dict = {}                       # the last block begun: its generator
+        # the draws' rows, room to grow; `delivered`, `noise`, `att_normals` (the attitude
+        # error's normals) are views of their first `n` rows
+        self._rows = GrowingRows({"delivered": (bool, ()), "noise": (float, (self.layout.size,)),
                             "att_normals": (float, (6,))})
         self.delivered, self.noise, self.att_normals = self._rows.views(0)
         self.state: dict[str, np.ndarray] = {}
 
     def ensure(self, count: int) -> None:
-        """Draw whole blocks until ``count`` samples are drawn."""
+        """Draw the samples until ``count`` are drawn, all at once: each block's draws from
+        its generator, in their order, as far as the samples go (the block's generator
+        kept for its rest), the noise of the new samples computed together."""
         if self.n >= count:
             return
-        self._rows.reserve(-(-count // BLOCK) * BLOCK)
-        while self.n < count:
-            self._rows.put(self.n, self._block(self.n // BLOCK))
-            self.n += BLOCK
+        self._rows.reserve(count)
+        self._draw(self.n, count, *(a[self.n:count] for a in self._rows.arrays))
+        self.n = count
         self.delivered, self.noise, self.att_normals = self._rows.views(self.n)
 
-    def _block(self, b: int):
-        s, B = self.s, BLOCK
+    def _draw(self, k0: int, k1: int, delivered, noise, att) -> None:
+        """Samples ``k0`` to ``k1`` into their rows: deliveries, noise, e_att's normals."""
+        rows = k1 - k0
         if not self.random:
-            return np.ones(B, dtype=bool), np.zeros((B, self.layout.size)), np.zeros((B, 6))
+            delivered[:], noise[:], att[:] = True, 0.0, 0.0
+            return
+        hit = np.empty(rows, dtype=bool) if "outlier_rate" in self.s else None
+        z = np.empty((rows, _NORMALS[self.name]))
+        att[:] = 0.0
+        times = self.clock.times(k0, k1)
+        k = k0
+        while k < k1:                               # block by block
+            b, r0 = divmod(k, BLOCK)
+            r1 = min(BLOCK, k1 - b * BLOCK)
+            at, rb = slice(k - k0, k - k0 + r1 - r0), slice(r0, r1)
+            block = self._open if r0 else self._start(b)
+            delivered[at] = block["delivered"][rb]
+            if hit is not None:
+                hit[at] = block["hit"][rb]
+            if block["z"] is None:                  # the block's normals as far as needed
+                block["rng"].standard_normal(out=z[at])
+            else:
+                z[at], att[at] = block["z"][rb], block["att"][rb]
+            k = b * BLOCK + r1
+        getattr(self, f"_{self.name}")(times, z, hit, k0, noise)
+        if self.name == "imu":
+            att[:] = z[:, -6:]
+
+    def _start(self, b: int) -> dict:
+        """Block ``b``'s generator and its draws before the noise's normals (the
+        deliveries' and outliers' uniforms, the IMU's turn-on biases); the whole block's
+        normals when it holds a sample between the IMU's (the attitude error's normals
+        come after the noise's)."""
+        s, B = self.s, BLOCK
         rng = _block_rng(self.seed, self.stream, b)
-        delivered = rng.random(B) >= s["dropout"]
-        hit = rng.random(B) < s["outlier_rate"] if "outlier_rate" in s else None
+        block = {"rng": rng, "delivered": rng.random(B) >= s["dropout"], "z": None}
+        if "outlier_rate" in s:
+            block["hit"] = rng.random(B) < s["outlier_rate"]
         if self.name == "imu" and b == 0:
             self.state["bias"] = np.concatenate([s["accel_bias_sigma"] * rng.standard_normal(3),
                                                  s["gyro_bias_sigma"] * rng.standard_normal(3)])
-        z = rng.standard_normal((B, _NORMALS[self.name]))
         times = self.clock.times(b * B, (b + 1) * B)
-        noise = getattr(self, f"_{self.name}")(times, z, hit)
-        att = z[:, -6:] if self.name == "imu" else np.zeros((B, 6))
         if self.imu is not None and np.any(_on_clock(self.imu, times) < 0):
-            att = rng.standard_normal((B, 6))       # e_att between the IMU's samples
-        return delivered, noise, att
+            block["z"] = rng.standard_normal((B, _NORMALS[self.name]))
+            block["att"] = rng.standard_normal((B, 6))   # e_att between the IMU's samples
+        self._open = block
+        return block
 
-    def _imu(self, times, z, hit):
-        """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g."""
+    def _imu(self, times, z, hit, k0, out):
+        """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g; the biases' random
+        walk: the block's start (the last value of the block before) plus the sum of the
+        block's steps so far."""
         s = self.s
         t_prev = self.state.get("t")
         dt = np.diff(times if t_prev is None else np.concatenate([[t_prev], times]))
         walk = np.repeat([s["accel_bias_random_walk"], s["gyro_bias_random_walk"]], 3)
-        steps = np.zeros((len(times), 6))
-        if t_prev is None:                          # b_0 = start (its normals unused)
-            steps[1:] = walk * np.sqrt(dt)[:, None] * z[1:, :6]
-        else:
-            steps[:] = walk * np.sqrt(dt)[:, None] * z[:, :6]
-        bias = self.state.get("sum", self.state["bias"]) + np.cumsum(steps, axis=0)
-        self.state["sum"], self.state["t"] = bias[-1], times[-1]
+        steps, first = np.zeros((len(times), 6)), int(t_prev is None)   # b_0 = start
+        np.multiply(walk * np.sqrt(dt)[:, None], z[first:, :6], out=steps[first:])
+        lay, k, k1 = self.layout, k0, k0 + len(times)
+        out[:, lay.slice("e_att")] = 0.0
+        bias = (out[:, lay.slice("b_a")], out[:, lay.slice("b_g")])
+        while k < k1:                               # the walk, block by block
+            r0 = k % BLOCK
+            at = slice(k - k0, min(k1, k - r0 + BLOCK) - k0)
+            if r0 == 0:                             # a block's first sample
+                self.state["start"] = self.state.get("sum", self.state["bias"])
+            for j, b in enumerate(bias):
+                if r0 == 0:
+                    np.cumsum(steps[at, 3 * j:3 * j + 3], axis=0, out=b[at])
+                else:                               # the sums so far, continued
+                    b[at] = np.cumsum(np.concatenate([self.state["c"][None, 3 * j:3 * j + 3],
+                                                      steps[at, 3 * j:3 * j + 3]]), axis=0)[1:]
+            self.state["c"] = np.concatenate([b[at][-1] for b in bias])
+            for j, b in enumerate(bias):            # the block's start plus its sums
+                np.add(self.state["start"][3 * j:3 * j + 3], b[at], out=b[at])
+            self.state["sum"] = np.concatenate([b[at][-1] for b in bias])
+            k = k - r0 + BLOCK
+        self.state["t"] = times[-1]
         white = np.repeat([s["accel_noise_density"], s["gyro_noise_density"]], 3) * \
-            math.sqrt(s["rate_hz"]) * z[:, 6:12]
-        return np.column_stack([np.zeros((len(times), 3)), bias[:, :3], white[:, :3],
-                                bias[:, 3:], white[:, 3:]])
+            math.sqrt(s["rate_hz"])
+        np.multiply(white[:3], z[:, 6:9], out=out[:, lay.slice("n_a")])
+        np.multiply(white[3:], z[:, 9:12], out=out[:, lay.slice("n_g")])
 
-    def _outliers(self, z, hit, k):
-        """Columns e_att (zeros: set by :class:`SensorDraws`), the white noise, the
-        outliers."""
-        out = np.where(hit[:, None], self.s["outlier_sigma"] * z[:, k:2 * k], 0.0)
-        return np.column_stack([np.zeros((len(z), 3)), z[:, :k], out])
+    def _outliers(self, z, hit, k, out):
+        """Columns e_att (zeros: set by :class:`SensorDraws`), white noise, outliers."""
+        out[:, :3], out[:, 3:3 + k] = 0.0, z[:, :k]
+        out[:, 3 + k:] = np.where(hit[:, None], self.s["outlier_sigma"] * z[:, k:2 * k], 0.0)
 
-    def _vision(self, times, z, hit):
-        return self._outliers(z, hit, 3)
+    def _vision(self, times, z, hit, k0, out):
+        self._outliers(z, hit, 3, out)
 
-    def _rangefinder(self, times, z, hit):
-        return self._outliers(z, hit, 1)
+    def _rangefinder(self, times, z, hit, k0, out):
+        self._outliers(z, hit, 1, out)
 
-    def _gnss(self, times, z, hit):
+    def _gnss(self, times, z, hit, k0, out):
         """Columns e_q, e_t (Gauss-Markov), n_v1, n_vt."""
         s = self.s
         sigma = np.asarray(GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"])
         e = gauss_markov_after(times, np.tile(sigma, 2), s["position_tau"], z[:, :6],
                                self.state.get("t"), self.state.get("e"))
         self.state["e"], self.state["t"] = e[-1], times[-1]
-        return np.column_stack([e, s["velocity_sigma"] * z[:, 6:12]])
+        out[:, :6] = e
+        np.multiply(s["velocity_sigma"], z[:, 6:12], out=out[:, 6:12])
 
-    def _datalink(self, times, z, hit):
+    def _datalink(self, times, z, hit, k0, out):
         sigma = np.concatenate([np.broadcast_to(np.asarray(
             self.s[f"{f.name[2:]}_sigma"], dtype=float), (f.size,)) for f in self.layout.fields])
-        return sigma * z
+        np.multiply(sigma, z, out=out)
 
 
 class _Attitude:
@@ -307,7 +321,7 @@ class _Attitude:
         self.clock = imu.clock
         self.tol = GRID_TOL * self.clock.h
         self.n = 0
-        self._rows = _Rows({"gm": (float, (3,)), "wn": (float, (3,))})
+        self._rows = GrowingRows({"gm": (float, (3,)), "wn": (float, (3,))})
         self.gm, self.wn = self._rows.views(0)
         self.last = None                    # the last point filled in: (t, gm, wn)
 
@@ -329,13 +343,15 @@ class _Attitude:
         self.gm, self.wn = self._rows.views(k1)
         self.n = k1
 
-    def coupling(self, rows: np.ndarray) -> np.ndarray:
-        """The GNSS-aided estimator's tilt at the IMU's ``rows`` (drawn): the roll and
-        pitch that level the biased accelerometer, ``[b_a_y, -b_a_x, 0] / g`` (the body's
-        horizontal bias over gravity, docs/sensors.md), zeros for the AHRS model."""
-        out = np.zeros((len(rows), 3))
+    def coupling(self, rows) -> np.ndarray:
+        """The GNSS-aided estimator's tilt at the IMU's ``rows`` (drawn; indices or a
+        slice): the roll and pitch that level the biased accelerometer, ``[b_a_y, -b_a_x,
+        0] / g`` (the body's horizontal bias over gravity, docs/sensors.md), zeros for the
+        AHRS model."""
+        out = np.zeros((len(range(self.imu.n)[rows]) if isinstance(rows, slice) else len(rows),
+                        3))
         if self.aided:
-            b_a = self.imu.noise[rows][:, self.imu.layout.slice("b_a")]
+            b_a = self.imu.noise[rows, self.imu.layout.slice("b_a")]
             out[:, 0], out[:, 1] = b_a[:, 1] / STANDARD_GRAVITY, -b_a[:, 0] / STANDARD_GRAVITY
         return out
 
@@ -411,7 +427,7 @@ class SensorDraws:
             att.ensure(imu.n)
             k0, self.att_rows = self.att_rows, imu.n      # the IMU's rows drawn since
             imu.noise[k0:imu.n, imu.layout.slice("e_att")] = (
-                att.gm[k0:imu.n] + att.wn[k0:imu.n] + att.coupling(np.arange(k0, imu.n)))
+                att.gm[k0:imu.n] + att.wn[k0:imu.n] + att.coupling(slice(k0, imu.n)))
         self.ready.update(counts)
         return counts
 

@@ -1,0 +1,134 @@
+"""The sensors' draws as far as the samples go, and the table's chunks (issue 20, fifteenth).
+
+A sensor's block of draws is begun from its generator (its spawn key, the block's
+index) and continued, as far as the samples asked for, from the same generator: the
+values are those of the whole block, in their order. The IMU's bias walk restarts its
+sums at each block (the block's start: the last value of the block before). The table
+draws its first chunk, two more, then its rest at once. Checked against the documented
+scheme re-derived by hand and against ``draw_sensors`` placed sample by sample.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from quadland.kinds.landing.sensed import TickTable
+from quadland.kinds.landing.sensing import (
+    BLOCK,
+    SENSOR_STREAM,
+    SensorDraws,
+    draw_sensors,
+)
+from quadland.kinds.landing.sensor_settings import SENSOR_DEFAULTS
+from quadland.scenario import load_scenario
+from quadland_symbolic.landing.sensed_loop import SENSED_TICK
+from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
+
+#: Off the IMU's grid (the vision's and rangefinder's blocks draw the attitude error's
+#: normals after the whole block's noise normals).
+OFF_GRID = {"imu": {"rate_hz": 125.0}, "vision": {"phase": 0.001},
+            "rangefinder": {"rate_hz": 250.0}}
+
+
+def _same_bits(a, b) -> bool:
+    a, b = np.asarray(a), np.asarray(b)
+    return a.shape == b.shape and np.array_equal(a.view(np.uint8), b.view(np.uint8))
+
+
+def test_the_imu_s_walk_and_white_noise_re_derived_from_each_block_s_generator():
+    """The IMU's biases and white noise at 2,600 samples (two blocks and part of a third),
+    re-derived in Python floats from the spawn key ``(seed, SENSOR_STREAM, 0, 3, b)``:
+    the block's dropout uniforms, the turn-on biases (block 0), then 18 normals a sample;
+    ``b_k = start + sum of the block's steps w sqrt(dt) n`` (the first sample's step
+    none), ``n_k = d sqrt(rate) n``; drawn at once and extended in uneven steps."""
+    s, seed, n = SENSOR_DEFAULTS["imu"], 11, 2_600
+    h, lay = 1.0 / s["rate_hz"], NOISES["imu"]
+    walk = [s["accel_bias_random_walk"]] * 3 + [s["gyro_bias_random_walk"]] * 3
+    dens = [s["accel_noise_density"] * math.sqrt(s["rate_hz"])] * 3 + \
+        [s["gyro_noise_density"] * math.sqrt(s["rate_hz"])] * 3
+    bias, white, start = [], [], None
+    for b in range(-(-n // BLOCK)):
+        rng = np.random.default_rng(np.random.SeedSequence(
+            seed, spawn_key=(SENSOR_STREAM, 0, 3, b)))
+        rng.random(BLOCK)                                   # the deliveries' uniforms
+        if b == 0:
+            start = [s["accel_bias_sigma"] * v for v in rng.standard_normal(3)] + \
+                [s["gyro_bias_sigma"] * v for v in rng.standard_normal(3)]
+        z = rng.standard_normal((BLOCK, 18)).tolist()
+        sums = [0.0] * 6
+        for i in range(BLOCK):
+            k = b * BLOCK + i
+            dt = (s["phase"] + h * k) - (s["phase"] + h * (k - 1))
+            for j in range(6):
+                step = 0.0 if k == 0 else walk[j] * math.sqrt(dt) * z[i][j]
+                sums[j] = sums[j] + step
+            bias.append([start[j] + sums[j] for j in range(6)])
+            white.append([dens[j] * z[i][6 + j] for j in range(6)])
+        start = bias[-1]
+    bias, white = np.array(bias[:n]), np.array(white[:n])
+    whole = draw_sensors(None, n * h, seed)["imu"].noise
+    steps = SensorDraws(None, seed)
+    for horizon in (0.5, 4.092, 4.096, 4.1, 7.0, 8.2, n * h):
+        steps.extend(horizon)
+    for noise in (whole, steps.sensors["imu"].noise[:n]):
+        assert len(noise) == n
+        for name, cols in (("b_a", bias[:, :3]), ("b_g", bias[:, 3:]),
+                           ("n_a", white[:, :3]), ("n_g", white[:, 3:])):
+            assert _same_bits(noise[:, lay.slice(name)], cols), name
+
+
+@pytest.mark.parametrize("settings", [None, OFF_GRID])
+def test_draws_extended_sample_by_sample_across_a_block_are_the_whole_draw(settings):
+    """Every sensor's deliveries and noise (the attitude error's too), drawn to 20 s
+    at once and extended one IMU sample at a time across the end of its first block,
+    then in uneven steps that end mid-block: the same bits; off the IMU's grid the
+    vision's and rangefinder's blocks draw their attitude normals after the block's."""
+    whole = draw_sensors(settings, 20.0, seed=23)
+    rate = (settings or {}).get("imu", {}).get("rate_hz", SENSOR_DEFAULTS["imu"]["rate_hz"])
+    steps = SensorDraws(settings, seed=23)
+    for k in range(BLOCK - 3, BLOCK + 4):
+        steps.extend((k + 0.5) / rate)
+    for horizon in (9.37, 9.371, 13.0, 16.5, 20.0):
+        steps.extend(horizon)
+    for name in SENSOR_NAMES:
+        k = len(whole[name].times)
+        assert k > 0
+        t, delivered, noise = steps.window(name, 0, k)
+        assert _same_bits(noise, whole[name].noise), name
+        assert _same_bits(delivered, whole[name].delivered), name
+
+
+@pytest.mark.parametrize(("overrides", "chunks"), [
+    ([], [3_072, 4_096, 5_120, 10_000]),
+    (["sensors.imu.rate_hz=125.0", "sensors.vision.phase=0.012"],   # blocks of 2,048 ticks
+     [4_096, 6_144, 8_192, 10_000])])
+def test_the_default_table_to_40_s_places_each_sample_on_its_tick(overrides, chunks):
+    """The table with its default chunks, drawn as a flight without a touchdown draws
+    it (at 250 Hz 12.3 s, two chunks of 4.1 s, then the rest at once), against each sensor's
+    samples of ``draw_sensors`` placed one by one on the row of its tick, zeros on every
+    other row of its columns; rows past those drawn left as they were (NaN here)."""
+    sc = load_scenario("highway", overrides)
+    rate = sc["controller.rate_hz"]
+    table = TickTable(sc, 10_000)
+    table.rows[:] = np.nan
+    ends, tick = [], 0
+    while tick < 10_000:
+        tick = table.more(tick)
+        ends.append(tick)
+        if tick < 10_000:
+            assert np.all(np.isnan(table.rows[tick:]))
+    assert ends == chunks
+    settings = {n: dict(sc.data[f"sensors.{n}"]) for n in SENSOR_NAMES}
+    draws = draw_sensors(settings, 40.0, seed=sc["simulation.seed"])
+    expect = np.zeros_like(table.rows)
+    for name in SENSOR_NAMES:
+        s = draws[name]
+        for t, kept, noise in zip(s.times, s.delivered, s.noise, strict=True):
+            row = expect[round(t * rate)]
+            row[SENSED_TICK.slice(f"{name}_sampled")] = 1.0
+            row[SENSED_TICK.slice(f"{name}_kept")] = float(kept)
+            row[SENSED_TICK.slice(f"{name}_noise")] = noise
+    assert _same_bits(table.rows, expect)
