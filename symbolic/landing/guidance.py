@@ -92,9 +92,9 @@ withdraws the committed descent, as a rising deck).
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
 (the criteria of a good touchdown could no longer be met), the phase goes
 back to align, the reference climbs back to the hover height, and the abort
-count grows by one, unless the gear is within ``abort_floor`` of the deck (the estimate:
-:mod:`~quadland_symbolic.landing.abort_floor`). (Above the crawl an offset or a speed out of the align
-band pauses the descent instead.) When, once committed, the deck rises faster
+count grows by one, unless the gear is within ``abort_floor`` of the deck (the
+estimate: :mod:`~quadland_symbolic.landing.abort_floor`). (Above the crawl an offset or a
+speed out of the align band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
