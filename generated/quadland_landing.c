@@ -169,7 +169,8 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, calm_lean, 38, 0) &&
     AT(ql_guidance_params, lean_time, 39, 0) &&
     AT(ql_guidance_params, lean_withdraw, 40, 0) &&
-    sizeof(ql_guidance_params) == 41 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, abort_floor, 41, 0) &&
+    sizeof(ql_guidance_params) == 42 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -202,14 +203,14 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[41] = {
+static const ql_real default_p_guid[42] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
     3.141592653589793, 0.0, 0.0, 0.0, 0.0, 1000.0,
-    0.0, 1000.0, 1.5707963267948966, 1.0, 0.0,
+    0.0, 1000.0, 1.5707963267948966, 1.0, 0.0, -1000.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -493,6 +494,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   calm_lean                >= 0
  *   lean_time                > 0
  *   lean_withdraw            0 or 1
+ *   abort_floor              finite
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -627,6 +629,9 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     }
     if (!bad && !(isfinite(p[40]) && ((p[40] == 0.0) || (p[40] == 1.0)))) {
         bad = "lean_withdraw";
+    }
+    if (!bad && !(isfinite(p[41]))) {
+        bad = "abort_floor";
     }
     if (bad_field) {
         *bad_field = bad;
@@ -827,7 +832,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 41)
+          & all_finite((const ql_real *)params, 42)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

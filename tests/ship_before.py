@@ -28,3 +28,8 @@ GATES_BEFORE = ("estimator.gate_datalink_v=11.344867", "estimator.gate_datalink_
 #: in the crawl"); ``ship`` takes the defaults, so the keys leave its flights as they are.
 COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0",
                  "landing.calm_lean_deg=90.0", "landing.lean_withdraw=false"]
+
+#: The crawl's abort of before, down to the contact: ``ship_ss5`` starts none with its gear
+#: within 6 cm of the deck since the fifteenth session (docs/landing.md, "ship_ss5: an abort
+#: the gear cannot fly"); ``ship`` takes the default, so the key leaves its flights as they are.
+ABORT_BEFORE = "landing.abort_floor=-1000.0"

@@ -129,7 +129,7 @@ GUIDANCE_DOCUMENTED = {
     "crawl_gate": _nonnegative, "crawl_gate_time": _nonnegative,
     "crawl_gate_floor": _nonnegative, "crawl_gate_wait": _nonnegative,
     "calm_lean": _nonnegative, "lean_time": _positive,
-    "lean_withdraw": lambda v, p: (v == 0) | (v == 1),
+    "lean_withdraw": lambda v, p: (v == 0) | (v == 1), "abort_floor": _finite,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

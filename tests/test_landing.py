@@ -727,7 +727,9 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
     marker on highway_100 and ship_ss5"), in ship_ss5's datalink gates (docs/landing.md,
     "ship_ss5: the datalink refused at the deck's turn"), and in ship_ss5's commit: no
     withdrawal in the crawl, the deck's tilt at the contact (docs/landing.md, "ship_ss5: the
-    deck's roll at the contact and the withdrawals in the crawl")."""
+    deck's roll at the contact and the withdrawals in the crawl"), the gust's lean, and no
+    crawl abort within 6 cm of the deck (docs/landing.md, "ship_ss5: an abort the gear cannot
+    fly")."""
     ship, ss5 = load_scenario("ship"), load_scenario("ship_ss5")
     assert ship["deck.sea_state"] == 4 and ss5["deck.sea_state"] == 5
     for d in (ship.data["deck"], ss5.data["deck"]):
@@ -740,7 +742,7 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
                       "initial.handover_clearance", "sensors.vision.small_range_max",
                       "estimator.gate_datalink_v", "estimator.gate_datalink_a",
                       "landing.withdraw_height", "landing.calm_tilt_deg",
-                      "landing.calm_lean_deg", "landing.lean_withdraw"}
+                      "landing.calm_lean_deg", "landing.lean_withdraw", "landing.abort_floor"}
     assert set(ship.campaign_table["dispersions"]) == set(ss5.campaign_table["dispersions"])
 
 

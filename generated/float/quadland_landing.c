@@ -169,7 +169,8 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, calm_lean, 38, 0) &&
     AT(qlf_guidance_params, lean_time, 39, 0) &&
     AT(qlf_guidance_params, lean_withdraw, 40, 0) &&
-    sizeof(qlf_guidance_params) == 41 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, abort_floor, 41, 0) &&
+    sizeof(qlf_guidance_params) == 42 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -202,14 +203,14 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[41] = {
+static const qlf_real default_p_guid[42] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
     0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
     0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, -1000.0f,
     3.141592653589793f, 0.0f, 0.0f, 0.0f, 0.0f, 1000.0f,
-    0.0f, 1000.0f, 1.5707963267948966f, 1.0f, 0.0f,
+    0.0f, 1000.0f, 1.5707963267948966f, 1.0f, 0.0f, -1000.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -493,6 +494,7 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   calm_lean                >= 0
  *   lean_time                > 0
  *   lean_withdraw            0 or 1
+ *   abort_floor              finite
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -627,6 +629,9 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     }
     if (!bad && !(isfinite(p[40]) && ((p[40] == 0.0f) || (p[40] == 1.0f)))) {
         bad = "lean_withdraw";
+    }
+    if (!bad && !(isfinite(p[41]))) {
+        bad = "abort_floor";
     }
     if (bad_field) {
         *bad_field = bad;
@@ -827,7 +832,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 41)
+          & all_finite((const qlf_real *)params, 42)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }

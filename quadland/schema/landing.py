@@ -237,6 +237,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "lean_withdraw": Field(B, "-", "true: once committed, the lean past calm_lean_deg "
                                "withdraws the descent above withdraw_height, as a rising deck "
                                "does; false: it only holds the commit", default=False),
+        "abort_floor": Field(F, "m", "the gear's height above the deck (the filter's estimate) "
+                             "at or below which the crawl's out-of-limits abort is not "
+                             "started (-1000: it is down to the contact)", lo=-1e3, hi=1e3,
+                             default=-1e3),
         "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
                              "descent above it does; false: the crawl is committed",
                              default=False),

@@ -92,8 +92,9 @@ withdraws the committed descent, as a rising deck).
 ``max_offset`` or the horizontal relative speed ``max_relative_speed``
 (the criteria of a good touchdown could no longer be met), the phase goes
 back to align, the reference climbs back to the hover height, and the abort
-count grows by one. (Above the crawl an offset or a speed out of the align
-band pauses the descent instead.) When, once committed, the deck rises faster
+count grows by one, unless the gear is within ``abort_floor`` of the deck (the
+estimate: :mod:`~quadland_symbolic.landing.abort_floor`). (Above the crawl an offset or a
+speed out of the align band pauses the descent instead.) When, once committed, the deck rises faster
 than ``max_deck_rise`` (the prediction missed), the commit is withdrawn: the
 descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
@@ -109,6 +110,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from quadland_symbolic.landing.abort_floor import out_of_limits
 from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_holds
 from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
@@ -232,6 +234,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("lean_withdraw", 1, "0/1", "1: once committed, the lean's average past calm_lean "
           "withdraws the descent above withdraw_height, as a rising deck does; 0: it "
           "only holds the commit"),
+    Field("abort_floor", 1, "m", "the gear's height above the deck, as estimated, at or "
+          "below which the crawl's out-of-limits abort is not started (-1000: never)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
@@ -440,8 +444,8 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     # the crawl (h / descent_time <= touchdown_speed) pauses only with crawl_pause and aborts
     # out of the limits; above it the descent pauses out of the band; a rising deck withdraws
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
-    off_limits = ca.logic_and(ca.logic_and(flying, crawl), ca.logic_or(
-        offset > p["max_offset"], speed > p["max_relative_speed"]))
+    off_limits = ca.logic_and(ca.logic_and(flying, crawl), out_of_limits(
+        offset, speed, p_e[2] - contact_height(p), p))
     gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, p)
     timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
         ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
