@@ -33,9 +33,11 @@ from pathlib import Path
 
 from bench_margins import _stats, _tree_env
 
-#: What each measured process runs: argv[1] the pickled review, argv[2] "figures" or not.
+#: What each measured process runs: argv[1] the pickled review, argv[2] "figures" or not,
+#: argv[3] the stored texts' file (``quadland.plots.text_store``; a tree without it draws
+#: its texts as it does).
 CHILD = """
-import os, pickle, sys
+import contextlib, os, pickle, sys
 from quadland import mpl_import
 mpl_import.for_the_command_line()
 import scipy.linalg
@@ -47,7 +49,11 @@ if sys.argv[2] == "figures":
         from quadland.output import figure_png
         from quadland.plots import margin_figures
         from quadland.plots.gc_pause import collection_paused
-        with collection_paused():
+        try:
+            from quadland.plots.text_store import texts_kept
+        except ImportError:
+            texts_kept = lambda path: contextlib.nullcontext()
+        with collection_paused(), texts_kept(sys.argv[3]):
             pngs = {k: figure_png(v) for k, v in margin_figures(report).items()}
 os._exit(0)
 """
@@ -72,8 +78,10 @@ def _cpu(args, env) -> float:
     return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
 
 
-def figures(runs: int, against: Path | None, scenarios) -> dict:
-    """CPU s of the five figures in each run, by (scenario, tree)."""
+def figures(runs: int, against: Path | None, scenarios, texts: str = "stored") -> dict:
+    """CPU s of the five figures in each run, by (scenario, tree); ``texts`` "stored": the
+    stored texts' file written by the first run (not counted) and read by the others,
+    "cold": none (each run lays out and renders every text, and writes the file)."""
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         child = Path(tmp, "child.py")
@@ -83,13 +91,18 @@ def figures(runs: int, against: Path | None, scenarios) -> dict:
             trees["against"] = _tree_env(against.resolve(), Path(tmp))
         for name in scenarios:
             _review(name, Path(tmp, f"{name}.pkl"))
-        for k in range(runs):
+        for k in range(runs + (texts == "stored")):
             for name in scenarios:
                 order = list(trees.items())
                 for tree, env in order if k % 2 == 0 else order[::-1]:
+                    store = Path(tmp, f"{name}-{tree}.texts")
+                    if texts == "cold":
+                        store.unlink(missing_ok=True)
                     args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
-                    base = _cpu([*args, "none"], env)
-                    out.setdefault((name, tree), []).append(_cpu([*args, "figures"], env) - base)
+                    base = _cpu([*args, "none", str(store)], env)
+                    cpu = _cpu([*args, "figures", str(store)], env) - base
+                    if k or texts == "cold":
+                        out.setdefault((name, tree), []).append(cpu)
     return out
 
 
@@ -139,6 +152,8 @@ def main(argv=None):
     ap.add_argument("--runs", type=int, default=5, help="runs of each")
     ap.add_argument("--against", type=Path, help="another source tree, paired run by run")
     ap.add_argument("--scenarios", nargs="+", default=("paper", "highway"))
+    ap.add_argument("--texts", choices=("stored", "cold"), default="stored",
+                    help="the stored texts read back (a first run writes them) or none")
     ap.add_argument("--glyph-cache", action="store_true",
                     help="in this process: highway's figures with and without the kept glyphs")
     args = ap.parse_args(argv)
@@ -150,8 +165,9 @@ def main(argv=None):
         ratios = [a / b for a, b in zip(pairs["kept"], pairs["matplotlib"], strict=True)]
         print(f"- kept / matplotlib's, pair by pair: {_stats(ratios)}")
         return
-    measured = figures(args.runs, args.against, args.scenarios)
-    print("## the five margin figures in a fresh process, CPU s, median (min to max)")
+    measured = figures(args.runs, args.against, args.scenarios, args.texts)
+    print(f"## the five margin figures in a fresh process, CPU s, median (min to max), "
+          f"texts {args.texts}")
     for (name, tree), cpu in measured.items():
         print(f"- {name}, {tree}: {_stats(cpu)}")
     if args.against is not None:
