@@ -18,6 +18,13 @@ Run from the repository root::
 
     python benchmarks/bench_margin_figures.py --runs 9 --against /tmp/old
     python benchmarks/bench_margin_figures.py --glyph-cache --runs 15
+    python benchmarks/bench_margin_figures.py --callgrind --runs 9 --against /tmp/old
+
+With ``--callgrind``: each tree's figures' instructions (callgrind's count of the
+process with the figures less the one without, the stored texts read back), and the
+instructions per second of the figures' process on this host (its count over its CPU
+time in ``--runs`` runs without valgrind: the fastest run, the least disturbed by the
+load, and the median), by which the instructions are converted to seconds.
 """
 
 from __future__ import annotations
@@ -106,6 +113,60 @@ def figures(runs: int, against: Path | None, scenarios, texts: str = "stored") -
     return out
 
 
+def _instructions(args, env, out: Path) -> int:
+    """Instructions the process ``args`` executes (callgrind's ``Ir``, children not traced)."""
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *args],
+                   env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    for line in out.read_text().splitlines():
+        if line.startswith(("summary:", "totals:")):
+            return int(line.split()[1])
+    raise RuntimeError(f"no instruction count in {out}")
+
+
+def instructions(against: Path | None, scenarios, native_runs: int) -> dict:
+    """Per scenario and tree: the figures' instructions (the figures' process less the one
+    without, under callgrind, the stored texts written by a run before), the figures'
+    process's own instructions and its CPU s in ``native_runs`` runs without valgrind
+    (alternating the trees), for instructions per second on this host."""
+    out: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        child = Path(tmp, "child.py")
+        child.write_text(CHILD)
+        trees = {"this": dict(os.environ)}
+        if against is not None:
+            trees["against"] = _tree_env(against.resolve(), Path(tmp))
+        for name in scenarios:
+            _review(name, Path(tmp, f"{name}.pkl"))
+            for tree, env in trees.items():
+                args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
+                store = str(Path(tmp, f"{name}-{tree}.texts"))
+                _cpu([*args, "figures", store], env)            # the stored texts written
+                counts = {mode: _instructions([*args, mode, store], env,
+                                              Path(tmp, f"{name}-{tree}-{mode}.out"))
+                          for mode in ("none", "figures")}
+                out[name, tree] = {"figures": counts["figures"] - counts["none"],
+                                   "process": counts["figures"], "cpu": []}
+            for _ in range(native_runs):
+                for tree, env in trees.items():
+                    args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
+                    out[name, tree]["cpu"].append(
+                        _cpu([*args, "figures", str(Path(tmp, f"{name}-{tree}.texts"))], env))
+    return out
+
+
+def _print_instructions(measured: dict) -> None:
+    print("## the five margin figures' instructions (callgrind), stored texts read back")
+    print("| scenario | tree | figures, G instr. | figures' process, G instr. | its CPU s, "
+          "min (median) | G instr./s at the min (median) | figures' s at that rate |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for (name, tree), m in measured.items():
+        cpu_min, cpu_med = min(m["cpu"]), sorted(m["cpu"])[len(m["cpu"]) // 2]
+        ips, ips_med = m["process"] / cpu_min, m["process"] / cpu_med
+        print(f"| {name} | {tree} | {m['figures'] / 1e9:.3f} | {m['process'] / 1e9:.3f} | "
+              f"{cpu_min:.2f} ({cpu_med:.2f}) | {ips / 1e9:.2f} ({ips_med / 1e9:.2f}) | "
+              f"{m['figures'] / ips:.3f} ({m['figures'] / ips_med:.3f}) |")
+
+
 def _matplotlibs_glyphs(renderer, gc, x, y, angle, items, size, flags):
     """A text's glyphs drawn by matplotlib's Agg loop (what ``draw_glyphs`` replaces)."""
     renderer._draw_text_glyphs_and_boxes(
@@ -156,7 +217,12 @@ def main(argv=None):
                     help="the stored texts read back (a first run writes them) or none")
     ap.add_argument("--glyph-cache", action="store_true",
                     help="in this process: highway's figures with and without the kept glyphs")
+    ap.add_argument("--callgrind", action="store_true",
+                    help="instructions under callgrind, converted by this host's rate")
     args = ap.parse_args(argv)
+    if args.callgrind:
+        _print_instructions(instructions(args.against, args.scenarios, args.runs))
+        return
     if args.glyph_cache:
         pairs = glyph_cache_pairs(args.runs)
         print("## highway's five figures in this process, CPU s, median (min to max)")

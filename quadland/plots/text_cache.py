@@ -42,13 +42,16 @@ _LAYOUTS: dict = {}
 _HEIGHTS: dict = {}
 _PATHS: dict = {}
 _MEASURES: dict = {}
+#: The measurements' keys whose every character is in the text's first font.
+_WHOLE: set = set()
 
 
-def kept_texts() -> tuple[dict, dict]:
+def kept_texts() -> tuple[dict, dict, set]:
     """The layouts (:class:`~quadland.plots.glyph_cache.Glyph` tuples) and measurements
-    (width, height, descent) kept, by their texts' :func:`text_key`: read and written
-    by :mod:`quadland.plots.text_store`."""
-    return _LAYOUTS, _MEASURES
+    (width, height, descent) kept, by their texts' :func:`text_key`, and the keys of the
+    measurements whose every character is in the text's first font: read and written by
+    :mod:`quadland.plots.text_store`."""
+    return _LAYOUTS, _MEASURES, _WHOLE
 
 #: Whether this matplotlib draws text as the renderer below expects (3.11's Agg).
 _CACHEABLE = (hasattr(RendererAgg, "_draw_text_glyphs_and_boxes")
@@ -179,6 +182,11 @@ class TextCacheRenderer(RendererAgg):
         if value is None:
             value = _remember(_MEASURES, key,
                               tuple(super().get_text_width_height_descent(s, prop, ismath)))
+            font = self._prepare_font(prop)
+            if all(font.get_char_index(ord(c)) for c in s):
+                if len(_WHOLE) >= CACHE_SIZE:
+                    _WHOLE.clear()
+                _WHOLE.add(key)
         return value
 
 

@@ -74,7 +74,7 @@ def _storable(glyphs) -> bool:
 
 def _contents() -> dict:
     """What this process keeps that another can read: plain values, no font objects."""
-    layouts, measures = text_cache.kept_texts()
+    layouts, measures, whole = text_cache.kept_texts()
     stored = {key: tuple(g._replace(font=None) for g in glyphs)
               for key, glyphs in layouts.items() if _storable(glyphs)}
     texts = {key[:3] for key in stored}             # font key, string, hinting
@@ -85,7 +85,8 @@ def _contents() -> dict:
             pixels.append(buffer.tobytes())
             offset += buffer.size
     return {"layouts": stored, "bitmaps": bitmaps, "pixels": b"".join(pixels),
-            "measures": {key: value for key, value in measures.items() if key in texts}}
+            "measures": {key: value for key, value in measures.items()
+                         if key in texts or key in whole}}
 
 
 def _read(path: Path) -> dict | None:
@@ -105,7 +106,7 @@ def _read(path: Path) -> dict | None:
 
 def _load(contents: dict) -> int:
     """Put the stored entries in the process's caches; how many there are."""
-    layouts, measures = text_cache.kept_texts()
+    layouts, measures, whole = text_cache.kept_texts()
     bitmaps = glyph_cache.kept_bitmaps()
     # one writable array (Agg's blending takes no read-only buffer), a view per bitmap
     pixels = np.frombuffer(bytearray(contents["pixels"]), dtype=np.uint8)
@@ -117,6 +118,7 @@ def _load(contents: dict) -> int:
         layouts.setdefault(key, tuple(glyph_cache.Glyph(*g) for g in glyphs))
     for key, value in contents["measures"].items():
         measures.setdefault(key, value)
+        whole.add(key)                  # stored so: written again by this process
     return sum(len(contents[k]) for k in ("bitmaps", "layouts", "measures"))
 
 
