@@ -48,6 +48,7 @@ import contextlib, os, pickle, sys
 from quadland import mpl_import
 mpl_import.for_the_command_line()
 import scipy.linalg
+import quadland.engine.build    # as the command's review has imported it (and CasADi)
 from threadpoolctl import threadpool_limits
 with open(sys.argv[1], "rb") as f:
     report = pickle.load(f)

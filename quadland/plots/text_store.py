@@ -108,12 +108,11 @@ def _load(contents: dict) -> int:
     """Put the stored entries in the process's caches; how many there are."""
     layouts, measures, whole = text_cache.kept_texts()
     bitmaps = glyph_cache.kept_bitmaps()
-    # one writable array (Agg's blending takes no read-only buffer), a view per bitmap
-    pixels = np.frombuffer(bytearray(contents["pixels"]), dtype=np.uint8)
+    # one writable buffer (Agg's blending takes no read-only array), an array on it each
+    pixels = bytearray(contents["pixels"])
     for key, (offset, shape, left, top) in contents["bitmaps"].items():
         if key not in bitmaps:
-            size = int(np.prod(shape))
-            bitmaps[key] = (pixels[offset:offset + size].reshape(shape), left, top)
+            bitmaps[key] = (np.ndarray(shape, np.uint8, pixels, offset), left, top)
     for key, glyphs in contents["layouts"].items():
         layouts.setdefault(key, tuple(glyph_cache.Glyph(*g) for g in glyphs))
     for key, value in contents["measures"].items():
@@ -150,7 +149,15 @@ def texts_kept(path: Path | None = None):
     path = store_path() if path is None else Path(path)
     stored = _read(path)
     before = _load(stored) if stored is not None else 0
+    loaded = _kept()
     yield path
+    if _kept() == loaded:           # nothing drawn that was not read (nor emptied)
+        return
     contents = _contents()
     if sum(len(contents[k]) for k in ("bitmaps", "layouts", "measures")) > before:
         _write(path, contents)
+
+
+def _kept() -> int:
+    layouts, measures, _ = text_cache.kept_texts()
+    return len(layouts) + len(measures) + len(glyph_cache.kept_bitmaps())
