@@ -169,10 +169,12 @@ def _print_instructions(measured: dict) -> None:
 
 
 def _matplotlibs_glyphs(renderer, gc, x, y, angle, items, size, flags):
-    """A text's glyphs drawn by matplotlib's Agg loop (what ``draw_glyphs`` replaces)."""
+    """A text's glyphs (``glyph_cache.Glyph``, with their fonts) drawn by matplotlib's Agg
+    loop (what ``draw_glyphs`` replaces)."""
     renderer._draw_text_glyphs_and_boxes(
         gc, x, y, angle,
-        ((item.ft_object, size, item.glyph_index, 0, 1, item.x, item.y) for item in items), [])
+        ((item.font, size, item.glyph_index, 0, 1, item.x, item.y) for item in items), [])
+    return True
 
 
 def glyph_cache_pairs(runs: int, name: str = "highway") -> dict:
