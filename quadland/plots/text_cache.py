@@ -9,8 +9,10 @@ measurement (``Text._get_layout``). A margin review draws about 380 texts
 measures them about 2,000 times.
 
 :class:`TextCacheRenderer` keeps both, by what they are computed from: the
-layout of a string by its fonts' files, size, resolution, hinting, features and
-whether the last-resort font is a fallback; the height metrics by the fonts' files,
+layout and the measurement (width, height, descent) of a string by its fonts' files
+as found on disk (:func:`text_key`), size, resolution, hinting, features and
+whether the last-resort font is a fallback (what :mod:`quadland.plots.text_store`
+writes for the next process); the height metrics by the fonts' files,
 size and resolution; a text's font files by its font properties and the rc parameters
 (:func:`font_paths`). Its glyphs are drawn by
 :func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per sub-pixel

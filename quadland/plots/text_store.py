@@ -23,7 +23,8 @@ Texts drawn with matplotlib's last-resort font or a missing glyph (FreeType's
 glyph is given again in the next process. The file starts with the SHA-256 of the rest,
 checked before it is read; one that cannot be read (absent, cut, damaged, another format)
 is ignored and rewritten; a folder that cannot be written only costs the next process the
-work.
+work. The file is a pickle: it is read only from the user's own cache folder, which others
+cannot write (:func:`~quadland.engine.build.cache_dir`), as are the libraries loaded from it.
 """
 
 from __future__ import annotations
