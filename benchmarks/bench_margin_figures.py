@@ -18,6 +18,13 @@ Run from the repository root::
 
     python benchmarks/bench_margin_figures.py --runs 9 --against /tmp/old
     python benchmarks/bench_margin_figures.py --glyph-cache --runs 15
+    python benchmarks/bench_margin_figures.py --callgrind --runs 9 --against /tmp/old
+
+With ``--callgrind``: each tree's figures' instructions (callgrind's count of the
+process with the figures less the one without, the stored texts read back), and the
+instructions per second of the figures' process on this host (its count over its CPU
+time in ``--runs`` runs without valgrind: the fastest run, the least disturbed by the
+load, and the median), by which the instructions are converted to seconds.
 """
 
 from __future__ import annotations
@@ -33,12 +40,15 @@ from pathlib import Path
 
 from bench_margins import _stats, _tree_env
 
-#: What each measured process runs: argv[1] the pickled review, argv[2] "figures" or not.
+#: What each measured process runs: argv[1] the pickled review, argv[2] "figures" or not,
+#: argv[3] the stored texts' file (``quadland.plots.text_store``; a tree without it draws
+#: its texts as it does).
 CHILD = """
-import os, pickle, sys
+import contextlib, os, pickle, sys
 from quadland import mpl_import
 mpl_import.for_the_command_line()
 import scipy.linalg
+import quadland.engine.build    # as the command's review has imported it (and CasADi)
 from threadpoolctl import threadpool_limits
 with open(sys.argv[1], "rb") as f:
     report = pickle.load(f)
@@ -47,7 +57,11 @@ if sys.argv[2] == "figures":
         from quadland.output import figure_png
         from quadland.plots import margin_figures
         from quadland.plots.gc_pause import collection_paused
-        with collection_paused():
+        try:
+            from quadland.plots.text_store import texts_kept
+        except ImportError:
+            texts_kept = lambda path: contextlib.nullcontext()
+        with collection_paused(), texts_kept(sys.argv[3]):
             pngs = {k: figure_png(v) for k, v in margin_figures(report).items()}
 os._exit(0)
 """
@@ -72,8 +86,10 @@ def _cpu(args, env) -> float:
     return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
 
 
-def figures(runs: int, against: Path | None, scenarios) -> dict:
-    """CPU s of the five figures in each run, by (scenario, tree)."""
+def figures(runs: int, against: Path | None, scenarios, texts: str = "stored") -> dict:
+    """CPU s of the five figures in each run, by (scenario, tree); ``texts`` "stored": the
+    stored texts' file written by the first run (not counted) and read by the others,
+    "cold": none (each run lays out and renders every text, and writes the file)."""
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         child = Path(tmp, "child.py")
@@ -83,21 +99,82 @@ def figures(runs: int, against: Path | None, scenarios) -> dict:
             trees["against"] = _tree_env(against.resolve(), Path(tmp))
         for name in scenarios:
             _review(name, Path(tmp, f"{name}.pkl"))
-        for k in range(runs):
+        for k in range(runs + (texts == "stored")):
             for name in scenarios:
                 order = list(trees.items())
                 for tree, env in order if k % 2 == 0 else order[::-1]:
+                    store = Path(tmp, f"{name}-{tree}.texts")
+                    if texts == "cold":
+                        store.unlink(missing_ok=True)
                     args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
-                    base = _cpu([*args, "none"], env)
-                    out.setdefault((name, tree), []).append(_cpu([*args, "figures"], env) - base)
+                    base = _cpu([*args, "none", str(store)], env)
+                    cpu = _cpu([*args, "figures", str(store)], env) - base
+                    if k or texts == "cold":
+                        out.setdefault((name, tree), []).append(cpu)
     return out
 
 
+def _instructions(args, env, out: Path) -> int:
+    """Instructions the process ``args`` executes (callgrind's ``Ir``, children not traced)."""
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *args],
+                   env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    for line in out.read_text().splitlines():
+        if line.startswith(("summary:", "totals:")):
+            return int(line.split()[1])
+    raise RuntimeError(f"no instruction count in {out}")
+
+
+def instructions(against: Path | None, scenarios, native_runs: int) -> dict:
+    """Per scenario and tree: the figures' instructions (the figures' process less the one
+    without, under callgrind, the stored texts written by a run before), the figures'
+    process's own instructions and its CPU s in ``native_runs`` runs without valgrind
+    (alternating the trees), for instructions per second on this host."""
+    out: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        child = Path(tmp, "child.py")
+        child.write_text(CHILD)
+        trees = {"this": dict(os.environ)}
+        if against is not None:
+            trees["against"] = _tree_env(against.resolve(), Path(tmp))
+        for name in scenarios:
+            _review(name, Path(tmp, f"{name}.pkl"))
+            for tree, env in trees.items():
+                args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
+                store = str(Path(tmp, f"{name}-{tree}.texts"))
+                _cpu([*args, "figures", store], env)            # the stored texts written
+                counts = {mode: _instructions([*args, mode, store], env,
+                                              Path(tmp, f"{name}-{tree}-{mode}.out"))
+                          for mode in ("none", "figures")}
+                out[name, tree] = {"figures": counts["figures"] - counts["none"],
+                                   "process": counts["figures"], "cpu": []}
+            for _ in range(native_runs):
+                for tree, env in trees.items():
+                    args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
+                    out[name, tree]["cpu"].append(
+                        _cpu([*args, "figures", str(Path(tmp, f"{name}-{tree}.texts"))], env))
+    return out
+
+
+def _print_instructions(measured: dict) -> None:
+    print("## the five margin figures' instructions (callgrind), stored texts read back")
+    print("| scenario | tree | figures, G instr. | figures' process, G instr. | its CPU s, "
+          "min (median) | G instr./s at the min (median) | figures' s at that rate |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for (name, tree), m in measured.items():
+        cpu_min, cpu_med = min(m["cpu"]), sorted(m["cpu"])[len(m["cpu"]) // 2]
+        ips, ips_med = m["process"] / cpu_min, m["process"] / cpu_med
+        print(f"| {name} | {tree} | {m['figures'] / 1e9:.3f} | {m['process'] / 1e9:.3f} | "
+              f"{cpu_min:.2f} ({cpu_med:.2f}) | {ips / 1e9:.2f} ({ips_med / 1e9:.2f}) | "
+              f"{m['figures'] / ips:.3f} ({m['figures'] / ips_med:.3f}) |")
+
+
 def _matplotlibs_glyphs(renderer, gc, x, y, angle, items, size, flags):
-    """A text's glyphs drawn by matplotlib's Agg loop (what ``draw_glyphs`` replaces)."""
+    """A text's glyphs (``glyph_cache.Glyph``, with their fonts) drawn by matplotlib's Agg
+    loop (what ``draw_glyphs`` replaces)."""
     renderer._draw_text_glyphs_and_boxes(
         gc, x, y, angle,
-        ((item.ft_object, size, item.glyph_index, 0, 1, item.x, item.y) for item in items), [])
+        ((item.font, size, item.glyph_index, 0, 1, item.x, item.y) for item in items), [])
+    return True
 
 
 def glyph_cache_pairs(runs: int, name: str = "highway") -> dict:
@@ -139,9 +216,16 @@ def main(argv=None):
     ap.add_argument("--runs", type=int, default=5, help="runs of each")
     ap.add_argument("--against", type=Path, help="another source tree, paired run by run")
     ap.add_argument("--scenarios", nargs="+", default=("paper", "highway"))
+    ap.add_argument("--texts", choices=("stored", "cold"), default="stored",
+                    help="the stored texts read back (a first run writes them) or none")
     ap.add_argument("--glyph-cache", action="store_true",
                     help="in this process: highway's figures with and without the kept glyphs")
+    ap.add_argument("--callgrind", action="store_true",
+                    help="instructions under callgrind, converted by this host's rate")
     args = ap.parse_args(argv)
+    if args.callgrind:
+        _print_instructions(instructions(args.against, args.scenarios, args.runs))
+        return
     if args.glyph_cache:
         pairs = glyph_cache_pairs(args.runs)
         print("## highway's five figures in this process, CPU s, median (min to max)")
@@ -150,8 +234,9 @@ def main(argv=None):
         ratios = [a / b for a, b in zip(pairs["kept"], pairs["matplotlib"], strict=True)]
         print(f"- kept / matplotlib's, pair by pair: {_stats(ratios)}")
         return
-    measured = figures(args.runs, args.against, args.scenarios)
-    print("## the five margin figures in a fresh process, CPU s, median (min to max)")
+    measured = figures(args.runs, args.against, args.scenarios, args.texts)
+    print(f"## the five margin figures in a fresh process, CPU s, median (min to max), "
+          f"texts {args.texts}")
     for (name, tree), cpu in measured.items():
         print(f"- {name}, {tree}: {_stats(cpu)}")
     if args.against is not None:

@@ -69,8 +69,11 @@ def review_scenario(scenario, overrides, out, at, requirement: Requirement,
             say(f"quadland: margins of {sc.name}: the figures...")
             from quadland.plots import margin_figures
             from quadland.plots.gc_pause import collection_paused
+            from quadland.plots.text_store import texts_kept
 
-            with collection_paused():       # 0.1 s of collections finding nothing
+            # the collector: 0.1 s of collections finding nothing; the texts: FreeType's
+            # layouts and glyphs of the last runs, read back
+            with collection_paused(), texts_kept():
                 figures = {name: figure_png(fig) for name, fig in margin_figures(report).items()}
         data = dict(report.to_dict(), runtime_s=time.perf_counter() - start,
                     versions=versions())

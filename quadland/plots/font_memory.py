@@ -30,7 +30,7 @@ import threading
 import matplotlib as mpl
 from matplotlib import font_manager
 
-__all__ = ["memory_font", "available"]
+__all__ = ["memory_font", "available", "font_identity", "file_identity"]
 
 #: The fonts made, by their files and the rc parameters matplotlib's recipe reads.
 _FONTS: dict = {}
@@ -79,12 +79,51 @@ def _file_entry(font_path) -> tuple[str, int]:
     return real, int(getattr(font_path, "face_index", 0))
 
 
-def _in_memory(path: str) -> io.BytesIO:
+class _FontBytes(io.BytesIO):
+    """A font file's bytes, with what names them across processes (:func:`font_identity`)."""
+
+    identity: tuple = ()
+
+
+#: Each font file's (real path, size, modification time in ns), by its real path.
+_STATS: dict = {}
+
+
+def file_identity(path: str, face_index: int = 0) -> tuple:
+    """A font file's face as another process finds it: its real path, face index, size and
+    modification time (ns), the file read once per process (a file changed while a
+    process runs is that process's font still)."""
+    real = _REAL_PATHS.get(path)
+    if real is None:
+        real = _REAL_PATHS[path] = os.path.realpath(path)
+    stat = _STATS.get(real)
+    if stat is None:
+        info = os.stat(real)
+        stat = _STATS[real] = (real, info.st_size, info.st_mtime_ns)
+    return (stat[0], int(face_index), *stat[1:])
+
+
+def font_identity(font):
+    """The identity (:func:`file_identity`) of the face an ``FT2Font`` was made from, by
+    :func:`memory_font` or from a path (matplotlib's last-resort fallback); None for a
+    font made from another file object."""
+    name = font.fname
+    if isinstance(name, _FontBytes):
+        return name.identity
+    if isinstance(name, str):
+        return file_identity(name, font.face_index)
+    return None
+
+
+def _in_memory(path: str, index: int) -> io.BytesIO:
     data = _BYTES.get(path)
+    identity = file_identity(path, index)      # stat before the read: a later change shows
     if data is None:
         with open(path, "rb") as f:
             data = _BYTES[path] = f.read()
-    return io.BytesIO(data)
+    stream = _FontBytes(data)
+    stream.identity = identity
+    return stream
 
 
 def memory_font(font_paths):
@@ -115,7 +154,7 @@ def memory_font(font_paths):
     font = _FONTS.get(key)
     try:
         if font is None:
-            font = _RECIPE(tuple((_in_memory(path), index) for path, index in entries),
+            font = _RECIPE(tuple((_in_memory(path, index), index) for path, index in entries),
                            _kerning_factor=kerning, thread_id=key[-1],
                            enable_last_resort=last_resort)
             _FONTS[key] = font

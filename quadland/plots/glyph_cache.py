@@ -22,11 +22,15 @@ from __future__ import annotations
 
 import math
 import os
+from typing import NamedTuple
 
+import matplotlib as mpl
 import numpy as np
 from matplotlib import ft2font
 
-__all__ = ["draw_glyphs", "available", "CACHE_SIZE"]
+from quadland.plots.font_memory import font_identity
+
+__all__ = ["Glyph", "glyphs_of", "draw_glyphs", "available", "CACHE_SIZE"]
 
 #: FreeType's render modes as matplotlib names them (3.10 on; None before, where
 #: ``quadland.plots.text_cache`` draws as matplotlib does and this module is not called).
@@ -36,6 +40,13 @@ RenderMode = getattr(ft2font, "RenderMode", None)
 CACHE_SIZE = 16384
 
 _BITMAPS: dict = {}
+
+
+def kept_bitmaps() -> dict:
+    """The bitmaps kept (by font identity, size, resolution, glyph, hinting, render mode,
+    matrix and hinting factor, and remainder of the place): read and written by
+    :mod:`quadland.plots.text_store`."""
+    return _BITMAPS
 
 
 def available() -> bool:
@@ -64,8 +75,34 @@ def _render(font, size, dpi, glyph_index, flags, mode, matrix, place, antialiase
     return buffer, bitmap.left, bitmap.top
 
 
-def draw_glyphs(renderer, gc, x: float, y: float, angle: float, items, size: float,
-                flags: int) -> None:
+class Glyph(NamedTuple):
+    """A laid-out glyph as :func:`draw_glyphs` draws it: its font (None for a layout read
+    back from another process, :mod:`quadland.plots.text_store`), the font's identity
+    (:func:`quadland.plots.font_memory.font_identity`, or the font where it has none),
+    its index in the font and its place in the text (pixels)."""
+
+    font: object
+    identity: object
+    glyph_index: int
+    x: float
+    y: float
+
+
+def glyphs_of(items) -> tuple[Glyph, ...]:
+    """``FT2Font._layout``'s items as :class:`Glyph` tuples."""
+    ids: dict = {}
+    out = []
+    for item in items:
+        font = item.ft_object
+        identity = ids.get(font, ids)
+        if identity is ids:
+            identity = ids[font] = font_identity(font) or font
+        out.append(Glyph(font, identity, item.glyph_index, item.x, item.y))
+    return tuple(out)
+
+
+def draw_glyphs(renderer, gc, x: float, y: float, angle: float, glyphs, size: float,
+                flags) -> bool:
     """Draw a plain text's laid-out glyphs as ``RendererAgg._draw_text_glyphs_and_boxes``.
 
     Parameters
@@ -77,38 +114,47 @@ def draw_glyphs(renderer, gc, x: float, y: float, angle: float, items, size: flo
         The text's anchor, pixels (``y`` downwards, as matplotlib passes it).
     angle : float
         deg.
-    items : iterable
-        ``FT2Font._layout``'s glyphs: ``ft_object``, ``glyph_index``, ``x``, ``y``.
+    glyphs : sequence of Glyph
+        The text's glyphs (:func:`glyphs_of`).
     size : float
         pt.
-    flags : int
+    flags : matplotlib.ft2font.LoadFlags
         FreeType's load flags (matplotlib's hinting).
+
+    Returns
+    -------
+    bool
+        False, with nothing drawn, where a glyph without its font has no kept bitmap.
     """
     matrix, cos, sin = rotation(angle)
-    key_matrix = tuple(matrix.ravel().tolist())
+    # the hinting factor: a font made by matplotlib's get_font before 3.11 holds the rc's
+    key_matrix = (*matrix.ravel().tolist(), mpl.rcParams["text.hinting_factor"])
     antialiased = bool(gc.get_antialiased())
     mode = RenderMode.NORMAL if antialiased else RenderMode.MONO
     height, dpi = renderer.height, renderer.dpi
-    bottom = int(height)
-    draw = renderer._renderer.draw_text_image
-    for item in items:
-        dx, dy = item.x, item.y
+    placed = []
+    for glyph in glyphs:
+        dx, dy = glyph.x, glyph.y
         place = (round(0x40 * (x + dx * cos - dy * sin)),
                  round(0x40 * (height - y + dx * sin + dy * cos)))   # FreeType's y is upwards
-        whole_x, whole_y = place[0] >> 6, place[1] >> 6
-        font = item.ft_object
-        key = (font, size, dpi, item.glyph_index, flags, mode, key_matrix,
+        key = (glyph.identity, size, dpi, glyph.glyph_index, flags, mode.name, key_matrix,
                place[0] & 63, place[1] & 63)
         kept = _BITMAPS.get(key)
         if kept is None:
-            buffer, left, top = _render(font, size, dpi, item.glyph_index, flags, mode,
-                                        matrix, place, antialiased)
+            if glyph.font is None:
+                return False
+            buffer, left, top = _render(glyph.font, size, dpi, glyph.glyph_index, flags,
+                                        mode, matrix, place, antialiased)
             if len(_BITMAPS) >= CACHE_SIZE:
                 _BITMAPS.clear()
-            kept = _BITMAPS[key] = (buffer, left - whole_x, top - whole_y)
-        buffer, left, top = kept
+            kept = _BITMAPS[key] = (buffer, left - (place[0] >> 6), top - (place[1] >> 6))
+        placed.append((kept, place[0] >> 6, place[1] >> 6))
+    draw = renderer._renderer.draw_text_image
+    bottom = int(height)
+    for (buffer, left, top), whole_x, whole_y in placed:
         # draw_text_image's y is downwards, at the bitmap's bottom side
         draw(buffer, left + whole_x, bottom - (top + whole_y) + buffer.shape[0], 0, gc)
+    return True
 
 
 if hasattr(os, "register_at_fork"):

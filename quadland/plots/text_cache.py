@@ -9,8 +9,10 @@ measurement (``Text._get_layout``). A margin review draws about 380 texts
 measures them about 2,000 times.
 
 :class:`TextCacheRenderer` keeps both, by what they are computed from: the
-layout of a string by its fonts' files, size, resolution, hinting, features and
-whether the last-resort font is a fallback; the height metrics by the fonts' files,
+layout and the measurement (width, height, descent) of a string by its fonts' files
+as found on disk (:func:`text_key`), size, resolution, hinting, features and
+whether the last-resort font is a fallback (what :mod:`quadland.plots.text_store`
+writes for the next process); the height metrics by the fonts' files,
 size and resolution; a text's font files by its font properties and the rc parameters
 (:func:`font_paths`). Its glyphs are drawn by
 :func:`quadland.plots.glyph_cache.draw_glyphs`, each bitmap rendered once per sub-pixel
@@ -29,11 +31,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hi
 from matplotlib.font_manager import fontManager, get_font
 from matplotlib.ft2font import FT2Font
 
-from quadland.plots.font_memory import memory_font
+from quadland.plots.font_memory import file_identity, memory_font
 from quadland.plots.glyph_cache import available as glyphs_drawable
-from quadland.plots.glyph_cache import draw_glyphs
+from quadland.plots.glyph_cache import draw_glyphs, glyphs_of
 
-__all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE", "font_paths"]
+__all__ = ["TextCacheRenderer", "TextCacheCanvas", "CACHE_SIZE", "font_paths", "kept_texts"]
 
 #: Most layouts (and height metrics) kept; the cache is emptied when full.
 CACHE_SIZE = 4096
@@ -41,6 +43,17 @@ CACHE_SIZE = 4096
 _LAYOUTS: dict = {}
 _HEIGHTS: dict = {}
 _PATHS: dict = {}
+_MEASURES: dict = {}
+#: The measurements' keys whose every character is in the text's first font.
+_WHOLE: set = set()
+
+
+def kept_texts() -> tuple[dict, dict, set]:
+    """The layouts (:class:`~quadland.plots.glyph_cache.Glyph` tuples) and measurements
+    (width, height, descent) kept, by their texts' :func:`text_key`, and the keys of the
+    measurements whose every character is in the text's first font: read and written by
+    :mod:`quadland.plots.text_store`."""
+    return _LAYOUTS, _MEASURES, _WHOLE
 
 #: Whether this matplotlib draws text as the renderer below expects (3.11's Agg).
 _CACHEABLE = (hasattr(RendererAgg, "_draw_text_glyphs_and_boxes")
@@ -82,6 +95,17 @@ def _font_key(prop, dpi) -> tuple:
     paths = font_paths(prop)
     return (paths, prop.get_size_in_points(), dpi, mpl.rcParams["text.hinting_factor"],
             mpl.rcParams["text.kerning_factor"], mpl.rcParams["font.enable_last_resort"])
+
+
+def text_key(prop, dpi) -> tuple:
+    """What a text's layout and measurement depend on besides the string, the hinting and
+    the features: its fonts' files as another process finds them
+    (:func:`~quadland.plots.font_memory.file_identity`), size, resolution, hinting and
+    kerning factors and whether the last-resort font is a fallback."""
+    key = _font_key(prop, dpi)
+    files = tuple(file_identity(os.fspath(getattr(p, "path", p)), getattr(p, "face_index", 0))
+                  for p in key[0])
+    return (files, *key[1:])
 
 
 def _remember(cache: dict, key, value):
@@ -136,16 +160,36 @@ class TextCacheRenderer(RendererAgg):
         flags = get_hinting_flag()
         features = mtext.get_fontfeatures() if mtext is not None else None
         language = mtext.get_language() if mtext is not None else None
-        key = (_font_key(prop, self.dpi), s, flags,
+        key = (text_key(prop, self.dpi), s, flags,
                None if features is None else tuple(features),
                language if language is None or isinstance(language, str) else tuple(language))
-        items = _LAYOUTS.get(key)
-        if items is None:
+        size = prop.get_size_in_points()
+        glyphs = _LAYOUTS.get(key)
+        # a layout read back from another process has no fonts: laid out again where one
+        # of its glyphs has no kept bitmap
+        if glyphs is None or not draw_glyphs(self, gc, x, y, angle, glyphs, size, flags):
             font = self._prepare_font(prop)
-            items = _remember(_LAYOUTS, key, tuple(font._layout(
+            glyphs = _remember(_LAYOUTS, key, glyphs_of(font._layout(
                 s, flags=flags, features=features, language=language)))
-        draw_glyphs(self, gc, x, y, angle, items, prop.get_size_in_points(), flags)
+            draw_glyphs(self, gc, x, y, angle, glyphs, size, flags)
         return None
+
+    def get_text_width_height_descent(self, s, prop, ismath):
+        """As matplotlib's Agg renderer measures ``s``, a plain text's measurement kept by
+        its :func:`text_key`, string and hinting."""
+        if ismath is not False or not _CACHEABLE:
+            return super().get_text_width_height_descent(s, prop, ismath)
+        key = (text_key(prop, self.dpi), s, get_hinting_flag())
+        value = _MEASURES.get(key)
+        if value is None:
+            value = _remember(_MEASURES, key,
+                              tuple(super().get_text_width_height_descent(s, prop, ismath)))
+            font = self._prepare_font(prop)
+            if all(font.get_char_index(ord(c)) for c in s):
+                if len(_WHOLE) >= CACHE_SIZE:
+                    _WHOLE.clear()
+                _WHOLE.add(key)
+        return value
 
 
 class TextCacheCanvas(FigureCanvasAgg):
