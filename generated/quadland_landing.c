@@ -166,10 +166,11 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, crawl_gate_time, 35, 0) &&
     AT(ql_guidance_params, crawl_gate_floor, 36, 0) &&
     AT(ql_guidance_params, crawl_gate_wait, 37, 0) &&
-    AT(ql_guidance_params, calm_lean, 38, 0) &&
-    AT(ql_guidance_params, lean_time, 39, 0) &&
-    AT(ql_guidance_params, lean_withdraw, 40, 0) &&
-    sizeof(ql_guidance_params) == 41 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, crawl_gate_rise, 38, 0) &&
+    AT(ql_guidance_params, calm_lean, 39, 0) &&
+    AT(ql_guidance_params, lean_time, 40, 0) &&
+    AT(ql_guidance_params, lean_withdraw, 41, 0) &&
+    sizeof(ql_guidance_params) == 42 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -202,14 +203,14 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[41] = {
+static const ql_real default_p_guid[42] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
     3.141592653589793, 0.0, 0.0, 0.0, 0.0, 1000.0,
-    0.0, 1000.0, 1.5707963267948966, 1.0, 0.0,
+    0.0, 1000.0, 1000.0, 1.5707963267948966, 1.0, 0.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -490,6 +491,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   crawl_gate_time          >= 0
  *   crawl_gate_floor         >= 0
  *   crawl_gate_wait          >= 0
+ *   crawl_gate_rise          >= 0
  *   calm_lean                >= 0
  *   lean_time                > 0
  *   lean_withdraw            0 or 1
@@ -620,12 +622,15 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
         bad = "crawl_gate_wait";
     }
     if (!bad && !(isfinite(p[38]) && (p[38] >= 0.0))) {
+        bad = "crawl_gate_rise";
+    }
+    if (!bad && !(isfinite(p[39]) && (p[39] >= 0.0))) {
         bad = "calm_lean";
     }
-    if (!bad && !(isfinite(p[39]) && (p[39] > 0.0))) {
+    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0))) {
         bad = "lean_time";
     }
-    if (!bad && !(isfinite(p[40]) && ((p[40] == 0.0) || (p[40] == 1.0)))) {
+    if (!bad && !(isfinite(p[41]) && ((p[41] == 0.0) || (p[41] == 1.0)))) {
         bad = "lean_withdraw";
     }
     if (bad_field) {
@@ -704,7 +709,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 40 comparisons. The values are known to be finite; no names and no
+ * 41 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -747,8 +752,9 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[36] >= 0.0);
     ok &= (p[37] >= 0.0);
     ok &= (p[38] >= 0.0);
-    ok &= (p[39] > 0.0);
-    ok &= ((p[40] == 0.0) | (p[40] == 1.0));
+    ok &= (p[39] >= 0.0);
+    ok &= (p[40] > 0.0);
+    ok &= ((p[41] == 0.0) | (p[41] == 1.0));
     return ok;
 }
 
@@ -827,7 +833,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 41)
+          & all_finite((const ql_real *)params, 42)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

@@ -403,6 +403,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "crawl_gate_time": _NONNEGATIVE,
     "crawl_gate_floor": _NONNEGATIVE,
     "crawl_gate_wait": _NONNEGATIVE,
+    "crawl_gate_rise": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:
