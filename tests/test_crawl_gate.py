@@ -5,7 +5,8 @@ prediction". In the committed crawl the reference's fall pauses while ``|p_h + v
 lies farther than ``crawl_gate`` from the pad, ``t_go = min(h / touchdown_speed,
 crawl_gate_time)`` and ``h`` the reference's height above touchdown, above
 ``crawl_gate_floor``, for at most ``crawl_gate_wait`` in a crawl, and only while the deck's
-vertical speed at the pad is within ``crawl_gate_rise``; 0 (the default) is no gate. Checked here against predictions worked by hand on one guidance step, and that every
+vertical speed at the pad is within ``crawl_gate_rise``; 0 (the default) is no gate.
+Checked here against predictions worked by hand on one guidance step, and that every
 shipped scenario leaves the gate off.
 """
 
