@@ -4,8 +4,9 @@ docs/landing.md, "The offset at contact: the estimate's wander and a gate on its
 prediction". In the committed crawl the reference's fall pauses while ``|p_h + v_h t_go|``
 lies farther than ``crawl_gate`` from the pad, ``t_go = min(h / touchdown_speed,
 crawl_gate_time)`` and ``h`` the reference's height above touchdown, above
-``crawl_gate_floor``, for at most ``crawl_gate_wait`` in a crawl; 0 (the default) is no
-gate. Checked here against predictions worked by hand on one guidance step, and that every
+``crawl_gate_floor``, for at most ``crawl_gate_wait`` in a crawl, and only while the deck's
+vertical speed at the pad is within ``crawl_gate_rise``; 0 (the default) is no gate.
+Checked here against predictions worked by hand on one guidance step, and that every
 shipped scenario leaves the gate off.
 """
 
@@ -32,11 +33,12 @@ HC = 0.2          # m: the gear below the centre, the contact height on the leve
 H = 0.1           # m above the contact height: in the crawl (0.3 m/s x 1 s = 0.3 m)
 
 
-def _step(x, vx, timer=0.0, **keys):
+def _step(x, vx, timer=0.0, rise=0.0, **keys):
     """The reference height and phase after one committed crawl step from ``H`` above the
     contact height, the quadrotor on the reference ``x`` m ahead of the pad moving at ``vx``
     m/s along x (the horizontal speed within the align band's 0.25 m/s), the guidance's
-    timer at ``timer``; with ``full``, the timer after the step too."""
+    timer at ``timer``, the deck's vertical speed at the pad ``rise`` m/s (up); with
+    ``full``, the timer after the step too."""
     full = keys.pop("full", False)
     z_ref = HC + H
     xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=timer, z_ref=z_ref, aborts=0,
@@ -46,7 +48,7 @@ def _step(x, vx, timer=0.0, **keys):
     cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
     pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, **keys))
     xg_next, _ = (np.asarray(v, dtype=float).ravel() for v in guidance_function()(
-        xg, [x, 0.0, z_ref], [vx, 0.0, 0.0], 0.0, 0.0, cues, DT, pg))
+        xg, [x, 0.0, z_ref], [vx, 0.0, 0.0], rise, 0.0, cues, DT, pg))
     g = GUIDANCE_STATE.unpack(xg_next)
     return (g["z_ref"][0], g["phase"][0]) + ((g["timer"][0],) if full else ())
 
@@ -91,6 +93,23 @@ def test_the_gate_s_wait_counts_its_pauses_and_then_opens():
     z, phase, timer = _step(0.03, 0.09, timer=0.5, **keys)
     assert (z, phase) == FELL
     assert _step(0.03, 0.09, timer=0.2, full=True)[2] == 0.0
+
+
+def test_the_gate_waits_only_on_a_quiescent_deck():
+    """``crawl_gate_rise`` 0.2 m/s: on the 0.06 m prediction past a 0.05 m gate the crawl
+    holds while the deck's vertical speed at the pad is within 0.2 m/s either way (0, 0.15,
+    -0.15: the pause is also counted on the timer), and falls once it is past (0.25 up,
+    0.25 down; max_deck_rise 0.8 m/s: no withdrawal), the timer then held; the default
+    (1000 m/s) holds whatever the deck does. A prediction inside the gate falls on any deck."""
+    keys = dict(crawl_gate=0.05, crawl_gate_wait=0.5, crawl_gate_rise=0.2, full=True)
+    for rise in (0.0, 0.15, -0.15):
+        z, phase, timer = _step(0.03, 0.09, timer=0.2, rise=rise, **keys)
+        assert (z, phase) == HELD and timer == pytest.approx(0.2 + DT, abs=1e-12)
+    for rise in (0.25, -0.25):
+        z, phase, timer = _step(0.03, 0.09, timer=0.2, rise=rise, **keys)
+        assert (z, phase) == FELL and timer == pytest.approx(0.2, abs=1e-12)
+        assert _step(0.03, 0.09, rise=rise, crawl_gate=0.05) == HELD
+    assert _step(0.03, 0.0, rise=0.0, crawl_gate=0.05, crawl_gate_rise=0.2) == FELL
 
 
 def _touchdown_after_pauses(timer, n, **keys):
@@ -145,9 +164,10 @@ def test_the_shipped_scenarios_fly_without_the_gate(name):
     parameters carry (no gate, the whole time to contact, no floor)."""
     sc = load_scenario(name)
     assert (sc["landing.crawl_gate"], sc["landing.crawl_gate_time"],
-            sc["landing.crawl_gate_floor"], sc["landing.crawl_gate_wait"]) == (0.0, 1e3, 0.0, 1e3)
+            sc["landing.crawl_gate_floor"], sc["landing.crawl_gate_wait"],
+            sc["landing.crawl_gate_rise"]) == (0.0, 1e3, 0.0, 1e3, 1e3)
     v = landing_values(sc)
     p_guid = landing_loop_params(v.l).unpack(np.asarray(v.pc, dtype=float).ravel())["p_guid"]
     p = GUIDANCE_PARAMS.unpack(np.asarray(p_guid, dtype=float).ravel())
     assert (p["crawl_gate"][0], p["crawl_gate_time"][0], p["crawl_gate_floor"][0],
-            p["crawl_gate_wait"][0]) == (0.0, 1e3, 0.0, 1e3)
+            p["crawl_gate_wait"][0], p["crawl_gate_rise"][0]) == (0.0, 1e3, 0.0, 1e3, 1e3)

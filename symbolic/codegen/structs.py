@@ -404,6 +404,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "crawl_gate_floor": _NONNEGATIVE,
     "crawl_gate_wait": _NONNEGATIVE,
     "abort_floor": _FINITE,
+    "crawl_gate_rise": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

@@ -17,7 +17,7 @@ import casadi as ca
 __all__ = ["crawl_timer_next", "fall_band", "gate_holds"]
 
 
-def gate_holds(p_e, v_e, h, timer, p):
+def gate_holds(p_e, v_e, h, timer, deck_rise, p):
     """Whether the crawl may fall on under ``crawl_gate``: the horizontal offset predicted at
     the contact, ``p_e + v_e t_go`` with ``t_go = max(h, 0) / touchdown_speed`` the crawl's
     time left (``h`` the reference's height above touchdown) but at most ``crawl_gate_time``
@@ -26,12 +26,15 @@ def gate_holds(p_e, v_e, h, timer, p):
     ``crawl_gate`` 0, at or below ``crawl_gate_floor`` (a pause within centimetres of the
     deck reads as a touchdown to the land detector) and once the gate has held this crawl for
     ``crawl_gate_wait`` (``timer``, :func:`crawl_timer_next`: a quadrotor that wanders on near the
-    deck in strong turbulence would otherwise pause until it aborts)."""
+    deck in strong turbulence would otherwise pause until it aborts); and while the deck's
+    vertical speed at the pad, ``|deck_rise|``, exceeds ``crawl_gate_rise`` (the gate waits
+    only on a quiescent deck: a pause over a heaving one is met by the deck, or withdrawn)."""
     t_go = ca.fmin(ca.fmax(h, 0) / p["touchdown_speed"], p["crawl_gate_time"])
     predicted = ca.norm_2(p_e[0:2] + v_e[0:2] * t_go)
-    return ca.logic_or(ca.logic_or(ca.logic_or(p["crawl_gate"] <= 0, h <= p["crawl_gate_floor"]),
-                                   timer >= p["crawl_gate_wait"]),
-                       predicted <= p["crawl_gate"])
+    off = ca.logic_or(ca.logic_or(p["crawl_gate"] <= 0, h <= p["crawl_gate_floor"]),
+                      ca.logic_or(timer >= p["crawl_gate_wait"],
+                                  ca.fabs(deck_rise) > p["crawl_gate_rise"]))
+    return ca.logic_or(off, predicted <= p["crawl_gate"])
 
 
 def fall_band(in_band, crawl, gate, p):

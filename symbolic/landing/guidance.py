@@ -32,7 +32,8 @@ averages. Phases (:data:`PHASES`):
    ``crawl_gate`` the crawl also pauses while the horizontal offset predicted at the
    contact, ``p_e + v_e min(h / touchdown_speed, crawl_gate_time)`` (``h`` the reference's
    height above touchdown, 0 below it), lies farther than ``crawl_gate`` from the pad
-   (:func:`~quadland_symbolic.landing.crawl_gate.gate_holds`).
+   (:func:`~quadland_symbolic.landing.crawl_gate.gate_holds`), and with ``crawl_gate_rise``
+   only while the deck's vertical speed at the pad is within it.
    The heights above touchdown count from ``touchdown_height + contact_drop``
    (:func:`contact_height`: where a body leaning into the airflow meets the deck);
 3. **touchdown**: entered from the descent when the flight stack reports
@@ -228,6 +229,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
     Field("crawl_gate_wait", 1, "s", "the longest time crawl_gate holds a crawl: after it the "
           "crawl falls on"),
+    Field("crawl_gate_rise", 1, "m/s", "crawl_gate holds the crawl only while the deck's "
+          "vertical speed at the pad is within this (a quiescent deck)"),
     Field("calm_lean", 1, "rad", "largest lean of the body z axis from the vertical, "
           "averaged over lean_time, at which the final descent commits (pi/2: no limit)"),
     Field("lean_time", 1, "s", "time constant of the lean's average for calm_lean"),
@@ -446,7 +449,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), out_of_limits(
         offset, speed, p_e[2] - contact_height(p), p))
-    gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, p)
+    gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, deck_rise, p)
     timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
         ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
         ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
