@@ -32,9 +32,8 @@ import numpy as np
 from quadland.engine.direct_call import DirectCall
 from quadland.kinds.landing.sensing import BLOCK, SensorDraws, sensor_seed
 from quadland.kinds.landing.sensor_settings import sensor_params
-from quadland.kinds.landing.values import LandingValues, deck_pose_values
+from quadland.kinds.landing.values import LandingValues, deck_pose_values, rotation_values
 from quadland.scenario import Scenario
-from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.estimator import (
     FLIGHT_COUPLING,
     FLIGHT_DEPTH,
@@ -114,7 +113,7 @@ def handover(scenario: Scenario, lv: LandingValues,
     dense = [np.asarray(v, dtype=float).ravel() for v in (deck.p2, deck.v2E, deck.a2E,
                                                           deck.eta2, deck.w2E, deck.w2E_dot)]
     p2, v2, a2, eta2, w2, w2_dot = dense
-    v1 = np.asarray(rotation(q["eta1"]), dtype=float) @ q["V1"]
+    v1 = rotation_values(q["eta1"]) @ q["V1"]
     truth = NAV.pack(dict(p_r=q["p1"] - p2, v1=v1, v_t=v2, a_t=a2, b=np.zeros(3),
                           a_b=np.zeros(3), a_tilt=np.zeros(3)))
     sigma = np.concatenate([np.asarray(e[k], dtype=float) for k in _P0_KEYS])
