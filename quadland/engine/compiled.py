@@ -174,8 +174,8 @@ class CompiledLoop:
         m = self.model
         out, dist = clocks
         x0, W, p, bound = as_f64(x0), as_f64(W), as_f64(p), envelope_bounds(m, bound)
-        rows = len(out.times())
-        assert W.shape == (len(dist.times()), m.disturbance.size)
+        rows = out.count()
+        assert W.shape == (dist.count(), m.disturbance.size)
         X = row_buffer(rows, m.state.size)
         times, w_index = np.zeros(rows), np.zeros(rows, dtype=np.int_)
         x_end, env = np.empty(m.state.size), np.full(max(bound.size, 1), np.nan)
@@ -215,8 +215,8 @@ class CompiledLoop:
         xp0, xc0, W, pp, pc = (as_f64(a) for a in (xp0, xc0, W, pp, pc))
         bound = envelope_bounds(m, bound)
         uh0 = np.zeros(m.held.size) if uh0 is None else as_f64(uh0)
-        rows = len(out.times())
-        assert W.shape == (len(dist.times()), m.disturbance.size)
+        rows = out.count()
+        assert W.shape == (dist.count(), m.disturbance.size)
         # each row the driver returns is written whole (simulator.c.jinja's memcpy of x, rv)
         X = row_buffer(rows, m.state.size, zeroed=False)
         R = row_buffer(rows, m.recorded.size, zeroed=False)

@@ -232,7 +232,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     pc, xc0, N = lv.pc, lv.xc0, None
     if sensed:
         pc, xc0 = sensed_vectors(scenario, lv)
-        N = TickTable(scenario, len(clocks[2].times()))
+        N = TickTable(scenario, clocks[2].count())
     pc_layout = (sensed_loop_params if sensed else landing_loop_params)(lv.l)
     loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed, welded,
                              flat_deck(lv.pp, pc, pc_layout))
