@@ -210,3 +210,32 @@ def test_the_stiffest_rate_on_numbers_is_its_dm_evaluation_bit_for_bit():
             g = pg * np.exp(rng.normal(0.0, 0.3, pg.shape))
             assert _same(np.asarray(float(stiffest_rate(q, g))),
                          np.asarray(stiffest_rate_value(q, g))), name
+
+
+def test_a_direct_call_shared_by_threads_gives_each_its_own_results():
+    """A Dask worker flies runs in threads of one process: eight threads calling one
+    ``DirectCall`` of the deck's pose, 200 calls each on their own arguments, each
+    result the DM call's."""
+    import threading
+
+    f = deck_function()
+    call, rng = DirectCall(f), np.random.default_rng(23)
+    cases = [_random_args(f, rng, 1.0) for _ in range(40)]
+    for args in cases:
+        args[3] = np.abs(args[3]) + DECK_PARAMS.zeros()
+    expected = [_dm(f, args) for args in cases]
+    wrong = []
+
+    def work(k):
+        for j in range(200):
+            i = (7 * j + k) % len(cases)
+            got = call(*cases[i])
+            if not all(_same(e, g) for e, g in zip(expected[i], got, strict=True)):
+                wrong.append(i)
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert wrong == []

@@ -14,6 +14,8 @@ on the same doubles), so the numbers are the same bits as the ``DM`` call's
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 __all__ = ["DirectCall"]
@@ -34,8 +36,8 @@ class DirectCall:
     has entries: a vector's (a flat array, a list, a column or a row), a scalar's, or a
     matrix of the input's shape (read in column order, as ``casadi.DM`` of it would be).
     A result is a ``(rows, columns)`` array, as ``numpy.asarray`` of the ``DM`` result.
-    The function's buffer is this object's: one call at a time (a process's own, as the
-    functions it wraps are built per process).
+    The function's buffer is this object's: its calls take turns under a lock (a Dask
+    worker flies runs in threads of one process).
     """
 
     def __init__(self, f):
@@ -49,6 +51,7 @@ class DirectCall:
         self._in = tuple((f.size1_in(i), f.size2_in(i)) for i in range(f.n_in()))
         self._out = tuple((f.size1_out(i), f.size2_out(i)) for i in range(f.n_out()))
         self._buffer, self._eval = f.buffer()
+        self._lock = threading.Lock()
 
     def __call__(self, *args) -> tuple[np.ndarray, ...]:
         if len(args) != len(self._in):
@@ -62,13 +65,15 @@ class DirectCall:
                 raise ValueError(f"{self.function.name()}: input {self.function.name_in(i)} "
                                  f"has {shape[0]}x{shape[1]} entries, got an array of "
                                  f"shape {a.shape}")
-            flat = np.ascontiguousarray(flat)
-            keep.append(flat)
-            self._buffer.set_arg(i, memoryview(flat))
+            keep.append(np.ascontiguousarray(flat))
         out = tuple(np.empty(s2 * s1) for s1, s2 in self._out)
-        for i, o in enumerate(out):
-            self._buffer.set_res(i, memoryview(o))
-        self._eval()
-        if self._buffer.ret():                      # as the DM call's "Evaluation failed"
+        with self._lock:
+            for i, a in enumerate(keep):
+                self._buffer.set_arg(i, memoryview(a))
+            for i, o in enumerate(out):
+                self._buffer.set_res(i, memoryview(o))
+            self._eval()
+            failed = self._buffer.ret()
+        if failed:                                  # as the DM call's "Evaluation failed"
             raise RuntimeError(f"{self.function.name()}: evaluation failed")
         return tuple(o.reshape(s2, s1).T for o, (s1, s2) in zip(out, self._out, strict=True))
