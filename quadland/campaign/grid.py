@@ -34,6 +34,7 @@ from quadland.campaign.cluster import (
     disconnect,
     quiet_cluster_logs,
 )
+from quadland.campaign.dispersed import dispersed
 from quadland.campaign.execute import CampaignInterrupted
 from quadland.campaign.fly import warm_up
 from quadland.campaign.journal import CampaignFolder, new_folder
@@ -166,9 +167,9 @@ def plan_envelope(scenario, overrides, axes: Sequence[str], runs_per_cell: int |
     k = spec.runs if runs_per_cell is None else runs_per_cell
     if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_RUNS_PER_CELL:
         raise CampaignError(f"runs_per_cell: must be in [1, {MAX_RUNS_PER_CELL}], got {k}")
-    dispersed = {t.key for d in spec.dispersions for t in d.targets}
+    drawn = {t.key for d in spec.dispersions for t in d.targets}
     for key in hold:
-        if key not in dispersed:
+        if key not in drawn:
             raise CampaignError(f"hold: {key} is not dispersed by the scenario's [campaign]")
     if polar and sum(a.angle for a in parsed) != 1:
         raise CampaignError("polar: needs exactly one axis of angles in degrees (a key "
@@ -178,9 +179,11 @@ def plan_envelope(scenario, overrides, axes: Sequence[str], runs_per_cell: int |
     if env.runs > MAX_RUNS:
         raise CampaignError(f"runs_per_cell: {len(env.cells)} cells of {k} runs make "
                             f"{env.runs} runs, over the {MAX_RUNS} a campaign may fly")
-    for cell in env.cells:                      # every cell's nominal scenario is valid
+    # every cell's nominal scenario is valid: checked as far as the cell changes it
+    # (``dispersed``: the refusal ``replace`` gives, a tenth of its time; 400 cells 0.6 s)
+    for cell in env.cells:
         try:
-            base.replace(**apply_cell({}, parsed, cell, base.data, spec, env.hold))
+            dispersed(base, apply_cell({}, parsed, cell, base.data, spec, env.hold))
         except ScenarioError as exc:
             where = ", ".join(f"{a.name} = {v:g}" for a, v in zip(parsed, cell, strict=True))
             raise CampaignError(f"axis: the cell {where} is no valid scenario: {exc}") \

@@ -68,11 +68,21 @@ class Clock:
             return regular, regular if self.closing else regular - 1
         return regular, regular + (1 if self.closing else 0)
 
+    def count(self) -> int:
+        """How many ticks: ``len(self.times())``, without them."""
+        return self._counts()[1]
+
     def times(self) -> np.ndarray:
-        """Every tick's time, s (``quadland_loop.h``'s ``qll_clock_time``)."""
-        regular, count = self._counts()
-        k = np.arange(count)
-        return np.where(k < regular, self.phase + self.h * k, self.T)
+        """Every tick's time, s (``quadland_loop.h``'s ``qll_clock_time``); read-only, computed
+        once per clock (a landing's run reads its 4,001 disturbance ticks five times)."""
+        kept = self.__dict__.get("_times")
+        if kept is None:
+            regular, count = self._counts()
+            k = np.arange(count)
+            kept = np.where(k < regular, self.phase + self.h * k, self.T)
+            kept.flags.writeable = False
+            object.__setattr__(self, "_times", kept)
+        return kept
 
     def table(self) -> tuple[float, float, float]:
         """``(rate, phase, closing)``: the row of the C drivers' clock table."""
@@ -81,7 +91,7 @@ class Clock:
 
 def grid_tolerance(clocks) -> float:
     """The merge tolerance: :data:`GRID_TOL` of the shortest period of a clock that ticks twice."""
-    periods = [c.h for c in clocks if len(c.times()) > 1]
+    periods = [c.h for c in clocks if c.count() > 1]
     return GRID_TOL * (min(periods) if periods else 1.0)
 
 

@@ -39,8 +39,11 @@ _HUGEPAGE_SWITCH = _hugepage_switch()
 _HUGEPAGE_LOCK = threading.Lock()
 
 
-def row_buffer(rows: int, width: int) -> np.ndarray:
-    """A zeroed ``(rows, width)`` array of doubles for a driver to fill, in small pages.
+def row_buffer(rows: int, width: int, zeroed: bool = True) -> np.ndarray:
+    """A ``(rows, width)`` array of doubles for a driver to fill, in small pages: zeroed,
+    or (``zeroed=False``) as the allocator gives it, for a driver that writes each row it
+    returns whole (the sampled driver's rows of states and recorded signals: the rows past
+    those it returns are never read).
 
     NumPy advises the kernel to back arrays of 4 MiB and more with 2 MiB pages
     (``madvise(MADV_HUGEPAGE)``). A run's rows are written once, front to back;
@@ -50,14 +53,18 @@ def row_buffer(rows: int, width: int) -> np.ndarray:
     the host backs each fresh huge page), against 7 ms in 4 KiB pages. The
     paper's 60 s run writes 20 MiB of states, so this alone took a warm run
     from 53 to 93 ms. NumPy's switch is process-wide: it is turned off only
-    while this array is allocated, under a lock.
+    while this array is allocated, under a lock. Where a process keeps the memory its
+    runs free (:func:`quadland.engine.heap.keep_freed_memory`), zeroing is the buffer's
+    whole cost: a 40 s landing's 10 MB of rows written over by the C library's
+    ``memset`` before the driver writes the rows it needs (issue 20).
     """
+    make = np.zeros if zeroed else np.empty
     if _HUGEPAGE_SWITCH is None:
-        return np.zeros((rows, width))
+        return make((rows, width))
     with _HUGEPAGE_LOCK:
         before = _HUGEPAGE_SWITCH(False)
         try:
-            return np.zeros((rows, width))
+            return make((rows, width))
         finally:
             _HUGEPAGE_SWITCH(before)
 

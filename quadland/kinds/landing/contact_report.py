@@ -46,6 +46,7 @@ import functools
 
 import numpy as np
 
+from quadland.engine.direct_call import DirectCall
 from quadland.kinds.landing.gear import gear_span
 from quadland_symbolic.landing.contact import N_FEET
 from quadland_symbolic.landing.flat_deck import amplitude_indices, flat_function
@@ -79,7 +80,7 @@ def gear_columns(pp, times, X, touched, W) -> dict[str, np.ndarray]:
     n = -(-rows.size // MAP_BUCKET) * MAP_BUCKET     # a map of few sizes (each column its own)
     pad = n - rows.size
     xp, w, t = (np.concatenate([a, np.repeat(a[-1:], pad, axis=0)]) for a in (xp, w, t))
-    s = np.asarray(_mapped(n, flat)(xp.T, w.T, t[None, :], pp), dtype=float)[:, :rows.size]
+    s = _mapped(n, flat)(xp.T, w.T, t[None, :], pp)[0][:, :rows.size]
     xp = xp[:rows.size]
     for name in GEAR_SIGNALS.names():
         cols[name][rows] = s[GEAR_SIGNALS.slice(name)][0]
@@ -99,9 +100,11 @@ def _mapped(n: int, flat: bool):
     """The gear's signals at ``n`` rows; ``flat``: on a deck whose sinusoids' amplitudes
     are all zero, without their sums (the same bits, ``tests/test_flat_deck.py``). The
     plant's parameters ``pp`` are one column for every row (``reduce_in``): CasADi
-    tiled them to ``n`` columns on each call, a third of the call's time."""
+    tiled them to ``n`` columns on each call, a third of the call's time. Called on the
+    rows' arrays in place (:class:`~quadland.engine.direct_call.DirectCall`: CasADi's
+    conversions were two thirds of what remained)."""
     f = flat_gear_signals() if flat else landing_gear_signals_function()
-    return f.map(n, [name == "pp" for name in f.name_in()], [False] * f.n_out())
+    return DirectCall(f.map(n, [name == "pp" for name in f.name_in()], [False] * f.n_out()))
 
 
 @functools.cache

@@ -12,12 +12,12 @@ from quadland_symbolic.landing.contact import (
     LOCK,
     RK4_REAL_STABILITY,
     lock_defaults,
-    stiffest_rate,
 )
 from quadland_symbolic.landing.gear import PEAK_RATE, TOUCHDOWN_POLICY
+from quadland_symbolic.parameters import QUADROTOR
 
 __all__ = ["gear_params", "lock_params", "policy_params", "touchdown_guidance", "contact_step",
-           "STEP_MARGIN", "FREE_GAP_WIDTHS", "free_flight_gap", "gear_span"]
+           "stiffest_rate_value", "STEP_MARGIN", "FREE_GAP_WIDTHS", "free_flight_gap", "gear_span"]
 
 #: RK4's step on the deck is this fraction of its stability edge on the stiffest mode
 #: (docs/contact.md: 5 steps per 4 ms for the default gear, ``h lambda = 2.0``).
@@ -98,9 +98,33 @@ def touchdown_guidance(scenario: Scenario) -> dict:
 def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
     """The longest RK4 step on the deck, s: :data:`STEP_MARGIN` of RK4's stability edge
     on the gear's stiffest mode (``stiffest_rate``) and the peak follower's rate."""
-    rate = max(float(stiffest_rate(p_quad, gear_params(scenario))),
-               PEAK_RATE)
+    rate = max(stiffest_rate_value(p_quad, gear_params(scenario)), PEAK_RATE)
     return STEP_MARGIN * RK4_REAL_STABILITY / rate
+
+
+def stiffest_rate_value(p_quad, p_gear) -> float:
+    """:func:`~quadland_symbolic.landing.contact.stiffest_rate` on numbers: the same
+    operations in the same order as its ``casadi.DM`` evaluation (the sums over the feet
+    from zero, the squares by the C library's ``pow``), so the same bits
+    (``tests/test_run_python.py``), in a fiftieth of its time (0.25 ms a landing)."""
+    p = QUADROTOR.unpack(np.asarray(p_quad, dtype=float).ravel())
+    g = GEAR.unpack(np.asarray(p_gear, dtype=float).ravel())
+    r, b, k = g["r_feet"], float(g["b_slip"][0]), float(g["k"][0])
+    m1, (Ix, Iy, Iz) = float(p["m1"][0]), (float(v) for v in p["I"])
+    n = r.shape[1]
+
+    def total(values):
+        out = 0.0
+        for v in values:
+            out += float(v)
+        return out
+
+    # ``** 2`` is the C library's pow, as CasADi's (not always x * x in the last bit)
+    x2, y2 = total(x ** 2 for x in r[0].tolist()), total(y ** 2 for y in r[1].tolist())
+    h_cg = -total(r[2].tolist()) / n
+    I_rock = min(Ix, Iy)
+    return max(n * b * (1 / m1 + h_cg ** 2 / I_rock), b * (x2 + y2) / Iz,
+               math.sqrt(n * k / m1), math.sqrt(k * max(x2 / Iy, y2 / Ix)))
 
 
 def free_flight_gap(scenario: Scenario) -> float:

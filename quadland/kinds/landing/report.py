@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
+import weakref
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
+from quadland.engine.direct_call import DirectCall
 from quadland.engine.result import SimulationResult
 from quadland.kinds.landing.contact_report import FAILURES, contact_figures
 from quadland.kinds.landing.values import rotor_force_max
@@ -147,9 +150,9 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
     def row(*names):
         return [float(result[n][k]) for n in names]
 
-    figures = np.asarray(touchdown_figures_function()(
+    figures = _touchdown_figures()(
         row("x_e", "y_e", "z_e"), row("dx_e", "dy_e", "dz_e"), row("phi1", "theta1", "psi1"),
-        row("phi2", "theta2", "psi2")), dtype=float).ravel()
+        row("phi2", "theta2", "psi2"))[0].ravel()
     f = {name: float(v) for name, v in zip(TOUCHDOWN_FIGURES.names(), figures, strict=True)}
     failures = [n for n in TOUCHDOWN_FIGURES.names() if not f[n] <= limits["max_" + n]]
     gear = {}
@@ -161,6 +164,28 @@ def touchdown_report(result: SimulationResult) -> TouchdownReport:
     return TouchdownReport(True, float(result["t"][k]), f["sink_rate"], f["offset"],
                            f["relative_speed"], f["tilt_deg"], int(result["aborts"][k]),
                            not failures, limits, **gear, failures=failures)
+
+
+@functools.cache
+def _touchdown_figures() -> DirectCall:
+    """``touchdown_figures`` on the row's numbers in place (no CasADi matrices)."""
+    return DirectCall(touchdown_figures_function())
+
+
+#: The last result :func:`_report` judged (a weak reference) and its report.
+_LAST: tuple = (None, None)
+
+
+def _report(result: SimulationResult) -> TouchdownReport:
+    """``touchdown_report(result)``, shared by this module's readers of one result (a
+    result is read-only): a campaign run's metrics, its false touchdown and its gear's
+    failures read one report, not three. None of them changes it."""
+    global _LAST
+    ref, report = _LAST
+    if ref is None or ref() is not result:
+        report = touchdown_report(result)
+        _LAST = (weakref.ref(result), report)
+    return report
 
 
 def landing_summary(result: SimulationResult) -> dict:
@@ -178,7 +203,7 @@ def landing_summary(result: SimulationResult) -> dict:
     for number, name in enumerate(PHASES):
         rows = np.flatnonzero(result["phase"] == number)
         phases[name] = float(t[rows[0]]) if rows.size else None
-    report = touchdown_report(result)
+    report = _report(result)
     if report.secured is not None:
         phases["landed"] = float(t[-1]) if report.secured else None
     rotors = np.vstack([result[f"F_{i}"] for i in range(1, 5)])
@@ -198,7 +223,7 @@ def false_touchdown(result: SimulationResult) -> float | None:
     The simulator's own touchdown is the gap's zero crossing: its row and the ride after
     it are the touchdown phase by construction, so only rows before it can be false.
     """
-    report = touchdown_report(result)
+    report = _report(result)
     flying = result["t"] < report.time if report.touchdown else np.ones(len(result["t"]), bool)
     early = np.flatnonzero(flying & (result["phase"] >= TOUCHDOWN))
     return float(result["gear_gap"][early[0]]) if early.size else None
@@ -214,7 +239,7 @@ def navigation_summary(result: SimulationResult) -> dict:
     miss it, E12 and E12a), and each sensor's discarded and dropped packets (the filter's
     counters at the end of the flight); the false touchdown (:func:`false_touchdown`).
     """
-    report = touchdown_report(result)
+    report = _report(result)
     t = result["t"]
     rows = np.flatnonzero(t <= report.time) if report.touchdown else np.arange(len(t))
     err = {}
@@ -277,7 +302,7 @@ GEAR_METRICS = ("peak_gear_force", "bounce", "impact_energy", "secured", "tipped
 
 def landing_run_metrics(result) -> dict[str, float | None]:
     """A finished landing's metrics, by name (None where undefined)."""
-    report = touchdown_report(result)
+    report = _report(result)
     rotors = np.vstack([result[f"F_{i}"] for i in range(1, 5)])
     return {"sink_rate": report.sink_rate, "offset": report.offset,
             "relative_speed": report.relative_speed, "tilt_deg": report.tilt_deg,
@@ -295,7 +320,7 @@ def gear_violations(result, metrics: Mapping[str, float | None]) -> list[str]:
     pad, not secured: the bounce and the gear load are limited metrics)."""
     if metrics.get("secured") is None:
         return []
-    return [f for f in touchdown_report(result).failures
+    return [f for f in _report(result).failures
             if f in FAILURES and f not in ("bounced", "gear load")]
 
 

@@ -25,14 +25,15 @@ filter's initial estimate is the truth (its initial covariance unchanged).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
+from quadland.engine.direct_call import DirectCall
 from quadland.kinds.landing.sensing import BLOCK, SensorDraws, sensor_seed
 from quadland.kinds.landing.sensor_settings import sensor_params
-from quadland.kinds.landing.values import LandingValues
+from quadland.kinds.landing.values import LandingValues, deck_pose_values, rotation_values
 from quadland.scenario import Scenario
-from quadland_symbolic.kinematics import rotation
-from quadland_symbolic.landing.deck import deck_pose
 from quadland_symbolic.landing.estimator import (
     FLIGHT_COUPLING,
     FLIGHT_DEPTH,
@@ -113,11 +114,11 @@ def handover(scenario: Scenario, lv: LandingValues,
     xs = LANDING_PLANT_STATE.unpack(lv.xp0)
     p = LANDING_PLANT_PARAMS.unpack(lv.pp)
     q = QUAD6_STATE.unpack(xs["x1q"])
-    deck = deck_pose(xs["xv"], 0.0, p["p_veh"], p["p_deck"])
+    deck = deck_pose_values(xs["xv"], 0.0, p["p_veh"], p["p_deck"])
     dense = [np.asarray(v, dtype=float).ravel() for v in (deck.p2, deck.v2E, deck.a2E,
                                                           deck.eta2, deck.w2E, deck.w2E_dot)]
     p2, v2, a2, eta2, w2, w2_dot = dense
-    v1 = np.asarray(rotation(q["eta1"]), dtype=float) @ q["V1"]
+    v1 = rotation_values(q["eta1"]) @ q["V1"]
     truth = NAV.pack(dict(p_r=q["p1"] - p2, v1=v1, v_t=v2, a_t=a2, b=np.zeros(3),
                           a_b=np.zeros(3), a_tilt=np.zeros(3)))
     sigma = np.concatenate([np.asarray(e[k], dtype=float) for k in _P0_KEYS])
@@ -150,14 +151,19 @@ def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, n
     # and the hover point starts at the handover's estimated height when that is higher
     # (no descent on a height only GNSS knows: the guidance's "The marker")
     x0, P0_diag, deck0 = handover(scenario, lv)
-    nav = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)(x0, P0_diag, deck0, 0.0)
-    nav = np.asarray(nav, dtype=float).ravel()
+    nav = _estimator_init()(x0, P0_diag, deck0, 0.0)[0].ravel()
     xg = GUIDANCE_STATE.unpack(base_xc["xg"])
     xg["z_ref"] = np.maximum(xg["z_ref"], NAV.unpack(x0)["p_r"][2])
     xc0 = lay.pack(dict(xg=GUIDANCE_STATE.pack(xg), mem=base_xc["mem"], nav=nav,
                         imu_held=hover, xld=LAND_DETECTOR_STATE.zeros(), marker_age=TIME_CAP,
                         **lines))
     return pc, xc0
+
+
+@functools.cache
+def _estimator_init() -> DirectCall:
+    """The filter's initial memory on numbers in place (no CasADi matrices)."""
+    return DirectCall(estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING))
 
 
 def imu_at_rest(xp0, g: float) -> np.ndarray:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from quadland.constants import TILT_MIN
+from quadland.engine.columns import columns_of
 from quadland.engine.compiled import (
     SIM_CONTROLLER,
     SIM_ENVELOPE,
@@ -231,7 +232,7 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     pc, xc0, N = lv.pc, lv.xc0, None
     if sensed:
         pc, xc0 = sensed_vectors(scenario, lv)
-        N = TickTable(scenario, len(clocks[2].times()))
+        N = TickTable(scenario, clocks[2].count())
     pc_layout = (sensed_loop_params if sensed else landing_loop_params)(lv.l)
     loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed, welded,
                              flat_deck(lv.pp, pc, pc_layout))
@@ -287,8 +288,10 @@ def _first_contact(run, loop, clocks, w_dist, lv, envelope):
         y_ev = loop.outputs(run.x_event[None, :], w_dist[:, [i_w]].T, np.array([t_ev]), lv.pp)
         R_ev = R[k - 1] if k > 0 else np.zeros(loop.model.recorded.size)
         times = np.insert(times, k, t_ev)
-        X, R, Y = (np.insert(a, k, v, axis=0) for a, v in ((X, run.x_event), (R, R_ev),
-                                                            (Y, y_ev[0])))
+        X = np.insert(X, k, run.x_event, axis=0)
+        # the recorded and output signals' columns with the contact's row, in one copy each
+        # (the rows are views of them; the result's columns are their rows as they are)
+        R, Y = (columns_of(a, k, v).T for a, v in ((R, R_ev), (Y, y_ev[0])))
         if run.status in (SIM_GUARD, SIM_ENVELOPE):
             return times, X, R, Y, None, None
     if run.status == SIM_OK:
@@ -378,12 +381,10 @@ def _result(scenario, times, X, R, Y, recorded=LANDING_RECORDED,
     signals (:func:`quadland.kinds.landing.contact_report.gear_columns`, under the
     disturbance ``held`` at each row)."""
     cols = {"t": times}
-    # one transposed copy each: its rows are the columns, contiguous (a copy per column
-    # was 280 small copies a landing)
-    cols.update(zip(LANDING_SIGNALS.element_names(), np.ascontiguousarray(Y.T, dtype=float),
-                    strict=True))
-    cols.update(zip(recorded.element_names(), np.ascontiguousarray(R.T, dtype=float),
-                    strict=True))
+    # one transposed copy each (none where the rows are already views of their columns):
+    # its rows are the columns, contiguous (a copy per column was 280 small copies a landing)
+    cols.update(zip(LANDING_SIGNALS.element_names(), columns_of(Y), strict=True))
+    cols.update(zip(recorded.element_names(), columns_of(R), strict=True))
     if touched is not None:
         cols["touched"] = touched
         cols.update(gear_columns(pp, times, X, touched, held))

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
+import math
 
 import numpy as np
 
+from quadland.engine.direct_call import DirectCall
 from quadland.engine.disturbance import disturbance_samples
 from quadland.engine.loop import Clock
 from quadland.engine.wind import (
@@ -17,9 +20,14 @@ from quadland.engine.wind import (
 from quadland.kinds.landing.gear import gear_params, lock_params, policy_params, touchdown_guidance
 from quadland.kinds.landing.sea import deck_components
 from quadland.scenario import Scenario, require_model
-from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import landing_controller_params, landing_memory
-from quadland_symbolic.landing.deck import DECK_PARAMS, N_DECK, N_SEA, deck_pose
+from quadland_symbolic.landing.deck import (
+    DECK_PARAMS,
+    N_DECK,
+    N_SEA,
+    DeckPose,
+    deck_function,
+)
 from quadland_symbolic.landing.drive import pack_drive
 from quadland_symbolic.landing.guidance import APPROACH, GUIDANCE_PARAMS, GUIDANCE_STATE
 from quadland_symbolic.landing.loop import (
@@ -32,8 +40,9 @@ from quadland_symbolic.landing.quadrotor import ACTUATOR, QUAD6_STATE
 from quadland_symbolic.parameters import QUADROTOR, VEHICLE
 from quadland_symbolic.vehicle import VEHICLE_STATE
 
-__all__ = ["LandingValues", "rotor_force_max", "deck_params", "landing_values", "landing_clocks",
-           "wind_samples", "landing_disturbance"]
+__all__ = ["LandingValues", "rotor_force_max", "deck_params", "deck_pose_values",
+           "rotation_values", "landing_values", "landing_clocks", "wind_samples",
+           "landing_disturbance"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,6 +100,40 @@ def deck_params(scenario: Scenario) -> np.ndarray:
                        v["profile_lane_offset"], scenario.data["initial"]["velocity2"][0])
     return DECK_PARAMS.pack(dict(deck, pad_offset=dk["pad_offset"], deck_height=dk["height"],
                                  drive=drive))
+
+
+@functools.cache
+def _deck_call() -> DirectCall:
+    return DirectCall(deck_function())
+
+
+def deck_pose_values(xv, t: float, p_veh, p_deck) -> DeckPose:
+    """:func:`~quadland_symbolic.landing.deck.deck_pose` on numbers, each field an array
+    (``numpy.asarray`` of the ``casadi.DM`` it gives, the same bits), evaluated on the
+    arguments in place (:class:`~quadland.engine.direct_call.DirectCall`)."""
+    return DeckPose(*_deck_call()(xv, t, p_veh, p_deck))
+
+
+def _product(a, b) -> list[list[float]]:
+    """``a @ b`` of 3 x 3 lists as CasADi's dense ``mtimes`` sums it: each entry from
+    ``0.0`` plus the products in the order of the inner index."""
+    return [[((0.0 + a[i][0] * b[0][j]) + a[i][1] * b[1][j]) + a[i][2] * b[2][j]
+             for j in range(3)] for i in range(3)]
+
+
+def rotation_values(eta) -> np.ndarray:
+    """:func:`~quadland_symbolic.kinematics.rotation` on numbers, ``(3, 3)``: the same
+    sines, cosines, products and sums as its ``casadi.DM`` evaluation (the C library's
+    ``sin`` and ``cos``, ``Rz @ Ry @ Rx`` summed as CasADi does, with the explicit zeros),
+    so the same bits (``tests/test_run_python.py``), in a thirtieth of its time."""
+    phi, theta, psi = float(eta[0]), float(eta[1]), float(eta[2])
+    cf, sf = math.cos(phi), math.sin(phi)
+    ct, st = math.cos(theta), math.sin(theta)
+    cp, sp = math.cos(psi), math.sin(psi)
+    Rx = [[1.0, 0.0, 0.0], [0.0, cf, -sf], [0.0, sf, cf]]
+    Ry = [[ct, 0.0, st], [0.0, 1.0, 0.0], [-st, 0.0, ct]]
+    Rz = [[cp, -sp, 0.0], [sp, cp, 0.0], [0.0, 0.0, 1.0]]
+    return np.array(_product(_product(Rz, Ry), Rx))
 
 
 def rotor_force_max(scenario) -> float:
@@ -193,9 +236,9 @@ def landing_values(scenario: Scenario) -> LandingValues:
     (x2, y2), (u2, v2) = init["position2"], init["velocity2"]
     xv = VEHICLE_STATE.pack(dict(x2=x2, y2=y2, psi2=init["psi2_deg"] * deg, u2=u2, v2=v2,
                                  r2=init["r2_deg_s"] * deg))
-    v_pad = np.asarray(deck_pose(xv, 0.0, p_veh, p_deck).v2E, dtype=float).ravel()
+    v_pad = np.asarray(deck_pose_values(xv, 0.0, p_veh, p_deck).v2E, dtype=float).ravel()
     eta1 = np.multiply(init["eta1_deg"], deg)
-    V1 = np.asarray(rotation(eta1), dtype=float).T @ (v_pad + np.asarray(
+    V1 = rotation_values(eta1).T @ (v_pad + np.asarray(
         init["relative_velocity"]))
     x1q = QUAD6_STATE.pack(dict(
         p1=[*init["position1"], init["z1"]], eta1=eta1, V1=V1,
@@ -226,7 +269,7 @@ def _cleared(xp0: np.ndarray, pp: np.ndarray, clearance: float) -> np.ndarray:
         return xp0
     p = LANDING_PLANT_PARAMS.unpack(pp)
     xv = LANDING_PLANT_STATE.unpack(xp0)["xv"]
-    n2_z = float(np.asarray(deck_pose(xv, 0.0, p["p_veh"], p["p_deck"]).R_deck, dtype=float)[2, 2])
+    n2_z = float(deck_pose_values(xv, 0.0, p["p_veh"], p["p_deck"]).R_deck[2, 2])
     z1 = LANDING_PLANT_STATE.slice("x1q").start + QUAD6_STATE.slice("p1").start + 2
     out = np.array(xp0, dtype=float, copy=True)
     out[z1] += (clearance - gap) / n2_z

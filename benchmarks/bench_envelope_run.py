@@ -1,0 +1,168 @@
+"""An envelope worker's runs and the envelope's own process, paired with another tree (issue 20).
+
+Issue 20's map (``highway``, the car at 5 to 35 m/s against the crosswind 0 to 20 m/s,
+20 x 20 cells of 30 runs: 12,000 landings). Each round runs, in a fresh child process for
+``--against TREE`` (an exported tree, ``git archive <commit> | tar -x -C /tmp/old``) and
+for this checkout alternately:
+
+* **a worker's runs**: ``--runs`` runs spread over the map (run ``g_i = (7309 i + 11) mod
+  12000``: every prefix of them spreads over the cells), flown as a local worker flies
+  them (:func:`quadland.campaign.fly.fly`, freed memory kept, one BLAS thread), in chunks
+  of 8 draws pickled and unpickled as the pipe does, their outcomes pickled back; CPU ms a
+  run (after one run outside the window), and the SHA-256 of the outcomes (index, seed,
+  status, success, metrics, message, columns);
+* **the envelope's process**: CPU s of ``plan_envelope`` (the axes, every cell's scenario
+  checked), of every run's draw (``cell_draws`` of the 12,000) and of their runs.csv rows
+  from the outcomes above, with the SHA-256 of the draws.
+
+::
+
+    nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --rounds 3 --runs 60
+
+``--callgrind`` instead counts the instructions of a worker's run under ``valgrind
+--tool=callgrind`` on each tree: the difference between processes flying ``--runs`` and
+``--few`` runs, over the runs between (``PYTHONHASHSEED=0``, one BLAS thread).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+AXES = ["initial.velocity2[0]=5:35:20", "wind.mean[1]=0:20:20"]
+
+CHILD = r'''
+import hashlib, json, pickle, sys, time
+from quadland.engine.heap import keep_freed_memory
+from threadpoolctl import threadpool_limits
+keep_freed_memory()
+threadpool_limits(1)
+runs, parent, warm = int(sys.argv[1]), sys.argv[2] == "1", sys.argv[3] == "1"
+AXES = json.loads(sys.argv[4])
+out = {}
+t0 = time.process_time()
+from quadland.campaign.fly import fly, warm_up
+from quadland.campaign.grid import cell_draws, plan_envelope, envelope_header
+import quadland.campaign.grid as grid
+t1 = time.process_time()
+env = plan_envelope("highway", None, AXES, 30)
+t2 = time.process_time()
+warm_up(env.base)
+picks = [(7309 * i + 11) % env.runs for i in range(runs + warm)]
+draws = list(cell_draws(env, picks))
+if warm:
+    fly(env.base, draws[0], env.spec.limits)
+    draws = draws[1:]
+outs = []
+t3 = time.process_time()
+for k in range(0, len(draws), 8):
+    chunk = pickle.loads(pickle.dumps(draws[k:k + 8]))
+    done = [fly(env.base, d, env.spec.limits) for d in chunk]
+    outs.extend(pickle.loads(pickle.dumps(done)))
+t4 = time.process_time()
+out["run, CPU ms"] = ((t4 - t3) / max(runs, 1) * 1e3, hashlib.sha256(repr(
+    [(o.index, o.seed, o.status, o.success, sorted(o.metrics.items()), o.message,
+      sorted(o.columns.items())) for o in outs]).encode()).hexdigest())
+if parent:
+    header = envelope_header(env)
+    t5 = time.process_time()
+    every = list(cell_draws(env, range(env.runs)))
+    t6 = time.process_time()
+    rows = [grid._row(o, header) for o in outs for _ in range(env.runs // max(len(outs), 1))]
+    t7 = time.process_time()
+    out["imports, CPU s"] = (t1 - t0, "")
+    out["plan_envelope, CPU s"] = (t2 - t1, "")
+    out["12,000 draws, CPU s"] = (t6 - t5, hashlib.sha256(repr(
+        [(d.index, d.seed, sorted(d.values.items()), sorted(d.columns.items()))
+         for d in every]).encode()).hexdigest())
+    out["12,000 rows, CPU s"] = ((t7 - t6) * env.runs / max(len(rows), 1), hashlib.sha256(
+        repr(rows).encode()).hexdigest())
+print(json.dumps(out))
+'''
+
+
+def _env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    if tree is None:
+        return env, ROOT
+    path = tmp / "against"
+    if not path.exists():
+        path.mkdir()
+        (path / "quadland").symlink_to(tree / "quadland")
+        (path / "quadland_symbolic").symlink_to(tree / "symbolic")
+    env["PYTHONPATH"] = str(path)
+    return env, tmp
+
+
+def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True) -> dict:
+    env, cwd = _env(tree, tmp)
+    out = subprocess.run([sys.executable, "-c", CHILD, str(runs), "1" if parent else "0", "1",
+                          json.dumps(AXES)], check=True, cwd=cwd, env=env,
+                         capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def callgrind(tree: Path | None, tmp: Path, runs: int) -> int:
+    """Callgrind's instruction count of a worker's process flying ``runs`` runs (no warm-up
+    run: the first of both counts is the same run)."""
+    env, cwd = _env(tree, tmp)
+    env["PYTHONHASHSEED"] = "0"
+    env["OPENBLAS_NUM_THREADS"] = "1"
+    out = tmp / "callgrind.out"
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+                    sys.executable, "-c", CHILD, str(runs), "0", "0", json.dumps(AXES)],
+                   check=True, cwd=cwd, env=env, capture_output=True)
+    for line in out.read_text().splitlines():
+        if line.startswith("summary:") or line.startswith("totals:"):
+            return int(line.split()[1])
+    raise RuntimeError("no totals in callgrind's output")
+
+
+def _table(res: dict) -> None:
+    print("| median of the rounds (min to max) | before | now | now / before | same bits |")
+    print("|---|---:|---:|---:|---|")
+    for k in res["now"]:
+        b, n = ([v[0] for v in res[w][k]] for w in ("before", "now"))
+        same = {v[1] for v in res["before"][k]} == {v[1] for v in res["now"][k]}
+        print(f"| {k} | {statistics.median(b):.3f} ({min(b):.3f} to {max(b):.3f}) | "
+              f"{statistics.median(n):.3f} ({min(n):.3f} to {max(n):.3f}) | "
+              f"{statistics.median(n) / statistics.median(b):.3f} | "
+              f"{('yes, ' + res['now'][k][0][1][:8]) if same else 'NO'} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--against", type=Path, required=True, help="the tree before")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--runs", type=int, default=60)
+    ap.add_argument("--few", type=int, default=4, help="--callgrind: the smaller process")
+    ap.add_argument("--callgrind", action="store_true")
+    a = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        if a.callgrind:
+            for name, tree in (("before", a.against.resolve()), ("now", None)):
+                few, many = (callgrind(tree, Path(tmp), n) for n in (a.few, a.runs))
+                print(f"{name}: {(many - few) / (a.runs - a.few) / 1e6:.2f} M instructions a "
+                      f"run (processes of {a.few} and {a.runs} runs: {few:,} and {many:,})",
+                      flush=True)
+            return
+        res: dict[str, dict[str, list]] = {"before": {}, "now": {}}
+        for r in range(a.rounds):
+            for name, tree in (("before", a.against.resolve()), ("now", None)):
+                for k, v in child(tree, Path(tmp), a.runs).items():
+                    res[name].setdefault(k, []).append(v)
+            print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 3) for k, v in
+                                                       d.items()} for n, d in res.items()}),
+                  flush=True)
+    _table(res)
+
+
+if __name__ == "__main__":
+    main()
