@@ -208,10 +208,16 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
     return exes
 
 
+#: highway_100's crawl before "highway_100: the crawl paused under the lower flare"
+#: (docs/landing.md, fifteenth session): committed, not paused out of the align band; the
+#: replays measured on the lower flare's file pin it.
+HIGHWAY_100_FLARE = ["landing.crawl_pause=false"]
+
 #: highway_100's flare before "highway_100: the flare under the contact limit" (docs/landing.md,
 #: fifteenth session): the tilt limit 58 deg from 0.15 m above touchdown; the replays measured
-#: on the fourteenth's file pin it.
-HIGHWAY_100_FOURTEENTH = ["touchdown.flare_tilt_deg=58.0", "touchdown.flare_height=0.15"]
+#: on the fourteenth's file pin it (and its committed crawl, ``HIGHWAY_100_FLARE``).
+HIGHWAY_100_FOURTEENTH = [*HIGHWAY_100_FLARE, "touchdown.flare_tilt_deg=58.0",
+                          "touchdown.flare_height=0.15"]
 
 #: highway_100's guidance before "highway_100: the guidance holds through the lane change"
 #: (docs/landing.md, fourteenth session): no hold while the pad swerves, a rising deck's

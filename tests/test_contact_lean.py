@@ -11,7 +11,8 @@ hand, the crawl's start moved up by it in one guidance step, the flare's and the
 too (one step each), and the key's default leaving
 every shipped scenario's profile on the level gear. ``landing.crawl_pause`` lets the align
 band pause the crawl as it pauses the descent above it; checked in one guidance step.
-Both keys are off in every shipped scenario (measured on highway_100 and not shipped).
+The drop is off in every shipped scenario (measured on highway_100 and not shipped); the
+pause ships on highway_100 alone.
 """
 
 import math
@@ -61,9 +62,11 @@ def test_the_drop_is_the_lowest_foot_of_the_pitched_gear(lean):
 @pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5", "highway_100"])
 def test_other_scenarios_keep_the_level_profile(name):
     """Without the key the drop is exactly 0: the profile of before; the crawl is committed
-    (``crawl_pause`` false)."""
+    (``crawl_pause`` false) but on highway_100, which pauses it since docs/landing.md's
+    "highway_100: the crawl paused under the lower flare"."""
     sc = load_scenario(name)
-    assert touchdown_guidance(sc)["contact_drop"] == 0.0 and sc["landing.crawl_pause"] is False
+    assert touchdown_guidance(sc)["contact_drop"] == 0.0
+    assert sc["landing.crawl_pause"] is (name == "highway_100")
 
 
 def _rate(z_ref, drop):
