@@ -169,3 +169,25 @@ def test_off_the_imu_s_grid_a_vision_block_draws_its_attitude_normals_after_its_
         assert _same_bits(v.att_normals[:n], np.array(att[:n]))
         assert _same_bits(v.noise[:n, lay.slice("n_r")], np.array(white[:n]))
         assert _same_bits(v.noise[:n, lay.slice("o_r")], np.array(outlier[:n]))
+
+
+def test_past_its_chunks_a_long_table_draws_twice_its_rows_not_its_whole_rest():
+    """ship_ss5's 180 s table (45,000 ticks at 250 Hz), asked at the first tick past its
+    rows as a flight asks: the first chunk and two more (to 20.5 s), then twice the rows
+    drawn each time, at most the table (a flight touching down at 25 s draws 41 s of it,
+    not 180 s); each end's rows against the table drawn whole, rows past it untouched
+    (NaN)."""
+    sc = load_scenario("ship_ss5")
+    n = round(sc["simulation.duration"] * sc["controller.rate_hz"])
+    assert n == 45_000
+    table = TickTable(sc, n)
+    table.rows[:] = np.nan
+    whole = TickTable(sc, n, first=n)
+    whole.more(0)
+    ends, tick = [], 0
+    while tick < n:
+        tick = table.more(tick)
+        ends.append(tick)
+        assert _same_bits(table.rows[:tick], whole.rows[:tick])
+        assert np.all(np.isnan(table.rows[tick:]))
+    assert ends == [3_072, 4_096, 5_120, 10_240, 20_480, 40_960, 45_000]
