@@ -316,3 +316,27 @@ def test_a_source_dated_in_the_future_is_no_edit_until_it_is_written(tmp_path, m
     assert recall.sources_edited_since_import() == ["quadland_symbolic/paper_loop.py"]
     recall.remember("ef" * 32, library)
     assert not (cache / recall.RECIPES / ("ef" * 16)).exists()
+
+
+def test_no_recipe_is_recalled_once_a_source_changed_under_the_process(tmp_path,
+                                                                       monkeypatch):
+    """A recipe recorded by a process of the code before is not recalled by a process
+    during which a source was written (its key may hash the new text, its library
+    another code's): with the copy's module written after the import, ``recalled`` gives
+    None; with every file older than the import, the library (its checks passed)."""
+    import ctypes
+    import os
+
+    from quadland.engine import build, recall
+
+    root, since, cache, library = _package_copy(tmp_path, monkeypatch)
+    monkeypatch.setattr(build, "verified_library", lambda path: path == library)
+    monkeypatch.setattr(ctypes, "CDLL", lambda path: None)
+    recall.remember("cd" * 32, library)
+    assert recall.recalled("cd" * 32) == library
+
+    edited = root / "paper_loop.py"
+    os.utime(edited, ns=(since + 1, since + 1))
+    assert recall.recalled("cd" * 32) is None
+    os.utime(edited, ns=(since - 1, since - 1))
+    assert recall.recalled("cd" * 32) == library

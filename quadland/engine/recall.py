@@ -162,7 +162,11 @@ def _entry(key: str) -> Path:
 
 def recalled(key: str) -> Path | None:
     """The library remembered for ``key``, verified and loadable; None if there is none
-    (or it was removed, damaged or does not load)."""
+    (or it was removed, damaged or does not load), or if a source was edited while this
+    process ran (:func:`sources_edited_since_import`: the key may hash other text than the
+    code the process runs, and name another code's library)."""
+    if sources_edited_since_import():
+        return None
     try:
         rel = _entry(key).read_text(encoding="ascii").strip()
     except (OSError, ValueError):
