@@ -87,6 +87,36 @@ def test_nothing_is_stored_by_a_process_whose_sources_changed_under_it(store, mo
         function_key(square_builder, (2, 0.3))[:32] + ".casadi"]
 
 
+def test_a_process_whose_sources_changed_under_it_reads_no_stored_function(store,
+                                                                           monkeypatch):
+    """A function stored by a process of the code before is not read back by a process
+    during which a source was written (its key may hash the new text while the code it
+    runs is the module of before): the builder is called again; once no source is newer
+    than the import, the stored file is read (no call)."""
+    stored_function(square_builder, 4, 0.2)
+    assert CALLS == [(4, 0.2)]
+    stored_function.cache_clear()
+    monkeypatch.setattr(function_store, "sources_edited_since_import",
+                        lambda: ["quadland_symbolic/paper_loop.py"])
+    stored_function(square_builder, 4, 0.2)
+    assert CALLS == [(4, 0.2)] * 2
+    monkeypatch.setattr(function_store, "sources_edited_since_import", lambda: [])
+    stored_function.cache_clear()
+    read = stored_function(square_builder, 4, 0.2)
+    assert CALLS == [(4, 0.2)] * 2
+    assert read.serialize() == square_builder(4, 0.2).serialize()
+
+
+def test_a_source_written_during_the_build_stores_nothing(store, monkeypatch):
+    """No source newer than the import before the build, one written during it: the
+    function is returned, not stored."""
+    answers = iter([[], ["quadland_symbolic/paper_loop.py"]])
+    monkeypatch.setattr(function_store, "sources_edited_since_import", lambda: next(answers))
+    stored_function(square_builder, 5, 0.4)
+    assert CALLS == [(5, 0.4)]
+    assert not store.exists() or not list(store.iterdir())
+
+
 def _stored(function: ca.Function) -> str:
     """The file the store writes for ``function``: its header line, then its text."""
     text = function.serialize()

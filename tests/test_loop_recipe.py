@@ -244,6 +244,30 @@ def test_a_changed_generator_rebuilds_the_model_and_its_c(cache, monkeypatch):
     assert len(calls) == 2 and "model" in vars(changed)
 
 
+def _package_copy(tmp_path, monkeypatch):
+    """A copy of ``quadland_symbolic`` (its files' times kept) that the process imported
+    1 ns after its newest source was written, a cache in ``tmp_path`` with one library:
+    the copy's root, the import's time, the cache and the library."""
+    import quadland
+    import quadland_symbolic
+    from quadland.engine import build
+
+    root = tmp_path / "quadland_symbolic"
+    src = quadland_symbolic.__file__.rsplit("/", 1)[0]
+    shutil.copytree(src, root, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(quadland_symbolic, "__file__", str(root / "__init__.py"))
+    since = max(p.stat().st_mtime_ns for tree in (root, Path(quadland.__file__).parent)
+                for p in tree.rglob("*") if p.suffix in (".py", ".jinja", ".toml")) + 1
+    monkeypatch.setattr(quadland_symbolic, "IMPORTED_NS", since)
+    monkeypatch.setattr(quadland, "IMPORTED_NS", since)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    cache = build.cache_dir()
+    library = cache / ("ab" * 12) / "qlsim_x.so"
+    library.parent.mkdir(parents=True)
+    library.write_bytes(b"")
+    return root, since, cache, library
+
+
 def test_no_recipe_is_remembered_once_a_source_changed_under_the_process(tmp_path,
                                                                          monkeypatch):
     """A copy of ``quadland_symbolic`` whose one module is written after the process
@@ -252,23 +276,9 @@ def test_no_recipe_is_remembered_once_a_source_changed_under_the_process(tmp_pat
     with every file older than the import the recipe is recorded and recalled."""
     import os
 
-    import quadland
-    import quadland_symbolic
-    from quadland.engine import build, recall
+    from quadland.engine import recall
 
-    root = tmp_path / "quadland_symbolic"
-    src = quadland_symbolic.__file__.rsplit("/", 1)[0]
-    shutil.copytree(src, root, ignore=shutil.ignore_patterns("__pycache__"))
-    monkeypatch.setattr(quadland_symbolic, "__file__", str(root / "__init__.py"))
-    since = max(p.stat().st_mtime_ns for tree in (root, Path(quadland.__file__).parent)
-                for p in tree.rglob("*")) + 10**9
-    monkeypatch.setattr(quadland_symbolic, "IMPORTED_NS", since)
-    monkeypatch.setattr(quadland, "IMPORTED_NS", since)
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
-    cache = build.cache_dir()
-    library = cache / ("ab" * 12) / "qlsim_x.so"
-    library.parent.mkdir(parents=True)
-    library.write_bytes(b"")
+    root, since, cache, library = _package_copy(tmp_path, monkeypatch)
     assert recall.sources_edited_since_import() == []
 
     edited = root / "paper_loop.py"
@@ -280,3 +290,53 @@ def test_no_recipe_is_remembered_once_a_source_changed_under_the_process(tmp_pat
     os.utime(edited, ns=(since - 1, since - 1))
     recall.remember("cd" * 32, library)
     assert (cache / recall.RECIPES / ("cd" * 16)).read_text() == f"{'ab' * 12}/qlsim_x.so\n"
+
+
+def test_a_source_dated_in_the_future_is_no_edit_until_it_is_written(tmp_path, monkeypatch):
+    """A source unpacked with a date an hour ahead of this machine's clock was not written
+    after the import (a write dates a file with the clock's time): the recipe is
+    recorded, as by every later process (refusing would hold for that hour, each
+    process generating its C again). Written now, the file is an edit and nothing is
+    recorded."""
+    import os
+    import time
+
+    from quadland.engine import recall
+
+    root, since, cache, library = _package_copy(tmp_path, monkeypatch)
+    edited = root / "paper_loop.py"
+    ahead = time.time_ns() + 3600 * 10**9
+    os.utime(edited, ns=(ahead, ahead))
+    assert recall.sources_edited_since_import() == []
+    recall.remember("cd" * 32, library)
+    assert (cache / recall.RECIPES / ("cd" * 16)).read_text() == f"{'ab' * 12}/qlsim_x.so\n"
+
+    edited.write_text(edited.read_text() + "# edited\n")
+    assert since < edited.stat().st_mtime_ns <= time.time_ns()
+    assert recall.sources_edited_since_import() == ["quadland_symbolic/paper_loop.py"]
+    recall.remember("ef" * 32, library)
+    assert not (cache / recall.RECIPES / ("ef" * 16)).exists()
+
+
+def test_no_recipe_is_recalled_once_a_source_changed_under_the_process(tmp_path,
+                                                                       monkeypatch):
+    """A recipe recorded by a process of the code before is not recalled by a process
+    during which a source was written (its key may hash the new text, its library
+    another code's): with the copy's module written after the import, ``recalled`` gives
+    None; with every file older than the import, the library (its checks passed)."""
+    import ctypes
+    import os
+
+    from quadland.engine import build, recall
+
+    root, since, cache, library = _package_copy(tmp_path, monkeypatch)
+    monkeypatch.setattr(build, "verified_library", lambda path: path == library)
+    monkeypatch.setattr(ctypes, "CDLL", lambda path: None)
+    recall.remember("cd" * 32, library)
+    assert recall.recalled("cd" * 32) == library
+
+    edited = root / "paper_loop.py"
+    os.utime(edited, ns=(since + 1, since + 1))
+    assert recall.recalled("cd" * 32) is None
+    os.utime(edited, ns=(since - 1, since - 1))
+    assert recall.recalled("cd" * 32) == library

@@ -27,17 +27,20 @@ def _by_rows(times, sigma, tau, normals):
     return x
 
 
+@pytest.mark.parametrize("tau", [[0.0, np.inf, 0.3, 4.0], [1e-3, 0.3, 4.0, 1100.0]])
 @pytest.mark.parametrize("compiled", [True, False])
 @pytest.mark.parametrize("n", [1, 2, 500, 10_000])
-def test_gauss_markov_is_its_row_recursion_bit_for_bit(monkeypatch, n, compiled):
-    """In C and over Python floats: the row recursion's bits (signs of zero too)."""
+def test_gauss_markov_is_its_row_recursion_bit_for_bit(monkeypatch, n, compiled, tau):
+    """In C and over Python floats: the row recursion's bits (signs of zero too), with
+    the limits ``tau = 0`` and ``inf`` among the columns and with every ``tau`` positive
+    and finite (the decay's path without them, the GNSS's)."""
     if compiled:
         assert compiled_recursion() is not None          # this machine has a compiler
     else:
         monkeypatch.setattr(noise, "recursion", lambda *args: None)
     rng = np.random.default_rng(20)
     times = np.cumsum(rng.uniform(1e-3, 1e-2, n))
-    sigma, tau = np.array([0.5, 1.5, 2.0, 0.1]), np.array([0.0, np.inf, 0.3, 4.0])
+    sigma, tau = np.array([0.5, 1.5, 2.0, 0.1]), np.array(tau)
     normals = rng.standard_normal((n, 4))
     got, want = gauss_markov(times, sigma, tau, normals), _by_rows(times, sigma, tau, normals)
     assert got.shape == want.shape == (n, 4)

@@ -132,3 +132,62 @@ def test_the_default_table_to_40_s_places_each_sample_on_its_tick(overrides, chu
             row[SENSED_TICK.slice(f"{name}_kept")] = float(kept)
             row[SENSED_TICK.slice(f"{name}_noise")] = noise
     assert _same_bits(table.rows, expect)
+
+
+def test_off_the_imu_s_grid_a_vision_block_draws_its_attitude_normals_after_its_noise():
+    """The vision 1 ms off the IMU's 125 Hz grid, 1,324 samples (a block and part of a
+    second), re-derived from the spawn key ``(seed, SENSOR_STREAM, vision, 3, b)``: the
+    deliveries' and outliers' uniforms, the block's 6 noise normals a sample (3 white,
+    3 outliers'), then its 6 attitude normals a sample (the attitude error's bridge
+    between the IMU's samples); drawn at once and extended in steps ending mid-block."""
+    settings, seed, n = {"imu": {"rate_hz": 125.0}, "vision": {"phase": 0.001}}, 11, BLOCK + 300
+    s, lay = SENSOR_DEFAULTS["vision"], NOISES["vision"]
+    stream = SENSOR_NAMES.index("vision")
+    delivered, white, outlier, att = [], [], [], []
+    for b in range(2):
+        rng = np.random.default_rng(np.random.SeedSequence(
+            seed, spawn_key=(SENSOR_STREAM, stream, 3, b)))
+        kept = (rng.random(BLOCK) >= s["dropout"]).tolist()
+        hit = (rng.random(BLOCK) < s["outlier_rate"]).tolist()
+        z = rng.standard_normal((BLOCK, 6)).tolist()
+        a = rng.standard_normal((BLOCK, 6)).tolist()
+        delivered += kept
+        white += [row[:3] for row in z]
+        outlier += [[s["outlier_sigma"] * v if h else 0.0 for v in row[3:]]
+                    for h, row in zip(hit, z, strict=True)]
+        att += a
+    horizon = (n - 0.5) / s["rate_hz"]
+    whole = SensorDraws(settings, seed)
+    whole.extend(horizon)
+    steps = SensorDraws(settings, seed)
+    for t in (0.3, 20.01, 40.93, 40.97, 41.0, horizon):
+        steps.extend(t)
+    for draws in (whole, steps):
+        v = draws.sensors["vision"]
+        assert v.n >= n
+        assert _same_bits(v.delivered[:n], np.array(delivered[:n]))
+        assert _same_bits(v.att_normals[:n], np.array(att[:n]))
+        assert _same_bits(v.noise[:n, lay.slice("n_r")], np.array(white[:n]))
+        assert _same_bits(v.noise[:n, lay.slice("o_r")], np.array(outlier[:n]))
+
+
+def test_past_its_chunks_a_long_table_draws_twice_its_rows_not_its_whole_rest():
+    """ship_ss5's 180 s table (45,000 ticks at 250 Hz), asked at the first tick past its
+    rows as a flight asks: the first chunk and two more (to 20.5 s), then twice the rows
+    drawn each time, at most the table (a flight touching down at 25 s draws 41 s of it,
+    not 180 s); each end's rows against the table drawn whole, rows past it untouched
+    (NaN)."""
+    sc = load_scenario("ship_ss5")
+    n = round(sc["simulation.duration"] * sc["controller.rate_hz"])
+    assert n == 45_000
+    table = TickTable(sc, n)
+    table.rows[:] = np.nan
+    whole = TickTable(sc, n, first=n)
+    whole.more(0)
+    ends, tick = [], 0
+    while tick < n:
+        tick = table.more(tick)
+        ends.append(tick)
+        assert _same_bits(table.rows[:tick], whole.rows[:tick])
+        assert np.all(np.isnan(table.rows[tick:]))
+    assert ends == [3_072, 4_096, 5_120, 10_240, 20_480, 40_960, 45_000]

@@ -66,12 +66,13 @@ def stored_function(builder, *args) -> ca.Function:
         one object per process for the same arguments.
     """
     path = cache_dir() / FUNCTIONS / f"{function_key(builder, args)[:32]}.casadi"
-    function = _read(path)
+    edited = sources_edited_since_import()      # the key may name other code than the
+    function = None if edited else _read(path)  # process runs: neither read nor written
     if function is not None:
         return function
     function = builder(*args)
-    if sources_edited_since_import():
-        return function         # the key may name other code than the process ran
+    if edited or sources_edited_since_import():     # (or edited during the build)
+        return function
     text = function.serialize()
     try:
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)

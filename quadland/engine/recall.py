@@ -162,7 +162,11 @@ def _entry(key: str) -> Path:
 
 def recalled(key: str) -> Path | None:
     """The library remembered for ``key``, verified and loadable; None if there is none
-    (or it was removed, damaged or does not load)."""
+    (or it was removed, damaged or does not load), or if a source was edited while this
+    process ran (:func:`sources_edited_since_import`: the key may hash other text than the
+    code the process runs, and name another code's library)."""
+    if sources_edited_since_import():
+        return None
     try:
         rel = _entry(key).read_text(encoding="ascii").strip()
     except (OSError, ValueError):
@@ -186,17 +190,22 @@ def sources_edited_since_import() -> list[str]:
     Such a file may not be the code this process runs: a module imported before the edit
     generated the C, while a digest read after it hashes the new text (a digest read
     before it, and a module imported after, the other way round). A key from such a
-    process could name a library of other code."""
+    process could name a library of other code. A file dated after now (unpacked with a
+    clock ahead of this machine's) was not written by an edit since: a write dates it now.
+    """
+    import time
+
     import quadland
     import quadland_symbolic
 
     since = min(quadland.IMPORTED_NS, quadland_symbolic.IMPORTED_NS)
+    now = time.time_ns()
     edited = []
     for package in (quadland, quadland_symbolic):
         root = Path(package.__file__).parent
         for path in root.rglob("*"):
             if path.suffix in (".py", ".jinja", ".toml") and path.is_file() \
-                    and path.stat().st_mtime_ns > since:
+                    and since < path.stat().st_mtime_ns <= now:
                 edited.append(f"{package.__name__}/{path.relative_to(root).as_posix()}")
     return sorted(edited)
 

@@ -71,10 +71,11 @@ INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
 #: 250 Hz; a one-worker campaign's table 4.7 to 3.4 ms, issue 20).
 TICK_CHUNK = 500
 FIRST_CHUNK = 2500
-#: Chunks of :data:`TICK_CHUNK` after the first; a flight that needs more draws the
-#: table's rest at once (past 20.5 s at 250 Hz: a landing touches down by about 12 s and
-#: settles 2 s later, and most flights that pass 20 s never touch down and fly the
-#: whole ``simulation.duration``; each extension costs its calls, issue 20).
+#: Chunks of :data:`TICK_CHUNK` after the first; a flight that needs more draws twice
+#: the rows drawn each time, at most the table's rest (past 20.5 s at 250 Hz: a landing
+#: touches down by about 12 s and settles 2 s later; a 40 s table's rest is drawn at
+#: once, while a ship's flight touching down at 25 s draws 41 s of its 180 s; each
+#: extension costs its calls, issue 20).
 CHUNKS_BEFORE_REST = 2
 
 #: ``[estimator]`` keys of the initial standard deviations, in the order of NAV's fields.
@@ -181,9 +182,10 @@ class TickTable:
     (:class:`SensorDraws`) and fills their ticks' rows, ``first`` ticks the first time and
     ``chunk`` ticks at a time after (by default :data:`FIRST_CHUNK` and
     :data:`TICK_CHUNK` rounded up to whole blocks of the IMU's draws,
-    :data:`~quadland.kinds.landing.sensing.BLOCK` of its samples), the table's rest after
-    ``rest`` such chunks (by default :data:`CHUNKS_BEFORE_REST` with the default chunk,
-    none with a given one). Every row is the same bits
+    :data:`~quadland.kinds.landing.sensing.BLOCK` of its samples), after ``rest`` such
+    chunks twice the rows drawn each time (at least a chunk, at most the table's rest;
+    by default after :data:`CHUNKS_BEFORE_REST` with the default chunk, never with a given
+    one). Every row is the same bits
     however far ahead it was drawn (the draws' blocks are seeded by their index): a
     flight on it is the flight on the whole table (the simulators' ``more``,
     :func:`quadland.engine.runs.tick_source`).
@@ -204,17 +206,17 @@ class TickTable:
         self.placed = {name: 0 for name in SENSOR_NAMES}
         if rest is None:                    # the default chunks' rest; none with a chunk
             rest = CHUNKS_BEFORE_REST if chunk_default else n_ticks
-        self.rest = self.first + max(int(rest), 0) * self.chunk   # then to the end
+        self.rest = self.first + max(int(rest), 0) * self.chunk   # then doubling
 
     def more(self, tick: int) -> int:
         """Fill the rows past ``tick`` (up to the next chunk's end, at most the table's);
         returns the rows filled."""
         n = self.rows.shape[0]
         end = self.first
-        if tick >= self.rest:
-            end = n
-        elif tick >= self.first:
+        if tick >= self.first:
             end += ((tick - self.first) // self.chunk + 1) * self.chunk
+        if tick >= self.rest:                               # twice the rows drawn
+            end = max(end, 2 * self.filled)
         end = min(n, end)
         if end <= self.filled:
             return self.filled
