@@ -239,3 +239,35 @@ def test_a_direct_call_shared_by_threads_gives_each_its_own_results():
     for t in threads:
         t.join()
     assert wrong == []
+
+
+def test_the_plain_float_helpers_are_their_dm_evaluation_off_the_physical_domain_too():
+    """Infinite angles (``math.sin`` raises where CasADi's sine gives NaN), and a gear or
+    quadrotor with a zero, negative, infinite, NaN or overflowing value (Python's
+    ``1 / 0``, ``sqrt`` of a negative and ``1e160 ** 2`` raise; ``max`` keeps a leading
+    NaN where ``mmax`` drops it): each helper returns the bits of its ``casadi.DM``
+    evaluation, as ``rotation`` and ``stiffest_rate`` give them, never an exception."""
+    import itertools
+
+    from quadland.kinds.landing.gear import gear_params, stiffest_rate_value
+    from quadland.kinds.landing.values import landing_values, rotation_values
+    from quadland_symbolic.kinematics import rotation
+    from quadland_symbolic.landing.contact import stiffest_rate
+    from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS
+
+    angles = [0.0, -0.0, np.inf, -np.inf, np.nan, 5e-324, 1e300]
+    for eta in itertools.product(angles, repeat=3):
+        eta = np.array(eta)
+        assert _same(np.asarray(rotation(eta), dtype=float), rotation_values(eta)), eta
+    sc = load_scenario("highway")
+    pq = np.asarray(LANDING_PLANT_PARAMS.unpack(landing_values(sc).pp)["p_quad"],
+                    dtype=float).ravel()
+    pg = gear_params(sc)
+    for which, i, v in itertools.product((0, 1), range(max(pq.size, pg.size)),
+                                         (0.0, -0.0, -1.0, np.inf, -np.inf, np.nan, 1e160)):
+        q, g = pq.copy(), pg.copy()
+        if i >= (q, g)[which].size:
+            continue
+        (q, g)[which][i] = v
+        assert _same(np.asarray(float(stiffest_rate(q, g))),
+                     np.asarray(stiffest_rate_value(q, g))), (which, i, v)

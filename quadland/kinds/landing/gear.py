@@ -12,6 +12,7 @@ from quadland_symbolic.landing.contact import (
     LOCK,
     RK4_REAL_STABILITY,
     lock_defaults,
+    stiffest_rate,
 )
 from quadland_symbolic.landing.gear import PEAK_RATE, TOUCHDOWN_POLICY
 from quadland_symbolic.parameters import QUADROTOR
@@ -106,9 +107,25 @@ def stiffest_rate_value(p_quad, p_gear) -> float:
     """:func:`~quadland_symbolic.landing.contact.stiffest_rate` on numbers: the same
     operations in the same order as its ``casadi.DM`` evaluation (the sums over the feet
     from zero, the squares by the C library's ``pow``), so the same bits
-    (``tests/test_run_python.py``), in a fiftieth of its time (0.25 ms a landing)."""
-    p = QUADROTOR.unpack(np.asarray(p_quad, dtype=float).ravel())
-    g = GEAR.unpack(np.asarray(p_gear, dtype=float).ravel())
+    (``tests/test_run_python.py``), in a fiftieth of its time (0.25 ms a landing).
+    Parameters off the physical domain (not finite; a division by zero, a negative root
+    or an overflow, which Python raises; a NaN, which ``max`` keeps and ``mmax`` drops)
+    take the ``casadi.DM`` evaluation."""
+    q = np.asarray(p_quad, dtype=float).ravel()
+    g = np.asarray(p_gear, dtype=float).ravel()
+    if np.isfinite(q).all() and np.isfinite(g).all():
+        try:
+            rate = _stiffest_rate_floats(q, g)
+        except (ArithmeticError, ValueError):
+            rate = math.nan
+        if math.isfinite(rate):
+            return rate
+    return float(stiffest_rate(q, g))
+
+
+def _stiffest_rate_floats(q: np.ndarray, g: np.ndarray) -> float:
+    """:func:`stiffest_rate_value` in Python's floats (raising where CasADi would not)."""
+    p, g = QUADROTOR.unpack(q), GEAR.unpack(g)
     r, b, k = g["r_feet"], float(g["b_slip"][0]), float(g["k"][0])
     m1, (Ix, Iy, Iz) = float(p["m1"][0]), (float(v) for v in p["I"])
     n = r.shape[1]

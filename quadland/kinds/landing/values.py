@@ -20,6 +20,7 @@ from quadland.engine.wind import (
 from quadland.kinds.landing.gear import gear_params, lock_params, policy_params, touchdown_guidance
 from quadland.kinds.landing.sea import deck_components
 from quadland.scenario import Scenario, require_model
+from quadland_symbolic.kinematics import rotation
 from quadland_symbolic.landing.controller import landing_controller_params, landing_memory
 from quadland_symbolic.landing.deck import (
     DECK_PARAMS,
@@ -125,8 +126,11 @@ def rotation_values(eta) -> np.ndarray:
     """:func:`~quadland_symbolic.kinematics.rotation` on numbers, ``(3, 3)``: the same
     sines, cosines, products and sums as its ``casadi.DM`` evaluation (the C library's
     ``sin`` and ``cos``, ``Rz @ Ry @ Rx`` summed as CasADi does, with the explicit zeros),
-    so the same bits (``tests/test_run_python.py``), in a thirtieth of its time."""
+    so the same bits (``tests/test_run_python.py``), in a thirtieth of its time. An
+    infinite angle (whose sine ``math`` refuses) takes the ``casadi.DM`` evaluation."""
     phi, theta, psi = float(eta[0]), float(eta[1]), float(eta[2])
+    if math.isinf(phi) or math.isinf(theta) or math.isinf(psi):
+        return np.asarray(rotation(np.array([phi, theta, psi])), dtype=float)
     cf, sf = math.cos(phi), math.sin(phi)
     ct, st = math.cos(theta), math.sin(theta)
     cp, sp = math.cos(psi), math.sin(psi)
