@@ -28,12 +28,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from bench_tick_table import tree_env
 
 ROOT = Path(__file__).resolve().parent.parent
 AXES = ["initial.velocity2[0]=5:35:20", "wind.mean[1]=0:20:20"]
@@ -88,21 +89,8 @@ print(json.dumps(out))
 '''
 
 
-def _env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    if tree is None:
-        return env, ROOT
-    path = tmp / "against"
-    if not path.exists():
-        path.mkdir()
-        (path / "quadland").symlink_to(tree / "quadland")
-        (path / "quadland_symbolic").symlink_to(tree / "symbolic")
-    env["PYTHONPATH"] = str(path)
-    return env, tmp
-
-
 def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True) -> dict:
-    env, cwd = _env(tree, tmp)
+    env, cwd = tree_env(tree, tmp)
     out = subprocess.run([sys.executable, "-c", CHILD, str(runs), "1" if parent else "0", "1",
                           json.dumps(AXES)], check=True, cwd=cwd, env=env,
                          capture_output=True, text=True).stdout
@@ -112,7 +100,7 @@ def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True) -> dict:
 def callgrind(tree: Path | None, tmp: Path, runs: int) -> int:
     """Callgrind's instruction count of a worker's process flying ``runs`` runs (no warm-up
     run: the first of both counts is the same run)."""
-    env, cwd = _env(tree, tmp)
+    env, cwd = tree_env(tree, tmp)
     env["PYTHONHASHSEED"] = "0"
     env["OPENBLAS_NUM_THREADS"] = "1"
     out = tmp / "callgrind.out"

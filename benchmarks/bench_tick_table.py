@@ -94,7 +94,7 @@ for _ in range(int(sys.argv[1])):
 '''
 
 
-def _env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
+def tree_env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     if tree is None:
         return env, ROOT
@@ -110,7 +110,7 @@ def _env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
 def callgrind(tree: Path | None, tmp: Path, tables: int, ticks: int) -> int:
     """Callgrind's instruction count of a process that draws ``tables`` tables to
     ``ticks``."""
-    env, cwd = _env(tree, tmp)
+    env, cwd = tree_env(tree, tmp)
     env["PYTHONHASHSEED"] = "0"                # the same dictionaries' and sets' order
     env["OPENBLAS_NUM_THREADS"] = "1"          # no BLAS threads spinning
     out = tmp / "callgrind.out"
@@ -124,7 +124,7 @@ def callgrind(tree: Path | None, tmp: Path, tables: int, ticks: int) -> int:
 
 
 def child(tree: Path | None, tmp: Path, tables: int, runs: int, ticks: str) -> dict:
-    env, cwd = _env(tree, tmp)
+    env, cwd = tree_env(tree, tmp)
     out = subprocess.run([sys.executable, "-c", CHILD, str(tables), str(runs), ticks], check=True,
                          cwd=cwd, env=env, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])

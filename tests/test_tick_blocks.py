@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from tick_reference import placed_table
 
 import quadland
 from quadland.engine.runs import SIM_ROWS
@@ -108,14 +109,7 @@ def test_each_sample_is_on_its_own_tick_s_row(overrides):
         while tick < ticks:
             tick = table.more(tick)
         draws = draw_sensors(settings, table.filled / rate, seed=sc["simulation.seed"])
-        expect = np.zeros_like(table.rows)
-        for name in SENSOR_NAMES:
-            s = draws[name]
-            for t, kept, noise in zip(s.times, s.delivered, s.noise, strict=True):
-                row = expect[round(t * rate)]
-                row[SENSED_TICK.slice(f"{name}_sampled")] = 1.0
-                row[SENSED_TICK.slice(f"{name}_kept")] = float(kept)
-                row[SENSED_TICK.slice(f"{name}_noise")] = noise
+        expect = placed_table(draws, table.rows.shape, rate)
         n = table.filled                              # (the rows past it are unwritten)
         assert _same_bits(table.rows[:n], expect[:n]), (overrides, ticks)
 

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from tick_reference import placed_table
 
 from quadland.kinds.landing.sensed import TickTable
 from quadland.kinds.landing.sensing import (
@@ -24,7 +25,6 @@ from quadland.kinds.landing.sensing import (
 )
 from quadland.kinds.landing.sensor_settings import SENSOR_DEFAULTS
 from quadland.scenario import load_scenario
-from quadland_symbolic.landing.sensed_loop import SENSED_TICK
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 
 #: Off the IMU's grid (the vision's and rangefinder's blocks draw the attitude error's
@@ -123,15 +123,7 @@ def test_the_default_table_to_40_s_places_each_sample_on_its_tick(overrides, chu
     assert ends == chunks
     settings = {n: dict(sc.data[f"sensors.{n}"]) for n in SENSOR_NAMES}
     draws = draw_sensors(settings, 40.0, seed=sc["simulation.seed"])
-    expect = np.zeros_like(table.rows)
-    for name in SENSOR_NAMES:
-        s = draws[name]
-        for t, kept, noise in zip(s.times, s.delivered, s.noise, strict=True):
-            row = expect[round(t * rate)]
-            row[SENSED_TICK.slice(f"{name}_sampled")] = 1.0
-            row[SENSED_TICK.slice(f"{name}_kept")] = float(kept)
-            row[SENSED_TICK.slice(f"{name}_noise")] = noise
-    assert _same_bits(table.rows, expect)
+    assert _same_bits(table.rows, placed_table(draws, table.rows.shape, rate))
 
 
 def test_off_the_imu_s_grid_a_vision_block_draws_its_attitude_normals_after_its_noise():
