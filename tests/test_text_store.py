@@ -188,3 +188,27 @@ def test_a_folder_that_cannot_be_written_only_costs_the_work(tmp_path, monkeypat
     drawn = _mine(_content(), store)
     assert not store.exists()
     assert np.array_equal(drawn, _theirs(_content()))
+
+
+def test_a_full_file_of_entries_no_longer_drawn_gives_way_to_the_current_ones(tmp_path,
+                                                                              monkeypatch):
+    store = tmp_path / "texts.pickle"
+    theirs = _theirs(_content())
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    drawn = len(glyph_cache.kept_bitmaps())
+    # room for the figure's bitmaps and a half of them: the file's and the figure's do not
+    # both fit, the cache is emptied once while the figure is drawn
+    monkeypatch.setattr(glyph_cache, "CACHE_SIZE", drawn * 3 // 2)
+    # the font files changed after the file was written: none of its entries is drawn
+    stats = {path: (real, size, mtime + 1) for path, (real, size, mtime)
+             in font_memory._STATS.items()}
+    rendered = []
+    for _ in range(4):
+        _new_process(monkeypatch)
+        monkeypatch.setattr(font_memory, "_STATS", dict(stats))
+        work = _counted(monkeypatch)
+        assert np.array_equal(_mine(_content(), store), theirs)
+        rendered.append(work["rendered"])
+    assert rendered[0] == drawn
+    assert rendered[-1] == 0, rendered

@@ -155,7 +155,10 @@ def texts_kept(path: Path | None = None):
     if _kept() == loaded:           # nothing drawn that was not read (nor emptied)
         return
     contents = _contents()
-    if sum(len(contents[k]) for k in ("bitmaps", "layouts", "measures")) > before:
+    # fewer than read too: a cache filled up and emptied (glyph_cache.CACHE_SIZE), the
+    # entries kept since written, so that a file full of ones no longer drawn (fonts
+    # changed since) gives way to those drawn now
+    if sum(len(contents[k]) for k in ("bitmaps", "layouts", "measures")) != before:
         _write(path, contents)
 
 
