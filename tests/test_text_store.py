@@ -212,3 +212,34 @@ def test_a_full_file_of_entries_no_longer_drawn_gives_way_to_the_current_ones(tm
         rendered.append(work["rendered"])
     assert rendered[0] == drawn
     assert rendered[-1] == 0, rendered
+
+
+def test_a_file_whose_pixels_changed_is_not_read(tmp_path, monkeypatch):
+    """A byte of a glyph bitmap changed: the file still unpickles, its digest does not hold."""
+    store = tmp_path / "texts.pickle"
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    data = bytearray(store.read_bytes())
+    blob = pickle.loads(bytes(data[32:]))["pixels"]
+    at = bytes(data).find(blob) + len(blob) // 2
+    data[at] ^= 0xFF
+    store.write_bytes(bytes(data))
+    _new_process(monkeypatch)
+    assert np.array_equal(_mine(_content(), store), _theirs(_content()))
+
+
+@pytest.mark.parametrize("rc", [{"text.hinting": "no_hinting"}, {"text.hinting": "auto"},
+                                {"text.antialiased": False}, {"font.family": "serif"}])
+def test_a_file_written_under_other_rc_parameters_draws_matplotlibs_pixels(
+        tmp_path, monkeypatch, rc):
+    import matplotlib as mpl
+
+    store = tmp_path / "texts.pickle"
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    with mpl.rc_context(rc):
+        theirs = _theirs(_content())
+        _new_process(monkeypatch)
+        assert np.array_equal(_mine(_content(), store), theirs)
+        _new_process(monkeypatch)       # and the file as that process wrote it
+        assert np.array_equal(_mine(_content(), store), theirs)
