@@ -128,11 +128,15 @@ def _damaged(data: bytes, how: str) -> bytes:
         return data[: len(data) // 2]
     if how == "empty":
         return b""
-    other = pickle.dumps({**pickle.loads(body), "format": FORMAT + 1})   # a later format
+    if how == "another layout":         # this format's number, other contents
+        other = pickle.dumps({"format": FORMAT, "layouts": [], "bitmaps": None})
+    else:
+        other = pickle.dumps({**pickle.loads(body), "format": FORMAT + 1})   # a later format
     return hashlib.sha256(other).digest() + other
 
 
-@pytest.mark.parametrize("how", ["a byte changed", "cut", "empty", "another format"])
+@pytest.mark.parametrize("how", ["a byte changed", "cut", "empty", "another format",
+                                 "another layout"])
 def test_a_damaged_or_foreign_file_is_ignored_and_written_again(tmp_path, monkeypatch, how):
     store = tmp_path / "texts.pickle"
     _new_process(monkeypatch)
@@ -243,3 +247,26 @@ def test_a_file_written_under_other_rc_parameters_draws_matplotlibs_pixels(
         assert np.array_equal(_mine(_content(), store), theirs)
         _new_process(monkeypatch)       # and the file as that process wrote it
         assert np.array_equal(_mine(_content(), store), theirs)
+
+
+def _unicode_and_math(fig):
+    """Non-ASCII labels, a glyph from the second family (cmr10 has no Greek capitals) and
+    mathtext beside plain text."""
+    ax = fig.add_subplot()
+    ax.plot([0, 1], [0, 1], label="Δφ → 45°, ±3 dB")
+    ax.set_title("marge de phase: ü é ß")
+    ax.set_xlabel(r"$\omega$ [rad/s] and $10^{2}$")
+    ax.legend()
+    fig.text(0.2, 0.5, "Ωmega ΔV", family=["cmr10", "DejaVu Sans"], rotation=15)
+
+
+def test_unicode_fallback_fonts_and_mathtext_read_back_draw_matplotlibs_pixels(
+        tmp_path, monkeypatch):
+    store = tmp_path / "texts.pickle"
+    theirs = _theirs(_unicode_and_math)
+    _new_process(monkeypatch)
+    assert np.array_equal(_mine(_unicode_and_math, store), theirs)
+    _new_process(monkeypatch)
+    work = _counted(monkeypatch)
+    assert np.array_equal(_mine(_unicode_and_math, store), theirs)
+    assert work["rendered"] == 0 and work["laid out"] == 0

@@ -102,7 +102,12 @@ def _read(path: Path) -> dict | None:
         contents = pickle.loads(body)
     except Exception:       # noqa: BLE001 - a file of another making: ignored, rewritten
         return None
-    return contents if isinstance(contents, dict) and contents.get("format") == FORMAT else None
+    if not (isinstance(contents, dict) and contents.get("format") == FORMAT
+            and isinstance(contents.get("pixels"), bytes)
+            and all(isinstance(contents.get(k), dict)
+                    for k in ("layouts", "bitmaps", "measures"))):
+        return None         # another making under this format's number: ignored, rewritten
+    return contents
 
 
 def _load(contents: dict) -> int:
