@@ -270,3 +270,26 @@ def test_unicode_fallback_fonts_and_mathtext_read_back_draw_matplotlibs_pixels(
     work = _counted(monkeypatch)
     assert np.array_equal(_mine(_unicode_and_math, store), theirs)
     assert work["rendered"] == 0 and work["laid out"] == 0
+
+
+def test_a_font_file_touched_since_is_not_read_back(tmp_path, monkeypatch):
+    """The file's modification time as ``os.stat`` gives it to a later process (one ns on),
+    its size the same: nothing read back (what the stat of ``file_identity`` is for)."""
+    import os
+    import types
+
+    store = tmp_path / "texts.pickle"
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    _new_process(monkeypatch)
+    monkeypatch.setattr(font_memory, "_STATS", {})
+
+    def touched(path):
+        info = os.stat(path)
+        return types.SimpleNamespace(st_size=info.st_size, st_mtime_ns=info.st_mtime_ns + 1)
+
+    monkeypatch.setattr(font_memory, "os", types.SimpleNamespace(
+        stat=touched, path=os.path, fspath=os.fspath))
+    work = _counted(monkeypatch)
+    assert np.array_equal(_mine(_content(), store), _theirs(_content()))
+    assert work["rendered"] > 0 and work["laid out"] > 0 and work["measured"] > 0
