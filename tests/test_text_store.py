@@ -128,11 +128,15 @@ def _damaged(data: bytes, how: str) -> bytes:
         return data[: len(data) // 2]
     if how == "empty":
         return b""
-    other = pickle.dumps({**pickle.loads(body), "format": FORMAT + 1})   # a later format
+    if how == "another layout":         # this format's number, other contents
+        other = pickle.dumps({"format": FORMAT, "layouts": [], "bitmaps": None})
+    else:
+        other = pickle.dumps({**pickle.loads(body), "format": FORMAT + 1})   # a later format
     return hashlib.sha256(other).digest() + other
 
 
-@pytest.mark.parametrize("how", ["a byte changed", "cut", "empty", "another format"])
+@pytest.mark.parametrize("how", ["a byte changed", "cut", "empty", "another format",
+                                 "another layout"])
 def test_a_damaged_or_foreign_file_is_ignored_and_written_again(tmp_path, monkeypatch, how):
     store = tmp_path / "texts.pickle"
     _new_process(monkeypatch)
@@ -188,3 +192,104 @@ def test_a_folder_that_cannot_be_written_only_costs_the_work(tmp_path, monkeypat
     drawn = _mine(_content(), store)
     assert not store.exists()
     assert np.array_equal(drawn, _theirs(_content()))
+
+
+def test_a_full_file_of_entries_no_longer_drawn_gives_way_to_the_current_ones(tmp_path,
+                                                                              monkeypatch):
+    store = tmp_path / "texts.pickle"
+    theirs = _theirs(_content())
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    drawn = len(glyph_cache.kept_bitmaps())
+    # room for the figure's bitmaps and a half of them: the file's and the figure's do not
+    # both fit, the cache is emptied once while the figure is drawn
+    monkeypatch.setattr(glyph_cache, "CACHE_SIZE", drawn * 3 // 2)
+    # the font files changed after the file was written: none of its entries is drawn
+    stats = {path: (real, size, mtime + 1) for path, (real, size, mtime)
+             in font_memory._STATS.items()}
+    rendered = []
+    for _ in range(4):
+        _new_process(monkeypatch)
+        monkeypatch.setattr(font_memory, "_STATS", dict(stats))
+        work = _counted(monkeypatch)
+        assert np.array_equal(_mine(_content(), store), theirs)
+        rendered.append(work["rendered"])
+    assert rendered[0] == drawn
+    assert rendered[-1] == 0, rendered
+
+
+def test_a_file_whose_pixels_changed_is_not_read(tmp_path, monkeypatch):
+    """A byte of a glyph bitmap changed: the file still unpickles, its digest does not hold."""
+    store = tmp_path / "texts.pickle"
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    data = bytearray(store.read_bytes())
+    blob = pickle.loads(bytes(data[32:]))["pixels"]
+    at = bytes(data).find(blob) + len(blob) // 2
+    data[at] ^= 0xFF
+    store.write_bytes(bytes(data))
+    _new_process(monkeypatch)
+    assert np.array_equal(_mine(_content(), store), _theirs(_content()))
+
+
+@pytest.mark.parametrize("rc", [{"text.hinting": "no_hinting"}, {"text.hinting": "auto"},
+                                {"text.antialiased": False}, {"font.family": "serif"}])
+def test_a_file_written_under_other_rc_parameters_draws_matplotlibs_pixels(
+        tmp_path, monkeypatch, rc):
+    import matplotlib as mpl
+
+    store = tmp_path / "texts.pickle"
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    with mpl.rc_context(rc):
+        theirs = _theirs(_content())
+        _new_process(monkeypatch)
+        assert np.array_equal(_mine(_content(), store), theirs)
+        _new_process(monkeypatch)       # and the file as that process wrote it
+        assert np.array_equal(_mine(_content(), store), theirs)
+
+
+def _unicode_and_math(fig):
+    """Non-ASCII labels, a glyph from the second family (cmr10 has no Greek capitals) and
+    mathtext beside plain text."""
+    ax = fig.add_subplot()
+    ax.plot([0, 1], [0, 1], label="Δφ → 45°, ±3 dB")
+    ax.set_title("marge de phase: ü é ß")
+    ax.set_xlabel(r"$\omega$ [rad/s] and $10^{2}$")
+    ax.legend()
+    fig.text(0.2, 0.5, "Ωmega ΔV", family=["cmr10", "DejaVu Sans"], rotation=15)
+
+
+def test_unicode_fallback_fonts_and_mathtext_read_back_draw_matplotlibs_pixels(
+        tmp_path, monkeypatch):
+    store = tmp_path / "texts.pickle"
+    theirs = _theirs(_unicode_and_math)
+    _new_process(monkeypatch)
+    assert np.array_equal(_mine(_unicode_and_math, store), theirs)
+    _new_process(monkeypatch)
+    work = _counted(monkeypatch)
+    assert np.array_equal(_mine(_unicode_and_math, store), theirs)
+    assert work["rendered"] == 0 and work["laid out"] == 0
+
+
+def test_a_font_file_touched_since_is_not_read_back(tmp_path, monkeypatch):
+    """The file's modification time as ``os.stat`` gives it to a later process (one ns on),
+    its size the same: nothing read back (what the stat of ``file_identity`` is for)."""
+    import os
+    import types
+
+    store = tmp_path / "texts.pickle"
+    _new_process(monkeypatch)
+    _mine(_content(), store)
+    _new_process(monkeypatch)
+    monkeypatch.setattr(font_memory, "_STATS", {})
+
+    def touched(path):
+        info = os.stat(path)
+        return types.SimpleNamespace(st_size=info.st_size, st_mtime_ns=info.st_mtime_ns + 1)
+
+    monkeypatch.setattr(font_memory, "os", types.SimpleNamespace(
+        stat=touched, path=os.path, fspath=os.fspath))
+    work = _counted(monkeypatch)
+    assert np.array_equal(_mine(_content(), store), _theirs(_content()))
+    assert work["rendered"] > 0 and work["laid out"] > 0 and work["measured"] > 0

@@ -102,7 +102,12 @@ def _read(path: Path) -> dict | None:
         contents = pickle.loads(body)
     except Exception:       # noqa: BLE001 - a file of another making: ignored, rewritten
         return None
-    return contents if isinstance(contents, dict) and contents.get("format") == FORMAT else None
+    if not (isinstance(contents, dict) and contents.get("format") == FORMAT
+            and isinstance(contents.get("pixels"), bytes)
+            and all(isinstance(contents.get(k), dict)
+                    for k in ("layouts", "bitmaps", "measures"))):
+        return None         # another making under this format's number: ignored, rewritten
+    return contents
 
 
 def _load(contents: dict) -> int:
@@ -155,7 +160,10 @@ def texts_kept(path: Path | None = None):
     if _kept() == loaded:           # nothing drawn that was not read (nor emptied)
         return
     contents = _contents()
-    if sum(len(contents[k]) for k in ("bitmaps", "layouts", "measures")) > before:
+    # fewer than read too: a cache filled up and emptied (glyph_cache.CACHE_SIZE), the
+    # entries kept since written, so that a file full of ones no longer drawn (fonts
+    # changed since) gives way to those drawn now
+    if sum(len(contents[k]) for k in ("bitmaps", "layouts", "measures")) != before:
         _write(path, contents)
 
 
