@@ -101,3 +101,14 @@ def test_within_the_limits_the_floor_changes_nothing():
 def test_a_scenario_that_leaves_it_out_aborts_down_to_the_contact():
     """The schema's default is -1000 m: ship leaves the key out."""
     assert load_scenario("ship").data["landing"]["abort_floor"] == -1e3
+
+
+def test_with_crawl_pause_the_floor_holds_the_crawl_instead():
+    """crawl_pause 1: past the limits is out of the align band (0.25 > 0.2 / 2), so within
+    the 0.06 m floor the step neither aborts nor falls: the reference stays H over the
+    contact (the pause), the phase and abort count as before the step; without the floor
+    it aborts as with the pause off."""
+    phase, aborts, h = _step(0.01, offset=0.25, abort_floor=0.06, crawl_pause=1.0)
+    assert (phase, aborts) == (DESCEND, 0.0)
+    assert h == pytest.approx(H, rel=1e-12)
+    assert _step(0.01, offset=0.25, crawl_pause=1.0)[:2] == _aborted()[:2]

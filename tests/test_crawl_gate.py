@@ -112,6 +112,16 @@ def test_the_gate_waits_only_on_a_quiescent_deck():
     assert _step(0.03, 0.0, rise=0.0, crawl_gate=0.05, crawl_gate_rise=0.2) == FELL
 
 
+def test_the_quiescent_deck_s_limit_is_inclusive():
+    """"Within" ``crawl_gate_rise``: with exact binary speeds (the limit 0.25 m/s) a deck
+    at 0.25 m/s up or down still holds the crawl on the 0.06 m prediction past a 0.05 m gate,
+    at 0.25 + 2^-20 m/s it falls on."""
+    keys = dict(crawl_gate=0.05, crawl_gate_rise=0.25)
+    for sign in (1.0, -1.0):
+        assert _step(0.03, 0.09, rise=sign * 0.25, **keys) == HELD
+        assert _step(0.03, 0.09, rise=sign * (0.25 + 2.0 ** -20), **keys) == FELL
+
+
 def _touchdown_after_pauses(timer, n, **keys):
     """From a committed crawl whose timer holds ``timer`` (the gate's pauses so far) with
     the quadrotor 3 cm ahead at rest, the contact switch closing (armed): the phase, the

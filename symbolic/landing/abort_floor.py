@@ -12,7 +12,11 @@ reads as a bounce off the pad. With ``abort_floor`` the abort is not started onc
 height above the deck, as the flight code knows it (the filter's relative height less the
 height of the contact, :func:`~quadland_symbolic.landing.guidance.contact_height`), is at or
 below it: the crawl goes on to the contact, which is judged on its own figures. The default,
--1000 m, never holds: the abort fires down to the contact.
+-1000 m, never holds: the abort fires down to the contact. With ``crawl_pause`` on as well, an
+offset or a speed past the limits is also out of the align band, so within the floor the
+crawl does not go on but pauses, the reference held a few centimetres over the deck until
+the estimate is back in the band (:func:`~quadland_symbolic.landing.crawl_gate.fall_band`);
+no shipped scenario sets both, and that combination was not flown.
 
 Branch-free CasADi, generated into C with the guidance step.
 """
