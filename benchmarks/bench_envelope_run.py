@@ -28,13 +28,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from bench_tick_table import tree_env
+from bench_tick_table import instructions, paired_table, tree_env
 
 ROOT = Path(__file__).resolve().parent.parent
 AXES = ["initial.velocity2[0]=5:35:20", "wind.mean[1]=0:20:20"]
@@ -100,29 +99,7 @@ def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True) -> dict:
 def callgrind(tree: Path | None, tmp: Path, runs: int) -> int:
     """Callgrind's instruction count of a worker's process flying ``runs`` runs (no warm-up
     run: the first of both counts is the same run)."""
-    env, cwd = tree_env(tree, tmp)
-    env["PYTHONHASHSEED"] = "0"
-    env["OPENBLAS_NUM_THREADS"] = "1"
-    out = tmp / "callgrind.out"
-    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-                    sys.executable, "-c", CHILD, str(runs), "0", "0", json.dumps(AXES)],
-                   check=True, cwd=cwd, env=env, capture_output=True)
-    for line in out.read_text().splitlines():
-        if line.startswith("summary:") or line.startswith("totals:"):
-            return int(line.split()[1])
-    raise RuntimeError("no totals in callgrind's output")
-
-
-def _table(res: dict) -> None:
-    print("| median of the rounds (min to max) | before | now | now / before | same bits |")
-    print("|---|---:|---:|---:|---|")
-    for k in res["now"]:
-        b, n = ([v[0] for v in res[w][k]] for w in ("before", "now"))
-        same = {v[1] for v in res["before"][k]} == {v[1] for v in res["now"][k]}
-        print(f"| {k} | {statistics.median(b):.3f} ({min(b):.3f} to {max(b):.3f}) | "
-              f"{statistics.median(n):.3f} ({min(n):.3f} to {max(n):.3f}) | "
-              f"{statistics.median(n) / statistics.median(b):.3f} | "
-              f"{('yes, ' + res['now'][k][0][1][:8]) if same else 'NO'} |")
+    return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES))
 
 
 def main() -> None:
@@ -149,7 +126,7 @@ def main() -> None:
             print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 3) for k, v in
                                                        d.items()} for n, d in res.items()}),
                   flush=True)
-    _table(res)
+    paired_table(res, "what", 3)
 
 
 if __name__ == "__main__":

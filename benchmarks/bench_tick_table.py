@@ -107,20 +107,43 @@ def tree_env(tree: Path | None, tmp: Path) -> tuple[dict, Path]:
     return env, tmp
 
 
-def callgrind(tree: Path | None, tmp: Path, tables: int, ticks: int) -> int:
-    """Callgrind's instruction count of a process that draws ``tables`` tables to
-    ``ticks``."""
+def instructions(tree: Path | None, tmp: Path, *args: str) -> int:
+    """Callgrind's instruction count of ``python -c script *args`` (``args[0]`` the
+    script) run on ``tree``'s code (this checkout's when None), with one hash seed and one
+    BLAS thread."""
     env, cwd = tree_env(tree, tmp)
     env["PYTHONHASHSEED"] = "0"                # the same dictionaries' and sets' order
     env["OPENBLAS_NUM_THREADS"] = "1"          # no BLAS threads spinning
     out = tmp / "callgrind.out"
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-                    sys.executable, "-c", _CALLGRIND, str(tables), str(ticks)], check=True, cwd=cwd,
-                   env=env, capture_output=True)
+                    sys.executable, "-c", *args], check=True, cwd=cwd, env=env,
+                   capture_output=True)
     for line in out.read_text().splitlines():
         if line.startswith("summary:") or line.startswith("totals:"):
             return int(line.split()[1])
     raise RuntimeError("no totals in callgrind's output")
+
+
+def callgrind(tree: Path | None, tmp: Path, tables: int, ticks: int) -> int:
+    """Callgrind's instruction count of a process that draws ``tables`` tables to
+    ``ticks``."""
+    return instructions(tree, tmp, _CALLGRIND, str(tables), str(ticks))
+
+
+def paired_table(res: dict, what: str, digits: int) -> None:
+    """Print ``res["before"]`` against ``res["now"]`` (per key, rounds of (value, digest)):
+    medians, ranges, their ratio and whether every round's digest is the same."""
+    print(f"| {what}, median of the rounds (min to max) | before | now | now / before | "
+          "same bits |")
+    print("|---|---:|---:|---:|---|")
+    for k in res["now"]:
+        b, n = ([v[0] for v in res[w][k]] for w in ("before", "now"))
+        same = {v[1] for v in res["before"][k]} == {v[1] for v in res["now"][k]}
+        print(f"| {k} | {statistics.median(b):.{digits}f} ({min(b):.{digits}f} to "
+              f"{max(b):.{digits}f}) | {statistics.median(n):.{digits}f} "
+              f"({min(n):.{digits}f} to {max(n):.{digits}f}) | "
+              f"{statistics.median(n) / statistics.median(b):.3f} | "
+              f"{'yes, ' + res['now'][k][0][1][:8] if same else 'NO'} |")
 
 
 def child(tree: Path | None, tmp: Path, tables: int, runs: int, ticks: str) -> dict:
@@ -158,16 +181,7 @@ def main() -> None:
                     res[name].setdefault(k, []).append(v)
             print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 2) for k, v in d.items()}
                                                   for n, d in res.items()}), flush=True)
-    print("| CPU ms, median of the rounds (min to max) | before | now | now / before | same bits |")
-    print("|---|---:|---:|---:|---|")
-    for k in res["now"]:
-        b, n = ([v[0] for v in res[w][k]] for w in ("before", "now"))
-        same = {v[1] for v in res["before"][k]} == {v[1] for v in res["now"][k]}
-        print(f"| {k} | {statistics.median(b):.2f} ({min(b):.2f} to {max(b):.2f}) | "
-              f"{statistics.median(n):.2f} ({min(n):.2f} to {max(n):.2f}) | "
-              f"{statistics.median(n) / statistics.median(b):.3f} | "
-              f"{'yes, ' + res['now'][k][0][1][:8] if same else 'NO'} |")
-
+    paired_table(res, "CPU ms", 2)
 
 if __name__ == "__main__":
     main()
