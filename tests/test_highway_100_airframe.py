@@ -192,10 +192,12 @@ def test_the_magnets_hold_the_worst_corner_at_the_cut():
 def test_the_road_benchmark_keeps_highway_100_s_old_airframe():
     """benchmarks/highway_100_road.toml extends highway_100 and pins what this change
     moved, so it flies what docs/landing.md measured on it: thrust-to-weight 2, the 0.2 m
-    gear height, the 102 deg lens, the 0.5 m pad, the 48.7 deg contact limit."""
+    gear height, the 102 deg lens without the nested marker, the 0.5 m pad, the 48.7 deg
+    contact limit."""
     d = load_scenario(BENCH / "highway_100_road.toml").data
     assert d["quadrotor"]["thrust_to_weight"] == d["controller_model"]["thrust_to_weight"]
     assert d["quadrotor"]["thrust_to_weight"] == 2.0 and d["quadrotor"]["gear_height"] == 0.2
     assert math.degrees(d["sensors.vision"]["half_angle"]) == pytest.approx(51.0)
     assert d["landing"]["pad_radius"] == 0.5 and d["landing"]["max_tilt_deg"] == 48.7
     assert d["touchdown"]["flare_height"] == 0.15 and d["touchdown"]["flare_tilt_deg"] == 47.0
+    assert d["sensors.vision"]["small_range_max"] == 0.0             # the large marker alone
