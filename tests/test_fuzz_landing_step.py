@@ -131,6 +131,7 @@ GUIDANCE_DOCUMENTED = {
     "crawl_gate_rise": _nonnegative,
     "calm_lean": _nonnegative, "lean_time": _positive,
     "lean_withdraw": lambda v, p: (v == 0) | (v == 1), "abort_floor": _finite,
+    "ground_airmode": lambda v, p: (v == 0) | (v == 1),
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -245,9 +246,10 @@ class _Harness:
         self.v_ref[:] = np.r_[np.r_[p_e, 0, 0, -rng.uniform(0, 0.7), 0, 0, rng.normal() * 0.3]
                               + scale * rng.normal(size=9),
                               # the touchdown policy's commands: a tilt limit, the level-out
-                              # and the collective's ramp, the cut, the pivot's arm (or none)
+                              # and the collective's ramp, the cut, air mode, the pivot's arm
+                              # (or none)
                               rng.uniform(0.05, math.pi / 2), rng.uniform(0, 1),
-                              rng.uniform(0, 1), rng.choice((0.0, 1.0)),
+                              rng.uniform(0, 1), rng.choice((0.0, 1.0)), rng.choice((0.0, 1.0)),
                               rng.choice((0.0, 1.0)) * rng.uniform(0, 0.3, size=3)]
         mem = landing_memory(L).unpack(np.zeros(landing_memory(L).size))
         st = {k: rng.normal(size=v.shape) * scale * 0.2 for k, v in mem.items()}

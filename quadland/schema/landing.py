@@ -335,6 +335,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                   "the gear to meet the deck: its crawl ends where the lowest "
                                   "foot of a body pitched this much does (0: level)", lo=0.0,
                                   hi=80.0, default=0.0),
+        "ground_airmode": Field(B, "-", "secure: false: from touchdown on the collective is not "
+                                "raised for the attitude's moments (air mode off)",
+                                default=True),
         **LOCK_FIELDS,
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.

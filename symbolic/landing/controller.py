@@ -298,8 +298,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     yaw_error = ms["eta1"][2] - eta2[2]
     eta1 = ca.vertcat(ms["eta1"][0:2], eta2[2] + ca.atan2(ca.sin(yaw_error), ca.cos(yaw_error)))
     W_hat, zeta_hat = mm["W_hat"], mm["zeta_hat"]
-    m1, rho, nominal = q["m1"], c["rho"], c["nominal_model"]
-    k1p, k2p = c["k1p"], c["k2p"]
+    m1, rho, nominal, k1p, k2p = q["m1"], c["rho"], c["nominal_model"], c["k1p"], c["k2p"]
     R_deck = rotation(eta2)
     eta2_dot, eta2_ddot = deck_rates(eta2, ms["w2E"], ms["w2E_dot"])
 
@@ -336,7 +335,8 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
                                           zeta_hat[_ATTITUDE], p_quad)
 
     # rotors: the moments first, the collective thrust within what they leave
-    T = thrust_within_moments(td["thrust_scale"] * th["T"], q["I"] * u_a, p_quad, act["F_max"])
+    T = thrust_within_moments(td["thrust_scale"] * th["T"], q["I"] * u_a, p_quad, act["F_max"],
+                              td["airmode"])
     delta = R_deck.T @ (T * th["b3"] - t_E) / m1                               # limits' shortfall
     wrench = ca.vertcat(T, q["I"] * u_a)
     unclipped = rotors_from_wrench(wrench, p_quad)

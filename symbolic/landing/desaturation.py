@@ -15,11 +15,16 @@ from quadland_symbolic.quadrotor import rotors_from_wrench
 __all__ = ["thrust_within_moments", "clip_forces", "clipped_count"]
 
 
-def thrust_within_moments(T, M, p_quad, F_max):
+def thrust_within_moments(T, M, p_quad, F_max, airmode=1):
     """``T`` moved into the band where every rotor can make its share of ``M``.
 
     The band is ``[4 max(-m_i), 4 (F_max - max m_i)]``; where it is empty (moments
     beyond the rotors) its upper end is taken, and the result is never below 0.
+    ``airmode`` 0 (a 0/1 flag, symbolic or not) never raises ``T`` to the band's lower
+    end: the collective only comes down to its upper end, and the rotors the moments
+    would take below 0 are clipped there, giving up that share of the moments (PX4's
+    mixer with ``MC_AIRMODE`` disabled, docs/landing.md, "highway_100: the level-out
+    without air mode"); 1, the default, is the band as above.
 
     Parameters
     ----------
@@ -31,10 +36,15 @@ def thrust_within_moments(T, M, p_quad, F_max):
         :data:`~quadland_symbolic.parameters.QUADROTOR` (the mixer's arm and drag factor).
     F_max : casadi.SX
         Largest force of one rotor, N.
+    airmode : casadi.SX or float
+        1: the collective rises for the moments (air mode); 0: it does not.
     """
     m = rotors_from_wrench(ca.vertcat(0, M), p_quad)
     lo, hi = 4 * ca.mmax(-m), 4 * (F_max - ca.mmax(m))
-    return ca.fmax(ca.fmin(ca.fmax(T, lo), hi), 0)
+    within = ca.fmax(ca.fmin(ca.fmax(T, lo), hi), 0)
+    if isinstance(airmode, (int, float)) and airmode == 1:
+        return within
+    return ca.if_else(airmode > 0.5, within, ca.fmax(ca.fmin(T, hi), 0))
 
 
 def clipped_count(F, F_max):

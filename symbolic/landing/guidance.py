@@ -239,6 +239,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "only holds the commit"),
     Field("abort_floor", 1, "m", "the gear's height above the deck, as estimated, at or "
           "below which the crawl's out-of-limits abort is not started (-1000: never)"),
+    Field("ground_airmode", 1, "0/1", "1: from touchdown on the collective still rises for the "
+          "moments, as in flight; 0: it does not (touchdown_policy)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.

@@ -47,6 +47,15 @@ through :data:`TOUCHDOWN_COMMANDS`, appended to the position reference:
    highway_100: 77 N at 0.5 s against 16 N to stop the slide and 4 N to stop
    the roll-over).
 
+With ``ground_airmode = 0`` the collective is not raised for the moments from touchdown
+on (:data:`TOUCHDOWN_COMMANDS`' ``airmode``, read by
+:func:`~quadland_symbolic.landing.desaturation.thrust_within_moments`): a body that pivots
+onto its rear feet faster than the level-out's blend makes the attitude loop ask for
+moments that, in air mode, buy themselves collective thrust, which unloads the feet the
+drag is sliding (docs/landing.md, "highway_100: the level-out without air mode"). PX4's
+mixer with ``MC_AIRMODE`` disabled never raises the thrust to unsaturate a rotor; it gives
+up the moment instead.
+
 With ``pivot_x``, ``pivot_y``, ``pivot_h`` set (the gear's arm, times ``[touchdown]
 pivot_aim``), the policy also aims ahead of the level-out: the body meets the deck
 leaning into the airflow, lowest feet first, and levelling it about those feet moves its
@@ -85,6 +94,8 @@ TOUCHDOWN_COMMANDS = Layout("td_cmd", (
     Field("level", 1, "-", "blend of the attitude command towards the deck's level, 0 to 1"),
     Field("thrust_scale", 1, "-", "factor on the collective thrust before the mixer, 0 to 1"),
     Field("power", 1, "-", "factor on the rotor commands: 0 cuts them"),
+    Field("airmode", 1, "0/1", "1: the collective rises for the moments (air mode); 0: it "
+          "does not, the moments give way"),
     Field("pivot", 3, "m", "the gear's pivot arm whose levelling the aim point anticipates "
           "(feet x, y half-spacings, height below the centre of mass; 0: no shift)",
           elements=("pivot_x", "pivot_y", "pivot_h")),
@@ -92,7 +103,7 @@ TOUCHDOWN_COMMANDS = Layout("td_cmd", (
 
 #: :data:`TOUCHDOWN_COMMANDS` that change nothing (the policy off, or before its flare).
 INERT_COMMANDS = dict(tilt_limit=float(NO_TILT_LIMIT), level=0.0, thrust_scale=1.0, power=1.0,
-                      pivot=[0.0, 0.0, 0.0])
+                      airmode=1.0, pivot=[0.0, 0.0, 0.0])
 
 
 def touchdown_commands(down, descending, timer_next, z_next, p):
@@ -114,7 +125,8 @@ def touchdown_commands(down, descending, timer_next, z_next, p):
     aiming = on * ca.logic_or(down, ca.logic_and(descending, z_next - p["touchdown_height"]
                                                  - p["contact_drop"] <= p["aim_height"]))
     pivot = aiming * ca.vertcat(p["pivot_x"], p["pivot_y"], p["pivot_h"])
-    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, pivot)
+    airmode = 1 - on * down * (1 - p["ground_airmode"])
+    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, airmode, pivot)
 
 
 def touchdown_crawl(in_touchdown, p):
@@ -129,14 +141,15 @@ def touchdown_crawl(in_touchdown, p):
 def bounded_commands(commands: dict, tilt_max) -> dict:
     """The landing step's reading of :data:`TOUCHDOWN_COMMANDS` (``commands``, unpacked):
     the tilt limit within ``[0, tilt_max]`` (the controller's own), the blend, the
-    collective's factor and the power within ``[0, 1]``, whatever the caller passed, so
-    that the rotor commands stay within ``[0, F_max]`` and the thrust within ``[0, 4
-    F_max]``."""
+    collective's factor, the power and the air-mode flag within ``[0, 1]``, whatever the
+    caller passed, so that the rotor commands stay within ``[0, F_max]`` and the thrust
+    within ``[0, 4 F_max]``."""
     def unit(v):
         return ca.fmin(ca.fmax(v, 0), 1)
     return dict(tilt_limit=ca.fmin(tilt_max, ca.fmax(commands["tilt_limit"], 0)),
                 level=unit(commands["level"]), thrust_scale=unit(commands["thrust_scale"]),
-                power=unit(commands["power"]), pivot=ca.fmax(commands["pivot"], 0))
+                power=unit(commands["power"]), airmode=unit(commands["airmode"]),
+                pivot=ca.fmax(commands["pivot"], 0))
 
 
 def apply_touchdown_commands(level, eta_c, eta_level):

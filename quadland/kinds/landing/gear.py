@@ -93,7 +93,7 @@ def touchdown_guidance(scenario: Scenario) -> dict:
                 level_time=td["level_time"], cut_time=td["cut_time"],
                 aim_height=td["aim_height"], pivot_x=aim * gear["feet_x"],
                 pivot_y=aim * gear["feet_y"],
-                pivot_h=aim * hc)
+                pivot_h=aim * hc, ground_airmode=float(td["ground_airmode"]))
 
 
 def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
