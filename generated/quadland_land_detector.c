@@ -54,7 +54,8 @@ typedef char land_detector_params_is_its_layout[
     AT(ql_land_detector_params, spike_min, 9, 0) &&
     AT(ql_land_detector_params, spike_window, 10, 0) &&
     AT(ql_land_detector_params, accel_tau, 11, 0) &&
-    sizeof(ql_land_detector_params) == 12 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_land_detector_params, contact_thrust, 12, 0) &&
+    sizeof(ql_land_detector_params) == 13 * sizeof(ql_real) ? 1 : -1];
 typedef char land_detector_flags_is_its_layout[
     AT(ql_land_detector_flags, ground_contact, 0, 0) &&
     AT(ql_land_detector_flags, maybe_landed, 1, 0) &&
@@ -69,9 +70,10 @@ typedef char land_detector_flags_is_its_layout[
     sizeof(ql_land_detector_flags) == 10 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.land_detector.LAND_DETECTOR_DEFAULTS. */
-static const ql_real default_p_ld[12] = {
+static const ql_real default_p_ld[13] = {
     0.1, 0.25, 0.6, 0.3333333333333333, 0.3333333333333333, 0.3333333333333333,
     2.5, 3.0, 0.1, 3.0, 1.0, 0.5,
+    0.0,
 };
 
 void ql_land_detector_params_init(ql_land_detector_params *params)
@@ -97,6 +99,7 @@ void ql_land_detector_state_init(ql_land_detector_state *state)
  *   spike_min                >= 0
  *   spike_window             >= 0
  *   accel_tau                > 0
+ *   contact_thrust           0 or 1
  * NaN and infinities are outside every range. */
 ql_status ql_check_land_detector_params(const ql_land_detector_params *params,
                                         const char **bad_field)
@@ -146,6 +149,9 @@ ql_status ql_check_land_detector_params(const ql_land_detector_params *params,
     if (!bad && !(isfinite(p[11]) && (p[11] > 0.0))) {
         bad = "accel_tau";
     }
+    if (!bad && !(isfinite(p[12]) && ((p[12] == 0.0) || (p[12] == 1.0)))) {
+        bad = "contact_thrust";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -153,7 +159,7 @@ ql_status ql_check_land_detector_params(const ql_land_detector_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 12 comparisons. The values are known to be finite; no names and no
+ * 13 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_land_detector_params finds the culprit. */
 static int land_detector_params_in_range(const ql_real *p)
 {
@@ -170,6 +176,7 @@ static int land_detector_params_in_range(const ql_real *p)
     ok &= (p[9] >= 0.0);
     ok &= (p[10] >= 0.0);
     ok &= (p[11] > 0.0);
+    ok &= ((p[12] == 0.0) | (p[12] == 1.0));
     return ok;
 }
 

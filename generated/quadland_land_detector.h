@@ -21,7 +21,7 @@ extern "C" {
 /* Sizes, from the layouts of symbolic/ (quadland_symbolic.landing.land_detector). */
 #define QL_LAND_DETECTOR_STATE_SIZE 11           /* reals in ql_land_detector_state */
 #define QL_LAND_DETECTOR_CUES_SIZE 7             /* reals in ql_land_detector_cues */
-#define QL_LAND_DETECTOR_PARAMS_SIZE 12          /* reals in ql_land_detector_params */
+#define QL_LAND_DETECTOR_PARAMS_SIZE 13          /* reals in ql_land_detector_params */
 #define QL_LAND_DETECTOR_FLAGS_SIZE 10           /* reals in ql_land_detector_flags */
 #define QL_LAND_DETECTOR_TIME_CAP 1000000.0      /* s: the largest time the memory holds */
 
@@ -66,6 +66,7 @@ typedef struct {
     ql_real spike_min;               /* m/s^2: smallest jump of f_z from its mean that is a touchdown */
     ql_real spike_window;            /* s: time a spike counts as corroboration */
     ql_real accel_tau;               /* s: time constant of f_z's running mean */
+    ql_real contact_thrust;          /* 0/1: 1: ground contact also needs the thrust at or below thrust_low (so a hover near the deck is no contact); 0: gap, still and descent */
 } ql_land_detector_params;
 
 /* What one step reports: the three stages and the cues it saw, each 0 or 1. */

@@ -47,7 +47,7 @@ DOCUMENTED = {
     "landed_time": lambda v: v >= 0, "hold_factor": lambda v: v >= 1,
     "no_range_factor": lambda v: v >= 1, "range_timeout": lambda v: v >= 0,
     "spike_min": lambda v: v >= 0, "spike_window": lambda v: v >= 0,
-    "accel_tau": lambda v: v > 0,
+    "accel_tau": lambda v: v > 0, "contact_thrust": lambda v: v in (0.0, 1.0),
 }
 
 

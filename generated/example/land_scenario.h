@@ -159,10 +159,11 @@ static const double ql_land_p_est[59] = {
     0.02, 0.5, 0.0, 0.0, 0.0,
 };
 
-/* The land detector's parameters ([land_detector]) (gap_max (1), vz_max (1), thrust_low (1), contact_time (1), maybe_time (1), landed_time (1), hold_factor (1), no_range_factor (1), range_timeout (1), spike_min (1), spike_window (1), accel_tau (1)). */
-static const double ql_land_p_ld[12] = {
+/* The land detector's parameters ([land_detector]) (gap_max (1), vz_max (1), thrust_low (1), contact_time (1), maybe_time (1), landed_time (1), hold_factor (1), no_range_factor (1), range_timeout (1), spike_min (1), spike_window (1), accel_tau (1), contact_thrust (1)). */
+static const double ql_land_p_ld[13] = {
     0.1, 0.25, 0.6, 0.3333333333333333, 0.3333333333333333, 0.3333333333333333,
     2.5, 3.0, 0.1, 3.0, 1.0, 0.5,
+    0.0,
 };
 
 /* The filter's initial estimate: the true relative motion at t = 0 (p_r (3), v1 (3), v_t (3), a_t (3), b (3), a_b (3), a_tilt (3)). */

@@ -54,7 +54,8 @@ typedef char land_detector_params_is_its_layout[
     AT(qlf_land_detector_params, spike_min, 9, 0) &&
     AT(qlf_land_detector_params, spike_window, 10, 0) &&
     AT(qlf_land_detector_params, accel_tau, 11, 0) &&
-    sizeof(qlf_land_detector_params) == 12 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_land_detector_params, contact_thrust, 12, 0) &&
+    sizeof(qlf_land_detector_params) == 13 * sizeof(qlf_real) ? 1 : -1];
 typedef char land_detector_flags_is_its_layout[
     AT(qlf_land_detector_flags, ground_contact, 0, 0) &&
     AT(qlf_land_detector_flags, maybe_landed, 1, 0) &&
@@ -69,9 +70,10 @@ typedef char land_detector_flags_is_its_layout[
     sizeof(qlf_land_detector_flags) == 10 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.land_detector.LAND_DETECTOR_DEFAULTS. */
-static const qlf_real default_p_ld[12] = {
+static const qlf_real default_p_ld[13] = {
     0.1f, 0.25f, 0.6f, 0.3333333333333333f, 0.3333333333333333f, 0.3333333333333333f,
     2.5f, 3.0f, 0.1f, 3.0f, 1.0f, 0.5f,
+    0.0f,
 };
 
 void qlf_land_detector_params_init(qlf_land_detector_params *params)
@@ -97,6 +99,7 @@ void qlf_land_detector_state_init(qlf_land_detector_state *state)
  *   spike_min                >= 0
  *   spike_window             >= 0
  *   accel_tau                > 0
+ *   contact_thrust           0 or 1
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_land_detector_params(const qlf_land_detector_params *params,
                                           const char **bad_field)
@@ -146,6 +149,9 @@ qlf_status qlf_check_land_detector_params(const qlf_land_detector_params *params
     if (!bad && !(isfinite(p[11]) && (p[11] > 0.0f))) {
         bad = "accel_tau";
     }
+    if (!bad && !(isfinite(p[12]) && ((p[12] == 0.0f) || (p[12] == 1.0f)))) {
+        bad = "contact_thrust";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -153,7 +159,7 @@ qlf_status qlf_check_land_detector_params(const qlf_land_detector_params *params
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 12 comparisons. The values are known to be finite; no names and no
+ * 13 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_land_detector_params finds the culprit. */
 static int land_detector_params_in_range(const qlf_real *p)
 {
@@ -170,6 +176,7 @@ static int land_detector_params_in_range(const qlf_real *p)
     ok &= (p[9] >= 0.0f);
     ok &= (p[10] >= 0.0f);
     ok &= (p[11] > 0.0f);
+    ok &= ((p[12] == 0.0f) | (p[12] == 1.0f));
     return ok;
 }
 

@@ -371,7 +371,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     },
     # The flight code's land detector (docs/land_detector.md): its cues' thresholds and
     # windows. Only the sensed loop has it; on the true state the touchdown is the gap's.
-    "land_detector": {
+    "land_detector": {**{
         name: Field(F, unit, LAND_DETECTOR_PARAMS[name].doc, lo=lo, hi=hi,
                     **({"lo_open": True} if name == "accel_tau" else {}))
         for name, unit, lo, hi in (
@@ -381,6 +381,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
             ("hold_factor", "-", 1.0, 100.0), ("no_range_factor", "-", 1.0, 100.0),
             ("range_timeout", "s", 0.0, 1e3), ("spike_min", "m/s^2", 0.0, 1e3),
             ("spike_window", "s", 0.0, 1e3), ("accel_tau", "s", 0.0, 1e3))},
+        "contact_thrust": Field(B, "-", "true: ground contact also needs the thrust at or "
+                                "below thrust_low (a hover near the deck is no contact)",
+                                default=False)},
     "disturbance": PAPER_SCHEMA["disturbance"],
     "wind": {
         "mean": Field(F, "m/s", "steady wind in E", 3, lo=-100.0, hi=100.0),

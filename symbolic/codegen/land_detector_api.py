@@ -60,7 +60,8 @@ _WIDENING = Range(lo=1.0)
 #: invalid everywhere): thresholds, windows, the range's timeout and the spike's size
 #: and window not negative; the widening and lengthening factors at least 1 (they
 #: widen and lengthen, docs/land_detector.md); the running mean's time constant
-#: positive (the scenario schema's ``[land_detector]`` ranges, unbounded above).
+#: positive; ``contact_thrust`` 0 or 1 (the scenario schema's ``[land_detector]`` ranges,
+#: unbounded above).
 LAND_DETECTOR_PARAM_RANGES = MappingProxyType({
     **{k: _NONNEGATIVE for k in ("gap_max", "vz_max", "thrust_low", "contact_time",
                                  "maybe_time", "landed_time")},
@@ -68,6 +69,7 @@ LAND_DETECTOR_PARAM_RANGES = MappingProxyType({
     "no_range_factor": _WIDENING,
     **{k: _NONNEGATIVE for k in ("range_timeout", "spike_min", "spike_window")},
     "accel_tau": Range(lo=0.0, lo_open=True),
+    "contact_thrust": Range(choices=(0.0, 1.0)),
 })
 
 #: The stage flags of the memory (each 0 or 1 in a valid memory); its other members but

@@ -93,6 +93,8 @@ LAND_DETECTOR_PARAMS = Layout("p_ld", (
     Field("spike_min", 1, "m/s^2", "smallest jump of f_z from its mean that is a touchdown"),
     Field("spike_window", 1, "s", "time a spike counts as corroboration"),
     Field("accel_tau", 1, "s", "time constant of f_z's running mean"),
+    Field("contact_thrust", 1, "0/1", "1: ground contact also needs the thrust at or below "
+          "thrust_low (so a hover near the deck is no contact); 0: gap, still and descent"),
 ), "land detector parameters")
 
 #: Default parameters (docs/land_detector.md, "Defaults").
@@ -100,7 +102,7 @@ LAND_DETECTOR_DEFAULTS = types.MappingProxyType(dict(
     gap_max=0.1, vz_max=0.25, thrust_low=0.6,
     contact_time=1.0 / 3.0, maybe_time=1.0 / 3.0, landed_time=1.0 / 3.0,
     hold_factor=2.5, no_range_factor=3.0, range_timeout=0.1,
-    spike_min=3.0, spike_window=1.0, accel_tau=0.5,
+    spike_min=3.0, spike_window=1.0, accel_tau=0.5, contact_thrust=0.0,
 ))
 
 #: Where each default comes from (PX4-Autopilot, or a reasoned assumption).
@@ -119,6 +121,9 @@ LAND_DETECTOR_SOURCES = types.MappingProxyType(dict(
               "(about 30 m/s^2), 8.6 times PX4's EKF2_ACC_NOISE",
     spike_window="assumption: LNDMC_TRIG_TIME, the whole detection",
     accel_tau="assumption: 16 times the 30 ms touchdown pulse, faster than the outer loop",
+    contact_thrust="PX4: ground contact needs low thrust as well as a commanded descent "
+                   "(MulticopterLandDetector.cpp, the ground-contact state); off by default, "
+                   "the detector of before",
 ))
 
 #: What the detector reports each step (every entry 0 or 1).
@@ -182,7 +187,7 @@ def land_detector_step(xld, cues, p_ld, dt):
         :data:`LAND_DETECTOR_STATE` at the start of the step.
     cues : casadi.SX, (7,)
         :data:`LAND_DETECTOR_CUES` of this step.
-    p_ld : casadi.SX, (12,)
+    p_ld : casadi.SX, (13,)
         :data:`LAND_DETECTOR_PARAMS`.
     dt : casadi.SX
         Step length, s (a negative one counts as 0).
@@ -210,14 +215,17 @@ def land_detector_step(xld, cues, p_ld, dt):
     slow = ca.logic_not(ca.logic_or(range_fresh, spike_cue))
     factor = ca.if_else(slow, p["no_range_factor"], 1)
     descend = ca.logic_or(c["in_descend"] >= 0.5, ca.logic_or(ml, ld))
-    contact = ca.logic_and(ca.logic_and(gap_cue, still_cue), ca.logic_and(
-        ca.logic_or(range_cue, ca.logic_not(range_fresh)), descend))
+    # with contact_thrust, the deck must carry the weight already (PX4's low thrust)
+    thrust_cue = c["thrust_ratio"] <= p["thrust_low"]
+    carried = ca.logic_or(thrust_cue, p["contact_thrust"] < 0.5)
+    contact = ca.logic_and(ca.logic_and(ca.logic_and(gap_cue, still_cue), carried),
+                           ca.logic_and(ca.logic_or(range_cue, ca.logic_not(range_fresh)),
+                                        descend))
     t_contact = _run(contact, s["t_contact"], dt)
     gc_next = ca.logic_or(ld, ca.logic_and(contact, ca.logic_or(
         gc, _reached(t_contact, p["contact_time"] * factor, dt))))
 
     # stage 2: the deck carries the weight
-    thrust_cue = c["thrust_ratio"] <= p["thrust_low"]
     maybe = ca.logic_and(gc_next, thrust_cue)
     t_maybe = _run(maybe, s["t_maybe"], dt)
     ml_next = ca.logic_or(ld, ca.logic_and(maybe, ca.logic_or(
