@@ -1,17 +1,24 @@
 """The heave oscillator kept to the final descent (``estimator.heave_height``, docs/landing.md,
-"ship_ss5: the heave oscillator in the final descent only").
+"ship_ss5: the heave oscillator in the crawl only").
 
 Checked by hand: the frequency the step uses at, just above and far below the gate's
 height; the filter's prediction below the gate against a quarter period of the oscillator
 worked by hand, above it against the random walk's prediction bit for bit; the default
-(1e6 m) never gating.
+(1e6 m) never gating; and ``ship_ss5``'s seed-7 run 104, the flight it was built for, against
+the pad's true motion (differences of its ``z2``).
 """
 
 import casadi as ca
 import numpy as np
 import pytest
 from nav_reference import N, col, sl
+from ship_before import HEAVE_BEFORE
 
+import quadland
+from quadland.campaign.sampling import draws
+from quadland.campaign.spec import campaign_spec_of
+from quadland.kinds.landing.report import touchdown_report
+from quadland.scenario import load_scenario
 from quadland_symbolic.landing.estimator import heave_frequency
 from quadland_symbolic.landing.filter_linearization import filter_prediction_function
 from quadland_symbolic.landing.navigation import ESTIMATOR_DEFAULTS, NAV, estimator_params
@@ -86,3 +93,53 @@ def test_above_the_gate_the_prediction_is_the_random_walks_to_the_bit():
     assert xn[sl("v_t")][2] == pytest.approx(0.3 - 0.8 * dt, abs=1e-15)
     assert xn[sl("a_t")][2] == -0.8
     assert xn[sl("p_r")][2] == pytest.approx(1.2 - (0.3 * dt - 0.8 * dt**2 / 2), abs=1e-15)
+
+
+def _run_104(*overrides):
+    """Seed 7's run 104 of ship_ss5 (its draw), with ``overrides``: the result, its report."""
+    seed7 = ["campaign.seed=7"]
+    d = draws(campaign_spec_of(load_scenario("ship_ss5", seed7)), [104])[0]
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *overrides]))
+    return res, touchdown_report(res)
+
+
+def _last_row(res):
+    """The last output row before the first contact."""
+    return int(np.argmax(np.asarray(res["touched"]) > 0.5)) - 1
+
+
+@pytest.mark.slow
+def test_seed_7_run_104_meets_its_deck_in_time_with_the_oscillator_in_the_crawl():
+    """Before (:data:`HEAVE_BEFORE`) the crawl meets a deck turning from its fall
+    too fast: the filter's pad acceleration at its horizon is more than 0.2 m/s^2 behind the
+    truth (differences of the pad's ``z2``), its relative vertical speed more than 0.1 m/s
+    short of the true one, and the sink rate past 0.5 m/s. As shipped (1.41 rad/s below
+    0.4 m) the horizon's acceleration is within 0.05 m/s^2 of the truth, the relative speed
+    within 0.05 m/s, and the run lands; the oscillator was on only in the last 0.4 s."""
+    for overrides, lands in ((HEAVE_BEFORE, False), ((), True)):
+        res, rep = _run_104(*overrides)
+        t, j = np.asarray(res["t"]), _last_row(res)
+        a_pad = np.gradient(np.gradient(np.asarray(res["z2"]), t), t)
+        k = int(np.argmin(np.abs(t - float(res["t_h"][j]))))
+        lag = abs(float(res["x_h_a_t_z"][j]) - a_pad[k])
+        short = float(res["vz_e_hat"][j]) - float(res["dz_e"][j])
+        assert rep.success is lands and rep.aborts == 0
+        if lands:
+            assert rep.sink_rate < 0.5 and lag < 0.05 and abs(short) < 0.05
+            on = t[np.asarray(res["x_h_p_r_z"]) <= 0.4]
+            assert 0.0 < t[j] - on[0] < 0.4
+        else:
+            assert rep.sink_rate > 0.5 and lag > 0.2 and short > 0.1
+
+
+def test_ship_ss5_takes_the_oscillator_in_its_crawl_and_the_others_none():
+    """``ship_ss5``: the nominal sea's 1.41 rad/s in the filter below 0.4 m; every other
+    landing scenario the defaults, which :data:`HEAVE_BEFORE` writes out."""
+    ss5 = load_scenario("ship_ss5")
+    assert (ss5["estimator.heave_frequency"], ss5["estimator.heave_in_filter"],
+            ss5["estimator.heave_height"]) == (1.41, 1.0, 0.4)
+    before = dict(kv.split("=") for kv in HEAVE_BEFORE)
+    for name in ("ship", "highway", "turning", "highway_100"):
+        sc = load_scenario(name)
+        for key, value in before.items():
+            assert sc[key] == float(value) == ESTIMATOR_DEFAULTS[key.split(".")[1]]
