@@ -103,7 +103,8 @@ typedef char estimator_params_is_its_layout[
     AT(ql_estimator_params, heave_time, 56, 0) &&
     AT(ql_estimator_params, heave_frequency, 57, 0) &&
     AT(ql_estimator_params, heave_in_filter, 58, 0) &&
-    sizeof(ql_estimator_params) == 59 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_estimator_params, heave_height, 59, 0) &&
+    sizeof(ql_estimator_params) == 60 * sizeof(ql_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(ql_estimator_memory, x_h, 0, 0) &&
     AT(ql_estimator_memory, P_h, 21, 0) &&
@@ -158,7 +159,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(ql_estimator_diagnostics) == 136 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const ql_real default_p_est[59] = {
+static const ql_real default_p_est[60] = {
     9.8, 0.02, 0.02, 0.02, 0.1, 0.1,
     0.1, 0.001, 0.001, 0.001, 0.001, 0.001,
     0.001, 0.0855, 0.0855, 0.0, 5.0, 0.0,
@@ -168,7 +169,7 @@ static const ql_real default_p_est[59] = {
     2.0, 0.1, 0.1, 0.1, 0.3, 0.3,
     0.3, 11.344867, 11.344867, 11.344867, 11.344867, 6.634897,
     11.344867, 11.344867, 10.0, 0.02, 0.02, 0.02,
-    0.02, 0.5, 0.0, 0.0, 0.0,
+    0.02, 0.5, 0.0, 0.0, 0.0, 1000000.0,
 };
 
 void ql_estimator_params_init(ql_estimator_params *params)
@@ -214,6 +215,7 @@ void ql_estimator_params_init(ql_estimator_params *params)
  *   heave_time               >= 0
  *   heave_frequency          >= 0
  *   heave_in_filter          in [0, 1]
+ *   heave_height             >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_estimator_params(const ql_estimator_params *params, const char **bad_field)
 {
@@ -360,6 +362,9 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
     if (!bad && !(isfinite(p[58]) && ((p[58] >= 0.0) && (p[58] <= 1.0)))) {
         bad = "heave_in_filter";
     }
+    if (!bad && !(isfinite(p[59]) && (p[59] >= 0.0))) {
+        bad = "heave_height";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -367,7 +372,7 @@ ql_status ql_check_estimator_params(const ql_estimator_params *params, const cha
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 59 comparisons. The values are known to be finite; no names and no
+ * 60 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const ql_real *p)
 {
@@ -431,6 +436,7 @@ static int estimator_params_in_range(const ql_real *p)
     ok &= (p[56] >= 0.0);
     ok &= (p[57] >= 0.0);
     ok &= ((p[58] >= 0.0) & (p[58] <= 1.0));
+    ok &= (p[59] >= 0.0);
     return ok;
 }
 

@@ -27,7 +27,7 @@ extern "C" {
 #define QL_ESTIMATOR_DEPTH_DATALINK 4            /* FIFO depth of datalink packets */
 #define QL_ESTIMATOR_COVARIANCE_SIZE 84          /* stored covariance entries (coupling axes) */
 #define QL_ESTIMATOR_MEMORY_SIZE 775             /* reals in ql_estimator_memory */
-#define QL_ESTIMATOR_PARAMS_SIZE 59              /* reals in ql_estimator_params */
+#define QL_ESTIMATOR_PARAMS_SIZE 60              /* reals in ql_estimator_params */
 #define QL_ESTIMATOR_DIAGNOSTICS_SIZE 136        /* reals in ql_estimator_diagnostics */
 #define QL_ESTIMATOR_BLOCKS 7                    /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QL_ESTIMATOR_SENSORS 4                   /* sensors: vision, gnss, range, datalink */
@@ -133,6 +133,7 @@ typedef struct {
     ql_real heave_time;              /* s: averaging time of the pad's heave frequency (E17a) */
     ql_real heave_frequency;         /* rad/s: the pad's heave frequency given (E17b); 0: the filter's own (E17a) */
     ql_real heave_in_filter;         /* -: 1: the pad's z is the oscillator in the filter's prediction too (E17b); 0: in the output predictor only */
+    ql_real heave_height;            /* m: the heave's frequency (E17a, E17b) is used only while the horizon's relative height p_r z is at or below this; above it, 0 */
 } ql_estimator_params;
 
 /* The filter's memory: the state and covariance at the horizon, the input

@@ -33,3 +33,10 @@ COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0
 #: within 6 cm of the deck since the fifteenth session (docs/landing.md, "ship_ss5: an abort
 #: the gear cannot fly"); ``ship`` takes the default, so the key leaves its flights as they are.
 ABORT_BEFORE = "landing.abort_floor=-1000.0"
+
+#: The pad's heave of before: the random walk's constant acceleration in the filter and over
+#: its horizon. ``ship_ss5`` carries it as the oscillator at 1.41 rad/s within its crawl since
+#: the sixteenth session (docs/landing.md, "ship_ss5: the heave oscillator in the crawl
+#: only"); ``ship`` takes the defaults, so the keys leave its flights as they are.
+HEAVE_BEFORE = ("estimator.heave_frequency=0.0", "estimator.heave_in_filter=0.0",
+                "estimator.heave_height=1000000.0")

@@ -388,7 +388,7 @@ DOCUMENTED = {
     "datalink_a_sigma": _pos, **{f"gate_{b.name}": _pos for b in BLOCKS}, "gate_lockout": _nonneg,
     **{f"max_age_{s}": _nonneg for s in SENSORS}, "deck_extrapolation_max": _nonneg,
     "heave_time": _nonneg, "heave_frequency": _nonneg,
-    "heave_in_filter": lambda v: (v >= 0) & (v <= 1),
+    "heave_in_filter": lambda v: (v >= 0) & (v <= 1), "heave_height": _nonneg,
 }
 
 

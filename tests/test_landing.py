@@ -52,7 +52,8 @@ SCENARIOS = ("highway", "turning", "ship", "ship_ss5", "highway_100")
 #: landed at 25.99 s; ship_ss5 aborted none.) Since ship_ss5's crawl goes on over a rising
 #: deck and its commit waits for the deck's tilt too (docs/landing.md, "ship_ss5: the deck's
 #: roll at the contact and the withdrawals in the crawl") it lands at 22.29 s on its sensors
-#: with none aborted (21.14 s on the true state).
+#: with none aborted (21.14 s on the true state); with the pad's heave in its filter within
+#: the crawl (docs/landing.md, "ship_ss5: the heave oscillator in the crawl only") at 22.21 s.
 ABORTS = {("highway", "sensors"): 0, ("turning", "sensors"): 0, ("ship", "sensors"): 0,
           ("ship_ss5", "sensors"): 0, ("highway_100", "sensors"): 0,
           ("highway", "perfect"): 0, ("turning", "perfect"): 0, ("ship", "perfect"): 0,
@@ -729,7 +730,8 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
     withdrawal in the crawl, the deck's tilt at the contact (docs/landing.md, "ship_ss5: the
     deck's roll at the contact and the withdrawals in the crawl"), the gust's lean, and no
     crawl abort within 6 cm of the deck (docs/landing.md, "ship_ss5: an abort the gear cannot
-    fly")."""
+    fly"), and the pad's heave as an oscillator in its filter within the crawl (docs/landing.md,
+    "ship_ss5: the heave oscillator in the crawl only")."""
     ship, ss5 = load_scenario("ship"), load_scenario("ship_ss5")
     assert ship["deck.sea_state"] == 4 and ss5["deck.sea_state"] == 5
     for d in (ship.data["deck"], ss5.data["deck"]):
@@ -742,7 +744,9 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
                       "initial.handover_clearance", "sensors.vision.small_range_max",
                       "estimator.gate_datalink_v", "estimator.gate_datalink_a",
                       "landing.withdraw_height", "landing.calm_tilt_deg",
-                      "landing.calm_lean_deg", "landing.lean_withdraw", "landing.abort_floor"}
+                      "landing.calm_lean_deg", "landing.lean_withdraw", "landing.abort_floor",
+                      "estimator.heave_frequency", "estimator.heave_in_filter",
+                      "estimator.heave_height"}
     assert set(ship.campaign_table["dispersions"]) == set(ss5.campaign_table["dispersions"])
 
 

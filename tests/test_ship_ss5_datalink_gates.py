@@ -14,7 +14,7 @@ gate's false alarms carried on by the lag they made.
 import numpy as np
 import pytest
 from scipy.stats import chi2
-from ship_before import ABORT_BEFORE, COMMIT_BEFORE, GATES_BEFORE
+from ship_before import ABORT_BEFORE, COMMIT_BEFORE, GATES_BEFORE, HEAVE_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -27,11 +27,12 @@ BLOCKS = ("datalink_v", "datalink_a")
 
 def _fly(*overrides):
     """Run 180 of ship_ss5's default campaign on the commit and the abort of before
-    (:data:`COMMIT_BEFORE`, :data:`ABORT_BEFORE`; the gates' campaign): its touchdown report,
+    (:data:`COMMIT_BEFORE`, :data:`ABORT_BEFORE`, :data:`HEAVE_BEFORE`; the gates' campaign):
+    its touchdown report,
     and per datalink block the NIS of every due packet and the refusals counted."""
     d = draws(campaign_spec_of(load_scenario("ship_ss5")), [180])[0]
     res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *COMMIT_BEFORE,
-                                                       ABORT_BEFORE, *overrides]))
+                                                       ABORT_BEFORE, *HEAVE_BEFORE, *overrides]))
     nis = {b: np.asarray(res[f"nis_{b}"])[np.asarray(res[f"nis_{b}"]) > 0] for b in BLOCKS}
     refused = {b: int(np.asarray(res[f"n_rejected_{b}"])[-1]) for b in BLOCKS}
     return touchdown_report(res), nis, refused

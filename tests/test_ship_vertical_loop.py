@@ -10,7 +10,14 @@ campaigns of docs/landing.md: the same draws, default campaign seed).
 
 import numpy as np
 import pytest
-from ship_before import ABORT_BEFORE, COMMIT_BEFORE, GATES_BEFORE, NO_FLARE, PAD_BEFORE
+from ship_before import (
+    ABORT_BEFORE,
+    COMMIT_BEFORE,
+    GATES_BEFORE,
+    HEAVE_BEFORE,
+    NO_FLARE,
+    PAD_BEFORE,
+)
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -25,13 +32,15 @@ OLD_Z = ["controller.k1p=[1.5, 1.5, 1.5]", "controller.k2p=[1.5, 1.5, 1.5]"]
 def _run(name, index, *overrides):
     """Run ``index`` of ``name``'s 300-run campaign (default campaign seed), flown without
     the flare (:data:`NO_FLARE`), on the pad, the gates and the commit of before
-    (:data:`PAD_BEFORE`, :data:`GATES_BEFORE`, :data:`COMMIT_BEFORE`, :data:`ABORT_BEFORE`)
+    (:data:`PAD_BEFORE`, :data:`GATES_BEFORE`, :data:`COMMIT_BEFORE`, :data:`ABORT_BEFORE`,
+    :data:`HEAVE_BEFORE`)
     and with ``overrides``: its touchdown report and the filter's and the true relative
     vertical velocity at the last row before the first contact."""
     sc = load_scenario(name)
     d = draws(campaign_spec_of(sc), [index])[0]
     res = quadland.simulate(load_scenario(name, [*d.overrides(), *NO_FLARE, PAD_BEFORE,
                                                  *GATES_BEFORE, *COMMIT_BEFORE, ABORT_BEFORE,
+                                                 *HEAVE_BEFORE,
                                                  *overrides]))
     rep = touchdown_report(res)
     k = int(np.flatnonzero(res["touched"] > 0.5)[0]) - 1

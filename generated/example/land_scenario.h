@@ -145,8 +145,8 @@ static const double ql_land_p_sens[13] = {
     0.7,
 };
 
-/* The navigation filter's parameters ([estimator], the model's gravity) (g (1), q_acc (3), q_at (3), q_b (3), q_ab (3), tilt_sigma (3), tilt_tau (1), tilt_levels_bias (3), vision_sigma0 (1), vision_k_range (1), vision_heading_sigma (1), gnss_rel_sigma (3), gnss_v1_sigma (3), gnss_vt_sigma (3), range_sigma (1), range_k_range (1), range_min_cos (1), range_deck_radius (1), range_deck_sigmas (1), datalink_v_sigma (3), datalink_a_sigma (3), gate_vision (1), gate_gnss_rel (1), gate_gnss_v1 (1), gate_gnss_vt (1), gate_range (1), gate_datalink_v (1), gate_datalink_a (1), gate_lockout (1), max_age_vision (1), max_age_gnss (1), max_age_range (1), max_age_datalink (1), deck_extrapolation_max (1), heave_time (1), heave_frequency (1), heave_in_filter (1)). */
-static const double ql_land_p_est[59] = {
+/* The navigation filter's parameters ([estimator], the model's gravity) (g (1), q_acc (3), q_at (3), q_b (3), q_ab (3), tilt_sigma (3), tilt_tau (1), tilt_levels_bias (3), vision_sigma0 (1), vision_k_range (1), vision_heading_sigma (1), gnss_rel_sigma (3), gnss_v1_sigma (3), gnss_vt_sigma (3), range_sigma (1), range_k_range (1), range_min_cos (1), range_deck_radius (1), range_deck_sigmas (1), datalink_v_sigma (3), datalink_a_sigma (3), gate_vision (1), gate_gnss_rel (1), gate_gnss_v1 (1), gate_gnss_vt (1), gate_range (1), gate_datalink_v (1), gate_datalink_a (1), gate_lockout (1), max_age_vision (1), max_age_gnss (1), max_age_range (1), max_age_datalink (1), deck_extrapolation_max (1), heave_time (1), heave_frequency (1), heave_in_filter (1), heave_height (1)). */
+static const double ql_land_p_est[60] = {
     9.8, 3.08e-05, 3.98e-05, 5.5e-06, 1e-09, 1e-09,
     1e-09, 0.006, 0.006, 0.021, 7.2e-07, 7.2e-07,
     4.6e-06, 0.0855, 0.0855, 0.0, 5.0, 0.0,
@@ -156,7 +156,7 @@ static const double ql_land_p_est[59] = {
     2.0, 0.05, 0.05, 0.05, 0.05, 0.05,
     0.05, 11.344867, 11.344867, 11.344867, 11.344867, 6.634897,
     11.344867, 11.344867, 10.0, 0.02, 0.02, 0.02,
-    0.02, 0.5, 0.0, 0.0, 0.0,
+    0.02, 0.5, 0.0, 0.0, 0.0, 1000000.0,
 };
 
 /* The land detector's parameters ([land_detector]) (gap_max (1), vz_max (1), thrust_low (1), contact_time (1), maybe_time (1), landed_time (1), hold_factor (1), no_range_factor (1), range_timeout (1), spike_min (1), spike_window (1), accel_tau (1), contact_thrust (1)). */

@@ -103,7 +103,8 @@ typedef char estimator_params_is_its_layout[
     AT(qlf_estimator_params, heave_time, 56, 0) &&
     AT(qlf_estimator_params, heave_frequency, 57, 0) &&
     AT(qlf_estimator_params, heave_in_filter, 58, 0) &&
-    sizeof(qlf_estimator_params) == 59 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_estimator_params, heave_height, 59, 0) &&
+    sizeof(qlf_estimator_params) == 60 * sizeof(qlf_real) ? 1 : -1];
 typedef char estimator_memory_is_its_layout[
     AT(qlf_estimator_memory, x_h, 0, 0) &&
     AT(qlf_estimator_memory, P_h, 21, 0) &&
@@ -158,7 +159,7 @@ typedef char estimator_diagnostics_is_its_layout[
     sizeof(qlf_estimator_diagnostics) == 136 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: quadland_symbolic.landing.navigation.ESTIMATOR_DEFAULTS. */
-static const qlf_real default_p_est[59] = {
+static const qlf_real default_p_est[60] = {
     9.8f, 0.02f, 0.02f, 0.02f, 0.1f, 0.1f,
     0.1f, 0.001f, 0.001f, 0.001f, 0.001f, 0.001f,
     0.001f, 0.0855f, 0.0855f, 0.0f, 5.0f, 0.0f,
@@ -168,7 +169,7 @@ static const qlf_real default_p_est[59] = {
     2.0f, 0.1f, 0.1f, 0.1f, 0.3f, 0.3f,
     0.3f, 11.344867f, 11.344867f, 11.344867f, 11.344867f, 6.634897f,
     11.344867f, 11.344867f, 10.0f, 0.02f, 0.02f, 0.02f,
-    0.02f, 0.5f, 0.0f, 0.0f, 0.0f,
+    0.02f, 0.5f, 0.0f, 0.0f, 0.0f, 1000000.0f,
 };
 
 void qlf_estimator_params_init(qlf_estimator_params *params)
@@ -214,6 +215,7 @@ void qlf_estimator_params_init(qlf_estimator_params *params)
  *   heave_time               >= 0
  *   heave_frequency          >= 0
  *   heave_in_filter          in [0, 1]
+ *   heave_height             >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
                                       const char **bad_field)
@@ -361,6 +363,9 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
     if (!bad && !(isfinite(p[58]) && ((p[58] >= 0.0f) && (p[58] <= 1.0f)))) {
         bad = "heave_in_filter";
     }
+    if (!bad && !(isfinite(p[59]) && (p[59] >= 0.0f))) {
+        bad = "heave_height";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -368,7 +373,7 @@ qlf_status qlf_check_estimator_params(const qlf_estimator_params *params,
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 59 comparisons. The values are known to be finite; no names and no
+ * 60 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_estimator_params finds the culprit. */
 static int estimator_params_in_range(const qlf_real *p)
 {
@@ -432,6 +437,7 @@ static int estimator_params_in_range(const qlf_real *p)
     ok &= (p[56] >= 0.0f);
     ok &= (p[57] >= 0.0f);
     ok &= ((p[58] >= 0.0f) & (p[58] <= 1.0f));
+    ok &= (p[59] >= 0.0f);
     return ok;
 }
 

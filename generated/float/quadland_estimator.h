@@ -27,7 +27,7 @@ extern "C" {
 #define QLF_ESTIMATOR_DEPTH_DATALINK 4           /* FIFO depth of datalink packets */
 #define QLF_ESTIMATOR_COVARIANCE_SIZE 84         /* stored covariance entries (coupling axes) */
 #define QLF_ESTIMATOR_MEMORY_SIZE 775            /* reals in qlf_estimator_memory */
-#define QLF_ESTIMATOR_PARAMS_SIZE 59             /* reals in qlf_estimator_params */
+#define QLF_ESTIMATOR_PARAMS_SIZE 60             /* reals in qlf_estimator_params */
 #define QLF_ESTIMATOR_DIAGNOSTICS_SIZE 136       /* reals in qlf_estimator_diagnostics */
 #define QLF_ESTIMATOR_BLOCKS 7                   /* measurement blocks: vision, gnss_rel, gnss_v1, gnss_vt, range, datalink_v, datalink_a */
 #define QLF_ESTIMATOR_SENSORS 4                  /* sensors: vision, gnss, range, datalink */
@@ -133,6 +133,7 @@ typedef struct {
     qlf_real heave_time;             /* s: averaging time of the pad's heave frequency (E17a) */
     qlf_real heave_frequency;        /* rad/s: the pad's heave frequency given (E17b); 0: the filter's own (E17a) */
     qlf_real heave_in_filter;        /* -: 1: the pad's z is the oscillator in the filter's prediction too (E17b); 0: in the output predictor only */
+    qlf_real heave_height;           /* m: the heave's frequency (E17a, E17b) is used only while the horizon's relative height p_r z is at or below this; above it, 0 */
 } qlf_estimator_params;
 
 /* The filter's memory: the state and covariance at the horizon, the input

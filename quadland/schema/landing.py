@@ -38,7 +38,7 @@ _ESTIMATOR_HI = {"range_min_cos": 1.0, "tilt_levels_bias": 1.0, "heave_in_filter
 #: the tilt apart from the accelerometer's bias (E2b), the pad's heave not in the prediction
 #: (E17b).
 _ESTIMATOR_ADDED = {"tilt_levels_bias": [0.0, 0.0, 0.0], "heave_frequency": 0.0,
-                    "heave_in_filter": 0.0}
+                    "heave_in_filter": 0.0, "heave_height": 1.0e6}
 
 
 def _sines(name: str, unit: str, what: str, amp_hi: float) -> dict[str, Field]:

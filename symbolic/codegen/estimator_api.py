@@ -87,6 +87,7 @@ ESTIMATOR_PARAM_RANGES = MappingProxyType({
     "heave_time": _NONNEGATIVE,           # 0: a flat deck, the constant acceleration (E17a)
     "heave_frequency": _NONNEGATIVE,      # 0: the filter's own frequency (E17a), (E17b)
     "heave_in_filter": Range(lo=0.0, hi=1.0),  # a switch: the oscillator in Phi too (E17b)
+    "heave_height": _NONNEGATIVE,         # the oscillator only at or below this p_r z
 })
 
 

@@ -50,6 +50,7 @@ from quadland_symbolic.landing.estimator import (
 )
 from quadland_symbolic.landing.gear import GEAR_STATE
 from quadland_symbolic.landing.guidance import POSITION_REFERENCE
+from quadland_symbolic.landing.heave import heave_gate
 from quadland_symbolic.landing.linearization import HOVER_PLANT, hover_quadrotor, hover_vehicle
 from quadland_symbolic.landing.navigation import (
     BLOCKS,
@@ -190,7 +191,8 @@ def filter_prediction_function(coupling: str) -> ca.Function:
     x, Pv, a_in = NAV.sym("x"), ca.SX.sym("P", pattern.size), ca.SX.sym("a_in", 3)
     dt, p_est = ca.SX.sym("dt"), estimator_params().sym("p_est")
     p = estimator_params().unpack(p_est)                    # a given heave frequency (E17b)
-    omega = select(p["heave_in_filter"] > 0.5, p["heave_frequency"], 0)
+    omega = heave_gate(select(p["heave_in_filter"] > 0.5, p["heave_frequency"], 0),
+                       NAV.unpack(x)["p_r"][2], p)
     xn, Pn = nav_predict(x, pattern.unpack(Pv), a_in, dt, p_est, pattern, None, omega)
     return ca.Function("filter_prediction", [x, Pv, a_in, dt, p_est],
                        [xn, pattern.pack(Pn), ca.jacobian(xn, x), ca.jacobian(xn, a_in)],
@@ -220,8 +222,9 @@ def filter_output_function(n_hist: int, depth, coupling: str) -> ca.Function:
     m = lay.unpack(mem)
     deck = dict(eta2=m["deck_eta2"], w2E=m["deck_w2E"], w2E_dot=m["deck_w2E_dot"],
                 tau=m["deck_tau"])
-    y = estimator_output(x_h, hist, deck, imu, p_est, t,
-                         estimator_params().unpack(p_est)["heave_frequency"])   # (E17b)
+    p = estimator_params().unpack(p_est)
+    y = estimator_output(x_h, hist, deck, imu, p_est, t,                 # (E17b)
+                         heave_gate(p["heave_frequency"], NAV.unpack(x_h)["p_r"][2], p))
     ims = IMU.unpack(imu)
     a_in = acceleration_input(ims["eta_hat"], ims["f_b"], estimator_params().unpack(p_est)["g"])
     acc = hist[0:3, :]

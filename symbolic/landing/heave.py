@@ -20,8 +20,9 @@ The same oscillator can replace the random-walk acceleration in the filter's own
 prediction over a period (:func:`heave_transition`, (E17b)): the z rows of the pad's
 velocity and acceleration and the pad's share of the relative height in ``Phi``. Its
 frequency is the filter's own (E17a) or one given by the scenario
-(``heave_frequency``, from the sea's spectrum); :data:`HEAVE_FIELDS` are the two
-parameters.
+(``heave_frequency``, from the sea's spectrum); :data:`HEAVE_FIELDS` are its
+parameters. ``heave_height`` keeps the oscillator (both forms) to the last metres over the
+pad: above it the frequency is 0, the constant acceleration (:func:`heave_gate`).
 """
 
 from __future__ import annotations
@@ -31,7 +32,8 @@ import casadi as ca
 from quadland_symbolic.kalman import select
 from quadland_symbolic.layout import Field
 
-__all__ = ["sinc", "heave_factors", "heave_transition", "HEAVE_FIELDS", "HEAVE_DEFAULTS"]
+__all__ = ["sinc", "heave_factors", "heave_transition", "heave_gate", "HEAVE_FIELDS",
+           "HEAVE_DEFAULTS"]
 
 #: The heave's parameters in ``p_est`` (docs/estimator.md (E17a), (E17b)).
 HEAVE_FIELDS = (
@@ -40,9 +42,12 @@ HEAVE_FIELDS = (
           "filter's own (E17a)"),
     Field("heave_in_filter", 1, "-", "1: the pad's z is the oscillator in the filter's "
           "prediction too (E17b); 0: in the output predictor only"),
+    Field("heave_height", 1, "m", "the heave's frequency (E17a, E17b) is used only while "
+          "the horizon's relative height p_r z is at or below this; above it, 0"),
 )
-#: Their defaults: the constant acceleration (a flat deck), as before (E17a).
-HEAVE_DEFAULTS = {"heave_time": 0.0, "heave_frequency": 0.0, "heave_in_filter": 0.0}
+#: Their defaults: the constant acceleration (a flat deck), as before (E17a); no height gate.
+HEAVE_DEFAULTS = {"heave_time": 0.0, "heave_frequency": 0.0, "heave_in_filter": 0.0,
+                  "heave_height": 1.0e6}
 
 
 def sinc(x):
@@ -80,3 +85,13 @@ def heave_transition(Phi, omega, dt, i_p, i_v, i_a):
     Phi[i_a, i_v] = -((omega * omega) * (dt * s))
     Phi[i_a, i_a] = c
     return Phi
+
+
+def heave_gate(omega, p_r_z, p):
+    """``omega`` while the relative height ``p_r_z`` is at or below ``p["heave_height"]``, else 0.
+
+    The oscillator of (E17a) and (E17b) kept to the final descent: at 0 both forms are the
+    constant acceleration to the bit, so above the gate the filter and its output are the
+    random walk's. The default height (1e6 m) never gates.
+    """
+    return select(p_r_z <= p["heave_height"], omega, 0)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import casadi as ca
 
 from quadland_symbolic.kalman import select
-from quadland_symbolic.landing.heave import heave_factors
+from quadland_symbolic.landing.heave import heave_factors, heave_gate
 from quadland_symbolic.landing.navigation import (
     IMU,
     NAV,
@@ -97,9 +97,11 @@ def heave_frequency(ms, x_h, p, dt):
     frequency of the pad's vertical velocity, clamped), each average moving by
     ``min(dt / heave_time, 1)`` of the way to the new square; ``omega`` is 0 (the constant
     acceleration) when ``heave_time`` is 0. A ``heave_frequency`` above 0 (given, from the
-    sea's spectrum, (E17b)) is ``omega`` instead.
+    sea's spectrum, (E17b)) is ``omega`` instead. Either is 0 while the horizon's relative
+    height is above ``heave_height`` (:func:`~quadland_symbolic.landing.heave.heave_gate`).
     """
     x = NAV.unpack(x_h)
     ms_next = quiescence_update(ms, x["v_t"][2], x["a_t"][2], dt, p["heave_time"])
     own = select(p["heave_time"] > 0, deck_frequency(ms_next), 0)
-    return ms_next, select(p["heave_frequency"] > 0, p["heave_frequency"], own)
+    omega = select(p["heave_frequency"] > 0, p["heave_frequency"], own)
+    return ms_next, heave_gate(omega, x["p_r"][2], p)
