@@ -22,15 +22,28 @@ for this checkout alternately:
 ``--callgrind`` instead counts the instructions of a worker's run under ``valgrind
 --tool=callgrind`` on each tree: the difference between processes flying ``--runs`` and
 ``--few`` runs, over the runs between (``PYTHONHASHSEED=0``, one BLAS thread).
+
+``--command K`` instead runs the whole command on each tree alternately, ``quadland
+envelope --scenario highway`` over the map at ``K`` runs a cell, ``--no-plots``, its
+local workers (``--workers``, default every core): the command's wall s, the wall s of
+its flying (its last line's "flew N runs in X s"), the CPU s of the command and all its
+processes (the forkserver's workers included: ``RUSAGE_CHILDREN`` before and after), and
+the SHA-256 of its runs.csv::
+
+    nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --rounds 2 --command 4
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
+import re
+import resource
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from bench_tick_table import instructions, paired_table, tree_env
@@ -102,6 +115,28 @@ def callgrind(tree: Path | None, tmp: Path, runs: int) -> int:
     return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES))
 
 
+def command(tree: Path | None, tmp: Path, k: int, workers: int | None) -> dict:
+    """The whole envelope command at ``k`` runs a cell on ``tree``: wall s, flying s, CPU s
+    of all its processes, each with runs.csv's SHA-256."""
+    env, cwd = tree_env(tree, tmp)
+    out = tmp / f"envelope-{'before' if tree else 'now'}"
+    subprocess.run(["rm", "-rf", str(out)], check=True)
+    args = [sys.executable, "-m", "quadland", "envelope", "--scenario", "highway",
+            *(x for a in AXES for x in ("--axis", a)), "--runs-per-cell", str(k),
+            "--no-plots", "--out", str(out), *(["--workers", str(workers)] if workers else [])]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    text = subprocess.run(args, check=True, cwd=cwd, env=env, capture_output=True,
+                          text=True).stdout
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    digest = hashlib.sha256((out / "runs.csv").read_bytes()).hexdigest()
+    flying = float(re.search(r"flew \d+ runs in ([0-9.]+) s", text).group(1))
+    return {"command, wall s": (wall, digest), "flying, wall s": (flying, digest),
+            "all processes, CPU s": (cpu, digest)}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--against", type=Path, required=True, help="the tree before")
@@ -109,6 +144,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=60)
     ap.add_argument("--few", type=int, default=4, help="--callgrind: the smaller process")
     ap.add_argument("--callgrind", action="store_true")
+    ap.add_argument("--command", type=int, metavar="K", help="the whole command, K runs a cell")
+    ap.add_argument("--workers", type=int, help="--command: local workers")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         if a.callgrind:
@@ -121,7 +158,9 @@ def main() -> None:
         res: dict[str, dict[str, list]] = {"before": {}, "now": {}}
         for r in range(a.rounds):
             for name, tree in (("before", a.against.resolve()), ("now", None)):
-                for k, v in child(tree, Path(tmp), a.runs).items():
+                got = (command(tree, Path(tmp), a.command, a.workers) if a.command
+                       else child(tree, Path(tmp), a.runs))
+                for k, v in got.items():
                     res[name].setdefault(k, []).append(v)
             print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 3) for k, v in
                                                        d.items()} for n, d in res.items()}),
