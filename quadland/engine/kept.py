@@ -74,10 +74,7 @@ class KeptDraws:
         return len(self._entries)
 
     def take(self, key: Hashable) -> Any | None:
-        """A kept object of ``key``, removed from the store (None: none kept, or not
-        keeping)."""
-        if not kept_bytes():
-            return None
+        """A kept object of ``key``, removed from the store (None: none kept)."""
         with self._lock:
             for entry in reversed(self._entries):
                 if entry[0] == key and not self._entries[entry][2]:
