@@ -231,13 +231,11 @@ def dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[s
               kept: int = 0) -> Iterator[list[RunOutcome]]:
     """Fly ``todo`` on the cluster's workers; yield outcomes as they finish.
 
-    A run lost with its worker is flown again by another (Dask reschedules
-    it); the campaign stops (:class:`CampaignStopped`) when a run fails for
-    the cluster's sake (a worker killed while flying it too often), when
-    the scheduler is lost, or when no worker is left for
-    :data:`NO_WORKER_GRACE_S` seconds. ``kept``: bytes of draws each worker process may
-    keep for its next runs (:func:`~quadland.campaign.fly.fly`'s ``keep``; its threads
-    share them).
+    A run lost with its worker is flown again by another (Dask reschedules it); the
+    campaign stops (:class:`CampaignStopped`) when a run fails for the cluster's sake (a
+    worker killed while flying it too often), when the scheduler is lost, or when no
+    worker is left for :data:`NO_WORKER_GRACE_S` seconds. ``kept``: bytes of draws each
+    worker process may keep for its next runs (``fly``'s ``keep``, its threads sharing).
     """
     from distributed import as_completed
 
@@ -306,11 +304,17 @@ def dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[s
                     client.cancel(leftover, force=True)
                 except Exception:               # the scheduler is gone with its tasks
                     pass
-        if kept and client.status == "running":
-            try:                                # the draws its workers kept, given up
-                client.run(forget)
-            except Exception:                   # a worker or the scheduler is gone
-                pass
+        if kept:
+            _forget_kept(client)
+
+
+def _forget_kept(client) -> None:
+    """The draws the cluster's workers kept for an envelope's runs, given up."""
+    if client.status == "running":
+        try:
+            client.run(forget)
+        except Exception:                       # a worker or the scheduler is gone
+            pass
 
 
 def _loss(client, error: BaseException) -> str:
