@@ -69,8 +69,9 @@ ENVELOPE_FORMAT = 1
 MAX_RUNS_PER_CELL = 100_000
 #: Bytes of draws each process flying an envelope's runs keeps for its next runs
 #: (:mod:`quadland.engine.kept`): a ``highway`` run's sensors' table, drawn to 40 s, is
-#: 8.1 MB with its draws' rows (a ship's to 180 s, about 37 MB), its force and moment
-#: noise 0.2 MB. Flown replicate by replicate, a local worker needs one table at a time.
+#: 8.8 MB with its draws' rows and their room (``ship_ss5``'s to 180 s about 37 MB), its
+#: force and moment noise 0.2 MB. Flown replicate by replicate, a local worker needs one
+#: table at a time.
 KEEP_BYTES = 64 * 2**20
 
 
