@@ -22,15 +22,38 @@ for this checkout alternately:
 ``--callgrind`` instead counts the instructions of a worker's run under ``valgrind
 --tool=callgrind`` on each tree: the difference between processes flying ``--runs`` and
 ``--few`` runs, over the runs between (``PYTHONHASHSEED=0``, one BLAS thread).
+
+``--replicates R`` flies, as the envelope now does, ``R`` replicates one after the other,
+each in ``--runs / R`` cells spread over the map, with the draws kept between runs where
+the tree keeps them (``quadland.campaign.grid.KEEP_BYTES``; the tree before flies the
+same runs without)::
+
+    nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --rounds 3 \
+        --runs 60 --replicates 2
+
+``--command K`` instead runs the whole command on each tree alternately, ``quadland
+envelope --scenario highway`` over the map at ``K`` runs a cell, ``--no-plots``, its
+local workers (``--workers``, default every core): the command's wall s, the wall s of
+its flying (its last line's "flew N runs in X s"), the CPU s of the command and all its
+processes (``RUSAGE_CHILDREN`` before and after: this process is the subreaper of the
+command's descendants and waits for each, so the forkserver, which waits for its
+workers, is counted with them), and the SHA-256 of its runs.csv::
+
+    nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --rounds 2 --command 4
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
+import os
+import re
+import resource
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from bench_tick_table import instructions, paired_table, tree_env
@@ -45,7 +68,7 @@ from threadpoolctl import threadpool_limits
 keep_freed_memory()
 threadpool_limits(1)
 runs, parent, warm = int(sys.argv[1]), sys.argv[2] == "1", sys.argv[3] == "1"
-AXES = json.loads(sys.argv[4])
+AXES, R = json.loads(sys.argv[4]), int(sys.argv[5])
 out = {}
 t0 = time.process_time()
 from quadland.campaign.fly import fly, warm_up
@@ -56,6 +79,12 @@ env = plan_envelope("highway", None, AXES, 30)
 t2 = time.process_time()
 warm_up(env.base)
 picks = [(7309 * i + 11) % env.runs for i in range(runs + warm)]
+kw = {}
+if R:       # R replicates, each in runs / R cells spread over the map, flown replicate by
+    K = env.runs_per_cell       # replicate; with the draws kept where the tree keeps them
+    picks = [K - 1] * warm + [((7309 * i + 11) % len(env.cells)) * K + r
+                              for r in range(R) for i in range(runs // R)]
+    kw = {"keep": grid.KEEP_BYTES} if hasattr(grid, "KEEP_BYTES") else {}
 draws = list(cell_draws(env, picks))
 if warm:
     fly(env.base, draws[0], env.spec.limits)
@@ -64,7 +93,7 @@ outs = []
 t3 = time.process_time()
 for k in range(0, len(draws), 8):
     chunk = pickle.loads(pickle.dumps(draws[k:k + 8]))
-    done = [fly(env.base, d, env.spec.limits) for d in chunk]
+    done = [fly(env.base, d, env.spec.limits, **kw) for d in chunk]
     outs.extend(pickle.loads(pickle.dumps(done)))
 t4 = time.process_time()
 out["run, CPU ms"] = ((t4 - t3) / max(runs, 1) * 1e3, hashlib.sha256(repr(
@@ -88,10 +117,11 @@ print(json.dumps(out))
 '''
 
 
-def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True) -> dict:
+def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True,
+          replicates: int = 0) -> dict:
     env, cwd = tree_env(tree, tmp)
     out = subprocess.run([sys.executable, "-c", CHILD, str(runs), "1" if parent else "0", "1",
-                          json.dumps(AXES)], check=True, cwd=cwd, env=env,
+                          json.dumps(AXES), str(replicates)], check=True, cwd=cwd, env=env,
                          capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -99,7 +129,44 @@ def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True) -> dict:
 def callgrind(tree: Path | None, tmp: Path, runs: int) -> int:
     """Callgrind's instruction count of a worker's process flying ``runs`` runs (no warm-up
     run: the first of both counts is the same run)."""
-    return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES))
+    return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES), "0")
+
+
+def _subreaper() -> None:
+    """Make this process the reaper of its descendants orphaned (Linux ``prctl``)."""
+    import ctypes
+
+    PR_SET_CHILD_SUBREAPER = 36
+    if ctypes.CDLL(None, use_errno=True).prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) != 0:
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_CHILD_SUBREAPER)")
+
+
+def command(tree: Path | None, tmp: Path, k: int, workers: int | None) -> dict:
+    """The whole envelope command at ``k`` runs a cell on ``tree``: wall s, flying s, CPU s
+    of all its processes, each with runs.csv's SHA-256."""
+    env, cwd = tree_env(tree, tmp)
+    out = tmp / f"envelope-{'before' if tree else 'now'}"
+    subprocess.run(["rm", "-rf", str(out)], check=True)
+    args = [sys.executable, "-m", "quadland", "envelope", "--scenario", "highway",
+            *(x for a in AXES for x in ("--axis", a)), "--runs-per-cell", str(k),
+            "--no-plots", "--out", str(out), *(["--workers", str(workers)] if workers else [])]
+    _subreaper()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    text = subprocess.run(args, check=True, cwd=cwd, env=env, capture_output=True,
+                          text=True).stdout
+    wall = time.perf_counter() - t0
+    while True:                                 # the orphaned forkserver, its workers waited
+        try:
+            os.waitpid(-1, 0)
+        except ChildProcessError:
+            break
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    digest = hashlib.sha256((out / "runs.csv").read_bytes()).hexdigest()
+    flying = float(re.search(r"flew \d+ runs in ([0-9.]+) s", text).group(1))
+    return {"command, wall s": (wall, digest), "flying, wall s": (flying, digest),
+            "all processes, CPU s": (cpu, digest)}
 
 
 def main() -> None:
@@ -109,6 +176,11 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=60)
     ap.add_argument("--few", type=int, default=4, help="--callgrind: the smaller process")
     ap.add_argument("--callgrind", action="store_true")
+    ap.add_argument("--command", type=int, metavar="K", help="the whole command, K runs a cell")
+    ap.add_argument("--replicates", type=int, default=0, metavar="R",
+                    help="a worker's runs: R replicates in --runs / R cells each, flown "
+                         "replicate by replicate, the draws kept where the tree keeps them")
+    ap.add_argument("--workers", type=int, help="--command: local workers")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         if a.callgrind:
@@ -121,7 +193,9 @@ def main() -> None:
         res: dict[str, dict[str, list]] = {"before": {}, "now": {}}
         for r in range(a.rounds):
             for name, tree in (("before", a.against.resolve()), ("now", None)):
-                for k, v in child(tree, Path(tmp), a.runs).items():
+                got = (command(tree, Path(tmp), a.command, a.workers) if a.command
+                       else child(tree, Path(tmp), a.runs, replicates=a.replicates))
+                for k, v in got.items():
                     res[name].setdefault(k, []).append(v)
             print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 3) for k, v in
                                                        d.items()} for n, d in res.items()}),

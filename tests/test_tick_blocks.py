@@ -10,6 +10,8 @@ drawn): the same flight, bit for bit, as on the whole table.
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pytest
 from tick_reference import placed_table
@@ -171,9 +173,9 @@ def test_a_flight_on_the_table_drawn_as_it_goes_is_the_flight_on_the_whole_table
             super().__init__(*args, **{**kwargs, **sizes})
             tables.append(self)
 
-    monkeypatch.setattr(landing_simulate, "TickTable", Recorded)
+    monkeypatch.setattr(landing_simulate, "drawn_table", _drawn(Recorded))
     lazy = quadland.simulate(sc)
-    monkeypatch.setattr(landing_simulate, "TickTable", tick_table)
+    monkeypatch.setattr(landing_simulate, "drawn_table", _drawn(tick_table))
     whole = quadland.simulate(sc)
     assert _bits(lazy, whole)
     (table,) = tables
@@ -187,6 +189,14 @@ def test_a_flight_on_the_table_drawn_as_it_goes_is_the_flight_on_the_whole_table
         ((last_tick - table.first) // table.chunk + 1) * table.chunk
     assert table.filled == table.first + ahead
     assert table.filled < table.rows.shape[0] == 10_000
+
+
+def _drawn(make):
+    """A stand-in for ``drawn_table``: the run's table made by ``make(scenario, n)``."""
+    @contextlib.contextmanager
+    def table(scenario, n_ticks):
+        yield make(scenario, n_ticks)
+    return table
 
 
 class _Failing:

@@ -21,6 +21,7 @@ from quadland.campaign.fly import RunOutcome, fly, warm_up
 from quadland.campaign.local import AHEAD, RunQueue
 from quadland.campaign.resume import code_fingerprint
 from quadland.campaign.sampling import RunDraw
+from quadland.engine.kept import forget
 from quadland.exceptions import CampaignError, CampaignStopped
 from quadland.scenario import Scenario
 
@@ -226,15 +227,15 @@ def _prepare(client, base: Scenario):
                        f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]})") from None
 
 
-def dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[str, float]
-               ) -> Iterator[list[RunOutcome]]:
+def dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[str, float],
+              kept: int = 0) -> Iterator[list[RunOutcome]]:
     """Fly ``todo`` on the cluster's workers; yield outcomes as they finish.
 
-    A run lost with its worker is flown again by another (Dask reschedules
-    it); the campaign stops (:class:`CampaignStopped`) when a run fails for
-    the cluster's sake (a worker killed while flying it too often), when
-    the scheduler is lost, or when no worker is left for
-    :data:`NO_WORKER_GRACE_S` seconds.
+    A run lost with its worker is flown again by another (Dask reschedules it); the
+    campaign stops (:class:`CampaignStopped`) when a run fails for the cluster's sake (a
+    worker killed while flying it too often), when the scheduler is lost, or when no
+    worker is left for :data:`NO_WORKER_GRACE_S` seconds. ``kept``: bytes of draws each
+    worker process may keep for its next runs (``fly``'s ``keep``, its threads sharing).
     """
     from distributed import as_completed
 
@@ -247,7 +248,7 @@ def dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[s
         def submit(k):
             for _ in range(k):
                 if queue:
-                    pending.add(client.submit(fly, base_future, queue.pop(), limits,
+                    pending.add(client.submit(fly, base_future, queue.pop(), limits, kept,
                                               pure=False))
 
         submit(AHEAD * max(threads, 1))
@@ -303,6 +304,17 @@ def dask_runs(client, base: Scenario, todo: Iterator[RunDraw], limits: Mapping[s
                     client.cancel(leftover, force=True)
                 except Exception:               # the scheduler is gone with its tasks
                     pass
+        if kept:
+            _forget_kept(client)
+
+
+def _forget_kept(client) -> None:
+    """The draws the cluster's workers kept for an envelope's runs, given up."""
+    if client.status == "running":
+        try:
+            client.run(forget)
+        except Exception:                       # a worker or the scheduler is gone
+            pass
 
 
 def _loss(client, error: BaseException) -> str:

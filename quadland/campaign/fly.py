@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from quadland.campaign.dispersed import dispersed
 from quadland.campaign.sampling import RunDraw
 from quadland.campaign.spec import campaign_spec_of
+from quadland.engine.kept import keeping
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.kinds import kind_of
 from quadland.scenario import Scenario
@@ -47,8 +48,8 @@ class RunOutcome:
     columns: Mapping[str, str]
 
 
-def fly(base: Scenario, draw: RunDraw, limits: Mapping[str, float] | None = None
-        ) -> RunOutcome:
+def fly(base: Scenario, draw: RunDraw, limits: Mapping[str, float] | None = None,
+        keep: int = 0) -> RunOutcome:
     """Fly run ``draw.index`` of the campaign of ``base``.
 
     Parameters
@@ -60,6 +61,10 @@ def fly(base: Scenario, draw: RunDraw, limits: Mapping[str, float] | None = None
     limits : mapping of str to float, optional
         The campaign's ``limits`` (``CampaignSpec.limits``); default: those
         of ``base``'s ``[campaign]`` table, validated here.
+    keep : int
+        Bytes of draws this process may keep for its next runs
+        (:func:`quadland.engine.kept.keeping`: an envelope's, whose replicates fly in
+        every cell); 0, a campaign's: none.
 
     Returns
     -------
@@ -78,7 +83,8 @@ def fly(base: Scenario, draw: RunDraw, limits: Mapping[str, float] | None = None
     except ScenarioError as exc:
         return outcome("invalid", message=str(exc))
     try:
-        result = kind.simulate(scenario)
+        with keeping(keep):
+            result = kind.simulate(scenario)
     except ScenarioError as exc:
         return outcome("invalid", message=str(exc))
     except SimulationError as exc:

@@ -13,6 +13,13 @@ hold). Run ``g`` of the envelope is replicate ``g % K`` of cell ``g // K``,
 cells in row-major order (the first axis slowest). When every run is
 recorded, :mod:`~quadland.campaign.cells` counts each cell and writes
 ``envelope.json`` and ``envelope.png``.
+
+The runs fly replicate by replicate (:func:`flight_order`: replicate 0 of every cell,
+then replicate 1, ...), and each process that flies them keeps up to
+:data:`KEEP_BYTES` of what a run draws from its seed and from keys the axes do not
+set (:mod:`quadland.engine.kept`: a landing's sensors' table and its force and moment
+noise), so that each is drawn about once per replicate and process instead of once
+per run; runs.csv is the same bytes (its rows are written sorted by index).
 """
 
 from __future__ import annotations
@@ -48,17 +55,24 @@ from quadland.campaign.local import (
 from quadland.campaign.resume import campaign_manifest, check_folder
 from quadland.campaign.sampling import RunDraw, draws, format_value
 from quadland.campaign.spec import MAX_RUNS, CampaignSpec, campaign_spec_of
+from quadland.engine.kept import KEPT
 from quadland.exceptions import CampaignError, ScenarioError
 from quadland.kinds import kind_of
 from quadland.scenario import Scenario, load_scenario
 
 __all__ = ["EnvelopeResult", "Envelope", "plan_envelope", "run_envelope", "envelope_header",
-           "cell_draws", "ENVELOPE_FORMAT", "MAX_RUNS_PER_CELL"]
+           "cell_draws", "flight_order", "ENVELOPE_FORMAT", "MAX_RUNS_PER_CELL", "KEEP_BYTES"]
 
 #: Format of the ``envelope`` entry of an envelope's campaign.json.
 ENVELOPE_FORMAT = 1
 #: Most runs in one cell.
 MAX_RUNS_PER_CELL = 100_000
+#: Bytes of draws each process flying an envelope's runs keeps for its next runs
+#: (:mod:`quadland.engine.kept`): a ``highway`` run's sensors' table, drawn to 40 s, is
+#: 8.8 MB with its draws' rows and their room (``ship_ss5``'s to 180 s about 37 MB), its
+#: force and moment noise 0.2 MB. Flown replicate by replicate, a local worker needs one
+#: table at a time.
+KEEP_BYTES = 64 * 2**20
 
 
 @dataclasses.dataclass(frozen=True)
@@ -215,6 +229,21 @@ def cell_draws(env: Envelope, indices: Sequence[int]) -> Iterator[RunDraw]:
         yield RunDraw(g, d.seed, values, columns)
 
 
+def flight_order(env: Envelope, indices: Sequence[int]) -> list[int]:
+    """The runs ``indices`` in the order they fly: replicate by replicate (replicate 0 of
+    every cell, then 1, ...), cells in order within each: consecutive runs, and the
+    chunks of them a worker is sent, share their replicate's draws.
+
+    Examples
+    --------
+    >>> env = Envelope(None, None, (), 3)
+    >>> flight_order(env, range(9))
+    [0, 3, 6, 1, 4, 7, 2, 5, 8]
+    """
+    k = env.runs_per_cell
+    return sorted(indices, key=lambda g: (g % k, g // k))
+
+
 def run_envelope(scenario, overrides=None, axes: Sequence[str] = (),
                  runs_per_cell: int | None = None, out=None, workers: int | None = None,
                  scheduler: str | None = None, hold: Sequence[str] = (), polar: bool = False,
@@ -262,7 +291,7 @@ def run_envelope(scenario, overrides=None, axes: Sequence[str] = (),
         check_address(scheduler)
         local = 0
     else:
-        local = local_workers(env.base, workers, env.runs)
+        local = local_workers(env.base, workers, env.runs, kept=KEEP_BYTES)
     header = envelope_header(env)
     manifest = dict(campaign_manifest(env.base, env.spec, env.runs), envelope=env.identity())
     path = None if out is None else Path(out).absolute()
@@ -292,12 +321,12 @@ def _check_envelope_folder(folder: CampaignFolder, manifest: dict, header) -> di
 
 def _batches(env, todo, connection, local, pending):
     if connection is not None:
-        return dask_runs(connection, env.base, todo, env.spec.limits)
+        return dask_runs(connection, env.base, todo, env.spec.limits, KEEP_BYTES)
     if local == 1 or len(pending) <= 1:
-        return serial_runs(env.base, todo, env.spec.limits)
+        return serial_runs(env.base, todo, env.spec.limits, KEEP_BYTES)
     workers = min(local, len(pending))
     return pool_runs(env.base, todo, workers, env.spec.limits,
-                     chunk_size(len(pending), workers))
+                     chunk_size(len(pending), workers), KEEP_BYTES)
 
 
 def _fly(env, header, manifest, path, connection, local, scheduler, progress, plots
@@ -309,7 +338,7 @@ def _fly(env, header, manifest, path, connection, local, scheduler, progress, pl
     with folder:
         rows = _check_envelope_folder(folder, manifest, header)
         folder.start(manifest, header, {"scenario.toml": env.base.to_toml().encode("utf-8")})
-        pending = [g for g in range(env.runs) if g not in rows]
+        pending = flight_order(env, [g for g in range(env.runs) if g not in rows])
         bar = _progress_bar(progress, env.runs, len(rows))
         start, flown, invalid = time.perf_counter(), 0, 0
         try:
@@ -322,6 +351,7 @@ def _fly(env, header, manifest, path, connection, local, scheduler, progress, pl
                     interrupt.check()
             finally:
                 batches.close()
+                KEPT.clear()                    # this process's (one worker: it flew them)
                 _recorded(folder.sync(), rows, bar)   # every run written: recorded
         except KeyboardInterrupt:
             raise CampaignInterrupted(folder.path, len(rows), env.runs) from None

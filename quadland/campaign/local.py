@@ -72,20 +72,21 @@ def available_memory() -> int | None:
         return None
 
 
-def worker_memory(base: Scenario) -> int:
+def worker_memory(base: Scenario, kept: int = 0) -> int:
     """Memory one local worker process of a campaign of ``base`` takes, bytes (estimate).
 
     :data:`WORKER_MEMORY` (a process with the simulator loaded) plus the
-    arrays of one run (its kind's ``plan``).
+    arrays of one run (its kind's ``plan``) and the ``kept`` bytes of draws it may keep
+    for its next runs (an envelope's).
     """
-    return WORKER_MEMORY + kind_of(base).plan(base).memory_bytes
+    return WORKER_MEMORY + kind_of(base).plan(base).memory_bytes + kept
 
 
-def local_workers(base: Scenario, workers: int | None, runs: int) -> int:
+def local_workers(base: Scenario, workers: int | None, runs: int, kept: int = 0) -> int:
     """How many local processes fly a campaign of ``runs`` runs of ``base``.
 
     ``workers`` (default: one per core), no more than the runs, and no more
-    than the available memory holds (:func:`worker_memory` each): asked for
+    than the available memory holds (:func:`worker_memory` each, with ``kept``): asked for
     explicitly, too many is refused; by default, fewer are started.
 
     Raises
@@ -96,7 +97,7 @@ def local_workers(base: Scenario, workers: int | None, runs: int) -> int:
     wanted = min(workers or _cores(), runs)
     if wanted == 1:
         return 1                                # flies in this process
-    each = worker_memory(base)
+    each = worker_memory(base, kept)
     available = available_memory()
     if available is None:
         return wanted
@@ -139,10 +140,11 @@ def chunk_size(runs: int, workers: int) -> int:
     return max(1, min(CHUNK, runs // max(1, workers * AHEAD)))
 
 
-def serial_runs(base: Scenario, todo: Iterable[RunDraw], limits: Mapping[str, float]
-                 ) -> Iterator[list[RunOutcome]]:
+def serial_runs(base: Scenario, todo: Iterable[RunDraw], limits: Mapping[str, float],
+                kept: int = 0) -> Iterator[list[RunOutcome]]:
+    """Fly ``todo`` in this process, one run a batch (``kept``: :func:`fly`'s ``keep``)."""
     for draw in todo:
-        yield [fly(base, draw, limits)]
+        yield [fly(base, draw, limits, kept)]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -152,7 +154,8 @@ class _Raised:
     error: BaseException
 
 
-def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) -> None:
+def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float],
+                 kept: int = 0) -> None:
     """A local worker process: fly the chunks of draws ``conn`` brings (lists), send back
     each chunk's outcomes (a list).
 
@@ -188,7 +191,7 @@ def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float]) ->
         if chunk is None:
             return
         try:
-            result = [fly(base, draw, limits) for draw in chunk]
+            result = [fly(base, draw, limits, kept) for draw in chunk]
         except Exception as exc:                # a bug, or out of memory: the campaign's
             result = _Raised(exc)               # process raises it
         try:
@@ -230,10 +233,11 @@ def _start_forkserver() -> None:
 class _Worker:
     """A local worker process, its end of the pipe and the runs sent to it."""
 
-    def __init__(self, context, lifeline, base: Scenario, limits: Mapping[str, float]):
+    def __init__(self, context, lifeline, base: Scenario, limits: Mapping[str, float],
+                 kept: int = 0):
         self.conn, theirs = context.Pipe()
         self.process = context.Process(target=_worker_main, name="quadland-campaign-worker",
-                                       args=(theirs, lifeline, base, limits), daemon=True)
+                                       args=(theirs, lifeline, base, limits, kept), daemon=True)
         self.process.start()
         theirs.close()
         self.busy = 0
@@ -248,7 +252,8 @@ class _Worker:
 
 
 def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
-               limits: Mapping[str, float], chunk: int = 1) -> Iterator[list[RunOutcome]]:
+              limits: Mapping[str, float], chunk: int = 1, kept: int = 0
+              ) -> Iterator[list[RunOutcome]]:
     """Fly ``todo`` on ``workers`` local processes; yield outcomes as they finish.
 
     Each worker is a process of the ``forkserver`` (no fork of a process
@@ -256,7 +261,8 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
     own pipe chunks of ``chunk`` runs (:func:`chunk_size`), at most
     :data:`AHEAD` chunks ahead; a chunk's outcomes come back together. Only
     pipes connect them: no semaphore that a SIGKILLed campaign would leave to
-    the resource tracker.
+    the resource tracker. ``kept``: bytes of draws each worker may keep for its next
+    runs (:func:`fly`'s ``keep``).
     """
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(["quadland.campaign.local",
@@ -266,7 +272,7 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
     pool: list[_Worker] = []
     try:
         for _ in range(workers):
-            pool.append(_Worker(context, lifeline, base, limits))
+            pool.append(_Worker(context, lifeline, base, limits, kept))
         lifeline.close()
         # the first draws (SciPy's import, 0.5 s) while the workers start, not before
         queue = RunQueue(todo)

@@ -25,11 +25,14 @@ filter's initial estimate is the truth (its initial covariance unchanged).
 
 from __future__ import annotations
 
+import contextlib
 import functools
+from collections.abc import Iterator
 
 import numpy as np
 
 from quadland.engine.direct_call import DirectCall
+from quadland.engine.kept import KEPT, kept_bytes
 from quadland.kinds.landing.sensing import BLOCK, SensorDraws, sensor_seed
 from quadland.kinds.landing.sensor_settings import sensor_params
 from quadland.kinds.landing.values import LandingValues, deck_pose_values, rotation_values
@@ -60,7 +63,7 @@ from quadland_symbolic.landing.sensors import SENSOR_NAMES
 
 __all__ = ["INITIAL_ERROR_STREAM", "TICK_CHUNK", "FIRST_CHUNK", "TickTable", "sensor_settings",
            "sensors_enabled", "handover", "sensed_vectors", "tick_table", "estimator_p",
-           "imu_at_rest"]
+           "imu_at_rest", "table_key", "drawn_table"]
 
 #: The random stream of the filter's initial error (beside the sensors').
 INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
@@ -208,6 +211,14 @@ class TickTable:
             rest = CHUNKS_BEFORE_REST if chunk_default else n_ticks
         self.rest = self.first + max(int(rest), 0) * self.chunk   # then doubling
 
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the table's rows and of its draws' rows (their room included)."""
+        arrays = [self.rows, self.draws.attitude.gm, self.draws.attitude.wn]
+        for sen in self.draws.sensors.values():
+            arrays += [sen.delivered, sen.noise, sen.att_normals]
+        return sum((a if a.base is None else a.base).nbytes for a in arrays)
+
     def more(self, tick: int) -> int:
         """Fill the rows past ``tick`` (up to the next chunk's end, at most the table's);
         returns the rows filled."""
@@ -261,3 +272,28 @@ def tick_table(scenario: Scenario, n_ticks: int) -> np.ndarray:
     if n_ticks:
         table.more(n_ticks - 1)
     return table.rows
+
+
+def table_key(scenario: Scenario, n_ticks: int) -> tuple:
+    """Everything a run's :class:`TickTable` of ``n_ticks`` rows is drawn from: the seed,
+    ``sensors.random``, the control rate and every ``[sensors.<name>]`` setting (equal
+    keys, equal tables)."""
+    d = scenario.data
+    settings = sorted((name, sorted(s.items())) for name, s in sensor_settings(scenario).items())
+    return ("tick_table", d["simulation"]["seed"], bool(d["sensors"]["random"]),
+            float(d["controller"]["rate_hz"]), int(n_ticks), repr(settings))
+
+
+@contextlib.contextmanager
+def drawn_table(scenario: Scenario, n_ticks: int) -> Iterator[TickTable]:
+    """A run's :class:`TickTable`: within :func:`quadland.engine.kept.keeping`, the one
+    kept for its :func:`table_key` (drawn by an earlier run as far as that run flew,
+    the same bits), else a new one; kept again when the block returns (not when it
+    raises: a table left in the middle of a draw is given up)."""
+    key = table_key(scenario, n_ticks) if kept_bytes() else None
+    table = None if key is None else KEPT.take(key)
+    if table is None:
+        table = TickTable(scenario, n_ticks)
+    yield table
+    if key is not None:
+        KEPT.give(key, table, table.nbytes)

@@ -19,6 +19,8 @@ the deck's, phase 3 (touchdown), then 4 (landed) at the end of the settling.
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 from quadland.constants import TILT_MIN
@@ -45,7 +47,7 @@ from quadland.engine.result import SimulationResult
 from quadland.exceptions import ScenarioError, SimulationError
 from quadland.kinds.landing.contact_report import gear_columns
 from quadland.kinds.landing.gear import contact_step, free_flight_gap
-from quadland.kinds.landing.sensed import TickTable, sensed_vectors, sensors_enabled
+from quadland.kinds.landing.sensed import drawn_table, sensed_vectors, sensors_enabled
 from quadland.kinds.landing.values import (
     LandingValues,
     deck_params,
@@ -229,20 +231,22 @@ def simulate_landing(scenario: Scenario) -> SimulationResult:
     sensed = sensors_enabled(scenario)
     welded = scenario.data["gear"]["welded"]
     hover = QUAD6_STATE.unpack(LANDING_PLANT_STATE.unpack(lv.xp0)["x1q"])["F"]
-    pc, xc0, N = lv.pc, lv.xc0, None
+    pc, xc0, table = lv.pc, lv.xc0, contextlib.nullcontext()
     if sensed:
         pc, xc0 = sensed_vectors(scenario, lv)
-        N = TickTable(scenario, clocks[2].count())
+        table = drawn_table(scenario, clocks[2].count())     # a kept one in an envelope
     pc_layout = (sensed_loop_params if sensed else landing_loop_params)(lv.l)
     loop = landing_loop_part(lv.l, "sampled_flight" if flight else "sampled", sensed, welded,
                              flat_deck(lv.pp, pc, pc_layout))
     p_quad = LANDING_PLANT_PARAMS.unpack(lv.pp)["p_quad"]
-    run = loop.sampled(lv.xp0, xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
-                       pc, TILT_MIN, envelope.bounds,
-                       delay=scenario.data["controller"]["delay_periods"], uh0=hover, N=N,
-                       h_after=contact_step(scenario, np.asarray(p_quad, dtype=float).ravel()),
-                       after=scenario.data["landing"]["settle_time"],
-                       near=free_flight_gap(scenario))
+    with table as N:
+        run = loop.sampled(lv.xp0, xc0, clocks, w_dist.T, sim["rk_steps_per_interval"], lv.pp,
+                           pc, TILT_MIN, envelope.bounds,
+                           delay=scenario.data["controller"]["delay_periods"], uh0=hover, N=N,
+                           h_after=contact_step(scenario,
+                                                np.asarray(p_quad, dtype=float).ravel()),
+                           after=scenario.data["landing"]["settle_time"],
+                           near=free_flight_gap(scenario))
     recorded = loop.model.recorded
     if welded:
         times, X, R, Y, what, t_fail = _welded(scenario, run, loop, clocks, w_dist, lv,

@@ -10,6 +10,7 @@ import numpy as np
 
 from quadland.engine.direct_call import DirectCall
 from quadland.engine.disturbance import disturbance_samples
+from quadland.engine.kept import KEPT, kept_bytes
 from quadland.engine.loop import Clock
 from quadland.engine.wind import (
     OneCosineGust,
@@ -322,8 +323,18 @@ def landing_disturbance(scenario: Scenario, times: np.ndarray) -> np.ndarray:
     """The landing loop's held disturbance at ``times``, ``(9, n)``: wind (E), d_F, d_M (body).
 
     ``d_F``, ``d_M`` are ``[disturbance]``'s, drawn as for the paper's loop
-    (:func:`quadland.engine.disturbance.disturbance_samples`).
+    (:func:`quadland.engine.disturbance.disturbance_samples`); within
+    :func:`quadland.engine.kept.keeping` (an envelope's runs), those of a run's seed,
+    ``[disturbance]`` and ``times`` are kept for the next run of the same (the wind is
+    drawn again: its turbulence's filter and its mean depend on the velocities).
     """
-    return np.vstack([wind_samples(scenario, times), disturbance_samples(scenario, times)])
+    if not kept_bytes():
+        return np.vstack([wind_samples(scenario, times), disturbance_samples(scenario, times)])
+    # an envelope's: the force and moment noise of the run's seed and [disturbance], kept
+    times = np.ascontiguousarray(times, dtype=float)
+    key = ("disturbance", scenario.data["simulation"]["seed"],
+           repr(sorted(scenario.data["disturbance"].items())), times.tobytes())
+    return np.vstack([wind_samples(scenario, times),
+                      KEPT.shared(key, lambda: disturbance_samples(scenario, times))])
 
 

@@ -1,0 +1,188 @@
+"""An envelope's draws kept between its runs (issue 20): the sensors' table and the force
+and moment noise of a replicate, drawn once in a process and flown in every cell.
+
+The claim under test: in an envelope, run ``r`` of every cell has replicate ``r``'s
+seed and drawn values with the axes' values in place, so what a landing draws from its
+seed and its sensor settings does not depend on the cell, unless an axis sets one of
+those settings. Each check compares against draws made afresh from the cell's own
+scenario (no keeping), bit for bit.
+"""
+
+import csv
+
+import numpy as np
+import pytest
+
+from quadland.campaign import grid
+from quadland.campaign.dispersed import dispersed
+from quadland.campaign.grid import KEEP_BYTES, cell_draws, plan_envelope, run_envelope
+from quadland.engine.kept import KEPT, KeptDraws, keeping, kept_bytes
+from quadland.kinds import kind_of
+from quadland.kinds.landing import sensed
+from quadland.kinds.landing.sensed import TickTable, table_key, tick_table
+from quadland.kinds.landing.values import landing_clocks, landing_disturbance
+
+MAP = ["initial.velocity2[0]=5:35:20", "wind.mean[1]=0:20:20"]
+
+
+def _bits(a):
+    return np.ascontiguousarray(a).view(np.uint8).tobytes()
+
+
+@pytest.fixture(scope="module")
+def env():
+    return plan_envelope("highway", None, MAP, 3)
+
+
+def _scenario(env, cell, replicate):
+    draw = next(cell_draws(env, [cell * env.runs_per_cell + replicate]))
+    return dispersed(env.base, draw.values)
+
+
+@pytest.fixture(autouse=True)
+def _nothing_kept():
+    KEPT.clear()
+    yield
+    KEPT.clear()
+
+
+def test_the_map_s_axes_do_not_enter_a_replicate_s_table(env):
+    """Replicate 1 in the map's corners and middle: other car speeds, crosswinds and drive
+    forces, one table key; replicate 2's is another (its seed and sensor draws)."""
+    cells = (0, 19, 210, 380, 399)
+    keys, where = [], set()
+    for c in cells:
+        sc = _scenario(env, c, 1)
+        keys.append(table_key(sc, landing_clocks(sc)[2].count()))
+        where.add((sc.data["initial"]["velocity2"][0], sc.data["wind"]["mean"][1],
+                   sc.data["vehicle"]["tau"][0]))
+    assert len(set(keys)) == 1
+    assert len(where) == len(cells)                 # the cells do differ
+    other = _scenario(env, 0, 2)
+    assert table_key(other, landing_clocks(other)[2].count()) != keys[0]
+
+
+def test_a_kept_table_is_the_freshly_drawn_table_bit_for_bit(env):
+    """The table a flight in one cell drew (as far as that flight went) is, row for row,
+    the table drawn afresh from another cell's scenario of the same replicate, and goes
+    on as that table does when a longer flight extends it."""
+    a, b = _scenario(env, 399, 0), _scenario(env, 0, 0)    # 35 m/s and 20 m/s crosswind
+    n = landing_clocks(b)[2].count()
+    with keeping(KEEP_BYTES):
+        kind_of(a).simulate(a)
+    kept = KEPT.take(table_key(b, n))
+    assert kept is not None and 0 < kept.filled <= n
+    fresh = TickTable(b, n)
+    fresh.more(kept.filled - 1)
+    assert fresh.filled == kept.filled
+    assert _bits(kept.rows[:kept.filled]) == _bits(fresh.rows[:fresh.filled])
+    kept.more(n - 1)                               # on to the end, as a 40 s flight asks
+    assert kept.filled == n
+    assert _bits(kept.rows) == _bits(tick_table(b, n))
+
+
+def test_a_flight_on_a_kept_table_is_the_flight_on_fresh_draws(env):
+    """Every column of a landing flown on the table (and force and moment noise) kept
+    from another cell's flight is the landing flown on its own draws, bit for bit."""
+    a, b = _scenario(env, 5, 2), _scenario(env, 233, 2)
+    kind = kind_of(b)
+    alone = kind.simulate(b)
+    n = landing_clocks(b)[2].count()
+    with keeping(KEEP_BYTES):
+        kind.simulate(a)
+        table = KEPT.take(table_key(b, n))
+        KEPT.give(table_key(b, n), table, table.nbytes)
+        again = kind.simulate(b)
+    assert KEPT.take(table_key(b, n)) is table      # flown on the kept one, given back
+    assert alone.columns.keys() == again.columns.keys()
+    for name, col in alone.columns.items():
+        assert _bits(col) == _bits(again.columns[name]), name
+    assert _bits(alone.states) == _bits(again.states)
+
+
+def test_the_kept_force_and_moment_noise_is_the_drawn_one(env):
+    a, b = _scenario(env, 3, 1), _scenario(env, 396, 1)
+    times = landing_clocks(b)[1].times()
+    fresh = landing_disturbance(b, times)
+    with keeping(KEEP_BYTES):
+        landing_disturbance(a, times)
+        assert len(KEPT) == 1
+        kept = landing_disturbance(b, times)
+        assert len(KEPT) == 1                       # the same entry, read again
+    assert _bits(kept) == _bits(fresh)
+    assert _bits(kept[:3]) != _bits(landing_disturbance(a, times)[:3])   # the wind is not
+
+
+def test_an_axis_on_the_sensors_draws_each_cell_s_own_table():
+    """A sensors.* axis changes the table: no cell is flown on another's, each table is its
+    own cell's fresh draws, and the GNSS's velocity noise differs between them."""
+    env = plan_envelope("highway", None, ["sensors.gnss.velocity_sigma=0.05:0.1:2",
+                                          "wind.mean[1]=0:5:2"], 2)
+    a, b = _scenario(env, 0, 1), _scenario(env, 2, 1)    # the same replicate, other sigma
+    n = landing_clocks(a)[2].count()
+    assert table_key(a, n) != table_key(b, n)
+    with keeping(KEEP_BYTES):
+        kind_of(a).simulate(a)
+        assert KEPT.take(table_key(b, n)) is None
+        kind_of(b).simulate(b)
+        ta, tb = KEPT.take(table_key(a, n)), KEPT.take(table_key(b, n))
+    assert ta is not None and tb is not None and ta is not tb
+    m = min(ta.filled, tb.filled)
+    fresh = tick_table(b, m)
+    assert _bits(tb.rows[:m]) == _bits(fresh)
+    gnss = sensed.SENSED_TICK.slice("gnss_noise")
+    assert _bits(ta.rows[:m, gnss]) != _bits(tb.rows[:m, gnss])
+    other = np.ones(sensed.SENSED_TICK.size, dtype=bool)
+    other[gnss] = False
+    assert _bits(ta.rows[:m, other]) == _bits(tb.rows[:m, other])
+
+
+def test_the_store_keeps_within_its_bytes_and_nothing_outside_keeping():
+    store = KeptDraws()
+    assert kept_bytes() == 0
+    store.give("a", object(), 10)
+    assert len(store) == 0 and store.take("a") is None
+    with keeping(100):
+        one, two, three = object(), object(), object()
+        store.give("a", one, 40)
+        store.give("a", two, 40)                    # two copies: two threads' runs
+        store.give("b", three, 40)                  # over 100: the oldest given up
+        assert store.bytes == 80 and len(store) == 2
+        assert store.take("a") is two and store.take("a") is None
+        store.give("c", object(), 101)              # alone over the limit: not kept
+        assert store.take("c") is None and store.take("b") is three
+        made = store.shared("s", lambda: np.arange(4.0))
+        assert not made.flags.writeable and store.shared("s", lambda: None) is made
+    assert kept_bytes() == 0
+
+
+def _rows(folder):
+    with open(folder / "runs.csv", newline="") as fh:
+        return list(csv.reader(fh))
+
+
+@pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.slow)])
+def test_an_envelope_keeping_its_draws_writes_the_runs_csv_of_one_that_does_not(
+        tmp_path, monkeypatch, workers):
+    """The map's corners, 3 replicates a cell: the same runs.csv bytes with and without
+    the kept draws; in one process, flown replicate by replicate, one table a replicate."""
+    axes = ["initial.velocity2[0]=5:35:2", "wind.mean[1]=0:20:2"]
+    drawn = []
+
+    class Counted(TickTable):
+        def __init__(self, *args, **kwargs):
+            drawn.append(1)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(sensed, "TickTable", Counted)
+    monkeypatch.setattr(grid, "KEEP_BYTES", 0)
+    run_envelope("highway", None, axes, 3, tmp_path / "fresh", workers=1, plots=False)
+    assert len(drawn) == 12 + 1                     # and warm_up's
+    monkeypatch.setattr(grid, "KEEP_BYTES", KEEP_BYTES)
+    del drawn[:]
+    run_envelope("highway", None, axes, 3, tmp_path / "kept", workers=workers, plots=False)
+    if workers == 1:
+        assert len(drawn) == 3 + 1 and len(KEPT) == 0   # given up after the envelope
+    assert (tmp_path / "kept" / "runs.csv").read_bytes() == \
+        (tmp_path / "fresh" / "runs.csv").read_bytes()
+    assert len(_rows(tmp_path / "kept")) == 1 + 12
