@@ -8,6 +8,7 @@ those settings. Each check compares against draws made afresh from the cell's ow
 scenario (no keeping), bit for bit.
 """
 
+import contextlib
 import csv
 
 import numpy as np
@@ -18,7 +19,7 @@ from quadland.campaign.dispersed import dispersed
 from quadland.campaign.grid import KEEP_BYTES, cell_draws, plan_envelope, run_envelope
 from quadland.engine.kept import KEPT, KeptDraws, keeping, kept_bytes
 from quadland.kinds import kind_of
-from quadland.kinds.landing import sensed
+from quadland.kinds.landing import sensed, simulate
 from quadland.kinds.landing.sensed import TickTable, table_key, tick_table
 from quadland.kinds.landing.values import landing_clocks, landing_disturbance
 
@@ -153,6 +154,10 @@ def test_the_store_keeps_within_its_bytes_and_nothing_outside_keeping():
         assert store.take("c") is None and store.take("b") is three
         made = store.shared("s", lambda: np.arange(4.0))
         assert not made.flags.writeable and store.shared("s", lambda: None) is made
+        assert store.bytes == 32                     # "b" taken, "s" kept
+        times = np.arange(3.0).tobytes()            # a key holding an array's bytes: counted
+        store.shared(("t", times), lambda: np.zeros(1))
+        assert store.bytes == 32 + 8 + 24 and len(store) == 2
     assert kept_bytes() == 0
 
 
@@ -186,3 +191,128 @@ def test_an_envelope_keeping_its_draws_writes_the_runs_csv_of_one_that_does_not(
     assert (tmp_path / "kept" / "runs.csv").read_bytes() == \
         (tmp_path / "fresh" / "runs.csv").read_bytes()
     assert len(_rows(tmp_path / "kept")) == 1 + 12
+
+
+def _changed(value):
+    """A nearby value of a setting: a bool flipped, numbers half as large again."""
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, (tuple, list)):
+        return type(value)(_changed(v) for v in value)
+    return 1.5 * value if value else 0.01
+
+
+def test_every_input_that_changes_a_table_changes_its_key():
+    """Each setting of every sensor, the seed, sensors.random, the control rate and the
+    duration changed one at a time: whenever the table drawn afresh (its first 12 s)
+    differs from the scenario's, so does the key (equal keys never hide other draws);
+    the settings no table reads (the airframe, the wind) leave the key as it is."""
+    from quadland.exceptions import ScenarioError
+    from quadland.scenario import load_scenario
+
+    base = load_scenario("highway")
+
+    def drawn(sc):
+        n = landing_clocks(sc)[2].count()
+        return table_key(sc, n), n, tick_table(sc, min(n, 3000))
+
+    key0, n0, rows0 = drawn(base)
+    changes = {"simulation.seed": base.data["simulation"]["seed"] + 1,
+               "sensors.random": False, "controller.rate_hz": 500.0,
+               "simulation.duration": base.data["simulation"]["duration"] + 4.0}
+    for name, settings in sensed.sensor_settings(base).items():
+        changes.update({f"sensors.{name}.{k}": _changed(v) for k, v in settings.items()})
+    changes.update({"sensors.imu.rate_hz": 125.0, "sensors.vision.rate_hz": 50.0,   # valid
+                    "sensors.gnss.rate_hz": 10.0, "sensors.vision.phase": 0.04,     # clocks
+                    "sensors.gnss.phase": 0.2})
+    differ, tried = set(), 0
+    for dotted, value in changes.items():
+        try:
+            sc = base.replace(**{dotted: value})
+        except ScenarioError:                       # e.g. a rate that divides no other
+            continue
+        tried += 1
+        key, n, rows = drawn(sc)
+        if n != n0 or _bits(rows) != _bits(rows0):
+            differ.add(dotted)
+            assert key != key0, dotted
+    assert tried > 40
+    assert {"simulation.seed", "sensors.random", "controller.rate_hz", "simulation.duration",
+            "sensors.gnss.velocity_sigma", "sensors.imu.gyro_noise_density",
+            "sensors.imu.rate_hz", "sensors.vision.rate_hz", "sensors.gnss.rate_hz",
+            "sensors.vision.phase", "sensors.gnss.phase"} <= differ
+    for dotted, value in {"quadrotor.mass": 1.5 * base.data["quadrotor"]["mass"],
+                          "wind.mean": [1.0, 2.0, 0.0]}.items():
+        sc = base.replace(**{dotted: value})
+        assert drawn(sc)[0] == key0, dotted
+
+
+def test_a_run_that_raises_mid_flight_gives_its_table_up(env, monkeypatch):
+    """A table whose drawing raised in the middle of a flight is not kept: the next run of
+    the replicate draws its own."""
+    sc = _scenario(env, 7, 0)
+    n = landing_clocks(sc)[2].count()
+    more = TickTable.more
+
+    def failing(self, tick):
+        if self.filled:                             # the second chunk: mid-flight
+            self.rows[self.filled:] = np.nan        # (half drawn)
+            raise RuntimeError("drawing failed")
+        return more(self, tick)
+
+    monkeypatch.setattr(TickTable, "more", failing)
+    with keeping(KEEP_BYTES), pytest.raises(RuntimeError, match="drawing failed"):
+        kind_of(sc).simulate(sc)
+    assert len(KEPT) == 1                           # the force noise alone
+    with keeping(KEEP_BYTES):
+        assert KEPT.take(table_key(sc, n)) is None
+
+
+def test_two_threads_flying_one_replicate_each_fly_a_table_of_their_own(env, monkeypatch):
+    """Two threads of one process fly two cells of one replicate at once, one table kept
+    from an earlier flight: each flies on a table no other flight holds, and each flight
+    is the flight on its own fresh draws, bit for bit."""
+    import threading
+
+    a, b, c = (_scenario(env, cell, 1) for cell in (12, 150, 377))
+    alone = {name: kind_of(sc).simulate(sc) for name, sc in (("b", b), ("c", c))}
+    with keeping(KEEP_BYTES):
+        kind_of(a).simulate(a)                      # one table of replicate 1 kept
+    n = landing_clocks(b)[2].count()
+    assert len(KEPT) == 2                           # the table and the force noise
+
+    both, holders = threading.Barrier(2, timeout=120), {}
+    drawn_table = simulate.drawn_table
+
+    @contextlib.contextmanager
+    def met(scenario, n_ticks):
+        with drawn_table(scenario, n_ticks) as table:
+            holders[threading.current_thread().name] = table
+            both.wait()                             # both flights hold a table at once
+            yield table
+
+    monkeypatch.setattr(simulate, "drawn_table", met)
+    results, errors = {}, []
+
+    def fly(name, sc):
+        try:
+            with keeping(KEEP_BYTES):
+                results[name] = kind_of(sc).simulate(sc)
+        except BaseException as exc:                # reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=fly, args=(name, sc), name=name)
+               for name, sc in (("b", b), ("c", c))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert holders["b"] is not holders["c"]
+    for name in ("b", "c"):
+        for col, values in alone[name].columns.items():
+            assert _bits(values) == _bits(results[name].columns[col]), (name, col)
+    with keeping(KEEP_BYTES):
+        kept = [KEPT.take(table_key(b, n)) for _ in range(3)]
+    assert kept[0] is not None and kept[1] is not None and kept[2] is None
+    assert {id(kept[0]), id(kept[1])} == {id(holders["b"]), id(holders["c"])}

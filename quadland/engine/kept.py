@@ -84,8 +84,8 @@ class KeptDraws:
         return None
 
     def give(self, key: Hashable, value: Any, size: int) -> None:
-        """Keep ``value`` (``size`` bytes) under ``key`` for a later :meth:`take`; not
-        when keeping nothing, nor when it alone is over the limit."""
+        """Keep ``value`` (``size`` bytes, and its key's ``bytes``) under ``key`` for a later
+        :meth:`take`; not when keeping nothing, nor when it alone is over the limit."""
         self._put(key, value, size, False)
 
     def shared(self, key: Hashable, make: Callable[[], np.ndarray]) -> np.ndarray:
@@ -104,6 +104,7 @@ class KeptDraws:
         return value
 
     def _put(self, key, value, size: int, shared: bool) -> None:
+        size += _key_bytes(key)                 # a key's arrays (a run's times) held too
         limit = kept_bytes()
         if not limit or size > limit:
             return
@@ -119,6 +120,12 @@ class KeptDraws:
         with self._lock:
             self._entries.clear()
             self.bytes = 0
+
+
+def _key_bytes(key) -> int:
+    """Bytes of the ``bytes`` parts of ``key`` (an array's, kept with its entry)."""
+    parts = key if isinstance(key, tuple) else (key,)
+    return sum(len(p) for p in parts if isinstance(p, bytes))
 
 
 #: The process's kept draws.
