@@ -6,7 +6,9 @@ With air mode (the default, as before) the rotors' collective rises to the band'
 moments with thrust. On the roof that thrust unloads the feet the drag is sliding. With the
 key false the touchdown policy tells the landing step, from the touchdown verdict on, not to
 raise the collective: the rotor that would go below 0 is clipped there and the moment gives
-way (PX4's mixer with ``MC_AIRMODE`` disabled never raises the thrust to unsaturate a rotor).
+way (PX4's mixer with ``MC_AIRMODE`` disabled never raises the thrust to unsaturate a rotor
+either, but scales roll and pitch back instead of clipping: the clip here adds the clipped
+rotor's deficit to the thrust made, and a yaw).
 Checked here: the policy's flag by phase, the thrust rule against the rotor forces ``T / 4 +
 m_i`` by hand, the landing step unchanged where the moments leave every rotor room, the key's
 default on every shipped scenario, and seed 11's run 42 of highway_100 replayed both ways.
@@ -23,14 +25,14 @@ from quadland.campaign.spec import campaign_spec_of
 from quadland.kinds.landing.gear import touchdown_guidance
 from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
-from quadland_symbolic.landing.desaturation import thrust_within_moments
+from quadland_symbolic.landing.desaturation import clip_forces, thrust_within_moments
 from quadland_symbolic.landing.touchdown_policy import (
     INERT_COMMANDS,
     TOUCHDOWN_COMMANDS,
     touchdown_commands,
 )
 from quadland_symbolic.parameters import QUADROTOR
-from quadland_symbolic.quadrotor import rotors_from_wrench
+from quadland_symbolic.quadrotor import rotors_from_wrench, wrench_from_rotors
 
 #: A quadrotor for the mixer: 0.25 m arms, the rotor drag factor 0.05 m.
 Q = dict(m1=2.0, I=[0.025, 0.025, 0.045], Kt=[0.3] * 3, Kr=[0.001] * 3, g=9.8, arm=0.25,
@@ -84,6 +86,33 @@ def test_air_mode_raises_the_collective_for_the_moments_and_without_it_the_rotor
     assert _thrust(-1.0, M, 0.0) == 0.0                 # never below 0
 
 
+def _delivered(T, M, airmode):
+    """The landing step's rotors (its thrust rule, the mixer, the clip to ``[0, F_max]``) and
+    the wrench they make."""
+    p_quad = QUADROTOR.pack(Q)
+    T = thrust_within_moments(T, ca.DM(M), p_quad, F_MAX, airmode)
+    F = clip_forces(rotors_from_wrench(ca.vertcat(T, ca.DM(M)), p_quad), 0, F_MAX)
+    return (np.asarray(F).ravel(), np.asarray(wrench_from_rotors(F, p_quad)).ravel())
+
+
+def test_without_air_mode_the_clip_gives_up_pitch_and_adds_some_thrust_and_yaw():
+    """By hand, arm ``d`` 0.25 m, drag factor ``c`` 0.05 m, ``T`` 4 N, ``My`` -1.2 N m: the
+    shares ``-My / 2d = 2.4`` (rotor 1) and ``My / 2d = -2.4`` N (rotor 3). In air mode ``T``
+    rises to ``4 * 2.4 = 9.6`` N: rotors 4.8, 2.4, 0, 2.4 N, the pitch made whole. Without it
+    rotor 3's ``1 - 2.4 = -1.4`` N clips to 0: rotors 3.4, 1, 0, 1 N, so the thrust made is
+    5.4 N (the clipped 1.4 N added to the 4 N asked for, less than air mode's 9.6), the
+    pitch ``d (F3 - F1) = -0.85`` N m of the -1.2 asked for, and a yaw ``c (F1 - F2 + F3 -
+    F4) = 0.07`` N m nobody asked for. (PX4's mixer with ``MC_AIRMODE`` disabled would
+    instead scale the pitch back to -0.5 N m, rotor 3 at 0, the thrust held at 4 N and no
+    yaw: docs/landing.md, "highway_100: the level-out without air mode".)"""
+    F, w = _delivered(4.0, [0.0, -1.2, 0.0], 1.0)
+    np.testing.assert_allclose(F, [4.8, 2.4, 0.0, 2.4], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(w, [9.6, 0.0, -1.2, 0.0], rtol=0, atol=1e-12)
+    F, w = _delivered(4.0, [0.0, -1.2, 0.0], 0.0)
+    np.testing.assert_allclose(F, [3.4, 1.0, 0.0, 1.0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(w, [5.4, 0.0, -0.85, 0.07], rtol=0, atol=1e-12)
+
+
 def test_where_the_moments_leave_every_rotor_room_the_flag_changes_nothing():
     """Shares within ``[-T / 4, F_max - T / 4]``: the thrust asked for is made either way,
     to the bit."""
@@ -128,3 +157,22 @@ def test_seed_11_run_42_stays_on_the_pad_without_air_mode():
     assert after.success and after.secured and after.on_pad
     assert after.time == before.time                    # the same contact
     assert f_before > weight > f_after
+
+
+def test_the_flight_code_flies_the_key_false_as_the_casadi_functions():
+    """highway on the true state with the key false: ``controller.backend = "c"`` (the
+    guidance's parameter, the policy's flag and the thrust rule in the generated C) flies the
+    CasADi functions' landing, every state to 1e-9 (as tests/test_landing_flight_code.py
+    does for the defaults); and the key acts: the run is the default's to the bit until the
+    touchdown verdict and departs from it after."""
+    off = ["sensors.enabled=false", "touchdown.ground_airmode=false"]
+    a = quadland.simulate(load_scenario("highway", off))
+    b = quadland.simulate(load_scenario("highway", [*off, 'controller.backend="c"']))
+    assert a.states.shape == b.states.shape
+    assert np.max(np.abs(a.states - b.states)) <= 1e-9
+    assert touchdown_report(a) == touchdown_report(b)
+    d = quadland.simulate(load_scenario("highway", ["sensors.enabled=false"]))
+    k0 = int(np.argmax(d["touched"] > 0.5))
+    assert k0 > 0 and a.states.shape == d.states.shape
+    np.testing.assert_array_equal(a.states[:k0].view(np.uint64), d.states[:k0].view(np.uint64))
+    assert np.max(np.abs(a.states[k0:] - d.states[k0:])) > 1e-3

@@ -22,9 +22,11 @@ def thrust_within_moments(T, M, p_quad, F_max, airmode=1):
     beyond the rotors) its upper end is taken, and the result is never below 0.
     ``airmode`` 0 (a 0/1 flag, symbolic or not) never raises ``T`` to the band's lower
     end: the collective only comes down to its upper end, and the rotors the moments
-    would take below 0 are clipped there, giving up that share of the moments (PX4's
-    mixer with ``MC_AIRMODE`` disabled, docs/landing.md, "highway_100: the level-out
-    without air mode"); 1, the default, is the band as above.
+    would take below 0 are clipped there by the caller. The clip gives up part of the
+    moments, adds the clipped rotors' deficit to the thrust made (less than air mode's
+    rise) and their share of the yaw; PX4 without air mode (``MC_AIRMODE`` 0) instead
+    scales roll and pitch back and holds the thrust (docs/landing.md, "highway_100: the
+    level-out without air mode"). 1, the default, is the band as above.
 
     Parameters
     ----------

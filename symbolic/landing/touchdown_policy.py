@@ -52,9 +52,10 @@ on (:data:`TOUCHDOWN_COMMANDS`' ``airmode``, read by
 :func:`~quadland_symbolic.landing.desaturation.thrust_within_moments`): a body that pivots
 onto its rear feet faster than the level-out's blend makes the attitude loop ask for
 moments that, in air mode, buy themselves collective thrust, which unloads the feet the
-drag is sliding (docs/landing.md, "highway_100: the level-out without air mode"). PX4's
-mixer with ``MC_AIRMODE`` disabled never raises the thrust to unsaturate a rotor; it gives
-up the moment instead.
+drag is sliding (docs/landing.md, "highway_100: the level-out without air mode"). The
+rotor the moments would take below 0 is clipped, which still adds its deficit to the
+thrust made; PX4's mixer with ``MC_AIRMODE`` disabled never raises the thrust to
+unsaturate a rotor and scales roll and pitch back instead, a different allocation.
 
 With ``pivot_x``, ``pivot_y``, ``pivot_h`` set (the gear's arm, times ``[touchdown]
 pivot_aim``), the policy also aims ahead of the level-out: the body meets the deck
