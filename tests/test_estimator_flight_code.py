@@ -173,15 +173,19 @@ def _fly(c, rng, steps, t0, oracle=None):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed, heave", [(1, False), (2, False), (3, True)])
-def test_step_equals_its_casadi_function_bit_for_bit(seed, heave):
+@pytest.mark.parametrize("seed, heave, height", [(1, False, 1e6), (2, False, 1e6),
+                                                  (3, True, 1e6), (4, True, 2.88)])
+def test_step_equals_its_casadi_function_bit_for_bit(seed, heave, height):
     """The C step against CasADi's; with ``heave`` the pad's z oscillates at a given
-    1.3 rad/s in the prediction and the output (E17b: a still pad stays still)."""
+    1.3 rad/s in the prediction and the output (E17b: a still pad stays still); with
+    ``height`` 2.88 m (``heave_height``) the gate opens halfway down the flight's 3.0 to
+    2.76 m, so the C step is held to CasADi's on both sides of it."""
     c = Call(load("double"))
     lay = estimator_params()
     if heave:
         c.v["params"][lay.slice("heave_frequency")] = 1.3
         c.v["params"][lay.slice("heave_in_filter")] = 1.0
+        c.v["params"][lay.slice("heave_height")] = height
     # the range fused wherever its beam points (E12a off): the random states are metres
     # from the pad, and every block must be fused at least once
     c.v["params"][lay.slice("range_deck_radius")] = 1e30
@@ -190,6 +194,8 @@ def test_step_equals_its_casadi_function_bit_for_bit(seed, heave):
     oracle = estimator_step_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
     rows = _fly(c, rng, 4 * N_HIST, 7.0 + seed, oracle)
     last = DIAG.unpack(rows[-1][1])
+    heights = np.array([NAV.unpack(DIAG.unpack(d)["x_h"])["p_r"][2] for _, d, _ in rows])
+    assert height > 1e5 or (np.any(heights <= height) and np.any(heights > height))
     # every kind of packet happened (the counters are the filter's own, C equal to CasADi)
     assert np.all(last["n_fused"] > 0) and np.all(last["n_discarded"] > 0)
     assert np.all(last["n_dropped"] > 0) and last["n_imu_invalid"] > 0

@@ -5,7 +5,7 @@ Checked by hand: the frequency the step uses at, just above and far below the ga
 height; the filter's prediction below the gate against a quarter period of the oscillator
 worked by hand, above it against the random walk's prediction bit for bit; the default
 (1e6 m) never gating; and ``ship_ss5``'s seed-7 run 104, the flight it was built for, against
-the pad's true motion (differences of its ``z2``).
+the pad's true motion (differences of its ``z2``); the output's step at the gate by hand.
 """
 
 import casadi as ca
@@ -19,7 +19,7 @@ from quadland.campaign.sampling import draws
 from quadland.campaign.spec import campaign_spec_of
 from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
-from quadland_symbolic.landing.estimator import heave_frequency
+from quadland_symbolic.landing.estimator import heave_frequency, output_predictor_function
 from quadland_symbolic.landing.filter_linearization import filter_prediction_function
 from quadland_symbolic.landing.navigation import ESTIMATOR_DEFAULTS, NAV, estimator_params
 
@@ -73,7 +73,8 @@ def _prediction(height, values):
 def test_below_the_gate_the_prediction_is_the_oscillators_quarter_period():
     """At 0.4 m under a gate of 0.5 m, 2 rad/s: ``v+ = a / omega``, ``a+ = -omega v``, the
     relative height loses the pad's rise ``(v + a / omega) / omega`` (as
-    tests/test_heave_filter.py's quarter period, here through the flight step's gate)."""
+    tests/test_heave_filter.py's quarter period, here through the gate of the prediction
+    the hover linearization (``quadland margins``) uses)."""
     w = 2.0
     on = {"heave_frequency": w, "heave_in_filter": 1.0, "heave_height": 0.5}
     xn, _ = _prediction(0.4, on)
@@ -93,6 +94,42 @@ def test_above_the_gate_the_prediction_is_the_random_walks_to_the_bit():
     assert xn[sl("v_t")][2] == pytest.approx(0.3 - 0.8 * dt, abs=1e-15)
     assert xn[sl("a_t")][2] == -0.8
     assert xn[sl("p_r")][2] == pytest.approx(1.2 - (0.3 * dt - 0.8 * dt**2 / 2), abs=1e-15)
+
+
+def _output_across_the_gate(height):
+    """The pad's z rows of the flight step's output at ``height`` (the frequency from
+    :func:`heave_frequency`'s gate, carried by the output predictor as the step does) over
+    a quarter period of 2 rad/s, no inputs in the buffer: ``(v_t z, a_t z, p_r z)``."""
+    w, n = 2.0, 8
+    x = np.zeros(N)
+    x[sl("v_t")][2], x[sl("a_t")][2], x[sl("p_r")][2] = 0.3, -0.8, height
+    on = {"heave_frequency": w, "heave_in_filter": 1.0, "heave_height": 0.5}
+    ms_s, x_s, p_s = ca.SX.sym("ms", 2), NAV.sym("x"), estimator_params().sym()
+    gate = ca.Function("g", [ms_s, x_s, p_s], [heave_frequency(
+        ms_s, x_s, estimator_params().unpack(p_s), 0.004)[1]])
+    omega = float(gate([0.0, 0.0], x, estimator_params().pack({**ESTIMATOR_DEFAULTS, **on})))
+    f = output_predictor_function(n)
+    hist = np.zeros((f.size1_in(1), n))
+    hist[3, :] = np.pi / 2 / w / n                     # T = a quarter period
+    y = col(f(x, hist, omega))
+    return y[sl("v_t")][2], y[sl("a_t")][2], y[sl("p_r")][2]
+
+
+def test_the_output_steps_at_the_gate_by_the_horizons_carry():
+    """The gate switches the output's carry over the horizon ``T`` at once: the output's
+    pad rows step between the constant acceleration above and the oscillator below (the
+    review of the sixteenth session quantified this step on ship_ss5's flights, docs/landing.md).
+    By hand at 2 rad/s and ``T`` a quarter period (``v`` 0.3, ``a`` -0.8): below, ``v = a /
+    omega = -0.4``, ``a = -omega v = -0.6``, the pad risen ``v / 2 + a / 4``; 2^-20 m above,
+    ``v + a T``, ``a``, ``v T + a T^2 / 2``. The step in ``a`` is ``-omega^2 T s v - (1 - c)
+    a`` (here -0.6 + 0.8)."""
+    T = np.pi / 4
+    v_on, a_on, p_on = _output_across_the_gate(0.5)
+    v_off, a_off, p_off = _output_across_the_gate(0.5 + 2.0**-20)
+    assert v_on == pytest.approx(-0.4, abs=1e-14) and a_on == pytest.approx(-0.6, abs=1e-14)
+    assert p_on == pytest.approx(0.5 - (0.3 / 2 - 0.8 / 4), abs=1e-14)
+    assert v_off == pytest.approx(0.3 - 0.8 * T, abs=1e-14) and a_off == -0.8
+    assert p_off == pytest.approx(0.5 + 2.0**-20 - (0.3 * T - 0.8 * T**2 / 2), abs=1e-14)
 
 
 def _run_104(*overrides):
