@@ -208,6 +208,13 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
     return exes
 
 
+#: highway's crawl and land detector before "The crawl's gate and a ground contact that needs
+#: the deck to carry the weight" (docs/landing.md, sixteenth session): no gate (the committed
+#: crawl, the whole time to contact, no floor) and the detector's ground contact without the
+#: thrust cue; the replays of highway's earlier campaign rows and default seed pin it.
+HIGHWAY_SIXTEENTH = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
+                     "landing.crawl_gate_time=1000.0", "land_detector.contact_thrust=false"]
+
 #: highway_100's pad before "highway_100: what the offset at contact is made of, and the
 #: nested marker" (docs/landing.md, sixteenth session): the large marker alone, lost at 0.45 m;
 #: the replays measured on the paused crawl's file (and every older one) pin it.

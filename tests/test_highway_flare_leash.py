@@ -15,6 +15,7 @@ from the file; and the four runs replayed from the campaigns' draws, with the la
 import math
 
 import pytest
+from reference import HIGHWAY_SIXTEENTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -22,10 +23,11 @@ from quadland.campaign.spec import campaign_spec_of
 from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
 
-#: highway's touchdown and descent of before this change (main at 42d6c22).
+#: highway's touchdown and descent of before this change (main at 42d6c22), with no crawl
+#: gate and the land detector of before (``reference.HIGHWAY_SIXTEENTH``).
 BEFORE = ['touchdown.policy="idle"', "touchdown.flare_tilt_deg=34.0",
           "touchdown.level_time=0.35", "touchdown.cut_time=0.5", "landing.descent_leash=0.0",
-          "sensors.vision.small_range_max=0.0"]
+          "sensors.vision.small_range_max=0.0", *HIGHWAY_SIXTEENTH]
 
 
 def test_the_flare_and_the_leash_are_inside_the_judge_and_the_gear():
@@ -66,14 +68,15 @@ def _run(seed, index, *overrides):
 ])
 def test_the_campaigns_last_four_failures_land(seed, index, failure, before_value):
     """Each run's row in the campaign of before (main's ``runs.csv``: ``failure`` at
-    ``before_value``) is replayed with the law of before, and lands with the shipped file:
-    secured, on the pad, within every limit of the judge."""
+    ``before_value``) is replayed with the law of before, and lands with the flare and
+    leash (the file of the change, ``HIGHWAY_SIXTEENTH`` pinning the gate and detector of
+    then) and with the shipped file: secured, on the pad, within every limit of the judge."""
     before = _run(seed, index, *BEFORE)
     assert not before.success and before.failures == [failure]
     assert getattr(before, failure) == pytest.approx(before_value, abs=1e-4 if failure ==
                                                      "sink_rate" else 0.01)
-    now = _run(seed, index)
-    assert now.success and now.secured and now.on_pad and now.failures == []
-    assert now.sink_rate < now.limits["max_sink_rate"]
-    assert now.tilt_deg < now.limits["max_tilt_deg"]
-    assert now.offset < now.limits["max_offset"]
+    for now in (_run(seed, index, *HIGHWAY_SIXTEENTH), _run(seed, index)):
+        assert now.success and now.secured and now.on_pad and now.failures == []
+        assert now.sink_rate < now.limits["max_sink_rate"]
+        assert now.tilt_deg < now.limits["max_tilt_deg"]
+        assert now.offset < now.limits["max_offset"]

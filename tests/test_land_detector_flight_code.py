@@ -120,9 +120,11 @@ def _flight(rng, n=1400):
     return rows
 
 
-def test_step_equals_its_casadi_function_bit_for_bit():
+@pytest.mark.parametrize("contact_thrust", [0.0, 1.0])
+def test_step_equals_its_casadi_function_bit_for_bit(contact_thrust):
     c = Call(load("double"))
     f = land_detector_function()
+    c.v["params"][LAND_DETECTOR_PARAMS.index("contact_thrust")] = contact_thrust
     p = c.v["params"].copy()
     state = np.zeros(LAND_DETECTOR_STATE.size)
     seen = set()
@@ -135,6 +137,31 @@ def test_step_equals_its_casadi_function_bit_for_bit():
         seen.add(tuple(flags[STAGES]))
     # the flight passed through every stage and dropped back once (the estimate's jump)
     assert {(0, 0, 0), (1, 0, 0), (1, 1, 0), (1, 1, 1)} <= seen
+
+
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_contact_thrust_keeps_a_hover_over_the_deck_out_of_contact(precision):
+    """``contact_thrust`` in the C: the gear held 3 cm over the deck, still, descending,
+    the range agreeing, at hover thrust (ratio 1.0 > thrust_low 0.6) is ground contact on
+    the hand-counted step 83 without the key and never in 1,000 steps with it; with the
+    weight on the deck (ratio 0.3) the key leaves the steps 83, 165 and 247."""
+    hover = _cues(range_gap=0.03, est_gap=0.03, thrust_ratio=1.0)
+    for key, cues, want in ((0.0, hover, 83), (1.0, hover, None), (1.0, _cues(), 83)):
+        c = Call(load(precision))
+        c.v["params"][LAND_DETECTOR_PARAMS.index("contact_thrust")] = key
+        assert c.check() == (STATUS["QL_OK"], None)
+        c.v["cues"][:] = cues
+        first = {}
+        for k in range(1, 1001):
+            assert c.step(DT) == STATUS["QL_OK"]
+            for i in STAGES:
+                if c.v["flags"][i] == 1 and i not in first:
+                    first[i] = k
+        if want is None:
+            assert first == {}
+        else:
+            assert first[STAGES[0]] == want
+    assert tuple(first[i] for i in STAGES) == (83, 165, 247)
 
 
 def test_float_build_gives_the_same_stages():

@@ -163,7 +163,7 @@ static const double ql_land_p_est[60] = {
 static const double ql_land_p_ld[13] = {
     0.1, 0.25, 0.6, 0.3333333333333333, 0.3333333333333333, 0.3333333333333333,
     2.5, 3.0, 0.1, 3.0, 1.0, 0.5,
-    0.0,
+    1.0,
 };
 
 /* The filter's initial estimate: the true relative motion at t = 0 (p_r (3), v1 (3), v_t (3), a_t (3), b (3), a_b (3), a_tilt (3)). */
