@@ -74,6 +74,23 @@ def test_highway_100_s_interval_is_its_wide_lens_pinholes():
     assert v["small_range_min"] < v["range_min"] < v["small_range_max"] < v["range_max"]
 
 
+def test_highway_100_s_range_min_is_inside_the_small_interval():
+    """highway_100 keeps the 102 deg lens's ``range_min``, 0.3 / tan 33.5 deg = 0.45 m; its
+    130 deg lens's own is 0.3 / tan 42.7 deg = 0.325 m (the 0.6 m marker filling the 85 deg
+    height). Both lie inside the small marker's 0.08 to 0.6 m, so with the nested marker the
+    union of the two intervals, the ranges the camera detects at, is 0.08 m to ``range_max``
+    with either figure (docs/landing.md, "highway_100: what the offset at contact is made of,
+    and the nested marker", the review's check)."""
+    v = load_scenario("highway_100").data["sensors.vision"]
+    large = 0.6                                                        # m, the pad's marker
+    narrow = (large / 2) / math.tan(math.radians(33.5))
+    own = (large / 2) / math.tan(math.radians(33.5 * WIDE))
+    assert narrow == pytest.approx(0.453, abs=1e-3) and v["range_min"] == 0.45
+    assert own == pytest.approx(0.325, abs=1e-3)
+    for r_min in (v["range_min"], own):
+        assert v["small_range_min"] < r_min < v["small_range_max"]
+
+
 def _marker_age_at_contact(*overrides, name="highway"):
     result = quadland.simulate(load_scenario(name, list(overrides)))
     report = touchdown_report(result)
