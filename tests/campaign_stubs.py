@@ -10,10 +10,10 @@ def ctrl_c_at_run(monkeypatch, index: int):
     would have flown), the others fly as before; returns the real ``fly``."""
     real_fly = local.fly
 
-    def fly(base, draw, limits):
+    def fly(base, draw, limits, *keep):
         if draw.index == index:
             raise KeyboardInterrupt
-        return real_fly(base, draw, limits)
+        return real_fly(base, draw, limits, *keep)
 
     monkeypatch.setattr(local, "fly", fly)
     return real_fly
