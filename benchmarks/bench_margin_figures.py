@@ -86,19 +86,26 @@ def _cpu(args, env) -> float:
     return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
 
 
+def _setup(tmp: Path, against: Path | None, scenarios) -> tuple[Path, dict]:
+    """In ``tmp``: the child script, each scenario's review pickled, and the trees' env
+    (this one's, and ``against``'s exported tree when given)."""
+    child = Path(tmp, "child.py")
+    child.write_text(CHILD)
+    trees = {"this": dict(os.environ)}
+    if against is not None:
+        trees["against"] = _tree_env(against.resolve(), tmp)
+    for name in scenarios:
+        _review(name, Path(tmp, f"{name}.pkl"))
+    return child, trees
+
+
 def figures(runs: int, against: Path | None, scenarios, texts: str = "stored") -> dict:
     """CPU s of the five figures in each run, by (scenario, tree); ``texts`` "stored": the
     stored texts' file written by the first run (not counted) and read by the others,
     "cold": none (each run lays out and renders every text, and writes the file)."""
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
-        child = Path(tmp, "child.py")
-        child.write_text(CHILD)
-        trees = {"this": dict(os.environ)}
-        if against is not None:
-            trees["against"] = _tree_env(against.resolve(), Path(tmp))
-        for name in scenarios:
-            _review(name, Path(tmp, f"{name}.pkl"))
+        child, trees = _setup(Path(tmp), against, scenarios)
         for k in range(runs + (texts == "stored")):
             for name in scenarios:
                 order = list(trees.items())
@@ -131,13 +138,8 @@ def instructions(against: Path | None, scenarios, native_runs: int) -> dict:
     (alternating the trees), for instructions per second on this host."""
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
-        child = Path(tmp, "child.py")
-        child.write_text(CHILD)
-        trees = {"this": dict(os.environ)}
-        if against is not None:
-            trees["against"] = _tree_env(against.resolve(), Path(tmp))
+        child, trees = _setup(Path(tmp), against, scenarios)
         for name in scenarios:
-            _review(name, Path(tmp, f"{name}.pkl"))
             for tree, env in trees.items():
                 args = [sys.executable, str(child), str(Path(tmp, f"{name}.pkl"))]
                 store = str(Path(tmp, f"{name}-{tree}.texts"))
