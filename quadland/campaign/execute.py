@@ -45,6 +45,7 @@ from quadland.campaign.local import (
     local_workers,
     pool_runs,
     serial_runs,
+    start_pool_server,
 )
 from quadland.campaign.resume import campaign_manifest, check_folder
 from quadland.campaign.sampling import format_value, iter_draws
@@ -206,6 +207,8 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
         check_folder(CampaignFolder(path), manifest, header)
     given = [o for o in (_override_texts(overrides)) if not o.startswith("campaign.")]
     scenario_arg = _scenario_argument(base, scenario)
+    if local > 1:                       # checked: its imports beside the simulator's load
+        start_pool_server()
     with contextlib.ExitStack() as stack:
         if scheduler is not None:
             stack.enter_context(quiet_cluster_logs())

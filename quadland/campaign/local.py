@@ -27,7 +27,8 @@ from quadland.kinds import kind_of
 from quadland.scenario import Scenario
 
 __all__ = ["MAX_WORKERS", "WORKER_MEMORY", "AHEAD", "CHUNK", "RunQueue", "available_memory",
-           "worker_memory", "local_workers", "serial_runs", "pool_runs", "chunk_size"]
+           "worker_memory", "local_workers", "serial_runs", "pool_runs", "chunk_size",
+           "start_pool_server"]
 
 #: Most local worker processes one campaign may ask for.
 MAX_WORKERS = 1024
@@ -202,6 +203,22 @@ def _worker_main(conn, lifeline, base: Scenario, limits: Mapping[str, float],
             conn.send(_Raised(RuntimeError(f"{type(exc).__name__}: {exc}")))
 
 
+def start_pool_server():
+    """Start the ``forkserver`` the local workers are forked from (if it is not running),
+    with this module preloaded; returns its multiprocessing context.
+
+    The server imports its preload (0.2 s of CPU) in a process of its own: a campaign
+    starts it as soon as it knows it flies on local processes, so that the import runs
+    on another core while this process checks the folder and loads the simulator
+    (:func:`pool_runs` then finds it running).
+    """
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["quadland.campaign.local",
+                                    "quadland.campaign.forkserver_hook"])
+    _start_forkserver()
+    return context
+
+
 def _start_forkserver() -> None:
     """Start the forkserver with SIGINT blocked, so that neither it nor a worker sees Ctrl-C.
 
@@ -264,10 +281,7 @@ def pool_runs(base: Scenario, todo: Iterator[RunDraw], workers: int,
     the resource tracker. ``kept``: bytes of draws each worker may keep for its next
     runs (:func:`fly`'s ``keep``).
     """
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(["quadland.campaign.local",
-                                    "quadland.campaign.forkserver_hook"])
-    _start_forkserver()
+    context = start_pool_server()
     lifeline, keep = context.Pipe(duplex=False)
     pool: list[_Worker] = []
     try:

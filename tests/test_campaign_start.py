@@ -1,0 +1,103 @@
+"""A campaign's start: its table checked without SciPy, its forkserver started early (issue 20).
+
+``NORMAL_REACH`` stands for SciPy's ``-ndtri(U_EDGE)`` in the reach of a normal
+dispersion's draws; checked here against SciPy itself, bit for bit, and the reach of every
+normal and truncated normal dispersion of the shipped campaigns against the reach computed
+from SciPy's value.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+import scipy.special
+
+from quadland.campaign import local
+from quadland.campaign.draws import NORMAL_REACH, U_EDGE, extremes
+from quadland.campaign.execute import run_campaign
+from quadland.campaign.spec import campaign_spec_of
+from quadland.exceptions import ScenarioError
+from quadland.scenario import load_scenario
+
+
+def test_the_normal_reach_is_scipy_s_ndtri_bit_for_bit():
+    assert NORMAL_REACH == -float(scipy.special.ndtri(U_EDGE))
+    assert NORMAL_REACH.hex() == (-float(scipy.special.ndtri(U_EDGE))).hex()
+
+
+def _reach_by_hand(disp):
+    """Each dimension's extreme draws, from SciPy's ``ndtri`` (the slow path)."""
+    reach = -float(scipy.special.ndtri(U_EDGE))
+    out = []
+    for j in range(len(disp.low if disp.distribution == "uniform" else disp.std)):
+        if disp.distribution == "uniform":
+            out.append((disp.low[j], disp.high[j]))
+            continue
+        lo, hi = disp.mean[j] - reach * disp.std[j], disp.mean[j] + reach * disp.std[j]
+        if disp.distribution == "truncnorm":
+            lo, hi = min(max(lo, disp.low[j]), disp.high[j]), max(min(hi, disp.high[j]),
+                                                                   disp.low[j])
+        out.append((lo, hi))
+    return out
+
+
+@pytest.mark.parametrize("name", ["highway", "ship", "turning", "ship_ss5", "highway_100"])
+def test_every_shipped_dispersion_reaches_what_scipy_s_value_gives(name):
+    spec = campaign_spec_of(load_scenario(name))
+    numeric = [d for d in spec.dispersions if d.distribution not in ("seed", "choice")]
+    assert any(d.distribution in ("normal", "truncnorm") for d in numeric)
+    for disp in numeric:
+        assert extremes(disp) == _reach_by_hand(disp), disp.key
+
+
+def test_a_normal_dispersion_that_overflows_is_still_refused():
+    import dataclasses
+
+    base = load_scenario("highway")
+    table = {**base.campaign_table,
+             "dispersions": {"quadrotor.mass": {"distribution": "normal", "mean": 0.0,
+                                                "std": 1e308}}}
+    with pytest.raises(ScenarioError, match="overflow"):
+        campaign_spec_of(dataclasses.replace(base, campaign_table=table))
+
+
+def test_checking_a_campaign_imports_no_scipy():
+    script = ("import sys\n"
+              "from quadland.scenario import load_scenario\n"
+              "from quadland.campaign.spec import campaign_spec_of\n"
+              "from quadland.campaign.execute import run_campaign\n"
+              "for name in ('highway', 'ship'):\n"
+              "    campaign_spec_of(load_scenario(name))\n"
+              "print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy'))\n")
+    out = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
+                         text=True).stdout.strip()
+    assert out == "[]"
+
+
+def test_the_forkserver_runs_before_the_simulator_loads_and_the_runs_are_the_same(
+        tmp_path, monkeypatch):
+    """The pool's server is started once the campaign is checked (its imports beside the
+    simulator's load); two workers still write the runs.csv of one."""
+    from multiprocessing import forkserver
+
+    from quadland.campaign import execute
+
+    fast = ["simulation.duration=0.5"]
+    serial = tmp_path / "one"
+    run_campaign("paper", fast, runs=6, out=serial, workers=1)
+    seen, warm = [], execute.warm_up
+
+    def warm_up(base):
+        seen.append(forkserver._forkserver._forkserver_pid)
+        warm(base)
+
+    monkeypatch.setattr(execute, "warm_up", warm_up)
+    forkserver._forkserver._stop()              # none left running by an earlier test
+    assert forkserver._forkserver._forkserver_pid is None
+    pool = tmp_path / "two"
+    run_campaign("paper", fast, runs=6, out=pool, workers=2)
+    assert len(seen) == 1 and seen[0] is not None
+    assert (pool / "runs.csv").read_bytes() == (serial / "runs.csv").read_bytes()
+    assert local.start_pool_server().get_start_method() == "forkserver"
