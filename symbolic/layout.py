@@ -234,37 +234,24 @@ class Layout:
             out[f.name] = block
         return out
 
-    @functools.cached_property
-    def _real(self) -> tuple[tuple[str, int, int, int, Layout | None], ...]:
-        """Each real field's name, size, ``(start, stop)`` and nested layout, in order."""
-        return tuple((f.name, f.size, *self._offsets[f.name], f.layout)
-                     for f in self.fields if f.ctype == "real")
-
     def pack(self, values: dict) -> np.ndarray:
-        """Assemble a numeric vector from a dict of named blocks.
-
-        Each block is written in place into the vector (a Python ``float`` or ``int`` of a
-        one-value field as itself; anything else column-major through
-        ``numpy.asarray(v, dtype=float)``): the values of the blocks' concatenation.
-        """
-        real = self._real
-        if not all(name in values for name, *_ in real):
-            missing = [name for name, *_ in real if name not in values]
+        """Assemble a numeric vector from a dict of named blocks."""
+        missing = [f.name for f in self.fields if f.ctype == "real" and f.name not in values]
+        if missing:
             raise KeyError(f"{self.name}: missing {missing}")
-        out = np.empty(self.size)
-        for name, size, a, b, layout in real:
-            v = values[name]
-            if size == 1 and (type(v) is float or type(v) is int):
-                out[a] = v
+        chunks = []
+        for f in self.fields:
+            if f.ctype != "real":
                 continue
-            if layout is not None and isinstance(v, dict):
-                v = layout.pack(v)
+            v = values[f.name]
+            if f.layout is not None and isinstance(v, dict):
+                v = f.layout.pack(v)
             flat = np.asarray(v, dtype=float).reshape(-1, order="F")   # column-major
-            if flat.size != size:
-                raise ValueError(f"{self.name}.{name}: expected {size} values, "
+            if flat.size != f.size:
+                raise ValueError(f"{self.name}.{f.name}: expected {f.size} values, "
                                  f"got {flat.size}")
-            out[a:b] = flat
-        return out
+            chunks.append(flat)
+        return np.concatenate(chunks) if chunks else np.zeros(0)
 
     def zeros(self) -> np.ndarray:
         """A numeric vector of zeros of the layout's length."""
