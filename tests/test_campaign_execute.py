@@ -717,4 +717,7 @@ def test_the_forkserver_hook_silences_only_a_truncated_start():
     import inspect
 
     import quadland.campaign.local as local
-    assert '"quadland.campaign.forkserver_hook"' in inspect.getsource(local.pool_runs)
+    # the pool's forkserver is started (its preload set) by start_pool_server, which
+    # pool_runs calls (run_campaign calls it earlier, once the campaign is checked)
+    assert '"quadland.campaign.forkserver_hook"' in inspect.getsource(local.start_pool_server)
+    assert "start_pool_server()" in inspect.getsource(local.pool_runs)
