@@ -31,6 +31,12 @@ same runs without)::
     nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --rounds 3 \
         --runs 60 --replicates 2
 
+With ``--callgrind`` too, each process flies its runs replicate by replicate (``--few /
+R`` and ``--runs / R`` of each): the first run of each replicate draws its table in both,
+so the difference is over runs flown on kept draws where the tree keeps them.
+``--set KEY=VALUE`` (repeatable) overrides the scenario in every child and command, e.g.
+``highway`` without its crawl's gate (``--set landing.crawl_gate=0.0 ...``).
+
 ``--command K`` instead runs the whole command on each tree alternately, ``quadland
 envelope --scenario highway`` over the map at ``K`` runs a cell, ``--no-plots``, its
 local workers (``--workers``, default every core): the command's wall s, the wall s of
@@ -69,13 +75,14 @@ keep_freed_memory()
 threadpool_limits(1)
 runs, parent, warm = int(sys.argv[1]), sys.argv[2] == "1", sys.argv[3] == "1"
 AXES, R = json.loads(sys.argv[4]), int(sys.argv[5])
+SETS = json.loads(sys.argv[6]) if len(sys.argv) > 6 else []
 out = {}
 t0 = time.process_time()
 from quadland.campaign.fly import fly, warm_up
 from quadland.campaign.grid import cell_draws, plan_envelope, envelope_header
 import quadland.campaign.grid as grid
 t1 = time.process_time()
-env = plan_envelope("highway", None, AXES, 30)
+env = plan_envelope("highway", SETS or None, AXES, 30)
 t2 = time.process_time()
 warm_up(env.base)
 picks = [(7309 * i + 11) % env.runs for i in range(runs + warm)]
@@ -118,18 +125,21 @@ print(json.dumps(out))
 
 
 def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True,
-          replicates: int = 0) -> dict:
+          replicates: int = 0, sets: list[str] = ()) -> dict:
     env, cwd = tree_env(tree, tmp)
     out = subprocess.run([sys.executable, "-c", CHILD, str(runs), "1" if parent else "0", "1",
-                          json.dumps(AXES), str(replicates)], check=True, cwd=cwd, env=env,
-                         capture_output=True, text=True).stdout
+                          json.dumps(AXES), str(replicates), json.dumps(list(sets))],
+                         check=True, cwd=cwd, env=env, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
-def callgrind(tree: Path | None, tmp: Path, runs: int) -> int:
+def callgrind(tree: Path | None, tmp: Path, runs: int, replicates: int = 0,
+              sets: list[str] = ()) -> int:
     """Callgrind's instruction count of a worker's process flying ``runs`` runs (no warm-up
-    run: the first of both counts is the same run)."""
-    return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES), "0")
+    run: the first of both counts is the same run; with ``replicates``, the first run of
+    each replicate)."""
+    return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES),
+                        str(replicates), json.dumps(list(sets)))
 
 
 def _subreaper() -> None:
@@ -141,7 +151,8 @@ def _subreaper() -> None:
         raise OSError(ctypes.get_errno(), "prctl(PR_SET_CHILD_SUBREAPER)")
 
 
-def command(tree: Path | None, tmp: Path, k: int, workers: int | None) -> dict:
+def command(tree: Path | None, tmp: Path, k: int, workers: int | None,
+            sets: list[str] = ()) -> dict:
     """The whole envelope command at ``k`` runs a cell on ``tree``: wall s, flying s, CPU s
     of all its processes, each with runs.csv's SHA-256."""
     env, cwd = tree_env(tree, tmp)
@@ -149,7 +160,8 @@ def command(tree: Path | None, tmp: Path, k: int, workers: int | None) -> dict:
     subprocess.run(["rm", "-rf", str(out)], check=True)
     args = [sys.executable, "-m", "quadland", "envelope", "--scenario", "highway",
             *(x for a in AXES for x in ("--axis", a)), "--runs-per-cell", str(k),
-            "--no-plots", "--out", str(out), *(["--workers", str(workers)] if workers else [])]
+            "--no-plots", "--out", str(out), *(["--workers", str(workers)] if workers else []),
+            *(x for kv in sets for x in ("--set", kv))]
     _subreaper()
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
@@ -181,11 +193,14 @@ def main() -> None:
                     help="a worker's runs: R replicates in --runs / R cells each, flown "
                          "replicate by replicate, the draws kept where the tree keeps them")
     ap.add_argument("--workers", type=int, help="--command: local workers")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a scenario override of every child and command (repeatable)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         if a.callgrind:
             for name, tree in (("before", a.against.resolve()), ("now", None)):
-                few, many = (callgrind(tree, Path(tmp), n) for n in (a.few, a.runs))
+                few, many = (callgrind(tree, Path(tmp), n, a.replicates, a.set)
+                             for n in (a.few, a.runs))
                 print(f"{name}: {(many - few) / (a.runs - a.few) / 1e6:.2f} M instructions a "
                       f"run (processes of {a.few} and {a.runs} runs: {few:,} and {many:,})",
                       flush=True)
@@ -193,8 +208,9 @@ def main() -> None:
         res: dict[str, dict[str, list]] = {"before": {}, "now": {}}
         for r in range(a.rounds):
             for name, tree in (("before", a.against.resolve()), ("now", None)):
-                got = (command(tree, Path(tmp), a.command, a.workers) if a.command
-                       else child(tree, Path(tmp), a.runs, replicates=a.replicates))
+                got = (command(tree, Path(tmp), a.command, a.workers, a.set) if a.command
+                       else child(tree, Path(tmp), a.runs, replicates=a.replicates,
+                                  sets=a.set))
                 for k, v in got.items():
                     res[name].setdefault(k, []).append(v)
             print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 3) for k, v in

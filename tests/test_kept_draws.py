@@ -299,7 +299,8 @@ def test_a_run_that_raises_mid_flight_gives_its_table_up(env, monkeypatch):
     monkeypatch.setattr(TickTable, "more", failing)
     with keeping(KEEP_BYTES), pytest.raises(RuntimeError, match="drawing failed"):
         kind_of(sc).simulate(sc)
-    assert len(KEPT) == 1                           # the force noise alone
+    assert len(KEPT) == 3                           # the force noise, the wind's normals
+                                                    # and gust alone
     with keeping(KEEP_BYTES):
         assert KEPT.take(table_key(sc, n)) is None
 
@@ -315,7 +316,8 @@ def test_two_threads_flying_one_replicate_each_fly_a_table_of_their_own(env, mon
     with keeping(KEEP_BYTES):
         kind_of(a).simulate(a)                      # one table of replicate 1 kept
     n = landing_clocks(b)[2].count()
-    assert len(KEPT) == 2                           # the table and the force noise
+    assert len(KEPT) == 4                           # the table, the force noise, the
+                                                    # wind's normals and gust
 
     both, holders = threading.Barrier(2, timeout=120), {}
     drawn_table = simulate.drawn_table
