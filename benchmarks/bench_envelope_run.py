@@ -31,13 +31,28 @@ same runs without)::
     nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --rounds 3 \
         --runs 60 --replicates 2
 
+With ``--callgrind`` too, each process flies its runs replicate by replicate (``--few /
+R`` and ``--runs / R`` of each): the first run of each replicate draws its table in both,
+so the difference is over runs flown on kept draws where the tree keeps them.
+``--wind`` times a run's disturbance alone (``landing_disturbance``: the wind, the force
+and moment noise) over ``--runs`` runs of the map in ``--replicates`` replicates, kept where
+the tree keeps (CPU ms a run, the SHA-256 of the disturbances; with ``--callgrind``, its
+instructions a run)::
+
+    nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --wind --rounds 5 \
+        --runs 200 --replicates 2
+
+``--set KEY=VALUE`` (repeatable) overrides the scenario in every child and command, e.g.
+``highway`` without its crawl's gate (``--set landing.crawl_gate=0.0 ...``).
+
 ``--command K`` instead runs the whole command on each tree alternately, ``quadland
 envelope --scenario highway`` over the map at ``K`` runs a cell, ``--no-plots``, its
 local workers (``--workers``, default every core): the command's wall s, the wall s of
 its flying (its last line's "flew N runs in X s"), the CPU s of the command and all its
 processes (``RUSAGE_CHILDREN`` before and after: this process is the subreaper of the
 command's descendants and waits for each, so the forkserver, which waits for its
-workers, is counted with them), and the SHA-256 of its runs.csv::
+workers, is counted with them), and the SHA-256 of its runs.csv (and of its envelope.json
+less the session's wall time and rate and the scenario file's path)::
 
     nice -n 10 python benchmarks/bench_envelope_run.py --against /tmp/old --rounds 2 --command 4
 """
@@ -69,13 +84,14 @@ keep_freed_memory()
 threadpool_limits(1)
 runs, parent, warm = int(sys.argv[1]), sys.argv[2] == "1", sys.argv[3] == "1"
 AXES, R = json.loads(sys.argv[4]), int(sys.argv[5])
+SETS = json.loads(sys.argv[6]) if len(sys.argv) > 6 else []
 out = {}
 t0 = time.process_time()
 from quadland.campaign.fly import fly, warm_up
 from quadland.campaign.grid import cell_draws, plan_envelope, envelope_header
 import quadland.campaign.grid as grid
 t1 = time.process_time()
-env = plan_envelope("highway", None, AXES, 30)
+env = plan_envelope("highway", SETS or None, AXES, 30)
 t2 = time.process_time()
 warm_up(env.base)
 picks = [(7309 * i + 11) % env.runs for i in range(runs + warm)]
@@ -116,20 +132,64 @@ if parent:
 print(json.dumps(out))
 '''
 
+WIND = r'''
+import contextlib, hashlib, json, sys, time
+from threadpoolctl import threadpool_limits
+threadpool_limits(1)
+calls, R, AXES, SETS = int(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3]), \
+    json.loads(sys.argv[4])
+import quadland.campaign.grid as grid
+from quadland.campaign.dispersed import dispersed
+from quadland.kinds.landing.values import landing_clocks, landing_disturbance
+env = grid.plan_envelope("highway", SETS or None, AXES, 30)
+K = env.runs_per_cell
+picks = [((7309 * i + 11) % len(env.cells)) * K + r for r in range(R) for i in range(calls // R)]
+runs = [dispersed(env.base, d.values) for d in grid.cell_draws(env, picks)]
+times = landing_clocks(runs[0])[1].times()
+try:
+    from quadland.engine.kept import keeping
+    keep = keeping(grid.KEEP_BYTES)
+except ImportError:                              # a tree that keeps nothing
+    keep = contextlib.nullcontext()
+digest, cpu = hashlib.sha256(), 0.0
+with keep:
+    for sc in runs:
+        t0 = time.process_time()
+        w = landing_disturbance(sc, times)
+        cpu += time.process_time() - t0
+        digest.update(w.tobytes())
+print(json.dumps({"a run's disturbance (the wind, the force and moment noise), CPU ms":
+                  (cpu / len(runs) * 1e3, digest.hexdigest())}))
+'''
 
-def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True,
-          replicates: int = 0) -> dict:
+
+def wind_child(tree: Path | None, tmp: Path, calls: int, replicates: int,
+               sets: list[str] = ()) -> dict:
+    """CPU ms of a run's ``landing_disturbance`` over ``calls`` runs of the map, replicate by
+    replicate, kept where the tree keeps, with the SHA-256 of the disturbances."""
     env, cwd = tree_env(tree, tmp)
-    out = subprocess.run([sys.executable, "-c", CHILD, str(runs), "1" if parent else "0", "1",
-                          json.dumps(AXES), str(replicates)], check=True, cwd=cwd, env=env,
-                         capture_output=True, text=True).stdout
+    out = subprocess.run([sys.executable, "-c", WIND, str(calls), str(max(replicates, 1)),
+                          json.dumps(AXES), json.dumps(list(sets))], check=True, cwd=cwd,
+                         env=env, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
-def callgrind(tree: Path | None, tmp: Path, runs: int) -> int:
+def child(tree: Path | None, tmp: Path, runs: int, parent: bool = True,
+          replicates: int = 0, sets: list[str] = ()) -> dict:
+    env, cwd = tree_env(tree, tmp)
+    out = subprocess.run([sys.executable, "-c", CHILD, str(runs), "1" if parent else "0", "1",
+                          json.dumps(AXES), str(replicates), json.dumps(list(sets))],
+                         check=True, cwd=cwd, env=env, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def callgrind(tree: Path | None, tmp: Path, runs: int, replicates: int = 0,
+              sets: list[str] = ()) -> int:
     """Callgrind's instruction count of a worker's process flying ``runs`` runs (no warm-up
-    run: the first of both counts is the same run)."""
-    return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES), "0")
+    run: the first of both counts is the same run; with ``replicates``, the first run of
+    each replicate)."""
+    return instructions(tree, tmp, CHILD, str(runs), "0", "0", json.dumps(AXES),
+                        str(replicates), json.dumps(list(sets)))
 
 
 def _subreaper() -> None:
@@ -141,7 +201,8 @@ def _subreaper() -> None:
         raise OSError(ctypes.get_errno(), "prctl(PR_SET_CHILD_SUBREAPER)")
 
 
-def command(tree: Path | None, tmp: Path, k: int, workers: int | None) -> dict:
+def command(tree: Path | None, tmp: Path, k: int, workers: int | None,
+            sets: list[str] = ()) -> dict:
     """The whole envelope command at ``k`` runs a cell on ``tree``: wall s, flying s, CPU s
     of all its processes, each with runs.csv's SHA-256."""
     env, cwd = tree_env(tree, tmp)
@@ -149,7 +210,8 @@ def command(tree: Path | None, tmp: Path, k: int, workers: int | None) -> dict:
     subprocess.run(["rm", "-rf", str(out)], check=True)
     args = [sys.executable, "-m", "quadland", "envelope", "--scenario", "highway",
             *(x for a in AXES for x in ("--axis", a)), "--runs-per-cell", str(k),
-            "--no-plots", "--out", str(out), *(["--workers", str(workers)] if workers else [])]
+            "--no-plots", "--out", str(out), *(["--workers", str(workers)] if workers else []),
+            *(x for kv in sets for x in ("--set", kv))]
     _subreaper()
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
@@ -166,7 +228,18 @@ def command(tree: Path | None, tmp: Path, k: int, workers: int | None) -> dict:
     digest = hashlib.sha256((out / "runs.csv").read_bytes()).hexdigest()
     flying = float(re.search(r"flew \d+ runs in ([0-9.]+) s", text).group(1))
     return {"command, wall s": (wall, digest), "flying, wall s": (flying, digest),
-            "all processes, CPU s": (cpu, digest)}
+            "all processes, CPU s": (cpu, digest),
+            "envelope.json but its times and path, CPU s": (cpu, envelope_digest(out))}
+
+
+def envelope_digest(out: Path) -> str:
+    """SHA-256 of ``out``'s envelope.json less what differs between two flights of the same
+    runs (the session's wall time and rate, the scenario file's path)."""
+    data = json.loads((out / "envelope.json").read_text())
+    for key in ("wall_s", "runs_per_s"):
+        data["last_session"].pop(key, None)
+    data["provenance"].pop("scenario_source", None)
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
 
 
 def main() -> None:
@@ -181,11 +254,18 @@ def main() -> None:
                     help="a worker's runs: R replicates in --runs / R cells each, flown "
                          "replicate by replicate, the draws kept where the tree keeps them")
     ap.add_argument("--workers", type=int, help="--command: local workers")
+    ap.add_argument("--wind", action="store_true",
+                    help="a run's disturbance alone (landing_disturbance), --runs calls in "
+                         "--replicates replicates; with --callgrind, its instructions")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a scenario override of every child and command (repeatable)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         if a.callgrind:
             for name, tree in (("before", a.against.resolve()), ("now", None)):
-                few, many = (callgrind(tree, Path(tmp), n) for n in (a.few, a.runs))
+                few, many = ((instructions(tree, Path(tmp), WIND, str(n), str(max(
+                    a.replicates, 1)), json.dumps(AXES), json.dumps(a.set)) if a.wind else
+                    callgrind(tree, Path(tmp), n, a.replicates, a.set)) for n in (a.few, a.runs))
                 print(f"{name}: {(many - few) / (a.runs - a.few) / 1e6:.2f} M instructions a "
                       f"run (processes of {a.few} and {a.runs} runs: {few:,} and {many:,})",
                       flush=True)
@@ -193,8 +273,10 @@ def main() -> None:
         res: dict[str, dict[str, list]] = {"before": {}, "now": {}}
         for r in range(a.rounds):
             for name, tree in (("before", a.against.resolve()), ("now", None)):
-                got = (command(tree, Path(tmp), a.command, a.workers) if a.command
-                       else child(tree, Path(tmp), a.runs, replicates=a.replicates))
+                got = (command(tree, Path(tmp), a.command, a.workers, a.set) if a.command
+                       else wind_child(tree, Path(tmp), a.runs, a.replicates, a.set)
+                       if a.wind else child(tree, Path(tmp), a.runs,
+                                            replicates=a.replicates, sets=a.set))
                 for k, v in got.items():
                     res[name].setdefault(k, []).append(v)
             print(f"round {r + 1}: " + json.dumps({n: {k: round(v[-1][0], 3) for k, v in

@@ -21,7 +21,7 @@ from quadland.engine.kept import KEPT, KeptDraws, keeping, kept_bytes
 from quadland.kinds import kind_of
 from quadland.kinds.landing import sensed, simulate
 from quadland.kinds.landing.sensed import TickTable, table_key, tick_table
-from quadland.kinds.landing.values import landing_clocks, landing_disturbance
+from quadland.kinds.landing.values import landing_clocks, landing_disturbance, wind_samples
 
 MAP = ["initial.velocity2[0]=5:35:20", "wind.mean[1]=0:20:20"]
 
@@ -107,11 +107,47 @@ def test_the_kept_force_and_moment_noise_is_the_drawn_one(env):
     fresh = landing_disturbance(b, times)
     with keeping(KEEP_BYTES):
         landing_disturbance(a, times)
-        assert len(KEPT) == 1
+        assert len(KEPT) == 3                       # the noise, the wind's normals and gust
         kept = landing_disturbance(b, times)
-        assert len(KEPT) == 1                       # the same entry, read again
+        assert len(KEPT) == 3                       # the same entries, read again
     assert _bits(kept) == _bits(fresh)
     assert _bits(kept[:3]) != _bits(landing_disturbance(a, times)[:3])   # the wind is not
+
+
+def test_the_wind_on_kept_normals_and_gust_is_the_drawn_wind(env):
+    """The wind of a run whose turbulence normals and gust were kept from other cells'
+    runs of its replicate (other car speeds and crosswinds, so other airspeeds in the
+    turbulence's filter) is the wind its own scenario draws afresh, bit for bit, in the
+    map's corners and middle; another replicate's is not read."""
+    cells = (0, 19, 210, 380, 399)
+    for i, replicate in enumerate((0, 2)):
+        scenarios = [_scenario(env, c, replicate) for c in cells]
+        times = landing_clocks(scenarios[0])[1].times()
+        fresh = [wind_samples(sc, times) for sc in scenarios]
+        with keeping(KEEP_BYTES):
+            kept = [wind_samples(sc, times) for sc in scenarios]
+            assert len(KEPT) == 2 * (i + 1)         # a replicate's normals and its gust
+            normals = KEPT.shared(("wind normals", scenarios[0].data["simulation"]["seed"],
+                                   len(times)), lambda: None)
+        rng = np.random.default_rng((scenarios[0].data["simulation"]["seed"], 1))
+        assert _bits(normals) == _bits(rng.standard_normal((len(times), 3)))
+        for k, f in zip(kept, fresh, strict=True):
+            assert _bits(k) == _bits(f)
+        assert len({_bits(f) for f in fresh}) == len(cells)     # the cells' winds differ
+
+
+def test_an_axis_on_the_gust_gives_each_cell_its_own_gust():
+    """A wind.gust_start axis: the cells of one replicate share the turbulence's normals
+    but not the gust, and each cell's wind is its fresh one."""
+    env = plan_envelope("highway", None, ["wind.gust_start=4:9:2", "wind.mean[1]=0:5:2"], 2)
+    a, b = _scenario(env, 0, 1), _scenario(env, 2, 1)
+    times = landing_clocks(a)[1].times()
+    fresh = [wind_samples(a, times), wind_samples(b, times)]
+    with keeping(KEEP_BYTES):
+        kept = [wind_samples(a, times), wind_samples(b, times)]
+        assert len(KEPT) == 3                       # one normals, two gusts
+    assert [_bits(k) for k in kept] == [_bits(f) for f in fresh]
+    assert _bits(fresh[0]) != _bits(fresh[1])
 
 
 def test_an_axis_on_the_sensors_draws_each_cell_s_own_table():
@@ -263,7 +299,8 @@ def test_a_run_that_raises_mid_flight_gives_its_table_up(env, monkeypatch):
     monkeypatch.setattr(TickTable, "more", failing)
     with keeping(KEEP_BYTES), pytest.raises(RuntimeError, match="drawing failed"):
         kind_of(sc).simulate(sc)
-    assert len(KEPT) == 1                           # the force noise alone
+    assert len(KEPT) == 3                           # the force noise, the wind's normals
+                                                    # and gust alone
     with keeping(KEEP_BYTES):
         assert KEPT.take(table_key(sc, n)) is None
 
@@ -279,7 +316,8 @@ def test_two_threads_flying_one_replicate_each_fly_a_table_of_their_own(env, mon
     with keeping(KEEP_BYTES):
         kind_of(a).simulate(a)                      # one table of replicate 1 kept
     n = landing_clocks(b)[2].count()
-    assert len(KEPT) == 2                           # the table and the force noise
+    assert len(KEPT) == 4                           # the table, the force noise, the
+                                                    # wind's normals and gust
 
     both, holders = threading.Barrier(2, timeout=120), {}
     drawn_table = simulate.drawn_table

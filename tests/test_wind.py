@@ -88,3 +88,46 @@ def test_the_turbulence_recursion_is_scipys_lfilter_bit_for_bit(monkeypatch, com
         got = first_order_recursion(a, b, x, u0)
         assert got.tobytes() == ref.tobytes(), (a, b, n)
     assert first_order_recursion(0.5, 1.0, np.zeros(0), 1.0).shape == (0,)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_three_axes_in_one_call_are_scipys_lfilter_of_each_bit_for_bit(monkeypatch,
+                                                                           compiled):
+    # issue 20, seventeenth session: the axes' recursions share one call of the compiled
+    # recursion (columns), and the normals may be handed in (an envelope keeps a
+    # replicate's); each axis must still be its own first-order filter of its own draws,
+    # as scipy.signal.lfilter computes it, an axis of zero intensity all +0.0
+    import scipy.signal
+
+    from quadland.engine import wind
+
+    if not compiled:
+        monkeypatch.setattr(wind, "recursion", lambda *args: None)
+    times = 0.01 * np.arange(4001)
+    for turb in (dryden_low_altitude(7.7, 12.0, 23.4), dryden_low_altitude(0.3, 2.0, 0.05),
+                 DrydenTurbulence((1.2, 0.0, 0.4), (30.0, 30.0, 3.0), 9.0)):
+        normals = np.random.default_rng(5).standard_normal((len(times), 3))
+        got = turbulence_samples(turb, times, np.random.default_rng(5))
+        again = turbulence_samples(turb, times, normals=normals)
+        assert got.shape == (3, len(times))
+        assert _bits(got) == _bits(again)
+        for axis in range(3):
+            sigma, L = turb.sigma[axis], turb.scale[axis]
+            if sigma == 0:
+                assert _bits(got[axis]) == _bits(np.zeros(len(times)))
+                continue
+            a = math.exp(-turb.airspeed * 0.01 / L)
+            b = sigma * math.sqrt(1.0 - a * a)
+            u0 = sigma * normals[0, axis]
+            ref = scipy.signal.lfilter([b], [1.0, -a], normals[1:, axis], zi=[a * u0])[0]
+            assert _bits(got[axis, 0:1]) == _bits(np.array([u0]))
+            assert _bits(got[axis, 1:]) == _bits(ref), (turb, axis)
+    assert turbulence_samples(DrydenTurbulence((1.0, 1.0, 1.0), (5.0, 5.0, 5.0), 3.0),
+                              np.zeros(0), np.random.default_rng(1)).shape == (3, 0)
+    one = turbulence_samples(DrydenTurbulence((1.0, 0.0, 2.0), (5.0, 5.0, 5.0), 3.0),
+                             np.zeros(1), normals=np.array([[0.5, -0.7, 0.25]]))
+    assert _bits(one) == _bits(np.array([[0.5], [0.0], [0.5]]))
+
+
+def _bits(a):
+    return np.ascontiguousarray(a).view(np.uint8).tobytes()

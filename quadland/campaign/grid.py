@@ -17,9 +17,10 @@ recorded, :mod:`~quadland.campaign.cells` counts each cell and writes
 The runs fly replicate by replicate (:func:`flight_order`: replicate 0 of every cell,
 then replicate 1, ...), and each process that flies them keeps up to
 :data:`KEEP_BYTES` of what a run draws from its seed and from keys the axes do not
-set (:mod:`quadland.engine.kept`: a landing's sensors' table and its force and moment
-noise), so that each is drawn about once per replicate and process instead of once
-per run; runs.csv is the same bytes (its rows are written sorted by index).
+set (:mod:`quadland.engine.kept`: a landing's sensors' table, its force and moment
+noise, its turbulence's normals and its gust), so that each is drawn about once per
+replicate and process instead of once per run; runs.csv is the same bytes (its rows are
+written sorted by index).
 """
 
 from __future__ import annotations
@@ -70,8 +71,8 @@ MAX_RUNS_PER_CELL = 100_000
 #: Bytes of draws each process flying an envelope's runs keeps for its next runs
 #: (:mod:`quadland.engine.kept`): a ``highway`` run's sensors' table, drawn to 40 s, is
 #: 8.8 MB with its draws' rows and their room (``ship_ss5``'s to 180 s about 37 MB), its
-#: force and moment noise 0.2 MB. Flown replicate by replicate, a local worker needs one
-#: table at a time.
+#: force and moment noise 0.2 MB, its wind's normals and gust 0.1 MB each. Flown replicate
+#: by replicate, a local worker needs one table at a time.
 KEEP_BYTES = 64 * 2**20
 
 

@@ -3,11 +3,11 @@
 An envelope flies each replicate of its scenario's campaign in every cell: run ``r``
 of every cell has run ``r``'s seed and drawn values, the axes' values in place of what
 it drew for those keys. Whatever a run draws from its seed and from keys the axes do
-not set (a landing's sensors' table, its force and moment noise) is then the same in
-every cell. :data:`KEPT` keeps such draws in the process that flies the runs, under a
-key that holds everything they are drawn from (the seed, the settings, the sizes), so
-that equal keys mean equal draws: a key the axes change (a ``sensors.*`` axis) is
-another key in every cell, and nothing is reused.
+not set (a landing's sensors' table, its force and moment noise, its turbulence's normals
+and its gust) is then the same in every cell. :data:`KEPT` keeps such draws in the
+process that flies the runs, under a key that holds everything they are drawn from (the
+seed, the settings, the sizes), so that equal keys mean equal draws: a key the axes
+change (a ``sensors.*`` axis) is another key in every cell, and nothing is reused.
 
 Nothing is kept unless a caller asks, for its own calls, with :func:`keeping` (the
 envelope's :func:`quadland.campaign.fly.fly`); then at most that many bytes are kept,

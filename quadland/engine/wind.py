@@ -88,23 +88,42 @@ def dryden_low_altitude(w20: float, height: float, airspeed: float) -> DrydenTur
 
 
 def turbulence_samples(turbulence: DrydenTurbulence, times: np.ndarray,
-                       rng: np.random.Generator) -> np.ndarray:
-    """Turbulence velocity at ``times`` (evenly spaced), shape ``(3, len(times))``, m/s."""
+                       rng: np.random.Generator | None = None,
+                       normals: np.ndarray | None = None) -> np.ndarray:
+    """Turbulence velocity at ``times`` (evenly spaced), shape ``(3, len(times))``, m/s.
+
+    The draws are ``rng.standard_normal((len(times), 3))``, or ``normals``, those
+    draws made before (an envelope keeps a replicate's: they depend on its seed and the
+    sample count alone, the filter on the airspeed and so on the cell). The three axes'
+    recursions run in one call of the compiled recursion, column by column, the same
+    products and sums as :func:`first_order_recursion` of each.
+    """
     times = np.asarray(times, dtype=float)
     n = len(times)
-    out = np.zeros((3, n))
-    draws = rng.standard_normal((n, 3)).T
+    if normals is None:
+        normals = rng.standard_normal((n, 3))
     if n == 0:
-        return out
+        return np.zeros((3, 0))
+    draws = normals.T
     dt = times[1] - times[0] if n > 1 else 0.0
+    a, b, u0 = np.zeros(3), np.zeros(3), np.zeros(3)
     for axis in range(3):
         sigma, L = turbulence.sigma[axis], turbulence.scale[axis]
         if sigma == 0:
             continue
-        a = math.exp(-turbulence.airspeed * dt / L)
-        b = sigma * math.sqrt(1.0 - a * a)
-        out[axis, 0] = sigma * draws[axis, 0]            # the stationary distribution
-        out[axis, 1:] = first_order_recursion(a, b, draws[axis, 1:], float(out[axis, 0]))
+        a_axis = math.exp(-turbulence.airspeed * dt / L)
+        a[axis], b[axis] = a_axis, sigma * math.sqrt(1.0 - a_axis * a_axis)
+        u0[axis] = sigma * draws[axis, 0]               # the stationary distribution
+    still = [axis for axis in range(3) if turbulence.sigma[axis] == 0]
+    compiled = recursion(u0, np.full((n - 1, 3), a), np.full((n - 1, 3), b), normals)
+    if compiled is not None:                            # (n, 3): the axes as its columns
+        compiled[:, still] = 0.0
+        return compiled.T
+    out = np.zeros((3, n))
+    for axis in set(range(3)) - set(still):
+        out[axis, 0] = u0[axis]
+        out[axis, 1:] = first_order_recursion(float(a[axis]), float(b[axis]), draws[axis, 1:],
+                                              float(u0[axis]))
     return out
 
 

@@ -299,7 +299,11 @@ def wind_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
     ``deck.height + landing.hover_height``, crossed at the vehicle's initial
     speed through the mean wind) plus a 1-cosine gust. The turbulence's
     draws come from their own generator seeded with ``(simulation.seed, 1)``,
-    independent of the disturbance's.
+    independent of the disturbance's. Within :func:`quadland.engine.kept.keeping` (an
+    envelope's runs), the turbulence's normals (the seed's and the sample count's) and
+    the gust (its settings' and the times') are kept for the next run of the same; the
+    turbulence's filter (the airspeed: the velocities and ``wind.mean``) and the sums
+    are computed each run.
     """
     w, d = scenario.data["wind"], scenario.data
     times = np.asarray(times, dtype=float)
@@ -310,12 +314,25 @@ def wind_samples(scenario: Scenario, times: np.ndarray) -> np.ndarray:
     airspeed = float(np.linalg.norm(ground - np.asarray(w["mean"])))
     height = d["deck"]["height"] + d["landing"]["hover_height"]
     turbulence = dryden_low_altitude(w["turbulence_w20"], height, airspeed)
-    rng = np.random.default_rng((d["simulation"]["seed"], 1))
-    out = np.asarray(w["mean"], dtype=float)[:, None] + turbulence_samples(turbulence, times, rng)
+    seed = d["simulation"]["seed"]
+    gust = gust_v = None
     if w["gust_amplitude"] > 0:
         gust = OneCosineGust(w["gust_start"], w["gust_half_length"], w["gust_amplitude"],
                              tuple(w["gust_direction"]))
-        out = out + gust_samples(gust, times)
+    if kept_bytes():
+        normals = KEPT.shared(("wind normals", seed, len(times)), lambda: np.random.default_rng(
+            (seed, 1)).standard_normal((len(times), 3)))
+        turb = turbulence_samples(turbulence, times, normals=normals)
+        if gust is not None:
+            times = np.ascontiguousarray(times)
+            gust_v = KEPT.shared(("gust", repr(gust), times.tobytes()),
+                                 lambda: gust_samples(gust, times))
+    else:
+        turb = turbulence_samples(turbulence, times, np.random.default_rng((seed, 1)))
+        gust_v = None if gust is None else gust_samples(gust, times)
+    out = np.asarray(w["mean"], dtype=float)[:, None] + turb
+    if gust is not None:
+        out = out + gust_v
     return out
 
 
@@ -325,8 +342,8 @@ def landing_disturbance(scenario: Scenario, times: np.ndarray) -> np.ndarray:
     ``d_F``, ``d_M`` are ``[disturbance]``'s, drawn as for the paper's loop
     (:func:`quadland.engine.disturbance.disturbance_samples`); within
     :func:`quadland.engine.kept.keeping` (an envelope's runs), those of a run's seed,
-    ``[disturbance]`` and ``times`` are kept for the next run of the same (the wind is
-    drawn again: its turbulence's filter and its mean depend on the velocities).
+    ``[disturbance]`` and ``times`` are kept for the next run of the same (of the wind,
+    its turbulence's normals and its gust, :func:`wind_samples`).
     """
     if not kept_bytes():
         return np.vstack([wind_samples(scenario, times), disturbance_samples(scenario, times)])
