@@ -215,10 +215,17 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
 HIGHWAY_SIXTEENTH = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
                      "landing.crawl_gate_time=1000.0", "land_detector.contact_thrust=false"]
 
+#: highway_100's withdrawal before "highway_100: the lane change's withdrawal down to the
+#: front feet's contact" (docs/landing.md, seventeenth session): the swerve's hold past 0.3
+#: m/s^2, no withdrawal at or below 0.25 m (the whole crawl); the replays measured on the
+#: nested marker's file (and every older one) pin it.
+HIGHWAY_100_MARKER = ["landing.swerve_accel=0.3", "landing.withdraw_height=0.25"]
+
 #: highway_100's pad before "highway_100: what the offset at contact is made of, and the
 #: nested marker" (docs/landing.md, sixteenth session): the large marker alone, lost at 0.45 m;
-#: the replays measured on the paused crawl's file (and every older one) pin it.
-HIGHWAY_100_PAUSED = ["sensors.vision.small_range_max=0.0"]
+#: the replays measured on the paused crawl's file (and every older one) pin it (and its
+#: withdrawal, ``HIGHWAY_100_MARKER``).
+HIGHWAY_100_PAUSED = [*HIGHWAY_100_MARKER, "sensors.vision.small_range_max=0.0"]
 
 #: highway_100's crawl before "highway_100: the crawl paused under the lower flare"
 #: (docs/landing.md, fifteenth session): committed, not paused out of the align band; the
