@@ -43,7 +43,7 @@ class Setting(NamedTuple):
     lo: float
     hi: float
     length: int | None = None
-    default: bool | None = None
+    default: object = None
 
 
 def _common(rate_hi: float) -> dict[str, Setting]:
@@ -110,6 +110,15 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
                                   100.0),
         "rtk": Setting("bool", "true: both receivers are RTK (position_sigma gives way to the "
                        "RTK fix's)", 0.0, 1.0),
+        "relative_rtk": Setting("bool", "true: the relative position is a moving-baseline RTK "
+                                "pair's, white noise of relative_sigma per fix in place of "
+                                "the receivers' Gauss-Markov errors; false: the receivers' "
+                                "difference. Optional: a scenario that leaves it out takes "
+                                "false", 0.0, 1.0, default=False),
+        "relative_sigma": Setting("m", "std of the RTK relative position's white noise per "
+                                  "fix (x, y, z), with relative_rtk. Optional: 0.0085, "
+                                  "0.0085, 0.016", 0.0, 1e3, 3,
+                                  default=(0.01 / 1.1774, 0.01 / 1.1774, 1.9 * 0.01 / 1.1774)),
     }),
     "rangefinder": MappingProxyType({
         **_common(1e5), **_OUTLIERS,
@@ -138,7 +147,8 @@ SETTINGS: Mapping[str, Mapping[str, Setting]] = MappingProxyType({
 def sensor_fields(name: str) -> dict[str, Field]:
     """The schema's fields of ``[sensors.<name>]``, from :data:`SETTINGS`."""
     return {key: (Field(bool, "-", s.doc, default=s.default) if s.unit == "bool"
-                  else Field(float, s.unit, s.doc, s.length, lo=s.lo, hi=s.hi))
+                  else Field(float, s.unit, s.doc, s.length, lo=s.lo, hi=s.hi,
+                             default=None if s.default is None else list(s.default)))
             for key, s in SETTINGS[name].items()}
 
 

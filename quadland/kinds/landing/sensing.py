@@ -62,7 +62,7 @@ from quadland.engine.loop import GRID_TOL
 from quadland.engine.noise import bridge, gauss_markov_after
 from quadland.exceptions import ScenarioError
 from quadland.kinds.landing.growing_rows import GrowingRows
-from quadland.kinds.landing.sensor_settings import GNSS_RTK, STANDARD_GRAVITY, validate_settings
+from quadland.kinds.landing.sensor_settings import STANDARD_GRAVITY, gnss_errors, validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
 
@@ -291,14 +291,13 @@ class _Sensor:
         self._outliers(z, hit, 1, out)
 
     def _gnss(self, times, z, hit, k0, out):
-        """Columns e_q, e_t (Gauss-Markov), n_v1, n_vt."""
-        s = self.s
-        sigma = np.asarray(GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"])
-        e = gauss_markov_after(times, np.tile(sigma, 2), s["position_tau"], z[:, :6],
-                               self.state.get("t"), self.state.get("e"))
+        """Columns e_q, e_t (Gauss-Markov; white with ``relative_rtk``), n_v1, n_vt."""
+        sigma, tau = gnss_errors(self.s)              # e_q, e_t: docs/sensors.md
+        e = gauss_markov_after(times, sigma, tau, z[:, :6], self.state.get("t"),
+                               self.state.get("e"))
         self.state["e"], self.state["t"] = e[-1], times[-1]
         out[:, :6] = e
-        np.multiply(s["velocity_sigma"], z[:, 6:12], out=out[:, 6:12])
+        np.multiply(self.s["velocity_sigma"], z[:, 6:12], out=out[:, 6:12])
 
     def _datalink(self, times, z, hit, k0, out):
         sigma = np.concatenate([np.broadcast_to(np.asarray(

@@ -20,6 +20,7 @@ from quadland.schema.sensors import SETTINGS, Setting, check_ranges
 from quadland_symbolic.landing.sensors import SENSOR_NAMES, SENSOR_PARAMS
 
 __all__ = ["Setting", "SETTINGS", "SENSOR_DEFAULTS", "GNSS_RTK", "STANDARD_GRAVITY",
+           "gnss_errors",
            "validate_settings", "sensor_params"]
 
 _DEG = math.pi / 180.0
@@ -60,6 +61,10 @@ SENSOR_DEFAULTS: Mapping[str, Mapping] = MappingProxyType({
         "rate_hz": 5.0, "latency": 0.11, "phase": 0.0, "dropout": 0.01,
         "position_sigma": (1.5 / 1.1774, 1.5 / 1.1774, 1.9 * 1.5 / 1.1774),
         "position_tau": 1100.0, "velocity_sigma": 0.05, "rtk": False,
+        # u-blox ZED-F9P moving base (NAV-RELPOSNED): the data sheet's RTK 0.01 m CEP per
+        # fix as white noise, the same vertical ratio (docs/sensors.md, "RTK moving baseline")
+        "relative_rtk": False,
+        "relative_sigma": (0.01 / 1.1774, 0.01 / 1.1774, 1.9 * 0.01 / 1.1774),
     }),
     # Benewake TFmini-S, PX4's EKF2_RNG_DELAY: docs/sensors.md, "Rangefinder".
     "rangefinder": MappingProxyType({
@@ -82,6 +87,20 @@ SENSOR_DEFAULTS: Mapping[str, Mapping] = MappingProxyType({
 GNSS_RTK: Mapping = MappingProxyType({
     "position_sigma": (0.01 / 1.1774, 0.01 / 1.1774, 1.9 * 0.01 / 1.1774),
 })
+
+
+def gnss_errors(s: Mapping) -> tuple[np.ndarray, float]:
+    """The receivers' position errors ``e_q``, ``e_t``: their six sigmas and time constant.
+
+    Standard or RTK receivers: both Gauss-Markov, ``position_sigma`` (or :data:`GNSS_RTK`'s)
+    over ``position_tau``. A moving-baseline RTK pair (``relative_rtk``, docs/sensors.md):
+    the relative position's error alone, ``e_q = 0`` and ``e_t`` white (``tau = 0``) of
+    ``relative_sigma`` per axis.
+    """
+    if s["relative_rtk"]:
+        return np.concatenate([np.zeros(3), np.asarray(s["relative_sigma"], dtype=float)]), 0.0
+    sigma = GNSS_RTK["position_sigma"] if s["rtk"] else s["position_sigma"]
+    return np.tile(np.asarray(sigma, dtype=float), 2), float(s["position_tau"])
 
 
 def validate_settings(name: str, values: Mapping | None = None) -> dict:
