@@ -27,8 +27,8 @@ U_EDGE = 2.0 ** -53
 
 #: ``-ndtri(U_EDGE)``, the most standard deviations a normal draw reaches, as SciPy's
 #: ``scipy.special.ndtri`` computes it (``tests/test_campaign_start.py`` checks the bits):
-#: a number here, so that checking a campaign's table does not import SciPy (0.3 s of CPU
-#: before the workers start; the draws import it while they start).
+#: a number here, so that checking a campaign's table does not import SciPy (about 0.2 s
+#: of CPU before the workers start; the draws import it while they start).
 NORMAL_REACH = 8.209536151601387
 
 

@@ -203,12 +203,13 @@ def run_campaign(scenario: str | Path | Scenario = "paper", overrides=None,
     header = campaign_header(spec, base.model)
     manifest = campaign_manifest(base, spec, n_runs)
     path = None if out is None else Path(out).absolute()
+    done = {}
     if path is not None:                        # refused now, before the cluster and the build
-        check_folder(CampaignFolder(path), manifest, header)
+        done = check_folder(CampaignFolder(path), manifest, header)
     given = [o for o in (_override_texts(overrides)) if not o.startswith("campaign.")]
     scenario_arg = _scenario_argument(base, scenario)
-    if local > 1:                       # checked: its imports beside the simulator's load
-        start_pool_server()
+    if local > 1 and n_runs - sum(0 <= i < n_runs for i in done) > 1:
+        start_pool_server()             # a pool's: its imports beside the simulator's load
     with contextlib.ExitStack() as stack:
         if scheduler is not None:
             stack.enter_context(quiet_cluster_logs())
