@@ -37,6 +37,21 @@ def test_the_default_is_off_and_the_receivers_draws_are_those_of_before():
     b = _gnss(["sensors.gnss.relative_rtk=false"], 20.0, 5)
     np.testing.assert_array_equal(a.noise, b.noise)
     assert np.all(np.abs(a.noise[:, LAYOUT.slice("e_q")]) > 0.0)
+    # the pad receiver's e_t by hand: the normals are the on-key draw's over relative_sigma
+    # (the same seeded normals), the recursion the exact Gauss-Markov discretization
+    on = _gnss(ON, 20.0, 5)
+    np.testing.assert_array_equal(on.times, a.times)
+    normals = on.noise[:, LAYOUT.slice("e_t")] / np.asarray(
+        SENSOR_DEFAULTS["gnss"]["relative_sigma"])
+    s = sensor_settings(load_scenario("ship"))["gnss"]
+    sigma, tau = np.asarray(s["position_sigma"]), s["position_tau"]
+    expected = np.empty_like(normals)
+    expected[0] = sigma * normals[0]
+    for k in range(1, len(normals)):
+        phi = np.exp(-(a.times[k] - a.times[k - 1]) / tau)
+        expected[k] = phi * expected[k - 1] + sigma * np.sqrt(1.0 - phi * phi) * normals[k]
+    np.testing.assert_allclose(a.noise[:, LAYOUT.slice("e_t")], expected, rtol=1e-9,
+                               atol=1e-12)
 
 
 def test_the_relative_error_is_white_with_relative_sigma_per_axis():
@@ -83,7 +98,13 @@ def test_relative_sigma_scales_the_same_normals_and_a_zero_sigma_is_the_truth():
 @pytest.mark.parametrize("value, message", [
     ("[-0.01, 0.01, 0.01]", "sensors.gnss.relative_sigma: must be in"),
     ("[0.01, 0.01]", "sensors.gnss.relative_sigma: expected a list of 3 numbers"),
+    ("[nan, 0.01, 0.01]", "sensors.gnss.relative_sigma: must be finite"),
 ])
 def test_a_bad_relative_sigma_is_refused(value, message):
     with pytest.raises(ScenarioError, match=message):
         _gnss(ON + [f"sensors.gnss.relative_sigma={value}"], 1.0, 1)
+
+
+def test_relative_rtk_must_be_a_boolean():
+    with pytest.raises(ScenarioError, match="sensors.gnss.relative_rtk: expected true or false"):
+        _gnss(["sensors.gnss.relative_rtk=2"], 1.0, 1)
