@@ -214,7 +214,7 @@ typedef struct {
     ql_real crawl_gate_floor;        /* m: reference height above touchdown at or below which crawl_gate no longer pauses the crawl (0: down to the touchdown height) */
     ql_real crawl_gate_wait;         /* s: the longest time crawl_gate holds a crawl: after it the crawl falls on */
     ql_real crawl_gate_rise;         /* m/s: crawl_gate holds the crawl only while the deck's vertical speed at the pad is within this (a quiescent deck) */
-    ql_real crawl_gate_slow;         /* m/s: below crawl_gate_floor the crawl falls at most this fast while crawl_gate's prediction is outside it (1000: no slowing) */
+    ql_real crawl_gate_wait_height;  /* m: reference height above touchdown at or below which crawl_gate_wait bounds the gate's holds (1000: everywhere) */
     ql_real calm_lean;               /* rad: largest lean of the body z axis from the vertical, averaged over lean_time, at which the final descent commits (pi/2: no limit) */
     ql_real lean_time;               /* s: time constant of the lean's average for calm_lean */
     ql_real lean_withdraw;           /* 0/1: 1: once committed, the lean's average past calm_lean withdraws the descent above withdraw_height, as a rising deck does; 0: it only holds the commit */

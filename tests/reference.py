@@ -23,7 +23,7 @@ GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_sp
                   withdraw_height=-1e3, calm_tilt=3.141592653589793,
                   contact_drop=0.0, crawl_pause=0.0, swerve_accel=0.0, crawl_gate=0.0,
                   crawl_gate_time=1e3, crawl_gate_floor=0.0,
-                  crawl_gate_wait=1e3, crawl_gate_rise=1e3, crawl_gate_slow=1e3,
+                  crawl_gate_wait=1e3, crawl_gate_rise=1e3, crawl_gate_wait_height=1e3,
                   calm_lean=1.5707963267948966,
                   lean_time=1.0, lean_withdraw=0.0, abort_floor=-1e3, ground_airmode=1.0)
 

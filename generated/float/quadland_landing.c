@@ -168,7 +168,7 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, crawl_gate_floor, 36, 0) &&
     AT(qlf_guidance_params, crawl_gate_wait, 37, 0) &&
     AT(qlf_guidance_params, crawl_gate_rise, 38, 0) &&
-    AT(qlf_guidance_params, crawl_gate_slow, 39, 0) &&
+    AT(qlf_guidance_params, crawl_gate_wait_height, 39, 0) &&
     AT(qlf_guidance_params, calm_lean, 40, 0) &&
     AT(qlf_guidance_params, lean_time, 41, 0) &&
     AT(qlf_guidance_params, lean_withdraw, 42, 0) &&
@@ -497,7 +497,7 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   crawl_gate_floor         >= 0
  *   crawl_gate_wait          >= 0
  *   crawl_gate_rise          >= 0
- *   crawl_gate_slow          >= 0
+ *   crawl_gate_wait_height   >= 0
  *   calm_lean                >= 0
  *   lean_time                > 0
  *   lean_withdraw            0 or 1
@@ -633,7 +633,7 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
         bad = "crawl_gate_rise";
     }
     if (!bad && !(isfinite(p[39]) && (p[39] >= 0.0f))) {
-        bad = "crawl_gate_slow";
+        bad = "crawl_gate_wait_height";
     }
     if (!bad && !(isfinite(p[40]) && (p[40] >= 0.0f))) {
         bad = "calm_lean";

@@ -112,7 +112,7 @@ from __future__ import annotations
 import casadi as ca
 
 from quadland_symbolic.landing.abort_floor import out_of_limits
-from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_and_cap
+from quadland_symbolic.landing.crawl_gate import crawl_timer_next, fall_band, gate_holds
 from quadland_symbolic.landing.deck_tilt import (
     DECK_TILT_STATE,
     TILT_CUES,
@@ -231,8 +231,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "crawl falls on"),
     Field("crawl_gate_rise", 1, "m/s", "crawl_gate holds the crawl only while the deck's "
           "vertical speed at the pad is within this (a quiescent deck)"),
-    Field("crawl_gate_slow", 1, "m/s", "below crawl_gate_floor the crawl falls at most this "
-          "fast while crawl_gate's prediction is outside it (1000: no slowing)"),
+    Field("crawl_gate_wait_height", 1, "m", "reference height above touchdown at or below "
+          "which crawl_gate_wait bounds the gate's holds (1000: everywhere)"),
     Field("calm_lean", 1, "rad", "largest lean of the body z axis from the vertical, "
           "averaged over lean_time, at which the final descent commits (pi/2: no limit)"),
     Field("lean_time", 1, "s", "time constant of the lean's average for calm_lean"),
@@ -363,7 +363,7 @@ def _reference_height(z_ref, p, f, dt):
     ``descending_next`` (the next phase touchdown, the descent), and ``timer_next``
     (the guidance's timer after the step), for the touchdown policy
     (:mod:`~quadland_symbolic.landing.touchdown_policy`); ``z`` the quadrotor's height, for
-    ``descent_leash`` (below ``leash_height`` above touchdown); ``cap`` the fall's top rate.
+    ``descent_leash`` (below ``leash_height`` above touchdown).
     """
     # the descent reference falls only while falling: to the wait height until committed,
     # then on at the crawl below the touchdown height until contact (a heaving deck may
@@ -372,7 +372,7 @@ def _reference_height(z_ref, p, f, dt):
     # height (a rising deck withdrew the commit) it glides back up to it; an abort
     # resets it to the hover height, as does the start of a descent
     h = z_ref - contact_height(p)
-    rate = ca.fmin(_descent_rate(h, p), f["cap"])
+    rate = _descent_rate(h, p)
     falling = f["falling"]
     # before the descent the hover point's height glides at descent_speed: to
     # hover_height while the marker is seen; without it, it holds in the approach
@@ -453,7 +453,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), out_of_limits(
         offset, speed, p_e[2] - contact_height(p), p))
-    gate, cap = gate_and_cap(p_e, v_e, z_ref - contact_height(p), crawl, timer, deck_rise, p)
+    gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, deck_rise, p)
     timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
         ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
         ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
@@ -479,7 +479,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                        abort=off_limits, seen=seen, landing=phase_next >= TOUCHDOWN,
                        touchdown=phase_next == TOUCHDOWN,
                        descending_next=phase_next == DESCEND, timer_next=timer_next,
-                       z=p_e[2], cap=cap), dt)
+                       z=p_e[2]), dt)
     return ca.vertcat(phase_next, timer_next, z_next, aborts + ca.logic_or(off_limits, rising),
                       committed_next, _armed_next(c, g, in_descend, phase_next), xq_held), \
         reference
