@@ -216,6 +216,12 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
 HIGHWAY_SIXTEENTH = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
                      "landing.crawl_gate_time=1000.0", "land_detector.contact_thrust=false"]
 
+#: highway's crawl gate as the sixteenth session shipped it, before "The crawl's gate: a wait
+#: near the deck only" (docs/landing.md, seventeenth session): the floor at 0.10 m and no wait;
+#: the replays of the sixteenth's gate (seed 13's run 133) pin it.
+HIGHWAY_GATE_SIXTEENTH = ["landing.crawl_gate_floor=0.1", "landing.crawl_gate_wait=1000.0",
+                          "landing.crawl_gate_wait_height=1000.0"]
+
 #: highway_100's pad before "highway_100: what the offset at contact is made of, and the
 #: nested marker" (docs/landing.md, sixteenth session): the large marker alone, lost at 0.45 m;
 #: the replays measured on the paused crawl's file (and every older one) pin it.

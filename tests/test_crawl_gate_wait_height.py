@@ -16,6 +16,10 @@ import numpy as np
 import pytest
 from reference import GUIDANCE_P, have_compiler
 
+import quadland
+from quadland.campaign.sampling import draws
+from quadland.campaign.spec import campaign_spec_of
+from quadland.kinds.landing.report import touchdown_report
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import load_scenario
 from quadland_symbolic.landing.guidance import (
@@ -119,11 +123,61 @@ def _wait_height(name):
         np.asarray(p_guid, dtype=float).ravel())["crawl_gate_wait_height"][0]
 
 
-@pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5", "highway_100"])
-def test_the_shipped_scenarios_bound_the_wait_everywhere(name):
-    """No shipped file sets the key: the schema's default, 1000 m, reaches the flight's
-    parameters (and none but highway sets a gate at all)."""
+@pytest.mark.parametrize("name", ["turning", "ship", "ship_ss5", "highway_100"])
+def test_the_other_shipped_scenarios_bound_the_wait_everywhere(name):
+    """No other shipped file sets the key: the schema's default, 1000 m, reaches the
+    flight's parameters (and none but highway sets a gate at all)."""
     assert _wait_height(name) == (1e3, 1e3)
+
+
+def test_highway_bounds_its_wait_at_its_old_floor():
+    """highway's gate waits at most 2 s at and below 0.10 m (its floor before, now 0.07 m),
+    and its flight's parameters carry it (docs/landing.md, "The crawl's gate: a wait near
+    the deck only")."""
+    assert _wait_height("highway") == (0.1, 0.1)
+
+
+def _fly_236(*overrides):
+    """Seed 11's run 236 on highway (turbulence_w20 12.1 m/s) plus ``overrides``: the
+    report, the reference's height above touchdown, the phase and the time."""
+    sc = load_scenario("highway", ["campaign.seed=11"])
+    d = draws(campaign_spec_of(sc), [236])[0]
+    sc = load_scenario("highway", [*d.overrides(), *overrides])
+    res = quadland.simulate(sc)
+    return (touchdown_report(res), np.asarray(res["z_ref"]) - sc["quadrotor.gear_height"],
+            np.asarray(res["phase"]), np.asarray(res["t"]))
+
+
+def _held(h, phase, t):
+    """The samples of the first crawl where the reference stands still in the descent (a
+    hold), and the time held before each (the guidance's timer, counted from the plant's
+    own reference signal)."""
+    first = np.flatnonzero(phase == DESCEND)
+    end = first[0] + np.argmax(phase[first[0]:] != DESCEND)
+    crawl = np.zeros(h.size, bool)
+    crawl[first[0]:end] = h[first[0]:end] < 0.3
+    still = np.r_[False, crawl[1:] & crawl[:-1] & (np.abs(np.diff(h)) < 1e-9)]
+    dt = np.diff(t, prepend=t[0])
+    return still, np.cumsum(dt * still) - dt * still
+
+
+@pytest.mark.slow
+def test_run_236_held_long_up_high_is_not_held_near_the_deck_and_lands():
+    """The sixteenth's loss on seed 11 (docs/landing.md): with the floor at 0.07 m and no
+    wait the gate holds the turbulent crawl below 0.10 m, the estimate wanders past
+    max_offset and the crawl aborts. As shipped (the 2 s wait at and below 0.10 m) its holds
+    above 0.10 m already total more than 2 s, so the reference is never held at or below
+    0.10 m: it lands in the first crawl, no abort, within every limit."""
+    rep, h, phase, t = _fly_236("landing.crawl_gate_wait=1000.0",
+                                "landing.crawl_gate_wait_height=1000.0")
+    still, before = _held(h, phase, t)
+    assert rep.aborts >= 1
+    assert (still & (h <= 0.1)).any()
+    rep, h, phase, t = _fly_236()
+    still, before = _held(h, phase, t)
+    assert rep.success and rep.aborts == 0
+    assert before[still & (h > 0.1)].max() > 2.0
+    assert not (still & (h <= 0.1)).any()
 
 
 @pytest.mark.slow
