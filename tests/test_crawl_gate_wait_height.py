@@ -150,13 +150,15 @@ def _fly_236(*overrides):
 
 def _held(h, phase, t):
     """The samples of the first crawl where the reference stands still in the descent (a
-    hold), and the time held before each (the guidance's timer, counted from the plant's
+    hold: two rows or more, not the contact's own row within a control period of the one
+    before), and the time held before each (the guidance's timer, counted from the plant's
     own reference signal)."""
     first = np.flatnonzero(phase == DESCEND)
     end = first[0] + np.argmax(phase[first[0]:] != DESCEND)
     crawl = np.zeros(h.size, bool)
     crawl[first[0]:end] = h[first[0]:end] < 0.3
     still = np.r_[False, crawl[1:] & crawl[:-1] & (np.abs(np.diff(h)) < 1e-9)]
+    still &= np.r_[still[1:], False] | np.r_[False, still[:-1]]
     dt = np.diff(t, prepend=t[0])
     return still, np.cumsum(dt * still) - dt * still
 
