@@ -168,12 +168,13 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, crawl_gate_floor, 36, 0) &&
     AT(ql_guidance_params, crawl_gate_wait, 37, 0) &&
     AT(ql_guidance_params, crawl_gate_rise, 38, 0) &&
-    AT(ql_guidance_params, calm_lean, 39, 0) &&
-    AT(ql_guidance_params, lean_time, 40, 0) &&
-    AT(ql_guidance_params, lean_withdraw, 41, 0) &&
-    AT(ql_guidance_params, abort_floor, 42, 0) &&
-    AT(ql_guidance_params, ground_airmode, 43, 0) &&
-    sizeof(ql_guidance_params) == 44 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, crawl_gate_wait_height, 39, 0) &&
+    AT(ql_guidance_params, calm_lean, 40, 0) &&
+    AT(ql_guidance_params, lean_time, 41, 0) &&
+    AT(ql_guidance_params, lean_withdraw, 42, 0) &&
+    AT(ql_guidance_params, abort_floor, 43, 0) &&
+    AT(ql_guidance_params, ground_airmode, 44, 0) &&
+    sizeof(ql_guidance_params) == 45 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -206,15 +207,15 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[44] = {
+static const ql_real default_p_guid[45] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
     0.15, 0.5235987755982988, 0.0, 0.1, 0.1, 0.3,
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
     3.141592653589793, 0.0, 0.0, 0.0, 0.04, 0.3,
-    0.1, 1000.0, 1000.0, 1.5707963267948966, 1.0, 0.0,
-    -1000.0, 1.0,
+    0.07, 2.0, 1000.0, 0.1, 1.5707963267948966, 1.0,
+    0.0, -1000.0, 1.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -496,6 +497,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   crawl_gate_floor         >= 0
  *   crawl_gate_wait          >= 0
  *   crawl_gate_rise          >= 0
+ *   crawl_gate_wait_height   >= 0
  *   calm_lean                >= 0
  *   lean_time                > 0
  *   lean_withdraw            0 or 1
@@ -631,18 +633,21 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
         bad = "crawl_gate_rise";
     }
     if (!bad && !(isfinite(p[39]) && (p[39] >= 0.0))) {
+        bad = "crawl_gate_wait_height";
+    }
+    if (!bad && !(isfinite(p[40]) && (p[40] >= 0.0))) {
         bad = "calm_lean";
     }
-    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0))) {
+    if (!bad && !(isfinite(p[41]) && (p[41] > 0.0))) {
         bad = "lean_time";
     }
-    if (!bad && !(isfinite(p[41]) && ((p[41] == 0.0) || (p[41] == 1.0)))) {
+    if (!bad && !(isfinite(p[42]) && ((p[42] == 0.0) || (p[42] == 1.0)))) {
         bad = "lean_withdraw";
     }
-    if (!bad && !(isfinite(p[42]))) {
+    if (!bad && !(isfinite(p[43]))) {
         bad = "abort_floor";
     }
-    if (!bad && !(isfinite(p[43]) && ((p[43] == 0.0) || (p[43] == 1.0)))) {
+    if (!bad && !(isfinite(p[44]) && ((p[44] == 0.0) || (p[44] == 1.0)))) {
         bad = "ground_airmode";
     }
     if (bad_field) {
@@ -721,7 +726,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 42 comparisons. The values are known to be finite; no names and no
+ * 43 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -765,9 +770,10 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[37] >= 0.0);
     ok &= (p[38] >= 0.0);
     ok &= (p[39] >= 0.0);
-    ok &= (p[40] > 0.0);
-    ok &= ((p[41] == 0.0) | (p[41] == 1.0));
-    ok &= ((p[43] == 0.0) | (p[43] == 1.0));
+    ok &= (p[40] >= 0.0);
+    ok &= (p[41] > 0.0);
+    ok &= ((p[42] == 0.0) | (p[42] == 1.0));
+    ok &= ((p[44] == 0.0) | (p[44] == 1.0));
     return ok;
 }
 
@@ -846,7 +852,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 44)
+          & all_finite((const ql_real *)params, 45)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

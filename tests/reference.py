@@ -23,7 +23,8 @@ GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_sp
                   withdraw_height=-1e3, calm_tilt=3.141592653589793,
                   contact_drop=0.0, crawl_pause=0.0, swerve_accel=0.0, crawl_gate=0.0,
                   crawl_gate_time=1e3, crawl_gate_floor=0.0,
-                  crawl_gate_wait=1e3, crawl_gate_rise=1e3, calm_lean=1.5707963267948966,
+                  crawl_gate_wait=1e3, crawl_gate_rise=1e3, crawl_gate_wait_height=1e3,
+                  calm_lean=1.5707963267948966,
                   lean_time=1.0, lean_withdraw=0.0, abort_floor=-1e3, ground_airmode=1.0)
 
 
@@ -220,6 +221,12 @@ HIGHWAY_SIXTEENTH = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
 #: m/s^2, no withdrawal at or below 0.25 m (the whole crawl); the replays measured on the
 #: nested marker's file (and every older one) pin it.
 HIGHWAY_100_MARKER = ["landing.swerve_accel=0.3", "landing.withdraw_height=0.25"]
+
+#: highway's crawl gate as the sixteenth session shipped it, before "The crawl's gate: a wait
+#: near the deck only" (docs/landing.md, seventeenth session): the floor at 0.10 m and no wait;
+#: the replays of the sixteenth's gate (seed 13's run 133) pin it.
+HIGHWAY_GATE_SIXTEENTH = ["landing.crawl_gate_floor=0.1", "landing.crawl_gate_wait=1000.0",
+                          "landing.crawl_gate_wait_height=1000.0"]
 
 #: highway_100's pad before "highway_100: what the offset at contact is made of, and the
 #: nested marker" (docs/landing.md, sixteenth session): the large marker alone, lost at 0.45 m;

@@ -1,7 +1,8 @@
-"""highway's crawl gate and land detector as shipped (issue 19, docs/landing.md, "The crawl's
-gate and a ground contact that needs the deck to carry the weight"): ``landing.crawl_gate``
-0.04 m over at most 0.3 s to contact above a 0.10 m floor, and ``land_detector.
-contact_thrust`` on.
+"""highway's crawl gate and land detector as the sixteenth session shipped them (issue 19,
+docs/landing.md, "The crawl's gate and a ground contact that needs the deck to carry the
+weight"): ``landing.crawl_gate`` 0.04 m over at most 0.3 s to contact above a 0.10 m floor
+(``reference.HIGHWAY_GATE_SIXTEENTH``: the seventeenth's floor and wait are pinned back),
+and ``land_detector.contact_thrust`` on.
 
 Checked on the replayed run that made the case, seed 13's run 133, against the plant's own
 signals rather than the flight code's: the reference's holds (its height flat while the
@@ -14,6 +15,7 @@ more than ``thrust_low`` of the weight, and the gear meets the roof faster than
 
 import numpy as np
 import pytest
+from reference import HIGHWAY_GATE_SIXTEENTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -26,10 +28,11 @@ SEED, INDEX = 13, 133
 
 
 def _fly(*overrides):
-    """Seed 13's run 133 on highway as shipped plus ``overrides``: result, report, scenario."""
+    """Seed 13's run 133 on highway with the sixteenth's gate (``HIGHWAY_GATE_SIXTEENTH``:
+    the 0.10 m floor, no wait) plus ``overrides``: result, report, scenario."""
     d = draws(campaign_spec_of(load_scenario("highway", [f"campaign.seed={SEED}"])),
               [INDEX])[0]
-    sc = load_scenario("highway", [*d.overrides(), *overrides])
+    sc = load_scenario("highway", [*d.overrides(), *HIGHWAY_GATE_SIXTEENTH, *overrides])
     res = quadland.simulate(sc)
     return res, touchdown_report(res), sc
 

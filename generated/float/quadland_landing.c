@@ -168,12 +168,13 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, crawl_gate_floor, 36, 0) &&
     AT(qlf_guidance_params, crawl_gate_wait, 37, 0) &&
     AT(qlf_guidance_params, crawl_gate_rise, 38, 0) &&
-    AT(qlf_guidance_params, calm_lean, 39, 0) &&
-    AT(qlf_guidance_params, lean_time, 40, 0) &&
-    AT(qlf_guidance_params, lean_withdraw, 41, 0) &&
-    AT(qlf_guidance_params, abort_floor, 42, 0) &&
-    AT(qlf_guidance_params, ground_airmode, 43, 0) &&
-    sizeof(qlf_guidance_params) == 44 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, crawl_gate_wait_height, 39, 0) &&
+    AT(qlf_guidance_params, calm_lean, 40, 0) &&
+    AT(qlf_guidance_params, lean_time, 41, 0) &&
+    AT(qlf_guidance_params, lean_withdraw, 42, 0) &&
+    AT(qlf_guidance_params, abort_floor, 43, 0) &&
+    AT(qlf_guidance_params, ground_airmode, 44, 0) &&
+    sizeof(qlf_guidance_params) == 45 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -206,15 +207,15 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[44] = {
+static const qlf_real default_p_guid[45] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
     0.15f, 0.5235987755982988f, 0.0f, 0.1f, 0.1f, 0.3f,
     0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, -1000.0f,
     3.141592653589793f, 0.0f, 0.0f, 0.0f, 0.04f, 0.3f,
-    0.1f, 1000.0f, 1000.0f, 1.5707963267948966f, 1.0f, 0.0f,
-    -1000.0f, 1.0f,
+    0.07f, 2.0f, 1000.0f, 0.1f, 1.5707963267948966f, 1.0f,
+    0.0f, -1000.0f, 1.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -496,6 +497,7 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   crawl_gate_floor         >= 0
  *   crawl_gate_wait          >= 0
  *   crawl_gate_rise          >= 0
+ *   crawl_gate_wait_height   >= 0
  *   calm_lean                >= 0
  *   lean_time                > 0
  *   lean_withdraw            0 or 1
@@ -631,18 +633,21 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
         bad = "crawl_gate_rise";
     }
     if (!bad && !(isfinite(p[39]) && (p[39] >= 0.0f))) {
+        bad = "crawl_gate_wait_height";
+    }
+    if (!bad && !(isfinite(p[40]) && (p[40] >= 0.0f))) {
         bad = "calm_lean";
     }
-    if (!bad && !(isfinite(p[40]) && (p[40] > 0.0f))) {
+    if (!bad && !(isfinite(p[41]) && (p[41] > 0.0f))) {
         bad = "lean_time";
     }
-    if (!bad && !(isfinite(p[41]) && ((p[41] == 0.0f) || (p[41] == 1.0f)))) {
+    if (!bad && !(isfinite(p[42]) && ((p[42] == 0.0f) || (p[42] == 1.0f)))) {
         bad = "lean_withdraw";
     }
-    if (!bad && !(isfinite(p[42]))) {
+    if (!bad && !(isfinite(p[43]))) {
         bad = "abort_floor";
     }
-    if (!bad && !(isfinite(p[43]) && ((p[43] == 0.0f) || (p[43] == 1.0f)))) {
+    if (!bad && !(isfinite(p[44]) && ((p[44] == 0.0f) || (p[44] == 1.0f)))) {
         bad = "ground_airmode";
     }
     if (bad_field) {
@@ -721,7 +726,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 42 comparisons. The values are known to be finite; no names and no
+ * 43 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -765,9 +770,10 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[37] >= 0.0f);
     ok &= (p[38] >= 0.0f);
     ok &= (p[39] >= 0.0f);
-    ok &= (p[40] > 0.0f);
-    ok &= ((p[41] == 0.0f) | (p[41] == 1.0f));
-    ok &= ((p[43] == 0.0f) | (p[43] == 1.0f));
+    ok &= (p[40] >= 0.0f);
+    ok &= (p[41] > 0.0f);
+    ok &= ((p[42] == 0.0f) | (p[42] == 1.0f));
+    ok &= ((p[44] == 0.0f) | (p[44] == 1.0f));
     return ok;
 }
 
@@ -846,7 +852,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 44)
+          & all_finite((const qlf_real *)params, 45)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }

@@ -22,7 +22,7 @@ extern "C" {
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QLF_LANDING_PARAMS_SIZE 132              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 89                /* reals in qlf_landing_state */
-#define QLF_GUIDANCE_PARAMS_SIZE 44              /* reals in qlf_guidance_params */
+#define QLF_GUIDANCE_PARAMS_SIZE 45              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
 #define QLF_LANDING_PLANT_NP 335                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -214,6 +214,7 @@ typedef struct {
     qlf_real crawl_gate_floor;       /* m: reference height above touchdown at or below which crawl_gate no longer pauses the crawl (0: down to the touchdown height) */
     qlf_real crawl_gate_wait;        /* s: the longest time crawl_gate holds a crawl: after it the crawl falls on */
     qlf_real crawl_gate_rise;        /* m/s: crawl_gate holds the crawl only while the deck's vertical speed at the pad is within this (a quiescent deck) */
+    qlf_real crawl_gate_wait_height; /* m: reference height above touchdown at or below which crawl_gate_wait bounds the gate's holds (1000: everywhere) */
     qlf_real calm_lean;              /* rad: largest lean of the body z axis from the vertical, averaged over lean_time, at which the final descent commits (pi/2: no limit) */
     qlf_real lean_time;              /* s: time constant of the lean's average for calm_lean */
     qlf_real lean_withdraw;          /* 0/1: 1: once committed, the lean's average past calm_lean withdraws the descent above withdraw_height, as a rising deck does; 0: it only holds the commit */

@@ -261,6 +261,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "crawl_gate_rise": Field(F, "m/s", "crawl_gate holds the crawl only while the deck's "
                                  "vertical speed at the pad is within this (a quiescent "
                                  "deck)", lo=0.0, hi=1e3, default=1e3),
+        "crawl_gate_wait_height": Field(F, "m", "height above touchdown at or below which "
+                                        "crawl_gate_wait applies", lo=0.0, hi=1e3, default=1e3),
         "crawl_gate_wait": Field(F, "s", "the longest time crawl_gate holds a crawl (then it "
                                  "falls on)", lo=0.0, hi=1e3, default=1e3),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,

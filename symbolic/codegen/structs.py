@@ -405,6 +405,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "crawl_gate_wait": _NONNEGATIVE,
     "abort_floor": _FINITE,
     "crawl_gate_rise": _NONNEGATIVE,
+    "crawl_gate_wait_height": _NONNEGATIVE,
     "ground_airmode": Range(choices=(0.0, 1.0)),
 })
 

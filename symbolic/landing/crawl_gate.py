@@ -5,7 +5,8 @@ at contact: the estimate's wander and a gate on its prediction").
 The guidance's offset at the contact is mostly the estimate's own wander about the pad, which
 decorrelates within a few tenths of a second; the gate lets the crawl fall only while the
 estimate, carried over the crawl's time left by the estimated velocity, is inside the gate.
-Its pauses are counted on the guidance's timer and bounded by ``crawl_gate_wait``.
+Its pauses are counted on the guidance's timer and bounded by ``crawl_gate_wait`` (with
+``crawl_gate_wait_height``, only at and below that height).
 
 Branch-free CasADi, generated into C with the guidance step.
 """
@@ -26,13 +27,18 @@ def gate_holds(p_e, v_e, h, timer, deck_rise, p):
     ``crawl_gate`` 0, at or below ``crawl_gate_floor`` (a pause within centimetres of the
     deck reads as a touchdown to the land detector) and once the gate has held this crawl for
     ``crawl_gate_wait`` (``timer``, :func:`crawl_timer_next`: a quadrotor that wanders on near the
-    deck in strong turbulence would otherwise pause until it aborts); and while the deck's
+    deck in strong turbulence would otherwise pause until it aborts), where ``h`` is at or
+    below ``crawl_gate_wait_height`` (1000, the default: at any height in the crawl; lower, the
+    holds above it are counted but not bounded, so that a crawl that has held long up high
+    is not held again near the deck, docs/landing.md, "The crawl's gate: a wait near the
+    deck only"); and while the deck's
     vertical speed at the pad, ``|deck_rise|``, exceeds ``crawl_gate_rise`` (the gate waits
     only on a quiescent deck: a pause over a heaving one is met by the deck, or withdrawn)."""
     t_go = ca.fmin(ca.fmax(h, 0) / p["touchdown_speed"], p["crawl_gate_time"])
     predicted = ca.norm_2(p_e[0:2] + v_e[0:2] * t_go)
     off = ca.logic_or(ca.logic_or(p["crawl_gate"] <= 0, h <= p["crawl_gate_floor"]),
-                      ca.logic_or(timer >= p["crawl_gate_wait"],
+                      ca.logic_or(ca.logic_and(timer >= p["crawl_gate_wait"],
+                                               h <= p["crawl_gate_wait_height"]),
                                   ca.fabs(deck_rise) > p["crawl_gate_rise"]))
     return ca.logic_or(off, predicted <= p["crawl_gate"])
 

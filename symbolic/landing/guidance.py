@@ -231,6 +231,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "crawl falls on"),
     Field("crawl_gate_rise", 1, "m/s", "crawl_gate holds the crawl only while the deck's "
           "vertical speed at the pad is within this (a quiescent deck)"),
+    Field("crawl_gate_wait_height", 1, "m", "reference height above touchdown at or below "
+          "which crawl_gate_wait bounds the gate's holds (1000: everywhere)"),
     Field("calm_lean", 1, "rad", "largest lean of the body z axis from the vertical, "
           "averaged over lean_time, at which the final descent commits (pi/2: no limit)"),
     Field("lean_time", 1, "s", "time constant of the lean's average for calm_lean"),
