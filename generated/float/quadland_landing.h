@@ -22,7 +22,7 @@ extern "C" {
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QLF_LANDING_PARAMS_SIZE 132              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 89                /* reals in qlf_landing_state */
-#define QLF_GUIDANCE_PARAMS_SIZE 44              /* reals in qlf_guidance_params */
+#define QLF_GUIDANCE_PARAMS_SIZE 45              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
 #define QLF_LANDING_PLANT_NP 335                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -74,6 +74,7 @@ typedef struct {
     qlf_real power;                  /* -: factor on the rotor commands: 0 cuts them */
     qlf_real airmode;                /* 0/1: 1: the collective rises for the moments (air mode); 0: it does not, the moments give way */
     qlf_real pivot[3];               /* m: the gear's pivot arm whose levelling the aim point anticipates (feet x, y half-spacings, height below the centre of mass; 0: no shift) (pivot_x, pivot_y, pivot_h) */
+    qlf_real deck_tilt_limit;        /* rad: largest angle of the thrust axis from the deck's normal (pi/2: none) */
 } qlf_position_reference;
 
 /* The landing step's memory: network, robust terms, command filter and
@@ -219,6 +220,7 @@ typedef struct {
     qlf_real lean_withdraw;          /* 0/1: 1: once committed, the lean's average past calm_lean withdraws the descent above withdraw_height, as a rising deck does; 0: it only holds the commit */
     qlf_real abort_floor;            /* m: the gear's height above the deck, as estimated, at or below which the crawl's out-of-limits abort is not started (-1000: never) */
     qlf_real ground_airmode;         /* 0/1: 1: from touchdown on the collective still rises for the moments, as in flight; 0: it does not (touchdown_policy) */
+    qlf_real flare_deck_tilt;        /* rad: from the flare on, the thrust axis is also held within this of the deck's normal (touchdown_policy; pi/2: no limit) */
 } qlf_guidance_params;
 
 /* Fill the defaults (scenario highway). */

@@ -338,6 +338,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "ground_airmode": Field(B, "-", "secure: false: from touchdown on the collective is not "
                                 "raised for the attitude's moments (air mode off)",
                                 default=True),
+        "flare_deck_tilt_deg": Field(F, "deg", "secure: the flare's limit from the deck's "
+                                     "normal too (90: none)", hi=90.0, default=90.0, **_POS),
         **LOCK_FIELDS,
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.

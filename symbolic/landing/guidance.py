@@ -241,6 +241,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "below which the crawl's out-of-limits abort is not started (-1000: never)"),
     Field("ground_airmode", 1, "0/1", "1: from touchdown on the collective still rises for the "
           "moments, as in flight; 0: it does not (touchdown_policy)"),
+    Field("flare_deck_tilt", 1, "rad", "from the flare on, the thrust axis is also held within "
+          "this of the deck's normal (touchdown_policy; pi/2: no limit)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
