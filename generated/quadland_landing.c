@@ -175,7 +175,8 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, abort_floor, 42, 0) &&
     AT(ql_guidance_params, ground_airmode, 43, 0) &&
     AT(ql_guidance_params, flare_deck_tilt, 44, 0) &&
-    sizeof(ql_guidance_params) == 45 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, flare_deck_height, 45, 0) &&
+    sizeof(ql_guidance_params) == 46 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -208,7 +209,7 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[45] = {
+static const ql_real default_p_guid[46] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
@@ -216,7 +217,7 @@ static const ql_real default_p_guid[45] = {
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
     3.141592653589793, 0.0, 0.0, 0.0, 0.04, 0.3,
     0.1, 1000.0, 1000.0, 1.5707963267948966, 1.0, 0.0,
-    -1000.0, 1.0, 1.5707963267948966,
+    -1000.0, 1.0, 1.5707963267948966, 1000.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -504,6 +505,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   abort_floor              finite
  *   ground_airmode           0 or 1
  *   flare_deck_tilt          in (0, 1.5708]
+ *   flare_deck_height        >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -651,6 +653,9 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[44]) && ((p[44] > 0.0) && (p[44] <= 1.5707963267948966)))) {
         bad = "flare_deck_tilt";
     }
+    if (!bad && !(isfinite(p[45]) && (p[45] >= 0.0))) {
+        bad = "flare_deck_height";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -727,7 +732,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 43 comparisons. The values are known to be finite; no names and no
+ * 44 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -775,6 +780,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= ((p[41] == 0.0) | (p[41] == 1.0));
     ok &= ((p[43] == 0.0) | (p[43] == 1.0));
     ok &= ((p[44] > 0.0) & (p[44] <= 1.5707963267948966));
+    ok &= (p[45] >= 0.0);
     return ok;
 }
 
@@ -853,7 +859,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 45)
+          & all_finite((const ql_real *)params, 46)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

@@ -98,9 +98,9 @@ def test_the_clip_stays_within_both_cones():
             assert R[:, 2] @ b3 == pytest.approx(np.cos(16 * DEG), abs=1e-12)
 
 
-def _deck_limit(down, descending, z_next, fly_on=1.0, key=16 * DEG):
+def _deck_limit(down, descending, z_next, fly_on=1.0, key=16 * DEG, height=1e3):
     p = dict(GUIDANCE_P, fly_on=fly_on, flare_deck_tilt=key, flare_height=0.3,
-             touchdown_height=0.2, contact_drop=0.0)
+             touchdown_height=0.2, contact_drop=0.0, flare_deck_height=height)
     out = np.asarray(touchdown_commands(float(down), float(descending), 0.1, z_next, p)).ravel()
     return TOUCHDOWN_COMMANDS.unpack(out)["deck_tilt_limit"][0]
 
@@ -119,10 +119,25 @@ def test_the_policy_commands_the_deck_cone_from_the_flare_on_only():
         assert float(ca.evalf(b["deck_tilt_limit"])) == got
 
 
+def test_below_flare_deck_height_only_and_on_the_deck():
+    """With ``flare_deck_height`` 0.125 m (binary heights): the flare's reference 0.25 m above
+    touchdown (z_next 0.45) has no deck cone, 0.125 m exactly and below have it, and so has
+    the deck whatever the height; the vertical's cone is the flare's throughout."""
+    assert _deck_limit(0, 1, 0.45, height=0.125) == float(NO_TILT_LIMIT)
+    assert _deck_limit(0, 1, 0.325, height=0.125) == 16 * DEG
+    assert _deck_limit(0, 1, 0.25, height=0.125) == 16 * DEG
+    assert _deck_limit(1, 0, 0.45, height=0.125) == 16 * DEG
+    p = dict(GUIDANCE_P, fly_on=1.0, flare_deck_tilt=16 * DEG, flare_height=0.3,
+             touchdown_height=0.2, contact_drop=0.0, flare_deck_height=0.125)
+    out = TOUCHDOWN_COMMANDS.unpack(np.asarray(touchdown_commands(0.0, 1.0, 0.1, 0.45, p)).ravel())
+    assert out["tilt_limit"][0] == p["flare_tilt"]
+
+
 def test_the_key_is_optional_and_off_by_default():
     """No shipped landing scenario but the ships sets it; the default packs ``pi / 2``."""
     for name in ("highway", "turning", "highway_100"):
-        assert touchdown_guidance(load_scenario(name))["flare_deck_tilt"] == np.pi / 2
+        g = touchdown_guidance(load_scenario(name))
+        assert g["flare_deck_tilt"] == np.pi / 2 and g["flare_deck_height"] == 1e3
     sc = load_scenario("highway", ["touchdown.flare_deck_tilt_deg=16.0"])
     assert touchdown_guidance(sc)["flare_deck_tilt"] == pytest.approx(16 * DEG, abs=1e-15)
 

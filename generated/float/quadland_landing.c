@@ -175,7 +175,8 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, abort_floor, 42, 0) &&
     AT(qlf_guidance_params, ground_airmode, 43, 0) &&
     AT(qlf_guidance_params, flare_deck_tilt, 44, 0) &&
-    sizeof(qlf_guidance_params) == 45 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, flare_deck_height, 45, 0) &&
+    sizeof(qlf_guidance_params) == 46 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -208,7 +209,7 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[45] = {
+static const qlf_real default_p_guid[46] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
@@ -216,7 +217,7 @@ static const qlf_real default_p_guid[45] = {
     0.0f, 0.0f, 0.0f, 0.05f, 1000.0f, -1000.0f,
     3.141592653589793f, 0.0f, 0.0f, 0.0f, 0.04f, 0.3f,
     0.1f, 1000.0f, 1000.0f, 1.5707963267948966f, 1.0f, 0.0f,
-    -1000.0f, 1.0f, 1.5707963267948966f,
+    -1000.0f, 1.0f, 1.5707963267948966f, 1000.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -504,6 +505,7 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   abort_floor              finite
  *   ground_airmode           0 or 1
  *   flare_deck_tilt          in (0, 1.5708]
+ *   flare_deck_height        >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -651,6 +653,9 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[44]) && ((p[44] > 0.0f) && (p[44] <= 1.5707963267948966f)))) {
         bad = "flare_deck_tilt";
     }
+    if (!bad && !(isfinite(p[45]) && (p[45] >= 0.0f))) {
+        bad = "flare_deck_height";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -727,7 +732,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 43 comparisons. The values are known to be finite; no names and no
+ * 44 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -775,6 +780,7 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= ((p[41] == 0.0f) | (p[41] == 1.0f));
     ok &= ((p[43] == 0.0f) | (p[43] == 1.0f));
     ok &= ((p[44] > 0.0f) & (p[44] <= 1.5707963267948966f));
+    ok &= (p[45] >= 0.0f);
     return ok;
 }
 
@@ -853,7 +859,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 45)
+          & all_finite((const qlf_real *)params, 46)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }

@@ -307,10 +307,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     },
     # What happens once the gear touches (docs/landing.md, "Touchdown policy").
     "touchdown": {
-        "policy": Field(S, "-", "idle: the gear's contact switch cuts the rotors to "
-                        "idle_thrust; hold: the flight code keeps commanding them; secure: "
-                        "the flight code flies on until the lock holds, then cuts them",
-                        choices=("idle", "hold", "secure")),
+        "policy": Field(S, "-", "idle: the gear's contact switch cuts the rotors to idle_thrust; "
+                        "hold: the flight code keeps commanding them; secure: it flies on "
+                        "until the lock holds, then cuts them", choices=("idle", "hold", "secure")),
         "cut_delay": Field(F, "s", "time from the contact switch closing to the rotor cut",
                            lo=0.0, hi=10.0),
         "idle_thrust": Field(F, "N", "each rotor's command once cut, at most F_max "
@@ -336,10 +335,11 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                   "foot of a body pitched this much does (0: level)", lo=0.0,
                                   hi=80.0, default=0.0),
         "ground_airmode": Field(B, "-", "secure: false: from touchdown on the collective is not "
-                                "raised for the attitude's moments (air mode off)",
-                                default=True),
+                                "raised for the attitude's moments (air mode off)", default=True),
         "flare_deck_tilt_deg": Field(F, "deg", "secure: the flare's limit from the deck's "
                                      "normal too (90: none)", hi=90.0, default=90.0, **_POS),
+        "flare_deck_height": Field(F, "m", "secure: flare_deck_tilt_deg below this reference "
+                                   "height above touchdown", lo=0.0, hi=1e3, default=1e3),
         **LOCK_FIELDS,
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.

@@ -243,6 +243,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "moments, as in flight; 0: it does not (touchdown_policy)"),
     Field("flare_deck_tilt", 1, "rad", "from the flare on, the thrust axis is also held within "
           "this of the deck's normal (touchdown_policy; pi/2: no limit)"),
+    Field("flare_deck_height", 1, "m", "reference height above touchdown below which "
+          "flare_deck_tilt holds (on the deck too; at or above flare_height: the whole flare)"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.

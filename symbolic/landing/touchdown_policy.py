@@ -31,6 +31,7 @@ through :data:`TOUCHDOWN_COMMANDS`, appended to the position reference:
    The horizontal thrust it gives up is a small backward drift relative to
    the deck over the last few centimetres. With ``flare_deck_tilt`` below
    ``pi / 2`` the thrust axis is also held within it of the deck's normal
+   (below ``flare_deck_height`` above touchdown, and on the deck)
    (the axis the contact's tilt is judged from; ``deck_tilt_limit``, applied by
    :func:`~quadland_symbolic.landing.attitude.thrust_attitude` after the
    vertical's cone): a lean into the airflow over a deck rolled or pitched the
@@ -134,7 +135,10 @@ def touchdown_commands(down, descending, timer_next, z_next, p):
                                                  - p["contact_drop"] <= p["aim_height"]))
     pivot = aiming * ca.vertcat(p["pivot_x"], p["pivot_y"], p["pivot_h"])
     airmode = 1 - on * down * (1 - p["ground_airmode"])
-    deck_limit = ca.if_else(ca.logic_and(on, flaring), p["flare_deck_tilt"], NO_TILT_LIMIT)
+    h_next = z_next - p["touchdown_height"] - p["contact_drop"]
+    deck_low = ca.logic_or(down, ca.logic_and(descending, ca.logic_and(
+        low, h_next <= p["flare_deck_height"])))
+    deck_limit = ca.if_else(ca.logic_and(on, deck_low), p["flare_deck_tilt"], NO_TILT_LIMIT)
     return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, airmode, pivot, deck_limit)
 
 
