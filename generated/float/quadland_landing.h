@@ -220,8 +220,8 @@ typedef struct {
     qlf_real lean_withdraw;          /* 0/1: 1: once committed, the lean's average past calm_lean withdraws the descent above withdraw_height, as a rising deck does; 0: it only holds the commit */
     qlf_real abort_floor;            /* m: the gear's height above the deck, as estimated, at or below which the crawl's out-of-limits abort is not started (-1000: never) */
     qlf_real ground_airmode;         /* 0/1: 1: from touchdown on the collective still rises for the moments, as in flight; 0: it does not (touchdown_policy) */
-    qlf_real flare_deck_tilt;        /* rad: from the flare on, the thrust axis is also held within this of the deck's normal (touchdown_policy; pi/2: no limit) */
-    qlf_real flare_deck_height;      /* m: reference height above touchdown below which flare_deck_tilt holds (on the deck too; at or above flare_height: the whole flare) */
+    qlf_real flare_deck_tilt;        /* rad: flare: the thrust axis's limit from the deck's normal */
+    qlf_real flare_deck_height;      /* m: height above touchdown below which flare_deck_tilt holds */
 } qlf_guidance_params;
 
 /* Fill the defaults (scenario highway). */

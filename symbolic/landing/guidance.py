@@ -241,10 +241,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "below which the crawl's out-of-limits abort is not started (-1000: never)"),
     Field("ground_airmode", 1, "0/1", "1: from touchdown on the collective still rises for the "
           "moments, as in flight; 0: it does not (touchdown_policy)"),
-    Field("flare_deck_tilt", 1, "rad", "from the flare on, the thrust axis is also held within "
-          "this of the deck's normal (touchdown_policy; pi/2: no limit)"),
-    Field("flare_deck_height", 1, "m", "reference height above touchdown below which "
-          "flare_deck_tilt holds (on the deck too; at or above flare_height: the whole flare)"),
+    Field("flare_deck_tilt", 1, "rad", "flare: the thrust axis's limit from the deck's normal"),
+    Field("flare_deck_height", 1, "m", "height above touchdown below which flare_deck_tilt holds"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.
