@@ -45,7 +45,8 @@ typedef char position_reference_is_its_layout[
     AT(ql_position_reference, power, 12, 0) &&
     AT(ql_position_reference, airmode, 13, 0) &&
     AT(ql_position_reference, pivot, 14, 0) &&
-    sizeof(ql_position_reference) == 17 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_position_reference, deck_tilt_limit, 17, 0) &&
+    sizeof(ql_position_reference) == 18 * sizeof(ql_real) ? 1 : -1];
 typedef char landing_state_is_its_layout[
     AT(ql_landing_state, W_hat, 0, 0) &&
     AT(ql_landing_state, zeta_hat, 60, 0) &&
@@ -174,7 +175,9 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, lean_withdraw, 42, 0) &&
     AT(ql_guidance_params, abort_floor, 43, 0) &&
     AT(ql_guidance_params, ground_airmode, 44, 0) &&
-    sizeof(ql_guidance_params) == 45 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, flare_deck_tilt, 45, 0) &&
+    AT(ql_guidance_params, flare_deck_height, 46, 0) &&
+    sizeof(ql_guidance_params) == 47 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -207,7 +210,7 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[45] = {
+static const ql_real default_p_guid[47] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
@@ -215,7 +218,7 @@ static const ql_real default_p_guid[45] = {
     0.0, 0.0, 0.0, 0.05, 1000.0, -1000.0,
     3.141592653589793, 0.0, 0.0, 0.0, 0.04, 0.3,
     0.07, 2.0, 1000.0, 0.1, 1.5707963267948966, 1.0,
-    0.0, -1000.0, 1.0,
+    0.0, -1000.0, 1.0, 1.5707963267948966, 1000.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -503,6 +506,8 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   lean_withdraw            0 or 1
  *   abort_floor              finite
  *   ground_airmode           0 or 1
+ *   flare_deck_tilt          in (0, 1.5708]
+ *   flare_deck_height        >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -650,6 +655,12 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[44]) && ((p[44] == 0.0) || (p[44] == 1.0)))) {
         bad = "ground_airmode";
     }
+    if (!bad && !(isfinite(p[45]) && ((p[45] > 0.0) && (p[45] <= 1.5707963267948966)))) {
+        bad = "flare_deck_tilt";
+    }
+    if (!bad && !(isfinite(p[46]) && (p[46] >= 0.0))) {
+        bad = "flare_deck_height";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -726,7 +737,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 43 comparisons. The values are known to be finite; no names and no
+ * 45 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -774,6 +785,8 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[41] > 0.0);
     ok &= ((p[42] == 0.0) | (p[42] == 1.0));
     ok &= ((p[44] == 0.0) | (p[44] == 1.0));
+    ok &= ((p[45] > 0.0) & (p[45] <= 1.5707963267948966));
+    ok &= (p[46] >= 0.0);
     return ok;
 }
 
@@ -827,7 +840,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
                            ql_guidance_state *state, ql_position_reference *ref)
 {
     /* xg = [phase, timer, z_ref, aborts, committed, armed, ms_rise, ms_rise_rate, ms_tilt_rate, ms_tilt_acc, lean_x, lean_y, lean_gust], CasADi's guidance state; res_v = [xg_next, ref]. */
-    ql_real xg[13], res_v[30];
+    ql_real xg[13], res_v[31];
     const ql_real *arg[ql_casadi_landing_guidance_SZ_ARG];
     ql_real *res[ql_casadi_landing_guidance_SZ_RES];
     casadi_int work_int[ql_casadi_landing_guidance_SZ_IW + 1];
@@ -852,7 +865,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 45)
+          & all_finite((const ql_real *)params, 47)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }
@@ -871,7 +884,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     res[0] = res_v + 0;
     res[1] = res_v + 13;
     ql_casadi_landing_guidance(arg, res, work_int, work_real, 0);
-    if (!all_finite(res_v, 30)) {
+    if (!all_finite(res_v, 31)) {
         return QL_ERR_NONFINITE_OUTPUT;
     }
     state->phase = (int)res_v[0];
@@ -915,7 +928,7 @@ ql_status ql_landing_step(const ql_landing_measurement *y, const ql_position_ref
     /* The measurements, the reference, dt and every parameter. The state is
      * checked through the outputs: each of its values reaches mem_next (a NaN
      * or an infinity in W_hat through a_w W_hat, 0 * inf being NaN, and so on). */
-    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 17)
+    if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)ref, 18)
           & all_finite((const ql_real *)params, QL_LANDING_PARAMS_SIZE) & (isfinite(dt) != 0))) {
         output_zero(out, 0);
         return QL_ERR_NONFINITE_INPUT;

@@ -111,6 +111,8 @@ LANDING_DOCUMENTED = {
 #: Members that only ql_check_landing_params tests (the step would test l values a call).
 CHECK_PARAMS_ONLY = {"ctrl.widths"}
 #: ql_guidance_params likewise.
+#: pi/2 rounded to single precision (1.5707963705...), the float build's literal.
+_HALF_PI_F32 = float(np.float32(math.pi / 2))
 GUIDANCE_DOCUMENTED = {
     "hover_height": _positive, "align_radius": _positive, "dwell_time": _nonnegative,
     "descent_speed": _positive, "descent_time": _positive, "touchdown_speed": _positive,
@@ -132,6 +134,9 @@ GUIDANCE_DOCUMENTED = {
     "calm_lean": _nonnegative, "lean_time": _positive,
     "lean_withdraw": lambda v, p: (v == 0) | (v == 1), "abort_floor": _finite,
     "ground_airmode": lambda v, p: (v == 0) | (v == 1),
+    # in (0, pi/2]; the float build's pi/2 (its default, 90 deg) is float32(pi/2), above
+    "flare_deck_tilt": lambda v, p: (v > 0) & ((v <= math.pi / 2) | (v == _HALF_PI_F32)),
+    "flare_deck_height": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
@@ -247,10 +252,11 @@ class _Harness:
                               + scale * rng.normal(size=9),
                               # the touchdown policy's commands: a tilt limit, the level-out
                               # and the collective's ramp, the cut, air mode, the pivot's arm
-                              # (or none)
+                              # (or none), the deck's cone (or none)
                               rng.uniform(0.05, math.pi / 2), rng.uniform(0, 1),
                               rng.uniform(0, 1), rng.choice((0.0, 1.0)), rng.choice((0.0, 1.0)),
-                              rng.choice((0.0, 1.0)) * rng.uniform(0, 0.3, size=3)]
+                              rng.choice((0.0, 1.0)) * rng.uniform(0, 0.3, size=3),
+                              rng.choice((math.pi / 2, rng.uniform(0.05, math.pi / 2)))]
         mem = landing_memory(L).unpack(np.zeros(landing_memory(L).size))
         st = {k: rng.normal(size=v.shape) * scale * 0.2 for k, v in mem.items()}
         st["W_hat"] *= rng.choice((0.0, 0.1, 1.0, 30.0))

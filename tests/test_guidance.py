@@ -224,7 +224,8 @@ def test_descent_touches_down_when_the_gap_closes_then_lands_after_settling():
     np.testing.assert_array_equal(rows[k_landed][1][3:9], 0)  # the reference is at rest
     # the touchdown policy off (fly_on = 0): its commands are inert throughout
     commands = np.array([ref[9:] for _, ref in rows])
-    np.testing.assert_array_equal(commands, [[math.pi / 2, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]]
+    np.testing.assert_array_equal(commands, [[math.pi / 2, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0,
+                                              math.pi / 2]]
                                   * len(rows))
     z = [GUIDANCE_STATE.unpack(x)["z_ref"][0] for x, _ in rows[41:]]
     assert len(set(z)) == 1

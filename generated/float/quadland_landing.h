@@ -22,7 +22,7 @@ extern "C" {
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QLF_LANDING_PARAMS_SIZE 132              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 89                /* reals in qlf_landing_state */
-#define QLF_GUIDANCE_PARAMS_SIZE 45              /* reals in qlf_guidance_params */
+#define QLF_GUIDANCE_PARAMS_SIZE 47              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
 #define QLF_LANDING_PLANT_NP 335                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -74,6 +74,7 @@ typedef struct {
     qlf_real power;                  /* -: factor on the rotor commands: 0 cuts them */
     qlf_real airmode;                /* 0/1: 1: the collective rises for the moments (air mode); 0: it does not, the moments give way */
     qlf_real pivot[3];               /* m: the gear's pivot arm whose levelling the aim point anticipates (feet x, y half-spacings, height below the centre of mass; 0: no shift) (pivot_x, pivot_y, pivot_h) */
+    qlf_real deck_tilt_limit;        /* rad: largest angle of the thrust axis from the deck's normal (pi/2: none) */
 } qlf_position_reference;
 
 /* The landing step's memory: network, robust terms, command filter and
@@ -210,9 +211,9 @@ typedef struct {
     qlf_real crawl_pause;            /* 0/1: 1: out of the align band the crawl pauses too, as the descent above it does; 0: the crawl is committed */
     qlf_real swerve_accel;           /* m/s^2: the pad's horizontal acceleration above which the final descent does not commit and a committed one is withdrawn (0: no hold) */
     qlf_real crawl_gate;             /* m: the crawl pauses while the horizontal offset predicted at the contact (estimate + velocity x time to contact) is farther than this from the pad (0: no gate) */
-    qlf_real crawl_gate_time;        /* s: the longest time to contact crawl_gate's prediction carries the velocity over */
+    qlf_real crawl_gate_time;        /* s: longest time to contact crawl_gate's prediction spans */
     qlf_real crawl_gate_floor;       /* m: reference height above touchdown at or below which crawl_gate no longer pauses the crawl (0: down to the touchdown height) */
-    qlf_real crawl_gate_wait;        /* s: the longest time crawl_gate holds a crawl: after it the crawl falls on */
+    qlf_real crawl_gate_wait;        /* s: longest time crawl_gate holds a crawl, then it falls on */
     qlf_real crawl_gate_rise;        /* m/s: crawl_gate holds the crawl only while the deck's vertical speed at the pad is within this (a quiescent deck) */
     qlf_real crawl_gate_wait_height; /* m: reference height above touchdown at or below which crawl_gate_wait bounds the gate's holds (1000: everywhere) */
     qlf_real calm_lean;              /* rad: largest lean of the body z axis from the vertical, averaged over lean_time, at which the final descent commits (pi/2: no limit) */
@@ -220,6 +221,8 @@ typedef struct {
     qlf_real lean_withdraw;          /* 0/1: 1: once committed, the lean's average past calm_lean withdraws the descent above withdraw_height, as a rising deck does; 0: it only holds the commit */
     qlf_real abort_floor;            /* m: the gear's height above the deck, as estimated, at or below which the crawl's out-of-limits abort is not started (-1000: never) */
     qlf_real ground_airmode;         /* 0/1: 1: from touchdown on the collective still rises for the moments, as in flight; 0: it does not (touchdown_policy) */
+    qlf_real flare_deck_tilt;        /* rad: flare: the thrust axis's limit from the deck's normal */
+    qlf_real flare_deck_height;      /* m: height above touchdown below which flare_deck_tilt holds */
 } qlf_guidance_params;
 
 /* Fill the defaults (scenario highway). */

@@ -237,13 +237,11 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "lean_withdraw": Field(B, "-", "true: once committed, the lean past calm_lean_deg "
                                "withdraws the descent above withdraw_height, as a rising deck "
                                "does; false: it only holds the commit", default=False),
-        "abort_floor": Field(F, "m", "the gear's height above the deck (the filter's estimate) "
-                             "at or below which the crawl's out-of-limits abort is not "
-                             "started (-1000: it is down to the contact)", lo=-1e3, hi=1e3,
-                             default=-1e3),
+        "abort_floor": Field(F, "m", "the gear's estimated height above the deck at or below "
+                             "which the crawl's out-of-limits abort is not started (-1000: "
+                             "it is down to the contact)", lo=-1e3, hi=1e3, default=-1e3),
         "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
-                             "descent above it does; false: the crawl is committed",
-                             default=False),
+                             "descent above it does; false: it is committed", default=False),
         "swerve_accel": Field(F, "m/s^2", "the pad's horizontal acceleration (as the "
                               "aircraft knows it) above which the final descent does not "
                               "commit and a committed one is withdrawn (0: no hold)",
@@ -309,10 +307,9 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
     },
     # What happens once the gear touches (docs/landing.md, "Touchdown policy").
     "touchdown": {
-        "policy": Field(S, "-", "idle: the gear's contact switch cuts the rotors to "
-                        "idle_thrust; hold: the flight code keeps commanding them; secure: "
-                        "the flight code flies on until the lock holds, then cuts them",
-                        choices=("idle", "hold", "secure")),
+        "policy": Field(S, "-", "idle: the gear's contact switch cuts the rotors to idle_thrust; "
+                        "hold: the flight code keeps commanding them; secure: it flies on "
+                        "until the lock holds, then cuts them", choices=("idle", "hold", "secure")),
         "cut_delay": Field(F, "s", "time from the contact switch closing to the rotor cut",
                            lo=0.0, hi=10.0),
         "idle_thrust": Field(F, "N", "each rotor's command once cut, at most F_max "
@@ -338,8 +335,11 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                   "foot of a body pitched this much does (0: level)", lo=0.0,
                                   hi=80.0, default=0.0),
         "ground_airmode": Field(B, "-", "secure: false: from touchdown on the collective is not "
-                                "raised for the attitude's moments (air mode off)",
-                                default=True),
+                                "raised for the attitude's moments (air mode off)", default=True),
+        "flare_deck_tilt_deg": Field(F, "deg", "secure: the flare's limit from the deck's "
+                                     "normal too (90: none)", hi=90.0, default=90.0, **_POS),
+        "flare_deck_height": Field(F, "m", "secure: flare_deck_tilt_deg below this reference "
+                                   "height above touchdown", lo=0.0, hi=1e3, default=1e3),
         **LOCK_FIELDS,
     },
     # What the aircraft can know (docs/sensors.md): false flies on the true state.

@@ -67,7 +67,7 @@ def body_z_to_attitude(b3, psi):
     return phi, theta
 
 
-def thrust_attitude(t_E, psi, tilt_max, T_max):
+def thrust_attitude(t_E, psi, tilt_max, T_max, deck=None):
     """Collective thrust and attitude of a desired thrust vector.
 
     Parameters
@@ -80,6 +80,13 @@ def thrust_attitude(t_E, psi, tilt_max, T_max):
         Largest angle between the body z axis and E's z, rad, in (0, pi/2).
     T_max : casadi.SX
         Largest collective thrust, N.
+    deck : tuple, optional
+        ``(deck_tilt_max, R_deck)``: ``b3``, once within ``tilt_max`` of E's z, is also
+        held within ``deck_tilt_max`` (rad, in (0, pi/2]) of the deck's normal ``R_deck
+        e_z``: where it lies farther it is moved toward the normal onto that cone (along
+        the great circle through both, so still within ``tilt_max`` of E's z when the
+        normal is); where it lies within (always at ``pi/2`` for a body within 90 deg of
+        the normal) it passes unchanged, bit for bit. None: E's z alone.
 
     Returns
     -------
@@ -88,6 +95,11 @@ def thrust_attitude(t_E, psi, tilt_max, T_max):
         ``theta`` (rad), ``tilt_limited`` and ``thrust_limited`` (0 or 1).
     """
     b3, tilt_limited = limit_tilt(t_E, tilt_max)
+    if deck is not None:
+        deck_tilt_max, R_deck = deck
+        outside = R_deck[:, 2].T @ b3 < ca.cos(deck_tilt_max)
+        b3 = ca.if_else(outside, R_deck @ limit_tilt(R_deck.T @ b3, deck_tilt_max)[0], b3)
+        tilt_limited = ca.logic_or(tilt_limited, outside)
     T_raw = t_E[2] / b3[2]                                   # vertical priority
     T = ca.fmin(ca.fmax(T_raw, 0), T_max)
     phi, theta = body_z_to_attitude(b3, psi)

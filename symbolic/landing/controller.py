@@ -319,7 +319,7 @@ def landing_law(l, y, ref, mem, p_ctrl, p_quad, p_act, dt):
     a_des = (-k2p * z2p - z1p - Delta_hat[_POSITION] - squash_p * zeta_hat[_POSITION] + alpha_p_dot
              - f_g - nominal * f_r - mm["d_hat"][_POSITION] - mm["d_o"])       # eq. 20, bias
     t_E = m1 * R_deck @ a_des                                                  # N, in E
-    th = thrust_attitude(t_E, eta2[2], td["tilt_limit"], 4 * act["F_max"])
+    th = thrust_attitude(t_E, eta2[2], td["tilt_limit"], 4 * act["F_max"], tdp.cone_of(td, R_deck))
 
     # command filter (its state is the inner loop's reference); the touchdown policy levels
     eta_c = tdp.apply_touchdown_commands(td["level"], ca.vertcat(th["phi"], th["theta"]), eta2[:2])

@@ -223,12 +223,10 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("crawl_gate", 1, "m", "the crawl pauses while the horizontal offset predicted at "
           "the contact (estimate + velocity x time to contact) is farther than this from the "
           "pad (0: no gate)"),
-    Field("crawl_gate_time", 1, "s", "the longest time to contact crawl_gate's prediction "
-          "carries the velocity over"),
+    Field("crawl_gate_time", 1, "s", "longest time to contact crawl_gate's prediction spans"),
     Field("crawl_gate_floor", 1, "m", "reference height above touchdown at or below which "
           "crawl_gate no longer pauses the crawl (0: down to the touchdown height)"),
-    Field("crawl_gate_wait", 1, "s", "the longest time crawl_gate holds a crawl: after it the "
-          "crawl falls on"),
+    Field("crawl_gate_wait", 1, "s", "longest time crawl_gate holds a crawl, then it falls on"),
     Field("crawl_gate_rise", 1, "m/s", "crawl_gate holds the crawl only while the deck's "
           "vertical speed at the pad is within this (a quiescent deck)"),
     Field("crawl_gate_wait_height", 1, "m", "reference height above touchdown at or below "
@@ -243,6 +241,8 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "below which the crawl's out-of-limits abort is not started (-1000: never)"),
     Field("ground_airmode", 1, "0/1", "1: from touchdown on the collective still rises for the "
           "moments, as in flight; 0: it does not (touchdown_policy)"),
+    Field("flare_deck_tilt", 1, "rad", "flare: the thrust axis's limit from the deck's normal"),
+    Field("flare_deck_height", 1, "m", "height above touchdown below which flare_deck_tilt holds"),
 ), "landing guidance parameters")
 
 #: What the rest of the flight stack tells the guidance each step.

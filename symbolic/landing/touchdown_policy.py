@@ -29,7 +29,13 @@ through :data:`TOUCHDOWN_COMMANDS`, appended to the position reference:
    and after): the tilt of the thrust axis is limited to ``flare_tilt``
    (below the static tip-over angle), so the gear meets the deck inside it.
    The horizontal thrust it gives up is a small backward drift relative to
-   the deck over the last few centimetres;
+   the deck over the last few centimetres. With ``flare_deck_tilt`` below
+   ``pi / 2`` the thrust axis is also held within it of the deck's normal
+   (below ``flare_deck_height`` above touchdown, and on the deck)
+   (the axis the contact's tilt is judged from; ``deck_tilt_limit``, applied by
+   :func:`~quadland_symbolic.landing.attitude.thrust_attitude` after the
+   vertical's cone): a lean into the airflow over a deck rolled or pitched the
+   other way is cut back only where the two add past it;
 2. **hold** (touchdown, the first ``hold_time``): the flight code keeps
    flying as in the descent, its reference crawling on into the deck at
    ``touchdown_speed`` (:func:`touchdown_crawl`: the gear stays pressed on it
@@ -84,7 +90,7 @@ from quadland_symbolic.layout import Field, Layout
 
 __all__ = ["TOUCHDOWN_COMMANDS", "NO_TILT_LIMIT", "INERT_COMMANDS", "touchdown_commands",
            "touchdown_crawl", "bounded_commands", "apply_touchdown_commands", "pivot_shift",
-           "aim_reference"]
+           "aim_reference", "cone_of"]
 
 #: rad: the tilt limit of an inert policy, above any controller's (``tilt_max < pi/2``).
 NO_TILT_LIMIT = ca.pi / 2
@@ -100,11 +106,13 @@ TOUCHDOWN_COMMANDS = Layout("td_cmd", (
     Field("pivot", 3, "m", "the gear's pivot arm whose levelling the aim point anticipates "
           "(feet x, y half-spacings, height below the centre of mass; 0: no shift)",
           elements=("pivot_x", "pivot_y", "pivot_h")),
+    Field("deck_tilt_limit", 1, "rad", "largest angle of the thrust axis from the deck's normal "
+          "(pi/2: none)"),
 ), "touchdown policy's commands to the landing step")
 
 #: :data:`TOUCHDOWN_COMMANDS` that change nothing (the policy off, or before its flare).
 INERT_COMMANDS = dict(tilt_limit=float(NO_TILT_LIMIT), level=0.0, thrust_scale=1.0, power=1.0,
-                      airmode=1.0, pivot=[0.0, 0.0, 0.0])
+                      airmode=1.0, pivot=[0.0, 0.0, 0.0], deck_tilt_limit=float(NO_TILT_LIMIT))
 
 
 def touchdown_commands(down, descending, timer_next, z_next, p):
@@ -127,7 +135,11 @@ def touchdown_commands(down, descending, timer_next, z_next, p):
                                                  - p["contact_drop"] <= p["aim_height"]))
     pivot = aiming * ca.vertcat(p["pivot_x"], p["pivot_y"], p["pivot_h"])
     airmode = 1 - on * down * (1 - p["ground_airmode"])
-    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, airmode, pivot)
+    h_next = z_next - p["touchdown_height"] - p["contact_drop"]
+    deck_low = ca.logic_or(down, ca.logic_and(descending, ca.logic_and(
+        low, h_next <= p["flare_deck_height"])))
+    deck_limit = ca.if_else(ca.logic_and(on, deck_low), p["flare_deck_tilt"], NO_TILT_LIMIT)
+    return ca.vertcat(tilt_limit, level, 1 - level, 1 - cut, airmode, pivot, deck_limit)
 
 
 def touchdown_crawl(in_touchdown, p):
@@ -141,7 +153,8 @@ def touchdown_crawl(in_touchdown, p):
 
 def bounded_commands(commands: dict, tilt_max) -> dict:
     """The landing step's reading of :data:`TOUCHDOWN_COMMANDS` (``commands``, unpacked):
-    the tilt limit within ``[0, tilt_max]`` (the controller's own), the blend, the
+    the tilt limit within ``[0, tilt_max]`` (the controller's own), the deck's within
+    ``[0, pi/2]``, the blend, the
     collective's factor, the power and the air-mode flag within ``[0, 1]``, whatever the
     caller passed, so that the rotor commands stay within ``[0, F_max]`` and the thrust
     within ``[0, 4 F_max]``."""
@@ -150,7 +163,8 @@ def bounded_commands(commands: dict, tilt_max) -> dict:
     return dict(tilt_limit=ca.fmin(tilt_max, ca.fmax(commands["tilt_limit"], 0)),
                 level=unit(commands["level"]), thrust_scale=unit(commands["thrust_scale"]),
                 power=unit(commands["power"]), airmode=unit(commands["airmode"]),
-                pivot=ca.fmax(commands["pivot"], 0))
+                pivot=ca.fmax(commands["pivot"], 0),
+                deck_tilt_limit=ca.fmin(NO_TILT_LIMIT, ca.fmax(commands["deck_tilt_limit"], 0)))
 
 
 def apply_touchdown_commands(level, eta_c, eta_level):
@@ -187,3 +201,9 @@ def aim_reference(ref, pivot, eta1, eta2):
     """The position reference ``ref`` (``p_ref`` first, then its rates and the rest) with
     ``p_ref`` moved against :func:`pivot_shift`; ``pivot = 0`` returns it unchanged."""
     return ca.vertcat(ref[0:3] - pivot_shift(pivot, eta1, eta2), ref[3:])
+
+
+def cone_of(commands: dict, R_deck):
+    """The deck's cone for :func:`~quadland_symbolic.landing.attitude.thrust_attitude`'s
+    ``deck``: :func:`bounded_commands`' ``deck_tilt_limit`` about ``R_deck``'s normal."""
+    return commands["deck_tilt_limit"], R_deck

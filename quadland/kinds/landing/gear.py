@@ -93,7 +93,9 @@ def touchdown_guidance(scenario: Scenario) -> dict:
                 level_time=td["level_time"], cut_time=td["cut_time"],
                 aim_height=td["aim_height"], pivot_x=aim * gear["feet_x"],
                 pivot_y=aim * gear["feet_y"],
-                pivot_h=aim * hc, ground_airmode=float(td["ground_airmode"]))
+                pivot_h=aim * hc, ground_airmode=float(td["ground_airmode"]),
+                flare_deck_tilt=np.radians(td["flare_deck_tilt_deg"]),
+                flare_deck_height=td["flare_deck_height"])
 
 
 def contact_step(scenario: Scenario, p_quad: np.ndarray) -> float:
