@@ -408,3 +408,22 @@ def test_every_input_of_the_wind_changes_its_kept_key_or_is_computed_each_run():
               times_of(sc).tobytes()) for sc in scenarios.values()
              if sc.data["wind"]["gust_amplitude"] > 0}
     assert entries == len(normals) + len(gusts) + 1             # and the stretched gust
+
+
+def test_a_campaign_keeps_no_wind_nor_any_other_draws(tmp_path, monkeypatch):
+    """A campaign flown in this process leaves the store empty, and its runs draw their
+    wind afresh: wind_samples is never asked inside keeping."""
+    from quadland.campaign.execute import run_campaign
+    from quadland.kinds.landing import values
+
+    asked = []
+    fresh_wind = values.wind_samples
+
+    def counted(scenario, times):
+        asked.append(kept_bytes())
+        return fresh_wind(scenario, times)
+
+    monkeypatch.setattr(values, "wind_samples", counted)
+    run_campaign("highway", None, 3, tmp_path / "c", workers=1, plots=False)
+    assert len(asked) >= 3 and set(asked) == {0}
+    assert len(KEPT) == 0
