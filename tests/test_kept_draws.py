@@ -354,3 +354,76 @@ def test_two_threads_flying_one_replicate_each_fly_a_table_of_their_own(env, mon
         kept = [KEPT.take(table_key(b, n)) for _ in range(3)]
     assert kept[0] is not None and kept[1] is not None and kept[2] is None
     assert {id(kept[0]), id(kept[1])} == {id(holders["b"]), id(holders["c"])}
+
+
+def test_every_input_of_the_wind_changes_its_kept_key_or_is_computed_each_run():
+    """Review of issue 20 (seventeenth session): every setting the wind reads (the seed,
+    the duration and the disturbance's rate, so the sample count and spacing, each
+    ``wind.*`` key, turbulence off, a gust off, the airspeed's velocities and heading, the
+    hover point's height) changed one at a time, all flown in one keeping block after the
+    scenario's own wind: each is the wind drawn afresh from its own scenario, bit for bit,
+    so no kept normals or gust stand in for other draws. The store then holds one normals
+    entry per (seed, sample count) and one gust per gust and times, as its keys say."""
+    from quadland.exceptions import ScenarioError
+    from quadland.scenario import load_scenario
+
+    base = load_scenario("highway")
+    w = base.data["wind"]
+    changes = {f"wind.{k}": _changed(v) for k, v in w.items()}
+    changes.update({"simulation.seed": base.data["simulation"]["seed"] + 1,
+                    "simulation.duration": base.data["simulation"]["duration"] + 4.0,
+                    "disturbance.sample_rate_hz": 50.0, "wind.turbulence_w20": 0.0,
+                    "wind.gust_amplitude": 0.0, "wind.gust_direction": [1.0, 0.0, 0.0],
+                    "initial.velocity2": [31.0, 0.5], "initial.psi2_deg": 30.0,
+                    "deck.height": base.data["deck"]["height"] + 2.0,
+                    "landing.hover_height": 5.0})
+    scenarios = {"": base}
+    for dotted, value in changes.items():
+        try:
+            scenarios[dotted] = base.replace(**{dotted: value})
+        except ScenarioError:
+            continue
+    assert len(scenarios) > 14
+
+    def times_of(sc):
+        return landing_clocks(sc)[1].times()
+
+    fresh = {k: wind_samples(sc, times_of(sc)) for k, sc in scenarios.items()}
+    with keeping(KEEP_BYTES):
+        kept = {k: wind_samples(sc, times_of(sc)) for k, sc in scenarios.items()}
+        again = wind_samples(base, times_of(base))            # after all the others
+        base_times = times_of(base)                             # the same count, other dt
+        stretched = wind_samples(base, 1.5 * base_times)
+        entries = len(KEPT)
+    for k in scenarios:
+        assert _bits(kept[k]) == _bits(fresh[k]), k
+    assert _bits(again) == _bits(fresh[""])
+    assert _bits(stretched) == _bits(wind_samples(base, 1.5 * base_times))
+    differ = {k for k in scenarios if k and _bits(fresh[k]) != _bits(fresh[""])}
+    # the drag alone reads the air's density; a heading turns the ground speed, whose
+    # norm (the airspeed through a calm mean wind) it leaves as it is
+    assert set(scenarios) - differ == {"", "wind.air_density", "initial.psi2_deg"}
+    normals = {(sc.data["simulation"]["seed"], len(times_of(sc))) for sc in scenarios.values()}
+    gusts = {(repr(sorted((g, sc.data["wind"][g]) for g in sc.data["wind"] if "gust" in g)),
+              times_of(sc).tobytes()) for sc in scenarios.values()
+             if sc.data["wind"]["gust_amplitude"] > 0}
+    assert entries == len(normals) + len(gusts) + 1             # and the stretched gust
+
+
+def test_a_campaign_keeps_no_wind_nor_any_other_draws(tmp_path, monkeypatch):
+    """A campaign flown in this process leaves the store empty, and its runs draw their
+    wind afresh: wind_samples is never asked inside keeping."""
+    from quadland.campaign.execute import run_campaign
+    from quadland.kinds.landing import values
+
+    asked = []
+    fresh_wind = values.wind_samples
+
+    def counted(scenario, times):
+        asked.append(kept_bytes())
+        return fresh_wind(scenario, times)
+
+    monkeypatch.setattr(values, "wind_samples", counted)
+    run_campaign("highway", None, 3, tmp_path / "c", workers=1, plots=False)
+    assert len(asked) >= 3 and set(asked) == {0}
+    assert len(KEPT) == 0

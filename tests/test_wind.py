@@ -127,7 +127,42 @@ def test_the_three_axes_in_one_call_are_scipys_lfilter_of_each_bit_for_bit(monke
     one = turbulence_samples(DrydenTurbulence((1.0, 0.0, 2.0), (5.0, 5.0, 5.0), 3.0),
                              np.zeros(1), normals=np.array([[0.5, -0.7, 0.25]]))
     assert _bits(one) == _bits(np.array([[0.5], [0.0], [0.5]]))
+    with pytest.raises(ValueError, match="normals of shape"):   # another count's draws
+        turbulence_samples(turb, times[1:], normals=normals)
 
 
 def _bits(a):
     return np.ascontiguousarray(a).view(np.uint8).tobytes()
+
+
+def test_the_three_axes_in_one_call_keep_nans_and_edge_values_as_lfilter_does(monkeypatch):
+    # review of issue 20 (seventeenth session): NaN intensity on one axis, NaN and infinite
+    # airspeed, a negative and subnormal intensities beside a still axis: the one compiled
+    # call, the Python loop without a compiler and scipy.signal.lfilter of each axis are the
+    # same bits (NaN where lfilter has NaN), the still axis +0.0
+    import scipy.signal
+
+    from quadland.engine import wind
+
+    times = 0.01 * np.arange(300)
+    normals = np.random.default_rng(3).standard_normal((len(times), 3))
+    compiled_call = wind.recursion
+    for turb in (DrydenTurbulence((math.nan, 1.0, 0.0), (3.0, 3.0, 3.0), 5.0),
+                 DrydenTurbulence((1.0, 1.0, 1.0), (3.0, 3.0, 3.0), math.nan),
+                 DrydenTurbulence((1.0, 0.0, 1.0), (3.0, 3.0, 3.0), math.inf),
+                 DrydenTurbulence((-1.0, 0.0, 2.0), (3.0, 3.0, 3.0), 5.0),
+                 DrydenTurbulence((1e-300, 0.0, 5e-324), (3.0, 3.0, 3.0), 5.0)):
+        monkeypatch.setattr(wind, "recursion", compiled_call)
+        got = turbulence_samples(turb, times, normals=normals)
+        monkeypatch.setattr(wind, "recursion", lambda *args: None)
+        assert _bits(turbulence_samples(turb, times, normals=normals)) == _bits(got), turb
+        for axis in range(3):
+            sigma, L = turb.sigma[axis], turb.scale[axis]
+            if sigma == 0:
+                assert _bits(got[axis]) == _bits(np.zeros(len(times)))
+                continue
+            a = math.exp(-turb.airspeed * 0.01 / L)
+            b = sigma * math.sqrt(1.0 - a * a)
+            u0 = sigma * normals[0, axis]
+            ref = scipy.signal.lfilter([b], [1.0, -a], normals[1:, axis], zi=[a * u0])[0]
+            assert _bits(got[axis]) == _bits(np.concatenate([[u0], ref])), (turb, axis)

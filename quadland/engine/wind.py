@@ -102,6 +102,8 @@ def turbulence_samples(turbulence: DrydenTurbulence, times: np.ndarray,
     n = len(times)
     if normals is None:
         normals = rng.standard_normal((n, 3))
+    elif np.shape(normals) != (n, 3):               # kept draws of another sample count
+        raise ValueError(f"normals of shape {np.shape(normals)} for {n} times")
     if n == 0:
         return np.zeros((3, 0))
     draws = normals.T
