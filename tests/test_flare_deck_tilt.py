@@ -101,8 +101,9 @@ def test_a_lean_the_deck_shares_is_left_alone_and_the_default_never_clips():
 def test_the_clip_stays_within_both_cones():
     """Random thrust vectors and decks tilted up to 10 deg: the axis ends within 15 deg of
     the vertical and within 16 deg of the normal (the arc toward the normal stays in the
-    vertical's cone, which holds the normal), and on the deck's cone where it was clipped."""
-    rng = np.random.default_rng(7)
+    vertical's cone, which holds the normal), and on the deck's cone where it was clipped, moved
+    along the great circle toward the normal (in the plane of the two, between them)."""
+    rng, clipped = np.random.default_rng(7), 0
     for _ in range(100):
         t = rng.normal(size=3) + [0.0, 0.0, 2.0]
         R = np.asarray(rotation(ca.DM([*rng.uniform(-10, 10, 2) * DEG, rng.uniform(-3, 3)])))
@@ -114,6 +115,14 @@ def test_the_clip_stays_within_both_cones():
         assert R[:, 2] @ b3 >= np.cos(16 * DEG) - 1e-12
         if R[:, 2] @ alone < np.cos(16 * DEG):
             assert R[:, 2] @ b3 == pytest.approx(np.cos(16 * DEG), abs=1e-12)
+            # on the great circle through the vertical's axis and the normal, between them:
+            # in their plane, and the two arcs to it add up to the whole
+            n = R[:, 2]
+            assert np.linalg.det(np.array([n, alone, b3])) == pytest.approx(0.0, abs=1e-12)
+            arcs = np.arccos(np.clip([alone @ b3, b3 @ n, alone @ n], -1, 1))
+            assert arcs[0] + arcs[1] == pytest.approx(arcs[2], abs=1e-9)
+            clipped += 1
+    assert clipped >= 10
 
 
 def _deck_limit(down, descending, z_next, fly_on=1.0, key=16 * DEG, height=1e3):
