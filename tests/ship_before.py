@@ -40,3 +40,9 @@ ABORT_BEFORE = "landing.abort_floor=-1000.0"
 #: only"); ``ship`` takes the defaults, so the keys leave its flights as they are.
 HEAVE_BEFORE = ("estimator.heave_frequency=0.0", "estimator.heave_in_filter=0.0",
                 "estimator.heave_height=1000000.0")
+
+#: The flare of before about the vertical alone. ``ship_ss5`` also holds the thrust axis within
+#: 16 deg of the deck's normal from the flare on since the seventeenth session (docs/landing.md,
+#: "The ships' tilt at the contact: the flare held about the deck's normal too"); ``ship`` takes
+#: the default (no limit), so the key leaves its flights as they are.
+DECK_TILT_BEFORE = "touchdown.flare_deck_tilt_deg=90.0"

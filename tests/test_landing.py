@@ -731,7 +731,9 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
     deck's roll at the contact and the withdrawals in the crawl"), the gust's lean, and no
     crawl abort within 6 cm of the deck (docs/landing.md, "ship_ss5: an abort the gear cannot
     fly"), and the pad's heave as an oscillator in its filter within the crawl (docs/landing.md,
-    "ship_ss5: the heave oscillator in the crawl only")."""
+    "ship_ss5: the heave oscillator in the crawl only"), and the flare held about the deck's
+    normal too (docs/landing.md, "The ships' tilt at the contact: the flare held about the
+    deck's normal too")."""
     ship, ss5 = load_scenario("ship"), load_scenario("ship_ss5")
     assert ship["deck.sea_state"] == 4 and ss5["deck.sea_state"] == 5
     for d in (ship.data["deck"], ss5.data["deck"]):
@@ -746,7 +748,7 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
                       "landing.withdraw_height", "landing.calm_tilt_deg",
                       "landing.calm_lean_deg", "landing.lean_withdraw", "landing.abort_floor",
                       "estimator.heave_frequency", "estimator.heave_in_filter",
-                      "estimator.heave_height"}
+                      "estimator.heave_height", "touchdown.flare_deck_tilt_deg"}
     assert set(ship.campaign_table["dispersions"]) == set(ss5.campaign_table["dispersions"])
 
 

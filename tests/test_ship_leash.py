@@ -18,7 +18,14 @@ wherever the filter's height is more than the leash above it.
 import numpy as np
 import pytest
 from reference import GUIDANCE_P
-from ship_before import ABORT_BEFORE, COMMIT_BEFORE, GATES_BEFORE, HEAVE_BEFORE, PAD_BEFORE
+from ship_before import (
+    ABORT_BEFORE,
+    COMMIT_BEFORE,
+    DECK_TILT_BEFORE,
+    GATES_BEFORE,
+    HEAVE_BEFORE,
+    PAD_BEFORE,
+)
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -84,13 +91,13 @@ def _fly(name, seed, index, *overrides):
     """Run ``index`` of ``name``'s campaign on campaign seed ``seed`` (None: the default),
     its draw replayed on the pad, the gates and the commit of before (:data:`PAD_BEFORE`,
     :data:`GATES_BEFORE`, :data:`COMMIT_BEFORE`, :data:`ABORT_BEFORE`,
-    :data:`HEAVE_BEFORE`): the flight and its
+    :data:`HEAVE_BEFORE`, :data:`DECK_TILT_BEFORE`): the flight and its
     touchdown report."""
     base = [] if seed is None else [f"campaign.seed={seed}"]
     d = draws(campaign_spec_of(load_scenario(name, base)), [index])[0]
     res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), PAD_BEFORE, *GATES_BEFORE,
                                                  *COMMIT_BEFORE, ABORT_BEFORE, *HEAVE_BEFORE,
-                                                 *overrides]))
+                                                 DECK_TILT_BEFORE, *overrides]))
     return res, touchdown_report(res)
 
 

@@ -20,7 +20,14 @@ case, not its effect.
 
 import numpy as np
 import pytest
-from ship_before import ABORT_BEFORE, COMMIT_BEFORE, GATES_BEFORE, HEAVE_BEFORE, PAD_BEFORE
+from ship_before import (
+    ABORT_BEFORE,
+    COMMIT_BEFORE,
+    DECK_TILT_BEFORE,
+    GATES_BEFORE,
+    HEAVE_BEFORE,
+    PAD_BEFORE,
+)
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -32,13 +39,13 @@ from quadland.scenario import load_scenario
 def _run(name, index, *overrides):
     """Run ``index`` of ``name``'s campaign (default campaign seed), its draw replayed on the
     pad, the gates and the commit of before (:data:`PAD_BEFORE`, :data:`GATES_BEFORE`,
-    :data:`COMMIT_BEFORE`, :data:`ABORT_BEFORE`, :data:`HEAVE_BEFORE`): the touchdown
-    report, and the filter's and the true relative vertical velocity (m/s, up) at the last
-    row before the first contact."""
+    :data:`COMMIT_BEFORE`, :data:`ABORT_BEFORE`, :data:`HEAVE_BEFORE`, :data:`DECK_TILT_BEFORE`):
+    the touchdown report, and the filter's and the true relative vertical velocity (m/s, up)
+    at the last row before the first contact."""
     d = draws(campaign_spec_of(load_scenario(name)), [index])[0]
     res = quadland.simulate(load_scenario(name, [*d.overrides(), PAD_BEFORE, *GATES_BEFORE,
                                                  *COMMIT_BEFORE, ABORT_BEFORE, *HEAVE_BEFORE,
-                                                 *overrides]))
+                                                 DECK_TILT_BEFORE, *overrides]))
     rep = touchdown_report(res)
     k = int(np.flatnonzero(res["touched"] > 0.5)[0]) - 1
     return rep, float(res["vz_e_hat"][k]), float(res["dz_e"][k])
