@@ -189,6 +189,6 @@ def test_the_other_shipped_scenarios_fly_without_the_gate(name):
 def test_highway_ships_the_gate_measured_on_four_seeds():
     """highway flies the gate 0.04 m, horizon 0.3 s, floor 0.07 m, a 2 s wait (at and below
     0.10 m, test_crawl_gate_wait_height.py) and no rise bound (docs/landing.md, "The crawl's
-    gate: a wait near the deck only": 300 landed on each of six seeds, the p99 no higher on
-    any), and its flight's parameters carry them."""
+    gate: a wait near the deck only": 300 landed on each of six seeds, the p99 lower on
+    the default seed and seed 7 but higher on seed 17), and its flight's parameters carry them."""
     assert _gate_keys("highway") == ((0.04, 0.3, 0.07, 2.0, 1e3),) * 2

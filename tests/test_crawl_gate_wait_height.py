@@ -45,7 +45,8 @@ def _state(h, timer=0.0):
 
 
 def _params(**keys):
-    return GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC, crawl_gate=0.05, **keys))
+    return GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC,
+                                     **{"crawl_gate": 0.05, **keys}))
 
 
 def _step(x, h, timer, **keys):
@@ -79,6 +80,21 @@ def test_the_wait_opens_the_gate_only_at_or_below_its_height():
     # inside the gate (2 cm) it falls whatever the wait
     assert _step(0.02, h, 0.0, crawl_gate_wait=wait, crawl_gate_wait_height=0.0)[0] == \
         pytest.approx(h - 0.3 * DT, abs=1e-12)
+
+
+def test_a_spent_wait_at_its_height_is_a_floor_there():
+    """A second configuration of the same rule: a wait of 0 opens the gate at and below the
+    wait height whatever the timer, which is what a floor at that height does; above it
+    neither bounds the hold. So wait 0 at 0.125 m (binary, so that the boundary is met
+    exactly) steps exactly as the 0.125 m floor with no wait (the reference and the timer),
+    6 cm off, at heights on both sides of it and on it, timers from 0 to past any wait; and
+    the gate off (``crawl_gate`` 0) ignores both keys."""
+    for h in (0.0625, 0.125 - 2.0 ** -20, 0.125, 0.125 + 2.0 ** -20, 0.25):
+        for timer in (0.0, 0.5, 5.0):
+            assert _step(0.06, h, timer, crawl_gate_wait=0.0, crawl_gate_wait_height=0.125) \
+                == _step(0.06, h, timer, crawl_gate_floor=0.125)
+            assert _step(0.06, h, timer, crawl_gate=0.0, crawl_gate_wait=0.0,
+                         crawl_gate_wait_height=0.125) == _step(0.06, h, timer, crawl_gate=0.0)
 
 
 def _crawl(outside, **keys):

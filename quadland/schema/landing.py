@@ -261,8 +261,8 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                                  "deck)", lo=0.0, hi=1e3, default=1e3),
         "crawl_gate_wait_height": Field(F, "m", "height above touchdown at or below which "
                                         "crawl_gate_wait applies", lo=0.0, hi=1e3, default=1e3),
-        "crawl_gate_wait": Field(F, "s", "the longest time crawl_gate holds a crawl (then it "
-                                 "falls on)", lo=0.0, hi=1e3, default=1e3),
+        "crawl_gate_wait": Field(F, "s", "the longest crawl_gate holds a crawl: it falls on "
+                                 "at or below crawl_gate_wait_height", lo=0, hi=1e3, default=1e3),
         "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
                                **_POS),
         "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
