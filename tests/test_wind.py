@@ -97,7 +97,6 @@ def test_the_three_axes_in_one_call_are_scipys_lfilter_of_each_bit_for_bit(monke
     # recursion (columns), and the normals may be handed in (an envelope keeps a
     # replicate's); each axis must still be its own first-order filter of its own draws,
     # as scipy.signal.lfilter computes it, an axis of zero intensity all +0.0
-    import scipy.signal
 
     from quadland.engine import wind
 
@@ -112,16 +111,7 @@ def test_the_three_axes_in_one_call_are_scipys_lfilter_of_each_bit_for_bit(monke
         assert got.shape == (3, len(times))
         assert _bits(got) == _bits(again)
         for axis in range(3):
-            sigma, L = turb.sigma[axis], turb.scale[axis]
-            if sigma == 0:
-                assert _bits(got[axis]) == _bits(np.zeros(len(times)))
-                continue
-            a = math.exp(-turb.airspeed * 0.01 / L)
-            b = sigma * math.sqrt(1.0 - a * a)
-            u0 = sigma * normals[0, axis]
-            ref = scipy.signal.lfilter([b], [1.0, -a], normals[1:, axis], zi=[a * u0])[0]
-            assert _bits(got[axis, 0:1]) == _bits(np.array([u0]))
-            assert _bits(got[axis, 1:]) == _bits(ref), (turb, axis)
+            assert _bits(got[axis]) == _bits(_lfilter_axis(turb, axis, normals)), (turb, axis)
     assert turbulence_samples(DrydenTurbulence((1.0, 1.0, 1.0), (5.0, 5.0, 5.0), 3.0),
                               np.zeros(0), np.random.default_rng(1)).shape == (3, 0)
     one = turbulence_samples(DrydenTurbulence((1.0, 0.0, 2.0), (5.0, 5.0, 5.0), 3.0),
@@ -135,12 +125,27 @@ def _bits(a):
     return np.ascontiguousarray(a).view(np.uint8).tobytes()
 
 
+def _lfilter_axis(turb, axis, normals, dt=0.01):
+    """One axis's turbulence on ``normals`` by scipy.signal.lfilter: the first-order
+    Dryden recursion ``u_k = a u_(k-1) + b n_k`` seeded at ``sigma n_0`` (+0.0 on a still
+    axis), the independent reference of the compiled and Python recursions."""
+    import scipy.signal
+
+    sigma, L = turb.sigma[axis], turb.scale[axis]
+    if sigma == 0:
+        return np.zeros(len(normals))
+    a = math.exp(-turb.airspeed * dt / L)
+    b = sigma * math.sqrt(1.0 - a * a)
+    u0 = sigma * normals[0, axis]
+    ref = scipy.signal.lfilter([b], [1.0, -a], normals[1:, axis], zi=[a * u0])[0]
+    return np.concatenate([[u0], ref])
+
+
 def test_the_three_axes_in_one_call_keep_nans_and_edge_values_as_lfilter_does(monkeypatch):
     # review of issue 20 (seventeenth session): NaN intensity on one axis, NaN and infinite
     # airspeed, a negative and subnormal intensities beside a still axis: the one compiled
     # call, the Python loop without a compiler and scipy.signal.lfilter of each axis are the
     # same bits (NaN where lfilter has NaN), the still axis +0.0
-    import scipy.signal
 
     from quadland.engine import wind
 
@@ -157,12 +162,4 @@ def test_the_three_axes_in_one_call_keep_nans_and_edge_values_as_lfilter_does(mo
         monkeypatch.setattr(wind, "recursion", lambda *args: None)
         assert _bits(turbulence_samples(turb, times, normals=normals)) == _bits(got), turb
         for axis in range(3):
-            sigma, L = turb.sigma[axis], turb.scale[axis]
-            if sigma == 0:
-                assert _bits(got[axis]) == _bits(np.zeros(len(times)))
-                continue
-            a = math.exp(-turb.airspeed * 0.01 / L)
-            b = sigma * math.sqrt(1.0 - a * a)
-            u0 = sigma * normals[0, axis]
-            ref = scipy.signal.lfilter([b], [1.0, -a], normals[1:, axis], zi=[a * u0])[0]
-            assert _bits(got[axis]) == _bits(np.concatenate([[u0], ref])), (turb, axis)
+            assert _bits(got[axis]) == _bits(_lfilter_axis(turb, axis, normals)), (turb, axis)
