@@ -27,18 +27,15 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
-import os
 import re
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_envelope_run import _subreaper  # noqa: E402
+from bench_envelope_run import reaped_run  # noqa: E402
 from bench_tick_table import tree_env  # noqa: E402
 
 #: The worker's runs, part by part: CPU ms per run of each part's own time.
@@ -135,27 +132,15 @@ def command(tree: Path | None, tmp: Path, runs: int) -> dict:
     script.write_text(COMMAND)
     out = tmp / f"campaign-{'before' if tree else 'now'}"
     subprocess.run(["rm", "-rf", str(out)], check=True)
-    _subreaper()
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    text = subprocess.run([sys.executable, str(script), "campaign", "--scenario", "highway",
-                           "--runs", str(runs), "--workers", "2", "--no-plots", "--out",
-                           str(out)], check=True, cwd=cwd, env=env, capture_output=True,
-                          text=True).stdout
-    wall = time.perf_counter() - t0
-    while True:                                 # the orphaned forkserver, its workers waited
-        try:
-            os.waitpid(-1, 0)
-        except ChildProcessError:
-            break
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    text, wall, cpu = reaped_run([sys.executable, str(script), "campaign", "--scenario",
+                                  "highway", "--runs", str(runs), "--workers", "2",
+                                  "--no-plots", "--out", str(out)], cwd, env)
     marks = json.loads(text.strip().splitlines()[-1])
     flying = float(re.search(r"flew \d+ runs in ([0-9.]+) s", text).group(1))
     return {"until the first worker, the command's CPU s": marks["first worker"][1],
             "until the first worker, wall s": marks["first worker"][0],
             "the command's process, CPU s": marks["end"][1],
-            "all processes, CPU s": (after.ru_utime - before.ru_utime)
-            + (after.ru_stime - before.ru_stime),
+            "all processes, CPU s": cpu,
             "the command, wall s": wall, "flying, wall s": flying,
             "sha": hashlib.sha256((out / "runs.csv").read_bytes()).hexdigest()}
 

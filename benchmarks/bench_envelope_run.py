@@ -201,6 +201,24 @@ def _subreaper() -> None:
         raise OSError(ctypes.get_errno(), "prctl(PR_SET_CHILD_SUBREAPER)")
 
 
+def reaped_run(args: list[str], cwd, env) -> tuple[str, float, float]:
+    """Run ``args`` to its end, then wait every descendant it orphaned (the pool's
+    forkserver and its workers): its stdout, wall s, and the CPU s of all those processes."""
+    _subreaper()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    text = subprocess.run(args, check=True, cwd=cwd, env=env, capture_output=True,
+                          text=True).stdout
+    wall = time.perf_counter() - t0
+    while True:
+        try:
+            os.waitpid(-1, 0)
+        except ChildProcessError:
+            break
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return text, wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
 def command(tree: Path | None, tmp: Path, k: int, workers: int | None,
             sets: list[str] = ()) -> dict:
     """The whole envelope command at ``k`` runs a cell on ``tree``: wall s, flying s, CPU s
@@ -212,19 +230,7 @@ def command(tree: Path | None, tmp: Path, k: int, workers: int | None,
             *(x for a in AXES for x in ("--axis", a)), "--runs-per-cell", str(k),
             "--no-plots", "--out", str(out), *(["--workers", str(workers)] if workers else []),
             *(x for kv in sets for x in ("--set", kv))]
-    _subreaper()
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    text = subprocess.run(args, check=True, cwd=cwd, env=env, capture_output=True,
-                          text=True).stdout
-    wall = time.perf_counter() - t0
-    while True:                                 # the orphaned forkserver, its workers waited
-        try:
-            os.waitpid(-1, 0)
-        except ChildProcessError:
-            break
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    text, wall, cpu = reaped_run(args, cwd, env)
     digest = hashlib.sha256((out / "runs.csv").read_bytes()).hexdigest()
     flying = float(re.search(r"flew \d+ runs in ([0-9.]+) s", text).group(1))
     return {"command, wall s": (wall, digest), "flying, wall s": (flying, digest),
