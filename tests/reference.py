@@ -217,11 +217,18 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
 HIGHWAY_SIXTEENTH = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
                      "landing.crawl_gate_time=1000.0", "land_detector.contact_thrust=false"]
 
+#: highway_100's contact switch before "highway_100: the graze the switch did not feel"
+#: (docs/landing.md, eighteenth session): it closed on 2 ms of the weight's load impulse, so a
+#: front foot's graze (0.5-1.8 ms) left it open; the replays measured on the seventeenth's
+#: file (and, through ``HIGHWAY_100_MARKER``, every older one) pin it.
+HIGHWAY_100_GRAZE = ["touchdown.switch_impulse=0.002"]
+
 #: highway_100's withdrawal before "highway_100: the lane change's withdrawal down to the
 #: front feet's contact" (docs/landing.md, seventeenth session): the swerve's hold past 0.3
 #: m/s^2, no withdrawal at or below 0.25 m (the whole crawl); the replays measured on the
 #: nested marker's file (and every older one) pin it.
-HIGHWAY_100_MARKER = ["landing.swerve_accel=0.3", "landing.withdraw_height=0.25"]
+HIGHWAY_100_MARKER = [*HIGHWAY_100_GRAZE, "landing.swerve_accel=0.3",
+                      "landing.withdraw_height=0.25"]
 
 #: highway's crawl gate as the sixteenth session shipped it, before "The crawl's gate: a wait
 #: near the deck only" (docs/landing.md, seventeenth session): the floor at 0.10 m and no wait;
