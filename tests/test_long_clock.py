@@ -4,7 +4,7 @@ A sensor's samples before a horizon were counted with a tolerance of ``1e-5`` of
 horizon: past about 800 s it exceeded two control periods, and a sample two ticks
 before the end of a chunk of the per-tick table was left out of that chunk (placed
 later, in a row the flight had already passed). The counts are now a tolerance of the
-sensor's own period (:meth:`_Clock.count`) or integers (:meth:`SensorDraws.extend_ticks`,
+sensor's own period (:meth:`SensorClock.count`) or integers (:meth:`SensorDraws.extend_ticks`,
 what the table draws with). Checked against hand counts.
 """
 
