@@ -216,7 +216,7 @@ class _Sensor:
         return block
 
     def _imu(self, times, z, hit, k0, out):
-        """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g; the biases' random
+        """Columns b_a, n_a, b_g, n_g (e_att is the attitude's, written after); the biases' random
         walk: the block's start (the last value of the block before) plus the sum of the
         block's steps so far (both biases' six columns summed at once, each down itself)."""
         s, st, lay = self.s, self.state, self.layout
@@ -239,8 +239,7 @@ class _Sensor:
             np.add(st["start"], sums[at], out=sums[at])
             st["sum"] = sums[at.stop - 1].copy()
             k = k - r0 + BLOCK
-        st["t"] = times[-1]
-        out[:, lay.slice("e_att")] = 0.0
+        st["t"] = times[-1]                         # (e_att: SensorDraws writes every row's)
         out[:, lay.slice("b_a")], out[:, lay.slice("b_g")] = sums[:, :3], sums[:, 3:]
         white = np.repeat([s["accel_noise_density"], s["gyro_noise_density"]], 3) * \
             math.sqrt(s["rate_hz"])
