@@ -4,11 +4,12 @@ Two measurements, each in fresh child processes, "before" (an exported tree, ``g
 archive <commit> | tar -x``, on ``PYTHONPATH``) alternating with "now" (this checkout)
 round by round:
 
-* ``--worker``: ``--runs`` ``highway`` runs flown as a local worker flies them
-  (``quadland.campaign.fly.fly``, one BLAS thread, freed memory kept) after a warm-up of
+* ``--worker``: ``--runs`` runs of ``--scenario``'s campaign (``highway`` by default)
+  flown as a local worker flies them (``quadland.campaign.fly.fly``, one BLAS thread,
+  freed memory kept) after a warm-up of
   the simulator and five runs; the CPU per run, the CPU of each part of a run (timed
-  around the functions, each part's own time, nested parts subtracted) and the SHA-256 of
-  the runs' outcomes;
+  around the functions, each part's own time, nested parts subtracted), each part's calls a
+  run and the SHA-256 of the runs' outcomes;
 * ``--command``: ``quadland campaign --scenario highway --runs R --no-plots`` on 2 local
   workers in a child process marked where its first worker is started: that process's
   CPU and wall until then (the fixed start-up), its CPU in all, the command's wall, the
@@ -52,11 +53,12 @@ from quadland.campaign.sampling import iter_draws
 from quadland.campaign import fly as F
 from quadland.kinds.landing import simulate as S, sensed, kind as K
 from quadland.engine import compiled as C
-acc, stack = {}, []
+acc, stack, calls = {}, [], {}
 def wrap(owner, name, label):
     f = getattr(owner, name)
     @functools.wraps(f)
     def w(*a, **k):
+        calls[label] = calls.get(label, 0) + 1
         t0 = time.process_time(); stack.append(0.0)
         try:
             return f(*a, **k)
@@ -83,21 +85,22 @@ for owner, name, label in (
         (S, "simulate_landing", "simulate_landing's own (checks, clocks, table set-up)"),
         (F, "fly", "fly's own")):
     wrap(owner, name, label)
-base = load_scenario("highway")
+base = load_scenario(sys.argv[2])
 spec = campaign_spec_of(base)
 n = int(sys.argv[1])
 draws = list(iter_draws(spec, range(n + 5), 300))
 F.warm_up(base)
 for d in draws[:5]:
     F.fly(base, d, spec.limits)
-acc.clear()
+acc.clear(); calls.clear()
 t0 = time.process_time()
 outs = [F.fly(base, d, spec.limits) for d in draws[5:]]
 total = time.process_time() - t0
 digest = hashlib.sha256(repr([(o.index, o.status, o.success, sorted(o.metrics.items()),
                                o.message) for o in outs]).encode()).hexdigest()
 print(json.dumps({"per run": total / n * 1e3, "sha": digest,
-                  "parts": {k: v / n * 1e3 for k, v in acc.items()}}))
+                  "parts": {k: v / n * 1e3 for k, v in acc.items()},
+                  "calls a run": {k: v / n for k, v in calls.items()}}))
 '''
 
 #: The campaign command, marked where its first worker is started.
@@ -119,9 +122,9 @@ if __name__ == "__main__":
 '''
 
 
-def worker(tree: Path | None, tmp: Path, runs: int) -> dict:
+def worker(tree: Path | None, tmp: Path, runs: int, scenario: str = "highway") -> dict:
     env, cwd = tree_env(tree, tmp)
-    out = subprocess.run([sys.executable, "-c", WORKER, str(runs)], check=True, cwd=cwd,
+    out = subprocess.run([sys.executable, "-c", WORKER, str(runs), scenario], check=True, cwd=cwd,
                          env=env, capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -156,6 +159,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=40, help="--worker: runs per child")
     ap.add_argument("--worker", action="store_true")
     ap.add_argument("--command", type=int, metavar="R", help="the command's runs")
+    ap.add_argument("--scenario", default="highway", help="--worker: the campaign's scenario")
     a = ap.parse_args()
     trees = (("before", a.before.resolve()), ("now", None))
     res: dict[str, list[dict]] = {"before": [], "now": []}
@@ -163,10 +167,10 @@ def main() -> None:
         for r in range(a.rounds):
             for name, tree in (trees if r % 2 == 0 else trees[::-1]):
                 got = command(tree, Path(tmp), a.command) if a.command else \
-                    worker(tree, Path(tmp), a.runs)
+                    worker(tree, Path(tmp), a.runs, a.scenario)
                 res[name].append(got)
                 print(f"round {r + 1} {name}: {json.dumps(got)}", flush=True)
-    keys = [k for k in res["now"][0] if k not in ("sha", "parts")]
+    keys = [k for k in res["now"][0] if k not in ("sha", "parts", "calls a run")]
     if "parts" in res["now"][0]:
         keys += [f"parts/{k}" for k in res["now"][0]["parts"]]
 
@@ -184,6 +188,8 @@ def main() -> None:
               f"({', '.join(f'{q:.3f}' for q in ratios)}) |")
     for name in res:
         print(name, "SHA-256:", sorted({g["sha"][:16] for g in res[name]}))
+        if "calls a run" in res[name][0]:
+            print(name, "calls a run:", json.dumps(res[name][0]["calls a run"]))
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ A sensor's samples before a horizon were counted with a tolerance of ``1e-5`` of
 horizon: past about 800 s it exceeded two control periods, and a sample two ticks
 before the end of a chunk of the per-tick table was left out of that chunk (placed
 later, in a row the flight had already passed). The counts are now a tolerance of the
-sensor's own period (:meth:`_Clock.count`) or integers (:meth:`SensorDraws.extend_ticks`,
+sensor's own period (:meth:`SensorClock.count`) or integers (:meth:`SensorDraws.extend_ticks`,
 what the table draws with). Checked against hand counts.
 """
 
@@ -58,3 +58,23 @@ def test_a_phase_moves_the_first_sample():
     clock = draws.sensors["vision"].clock
     assert [clock.before_tick(t, RATE) for t in (0, 3, 4, 13, 14)] == [0, 0, 1, 1, 2]
     assert clock.before_tick(200_004, RATE) == clock.count(800.016) == 20_001
+
+
+def test_a_sensors_ticks_are_its_sample_times_on_the_control_clock():
+    """``SensorClock.ticks`` (the rows :class:`TickTable` writes a sensor's samples into, in
+    integers) against the samples' own times rounded to the control clock, the rule the
+    table placed them by before (``rint(t * rate)``): every default sensor, a phase of 3
+    control periods and the IMU at 125 Hz, samples from 0 and from a late block to
+    1,000 s; and hand values for the 25 Hz vision 3 periods late (ticks 3, 13, 23)."""
+    settings = ({}, {"vision": {"phase": 0.012}, "rangefinder": {"phase": 0.02},
+                     "imu": {"rate_hz": 125.0}})
+    for s in settings:
+        draws = SensorDraws(s, seed=5, random=False)
+        for name, sen in draws.sensors.items():
+            n = sen.clock.before_tick(250_003, RATE)
+            for k0, k1 in ((0, 1), (0, min(n, 4_097)), (n - 3_000, n), (n - 1, n)):
+                by_time = np.rint(sen.clock.times(k0, k1) * RATE).astype(np.int64)
+                rows = np.arange(250_003)[sen.clock.ticks(k0, k1, RATE)]
+                assert np.array_equal(rows, by_time), (name, s, k0, k1)
+    vision = SensorDraws({"vision": {"phase": 0.012}}, seed=5, random=False).sensors["vision"]
+    assert vision.clock.ticks(0, 3, RATE) == slice(3, 24, 10)

@@ -34,6 +34,12 @@ def sample_times(rate_hz: float, duration: float, phase: float = 0.0) -> np.ndar
     return Clock(rate_hz, phase, duration, closing=False).times()
 
 
+def _columns(v, m: int) -> np.ndarray:
+    """``v`` as ``m`` doubles (a view where it already is; broadcast otherwise)."""
+    v = np.asarray(v, dtype=float)
+    return v if v.shape == (m,) else np.broadcast_to(v, (m,))
+
+
 def _decay(dt, tau):
     """``exp(-dt / tau)``: 1 for ``tau = inf``, 0 for ``tau = 0``."""
     tau, dt = np.asarray(tau, dtype=float), np.asarray(dt, dtype=float)
@@ -68,13 +74,12 @@ def gauss_markov(times, sigma, tau, normals) -> np.ndarray:
     """
     normals = np.asarray(normals, dtype=float)
     n, m = normals.shape
-    sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (m,))
-    tau = np.broadcast_to(np.asarray(tau, dtype=float), (m,))
+    sigma, tau = _columns(sigma, m), _columns(tau, m)
     x = np.empty((n, m))
     if n == 0:
         return x
     a = _decay(np.diff(np.asarray(times, dtype=float))[:, None], tau[None, :])
-    b = sigma * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
+    b = sigma * np.sqrt(np.maximum(1.0 - a * a, 0.0))     # (clip's values, one ufunc)
     x[0] = sigma * normals[0]
     compiled = recursion(x[0], a, b, normals)      # the same products and sums, in C
     if compiled is not None:
@@ -103,14 +108,14 @@ def gauss_markov_after(times, sigma, tau, normals, t_prev=None, x_prev=None) -> 
         return gauss_markov(times, sigma, tau, normals)
     normals = np.asarray(normals, dtype=float)
     n, m = normals.shape
-    sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (m,))
-    tau = np.broadcast_to(np.asarray(tau, dtype=float), (m,))
+    sigma, tau = _columns(sigma, m), _columns(tau, m)
     if n == 0:
         return np.empty((0, m))
     t = np.concatenate([[float(t_prev)], np.asarray(times, dtype=float)])
     a = _decay(np.diff(t)[:, None], tau[None, :])
-    b = sigma * np.sqrt(np.clip(1.0 - a * a, 0.0, None))
-    rows = np.vstack([np.zeros((1, m)), normals])
+    b = sigma * np.sqrt(np.maximum(1.0 - a * a, 0.0))     # (clip's values, one ufunc)
+    rows = np.empty((n + 1, m))                          # (row 0 is never read)
+    rows[1:] = normals
     x = recursion(np.asarray(x_prev, dtype=float), a, b, rows)
     if x is None:
         x = np.empty((n + 1, m))

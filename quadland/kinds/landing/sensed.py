@@ -81,6 +81,10 @@ FIRST_CHUNK = 2500
 #: extension costs its calls, issue 20).
 CHUNKS_BEFORE_REST = 2
 
+#: Each sensor's columns of :data:`SENSED_TICK`: its sample flag, delivery flag and noise.
+_COLUMNS = {name: tuple(SENSED_TICK.slice(f"{name}_{c}") for c in ("sampled", "kept", "noise"))
+            for name in SENSOR_NAMES}
+
 #: ``[estimator]`` keys of the initial standard deviations, in the order of NAV's fields.
 _P0_KEYS = ("p0_position", "p0_velocity", "p0_target_velocity", "p0_target_acceleration",
             "p0_bias", "p0_input_bias", "p0_tilt_bias")
@@ -231,30 +235,33 @@ class TickTable:
         end = min(n, end)
         if end <= self.filled:
             return self.filled
+        if not self.filled:                                 # room for the chunks' draws
+            self.draws.room(min(n, max(end, self.rest)), self.rate)
         self.rows[self.filled:end] = 0.0                    # a row without a sample: zeros
         counts = self.draws.extend_ticks(end, self.rate)   # the samples before `end`
         for name in SENSOR_NAMES:
-            k0 = self.placed[name]
-            if counts[name] <= k0:                          # no sample due in the chunk
+            k0, k1 = self.placed[name], counts[name]
+            if k1 <= k0:                                    # no sample due in the chunk
                 continue
-            t, delivered, noise = self.draws.window(name, k0, counts[name])
-            ticks = np.rint(t * self.rate).astype(np.int64)
-            keep = int(np.searchsorted(ticks, end))        # the samples before `end`
-            if keep:
-                self._place(name, ticks[:keep], delivered[:keep], noise[:keep])
-            self.placed[name] = k0 + keep
+            sen = self.draws.sensors[name]                  # its ticks: all before `end`
+            self._place(name, sen.clock.ticks(k0, k1, self.rate), sen.delivered[k0:k1],
+                        sen.noise[k0:k1])
+            self.placed[name] = k1
         self.filled = end
         return end
 
-    def _place(self, name: str, ticks: np.ndarray, delivered, noise) -> None:
-        """Write sensor ``name``'s samples into the rows of their ``ticks`` (ascending):
-        through a strided view of the table where the ticks are evenly spaced (a
-        sensor's clock), else row by row of ``ticks``."""
-        cols = [SENSED_TICK.slice(f"{name}_{c}") for c in ("sampled", "kept", "noise")]
-        first, last = int(ticks[0]), int(ticks[-1])
-        stride = (last - first) // (len(ticks) - 1) if len(ticks) > 1 else 1
-        even = stride > 0 and np.array_equal(ticks, np.arange(first, last + 1, stride))
-        at = slice(first, last + 1, stride) if even else ticks
+    def _place(self, name: str, ticks, delivered, noise) -> None:
+        """Write sensor ``name``'s samples into the rows of their ``ticks`` (a slice of the
+        table's rows, or ticks ascending): through a strided view of the table where the
+        ticks are evenly spaced (a sensor's clock), else row by row of ``ticks``."""
+        cols = _COLUMNS[name]
+        if isinstance(ticks, slice):
+            at = ticks
+        else:
+            first, last = int(ticks[0]), int(ticks[-1])
+            stride = (last - first) // (len(ticks) - 1) if len(ticks) > 1 else 1
+            even = stride > 0 and np.array_equal(ticks, np.arange(first, last + 1, stride))
+            at = slice(first, last + 1, stride) if even else ticks
         N = self.rows
         N[at, cols[0]] = 1.0
         N[at, cols[1]] = delivered[:, None]

@@ -62,6 +62,7 @@ from quadland.engine.loop import GRID_TOL
 from quadland.engine.noise import bridge, gauss_markov_after
 from quadland.exceptions import ScenarioError
 from quadland.kinds.landing.growing_rows import GrowingRows
+from quadland.kinds.landing.sensor_clock import SensorClock, on_clock
 from quadland.kinds.landing.sensor_settings import STANDARD_GRAVITY, gnss_errors, validate_settings
 from quadland_symbolic.landing.sensors import NOISES, SENSOR_NAMES
 from quadland_symbolic.layout import Layout
@@ -127,30 +128,8 @@ def sensor_seed(seed, stream: int, *part: int) -> np.random.SeedSequence:
 
 
 def _block_rng(seed, stream: int, block: int) -> np.random.Generator:
-    return np.random.default_rng(sensor_seed(seed, stream, _BLOCKS, block))
-
-
-class _Clock:
-    """A sensor's unbounded clock: ``phase + k / rate_hz`` (the loop's rule, to the bit)."""
-
-    def __init__(self, rate_hz: float, phase: float):
-        self.rate, self.phase, self.h = rate_hz, phase, 1.0 / rate_hz
-
-    def times(self, k0: int, k1: int) -> np.ndarray:
-        return self.phase + self.h * np.arange(k0, k1)
-
-    def count(self, horizon: float) -> int:
-        """Samples before ``horizon``, s; a sample within :data:`GRID_TOL` of a period of
-        it counts as at it (not before): a tolerance of the clock's period, whatever the
-        horizon (a tolerance growing with the horizon dropped samples of long flights)."""
-        return max(0, math.ceil((horizon - self.phase) * self.rate - GRID_TOL))
-
-    def before_tick(self, tick: int, rate: float) -> int:
-        """Samples on the ticks of a ``rate`` Hz clock before ``tick``, in integers: the
-        sensor's samples fall on its ticks (every ``rate / rate_hz``-th from the
-        ``phase * rate``-th, as the schema checks)."""
-        stride, first = round(rate / self.rate), round(self.phase * rate)
-        return max(0, -(-(int(tick) - first) // stride))
+    """``numpy.random.default_rng`` of the block's seed (the same PCG64 and Generator)."""
+    return np.random.Generator(np.random.PCG64(sensor_seed(seed, stream, _BLOCKS, block)))
 
 
 #: Standard normals per sample of a sensor's block: its noise's, then the IMU's six of
@@ -159,21 +138,13 @@ class _Clock:
 _NORMALS = {"imu": 12 + 6, "vision": 6, "gnss": 12, "rangefinder": 2, "datalink": 15}
 
 
-def _on_clock(clock: _Clock, times: np.ndarray) -> np.ndarray:
-    """Each time's tick of ``clock`` where they coincide (within :data:`GRID_TOL` of its
-    period: the loop's grid rule), else -1."""
-    k = np.rint((times - clock.phase) * clock.rate).astype(np.int64)
-    hit = (k >= 0) & (np.abs(clock.phase + clock.h * k - times) <= GRID_TOL * clock.h)
-    return np.where(hit, k, -1)
-
-
 class _Sensor:
     """One sensor's draws, block by block, and its noise computed as far as drawn."""
 
     def __init__(self, name: str, stream: int, s: Mapping, seed, random: bool,
-                 imu: _Clock | None = None):
+                 imu: SensorClock | None = None):
         self.name, self.stream, self.s, self.seed, self.random = name, stream, s, seed, random
-        self.clock = _Clock(s["rate_hz"], s["phase"])
+        self.clock = SensorClock(s["rate_hz"], s["phase"])
         self.imu = imu                              # the IMU's clock (vision, rangefinder)
         self.layout = NOISES[name]
         self.n = 0                                  # samples drawn
@@ -238,42 +209,38 @@ class _Sensor:
             self.state["bias"] = np.concatenate([s["accel_bias_sigma"] * rng.standard_normal(3),
                                                  s["gyro_bias_sigma"] * rng.standard_normal(3)])
         times = self.clock.times(b * B, (b + 1) * B)
-        if self.imu is not None and np.any(_on_clock(self.imu, times) < 0):
+        if self.imu is not None and np.any(on_clock(self.imu, times) < 0):
             block["z"] = rng.standard_normal((B, _NORMALS[self.name]))
             block["att"] = rng.standard_normal((B, 6))   # e_att between the IMU's samples
         self._open = block
         return block
 
     def _imu(self, times, z, hit, k0, out):
-        """Columns e_att (zeros: the attitude's), b_a, n_a, b_g, n_g; the biases' random
+        """Columns b_a, n_a, b_g, n_g (e_att is the attitude's, written after); the biases' random
         walk: the block's start (the last value of the block before) plus the sum of the
-        block's steps so far."""
-        s = self.s
-        t_prev = self.state.get("t")
+        block's steps so far (both biases' six columns summed at once, each down itself)."""
+        s, st, lay = self.s, self.state, self.layout
+        t_prev = st.get("t")
         dt = np.diff(times if t_prev is None else np.concatenate([[t_prev], times]))
         walk = np.repeat([s["accel_bias_random_walk"], s["gyro_bias_random_walk"]], 3)
-        steps, first = np.zeros((len(times), 6)), int(t_prev is None)   # b_0 = start
-        np.multiply(walk * np.sqrt(dt)[:, None], z[first:, :6], out=steps[first:])
-        lay, k, k1 = self.layout, k0, k0 + len(times)
-        out[:, lay.slice("e_att")] = 0.0
-        bias = (out[:, lay.slice("b_a")], out[:, lay.slice("b_g")])
+        sums, first = np.empty((len(times), 6)), int(t_prev is None)    # b_0 = start
+        np.multiply(walk * np.sqrt(dt)[:, None], z[first:, :6], out=sums[first:])
+        sums[:first] = 0.0
+        k, k1 = k0, k0 + len(times)
         while k < k1:                               # the walk, block by block
             r0 = k % BLOCK
             at = slice(k - k0, min(k1, k - r0 + BLOCK) - k0)
             if r0 == 0:                             # a block's first sample
-                self.state["start"] = self.state.get("sum", self.state["bias"])
-            for j, b in enumerate(bias):
-                if r0 == 0:
-                    np.cumsum(steps[at, 3 * j:3 * j + 3], axis=0, out=b[at])
-                else:                               # the sums so far, continued
-                    b[at] = np.cumsum(np.concatenate([self.state["c"][None, 3 * j:3 * j + 3],
-                                                      steps[at, 3 * j:3 * j + 3]]), axis=0)[1:]
-            self.state["c"] = np.concatenate([b[at][-1] for b in bias])
-            for j, b in enumerate(bias):            # the block's start plus its sums
-                np.add(self.state["start"][3 * j:3 * j + 3], b[at], out=b[at])
-            self.state["sum"] = np.concatenate([b[at][-1] for b in bias])
+                st["start"] = st.get("sum", st["bias"])
+            else:                                   # the sums so far, continued
+                sums[at.start] += st["c"]
+            np.cumsum(sums[at], axis=0, out=sums[at])
+            st["c"] = sums[at.stop - 1].copy()
+            np.add(st["start"], sums[at], out=sums[at])
+            st["sum"] = sums[at.stop - 1].copy()
             k = k - r0 + BLOCK
-        self.state["t"] = times[-1]
+        st["t"] = times[-1]                         # (e_att: SensorDraws writes every row's)
+        out[:, lay.slice("b_a")], out[:, lay.slice("b_g")] = sums[:, :3], sums[:, 3:]
         white = np.repeat([s["accel_noise_density"], s["gyro_noise_density"]], 3) * \
             math.sqrt(s["rate_hz"])
         np.multiply(white[:3], z[:, 6:9], out=out[:, lay.slice("n_a")])
@@ -292,7 +259,9 @@ class _Sensor:
 
     def _gnss(self, times, z, hit, k0, out):
         """Columns e_q, e_t (Gauss-Markov; white with ``relative_rtk``), n_v1, n_vt."""
-        sigma, tau = gnss_errors(self.s)              # e_q, e_t: docs/sensors.md
+        if "errors" not in self.state:               # e_q, e_t: docs/sensors.md
+            self.state["errors"] = gnss_errors(self.s)
+        sigma, tau = self.state["errors"]
         e = gauss_markov_after(times, sigma, tau, z[:, :6], self.state.get("t"),
                                self.state.get("e"))
         self.state["e"], self.state["t"] = e[-1], times[-1]
@@ -300,9 +269,11 @@ class _Sensor:
         np.multiply(self.s["velocity_sigma"], z[:, 6:12], out=out[:, 6:12])
 
     def _datalink(self, times, z, hit, k0, out):
-        sigma = np.concatenate([np.broadcast_to(np.asarray(
-            self.s[f"{f.name[2:]}_sigma"], dtype=float), (f.size,)) for f in self.layout.fields])
-        np.multiply(sigma, z, out=out)
+        if "sigma" not in self.state:               # each column's sigma, once
+            self.state["sigma"] = np.concatenate([np.broadcast_to(np.asarray(
+                self.s[f"{f.name[2:]}_sigma"], dtype=float), (f.size,))
+                for f in self.layout.fields])
+        np.multiply(self.state["sigma"], z, out=out)
 
 
 class _Attitude:
@@ -356,7 +327,7 @@ class _Attitude:
 
     def on_imu(self, times: np.ndarray) -> np.ndarray:
         """Each time's IMU sample where they coincide (the loop's grid rule), else -1."""
-        return _on_clock(self.clock, times)
+        return on_clock(self.clock, times)
 
     def fill(self, points) -> dict:
         """``e_att`` at the points between IMU samples, ``[(t, key, normals(6))]`` in time
@@ -398,7 +369,7 @@ class SensorDraws:
                          for name in SENSOR_NAMES}
         self.random = random
         imu = self.settings["imu"]
-        imu_clock = _Clock(imu["rate_hz"], imu["phase"])
+        imu_clock = SensorClock(imu["rate_hz"], imu["phase"])
         self.sensors = {name: _Sensor(name, i, self.settings[name], seed, random,
                                       imu_clock if name in ("vision", "rangefinder") else None)
                         for i, name in enumerate(SENSOR_NAMES)}
@@ -416,6 +387,12 @@ class SensorDraws:
         ``tick``, counted in integers; returns each sensor's count."""
         return self._extend({name: sen.clock.before_tick(tick, rate)
                              for name, sen in self.sensors.items()})
+
+    def room(self, tick: int, rate: float) -> None:
+        """Room in each sensor's rows for its samples before ``tick`` of a ``rate`` Hz clock
+        (a table's next extensions: no rows copied as they grow to it)."""
+        for sen in self.sensors.values():
+            sen._rows.reserve(sen.clock.before_tick(tick, rate))
 
     def _extend(self, counts: dict[str, int]) -> dict[str, int]:
         for name, sen in self.sensors.items():
@@ -446,8 +423,9 @@ class SensorDraws:
             block[on] = (self.attitude.gm[idx[on]] + self.attitude.wn[idx[on]]
                          + self.attitude.coupling(idx[on]))
             sen.noise[k0:k1, cols] = block
-            points += [(t, (rank, name, k0 + i), sen.att_normals[k0 + i])
-                       for i, t in zip(np.flatnonzero(~on), times[~on], strict=True)]
+            if not on.all():
+                points += [(t, (rank, name, k0 + i), sen.att_normals[k0 + i])
+                           for i, t in zip(np.flatnonzero(~on), times[~on], strict=True)]
         points.sort(key=lambda p: (p[0], p[1][0]))
         for (_, name, k), e in self.attitude.fill(points).items():
             self.sensors[name].noise[k, self.sensors[name].layout.slice("e_att")] = e
