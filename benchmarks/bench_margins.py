@@ -24,6 +24,11 @@ Run from the repository root::
     python benchmarks/bench_margins.py --runs 5 --against /tmp/old
     python benchmarks/bench_margins.py --scenarios paper highway --no-stages
     python benchmarks/bench_margins.py --callgrind --against /tmp/old --scenarios highway
+    python benchmarks/bench_margins.py --bytecode --runs 5 --scenarios highway --no-stages
+
+With ``--bytecode``: this tree as above (where ``PYTHONDONTWRITEBYTECODE`` is set, as on
+the project's machines, each process compiles quadland's modules from their source) against
+the same tree reading its modules' compiled bytecode, as an installed package does.
 """
 
 from __future__ import annotations
@@ -63,21 +68,37 @@ def _cpu(args, env, cwd) -> float:
     return after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
 
 
-def commands(runs: int, against: Path | None, scenarios=SCENARIOS) -> dict:
-    """Whole-process CPU s of each command, by (scenario, figures, tree)."""
+def _bytecode_env(env: dict, folder: Path) -> dict:
+    """``env`` reading (and writing) the modules' compiled bytecode under ``folder``, as an
+    installed package's ``__pycache__`` holds it, whatever ``PYTHONDONTWRITEBYTECODE``."""
+    env = dict(env, PYTHONPYCACHEPREFIX=str(folder))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
+def commands(runs: int, against: Path | None, scenarios=SCENARIOS,
+             bytecode: bool = False) -> dict:
+    """Whole-process CPU s of each command, by (scenario, figures, tree); ``bytecode``:
+    the trees ``"this"`` (its modules compiled from source in each process where Python
+    writes no bytecode, ``PYTHONDONTWRITEBYTECODE``) and ``"bytecode"`` (the same tree, its
+    compiled modules read from a folder a first round, not counted, wrote)."""
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         trees = {"this": dict(os.environ)}
-        if against is not None:
+        if bytecode:
+            trees["bytecode"] = _bytecode_env(os.environ, Path(tmp, "pycache"))
+        elif against is not None:
             trees["against"] = _tree_env(against.resolve(), Path(tmp))
-        for k in range(runs):
+        for k in range(runs + bytecode):
             for name in scenarios:
                 for figures in (False, True):
                     for tree, env in trees.items():
                         folder = Path(tmp, f"{name}-{figures}-{tree}-{k}")
                         args = [sys.executable, "-m", "quadland", "margins", "--scenario", name,
                                 "--out", str(folder), *(() if figures else ("--no-plots",))]
-                        out.setdefault((name, figures, tree), []).append(_cpu(args, env, tmp))
+                        cpu = _cpu(args, env, tmp)
+                        if k or not bytecode:
+                            out.setdefault((name, figures, tree), []).append(cpu)
     return out
 
 
@@ -179,6 +200,8 @@ def main(argv=None):
     ap.add_argument("--against", type=Path, help="another source tree, paired run by run")
     ap.add_argument("--scenarios", nargs="+", default=SCENARIOS, help="scenarios measured")
     ap.add_argument("--no-stages", action="store_true", help="skip the stages of highway's review")
+    ap.add_argument("--bytecode", action="store_true",
+                    help="this tree with its compiled bytecode read back against without")
     ap.add_argument("--callgrind", action="store_true",
                     help="each command's instructions under callgrind instead of CPU time")
     args = ap.parse_args(argv)
@@ -186,17 +209,21 @@ def main(argv=None):
         _print_instructions(instructions(args.against, args.scenarios))
         return
     print("## quadland margins, whole process, CPU s, median (min to max)")
-    measured = commands(args.runs, args.against, args.scenarios)
+    measured = commands(args.runs, args.against, args.scenarios, args.bytecode)
     for (name, figures, tree), cpu in measured.items():
         print(f"- {name}{' (figures)' if figures else ' --no-plots'}, {tree}: {_stats(cpu)}")
     print("\n## the figures' cost, run by run (figures less --no-plots of the same run), CPU s")
     for name, tree in dict.fromkeys((n, t) for n, _, t in measured):
         print(f"- {name}, {tree}: {_stats(_costs(measured, name, tree))}")
-    if args.against is not None:
+    other = "bytecode" if args.bytecode else "against" if args.against is not None else None
+    if other is not None:
         for name in args.scenarios:
             ratios = [a / b for a, b in zip(_costs(measured, name, "this"),
-                                            _costs(measured, name, "against"), strict=True)]
-            print(f"- {name}, this / against, run by run: {_stats(ratios)}")
+                                            _costs(measured, name, other), strict=True)]
+            print(f"- {name}, this / {other}, run by run: {_stats(ratios)}")
+            bare = [a / b for a, b in zip(measured[name, False, "this"],
+                                          measured[name, False, other], strict=True)]
+            print(f"- {name} --no-plots, this / {other}, run by run: {_stats(bare)}")
     if args.no_stages:
         return
     print("\n## margin_report of highway in this process, first call, CPU s")
