@@ -20,6 +20,13 @@ Run from the repository root::
     python benchmarks/bench_margin_figures.py --glyph-cache --runs 15
     python benchmarks/bench_margin_figures.py --callgrind --runs 9 --against /tmp/old
 
+With ``--property-tables``: importing the figures' modules as the command line does
+(:func:`quadland.mpl_import.for_the_command_line`, after NumPy, SciPy and Pillow), in a
+fresh process each time, with the artists' property tables left out of matplotlib's
+docstrings (as the command line imports them) and with them written (``mpl_import``'s
+``_without_property_tables`` made a null context), alternating; CPU s of the import
+(``time.process_time``).
+
 With ``--callgrind``: each tree's figures' instructions (callgrind's count of the
 process with the figures less the one without, the stored texts read back), and the
 instructions per second of the figures' process on this host (its count over its CPU
@@ -65,6 +72,35 @@ if sys.argv[2] == "figures":
             pngs = {k: figure_png(v) for k, v in margin_figures(report).items()}
 os._exit(0)
 """
+
+
+#: What each ``--property-tables`` process runs: argv[1] "skipped" or "written".
+IMPORT_CHILD = """
+import contextlib, sys, time
+import numpy, scipy.linalg, PIL.Image
+import matplotlib._docstring
+from quadland import mpl_import
+mpl_import.for_the_command_line()
+if sys.argv[1] == "written":
+    mpl_import._without_property_tables = contextlib.nullcontext
+start = time.process_time()
+import quadland.plots
+from quadland.plots import margin_figures
+print(time.process_time() - start)
+"""
+
+
+def property_tables(runs: int) -> dict:
+    """CPU s of importing the figures' modules in fresh processes, the property tables
+    skipped and written, by which (alternating which goes first)."""
+    out: dict = {"skipped": [], "written": []}
+    order = list(out)
+    for k in range(runs):
+        for which in order if k % 2 == 0 else order[::-1]:
+            proc = subprocess.run([sys.executable, "-c", IMPORT_CHILD, which], check=True,
+                                  capture_output=True, text=True)
+            out[which].append(float(proc.stdout.split()[-1]))
+    return out
 
 
 def _review(name: str, path: Path) -> None:
@@ -224,7 +260,17 @@ def main(argv=None):
                     help="in this process: highway's figures with and without the kept glyphs")
     ap.add_argument("--callgrind", action="store_true",
                     help="instructions under callgrind, converted by this host's rate")
+    ap.add_argument("--property-tables", action="store_true",
+                    help="the figures' import with and without matplotlib's property tables")
     args = ap.parse_args(argv)
+    if args.property_tables:
+        measured = property_tables(args.runs)
+        print("## importing the figures' modules in a fresh process, CPU s, median (min to max)")
+        for which, cpu in measured.items():
+            print(f"- property tables {which}: {_stats(cpu)}")
+        ratios = [a / b for a, b in zip(measured["skipped"], measured["written"], strict=True)]
+        print(f"- skipped / written, pair by pair: {_stats(ratios)}")
+        return
     if args.callgrind:
         _print_instructions(instructions(args.against, args.scenarios, args.runs))
         return

@@ -37,6 +37,35 @@ def test_the_command_line_skips_the_set_docstrings_and_others_do_not():
     assert _probe("plain") == "True True True r 3.0"
 
 
+_TABLES = """
+import sys
+import quadland.mpl_import as mi
+if sys.argv[1] == "cli":
+    mi.for_the_command_line()
+import quadland.plots
+from matplotlib import _docstring
+from matplotlib.axes import Axes
+
+@_docstring.interpd
+def later():
+    '''Properties: %(Line2D:kwdoc)s'''
+
+print("markerfacecoloralt" in Axes.plot.__doc__, "markerfacecoloralt" in later.__doc__)
+"""
+
+
+def test_the_command_line_skips_the_property_tables_and_others_do_not():
+    """A docstring defined while the command line imports matplotlib's figure module
+    (``Axes.plot``'s) gets no table of the artist's properties; one defined afterwards
+    gets its table, as in any other process (matplotlib's loader restored, no empty
+    table remembered)."""
+    for mode, expected in (("cli", "False True"), ("plain", "True True")):
+        proc = subprocess.run([sys.executable, "-c", _TABLES, mode], capture_output=True,
+                              text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.strip() == expected
+
+
 def test_the_command_lines_figures_are_matplotlibs(tmp_path):
     """A margin figure written by the command line's process (the docstrings skipped)
     and by a plain one: the same bytes."""
