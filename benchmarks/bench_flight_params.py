@@ -63,7 +63,8 @@ def builds(scenario: str, ways: dict):
     loop, args, kwargs = captured(scenario)
     model = built_model(loop.model)
     real, loops = build.machine_flags, {}
-    for i, (name, (cut, vector, opt)) in enumerate(ways.items()):
+    for name, (cut, vector, opt) in ways.items():
+        i = list(WAYS).index(name)                   # each way's model name, whichever asked
         build.machine_flags, staged_c.CUT_PARAMS = _flags(vector), cut
         try:
             loops[name] = CompiledLoop(dataclasses.replace(model, name=f"{model.name}_w{i}"),
