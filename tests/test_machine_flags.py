@@ -59,7 +59,7 @@ GCC = ("/usr/bin/cc\ncc (Debian 12.2.0-14+deb12u1) 12.2.0\nCopyright (C) 2022 Fr
        "Foundation, Inc.")
 CLANG = "/usr/bin/clang\nDebian clang version 14.0.6\nTarget: x86_64-pc-linux-gnu"
 TCC = "/usr/bin/tcc\ntcc version 0.9.27 (x86_64 Linux)"
-MACHINE = (*machine.AVX2_FLAGS, *machine.ERRNO_FLAGS)
+MACHINE = (*machine.AVX2_FLAGS, *machine.ERRNO_FLAGS, *machine.VECTOR_FLAGS)
 AVX2_CPU = frozenset("fpu sse sse2 ssse3 sse4_1 sse4_2 avx fma avx2".split())
 OLD_CPU = frozenset("fpu sse sse2 ssse3 sse4_1 sse4_2 avx".split())
 
@@ -91,6 +91,8 @@ def test_the_machine_flags_follow_the_cpu_and_the_compiler(monkeypatch, arch, id
 def test_the_flags_are_avx2_without_fma_nor_contraction():
     assert machine.AVX2_FLAGS == ("-mavx2", "-mno-fma", "-ffp-contract=off")
     assert machine.ERRNO_FLAGS == ("-fno-math-errno",)
+    # the vectorizer's cost model alone: neither -O3's other passes nor reassociation
+    assert machine.VECTOR_FLAGS == ("-fvect-cost-model=dynamic",)
 
 
 def test_the_cpu_flags_are_the_first_flags_line(tmp_path):

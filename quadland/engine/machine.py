@@ -6,8 +6,9 @@ so it may use the machine's vector instructions. :func:`machine_flags` adds AVX2
 (:data:`AVX2_FLAGS`) on an x86-64 CPU that has it, with GCC or clang: the scalar C then
 uses the VEX encodings (three-operand arithmetic, no false dependencies on a
 register's upper half) and 256-bit moves: 2.5 to 6 % less CPU a flight (measured in
-``docs/performance.md``, "The compiled flight's instructions"); and libm's functions
-without ``errno`` (:data:`ERRNO_FLAGS`, 1.9 % fewer instructions). Every operation stays
+``docs/performance.md``, "The compiled flight's instructions"); libm's functions
+without ``errno`` (:data:`ERRNO_FLAGS`, 1.9 % fewer instructions); and GCC's loop
+vectorizer's dynamic cost model (:data:`VECTOR_FLAGS`, 5 % fewer). Every operation stays
 the IEEE operation it was: no fused multiply-add (``-mno-fma``; GCC 12 vectorizes an
 add-and-subtract pair into ``vfmsubadd`` with FMA enabled even under
 ``-ffp-contract=off``, which changed a highway landing's bits, so ``-march=x86-64-v3``
@@ -26,8 +27,8 @@ from pathlib import Path
 
 from quadland.engine.compiler import compiler_identity
 
-__all__ = ["AVX2_FLAGS", "CPUINFO", "ERRNO_FLAGS", "cpu_flags", "machine_flags",
-           "machine_rejected"]
+__all__ = ["AVX2_FLAGS", "CPUINFO", "ERRNO_FLAGS", "VECTOR_FLAGS", "cpu_flags",
+           "machine_flags", "machine_rejected"]
 
 #: The flags of an x86-64 CPU with AVX2: its instructions, without FMA, and no
 #: contraction of a product and a sum (``-std=c99`` implies it; said explicitly).
@@ -40,6 +41,13 @@ AVX2_FLAGS = ("-mavx2", "-mno-fma", "-ffp-contract=off")
 #: It is not fast math: ``__FAST_MATH__`` stays undefined, so glibc declares no vector
 #: variants of libm's functions (``bits/math-vector.h``), whose bits differ.
 ERRNO_FLAGS = ("-fno-math-errno",)
+#: GCC's loop vectorizer with its dynamic cost model (at -O2 it uses the "very cheap"
+#: one, which leaves a loop of a count known only at run time scalar): the driver's RK4
+#: and finiteness loops and CasADi's ``casadi_copy`` loops become vector loops with a
+#: check that their arrays do not overlap. Element by element the same operations (GCC
+#: vectorizes no floating-point sum without ``-fassociative-math``): the same bits, 5 %
+#: fewer instructions a ``highway`` flight (docs/performance.md, "eighteenth").
+VECTOR_FLAGS = ("-fvect-cost-model=dynamic",)
 #: Where Linux lists the CPU's features.
 CPUINFO = Path("/proc/cpuinfo")
 
@@ -61,9 +69,9 @@ def cpu_flags(path: Path = CPUINFO) -> frozenset[str]:
 
 
 def machine_flags(cc: str) -> tuple[str, ...]:
-    """The machine's own flags for compiler ``cc``: :data:`AVX2_FLAGS` and
-    :data:`ERRNO_FLAGS` on an x86-64 CPU with AVX2 and a GCC (by its ``--version``), the
-    AVX2 flags alone with a clang, none otherwise."""
+    """The machine's own flags for compiler ``cc``: :data:`AVX2_FLAGS`,
+    :data:`ERRNO_FLAGS` and :data:`VECTOR_FLAGS` on an x86-64 CPU with AVX2 and a GCC (by
+    its ``--version``), the AVX2 flags alone with a clang, none otherwise."""
     if platform.machine().lower() not in ("x86_64", "amd64"):
         return ()
     identity = compiler_identity(cc)
@@ -74,7 +82,7 @@ def machine_flags(cc: str) -> tuple[str, ...]:
     # -fno-math-errno's same bits are measured with GCC only (clang turns libm's calls
     # into intrinsics it may fold): clang gets the AVX2 flags alone
     gcc = "Free Software Foundation" in identity
-    return (*AVX2_FLAGS, *ERRNO_FLAGS) if gcc else AVX2_FLAGS
+    return (*AVX2_FLAGS, *ERRNO_FLAGS, *VECTOR_FLAGS) if gcc else AVX2_FLAGS
 
 
 def machine_rejected(message: str, flags: tuple[str, ...]) -> bool:

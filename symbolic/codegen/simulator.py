@@ -91,14 +91,10 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         names = (*names, "ride_rhs", "ride_row")
     if model.envelope is None:
         names = tuple(n for n in names if n != "envelope")
-    files, work, rings, hoisted = {}, [], (), {}
+    files, work, rings, hoisted, params = {}, [], (), {}, (0, 0)
     for name in names:
         if name == "controller" and model.controller_stages is not None:
-            staged, sz = staged_sources(prefix, model.controller_stages,
-                                        lambda n, f: _emit(n, f)[0])
-            files.update(staged)
-            work.append(sz)
-            rings = _rings(model.controller_stages)
+            rings, params = _staged(model, prefix, driver, files, work)
             continue
         split = _split(by_name[name]) if driver == "sampled" and name in HOISTING else None
         for f in (by_name[name],) if split is None else split:
@@ -124,7 +120,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         has_envelope=model.envelope is not None, max_delay=MAX_DELAY_PERIODS,
         has_ride=has_ride, has_free=has_free,
         has_tick=driver == "sampled" and model.tick_inputs is not None, rings=rings,
-        hoisted=hoisted,
+        hoisted=hoisted, controller_params=params[0], controller_inputs=params[1],
         ring_slots=max((r["n"] for r in rings), default=0) + 1,
         core=_core(model.controller_state.size, rings),
         casadi_version=ca.__version__, sizes=sizes,
@@ -132,6 +128,32 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
     if part == "sampled_flight":
         files.update(_flight_controller(model, prefix, by_name["step_args"]))
     return files
+
+
+#: The sampled driver's arguments of the controller constant over a flight: its
+#: parameters (``k.arg[2]``, and ``k.arg[7]`` where the controller reads tick inputs).
+CONSTANT_ARGS = {2: "pc", 7: "pp"}
+
+
+def _staged(model: LoopModel, prefix: str, driver: str, files: dict, work: list):
+    """The staged controller's C added to ``files``, its work sizes to ``work``; its rings
+    (:func:`_rings`) and ``(values of its parameters alone, inputs)``."""
+    inputs = model.controller_stages.inputs
+    staged, sz = staged_sources(prefix, model.controller_stages, lambda n, f: _emit(n, f)[0],
+                                _constants(inputs, driver, model.tick_inputs))
+    files.update(staged)
+    work.append(sz)
+    return _rings(model.controller_stages), (sz["n_params"], len(inputs))
+
+
+def _constants(inputs, driver: str, tick_inputs) -> tuple[str, ...]:
+    """The staged controller's inputs the sampled driver holds constant over a flight
+    (:data:`CONSTANT_ARGS`, where they are the inputs of those names); none in another
+    driver."""
+    if driver != "sampled":
+        return ()
+    return tuple(n for i, n in CONSTANT_ARGS.items()
+                 if i < len(inputs) and inputs[i][0] == n and (i == 2 or tick_inputs is not None))
 
 
 #: The sampled driver's functions of the plant's state at an instant whose terms of the

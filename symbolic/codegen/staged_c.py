@@ -19,13 +19,32 @@ caller keeps twice over, so that the line from any slot on is contiguous:
 ``symbolic/templates/simulator.c.jinja``). The composed function then writes
 neither that line's piece of its output nor a copy of it: one record a ring and
 call instead of the whole line.
+
+Inputs constant over a flight (``constants``: the controller's parameters) make a stage's
+values of them alone the same at every call. Such an SX stage is cut in two by
+:func:`~quadland_symbolic.codegen.time_split.time_split` on those inputs: its values of the
+constants alone in ``<name>_<stage>_params``, which ``<name>_params`` (the composed
+function's inputs, its one output those values of every cut stage) computes once, and the
+core, which reads them where the caller passes them, ``arg[n_in]``. The same instructions
+on the same operands: the same bits, the values given what ``<name>_params`` returns for
+the same constants.
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
-__all__ = ["staged_sources"]
+from quadland_symbolic.codegen.time_split import HOISTED, time_split
+
+__all__ = ["CUT_PARAMS", "MIN_PARAMS", "staged_sources"]
+
+#: The fewest instructions of a stage's values of the constants alone worth cutting it
+#: for (one more pointer a call, a few values read from memory).
+MIN_PARAMS = 32
+#: Whether stages are cut on their constant inputs at all. The cache's keys hash this
+#: module's text, not the value: a build with it turned off at run time (the benchmark's
+#: and the tests' uncut build) needs a model of another name.
+CUT_PARAMS = True
 
 
 def _dense(f: ca.Function) -> None:
@@ -67,7 +86,25 @@ def _places(staged, name: str) -> tuple[dict, int]:
     return where, total
 
 
-def staged_sources(prefix: str, staged, emit) -> tuple[dict, dict]:
+def _cut(stage: ca.Function, constant: set):
+    """``(core, params)`` of an SX ``stage`` by :func:`time_split` on its inputs in
+    ``constant``, or ``None`` (nothing of them alone, fewer than :data:`MIN_PARAMS`
+    instructions, an MX stage)."""
+    names = [n for n in stage.name_in() if n in constant]
+    if not names or not stage.is_a("SXFunction"):
+        return None
+    split = time_split(stage, tuple(names))
+    if split is None or split[1].n_instructions() < MIN_PARAMS:
+        return None
+    return split
+
+
+def _constant_names(staged, constants) -> set:
+    """The named values constant over a flight: ``constants`` and their slices."""
+    return set(constants) | {n for n, src, _, _ in staged.slices if src in constants}
+
+
+def staged_sources(prefix: str, staged, emit, constants=()) -> tuple[dict, dict]:
     """The C of ``staged`` (named ``<prefix><its name>``), one file a stage.
 
     Parameters
@@ -78,45 +115,82 @@ def staged_sources(prefix: str, staged, emit) -> tuple[dict, dict]:
         Every input and output of its stages a dense column.
     emit : callable
         ``emit(name, f) -> {file: text}``: CasADi's C of ``f`` named ``name``.
+    constants : tuple of str
+        Inputs the caller holds constant over its calls (module docstring).
 
     Returns
     -------
     files : dict of str to str
-        Each stage's files (``<prefix><name>_<stage>.c/.h``) and ``<prefix><name>.c/.h``.
+        Each stage's files (``<prefix><name>_<stage>.c/.h``), ``<prefix><name>.c/.h``
+        and, where stages are cut, ``<prefix><name>_<stage>_params.c/.h``.
     sizes : dict of str to int
-        ``sz_arg``, ``sz_res``, ``sz_iw``, ``sz_w`` of the composed function.
+        ``sz_arg``, ``sz_res``, ``sz_iw``, ``sz_w`` of the composed function and of
+        ``<prefix><name>_params``; ``n_params``: the values it computes (0: none, no
+        such function, and the composed function reads no ``arg[n_in]``).
     """
     shifts = {line for line, _, _ in staged.rings}
     name = prefix + staged.name
     stages = tuple(s for s in staged.stages if not shifts & set(s.name_out()))
+    constant = _constant_names(staged, constants) if CUT_PARAMS else set()
+    cuts = {s.name(): _cut(s, constant) for s in stages}
+    cuts = {k: v for k, v in cuts.items() if v is not None}
     where, total = _places(staged, name)
-    n_res = len(staged.outputs) + len(staged.rings)
-    body = [f"    const casadi_real **arg1 = arg + {len(staged.inputs)};",
+    n_in, n_res = len(staged.inputs), len(staged.outputs) + len(staged.rings)
+    body = [f"    const casadi_real **arg1 = arg + {n_in + bool(cuts)};",
             f"    casadi_real **res1 = res + {n_res};"]
-    files = {}
+    pbody = [f"    const casadi_real **arg1 = arg + {n_in + 1};",
+             "    casadi_real **res1 = res + 1;"]
+    files, called, at = {}, [], 0
     for stage in stages:
-        files.update(emit(f"{name}_{stage.name()}", stage))
+        core, params = cuts.get(stage.name(), (stage, None))
+        where[HOISTED] = f"arg[{n_in}] + {at}"
+        files.update(emit(f"{name}_{stage.name()}", core))
+        called.append((stage.name(), core))
         body.append(f"    /* {stage.name()} */")
-        body += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(stage.name_in())]
-        body += [f"    res1[{i}] = {where[n]};" for i, n in enumerate(stage.name_out())]
+        body += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(core.name_in())]
+        body += [f"    res1[{i}] = {where[n]};" for i, n in enumerate(core.name_out())]
         body.append(f"    if ({name}_{stage.name()}(arg1, res1, iw, w + {total}, 0)) return 1;")
-    sizes = dict(sz_arg=len(staged.inputs) + max(s.sz_arg() for s in stages),
-                 sz_res=n_res + max(s.sz_res() for s in stages),
-                 sz_iw=max(s.sz_iw() for s in stages),
-                 sz_w=total + max(s.sz_w() for s in stages))
-    signature = (f"int {name}(const casadi_real** arg, casadi_real** res, casadi_int* iw, "
-                 "casadi_real* w, int mem)")
-    includes = "".join(f'#include "{name}_{s.name()}.h"\n' for s in stages)
-    files[f"{name}.h"] = (f"/* {name}: {staged.name} as its stages "
-                          f"({', '.join(s.name() for s in stages)}). */\n"
-                          f"{includes}{signature};\n")
+        if params is not None:
+            files.update(emit(f"{name}_{stage.name()}_params", params))
+            called.append((f"{stage.name()}_params", params))
+            pbody += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(params.name_in())]
+            pbody.append(f"    res1[0] = res[0] ? res[0] + {at} : 0;")
+            pbody.append(f"    if ({name}_{stage.name()}_params(arg1, res1, iw, w, 0)) return 1;")
+            at += params.nnz_out(0)
+    fns = [f for _, f in called]
+    sizes = dict(sz_arg=n_in + bool(cuts) + max(f.sz_arg() for f in fns),
+                 sz_res=n_res + max(f.sz_res() for f in fns), sz_iw=max(f.sz_iw() for f in fns),
+                 sz_w=total + max(f.sz_w() for f in fns), n_params=at)
+    params = (f" * arg[{n_in}]: the values of the constants alone ({at}), as {name}_params\n"
+              f" * computes them from the same {', '.join(constants)}.\n") if cuts else ""
+    files.update(_composed(name, staged, stages, called, body, total, params))
+    if cuts:
+        files[f"{name}.h"] += f"{_signature(name + '_params')};\n"
+        files[f"{name}.c"] += (
+            f"\n/* The values of {', '.join(constants)} alone of the stages "
+            f"{', '.join(cuts)}, into res[0]. */\n"
+            f"{_signature(name + '_params')}\n{{\n    (void)mem;\n" + "\n".join(pbody)
+            + "\n    return 0;\n}\n")
+    return files, sizes
+
+
+def _signature(name: str) -> str:
+    return (f"int {name}(const casadi_real** arg, casadi_real** res, casadi_int* iw, "
+            "casadi_real* w, int mem)")
+
+
+def _composed(name, staged, stages, called, body, total, params) -> dict:
+    """``<name>.h`` and ``<name>.c``: the composed function calling its stages."""
+    includes = "".join(f'#include "{name}_{c}.h"\n' for c, _ in called)
     rings = "".join(f" * res[{len(staged.outputs) + i}]: the ring of {line} (its record of "
                     "this call there, its slots from there on).\n"
                     for i, (line, _, _) in enumerate(staged.rings))
-    files[f"{name}.c"] = (
-        f"/* {name}: {staged.name} as its stages, each in its own file; the values\n"
-        f" * between them in place or in w[0..{total}). Generated by\n"
-        f" * quadland_symbolic.codegen.staged_c.\n{rings} */\n"
-        f'#include "{name}.h"\n\n{signature}\n{{\n    (void)mem;\n' + "\n".join(body)
-        + "\n    return 0;\n}\n")
-    return files, sizes
+    return {f"{name}.h": (f"/* {name}: {staged.name} as its stages "
+                          f"({', '.join(s.name() for s in stages)}). */\n"
+                          f"{includes}{_signature(name)};\n"),
+            f"{name}.c": (
+                f"/* {name}: {staged.name} as its stages, each in its own file; the values\n"
+                f" * between them in place or in w[0..{total}). Generated by\n"
+                f" * quadland_symbolic.codegen.staged_c.\n{rings}{params} */\n"
+                f'#include "{name}.h"\n\n{_signature(name)}\n{{\n    (void)mem;\n'
+                + "\n".join(body) + "\n    return 0;\n}\n")}
