@@ -77,3 +77,27 @@ def test_the_thresholds_straddle_a_hand_integrated_graze():
     # the contact the judge scores is the same graze either way (the same figures to 1 mm)
     assert rep.time == pytest.approx(rep_before.time, abs=1e-3)
     assert rep.offset == pytest.approx(rep_before.offset, abs=1e-3)
+
+
+@pytest.mark.parametrize("index", [1145, 860])
+def test_the_graze_closes_the_switch_through_its_penetration(index):
+    """Review: the contact's onset smoothing (``gear.onset_width`` 0.1 mm) loads a foot
+    ``k eps ln 2`` (0.35 N at 5000 N/m) already at a zero gap, a third of a graze's peak, so
+    part of a graze's impulse could be the smoothing's cushion rather than the foot pressing
+    into the roof. A second model of the contact, ten times thinner (0.01 mm: 0.035 N at a
+    zero gap), must give the same verdicts on the default seed's 1145 (a paused crawl) and 860
+    (a withdrawn one): the switch of before stays open and the run bounces; the shipped one
+    closes within 20 ms of the same contact and the run lands secured, with the contact's
+    figures of the 0.1 mm model to 1 mm."""
+    thin = "gear.onset_width=1e-05"
+    ref, rep_ref = _flown(index)
+    before, rep_before = _flown(index, thin, *HIGHWAY_100_GRAZE)
+    res, rep = _flown(index, thin)
+    assert rep_ref.success and not rep_before.success and rep_before.bounced
+    assert np.all(np.nan_to_num(before["t_contact"]) == 0.0)
+    closed = int(np.argmax(res["t_contact"] > 0))
+    assert res["t_contact"][closed] > 0
+    assert 0.0 <= res["t"][closed] - rep.time < 0.02
+    assert rep.success and rep.secured and not rep.bounced
+    assert rep.time == pytest.approx(rep_ref.time, abs=2e-3)
+    assert rep.offset == pytest.approx(rep_ref.offset, abs=1e-3)
