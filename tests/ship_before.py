@@ -37,7 +37,8 @@ ABORT_BEFORE = "landing.abort_floor=-1000.0"
 #: The pad's heave of before: the random walk's constant acceleration in the filter and over
 #: its horizon. ``ship_ss5`` carries it as the oscillator at 1.41 rad/s within its crawl since
 #: the sixteenth session (docs/landing.md, "ship_ss5: the heave oscillator in the crawl
-#: only"); ``ship`` takes the defaults, so the keys leave its flights as they are.
+#: only"), ``ship`` at its sea state 4's 1.49 rad/s since the eighteenth (docs/landing.md,
+#: "ship: the heave oscillator in the crawl at sea state 4's frequency").
 HEAVE_BEFORE = ("estimator.heave_frequency=0.0", "estimator.heave_in_filter=0.0",
                 "estimator.heave_height=1000000.0")
 

@@ -60,8 +60,10 @@ NO_LEASH = ["landing.descent_leash=0.0", "landing.leash_height=1000.0"]
 
 
 def test_the_ships_fly_without_the_heave_predictor():
-    """As shipped the filter carries the pad's acceleration as a constant (heave_time 0),
-    and the variant's averaging time is the guidance's own deck-motion time."""
+    """As shipped the filter estimates no heave frequency of its own (heave_time 0: above
+    their crawl the pad's acceleration is a constant; within it both ships give the filter
+    their sea's frequency, tests/test_heave_height.py), and the variant's averaging time is
+    the guidance's own deck-motion time."""
     for name in ("ship", "ship_ss5"):
         sc = load_scenario(name)
         assert sc["estimator.heave_time"] == 0.0 and sc["landing.motion_time"] == 20.0
