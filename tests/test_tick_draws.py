@@ -183,3 +183,34 @@ def test_past_its_chunks_a_long_table_draws_twice_its_rows_not_its_whole_rest():
         assert _same_bits(table.rows[:tick], whole.rows[:tick])
         assert np.all(np.isnan(table.rows[tick:]))
     assert ends == [3_072, 4_096, 5_120, 10_240, 20_480, 40_960, 45_000]
+
+
+def test_the_rows_reserved_for_the_chunks_are_the_rows_each_sensor_reads():
+    """A first chunk of 100 ticks (0.4 s) with the GNSS's first fix at 8 s: the first
+    ``more`` reserves each sensor's rows up to the chunks' end (100 + 2 x 1,024 = 2,148
+    ticks, 8.592 s) before drawing; by hand the IMU's 2,148 samples, the vision's 215
+    (every 10th tick), the rangefinder's 1,074 (every 2nd), the datalink's 86 (every 25th)
+    and the GNSS's 3 (ticks 2,000, 2,050, 2,100), none of which it draws yet. Each sensor's
+    rows seen (its ``noise`` and ``delivered``) are those reserved rows, the GNSS's too, and
+    the table's ``nbytes`` counts them; the table then drawn to 40 s against each sample
+    of ``draw_sensors`` placed on its tick, rows past those drawn untouched (NaN)."""
+    sc = load_scenario("highway", ["sensors.gnss.phase=8.0"])
+    rate = sc["controller.rate_hz"]
+    table = TickTable(sc, 10_000, first=100)
+    table.rows[:] = np.nan
+    assert table.more(0) == 100
+    room = {"imu": 2_148, "vision": 215, "gnss": 3, "rangefinder": 1_074, "datalink": 86}
+    drawn = {"imu": 100, "vision": 10, "gnss": 0, "rangefinder": 50, "datalink": 4}
+    for name, sen in table.draws.sensors.items():
+        assert len(sen.noise) == len(sen.delivered) == drawn[name], name
+        assert sen.noise.base.shape == (room[name], NOISES[name].size), name
+        assert sen.delivered.base.shape == (room[name],), name
+    rows = sum(room[n] * (1 + 8 * NOISES[n].size + 8 * 6) for n in SENSOR_NAMES)
+    assert table.nbytes >= table.rows.nbytes + rows
+    tick = 100
+    while tick < 10_000:
+        assert np.all(np.isnan(table.rows[tick:]))
+        tick = table.more(tick)
+    settings = {n: dict(sc.data[f"sensors.{n}"]) for n in SENSOR_NAMES}
+    draws = draw_sensors(settings, 40.0, seed=sc["simulation.seed"])
+    assert _same_bits(table.rows, placed_table(draws, table.rows.shape, rate))

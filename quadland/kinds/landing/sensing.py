@@ -156,6 +156,11 @@ class _Sensor:
         self.delivered, self.noise, self.att_normals = self._rows.views(0)
         self.state: dict[str, np.ndarray] = {}
 
+    def reserve(self, count: int) -> None:
+        """Room for ``count`` samples' rows; the views follow the rows (moved if grown)."""
+        self._rows.reserve(count)
+        self.delivered, self.noise, self.att_normals = self._rows.views(self.n)
+
     def ensure(self, count: int) -> None:
         """Draw the samples until ``count`` are drawn, all at once: each block's draws from
         its generator, in their order, as far as the samples go (the block's generator
@@ -392,7 +397,7 @@ class SensorDraws:
         """Room in each sensor's rows for its samples before ``tick`` of a ``rate`` Hz clock
         (a table's next extensions: no rows copied as they grow to it)."""
         for sen in self.sensors.values():
-            sen._rows.reserve(sen.clock.before_tick(tick, rate))
+            sen.reserve(sen.clock.before_tick(tick, rate))
 
     def _extend(self, counts: dict[str, int]) -> dict[str, int]:
         for name, sen in self.sensors.items():
