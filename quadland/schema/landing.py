@@ -9,10 +9,11 @@ from types import MappingProxyType
 
 from quadland.exceptions import ScenarioError
 from quadland.schema.fields import MAX_DURATION_S, MAX_RATE_HZ, Field, tilt_within
-from quadland.schema.lock import LOCK_FIELDS
+from quadland.schema.guidance import GUIDANCE_FIELDS
 from quadland.schema.paper import PAPER_SCHEMA, check_rbf
 from quadland.schema.sea_state import SEA_STATES
 from quadland.schema.sensors import check_sensor_timing, sensor_fields
+from quadland.schema.touchdown import TOUCHDOWN_FIELDS
 from quadland_symbolic.landing.deck import N_SINES
 from quadland_symbolic.landing.drive import N_LEGS, pack_drive, planned_speed_change
 from quadland_symbolic.landing.land_detector import LAND_DETECTOR_PARAMS
@@ -199,92 +200,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                      ("thrust_to_weight", _THRUST_TO_WEIGHT),
                      ("motor_time_constant", _MOTOR_TIME_CONSTANT))},
     "rbf": PAPER_SCHEMA["rbf"],
-    "landing": {
-        "hover_height": Field(F, "m", "hover point: the centre's height above the pad",
-                              hi=1e3, **_POS),
-        "align_radius": Field(F, "m", "distance to the hover point that ends the approach",
-                              hi=1e3, **_POS),
-        "dwell_time": Field(F, "s", "time the align criteria must hold", lo=0.0, hi=1e3),
-        "descent_speed": Field(F, "m/s", "largest descent rate", hi=100.0, **_POS),
-        "descent_time": Field(F, "s", "descent rate = height above touchdown / descent_time",
-                              hi=1e3, **_POS),
-        "touchdown_speed": Field(F, "m/s", "descent rate of the final crawl", hi=100.0, **_POS),
-        "max_deck_rise": Field(F, "m/s", "a faster rising deck aborts the committed final "
-                               "descent", hi=100.0, **_POS),
-        "commit_height": Field(F, "m", "height above touchdown where the descent waits for a "
-                               "calm window of the deck (quiescent periods)", hi=1e3, **_POS),
-        "commit_horizon": Field(F, "s", "how far ahead the deck's rise must be predicted "
-                                "calm to commit the final descent", hi=100.0, **_POS),
-        "calm_speed": Field(F, "m/s", "largest predicted vertical speed of the deck over the "
-                            "horizon at which the final descent commits", hi=100.0, **_POS),
-        "motion_time": Field(F, "s", "time constant of the deck motion's averages (the "
-                             "predictor's frequency)", hi=1e4, **_POS),
-        "descent_leash": Field(F, "m", "how far the falling descent reference may lead the "
-                               "quadrotor down (0: no limit)", lo=0.0, hi=1e3, default=0.0),
-        "leash_height": Field(F, "m", "height above touchdown below which descent_leash holds",
-                              lo=0.0, hi=1e3, default=1e3),
-        "withdraw_height": Field(F, "m", "reference height above touchdown at or below which "
-                                 "a rising deck (or a swerve) no longer withdraws the committed "
-                                 "descent (-1000: everywhere)", lo=-1e3, hi=1e3, default=-1e3),
-        "calm_tilt_deg": Field(F, "deg", "the deck's normal predicted at the contact within "
-                               "this of the flare's worst lean, or the final descent does "
-                               "not commit (180: no limit)", lo=0.0, hi=180.0, default=180.0),
-        "calm_lean_deg": Field(F, "deg", "the quadrotor's lean from the vertical, averaged "
-                               "over lean_time, within this, or the final descent does not "
-                               "commit (90: no limit)", lo=0.0, hi=90.0, default=90.0),
-        "lean_time": Field(F, "s", "time constant of the lean's average for calm_lean_deg",
-                           hi=1e4, default=1.0, **_POS),
-        "lean_withdraw": Field(B, "-", "true: once committed, the lean past calm_lean_deg "
-                               "withdraws the descent above withdraw_height, as a rising deck "
-                               "does; false: it only holds the commit", default=False),
-        "abort_floor": Field(F, "m", "the gear's estimated height above the deck at or below "
-                             "which the crawl's out-of-limits abort is not started (-1000: "
-                             "it is down to the contact)", lo=-1e3, hi=1e3, default=-1e3),
-        "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
-                             "descent above it does; false: it is committed", default=False),
-        "swerve_accel": Field(F, "m/s^2", "the pad's horizontal acceleration (as the "
-                              "aircraft knows it) above which the final descent does not "
-                              "commit and a committed one is withdrawn (0: no hold)",
-                              lo=0.0, hi=100.0, default=0.0),
-        "crawl_gate": Field(F, "m", "the crawl pauses while the horizontal offset predicted "
-                            "at the contact (estimate + velocity x time to contact) lies "
-                            "farther than this from the pad (0: no gate)", lo=0.0, hi=100.0,
-                            default=0.0),
-        "crawl_gate_time": Field(F, "s", "the longest time to contact over which crawl_gate's "
-                                 "prediction carries the estimated velocity", lo=0.0, hi=1e3,
-                                 default=1e3),
-        "crawl_gate_floor": Field(F, "m", "reference height above touchdown at or below which "
-                                  "crawl_gate no longer pauses the crawl", lo=0.0, hi=1e3,
-                                  default=0.0),
-        "crawl_gate_rise": Field(F, "m/s", "crawl_gate holds the crawl only while the deck's "
-                                 "vertical speed at the pad is within this (a quiescent "
-                                 "deck)", lo=0.0, hi=1e3, default=1e3),
-        "crawl_gate_wait_height": Field(F, "m", "height above touchdown at or below which "
-                                        "crawl_gate_wait applies", lo=0.0, hi=1e3, default=1e3),
-        "crawl_gate_wait": Field(F, "s", "the longest crawl_gate holds a crawl: it falls on "
-                                 "at or below crawl_gate_wait_height", lo=0, hi=1e3, default=1e3),
-        "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,
-                               **_POS),
-        "max_offset": Field(F, "m", "limit: horizontal distance from the pad centre",
-                            hi=100.0, **_POS),
-        "max_tilt_deg": Field(F, "deg", "limit: body z axis from the deck normal", hi=90.0, **_POS),
-        "max_relative_speed": Field(F, "m/s", "limit: horizontal relative speed at contact",
-                                    hi=100.0, **_POS),
-        "settle_time": Field(F, "s", "the run ends this long after touchdown", lo=0.0, hi=1e3),
-        "max_gear_load": Field(F, "N", "limit: the gear's peak total normal load", hi=1e6, **_POS),
-        "max_bounce": Field(F, "m", "limit: the lowest foot's rebound above the deck with "
-                            "every foot off it", hi=100.0, **_POS),
-        "pad_radius": Field(F, "m", "limit: the landing area's radius, which every foot "
-                            "stays within from the first contact to the settle time", hi=100.0,
-                            **_POS),
-        "max_friction_margin": Field(F, "-", "secured without a lock: friction needed over "
-                                     "available at rest, at the end, below this", hi=1.0,
-                                     **_POS),
-        "marker_timeout": Field(F, "s", "the descent starts only while the marker was seen "
-                                "within this time", lo=0.0, hi=1e3),
-        "search_height": Field(F, "m", "hover height while the marker is not seen (in align)",
-                               hi=1e3, **_POS),
-    },
+    "landing": GUIDANCE_FIELDS,
     # The landing gear on the deck (docs/contact.md): four feet at (+-feet_x, +-feet_y,
     # -quadrotor.gear_height) in the body frame.
     "gear": {
@@ -306,42 +222,7 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
         "onset_width": Field(F, "m", "smoothing width of the contact's onset", hi=0.01, **_POS),
     },
     # What happens once the gear touches (docs/landing.md, "Touchdown policy").
-    "touchdown": {
-        "policy": Field(S, "-", "idle: the gear's contact switch cuts the rotors to idle_thrust; "
-                        "hold: the flight code keeps commanding them; secure: it flies on "
-                        "until the lock holds, then cuts them", choices=("idle", "hold", "secure")),
-        "cut_delay": Field(F, "s", "time from the contact switch closing to the rotor cut",
-                           lo=0.0, hi=10.0),
-        "idle_thrust": Field(F, "N", "each rotor's command once cut, at most F_max "
-                             "(thrust_to_weight mass gravity / 4)", lo=0.0, hi=1e3),
-        "switch_impulse": Field(F, "s", "load impulse over the weight that closes the contact "
-                                "switch", hi=1.0, **_POS),
-        "flare_height": Field(F, "m", "secure: reference height above touchdown from which the "
-                              "tilt is limited to flare_tilt_deg", lo=0.0, hi=100.0),
-        "flare_tilt_deg": Field(F, "deg", "secure: tilt limit of the thrust axis from the flare "
-                                "on", hi=89.0, **_POS),
-        "hold_time": Field(F, "s", "secure: time from touchdown during which the flight code "
-                           "flies on as in the descent", lo=0.0, hi=10.0),
-        "level_time": Field(F, "s", "secure: time of the level-out to the deck's attitude and "
-                            "the thrust's ramp-down, after hold_time", hi=10.0, **_POS),
-        "cut_time": Field(F, "s", "secure: time from touchdown to the rotor cut (at least "
-                          "hold_time + level_time)", lo=0.0, hi=10.0),
-        "pivot_aim": Field(F, "-", "secure: share of the level-out's pivot about the lowest "
-                           "feet the aim point anticipates (0: none, 1: all)", lo=0.0, hi=1.0),
-        "aim_height": Field(F, "m", "secure: reference height above touchdown from which the "
-                            "aim point anticipates the pivot", lo=0.0, hi=100.0),
-        "contact_lean_deg": Field(F, "deg", "the pitch at which the descent profile expects "
-                                  "the gear to meet the deck: its crawl ends where the lowest "
-                                  "foot of a body pitched this much does (0: level)", lo=0.0,
-                                  hi=80.0, default=0.0),
-        "ground_airmode": Field(B, "-", "secure: false: from touchdown on the collective is not "
-                                "raised for the attitude's moments (air mode off)", default=True),
-        "flare_deck_tilt_deg": Field(F, "deg", "secure: the flare's limit from the deck's "
-                                     "normal too (90: none)", hi=90.0, default=90.0, **_POS),
-        "flare_deck_height": Field(F, "m", "secure: flare_deck_tilt_deg below this reference "
-                                   "height above touchdown", lo=0.0, hi=1e3, default=1e3),
-        **LOCK_FIELDS,
-    },
+    "touchdown": TOUCHDOWN_FIELDS,
     # What the aircraft can know (docs/sensors.md): false flies on the true state.
     "sensors": {
         "enabled": Field(B, "-", "true: the controller flies on the sensors and the navigation "
