@@ -30,9 +30,11 @@ __all__ = ["out_of_limits"]
 
 def out_of_limits(offset, speed, gap, p):
     """1 (CasADi) when the crawl's abort is started: the horizontal ``offset`` (m) past
-    ``max_offset`` or the horizontal relative ``speed`` (m/s) past ``max_relative_speed``,
+    ``max_offset`` or past ``crawl_abort_offset`` (1000, the default: no tighter bound than the
+    judge's), or the horizontal relative ``speed`` (m/s) past ``max_relative_speed``,
     with the gear's estimated height above the deck ``gap`` (m) above ``abort_floor``.
     ``p`` the unpacked guidance parameters; the caller adds that the step is in the
     committed crawl."""
-    past = ca.logic_or(offset > p["max_offset"], speed > p["max_relative_speed"])
+    limit = ca.fmin(p["max_offset"], p["crawl_abort_offset"])
+    past = ca.logic_or(offset > limit, speed > p["max_relative_speed"])
     return ca.logic_and(past, gap > p["abort_floor"])

@@ -82,4 +82,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "moments, as in flight; 0: it does not (touchdown_policy)"),
     Field("flare_deck_tilt", 1, "rad", "flare: the thrust axis's limit from the deck's normal"),
     Field("flare_deck_height", 1, "m", "height above touchdown below which flare_deck_tilt holds"),
+    Field("crawl_abort_offset", 1, "m", "the crawl's out-of-limits abort also past this "
+          "horizontal offset, as estimated (1000: past max_offset only)"),
 ), "landing guidance parameters")

@@ -1,0 +1,91 @@
+"""``crawl_abort_offset``: the crawl's out-of-limits abort is also started past this estimated
+horizontal offset, below the judge's ``max_offset`` (symbolic/landing/abort_floor.py), by hand
+on one guidance step: the abort sends the phase back to align, counts one abort and resets the
+reference to the hover height; otherwise the committed crawl falls on at ``touchdown_speed``.
+The default, 1000 m, leaves ``max_offset`` the only bound (the guidance of before)."""
+
+import numpy as np
+import pytest
+from reference import GUIDANCE_P
+
+from quadland.scenario import load_scenario, scenario_names
+from quadland_symbolic.landing.guidance import (
+    ALIGN,
+    DESCEND,
+    GUIDANCE_CUES,
+    GUIDANCE_PARAMS,
+    GUIDANCE_STATE,
+    guidance_function,
+)
+
+DT = 0.004
+H = 0.1            # the reference 0.1 m above the contact: in the crawl (0.3 m at 0.3 m/s x 1 s)
+
+
+def _step(offset, gap=0.1, **params):
+    """One committed crawl step, the reference ``H`` above the contact, the gear ``gap`` above
+    it and the estimated horizontal offset ``offset`` along x; the phase, the aborts and the
+    reference's height above the contact after the step."""
+    p = dict(GUIDANCE_P, **params)
+    contact = p["touchdown_height"] + p["contact_drop"]
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=contact + H, aborts=0,
+                                  committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
+    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
+    xg_next, _ = guidance_function()(xg, [offset, 0.0, contact + gap], [0.0, 0.0, -0.3],
+                                     0.0, 0.0, cues, DT, GUIDANCE_PARAMS.pack(p))
+    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
+    return g["phase"][0], g["aborts"][0], g["z_ref"][0] - contact
+
+
+#: By hand: the abort (align, one abort, the reference at the hover height above the pad,
+#: hover_height less the contact's height above the contact) and the crawl going on (the
+#: rate clamp(H / descent_time, touchdown_speed, descent_speed) = 0.3 m/s over one step).
+ABORTED = (ALIGN, 1.0, GUIDANCE_P["hover_height"] - GUIDANCE_P["touchdown_height"]
+           - GUIDANCE_P["contact_drop"])
+CRAWLED = (DESCEND, 0.0, H - GUIDANCE_P["touchdown_speed"] * DT)
+
+
+def _check(got, want):
+    assert got[:2] == want[:2]
+    assert got[2] == pytest.approx(want[2], rel=1e-12)
+
+
+def test_the_default_bounds_by_max_offset_only():
+    """1000 m: 0.15 m off (inside max_offset 0.2) crawls on, 0.25 m aborts, as before the key."""
+    assert GUIDANCE_P["crawl_abort_offset"] == 1e3 and GUIDANCE_P["max_offset"] == 0.2
+    _check(_step(0.15), CRAWLED)
+    _check(_step(0.25), ABORTED)
+
+
+def test_past_the_key_the_crawl_aborts():
+    """0.1 m: 0.15 m off aborts, 0.09 m crawls on; a key above max_offset loosens nothing
+    (0.5 m: 0.25 m off still aborts on max_offset)."""
+    _check(_step(0.15, crawl_abort_offset=0.1), ABORTED)
+    _check(_step(0.09, crawl_abort_offset=0.1), CRAWLED)
+    _check(_step(0.25, crawl_abort_offset=0.5), ABORTED)
+
+
+def test_at_the_key_no_abort_and_just_above_it_one():
+    """'Past': with binary-exact figures (the key 0.125 m) 0.125 m off crawls on and
+    0.125 + 2^-20 m aborts."""
+    assert _step(0.125, crawl_abort_offset=0.125)[:2] == (DESCEND, 0.0)
+    assert _step(0.125 + 2.0 ** -20, crawl_abort_offset=0.125)[:2] == (ALIGN, 1.0)
+
+
+def test_the_abort_floor_still_holds():
+    """With abort_floor 0.06 m the same 0.15 m abort is not started with the gear 1 cm over
+    the deck, and is 10 cm over it."""
+    _check(_step(0.15, gap=0.01, crawl_abort_offset=0.1, abort_floor=0.06), CRAWLED)
+    _check(_step(0.15, gap=0.10, crawl_abort_offset=0.1, abort_floor=0.06), ABORTED)
+
+
+def test_the_schema_default_and_the_shipped_scenarios():
+    """The key is optional (1000 m, no tighter bound) and no shipped scenario sets it."""
+    for name in scenario_names():
+        sc = load_scenario(name)
+        if sc.model == "landing":
+            assert sc["landing.crawl_abort_offset"] == 1e3
+    with pytest.raises(Exception, match="crawl_abort_offset"):
+        load_scenario("ship", ["landing.crawl_abort_offset=-0.1"])
