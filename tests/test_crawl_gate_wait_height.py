@@ -142,7 +142,7 @@ def _wait_height(name):
 @pytest.mark.parametrize("name", ["turning", "ship", "ship_ss5", "highway_100"])
 def test_the_other_shipped_scenarios_bound_the_wait_everywhere(name):
     """No other shipped file sets the key: the schema's default, 1000 m, reaches the
-    flight's parameters (turning's gate, test_turning_gate_ships.py, has no wait)."""
+    flight's parameters (and none but highway sets a gate at all)."""
     assert _wait_height(name) == (1e3, 1e3)
 
 
