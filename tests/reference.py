@@ -237,6 +237,14 @@ HIGHWAY_100_MARKER = [*HIGHWAY_100_GRAZE, "landing.swerve_accel=0.3",
 HIGHWAY_GATE_SIXTEENTH = ["landing.crawl_gate_floor=0.1", "landing.crawl_gate_wait=1000.0",
                           "landing.crawl_gate_wait_height=1000.0"]
 
+#: turning's crawl and land detector before "turning: a stiffer horizontal loop and the
+#: crawl's gate" (docs/landing.md, eighteenth session): no gate (the committed crawl, no
+#: floor, no wait) and the detector's ground contact without the thrust cue; the replays of
+#: turning's earlier campaign rows and default seed pin it.
+TURNING_SEVENTEENTH = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
+                       "landing.crawl_gate_wait=1000.0", "landing.crawl_gate_wait_height=1000.0",
+                       "land_detector.contact_thrust=false"]
+
 #: highway_100's pad before "highway_100: what the offset at contact is made of, and the
 #: nested marker" (docs/landing.md, sixteenth session): the large marker alone, lost at 0.45 m;
 #: the replays measured on the paused crawl's file (and every older one) pin it (and its

@@ -17,6 +17,7 @@ import tomllib
 from importlib.resources import files
 
 import pytest
+from reference import TURNING_SEVENTEENTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -37,11 +38,13 @@ def _toml(name):
 
 
 def _campaign_run(seed, index, *overrides):
-    """Run ``index`` of turning's campaign drawn with campaign seed ``seed``, replayed."""
+    """Run ``index`` of turning's campaign drawn with campaign seed ``seed``, replayed, with
+    the crawl and land detector these rows were measured with
+    (``TURNING_SEVENTEENTH``)."""
     spec = campaign_spec_of(load_scenario("turning", [f"campaign.seed={seed}"]))
     d = draws(spec, [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *d.overrides(), *overrides])))
+        *d.overrides(), *TURNING_SEVENTEENTH, *overrides])))
 
 
 def test_q_at_is_the_turning_cars_jerk_squared_over_a_second():

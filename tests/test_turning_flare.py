@@ -13,6 +13,7 @@ settings of before (``BEFORE``, ``bf41d33``'s file to the bit) and as shipped.
 import math
 
 import pytest
+from reference import TURNING_SEVENTEENTH
 from turning_before import BEFORE
 
 import quadland
@@ -30,10 +31,12 @@ DEG = math.pi / 180
 
 
 def _campaign_run(index, *overrides):
-    """Run ``index`` of turning's campaign (default campaign seed), its draw replayed."""
+    """Run ``index`` of turning's campaign (default campaign seed), its draw replayed, with
+    the crawl and land detector these rows were measured with
+    (``TURNING_SEVENTEENTH``)."""
     d = draws(campaign_spec_of(load_scenario("turning")), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *d.overrides(), *overrides])))
+        *d.overrides(), *TURNING_SEVENTEENTH, *overrides])))
 
 
 def test_the_flare_leaves_authority_over_the_steady_tilt_and_stays_under_the_limit():
@@ -93,7 +96,7 @@ def test_the_campaigns_tilt_failures_of_before_land_inside_the_flare(index, befo
     now = _campaign_run(index, PAD_BEFORE)                 # the campaign's pad
     assert now.success and now.on_pad and now.secured
     assert now.tilt_deg == pytest.approx(now_deg, abs=5e-4) and now.tilt_deg < 21.25
-    nested = _campaign_run(index)                          # as shipped: the nested marker
+    nested = _campaign_run(index)                          # the nested marker
     assert nested.success and nested.on_pad and nested.secured and nested.tilt_deg < 21.25
 
 
@@ -103,11 +106,13 @@ def test_the_observer_alone_leaves_no_slow_tail_in_calm_air():
     turning car's default seed meets its roof 0.041 m off the centre (0.036 m with the
     whole file of before). With the disturbance observer alone horizontally (``ki_p`` 0
     there; the observer learns a constant disturbance exactly, docs/landing.md) it is
-    0.006 m: the law's equilibrium is the pad's centre."""
+    0.006 m: the law's equilibrium is the pad's centre. (Flown with the crawl without its
+    gate: ``TURNING_SEVENTEENTH``, the file these were measured on.)"""
     assert touchdown_report(quadland.simulate(load_scenario(
         "turning", [*CALM, *BEFORE]))).offset == pytest.approx(0.0362, abs=5e-4)
     tail = touchdown_report(quadland.simulate(load_scenario(
-        "turning", [*CALM, "controller.ki_p=[0.5, 0.5, 1.0]"])))
+        "turning", [*CALM, *TURNING_SEVENTEENTH, "controller.ki_p=[0.5, 0.5, 1.0]"])))
     assert tail.offset == pytest.approx(0.0405, abs=5e-4)
-    now = touchdown_report(quadland.simulate(load_scenario("turning", CALM)))
+    now = touchdown_report(quadland.simulate(load_scenario(
+        "turning", [*CALM, *TURNING_SEVENTEENTH])))
     assert now.offset == pytest.approx(0.0061, abs=5e-4)
