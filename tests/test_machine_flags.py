@@ -136,9 +136,13 @@ def test_the_recipe_key_names_the_machine_flags(monkeypatch):
     assert key() != avx2
 
 
-def test_a_compiler_that_refuses_them_builds_the_baseline(cache, tmp_path, monkeypatch):
-    """A compiler for another target refuses -mavx2 (as gcc's ``cc1: error: unrecognized
-    command-line option``): the library is built without the machine's flags, once."""
+@pytest.mark.parametrize("refused, flags", [("-mavx2", machine.AVX2_FLAGS),
+                                             ("-fvect-cost-model=dynamic", MACHINE)])
+def test_a_compiler_that_refuses_them_builds_the_baseline(cache, tmp_path, monkeypatch,
+                                                          refused, flags):
+    """A compiler for another target refuses -mavx2, an older GCC the vectorizer's cost
+    model (as gcc's ``cc1: error: unrecognized command-line option``): the library is built
+    without the machine's flags, once."""
     real = build.find_compiler()
     log = tmp_path / "calls"
     fake = tmp_path / "fakecc"
@@ -146,8 +150,8 @@ def test_a_compiler_that_refuses_them_builds_the_baseline(cache, tmp_path, monke
         #!/bin/sh
         echo "$*" >> {log}
         for a in "$@"; do
-            if [ "$a" = "-mavx2" ]; then
-                echo "cc1: error: unrecognized command-line option '-mavx2'" >&2
+            if [ "$a" = "{refused}" ]; then
+                echo "cc1: error: unrecognized command-line option '{refused}'" >&2
                 exit 1
             fi
         done
@@ -155,11 +159,12 @@ def test_a_compiler_that_refuses_them_builds_the_baseline(cache, tmp_path, monke
         """))
     fake.chmod(fake.stat().st_mode | stat.S_IXUSR)
     monkeypatch.setenv("CC", str(fake))
-    monkeypatch.setattr(build, "machine_flags", lambda cc: machine.AVX2_FLAGS)
+    monkeypatch.setattr(build, "machine_flags", lambda cc: flags)
     lib = ctypes.CDLL(str(_probe_library()))
     assert lib.probe_avx2() == 0
     compiles = [line for line in log.read_text().splitlines() if " -c " in f" {line} "]
-    assert len(compiles) == 2 and "-mavx2" in compiles[0] and "-mavx2" not in compiles[1]
+    assert len(compiles) == 2 and refused in compiles[0]
+    assert not any(f in compiles[1] for f in flags)
 
 
 def test_another_compiler_error_is_not_retried(cache, monkeypatch):
