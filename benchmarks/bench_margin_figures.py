@@ -23,8 +23,9 @@ Run from the repository root::
 With ``--property-tables``: importing the figures' modules as the command line does
 (:func:`quadland.mpl_import.for_the_command_line`, after NumPy, SciPy and Pillow), in a
 fresh process each time, with the artists' property tables left out of matplotlib's
-docstrings (as the command line imports them) and with them written (``mpl_import``'s
-``_without_property_tables`` made a null context), alternating; CPU s of the import
+docstrings (matplotlib's private loader of them, ``_docstring._ArtistKwdocLoader``,
+patched in the measured process only: the eighteenth session's review kept that patch out
+of quadland, docs/performance.md) and with them written, alternating; CPU s of the import
 (``time.process_time``).
 
 With ``--callgrind``: each tree's figures' instructions (callgrind's count of the
@@ -76,17 +77,20 @@ os._exit(0)
 
 #: What each ``--property-tables`` process runs: argv[1] "skipped" or "written".
 IMPORT_CHILD = """
-import contextlib, sys, time
+import sys, time
 import numpy, scipy.linalg, PIL.Image
-import matplotlib._docstring
+from matplotlib import _docstring
 from quadland import mpl_import
 mpl_import.for_the_command_line()
-if sys.argv[1] == "written":
-    mpl_import._without_property_tables = contextlib.nullcontext
+loader = _docstring._ArtistKwdocLoader
+missing = loader.__missing__
+if sys.argv[1] == "skipped":      # each ':kwdoc' table an empty text, not remembered
+    loader.__missing__ = lambda self, key: "" if key.endswith(":kwdoc") else missing(self, key)
 start = time.process_time()
 import quadland.plots
 from quadland.plots import margin_figures
 print(time.process_time() - start)
+loader.__missing__ = missing
 """
 
 

@@ -4,26 +4,19 @@ On import, matplotlib writes the docstring and the signature of each artist clas
 ``set`` method: every property of the class, each setter's docstring read and
 cleaned (``Artist.__init_subclass__``). The hundred artist classes that
 ``matplotlib.figure`` brings spend about a quarter of the import's CPU on it
-(0.1 to 0.25 s at a load of 6 to 12, docs/performance.md). And each docstring that
-names an artist's properties (``%(Line2D:kwdoc)s``: ``plot``, ``text``, ``legend``, the
-patches...) has the artist's property table written into it on import (``kwdoc``: every
-setter's docstring read and cleaned, about 1,400 of them, a fifth of importing the
-figure module after ``matplotlib`` itself). Those texts are there for ``help()`` and for
-the documentation; nothing calls or reads them when drawing.
+(0.1 to 0.25 s at a load of 6 to 12, docs/performance.md). Those texts are there for
+``help()`` and for the documentation; nothing calls or reads them when drawing.
 
 In the command line's process (:func:`quadland.__main__.run` calls
 :func:`for_the_command_line`), where no one reads them, the artist classes defined
 while ``matplotlib.figure`` is imported get their ``set`` without the generated
-docstring and signature (it still takes every property, as ``Artist.set``), and the
-docstrings defined meanwhile get an empty text in place of each property table; the
-classes and docstrings defined afterwards get theirs, as matplotlib makes them. In any
-other process (a notebook, the tests, a script importing quadland) matplotlib is
-imported as it is.
+docstring and signature (it still takes every property, as ``Artist.set``); the
+classes defined afterwards get both, as matplotlib makes them. In any other process
+(a notebook, the tests, a script importing quadland) matplotlib is imported as it is.
 """
 
 from __future__ import annotations
 
-import contextlib
 import importlib
 
 __all__ = ["for_the_command_line", "figure_class"]
@@ -55,32 +48,6 @@ def figure_class():
 
     Artist._update_set_signature_and_docstring = classmethod(flag_only)
     try:
-        with _without_property_tables():
-            return importlib.import_module("matplotlib.figure").Figure
+        return importlib.import_module("matplotlib.figure").Figure
     finally:
         Artist._update_set_signature_and_docstring = generate
-
-
-@contextlib.contextmanager
-def _without_property_tables():
-    """Within the context, a docstring's ``%(Name:kwdoc)s`` becomes an empty text, not
-    remembered (matplotlib's loader of those tables, ``_ArtistKwdocLoader``, computes
-    and keeps each on first use; without that loader: nothing changes)."""
-    from matplotlib import _docstring
-
-    loader = getattr(_docstring, "_ArtistKwdocLoader", None)
-    missing = getattr(loader, "__missing__", None)
-    if missing is None:
-        yield
-        return
-
-    def empty_table(self, key):
-        if not key.endswith(":kwdoc"):
-            return missing(self, key)       # matplotlib's KeyError for any other name
-        return ""
-
-    loader.__missing__ = empty_table
-    try:
-        yield
-    finally:
-        loader.__missing__ = missing
