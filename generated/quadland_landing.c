@@ -509,7 +509,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   ground_airmode           0 or 1
  *   flare_deck_tilt          in (0, 1.5708]
  *   flare_deck_height        >= 0
- *   crawl_abort_offset       >= 0
+ *   crawl_abort_offset       > 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -663,7 +663,7 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[46]) && (p[46] >= 0.0))) {
         bad = "flare_deck_height";
     }
-    if (!bad && !(isfinite(p[47]) && (p[47] >= 0.0))) {
+    if (!bad && !(isfinite(p[47]) && (p[47] > 0.0))) {
         bad = "crawl_abort_offset";
     }
     if (bad_field) {
@@ -792,7 +792,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= ((p[44] == 0.0) | (p[44] == 1.0));
     ok &= ((p[45] > 0.0) & (p[45] <= 1.5707963267948966));
     ok &= (p[46] >= 0.0);
-    ok &= (p[47] >= 0.0);
+    ok &= (p[47] > 0.0);
     return ok;
 }
 

@@ -4,10 +4,13 @@ on one guidance step: the abort sends the phase back to align, counts one abort 
 reference to the hover height; otherwise the committed crawl falls on at ``touchdown_speed``.
 The default, 1000 m, leaves ``max_offset`` the only bound (the guidance of before)."""
 
+import ctypes
+
 import numpy as np
 import pytest
-from reference import GUIDANCE_P
+from reference import GUIDANCE_P, have_compiler
 
+from quadland.kinds.landing.flight import load_landing_api
 from quadland.scenario import load_scenario, scenario_names
 from quadland_symbolic.landing.guidance import (
     ALIGN,
@@ -87,5 +90,26 @@ def test_the_schema_default_and_the_shipped_scenarios():
         sc = load_scenario(name)
         if sc.model == "landing":
             assert sc["landing.crawl_abort_offset"] == 1e3
-    with pytest.raises(Exception, match="crawl_abort_offset"):
-        load_scenario("ship", ["landing.crawl_abort_offset=-0.1"])
+    for bad in ("-0.1", "0", "nan", "1001"):
+        with pytest.raises(Exception, match="crawl_abort_offset"):
+            load_scenario("ship", [f"landing.crawl_abort_offset={bad}"])
+
+
+@pytest.mark.skipif(not have_compiler(), reason="no C compiler")
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_the_flight_code_refuses_what_the_schema_refuses(precision):
+    """Review: 0 m would abort every crawl with any offset (elsewhere 0 turns a key off), so
+    the range is (0, 1000] as ``max_offset``'s is open at 0. ``ql_check_guidance_params``
+    names the key for 0, -0.0, -1, NaN and an infinity, takes the smallest positive value and
+    1000 (``tests/test_fuzz_landing_step.py`` draws the rest against the same range)."""
+    api = load_landing_api(10, precision)
+    gp = api.GuidanceParams()
+    api.lib.ql_guidance_params_init(ctypes.byref(gp))
+    bad = ctypes.c_char_p()
+    tiny = np.finfo(np.float64 if precision == "double" else np.float32).tiny
+    for value, refused in ((0.0, True), (-0.0, True), (-1.0, True), (np.nan, True),
+                           (np.inf, True), (tiny, False), (1e3, False), (0.1, False)):
+        gp.crawl_abort_offset = value
+        status = api.lib.ql_check_guidance_params(ctypes.byref(gp), ctypes.byref(bad))
+        assert (status != 0, bad.value) == ((True, b"crawl_abort_offset") if refused
+                                            else (False, None)), value

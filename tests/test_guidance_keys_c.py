@@ -1,6 +1,7 @@
 """The generated guidance step (double and float C) against its CasADi function with the
 fifteenth session's keys on: ``abort_floor`` (symbolic/landing/abort_floor.py) and
-``crawl_gate_rise`` (symbolic/landing/crawl_gate.py). ``tests/test_fuzz_landing_step.py``
+``crawl_gate_rise`` (symbolic/landing/crawl_gate.py), and the eighteenth's
+``crawl_abort_offset`` (the same module's ``fmin``; review). ``tests/test_fuzz_landing_step.py``
 draws the guidance's parameters around ``ql_guidance_params_init``'s defaults, where the
 floor never holds and the gate is off; here the draws sit in the committed crawl with the
 gate on, the gear within centimetres of the deck and the offset or speed past the limits, so
@@ -38,7 +39,8 @@ def _draws(rng, keys_on):
                  crawl_pause=float(rng.integers(2)))
         if keys_on:
             p.update(abort_floor=rng.choice([0.06, rng.uniform(-0.05, 0.2)]),
-                     crawl_gate_rise=rng.choice([0.35, rng.uniform(0.0, 1.0)]))
+                     crawl_gate_rise=rng.choice([0.35, rng.uniform(0.0, 1.0)]),
+                     crawl_abort_offset=rng.choice([0.1, rng.uniform(0.03, 0.3)]))
         contact = p["touchdown_height"]
         xg = GUIDANCE_STATE.pack(dict(
             phase=DESCEND, timer=rng.uniform(0, 0.5), z_ref=contact + rng.uniform(0, 0.3),
@@ -83,13 +85,18 @@ def test_the_c_step_decides_as_casadi_with_the_floor_and_the_quiescent_gate(prec
             assert (gs.phase, gs.aborts, float(vg[2])) == (xn[0], xn[3], xn[4])
             tol = 1e-12 if precision == "double" else 1e-6
             np.testing.assert_allclose(vref.astype(float), r, rtol=tol, atol=tol)
-            # the same step with both keys at their defaults: did a key decide it?
+            # the same step with the keys at their defaults, all or one: did a key decide it?
             p0 = GUIDANCE_PARAMS.unpack(p)
-            p0 = GUIDANCE_PARAMS.pack(dict(p0, abort_floor=-1e3, crawl_gate_rise=1e3))
-            x0, r0 = (np.asarray(v, dtype=float).ravel() for v in f(xg, yy, cu, dt, p0))
-            decided.append((keys_on, xn[3] != x0[3], xn[2] != x0[2]))
+            x0, x1, x2 = (np.asarray(f(xg, yy, cu, dt, GUIDANCE_PARAMS.pack(dict(p0, **k)))[0],
+                                     dtype=float).ravel()
+                          for k in (dict(abort_floor=-1e3, crawl_gate_rise=1e3,
+                                         crawl_abort_offset=1e3),
+                                    dict(crawl_abort_offset=1e3), dict(abort_floor=-1e3)))
+            decided.append((keys_on, xn[3] != x0[3], xn[2] != x0[2], xn[3] > x1[3],
+                            xn[3] < x2[3]))
     decided = np.array(decided)
     on = decided[:, 0] > 0
     assert not decided[~on, 1:].any()                 # off: the keys decide nothing
-    assert decided[on, 1].sum() >= 20                 # the floor held aborts
+    assert decided[on, 4].sum() >= 20                 # the floor held aborts
     assert (decided[on, 2] & ~decided[on, 1]).sum() >= 20   # the gate's rise moved z_ref
+    assert decided[on, 3].sum() >= 20                 # the tighter offset started aborts

@@ -55,7 +55,8 @@ GUIDANCE_FIELDS = {
                          "it is down to the contact)", lo=-1e3, hi=1e3, default=-1e3),
     "crawl_abort_offset": Field(F, "m", "the crawl's out-of-limits abort is also started past "
                                 "this horizontal offset, as estimated (1000: past "
-                                "max_offset only)", lo=0.0, hi=1e3, default=1e3),
+                                "max_offset only; 0 is refused, it would abort every crawl)",
+                                lo=0.0, lo_open=True, hi=1e3, default=1e3),
     "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
                          "descent above it does; false: it is committed", default=False),
     "swerve_accel": Field(F, "m/s^2", "the pad's horizontal acceleration (as the "

@@ -409,7 +409,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "ground_airmode": Range(choices=(0.0, 1.0)),
     "flare_deck_tilt": Range(lo=0.0, hi=math.pi / 2, lo_open=True),
     "flare_deck_height": _NONNEGATIVE,
-    "crawl_abort_offset": _NONNEGATIVE,
+    "crawl_abort_offset": _POSITIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:
