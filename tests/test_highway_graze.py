@@ -3,8 +3,8 @@
 ``touchdown.switch_impulse`` 0.0005 s on highway too (was 0.002 s; docs/landing.md,
 "highway: the graze switch", after "highway_100: the graze the switch did not feel"). The
 seventeenth's 1,500 runs of the default seed lost three (314, 554, 1193) the way highway_100
-lost its grazes: a front foot meets the roof for about 30 ms at 1.4-1.9 N under a paused
-crawl, the switch of before stays open, no touchdown is declared, the body lifts off and the
+lost its grazes: a front foot meets the roof for about 30 ms at 1.4-1.9 N in the descent,
+the switch of before stays open, no touchdown is declared, the body lifts off and the
 judge reads a 3.4-3.7 cm rebound, past ``landing.max_bounce``. Checked against a hand
 integration of the gear's logged load (``graze_rig.graze``, the trapezoid rule over the rows
 of a 1 kHz replay) and the two thresholds: the file of before (``HIGHWAY_GRAZE``) bounces,
