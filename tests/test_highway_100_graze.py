@@ -12,39 +12,12 @@ loses that way and the shipped file lands.
 
 import numpy as np
 import pytest
+from graze_rig import G, flown, graze
 from reference import HIGHWAY_100_GRAZE
-
-import quadland
-from quadland.campaign.sampling import draws
-from quadland.campaign.spec import campaign_spec_of
-from quadland.kinds.landing.report import touchdown_report
-from quadland.scenario import load_scenario
-
-G = 9.8
-FINE = "simulation.output_rate_hz=1000.0"   # a row per ms: the graze lasts ~25 ms
 
 
 def _flown(index, *extra):
-    sc = load_scenario("highway_100")
-    overrides = draws(campaign_spec_of(sc), [index])[0].overrides()
-    res = quadland.simulate(load_scenario("highway_100", [*overrides, FINE, *extra]))
-    return res, touchdown_report(res)
-
-
-def _graze(res):
-    """The rows of the first contact up to the first row with every foot off the roof, and
-    the gear's load impulse over the weight logged over them, s (trapezoid rule). It leaves
-    out the load inside the contact's onset smoothing before the located contact, so it is a
-    lower bound of the switch's own integral."""
-    t, F = res["t"], np.nan_to_num(res["F_gear"])
-    k0 = int(np.argmax(res["touched"] > 0.5))
-    off = np.flatnonzero((np.arange(len(t)) > k0) & (res["feet_down"] < 0.5))
-    k1 = int(off[0]) if off.size else len(t) - 1
-    weight = res.scenario.data["quadrotor"]["mass"] * G
-    rows = slice(k0, k1 + 1)
-    impulse = np.concatenate([[0.0], np.cumsum(0.5 * (F[rows][1:] + F[rows][:-1])
-                                               * np.diff(t[rows]))]) / weight
-    return k0, k1, impulse
+    return flown("highway_100", index, *extra)
 
 
 def test_the_thresholds_straddle_a_hand_integrated_graze():
@@ -57,7 +30,7 @@ def test_the_thresholds_straddle_a_hand_integrated_graze():
     Shipped: the switch closes no later than the row where the logged impulse alone passes
     0.5 ms, inside the graze; the guidance enters touchdown there and the run lands."""
     before, rep_before = _flown(1145, *HIGHWAY_100_GRAZE)
-    k0, k1, impulse = _graze(before)
+    k0, k1, impulse = graze(before)
     weight = before.scenario.data["quadrotor"]["mass"] * G
     assert 9.55 < before["t"][k0] < 9.6
     assert np.nanmax(before["F_gear"][k0:k1 + 1]) < 0.1 * weight
@@ -67,7 +40,7 @@ def test_the_thresholds_straddle_a_hand_integrated_graze():
     assert not rep_before.success and rep_before.bounced and rep_before.bounce > 1.0
 
     res, rep = _flown(1145)
-    k0, k1, impulse = _graze(res)
+    k0, k1, impulse = graze(res)
     assert res.scenario.data["touchdown"]["switch_impulse"] == 0.0005
     passed = k0 + int(np.argmax(impulse > 0.5e-3))
     closed = int(np.argmax(res["t_contact"] > 0))
