@@ -18,8 +18,8 @@ import dataclasses
 import casadi as ca
 import numpy as np
 import pytest
+from flight_capture import captured
 
-import quadland
 from quadland.engine.compiled import CompiledLoop, built_model
 from quadland_symbolic.codegen import simulator, staged_c
 from quadland_symbolic.codegen.time_split import HOISTED
@@ -34,27 +34,6 @@ def _bits(v) -> np.ndarray:
 
 def _ops(f: ca.Function) -> list:
     return [f.instruction_id(k) for k in range(f.n_instructions())]
-
-
-class _Captured(Exception):
-    pass
-
-
-def _captured(scenario: str):
-    """The simulator and the arguments the runtime passes it for ``scenario``'s flight."""
-    mp, seen = pytest.MonkeyPatch(), {}
-
-    def capture(self, *args, **kwargs):
-        seen.update(loop=self, args=args, kwargs=kwargs)
-        raise _Captured
-
-    mp.setattr(CompiledLoop, "sampled", capture)
-    try:
-        with pytest.raises(_Captured):
-            quadland.simulate(quadland.load_scenario(scenario))
-    finally:
-        mp.undo()
-    return seen["loop"], seen["args"], seen["kwargs"]
 
 
 def _emitted(staged, constants):
@@ -107,7 +86,7 @@ def test_a_small_staged_function_by_hand():
 
 @pytest.fixture(scope="module")
 def highway_model():
-    return built_model(_captured("highway")[0].model)
+    return built_model(captured("highway")[0].model)
 
 
 def test_the_sensed_stages_cut_bit_for_bit(highway_model):
@@ -152,7 +131,7 @@ def _same(a, b) -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("scenario", ["highway", "ship"])
 def test_the_compiled_flight_is_the_uncut_controller_s_to_the_bit(scenario, monkeypatch):
-    cut, args, kwargs = _captured(scenario)
+    cut, args, kwargs = captured(scenario)
     model = built_model(cut.model)
     files = simulator.simulator_sources(model, "sampled")
     assert f"qlsim_{model.name}_controller_sensed_flight_params.c" in files   # cut flown
@@ -169,7 +148,7 @@ def test_a_second_flight_with_other_parameters_reads_its_own():
     # and plant parameters: the second flight against the uncut build's on the same
     # arguments, bit for bit, and different from the first (the values of the parameters
     # alone are computed at each flight's start, not kept from the one before)
-    cut, args, kwargs = _captured("highway")
+    cut, args, kwargs = captured("highway")
     model = built_model(cut.model)
     pc, pp = np.asarray(args[6], dtype=float).copy(), np.asarray(args[5], dtype=float).copy()
     pc[pc != np.round(pc)] *= 1.0 + 1e-3                  # gains and times, not flags,

@@ -15,8 +15,8 @@ import dataclasses
 import casadi as ca
 import numpy as np
 import pytest
+from flight_capture import captured
 
-import quadland
 from quadland.engine.compiled import CompiledLoop, built_model
 from quadland_symbolic.codegen import simulator
 from quadland_symbolic.codegen.time_split import HOISTED, time_split
@@ -84,28 +84,7 @@ def test_an_output_of_time_alone_is_hoisted():
 
 @pytest.fixture(scope="module")
 def ship_model():
-    return built_model(_captured("ship")[0].model)
-
-
-class _Captured(Exception):
-    pass
-
-
-def _captured(scenario: str):
-    """The simulator and the arguments the runtime passes it for ``scenario``'s flight."""
-    mp, seen = pytest.MonkeyPatch(), {}
-
-    def capture(self, *args, **kwargs):
-        seen.update(loop=self, args=args, kwargs=kwargs)
-        raise _Captured
-
-    mp.setattr(CompiledLoop, "sampled", capture)
-    try:
-        with pytest.raises(_Captured):
-            quadland.simulate(quadland.load_scenario(scenario))
-    finally:
-        mp.undo()
-    return seen["loop"], seen["args"], seen["kwargs"]
+    return built_model(captured("ship")[0].model)
 
 
 def _time_alone_trig(f: ca.Function) -> tuple[int, int]:
@@ -141,7 +120,7 @@ def test_the_ship_s_functions_split_bit_for_bit(ship_model, name):
 @pytest.mark.slow
 @pytest.mark.parametrize("scenario", ["ship", "highway"])
 def test_the_compiled_flight_is_the_whole_plant_s_to_the_bit(scenario, monkeypatch):
-    split, args, kwargs = _captured(scenario)
+    split, args, kwargs = captured(scenario)
     model = built_model(split.model)
     monkeypatch.setattr(simulator, "HOISTING", ())
     whole = CompiledLoop(dataclasses.replace(model, name=f"{model.name}_whole"), "sampled")
@@ -181,7 +160,7 @@ def test_a_second_flight_with_another_deck_reads_its_own_deck():
     # only its own (the first flight's last is not 0), so a cache kept across calls would
     # be stale at most at t = 0: the driver's source is checked to keep it in the call's
     # own context, marked unknown before the first call of the function
-    split, args, kwargs = _captured("ship")
+    split, args, kwargs = captured("ship")
     model = built_model(split.model)
     lay = model.plant_params
     pp_a = np.asarray(args[5], dtype=float)
