@@ -117,6 +117,12 @@ def timed_flights(loops, args, kwargs, rounds: int) -> dict:
                                   np.asarray(getattr(ref, a)).view(np.uint64))
                    for a in ("X", "R", "times", "x_end")) and r.status == ref.status
             for k, r in runs.items()}
+    return {"cpu": alternated_cpu(loops, args, kwargs, rounds), "same": same,
+            "flown": float(ref.times[-1])}
+
+
+def alternated_cpu(loops, args, kwargs, rounds: int) -> dict:
+    """CPU seconds of each build's flight, ``rounds`` times, the order reversed each round."""
     cpu: dict = {k: [] for k in loops}
     names = list(loops)
     for r in range(rounds):
@@ -124,7 +130,7 @@ def timed_flights(loops, args, kwargs, rounds: int) -> dict:
             t0 = time.process_time()
             loops[k].sampled(*args, **kwargs)
             cpu[k].append(time.process_time() - t0)
-    return {"cpu": cpu, "same": same, "flown": float(ref.times[-1])}
+    return cpu
 
 
 def report_flights(scenario: str, out: dict, rounds: int, of: str) -> None:

@@ -34,12 +34,12 @@ import resource
 import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_compiled_flight import alternated_cpu  # noqa: E402
 from bench_delivery_ring import captured  # noqa: E402
 
 from quadland.engine import build  # noqa: E402
@@ -84,14 +84,8 @@ def timed(loops, args, kwargs, rounds: int) -> tuple[dict, dict, float]:
     runs = {k: loop.sampled(*args, **kwargs) for k, loop in loops.items()}
     ref = _bits(next(iter(runs.values())))
     same = {k: _bits(r) == ref for k, r in runs.items()}
-    cpu: dict = {k: [] for k in loops}
-    names = list(loops)
-    for r in range(rounds):
-        for k in names if r % 2 == 0 else names[::-1]:
-            t0 = time.process_time()
-            loops[k].sampled(*args, **kwargs)
-            cpu[k].append(time.process_time() - t0)
-    return cpu, same, float(next(iter(runs.values())).times[-1])
+    return (alternated_cpu(loops, args, kwargs, rounds), same,
+            float(next(iter(runs.values())).times[-1]))
 
 
 def compile_cpu(ways: dict) -> None:

@@ -253,6 +253,16 @@ def glyph_cache_pairs(runs: int, name: str = "highway") -> dict:
     return out
 
 
+def _report_pairs(heading: str, what: str, measured: dict, ratio: tuple[str, str]) -> None:
+    """Each arm's CPU seconds, then the ratio of the two arms named in ``ratio``, pair by pair."""
+    print(f"## {heading}, CPU s, median (min to max)")
+    for which, cpu in measured.items():
+        print(f"- {what} {which}: {_stats(cpu)}")
+    num, den = ratio
+    ratios = [a / b for a, b in zip(measured[num], measured[den], strict=True)]
+    print(f"- {num} / {den}, pair by pair: {_stats(ratios)}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=5, help="runs of each")
@@ -268,23 +278,15 @@ def main(argv=None):
                     help="the figures' import with and without matplotlib's property tables")
     args = ap.parse_args(argv)
     if args.property_tables:
-        measured = property_tables(args.runs)
-        print("## importing the figures' modules in a fresh process, CPU s, median (min to max)")
-        for which, cpu in measured.items():
-            print(f"- property tables {which}: {_stats(cpu)}")
-        ratios = [a / b for a, b in zip(measured["skipped"], measured["written"], strict=True)]
-        print(f"- skipped / written, pair by pair: {_stats(ratios)}")
+        _report_pairs("importing the figures' modules in a fresh process", "property tables",
+                      property_tables(args.runs), ("skipped", "written"))
         return
     if args.callgrind:
         _print_instructions(instructions(args.against, args.scenarios, args.runs))
         return
     if args.glyph_cache:
-        pairs = glyph_cache_pairs(args.runs)
-        print("## highway's five figures in this process, CPU s, median (min to max)")
-        for which, cpu in pairs.items():
-            print(f"- glyphs {which}: {_stats(cpu)}")
-        ratios = [a / b for a, b in zip(pairs["kept"], pairs["matplotlib"], strict=True)]
-        print(f"- kept / matplotlib's, pair by pair: {_stats(ratios)}")
+        _report_pairs("highway's five figures in this process", "glyphs",
+                      glyph_cache_pairs(args.runs), ("kept", "matplotlib"))
         return
     measured = figures(args.runs, args.against, args.scenarios, args.texts)
     print(f"## the five margin figures in a fresh process, CPU s, median (min to max), "
