@@ -46,6 +46,13 @@ class Staged:
         ``past``'s place. :meth:`function` computes the shift; the C
         (:mod:`quadland_symbolic.codegen.staged_c`) leaves that stage out and keeps the
         line in a ring its caller holds (:meth:`ring_places`).
+    free : tuple of (str, casadi.Function)
+        Stages' other functions where the gear is far from the deck, ``(stage, f)``: ``f``
+        has the stage's names in and out and computes its values where the gear's contact
+        is exactly zero (the loop's ``free_plant`` for its ``plant``). :meth:`function`
+        uses the stages themselves; the C (:mod:`quadland_symbolic.codegen.staged_c`)
+        calls ``f`` where the caller says the gear is far, as the sampled driver flies
+        its free plant.
     """
 
     name: str
@@ -54,6 +61,7 @@ class Staged:
     outputs: tuple
     slices: tuple = ()
     rings: tuple = ()
+    free: tuple = ()
 
     def __post_init__(self):
         known = {n for n, _ in self.inputs} | {s[0] for s in self.slices}
@@ -69,6 +77,11 @@ class Staged:
         absent = [n for _, pieces in self.outputs for n in pieces if n not in known]
         if absent:
             raise ValueError(f"no stage outputs {', '.join(absent)}")
+        by_name = {s.name(): s for s in self.stages}
+        for stage, f in self.free:
+            if stage not in by_name or (f.name_in(), f.name_out()) != (
+                    by_name[stage].name_in(), by_name[stage].name_out()):
+                raise ValueError(f"free {f.name()}: not a stage's names in and out")
         self.ring_places()
 
     def ring_places(self) -> tuple[tuple[int, int, int, int, int], ...]:
@@ -143,6 +156,9 @@ class Staged:
                             for _, pieces in self.outputs],
                            [n for n, _ in self.inputs], [n for n, _ in self.outputs])
 
-    def with_stages(self, stages) -> Staged:
-        """The same composition of other stages (the same names in and out)."""
-        return dataclasses.replace(self, stages=tuple(stages))
+    def with_stages(self, stages, free=None) -> Staged:
+        """The same composition of other stages (the same names in and out), and of other
+        :attr:`free` functions (``free``, in the same order; unchanged when ``None``)."""
+        changes = {} if free is None else {"free": tuple(zip((n for n, _ in self.free), free,
+                                                             strict=True))}
+        return dataclasses.replace(self, stages=tuple(stages), **changes)

@@ -91,10 +91,10 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         names = (*names, "ride_rhs", "ride_row")
     if model.envelope is None:
         names = tuple(n for n in names if n != "envelope")
-    files, work, rings, hoisted, params = {}, [], (), {}, (0, 0)
+    files, work, rings, hoisted, params = {}, [], (), {}, (0, 0, False)
     for name in names:
         if name == "controller" and model.controller_stages is not None:
-            rings, params = _staged(model, prefix, driver, files, work)
+            rings, params = _staged(model, prefix, driver, files, work, has_free)
             continue
         split = _split(by_name[name]) if driver == "sampled" and name in HOISTING else None
         for f in (by_name[name],) if split is None else split:
@@ -121,6 +121,7 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
         has_ride=has_ride, has_free=has_free,
         has_tick=driver == "sampled" and model.tick_inputs is not None, rings=rings,
         hoisted=hoisted, controller_params=params[0], controller_inputs=params[1],
+        controller_free=params[2],
         ring_slots=max((r["n"] for r in rings), default=0) + 1,
         core=_core(model.controller_state.size, rings),
         casadi_version=ca.__version__, sizes=sizes,
@@ -135,15 +136,18 @@ def simulator_sources(model: LoopModel, part: str) -> dict[str, str]:
 CONSTANT_ARGS = {2: "pc", 7: "pp"}
 
 
-def _staged(model: LoopModel, prefix: str, driver: str, files: dict, work: list):
+def _staged(model: LoopModel, prefix: str, driver: str, files: dict, work: list,
+            has_free: bool = False):
     """The staged controller's C added to ``files``, its work sizes to ``work``; its rings
-    (:func:`_rings`) and ``(values of its parameters alone, inputs)``."""
+    (:func:`_rings`) and ``(values of its parameters alone, inputs, whether it reads the
+    driver's flag of the gear far from the deck)``: with ``has_free`` (the driver flies
+    the free plant), its stages' free functions where the driver does."""
     inputs = model.controller_stages.inputs
     staged, sz = staged_sources(prefix, model.controller_stages, lambda n, f: _emit(n, f)[0],
-                                _constants(inputs, driver, model.tick_inputs))
+                                _constants(inputs, driver, model.tick_inputs), has_free)
     files.update(staged)
-    work.append(sz)
-    return _rings(model.controller_stages), (sz["n_params"], len(inputs))
+    work.append({k: v for k, v in sz.items() if k != "free"})
+    return _rings(model.controller_stages), (sz["n_params"], len(inputs), sz["free"])
 
 
 def _constants(inputs, driver: str, tick_inputs) -> tuple[str, ...]:

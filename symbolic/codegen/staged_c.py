@@ -36,7 +36,7 @@ import casadi as ca
 
 from quadland_symbolic.codegen.time_split import HOISTED, time_split
 
-__all__ = ["CUT_PARAMS", "MIN_PARAMS", "staged_sources"]
+__all__ = ["CUT_PARAMS", "FREE_STAGES", "MIN_PARAMS", "staged_sources"]
 
 #: The fewest instructions of a stage's values of the constants alone worth cutting it
 #: for (one more pointer a call, a few values read from memory).
@@ -45,6 +45,10 @@ MIN_PARAMS = 32
 #: module's text, not the value: a build with it turned off at run time (the benchmark's
 #: and the tests' uncut build) needs a model of another name.
 CUT_PARAMS = True
+#: Whether the stages' free functions are written and called where the caller asks
+#: (``staged_sources``' ``free``); off, the stages alone, as before (the benchmark's and
+#: the tests' build without them: a model of another name, as for :data:`CUT_PARAMS`).
+FREE_STAGES = True
 
 
 def _dense(f: ca.Function) -> None:
@@ -104,7 +108,15 @@ def _constant_names(staged, constants) -> set:
     return set(constants) | {n for n, src, _, _ in staged.slices if src in constants}
 
 
-def staged_sources(prefix: str, staged, emit, constants=()) -> tuple[dict, dict]:
+def _call(where, fname, core, total) -> list:
+    """The lines calling stage function ``fname`` (``core``) on its named values."""
+    return ([f"    arg1[{i}] = {where[n]};" for i, n in enumerate(core.name_in())]
+            + [f"    res1[{i}] = {where[n]};" for i, n in enumerate(core.name_out())]
+            + [f"    if ({fname}(arg1, res1, iw, w + {total}, 0)) return 1;"])
+
+
+def staged_sources(prefix: str, staged, emit, constants=(), free: bool = False
+                   ) -> tuple[dict, dict]:
     """The C of ``staged`` (named ``<prefix><its name>``), one file a stage.
 
     Parameters
@@ -117,6 +129,12 @@ def staged_sources(prefix: str, staged, emit, constants=()) -> tuple[dict, dict]
         ``emit(name, f) -> {file: text}``: CasADi's C of ``f`` named ``name``.
     constants : tuple of str
         Inputs the caller holds constant over its calls (module docstring).
+    free : bool
+        Whether the caller says where the gear is far from the deck: the stages'
+        :attr:`~quadland_symbolic.stages.Staged.free` functions are written too
+        (``<prefix><name>_<stage>_free``) and called instead of their stages where the
+        value at ``arg[n_in]`` (after the constants', ``arg[n_in + 1]``, where stages
+        are cut) is not zero.
 
     Returns
     -------
@@ -131,36 +149,49 @@ def staged_sources(prefix: str, staged, emit, constants=()) -> tuple[dict, dict]
     shifts = {line for line, _, _ in staged.rings}
     name = prefix + staged.name
     stages = tuple(s for s in staged.stages if not shifts & set(s.name_out()))
+    variants = dict(staged.free) if free and FREE_STAGES else {}
     constant = _constant_names(staged, constants) if CUT_PARAMS else set()
     cuts = {s.name(): _cut(s, constant) for s in stages}
+    cuts.update((f"{n}_free", _cut(f, constant)) for n, f in variants.items())
     cuts = {k: v for k, v in cuts.items() if v is not None}
     where, total = _places(staged, name)
     n_in, n_res = len(staged.inputs), len(staged.outputs) + len(staged.rings)
-    body = [f"    const casadi_real **arg1 = arg + {n_in + bool(cuts)};",
+    n_extra = n_in + bool(cuts) + bool(variants)
+    body = [f"    const casadi_real **arg1 = arg + {n_extra};",
             f"    casadi_real **res1 = res + {n_res};"]
-    pbody = [f"    const casadi_real **arg1 = arg + {n_in + 1};",
+    pbody = [f"    const casadi_real **arg1 = arg + {n_extra};",
              "    casadi_real **res1 = res + 1;"]
+    flag = f"arg[{n_in + bool(cuts)}]"
     files, called, at = {}, [], 0
     for stage in stages:
-        core, params = cuts.get(stage.name(), (stage, None))
-        where[HOISTED] = f"arg[{n_in}] + {at}"
-        files.update(emit(f"{name}_{stage.name()}", core))
-        called.append((stage.name(), core))
         body.append(f"    /* {stage.name()} */")
-        body += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(core.name_in())]
-        body += [f"    res1[{i}] = {where[n]};" for i, n in enumerate(core.name_out())]
-        body.append(f"    if ({name}_{stage.name()}(arg1, res1, iw, w + {total}, 0)) return 1;")
-        if params is not None:
-            files.update(emit(f"{name}_{stage.name()}_params", params))
-            called.append((f"{stage.name()}_params", params))
-            pbody += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(params.name_in())]
-            pbody.append(f"    res1[0] = res[0] ? res[0] + {at} : 0;")
-            pbody.append(f"    if ({name}_{stage.name()}_params(arg1, res1, iw, w, 0)) return 1;")
-            at += params.nnz_out(0)
+        both = [(stage.name(), stage)]
+        if stage.name() in variants:
+            both.append((f"{stage.name()}_free", variants[stage.name()]))
+        calls = []
+        for sname, f in both:
+            core, params = cuts.get(sname, (f, None))
+            where[HOISTED] = f"arg[{n_in}] + {at}"
+            files.update(emit(f"{name}_{sname}", core))
+            called.append((sname, core))
+            calls.append(_call(where, f"{name}_{sname}", core, total))
+            if params is not None:
+                files.update(emit(f"{name}_{sname}_params", params))
+                called.append((f"{sname}_params", params))
+                pbody += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(params.name_in())]
+                pbody.append(f"    res1[0] = res[0] ? res[0] + {at} : 0;")
+                pbody.append(f"    if ({name}_{sname}_params(arg1, res1, iw, w, 0)) return 1;")
+                at += params.nnz_out(0)
+        if len(calls) == 1:
+            body += calls[0]
+        else:       # far from the deck (the caller's flag): the free function
+            body += ([f"    if ({flag} && {flag}[0] != 0) {{"] + ["    " + c for c in calls[1]]
+                     + ["    } else {"] + ["    " + c for c in calls[0]] + ["    }"])
     fns = [f for _, f in called]
-    sizes = dict(sz_arg=n_in + bool(cuts) + max(f.sz_arg() for f in fns),
+    sizes = dict(sz_arg=n_extra + max(f.sz_arg() for f in fns),
                  sz_res=n_res + max(f.sz_res() for f in fns), sz_iw=max(f.sz_iw() for f in fns),
-                 sz_w=total + max(f.sz_w() for f in fns), n_params=at)
+                 sz_w=total + max(f.sz_w() for f in fns), n_params=at,
+                 free=bool(variants))
     params = (f" * arg[{n_in}]: the values of the constants alone ({at}), as {name}_params\n"
               f" * computes them from the same {', '.join(constants)}.\n") if cuts else ""
     files.update(_composed(name, staged, stages, called, body, total, params))

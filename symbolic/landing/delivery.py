@@ -51,11 +51,12 @@ def delivery_delay(latency: float, period: float) -> int:
     return max(0, math.ceil(latency / period - 1e-9))
 
 
-def sensor_record(name, xp, uh, w, t, pp, p_sens, tick):
+def sensor_record(name, xp, uh, w, t, pp, p_sens, tick, contact: bool = True):
     """This tick's record of ``name`` (:func:`delivery_record`): ``fresh``, ``tau = t``, the
-    packet's values."""
+    packet's values (``contact``: :func:`~quadland_symbolic.landing.sensors.sensor_function`'s)."""
     packet = SENSOR_PACKETS[name]
-    y = packet.unpack(sensor_function(name)(xp, uh, w, t, pp, p_sens, tick[f"{name}_noise"]))
+    y = packet.unpack(sensor_function(name, contact)(xp, uh, w, t, pp, p_sens,
+                                                     tick[f"{name}_noise"]))
     fresh = tick[f"{name}_sampled"] * tick[f"{name}_kept"]
     if "valid" in packet.names():
         fresh = fresh * y["valid"]

@@ -122,7 +122,8 @@ def flat_deck_loop(model: LoopModel) -> LoopModel:
                if getattr(model, name) is not None and not (staged and name == "controller")}
     if staged:          # each SX stage flattened, composed again
         stages = model.controller_stages.with_stages(
-            flat_function(f, zeros) for f in model.controller_stages.stages)
+            (flat_function(f, zeros) for f in model.controller_stages.stages),
+            [flat_function(f, zeros) for _, f in model.controller_stages.free])
         changes.update(controller=stages.function(), controller_stages=stages)
     return dataclasses.replace(model, name=f"{model.name}_flat", **changes)
 

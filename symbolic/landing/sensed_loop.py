@@ -262,14 +262,18 @@ def detector_cues_function() -> ca.Function:
                        ["y", "range", "imu", "F_cmd", "xg", "p_guid", "p_quad"], ["cues"])
 
 
-def _world_stage(xc_lay, pc_lay) -> ca.Function:
+def _world_stage(xc_lay, pc_lay, contact: bool = True) -> ca.Function:
     """``sensed_world``: steps 1 and 2 up to the lines (the sensors: each one's record of
-    this tick, :func:`~quadland_symbolic.landing.delivery.sensor_record`)."""
+    this tick, :func:`~quadland_symbolic.landing.delivery.sensor_record`). ``contact =
+    False``: the IMU's specific force of the plant without the gear's contact, the
+    stage's :attr:`~quadland_symbolic.stages.Staged.free` function (the same values
+    where the loop flies its free plant; the contact's exp, log1p and tanh a foot, some
+    1,200 of the IMU record's 2,150 operations, not evaluated)."""
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     xc, pc, n = xc_lay.sym(), pc_lay.sym(), SENSED_TICK.sym()
     ps, tick = pc_lay.unpack(pc), SENSED_TICK.unpack(n)
-    records = [ca.densify(sensor_record(name, xp, uh, w, t, pp, ps["p_sens"], tick))
+    records = [ca.densify(sensor_record(name, xp, uh, w, t, pp, ps["p_sens"], tick, contact))
                for name in SENSOR_NAMES]
     return ca.Function("sensed_world", [xp, xc, pc, t, uh, w, pp, n], records,
                        ["xp", "xc", "pc", "t", "uh_held", "w", "pp", "n"],
@@ -405,7 +409,9 @@ def landing_sensed_loop(l: int, welded: bool = False) -> LoopModel:
                 *((f"past_{s}", "xc", xc_lay.slice(f"line_{s}").start,
                    xc_lay.slice(f"line_{s}").stop) for s in SENSOR_NAMES)),
         # each line a ring in the compiled simulator: no shift of 3,200 values a tick
-        rings=tuple((f"line_{s}", f"record_{s}", f"past_{s}") for s in SENSOR_NAMES))
+        rings=tuple((f"line_{s}", f"record_{s}", f"past_{s}") for s in SENSOR_NAMES),
+        # far from the deck the IMU's truth without the gear's contact, as the plant's
+        free=() if welded else (("sensed_world", _world_stage(xc_lay, pc_lay, False)),))
     controller = stages.function()
     xp, xc = LANDING_PLANT_STATE.sym(), xc_lay.sym()
     cs = xc_lay.unpack(xc)

@@ -191,16 +191,17 @@ def _truth(xp, t, pp):
     return q, deck_pose(x["xv"], t, p["p_veh"], p["p_deck"]), p
 
 
-def specific_force(xp, uh, w, t, pp):
+def specific_force(xp, uh, w, t, pp, contact: bool = True):
     """``R1^T (a1 - g_vec)``: an ideal accelerometer's reading, m/s^2.
 
     ``a1 = p1'' = R1 (V1' + Omega1 x V1)`` with ``V1'`` from
     :func:`~quadland_symbolic.landing.loop.loop_plant_function` (wind, disturbance
     and rotor states included); ``g_vec = [0, 0, -g]`` (E, z up), so a level
-    hover reads ``+g`` along ``b3`` and free fall reads 0.
+    hover reads ``+g`` along ``b3`` and free fall reads 0. ``contact = False``: the
+    plant without the gear's contact (the same reading where its forces are zero).
     """
     q, _, p = _truth(xp, t, pp)
-    xp_dot = LANDING_PLANT_STATE.unpack(loop_plant_function()(xp, uh, w, t, pp))
+    xp_dot = LANDING_PLANT_STATE.unpack(loop_plant_function(contact)(xp, uh, w, t, pp))
     V1_dot = QUAD6_STATE.unpack(xp_dot["x1q"])["V1"]
     R1 = rotation(q["eta1"])
     a1 = R1 @ (V1_dot + skew(q["Omega1"]) @ q["V1"])                   # p1'' in E
@@ -250,21 +251,23 @@ _IN_NAMES = ["xp", "uh", "w", "t", "pp", "p_sens", "noise"]
 
 
 @functools.cache
-def sense_imu_function() -> ca.Function:
+def sense_imu_function(contact: bool = True) -> ca.Function:
     """``sense_imu``: the :data:`IMU_PACKET` under :data:`IMU_NOISE`.
 
     Signature ``(xp, uh, w, t, pp, p_sens, noise) -> y`` (as every sensor's).
     ``eta_hat = eta1 + e_att``, ``f_b = specific_force + b_a + n_a``,
-    ``omega = Omega1 + b_g + n_g``.
+    ``omega = Omega1 + b_g + n_g``. ``contact = False``: ``sense_imu_free``, its
+    specific force of the plant without the gear's contact (:func:`specific_force`).
     """
     xp, uh, w, t, pp, ps = _args()
     noise = IMU_NOISE.sym()
     n = IMU_NOISE.unpack(noise)
     q, _, _ = _truth(xp, t, pp)
     y = ca.vertcat(q["eta1"] + n["e_att"],
-                   specific_force(xp, uh, w, t, pp) + n["b_a"] + n["n_a"],
+                   specific_force(xp, uh, w, t, pp, contact) + n["b_a"] + n["n_a"],
                    q["Omega1"] + n["b_g"] + n["n_g"])
-    return ca.Function("sense_imu", [xp, uh, w, t, pp, ps, noise], [y], _IN_NAMES, ["y"])
+    return ca.Function("sense_imu" if contact else "sense_imu_free",
+                       [xp, uh, w, t, pp, ps, noise], [y], _IN_NAMES, ["y"])
 
 
 @functools.cache
@@ -354,8 +357,11 @@ _BUILDERS = MappingProxyType({"imu": sense_imu_function, "vision": sense_vision_
                               "datalink": sense_datalink_function})
 
 
-def sensor_function(name: str) -> ca.Function:
-    """The Function ``sense_<name>`` of one of :data:`SENSOR_NAMES`."""
+def sensor_function(name: str, contact: bool = True) -> ca.Function:
+    """The Function ``sense_<name>`` of one of :data:`SENSOR_NAMES`; ``contact = False``:
+    the IMU's of the plant without the gear's contact (:func:`sense_imu_function`)."""
+    if name == "imu" and not contact:
+        return sense_imu_function(False)
     try:
         return _BUILDERS[name]()
     except KeyError:
