@@ -115,6 +115,21 @@ def _call(where, fname, core, total) -> list:
             + [f"    if ({fname}(arg1, res1, iw, w + {total}, 0)) return 1;"])
 
 
+def _params_call(where, fname, params, at) -> list:
+    """The lines computing a cut stage's values of the constants alone into ``res[0]``."""
+    return ([f"    arg1[{i}] = {where[n]};" for i, n in enumerate(params.name_in())]
+            + [f"    res1[0] = res[0] ? res[0] + {at} : 0;",
+               f"    if ({fname}(arg1, res1, iw, w, 0)) return 1;"])
+
+
+def _branch(flag, calls) -> list:
+    """A stage's call, or its free function's where the caller's ``flag`` is not zero."""
+    if len(calls) == 1:
+        return calls[0]
+    return ([f"    if ({flag} && {flag}[0] != 0) {{"] + ["    " + c for c in calls[1]]
+            + ["    } else {"] + ["    " + c for c in calls[0]] + ["    }"])
+
+
 def staged_sources(prefix: str, staged, emit, constants=(), free: bool = False
                    ) -> tuple[dict, dict]:
     """The C of ``staged`` (named ``<prefix><its name>``), one file a stage.
@@ -130,11 +145,9 @@ def staged_sources(prefix: str, staged, emit, constants=(), free: bool = False
     constants : tuple of str
         Inputs the caller holds constant over its calls (module docstring).
     free : bool
-        Whether the caller says where the gear is far from the deck: the stages'
-        :attr:`~quadland_symbolic.stages.Staged.free` functions are written too
-        (``<prefix><name>_<stage>_free``) and called instead of their stages where the
-        value at ``arg[n_in]`` (after the constants', ``arg[n_in + 1]``, where stages
-        are cut) is not zero.
+        Whether the caller flags where the gear is far from the deck: the stages'
+        :attr:`~quadland_symbolic.stages.Staged.free` functions (``<name>_<stage>_free``),
+        called instead where ``arg[n_in]`` (after the constants', ``arg[n_in + 1]``) is not 0.
 
     Returns
     -------
@@ -178,15 +191,9 @@ def staged_sources(prefix: str, staged, emit, constants=(), free: bool = False
             if params is not None:
                 files.update(emit(f"{name}_{sname}_params", params))
                 called.append((f"{sname}_params", params))
-                pbody += [f"    arg1[{i}] = {where[n]};" for i, n in enumerate(params.name_in())]
-                pbody.append(f"    res1[0] = res[0] ? res[0] + {at} : 0;")
-                pbody.append(f"    if ({name}_{sname}_params(arg1, res1, iw, w, 0)) return 1;")
+                pbody += _params_call(where, f"{name}_{sname}_params", params, at)
                 at += params.nnz_out(0)
-        if len(calls) == 1:
-            body += calls[0]
-        else:       # far from the deck (the caller's flag): the free function
-            body += ([f"    if ({flag} && {flag}[0] != 0) {{"] + ["    " + c for c in calls[1]]
-                     + ["    } else {"] + ["    " + c for c in calls[0]] + ["    }"])
+        body += _branch(flag, calls)
     fns = [f for _, f in called]
     sizes = dict(sz_arg=n_extra + max(f.sz_arg() for f in fns),
                  sz_res=n_res + max(f.sz_res() for f in fns), sz_iw=max(f.sz_iw() for f in fns),
