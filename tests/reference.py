@@ -224,11 +224,19 @@ HIGHWAY_GRAZE = ["touchdown.switch_impulse=0.002"]
 HIGHWAY_SIXTEENTH = [*HIGHWAY_GRAZE, "landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
                      "landing.crawl_gate_time=1000.0", "land_detector.contact_thrust=false"]
 
+#: highway_100's crawl before "highway_100: the crawl's gate on the predicted offset, its wait
+#: over the whole crawl" (docs/landing.md, nineteenth session): no gate (the schema's
+#: defaults: no gate, the whole time to contact, no floor, no wait); the replays measured on
+#: the eighteenth's file (and, through ``HIGHWAY_100_GRAZE``, every older one) pin it.
+HIGHWAY_100_GATE = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
+                    "landing.crawl_gate_time=1000.0", "landing.crawl_gate_wait=1000.0"]
+
 #: highway_100's contact switch before "highway_100: the graze the switch did not feel"
 #: (docs/landing.md, eighteenth session): it closed on 2 ms of the weight's load impulse, so a
 #: front foot's graze (0.5-1.8 ms) left it open; the replays measured on the seventeenth's
-#: file (and, through ``HIGHWAY_100_MARKER``, every older one) pin it.
-HIGHWAY_100_GRAZE = ["touchdown.switch_impulse=0.002"]
+#: file (and, through ``HIGHWAY_100_MARKER``, every older one) pin it (and its crawl,
+#: ``HIGHWAY_100_GATE``).
+HIGHWAY_100_GRAZE = [*HIGHWAY_100_GATE, "touchdown.switch_impulse=0.002"]
 
 #: highway_100's withdrawal before "highway_100: the lane change's withdrawal down to the
 #: front feet's contact" (docs/landing.md, seventeenth session): the swerve's hold past 0.3

@@ -143,7 +143,7 @@ def _wait_height(name):
 def test_the_other_shipped_scenarios_bound_the_wait_everywhere(name):
     """No other shipped file sets the key: the schema's default, 1000 m, reaches the
     flight's parameters (highway's and turning's gates wait at 0.10 m,
-    test_turning_gate_ships.py)."""
+    test_turning_gate_ships.py; highway_100's gate waits at any height, test_crawl_gate.py)."""
     assert _wait_height(name) == (1e3, 1e3)
 
 

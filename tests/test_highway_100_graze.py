@@ -7,13 +7,14 @@ or withdrawn; the switch of before stayed open, no touchdown was declared, and t
 back up off the roof, which the judge counts as a bounce. Checked against a hand integration
 of the gear's logged load (the trapezoid rule over the rows of a 1 kHz replay) and the switch's
 threshold, on the default seed's run 1145, which the file of before (``HIGHWAY_100_GRAZE``)
-loses that way and the shipped file lands.
+loses that way and the eighteenth's file (the switch shipped, no crawl gate yet:
+``HIGHWAY_100_GATE``) lands.
 """
 
 import numpy as np
 import pytest
 from graze_rig import G, flown, graze
-from reference import HIGHWAY_100_GRAZE
+from reference import HIGHWAY_100_GATE, HIGHWAY_100_GRAZE
 
 
 def _flown(index, *extra):
@@ -39,7 +40,7 @@ def test_the_thresholds_straddle_a_hand_integrated_graze():
     assert np.all(before["phase"][k0:k1 + 1] == 2)
     assert not rep_before.success and rep_before.bounced and rep_before.bounce > 1.0
 
-    res, rep = _flown(1145)
+    res, rep = _flown(1145, *HIGHWAY_100_GATE)
     k0, k1, impulse = graze(res)
     assert res.scenario.data["touchdown"]["switch_impulse"] == 0.0005
     passed = k0 + int(np.argmax(impulse > 0.5e-3))
@@ -63,9 +64,9 @@ def test_the_graze_closes_the_switch_through_its_penetration(index):
     closes within 20 ms of the same contact and the run lands secured, with the contact's
     figures of the 0.1 mm model to 1 mm."""
     thin = "gear.onset_width=1e-05"
-    ref, rep_ref = _flown(index)
+    ref, rep_ref = _flown(index, *HIGHWAY_100_GATE)
     before, rep_before = _flown(index, thin, *HIGHWAY_100_GRAZE)
-    res, rep = _flown(index, thin)
+    res, rep = _flown(index, thin, *HIGHWAY_100_GATE)
     assert rep_ref.success and not rep_before.success and rep_before.bounced
     assert np.all(np.nan_to_num(before["t_contact"]) == 0.0)
     closed = int(np.argmax(res["t_contact"] > 0))
