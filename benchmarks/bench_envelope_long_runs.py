@@ -12,6 +12,13 @@ Issue 20's map (``highway``, the car at 5 to 35 m/s against the crosswind 0 to 2
 
       nice -n 10 python benchmarks/bench_envelope_long_runs.py --split 200
 
+* ``--phases N`` flies ``N`` landings of replicate 0 in slow cells twice each, whole and
+  with ``simulation.duration`` 0.05 s before their touchdown (three rounds, medians): the
+  compiled flight's CPU before the touchdown per simulated second, and what the last 2.05
+  s (the first contact and the ride to ``landing.settle_time``) add::
+
+      nice -n 10 python benchmarks/bench_envelope_long_runs.py --phases 40
+
 * ``--schedule RUNS_CSV`` replays a whole map's runs on two workers as
   :func:`~quadland.campaign.local.pool_runs` feeds them (chunks of
   :func:`~quadland.campaign.local.chunk_size` runs, :data:`~quadland.campaign.local.AHEAD`
@@ -110,6 +117,52 @@ for d in draws:
 print(json.dumps(groups))
 '''
 
+PHASES = r'''
+import json, statistics, sys, time
+from threadpoolctl import threadpool_limits
+from quadland.engine.heap import keep_freed_memory
+threadpool_limits(1)
+keep_freed_memory()
+from quadland.campaign.dispersed import dispersed
+from quadland.campaign.fly import fly, warm_up
+from quadland.campaign.grid import KEEP_BYTES, cell_draws, plan_envelope
+from quadland.engine import compiled
+from quadland.engine.kept import keeping
+from quadland.kinds.landing.simulate import simulate_landing
+n, AXES = int(sys.argv[1]), json.loads(sys.argv[2])
+flight = [0.0]
+sampled = compiled.CompiledLoop.sampled
+def timed(*a, **k):
+    t = time.process_time()
+    try:
+        return sampled(*a, **k)
+    finally:
+        flight[0] += time.process_time() - t
+compiled.CompiledLoop.sampled = timed
+env = plan_envelope("highway", None, AXES, 30)
+warm_up(env.base)
+draws = list(cell_draws(env, [c * 30 for c in range(0, 80, max(1, 80 // n))][:n]))
+outs = [fly(env.base, d, env.spec.limits, KEEP_BYTES) for d in draws]
+landed = [(d, o.metrics["touchdown_time"]) for d, o in zip(draws, outs)
+          if o.metrics.get("touchdown_time") is not None]
+cpu = {"whole": [[] for _ in landed], "cut": [[] for _ in landed]}
+for _ in range(3):
+    for i, (d, td) in enumerate(landed):
+        for how in cpu:
+            sc = dispersed(env.base, d.values)
+            if how == "cut":
+                sc = sc.replace(**{"simulation.duration": round(td - 0.05, 2)})
+            flight[0] = 0.0
+            with keeping(KEEP_BYTES):
+                simulate_landing(sc)
+            cpu[how][i].append(flight[0])
+whole, cut = (statistics.mean(statistics.median(c) for c in cpu[h]) for h in ("whole", "cut"))
+td = statistics.mean(t for _, t in landed)
+print(json.dumps({"landings": len(landed), "touchdown": td, "whole": whole * 1e3,
+                  "cut": cut * 1e3, "before per s": cut * 1e3 / (td - 0.05),
+                  "last": (whole - cut) * 1e3}))
+'''
+
 FLY_SET = r'''
 import hashlib, json, sys, time
 from threadpoolctl import threadpool_limits
@@ -167,6 +220,17 @@ def split(runs: int) -> None:
     print("| the rest of the run, ms | " + " | ".join(
         f"{(g[n]['cpu'] - g[n]['parts'].get(flight, 0.0)) / g[n]['runs'] * 1e3:.2f}"
         for n in names) + " |")
+
+
+def phases(n: int) -> None:
+    """``--phases``: a landing's compiled flight before its touchdown and after."""
+    out = subprocess.run([sys.executable, "-c", PHASES, str(n), json.dumps(AXES)],
+                         capture_output=True, text=True, check=True, env=python_env())
+    r = json.loads(out.stdout.splitlines()[-1])
+    print(f"{r['landings']} landings, touchdown at {r['touchdown']:.2f} s on average; the "
+          f"compiled flight {r['whole']:.2f} ms, to 0.05 s before the touchdown "
+          f"{r['cut']:.2f} ms ({r['before per s']:.3f} ms per simulated second), the last "
+          f"2.05 s {r['last']:.2f} ms ({r['last'] / 2.05:.3f} ms per simulated second)")
 
 
 def finishing_times(costs: list[float], workers: int, chunk: int, ahead: int) -> list[float]:
@@ -349,6 +413,7 @@ def pgo(rounds: int, runs: int, train: int, command: int) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--split", type=int, default=0, metavar="N")
+    parser.add_argument("--phases", type=int, default=0, metavar="N")
     parser.add_argument("--schedule", type=Path, default=None, metavar="RUNS_CSV")
     parser.add_argument("--ms-per-s", type=float, nargs=2, default=(1.10, 1.38),
                         help="the compiled flight's CPU ms per simulated second: runs "
@@ -364,6 +429,8 @@ def main() -> None:
     a = parser.parse_args()
     if a.split:
         split(a.split)
+    if a.phases:
+        phases(a.phases)
     if a.schedule is not None:
         schedule(a.schedule, tuple(a.ms_per_s), a.ms_fixed)
     if a.pgo:
