@@ -184,6 +184,9 @@ for label, picks in groups.items():
     out[label] = (cpu / len(draws) * 1e3, hashlib.sha256(repr(
         [(o.index, o.status, o.success, sorted(o.metrics.items()), o.message)
          for o in outs]).encode()).hexdigest())
+from quadland.kinds.landing.simulate import landing_loop_part
+with open(landing_loop_part(10, "sampled", sensed=True, flat=True).library, "rb") as fh:
+    out["library"] = hashlib.file_digest(fh, "sha256").hexdigest()
 print(json.dumps(out))
 '''
 
@@ -307,15 +310,21 @@ def _build(cc: str, flags: list[str], files: dict, out: Path) -> Path:
     return lib
 
 
-def _cache_with(src: Path, library: Path, lib: Path, dst: Path) -> Path:
-    """A copy of the build cache ``src`` with ``library`` (a path in it) replaced by ``lib``."""
-    shutil.copytree(src, dst)
-    target = dst / library.relative_to(src)
+def _cache_with(xdg: Path, library: Path, lib: Path, dst: Path) -> Path:
+    """A copy ``dst`` of the build cache ``xdg`` (an ``XDG_CACHE_HOME``) with ``library`` (a
+    path in it) replaced by ``lib``: the ``XDG_CACHE_HOME`` of the children that fly it."""
+    shutil.copytree(xdg / "quadland", dst / "quadland")
+    target = dst / library.relative_to(xdg)
     shutil.copyfile(lib, target)
     with open(target, "rb") as fh:
         digest = hashlib.file_digest(fh, "sha256").hexdigest()
     target.with_name(target.name + ".sha256").write_text(digest + "\n")
-    return dst.parent
+    return dst
+
+
+def _sha256(path: Path) -> str:
+    with open(path, "rb") as fh:
+        return hashlib.file_digest(fh, "sha256").hexdigest()
 
 
 def _picks(replicate: int, per_group: int) -> dict:
@@ -339,7 +348,7 @@ def pgo_caches(tmp: Path, train: int) -> tuple[Path, Path]:
 
     part = landing_loop_part(10, "sampled", sensed=True, flat=True)
     library = Path(part.library)
-    src = library.parent.parent.parent            # <XDG_CACHE_HOME>/quadland/<key>/<lib>
+    xdg = library.parents[2]                       # <XDG_CACHE_HOME>/quadland/<key>/<lib>
     files = simulator_sources(built_model(landing_loop_recipe(10, True, False, True)),
                               "sampled")
     cc = find_compiler()
@@ -349,15 +358,26 @@ def pgo_caches(tmp: Path, train: int) -> tuple[Path, Path]:
     profile = tmp / "profile"
     gen = _build(cc, [*flags, f"-fprofile-generate={profile}", "-fprofile-update=single"],
                  files, tmp / "pgo")
-    trained = _cache_with(src.parent, library, gen, tmp / "cache-gen" / "xdg")
+    trained = _cache_with(xdg, library, gen, tmp / "cache-gen")
     for r in (1, 2):
-        subprocess.run([sys.executable, "-c", FLY_SET, json.dumps(AXES),
-                        json.dumps(_picks(r, train))], check=True, capture_output=True,
-                       env=python_env(trained))
+        _fly_set(trained, _picks(r, train), _sha256(gen))
+    assert any(profile.rglob("*.gcda")), "the training flight wrote no profile"
     use = _build(cc, [*flags, f"-fprofile-use={profile}", "-fprofile-partial-training"],
                  files, tmp / "pgo")                 # the same objects' names as the profile's
-    return (_cache_with(src.parent, library, base, tmp / "cache-base" / "xdg"),
-            _cache_with(src.parent, library, use, tmp / "cache-pgo" / "xdg"))
+    assert use.read_bytes() != base.read_bytes(), "the profile changed nothing"
+    return (_cache_with(xdg, library, base, tmp / "cache-base"),
+            _cache_with(xdg, library, use, tmp / "cache-pgo"))
+
+
+def _fly_set(cache: Path, picks: dict, library: str) -> dict:
+    """``FLY_SET`` in a child on ``cache``, refused unless it flew the library of SHA-256
+    ``library`` (a cache missing it would build the runtime's own)."""
+    out = subprocess.run([sys.executable, "-c", FLY_SET, json.dumps(AXES), json.dumps(picks)],
+                         check=True, capture_output=True, text=True, env=python_env(cache))
+    got = json.loads(out.stdout.splitlines()[-1])
+    flown = got.pop("library")
+    assert flown == library, f"the child flew {flown[:12]}, not {library[:12]}"
+    return got
 
 
 def command_child(cache: Path, k: int, tmp: Path) -> dict:
@@ -372,6 +392,8 @@ def command_child(cache: Path, k: int, tmp: Path) -> dict:
                                "--runs-per-cell", str(k), "--no-plots", "--out", str(out)],
                               None, python_env(cache))
     digest = hashlib.sha256((out / "runs.csv").read_bytes()).hexdigest()
+    built = list(cache.rglob("qlsim_landing_sensed_flat_sampled.so"))
+    assert len(built) == 1, "the command built its own simulator beside the one given"
     return {"the command, all processes, CPU s": (cpu, digest),
             "the command, wall s": (wall, digest)}
 
@@ -382,18 +404,16 @@ def pgo(rounds: int, runs: int, train: int, command: int) -> None:
     try:
         caches = dict(zip(("runtime's build", "profile-guided"), pgo_caches(tmp, train),
                           strict=True))
+        libs = {name: _sha256(tmp / ("base" if name == "runtime's build" else "pgo") /
+                              "lib.so") for name in caches}
         res: dict = {}
         for _ in range(rounds):
             for name, cache in caches.items():
                 if command:
                     got = command_child(cache, command, tmp)
                 else:
-                    out = subprocess.run([sys.executable, "-c", FLY_SET, json.dumps(AXES),
-                                          json.dumps(_picks(0, runs))], check=True,
-                                         capture_output=True, text=True,
-                                         env=python_env(cache))
                     got = {f"{k}, CPU ms a run": v for k, v in
-                           json.loads(out.stdout.splitlines()[-1]).items()}
+                           _fly_set(cache, _picks(0, runs), libs[name]).items()}
                 for what, (value, digest) in got.items():
                     res.setdefault(what, {}).setdefault(name, []).append((value, digest))
         a, b = caches
