@@ -264,6 +264,7 @@ def finishing_times(costs: list[float], workers: int, chunk: int, ahead: int) ->
 
 def schedule(path: Path, ms_per_s: tuple[float, float], ms_fixed: float) -> None:
     """``--schedule``: the two workers' ends in the envelope's order and longest first."""
+    from quadland.campaign.grid import Envelope, flight_order
     from quadland.campaign.local import AHEAD, chunk_size
 
     with open(path, newline="") as fh:
@@ -285,8 +286,8 @@ def schedule(path: Path, ms_per_s: tuple[float, float], ms_fixed: float) -> None
           f"the others {flown_td:.0f} ({flown_nt / (flown_nt + flown_td):.1%} without)")
     print(f"modelled CPU {total:.1f} s, half of it {total / 2:.2f} s; chunks of {chunk}, "
           f"{AHEAD} ahead")
-    orders = {"the envelope's (replicate by replicate)": sorted(
-                  costs, key=lambda g: (g % k, g // k)),
+    orders = {"the envelope's (replicate by replicate)": flight_order(
+                  Envelope(None, None, (), k), sorted(costs)),
               "longest first": sorted(costs, key=lambda g: -costs[g])}
     for name, order in orders.items():
         end = finishing_times([costs[g] for g in order], 2, chunk, AHEAD)
@@ -435,11 +436,12 @@ def main() -> None:
     parser.add_argument("--split", type=int, default=0, metavar="N")
     parser.add_argument("--phases", type=int, default=0, metavar="N")
     parser.add_argument("--schedule", type=Path, default=None, metavar="RUNS_CSV")
-    parser.add_argument("--ms-per-s", type=float, nargs=2, default=(1.10, 1.38),
+    parser.add_argument("--ms-per-s", type=float, nargs=2, default=(1.18, 1.48),
                         help="the compiled flight's CPU ms per simulated second: runs "
                              "without a touchdown, the others")
-    parser.add_argument("--ms-fixed", type=float, default=5.8,
-                        help="CPU ms a run besides the compiled flight")
+    parser.add_argument("--ms-fixed", type=float, default=7.1,
+                        help="CPU ms a run besides the compiled flight (the defaults: "
+                             "docs/performance.md's --split 400 table)")
     parser.add_argument("--pgo", type=int, default=0, metavar="ROUNDS")
     parser.add_argument("--runs", type=int, default=30, help="--pgo: runs a group")
     parser.add_argument("--train", type=int, default=40,

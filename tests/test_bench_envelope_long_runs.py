@@ -38,3 +38,11 @@ def test_chunks_queued_ahead_are_flown_by_the_worker_they_were_sent_to(bench):
     assert bench.finishing_times(costs, 2, 2, 1) == [8.0, 4.0]
     # every run is flown once: the ends add up to the work when nothing waits
     assert sum(bench.finishing_times([1.0] * 9, 3, 2, 4)) == pytest.approx(9.0)
+
+
+def test_a_worker_sent_nothing_ends_at_zero_and_late_chunks_follow_the_first_free(bench):
+    # fewer chunks than the first sends: worker 0 holds both (1 s, 2 s), worker 1 none
+    assert bench.finishing_times([1.0, 2.0], 2, 1, 2) == [3.0, 0.0]
+    # chunks of 3 (the last one short): 3 s and 6 s sent first, one each; worker 0 is
+    # free at 3 s and takes the 1 s rest: both end at 4 s and 6 s
+    assert bench.finishing_times([1.0] * 3 + [2.0] * 3 + [1.0], 2, 3, 1) == [4.0, 6.0]
