@@ -25,9 +25,9 @@ from quadland.scenario import load_scenario
 
 #: highway's touchdown and descent of before this change (main at 42d6c22), with no crawl
 #: gate and the land detector of before (``reference.HIGHWAY_SIXTEENTH``).
-BEFORE = ['touchdown.policy="idle"', "touchdown.flare_tilt_deg=34.0",
+BEFORE = [*HIGHWAY_SIXTEENTH, 'touchdown.policy="idle"', "touchdown.flare_tilt_deg=34.0",
           "touchdown.level_time=0.35", "touchdown.cut_time=0.5", "landing.descent_leash=0.0",
-          "sensors.vision.small_range_max=0.0", *HIGHWAY_SIXTEENTH]
+          "sensors.vision.small_range_max=0.0"]
 
 
 def test_the_flare_and_the_leash_are_inside_the_judge_and_the_gear():
