@@ -9,6 +9,6 @@ marker"), and with no crawl gate and the land detector of before
 
 from reference import HIGHWAY_SIXTEENTH
 
-BEFORE = ['touchdown.policy="idle"', "touchdown.flare_tilt_deg=34.0",
+BEFORE = [*HIGHWAY_SIXTEENTH, 'touchdown.policy="idle"', "touchdown.flare_tilt_deg=34.0",
           "touchdown.level_time=0.35", "touchdown.cut_time=0.5", "landing.descent_leash=0.0",
-          "sensors.vision.small_range_max=0.0", *HIGHWAY_SIXTEENTH]
+          "sensors.vision.small_range_max=0.0"]

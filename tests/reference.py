@@ -217,12 +217,19 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
 #: and default seed (through ``HIGHWAY_SIXTEENTH`` and ``HIGHWAY_GATE_SIXTEENTH``) pin it.
 HIGHWAY_GRAZE = ["touchdown.switch_impulse=0.002"]
 
+#: highway's descent leash before "The cars' offset at first contact: the tail taken apart, and
+#: a shorter leash" (docs/landing.md, nineteenth session): 5 cm (now 2 cm); the replays of
+#: highway's earlier rows and default seed (through ``HIGHWAY_SIXTEENTH`` and
+#: ``HIGHWAY_GATE_SIXTEENTH``, and the eighteenth's graze and seventeenth's wait replays) pin it.
+HIGHWAY_LEASH = ["landing.descent_leash=0.05"]
+
 #: highway's crawl and land detector before "The crawl's gate and a ground contact that needs
 #: the deck to carry the weight" (docs/landing.md, sixteenth session): no gate (the committed
 #: crawl, the whole time to contact, no floor) and the detector's ground contact without the
 #: thrust cue; the replays of highway's earlier campaign rows and default seed pin it.
-HIGHWAY_SIXTEENTH = [*HIGHWAY_GRAZE, "landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
-                     "landing.crawl_gate_time=1000.0", "land_detector.contact_thrust=false"]
+HIGHWAY_SIXTEENTH = [*HIGHWAY_GRAZE, *HIGHWAY_LEASH, "landing.crawl_gate=0.0",
+                     "landing.crawl_gate_floor=0.0", "landing.crawl_gate_time=1000.0",
+                     "land_detector.contact_thrust=false"]
 
 #: highway_100's crawl before "highway_100: the crawl's gate on the predicted offset, its wait
 #: over the whole crawl" (docs/landing.md, nineteenth session): no gate (the schema's
@@ -248,7 +255,8 @@ HIGHWAY_100_MARKER = [*HIGHWAY_100_GRAZE, "landing.swerve_accel=0.3",
 #: highway's crawl gate as the sixteenth session shipped it, before "The crawl's gate: a wait
 #: near the deck only" (docs/landing.md, seventeenth session): the floor at 0.10 m and no wait;
 #: the replays of the sixteenth's gate (seed 13's run 133) pin it.
-HIGHWAY_GATE_SIXTEENTH = [*HIGHWAY_GRAZE, "landing.crawl_gate_floor=0.1",
+HIGHWAY_GATE_SIXTEENTH = [*HIGHWAY_GRAZE, *HIGHWAY_LEASH,
+                          "landing.crawl_gate_floor=0.1",
                           "landing.crawl_gate_wait=1000.0",
                           "landing.crawl_gate_wait_height=1000.0"]
 

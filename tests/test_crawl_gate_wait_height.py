@@ -14,7 +14,7 @@ import ctypes
 
 import numpy as np
 import pytest
-from reference import GUIDANCE_P, have_compiler
+from reference import GUIDANCE_P, HIGHWAY_LEASH, have_compiler
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -155,11 +155,12 @@ def test_highway_bounds_its_wait_at_its_old_floor():
 
 
 def _fly_236(*overrides):
-    """Seed 11's run 236 on highway (turbulence_w20 12.1 m/s) plus ``overrides``: the
-    report, the reference's height above touchdown, the phase and the time."""
+    """Seed 11's run 236 on highway (turbulence_w20 12.1 m/s) with the leash it was measured
+    with (``HIGHWAY_LEASH``, 5 cm) plus ``overrides``: the report, the reference's height
+    above touchdown, the phase and the time."""
     sc = load_scenario("highway", ["campaign.seed=11"])
     d = draws(campaign_spec_of(sc), [236])[0]
-    sc = load_scenario("highway", [*d.overrides(), *overrides])
+    sc = load_scenario("highway", [*d.overrides(), *HIGHWAY_LEASH, *overrides])
     res = quadland.simulate(sc)
     return (touchdown_report(res), np.asarray(res["z_ref"]) - sc["quadrotor.gear_height"],
             np.asarray(res["phase"]), np.asarray(res["t"]))

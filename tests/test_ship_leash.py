@@ -112,9 +112,10 @@ def test_ship_flies_its_crawl_on_the_leash():
     """``ship`` flies its crawl (touchdown_speed x descent_time = 0.3 m, the flare's
     height) on the 2 cm leash (:data:`CRAWL_LEASH`), at the 0.3 m/s the tests below assume;
     the other landing scenarios keep the default height, the whole descent, and all but
-    ``highway`` (whose 5 cm leash holds the whole descent, tests/test_highway_flare_leash.py)
-    and ``highway_100`` (the same leash, docs/landing.md, "highway_100: the observer and the
-    leash") fly with no leash."""
+    ``highway`` (whose leash holds the whole descent, tests/test_highway_flare_leash.py: 2 cm
+    since the nineteenth session, tests/test_highway_leash_ships.py) and ``highway_100``
+    (highway's 5 cm of before, docs/landing.md, "highway_100: the observer and the leash")
+    fly with no leash."""
     sc = load_scenario("ship")
     assert sc["landing.descent_leash"] == LEASH and sc["landing.touchdown_speed"] == CRAWL
     assert sc["landing.leash_height"] == pytest.approx(
@@ -124,8 +125,8 @@ def test_ship_flies_its_crawl_on_the_leash():
     for name in ("ship_ss5", "highway", "turning", "highway_100"):
         sc = load_scenario(name)
         assert sc["landing.leash_height"] == 1e3
-        assert sc["landing.descent_leash"] == (0.05 if name in ("highway", "highway_100")
-                                               else 0.0)
+        assert sc["landing.descent_leash"] == {"highway": 0.02, "highway_100": 0.05}.get(name,
+                                                                                      0.0)
 
 
 @pytest.mark.slow
