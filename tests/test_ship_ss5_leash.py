@@ -16,6 +16,7 @@ the leash it passed it inside the floor and met the deck at 0.526 m/s.
 
 import numpy as np
 import pytest
+from ship_before import LEASH_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -24,7 +25,7 @@ from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
 
 #: ``ship_ss5``'s guidance before its leash: the reference falls at the crawl's rate.
-NO_LEASH = ("landing.descent_leash=0.0", "landing.leash_height=1000.0")
+NO_LEASH = LEASH_BEFORE
 
 
 def _fly(index, *overrides):
