@@ -47,3 +47,9 @@ HEAVE_BEFORE = ("estimator.heave_frequency=0.0", "estimator.heave_in_filter=0.0"
 #: "The ships' tilt at the contact: the flare held about the deck's normal too"); ``ship`` takes
 #: the default (no limit), so the key leaves its flights as they are.
 DECK_TILT_BEFORE = "touchdown.flare_deck_tilt_deg=90.0"
+
+#: The crawl of before on ``ship_ss5``: the reference falls at the crawl's rate, on no leash.
+#: ``ship_ss5`` flies ``ship``'s 2 cm leash in its crawl since the nineteenth session
+#: (docs/landing.md, "ship_ss5: the crawl on the leash, with the heave in the filter");
+#: ``ship`` has flown it since the tenth, so these keys are not its flights of before.
+LEASH_BEFORE = ("landing.descent_leash=0.0", "landing.leash_height=1000.0")

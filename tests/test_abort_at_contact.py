@@ -14,7 +14,7 @@ with the abort is the contact without it, to within 10 ms, 1 cm, 0.01 m/s horizo
 
 import numpy as np
 import pytest
-from ship_before import ABORT_BEFORE, DECK_TILT_BEFORE, HEAVE_BEFORE
+from ship_before import ABORT_BEFORE, DECK_TILT_BEFORE, HEAVE_BEFORE, LEASH_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -28,12 +28,13 @@ RUNS = ((13, 173), (11, 107))
 
 def _fly(seed, index, *overrides):
     """The run's result and touchdown report, ship_ss5 as shipped plus ``overrides``, with the
-    pad's heave and flare of before (:data:`HEAVE_BEFORE`, :data:`DECK_TILT_BEFORE`: the
-    fifteenth session's flights)."""
+    pad's heave, flare and crawl of before (:data:`HEAVE_BEFORE`, :data:`DECK_TILT_BEFORE`,
+    :data:`LEASH_BEFORE`: the fifteenth session's flights)."""
     spec = campaign_spec_of(load_scenario("ship_ss5", [f"campaign.seed={seed}"]))
     d = draws(spec, [index])[0]
     res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *HEAVE_BEFORE,
-                                                       DECK_TILT_BEFORE, *overrides]))
+                                                       DECK_TILT_BEFORE, *LEASH_BEFORE,
+                                                       *overrides]))
     return res, touchdown_report(res)
 
 

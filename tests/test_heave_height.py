@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from nav_reference import N, col, sl
-from ship_before import HEAVE_BEFORE
+from ship_before import HEAVE_BEFORE, LEASH_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -133,10 +133,13 @@ def test_the_output_steps_at_the_gate_by_the_horizons_carry():
 
 
 def _run_104(*overrides):
-    """Seed 7's run 104 of ship_ss5 (its draw), with ``overrides``: the result, its report."""
+    """Seed 7's run 104 of ship_ss5 (its draw), with ``overrides``, on the crawl of the
+    sixteenth session (no leash, :data:`LEASH_BEFORE`; ``ship_ss5`` flies ``ship``'s since the
+    nineteenth): the result, its report."""
     seed7 = ["campaign.seed=7"]
     d = draws(campaign_spec_of(load_scenario("ship_ss5", seed7)), [104])[0]
-    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *overrides]))
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *LEASH_BEFORE,
+                                                       *overrides]))
     return res, touchdown_report(res)
 
 

@@ -43,7 +43,8 @@ from quadland_symbolic.landing.guidance import (
 #: The ships' leash, m, and the crawl, m/s (their TOMLs).
 LEASH, CRAWL = 0.02, 0.3
 #: The guidance before the ships' leash, and the leash in the crawl (``ship``'s TOML; on
-#: ``ship_ss5`` measured, not shipped: docs/landing.md).
+#: ``ship_ss5`` measured and not shipped in the tenth session, shipped in the nineteenth:
+#: docs/landing.md).
 NO_LEASH = ["landing.descent_leash=0.0", "landing.leash_height=1000.0"]
 CRAWL_LEASH = [f"landing.descent_leash={LEASH}", "landing.leash_height=0.3"]
 #: The touchdown height (the gear, m) and one step, s, of the by-hand steps below.
@@ -111,7 +112,8 @@ def _at_contact(res):
 def test_ship_flies_its_crawl_on_the_leash():
     """``ship`` flies its crawl (touchdown_speed x descent_time = 0.3 m, the flare's
     height) on the 2 cm leash (:data:`CRAWL_LEASH`), at the 0.3 m/s the tests below assume;
-    the other landing scenarios keep the default height, the whole descent, and all but
+    ``ship_ss5`` the same since the nineteenth session (tests/test_ship_ss5_leash.py); the
+    other landing scenarios keep the default height, the whole descent, and all but
     ``highway`` (whose leash holds the whole descent, tests/test_highway_flare_leash.py: 2 cm
     since the nineteenth session, tests/test_highway_leash_ships.py) and ``highway_100``
     (highway's 5 cm of before, docs/landing.md, "highway_100: the observer and the leash")
@@ -122,7 +124,8 @@ def test_ship_flies_its_crawl_on_the_leash():
         sc["landing.touchdown_speed"] * sc["landing.descent_time"])
     assert sc["touchdown.flare_height"] == sc["landing.leash_height"]
     assert load_scenario("ship", CRAWL_LEASH).data == sc.data
-    for name in ("ship_ss5", "highway", "turning", "highway_100"):
+    assert load_scenario("ship_ss5", CRAWL_LEASH).data == load_scenario("ship_ss5").data
+    for name in ("highway", "turning", "highway_100"):
         sc = load_scenario(name)
         assert sc["landing.leash_height"] == 1e3
         assert sc["landing.descent_leash"] == {"highway": 0.02, "highway_100": 0.05}.get(name,
