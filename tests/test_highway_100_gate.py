@@ -62,8 +62,8 @@ def test_the_flights_part_where_the_hand_prediction_passes_the_gate_inside_the_a
     most ``descent_leash``, so ``t_go >= (gap - 0.05) / touchdown_speed``), passes the 0.10 m
     gate, while the estimate is inside the align band (half ``max_offset`` and
     ``max_relative_speed``: 0.1 m, 0.25 m/s), where
-    ``crawl_pause`` alone lets the crawl fall (and the eighteenth's did); 5 ms earlier it was
-    inside the gate. The gated reference then holds over the falling one."""
+    ``crawl_pause`` alone lets the crawl fall (and the eighteenth's did); at the start of those
+    10 ms it was inside the gate. The gated reference then holds over the falling one."""
     before, _ = flown("highway_100", 165, *HIGHWAY_100_GATE)
     res, _ = flown("highway_100", 165)
     land = res.scenario.data["landing"]
