@@ -52,3 +52,32 @@ def test_the_shipped_gate_lands_it_on_the_pad():
     assert (land["crawl_gate"], land["crawl_gate_time"], land["crawl_gate_wait"]) == (0.1, 0.3, 1.0)
     assert rep.success and rep.secured and rep.on_pad
     assert rep.offset < 0.1 and rep.offset < rep_before.offset - 0.1
+
+
+def test_the_flights_part_where_the_hand_prediction_passes_the_gate_inside_the_align_band():
+    """Why the shipped file's 165 differs (review, nineteenth): the two flights are the same
+    bits until the gate's first hold of its own. Over the 10 ms before the body's state first
+    differs, the prediction worked by hand from the logged estimate, ``|p + v t_go|`` with the
+    horizon's 0.3 s (the crawl's time left is longer: the reference leads the body down by at
+    most ``descent_leash``, so ``t_go >= (gap - 0.05) / touchdown_speed``), passes the 0.10 m
+    gate, while the estimate is inside the align band (half ``max_offset`` and
+    ``max_relative_speed``: 0.1 m, 0.25 m/s), where
+    ``crawl_pause`` alone lets the crawl fall (and the eighteenth's did); at the start of those
+    10 ms it was inside the gate. The gated reference then holds over the falling one."""
+    before, _ = flown("highway_100", 165, *HIGHWAY_100_GATE)
+    res, _ = flown("highway_100", 165)
+    land = res.scenario.data["landing"]
+    n = min(len(before["t"]), len(res["t"]))
+    k = int(np.flatnonzero(before["x_e"][:n] != res["x_e"][:n])[0])
+    rows = slice(k - 10, k + 1)
+    p = np.stack([res["x_e_hat"][rows], res["y_e_hat"][rows]])
+    v = np.stack([res["vx_e_hat"][rows], res["vy_e_hat"][rows]])
+    gap = res["gear_gap"][rows]
+    assert np.all((gap - land["descent_leash"]) / land["touchdown_speed"] > land["crawl_gate_time"])
+    predicted = np.hypot(*(p + v * land["crawl_gate_time"]))
+    assert predicted.max() > land["crawl_gate"]
+    assert np.all(np.hypot(*p) <= land["max_offset"] / 2)            # 0.1 m
+    assert np.all(np.hypot(*v) <= land["max_relative_speed"] / 2)    # 0.25 m/s
+    assert np.hypot(*(p[:, 0] + v[:, 0] * land["crawl_gate_time"])) < land["crawl_gate"]
+    later = _at(res, res["t"][k] + 0.05)
+    assert res["z_ref"][later] > before["z_ref"][later]
