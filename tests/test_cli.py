@@ -744,7 +744,9 @@ def test_simulate_prints_the_verdict_and_figures(tmp_path, capsys):
     assert main(["simulate", "--scenario", "highway", "--no-plots", "--out", str(out2), "--set",
                  f"landing.max_sink_rate={limit}"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    land = json.loads((out2 / "summary.json").read_text())["landing"]
+    flown, land = land, json.loads((out2 / "summary.json").read_text())["landing"]
+    assert land["sink_rate"] == flown["sink_rate"] and land["time"] == flown["time"]
+    assert land["sink_rate"] > limit
     assert lines[1].startswith(
         f"landing: FAILED: sink rate {land['sink_rate']:.3g} > {limit:g} m/s")
     assert lines[2].endswith(f"limit {limit:g}  over")
