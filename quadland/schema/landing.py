@@ -251,6 +251,10 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                ("input_bias", "m/s^2", "the accelerometer's bias in the acceleration input"),
                ("tilt_bias", "m/s^2", "the acceleration input's bias from the attitude "
                 "estimate's tilt error"))},
+        "handover_lockout_gnss": Field(F, "-", "refusals after which a GNSS block not yet "
+                                       "fused since the handover is re-admitted (E8a), 0: "
+                                       "gate_lockout's as for any block", lo=0.0, hi=1e6,
+                                       default=0.0),
     },
     # The flight code's land detector (docs/land_detector.md): its cues' thresholds and
     # windows. Only the sensed loop has it; on the true state the touchdown is the gap's.
@@ -319,6 +323,10 @@ def check_landing(data: dict) -> None:
     if lockout < 1 or lockout != int(lockout):
         raise ScenarioError(f"estimator.gate_lockout: must be a whole number of refusals >= 1, "
                             f"got {lockout:g}")
+    k = data["estimator"]["handover_lockout_gnss"]
+    if k != int(k) or k > lockout:
+        raise ScenarioError(f"estimator.handover_lockout_gnss: must be a whole number of "
+                            f"refusals from 0 to gate_lockout ({lockout:g}), got {k:g}")
 
 
 def _check_gear(data: dict) -> None:

@@ -42,6 +42,7 @@ from quadland_symbolic.landing.estimator import (
     FLIGHT_DEPTH,
     N_HIST,
     estimator_init_function,
+    estimator_memory,
 )
 from quadland_symbolic.landing.guidance import GUIDANCE_STATE
 from quadland_symbolic.landing.land_detector import (
@@ -50,7 +51,7 @@ from quadland_symbolic.landing.land_detector import (
     TIME_CAP,
 )
 from quadland_symbolic.landing.loop import landing_loop_memory, landing_loop_params
-from quadland_symbolic.landing.navigation import DECK_INIT, IMU, NAV, estimator_params
+from quadland_symbolic.landing.navigation import BLOCKS, DECK_INIT, IMU, NAV, estimator_params
 from quadland_symbolic.landing.plant import LANDING_PLANT_PARAMS, LANDING_PLANT_STATE
 from quadland_symbolic.landing.quadrotor import QUAD6_STATE
 from quadland_symbolic.landing.sensed_loop import (
@@ -159,13 +160,33 @@ def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, n
     # and the hover point starts at the handover's estimated height when that is higher
     # (no descent on a height only GNSS knows: the guidance's "The marker")
     x0, P0_diag, deck0 = handover(scenario, lv)
-    nav = _estimator_init()(x0, P0_diag, deck0, 0.0)[0].ravel()
+    nav = handover_streaks(scenario, _estimator_init()(x0, P0_diag, deck0, 0.0)[0].ravel())
     xg = GUIDANCE_STATE.unpack(base_xc["xg"])
     xg["z_ref"] = np.maximum(xg["z_ref"], NAV.unpack(x0)["p_r"][2])
     xc0 = lay.pack(dict(xg=GUIDANCE_STATE.pack(xg), mem=base_xc["mem"], nav=nav,
                         imu_held=hover, xld=LAND_DETECTOR_STATE.zeros(), marker_age=TIME_CAP,
                         **lines))
     return pc, xc0
+
+
+def handover_streaks(scenario: Scenario, nav: np.ndarray) -> np.ndarray:
+    """The filter's initial memory ``nav`` with the GNSS blocks' refusal streaks set.
+
+    ``estimator.handover_lockout_gnss`` = k > 0 starts each GNSS block's streak (E8a) at
+    ``gate_lockout - k``: a block refused from the handover on is re-admitted after k
+    refusals, and its first fusion resets the streak, so the approach's gates are
+    ``gate_lockout``'s again (docs/landing.md, "Two flights into the roof 1.9 s after the
+    handover"). 0 leaves ``nav`` as it is.
+    """
+    e = scenario.data["estimator"]
+    k = e.get("handover_lockout_gnss", 0.0)
+    if not k:
+        return nav
+    nav = np.array(nav, dtype=float)
+    streak = estimator_memory(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING).slice("streak")
+    gnss = [i for i, b in enumerate(BLOCKS) if b.sensor == "gnss"]
+    nav[np.arange(streak.start, streak.stop)[gnss]] = e["gate_lockout"] - k
+    return nav
 
 
 @functools.cache
