@@ -15,13 +15,15 @@ from quadland.campaign.fly import fly
 from quadland.campaign.sampling import draws
 from quadland.campaign.spec import campaign_spec_of
 from quadland.exceptions import ScenarioError
-from quadland.kinds.landing.sensed import sensed_vectors
+from quadland.kinds.landing.kind import LandingKind
+from quadland.kinds.landing.sensed import handover, sensed_vectors
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import load_scenario
 from quadland_symbolic.landing.estimator import (
     FLIGHT_COUPLING,
     FLIGHT_DEPTH,
     N_HIST,
+    estimator_init_function,
     estimator_memory,
 )
 from quadland_symbolic.landing.navigation import BLOCKS
@@ -43,6 +45,15 @@ def test_off_by_default_and_bit_for_bit():
     s_off, x_off = _streaks(["estimator.handover_lockout_gnss=0"])
     assert np.array_equal(x0, x_off)
     assert not s0.any()
+    # a second path: the CasADi estimator_init itself on the handover, without the
+    # simulator's number-in-place call and without handover_streaks
+    sc = load_scenario("highway")
+    lv = landing_values(sc)
+    x0_nav, p0, deck0 = handover(sc, lv)
+    init = estimator_init_function(N_HIST, FLIGHT_DEPTH, FLIGHT_COUPLING)
+    ref = np.asarray(init(x0_nav, p0, deck0, 0.0), dtype=float).ravel()
+    nav = np.asarray(sensed_loop_memory(lv.l).unpack(x0)["nav"], dtype=float).ravel()
+    np.testing.assert_array_equal(nav, ref)
 
 
 def test_gnss_streaks_start_at_lockout_less_k():
@@ -59,6 +70,14 @@ def test_gnss_streaks_start_at_lockout_less_k():
 def test_whole_number_up_to_the_lockout(bad):
     with pytest.raises(ScenarioError, match="handover_lockout_gnss"):
         load_scenario("highway", [f"estimator.handover_lockout_gnss={bad}"])
+
+
+def test_the_c_example_refuses_it():
+    # the flight code's estimator_init (ql_estimator_init) sets no streaks: the key would be
+    # silently dropped from a generated example, so generating one from it is refused
+    sc = load_scenario("highway", ["estimator.handover_lockout_gnss=1"])
+    with pytest.raises(ScenarioError, match="^estimator.handover_lockout_gnss: the pure-C"):
+        LandingKind().codegen_defaults(sc)
 
 
 def test_seed_19_run_1326_lands_with_it():

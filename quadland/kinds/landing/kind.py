@@ -174,6 +174,10 @@ class LandingKind(LoopKind):
         if scenario.data["gear"]["welded"]:
             raise ScenarioError("gear.welded: the pure-C example flies the gear's contact; "
                                 "generate it from a scenario with gear.welded = false")
+        if scenario.data["estimator"]["handover_lockout_gnss"]:
+            raise ScenarioError("estimator.handover_lockout_gnss: the pure-C example's "
+                                "estimator_init leaves the refusal streaks at 0; generate it "
+                                "from a scenario with handover_lockout_gnss = 0")
         return flight.landing_defaults(scenario)
 
 
