@@ -16,13 +16,14 @@ the leash it passed it inside the floor and met the deck at 0.526 m/s.
 
 import numpy as np
 import pytest
-from ship_before import LEASH_BEFORE
+from ship_before import ABORT_BEFORE, LEASH_BEFORE
 
 import quadland
 from quadland.campaign.sampling import draws
 from quadland.campaign.spec import campaign_spec_of
 from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
+from quadland_symbolic.landing.guidance import ALIGN, DESCEND
 
 #: ``ship_ss5``'s guidance before its leash: the reference falls at the crawl's rate.
 NO_LEASH = LEASH_BEFORE
@@ -99,3 +100,41 @@ def test_run_260_aborts_above_the_floor_on_the_leash():
     assert gap1 > 0.1 and 0.0 <= t[first_abort] - t[j] < 0.05
     assert t[first_abort] < rep0.time
     assert rep1.success and rep1.secured and rep1.aborts == 1
+
+
+def _crawl_aborts(seed, index, *overrides):
+    """Seed ``seed``'s run ``index`` of ``ship_ss5`` as shipped (the heave in the filter, the
+    flare about the deck's normal, the leash) plus ``overrides``: its report, the first
+    contact's time, and each return from the crawl to the hover (descend to align) as its
+    time and the gear's height above the deck by the filter (m)."""
+    d = draws(campaign_spec_of(load_scenario("ship_ss5", [f"campaign.seed={seed}"])), [index])[0]
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *overrides]))
+    t, phase = np.asarray(res["t"]), np.asarray(res["phase"])
+    gear = load_scenario("ship_ss5")["quadrotor.gear_height"]
+    rows = np.flatnonzero((phase[:-1] == DESCEND) & (phase[1:] == ALIGN)) + 1
+    contact = float(t[int(np.argmax(np.asarray(res["touched"]) > 0.5))])
+    return touchdown_report(res), contact, [(float(t[j]), float(res["z_e_hat"][j]) - gear)
+                                            for j in rows]
+
+
+@pytest.mark.slow
+def test_the_floor_still_holds_on_the_leash():
+    """tests/test_abort_at_contact.py replays its runs on the crawl of before
+    (:data:`LEASH_BEFORE`); this is the shipped flight. Seed 11's run 107: without the floor
+    (:data:`ABORT_BEFORE`) the crawl aborts with the gear within 6 cm of the deck and the
+    contact follows within 0.03 s, a bounce; with it the contact is made and the run lands.
+    Seed 13's run 173: on the leash its crawl's abort comes with the gear more than 10 cm up,
+    above the floor, and is flown away from (no contact within a second), with or without
+    the floor, and the run lands (review of the leash, docs/landing.md)."""
+    floor = load_scenario("ship_ss5")["landing.abort_floor"]
+    rep, t0, aborts = _crawl_aborts(11, 107, ABORT_BEFORE)
+    (ta, gap), = aborts
+    assert 0.0 < gap <= floor and 0.0 < t0 - ta < 0.03
+    assert rep.bounced and not rep.success
+    rep, _, aborts = _crawl_aborts(11, 107)
+    assert aborts == [] and rep.success and rep.secured
+    for overrides in ((), (ABORT_BEFORE,)):
+        rep, t0, aborts = _crawl_aborts(13, 173, *overrides)
+        (ta, gap), = aborts
+        assert gap > 0.1 > floor and t0 - ta > 1.0
+        assert rep.success and rep.secured and not rep.bounced
