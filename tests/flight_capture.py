@@ -13,8 +13,9 @@ class _Captured(Exception):
     pass
 
 
-def captured(scenario: str):
-    """The simulator and the arguments the runtime passes it for ``scenario``'s flight."""
+def captured(scenario: str, overrides=()):
+    """The simulator and the arguments the runtime passes it for ``scenario``'s flight
+    (with ``overrides``, ``key=value`` strings as ``--set`` takes them)."""
     mp, seen = pytest.MonkeyPatch(), {}
 
     def capture(self, *args, **kwargs):
@@ -24,7 +25,7 @@ def captured(scenario: str):
     mp.setattr(CompiledLoop, "sampled", capture)
     try:
         with pytest.raises(_Captured):
-            quadland.simulate(quadland.load_scenario(scenario))
+            quadland.simulate(quadland.load_scenario(scenario, list(overrides)))
     finally:
         mp.undo()
     return seen["loop"], seen["args"], seen["kwargs"]

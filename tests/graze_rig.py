@@ -3,6 +3,7 @@
 campaign row flown again at 1 kHz, and the gear's logged load impulse over a first contact."""
 
 import numpy as np
+import pytest
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -36,3 +37,33 @@ def graze(res):
     impulse = np.concatenate([[0.0], np.cumsum(0.5 * (F[rows][1:] + F[rows][:-1])
                                                * np.diff(t[rows]))]) / weight
     return k0, k1, impulse
+
+
+def assert_graze_open(before):
+    """The graze flown with the old 2 ms switch: its logged load stays under a tenth of the
+    weight, its impulse lies between the shipped threshold (0.5 ms of the weight) and the old
+    one (2 ms), and through it the switch stays open and the phase the descent. Returns the
+    graze's rows ``(k0, k1)``."""
+    k0, k1, impulse = graze(before)
+    weight = before.scenario.data["quadrotor"]["mass"] * G
+    assert np.nanmax(before["F_gear"][k0:k1 + 1]) < 0.1 * weight
+    assert 0.5e-3 < impulse[-1] < 2e-3
+    assert np.all(before["t_contact"][k0:k1 + 1] == 0.0)
+    assert np.all(before["phase"][k0:k1 + 1] == 2)
+    return k0, k1
+
+
+def assert_graze_closes(res, rep, rep_before):
+    """The graze flown with the 0.5 ms switch: its logged impulse passes 0.5 ms of the weight
+    (the lower bound of the switch's own integral, :func:`graze`), the switch closes within
+    the graze no later than that, the guidance is in touchdown three rows on, the run lands
+    and is secured, and the contact the judge scores is ``rep_before``'s (the same figures to
+    1 mm)."""
+    k0, k1, impulse = graze(res)
+    passed = k0 + int(np.argmax(impulse > 0.5e-3))
+    closed = int(np.argmax(res["t_contact"] > 0))
+    assert impulse[-1] > 0.5e-3 and k0 <= closed <= passed <= k1
+    assert res["phase"][closed + 3] == 3
+    assert rep.success and rep.secured and not rep.bounced
+    assert rep.time == pytest.approx(rep_before.time, abs=1e-3)
+    assert rep.offset == pytest.approx(rep_before.offset, abs=1e-3)

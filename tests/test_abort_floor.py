@@ -3,50 +3,14 @@ height above the deck is within it (symbolic/landing/abort_floor.py), by hand on
 step: the abort sends the phase back to align, counts one abort and resets the reference to
 the hover height; without it the committed crawl falls on at ``touchdown_speed``."""
 
-import numpy as np
 import pytest
+from crawl_step import CRAWLED, H
+from crawl_step import aborted as _aborted
+from crawl_step import crawl_step as _step
 from reference import GUIDANCE_P
 
 from quadland.scenario import load_scenario
-from quadland_symbolic.landing.guidance import (
-    ALIGN,
-    DESCEND,
-    GUIDANCE_CUES,
-    GUIDANCE_PARAMS,
-    GUIDANCE_STATE,
-    guidance_function,
-)
-
-DT = 0.004
-H = 0.1            # the reference 0.1 m above the contact: in the crawl (0.3 m at 0.3 m/s x 1 s)
-
-
-def _step(gap, offset=0.0, speed=0.0, **params):
-    """One committed crawl step with the reference ``H`` above the contact and the
-    quadrotor's gear ``gap`` above it (the relative position's z is the contact's height
-    plus ``gap``), its horizontal offset along x and its horizontal speed along y. Returns
-    the phase, the aborts and the reference height after the step."""
-    p = dict(GUIDANCE_P, **params)
-    contact = p["touchdown_height"] + p["contact_drop"]
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=contact + H, aborts=0,
-                                  committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
-                                  lean_gust=0.0))
-    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
-    xg_next, _ = guidance_function()(xg, [offset, 0.0, contact + gap], [0.0, speed, -0.3],
-                                     0.0, 0.0, cues, DT, GUIDANCE_PARAMS.pack(p))
-    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
-    return g["phase"][0], g["aborts"][0], g["z_ref"][0] - contact
-
-
-#: What the step gives, by hand: the abort (align, one abort, the hover height above the
-#: pad, which is hover_height less the contact's height above the contact) and the crawl
-#: going on (the rate clamp(H / descent_time, touchdown_speed, descent_speed) = 0.3 m/s).
-def _aborted(p=GUIDANCE_P):
-    return ALIGN, 1.0, p["hover_height"] - p["touchdown_height"] - p.get("contact_drop", 0.0)
-
-
-CRAWLED = (DESCEND, 0.0, H - GUIDANCE_P["touchdown_speed"] * DT)
+from quadland_symbolic.landing.guidance import ALIGN, DESCEND
 
 
 def test_the_default_aborts_down_to_the_contact():

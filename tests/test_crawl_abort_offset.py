@@ -8,46 +8,22 @@ import ctypes
 
 import numpy as np
 import pytest
+from crawl_step import CRAWLED, aborted, crawl_step
 from reference import GUIDANCE_P, have_compiler
 
 from quadland.kinds.landing.flight import load_landing_api
 from quadland.scenario import load_scenario, scenario_names
-from quadland_symbolic.landing.guidance import (
-    ALIGN,
-    DESCEND,
-    GUIDANCE_CUES,
-    GUIDANCE_PARAMS,
-    GUIDANCE_STATE,
-    guidance_function,
-)
-
-DT = 0.004
-H = 0.1            # the reference 0.1 m above the contact: in the crawl (0.3 m at 0.3 m/s x 1 s)
+from quadland_symbolic.landing.guidance import ALIGN, DESCEND
 
 
 def _step(offset, gap=0.1, **params):
-    """One committed crawl step, the reference ``H`` above the contact, the gear ``gap`` above
-    it and the estimated horizontal offset ``offset`` along x; the phase, the aborts and the
-    reference's height above the contact after the step."""
-    p = dict(GUIDANCE_P, **params)
-    contact = p["touchdown_height"] + p["contact_drop"]
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=contact + H, aborts=0,
-                                  committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
-                                  lean_gust=0.0))
-    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
-    xg_next, _ = guidance_function()(xg, [offset, 0.0, contact + gap], [0.0, 0.0, -0.3],
-                                     0.0, 0.0, cues, DT, GUIDANCE_PARAMS.pack(p))
-    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
-    return g["phase"][0], g["aborts"][0], g["z_ref"][0] - contact
+    """One committed crawl step (:func:`crawl_step.crawl_step`) with the estimated
+    horizontal offset ``offset`` along x and the gear ``gap`` above the contact."""
+    return crawl_step(gap, offset, **params)
 
 
-#: By hand: the abort (align, one abort, the reference at the hover height above the pad,
-#: hover_height less the contact's height above the contact) and the crawl going on (the
-#: rate clamp(H / descent_time, touchdown_speed, descent_speed) = 0.3 m/s over one step).
-ABORTED = (ALIGN, 1.0, GUIDANCE_P["hover_height"] - GUIDANCE_P["touchdown_height"]
-           - GUIDANCE_P["contact_drop"])
-CRAWLED = (DESCEND, 0.0, H - GUIDANCE_P["touchdown_speed"] * DT)
+#: By hand: the abort (:func:`crawl_step.aborted`) and the crawl going on.
+ABORTED = aborted()
 
 
 def _check(got, want):

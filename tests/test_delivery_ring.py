@@ -19,8 +19,8 @@ import dataclasses
 import casadi as ca
 import numpy as np
 import pytest
+from flight_capture import captured
 
-import quadland
 from quadland.engine.compiled import SIM_NONFINITE, CompiledLoop, built_model
 from quadland_symbolic.landing.sensed_loop import (
     DELIVERY_SLOTS,
@@ -35,27 +35,10 @@ from quadland_symbolic.stages import Staged
 L = 10
 
 
-class _Captured(Exception):
-    pass
-
-
 def _captured(duration: float):
     """The simulator and the arguments the runtime passes it for a ``highway`` flight of
     ``duration`` on sensors."""
-    mp, seen = pytest.MonkeyPatch(), {}
-
-    def capture(self, *args, **kwargs):
-        seen.update(loop=self, args=args, kwargs=kwargs)
-        raise _Captured
-
-    mp.setattr(CompiledLoop, "sampled", capture)
-    try:
-        with pytest.raises(_Captured):
-            quadland.simulate(quadland.load_scenario(
-                "highway", [f"simulation.duration={duration}"]))
-    finally:
-        mp.undo()
-    return seen["loop"], seen["args"], seen["kwargs"]
+    return captured("highway", [f"simulation.duration={duration}"])
 
 
 @pytest.fixture(scope="module")
