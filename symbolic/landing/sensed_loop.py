@@ -268,7 +268,7 @@ def _world_stage(xc_lay, pc_lay, contact: bool = True) -> ca.Function:
     False``: the IMU's specific force of the plant without the gear's contact, the
     stage's :attr:`~quadland_symbolic.stages.Staged.free` function (the same values
     where the loop flies its free plant; the contact's exp, log1p and tanh a foot, some
-    1,200 of the IMU record's 2,150 operations, not evaluated)."""
+    1,205 of the IMU record's 2,180 operations, not evaluated)."""
     xp, uh, w = LANDING_PLANT_STATE.sym(), COMMAND.sym(), LANDING_DISTURBANCE.sym()
     t, pp = ca.SX.sym("t"), LANDING_PLANT_PARAMS.sym()
     xc, pc, n = xc_lay.sym(), pc_lay.sym(), SENSED_TICK.sym()
