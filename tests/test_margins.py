@@ -478,3 +478,16 @@ def test_loop_sizes_are_the_built_loop_s(name, nodes):
     kind = kind_of(load_scenario(name, [f"rbf.nodes={nodes}"]))
     loop = kind.loop_model(nodes)
     assert kind.loop_sizes(nodes) == (loop.state.size, loop.held.size)
+
+
+def test_a_review_is_the_same_whatever_the_caller_s_blas_threads():
+    """The review sets its own BLAS threads: called under one thread and under two it
+    reports the same numbers, bit for bit (a two-thread OpenBLAS changes the last bits of
+    highway's margins, so without the review's own limit the two differ)."""
+    sc = load_scenario("highway", ["rbf.nodes=3"])
+    texts = []
+    for threads in (1, 2):
+        with threadpool_limits(threads):
+            d = margin_report(sc).to_dict()
+        texts.append(json.dumps(d, sort_keys=True))
+    assert texts[0] == texts[1]

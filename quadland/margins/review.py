@@ -225,10 +225,12 @@ def margin_report(scenario: Scenario, at: float | None = None,
 
     Notes
     -----
-    The computation is a few hundred small dense factorizations; a
-    multithreaded BLAS on a busy machine can make it several times slower.
-    The command line runs it under ``threadpoolctl.threadpool_limits(1)``;
-    do the same when calling it in a loop.
+    The computation is a few hundred small dense factorizations. It runs
+    under ``threadpoolctl.threadpool_limits(1)`` whatever the caller's BLAS
+    threads: a multithreaded BLAS on a busy machine makes it several times
+    slower, and a different thread count changes the last bits of the
+    reported numbers (a review is the same number for number in every
+    process).
 
     Examples
     --------
@@ -240,6 +242,18 @@ def margin_report(scenario: Scenario, at: float | None = None,
     >>> report.passed
     True
     """
+    # threadpoolctl limits the libraries loaded when it is called: SciPy's own OpenBLAS
+    # loads with scipy.linalg, which the analysis imports, so load it first.
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        return _review(scenario, at, requirement, delay_periods, filtered)
+
+
+def _review(scenario: Scenario, at: float | None, requirement: Requirement,
+            delay_periods: int | None, filtered: bool) -> MarginReport:
+    """margin_report's work, on one BLAS thread."""
     from quadland.kinds import kind_of
 
     kind = kind_of(scenario)
