@@ -131,6 +131,7 @@ GUIDANCE_DOCUMENTED = {
     "crawl_gate": _nonnegative, "crawl_gate_time": _nonnegative,
     "crawl_gate_floor": _nonnegative, "crawl_gate_wait": _nonnegative,
     "crawl_gate_rise": _nonnegative, "crawl_gate_wait_height": _nonnegative,
+    "crawl_gate_count_height": _nonnegative,
     "calm_lean": _nonnegative, "lean_time": _positive,
     "lean_withdraw": lambda v, p: (v == 0) | (v == 1), "abort_floor": _finite,
     "ground_airmode": lambda v, p: (v == 0) | (v == 1),
