@@ -78,6 +78,9 @@ GUIDANCE_FIELDS = {
                              "deck)", lo=0.0, hi=1e3, default=1e3),
     "crawl_gate_wait_height": Field(F, "m", "height above touchdown at or below which "
                                     "crawl_gate_wait applies", lo=0.0, hi=1e3, default=1e3),
+    "crawl_gate_count_height": Field(F, "m", "height above touchdown at or below which "
+                                     "crawl_gate's holds count toward crawl_gate_wait",
+                                     lo=0.0, hi=1e3, default=1e3),
     "crawl_gate_wait": Field(F, "s", "the longest crawl_gate holds a crawl: it falls on "
                              "at or below crawl_gate_wait_height", lo=0, hi=1e3, default=1e3),
     "max_sink_rate": Field(F, "m/s", "limit: relative vertical speed at contact", hi=100.0,

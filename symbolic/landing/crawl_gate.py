@@ -54,9 +54,14 @@ def fall_band(in_band, crawl, gate, p):
 def crawl_timer_next(g, f, p, dt):
     """The guidance's timer after the step: the align criteria's dwell, then the time since
     touchdown (``f["counting"]``), held once landed; with ``crawl_gate`` on, in the crawl
-    (``f["gating"]``: flying, no abort) the time the gate has held it (``f["gate"]`` false),
-    which :func:`gate_holds` bounds by ``crawl_gate_wait``; else 0 (as without the gate)."""
+    (``f["gating"]``: flying, no abort) the time the gate has held it (``f["gate"]`` false)
+    with the reference's height above touchdown ``f["h"]`` at or below
+    ``crawl_gate_count_height`` (1000, the default: every hold; at ``crawl_gate_wait_height``
+    the holds up high do not spend the wait near the deck, which then guards the crawl's last
+    part afresh, docs/landing.md, "turning: the last half second before contact"), which
+    :func:`gate_holds` bounds by ``crawl_gate_wait``; else 0 (as without the gate)."""
     gating = ca.logic_and(f["gating"], p["crawl_gate"] > 0)
+    held = ca.logic_and(ca.logic_not(f["gate"]), f["h"] <= p["crawl_gate_count_height"])
     return ca.if_else(f["counting"], g["timer"] + dt, ca.if_else(
         f["landed"], g["timer"],
-        ca.if_else(gating, g["timer"] + dt * ca.logic_not(f["gate"]), 0)))
+        ca.if_else(gating, g["timer"] + dt * held, 0)))

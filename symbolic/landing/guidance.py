@@ -357,7 +357,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     g, p, c = (L.unpack(v) for L, v in ((GUIDANCE_STATE, xg), (GUIDANCE_PARAMS, p_guid),
                                         (GUIDANCE_CUES, cues)))
     phase, timer, z_ref, aborts = g["phase"], g["timer"], g["z_ref"], g["aborts"]
-    offset, speed = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2])
+    offset, speed, h = ca.norm_2(p_e[0:2]), ca.norm_2(v_e[0:2]), z_ref - contact_height(p)
     to_hover = ca.norm_2(p_e - ca.vertcat(0, 0, z_ref))
 
     in_approach, in_align, in_descend, in_touchdown = (
@@ -375,13 +375,13 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
                                                      ca.logic_and(z_fall <= wait, calm)))
     # the crawl (h / descent_time <= touchdown_speed) pauses only with crawl_pause and aborts
     # out of the limits; above it the descent pauses out of the band; a rising deck withdraws
-    crawl = z_ref - contact_height(p) <= p["touchdown_speed"] * p["descent_time"]
+    crawl = h <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), out_of_limits(
         offset, speed, p_e[2] - contact_height(p), p))
-    gate = gate_holds(p_e, v_e, z_ref - contact_height(p), timer, deck_rise, p)
-    timer_next = crawl_timer_next(g, dict(gate=gate, landed=phase == LANDED, counting=ca.logic_or(
-        ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown), gating=ca.logic_and(
-        ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
+    gate = gate_holds(p_e, v_e, h, timer, deck_rise, p)
+    timer_next = crawl_timer_next(g, dict(gate=gate, h=h, landed=phase == LANDED, counting=(
+        ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown)),
+        gating=ca.logic_and(ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
     rising = _withdrawn(flying, g, p, deck_rise, cause)   # a rising deck, a swerve, a gust
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,

@@ -84,4 +84,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("flare_deck_height", 1, "m", "height above touchdown below which flare_deck_tilt holds"),
     Field("crawl_abort_offset", 1, "m", "the crawl's out-of-limits abort also past this "
           "horizontal offset, as estimated (1000: past max_offset only)"),
+    Field("crawl_gate_count_height", 1, "m", "reference height above touchdown at or below "
+          "which the gate's holds count toward crawl_gate_wait (1000: everywhere)"),
 ), "landing guidance parameters")
