@@ -231,11 +231,18 @@ HIGHWAY_SIXTEENTH = [*HIGHWAY_GRAZE, *HIGHWAY_LEASH, "landing.crawl_gate=0.0",
                      "landing.crawl_gate_floor=0.0", "landing.crawl_gate_time=1000.0",
                      "land_detector.contact_thrust=false"]
 
+#: highway_100's friction before "highway_100 on fresh seeds: the creep under the magnets"
+#: (docs/landing.md, twentieth session): the cap on the friction's slope at 1000 N s/m per foot
+#: (the creep under the magnets 0.48 cm/s, not 0.22); the replays measured on the nineteenth's
+#: file (and, through ``HIGHWAY_100_GATE``, every older one) pin it.
+HIGHWAY_100_CREEP = ["gear.slip_damping_max=1000.0"]
+
 #: highway_100's crawl before "highway_100: the crawl's gate on the predicted offset, its wait
 #: over the whole crawl" (docs/landing.md, nineteenth session): no gate (the schema's
 #: defaults: no gate, the whole time to contact, no floor, no wait); the replays measured on
-#: the eighteenth's file (and, through ``HIGHWAY_100_GRAZE``, every older one) pin it.
-HIGHWAY_100_GATE = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
+#: the eighteenth's file (and, through ``HIGHWAY_100_GRAZE``, every older one) pin it (and its
+#: friction, ``HIGHWAY_100_CREEP``).
+HIGHWAY_100_GATE = [*HIGHWAY_100_CREEP, "landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
                     "landing.crawl_gate_time=1000.0", "landing.crawl_gate_wait=1000.0"]
 
 #: highway_100's contact switch before "highway_100: the graze the switch did not feel"

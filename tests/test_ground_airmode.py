@@ -17,7 +17,7 @@ default on every shipped scenario, and seed 11's run 42 of highway_100 replayed 
 import casadi as ca
 import numpy as np
 import pytest
-from reference import GUIDANCE_P
+from reference import GUIDANCE_P, HIGHWAY_100_CREEP
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -137,14 +137,18 @@ def test_seed_11_run_42_stays_on_the_pad_without_air_mode():
     fall onto its rear feet, raises the collective past the body's weight between 0.1 s
     after the contact (the level-out's ramp under way) and the last foot down, and the drag
     slides the body off the pad. Without it the collective stays below the weight over the
-    same interval and the run lands on the pad and is secured."""
+    same interval and the run lands on the pad and is secured. Flown at the friction's cap it
+    was measured with (``HIGHWAY_100_CREEP``): at the shipped 3000 the smaller creep keeps it
+    on the pad in air mode too (docs/landing.md, "highway_100 on fresh seeds: the creep under
+    the magnets")."""
     sc = load_scenario("highway_100", {"campaign.seed": 11})
     overrides = draws(campaign_spec_of(sc), [42])[0].overrides()
 
     weight = load_scenario("highway_100", overrides).data["quadrotor"]["mass"] * 9.8
 
     def flown(*extra):
-        res = quadland.simulate(load_scenario("highway_100", [*overrides, *extra]))
+        res = quadland.simulate(load_scenario("highway_100",
+                                              [*overrides, *HIGHWAY_100_CREEP, *extra]))
         t = res["t"]
         k0 = int(np.argmax(res["touched"] > 0.5))
         k4 = k0 + int(np.argmax(res["feet_down"][k0:] > 3.5))     # every foot down
