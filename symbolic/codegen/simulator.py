@@ -8,13 +8,15 @@ but its functions' sizes. The sampled driver's plant, free plant and event are e
 cut in two where their terms of the time and the parameters alone are worth it
 (:data:`HOISTING`, :func:`~quadland_symbolic.codegen.time_split.time_split`): those
 terms in ``<function>_time``, which the driver calls once an instant, the same bits.
-:func:`loop_header` writes the loop algorithm the drivers and the pure-C examples share
-(``quadland_loop.h``).
+Each function's C reads its arguments and writes its results through pointers taken once a
+call (:func:`direct_access`), the same bits. :func:`loop_header` writes the loop algorithm
+the drivers and the pure-C examples share (``quadland_loop.h``).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -228,6 +230,8 @@ def _emit(name: str, f: ca.Function) -> tuple[dict[str, str], ca.Function]:
         text = {f"{name}.{ext}": Path(tmp, f"{name}.{ext}").read_text() for ext in ("c", "h")}
     if INLINE_MIN_MAX:
         text[f"{name}.c"] = inline_min_max(text[f"{name}.c"])
+    if DIRECT_ACCESS:
+        text[f"{name}.c"] = direct_access(text[f"{name}.c"])
     return text, fn
 
 
@@ -261,6 +265,77 @@ def inline_min_max(c: str) -> str:
     for call, inline in _MIN_MAX.items():
         c = c.replace(call, inline)
     return c
+
+
+#: Whether the simulators' SX bodies read and write through pointers taken once a call
+#: (:func:`direct_access`). The cache's keys hash this module's text, not the value: a
+#: build with it turned off at run time (the benchmark's) needs a model of another name.
+DIRECT_ACCESS = True
+#: Largest result CasADi's body writes (its last index + 1) that :func:`direct_access`
+#: gives a sink on the stack for: 8,192 doubles (64 KiB); a body with a larger one keeps
+#: its writes as CasADi writes them.
+DIRECT_SINK_MAX = 8192
+#: An SX body as CasADi 3.x writes it: ``static int casadi_fN(...) {`` to the first
+#: ``}`` at the start of a line.
+_BODY = re.compile(r"^static int casadi_f\d+\(const casadi_real\*\* arg, casadi_real\*\* res, "
+                   r"casadi_int\* iw, casadi_real\* w, int mem\) \{\n", re.M)
+#: An SX body's read of element ``j`` of argument ``i`` (zero where ``arg[i]`` is null),
+#: and its write of element ``j`` of result ``i`` (none where ``res[i]`` is null).
+_READ = re.compile(r"=arg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0;")
+_WRITE = re.compile(r"^  if \(res\[(\d+)\]!=0\) res\[\1\]\[(\d+)\]=", re.M)
+
+
+def _extent(matches) -> dict[int, int]:
+    """Each argument's or result's index ``i``: its last element read or written + 1."""
+    out: dict[int, int] = {}
+    for m in matches:
+        out[int(m[1])] = max(out.get(int(m[1]), 0), int(m[2]) + 1)
+    return out
+
+
+def direct_access(c: str) -> str:
+    """CasADi's C with each SX body's reads and writes through pointers taken once a call.
+
+    CasADi writes an SX function's every read of an argument as ``a=arg[i]? arg[i][j] :
+    0;`` and every write of a result as ``if (res[i]!=0) res[i][j]=a;``: a test and a
+    branch on the pointer at each of the thousands of elements of a stage (the pointers
+    cannot change during the call; GCC does not merge the tests). Here each body takes
+    ``ql_a<i> = arg[i] ? arg[i] : ql_z`` once (``ql_z`` a static array of zeros as long
+    as the longest argument read) and ``ql_r<i> = res[i] ? res[i] : ql_s`` (``ql_s`` a
+    sink on the stack, as long as the longest result written), and reads ``ql_a<i>[j]``
+    and writes ``ql_r<i>[j]``. A read gives what it gave (the element, or ``+0.0`` where
+    the argument is null: ``0`` converted, as the zeros are); a write goes where it went,
+    or to the sink, which nothing reads, where it went nowhere; every operation is the
+    one it was: the same bits. 7 % fewer instructions a ``highway`` flight
+    (docs/performance.md, "twentieth"). MX bodies (their own forms, with spaces) and a
+    body whose result is over :data:`DIRECT_SINK_MAX` keep their writes as they are.
+    ``tests/test_direct_access.py`` compares the two forms bit for bit, null pointers
+    included."""
+    out, at = [], 0
+    for head in _BODY.finditer(c):
+        end = c.index("\n}\n", head.end())
+        body = c[head.end():end]
+        reads = _extent(_READ.finditer(body))
+        writes = _extent(_WRITE.finditer(body))
+        if writes and max(writes.values()) > DIRECT_SINK_MAX:
+            writes = {}
+        if not reads and not writes:
+            continue
+        decl = []
+        if reads:
+            decl.append(f"  static const casadi_real ql_z[{max(reads.values())}] = {{0}};")
+            decl += [f"  const casadi_real* const ql_a{i} = arg[{i}] ? arg[{i}] : ql_z;"
+                     for i in sorted(reads)]
+            body = _READ.sub(lambda m: f"=ql_a{m[1]}[{m[2]}];", body)
+        if writes:
+            decl.append(f"  casadi_real ql_s[{max(writes.values())}];")
+            decl += [f"  casadi_real* const ql_r{i} = res[{i}] ? res[{i}] : ql_s;"
+                     for i in sorted(writes)]
+            body = _WRITE.sub(lambda m: f"  ql_r{m[1]}[{m[2]}]=", body)
+        out += [c[at:head.end()], "\n".join(decl), "\n", body]
+        at = end
+    out.append(c[at:])
+    return "".join(out)
 
 
 def _flight_controller(model: LoopModel, prefix: str, args: ca.Function) -> dict[str, str]:
