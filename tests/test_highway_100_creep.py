@@ -96,15 +96,15 @@ CREPT_OFF = [(31, 77, 0.09672316584605237, 24.41260118521228),
              (41, 123, 0.1373516051475941, 11.676686890659054)]
 
 
-def _row_flown(seed, index, b_slip):
+def _row_flown(seed, index, b_slip=None):
     """Run ``index`` of highway_100's campaign under campaign seed ``seed``, its draws, flown
-    as the campaign flies it (100 rows a second) with the cap ``b_slip``: the result and its
-    touchdown report."""
+    as the campaign flies it (100 rows a second) with the cap ``b_slip`` (``None``: the
+    shipped file's): the result and its touchdown report."""
     seeded = [f"campaign.seed={seed}"]
     spec = campaign_spec_of(load_scenario("highway_100", seeded))
     overrides = draws(spec, [index])[0].overrides()
-    res = quadland.simulate(load_scenario("highway_100", [*seeded, *overrides,
-                                                          f"gear.slip_damping_max={b_slip}"]))
+    cap = [] if b_slip is None else [f"gear.slip_damping_max={b_slip}"]
+    res = quadland.simulate(load_scenario("highway_100", [*seeded, *overrides, *cap]))
     return res, touchdown_report(res)
 
 
@@ -127,7 +127,10 @@ def test_the_creep_carried_them_off_at_1000_and_not_at_the_shipped_cap(seed, ind
     3000 over the one at 1000 is the closed form's ratio (the same drag and magnets at both
     caps, ``v_s(3000) / v_s(1000)``, about 0.464, to 2 %), and at 3000 the run lands, secured,
     with every foot on the pad. The flight before the contact is the same at both caps (its
-located contact to 1e-9: the contact's location reads the step on the deck)."""
+    located contact to 1e-9: the contact's location reads the step on the deck). The "after"
+    flies the shipped file as it is, so a file that lost its cap fails here, not only in the
+    closed form's check of the key (the review of "highway_100 on fresh seeds: the creep under
+    the magnets": 41's 123 still leaves the pad at 2000 and ends 1.1 mm inside it at 3000)."""
     pad = load_scenario("highway_100").data["landing"]["pad_radius"]
     before, rep_before = _row_flown(seed, index, 1000.0)
     assert rep_before.offset == pytest.approx(offset, abs=1e-9)
@@ -137,7 +140,7 @@ located contact to 1e-9: the contact's location reads the step on the deck)."""
     tenth = int(round(0.1 / (before["t"][1] - before["t"][0])))
     assert np.all(before["foot_offset"][k4:k4 + tenth + 1] < pad)
     assert np.nanmax(before["foot_offset"][k:]) > pad
-    res, rep = _row_flown(seed, index, 3000.0)
+    res, rep = _row_flown(seed, index)          # the shipped file, whatever its cap
     assert rep.time == pytest.approx(rep_before.time, abs=1e-9)
     assert rep.offset == pytest.approx(rep_before.offset, abs=1e-9)
     assert rep.success and rep.secured and rep.on_pad
@@ -145,6 +148,7 @@ located contact to 1e-9: the contact's location reads the step on the deck)."""
     d = res.scenario.data
     F_n = d["quadrotor"]["mass"] * d["quadrotor"]["gravity"] + float(np.mean(res["F_lock"][k3:]))
     mu, v_eps = d["gear"]["friction"], d["gear"]["slip_speed"]
-    ratio = math.hypot(v_eps, mu * F_n / (4 * 3000.0)) / math.hypot(v_eps, mu * F_n / (4 * 1000.0))
-    assert ratio == pytest.approx(0.464, abs=0.002)
+    b_slip = d["gear"]["slip_damping_max"]
+    ratio = math.hypot(v_eps, mu * F_n / (4 * b_slip)) / math.hypot(v_eps, mu * F_n / (4 * 1000.0))
+    assert ratio == pytest.approx(0.464, abs=0.002)             # the shipped 3000, by hand
     assert creep / creep_before == pytest.approx(ratio, rel=0.02)
