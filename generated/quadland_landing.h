@@ -22,7 +22,7 @@ extern "C" {
 #define QL_LANDING_CHANNELS 6                    /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QL_LANDING_PARAMS_SIZE 132               /* reals in ql_landing_params */
 #define QL_LANDING_STATE_SIZE 89                 /* reals in ql_landing_state */
-#define QL_GUIDANCE_PARAMS_SIZE 48               /* reals in ql_guidance_params */
+#define QL_GUIDANCE_PARAMS_SIZE 49               /* reals in ql_guidance_params */
 #define QL_GUIDANCE_MAX_ABORTS 16777215          /* largest abort count ql_guidance_step accepts */
 #define QL_LANDING_PLANT_NX 25                   /* xp = [x1q (16), xv (6), gear (3)] */
 #define QL_LANDING_PLANT_NP 335                  /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -224,6 +224,7 @@ typedef struct {
     ql_real flare_deck_tilt;         /* rad: flare: the thrust axis's limit from the deck's normal */
     ql_real flare_deck_height;       /* m: height above touchdown below which flare_deck_tilt holds */
     ql_real crawl_abort_offset;      /* m: the crawl's out-of-limits abort also past this horizontal offset, as estimated (1000: past max_offset only) */
+    ql_real crawl_abort_budget;      /* -: crawl_abort_offset holds while the descent's abort count is below this, then max_offset alone (1e6: always) */
 } ql_guidance_params;
 
 /* Fill the defaults (scenario highway). */

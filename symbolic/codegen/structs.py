@@ -410,6 +410,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "flare_deck_tilt": Range(lo=0.0, hi=math.pi / 2, lo_open=True),
     "flare_deck_height": _NONNEGATIVE,
     "crawl_abort_offset": _POSITIVE,
+    "crawl_abort_budget": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

@@ -84,4 +84,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
     Field("flare_deck_height", 1, "m", "height above touchdown below which flare_deck_tilt holds"),
     Field("crawl_abort_offset", 1, "m", "the crawl's out-of-limits abort also past this "
           "horizontal offset, as estimated (1000: past max_offset only)"),
+    Field("crawl_abort_budget", 1, "-", "crawl_abort_offset holds while the descent's "
+          "abort count is below this, then max_offset alone (1e6: always)"),
 ), "landing guidance parameters")
