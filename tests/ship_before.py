@@ -53,9 +53,3 @@ DECK_TILT_BEFORE = "touchdown.flare_deck_tilt_deg=90.0"
 #: (docs/landing.md, "ship_ss5: the crawl on the leash, with the heave in the filter");
 #: ``ship`` has flown it since the tenth, so these keys are not its flights of before.
 LEASH_BEFORE = ("landing.descent_leash=0.0", "landing.leash_height=1000.0")
-#: The crawl's abort of before on ``ship_ss5``: at the judge's ``max_offset`` (0.2 m) only.
-#: ``ship_ss5`` also aborts its crawl past 0.15 m of estimated offset since the twentieth
-#: session (docs/landing.md, "ship_ss5 out of sample: the gust's drift in the crawl, and an
-#: abort at 0.15 m"); ``ship`` takes the default (1000 m), so the key leaves its flights as
-#: they are.
-CRAWL_ABORT_BEFORE = "landing.crawl_abort_offset=1000.0"
