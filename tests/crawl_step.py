@@ -17,15 +17,15 @@ DT = 0.004
 H = 0.1            # the reference 0.1 m above the contact: in the crawl (0.3 m at 0.3 m/s x 1 s)
 
 
-def crawl_step(gap, offset=0.0, speed=0.0, **params):
+def crawl_step(gap, offset=0.0, speed=0.0, aborts=0.0, **params):
     """One committed crawl step with the reference ``H`` above the contact and the
     quadrotor's gear ``gap`` above it (the relative position's z is the contact's height
-    plus ``gap``), its estimated horizontal offset along x and its horizontal speed along y.
-    Returns the phase, the aborts and the reference height above the contact after the
-    step."""
+    plus ``gap``), its estimated horizontal offset along x and its horizontal speed along y,
+    after ``aborts`` aborted descents. Returns the phase, the aborts and the reference height
+    above the contact after the step."""
     p = dict(GUIDANCE_P, **params)
     contact = p["touchdown_height"] + p["contact_drop"]
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=contact + H, aborts=0,
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=contact + H, aborts=aborts,
                                   committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
                                   ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
                                   lean_gust=0.0))

@@ -60,15 +60,38 @@ def test_the_abort_floor_still_holds():
     _check(_step(0.15, gap=0.10, crawl_abort_offset=0.1, abort_floor=0.06), ABORTED)
 
 
+def test_the_budget_bounds_the_windows_the_key_holds():
+    """``crawl_abort_budget`` 3: after two aborted descents the 0.15 m abort past a 0.1 m key
+    is started (the count goes to 3); after three the key no longer holds and the crawl falls
+    on at 0.15 m off, while 0.25 m still aborts on ``max_offset``. The default (1e6) holds the
+    key after 50 aborts; 0 never holds it."""
+    def step(offset, n, **p):
+        return crawl_step(0.1, offset, aborts=float(n), crawl_abort_offset=0.1, **p)
+    hover = ABORTED[2]
+    _check(step(0.15, 2, crawl_abort_budget=3.0), (ALIGN, 3.0, hover))
+    _check(step(0.15, 3, crawl_abort_budget=3.0), (DESCEND, 3.0, CRAWLED[2]))
+    _check(step(0.25, 3, crawl_abort_budget=3.0), (ALIGN, 4.0, hover))
+    assert GUIDANCE_P["crawl_abort_budget"] == 1e6
+    _check(step(0.15, 50), (ALIGN, 51.0, hover))
+    _check(step(0.15, 0, crawl_abort_budget=0.0), (DESCEND, 0.0, CRAWLED[2]))
+
+
 def test_the_schema_default_and_the_shipped_scenarios():
-    """The key is optional (1000 m, no tighter bound) and no shipped scenario sets it."""
+    """Both keys are optional (1000 m, no tighter bound; a budget of 1e6, always) and no
+    shipped scenario sets them (``ship_ss5`` with 0.15 m over three windows lost seed 13's
+    run 22: docs/landing.md, "ship_ss5 out of sample: the gust's drift in the crawl, and an
+    abort at 0.15 m")."""
     for name in scenario_names():
         sc = load_scenario(name)
         if sc.model == "landing":
             assert sc["landing.crawl_abort_offset"] == 1e3
+            assert sc["landing.crawl_abort_budget"] == 1e6
     for bad in ("-0.1", "0", "nan", "1001"):
         with pytest.raises(Exception, match="crawl_abort_offset"):
             load_scenario("ship", [f"landing.crawl_abort_offset={bad}"])
+    for bad in ("-1", "nan", "inf", "1000001", "abc"):
+        with pytest.raises(Exception, match="crawl_abort_budget"):
+            load_scenario("ship", [f"landing.crawl_abort_budget={bad}"])
 
 
 @pytest.mark.skipif(not have_compiler(), reason="no C compiler")
@@ -88,4 +111,11 @@ def test_the_flight_code_refuses_what_the_schema_refuses(precision):
         gp.crawl_abort_offset = value
         status = api.lib.ql_check_guidance_params(ctypes.byref(gp), ctypes.byref(bad))
         assert (status != 0, bad.value) == ((True, b"crawl_abort_offset") if refused
+                                            else (False, None)), value
+    api.lib.ql_guidance_params_init(ctypes.byref(gp))
+    for value, refused in ((-1.0, True), (np.nan, True), (np.inf, True), (0.0, False),
+                           (3.0, False), (1e6, False)):
+        gp.crawl_abort_budget = value
+        status = api.lib.ql_check_guidance_params(ctypes.byref(gp), ctypes.byref(bad))
+        assert (status != 0, bad.value) == ((True, b"crawl_abort_budget") if refused
                                             else (False, None)), value

@@ -40,7 +40,8 @@ def _draws(rng, keys_on):
         if keys_on:
             p.update(abort_floor=rng.choice([0.06, rng.uniform(-0.05, 0.2)]),
                      crawl_gate_rise=rng.choice([0.35, rng.uniform(0.0, 1.0)]),
-                     crawl_abort_offset=rng.choice([0.1, rng.uniform(0.03, 0.3)]))
+                     crawl_abort_offset=rng.choice([0.1, rng.uniform(0.03, 0.3)]),
+                     crawl_abort_budget=rng.choice([1e6, float(rng.integers(4))]))
         contact = p["touchdown_height"]
         xg = GUIDANCE_STATE.pack(dict(
             phase=DESCEND, timer=rng.uniform(0, 0.5), z_ref=contact + rng.uniform(0, 0.3),
@@ -90,7 +91,7 @@ def test_the_c_step_decides_as_casadi_with_the_floor_and_the_quiescent_gate(prec
             x0, x1, x2 = (np.asarray(f(xg, yy, cu, dt, GUIDANCE_PARAMS.pack(dict(p0, **k)))[0],
                                      dtype=float).ravel()
                           for k in (dict(abort_floor=-1e3, crawl_gate_rise=1e3,
-                                         crawl_abort_offset=1e3),
+                                         crawl_abort_offset=1e3, crawl_abort_budget=1e6),
                                     dict(crawl_abort_offset=1e3), dict(abort_floor=-1e3)))
             decided.append((keys_on, xn[3] != x0[3], xn[2] != x0[2], xn[3] > x1[3],
                             xn[3] < x2[3]))

@@ -57,6 +57,10 @@ GUIDANCE_FIELDS = {
                                 "this horizontal offset, as estimated (1000: past "
                                 "max_offset only; 0 is refused, it would abort every crawl)",
                                 lo=0.0, lo_open=True, hi=1e3, default=1e3),
+    "crawl_abort_budget": Field(F, "-", "crawl_abort_offset holds while the descent's abort "
+                                "count (the crawl's aborts and the commit's withdrawals) is "
+                                "below this; from then on max_offset alone (1e6: always; 0: "
+                                "never)", lo=0.0, hi=1e6, default=1e6),
     "crawl_pause": Field(B, "-", "true: out of the align band the crawl pauses as the "
                          "descent above it does; false: it is committed", default=False),
     "swerve_accel": Field(F, "m/s^2", "the pad's horizontal acceleration (as the "

@@ -28,13 +28,17 @@ import casadi as ca
 __all__ = ["out_of_limits"]
 
 
-def out_of_limits(offset, speed, gap, p):
+def out_of_limits(offset, speed, gap, p, aborts=0):
     """1 (CasADi) when the crawl's abort is started: the horizontal ``offset`` (m) past
     ``max_offset`` or past ``crawl_abort_offset`` (1000, the default: no tighter bound than the
-    judge's), or the horizontal relative ``speed`` (m/s) past ``max_relative_speed``,
-    with the gear's estimated height above the deck ``gap`` (m) above ``abort_floor``.
-    ``p`` the unpacked guidance parameters; the caller adds that the step is in the
-    committed crawl."""
-    limit = ca.fmin(p["max_offset"], p["crawl_abort_offset"])
+    judge's) while the descent's abort count ``aborts`` is below ``crawl_abort_budget`` (a
+    retry budget: a run whose crawls drift past the tighter bound window after window falls
+    back to ``max_offset`` instead of running out of time), or the horizontal relative
+    ``speed`` (m/s) past ``max_relative_speed``, with the gear's estimated height above the
+    deck ``gap`` (m) above ``abort_floor``. ``p`` the unpacked guidance parameters; the caller
+    adds that the step is in the committed crawl."""
+    tight = ca.if_else(aborts < p["crawl_abort_budget"], p["crawl_abort_offset"],
+                       p["max_offset"])
+    limit = ca.fmin(p["max_offset"], tight)
     past = ca.logic_or(offset > limit, speed > p["max_relative_speed"])
     return ca.logic_and(past, gap > p["abort_floor"])

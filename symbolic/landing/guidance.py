@@ -377,7 +377,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     # out of the limits; above it the descent pauses out of the band; a rising deck withdraws
     crawl = h <= p["touchdown_speed"] * p["descent_time"]
     off_limits = ca.logic_and(ca.logic_and(flying, crawl), out_of_limits(
-        offset, speed, p_e[2] - contact_height(p), p))
+        offset, speed, p_e[2] - contact_height(p), p, aborts))
     gate = gate_holds(p_e, v_e, h, timer, deck_rise, p)
     timer_next = crawl_timer_next(g, dict(gate=gate, h=h, landed=phase == LANDED, counting=(
         ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown)),

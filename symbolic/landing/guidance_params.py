@@ -86,4 +86,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "horizontal offset, as estimated (1000: past max_offset only)"),
     Field("crawl_gate_count_height", 1, "m", "reference height above touchdown at or below "
           "which the gate's holds count toward crawl_gate_wait (1000: everywhere)"),
+    Field("crawl_abort_budget", 1, "-", "crawl_abort_offset holds while the descent's "
+          "abort count is below this, then max_offset alone (1e6: always)"),
 ), "landing guidance parameters")
