@@ -97,11 +97,11 @@ def test_the_gate_off_counts_nothing():
         assert _step(0.06, 0.125, 8 * DT, crawl_gate=0.0, crawl_gate_count_height=ch)[1] == 0.0
 
 
-def _crawl(outside, **keys):
+def _crawl(outside, start=0.2, **keys):
     """The reference's heights above the contact height after each step of a crawl from
-    0.2 m, the quadrotor at rest on the reference 6 cm off the pad (past the 0.05 m gate) on
-    the steps ``outside`` marks, 2 cm off (inside) on the others."""
-    pg, xg, out = _params(**keys), _state(0.2), []
+    ``start`` (0.2 m), the quadrotor at rest on the reference 6 cm off the pad (past the
+    0.05 m gate) on the steps ``outside`` marks, 2 cm off (inside) on the others."""
+    pg, xg, out = _params(**keys), _state(start), []
     for off in outside:
         z = GUIDANCE_STATE.unpack(xg)["z_ref"][0]
         xg, _ = (np.asarray(v, dtype=float).ravel() for v in F(
@@ -138,6 +138,21 @@ def _count_height(name, *overrides):
     p_guid = landing_loop_params(v.l).unpack(np.asarray(v.pc, dtype=float).ravel())["p_guid"]
     return sc["landing.crawl_gate_count_height"], GUIDANCE_PARAMS.unpack(
         np.asarray(p_guid, dtype=float).ravel())["crawl_gate_count_height"][0]
+
+
+def test_a_count_height_at_or_under_the_floor_unbounds_the_wait():
+    """Review: the gate holds only above ``crawl_gate_floor``, so with the count height at or
+    under it no hold counts and the wait never opens the gate (as ``crawl_gate_wait`` 1000
+    would). Floor 0.03125 m, the wait 30 steps at and below 0.1 m, a crawl from 0.0625 m
+    held outside for 60 steps: with every hold counted it holds 30 steps and falls from step
+    31 (0.0625 - 0.3 (k - 30) dt); with the count height at the floor (or 0) it holds all 60."""
+    k = np.arange(1, 61)
+    gate = dict(crawl_gate_floor=2.0 ** -5, crawl_gate_wait=30 * DT, crawl_gate_wait_height=0.1)
+    np.testing.assert_allclose(_crawl(k > 0, start=0.0625, **gate),
+                               0.0625 - 0.3 * np.maximum(k - 30, 0) * DT, rtol=0, atol=1e-12)
+    for ch in (2.0 ** -5, 0.0):
+        np.testing.assert_allclose(_crawl(k > 0, start=0.0625, crawl_gate_count_height=ch,
+                                          **gate), np.full(60, 0.0625), rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5", "highway_100"])
