@@ -45,7 +45,7 @@ def test_shipped_scenarios_start_from_the_gnss(name):
     assert list(e["p0_velocity"]) == list(e["gnss_v1_sigma"]) == [0.05] * 3
 
 
-def test_a_scenario_without_the_key_starts_cold_as_before():
+def test_the_gnss_start_is_the_cold_draw_scaled_and_p0_the_default():
     # the schema's default is the behaviour before the key (quadland.schema.fields.Field)
     doc = load_scenario("highway").data["estimator"]
     assert doc["handover_velocity"] == "gnss"
