@@ -4,6 +4,7 @@ campaign row flown again at 1 kHz, and the gear's logged load impulse over a fir
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -19,6 +20,7 @@ def flown(scenario, index, *extra):
     """Row ``index`` of ``scenario``'s campaign (its own campaign seed) flown at 1 kHz with
     ``extra`` overrides on top of the row's draws: the result and its touchdown report."""
     overrides = draws(campaign_spec_of(load_scenario(scenario)), [index])[0].overrides()
+    overrides = [*overrides, *HANDOVER_COLD]
     res = quadland.simulate(load_scenario(scenario, [*overrides, FINE, *extra]))
     return res, touchdown_report(res)
 

@@ -212,6 +212,12 @@ def sanitized_drivers(tmp_path_factory, label: str, files, sources, driver: str)
     return exes
 
 
+#: The handover's velocity before "The handover's velocity from the GNSS" (docs/landing.md,
+#: twentieth session): the cold start, the truth plus a draw from the filter's 0.5 m/s
+#: ``p0_velocity``; main's bits exactly (highway's default 300 gives the nineteenth's
+#: runs.csv). A replay of a campaign row measured before the twentieth session pins it.
+HANDOVER_COLD = ["estimator.handover_velocity=p0", "estimator.p0_velocity=[0.5, 0.5, 0.5]"]
+
 #: highway's contact switch before "highway: the graze switch" (docs/landing.md, eighteenth
 #: session): it closed on 2 ms of the weight's load impulse, so a front foot's graze left it
 #: open (the default seed's 314, 554 and 1193 bounced); the replays of highway's earlier rows

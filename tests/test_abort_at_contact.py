@@ -14,6 +14,7 @@ with the abort is the contact without it, to within 10 ms, 1 cm, 0.01 m/s horizo
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 from ship_before import ABORT_BEFORE, DECK_TILT_BEFORE, HEAVE_BEFORE, LEASH_BEFORE
 
 import quadland
@@ -32,7 +33,8 @@ def _fly(seed, index, *overrides):
     :data:`LEASH_BEFORE`: the fifteenth session's flights)."""
     spec = campaign_spec_of(load_scenario("ship_ss5", [f"campaign.seed={seed}"]))
     d = draws(spec, [index])[0]
-    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *HEAVE_BEFORE,
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *HANDOVER_COLD,
+                                                       *HEAVE_BEFORE,
                                                        DECK_TILT_BEFORE, *LEASH_BEFORE,
                                                        *overrides]))
     return res, touchdown_report(res)

@@ -14,7 +14,7 @@ import ctypes
 
 import numpy as np
 import pytest
-from reference import GUIDANCE_P, HIGHWAY_LEASH, have_compiler
+from reference import GUIDANCE_P, HANDOVER_COLD, HIGHWAY_LEASH, have_compiler
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -160,7 +160,7 @@ def _fly_236(*overrides):
     above touchdown, the phase and the time."""
     sc = load_scenario("highway", ["campaign.seed=11"])
     d = draws(campaign_spec_of(sc), [236])[0]
-    sc = load_scenario("highway", [*d.overrides(), *HIGHWAY_LEASH, *overrides])
+    sc = load_scenario("highway", [*d.overrides(), *HANDOVER_COLD, *HIGHWAY_LEASH, *overrides])
     res = quadland.simulate(sc)
     return (touchdown_report(res), np.asarray(res["z_ref"]) - sc["quadrotor.gear_height"],
             np.asarray(res["phase"]), np.asarray(res["t"]))

@@ -15,7 +15,7 @@ draws, whose rows the campaign recorded.
 import numpy as np
 import pytest
 from highway_before import BEFORE
-from reference import GUIDANCE_P
+from reference import GUIDANCE_P, HANDOVER_COLD
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -68,7 +68,7 @@ def _run(index, *overrides):
     sc = load_scenario("highway")
     d = draws(campaign_spec_of(sc), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("highway", [
-        *d.overrides(), *BEFORE, *overrides])))
+        *d.overrides(), *BEFORE, *HANDOVER_COLD, *overrides])))
 
 
 @pytest.mark.parametrize(("index", "sink_before", "sink_leash"),

@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 from highway_before import BEFORE
+from reference import HANDOVER_COLD
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -59,7 +60,7 @@ def _run(index, *overrides):
     sc = load_scenario("highway")
     d = draws(campaign_spec_of(sc), [index])[0]
     res = quadland.simulate(load_scenario("highway", [
-        *d.overrides(), "controller.observer_frequency=[0.0, 0.0, 0.0]",
+        *d.overrides(), *HANDOVER_COLD, "controller.observer_frequency=[0.0, 0.0, 0.0]",
         "controller.ki_p=[0.5, 0.5, 1.0]", *BEFORE, *overrides]))
     k = np.flatnonzero(res["touched"] > 0.5)
     return touchdown_report(res), float(np.max(res["foot_offset"][k]))

@@ -16,7 +16,7 @@ import ctypes
 import casadi as ca
 import numpy as np
 import pytest
-from reference import GUIDANCE_P, have_compiler
+from reference import GUIDANCE_P, HANDOVER_COLD, have_compiler
 from test_landing_flight_code import STATUS, Harness, L, _measurement
 
 import quadland
@@ -176,7 +176,7 @@ def test_seed_11_run_293_of_ship_ss5_meets_the_deck_within_the_tilt_limit():
     deg. With the deck's cone at 16 deg it meets it within 17.9 deg, the contact within
     0.05 s of the other, and lands."""
     sc = load_scenario("ship_ss5", {"campaign.seed": 11})
-    overrides = draws(campaign_spec_of(sc), [293])[0].overrides()
+    overrides = draws(campaign_spec_of(sc), [293])[0].overrides() + HANDOVER_COLD
 
     def flown(*extra):
         return touchdown_report(quadland.simulate(load_scenario("ship_ss5",

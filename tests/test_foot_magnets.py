@@ -30,7 +30,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from lock_rig import F_HOLD, FX, FY, G0, H, lock_function, lock_packs
-from reference import HIGHWAY_100_TWELFTH
+from reference import HANDOVER_COLD, HIGHWAY_100_TWELFTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -126,7 +126,8 @@ def test_on_its_front_feet_only_the_front_magnets_pull(deg):
 def _run(index, *overrides):
     sc = load_scenario("highway_100")
     d = draws(campaign_spec_of(sc), [index])[0]
-    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HIGHWAY_100_TWELFTH,
+    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HANDOVER_COLD,
+                                                          *HIGHWAY_100_TWELFTH,
                                                           *overrides]))
     k0 = int(np.argmax(res["touched"] > 0.5))
     k4 = k0 + int(np.argmax(res["feet_down"][k0:] > 3.5))

@@ -17,7 +17,7 @@ default on every shipped scenario, and seed 11's run 42 of highway_100 replayed 
 import casadi as ca
 import numpy as np
 import pytest
-from reference import GUIDANCE_P, HIGHWAY_100_CREEP
+from reference import GUIDANCE_P, HANDOVER_COLD, HIGHWAY_100_CREEP
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -142,7 +142,7 @@ def test_seed_11_run_42_stays_on_the_pad_without_air_mode():
     on the pad in air mode too (docs/landing.md, "highway_100 on fresh seeds: the creep under
     the magnets")."""
     sc = load_scenario("highway_100", {"campaign.seed": 11})
-    overrides = draws(campaign_spec_of(sc), [42])[0].overrides()
+    overrides = draws(campaign_spec_of(sc), [42])[0].overrides() + HANDOVER_COLD
 
     weight = load_scenario("highway_100", overrides).data["quadrotor"]["mass"] * 9.8
 

@@ -12,6 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from nav_reference import N, col, sl
+from reference import HANDOVER_COLD
 from ship_before import HEAVE_BEFORE, LEASH_BEFORE
 
 import quadland
@@ -138,7 +139,8 @@ def _run_104(*overrides):
     nineteenth): the result, its report."""
     seed7 = ["campaign.seed=7"]
     d = draws(campaign_spec_of(load_scenario("ship_ss5", seed7)), [104])[0]
-    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *LEASH_BEFORE,
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *HANDOVER_COLD,
+                                                       *LEASH_BEFORE,
                                                        *overrides]))
     return res, touchdown_report(res)
 

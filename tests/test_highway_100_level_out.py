@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 import pytest
-from reference import HIGHWAY_100_TWELFTH
+from reference import HANDOVER_COLD, HIGHWAY_100_TWELFTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -189,7 +189,8 @@ def _run(index, *overrides):
     its contact (x, lean), its rest (x) and its farthest foot at the end, its verdict."""
     sc = load_scenario("highway_100")
     d = draws(campaign_spec_of(sc), [index])[0]
-    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HIGHWAY_100_TWELFTH,
+    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HANDOVER_COLD,
+                                                          *HIGHWAY_100_TWELFTH,
                                                           *TENTH, *overrides]))
     k0 = int(np.argmax(res["touched"] > 0.5))
     return dict(x0=float(res["x_e"][k0]), th=math.degrees(abs(float(res["theta1"][k0]))),

@@ -13,7 +13,7 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
-from reference import HIGHWAY_100_FOURTEENTH
+from reference import HANDOVER_COLD, HIGHWAY_100_FOURTEENTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -75,7 +75,7 @@ def test_seed_7_run_87_pauses_its_crawl_in_the_lane_change_s_onset_and_lands():
     measured with (``HIGHWAY_100_FOURTEENTH``, which also commits the crawl: the fifteenth
     session's lower flare lands this run without the pause)."""
     sc = load_scenario(BENCH / "highway_100_30_100.toml", {"campaign.seed": 7})
-    overrides = draws(campaign_spec_of(sc), [87])[0].overrides()
+    overrides = draws(campaign_spec_of(sc), [87])[0].overrides() + HANDOVER_COLD
 
     def flown(*extra):
         res = quadland.simulate(load_scenario(BENCH / "highway_100_30_100.toml",

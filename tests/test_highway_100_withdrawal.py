@@ -14,7 +14,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
-from reference import GUIDANCE_P, HIGHWAY_100_MARKER
+from reference import GUIDANCE_P, HANDOVER_COLD, HIGHWAY_100_MARKER
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -159,7 +159,7 @@ def test_seed_7_run_87_is_withdrawn_and_lands():
     12.55 s (docs/landing.md, the section's review), so a change of the numerics that moves
     the body by a tenth of a millimetre may flip this run, not the mechanism."""
     sc = load_scenario("highway_100", {"campaign.seed": 7})
-    overrides = draws(campaign_spec_of(sc), [87])[0].overrides()
+    overrides = draws(campaign_spec_of(sc), [87])[0].overrides() + HANDOVER_COLD
 
     def flown(*extra):
         res = quadland.simulate(load_scenario("highway_100", [*overrides, *extra]))

@@ -15,7 +15,7 @@ from the file; and the four runs replayed from the campaigns' draws, with the la
 import math
 
 import pytest
-from reference import HIGHWAY_LEASH, HIGHWAY_SIXTEENTH
+from reference import HANDOVER_COLD, HIGHWAY_LEASH, HIGHWAY_SIXTEENTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -62,7 +62,7 @@ def _run(seed, index, *overrides):
     base = [] if seed is None else [f"campaign.seed={seed}"]
     d = draws(campaign_spec_of(load_scenario("highway", base)), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("highway", [
-        *d.overrides(), *overrides])))
+        *d.overrides(), *HANDOVER_COLD, *overrides])))
 
 
 @pytest.mark.parametrize(("seed", "index", "failure", "before_value"), [

@@ -15,7 +15,7 @@ more than ``thrust_low`` of the weight, and the gear meets the roof faster than
 
 import numpy as np
 import pytest
-from reference import HIGHWAY_GATE_SIXTEENTH
+from reference import HANDOVER_COLD, HIGHWAY_GATE_SIXTEENTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -32,7 +32,8 @@ def _fly(*overrides):
     the 0.10 m floor, no wait) plus ``overrides``: result, report, scenario."""
     d = draws(campaign_spec_of(load_scenario("highway", [f"campaign.seed={SEED}"])),
               [INDEX])[0]
-    sc = load_scenario("highway", [*d.overrides(), *HIGHWAY_GATE_SIXTEENTH, *overrides])
+    sc = load_scenario("highway", [*d.overrides(), *HANDOVER_COLD,
+                                   *HIGHWAY_GATE_SIXTEENTH, *overrides])
     res = quadland.simulate(sc)
     return res, touchdown_report(res), sc
 

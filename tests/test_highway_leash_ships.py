@@ -12,7 +12,7 @@ its catch-up bound against the judge's sink-rate limit (by hand from the file), 
 
 import numpy as np
 import pytest
-from reference import HIGHWAY_LEASH
+from reference import HANDOVER_COLD, HIGHWAY_LEASH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -43,7 +43,7 @@ def _fly_1442(*overrides):
     reference's height above touchdown and the time."""
     sc = load_scenario("highway")
     d = draws(campaign_spec_of(sc), [1442])[0]
-    sc = load_scenario("highway", [*d.overrides(), *overrides])
+    sc = load_scenario("highway", [*d.overrides(), *HANDOVER_COLD, *overrides])
     res = quadland.simulate(sc)
     h = np.asarray(res["z_ref"]) - sc["quadrotor.gear_height"]
     return touchdown_report(res), h, np.asarray(res["t"])

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from highway_before import BEFORE as TOUCHDOWN_BEFORE
+from reference import HANDOVER_COLD
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -64,7 +65,7 @@ def _run(index, *overrides):
     sc = load_scenario("highway")
     d = draws(campaign_spec_of(sc), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("highway", [
-        *d.overrides(), *TOUCHDOWN_BEFORE, *overrides])))
+        *d.overrides(), *HANDOVER_COLD, *TOUCHDOWN_BEFORE, *overrides])))
 
 
 def test_campaign_run_237_no_longer_meets_the_deck_past_the_tilt_limit():

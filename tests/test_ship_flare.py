@@ -14,6 +14,7 @@ keys of before land 291 of 300 (4 tilt, 1 tipped), as shipped 299 (``ship_ss5`` 
 import math
 
 import pytest
+from reference import HANDOVER_COLD
 from ship_before import HEAVE_BEFORE, NO_FLARE
 
 import quadland
@@ -32,7 +33,7 @@ def _campaign_run(index, *overrides):
     sea state 4's frequency")."""
     d = draws(campaign_spec_of(load_scenario("ship")), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("ship", [
-        *d.overrides(), *HEAVE_BEFORE, *overrides])))
+        *d.overrides(), *HANDOVER_COLD, *HEAVE_BEFORE, *overrides])))
 
 
 @pytest.mark.parametrize("name", ["ship", "ship_ss5"])

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 from ship_before import HEAVE_BEFORE
 
 import quadland
@@ -66,7 +67,7 @@ def test_ships_campaign_does_not_fly_the_filters_sea():
 def _run_668(*overrides):
     """The default seed's run 668 of ship (its draw), with ``overrides``: result, report."""
     d = draws(campaign_spec_of(load_scenario("ship")), [668])[0]
-    res = quadland.simulate(load_scenario("ship", [*d.overrides(), *overrides]))
+    res = quadland.simulate(load_scenario("ship", [*d.overrides(), *HANDOVER_COLD, *overrides]))
     return res, touchdown_report(res)
 
 

@@ -17,7 +17,7 @@ wherever the filter's height is more than the leash above it.
 
 import numpy as np
 import pytest
-from reference import GUIDANCE_P
+from reference import GUIDANCE_P, HANDOVER_COLD
 from ship_before import (
     ABORT_BEFORE,
     COMMIT_BEFORE,
@@ -96,7 +96,8 @@ def _fly(name, seed, index, *overrides):
     touchdown report."""
     base = [] if seed is None else [f"campaign.seed={seed}"]
     d = draws(campaign_spec_of(load_scenario(name, base)), [index])[0]
-    res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), PAD_BEFORE, *GATES_BEFORE,
+    res = quadland.simulate(load_scenario(name, [*base, *d.overrides(), *HANDOVER_COLD,
+                                                        PAD_BEFORE, *GATES_BEFORE,
                                                  *COMMIT_BEFORE, ABORT_BEFORE, *HEAVE_BEFORE,
                                                  DECK_TILT_BEFORE, *overrides]))
     return res, touchdown_report(res)

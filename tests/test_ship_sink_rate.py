@@ -20,6 +20,7 @@ case, not its effect.
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 from ship_before import (
     ABORT_BEFORE,
     COMMIT_BEFORE,
@@ -43,7 +44,8 @@ def _run(name, index, *overrides):
     the touchdown report, and the filter's and the true relative vertical velocity (m/s, up)
     at the last row before the first contact."""
     d = draws(campaign_spec_of(load_scenario(name)), [index])[0]
-    res = quadland.simulate(load_scenario(name, [*d.overrides(), PAD_BEFORE, *GATES_BEFORE,
+    res = quadland.simulate(load_scenario(name, [*d.overrides(), *HANDOVER_COLD,
+                                                 PAD_BEFORE, *GATES_BEFORE,
                                                  *COMMIT_BEFORE, ABORT_BEFORE, *HEAVE_BEFORE,
                                                  DECK_TILT_BEFORE, *overrides]))
     rep = touchdown_report(res)

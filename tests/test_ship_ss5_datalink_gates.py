@@ -13,6 +13,7 @@ gate's false alarms carried on by the lag they made.
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 from scipy.stats import chi2
 from ship_before import ABORT_BEFORE, COMMIT_BEFORE, GATES_BEFORE, HEAVE_BEFORE
 
@@ -31,7 +32,8 @@ def _fly(*overrides):
     its touchdown report,
     and per datalink block the NIS of every due packet and the refusals counted."""
     d = draws(campaign_spec_of(load_scenario("ship_ss5")), [180])[0]
-    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *COMMIT_BEFORE,
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *HANDOVER_COLD,
+                                                       *COMMIT_BEFORE,
                                                        ABORT_BEFORE, *HEAVE_BEFORE, *overrides]))
     nis = {b: np.asarray(res[f"nis_{b}"])[np.asarray(res[f"nis_{b}"]) > 0] for b in BLOCKS}
     refused = {b: int(np.asarray(res[f"n_rejected_{b}"])[-1]) for b in BLOCKS}

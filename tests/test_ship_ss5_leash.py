@@ -16,6 +16,7 @@ the leash it passed it inside the floor and met the deck at 0.526 m/s.
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 from ship_before import ABORT_BEFORE, LEASH_BEFORE
 
 import quadland
@@ -33,7 +34,7 @@ def _fly(index, *overrides):
     """The default seed's run ``index`` of ``ship_ss5`` (its draw), with ``overrides``: the
     flight, its touchdown report, and the last row before the first contact."""
     d = draws(campaign_spec_of(load_scenario("ship_ss5")), [index])[0]
-    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *overrides]))
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *HANDOVER_COLD, *overrides]))
     k = int(np.flatnonzero(np.asarray(res["touched"]) > 0.5)[0]) - 1
     return res, touchdown_report(res), k
 
@@ -108,7 +109,7 @@ def _crawl_aborts(seed, index, *overrides):
     contact's time, and each return from the crawl to the hover (descend to align) as its
     time and the gear's height above the deck by the filter (m)."""
     d = draws(campaign_spec_of(load_scenario("ship_ss5", [f"campaign.seed={seed}"])), [index])[0]
-    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *overrides]))
+    res = quadland.simulate(load_scenario("ship_ss5", [*d.overrides(), *HANDOVER_COLD, *overrides]))
     t, phase = np.asarray(res["t"]), np.asarray(res["phase"])
     gear = load_scenario("ship_ss5")["quadrotor.gear_height"]
     rows = np.flatnonzero((phase[:-1] == DESCEND) & (phase[1:] == ALIGN)) + 1

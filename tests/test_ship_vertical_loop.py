@@ -10,6 +10,7 @@ campaigns of docs/landing.md: the same draws, default campaign seed).
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 from ship_before import (
     ABORT_BEFORE,
     COMMIT_BEFORE,
@@ -38,7 +39,8 @@ def _run(name, index, *overrides):
     vertical velocity at the last row before the first contact."""
     sc = load_scenario(name)
     d = draws(campaign_spec_of(sc), [index])[0]
-    res = quadland.simulate(load_scenario(name, [*d.overrides(), *NO_FLARE, PAD_BEFORE,
+    res = quadland.simulate(load_scenario(name, [*d.overrides(), *HANDOVER_COLD,
+                                                 *NO_FLARE, PAD_BEFORE,
                                                  *GATES_BEFORE, *COMMIT_BEFORE, ABORT_BEFORE,
                                                  *HEAVE_BEFORE,
                                                  *overrides]))

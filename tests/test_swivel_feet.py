@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from lock_rig import F_HOLD, FX, FY, G0, H, lock_function, lock_packs
-from reference import HIGHWAY_100_TWELFTH
+from reference import HANDOVER_COLD, HIGHWAY_100_TWELFTH
 
 from quadland.kinds.landing.gear import lock_params
 from quadland.scenario import load_scenario
@@ -192,7 +192,8 @@ def _replay(index, *overrides):
     from quadland.campaign.spec import campaign_spec_of
     from quadland.kinds.landing.report import touchdown_report
     d = draws(campaign_spec_of(load_scenario("highway_100")), [index])[0]
-    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HIGHWAY_100_TWELFTH,
+    res = quadland.simulate(load_scenario("highway_100", [*d.overrides(), *HANDOVER_COLD,
+                                                          *HIGHWAY_100_TWELFTH,
                                                           *overrides]))
     k0 = int(np.argmax(res["touched"] > 0.5))
     th = np.abs(res["theta1"])

@@ -17,7 +17,7 @@ import tomllib
 from importlib.resources import files
 
 import pytest
-from reference import TURNING_SEVENTEENTH
+from reference import HANDOVER_COLD, TURNING_SEVENTEENTH
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -44,7 +44,7 @@ def _campaign_run(seed, index, *overrides):
     spec = campaign_spec_of(load_scenario("turning", [f"campaign.seed={seed}"]))
     d = draws(spec, [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *d.overrides(), *TURNING_SEVENTEENTH, *overrides])))
+        *d.overrides(), *HANDOVER_COLD, *TURNING_SEVENTEENTH, *overrides])))
 
 
 def test_q_at_is_the_turning_cars_jerk_squared_over_a_second():

@@ -13,7 +13,7 @@ settings of before (``BEFORE``, ``bf41d33``'s file to the bit) and as shipped.
 import math
 
 import pytest
-from reference import TURNING_SEVENTEENTH
+from reference import HANDOVER_COLD, TURNING_SEVENTEENTH
 from turning_before import BEFORE
 
 import quadland
@@ -36,7 +36,7 @@ def _campaign_run(index, *overrides):
     (``TURNING_SEVENTEENTH``)."""
     d = draws(campaign_spec_of(load_scenario("turning")), [index])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *d.overrides(), *TURNING_SEVENTEENTH, *overrides])))
+        *d.overrides(), *TURNING_SEVENTEENTH, *HANDOVER_COLD, *overrides])))
 
 
 def test_the_flare_leaves_authority_over_the_steady_tilt_and_stays_under_the_limit():

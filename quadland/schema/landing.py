@@ -251,6 +251,11 @@ LANDING_SCHEMA: Mapping[str, Mapping[str, Field]] = MappingProxyType({
                ("input_bias", "m/s^2", "the accelerometer's bias in the acceleration input"),
                ("tilt_bias", "m/s^2", "the acceleration input's bias from the attitude "
                 "estimate's tilt error"))},
+        "handover_velocity": Field(S, "-", "the quadrotor's velocity at the handover: gnss: "
+                                   "the GNSS's (its error drawn at sensors.gnss."
+                                   "velocity_sigma, as EKF2 resets its velocity to the "
+                                   "GNSS); p0: the truth plus a draw from p0_velocity (a "
+                                   "cold start)", choices=("gnss", "p0"), default="p0"),
         "handover_lockout_gnss": Field(F, "-", "refusals after which a GNSS block not yet "
                                        "fused since the handover is re-admitted (E8a), 0: "
                                        "gate_lockout's as for any block", lo=0.0, hi=1e6,

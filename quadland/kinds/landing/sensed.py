@@ -63,8 +63,8 @@ from quadland_symbolic.landing.sensed_loop import (
 from quadland_symbolic.landing.sensors import SENSOR_NAMES
 
 __all__ = ["INITIAL_ERROR_STREAM", "TICK_CHUNK", "FIRST_CHUNK", "TickTable", "sensor_settings",
-           "sensors_enabled", "handover", "sensed_vectors", "tick_table", "estimator_p",
-           "imu_at_rest", "table_key", "drawn_table"]
+           "sensors_enabled", "handover", "handover_velocity_sigma", "sensed_vectors",
+           "tick_table", "estimator_p", "imu_at_rest", "table_key", "drawn_table"]
 
 #: The random stream of the filter's initial error (beside the sensors').
 INITIAL_ERROR_STREAM = len(SENSOR_NAMES) + 1
@@ -112,10 +112,16 @@ def handover(scenario: Scenario, lv: LandingValues,
              random: bool | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The filter's handover at t = 0: ``(x0, P0_diag, deck0)``.
 
-    ``x0`` is the true relative motion plus a draw from ``P0`` (seeded by
-    ``simulation.seed``; none when ``random`` is False, by default when
-    ``sensors.random`` is false), ``P0_diag`` the ``[estimator]``'s initial
-    variances, ``deck0`` the deck's rotation at t = 0.
+    ``x0`` is the true relative motion plus a draw (seeded by ``simulation.seed``;
+    none when ``random`` is False, by default when ``sensors.random`` is false):
+    from ``P0`` for every state but the quadrotor's velocity ``v1``, whose estimate is
+    the GNSS's velocity when ``estimator.handover_velocity`` is ``"gnss"`` (the
+    default: the autopilot's GNSS-aided navigation hands over, as EKF2 resets its
+    velocity to the GNSS, docs/landing.md "The handover's velocity from the GNSS"),
+    so its error is drawn at the world's ``sensors.gnss.velocity_sigma``; ``"p0"``
+    draws it from ``p0_velocity`` (a cold start, the sessions before the twentieth).
+    The draw's standard normals are the same either way. ``P0_diag`` is the
+    ``[estimator]``'s initial variances, ``deck0`` the deck's rotation at t = 0.
     """
     e, seed = scenario.data["estimator"], scenario.data["simulation"]["seed"]
     if random is None:
@@ -134,10 +140,26 @@ def handover(scenario: Scenario, lv: LandingValues,
     error = np.zeros(NAV.size)
     if random:
         rng = np.random.default_rng(sensor_seed(seed, INITIAL_ERROR_STREAM, 0))
-        error = sigma * rng.standard_normal(NAV.size)
+        z = rng.standard_normal(NAV.size)
+        error = sigma * z
+        if e["handover_velocity"] == "gnss":
+            v1 = NAV.slice("v1")
+            error[v1] = handover_velocity_sigma(scenario) * z[v1]
         for name in ("b", "a_b", "a_tilt"):   # the biases' truth is the sensors' draw
             error[NAV.slice(name)] = 0.0
     return truth + error, sigma ** 2, DECK_INIT.pack(dict(eta2=eta2, w2E=w2, w2E_dot=w2_dot))
+
+
+def handover_velocity_sigma(scenario: Scenario) -> float:
+    """The standard deviation, per axis, of the handover's velocity error from the GNSS.
+
+    The GNSS's velocity noise, ``sensors.gnss.velocity_sigma`` (the world's, as a
+    campaign draws it). The receiver's latency is not in it: the autopilot's filter
+    resets its velocity on its delayed horizon and carries it to the present on the
+    IMU, as EKF2's output predictor does; what that leaves (the accelerometer's error
+    over the latency) is bounded in docs/landing.md and not drawn.
+    """
+    return float(scenario.data["sensors.gnss"]["velocity_sigma"])
 
 
 def sensed_vectors(scenario: Scenario, lv: LandingValues) -> tuple[np.ndarray, np.ndarray]:
