@@ -9,8 +9,9 @@ Two builds of the runtime's simulator of each of ``--flights`` (the model rename
 ``before`` (``simulator.DIRECT_ACCESS`` off: CasADi's C as it writes it) and ``now``; each
 flown on the runtime's own arguments of the default landing, the ``now`` flight checked the
 same bits as ``before``'s (every recorded row, signal, state and the end state); then flown
-alternately in one process, CPU ms, median of ``--rounds``. ``--callgrind NAME`` flies one
-build of ``highway`` once, for::
+alternately in one process, CPU ms, median of ``--rounds``, and the median of the rounds'
+paired ratios (each round's two flights back to back). ``--callgrind NAME`` flies one build
+of ``highway`` once, for::
 
     valgrind --tool=callgrind --toggle-collect=ffi_call --toggle-collect=closure_fcn \\
         python benchmarks/bench_direct_access.py --callgrind now
@@ -77,6 +78,11 @@ def main() -> None:
                   f"{1e3 * m:.2f} ms CPU (median of {a.rounds}, {1e3 * min(v):.2f} to "
                   f"{1e3 * max(v):.2f}), {m / base:.3f} of before; the same bits: "
                   f"{same if k == 'now' else '-'}")
+        pairs = [n / b for n, b in zip(cpu["now"], cpu["before"], strict=True)]
+        q = statistics.quantiles(pairs, n=4)
+        print(f"- {s}, paired: the rounds' now / before {statistics.median(pairs):.3f} "
+              f"(median; quartiles {q[0]:.3f} to {q[2]:.3f}), now the faster in "
+              f"{sum(r < 1 for r in pairs)} of {a.rounds}")
     print(f"load average {os.getloadavg()}")
 
 

@@ -148,3 +148,134 @@ def test_mx_bodies_and_large_results_are_left_as_they_are(monkeypatch):
     assert "ql_a0" in text and "ql_r0" not in text and "if (res[0]!=0) res[0][8]=" in text
     plain = "int f(void) { return 0; }\n"
     assert simulator.direct_access(plain) == plain
+
+
+# --- The review's cases (rev-flightcost, twentieth): aliasing, call nodes, sparsity, levels.
+
+def _aliasing_function() -> ca.Function:
+    """CasADi's SX body of this writes ``a`` (all of it) before it reads ``x[2]`` and
+    ``x[1]``, reads a sparse argument's third nonzero, writes a constant, a copy of ``x``, a
+    result of no elements and a sparse one: called with ``res[0] == arg[0]`` the later reads
+    see the written values."""
+    x, y = ca.SX.sym("x", 3), ca.SX.sym("y", ca.Sparsity.lower(2))
+    return ca.Function("alias", [x, y], [
+        ca.vertcat(2 * x[0], x[0] + 1, 3.0), ca.vertcat(x[2] * x[1], y.nz[2]),
+        ca.DM.zeros(0, 1), x, ca.sparsify(ca.vertcat(0, x[1], 0))],
+        ["x", "y"], ["a", "b", "e", "p", "s"])
+
+
+def _call_node_function() -> ca.Function:
+    """An SX function calling another through CasADi's call node (``never_inline``): its
+    body sets ``arg[n_in]`` and ``res[n_out]`` for the callee and reads the callee's
+    results from ``w``."""
+    u = ca.SX.sym("u", 2)
+    g = ca.Function("g", [u], [ca.sin(u) * 2 - u[::-1]], {"never_inline": True})
+    x = ca.SX.sym("x", 3)
+    return ca.Function("callnode", [x], [g(x[:2]) + x[2], g(x[1:]) * x[0]], ["x"], ["o", "q"])
+
+
+def _direct_library(monkeypatch, f: ca.Function, direct: bool, name: str, opt: str = "-O2"):
+    """``f``'s C, rewritten or not, built at ``opt``; its entry with CasADi's signature."""
+    monkeypatch.setattr(simulator, "DIRECT_ACCESS", direct)
+    files, fn = simulator._emit(name, f)
+    lib = ctypes.CDLL(str(build.build_library(files, (f"{name}.c",), opt=opt,
+                                              name=f"lib{name}{opt[1:]}", strict=False)))
+    entry = getattr(lib, name)
+    entry.restype = ctypes.c_int
+    return files[f"{name}.c"], entry, fn
+
+
+def _raw_call(entry, fn: ca.Function, args: list, res: list) -> None:
+    """``entry(arg, res, iw, w, 0)`` with CasADi's work sizes; ``None`` is a null pointer,
+    an array its data (several may share one buffer)."""
+    real_p = ctypes.POINTER(ctypes.c_double)
+    arg = (real_p * max(fn.sz_arg(), 1))(*(
+        ctypes.cast(a.ctypes.data, real_p) if a is not None else real_p() for a in args))
+    out = (real_p * max(fn.sz_res(), 1))(*(
+        ctypes.cast(r.ctypes.data, real_p) if r is not None else real_p() for r in res))
+    iw = (ctypes.c_longlong * max(fn.sz_iw(), 1))()
+    w = (ctypes.c_double * max(fn.sz_w(), 1))()
+    assert entry(arg, out, iw, w, 0) == 0
+
+
+def test_an_output_aliasing_an_input_reads_what_was_written_in_both_forms(monkeypatch,
+                                                                            tmp_path):
+    """``res[0] == arg[0]``: CasADi's body writes ``a`` over ``x`` and then reads ``x[1]``,
+    ``x[2]``; the pointers taken once a call are the same memory, so the direct form reads
+    the written values as CasADi's does. Against the hand derivation (``b[0] = 3 (x0 + 1)``,
+    ``p = (x0, x0 + 1, 3)``), CasADi's compiled C and, unaliased, CasADi's own evaluation."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    f = _aliasing_function()
+    plain_c, plain, fn = _direct_library(monkeypatch, f, False, "t_da_alias_plain")
+    direct_c, direct, _ = _direct_library(monkeypatch, f, True, "t_da_alias_direct")
+    body = plain_c.split("static int casadi_f0(")[1]
+    assert body.index("if (res[0]!=0) res[0][2]=") < body.index("arg[0]? arg[0][2] : 0")
+    assert "if (res[" not in direct_c and "]? arg[" not in direct_c
+    rng = np.random.default_rng(11)
+    for x0 in [*SPECIAL, *rng.normal(0, 3, 20)]:
+        x_in = np.array([x0, rng.normal(), rng.normal()])
+        y_in = rng.normal(size=3)
+        got = {}
+        for form, entry in (("plain", plain), ("direct", direct)):
+            x = x_in.copy()
+            b, p, s = np.full(2, 7.0), np.full(3, 7.0), np.full(1, 7.0)
+            _raw_call(entry, fn, [x, y_in], [x, b, None, p, s])       # a written over x
+            got[form] = np.concatenate([x, b, p, s])
+        nan = np.isnan(got["plain"])
+        assert np.array_equal(np.isnan(got["direct"]), nan)
+        assert got["plain"][~nan].view(np.uint64).tolist() == \
+            got["direct"][~nan].view(np.uint64).tolist()
+        x, b, p, s = np.split(got["direct"], [3, 5, 8])
+        assert b[1] == y_in[2]                          # the sparse argument's third nonzero
+        if np.isfinite(x0):                             # the hand derivation
+            want = np.array([2 * x0, x0 + 1, 3.0, 3.0 * (x0 + 1), y_in[2], x0, x0 + 1, 3.0,
+                             x0 + 1])
+            assert got["direct"].view(np.uint64).tolist() == want.view(np.uint64).tolist()
+            assert (p[1], p[2]) != (x_in[1], x_in[2])   # the aliasing was exercised
+        # not aliased: CasADi's own evaluation, bit for bit where a number
+        x = x_in.copy()
+        a, b, p, s = np.full(3, 7.0), np.full(2, 7.0), np.full(3, 7.0), np.full(1, 7.0)
+        _raw_call(direct, fn, [x, y_in], [a, b, None, p, s])
+        want = f(x_in, ca.DM(ca.Sparsity.lower(2), y_in))
+        for g, w_ in zip((a, b, p, s), (want[0], want[1], want[3], want[4]), strict=True):
+            w_ = np.asarray(ca.DM(w_).nonzeros(), dtype=float)
+            assert np.array_equal(np.isnan(g), np.isnan(w_))
+            assert g[~np.isnan(g)].view(np.uint64).tolist() == \
+                w_[~np.isnan(w_)].view(np.uint64).tolist()
+
+
+@pytest.mark.parametrize("opt", ["-O2", "-Os", "-O0"])
+def test_call_nodes_and_every_build_level_give_casadi_s_bits(monkeypatch, tmp_path, opt):
+    """A body with CasADi's call node (it sets ``arg[1]``/``res[2]`` itself) and its callee,
+    each rewritten, built at each level the runtime may fall back to
+    (``build.OPT_LEVELS``): the bits of CasADi's own C at that level, a null argument and
+    each null result included, and CasADi's evaluation where every pointer is given."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    f = _call_node_function()
+    plain_c, plain, fn = _direct_library(monkeypatch, f, False, "t_da_call_plain", opt)
+    direct_c, direct, _ = _direct_library(monkeypatch, f, True, "t_da_call_direct", opt)
+    assert "if (casadi_f1(arg+1, res+2, iw, w+4, 0)) return 1;" in direct_c
+    assert direct_c.count("ql_a0 = arg[0] ? arg[0] : ql_z;") == 2
+    rng = np.random.default_rng(13)
+    pool = np.array(SPECIAL + list(rng.normal(0, 3, 30)))
+    compared = 0
+    for k in range(120):
+        x_in = rng.choice(pool, size=3)
+        null_x, null_o, null_q = k % 4 == 3, k % 3 == 1, k % 5 == 2
+        got = []
+        for entry in (plain, direct):
+            o, q = np.full(2, 7.0), np.full(2, 7.0)
+            _raw_call(entry, fn, [None if null_x else x_in.copy()],
+                      [None if null_o else o, None if null_q else q])
+            got.append(np.concatenate([o, q]))
+        nan = np.isnan(got[0])
+        assert np.array_equal(np.isnan(got[1]), nan)
+        assert got[0][~nan].view(np.uint64).tolist() == got[1][~nan].view(np.uint64).tolist()
+        assert (got[1][:2] == 7.0).all() == null_o and (got[1][2:] == 7.0).all() == null_q
+        if not (null_x or null_o or null_q):
+            want = np.concatenate([np.asarray(w_, dtype=float).ravel() for w_ in f(x_in)])
+            assert np.array_equal(np.isnan(want), nan)
+            assert want[~nan].view(np.uint64).tolist() == got[1][~nan].view(
+                np.uint64).tolist()
+            compared += int((~nan).sum())
+    assert compared > 100
