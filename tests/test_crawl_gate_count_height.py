@@ -14,7 +14,7 @@ import ctypes
 
 import numpy as np
 import pytest
-from reference import GUIDANCE_P, have_compiler
+from reference import GUIDANCE_P, HANDOVER_COLD, have_compiler
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -193,7 +193,7 @@ def test_the_flight_code_refuses_what_the_schema_refuses(precision):
 def _fly_13_185(*overrides):
     d = draws(campaign_spec_of(load_scenario("turning", ["campaign.seed=13"])), [185])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *d.overrides(), *overrides])))
+        *d.overrides(), *HANDOVER_COLD, *overrides])))
 
 
 @pytest.mark.slow

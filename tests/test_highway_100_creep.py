@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -99,12 +100,14 @@ CREPT_OFF = [(31, 77, 0.09672316584605237, 24.41260118521228),
 def _row_flown(seed, index, b_slip=None):
     """Run ``index`` of highway_100's campaign under campaign seed ``seed``, its draws, flown
     as the campaign flies it (100 rows a second) with the cap ``b_slip`` (``None``: the
-    shipped file's): the result and its touchdown report."""
+    shipped file's), from the filter's cold start the rows were flown with (``HANDOVER_COLD``):
+    the result and its touchdown report."""
     seeded = [f"campaign.seed={seed}"]
     spec = campaign_spec_of(load_scenario("highway_100", seeded))
     overrides = draws(spec, [index])[0].overrides()
     cap = [] if b_slip is None else [f"gear.slip_damping_max={b_slip}"]
-    res = quadland.simulate(load_scenario("highway_100", [*seeded, *overrides, *cap]))
+    res = quadland.simulate(load_scenario("highway_100", [*seeded, *overrides, *HANDOVER_COLD,
+                                                          *cap]))
     return res, touchdown_report(res)
 
 

@@ -14,6 +14,7 @@ deck 0.04 s later, and the climb away is judged a bounce off the pad.
 
 import numpy as np
 import pytest
+from reference import HANDOVER_COLD
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -28,10 +29,12 @@ TRIAL = ("landing.crawl_abort_offset=0.15", "landing.crawl_abort_budget=3.0")
 
 def _fly(seed, index, *overrides):
     """Run ``index`` of ``ship_ss5``'s campaign seed ``seed`` (its draw), with ``overrides``:
-    the flight and its touchdown report."""
+    the flight and its touchdown report, from the filter's cold start the rows were flown
+    with (``HANDOVER_COLD``)."""
     base = [f"campaign.seed={seed}"]
     d = draws(campaign_spec_of(load_scenario("ship_ss5", base)), [index])[0]
-    res = quadland.simulate(load_scenario("ship_ss5", [*base, *d.overrides(), *overrides]))
+    res = quadland.simulate(load_scenario("ship_ss5", [*base, *d.overrides(), *HANDOVER_COLD,
+                                                       *overrides]))
     return res, touchdown_report(res)
 
 
