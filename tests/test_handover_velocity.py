@@ -119,6 +119,18 @@ def test_bad_value_names_the_key():
         load_scenario("highway", ["estimator.handover_velocity=cold"])
 
 
+def test_gnss_start_without_a_gnss_names_the_key():
+    # a receiver that loses every sample (dropout 1) gives no velocity to start from: the
+    # handover from the GNSS is refused with one line naming the key, the cold start not
+    with pytest.raises(ScenarioError, match="^estimator.handover_velocity: gnss needs a GNSS"):
+        load_scenario("highway", ["sensors.gnss.dropout=1.0"])
+    e = load_scenario("highway", ["sensors.gnss.dropout=1.0", *COLD]).data["estimator"]
+    assert e["handover_velocity"] == "p0"
+    # a receiver that loses some samples still starts the velocity from the GNSS
+    assert load_scenario("highway", ["sensors.gnss.dropout=0.5"]).data["estimator"][
+        "handover_velocity"] == "gnss"
+
+
 @pytest.mark.parametrize(("seed", "run", "t_roof"), [(19, 1326, 1.84), (17, 1413, 1.93)])
 def test_the_two_roof_flights_land_from_the_gnss(seed, run, t_roof):
     base = load_scenario("highway", [f"campaign.seed={seed}"])

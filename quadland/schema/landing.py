@@ -328,6 +328,10 @@ def check_landing(data: dict) -> None:
     if lockout < 1 or lockout != int(lockout):
         raise ScenarioError(f"estimator.gate_lockout: must be a whole number of refusals >= 1, "
                             f"got {lockout:g}")
+    if data["estimator"]["handover_velocity"] == "gnss" and \
+            data["sensors.gnss"]["dropout"] >= 1.0:
+        raise ScenarioError("estimator.handover_velocity: gnss needs a GNSS velocity, but "
+                            "sensors.gnss.dropout = 1 loses every sample; use p0")
     k = data["estimator"]["handover_lockout_gnss"]
     if k != int(k) or k > lockout:
         raise ScenarioError(f"estimator.handover_lockout_gnss: must be a whole number of "

@@ -116,12 +116,13 @@ def handover(scenario: Scenario, lv: LandingValues,
     none when ``random`` is False, by default when ``sensors.random`` is false):
     from ``P0`` for every state but the quadrotor's velocity ``v1``, whose estimate is
     the GNSS's velocity when ``estimator.handover_velocity`` is ``"gnss"`` (the
-    default: the autopilot's GNSS-aided navigation hands over, as EKF2 resets its
-    velocity to the GNSS, docs/landing.md "The handover's velocity from the GNSS"),
-    so its error is drawn at the world's ``sensors.gnss.velocity_sigma``; ``"p0"``
-    draws it from ``p0_velocity`` (a cold start, the sessions before the twentieth).
-    The draw's standard normals are the same either way. ``P0_diag`` is the
-    ``[estimator]``'s initial variances, ``deck0`` the deck's rotation at t = 0.
+    shipped landing scenarios': the autopilot's GNSS-aided navigation hands over, as EKF2
+    resets its velocity to the GNSS, docs/landing.md "The handover's velocity from the
+    GNSS"), so its error is drawn at the world's ``sensors.gnss.velocity_sigma``;
+    ``"p0"`` (the schema's default when the key is left out) draws it from
+    ``p0_velocity`` (a cold start, the sessions before the twentieth). The draw's
+    standard normals are the same either way. ``P0_diag`` is the ``[estimator]``'s
+    initial variances, ``deck0`` the deck's rotation at t = 0.
     """
     e, seed = scenario.data["estimator"], scenario.data["simulation"]["seed"]
     if random is None:
