@@ -1,12 +1,14 @@
 """The generated guidance step (double and float C) against its CasADi function with the
 fifteenth session's keys on: ``abort_floor`` (symbolic/landing/abort_floor.py) and
 ``crawl_gate_rise`` (symbolic/landing/crawl_gate.py), and the eighteenth's
-``crawl_abort_offset`` (the same module's ``fmin``; review). ``tests/test_fuzz_landing_step.py``
-draws the guidance's parameters around ``ql_guidance_params_init``'s defaults, where the
-floor never holds and the gate is off; here the draws sit in the committed crawl with the
-gate on, the gear within centimetres of the deck and the offset or speed past the limits, so
-that both keys decide steps. The phase, the abort count and the commit must be the CasADi
-function's in both precisions; the reference within the precision's rounding."""
+``crawl_abort_offset`` (the same module's ``fmin``; review) with the twentieth's
+``crawl_abort_budget`` (the steps it decides, and those at a count one below it where the
+tighter offset still fires, are counted; review). ``tests/test_fuzz_landing_step.py`` draws
+the guidance's parameters around ``ql_guidance_params_init``'s defaults, where the floor
+never holds and the gate is off; here the draws sit in the committed crawl with the gate on,
+the gear within centimetres of the deck and the offset or speed past the limits, so that the
+keys decide steps. The phase, the abort count and the commit must be the CasADi function's
+in both precisions; the reference within the precision's rounding."""
 
 import ctypes
 
@@ -88,16 +90,22 @@ def test_the_c_step_decides_as_casadi_with_the_floor_and_the_quiescent_gate(prec
             np.testing.assert_allclose(vref.astype(float), r, rtol=tol, atol=tol)
             # the same step with the keys at their defaults, all or one: did a key decide it?
             p0 = GUIDANCE_PARAMS.unpack(p)
-            x0, x1, x2 = (np.asarray(f(xg, yy, cu, dt, GUIDANCE_PARAMS.pack(dict(p0, **k)))[0],
-                                     dtype=float).ravel()
-                          for k in (dict(abort_floor=-1e3, crawl_gate_rise=1e3,
-                                         crawl_abort_offset=1e3, crawl_abort_budget=1e6),
-                                    dict(crawl_abort_offset=1e3), dict(abort_floor=-1e3)))
+            x0, x1, x2, x3 = (np.asarray(f(xg, yy, cu, dt,
+                                           GUIDANCE_PARAMS.pack(dict(p0, **k)))[0],
+                                         dtype=float).ravel()
+                              for k in (dict(abort_floor=-1e3, crawl_gate_rise=1e3,
+                                             crawl_abort_offset=1e3, crawl_abort_budget=1e6),
+                                        dict(crawl_abort_offset=1e3), dict(abort_floor=-1e3),
+                                        dict(crawl_abort_budget=1e6)))
+            # the budget's edge: the tighter offset fired with the count one below the budget
+            edge = p0["crawl_abort_budget"][0] == xg[3] + 1 and xn[3] > x1[3]
             decided.append((keys_on, xn[3] != x0[3], xn[2] != x0[2], xn[3] > x1[3],
-                            xn[3] < x2[3]))
+                            xn[3] < x2[3], xn[3] < x3[3], edge))
     decided = np.array(decided)
     on = decided[:, 0] > 0
     assert not decided[~on, 1:].any()                 # off: the keys decide nothing
     assert decided[on, 4].sum() >= 20                 # the floor held aborts
     assert (decided[on, 2] & ~decided[on, 1]).sum() >= 20   # the gate's rise moved z_ref
     assert decided[on, 3].sum() >= 20                 # the tighter offset started aborts
+    assert decided[on, 5].sum() >= 10                 # the spent budget stopped some (review)
+    assert decided[on, 6].sum() >= 5                  # and at count = budget - 1 it held
