@@ -14,6 +14,7 @@ import ctypes
 
 import numpy as np
 import pytest
+from gate_timer_rig import CUES, DT, HC, F, gate_params, gate_state
 from reference import GUIDANCE_P, HANDOVER_COLD, have_compiler
 
 import quadland
@@ -24,30 +25,10 @@ from quadland.kinds.landing.report import touchdown_report
 from quadland.kinds.landing.values import landing_values
 from quadland.scenario import load_scenario
 from quadland_symbolic.landing.guidance import (
-    DESCEND,
-    GUIDANCE_CUES,
     GUIDANCE_PARAMS,
     GUIDANCE_STATE,
-    guidance_function,
 )
 from quadland_symbolic.landing.loop import landing_loop_params
-
-DT = 2.0 ** -7    # s: binary, so that the timer's sums and the wait are exact
-HC = 0.25         # m: the gear below the centre, the contact height on the level gear
-F = guidance_function()
-CUES = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
-
-
-def _state(h, timer=0.0):
-    return GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=timer, z_ref=HC + h, aborts=0,
-                                    committed=1, armed=1.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                    ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
-                                    lean_gust=0.0))
-
-
-def _params(**keys):
-    return GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, touchdown_height=HC,
-                                     **{"crawl_gate": 0.05, **keys}))
 
 
 def _step(x, h, timer, body=None, **keys):
@@ -56,8 +37,8 @@ def _step(x, h, timer, body=None, **keys):
     (or with its centre ``body`` m above the contact height): the reference's height above
     the contact height and the timer after it."""
     xg, _ = (np.asarray(v, dtype=float).ravel() for v in F(
-        _state(h, timer), [x, 0.0, HC + (h if body is None else body)], [0.0, 0.0, 0.0],
-        0.0, 0.0, CUES, DT, _params(**keys)))
+        gate_state(h, timer), [x, 0.0, HC + (h if body is None else body)], [0.0, 0.0, 0.0],
+        0.0, 0.0, CUES, DT, gate_params(**keys)))
     g = GUIDANCE_STATE.unpack(xg)
     return g["z_ref"][0] - HC, g["timer"][0]
 
@@ -101,7 +82,7 @@ def _crawl(outside, start=0.2, **keys):
     """The reference's heights above the contact height after each step of a crawl from
     ``start`` (0.2 m), the quadrotor at rest on the reference 6 cm off the pad (past the
     0.05 m gate) on the steps ``outside`` marks, 2 cm off (inside) on the others."""
-    pg, xg, out = _params(**keys), _state(start), []
+    pg, xg, out = gate_params(**keys), gate_state(start), []
     for off in outside:
         z = GUIDANCE_STATE.unpack(xg)["z_ref"][0]
         xg, _ = (np.asarray(v, dtype=float).ravel() for v in F(
@@ -239,7 +220,7 @@ def test_the_c_step_decides_as_casadi_with_the_count_height(precision):
                  crawl_gate_time=0.3, crawl_gate_wait=rng.uniform(0.0, 0.5),
                  crawl_gate_wait_height=rng.uniform(0.0, 0.3),
                  crawl_gate_count_height=rng.uniform(0.0, 0.3))
-        xg = _state(rng.uniform(-0.02, 0.3), timer=rng.uniform(0, 0.5))
+        xg = gate_state(rng.uniform(-0.02, 0.3), timer=rng.uniform(0, 0.5))
         ym = LANDING_MEASUREMENT.unpack(np.zeros(LANDING_MEASUREMENT.size))
         ym = {k: np.array(v, dtype=float).ravel() for k, v in ym.items()}
         ym["p_e"] = np.r_[rng.uniform(-0.12, 0.12, 2), HC + rng.uniform(-0.02, 0.25)]
