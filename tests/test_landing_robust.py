@@ -220,7 +220,10 @@ def test_three_times_the_drag_cannot_be_held_on_the_ship():
 #: crawl's drift downwind under the flare's tilt limit (the test above).
 DRAG3_FAILS = {2026: "relative speed 0.533 m/s, 0.52 of it downwind",
                6: "no touchdown: 4 crawl aborts on the drift (0.48-0.68 m/s)",
-               7: "relative speed 0.502 m/s, downwind 0.49"}
+               7: "relative speed 0.502 m/s, downwind 0.49",
+               # since the handover takes the GNSS velocity: 0.495 m/s (landed) on the cold
+               # start of before, a draw on the limit
+               9: "relative speed 0.594 m/s at 30.75 s after one abort, then a bounce"}
 
 
 @pytest.mark.parametrize("seed", [
@@ -228,16 +231,17 @@ DRAG3_FAILS = {2026: "relative speed 0.533 m/s, 0.52 of it downwind",
                                              f"this seed: {DRAG3_FAILS[s]}"))
     if s in DRAG3_FAILS else s for s in (2026, *range(10))])
 def test_the_ship_with_three_times_the_modelled_drag(seed):
-    """Flown where the force balance cannot hold the pad (the test above): 8 of the 11
-    seeds land, each in the flare's drift before it reaches 0.5 m/s; the default seed
-    (2026) and seed 7 meet the deck over the 0.5 m/s relative-speed limit, nearly all of
-    it downwind, and bounce (the crawl's abort climbs away from the contact), seed 6's four
-    crawls each drift past 0.5 m/s and abort, and it does not touch down in the scenario's
-    time. A shorter flare (0.2-0.25 m) lands 10 of the 11, a different one failing at each
-    height, and costs `ship`'s campaign a run (docs/landing.md, "The ship with three times
-    the drag"). (Until the descent waited for a calm window at the wait height, issue 19
-    item 4, it never touched down in 120 s; before the ships' flare 1 to 3 of 10 landed,
-    the others tilted at contact.)"""
+    """Flown where the force balance cannot hold the pad (the test above): 7 of the 11 seeds land
+    (8 on the handover's cold start of before the twentieth session: seed 9 met the deck at
+    0.495 m/s, on the limit, and now at 0.594), each in the flare's drift before it reaches
+    0.5 m/s; the default seed (2026) and seed 7 meet the deck over the 0.5 m/s relative-
+    speed limit, nearly all of it downwind, and bounce (the crawl's abort climbs away from
+    the contact), seed 6's four crawls each drift past 0.5 m/s and abort, and it does not
+    touch down in the scenario's time. A shorter flare (0.2-0.25 m) lands 10 of the 11, a
+    different one failing at each height, and costs `ship`'s campaign a run
+    (docs/landing.md, "The ship with three times the drag"). (Until the descent waited for a
+    calm window at the wait height, issue 19 item 4, it never touched down in 120 s; before
+    the ships' flare 1 to 3 of 10 landed, the others tilted at contact.)"""
     sc = load_scenario("ship")
     rep = touchdown_report(quadland.simulate(load_scenario("ship", [
         "quadrotor.drag_translational=[0.9, 0.9, 0.9]",

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from highway_before import BEFORE as HIGHWAY_BEFORE
-from reference import HIGHWAY_GRAZE
+from reference import HANDOVER_COLD, HIGHWAY_GRAZE
 
 import quadland
 from quadland.kinds.landing.report import touchdown_report
@@ -96,15 +96,16 @@ def test_a_100_km_h_car_lands_on_the_road_hardware():
     is what lands the others.) The fix's two flights keep highway's contact switch of
     before (``HIGHWAY_GRAZE``, 2 ms), which they were measured with; with the 0.5 ms one
     the switch closes earlier in the contact and the farthest foot comes, before the fix, to
-    0.541 m, after it 0.485 m (docs/landing.md, "highway: the graze switch")."""
+    0.541 m, after it 0.485 m (docs/landing.md, "highway: the graze switch"). Both fly the
+    handover's cold start they were measured with (``HANDOVER_COLD``)."""
     before = quadland.simulate(load_scenario(BENCH / "highway_30_100.toml", [
         *FASTEST, *NO_OBSERVER, "touchdown.level_time=0.35", "touchdown.cut_time=0.5",
-        "simulation.seed=6", *HIGHWAY_GRAZE]))
+        "simulation.seed=6", *HIGHWAY_GRAZE, *HANDOVER_COLD]))
     assert _farthest_foot(before) == pytest.approx(0.5419, abs=5e-4)
     assert touchdown_report(before).failures == ["off the pad"]
     after = quadland.simulate(load_scenario(BENCH / "highway_30_100.toml",
                                             [*FASTEST, *NO_OBSERVER, "simulation.seed=6",
-                                             *HIGHWAY_GRAZE]))
+                                             *HIGHWAY_GRAZE, *HANDOVER_COLD]))
     assert _farthest_foot(after) == pytest.approx(0.4866, abs=5e-4)
     assert touchdown_report(after).failures == []
     res = quadland.simulate(load_scenario(BENCH / "highway_30_100.toml", FASTEST))
