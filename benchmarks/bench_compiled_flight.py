@@ -109,6 +109,23 @@ def builds(scenario: str, extra: dict):
     return loops, args, kwargs
 
 
+def flag_builds(scenario: str, module, flag: str, ways: dict, tag: str):
+    """The runtime's simulator of ``scenario`` built once for each of ``ways`` (name: the
+    value of ``module.flag`` for that build, a name of its own per value: ``tag`` and the
+    value), the flag set back to True after each; and the flight's arguments."""
+    loop, args, kwargs = captured(scenario)
+    model = built_model(loop.model)
+    loops = {}
+    for name, value in ways.items():
+        setattr(module, flag, value)
+        try:
+            loops[name] = CompiledLoop(
+                dataclasses.replace(model, name=f"{model.name}_{tag}{value:d}"), "sampled")
+        finally:
+            setattr(module, flag, True)
+    return loops, args, kwargs
+
+
 def timed_flights(loops, args, kwargs, rounds: int) -> dict:
     """CPU seconds of each build's flight, alternately; checked the same bits first."""
     runs = {k: loop.sampled(*args, **kwargs) for k, loop in loops.items()}

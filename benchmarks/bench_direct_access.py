@@ -22,18 +22,15 @@ Run from the repository root: ``nice -n 10 python benchmarks/bench_direct_access
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import statistics
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_compiled_flight import alternated_cpu  # noqa: E402
-from bench_delivery_ring import captured  # noqa: E402
+from bench_compiled_flight import alternated_cpu, flag_builds  # noqa: E402
 from bench_flight_params import _bits  # noqa: E402
 
-from quadland.engine.compiled import CompiledLoop, built_model  # noqa: E402
 from quadland_symbolic.codegen import simulator  # noqa: E402
 
 #: Each build: whether the SX bodies read and write through pointers taken once a call.
@@ -42,17 +39,7 @@ WAYS = {"before": False, "now": True}
 
 def builds(scenario: str, ways: dict):
     """The runtime's simulator of ``scenario`` built each of ``ways``, and its arguments."""
-    loop, args, kwargs = captured(scenario)
-    model = built_model(loop.model)
-    loops = {}
-    for name, direct in ways.items():
-        simulator.DIRECT_ACCESS = direct
-        try:
-            loops[name] = CompiledLoop(
-                dataclasses.replace(model, name=f"{model.name}_da{direct:d}"), "sampled")
-        finally:
-            simulator.DIRECT_ACCESS = True
-    return loops, args, kwargs
+    return flag_builds(scenario, simulator, "DIRECT_ACCESS", ways, "da")
 
 
 def main() -> None:

@@ -23,18 +23,15 @@ Run from the repository root: ``nice -n 10 python benchmarks/bench_free_world.py
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import statistics
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_compiled_flight import alternated_cpu  # noqa: E402
-from bench_delivery_ring import captured  # noqa: E402
+from bench_compiled_flight import alternated_cpu, flag_builds  # noqa: E402
 from bench_flight_params import _bits  # noqa: E402
 
-from quadland.engine.compiled import CompiledLoop, built_model  # noqa: E402
 from quadland_symbolic.codegen import staged_c  # noqa: E402
 
 #: Each build: whether the stages' free functions are written and called.
@@ -43,17 +40,7 @@ WAYS = {"before": False, "now": True}
 
 def builds(scenario: str, ways: dict):
     """The runtime's simulator of ``scenario`` built each of ``ways``, and its arguments."""
-    loop, args, kwargs = captured(scenario)
-    model = built_model(loop.model)
-    loops = {}
-    for name, free in ways.items():
-        staged_c.FREE_STAGES = free
-        try:
-            loops[name] = CompiledLoop(dataclasses.replace(model, name=f"{model.name}_fw{free:d}"),
-                                       "sampled")
-        finally:
-            staged_c.FREE_STAGES = True
-    return loops, args, kwargs
+    return flag_builds(scenario, staged_c, "FREE_STAGES", ways, "fw")
 
 
 def main() -> None:
