@@ -274,11 +274,18 @@ HIGHWAY_GATE_SIXTEENTH = [*HIGHWAY_GRAZE, *HIGHWAY_LEASH,
                           "landing.crawl_gate_wait=1000.0",
                           "landing.crawl_gate_wait_height=1000.0"]
 
+#: turning's command filter before "turning: the command filter at the corners' bound"
+#: (docs/landing.md, twenty-first session): 10 rad/s (now 13); the replays of turning's rows
+#: measured on the twentieth's file (and, through ``TURNING_SEVENTEENTH``, every older one)
+#: pin it.
+TURNING_FILTER = ["controller.filter_frequency=10.0"]
+
 #: turning's crawl and land detector before "turning: a stiffer horizontal loop and the
 #: crawl's gate" (docs/landing.md, eighteenth session): no gate (the committed crawl, no
 #: floor, no wait) and the detector's ground contact without the thrust cue; the replays of
-#: turning's earlier campaign rows and default seed pin it.
-TURNING_SEVENTEENTH = ["landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
+#: turning's earlier campaign rows and default seed pin it (and its command filter,
+#: ``TURNING_FILTER``).
+TURNING_SEVENTEENTH = [*TURNING_FILTER, "landing.crawl_gate=0.0", "landing.crawl_gate_floor=0.0",
                        "landing.crawl_gate_wait=1000.0", "landing.crawl_gate_wait_height=1000.0",
                        "land_detector.contact_thrust=false"]
 

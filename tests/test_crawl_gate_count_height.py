@@ -15,7 +15,7 @@ import ctypes
 import numpy as np
 import pytest
 from gate_timer_rig import CUES, DT, HC, F, gate_params, gate_state
-from reference import GUIDANCE_P, HANDOVER_COLD, have_compiler
+from reference import GUIDANCE_P, HANDOVER_COLD, TURNING_FILTER, have_compiler
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -174,7 +174,7 @@ def test_the_flight_code_refuses_what_the_schema_refuses(precision):
 def _fly_13_185(*overrides):
     d = draws(campaign_spec_of(load_scenario("turning", ["campaign.seed=13"])), [185])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *d.overrides(), *HANDOVER_COLD, *overrides])))
+        *d.overrides(), *HANDOVER_COLD, *TURNING_FILTER, *overrides])))
 
 
 @pytest.mark.slow

@@ -12,7 +12,7 @@ lost again with the wait taken out. The replays of turning's earlier rows fly
 
 import numpy as np
 import pytest
-from reference import HANDOVER_COLD
+from reference import HANDOVER_COLD, TURNING_FILTER
 
 import quadland
 from quadland.campaign.sampling import draws
@@ -56,7 +56,7 @@ def _fly(*overrides):
     d = draws(campaign_spec_of(load_scenario("turning", [f"campaign.seed={SEED}"])),
               [INDEX])[0]
     return touchdown_report(quadland.simulate(load_scenario("turning", [
-        *d.overrides(), *HANDOVER_COLD, *overrides])))
+        *d.overrides(), *HANDOVER_COLD, *TURNING_FILTER, *overrides])))
 
 
 @pytest.mark.slow
