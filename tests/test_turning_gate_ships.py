@@ -6,8 +6,9 @@ its holds bounded by a 2 s wait at and below 0.10 m (highway's wait), and
 Checked here: the values reach the flight's guidance parameters, and seed 13's run 185,
 which the gate without the wait lost (no touchdown by 40 s after three aborts, the
 sixteenth's campaign), replayed: it lands as the shipped file's campaign row says, and is
-lost again with the wait taken out. The replays of turning's earlier rows fly
-``reference.TURNING_SEVENTEENTH``.
+lost again with the wait taken out (the row was flown on the handover and the command
+filter of before: ``reference.HANDOVER_COLD`` and ``TURNING_FILTER``). The replays of
+turning's earlier rows fly ``reference.TURNING_SEVENTEENTH``.
 """
 
 import numpy as np
