@@ -64,13 +64,14 @@ def test_the_flare_leaves_authority_over_the_steady_tilt_and_stays_under_the_lim
 
 
 def _crawl_lean_deg(sc, sink):
-    """deg: the tilt that carries the quadrotor along the car's steady turn (``u2`` = 10 m/s,
-    ``r2`` = 0.1 rad/s from eq. (4) with the file's forces: the turn's ``u2 r2`` = 1 m/s^2
-    toward its centre) through still air while it sinks at ``sink`` m/s, solved by hand from the force balance
+    """deg: the tilt that carries the quadrotor along the car's steady turn through still
+    air while it sinks at ``sink`` m/s, solved by hand from the force balance
     ``m a = R (T e_z + f_body) - m g e_z`` for roll, pitch and thrust (yaw 0: the car's
-    heading), ``f_body = -Kt V - Kq V |V|`` per body axis, ``V`` the air's velocity past the
-    body (docs/landing.md, "Real drag and thrust"). The command filter has unit gain at zero
-    frequency: the lean does not depend on it."""
+    heading). ``u2`` = 10 m/s and ``r2`` = 0.1 rad/s come from eq. (4) with the file's
+    forces, the turn's ``u2 r2`` = 1 m/s^2 toward its centre; ``f_body = -Kt V - Kq V |V|``
+    per body axis, ``V`` the air's velocity past the body (docs/landing.md, "Real drag and
+    thrust"). The command filter has unit gain at zero frequency: the lean does not depend
+    on it."""
     import numpy as np
     import scipy.optimize
 
