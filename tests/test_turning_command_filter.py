@@ -9,9 +9,9 @@ campaign (mass 1.8 kg, inertia +10 %, drag 0.39 N s/m and 0.015925 N s^2/m^2, ea
 the file's, 30 ms motor lag) the sampled multiloop disk phase margin is 45.37 deg at 13
 rad/s and 44.87 deg at 13.5 (the review, docs/landing.md; ``test_landing_robust.py``'s
 corners take the drag of before issue 18, 0.07 / 0.13 N s/m, where the worst gives 45.32 and
-44.92). Checked here: the value and
-its lag by hand, that bound at the worst corner, and the shipped file's campaign row of the
-default seed's run 156 replayed (0.125 m off on the filter of before, 0.038 m on 13 rad/s).
+44.92). Checked here: the value and its lag by hand, that bound at the worst corner, and the
+shipped file's campaign row of the default seed's run 156 replayed (0.125 m off on the
+filter of before, 0.038 m on 13 rad/s).
 """
 
 import pytest
