@@ -404,6 +404,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "crawl_gate_floor": _NONNEGATIVE,
     "crawl_gate_wait": _NONNEGATIVE,
     "abort_floor": _FINITE,
+    "withdraw_budget": _NONNEGATIVE,
     "crawl_gate_rise": _NONNEGATIVE,
     "crawl_gate_wait_height": _NONNEGATIVE,
     "ground_airmode": Range(choices=(0.0, 1.0)),
