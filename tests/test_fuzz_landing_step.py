@@ -133,13 +133,12 @@ GUIDANCE_DOCUMENTED = {
     "crawl_gate_rise": _nonnegative, "crawl_gate_wait_height": _nonnegative,
     "calm_lean": _nonnegative, "lean_time": _positive,
     "lean_withdraw": lambda v, p: (v == 0) | (v == 1), "abort_floor": _finite,
-    "withdraw_budget": _nonnegative,
     "ground_airmode": lambda v, p: (v == 0) | (v == 1),
     # in (0, pi/2]; the float build's pi/2 (its default, 90 deg) is float32(pi/2), above
     "flare_deck_tilt": lambda v, p: (v > 0) & ((v <= math.pi / 2) | (v == _HALF_PI_F32)),
     "flare_deck_height": _nonnegative, "crawl_abort_offset": _positive,
     "crawl_gate_count_height": _nonnegative,
-    "crawl_abort_budget": _nonnegative,
+    "crawl_abort_budget": _nonnegative, "withdraw_budget": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},
