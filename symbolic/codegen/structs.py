@@ -404,7 +404,6 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "crawl_gate_floor": _NONNEGATIVE,
     "crawl_gate_wait": _NONNEGATIVE,
     "abort_floor": _FINITE,
-    "withdraw_budget": _NONNEGATIVE,
     "crawl_gate_rise": _NONNEGATIVE,
     "crawl_gate_wait_height": _NONNEGATIVE,
     "ground_airmode": Range(choices=(0.0, 1.0)),
@@ -412,7 +411,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "flare_deck_height": _NONNEGATIVE,
     "crawl_abort_offset": _POSITIVE,
     "crawl_gate_count_height": _NONNEGATIVE,
-    "crawl_abort_budget": _NONNEGATIVE,
+    "crawl_abort_budget": _NONNEGATIVE, "withdraw_budget": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:
