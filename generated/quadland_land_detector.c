@@ -243,7 +243,7 @@ ql_status ql_land_detector_form_cues(const ql_landing_measurement *y,
         if (cues) memset(cues, 0, sizeof *cues);
         return QL_ERR_NULL;
     }
-    if (!(all_finite((const ql_real *)guidance_params, 50)
+    if (!(all_finite((const ql_real *)guidance_params, 51)
           & all_finite((const ql_real *)quad, 13))) {
         memset(cues, 0, sizeof *cues);
         return QL_ERR_NONFINITE_INPUT;

@@ -180,7 +180,8 @@ typedef char guidance_params_is_its_layout[
     AT(ql_guidance_params, crawl_abort_offset, 47, 0) &&
     AT(ql_guidance_params, crawl_gate_count_height, 48, 0) &&
     AT(ql_guidance_params, crawl_abort_budget, 49, 0) &&
-    sizeof(ql_guidance_params) == 50 * sizeof(ql_real) ? 1 : -1];
+    AT(ql_guidance_params, withdraw_budget, 50, 0) &&
+    sizeof(ql_guidance_params) == 51 * sizeof(ql_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const ql_real default_p_quad[13] = {
@@ -213,7 +214,7 @@ static const ql_real default_p_act[15] = {
     0.127, 1.225, 1.0, 1.0, 1.0, 1.0,
     0.0, 0.0, 0.0,
 };
-static const ql_real default_p_guid[50] = {
+static const ql_real default_p_guid[51] = {
     3.0, 0.5, 0.25, 0.7, 1.0, 0.3,
     0.2, 0.2, 0.5, 0.5, 2.0, 0.5,
     10.0, 1.0, 2.5, 0.4, 20.0, 1.0,
@@ -222,7 +223,7 @@ static const ql_real default_p_guid[50] = {
     3.141592653589793, 0.0, 0.0, 0.0, 0.04, 0.3,
     0.07, 2.0, 1000.0, 0.1, 1.5707963267948966, 1.0,
     0.0, -1000.0, 1.0, 1.5707963267948966, 1000.0, 1000.0,
-    1000.0, 1000000.0,
+    1000.0, 1000000.0, 1000000.0,
 };
 
 void ql_landing_params_init(ql_landing_params *params)
@@ -515,6 +516,7 @@ ql_status ql_check_landing_params(const ql_landing_params *params, const char **
  *   crawl_abort_offset       > 0
  *   crawl_gate_count_height  >= 0
  *   crawl_abort_budget       >= 0
+ *   withdraw_budget          >= 0
  * NaN and infinities are outside every range. */
 ql_status ql_check_guidance_params(const ql_guidance_params *params, const char **bad_field)
 {
@@ -677,6 +679,9 @@ ql_status ql_check_guidance_params(const ql_guidance_params *params, const char 
     if (!bad && !(isfinite(p[49]) && (p[49] >= 0.0))) {
         bad = "crawl_abort_budget";
     }
+    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0))) {
+        bad = "withdraw_budget";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -753,7 +758,7 @@ static int landing_params_in_range(const ql_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 48 comparisons. The values are known to be finite; no names and no
+ * 49 comparisons. The values are known to be finite; no names and no
  * branches: ql_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const ql_real *p)
 {
@@ -806,6 +811,7 @@ static int guidance_params_in_range(const ql_real *p)
     ok &= (p[47] > 0.0);
     ok &= (p[48] >= 0.0);
     ok &= (p[49] >= 0.0);
+    ok &= (p[50] >= 0.0);
     return ok;
 }
 
@@ -884,7 +890,7 @@ ql_status ql_guidance_step(const ql_landing_measurement *y, const ql_guidance_cu
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const ql_real *)y, 27) & all_finite((const ql_real *)cues, 3)
-          & all_finite((const ql_real *)params, 50)
+          & all_finite((const ql_real *)params, 51)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QL_ERR_NONFINITE_INPUT;
     }

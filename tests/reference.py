@@ -28,7 +28,7 @@ GUIDANCE_P = dict(hover_height=3.0, align_radius=0.5, dwell_time=1.0, descent_sp
                   lean_time=1.0, lean_withdraw=0.0, abort_floor=-1e3, ground_airmode=1.0,
                   flare_deck_tilt=float(np.pi / 2), flare_deck_height=1e3,
                   crawl_abort_offset=1e3, crawl_gate_count_height=1e3,
-                  crawl_abort_budget=1e6)
+                  crawl_abort_budget=1e6, withdraw_budget=1e6)
 
 
 def euler_rate_matrix(phi, theta):

@@ -25,9 +25,13 @@ GATES_BEFORE = ("estimator.gate_datalink_v=11.344867", "estimator.gate_datalink_
 #: The commit of before the thirteenth session, and the fourteenth's lean keys off:
 #: ``ship_ss5`` since withdraws nothing in the crawl and waits for the deck's tilt at the
 #: contact (docs/landing.md, "ship_ss5: the deck's roll at the contact and the withdrawals
-#: in the crawl"); ``ship`` takes the defaults, so the keys leave its flights as they are.
+#: in the crawl"); ``ship`` takes the defaults, so the keys leave its flights as they are;
+#: and the withdrawals of before the twenty-first session, down to the contact however many:
+#: ``ship`` keeps its crawl committed after three aborts since (docs/landing.md, "The ships'
+#: repeated withdrawals"), which moves the rows with three aborts or more.
 COMMIT_BEFORE = ["landing.withdraw_height=-1000.0", "landing.calm_tilt_deg=180.0",
-                 "landing.calm_lean_deg=90.0", "landing.lean_withdraw=false"]
+                 "landing.calm_lean_deg=90.0", "landing.lean_withdraw=false",
+                 "landing.withdraw_budget=1000000.0"]
 
 #: The crawl's abort of before, down to the contact: ``ship_ss5`` starts none with its gear
 #: within 6 cm of the deck since the fifteenth session (docs/landing.md, "ship_ss5: an abort

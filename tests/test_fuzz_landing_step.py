@@ -138,7 +138,7 @@ GUIDANCE_DOCUMENTED = {
     "flare_deck_tilt": lambda v, p: (v > 0) & ((v <= math.pi / 2) | (v == _HALF_PI_F32)),
     "flare_deck_height": _nonnegative, "crawl_abort_offset": _positive,
     "crawl_gate_count_height": _nonnegative,
-    "crawl_abort_budget": _nonnegative,
+    "crawl_abort_budget": _nonnegative, "withdraw_budget": _nonnegative,
 }
 #: Where each phase may go in one step, and whether the abort count grows.
 NEXT = {APPROACH: {APPROACH, ALIGN}, ALIGN: {ALIGN, DESCEND},

@@ -736,7 +736,8 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
     state 4, "ship: the heave oscillator in the crawl at sea state 4's frequency"), and the
     flare held about the deck's
     normal too (docs/landing.md, "The ships' tilt at the contact: the flare held about the
-    deck's normal too")."""
+    deck's normal too"), and in ship's withdrawal budget (ship_ss5 withdraws nothing in its
+    crawl already: docs/landing.md, "The ships' repeated withdrawals")."""
     ship, ss5 = load_scenario("ship"), load_scenario("ship_ss5")
     assert ship["deck.sea_state"] == 4 and ss5["deck.sea_state"] == 5
     for d in (ship.data["deck"], ss5.data["deck"]):
@@ -750,7 +751,8 @@ def test_ship_deck_is_sea_state_4_and_ship_ss5_the_same_ship_in_sea_state_5():
                       "estimator.gate_datalink_v", "estimator.gate_datalink_a",
                       "landing.withdraw_height", "landing.calm_tilt_deg",
                       "landing.calm_lean_deg", "landing.lean_withdraw", "landing.abort_floor",
-                      "estimator.heave_frequency", "touchdown.flare_deck_tilt_deg"}
+                      "estimator.heave_frequency", "touchdown.flare_deck_tilt_deg",
+                      "landing.withdraw_budget"}
     assert set(ship.campaign_table["dispersions"]) == set(ss5.campaign_table["dispersions"])
 
 

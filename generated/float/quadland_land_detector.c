@@ -244,7 +244,7 @@ qlf_status qlf_land_detector_form_cues(const qlf_landing_measurement *y,
         if (cues) memset(cues, 0, sizeof *cues);
         return QLF_ERR_NULL;
     }
-    if (!(all_finite((const qlf_real *)guidance_params, 50)
+    if (!(all_finite((const qlf_real *)guidance_params, 51)
           & all_finite((const qlf_real *)quad, 13))) {
         memset(cues, 0, sizeof *cues);
         return QLF_ERR_NONFINITE_INPUT;

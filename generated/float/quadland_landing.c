@@ -180,7 +180,8 @@ typedef char guidance_params_is_its_layout[
     AT(qlf_guidance_params, crawl_abort_offset, 47, 0) &&
     AT(qlf_guidance_params, crawl_gate_count_height, 48, 0) &&
     AT(qlf_guidance_params, crawl_abort_budget, 49, 0) &&
-    sizeof(qlf_guidance_params) == 50 * sizeof(qlf_real) ? 1 : -1];
+    AT(qlf_guidance_params, withdraw_budget, 50, 0) &&
+    sizeof(qlf_guidance_params) == 51 * sizeof(qlf_real) ? 1 : -1];
 #undef AT
 /* Defaults: scenario highway. */
 static const qlf_real default_p_quad[13] = {
@@ -213,7 +214,7 @@ static const qlf_real default_p_act[15] = {
     0.127f, 1.225f, 1.0f, 1.0f, 1.0f, 1.0f,
     0.0f, 0.0f, 0.0f,
 };
-static const qlf_real default_p_guid[50] = {
+static const qlf_real default_p_guid[51] = {
     3.0f, 0.5f, 0.25f, 0.7f, 1.0f, 0.3f,
     0.2f, 0.2f, 0.5f, 0.5f, 2.0f, 0.5f,
     10.0f, 1.0f, 2.5f, 0.4f, 20.0f, 1.0f,
@@ -222,7 +223,7 @@ static const qlf_real default_p_guid[50] = {
     3.141592653589793f, 0.0f, 0.0f, 0.0f, 0.04f, 0.3f,
     0.07f, 2.0f, 1000.0f, 0.1f, 1.5707963267948966f, 1.0f,
     0.0f, -1000.0f, 1.0f, 1.5707963267948966f, 1000.0f, 1000.0f,
-    1000.0f, 1000000.0f,
+    1000.0f, 1000000.0f, 1000000.0f,
 };
 
 void qlf_landing_params_init(qlf_landing_params *params)
@@ -515,6 +516,7 @@ qlf_status qlf_check_landing_params(const qlf_landing_params *params, const char
  *   crawl_abort_offset       > 0
  *   crawl_gate_count_height  >= 0
  *   crawl_abort_budget       >= 0
+ *   withdraw_budget          >= 0
  * NaN and infinities are outside every range. */
 qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const char **bad_field)
 {
@@ -677,6 +679,9 @@ qlf_status qlf_check_guidance_params(const qlf_guidance_params *params, const ch
     if (!bad && !(isfinite(p[49]) && (p[49] >= 0.0f))) {
         bad = "crawl_abort_budget";
     }
+    if (!bad && !(isfinite(p[50]) && (p[50] >= 0.0f))) {
+        bad = "withdraw_budget";
+    }
     if (bad_field) {
         *bad_field = bad;
     }
@@ -753,7 +758,7 @@ static int landing_params_in_range(const qlf_real *p)
 }
 
 /* 1 when every parameter lies in its range: the step's invariant,
- * 48 comparisons. The values are known to be finite; no names and no
+ * 49 comparisons. The values are known to be finite; no names and no
  * branches: qlf_check_guidance_params finds the culprit. */
 static int guidance_params_in_range(const qlf_real *p)
 {
@@ -806,6 +811,7 @@ static int guidance_params_in_range(const qlf_real *p)
     ok &= (p[47] > 0.0f);
     ok &= (p[48] >= 0.0f);
     ok &= (p[49] >= 0.0f);
+    ok &= (p[50] >= 0.0f);
     return ok;
 }
 
@@ -884,7 +890,7 @@ qlf_status qlf_guidance_step(const qlf_landing_measurement *y, const qlf_guidanc
     xg[11] = state->lean_y;
     xg[12] = state->lean_gust;
     if (!(all_finite((const qlf_real *)y, 27) & all_finite((const qlf_real *)cues, 3)
-          & all_finite((const qlf_real *)params, 50)
+          & all_finite((const qlf_real *)params, 51)
           & all_finite(xg, 13) & (isfinite(dt) != 0))) {
         return QLF_ERR_NONFINITE_INPUT;
     }

@@ -22,7 +22,7 @@ extern "C" {
 #define QLF_LANDING_CHANNELS 6                   /* channels: deck-frame x, y, z; roll, pitch, yaw */
 #define QLF_LANDING_PARAMS_SIZE 132              /* reals in qlf_landing_params */
 #define QLF_LANDING_STATE_SIZE 89                /* reals in qlf_landing_state */
-#define QLF_GUIDANCE_PARAMS_SIZE 50              /* reals in qlf_guidance_params */
+#define QLF_GUIDANCE_PARAMS_SIZE 51              /* reals in qlf_guidance_params */
 #define QLF_GUIDANCE_MAX_ABORTS 16777215         /* largest abort count qlf_guidance_step accepts */
 #define QLF_LANDING_PLANT_NX 25                  /* xp = [x1q (16), xv (6), gear (3)] */
 #define QLF_LANDING_PLANT_NP 335                 /* pp = [p_quad (13), p_act (15), p_veh (10), p_deck (267), p_gear (18), p_lock (8), p_td (4)] */
@@ -226,6 +226,7 @@ typedef struct {
     qlf_real crawl_abort_offset;     /* m: the crawl's out-of-limits abort also past this horizontal offset, as estimated (1000: past max_offset only) */
     qlf_real crawl_gate_count_height; /* m: reference height above touchdown at or below which the gate's holds count toward crawl_gate_wait (1000: everywhere) */
     qlf_real crawl_abort_budget;     /* -: crawl_abort_offset holds while the descent's abort count is below this, then max_offset alone (1e6: always) */
+    qlf_real withdraw_budget;        /* -: once the descent's abort count reaches this, nothing withdraws the committed crawl (1e6: always withdrawn, as above it) */
 } qlf_guidance_params;
 
 /* Fill the defaults (scenario highway). */

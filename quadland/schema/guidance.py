@@ -53,6 +53,12 @@ GUIDANCE_FIELDS = {
     "abort_floor": Field(F, "m", "the gear's estimated height above the deck at or below "
                          "which the crawl's out-of-limits abort is not started (-1000: "
                          "it is down to the contact)", lo=-1e3, hi=1e3, default=-1e3),
+    "withdraw_budget": Field(F, "-", "once the descent's abort count (the crawl's aborts "
+                             "and the commit's withdrawals) reaches this, a rising deck (or "
+                             "a swerve, a gust's lean) no longer withdraws the committed "
+                             "crawl (touchdown_speed x descent_time above touchdown): it "
+                             "crawls on into the deck (1e6: always withdrawn)", lo=0.0,
+                             hi=1e6, default=1e6),
     "crawl_abort_offset": Field(F, "m", "the crawl's out-of-limits abort is also started past "
                                 "this horizontal offset, as estimated (1000: past "
                                 "max_offset only; 0 is refused, it would abort every crawl)",

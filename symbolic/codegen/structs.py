@@ -411,7 +411,7 @@ GUIDANCE_PARAM_RANGES = MappingProxyType({
     "flare_deck_height": _NONNEGATIVE,
     "crawl_abort_offset": _POSITIVE,
     "crawl_gate_count_height": _NONNEGATIVE,
-    "crawl_abort_budget": _NONNEGATIVE,
+    "crawl_abort_budget": _NONNEGATIVE, "withdraw_budget": _NONNEGATIVE,
 })
 
 #: Largest abort count ``ql_guidance_step`` accepts in its state (2^24 - 1:

@@ -101,7 +101,11 @@ descent goes on uncommitted, its reference climbs back to the wait height at
 ``descent_speed`` to wait for the next calm window, and the abort count grows
 by one (so does a swerve past ``swerve_accel``), unless the reference is at
 or below ``withdraw_height`` above touchdown (the default, -1000 m, never is: the
-withdrawal holds down to the contact). Above the wait height a moving deck aborts nothing.
+withdrawal holds down to the contact). Once the descent's abort count has reached
+``withdraw_budget`` (a retry budget; the default, 1e6, never is), nothing withdraws the
+committed crawl either (``touchdown_speed x descent_time`` above touchdown): it crawls on
+into the deck, as below ``withdraw_height``, instead of retrying until the time runs out.
+Above the wait height a moving deck aborts nothing.
 
 All logic is branch-free (``if_else``), so that the step is one CasADi
 Function, generated into C like the controller.
@@ -233,10 +237,14 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt, swerve):
 def _withdrawn(flying, g, p, deck_rise, cause):
     """1 (CasADi) when the committed descent is withdrawn: the deck rises past
     max_deck_rise or ``cause`` (a swerve, a gust's lean: :func:`_calm`), above
-    withdraw_height."""
+    withdraw_height, and, once the descent's abort count has reached withdraw_budget, above
+    the crawl (``touchdown_speed x descent_time`` above touchdown)."""
+    h = g["z_ref"] - contact_height(p)
+    spent = ca.logic_and(g["aborts"] >= p["withdraw_budget"],
+                         h <= p["touchdown_speed"] * p["descent_time"])
     return ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
         ca.logic_or(deck_rise > p["max_deck_rise"], cause),
-        g["z_ref"] - contact_height(p) > p["withdraw_height"]))
+        ca.logic_and(h > p["withdraw_height"], ca.logic_not(spent))))
 
 
 def _tilt_calm(g, p, tilt, dt):

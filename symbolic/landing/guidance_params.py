@@ -88,4 +88,6 @@ GUIDANCE_PARAMS = Layout("p_guid", (
           "which the gate's holds count toward crawl_gate_wait (1000: everywhere)"),
     Field("crawl_abort_budget", 1, "-", "crawl_abort_offset holds while the descent's "
           "abort count is below this, then max_offset alone (1e6: always)"),
+    Field("withdraw_budget", 1, "-", "once the descent's abort count reaches this, nothing "
+          "withdraws the committed crawl (1e6: always withdrawn, as above it)"),
 ), "landing guidance parameters")

@@ -172,7 +172,7 @@ def _controller_model(d: dict, p_veh: np.ndarray, p_deck: np.ndarray, gear: dict
 _PASSED_KEYS = ("withdraw_height", "lean_time", "swerve_accel", "crawl_gate",
                 "crawl_gate_time", "crawl_gate_floor", "crawl_gate_wait", "crawl_gate_rise",
                 "crawl_gate_wait_height", "abort_floor", "crawl_abort_offset",
-                "crawl_gate_count_height", "crawl_abort_budget")
+                "crawl_gate_count_height", "crawl_abort_budget", "withdraw_budget")
 
 
 def _commit_keys(g) -> dict:
