@@ -19,6 +19,7 @@ import argparse
 import errno
 import logging
 import os
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -420,8 +421,24 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print("quadland: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        # a Ctrl-C while ctypes converts a call's arguments (NumPy's ``ndpointer``
+        # checks them in Python) surfaces as ctypes.ArgumentError, its text all that
+        # is left of the KeyboardInterrupt: "argument 6: KeyboardInterrupt: "
+        if not _is_ctypes_interrupt(exc):
+            raise
+        print("quadland: interrupted", file=sys.stderr)
+        return 130
     finally:
         sys.unraisablehook = default_hook
+
+
+def _is_ctypes_interrupt(exc: Exception) -> bool:
+    """Whether ``exc`` is ctypes' wrapping of a KeyboardInterrupt raised while it
+    converted an argument (it keeps neither cause nor context, only the text)."""
+    ctypes = sys.modules.get("ctypes")
+    return (ctypes is not None and isinstance(exc, ctypes.ArgumentError)
+            and re.fullmatch(r"argument \d+: KeyboardInterrupt: ?", str(exc)) is not None)
 
 
 def _quiet_matplotlib() -> None:

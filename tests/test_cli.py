@@ -215,6 +215,44 @@ def test_a_ctrl_c_that_breaks_a_module_s_import_is_one_line(capsys, monkeypatch)
         main(["simulate", "--no-plots"])
 
 
+def test_a_ctrl_c_while_ctypes_converts_an_argument_is_one_line(capsys, monkeypatch):
+    """A Ctrl-C while ctypes converts a call's arguments (NumPy's ``ndpointer`` checks
+    them in Python) reaches the command as ``ctypes.ArgumentError("argument 6:
+    KeyboardInterrupt: ")``, without cause or context (it printed a traceback once, in a
+    campaign's start under load): one line, 130. Any other ArgumentError is not hidden."""
+    import ctypes
+
+    import quadland.cli as cli
+
+    class Interrupted:                          # what an ndpointer does on a SIGINT
+        @classmethod
+        def from_param(cls, obj):
+            raise KeyboardInterrupt
+
+    labs = ctypes.CDLL(None).labs               # a real call of the C library
+    labs.restype, labs.argtypes = ctypes.c_long, [Interrupted]
+
+    def cut_short(args):
+        labs(-3)
+
+    with pytest.raises(ctypes.ArgumentError) as raised:     # what ctypes makes of it
+        cut_short(None)
+    assert str(raised.value) == "argument 1: KeyboardInterrupt: "
+    assert raised.value.__cause__ is None and raised.value.__context__ is None
+    monkeypatch.setattr(cli, "_dispatch", cut_short)
+    assert main(["simulate", "--no-plots"]) == 130
+    assert capsys.readouterr().err == "quadland: interrupted\n"
+
+    labs.argtypes = [ctypes.c_long]
+
+    def wrong_type(args):
+        labs("three")
+
+    monkeypatch.setattr(cli, "_dispatch", wrong_type)
+    with pytest.raises(ctypes.ArgumentError, match="argument 1: TypeError"):
+        main(["simulate", "--no-plots"])
+
+
 def test_a_ctrl_c_swallowed_then_raised_again_is_one_line(capsys, monkeypatch):
     """One SIGINT landing where Python cannot raise (a module lock while a lazy import
     loads: printed as unraisable and dropped), then raised again by the command's
