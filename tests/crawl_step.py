@@ -1,5 +1,7 @@
 """One committed crawl step of the guidance, by hand (shared by the tests of the crawl's
-abort bounds: ``abort_floor`` and ``crawl_abort_offset``, symbolic/landing/abort_floor.py)."""
+abort bounds: ``abort_floor`` and ``crawl_abort_offset``, symbolic/landing/abort_floor.py),
+and one committed step under a rising deck (shared by the tests of the withdrawal's bounds:
+``withdraw_height`` and ``withdraw_budget``)."""
 
 import numpy as np
 from reference import GUIDANCE_P
@@ -45,3 +47,21 @@ def aborted(p=GUIDANCE_P):
 #: The crawl going on, by hand: the rate clamp(H / descent_time, touchdown_speed,
 #: descent_speed) = 0.3 m/s over one step.
 CRAWLED = (DESCEND, 0.0, H - GUIDANCE_P["touchdown_speed"] * DT)
+
+
+def withdraw_step(h, rise, aborts=0.0, **params):
+    """One step committed with the reference ``h`` above ``touchdown_height``, after
+    ``aborts`` aborts, the quadrotor on the reference at rest, the deck rising at ``rise``;
+    ``params`` replace the guidance's parameters. Returns z_ref, committed and aborts
+    after it."""
+    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0,
+                                  z_ref=GUIDANCE_P["touchdown_height"] + h, aborts=aborts,
+                                  committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
+                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
+                                  lean_gust=0.0))
+    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
+    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, **params))
+    xg_next, _ = guidance_function()(xg, [0.0, 0.0, GUIDANCE_P["touchdown_height"] + h],
+                                     [0.0, 0.0, 0.0], rise, 0.0, cues, DT, pg)
+    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
+    return g["z_ref"][0], g["committed"][0], g["aborts"][0]

@@ -3,8 +3,8 @@ withdraws the committed crawl (symbolic/landing/guidance.py), by hand on one gui
 and the flights that asked for it, replayed from their campaign rows (docs/landing.md, "The
 ships' repeated withdrawals")."""
 
-import numpy as np
 import pytest
+from crawl_step import DT, withdraw_step
 from reference import GUIDANCE_P
 
 import quadland
@@ -12,15 +12,7 @@ from quadland.campaign.sampling import draws
 from quadland.campaign.spec import campaign_spec_of
 from quadland.kinds.landing.report import touchdown_report
 from quadland.scenario import load_scenario
-from quadland_symbolic.landing.guidance import (
-    DESCEND,
-    GUIDANCE_CUES,
-    GUIDANCE_PARAMS,
-    GUIDANCE_STATE,
-    guidance_function,
-)
 
-DT = 0.004
 TOUCHDOWN = GUIDANCE_P["touchdown_height"]
 RISE = GUIDANCE_P["max_deck_rise"] + 0.1
 CRAWL = GUIDANCE_P["touchdown_speed"] * GUIDANCE_P["descent_time"]     # 0.3 m
@@ -30,16 +22,7 @@ def _step(h, rise, aborts, **params):
     """One step committed with the reference ``h`` above touchdown after ``aborts`` aborts,
     the quadrotor on it, at rest, the deck rising at ``rise``. Returns z_ref, committed and
     aborts after it."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=TOUCHDOWN + h,
-                                  aborts=aborts, committed=1, armed=0.0, ms_rise=0.0,
-                                  ms_rise_rate=0.0, ms_tilt_rate=0.0, ms_tilt_acc=0.0,
-                                  lean_x=0.0, lean_y=0.0, lean_gust=0.0))
-    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
-    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, **params))
-    xg_next, _ = guidance_function()(xg, [0.0, 0.0, TOUCHDOWN + h], [0.0, 0.0, 0.0], rise,
-                                     0.0, cues, DT, pg)
-    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
-    return g["z_ref"][0], g["committed"][0], g["aborts"][0]
+    return withdraw_step(h, rise, aborts, **params)
 
 
 def _withdrawn(h, aborts):

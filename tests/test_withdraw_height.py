@@ -1,35 +1,17 @@
 """``withdraw_height``: where a rising deck no longer withdraws the committed descent
 (symbolic/landing/guidance.py), by hand on one guidance step."""
 
-import numpy as np
 import pytest
+from crawl_step import DT, withdraw_step
 from reference import GUIDANCE_P
 
-from quadland_symbolic.landing.guidance import (
-    DESCEND,
-    GUIDANCE_CUES,
-    GUIDANCE_PARAMS,
-    GUIDANCE_STATE,
-    guidance_function,
-)
-
-DT = 0.004
 TOUCHDOWN = GUIDANCE_P["touchdown_height"]
 
 
 def _step(h, rise, withdraw_height):
     """One step committed with the reference ``h`` above touchdown, the quadrotor on it,
     at rest, the deck rising at ``rise``. Returns z_ref, committed and aborts after it."""
-    xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=TOUCHDOWN + h, aborts=0,
-                                  committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                  ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0, lean_y=0.0,
-                                  lean_gust=0.0))
-    cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
-    pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, withdraw_height=withdraw_height))
-    xg_next, _ = guidance_function()(xg, [0.0, 0.0, TOUCHDOWN + h], [0.0, 0.0, 0.0], rise,
-                                     0.0, cues, DT, pg)
-    g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
-    return g["z_ref"][0], g["committed"][0], g["aborts"][0]
+    return withdraw_step(h, rise, withdraw_height=withdraw_height)
 
 
 @pytest.mark.parametrize("rise", [GUIDANCE_P["max_deck_rise"] + 0.1, 1.5])
@@ -63,16 +45,8 @@ def test_the_withdraw_height_is_above_the_expected_contact():
     (the merge's other side) the first would have been withdrawn inside the crawl."""
     rise, drop = GUIDANCE_P["max_deck_rise"] + 0.1, 0.1
     for h, expected in ((0.35, (1.0, 0.0)), (0.45, (0.0, 1.0))):
-        xg = GUIDANCE_STATE.pack(dict(phase=DESCEND, timer=0.0, z_ref=TOUCHDOWN + h, aborts=0,
-                                      committed=1, armed=0.0, ms_rise=0.0, ms_rise_rate=0.0,
-                                      ms_tilt_rate=0.0, ms_tilt_acc=0.0, lean_x=0.0,
-                                      lean_y=0.0, lean_gust=0.0))
-        cues = GUIDANCE_CUES.pack(dict(touchdown=0.0, marker_age=0.0, contact_switch=0.0))
-        pg = GUIDANCE_PARAMS.pack(dict(GUIDANCE_P, withdraw_height=0.3, contact_drop=drop))
-        xg_next, _ = guidance_function()(xg, [0.0, 0.0, TOUCHDOWN + h], [0.0, 0.0, 0.0], rise,
-                                         0.0, cues, DT, pg)
-        g = GUIDANCE_STATE.unpack(np.asarray(xg_next, dtype=float).ravel())
-        assert (g["committed"][0], g["aborts"][0]) == expected
+        z, committed, aborts = withdraw_step(h, rise, withdraw_height=0.3, contact_drop=drop)
+        assert (committed, aborts) == expected
         if expected[0]:
-            assert g["z_ref"][0] == pytest.approx(
-                TOUCHDOWN + h - GUIDANCE_P["touchdown_speed"] * DT, rel=1e-12)
+            assert z == pytest.approx(TOUCHDOWN + h - GUIDANCE_P["touchdown_speed"] * DT,
+                                      rel=1e-12)
