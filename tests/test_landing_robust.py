@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 import pytest
+from campaign_corners import airframe_corners, corner_id
 
 import quadland
 from quadland.kinds.landing.report import touchdown_report
@@ -287,14 +288,38 @@ def test_lands_with_a_4_newton_steady_side_force():
 
 # ---------------------------------------------------------------- the margins (item 2)
 
-#: The corners of the shipped campaigns' dispersions of [quadrotor] (highway's and the
-#: ships'; turning's campaign disperses none, its corners are taken the same):
-#: mass and inertia +-10 %, drag +-30 %, motor lag 15 and 30 ms.
-CORNERS = [[f"quadrotor.mass={m}", f"quadrotor.inertia=[{i}, {i}, {1.8 * i}]",
-            f"quadrotor.drag_translational=[{d}, {d}, {d}]",
-            f"quadrotor.motor_time_constant={tau}"]
-           for m in (1.8, 2.2) for i in (0.0225, 0.0275) for d in (0.07, 0.13)
-           for tau in (0.015, 0.03)]
+#: The shipped landing scenarios: each is checked at its hover point and at the corners of
+#: its own campaign's dispersions of the airframe (``campaign_corners``: the file's nominal
+#: values and ``[campaign]`` ranges; today mass and inertia +-10 %, both drags +-30 % of the
+#: file's 0.3 N s/m and 0.01225 N s^2/m^2, motor lag 15 and 30 ms: 32 corners each).
+LANDING = ("highway", "highway_100", "turning", "ship", "ship_ss5")
+
+#: (scenario, corner's id): the margin each corner misses, as measured (strict xfails).
+#: highway_100's eight corners with 30 ms of motor lag keep 45 deg continuous and lose it
+#: sampled (one period of computation delay); its command filter at 8 rad/s meets 45 deg at
+#: all 33 points but lands 291 of 300 on the default seed and on seed 7 (300 and 300
+#: before), so it is not shipped (docs/landing.md, "The margins at every campaign's own
+#: corners").
+_H100_FAILS = {"m1.8-I0.0225-kt0.21-kq0.008575-tau0.03": (49.47, 43.56),
+               "m1.8-I0.0225-kt0.21-kq0.015925-tau0.03": (48.89, 44.69),
+               "m1.8-I0.0225-kt0.39-kq0.008575-tau0.03": (50.04, 44.78),
+               "m1.8-I0.0275-kt0.21-kq0.015925-tau0.03": (45.40, 42.63),
+               "m1.8-I0.0275-kt0.39-kq0.015925-tau0.03": (47.34, 44.69),
+               "m2.2-I0.0225-kt0.21-kq0.008575-tau0.03": (49.95, 44.01),
+               "m2.2-I0.0225-kt0.21-kq0.015925-tau0.03": (50.88, 44.54),
+               "m2.2-I0.0225-kt0.39-kq0.008575-tau0.03": (50.87, 44.51)}
+CORNER_FAILS = {("highway_100", cid): f"issue 19 item 2 unmet: sampled multiloop disk phase "
+                                      f"margin {s:.2f} deg < 45 (continuous {c:.2f})"
+                for cid, (c, s) in _H100_FAILS.items()}
+
+
+def _points():
+    for name in LANDING:
+        for corner in [[], *airframe_corners(name)]:
+            cid = f"{name}-{corner_id(corner)}"
+            why = CORNER_FAILS.get((name, corner_id(corner)))
+            marks = () if why is None else pytest.mark.xfail(strict=True, reason=why)
+            yield pytest.param(name, corner, id=cid, marks=marks)
 
 
 def _meets(name, overrides=()):
@@ -306,18 +331,42 @@ def _meets(name, overrides=()):
         # perfect sensing at the corners (the filter's section, 2 s each, is checked at
         # the hover points: tests/test_filter_loop.py, docs/margins.md)
         report = margin_report(load_scenario(name, list(overrides)), filtered=False)
-    assert report.continuous.passed and report.sampled.passed, (name, overrides)
+    assert report.continuous.passed and report.sampled.passed, (
+        name, overrides, report.continuous.multiloop_disk.disk.phase_margin,
+        report.sampled.multiloop_disk.disk.phase_margin)
     return report
 
 
+def test_the_corners_are_each_campaigns_own():
+    """The corners come from each file: its nominal drag (issue 18's, not the 0.1 N s/m of
+    before) and its table's ranges, worked by hand for the two drags; every scenario has the
+    2^5 corners of its five dispersed airframe keys, each key at both ends."""
+    for name in LANDING:
+        corners = airframe_corners(name)
+        assert len(corners) == 32 and len({tuple(c) for c in corners}) == 32
+        flat = {o for c in corners for o in c}
+        assert "quadrotor.drag_translational=[0.21, 0.21, 0.21]" in flat
+        assert "quadrotor.drag_translational=[0.39, 0.39, 0.39]" in flat
+        assert "quadrotor.drag_quadratic=[0.008575, 0.008575, 0.008575]" in flat
+        assert "quadrotor.drag_quadratic=[0.015925, 0.015925, 0.015925]" in flat
+        assert {"quadrotor.motor_time_constant=0.015",
+                "quadrotor.motor_time_constant=0.03", "quadrotor.mass=1.8",
+                "quadrotor.mass=2.2"} <= flat
+    # the file's own nominal moves its corners: 0.02 N s^2/m^2 +-30 %
+    moved = {float(o.split("[")[1].split(",")[0])
+             for c in airframe_corners("highway", ["quadrotor.drag_quadratic=[0.02, 0.02, 0.02]"])
+             for o in c if o.startswith("quadrotor.drag_quadratic=")}
+    assert sorted(moved) == pytest.approx([0.014, 0.026], rel=1e-12)
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["highway", "turning", "ship", "ship_ss5"])
-def test_the_gains_meet_6_db_and_45_deg_at_every_hover_point_and_corner(name):
+@pytest.mark.parametrize(("name", "corner"), list(_points()))
+def test_the_gains_meet_6_db_and_45_deg_at_every_hover_point_and_corner(name, corner):
     """6 dB / 45 deg per loop with the others closed and the multiloop disk margin,
     continuous and sampled with one period of computation delay, at the hover point
-    and at each of the 16 corners (the controller's model at the nominal)."""
-    for corner in [[], *CORNERS]:
-        _meets(name, corner)
+    and at each corner of the scenario's campaign (the controller's model at the
+    nominal)."""
+    _meets(name, corner)
 
 
 def test_highway_meets_its_margins_at_the_worst_corner():

@@ -7,14 +7,14 @@ lags the outer loop's command by ``2 zeta / w``: 0.2 s at the 10 rad/s of before
 dispersions keeps the project's 6 dB / 45 deg: at the worst of the 32 corners of turning's
 campaign (mass 1.8 kg, inertia +10 %, drag 0.39 N s/m and 0.015925 N s^2/m^2, each +30 % of
 the file's, 30 ms motor lag) the sampled multiloop disk phase margin is 45.37 deg at 13
-rad/s and 44.87 deg at 13.5 (the review, docs/landing.md; ``test_landing_robust.py``'s
-corners take the drag of before issue 18, 0.07 / 0.13 N s/m, where the worst gives 45.32 and
-44.92). Checked here: the value and its lag by hand, that bound at the worst corner, and the
-shipped file's campaign row of the default seed's run 156 replayed (0.125 m off on the
-filter of before, 0.038 m on 13 rad/s).
+rad/s and 44.87 deg at 13.5 (the review, docs/landing.md; ``test_landing_robust.py`` checks
+all of them, taken from the file by ``campaign_corners``). Checked here: the value and its
+lag by hand, that bound at the worst corner, and the shipped file's campaign row of the
+default seed's run 156 replayed (0.125 m off on the filter of before, 0.038 m on 13 rad/s).
 """
 
 import pytest
+from campaign_corners import airframe_corners, corner_id
 from reference import TURNING_FILTER
 
 import quadland
@@ -45,6 +45,7 @@ def test_the_file_ships_13_rad_s_a_lag_of_0_154_s():
     for key in ("quadrotor.mass", "quadrotor.inertia"):
         assert (spec[key]["mode"], spec[key]["low"]) == ("relative", -0.1)
     assert spec["quadrotor.motor_time_constant"]["high"] == 0.03
+    assert corner_id(WORST) in {corner_id(c) for c in airframe_corners("turning")}
     assert sc["controller.filter_frequency"] == 13.0
     assert sc["controller.filter_damping"] == 1.0
     lag = 2.0 * sc["controller.filter_damping"] / sc["controller.filter_frequency"]
