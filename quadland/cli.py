@@ -19,7 +19,6 @@ import argparse
 import errno
 import logging
 import os
-import re
 import sys
 import warnings
 from pathlib import Path
@@ -414,31 +413,18 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("quadland: interrupted", file=sys.stderr)
         return 130
-    except ImportError as exc:
-        # a Ctrl-C that cut short an extension module's initialization (NumPy,
-        # CasADi, matplotlib load on first use) surfaces as ImportError from it
-        if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
-            raise
-        print("quadland: interrupted", file=sys.stderr)
-        return 130
     except Exception as exc:
-        # a Ctrl-C while ctypes converts a call's arguments (NumPy's ``ndpointer``
-        # checks them in Python) surfaces as ctypes.ArgumentError, its text all that
-        # is left of the KeyboardInterrupt: "argument 6: KeyboardInterrupt: "
-        if not _is_ctypes_interrupt(exc):
+        # a Ctrl-C that cut short an extension module's initialization (NumPy, CasADi,
+        # matplotlib load on first use) surfaces as ImportError from it, and one while
+        # ctypes converted a call's arguments as its ArgumentError
+        if not (isinstance(exc, ImportError) and isinstance(exc.__cause__ or exc.__context__,
+                                                             KeyboardInterrupt)
+                or interrupt.wrapped_by_ctypes(exc)):
             raise
         print("quadland: interrupted", file=sys.stderr)
         return 130
     finally:
         sys.unraisablehook = default_hook
-
-
-def _is_ctypes_interrupt(exc: Exception) -> bool:
-    """Whether ``exc`` is ctypes' wrapping of a KeyboardInterrupt raised while it
-    converted an argument (it keeps neither cause nor context, only the text)."""
-    ctypes = sys.modules.get("ctypes")
-    return (ctypes is not None and isinstance(exc, ctypes.ArgumentError)
-            and re.fullmatch(r"argument \d+: KeyboardInterrupt: ?", str(exc)) is not None)
 
 
 def _quiet_matplotlib() -> None:

@@ -17,7 +17,9 @@ campaign's batches, and before it reports success.
 from __future__ import annotations
 
 import contextlib
+import re
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 
@@ -59,3 +61,13 @@ def check() -> None:
     if _noted:
         _noted = False
         raise KeyboardInterrupt
+
+
+def wrapped_by_ctypes(exc: BaseException) -> bool:
+    """Whether ``exc`` is a Ctrl-C that arrived while ctypes converted a call's
+    arguments (NumPy's ``ndpointer`` checks them in Python): ctypes raises
+    ``ArgumentError("argument 6: KeyboardInterrupt: ")`` instead, with neither
+    cause nor context, its text all that is left of the interrupt."""
+    ctypes = sys.modules.get("ctypes")
+    return (ctypes is not None and isinstance(exc, ctypes.ArgumentError)
+            and re.fullmatch(r"argument \d+: KeyboardInterrupt: ?", str(exc)) is not None)
