@@ -31,9 +31,14 @@ def _value(target, mode, x):
 def airframe_corners(name, overrides=()):
     """Every corner of scenario ``name``'s dispersed airframe keys, as overrides.
 
-    Each key goes to the least and the largest value its dispersion can draw (every element
-    of a list key together: one draw's extremes, ``extremes`` of the sampling), the keys in
-    :data:`AIRFRAME_KEYS` order; ``2 ** k`` corners for ``k`` dispersed keys.
+    Each key goes to the least and the largest value its dispersion can draw (``extremes``
+    of the sampling), the keys in :data:`AIRFRAME_KEYS` order; ``2 ** k`` corners for ``k``
+    dispersed keys. Every element of a list key goes to the same end: these are the
+    diagonal corners only. Without ``common = true`` the campaign draws each element of a
+    list key on its own (one of its runs can fly the roll inertia at +10 % and the yaw
+    inertia at -10 %), so its box has ``2 ** 11`` vertices for the five keys of today's
+    files; the review of the twenty-first session measured off-diagonal ones
+    (docs/landing.md).
 
     Parameters
     ----------

@@ -397,6 +397,44 @@ def test_ctrl_c_at_any_moment_of_start_up_is_one_line(tmp_path):
         assert lines[0].startswith("quadland: interrupted"), (trial, err)
 
 
+def test_a_ctrl_c_ctypes_wraps_in_a_run_keeps_the_runs_and_says_so(reference, tmp_path,
+                                                                   monkeypatch, capsys):
+    """A Ctrl-C while ctypes converts a call's arguments (NumPy's ``ndpointer`` checks them
+    in Python; a serial campaign flies its runs in its own process) reaches the campaign as
+    ``ctypes.ArgumentError("argument N: KeyboardInterrupt: ")``: the runs recorded stay,
+    the line says how many and how to resume (it said only "interrupted"), and the resume
+    ends on the uninterrupted campaign's bytes."""
+    import ctypes
+
+    import quadland.campaign.execute as execute
+
+    class Interrupted:                          # what an ndpointer does on a SIGINT
+        @classmethod
+        def from_param(cls, obj):
+            raise KeyboardInterrupt
+
+    labs = ctypes.CDLL(None).labs               # a real call of the C library
+    labs.restype, labs.argtypes = ctypes.c_long, [Interrupted]
+    real = execute.serial_runs
+
+    def cut_short(base, todo, limits, kept=0):
+        for n, batch in enumerate(real(base, todo, limits, kept)):
+            if n == 5:                          # five runs recorded, the sixth flown
+                labs(-3)
+            yield batch
+
+    monkeypatch.setattr(execute, "serial_runs", cut_short)
+    out = tmp_path / "stopped"
+    assert main(_argv(out)) == 130
+    assert capsys.readouterr().err == (
+        f"quadland: interrupted: 5 of {RUNS} runs recorded in {out}; run the same command "
+        f"with --out {out} to fly the rest\n")
+    assert len(_rows(out)) == 1 + 5 and not (out / "summary.json").exists()
+    monkeypatch.setattr(execute, "serial_runs", real)
+    assert main(_argv(out)) == 0
+    assert (out / "runs.csv").read_bytes() == (reference / "runs.csv").read_bytes()
+
+
 def test_an_all_invalid_campaign_is_summarized(tmp_path, capsys):
     # V2: every run invalid crashed the summary (np.ptp of an empty array) and every resume
     # crashed again; V6: non-finite draws left nan in runs.csv with exit 0

@@ -401,8 +401,12 @@ def examples(tmp_path_factory):
         quadland.load_scenario("highway_100")))
     # The committed tree's land builds at the Makefile's own flags (-O2, the flight code's
     # build); the others at -O1 with the same warnings as errors, for the suite's time
-    # (about half the compiler's CPU): without -ffast-math or -march the optimization level
-    # does not change a double's bits (C99 keeps contraction off), which the replays check.
+    # (about half the compiler's CPU): without -ffast-math the optimization level does not
+    # change IEEE arithmetic. Contraction into FMA is what could: GCC in an ISO mode
+    # (-std=c99) keeps it off at every level (in GNU C, -ffp-contract=fast fuses at -O2 and
+    # not at -O1 where the target has FMA: aarch64, or x86-64 with -march); Clang's default
+    # on fuses within one expression alike at every level. The replays check the C against
+    # the simulator to 1e-9 (not to the bit) at either level.
     o1 = f"CFLAGS={' '.join(build.STRICT_CFLAGS)} -O1"
     procs = [subprocess.Popen(["make", "-s", f"CC={cc}", *flags, *targets],
                               cwd=trees[name] / "example",

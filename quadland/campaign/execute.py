@@ -254,6 +254,12 @@ def _fly_campaign(base, spec, n_runs, header, manifest, path, connection, local,
                 _recorded(folder.sync(), rows, bar)   # every run written: recorded
         except KeyboardInterrupt:
             raise CampaignInterrupted(folder.path, len(rows), n_runs) from None
+        except Exception as exc:
+            # a Ctrl-C while ctypes converted a run's arguments (NumPy's ndpointer, in
+            # Python) arrives as its ArgumentError: the same interrupt, the same message
+            if not interrupt.wrapped_by_ctypes(exc):
+                raise
+            raise CampaignInterrupted(folder.path, len(rows), n_runs) from None
         finally:
             if bar is not None:
                 bar.close()

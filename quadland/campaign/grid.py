@@ -356,6 +356,12 @@ def _fly(env, header, manifest, path, connection, local, scheduler, progress, pl
                 _recorded(folder.sync(), rows, bar)   # every run written: recorded
         except KeyboardInterrupt:
             raise CampaignInterrupted(folder.path, len(rows), env.runs) from None
+        except Exception as exc:
+            # a Ctrl-C while ctypes converted a run's arguments (NumPy's ndpointer, in
+            # Python) arrives as its ArgumentError: the same interrupt, the same message
+            if not interrupt.wrapped_by_ctypes(exc):
+                raise
+            raise CampaignInterrupted(folder.path, len(rows), env.runs) from None
         finally:
             if bar is not None:
                 bar.close()
