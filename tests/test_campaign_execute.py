@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 import pytest
+from ctypes_interrupt import ctrl_c_wrapped_by_ctypes
 
 from quadland.campaign.execute import campaign_header, run_campaign
 from quadland.campaign.spec import campaign_spec_of
@@ -404,23 +405,14 @@ def test_a_ctrl_c_ctypes_wraps_in_a_run_keeps_the_runs_and_says_so(reference, tm
     ``ctypes.ArgumentError("argument N: KeyboardInterrupt: ")``: the runs recorded stay,
     the line says how many and how to resume (it said only "interrupted"), and the resume
     ends on the uninterrupted campaign's bytes."""
-    import ctypes
-
     import quadland.campaign.execute as execute
 
-    class Interrupted:                          # what an ndpointer does on a SIGINT
-        @classmethod
-        def from_param(cls, obj):
-            raise KeyboardInterrupt
-
-    labs = ctypes.CDLL(None).labs               # a real call of the C library
-    labs.restype, labs.argtypes = ctypes.c_long, [Interrupted]
     real = execute.serial_runs
 
     def cut_short(base, todo, limits, kept=0):
         for n, batch in enumerate(real(base, todo, limits, kept)):
             if n == 5:                          # five runs recorded, the sixth flown
-                labs(-3)
+                ctrl_c_wrapped_by_ctypes()
             yield batch
 
     monkeypatch.setattr(execute, "serial_runs", cut_short)

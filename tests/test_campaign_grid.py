@@ -14,6 +14,7 @@ import time
 
 import numpy as np
 import pytest
+from ctypes_interrupt import ctrl_c_wrapped_by_ctypes
 
 from quadland.campaign import axes as axes_mod
 from quadland.campaign.axes import over_deck_wind, parse_axis, wind_over_deck
@@ -279,22 +280,6 @@ def test_replicate_r_of_a_nominal_cell_is_run_r_of_the_campaign(whole, tmp_path)
                 assert mine[name] == theirs[k], name
 
 
-def _ctrl_c_wrapped_by_ctypes():
-    """Raise what ctypes makes of a Ctrl-C while it converts an argument (NumPy's
-    ``ndpointer`` checks them in Python): ``ArgumentError("argument 1: KeyboardInterrupt:
-    ")``, from a real call of the C library."""
-    import ctypes
-
-    class Interrupted:
-        @classmethod
-        def from_param(cls, obj):
-            raise KeyboardInterrupt
-
-    labs = ctypes.CDLL(None).labs
-    labs.restype, labs.argtypes = ctypes.c_long, [Interrupted]
-    labs(-3)
-
-
 @pytest.mark.parametrize("wrapped", [False, True], ids=["ctrl-c", "ctrl-c-wrapped-by-ctypes"])
 def test_an_interrupted_envelope_resumes_to_the_same_bytes(whole, tmp_path, monkeypatch,
                                                            capsys, wrapped):
@@ -308,7 +293,7 @@ def test_an_interrupted_envelope_resumes_to_the_same_bytes(whole, tmp_path, monk
         calls.append(1)
         if len(calls) == 3:
             if wrapped:                         # a serial envelope flies in this process
-                _ctrl_c_wrapped_by_ctypes()
+                ctrl_c_wrapped_by_ctypes()
             raise KeyboardInterrupt
         real()
 

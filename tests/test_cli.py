@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+from ctypes_interrupt import ctrl_c_wrapped_by_ctypes, labs_of_a_long
 
 from quadland.cli import main
 from quadland.margins import Requirement
@@ -224,16 +225,8 @@ def test_a_ctrl_c_while_ctypes_converts_an_argument_is_one_line(capsys, monkeypa
 
     import quadland.cli as cli
 
-    class Interrupted:                          # what an ndpointer does on a SIGINT
-        @classmethod
-        def from_param(cls, obj):
-            raise KeyboardInterrupt
-
-    labs = ctypes.CDLL(None).labs               # a real call of the C library
-    labs.restype, labs.argtypes = ctypes.c_long, [Interrupted]
-
     def cut_short(args):
-        labs(-3)
+        ctrl_c_wrapped_by_ctypes()
 
     with pytest.raises(ctypes.ArgumentError) as raised:     # what ctypes makes of it
         cut_short(None)
@@ -243,10 +236,8 @@ def test_a_ctrl_c_while_ctypes_converts_an_argument_is_one_line(capsys, monkeypa
     assert main(["simulate", "--no-plots"]) == 130
     assert capsys.readouterr().err == "quadland: interrupted\n"
 
-    labs.argtypes = [ctypes.c_long]
-
     def wrong_type(args):
-        labs("three")
+        labs_of_a_long()("three")
 
     monkeypatch.setattr(cli, "_dispatch", wrong_type)
     with pytest.raises(ctypes.ArgumentError, match="argument 1: TypeError"):
