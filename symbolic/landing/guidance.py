@@ -234,14 +234,13 @@ def _calm(g, p, deck_rise, deck_rise_rate, dt, tilt, swerve):
             ca.logic_or(held, ca.logic_and(p["lean_withdraw"] >= 0.5, ca.logic_not(lean_ok))))
 
 
-def _withdrawn(flying, g, p, deck_rise, cause):
+def _withdrawn(flying, g, p, deck_rise, cause, h, crawl):
     """1 (CasADi) when the committed descent is withdrawn: the deck rises past
     max_deck_rise or ``cause`` (a swerve, a gust's lean: :func:`_calm`), above
     withdraw_height, and, once the descent's abort count has reached withdraw_budget, above
-    the crawl (``touchdown_speed x descent_time`` above touchdown)."""
-    h = g["z_ref"] - contact_height(p)
-    spent = ca.logic_and(g["aborts"] >= p["withdraw_budget"],
-                         h <= p["touchdown_speed"] * p["descent_time"])
+    the crawl. ``h`` is the reference's height above the contact, ``crawl`` whether it is
+    in the crawl (``touchdown_speed x descent_time`` above the contact), the step's own."""
+    spent = ca.logic_and(g["aborts"] >= p["withdraw_budget"], crawl)
     return ca.logic_and(ca.logic_and(flying, g["committed"] >= 0.5), ca.logic_and(
         ca.logic_or(deck_rise > p["max_deck_rise"], cause),
         ca.logic_and(h > p["withdraw_height"], ca.logic_not(spent))))
@@ -390,7 +389,7 @@ def guidance_step(xg, p_e, v_e, deck_rise, deck_rise_rate, cues, dt, p_guid, til
     timer_next = crawl_timer_next(g, dict(gate=gate, h=h, landed=phase == LANDED, counting=(
         ca.logic_or(ca.logic_and(in_align, ca.logic_and(in_band, seen)), in_touchdown)),
         gating=ca.logic_and(ca.logic_and(flying, crawl), ca.logic_not(off_limits))), p, dt)
-    rising = _withdrawn(flying, g, p, deck_rise, cause)   # a rising deck, a swerve, a gust
+    rising = _withdrawn(flying, g, p, deck_rise, cause, h, crawl)   # a rising deck, a swerve
     phase_next = ca.if_else(
         ca.logic_and(in_approach, to_hover <= p["align_radius"]), ALIGN,
         ca.if_else(ca.logic_and(in_align, timer_next >= p["dwell_time"]), DESCEND,
